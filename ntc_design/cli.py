@@ -91,9 +91,7 @@ def _print_check(rep: dict, title: str) -> None:
         )
     out.print(at)
     if rep["assumption_holds"]:
-        out.print(
-            f"Assumption 2 holds: V1 = {_labels(rep['V1'])}, V2 = {_labels(rep['V2'])}"
-        )
+        out.print(f"Assumption 2 holds: V1 = {_labels(rep['V1'])}, V2 = {_labels(rep['V2'])}")
         for a, p in rep["paths"].items():
             out.print(f"  {a} reached by the positive-negative path {' -> '.join(map(str, p))}")
     else:

@@ -77,7 +77,9 @@ def assumption2(top: Topology) -> Decomposition:
                 else "its antagonistic in-weight Σ_{Ω_i}|A_ij| is only semidefinite"
             )
             violations.append(
-                Violation(i, f"not in-degree-dominated and {why}, so it can be neither in V1 nor in V2")
+                Violation(
+                    i, f"not in-degree-dominated and {why}, so it can be neither in V1 nor in V2"
+                )
             )
     required = [i for i in range(n) if not idd[i] and i in cands]
     floor = max((cands[i] for i in required), default=-math.inf)
@@ -89,9 +91,7 @@ def assumption2(top: Topology) -> Decomposition:
             if all(i in paths for i in range(n)):
                 v1s = tuple(v1)
                 v2 = tuple(i for i in range(n) if i not in v1s)
-                return Decomposition(
-                    True, v1s, v2, cands, (), {i: tuple(paths[i]) for i in v2}
-                )
+                return Decomposition(True, v1s, v2, cands, (), {i: tuple(paths[i]) for i in v2})
     # Report who cannot be covered even with every candidate in V1.
     v1 = tuple(sorted(cands))
     paths = positive_negative_reachable(top, v1)
@@ -102,7 +102,11 @@ def assumption2(top: Topology) -> Decomposition:
                 Violation(
                     i,
                     "not reached by any positive-negative path from an agent that can be in V1"
-                    + (" (no agent has a positive definite antagonistic in-weight)" if not v1 else ""),
+                    + (
+                        " (no agent has a positive definite antagonistic in-weight)"
+                        if not v1
+                        else ""
+                    ),
                 )
             )
     violations.sort(key=lambda v: v.agent)
@@ -174,9 +178,7 @@ class ProtocolDesign:
             "violations": [{"agent": lab[v.agent], "reason": v.reason} for v in dec.violations],
             "identity_residual": self.identity_residual,
             "thresholds": th.to_dict() if th is not None else None,
-            "conservatism": (
-                self.delta / th.hurwitz if th is not None and th.hurwitz else None
-            ),
+            "conservatism": (self.delta / th.hurwitz if th is not None and th.hurwitz else None),
             "notes": list(self.notes),
         }
 
@@ -235,7 +237,12 @@ def design_topology(
 ) -> ProtocolDesign:
     """Lemma 1 design for one topology: δ = C + ΔC (``margin``), or an explicit δ."""
     th = _theta(theta, top.dim)
-    if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not margin > 0 or not math.isfinite(margin):
+    if (
+        isinstance(margin, bool)
+        or not isinstance(margin, (int, float))
+        or not margin > 0
+        or not math.isfinite(margin)
+    ):
         raise InputError(f"margin: ΔC must be a positive number, got {margin!r}")
     dec = assumption2(top)
     notes: list[str] = []
@@ -257,7 +264,12 @@ def design_topology(
         else:
             dl = float(c + margin)
     else:
-        if isinstance(delta, bool) or not isinstance(delta, (int, float)) or not delta > 0 or not math.isfinite(delta):
+        if (
+            isinstance(delta, bool)
+            or not isinstance(delta, (int, float))
+            or not delta > 0
+            or not math.isfinite(delta)
+        ):
             raise InputError(f"delta: must be a positive number, got {delta!r}")
         dl = float(delta)
         if c is not None and dl <= c:

@@ -183,7 +183,9 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
     """Validate a topology mapping (see the module docstring for the form)."""
     unknown = sorted(set(doc) - TOPOLOGY_KEYS)
     if unknown:
-        raise _err(source, unknown[0], f"unknown field (allowed: {', '.join(sorted(TOPOLOGY_KEYS))})")
+        raise _err(
+            source, unknown[0], f"unknown field (allowed: {', '.join(sorted(TOPOLOGY_KEYS))})"
+        )
     for key in ("dim", "agents", "edges"):
         if key not in doc:
             raise _err(source, key, "missing")

@@ -12,7 +12,7 @@ Tolerances (documented once, used everywhere):
 
 from __future__ import annotations
 
-from enum import Enum
+from enum import StrEnum
 
 import numpy as np
 
@@ -20,7 +20,7 @@ SYM_RTOL = 1e-12
 DEF_RTOL = 1e-10
 
 
-class Definiteness(str, Enum):
+class Definiteness(StrEnum):
     """Class of a symmetric weight (paper, Sec. 2.1: sgn and |·|)."""
 
     PD = "PD"

@@ -375,4 +375,3 @@ def load(path: str | Path) -> Topology | SwitchingTopology:
     if isinstance(data, files.SwitchingData):
         return SwitchingTopology.from_data(data)
     return Topology.from_data(data)
-

@@ -41,7 +41,9 @@ class CriticalCouplings:
     def to_dict(self) -> dict:
         return {
             "hurwitz": self.hurwitz,
-            "hurwitz_intervals": [[lo, None if math.isinf(hi) else hi] for lo, hi in self.hurwitz_intervals],
+            "hurwitz_intervals": [
+                [lo, None if math.isinf(hi) else hi] for lo, hi in self.hurwitz_intervals
+            ],
             "symmetric": self.symmetric,
             "best_rate": self.best_rate,
             "best_rate_delta": self.best_rate_delta,
@@ -67,8 +69,11 @@ def _kron_candidates(lap: np.ndarray, d: np.ndarray) -> np.ndarray:
     ok = np.abs(beta) > 1e-13 * np.maximum(np.abs(alpha), 1e-300)
     ok &= ~((np.abs(alpha) < 1e-12 * scale) & (np.abs(beta) < 1e-12 * scale))
     w = alpha[ok] / beta[ok]
-    w = w[np.abs(w.imag) <= 1e-6 * np.maximum(1.0, np.abs(w))].real
-    return np.unique(w[w > 0])
+    w = np.sort(w[np.abs(w.imag) <= 1e-6 * np.maximum(1.0, np.abs(w))].real)
+    w = w[w > 0]
+    # λ_i + λ_j = 0 and λ_j + λ_i = 0 give the same root twice: merge near-equal roots.
+    keep = np.concatenate([[True], np.diff(w) > 1e-8 * w[1:]]) if w.size else w.astype(bool)
+    return w[keep]
 
 
 def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
@@ -182,7 +187,10 @@ def _best_rate(alpha, scale: float, notes: list[str]) -> tuple[float, float | No
         for _ in range(80):
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if -alpha(math.exp(mid)) >= rmax - tol else (mid, hi)
-        notes.append(f"the decay rate reaches its maximum {rmax:.6g} at δ ≈ {math.exp(hi):.6g} and stays there")
+        notes.append(
+            f"the decay rate reaches its maximum {rmax:.6g} at δ ≈ {math.exp(hi):.6g} "
+            "and stays there"
+        )
         return rmax, math.exp(hi)
     if k == 0:
         return rmax, float(grid[0])

@@ -1,0 +1,35 @@
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ntc_design import Topology
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = ROOT / "examples"
+
+
+def random_topology(
+    seed: int, n: int = 5, d: int = 2, p_edge: float = 0.5, p_neg: float = 0.4, p_semi: float = 0.3
+) -> Topology:
+    """A random signed matrix-weighted digraph: PD/PSD/ND/NSD weights, explicit seed."""
+    rng = np.random.default_rng(seed)
+    edges = []
+    for i in range(n):
+        for j in range(n):
+            if i == j or rng.random() > p_edge:
+                continue
+            m = rng.normal(size=(d, d))
+            w = m @ m.T + 0.1 * np.eye(d)
+            if d > 1 and rng.random() < p_semi:  # drop a direction: semidefinite
+                v = np.linalg.eigh(w)[1][:, 0]
+                w = w - (v @ w @ v) * np.outer(v, v)
+                w = 0.5 * (w + w.T)
+            sgn = -1.0 if rng.random() < p_neg else 1.0
+            edges.append((j + 1, i + 1, sgn * w))
+    return Topology.from_edges(n, d, edges)
+
+
+@pytest.fixture(scope="session")
+def examples() -> Path:
+    return EXAMPLES
