@@ -1,0 +1,217 @@
+"""Lyapunov equations and LMIs for −L_B (the certificates layer's numerical side).
+
+Conventions (python-control's ``lyap(A, Q)`` solves ``A X + X Aᵀ + Q = 0``; SciPy's
+``solve_continuous_lyapunov(A, Q)`` solves ``A X + X Aᴴ = Q``). Here everything is
+written for the consensus error dynamics ``ε̇ = −L_B ε``: −L_B is Hurwitz iff there is
+``P ≻ 0`` with ``P L_B + L_Bᵀ P ≻ 0`` (the paper's eq. LBP with the sign moved).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.linalg.lapack import dtrsyl
+
+LEAF = 96
+
+
+def _split(t: np.ndarray, k: int) -> int:
+    """A split index that does not cut a 2×2 block of the quasi-triangular t."""
+    return k + 1 if k < t.shape[0] and t[k, k - 1] != 0.0 else k
+
+
+def _sylv_upper(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Solve ``A X + X B = C`` for upper quasi-triangular A, B, recursively (level-3
+    BLAS for the couplings, LAPACK ``dtrsyl`` at the leaves)."""
+    m, n = c.shape
+    if m <= LEAF and n <= LEAF:
+        x, scale, info = dtrsyl(a, b, c)
+        if info < 0:
+            raise RuntimeError(f"dtrsyl failed (info={info})")
+        return x / scale
+    if m >= n:
+        k = _split(a, m // 2)
+        a11, a12, a22 = a[:k, :k], a[:k, k:], a[k:, k:]
+        x2 = _sylv_upper(a22, b, c[k:])
+        x1 = _sylv_upper(a11, b, c[:k] - a12 @ x2)
+        return np.vstack([x1, x2])
+    k = _split(b, n // 2)
+    b11, b12, b22 = b[:k, :k], b[:k, k:], b[k:, k:]
+    x1 = _sylv_upper(a, b11, c[:, :k])
+    x2 = _sylv_upper(a, b22, c[:, k:] - x1 @ b12)
+    return np.hstack([x1, x2])
+
+
+def lyapunov_solve(lap_b: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+    """Solve ``P L_B + L_Bᵀ P = Q`` (Q = I by default) for P.
+
+    Real Schur form ``L_B = Z T Zᵀ`` turns it into ``Tᵀ Y + Y T = Zᵀ Q Z`` with
+    ``P = Z Y Zᵀ``; reversing the row order (J) makes ``J Tᵀ J`` upper quasi-triangular,
+    so a recursive blocked Bartels–Stewart solve applies. Equivalent to python-control's
+    ``lyap(L_Bᵀ, -Q)`` and SciPy's ``solve_continuous_lyapunov(L_Bᵀ, Q)``, but level-3."""
+    n = lap_b.shape[0]
+    q = np.eye(n) if q is None else q
+    t, z = sla.schur(lap_b, output="real")
+    c = z.T @ q @ z
+    a = t.T[::-1, ::-1].copy()  # J Tᵀ J: upper quasi-triangular
+    x = _sylv_upper(a, t, c[::-1].copy())  # X = J Y
+    y = x[::-1]
+    p = z @ y @ z.T
+    return 0.5 * (p + p.T)
+
+
+@dataclass(frozen=True)
+class LyapunovResult:
+    p: np.ndarray
+    residual: float  # ‖P L_B + L_Bᵀ P − Q‖_F / ‖Q‖_F
+    p_min_eig: float
+    seconds: float
+
+
+def hurwitz_by_lyapunov(lap_b: np.ndarray) -> LyapunovResult:
+    """(a) of the certificate: P from the Lyapunov equation with Q = I."""
+    t0 = time.perf_counter()
+    p = lyapunov_solve(lap_b)
+    r = p @ lap_b + lap_b.T @ p - np.eye(lap_b.shape[0])
+    res = float(np.linalg.norm(r) / np.sqrt(lap_b.shape[0]))
+    lam = float(sla.eigvalsh(p, subset_by_index=[0, 0])[0])
+    return LyapunovResult(p, res, lam, time.perf_counter() - t0)
+
+
+@dataclass(frozen=True)
+class RateResult:
+    alpha: float  # certified decay rate (verified in floating point), or 0
+    eig_bound: float  # −max Re λ(−L_B)
+    p: np.ndarray | None
+    status: str
+    iterations: int
+    seconds: float
+
+
+def _cvx():
+    import cvxpy as cp  # imported lazily: heavy, and only the LMI paths need it
+
+    return cp
+
+
+def _solve(prob) -> str:
+    cp = _cvx()
+    try:
+        prob.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError as exc:
+        return f"solver error: {exc}"
+    return str(prob.status)
+
+
+def _verified_margin(mats: Sequence[np.ndarray], p: np.ndarray, alpha: float) -> float:
+    """Smallest eigenvalue (relative) of P and of every P L + Lᵀ P − 2αP, in floats."""
+    worst = np.linalg.eigvalsh(p)[0] / np.linalg.norm(p, 2)
+    for lap in mats:
+        m = p @ lap + lap.T @ p - 2 * alpha * p
+        worst = min(worst, np.linalg.eigvalsh(0.5 * (m + m.T))[0] / np.linalg.norm(m, 2))
+    return float(worst)
+
+
+def decay_rate_lmi(lap_b: np.ndarray, tol: float = 1e-4, max_iter: int = 40) -> RateResult:
+    """(b) of the certificate: the largest α with ``P ⪰ I`` and
+    ``P L_B + L_Bᵀ P − 2αP ⪰ 0`` (so ``‖ε(t)‖ <= κ e^{−αt}‖ε(0)‖`` for ε̇ = −L_B ε),
+    by bisection on α with one Clarabel SDP per step. Each accepted α is checked on the
+    returned P in floating point (a strict margin), so α never exceeds what P proves;
+    the result is compared with the eigenvalue bound ``−max Re λ(−L_B)``."""
+    cp = _cvx()
+    t0 = time.perf_counter()
+    n = lap_b.shape[0]
+    bound = float(np.min(np.linalg.eigvals(lap_b).real))
+    if bound <= 0:
+        return RateResult(0.0, bound, None, "not Hurwitz: eigenvalue bound <= 0", 0, 0.0)
+    p_var = cp.Variable((n, n), symmetric=True)
+    a_par = cp.Parameter(nonneg=True)
+    lmi = p_var @ lap_b + lap_b.T @ p_var - 2 * a_par * p_var
+    prob = cp.Problem(cp.Minimize(0), [p_var >> np.eye(n), 0.5 * (lmi + lmi.T) >> 0])
+    lo, hi, best, it = 0.0, bound, None, 0
+    while hi - lo > tol * bound and it < max_iter:
+        it += 1
+        mid = 0.5 * (lo + hi)
+        a_par.value = mid
+        status = _solve(prob)
+        if status in ("optimal", "optimal_inaccurate") and p_var.value is not None:
+            p = 0.5 * (p_var.value + p_var.value.T)
+            if _verified_margin([lap_b], p, mid) > 1e-9:
+                lo, best = mid, p
+                continue
+        hi = mid
+    status = "optimal" if best is not None else "no α > 0 verified"
+    return RateResult(lo, bound, best, status, it, time.perf_counter() - t0)
+
+
+@dataclass(frozen=True)
+class CommonLyapunov:
+    """A common Lyapunov matrix for a set of modes: ``P ≻ 0`` with
+    ``P L_B(k) + L_B(k)ᵀ P ≻ 0`` for every mode k."""
+
+    p: np.ndarray | None
+    structure: str | None  # "identity", "block-diagonal", "dense" or None
+    attempts: tuple[tuple[str, str, float], ...]  # (structure, status, seconds)
+    margin: float | None  # verified min eigenvalue, relative
+    notes: tuple[str, ...] = field(default=())
+
+
+def common_lyapunov(
+    mats: Mapping[str, np.ndarray],
+    block: int,
+    structures: Sequence[str] = ("identity", "block-diagonal", "dense"),
+) -> CommonLyapunov:
+    """Search for a common Lyapunov matrix, cheapest structure first:
+    P = I (holds iff every L_B + L_Bᵀ ≻ 0), then per-agent block-diagonal P (an SDP whose
+    size grows with N·d(d+1)/2 variables), then a dense P (the naive LMI).
+    Solver results are accepted only after a floating-point check with a strict margin;
+    an infeasible or inaccurate result is reported with its status, never as a P."""
+    cp = None
+    lst = list(mats.values())
+    n = lst[0].shape[0]
+    attempts: list[tuple[str, str, float]] = []
+    for s in structures:
+        t0 = time.perf_counter()
+        if s == "identity":
+            p = np.eye(n)
+            m = _verified_margin(lst, p, 0.0)
+            ok = m > 1e-9
+            attempts.append(
+                (s, "verified" if ok else f"fails (margin {m:.3g})", time.perf_counter() - t0)
+            )
+            if ok:
+                return CommonLyapunov(p, s, tuple(attempts), m)
+            continue
+        cp = cp or _cvx()
+        if s == "block-diagonal":
+            blocks = [cp.Variable((block, block), symmetric=True) for _ in range(n // block)]
+            p_var = cp.bmat(
+                [
+                    [blocks[i] if i == j else np.zeros((block, block)) for j in range(len(blocks))]
+                    for i in range(len(blocks))
+                ]
+            )
+            cons = [b >> np.eye(block) for b in blocks]
+        elif s == "dense":
+            p_var = cp.Variable((n, n), symmetric=True)
+            cons = [p_var >> np.eye(n)]
+        else:
+            raise ValueError(f"unknown structure {s!r}")
+        for lap in lst:
+            lmi = p_var @ lap + lap.T @ p_var
+            cons.append(0.5 * (lmi + lmi.T) >> 1e-6 * np.eye(n))
+        prob = cp.Problem(cp.Minimize(0), cons)
+        status = _solve(prob)
+        if status in ("optimal", "optimal_inaccurate") and p_var.value is not None:
+            p = 0.5 * (np.asarray(p_var.value) + np.asarray(p_var.value).T)
+            m = _verified_margin(lst, p, 0.0)
+            if m > 1e-9:
+                attempts.append((s, f"{status}, verified", time.perf_counter() - t0))
+                return CommonLyapunov(p, s, tuple(attempts), m)
+            status = f"{status} but the float check fails (margin {m:.3g})"
+        attempts.append((s, status, time.perf_counter() - t0))
+    return CommonLyapunov(None, None, tuple(attempts), None)
