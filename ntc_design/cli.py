@@ -164,6 +164,127 @@ def design_cmd(
         _print_design(doc, res.topology.name or str(file))
 
 
+def _print_checks(checks) -> None:
+    t = Table(title="certificate checks")
+    for c in ("check", "result", "detail"):
+        t.add_column(c)
+    for c in checks:
+        t.add_row(c["name"], "[green]ok[/green]" if c["ok"] else "[red]FAILS[/red]", c["detail"])
+    out.print(t)
+
+
+def _print_gain(g: dict) -> None:
+    t = Table(title=f"gain c(t) = {g['parsed']}")
+    for c in ("condition", "holds", "reason"):
+        t.add_column(c)
+    names = {
+        "continuous_nonnegative": "continuous, c >= 0 on [0, ∞)",
+        "integral_diverges": "∫₀^∞ c dt = ∞",
+        "tends_to_zero": "c(t) → 0",
+        "square_integrable": "∫₀^∞ c² dt < ∞",
+    }
+    yn = {True: "yes", False: "[red]no[/red]", None: "undetermined"}
+    for k, label in names.items():
+        t.add_row(label, yn[g[k]["value"]], g[k]["reason"])
+    out.print(t)
+    out.print(
+        f"mean square (Theorems 1, 3): {yn[g['mean_square']]}; almost sure (Theorems 2, 4): {yn[g['almost_sure']]}"
+    )
+
+
+def _print_theorems(ths: list[dict]) -> None:
+    yn = {
+        True: "[green]guaranteed[/green]",
+        False: "[red]not guaranteed[/red]",
+        None: "undetermined",
+    }
+    for th in ths:
+        out.print(f"Theorem {th['theorem']} ({th['sense']}): {yn[th['guaranteed']]}")
+        for p in th["failing"]:
+            out.print(f"  fails: {p['premise']}: {p['detail']}")
+        for p in th["undetermined"]:
+            out.print(f"  undetermined: {p['premise']}: {p['detail']}")
+
+
+@app.command()
+def gain(
+    expr: Annotated[str, typer.Argument(help="c(t), e.g. '1/(1+t)' or '(1+t)^(-1/3)'.")],
+    as_json: JsonOpt = False,
+) -> None:
+    """Decide the gain conditions of Theorems 1-4 for c(t)."""
+    from .certify import analyse_gain
+
+    doc = analyse_gain(expr).to_dict()
+    print(_json(doc)) if as_json else _print_gain(doc)
+
+
+@app.command()
+def certify(
+    file: FileArg,
+    theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
+    margin: Annotated[float, typer.Option(help="ΔC > 0: δ = C + ΔC.")] = 0.1,
+    gain: Annotated[str | None, typer.Option(help="Control gain c(t), e.g. '1/(1+t)'.")] = None,
+    out_path: Annotated[
+        Path | None, typer.Option("--out", help="Write the certificate (JSON) here.")
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
+    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed."""
+    from .certify import certify as run
+    from .certify import write_certificate
+
+    th = parse_vector(theta, "--theta")
+    if out_path is not None and not out_path.parent.is_dir():
+        raise InputError(f"--out: directory {out_path.parent} does not exist")
+    res = run(load(file), th, margin, gain)
+    if out_path is not None:
+        write_certificate(res.certificate, out_path)
+    doc = res.to_dict()
+    if as_json:
+        print(_json(doc))
+        return
+    _print_checks(doc["certificate"]["checks"])
+    r = doc["certificate"]["results"]
+    if "lmi" in r:
+        out.print(
+            f"decay rate: LMI α = {r['lmi']['alpha']:.6g}, eigenvalue bound = {r['lmi']['eig_bound']:.6g} "
+            f"(gap {r['lmi']['gap']:.2e}); Lyapunov residual {r['lyapunov']['residual']:.2e}"
+        )
+    if "common_lyapunov" in r:
+        cl = r["common_lyapunov"]
+        out.print(
+            "λ_min(L_B + L_Bᵀ): "
+            + ", ".join(f"{k} {v:.6g}" for k, v in r["symmetric_part_min_eig"].items())
+        )
+        out.print(
+            f"common Lyapunov matrix: {cl['structure'] or 'none found'} ("
+            + "; ".join(f"{a['structure']}: {a['status']}" for a in cl["attempts"])
+            + ")"
+        )
+    if doc["gain"] is not None:
+        _print_gain(doc["gain"])
+    _print_theorems(doc["theorems"])
+    if out_path is not None:
+        out.print(f"certificate written to {out_path} (re-check with: ntc verify {out_path})")
+
+
+@app.command()
+def verify(cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")]) -> None:
+    """Re-check a certificate without an SDP solver. Exit 0 valid, 1 invalid, 2 malformed."""
+    from .certify import verify_file
+
+    ver = verify_file(cert)
+    for c in ver.checks:
+        mark = "ok   " if c.ok else "FAILS"
+        print(f"{mark} {c.name}: {c.detail}")
+    if not ver.valid:
+        names = "; ".join(c.name for c in ver.failed)
+        print(f"INVALID ({ver.method}): {names}", file=sys.stderr)
+        raise typer.Exit(1)
+    print(f"VALID ({ver.method}): {len(ver.checks)} checks")
+
+
 def main() -> None:
     try:
         app()

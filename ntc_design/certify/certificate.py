@@ -307,6 +307,32 @@ def _prove_pd_expr(
     return verified_float_pd(m, 2 * err * (1 + 8 * gamma(n)))
 
 
+@dataclass(frozen=True)
+class HurwitzProof:
+    """−L_B Hurwitz proven from the Lyapunov-equation P: P ≻ 0 and P L_B + L_Bᵀ P ≻ 0."""
+
+    holds: bool
+    p: np.ndarray
+    p_pd: PDProof
+    lyapunov_pd: PDProof
+    seconds: float
+
+
+def prove_hurwitz(lap_b: np.ndarray, exact: bool | None = None) -> HurwitzProof:
+    """Solve P L_B + L_Bᵀ P = I and prove both inequalities for the given float L_B
+    (exactly up to EXACT_MAX_N, else by the rigorous floating-point test)."""
+    import time
+
+    t0 = time.perf_counter()
+    n = lap_b.shape[0]
+    exact = n <= EXACT_MAX_N if exact is None else exact
+    p = hurwitz_by_lyapunov(lap_b).p
+    lap_exact = Dyadic.of(lap_b) if exact else None
+    p1 = _prove_pd_expr(p, None, None, 0.0, None, exact)
+    p2 = _prove_pd_expr(p, lap_exact, lap_b, 0.0, np.zeros_like(lap_b), exact)
+    return HurwitzProof(p1.holds and p2.holds, p, p1, p2, time.perf_counter() - t0)
+
+
 def verify(doc: Any, source: str = "certificate") -> Verification:
     """Re-check a certificate mapping. Raises InputError when it is malformed."""
     if not isinstance(doc, dict):
