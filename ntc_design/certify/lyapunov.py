@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sparse
 from scipy.linalg.lapack import dtrsyl
 
 LEAF = 96
@@ -160,17 +161,91 @@ class CommonLyapunov:
     notes: tuple[str, ...] = field(default=())
 
 
+def _block_basis(n: int, block: int) -> list[tuple[int, int, int]]:
+    """(block index, r, c) with r <= c: one scalar variable per entry of each symmetric
+    d×d diagonal block of P."""
+    return [(b, r, c) for b in range(n // block) for r in range(block) for c in range(r, block)]
+
+
+def _block_lmi_columns(lap: np.ndarray, block: int, basis) -> sparse.csc_matrix:
+    """Columns vec(E_m L + Lᵀ E_m) for the block basis E_m (symmetric, so vec order is
+    irrelevant); sparse: E_m L only touches the rows of its block."""
+    n = lap.shape[0]
+    rows, cols, vals = [], [], []
+    for m, (b, r, c) in enumerate(basis):
+        e = np.zeros((block, block))
+        e[r, c] = e[c, r] = 1.0
+        sl = slice(b * block, (b + 1) * block)
+        f = np.zeros((n, n))
+        f[sl, :] = e @ lap[sl, :]
+        f[:, sl] += lap[sl, :].T @ e
+        nz = np.flatnonzero(f)
+        rows.append(nz)
+        cols.append(np.full(nz.size, m))
+        vals.append(f.ravel()[nz])
+    return sparse.csc_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(n * n, len(basis)),
+    )
+
+
+def _block_diagonal_problem(lst: Sequence[np.ndarray], block: int):
+    """Vectorised LMI for a per-agent block-diagonal P: P = Σ x_m E_m, so each mode's
+    P L + Lᵀ P is one sparse matrix times x (cheap to compile; its sparsity pattern is
+    the network's, which Clarabel's chordal decomposition exploits)."""
+    cp = _cvx()
+    n = lst[0].shape[0]
+    basis = _block_basis(n, block)
+    x = cp.Variable(len(basis))
+    cons = []
+    for b in range(n // block):
+        idx = [m for m, (bb, _, _) in enumerate(basis) if bb == b]
+        sel = np.zeros((block * block, len(basis)))
+        for m in idx:
+            _, r, c = basis[m]
+            sel[r + c * block, m] = sel[c + r * block, m] = 1.0
+        pb = cp.reshape(sparse.csc_matrix(sel) @ x, (block, block), order="F")
+        cons.append(pb >> np.eye(block))
+    for lap in lst:
+        f = _block_lmi_columns(lap, block, basis)
+        lmi = cp.reshape(f @ x, (n, n), order="F")
+        cons.append(0.5 * (lmi + lmi.T) >> 1e-6 * np.eye(n))
+
+    def value() -> np.ndarray | None:
+        if x.value is None:
+            return None
+        p = np.zeros((n, n))
+        for m, (b, r, c) in enumerate(basis):
+            p[b * block + r, b * block + c] = p[b * block + c, b * block + r] = x.value[m]
+        return p
+
+    return cp.Problem(cp.Minimize(0), cons), value
+
+
+def _dense_problem(lst: Sequence[np.ndarray]):
+    """The naive LMI: one dense symmetric P (n(n+1)/2 variables)."""
+    cp = _cvx()
+    n = lst[0].shape[0]
+    p_var = cp.Variable((n, n), symmetric=True)
+    cons = [p_var >> np.eye(n)]
+    for lap in lst:
+        lmi = p_var @ lap + lap.T @ p_var
+        cons.append(0.5 * (lmi + lmi.T) >> 1e-6 * np.eye(n))
+    return cp.Problem(
+        cp.Minimize(0), cons
+    ), lambda: None if p_var.value is None else np.asarray(p_var.value)
+
+
 def common_lyapunov(
     mats: Mapping[str, np.ndarray],
     block: int,
     structures: Sequence[str] = ("identity", "block-diagonal", "dense"),
 ) -> CommonLyapunov:
     """Search for a common Lyapunov matrix, cheapest structure first:
-    P = I (holds iff every L_B + L_Bᵀ ≻ 0), then per-agent block-diagonal P (an SDP whose
-    size grows with N·d(d+1)/2 variables), then a dense P (the naive LMI).
+    P = I (holds iff every L_B + L_Bᵀ ≻ 0), then per-agent block-diagonal P (an SDP with
+    N·d(d+1)/2 variables, vectorised and sparse), then a dense P (the naive LMI).
     Solver results are accepted only after a floating-point check with a strict margin;
     an infeasible or inaccurate result is reported with its status, never as a P."""
-    cp = None
     lst = list(mats.values())
     n = lst[0].shape[0]
     attempts: list[tuple[str, str, float]] = []
@@ -186,28 +261,16 @@ def common_lyapunov(
             if ok:
                 return CommonLyapunov(p, s, tuple(attempts), m)
             continue
-        cp = cp or _cvx()
         if s == "block-diagonal":
-            blocks = [cp.Variable((block, block), symmetric=True) for _ in range(n // block)]
-            p_var = cp.bmat(
-                [
-                    [blocks[i] if i == j else np.zeros((block, block)) for j in range(len(blocks))]
-                    for i in range(len(blocks))
-                ]
-            )
-            cons = [b >> np.eye(block) for b in blocks]
+            prob, value = _block_diagonal_problem(lst, block)
         elif s == "dense":
-            p_var = cp.Variable((n, n), symmetric=True)
-            cons = [p_var >> np.eye(n)]
+            prob, value = _dense_problem(lst)
         else:
             raise ValueError(f"unknown structure {s!r}")
-        for lap in lst:
-            lmi = p_var @ lap + lap.T @ p_var
-            cons.append(0.5 * (lmi + lmi.T) >> 1e-6 * np.eye(n))
-        prob = cp.Problem(cp.Minimize(0), cons)
         status = _solve(prob)
-        if status in ("optimal", "optimal_inaccurate") and p_var.value is not None:
-            p = 0.5 * (np.asarray(p_var.value) + np.asarray(p_var.value).T)
+        pv = value() if status in ("optimal", "optimal_inaccurate") else None
+        if pv is not None:
+            p = 0.5 * (pv + pv.T)
             m = _verified_margin(lst, p, 0.0)
             if m > 1e-9:
                 attempts.append((s, f"{status}, verified", time.perf_counter() - t0))
