@@ -1,0 +1,84 @@
+"""The time grid: every switching instant and save time is a grid point, exactly.
+
+Between consecutive events the step is either uniform (``h <= dt``, the event interval cut
+into equal steps) or *intrinsic*: c(t) multiplies both drift and noise, so in the
+intrinsic time s = ∫c dt the dynamics have unit gain; steps ``h_k = min(ds / c(t_k), h_max)``
+are uniform in s, which makes long horizons cheap for decaying gains.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    t: np.ndarray  # K+1 grid times, t[0] = 0, t[-1] = T
+    mode: np.ndarray  # K: mode index of each step [t_k, t_{k+1})
+    save_steps: np.ndarray  # grid indices of the save times
+    save_times: np.ndarray
+
+    @property
+    def h(self) -> np.ndarray:
+        return np.diff(self.t)
+
+    @property
+    def n_steps(self) -> int:
+        return self.t.size - 1
+
+
+def build_grid(
+    t_end: float,
+    dt: float,
+    save_times: Sequence[float],
+    segments: Sequence[tuple[float, float, int]] | None = None,
+    gain: Callable[[np.ndarray], np.ndarray] | None = None,
+    intrinsic_ds: float | None = None,
+    h_max: float | None = None,
+) -> TimeGrid:
+    """Grid on [0, t_end] through every save time and every segment boundary.
+
+    ``segments`` are (start, stop, mode index) covering [0, t_end] (one mode if None).
+    With ``intrinsic_ds`` steps are h = min(ds / c(t), h_max, time to next event)."""
+    segs = list(segments) if segments else [(0.0, t_end, 0)]
+    saves = np.unique(np.clip(np.asarray(save_times, dtype=float), 0.0, t_end))
+    events = np.unique(
+        np.concatenate([[0.0, t_end], saves, [a for a, _, _ in segs], [b for _, b, _ in segs]])
+    )
+    events = events[(events >= 0) & (events <= t_end)]
+    starts = np.array([a for a, _, _ in segs])
+    modes = np.array([m for _, _, m in segs])
+    ts: list[np.ndarray] = [np.array([0.0])]
+    ms: list[np.ndarray] = []
+    for a, b in zip(events[:-1], events[1:], strict=True):
+        if b - a <= 1e-14 * max(1.0, b):
+            continue
+        mode = modes[max(np.searchsorted(starts, a, side="right") - 1, 0)]
+        if intrinsic_ds is None:
+            k = max(int(np.ceil((b - a) / dt - 1e-9)), 1)
+            pts = a + (b - a) * np.arange(1, k + 1) / k
+            pts[-1] = b
+        else:
+            pts_l = []
+            t = a
+            cap = h_max if h_max is not None else np.inf
+            while b - t > 1e-14 * max(1.0, b):
+                c = float(gain(np.array([t]))[0]) if gain is not None else 1.0
+                h = min(intrinsic_ds / c if c > 0 else cap, cap, b - t)
+                if b - t - h < 0.25 * h:  # no sliver step before the event
+                    h = b - t
+                t = b if h == b - t else t + h
+                pts_l.append(t)
+            pts = np.array(pts_l)
+        ts.append(pts)
+        ms.append(np.full(pts.size, mode, dtype=np.int64))
+    t = np.concatenate(ts)
+    save_steps = np.searchsorted(t, saves)
+    save_steps = np.minimum(save_steps, t.size - 1)
+    # save times are grid points by construction (equality up to rounding of the cut)
+    return TimeGrid(
+        t, np.concatenate(ms) if ms else np.zeros(0, np.int64), save_steps, t[save_steps]
+    )

@@ -1,0 +1,246 @@
+"""Monte Carlo Euler–Maruyama for the SAN with compound noise, in bounded memory.
+
+Paths are integrated in fixed *blocks* (``block_size`` paths each); block b draws its
+normals from ``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of the run's
+SeedSequence), so a path's noise depends only on (seed, block_size, its index). Each
+block streams its statistics at the save times (sums of ‖x_i − θ‖² and of its square,
+the summed state, a few stored paths) and never keeps the trajectory; blocks are merged
+in block order. Results are therefore identical whatever the number of workers and the
+number of blocks per chunk. The chunk interface (:func:`run_chunk`: block indices in,
+:class:`PartialStats` out; :func:`merge`) is what a distributed engine would call.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .grid import TimeGrid
+from .system import ModeSystem
+
+BATCH = 64  # steps whose normals are drawn at once
+
+
+@dataclass(frozen=True, eq=False)
+class MonteCarloSpec:
+    systems: tuple[ModeSystem, ...]
+    grid: TimeGrid
+    gain: Callable[[np.ndarray], np.ndarray]
+    theta: np.ndarray
+    x_init: np.ndarray  # Nd
+    n_agents: int
+    dim: int
+    paths: int
+    seed: int
+    block_size: int = 500
+    store_paths: int = 10
+    agent_labels: tuple = ()
+
+    @property
+    def n_blocks(self) -> int:
+        return -(-self.paths // self.block_size)
+
+
+@dataclass
+class PartialStats:
+    """Sums over some paths at the save times (mergeable)."""
+
+    blocks: list[int]
+    count: int
+    sq: np.ndarray  # (S, N) Σ ‖x_i − θ‖²
+    sq2: np.ndarray  # (S, N) Σ ‖x_i − θ‖⁴
+    state: np.ndarray  # (S, Nd) Σ x
+    stored: np.ndarray  # (k, S, Nd) stored paths (global indices 0..k-1)
+    stored_index: list[int] = field(default_factory=list)
+    failure: dict | None = None  # {"t", "agent", "path", "save_index"} on NaN/overflow
+    valid_saves: int = 0  # save points computed for every path in these blocks
+
+
+def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
+    grid = spec.grid
+    nd_, n_, d = spec.x_init.size, spec.n_agents, spec.dim
+    p0 = b * spec.block_size
+    p = min(spec.block_size, spec.paths - p0)
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
+    s_n = grid.save_steps.size
+    sq = np.zeros((s_n, n_))
+    sq2 = np.zeros((s_n, n_))
+    state = np.zeros((s_n, nd_))
+    n_store = max(0, min(spec.store_paths - p0, p))
+    stored = np.zeros((n_store, s_n, nd_))
+    theta_t = np.tile(spec.theta, n_)
+    x = np.tile(spec.x_init, (p, 1))
+    e_max = max(s.n_edges for s in spec.systems)
+    # per mode: M1 = [−L_Bᵀ | Dᵀ], Gᵀ, Wᵀ
+    mats = [
+        (np.hstack([-s.lap_b.T, s.dmat.T]), s.g.T.copy(), s.wmat.T.copy(), s.u, s.n_edges, s.f)
+        for s in spec.systems
+    ]
+    c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
+    h_all = np.diff(grid.t)
+    ch_all = c_all * h_all
+    cs_all = c_all * np.sqrt(h_all)
+    save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
+    failure = None
+    valid = 0
+
+    def record(i: int) -> bool:
+        nonlocal failure, valid
+        if not np.all(np.isfinite(x)) or np.max(np.abs(x)) > 1e150:
+            bad = ~np.isfinite(x) | (np.abs(x) > 1e150)
+            path, col = np.argwhere(bad)[0]
+            failure = {
+                "t": float(grid.save_times[i]),
+                "agent": int(col // d),
+                "path": int(p0 + path),
+                "save_index": i,
+            }
+            return False
+        e = (x - theta_t).reshape(p, n_, d)
+        e2 = np.einsum("pnd,pnd->pn", e, e)
+        sq[i] = e2.sum(axis=0)
+        sq2[i] = (e2 * e2).sum(axis=0)
+        state[i] = x.sum(axis=0)
+        if n_store:
+            stored[:, i] = x[:n_store]
+        valid = i + 1
+        return True
+
+    if 0 in save_at and not record(save_at[0]):
+        return PartialStats(
+            [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
+        )
+    xi = np.empty((BATCH, p, 2 * e_max))
+    k_total = grid.n_steps
+    for k0 in range(0, k_total, BATCH):
+        kb = min(BATCH, k_total - k0)
+        rng.standard_normal(out=xi[:kb])
+        for kk in range(kb):
+            k = k0 + kk
+            m1, gt, wt, u, ne, f = mats[grid.mode[k]]
+            y = x @ m1
+            drift = y[:, :nd_]
+            drift += u
+            diff = y[:, nd_:].reshape(p, ne, d)
+            if f is not None:
+                diff = f(diff)
+            z = (diff * xi[kk, :, ne : 2 * ne, None]).reshape(p, ne * d)
+            noise = xi[kk, :, :ne] @ gt
+            noise += z @ wt
+            x += ch_all[k] * drift + cs_all[k] * noise
+            if k + 1 in save_at and not record(save_at[k + 1]):
+                return PartialStats(
+                    [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
+                )
+        if progress is not None:
+            progress(kb * p)
+        if not np.all(np.isfinite(x)):
+            bad = np.argwhere(~np.isfinite(x))[0]
+            t_bad = float(grid.t[k0 + kb])
+            failure = {
+                "t": t_bad,
+                "agent": int(bad[1] // d),
+                "path": int(p0 + bad[0]),
+                "save_index": valid,
+            }
+            return PartialStats(
+                [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
+            )
+    return PartialStats(
+        [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
+    )
+
+
+def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+    """Integrate the given blocks; one PartialStats per block (merge them with merge())."""
+    return [_run_block(spec, b, progress) for b in blocks]
+
+
+def merge(parts: Sequence[PartialStats]) -> PartialStats:
+    """Sum partial statistics in block order (so the result does not depend on chunking)."""
+    parts = sorted(parts, key=lambda q: q.blocks[0])
+    first = parts[0]
+    sq, sq2, state = first.sq.copy(), first.sq2.copy(), first.state.copy()
+    for q in parts[1:]:
+        sq += q.sq
+        sq2 += q.sq2
+        state += q.state
+    stored = (
+        np.concatenate([q.stored for q in parts if q.stored.size], axis=0)
+        if any(q.stored.size for q in parts)
+        else first.stored
+    )
+    idx = [i for q in parts for i in q.stored_index]
+    fails = [q.failure for q in parts if q.failure is not None]
+    failure = min(fails, key=lambda f: f["t"]) if fails else None
+    valid = min(q.valid_saves for q in parts)
+    return PartialStats(
+        [b for q in parts for b in q.blocks],
+        sum(q.count for q in parts),
+        sq,
+        sq2,
+        state,
+        stored,
+        idx,
+        failure,
+        valid,
+    )
+
+
+# -- parallel execution (fork: the spec, callables included, is inherited) -----------
+
+_SPEC: MonteCarloSpec | None = None
+_COUNTER = None
+
+
+def _worker(blocks: list[int]) -> list[PartialStats]:
+    def tick(n: int) -> None:
+        with _COUNTER.get_lock():
+            _COUNTER.value += n
+
+    return run_chunk(_SPEC, blocks, tick)
+
+
+def run(
+    spec: MonteCarloSpec,
+    workers: int = 2,
+    blocks_per_chunk: int = 1,
+    progress: Callable[[int, int], None] | None = None,
+) -> PartialStats:
+    """Run every block, on ``workers`` processes (1: in this process)."""
+    global _SPEC, _COUNTER
+    blocks = list(range(spec.n_blocks))
+    chunks = [blocks[i : i + blocks_per_chunk] for i in range(0, len(blocks), blocks_per_chunk)]
+    total = spec.paths * spec.grid.n_steps
+    if workers <= 1 or len(chunks) == 1 or "fork" not in mp.get_all_start_methods():
+        done = 0
+
+        def tick(n: int) -> None:
+            nonlocal done
+            done += n
+            if progress:
+                progress(done, total)
+
+        return merge([q for ch in chunks for q in run_chunk(spec, ch, tick)])
+    ctx = mp.get_context("fork")
+    _SPEC, _COUNTER = spec, ctx.Value("q", 0)
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    try:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
+            futs = [ex.submit(_worker, ch) for ch in chunks]
+            pending = set(futs)
+            while pending:
+                _, pending = wait(pending, timeout=0.2)
+                if progress is not None:
+                    progress(_COUNTER.value, total)
+            parts = [q for f in futs for q in f.result()]
+        if progress:
+            progress(total, total)
+    finally:
+        _SPEC, _COUNTER = None, None
+    return merge(parts)
