@@ -318,14 +318,21 @@ class SwitchingTopology:
 
     def segments(self, t_end: float, t_start: float = 0.0) -> list[tuple[float, float, str]]:
         """The schedule unrolled on [t_start, t_end): ``(start, stop, mode)`` triples.
-        Switch times are computed as ``k·period + offset`` to avoid drift."""
-        offsets = np.concatenate([[0.0], np.cumsum([d for _, d in self.schedule])])
+        Switch times are ``k·period + offset`` (no drift from repeated addition), and each
+        segment stops exactly where the next one starts."""
+        offsets = np.concatenate([[0.0], np.cumsum([d for _, d in self.schedule])[:-1]])
         per = self.period
+        m_n = len(self.schedule)
+
+        def start(k: int, m: int) -> float:
+            k, m = k + m // m_n, m % m_n
+            return float(k * per + offsets[m])
+
         out: list[tuple[float, float, str]] = []
         k = int(np.floor(t_start / per))
         while True:
             for m, (mode, _) in enumerate(self.schedule):
-                a, b = k * per + offsets[m], k * per + offsets[m + 1]
+                a, b = start(k, m), start(k, m + 1)
                 if b <= t_start:
                     continue
                 if a >= t_end:

@@ -44,6 +44,7 @@ class SimulationResult:
     stats: dict
     notes: list[str] = field(default_factory=list)
     failure: dict | None = None
+    grid: TimeGrid | None = None
 
     def summary(self) -> dict:
         lab = [str(a) for a in self.labels]
@@ -351,7 +352,7 @@ def simulate(
         else:
             notes.append("exact moments skipped: f is not linear")
     res = SimulationResult(
-        tuple(labels), th, grid.save_times, designs, mc, exact, params, stats, notes, None
+        tuple(labels), th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
     )
     if failure is not None:
         lab = labels[failure["agent"]]

@@ -68,7 +68,7 @@ class ModeSystem:
 
 def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeSystem:
     top = des.topology
-    n, d = top.n, top.dim
+    d = top.dim
     nd_ = top.nd
     edges = top.edges  # (i, j): j -> i
     e_n = len(edges)
