@@ -338,6 +338,19 @@ def simulate(
     out.print(f"wrote {out_dir}/summary.json, ms_error.csv, paths.npz")
 
 
+@app.command()
+def report(
+    directory: Annotated[
+        Path, typer.Argument(help="A simulation output directory (ntc simulate --out).")
+    ],
+) -> None:
+    """Turn a simulation output directory into one self-contained report.html."""
+    from .reports.report import write_report
+
+    path = write_report(directory)
+    out.print(f"wrote {path}")
+
+
 def main() -> None:
     try:
         app()

@@ -96,3 +96,15 @@ def test_g3_breaks_assumption2_but_gives_the_papers_delta(examples):
         assert lam[0] < 0 < lam[-1]
     assert d.C == pytest.approx(3.0, abs=1e-12)
     assert d.delta == pytest.approx(3.1, abs=1e-12)
+
+
+def test_builtin_paper_topologies_match_example_files(examples):
+    from ntc_design import paper
+
+    for name, build in (("g1", paper.g1), ("g2", paper.g2), ("g3", paper.g3)):
+        a, b = build(), nd.load(examples / f"{name}.yaml")
+        assert a.labels == b.labels and set(a.weights) == set(b.weights)
+        for k in a.weights:
+            np.testing.assert_array_equal(a.weights[k], b.weights[k])
+    sw = nd.load(examples / "switching.yaml")
+    assert paper.switching().schedule == sw.schedule

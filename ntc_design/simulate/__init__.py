@@ -50,6 +50,7 @@ class SimulationResult:
         lab = [str(a) for a in self.labels]
         out: dict = {
             "parameters": self.parameters,
+            "topologies": {k: d.topology.to_dict() for k, d in self.designs.items()},
             "designs": {k: _design_brief(d) for k, d in self.designs.items()},
             "save_times": {
                 "count": int(self.save_times.size),
@@ -313,6 +314,8 @@ def simulate(
         "save_times": int(st.size),
         "modes": names,
     }
+    if isinstance(topology, SwitchingTopology):
+        params["schedule"] = [{"mode": m, "duration": t} for m, t in topology.schedule]
     stats: dict = {"steps": grid.n_steps, "path_steps": grid.n_steps * paths}
     mc = None
     failure = None
