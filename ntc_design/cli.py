@@ -164,6 +164,20 @@ def design_cmd(
         _print_design(doc, res.topology.name or str(file))
 
 
+def _progress():
+    """A progress bar on stderr, shown only on a terminal."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+        disable=not sys.stderr.isatty(),
+    )
+
+
 def _print_checks(checks) -> None:
     t = Table(title="certificate checks")
     for c in ("check", "result", "detail"):
@@ -295,8 +309,6 @@ def simulate(
 ) -> None:
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
     summary.json, ms_error.csv and paths.npz to --out."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
     from .simulate.scenario import scenario_arguments, write_outputs
@@ -304,17 +316,9 @@ def simulate(
     top, kw, sc = scenario_arguments(scenario)
     if workers is not None:
         kw["workers"] = workers
-    show = sys.stderr.isatty()
-    prog = Progress(
-        TextColumn("simulating"),
-        BarColumn(),
-        TextColumn("{task.percentage:>3.0f}%"),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-        disable=not show,
-    )
+    prog = _progress()
     with prog:
-        task = prog.add_task("mc", total=1)
+        task = prog.add_task("simulating", total=1)
 
         def tick(done: int, total: int) -> None:
             prog.update(task, completed=done, total=total)
@@ -366,20 +370,11 @@ def reproduce(
     workers: Annotated[int, typer.Option(help="Worker processes.")] = 2,
 ) -> None:
     """Run the paper's Section 5 end to end and write one report beside its numbers."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
     from .reports.reproduce import reproduce_paper
 
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
-    prog = Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.percentage:>3.0f}%"),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-        disable=not sys.stderr.isatty(),
-    )
+    prog = _progress()
     tasks: dict[str, int] = {}
 
     def tick(key: str, done: int, total: int) -> None:

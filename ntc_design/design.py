@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, require_positive
 from .linalg import DEF_RTOL, pd
 from .model import (
     SwitchingTopology,
@@ -112,6 +112,23 @@ def assumption2(top: Topology) -> Decomposition:
     violations.sort(key=lambda v: v.agent)
     v2 = tuple(i for i in range(n) if i not in v1)
     return Decomposition(False, v1, v2, cands, tuple(violations), {})
+
+
+#: Keys of the stable ``ntc design --json`` format (per mode for a switching file).
+DESIGN_KEYS = (
+    "C",
+    "delta",
+    "k1",
+    "x0",
+    "informed",
+    "B",
+    "V1",
+    "V2",
+    "assumption_holds",
+    "violations",
+    "identity_residual",
+    "thresholds",
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -237,13 +254,7 @@ def design_topology(
 ) -> ProtocolDesign:
     """Lemma 1 design for one topology: δ = C + ΔC (``margin``), or an explicit δ."""
     th = _theta(theta, top.dim)
-    if (
-        isinstance(margin, bool)
-        or not isinstance(margin, (int, float))
-        or not margin > 0
-        or not math.isfinite(margin)
-    ):
-        raise InputError(f"margin: ΔC must be a positive number, got {margin!r}")
+    require_positive("margin (ΔC)", margin)
     dec = assumption2(top)
     notes: list[str] = []
     if dec.holds:
@@ -264,13 +275,7 @@ def design_topology(
         else:
             dl = float(c + margin)
     else:
-        if (
-            isinstance(delta, bool)
-            or not isinstance(delta, (int, float))
-            or not delta > 0
-            or not math.isfinite(delta)
-        ):
-            raise InputError(f"delta: must be a positive number, got {delta!r}")
+        require_positive("delta", delta)
         dl = float(delta)
         if c is not None and dl <= c:
             notes.append(f"explicit δ = {dl:.6g} is not above C = {c:.6g}: Lemma 1 does not apply")

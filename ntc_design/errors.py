@@ -12,3 +12,20 @@ class InputError(ValueError):
 def where(source: str | None, field: str) -> str:
     """Prefix naming the file (if any) and the field an error concerns."""
     return f"{source}: {field}" if source else field
+
+
+def require_positive(name: str, value, integer: bool = False) -> None:
+    """Raise InputError unless ``value`` is a finite positive number (an integer if asked)."""
+    import math
+
+    bad = (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or value <= 0
+    )
+    if integer:
+        bad = bad or not float(value).is_integer()
+    if bad:
+        kind = "a positive integer" if integer else "a positive number"
+        raise InputError(f"{name}: must be {kind}, got {value!r}")

@@ -34,6 +34,12 @@ def _style(cls: Definiteness) -> tuple[str, str]:
     return colour, ("-" if cls.definite else "--")
 
 
+def _arrow(ax, a, b, colour: str, ls: str, **kw) -> None:
+    ax.add_patch(
+        FancyArrowPatch(a, b, arrowstyle="-|>", color=colour, linestyle=ls, shrinkB=18, **kw)
+    )
+
+
 def topology_figure(top: Topology, informed: Sequence[int], b: dict, title: str):
     """Ĝ: the topology with the external signal (vertex 0) and its couplings B_i."""
     n = top.n
@@ -48,35 +54,21 @@ def topology_figure(top: Topology, informed: Sequence[int], b: dict, title: str)
             continue
         colour, ls = _style(cls)
         rad = 0.18 if (j, i) in pairs else 0.0
-        ax.add_patch(
-            FancyArrowPatch(
-                pos[j],
-                pos[i],
-                arrowstyle="-|>",
-                mutation_scale=14,
-                color=colour,
-                linestyle=ls,
-                linewidth=1.6,
-                shrinkA=18,
-                shrinkB=18,
-                connectionstyle=f"arc3,rad={rad}",
-            )
+        _arrow(
+            ax,
+            pos[j],
+            pos[i],
+            colour,
+            ls,
+            mutation_scale=14,
+            linewidth=1.6,
+            shrinkA=18,
+            connectionstyle=f"arc3,rad={rad}",
         )
     for i in informed:
         colour, ls = _style(classify(np.asarray(b[i])))
-        ax.add_patch(
-            FancyArrowPatch(
-                pos[-1],
-                pos[i],
-                arrowstyle="-|>",
-                mutation_scale=12,
-                color=colour,
-                linestyle=ls,
-                linewidth=1.2,
-                alpha=0.8,
-                shrinkA=16,
-                shrinkB=18,
-            )
+        _arrow(
+            ax, pos[-1], pos[i], colour, ls, mutation_scale=12, linewidth=1.2, alpha=0.8, shrinkA=16
         )
     for i in range(n):
         ax.add_patch(

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -12,8 +11,8 @@ import numpy as np
 
 from ..certify.gain import T as T_SYM
 from ..certify.gain import parse_gain
-from ..design import ProtocolDesign, design_topology
-from ..errors import InputError
+from ..design import DESIGN_KEYS, ProtocolDesign, design_topology
+from ..errors import InputError, require_positive
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from .grid import TimeGrid, build_grid
 from .moments import Moments, exact_moments
@@ -80,21 +79,7 @@ class SimulationResult:
 
 def _design_brief(d: ProtocolDesign) -> dict:
     full = d.to_dict()
-    keep = (
-        "C",
-        "delta",
-        "k1",
-        "x0",
-        "informed",
-        "B",
-        "V1",
-        "V2",
-        "assumption_holds",
-        "violations",
-        "identity_residual",
-        "thresholds",
-    )
-    return {k: full[k] for k in keep}
+    return {k: full[k] for k in DESIGN_KEYS}
 
 
 def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
@@ -140,15 +125,6 @@ def make_gain(
     raise InputError(f"{field_name}: expected an expression in t or a callable")
 
 
-def _positive(name: str, v, integer: bool = False) -> None:
-    bad = isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0
-    if integer:
-        bad = bad or not float(v).is_integer()
-    if bad:
-        kind = "a positive integer" if integer else "a positive number"
-        raise InputError(f"{name}: must be {kind}, got {v!r}")
-
-
 def simulate(
     topology: Topology | SwitchingTopology | TimeVaryingTopology,
     theta: Sequence[float],
@@ -177,11 +153,11 @@ def simulate(
     functions of t), by Monte Carlo Euler–Maruyama (``method`` mc), exact moments (exact,
     linear f only) or both."""
     noise = noise or NoiseModel()
-    _positive("T", T)
-    _positive("dt", dt)
-    _positive("paths", paths, integer=True)
-    _positive("block_size", block_size, integer=True)
-    _positive("workers", workers, integer=True)
+    require_positive("T", T)
+    require_positive("dt", dt)
+    require_positive("paths", paths, integer=True)
+    require_positive("block_size", block_size, integer=True)
+    require_positive("workers", workers, integer=True)
     if method not in ("mc", "exact", "both"):
         raise InputError(f"method: must be mc, exact or both, got {method!r}")
     if stepping not in ("uniform", "intrinsic"):
@@ -200,7 +176,7 @@ def simulate(
         n, d, labels = topology.n, topology.dim, topology.labels
     elif isinstance(topology, TimeVaryingTopology):
         step = resample if resample is not None else 0.1
-        _positive("resample", step)
+        require_positive("resample", step)
         ts = np.arange(0.0, T, step)
         designs = {
             f"t={t:g}": design_topology(topology.at(float(t)), theta, margin, thresholds=False)
@@ -244,7 +220,7 @@ def simulate(
             raise InputError(f"save_times: expected times in [0, T={T:g}]")
         st = np.unique(np.concatenate([[0.0], st]))
     else:
-        _positive("save_every", save_every)
+        require_positive("save_every", save_every)
         st = np.unique(np.concatenate([np.arange(0.0, T, save_every), [T]]))
     grid = build_grid(
         float(T),
