@@ -9,11 +9,6 @@ class InputError(ValueError):
     """
 
 
-def where(source: str | None, field: str) -> str:
-    """Prefix naming the file (if any) and the field an error concerns."""
-    return f"{source}: {field}" if source else field
-
-
 def require_positive(name: str, value, integer: bool = False) -> None:
     """Raise InputError unless ``value`` is a finite positive number (an integer if asked)."""
     import math

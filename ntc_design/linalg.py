@@ -72,16 +72,7 @@ def classify(a: np.ndarray, rtol: float = DEF_RTOL) -> Definiteness:
     return Definiteness.INDEFINITE
 
 
-def psd(a: np.ndarray, rtol: float = DEF_RTOL) -> bool:
-    """``a ⪰ 0`` for a symmetric ``a``, up to ``rtol·‖a‖₂``."""
-    return classify(a, rtol) in (Definiteness.PD, Definiteness.PSD, Definiteness.ZERO)
-
-
 def pd(a: np.ndarray, rtol: float = DEF_RTOL) -> bool:
     """``a ≻ 0`` for a symmetric ``a``: smallest eigenvalue above ``rtol·‖a‖₂``."""
     return classify(a, rtol) is Definiteness.PD
 
-
-def spectral_abscissa(m: np.ndarray) -> float:
-    """max Re λ(m)."""
-    return float(np.max(np.linalg.eigvals(m).real))
