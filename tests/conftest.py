@@ -2,8 +2,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import settings
 
 from ntc_design import Topology
+
+# Property tests draw the same examples on every run: results are identical on re-run.
+settings.register_profile("ntc", derandomize=True, print_blob=True)
+settings.load_profile("ntc")
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
