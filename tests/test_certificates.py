@@ -357,3 +357,25 @@ def test_certify_out_is_written_only_on_success(tmp_path, examples, capsys, monk
     assert verify(json.loads(out.read_text())).valid
     doc = copy.deepcopy(json.loads(out.read_text()))
     assert doc["verification_method"] == "exact-rational"
+
+
+def test_verify_uses_verified_float_above_the_exact_size(examples):
+    """Four disjoint copies of G1 (Nd = 84 > 80): the certificate is re-checked with the
+    rigorous floating-point test, and a forged P still fails."""
+    g1 = nd.load(examples / "g1.yaml")
+    edges = [
+        (7 * c + g1.labels[j], 7 * c + g1.labels[i], a)
+        for c in range(4)
+        for (i, j), a in g1.weights.items()
+    ]
+    big = nd.Topology.from_edges(28, 3, edges, name="4xG1")
+    cert = hurwitz_certificate(nd.design(big, THETA, thresholds=False), rate=False)
+    ver = verify(cert)
+    assert ver.valid and ver.method == "verified-float", ver.failed
+    assert cert["verification_method"] == "verified-float"
+    p = np.array(cert["matrices"]["P"]["lyapunov"])
+    p[5, 5] = -1.0
+    cert["matrices"]["P"]["lyapunov"] = p.tolist()
+    cert["digest"] = digest(cert)
+    bad = verify(cert)
+    assert not bad.valid and {c.name for c in bad.failed} >= {"P_lyapunov ≻ 0"}

@@ -118,7 +118,9 @@ def _verified_margin(mats: Sequence[np.ndarray], p: np.ndarray, alpha: float) ->
     return float(worst)
 
 
-def decay_rate_lmi(lap_b: np.ndarray, tol: float = 1e-4, max_iter: int = 40) -> RateResult:
+def decay_rate_lmi(
+    lap_b: np.ndarray, tol: float = 1e-4, max_iter: int = 40, eig_bound: float | None = None
+) -> RateResult:
     """(b) of the certificate: the largest α with ``P ⪰ I`` and
     ``P L_B + L_Bᵀ P − 2αP ⪰ 0`` (so ``‖ε(t)‖ <= κ e^{−αt}‖ε(0)‖`` for ε̇ = −L_B ε),
     by bisection on α with one Clarabel SDP per step. Each accepted α is checked on the
@@ -127,7 +129,7 @@ def decay_rate_lmi(lap_b: np.ndarray, tol: float = 1e-4, max_iter: int = 40) -> 
     cp = _cvx()
     t0 = time.perf_counter()
     n = lap_b.shape[0]
-    bound = float(np.min(np.linalg.eigvals(lap_b).real))
+    bound = float(np.min(np.linalg.eigvals(lap_b).real)) if eig_bound is None else eig_bound
     if bound <= 0:
         return RateResult(0.0, bound, None, "not Hurwitz: eigenvalue bound <= 0", 0, 0.0)
     p_var = cp.Variable((n, n), symmetric=True)
