@@ -4,7 +4,6 @@ stderr, exit code 2."""
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -16,6 +15,7 @@ from rich.table import Table
 
 from .design import ProtocolDesign, SwitchingDesign, design, structure_report
 from .errors import InputError
+from .files import jsonable
 from .model import SwitchingTopology, load
 
 app = typer.Typer(
@@ -43,18 +43,7 @@ def parse_vector(text: str, field: str) -> list[float]:
 
 
 def _json(obj) -> str:
-    def clean(x):
-        if isinstance(x, float) and not math.isfinite(x):
-            return None
-        if isinstance(x, dict):
-            return {k: clean(v) for k, v in x.items()}
-        if isinstance(x, (list, tuple)):
-            return [clean(v) for v in x]
-        if isinstance(x, np.generic):
-            return x.item()
-        return x
-
-    return json.dumps(clean(obj), indent=2, ensure_ascii=False)
+    return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
 
 
 def _fmt(x, digits: int = 4) -> str:

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError, require_positive
-from .linalg import DEF_RTOL, pd
+from .linalg import pd
 from .model import (
     SwitchingTopology,
     Topology,
@@ -168,11 +168,7 @@ class ProtocolDesign:
 
     def input_vector(self) -> np.ndarray:
         """``k1 (Δ⊗I_d) B θ`` = ``(Δ⊗I_d) B x0``: the constant drift from the external signal."""
-        d = self.topology.dim
-        u = np.zeros(self.topology.nd)
-        for i, b in self.B.items():
-            u[i * d : (i + 1) * d] = self.delta * b @ self.x0
-        return u
+        return input_vector(self.topology, self.B, self.delta, self.x0)
 
     def to_dict(self) -> dict:
         lab = self.topology.labels
@@ -221,6 +217,17 @@ def coupling_matrix(top: Topology, b: Mapping[int, np.ndarray]) -> np.ndarray:
     for i, bi in b.items():
         out[i * d : (i + 1) * d, i * d : (i + 1) * d] = bi
     return out
+
+
+def input_vector(
+    top: Topology, b: Mapping[int, np.ndarray], delta: float, x0: np.ndarray
+) -> np.ndarray:
+    """``(Δ⊗I_d) B x0`` with δ_i = δ on the informed agents (the keys of ``b``)."""
+    d = top.dim
+    u = np.zeros(top.nd)
+    for i, bi in b.items():
+        u[i * d : (i + 1) * d] = delta * bi @ x0
+    return u
 
 
 def _theta(theta: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:
@@ -285,12 +292,7 @@ def design_topology(
     x0 = k1 * th
     lap = top.laplacian()
     dmat = coupling_matrix(top, b)
-    lap_b = lap + dl * dmat
-    u = np.zeros(top.nd)
-    dd = top.dim
-    for i, bi in b.items():
-        u[i * dd : (i + 1) * dd] = dl * bi @ x0
-    res = identity_residual(lap_b, u, th)
+    res = identity_residual(lap + dl * dmat, input_vector(top, b, dl, x0), th)
     want = thresholds if thresholds is not None else top.nd <= THRESHOLDS_MAX_ND
     crit = critical_couplings(lap, dmat) if want else None
     if not want:
@@ -319,20 +321,6 @@ def design(
             },
         )
     return design_topology(topology, theta, margin, delta, thresholds)
-
-
-__all__ = [
-    "DEF_RTOL",
-    "Decomposition",
-    "ProtocolDesign",
-    "SwitchingDesign",
-    "Violation",
-    "assumption2",
-    "design",
-    "design_topology",
-    "lemma1_coefficient",
-    "structure_report",
-]
 
 
 def structure_report(top: Topology) -> dict:
@@ -367,3 +355,16 @@ def structure_report(top: Topology) -> dict:
         "paths": {str(lab[i]): [lab[k] for k in p] for i, p in dec.paths.items()},
         "violations": [{"agent": lab[v.agent], "reason": v.reason} for v in dec.violations],
     }
+
+
+__all__ = [
+    "Decomposition",
+    "ProtocolDesign",
+    "SwitchingDesign",
+    "Violation",
+    "assumption2",
+    "design",
+    "design_topology",
+    "lemma1_coefficient",
+    "structure_report",
+]

@@ -75,4 +75,3 @@ def classify(a: np.ndarray, rtol: float = DEF_RTOL) -> Definiteness:
 def pd(a: np.ndarray, rtol: float = DEF_RTOL) -> bool:
     """``a ≻ 0`` for a symmetric ``a``: smallest eigenvalue above ``rtol·‖a‖₂``."""
     return classify(a, rtol) is Definiteness.PD
-

@@ -178,9 +178,14 @@ class Topology:
         """U = {i : ∃ j, sgn(A_ij) = -1}: agents with at least one negative in-edge."""
         return tuple(i for i in range(self.n) if self.omega(i))
 
-    def laplacian(self) -> np.ndarray:
-        """The signed Laplacian L (Nd×Nd); see :func:`signed_laplacian`."""
+    @cached_property
+    def _laplacian(self) -> np.ndarray:
         return signed_laplacian(self)
+
+    def laplacian(self) -> np.ndarray:
+        """The signed Laplacian L (Nd×Nd); see :func:`signed_laplacian` (built once, a
+        copy is returned)."""
+        return self._laplacian.copy()
 
     def to_dict(self) -> dict:
         """A plain mapping in the topology-file form (round-trips through JSON/YAML)."""
@@ -291,7 +296,9 @@ class SwitchingTopology:
             raise InputError(f"{where}schedule: must not be empty")
         for k, (m, dur) in enumerate(self.schedule):
             if m not in self.modes:
-                raise InputError(f"{where}schedule[{k}]: unknown mode {m!r}")
+                raise InputError(
+                    f"{where}schedule[{k}]: unknown mode {m!r} (modes: {', '.join(self.modes)})"
+                )
             if not dur > 0:
                 raise InputError(f"{where}schedule[{k}].duration: must be positive, got {dur}")
 

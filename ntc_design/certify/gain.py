@@ -121,10 +121,6 @@ class GainAnalysis:
             "almost_sure": self.almost_sure,
         }
 
-    def callable(self):
-        """A vectorised NumPy function t -> c(t)."""
-        return sp.lambdify(T, self.expr, modules="numpy")
-
 
 def _and(*vals: bool | None) -> bool | None:
     if any(v is False for v in vals):

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..certify import certify, verify_file, write_certificate
 from ..certify.certificate import package_versions
-from ..design import design
+from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError
 from ..files import parse_topology
 from ..model import SwitchingTopology, Topology
@@ -153,13 +153,14 @@ def page(title: str, body: str) -> str:
 # --------------------------------------------------------------------------- sections
 
 
-def design_tables(top, theta, margin) -> tuple[str, dict]:
-    des = design(top, theta, margin)
-    docs = (
-        des.to_dict()["modes"]
-        if isinstance(top, SwitchingTopology)
-        else {top.name or "topology": des.to_dict()}
-    )
+def _modes(des: ProtocolDesign | SwitchingDesign) -> dict[str, ProtocolDesign]:
+    if isinstance(des, SwitchingDesign):
+        return dict(des.modes)
+    return {des.topology.name or "topology": des}
+
+
+def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[str, dict]:
+    docs = {name: d.to_dict() for name, d in _modes(des).items()}
     out = []
     for name, d in docs.items():
         th = d["thresholds"] or {}
@@ -277,7 +278,7 @@ def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, 
     p = run.summary["parameters"]
     top = run.topology()
     res = certify(top, p["theta"], p["margin"], p["gain"])
-    des_html, des_docs = design_tables(top, p["theta"], p["margin"])
+    des_html, des_docs = design_tables(res.design)  # the design certify made
     cert_html, cert = certificate_section(res, run.path / "certificate.json")
     doc = res.to_dict()
     labels = run.labels
@@ -285,11 +286,11 @@ def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, 
     if isinstance(top, SwitchingTopology):
         segs = top.segments(float(run.t[-1]))
     figs = []
-    modes = top.modes if isinstance(top, SwitchingTopology) else {top.name or "topology": top}
-    for name, t_m in modes.items():
-        d_m = design(t_m, p["theta"], p["margin"], thresholds=False)
+    for name, d_m in _modes(res.design).items():
         _, _, png = figures.save(
-            figures.topology_figure(t_m, d_m.informed, d_m.B, f"Ĝ of {name}: vertex 0 is x0"),
+            figures.topology_figure(
+                d_m.topology, d_m.informed, d_m.B, f"Ĝ of {name}: vertex 0 is x0"
+            ),
             figdir / f"{key}_topology_{name}",
         )
         figs.append(img(png, f"{title}: topology {name} with the external signal (vertex 0)"))

@@ -105,24 +105,21 @@ def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
 def make_gain(
     gain: str | Callable, field_name: str = "gain"
 ) -> tuple[Callable[[np.ndarray], np.ndarray], str]:
-    """A vectorised c(t) from an expression string or a callable."""
+    """A vectorised c(t) (array in, array of the same shape out) from an expression
+    string or a callable, and a label for it."""
     if isinstance(gain, str):
         import sympy as sp
 
-        expr = parse_gain(gain, field_name)
-        f = sp.lambdify(T_SYM, expr, modules="numpy")
-        return (
-            lambda t, f=f: (
-                np.asarray(f(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
-            )
-        ), gain
-    if callable(gain):
-        return (
-            lambda t, g=gain: (
-                np.asarray(g(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
-            )
-        ), getattr(gain, "__name__", "callable")
-    raise InputError(f"{field_name}: expected an expression in t or a callable")
+        fn, label = sp.lambdify(T_SYM, parse_gain(gain, field_name), modules="numpy"), gain
+    elif callable(gain):
+        fn, label = gain, getattr(gain, "__name__", "callable")
+    else:
+        raise InputError(f"{field_name}: expected an expression in t or a callable")
+
+    def c(t):  # a constant expression returns a scalar: broadcast it
+        return np.asarray(fn(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
+
+    return c, label
 
 
 def simulate(

@@ -53,10 +53,10 @@ class _Rhs:
         )
         self.ar = np.arange(n)
 
-    def __call__(self, c: float, m: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def noise(self, s: np.ndarray) -> np.ndarray:
+        """``Σ_k (g_k g_kᵀ + G_k S G_kᵀ)``."""
         n, d = self.n, self.d
-        ls = self.l @ s
-        ds = -c * (ls + ls.T) + c * c * self.q
+        out = self.q.copy()
         if self.k.size:
             s4 = s.reshape(n, d, n, d)
             i, j = self.ii, self.jj
@@ -64,9 +64,12 @@ class _Rhs:
             val = np.einsum("eab,ebc,edc->ead", self.k, delta, self.k)
             acc = np.zeros((n, d, d))
             np.add.at(acc, i, val)
-            ds4 = ds.reshape(n, d, n, d)
-            ds4[self.ar, :, self.ar, :] += c * c * acc
-        return -c * (self.l @ m), ds
+            out.reshape(n, d, n, d)[self.ar, :, self.ar, :] += acc
+        return out
+
+    def __call__(self, c: float, m: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        ls = self.l @ s
+        return -c * (self.l @ m), -c * (ls + ls.T) + c * c * self.noise(s)
 
 
 def exact_moments(
@@ -154,10 +157,10 @@ def em_moments(
     for k in range(grid.n_steps):
         f = rhs[grid.mode[k]]
         c, h = c_all[k], h_all[k]
-        dm, ds = f(c, m, s)  # continuous right-hand sides: h·f is the Euler part
         ls = f.l @ s
-        s = s + h * ds + (c * h) ** 2 * (ls @ f.l.T)
-        m = m + h * dm
+        # A S Aᵀ with A = I − c h L_B, plus the noise over one step
+        s = s - c * h * (ls + ls.T) + (c * h) ** 2 * (ls @ f.l.T) + c * c * h * f.noise(s)
+        m = m - c * h * (f.l @ m)
         s = 0.5 * (s + s.T)
         store(k + 1)
     return Moments(grid.save_times, means, ms, s, grid.n_steps)

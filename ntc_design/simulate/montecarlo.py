@@ -60,6 +60,15 @@ class PartialStats:
     valid_saves: int = 0  # save points computed for every path in these blocks
 
 
+def _first_bad(x: np.ndarray, d: int) -> tuple[int, int] | None:
+    """(path row, agent) of the first non-finite or overflowing entry, or None."""
+    bad = ~np.isfinite(x) | (np.abs(x) > 1e150)
+    if not bad.any():
+        return None
+    row, col = np.argwhere(bad)[0]
+    return int(row), int(col // d)
+
+
 def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     grid = spec.grid
     nd_, n_, d = spec.x_init.size, spec.n_agents, spec.dim
@@ -88,17 +97,19 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     failure = None
     valid = 0
 
+    def fail(where: tuple[int, int], t: float) -> None:
+        nonlocal failure
+        failure = {"t": t, "agent": where[1], "path": p0 + where[0], "save_index": valid}
+
+    def result() -> PartialStats:
+        idx = list(range(p0, p0 + n_store))
+        return PartialStats([b], p, sq, sq2, state, stored, idx, failure, valid)
+
     def record(i: int) -> bool:
-        nonlocal failure, valid
-        if not np.all(np.isfinite(x)) or np.max(np.abs(x)) > 1e150:
-            bad = ~np.isfinite(x) | (np.abs(x) > 1e150)
-            path, col = np.argwhere(bad)[0]
-            failure = {
-                "t": float(grid.save_times[i]),
-                "agent": int(col // d),
-                "path": int(p0 + path),
-                "save_index": i,
-            }
+        nonlocal valid
+        where = _first_bad(x, d)
+        if where is not None:
+            fail(where, float(grid.save_times[i]))
             return False
         e = (x - theta_t).reshape(p, n_, d)
         e2 = np.einsum("pnd,pnd->pn", e, e)
@@ -111,9 +122,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
         return True
 
     if 0 in save_at and not record(save_at[0]):
-        return PartialStats(
-            [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
-        )
+        return result()
     xi = np.empty((BATCH, p, 2 * e_max))
     k_total = grid.n_steps
     for k0 in range(0, k_total, BATCH):
@@ -133,26 +142,14 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
             noise += z @ wt
             x += ch_all[k] * drift + cs_all[k] * noise
             if k + 1 in save_at and not record(save_at[k + 1]):
-                return PartialStats(
-                    [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
-                )
+                return result()
         if progress is not None:
             progress(kb * p)
-        if not np.all(np.isfinite(x)):
-            bad = np.argwhere(~np.isfinite(x))[0]
-            t_bad = float(grid.t[k0 + kb])
-            failure = {
-                "t": t_bad,
-                "agent": int(bad[1] // d),
-                "path": int(p0 + bad[0]),
-                "save_index": valid,
-            }
-            return PartialStats(
-                [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
-            )
-    return PartialStats(
-        [b], p, sq, sq2, state, stored, list(range(p0, p0 + n_store)), failure, valid
-    )
+        where = _first_bad(x, d)
+        if where is not None:
+            fail(where, float(grid.t[k0 + kb]))
+            return result()
+    return result()
 
 
 def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> list[PartialStats]:
@@ -169,11 +166,7 @@ def merge(parts: Sequence[PartialStats]) -> PartialStats:
         sq += q.sq
         sq2 += q.sq2
         state += q.state
-    stored = (
-        np.concatenate([q.stored for q in parts if q.stored.size], axis=0)
-        if any(q.stored.size for q in parts)
-        else first.stored
-    )
+    stored = np.concatenate([q.stored for q in parts], axis=0)
     idx = [i for q in parts for i in q.stored_index]
     fails = [q.failure for q in parts if q.failure is not None]
     failure = min(fails, key=lambda f: f["t"]) if fails else None

@@ -6,13 +6,12 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..files import ScenarioData, parse_scenario
+from ..files import ScenarioData, jsonable, parse_scenario
 from ..model import SwitchingTopology, load
 from .system import NoiseModel
 
@@ -71,20 +70,6 @@ def scenario_arguments(path: str | Path) -> tuple[object, dict, ScenarioData]:
     return top, {"theta": theta, **kw}, sc
 
 
-def _clean(x):
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if isinstance(x, dict):
-        return {str(k): _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return _clean(x.tolist())
-    return x
-
-
 def ms_error_table(res) -> tuple[list[str], np.ndarray]:
     """Columns t, mc_a, mc_a_lo, mc_a_hi, exact_a (a = agent label)."""
     cols = ["t"]
@@ -113,7 +98,7 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
     for row in table:
         w.writerow([repr(float(v)) for v in row])
     files = {
-        "summary.json": json.dumps(_clean(summary), indent=1, ensure_ascii=False) + "\n",
+        "summary.json": json.dumps(jsonable(summary), indent=1, ensure_ascii=False) + "\n",
         "ms_error.csv": buf.getvalue(),
     }
     written = []
