@@ -108,18 +108,31 @@ def make_gain(
     """A vectorised c(t) (array in, array of the same shape out) from an expression
     string or a callable, and a label for it."""
     if isinstance(gain, str):
-        import sympy as sp
-
-        fn, label = sp.lambdify(T_SYM, parse_gain(gain, field_name), modules="numpy"), gain
-    elif callable(gain):
-        fn, label = gain, getattr(gain, "__name__", "callable")
-    else:
+        return ExpressionGain(gain, field_name), gain
+    if not callable(gain):
         raise InputError(f"{field_name}: expected an expression in t or a callable")
 
     def c(t):  # a constant expression returns a scalar: broadcast it
-        return np.asarray(fn(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
+        return np.asarray(gain(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
 
-    return c, label
+    return c, getattr(gain, "__name__", "callable")
+
+
+class ExpressionGain:
+    """c(t) from an expression: pickled as its text and rebuilt where it is unpickled, so a
+    spec holding it ships by value to other processes and machines (no lambdas)."""
+
+    def __init__(self, text: str, field_name: str = "gain"):
+        import sympy as sp
+
+        self.text, self.field_name = text, field_name
+        self._fn = sp.lambdify(T_SYM, parse_gain(text, field_name), modules="numpy")
+
+    def __reduce__(self):
+        return (ExpressionGain, (self.text, self.field_name))
+
+    def __call__(self, t):  # a constant expression returns a scalar: broadcast it
+        return np.asarray(self._fn(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
 
 
 def simulate(
@@ -144,11 +157,14 @@ def simulate(
     store_paths: int = 10,
     resample: float | None = None,
     progress: Callable[[int, int], None] | None = None,
+    engine=None,
 ) -> SimulationResult:
     """Simulate the SAN with compound noise under the Lemma 1 protocol (re-designed per
     mode for switching files, and every ``resample`` time units for a topology given as
     functions of t), by Monte Carlo Euler–Maruyama (``method`` mc), exact moments (exact,
-    linear f only) or both."""
+    linear f only) or both. ``engine``: an object with ``run_mc(spec, progress)`` (e.g.
+    :class:`ntc_design.distributed.DaskEngine`) that runs the Monte Carlo blocks elsewhere;
+    None runs them on ``workers`` local processes. Either way the result is the same."""
     noise = noise or NoiseModel()
     require_positive("T", T)
     require_positive("dt", dt)
@@ -308,7 +324,11 @@ def simulate(
             tuple(labels),
         )
         t0 = time.perf_counter()
-        part = run(spec, workers=workers, progress=progress)
+        if engine is not None:
+            part = engine.run_mc(spec, progress)
+            stats["engine"] = engine.describe()
+        else:
+            part = run(spec, workers=workers, progress=progress)
         sec = time.perf_counter() - t0
         stats.update({"mc_seconds": sec, "path_steps_per_second": grid.n_steps * paths / sec})
         mc = _mc_summary(part)
