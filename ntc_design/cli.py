@@ -3,8 +3,10 @@ stderr, exit code 2."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -29,6 +31,14 @@ out = Console(highlight=False)
 
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
+SchedulerOpt = Annotated[
+    str | None,
+    typer.Option(
+        help="Run on a Dask cluster: the scheduler's address, e.g. tcp://10.0.0.5:8786 "
+        "(start one with `dask scheduler` and `dask worker ADDRESS`). Default: this machine."
+    ),
+]
+PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
 
 
 def parse_vector(text: str, field: str) -> list[float]:
@@ -295,9 +305,11 @@ def simulate(
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
     ] = None,
+    scheduler: SchedulerOpt = None,
 ) -> None:
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
     summary.json, ms_error.csv and paths.npz to --out."""
+    from .distributed import DaskEngine
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
     from .simulate.scenario import scenario_arguments, write_outputs
@@ -305,19 +317,24 @@ def simulate(
     top, kw, sc = scenario_arguments(scenario)
     if workers is not None:
         kw["workers"] = workers
+    engine = DaskEngine.connect(scheduler) if scheduler else None
     prog = _progress()
-    with prog:
-        task = prog.add_task("simulating", total=1)
+    try:
+        with prog:
+            task = prog.add_task("simulating", total=1)
 
-        def tick(done: int, total: int) -> None:
-            prog.update(task, completed=done, total=total)
+            def tick(done: int, total: int) -> None:
+                prog.update(task, completed=done, total=total)
 
-        try:
-            res = run(top, progress=tick, **kw)
-        except SimulationDiverged as exc:
-            write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
-            print(f"error: {exc}", file=sys.stderr)
-            raise typer.Exit(1) from None
+            try:
+                res = run(top, progress=tick, engine=engine, **kw)
+            except SimulationDiverged as exc:
+                write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
+                print(f"error: {exc}", file=sys.stderr)
+                raise typer.Exit(1) from None
+    finally:
+        if engine is not None:
+            engine.close()
     write_outputs(res, out_dir, {"scenario": str(scenario)})
     st = res.stats
     rate = (
@@ -331,16 +348,81 @@ def simulate(
     out.print(f"wrote {out_dir}/summary.json, ms_error.csv, paths.npz")
 
 
+def _sweep_progress():
+    """(callback, context): a bar for points and path-steps on a terminal, otherwise a
+    plain line on stderr every PLAIN_EVERY seconds (and at the end), for batch jobs."""
+    if not sys.stderr.isatty():
+        last = [0.0]
+
+        def plain(st) -> None:
+            now = time.monotonic()
+            if now - last[0] >= PLAIN_EVERY or st.points_done == st.points_total:
+                last[0] = now
+                print(st.line(), file=sys.stderr, flush=True)
+
+        return plain, contextlib.nullcontext()
+    prog = _progress()
+    ids: dict[str, int] = {}
+
+    def bar(st) -> None:
+        if not ids:
+            ids["p"] = prog.add_task("points", total=st.points_total)
+            ids["s"] = prog.add_task("path-steps", total=max(st.path_steps_total, 1))
+        prog.update(ids["p"], completed=st.points_done, total=st.points_total)
+        prog.update(ids["s"], completed=st.path_steps_done, total=max(st.path_steps_total, 1))
+
+    return bar, prog
+
+
+@app.command()
+def sweep(
+    sweep_file: Annotated[Path, typer.Argument(help="A sweep file (YAML/JSON).")],
+    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    scheduler: SchedulerOpt = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(help="Local processes per point without --scheduler (default: 2)."),
+    ] = None,
+) -> None:
+    """Design, certify and simulate every point of a sweep (a grid or a list of points over
+    a base scenario); points already in --out are reused. Writes results.csv,
+    results.parquet, curves.parquet and points/. Exit 1 when some point failed."""
+    from .sweep import load_sweep, run_sweep
+
+    sw = load_sweep(sweep_file)
+    callback, ctx = _sweep_progress()
+    with ctx:
+        res = run_sweep(sw, out_dir, scheduler=scheduler, workers=workers, progress=callback)
+    out.print(
+        f"{res.points} points in {res.seconds:.1f} s: {res.computed} computed, {res.reused} reused, "
+        f"{res.failed} failed"
+    )
+    if res.failed:
+        import pandas as pd
+
+        table = pd.read_csv(out_dir / "results.csv")
+        for _, row in table[table["error"].notna()].head(10).iterrows():
+            vals = ", ".join(f"{k}={row[k]}" for k in sw.keys)
+            out.print(f"  failed: {vals}: {row['error']}")
+    out.print(
+        f"wrote {out_dir}/results.csv, results.parquet, curves.parquet (report: ntc report {out_dir})"
+    )
+    if res.failed:
+        raise typer.Exit(1)
+
+
 @app.command()
 def report(
     directory: Annotated[
-        Path, typer.Argument(help="A simulation output directory (ntc simulate --out).")
+        Path,
+        typer.Argument(help="A simulation or sweep output directory (ntc simulate/sweep --out)."),
     ],
 ) -> None:
-    """Turn a simulation output directory into one self-contained report.html."""
+    """Turn a simulation or sweep output directory into one self-contained report.html."""
     from .reports.report import write_report
+    from .reports.sweep import is_sweep_dir, write_sweep_report
 
-    path = write_report(directory)
+    path = write_sweep_report(directory) if is_sweep_dir(directory) else write_report(directory)
     out.print(f"wrote {path}")
 
 

@@ -58,7 +58,7 @@ _CERT_CACHE_SIZE = 64
 @dataclass(frozen=True)
 class Sweep:
     """A validated sweep file: the swept keys in file order and one override mapping per
-    point (every point sets every key; keys a listed point leaves out keep the base's)."""
+    point (a listed point may leave keys out: they keep the base scenario's values)."""
 
     source: Path
     base: Path
@@ -174,16 +174,23 @@ def _check_key(src: Path, where: str, key: Any, base_doc: dict) -> str:
     head, _, rest = key.partition(".")
     if head not in TOP_KEYS:
         raise _err(
-            src, f"{where}.{key}", "not a scenario field (allowed: " + ", ".join(sorted(TOP_KEYS))
-            + ", noise.sigma|f|sigma_edges, initial.uniform|seed)"
+            src,
+            f"{where}.{key}",
+            "not a scenario field (allowed: "
+            + ", ".join(sorted(TOP_KEYS))
+            + ", noise.sigma|f|sigma_edges, initial.uniform|seed)",
         )
     if rest:
         if head not in NESTED_KEYS or rest not in NESTED_KEYS[head]:
             allowed = ", ".join(f"{h}.{k}" for h in NESTED_KEYS for k in sorted(NESTED_KEYS[h]))
-            raise _err(src, f"{where}.{key}", f"no such field in a scenario (dotted keys: {allowed})")
+            raise _err(
+                src, f"{where}.{key}", f"no such field in a scenario (dotted keys: {allowed})"
+            )
         if head == "initial" and not isinstance(base_doc.get("initial"), dict):
             raise _err(
-                src, f"{where}.{key}", "the base scenario's initial is not a {uniform, seed} mapping"
+                src,
+                f"{where}.{key}",
+                "the base scenario's initial is not a {uniform, seed} mapping",
             )
     return key
 
@@ -234,7 +241,9 @@ def load_sweep(path: str | Path) -> Sweep:
     doc = read_document(src)
     unknown = sorted(str(k) for k in set(doc) - SWEEP_KEYS)
     if unknown:
-        raise _err(src, unknown[0], "unknown field (allowed: " + ", ".join(sorted(SWEEP_KEYS)) + ")")
+        raise _err(
+            src, unknown[0], "unknown field (allowed: " + ", ".join(sorted(SWEEP_KEYS)) + ")"
+        )
     if not isinstance(doc.get("base"), str) or not doc["base"]:
         raise _err(src, "base", "expected the path of a scenario file")
     base = src.parent / doc["base"]
@@ -279,14 +288,17 @@ def load_sweep(path: str | Path) -> Sweep:
             _check_conflicts(src, f"points[{i}]", p)
         keys = tuple(seen)
         _check_conflicts(src, "points", keys)
-        points = tuple({k: p.get(k, _get(base_doc, k)) for k in keys} for p in pts)
+        points = tuple(dict(p) for p in pts)
     topology_doc = _inline_topology(sc.topology)
     sweep = Sweep(src, base, base_doc, topology_doc, keys, points, str(doc.get("name") or src.stem))
     hashes: dict[str, int] = {}
     for i, t in enumerate(sweep.tasks()):
         if t.point in hashes:
-            raise _err(src, "points" if "points" in doc else "grid",
-                       f"point {i} repeats point {hashes[t.point]} (same resolved parameters)")
+            raise _err(
+                src,
+                "points" if "points" in doc else "grid",
+                f"point {i} repeats point {hashes[t.point]} (same resolved parameters)",
+            )
         hashes[t.point] = i
     return sweep
 
@@ -327,7 +339,9 @@ def point_hash(scenario: dict, topology_doc: dict) -> str:
 
 def _task(sweep: Sweep, overrides: dict) -> PointTask:
     scenario, top = _resolve(sweep, overrides)
-    return PointTask(point_hash(scenario, top), dict(overrides), scenario, top)
+    # the value each swept key has at this point (the base's where a listed point is silent)
+    params = {k: overrides[k] if k in overrides else _get(sweep.base_doc, k) for k in sweep.keys}
+    return PointTask(point_hash(scenario, top), params, scenario, top)
 
 
 # -- one point (runs on a worker) ------------------------------------------------------
@@ -366,7 +380,10 @@ def _certify_cached(top, topology_doc: dict, kw: dict) -> tuple:
 
 
 def run_point(
-    task: PointTask, progress: Callable[[int, int], None] | None = None, remote: bool = False
+    task: PointTask,
+    progress: Callable[[int, int], None] | None = None,
+    remote: bool = False,
+    workers: int | None = None,
 ) -> PointResult:
     """Design, certify and simulate one point. Errors inside the point (a bad parameter, a
     divergence, a failed design) become the row's ``error``; nothing is raised.
@@ -380,6 +397,8 @@ def run_point(
     remote
         True inside a cluster task: the Monte Carlo runs in this process with one BLAS
         thread (the cluster's workers are the parallelism).
+    workers
+        Local processes for the Monte Carlo when not remote (None: the scenario's).
 
     Returns
     -------
@@ -407,6 +426,8 @@ def run_point(
                 raise InputError(str(exc).replace(str(sc_path), "scenario")) from None
         if remote:
             kw["workers"] = 1
+        elif workers is not None:
+            kw["workers"] = workers
         row["T"], row["paths"] = kw.get("T", DEFAULTS["T"]), kw.get("paths", DEFAULTS["paths"])
         (
             row["delta"],
@@ -558,7 +579,9 @@ def write_tables(sweep: Sweep, out_dir: Path, results: dict[str, PointResult]) -
         row.update({k: _cell(task.params.get(k)) for k in sweep.keys})
         rows.append(row)
     # a swept key named like a row field (T, paths) is that column, shown once
-    table = pd.DataFrame(rows, columns=[*sweep.keys, *(f for f in ROW_FIELDS if f not in sweep.keys)])
+    table = pd.DataFrame(
+        rows, columns=[*sweep.keys, *(f for f in ROW_FIELDS if f not in sweep.keys)]
+    )
     for k in sweep.keys:  # one type per column (Parquet): mixed columns become text
         kinds = {type(v) for v in table[k] if v is not None}
         if len(kinds) > 1 and not kinds <= {int, float}:
@@ -682,7 +705,7 @@ def run_sweep(
 
         report()
         if todo:
-            items = [(t.point, (t,)) for t in todo]
+            items = [(t.point, (t, None, workers)) for t in todo]
             if not isinstance(eng, LocalEngine):
                 # one copy of each distinct topology on the cluster, not one per task
                 shared: dict[str, Any] = {}
@@ -697,7 +720,9 @@ def run_sweep(
                 if exc is not None:  # the cluster gave up: a row now, a retry next run
                     task = next(t for t in todo if t.point == point)
                     row = {k: None for k in ROW_FIELDS}
-                    row.update(point=point, error=f"not computed: {exc.__class__.__name__}: {exc}"[:500])
+                    row.update(
+                        point=point, error=f"not computed: {exc.__class__.__name__}: {exc}"[:500]
+                    )
                     results[point] = PointResult(point, task.params, row, np.zeros(0), [])
                 else:
                     save_point(out, res)
@@ -722,8 +747,10 @@ def run_sweep(
     )
 
 
-def _run_any(task: PointTask, topology_doc=None, progress=None, remote=False) -> PointResult:
+def _run_any(
+    task: PointTask, topology_doc=None, workers=None, progress=None, remote=False
+) -> PointResult:
     """run_point, with the topology document passed separately when it was scattered."""
     if topology_doc is not None:
         task = PointTask(task.point, task.params, task.scenario, topology_doc)
-    return run_point(task, progress, remote)
+    return run_point(task, progress, remote, workers)
