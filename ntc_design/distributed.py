@@ -125,7 +125,7 @@ class DaskEngine:
         if not isinstance(address, str) or not address.strip() or len(address) > 1000:
             raise InputError("--scheduler: expected an address such as tcp://127.0.0.1:8786")
         try:
-            client = Client(address, timeout=CONNECT_TIMEOUT, set_as_default=False)
+            client = Client(address, timeout=CONNECT_TIMEOUT)
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             msg = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
             raise InputError(
