@@ -11,11 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from ..files import ScenarioData, jsonable, parse_scenario
+from ..interop import simulation_frame
 from ..model import load
 from ..outputs import check_output_folder, output_folder
 from .spec import SimulationSpec
 
-OUTPUT_FILES = ("summary.json", "ms_error.csv", "paths.npz")
+OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz")
 # what an earlier run's folder may hold besides its outputs (ntc report writes these)
 REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures")
 
@@ -62,7 +63,7 @@ def ms_error_table(res) -> tuple[list[str], np.ndarray]:
 
 
 def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[Path]:
-    """Write summary.json, ms_error.csv and paths.npz into ``out_dir``, all or nothing
+    """Write summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz into ``out_dir``, all or nothing
     (see :func:`ntc_design.outputs.output_folder`).
 
     Parameters
@@ -96,6 +97,10 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
             json.dumps(jsonable(summary), indent=1, ensure_ascii=False) + "\n", encoding="utf-8"
         )
         (tmp / "ms_error.csv").write_text(buf.getvalue(), encoding="utf-8")
+        # the same numbers in tidy long form (t, agent, mc, lo, hi, exact), as to_pandas()
+        (tmp / "ms_error_long.csv").write_text(
+            simulation_frame(res).to_csv(index=False), encoding="utf-8"
+        )
         np.savez_compressed(
             tmp / "paths.npz",
             t=res.save_times,
