@@ -29,17 +29,17 @@ import json
 import math
 import os
 import socket
-import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .errors import InputError
-from .files import SCENARIO_KEYS, jsonable, parse_scenario, read_document
+from .files import jsonable, parse_switching, parse_topology, read_document
+from .simulate.spec import SCENARIO_KEYS
 
 FORMAT = 1
 MAX_POINTS = 10_000  # points in one sweep
@@ -47,7 +47,7 @@ MAX_VALUES = 1_000  # values of one grid key
 SWEEP_KEYS = {"name", "description", "base", "grid", "points"}
 # keys a sweep may set: the scenario's own (the engine, not the sweep, decides the workers),
 # and the fields inside noise and initial
-TOP_KEYS = SCENARIO_KEYS - {"name", "description", "workers"}
+TOP_KEYS = set(SCENARIO_KEYS) - {"name", "description", "workers"}
 NESTED_KEYS = {"noise": {"sigma", "f", "sigma_edges"}, "initial": {"uniform", "seed"}}
 # simulate()'s defaults, for the path-step estimate of a point
 DEFAULTS = {"T": 10.0, "dt": 1e-3, "paths": 1000}
@@ -249,7 +249,9 @@ def load_sweep(path: str | Path) -> Sweep:
     base = src.parent / doc["base"]
     if not base.is_file():
         raise _err(src, "base", f"no such file {base}")
-    sc = parse_scenario(base)  # a broken base is the file's error, not every point's
+    from .simulate.scenario import load_scenario
+
+    _, _, sc = load_scenario(base)  # a broken base is the file's error, not every point's
     base_doc = read_document(base)
     if ("grid" in doc) == ("points" in doc):
         raise _err(src, "grid", "give exactly one of grid (a product of lists) or points (a list)")
@@ -347,19 +349,27 @@ def _task(sweep: Sweep, overrides: dict) -> PointTask:
 # -- one point (runs on a worker) ------------------------------------------------------
 
 
-def _certify_cached(top, topology_doc: dict, kw: dict) -> tuple:
+def topology_from_document(doc: dict, source: str = "topology"):
+    """A Topology or SwitchingTopology from its (inlined) document."""
+    from .model import SwitchingTopology, Topology
+
+    if "modes" in doc or "schedule" in doc:
+        return SwitchingTopology.from_data(parse_switching(doc, source))
+    return Topology.from_data(parse_topology(doc, source))
+
+
+def _certify_cached(top, topology_doc: dict, spec) -> tuple:
     """(δ, certificate valid, MS verdict, a.s. verdict, digest): the certificate depends
     only on the topology, θ, the margin and the gain."""
     from .certify import certify
     from .design import SwitchingDesign
 
+    gain = spec.gain if isinstance(spec.gain, str) else None
     key = json.dumps(
-        jsonable([topology_doc, kw["theta"], kw.get("margin", 0.1), kw.get("gain", "1/(1+t)")]),
-        sort_keys=True,
-        default=repr,
+        jsonable([topology_doc, spec.theta, spec.margin, gain]), sort_keys=True, default=repr
     )
     if key not in _CERT_CACHE:
-        res = certify(top, kw["theta"], kw.get("margin", 0.1), kw.get("gain", "1/(1+t)"))
+        res = certify(top, spec.theta, spec.margin, gain)
         des = res.design
         delta = (
             max(d.delta for d in des.modes.values())
@@ -406,39 +416,29 @@ def run_point(
     """
     from threadpoolctl import threadpool_limits
 
-    from .simulate import SimulationDiverged, simulate
-    from .simulate.scenario import scenario_arguments
+    from .simulate import SimulationDiverged, SimulationSpec, simulate
 
     t0 = time.perf_counter()
     row: dict[str, Any] = {k: None for k in ROW_FIELDS}
     row.update(point=task.point, worker=_worker_name(remote))
     res = None
     try:
-        # one parser for scenario files and sweep points: the point is written out as a
-        # scenario file in a private directory and read back exactly like `ntc simulate`
-        with tempfile.TemporaryDirectory(prefix="ntc-point-") as tmp:
-            sc_path = Path(tmp) / "scenario.json"
-            (Path(tmp) / "topology.json").write_text(json.dumps(task.topology_doc))
-            sc_path.write_text(json.dumps({**task.scenario, "topology": "topology.json"}))
-            try:
-                top, kw, _ = scenario_arguments(sc_path)
-            except InputError as exc:
-                raise InputError(str(exc).replace(str(sc_path), "scenario")) from None
-        if remote:
-            kw["workers"] = 1
-        elif workers is not None:
-            kw["workers"] = workers
-        row["T"], row["paths"] = kw.get("T", DEFAULTS["T"]), kw.get("paths", DEFAULTS["paths"])
+        # the same checks as a scenario file: every field named in a one-line error
+        spec = SimulationSpec.from_document(task.scenario)
+        top = topology_from_document(task.topology_doc)
+        if remote or workers is not None:
+            spec = spec.replace(mc=replace(spec.mc, workers=1 if remote else workers))
+        row["T"], row["paths"] = spec.T, spec.mc.paths
         (
             row["delta"],
             row["certified"],
             row["ms_guaranteed"],
             row["as_guaranteed"],
             row["certificate_digest"],
-        ) = _certify_cached(top, task.topology_doc, kw)
+        ) = _certify_cached(top, task.topology_doc, spec)
         with threadpool_limits(limits=1 if remote else None):
             try:
-                res = simulate(top, progress=progress, **kw)
+                res = simulate(top, spec, progress=progress)
             except SimulationDiverged as exc:
                 res, row["error"] = exc.result, str(exc)
         row["path_steps"] = res.stats["path_steps"]

@@ -6,6 +6,7 @@ import os
 import signal
 import socket
 import time
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -14,7 +15,7 @@ import pytest
 from ntc_design import distributed as dist
 from ntc_design.distributed import DaskEngine, LocalEngine
 from ntc_design.simulate import simulate
-from ntc_design.simulate.scenario import scenario_arguments
+from ntc_design.simulate.scenario import load_scenario
 from ntc_design.sweep import MAX_POINTS, load_sweep, run_sweep
 
 from .cli_helpers import assert_input_error, run_cli
@@ -131,13 +132,14 @@ def test_sweep_on_cluster_survives_a_killed_worker(files, reference, cluster):
 
 
 def test_monte_carlo_bit_identical_through_the_scheduler(files, cluster):
-    top, kw, _ = scenario_arguments(files / "sc.yaml")
-    kw.update(paths=230, block_size=40, method="mc")  # 6 blocks, the last one short
-    local1 = simulate(top, **{**kw, "workers": 1})
-    local2 = simulate(top, **{**kw, "workers": 2})
+    top, spec, _ = load_scenario(files / "sc.yaml")
+    # 6 blocks, the last one short
+    spec = spec.replace(mc=replace(spec.mc, paths=230, block_size=40), method="mc")
+    local1 = simulate(top, spec.replace(mc=replace(spec.mc, workers=1)))
+    local2 = simulate(top, spec.replace(mc=replace(spec.mc, workers=2)))
     for chunk in (1, 4):
         with DaskEngine(cluster, blocks_per_chunk=chunk) as eng:
-            remote = simulate(top, engine=eng, **kw)
+            remote = simulate(top, spec, engine=eng)
         assert remote.stats["engine"]["engine"] == "dask"
         for key in ("mean", "lo", "hi", "mean_state", "paths"):
             assert np.array_equal(remote.mc[key], local1.mc[key]), (chunk, key)
