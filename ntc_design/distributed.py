@@ -26,7 +26,7 @@ from .errors import InputError
 from .simulate.montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
 
 RETRIES = 3  # re-runs of a task that raised (a lost worker is re-scheduled regardless)
-CONNECT_TIMEOUT = 10.0  # seconds to reach a scheduler
+CONNECT_TIMEOUT = 30.0  # seconds to reach a scheduler (generous: a loaded scheduler is slow)
 PROGRESS_EVERY = 0.5  # seconds between progress events sent by one task
 
 
