@@ -423,9 +423,10 @@ def sweep(
         table = pd.read_csv(out_dir / "results.csv")
         for _, row in table[table["error"].notna()].head(10).iterrows():
             vals = ", ".join(f"{k}={row[k]}" for k in sw.keys)
-            out.print(f"  failed: {vals}: {row['error']}")
+            out.print(f"  failed: {vals}: {row['error']}", soft_wrap=True)
     out.print(
-        f"wrote {out_dir}/results.csv, results.parquet, curves.parquet (report: ntc report {out_dir})"
+        f"wrote {out_dir}/results.csv, results.parquet, curves.parquet (report: ntc report {out_dir})",
+        soft_wrap=True,
     )
     if res.failed:
         raise typer.Exit(1)
