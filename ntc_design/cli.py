@@ -45,6 +45,7 @@ def _root(
     """Certify, design and validate non-trivial consensus protocols on signed
     matrix-weighted networks with compound measurement noise."""
 
+
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
 
@@ -334,6 +335,8 @@ def simulate(
 
         try:
             res = run(top, spec, progress=tick)
+        except InputError as exc:  # a field of the scenario: name the file
+            raise InputError(f"{sc.source}: {exc}") from None
         except SimulationDiverged as exc:
             write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
             print(f"error: {one_line(str(exc))}", file=sys.stderr)
