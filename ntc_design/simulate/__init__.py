@@ -9,10 +9,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..certify.gain import T as T_SYM
-from ..certify.gain import parse_gain
 from ..design import DESIGN_KEYS, ProtocolDesign, design_topology
 from ..errors import InputError, require_positive
+from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from .grid import TimeGrid, build_grid
 from .moments import Moments, exact_moments
@@ -115,9 +114,7 @@ def make_gain(
     """A vectorised c(t) (array in, array of the same shape out) from an expression
     string or a callable, and a label for it."""
     if isinstance(gain, str):
-        import sympy as sp
-
-        fn, label = sp.lambdify(T_SYM, parse_gain(gain, field_name), modules="numpy"), gain
+        fn, label = gain_function(gain, field_name), gain
     elif callable(gain):
         fn, label = gain, getattr(gain, "__name__", "callable")
     else:
