@@ -51,7 +51,8 @@ from .expr import compile_expression, parse_expression, symbol
 
 T = symbol("t")
 GAIN_SECONDS = 6.0  # hard limit of one gain analysis (the child process is killed)
-STEP_SECONDS = 2.0  # budget of one sympy call inside it
+STEP_SECONDS = 2.0  # budget of one sympy call inside it (a third of a larger total)
+_step = [STEP_SECONDS]  # the budget in force, set per analysis
 
 #: The gain conditions, by key, with the label every report and verdict prints.
 CONDITION_LABELS: dict[str, str] = {
@@ -173,8 +174,9 @@ def gain_function(text: str, field: str = "gain") -> Callable[[np.ndarray], np.n
 # ----------------------------------------------------------------- bounded sympy calls
 
 
-def _bounded(fn: Callable[[], Any], seconds: float = STEP_SECONDS) -> Any:
+def _bounded(fn: Callable[[], Any], seconds: float | None = None) -> Any:
     """Run a sympy call with a SIGALRM budget where possible; raise _Timeout past it."""
+    seconds = _step[0] if seconds is None else seconds * _step[0] / STEP_SECONDS
     import threading
 
     if not hasattr(signal, "setitimer"):
@@ -195,7 +197,7 @@ def _bounded(fn: Callable[[], Any], seconds: float = STEP_SECONDS) -> Any:
         signal.signal(signal.SIGALRM, old)
 
 
-def _limit(expr: sp.Expr, seconds: float = STEP_SECONDS) -> sp.Expr | None:
+def _limit(expr: sp.Expr, seconds: float | None = None) -> sp.Expr | None:
     """lim_(t→∞) expr: a number, ±oo, an AccumBounds, or None if sympy fails or times out."""
     try:
         val = _bounded(lambda: sp.limit(expr, T, sp.oo), seconds)
@@ -248,8 +250,9 @@ def _compare(h: sp.Expr, name: str) -> tuple[bool | None, str]:
     for psi, psi_l2, div_ref, conv_ref in _scale():
         lo, _ = _bounds(d) if (d := _limit(h * psi)) is not None else (None, None)
         if lo is not None and _pos(lo):
+            what = "liminf" if isinstance(d, sp.AccumBounds) else "lim"
             return False, (
-                f"liminf {name}·{_mul_name(div_ref)} = {lo} > 0: ∫ {name} dt diverges like "
+                f"{what} {name}·{_mul_name(div_ref)} = {lo} > 0: ∫ {name} dt diverges like "
                 f"∫ {div_ref} dt (limit comparison)"
             )
         c = _limit(h * psi_l2)
@@ -512,8 +515,9 @@ def _decide(expr: sp.Expr, text: str, send: Callable[[str, Any], None]) -> None:
     send("square_integrable", Condition(*_integral(tail**2, "c²")))
 
 
-def _child(conn, expr: sp.Expr, text: str) -> None:  # pragma: no cover - runs in the fork
+def _child(conn, expr: sp.Expr, text: str, step: float) -> None:  # pragma: no cover - fork
     warnings.simplefilter("ignore")
+    _step[0] = step  # this process only
     try:
         _decide(expr, text, lambda k, v: conn.send((k, v)))
     except BaseException as exc:  # noqa: BLE001 - report, never a traceback
@@ -527,14 +531,19 @@ def _child(conn, expr: sp.Expr, text: str) -> None:  # pragma: no cover - runs i
 def _run(expr: sp.Expr, text: str, seconds: float) -> tuple[dict[str, Any], str]:
     """Run :func:`_decide` in a forked child killed at the deadline; (results, why missing)."""
     results: dict[str, Any] = {}
+    step = max(STEP_SECONDS, seconds / 3)
     if "fork" not in multiprocessing.get_all_start_methods() or sys.platform != "linux":
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            _decide(expr, text, results.__setitem__)
+        old, _step[0] = _step[0], step
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                _decide(expr, text, results.__setitem__)
+        finally:
+            _step[0] = old
         return results, ""
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, expr, text), daemon=True)
+    proc = ctx.Process(target=_child, args=(send, expr, text, step), daemon=True)
     proc.start()
     send.close()
     deadline = time.monotonic() + seconds
