@@ -17,10 +17,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..certify.gain import T as T_SYM
-from ..certify.gain import parse_gain
 from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, quote
+from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from .budget import check_budget, estimate, estimate_steps
 from .grid import TimeGrid, build_grid
@@ -57,9 +56,7 @@ def make_gain(
         When the expression does not parse or ``gain`` is neither.
     """
     if isinstance(gain, str):
-        import sympy as sp
-
-        fn, label = sp.lambdify(T_SYM, parse_gain(gain, field_name), modules="numpy"), gain
+        fn, label = gain_function(gain, field_name), gain
     elif callable(gain):
         fn, label = gain, getattr(gain, "__name__", "callable")
     else:
