@@ -348,10 +348,13 @@ def test_read_only_out_folder(tmp_path, capsys, monkeypatch):
 def test_rerun_replaces_the_whole_folder(tmp_path, capsys, monkeypatch):
     out = tmp_path / "o"
     assert run_cli(["simulate", scenario(tmp_path), "--out", out], capsys, monkeypatch)[0] == 0
-    (out / "report.html").write_text("old report")
+    (out / "report.html").write_text("old report")  # what ntc report adds to a run
+    (out / "certificate.json").write_text("{}")
+    (out / "figures").mkdir()
     sc2 = scenario(tmp_path, name="sc2.json", seed=5)
     assert run_cli(["simulate", sc2, "--out", out], capsys, monkeypatch)[0] == 0
     assert not (out / "report.html").exists()  # nothing from the old run is left beside it
+    assert not (out / "figures").exists() and not (out / "certificate.json").exists()
     assert json.loads((out / "summary.json").read_text())["parameters"]["seed"] == 5
     assert sorted(os.listdir(tmp_path)) == ["o", "sc.json", "sc2.json"]
 
