@@ -422,7 +422,7 @@ def simulate(
     out.print("; ".join(parts))
     for n in res.notes:
         out.print(f"note: {n}")
-    out.print(f"wrote {', '.join(str(p) for p in written)}")
+    out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
 @app.command()
@@ -453,7 +453,7 @@ def report(
             )
         )
         return
-    out.print(f"wrote {path}")
+    out.print(f"wrote {path}", soft_wrap=True)
 
 
 @app.command()
@@ -499,7 +499,8 @@ def reproduce(
         print(_json({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))
     else:
         out.print(
-            f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}"
+            f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}",
+            soft_wrap=True,
         )
     if not ok:
         raise typer.Exit(1)

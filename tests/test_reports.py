@@ -90,7 +90,7 @@ def test_reproduce_paper_summary_matches(paper_run):
         assert (out / "figures" / f"{stem}.png").stat().st_size > 10_000
         assert (out / "figures" / f"{stem}.svg").read_text().lstrip().startswith("<?xml")
         assert (out / "figures" / f"{stem}.pdf").read_bytes().startswith(b"%PDF")
-    assert wall < 300
+    assert wall < 900  # a gross-regression guard only: speed is measured in benchmarks/
 
 
 def test_reproduce_report_structure(paper_run):
