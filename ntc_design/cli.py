@@ -251,14 +251,10 @@ def _print_gain(g: dict) -> None:
     t = Table(title=f"gain c(t) = {g['parsed']}")
     for c in ("condition", "holds", "reason"):
         t.add_column(c)
-    names = {
-        "continuous_nonnegative": "continuous, c >= 0 on [0, ∞)",
-        "integral_diverges": "∫₀^∞ c dt = ∞",
-        "tends_to_zero": "c(t) → 0",
-        "square_integrable": "∫₀^∞ c² dt < ∞",
-    }
+    from .gain import CONDITION_LABELS
+
     yn = {True: "yes", False: "[red]no[/red]", None: "undetermined"}
-    for k, label in names.items():
+    for k, label in CONDITION_LABELS.items():
         t.add_row(label, yn[g[k]["value"]], g[k]["reason"])
     out.print(t)
     out.print(
@@ -286,7 +282,7 @@ def gain(
     as_json: JsonOpt = False,
 ) -> None:
     """Decide the gain conditions of Theorems 1-4 for c(t)."""
-    from .certify import analyse_gain
+    from .gain import analyse_gain
 
     doc = analyse_gain(expr).to_dict()
     print(_json(doc)) if as_json else _print_gain(doc)
@@ -384,6 +380,8 @@ def simulate(
         prog.stage(f"simulating {scenario}")
         try:
             res = run(top, spec, progress=lambda done, total: prog.tick("simulating", done, total))
+        except InputError as exc:  # a field of the scenario: name the file
+            raise InputError(f"{sc.source}: {exc}") from None
         except SimulationDiverged as exc:
             written = write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
             if as_json:

@@ -687,7 +687,7 @@ def gain_latex(text: str) -> str:
     from matplotlib.mathtext import MathTextParser
     from sympy.printing.latex import LatexPrinter
 
-    from ..certify.gain import parse_gain
+    from ..gain import parse_gain
 
     class Printer(LatexPrinter):
         def _print_Pow(self, expr):  # (1+t)^{-1/3} as the paper writes it, not 1/∛(1+t)

@@ -148,8 +148,15 @@ def estimate(
             "block_size",
             w * F8 * b * (4 * nd_ + BATCH * 2 * edges + 3 * ed),
         )
-        parts["statistics at the save times"] = ("save_every", stats * (2 * w + 2) + F8 * saves * 3 * n)
-        parts["stored paths"] = ("store_paths", 3 * F8 * k * saves * nd_)
+        parts["statistics at the save times"] = (
+            "save_every",
+            stats * (2 * w + 2) + F8 * saves * 3 * n,
+        )
+        # k stored paths × S save times × Nd: name the factor that is out of scale
+        parts["stored paths"] = (
+            "store_paths" if k >= saves else "save_every",
+            3 * F8 * k * saves * nd_,
+        )
     if exact:
         parts["exact moments"] = ("method", F8 * (12 * nd_ * nd_ + saves * (nd_ + n)))
     parts["output tables"] = ("save_every", 30.0 * saves * (4 * n + 1))
