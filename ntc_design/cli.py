@@ -177,7 +177,7 @@ def design_cmd(
 class Progress:
     """Progress on stderr: a rich bar on a terminal; otherwise (a batch job, a pipe) a plain
     line every ``every`` seconds from a heartbeat thread, so that a long run is never
-    silent, and one line when a stage starts."""
+    silent, and one line when a later stage starts."""
 
     def __init__(self, what: str, every: float = 5.0, tty: bool | None = None):
         self.what, self.every = what, every
@@ -224,9 +224,11 @@ class Progress:
             self._line(self.state)
 
     def stage(self, text: str) -> None:
-        """A new stage (e.g. 'g1: figures and report')."""
+        """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
+        once only after the first ``every`` seconds, so that a quick run, or bad input
+        refused at the start, prints nothing but its result or its one error line."""
         self.state = text
-        if not self.tty:
+        if not self.tty and time.monotonic() - self.t0 >= self.every:
             self._line(text)
 
     def tick(self, key: str, done: int, total: int) -> None:
