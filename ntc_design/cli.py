@@ -376,7 +376,10 @@ def simulate(
 
     top, spec, sc = load_scenario(scenario)
     if workers is not None:
-        spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+        try:
+            spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+        except InputError as exc:
+            raise InputError(f"--{exc}") from None
     check_output(out_dir)  # before the run, not after it
     with Progress("ntc simulate") as prog:
         prog.stage(f"simulating {scenario}")

@@ -41,6 +41,7 @@ def scenario(tmp_path, name="sc.json", **over):
         doc.pop("save_every")
     doc = {k: v for k, v in doc.items() if v is not DROP}
     p = tmp_path / name
+    p.parent.mkdir(parents=True, exist_ok=True)
     p.write_text(json.dumps(doc))  # JSON: NaN and Infinity survive (Python's json reads them)
     return p
 
@@ -217,6 +218,7 @@ def test_bad_scenario_combinations(tmp_path, capsys, monkeypatch, over, needles)
 SWITCHING = [
     ([1e308, 1e308], ["schedule", "overflows to infinity"]),
     ([1.0, 1e-300], ["schedule[1].duration", "collide"]),
+    ([1e308, 0.02], ["schedule[1].duration", "collide"]),
     ([1e-9, 1e-9], ["schedule", "switching segments"]),
     ([0.02, -0.02], ["schedule[1].duration", "positive"]),
     ([0.02, NAN], ["schedule[1].duration"]),
@@ -346,10 +348,13 @@ def test_read_only_out_folder(tmp_path, capsys, monkeypatch):
 def test_rerun_replaces_the_whole_folder(tmp_path, capsys, monkeypatch):
     out = tmp_path / "o"
     assert run_cli(["simulate", scenario(tmp_path), "--out", out], capsys, monkeypatch)[0] == 0
-    (out / "report.html").write_text("old report")
+    (out / "report.html").write_text("old report")  # what ntc report adds to a run
+    (out / "certificate.json").write_text("{}")
+    (out / "figures").mkdir()
     sc2 = scenario(tmp_path, name="sc2.json", seed=5)
     assert run_cli(["simulate", sc2, "--out", out], capsys, monkeypatch)[0] == 0
     assert not (out / "report.html").exists()  # nothing from the old run is left beside it
+    assert not (out / "figures").exists() and not (out / "certificate.json").exists()
     assert json.loads((out / "summary.json").read_text())["parameters"]["seed"] == 5
     assert sorted(os.listdir(tmp_path)) == ["o", "sc.json", "sc2.json"]
 
@@ -456,6 +461,8 @@ ARGS = [
     (["certify", G1, "--theta", "1,2,-1", "--margin", "nan?"], ["'--margin'"]),
     (["design", G1, "--theta", "1,2,-1", "--margin"], ["--margin"]),
     (["simulate", "x.yaml", "--out", "o", "--workers", "many"], ["'--workers'"]),
+    (["simulate", "SC", "--out", "o", "--workers", "0"], ["--workers: must be a positive"]),
+    (["simulate", "SC", "--out", "o", "--workers", "-3"], ["--workers: must be a positive"]),
     (["simulate", "x.yaml"], ["Missing option '--out'"]),
     (["simulate"], ["Missing argument"]),
     (["report"], ["Missing argument"]),
@@ -480,6 +487,9 @@ ARGS = [
 @pytest.mark.parametrize("args, needles", ARGS, ids=[" ".join(a[:2]) for a, _ in ARGS])
 def test_argument_errors_are_one_line(tmp_path, capsys, monkeypatch, args, needles):
     monkeypatch.chdir(tmp_path)
+    if "SC" in args:
+        sc = scenario(tmp_path.parent / "sc", name=f"{tmp_path.name}.json")
+        args = [str(sc) if a == "SC" else a for a in args]
     assert_input_error(args, capsys, monkeypatch, *needles)
     assert os.listdir(tmp_path) == []
 

@@ -326,3 +326,13 @@ def test_permission_error_while_writing_is_one_line(g1, tmp_path, monkeypatch):
     with pytest.raises(InputError, match=r"^--out: cannot write .* \(Permission denied\)$"):
         write_outputs(res, tmp_path / "o")
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.hostile
+def test_large_topology_refused_before_the_design(monkeypatch):
+    monkeypatch.setattr("ntc_design.simulate.budget.available_memory", lambda: 2.0**30)
+    top = nd.Topology.from_edges(20000, 1, [(1, 2, np.eye(1))])
+    with pytest.raises(InputError, match=r"^method: .* GiB .*use method: mc"):
+        simulate(top, [1.0], T=1.0, paths=10)
+    with pytest.raises(InputError, match=r"^topology: .* GiB .*too large"):
+        simulate(top, [1.0], T=1.0, paths=10, method="mc")

@@ -163,6 +163,14 @@ def estimate(
     return Estimate(parts, float(steps), float(steps) * paths if mc else 0.0)
 
 
+_HINTS = {
+    "method": "use method: mc (the exact second moments are N·d × N·d)",
+    "topology": "the topology is too large for this machine's memory",
+    "dt": "raise dt (or ds), or shorten T",
+    "save_every": "save less often (save_every) or fewer save_times",
+}
+
+
 def check_budget(est: Estimate, available: float | None = None) -> None:
     """Refuse (InputError naming the field and the size) a run whose estimated peak
     memory exceeds :data:`MEMORY_FRACTION` of ``available`` (default: what the machine
@@ -185,7 +193,7 @@ def check_budget(est: Estimate, available: float | None = None) -> None:
         raise InputError(
             f"{fld}: the run would need about {format_bytes(total)} of memory "
             f"({name}: {format_bytes(b)}), more than {MEMORY_FRACTION:.0%} of the "
-            f"{format_bytes(avail)} available; reduce {fld}"
+            f"{format_bytes(avail)} available; {_HINTS.get(fld, f'reduce {fld}')}"
         )
     if est.path_steps > MAX_PATH_STEPS:
         raise InputError(
