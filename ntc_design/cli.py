@@ -484,6 +484,9 @@ def reproduce(
 
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
+    from .outputs import check_output_folder
+
+    check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
     with Progress("ntc reproduce") as prog:
         path, ok, wall = reproduce_paper(
             out_dir,
@@ -580,6 +583,10 @@ def main(argv: list[str] | None = None) -> None:
         code = 2
     except BrokenPipeError:
         code = 1
+    except OSError as exc:  # a file or folder the user named cannot be read or written
+        where = f"{one_line(str(exc.filename))!r}: " if exc.filename else ""
+        print(f"error: {where}{exc.strerror or exc.__class__.__name__}", file=sys.stderr)
+        code = 2
     except Exception as exc:  # a bug: one line, the traceback with NTC_DEBUG=1
         if os.environ.get("NTC_DEBUG"):
             raise
