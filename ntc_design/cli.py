@@ -315,7 +315,9 @@ def verify(
     cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")],
     topology: Annotated[
         Path | None,
-        typer.Option("--topology", help="Your topology or switching file: the certificate must be about it."),
+        typer.Option(
+            "--topology", help="Your topology or switching file: the certificate must be about it."
+        ),
     ] = None,
     theta: Annotated[
         str | None, typer.Option(help="Your θ, e.g. 1,2,-1: the certificate must be about it.")

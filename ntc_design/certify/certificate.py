@@ -1032,7 +1032,7 @@ def verify(
         bound = float(np.max(m.err + RESULT_RTOL * np.abs(m.lap))) if m.in_range else 0.0
         checks.append(
             Check(
-                f"{name}: stated L_B is the one derived from topology, B and δ",
+                f"L_B({name}) matches its topology, B and δ",
                 diff <= bound,
                 f"max deviation {diff:.2e}",
             )
@@ -1150,9 +1150,7 @@ def verify(
         spec.description,
         props,
         tuple(
-            ModeAbout(
-                k, m.top.name, m.top.n, m.top.dim, m.hash, m.delta, tuple(m.theta.tolist())
-            )
+            ModeAbout(k, m.top.name, m.top.n, m.top.dim, m.hash, m.delta, tuple(m.theta.tolist()))
             for k, m in modes.items()
         ),
         scheduled,
@@ -1172,7 +1170,9 @@ def _same_topology(
     name = "about the given topology"
     if isinstance(topology, SwitchingTopology):
         if schedule is None:
-            return Check(name, False, "a switching file was given; the certificate is about one topology")
+            return Check(
+                name, False, "a switching file was given; the certificate is about one topology"
+            )
         mine = switching_hash(
             {k: topology_hash(t) for k, t in topology.modes.items()}, topology.schedule
         )
@@ -1180,10 +1180,14 @@ def _same_topology(
         return Check(
             name,
             ok,
-            f"switching hash {mine}" if ok else f"the file hashes to {mine}, the certificate is about {sw_hash}",
+            f"switching hash {mine}"
+            if ok
+            else f"the file hashes to {mine}, the certificate is about {sw_hash}",
         )
     if schedule is not None:
-        return Check(name, False, "one topology was given; the certificate is about a switching set")
+        return Check(
+            name, False, "one topology was given; the certificate is about a switching set"
+        )
     mine = topology_hash(topology)
     (mode,) = modes.values()
     ok = mine == mode.hash

@@ -100,7 +100,11 @@ def certify(
         cert = switching_certificate(des)
         ver = _verify_own(cert)
         bound = max(
-            (float(np.max(np.abs(a))) for top in des.switching.modes.values() for a in top.weights.values()),
+            (
+                float(np.max(np.abs(a)))
+                for top in des.switching.modes.values()
+                for a in top.weights.values()
+            ),
             default=0.0,
         )
         th = switching_verdicts(des, ver, g, bound, cert["results"]["symmetric_part_min_eig"])

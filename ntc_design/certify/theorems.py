@@ -170,9 +170,7 @@ def switching_verdicts(
         proof = [
             c
             for c in ver.checks
-            if c.claim is not None
-            and c.claim.prop is Property.SYMMETRIC_PART
-            and c.claim.mode == k
+            if c.claim is not None and c.claim.prop is Property.SYMMETRIC_PART and c.claim.mode == k
         ]
         lam_v = sym_min.get(k)
         lam = f"λ_min = {lam_v:.6g}" if lam_v is not None else ""
@@ -182,10 +180,14 @@ def switching_verdicts(
             short = -lam_v if lam_v is not None and lam_v <= 0 else None
             detail = f"fails{f' by {short:.6g} ({lam})' if short is not None else ''}"
             if short is None:
-                detail += "; not certified: " + ("; ".join(c.name for c in ver.failed) or "no proof")
+                detail += "; not certified: " + (
+                    "; ".join(c.name for c in ver.failed) or "no proof"
+                )
             th = mode.thresholds
             if th is not None and th.symmetric is not None:
-                detail += f"; it holds for δ > δ_S = {th.symmetric:.6g} (designed δ = {mode.delta:.6g})"
+                detail += (
+                    f"; it holds for δ > δ_S = {th.symmetric:.6g} (designed δ = {mode.delta:.6g})"
+                )
         sym_prem.append(Premise(f"L_B({k}) + L_B({k})ᵀ ≻ 0", ok, detail))
     a3 = Premise(
         "Assumption 3 (bounded weight entries)",
