@@ -1,6 +1,7 @@
 """Certificates layer: Lyapunov equations, LMIs, exact re-check, gain conditions and the
 theorem verdict."""
 
+from ..gain import GainAnalysis, analyse_gain
 from .certificate import (
     DIGEST_NOTE,
     About,
@@ -14,25 +15,24 @@ from .certificate import (
     write_certificate,
 )
 from .claims import KINDS, Claim, ClaimKind, KindSpec, Property
-from .gain import GainAnalysis, analyse_gain
 from .result import CertifyResult, certify
 from .theorems import Premise, TheoremVerdict
 
 __all__ = [
     "DIGEST_NOTE",
+    "GainAnalysis",
+    "analyse_gain",
     "KINDS",
     "About",
     "CertifyResult",
     "Check",
     "Claim",
     "ClaimKind",
-    "GainAnalysis",
     "KindSpec",
     "Premise",
     "Property",
     "TheoremVerdict",
     "Verification",
-    "analyse_gain",
     "certify",
     "hurwitz_certificate",
     "switching_certificate",

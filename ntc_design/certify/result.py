@@ -8,9 +8,9 @@ import numpy as np
 
 from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
+from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
 from .certificate import Check, Verification, hurwitz_certificate, switching_certificate, verify
-from .gain import GainAnalysis, analyse_gain
 from .theorems import TheoremVerdict, fixed_verdicts, switching_verdicts
 
 

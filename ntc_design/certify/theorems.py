@@ -18,9 +18,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..design import ProtocolDesign, SwitchingDesign
+from ..gain import CONDITION_LABELS, GainAnalysis
 from .certificate import Verification
 from .claims import Property
-from .gain import GainAnalysis
 
 
 @dataclass(frozen=True)
@@ -77,20 +77,11 @@ def _gain_premises(gain: GainAnalysis | None, almost_sure: bool) -> list[Premise
                 "gain c(t)", None, "no gain given (--gain): the gain conditions are not checked"
             )
         ]
-    out = [
-        Premise(
-            "c continuous and >= 0 on [0, ∞)",
-            gain.continuous_nonnegative.value,
-            gain.continuous_nonnegative.reason,
-        ),
-        Premise("∫₀^∞ c dt = ∞", gain.integral_diverges.value, gain.integral_diverges.reason),
-        Premise("c(t) → 0", gain.tends_to_zero.value, gain.tends_to_zero.reason),
+    keys = [k for k in CONDITION_LABELS if almost_sure or k != "square_integrable"]
+    return [
+        Premise(CONDITION_LABELS[k], gain.condition(k).value, gain.condition(k).reason)
+        for k in keys
     ]
-    if almost_sure:
-        out.append(
-            Premise("∫₀^∞ c² dt < ∞", gain.square_integrable.value, gain.square_integrable.reason)
-        )
-    return out
 
 
 A1 = Premise(
