@@ -118,6 +118,7 @@ def _write(tmp_path, doc, name="c.json"):
     return p
 
 
+@pytest.mark.hostile
 @pytest.mark.parametrize(
     "path",
     [
@@ -142,6 +143,7 @@ def test_tampering_any_entry_fails(tmp_path, capsys, monkeypatch, path):
     assert "INVALID" in err and "digest" in err
 
 
+@pytest.mark.hostile
 def test_tampered_then_redigested_fails_on_the_inequality(tmp_path, capsys, monkeypatch):
     doc = _load("g1.json")
     p = np.array(doc["matrices"]["P"]["lyapunov"])
@@ -165,6 +167,7 @@ def test_tampered_then_redigested_fails_on_the_inequality(tmp_path, capsys, monk
     assert cert["results"]["symmetric_part_min_eig"]["G1"] < 0
 
 
+@pytest.mark.hostile
 @pytest.mark.parametrize(
     "mutate, needles",
     [
