@@ -26,9 +26,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import platform
-import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -41,6 +39,7 @@ from ..design import ProtocolDesign, SwitchingDesign, coupling_matrix
 from ..errors import InputError
 from ..files import parse_topology
 from ..model import SwitchingTopology, Topology, antagonistic_in_weight
+from ..outputs import write_atomic
 from .claims import KINDS, PROPERTY_TEXT, Claim, ClaimKind, KindSpec, Property, derive_claims
 from .exact import (
     EXACT_MAX_N,
@@ -317,30 +316,15 @@ def switching_certificate(
 
 
 def write_certificate(doc: dict, path: str | Path) -> None:
-    """Write a certificate atomically: a temporary file in the same folder, then a
-    rename, so a reader never sees a half-written file.
+    """Write a certificate atomically (:func:`ntc_design.outputs.write_atomic`): a reader
+    never sees a half-written file.
 
     Raises
     ------
     InputError
-        When the folder cannot be written.
+        When the folder cannot be written or the path is a folder.
     """
-    p = Path(path)
-    text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    except OSError as exc:
-        raise InputError(f"{p}: cannot write here ({exc.strerror})") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, p)
-    except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
-        raise InputError(f"{p}: cannot write the certificate ({exc.strerror})") from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomic(path, json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n")
 
 
 # ---------------------------------------------------------------------------- verify
