@@ -207,7 +207,6 @@ def test_bad_scenario_field(tmp_path, capsys, monkeypatch, field, value, needles
         ({"stepping": "intrinsic", "ds": 1e-300}, ["memory"]),
         ({"save_times": [0.05], "save_every": 0.05}, ["save_times", "not both"]),
         ({"dt": 0.3, "T": 1.0, "save_every": 1.0}, ["dt", "unstable"]),
-        ({"method": "exact", "gain": "exp(50*t)"}, ["method", "RK4 steps"]),
         ({"method": "exact", "gain": "1e4"}, ["method", "RK4 steps"]),
     ],
 )
@@ -475,6 +474,9 @@ ARGS = [
     (["check", "/"], ["no such file"]),
     (["gain", "-1/(1+t)"], ["gain", "negative"]),
     (["gain", "-1"], ["gain", "negative"]),
+    (["gain", "-1", "--json"], ["gain", "negative"]),
+    (["gain", "--json", "-1/(1+t)"], ["gain", "negative"]),
+    (["design", G1, "--theta", "1,2,-1", "--margin", "-0.5"], ["margin", "positive"]),
     (["gain", "-(1+t)^(-1)"], ["gain", "negative"]),
     (["gain", ".5 - t"], ["gain", "negative"]),
     (["certify", G1, "--theta", "1,2,-1", "--gain", "-1"], ["gain", "negative"]),
