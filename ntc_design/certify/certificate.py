@@ -372,9 +372,16 @@ def write_certificate(doc: dict, path: str | Path) -> None:
     Raises
     ------
     InputError
-        When the folder cannot be written or the path is a folder.
+        When the folder cannot be written, the path is a folder, or the certificate holds
+        non-finite numbers.
     """
-    write_atomic(path, json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n")
+    try:
+        text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
+    except ValueError:  # JSON has no NaN/Inf: such numbers prove nothing anyway
+        raise InputError(
+            f"{path}: the certificate holds non-finite numbers (nothing is proven); not written"
+        ) from None
+    write_atomic(path, text)
 
 
 # ---------------------------------------------------------------------------- verify
