@@ -8,7 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..design import ProtocolDesign, SwitchingDesign, design
-from ..model import SwitchingTopology, Topology
+from ..errors import InputError
+from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .certificate import (
     Verification,
     hurwitz_certificate,
@@ -47,15 +48,34 @@ class CertifyResult:
 
 
 def certify(
-    topology: Topology | SwitchingTopology,
+    topology,
     theta,
     margin: float = 0.1,
     gain: str | None = None,
     delta: float | None = None,
+    noise_sigma: float = 0.4,
+    noise_f=0.3,
 ) -> CertifyResult:
     """Design (Lemma 1), certify (Lyapunov + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a common
-    P), re-verify the certificate exactly, analyse the gain and give the theorem verdict."""
+    P, or for weights given as expressions of t the uniform bound Λ₂ of Theorems 3-4 by
+    branch and bound), re-verify the certificate, analyse the gain and give the theorem
+    verdict. ``noise_sigma`` and ``noise_f`` (σ_ji and f(x) = f·x) enter only the
+    time-varying certificate's p̄, σ̄ and t₀."""
     g = analyse_gain(gain) if gain is not None else None
+    if isinstance(topology, ExpressionTopology):
+        from .time_varying import (
+            time_varying_certificate,
+            time_varying_verdicts,
+            verify_time_varying,
+        )
+
+        if delta is not None:
+            raise InputError("delta: a time-varying topology uses δ(t) = C(t) + ΔC (Lemma 1)")
+        tdes = TimeVaryingDesign(topology, np.asarray(theta, dtype=float), margin)
+        cert = time_varying_certificate(topology, theta, margin, gain, noise_sigma, noise_f)
+        ver = verify_time_varying(cert)
+        th = time_varying_verdicts(cert["results"]["time_varying"], ver, g)
+        return CertifyResult(tdes, cert, ver, g, th)
     des = design(topology, theta, margin, delta)
     if isinstance(des, SwitchingDesign):
         cert = switching_certificate(des)

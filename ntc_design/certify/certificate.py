@@ -357,6 +357,11 @@ def verify(doc: Any, source: str = "certificate") -> Verification:
         raise InputError(f"{source}: expected a JSON object")
     if doc.get("format") != FORMAT:
         raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
+    if doc.get("kind") == "time_varying":
+        from .time_varying import verify_time_varying
+
+        _need(doc, "digest", str, source)
+        return verify_time_varying(doc, source)
     n = _need(doc, "size", int, source)
     subject = _need(doc, "subject", dict, source)
     modes = _need(subject, "modes", dict, f"{source}: subject")
