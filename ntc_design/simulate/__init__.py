@@ -76,6 +76,13 @@ class SimulationResult:
             out["min_ms_error_exact"] = float(np.min(self.exact.ms_error.sum(axis=1)))
         return out
 
+    def to_pandas(self):
+        """Tidy ``pandas.DataFrame``: columns t, agent, mc, lo, hi, exact, one row per save
+        time and agent; see :func:`ntc_design.interop.simulation_frame`."""
+        from ..interop import simulation_frame
+
+        return simulation_frame(self)
+
 
 def _design_brief(d: ProtocolDesign) -> dict:
     full = d.to_dict()

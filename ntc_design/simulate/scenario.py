@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..files import ScenarioData, jsonable, parse_scenario
+from ..interop import simulation_frame
 from ..model import SwitchingTopology, load
 from .system import NoiseModel
 
@@ -85,7 +86,8 @@ def ms_error_table(res) -> tuple[list[str], np.ndarray]:
 
 
 def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[Path]:
-    """Write summary.json, ms_error.csv and paths.npz (each via a temporary file)."""
+    """Write summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz (each
+    via a temporary file)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     summary = res.summary()
@@ -100,6 +102,8 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
     files = {
         "summary.json": json.dumps(jsonable(summary), indent=1, ensure_ascii=False) + "\n",
         "ms_error.csv": buf.getvalue(),
+        # the same numbers in tidy long form (t, agent, mc, lo, hi, exact), as to_pandas()
+        "ms_error_long.csv": simulation_frame(res).to_csv(index=False),
     }
     written = []
     for name, text in files.items():
