@@ -554,8 +554,8 @@ def mu2_t0(gain: str, kappa: float) -> tuple[float | None, str]:
     except Exception:  # noqa: BLE001 - sympy may fail on anything
         dec = None
     if dec:
-        return t0, "ball arithmetic on [t0, 1e9], c decreasing beyond (sympy)"
-    return t0, "ball arithmetic on [t0, 1e9]; beyond 1e9 not proven"
+        return t0, "ball arithmetic on t0 <= t <= 1e9, c decreasing beyond (sympy)"
+    return t0, "ball arithmetic on t0 <= t <= 1e9; beyond 1e9 not proven"
 
 
 # ------------------------------------------------------------------ certificate

@@ -14,6 +14,7 @@ from ..certify.gain import parse_gain
 from ..design import DESIGN_KEYS, ProtocolDesign, design_topology
 from ..errors import InputError, require_positive
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..timevarying import ExpressionTopology
 from .grid import TimeGrid, build_grid
 from .moments import Moments, exact_moments
 from .montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
@@ -170,6 +171,29 @@ def simulate(
         raise InputError(f"seed: must be a non-negative integer, got {seed!r}")
     cfun, gain_text = make_gain(gain)
     notes: list[str] = []
+    if isinstance(topology, ExpressionTopology):
+        return _simulate_expression(
+            topology,
+            theta,
+            margin,
+            cfun,
+            gain_text,
+            noise,
+            initial,
+            T,
+            dt,
+            paths,
+            seed,
+            save_every,
+            save_times,
+            method,
+            stepping,
+            ds,
+            workers,
+            block_size,
+            store_paths,
+            progress,
+        )
     # modes and their segments on [0, T)
     if isinstance(topology, SwitchingTopology):
         names = list(topology.modes)
@@ -348,6 +372,120 @@ def simulate(
             if res.save_times.size
             else "",
             res,
+        )
+    return res
+
+
+def _simulate_expression(
+    tv,
+    theta,
+    margin,
+    cfun,
+    gain_text,
+    noise,
+    initial,
+    T,
+    dt,
+    paths,
+    seed,  # noqa: N803
+    save_every,
+    save_times,
+    method,
+    stepping,
+    ds,
+    workers,
+    block_size,
+    store_paths,
+    progress,
+) -> SimulationResult:
+    """A topology with weights as expressions of t: the protocol at every instant
+    (:mod:`ntc_design.simulate.timevarying`)."""
+    from .timevarying import simulate_time_varying
+
+    n, d = tv.n, tv.dim
+    th = np.asarray(theta, dtype=float)
+    if initial is None:
+        x_init = np.zeros(n * d)
+    else:
+        x_init = np.asarray(initial, dtype=float).reshape(-1)
+        if x_init.size != n * d or not np.all(np.isfinite(x_init)):
+            raise InputError(f"initial: expected N×d = {n * d} finite values")
+    if save_times is not None:
+        st = np.asarray(save_times, dtype=float)
+        if st.size == 0 or np.any(~np.isfinite(st)) or np.any(st < 0) or np.any(st > T):
+            raise InputError(f"save_times: expected times in [0, T={T:g}]")
+        st = np.unique(np.concatenate([[0.0], st]))
+    else:
+        require_positive("save_every", save_every)
+        st = np.unique(np.concatenate([np.arange(0.0, T, save_every), [T]]))
+    grid = build_grid(
+        float(T),
+        float(dt),
+        st,
+        None,
+        gain=cfun,
+        intrinsic_ds=(ds or dt) if stepping == "intrinsic" else None,
+        h_max=max(1.0, 100 * dt) if stepping == "intrinsic" else None,
+    )
+    c_grid = cfun(grid.t[:-1])
+    if not np.all(np.isfinite(c_grid)) or np.any(c_grid < 0):
+        raise InputError(f"gain: {gain_text!r} must be finite and >= 0 on [0, T]")
+    designs, part, exact, stats, notes = simulate_time_varying(
+        tv,
+        th,
+        margin=margin,
+        cfun=cfun,
+        noise=noise,
+        x_init=x_init,
+        grid=grid,
+        method=method,
+        paths=paths,
+        seed=seed,
+        block_size=block_size,
+        store_paths=store_paths,
+        workers=workers,
+        progress=progress,
+    )
+    params = {
+        "theta": th.tolist(),
+        "margin": margin,
+        "gain": gain_text,
+        "noise": {
+            "sigma": noise.sigma,
+            "f": noise.f.tolist()
+            if isinstance(noise.f, np.ndarray)
+            else (noise.f if not callable(noise.f) else "callable"),
+        },
+        "initial": x_init.tolist(),
+        "T": T,
+        "dt": dt,
+        "paths": paths,
+        "seed": seed,
+        "block_size": block_size,
+        "method": method,
+        "stepping": stepping,
+        "ds": ds,
+        "workers": workers,
+        "save_times": int(st.size),
+        "modes": list(designs),
+        "time_varying": {
+            "period": str(tv.period) if tv.period is not None else None,
+            "constant_after": str(tv.constant_after) if tv.constant_after is not None else None,
+            "topology": tv.to_dict(),
+        },
+    }
+    stats = {"steps": grid.n_steps, "path_steps": grid.n_steps * paths, **stats}
+    mc = _mc_summary(part) if part is not None else None
+    res = SimulationResult(
+        tuple(tv.labels), th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
+    )
+    failure = part.failure if part is not None else None
+    if failure is not None:
+        lab = tv.labels[failure["agent"]]
+        res = _truncate(res, failure["save_index"])
+        res.failure = {**failure, "agent": lab}
+        raise SimulationDiverged(
+            f"simulation diverged (NaN or overflow) by t = {failure['t']:.6g} at agent {lab}", res
         )
     return res
 
