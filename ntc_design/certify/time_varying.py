@@ -174,9 +174,14 @@ class _Enclosures:
 
     def samples(self, ts: np.ndarray) -> np.ndarray:
         """λ_min(L_B(t) + L_B(t)ᵀ) of the design as computed (floating point) at times ts."""
-        lb = lemma1_batch(self.tv, self.st, ts, np.ones(self.d), self.margin)
-        lap = lb.lap_b(self.st)
-        return np.linalg.eigvalsh(lap + np.swapaxes(lap, 1, 2))[:, 0]
+        tv = self.tv
+        per = max(1, int(32 * 2**20 // (8 * 2 * tv.nd * tv.nd)))
+        out = []
+        for chunk in np.array_split(ts, -(-len(ts) // per)):
+            lb = lemma1_batch(tv, self.st, chunk, np.ones(self.d), self.margin)
+            lap = lb.lap_b(self.st)
+            out.append(np.linalg.eigvalsh(lap + np.swapaxes(lap, 1, 2))[:, 0])
+        return np.concatenate(out)
 
     def leaf(self, a: float, b: float, sample: float = math.nan) -> LeafBound:
         st, tv, d = self.st, self.tv, self.d
