@@ -9,6 +9,8 @@ import numpy as np
 
 from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
+from ..gain import GainAnalysis, analyse_gain
+from ..model import SwitchingTopology, Topology
 from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .certificate import (
     Verification,
@@ -18,7 +20,6 @@ from .certificate import (
     verify_file,
     write_certificate,
 )
-from .gain import GainAnalysis, analyse_gain
 from .theorems import fixed_verdicts, switching_verdicts
 
 
@@ -48,7 +49,7 @@ class CertifyResult:
 
 
 def certify(
-    topology,
+    topology: Topology | SwitchingTopology | ExpressionTopology,
     theta,
     margin: float = 0.1,
     gain: str | None = None,

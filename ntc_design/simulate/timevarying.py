@@ -396,8 +396,95 @@ def simulate_time_varying(
     return designs, part, exact, stats, notes
 
 
+def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, workers: int, progress):
+    """The driver's path for an :class:`ExpressionTopology` (``simulate`` dispatches here):
+    grid, checks, Monte Carlo and exact moments with A(t), and the result."""
+    from ..errors import quote
+    from .grid import build_grid
+    from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
+    from .spec import UniformInitial
+
+    n, d = tv.n, tv.dim
+    ini = spec.initial
+    if ini is None:
+        x_init, ini_notes = np.zeros(n * d), ["initial state: zero"]
+    elif isinstance(ini, UniformInitial):
+        x_init, ini_notes = ini.draw(n * d), []
+    else:
+        if ini.size != n * d:
+            raise InputError(
+                f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
+            )
+        x_init, ini_notes = np.array(ini, dtype=float), []
+    st = spec.stepping
+    grid = build_grid(
+        spec.T,
+        st.dt,
+        spec.save.resolve(spec.T),
+        None,
+        gain=cfun,
+        intrinsic_ds=st.intrinsic_ds,
+        h_max=st.max_step,
+    )
+    c_grid = cfun(grid.t[:-1])
+    if c_grid.shape != grid.t[:-1].shape or not np.all(np.isfinite(c_grid)) or np.any(c_grid < 0):
+        raise InputError(f"gain: {gain_text!r} must be finite and >= 0 on [0, T]")
+    designs, part, exact, stats, notes = simulate_time_varying(
+        tv,
+        spec.theta,
+        margin=spec.margin,
+        cfun=cfun,
+        noise=spec.noise,
+        x_init=x_init,
+        grid=grid,
+        method=spec.method,
+        paths=spec.mc.paths,
+        seed=spec.mc.seed,
+        block_size=spec.mc.block_size,
+        store_paths=spec.mc.store_paths,
+        workers=workers,
+        progress=progress,
+    )
+    notes = ini_notes + notes
+    th = np.asarray(spec.theta, dtype=float)
+    params = spec.options()
+    params.update(
+        {
+            "theta": th.tolist(),
+            "gain": gain_text,
+            "initial": x_init.tolist(),
+            "workers": workers,
+            "save_times": int(grid.save_times.size),
+            "modes": list(designs),
+        }
+    )
+    params["time_varying"] = {
+        "period": str(tv.period) if tv.period is not None else None,
+        "constant_after": str(tv.constant_after) if tv.constant_after is not None else None,
+        "topology": tv.to_dict(),
+    }
+    stats = {"steps": grid.n_steps, "path_steps": grid.n_steps * spec.mc.paths, **stats}
+    mc = _mc_summary(part) if part is not None else None
+    labels = tuple(tv.labels)
+    res = SimulationResult(
+        labels, th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
+    )
+    failure = part.failure if part is not None else None
+    if failure is not None:
+        lab = labels[failure["agent"]]
+        res = _truncate(res, failure["save_index"])
+        res.failure = {**failure, "agent": lab}
+        raise SimulationDiverged(
+            f"simulation diverged (NaN or overflow) by t = {failure['t']:.6g} at agent "
+            f"{quote(lab)} (path {failure['path']})",
+            res,
+        )
+    return res
+
+
 __all__ = [
     "TimeVaryingMonteCarloSpec",
+    "simulate_expression",
     "TimeVaryingSystem",
     "exact_moments_tv",
     "simulate_time_varying",
