@@ -133,7 +133,7 @@ def parse_expr_weight(
         if len(spec) != dim or any(not isinstance(r, list) or len(r) != dim for r in spec):
             raise _err(source, field, f"expected a {dim}x{dim} matrix")
         rows = tuple(
-            tuple(_entry(v, source, f"{field}[{k}][{m}]") for m, v in enumerate(r))
+            tuple(_entry(v, source, f"{field}: weight[{k}][{m}]") for m, v in enumerate(r))
             for k, r in enumerate(spec)
         )
         return ExprWeight("rows", rows, text=spec)
@@ -143,13 +143,13 @@ def parse_expr_weight(
             diag = spec["diag"]
             if not isinstance(diag, list) or len(diag) != dim:
                 raise _err(source, field, f"diag must list {dim} entries")
-            vals = [_entry(v, source, f"{field}.diag[{k}]") for k, v in enumerate(diag)]
+            vals = [_entry(v, source, f"{field}: diag[{k}]") for k, v in enumerate(diag)]
             rows = tuple(
                 tuple(vals[k] if k == m else sp.Integer(0) for m in range(dim)) for k in range(dim)
             )
             return ExprWeight("diag", rows, text=spec)
         if keys == {"identity"}:
-            s = _entry(spec["identity"], source, f"{field}.identity")
+            s = _entry(spec["identity"], source, f"{field}: identity")
             return ExprWeight(
                 "scale", _scaled(np.eye(dim), s), base=np.eye(dim), scale=s, text=spec
             )
@@ -158,7 +158,7 @@ def parse_expr_weight(
             if not isinstance(name, str) or name not in named:
                 known = ", ".join(sorted(named)) or "none defined"
                 raise _err(source, field, f"unknown matrix {name!r} (known: {known})")
-            s = _entry(spec.get("scale", 1), source, f"{field}.scale")
+            s = _entry(spec.get("scale", 1), source, f"{field}: scale")
             base = named[name]
             return ExprWeight("scale", _scaled(base, s), base=base, scale=s, text=spec)
         raise _err(

@@ -41,6 +41,11 @@ class RunData:
         return np.asarray(self.summary["parameters"]["theta"], dtype=float)
 
     def topology(self) -> Topology | SwitchingTopology:
+        tvp = self.summary["parameters"].get("time_varying")
+        if isinstance(tvp, dict) and isinstance(tvp.get("topology"), dict):
+            from ..timevarying import from_document  # weights as expressions of t
+
+            return from_document(tvp["topology"], f"{self.path}/summary.json: time_varying")
         tops = {
             k: Topology.from_data(parse_topology(v, f"{self.path}/summary.json: topologies.{k}"))
             for k, v in self.summary["topologies"].items()
@@ -366,12 +371,23 @@ def theorem_section(ths: list[dict]) -> str:
     return table(["theorem", "sense", "guaranteed", "why"], rows)
 
 
+def _tv_noise(top, noise: dict) -> dict:
+    """σ and f of a run for the time-varying certificate (p̄, σ̄, t₀); {} otherwise."""
+    if not hasattr(top, "domain"):
+        return {}
+    f = noise.get("f", 0.3)
+    return {
+        "noise_sigma": float(noise.get("sigma", 0.4)),
+        "noise_f": f if isinstance(f, (int, float, list)) else 0.3,
+    }
+
+
 def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, dict]:
     """One run's section of a report, and the facts a summary table needs."""
     p = run.summary["parameters"]
     top = run.topology()
-    res = certify(top, p["theta"], p["margin"], p["gain"])
-    des_html, des_docs = design_tables(res.design)  # the design certify made
+    noise = p.get("noise") or {}
+    res = certify(top, p["theta"], p["margin"], p["gain"], **_tv_noise(top, noise))
     cert_html, cert = certificate_section(res, run.path / "certificate.json")
     doc = res.to_dict()
     labels = run.labels
@@ -379,7 +395,20 @@ def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, 
     if isinstance(top, SwitchingTopology):
         segs = top.segments(float(run.t[-1]))
     figs = []
-    for name, d_m in _modes(res.design).items():
+    tv_modes: dict = {}
+    if hasattr(res.design, "structure"):  # time-varying: the design over time, two figures
+        from .timevarying import time_varying_section
+
+        des_html, pngs = time_varying_section(top, res, figdir, key)
+        des_docs = {"time_varying": res.design.to_dict()}
+        figs += [
+            img(pngs[0], f"{title}: λ_min(L_B(t) + L_B(t)ᵀ) over a period with Λ₂ marked"),
+            img(pngs[1], f"{title}: the time-varying weights and δ(t)"),
+        ]
+    else:
+        des_html, des_docs = design_tables(res.design)  # the design certify made
+        tv_modes = _modes(res.design)
+    for name, d_m in tv_modes.items():
         _, _, png = figures.save(
             figures.topology_figure(
                 d_m.topology, d_m.informed, d_m.B, f"Ĝ of {name}: vertex 0 is x0"
