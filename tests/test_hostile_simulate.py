@@ -538,3 +538,25 @@ def test_ctrl_c_with_two_workers_stops_promptly(tmp_path):
     assert sorted(os.listdir(out)) == ["paths.npz", "summary.json"]
     assert (out / "summary.json").read_text() == "old"
     assert sorted(os.listdir(tmp_path)) == ["o", "sc.json"]
+
+
+@pytest.mark.hostile
+def test_reproduce_out_checked_before_the_run(tmp_path, capsys, monkeypatch):
+    f = tmp_path / "taken"
+    f.write_text("mine")
+    t0 = time.monotonic()
+    assert_input_error(
+        ["reproduce", "paper", "--out", f], capsys, monkeypatch, "--out", "existing file"
+    )
+    assert time.monotonic() - t0 < 5 and f.read_text() == "mine"
+
+
+@pytest.mark.hostile
+def test_os_error_is_one_line(tmp_path, capsys, monkeypatch):
+    import ntc_design.reports.report as rp
+
+    def denied(directory, **kw):
+        raise PermissionError(13, "Permission denied", str(directory))
+
+    monkeypatch.setattr(rp, "write_report", denied)
+    assert_input_error(["report", tmp_path], capsys, monkeypatch, "Permission denied")

@@ -7,6 +7,8 @@ import os
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import ntc_design as nd
 from ntc_design.errors import InputError, one_line, quote
@@ -127,6 +129,9 @@ def test_spec_is_frozen_and_rechecked_on_replace():
         (lambda: SimulationSpec.build(THETA, margin=-1), "margin"),
         (lambda: SimulationSpec.build(THETA, gain=3.0), "gain"),
         (lambda: SimulationSpec.build(THETA, gain="t" * 20000), "gain"),
+        (lambda: SimulationSpec.build(THETA, gain="__import__('os')"), "gain"),
+        (lambda: SimulationSpec.build(THETA, gain="1/(1+"), "gain"),
+        (lambda: SimulationSpec.build(THETA, gain="x + t"), "gain"),
         (lambda: SimulationSpec.build(THETA, method="magic"), "method"),
         (lambda: SimulationSpec.build(THETA, resample=0), "resample"),
         (lambda: SimulationSpec.build(THETA, colour=1), "colour"),
@@ -336,3 +341,44 @@ def test_large_topology_refused_before_the_design(monkeypatch):
         simulate(top, [1.0], T=1.0, paths=10)
     with pytest.raises(InputError, match=r"^topology: .* GiB .*too large"):
         simulate(top, [1.0], T=1.0, paths=10, method="mc")
+
+
+# ------------------------------------------------------- property: any scenario document
+
+_scalars = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(min_value=-(2**70), max_value=2**70),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=8),
+)
+_values = st.recursive(
+    _scalars,
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=4), st.dictionaries(st.text(max_size=6), inner, max_size=3)
+    ),
+    max_leaves=12,
+)
+_keys = st.sampled_from([k for k in SCENARIO_KEYS if k != "topology"] + ["colour", "noise.f"])
+
+
+@pytest.mark.hostile
+@settings(max_examples=150, deadline=None)
+@given(
+    doc=st.dictionaries(_keys, _values, max_size=6),
+    theta=st.one_of(st.just([1, 2, -1]), _values),
+)
+def test_any_scenario_document_gives_a_spec_or_one_line(doc, theta):
+    """Whatever a scenario holds, the parser returns a valid spec or raises InputError
+    with one line naming a field; never another exception."""
+    doc = {**doc, "theta": theta}
+    try:
+        spec = SimulationSpec.from_document(doc, "sc.yaml")
+    except InputError as exc:
+        msg = str(exc)
+        assert msg.startswith("sc.yaml: ") and "\n" not in msg
+        field = msg.split(": ")[1].split(" ")[0].strip("'")
+        assert field.split("[")[0].split(".")[0] in (*SCENARIO_KEYS, "colour", "noise.f"), msg
+        return
+    assert isinstance(spec, SimulationSpec) and np.all(np.isfinite(spec.theta))
+    assert spec.mc.paths >= 1 and spec.T > 0

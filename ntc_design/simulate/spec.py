@@ -307,6 +307,9 @@ class SimulationSpec:
         if isinstance(self.gain, str):
             if len(self.gain) > MAX_GAIN_TEXT:
                 raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
+            from ..gain import parse_gain
+
+            parse_gain(self.gain)  # a whitelisted expression in t, or one line naming gain
         elif not callable(self.gain):
             raise InputError(
                 f"gain: expected an expression in t or a callable, got {type(self.gain).__name__}"
