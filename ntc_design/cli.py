@@ -355,20 +355,36 @@ def certify(
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
-    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed."""
+    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed.
+    Exit 0 when one is (or, without --gain, when the certificate is valid), 1 when none is;
+    --out is written only when the certificate is valid."""
     from .certify import certify as run
     from .certify import write_certificate
 
     th = parse_vector(theta, "--theta")
-    if out_path is not None and not out_path.parent.is_dir():
-        raise InputError(f"--out: directory {out_path.parent} does not exist")
-    res = run(load(file), th, margin, gain, noise_sigma=noise_sigma, noise_f=noise_f)
     if out_path is not None:
+        if not out_path.parent.is_dir():
+            raise InputError(f"--out: directory {out_path.parent} does not exist")
+        if out_path.is_dir():
+            raise InputError(f"--out: {out_path} is a directory")
+    res = run(load(file), th, margin, gain, noise_sigma=noise_sigma, noise_f=noise_f)
+    written = out_path is not None and res.verification.valid
+    if written:
         write_certificate(res.certificate, out_path)
     doc = res.to_dict()
     if as_json:
         print(_json(doc))
-        return
+    else:
+        _print_certify(doc, out_path if written else None)
+    if out_path is not None and not written:
+        print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
+    if not res.proven:
+        if out_path is None or written:
+            print("not proven: no theorem is guaranteed", file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _print_certify(doc: dict, written: Path | None) -> None:
     _print_checks(doc["certificate"]["checks"])
     r = doc["certificate"]["results"]
     if "lmi" in r:
@@ -403,24 +419,64 @@ def certify(
     if doc["gain"] is not None:
         _print_gain(doc["gain"])
     _print_theorems(doc["theorems"])
-    if out_path is not None:
-        out.print(f"certificate written to {out_path} (re-check with: ntc verify {out_path})")
+    if written is not None:
+        out.print(f"certificate written to {written} (re-check with: ntc verify {written})")
+
+
+def _print_verification(doc: dict) -> None:
+    ab = doc["certifies"]
+    if ab is not None:
+        print(f"kind: {ab['kind']} ({ab['description']})")
+        for m in ab["modes"]:
+            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
+            print(
+                f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
+                f"d = {m['d']}, {m['topology_hash']}, δ = {m['delta']:.6g}, θ = {m['theta']}{used}"
+            )
+        if ab["schedule"] is not None:
+            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
+            print(f"schedule: {sched} ({ab['switching_hash']})")
+        for p in ab["properties"]:
+            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
+            print(f"certifies: {p['meaning']}{alpha}")
+    for c in doc["checks"]:
+        mark = "ok   " if c["ok"] else "FAILS"
+        print(f"{mark} {c['name']}: {c['detail']}")
+    print(f"note: {doc['digest_note']}")
 
 
 @app.command()
-def verify(cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")]) -> None:
-    """Re-check a certificate without an SDP solver. Exit 0 valid, 1 invalid, 2 malformed."""
+def verify(
+    cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")],
+    topology: Annotated[
+        Path | None,
+        typer.Option(
+            "--topology", help="Your topology or switching file: the certificate must be about it."
+        ),
+    ] = None,
+    theta: Annotated[
+        str | None, typer.Option(help="Your θ, e.g. 1,2,-1: the certificate must be about it.")
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Re-check a certificate without an SDP solver, deriving what must be proven from its
+    kind. Exit 0 valid, 1 invalid (names what fails), 2 malformed."""
     from .certify import verify_file
 
-    ver = verify_file(cert)
-    for c in ver.checks:
-        mark = "ok   " if c.ok else "FAILS"
-        print(f"{mark} {c.name}: {c.detail}")
+    top = load(topology) if topology is not None else None
+    th = parse_vector(theta, "--theta") if theta is not None else None
+    ver = verify_file(cert, top, th)
+    doc = ver.to_dict()
+    if as_json:
+        print(_json(doc))
+    else:
+        _print_verification(doc)
     if not ver.valid:
         names = "; ".join(c.name for c in ver.failed)
         print(f"INVALID ({ver.method}): {names}", file=sys.stderr)
         raise typer.Exit(1)
-    print(f"VALID ({ver.method}): {len(ver.checks)} checks")
+    if not as_json:
+        print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
 @app.command()

@@ -608,6 +608,7 @@ def time_varying_certificate(
         "format": FORMAT,
         "version": VERSION,
         "kind": "time_varying",
+        "certifies": ["uniform_symmetric_part"],
         "size": int(tv.nd),
         "subject": {
             "topology": tv.to_dict(),
@@ -626,12 +627,8 @@ def time_varying_certificate(
         "results": {"time_varying": results},
         "solver": {"name": "branch and bound, Arb ball arithmetic", "status": "ok"},
     }
-    doc = _finish(doc)
     doc["verification_method"] = "interval"
-    from .certificate import digest
-
-    doc["digest"] = digest(doc)
-    return doc
+    return _finish(doc)
 
 
 def verify_time_varying(doc: dict, source: str = "certificate"):
@@ -727,29 +724,29 @@ def verify_time_varying(doc: dict, source: str = "certificate"):
     return Verification(all(c.ok for c in checks), "interval", tuple(checks))
 
 
-def time_varying_verdicts(result: dict, ver, gain) -> list[dict]:
+def time_varying_verdicts(result: dict, ver, gain) -> tuple:
     """Theorems 3 and 4 for a continuously time-varying topology."""
-    from .theorems import _gain_premises, _premise, _verdict
+    from .theorems import Premise, TheoremVerdict, _gain_premises
 
     r = result
-    a1 = _premise(
+    a1 = Premise(
         "Assumption 1 (‖f_ji(x)‖ <= σ̄‖x‖)", True, f"f(x) = F x with σ̄ = {r['sigma_bar']:.4g}"
     )
-    a3 = _premise(
+    a3 = Premise(
         "Assumption 3 (bounded weight entries)",
         ver.valid,
         f"|a_kl(t)| <= D = {r['D']:.6g} for every t (ball arithmetic over {r['domain_text']})",
     )
-    lam = _premise(
+    lam = Premise(
         "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for every t (uniform, used by the proof)",
         ver.valid and r["lambda2"] > 0,
         f"Λ₂ = {r['lambda2']:.6g} certified on {r['intervals']} t-intervals "
         f"(sampled infimum {r['sampled_inf']:.6g})",
     )
-    return [
-        _verdict(3, "mean square", [a1, a3, lam, *_gain_premises(gain, False)]),
-        _verdict(4, "almost sure", [a1, a3, lam, *_gain_premises(gain, True)]),
-    ]
+    return (
+        TheoremVerdict(3, "mean square", (a1, a3, lam, *_gain_premises(gain, False))),
+        TheoremVerdict(4, "almost sure", (a1, a3, lam, *_gain_premises(gain, True))),
+    )
 
 
 __all__ = [
