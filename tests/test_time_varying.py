@@ -96,7 +96,7 @@ def test_certified_lambda2_below_and_within_one_percent_of_sampled_infimum(g1tv,
     kappa = r["lambda2"] / (2 * r["sigma_bar"] * r["Lambda1"] * 7)
     assert 1 / (1 + r["t0"]) < kappa <= 1 / (1 + 0.999 * r["t0"])
     assert g1tv_cert.verification.valid
-    assert [t["guaranteed"] for t in g1tv_cert.theorems] == [True, True]
+    assert [t.guaranteed for t in g1tv_cert.theorems] == [True, True]
 
 
 def test_cli_certify_json_and_verify(tmp_path, capsys, monkeypatch):
