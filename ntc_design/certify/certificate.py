@@ -1047,6 +1047,11 @@ def verify(
             f"version {version} is not one this ntc reads ({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
         )
     kind = _need(doc, "kind", str, source)
+    if kind == "time_varying":  # weights as expressions of t: the uniform bound Λ₂
+        from .time_varying import verify_time_varying
+
+        _need(doc, "digest", str, source)
+        return verify_time_varying(doc, source)
     spec: KindSpec | None = KINDS.get(kind)
     if spec is None:
         return _invalid(

@@ -21,6 +21,7 @@ from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, quote
 from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..timevarying import ExpressionTopology
 from .budget import check_budget, estimate, estimate_steps
 from .grid import TimeGrid, build_grid
 from .moments import exact_moments
@@ -326,6 +327,12 @@ def simulate(
             f"theta: expected {d} numbers (the state dimension d), got {spec.theta.size}"
         )
     cfun, gain_text = make_gain(spec.gain)
+    if isinstance(topology, ExpressionTopology):  # A(t): the protocol at every step
+        from .timevarying import simulate_expression
+
+        workers = min(spec.mc.workers, os.cpu_count() or 1)
+        _check_size(topology, spec, cfun, 1, 1, workers)
+        return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
     names, make_designs, segments, notes = _modes(topology, spec)
     workers = min(spec.mc.workers, os.cpu_count() or 1)
     if workers < spec.mc.workers:
