@@ -129,7 +129,11 @@ TOPOLOGY_BAD = {
         INF,
         HUGE,
         [[[1]]],
-        [["1", 0], [0, 1]],
+        [["x", 0], [0, 1]],  # a string entry is an expression in t (time-varying)
+        [["__import__('os').system('touch {S}')", 0], [0, 1]],
+        [["t**(10**10)", 0], [0, 1]],
+        [["1/(t-t)", 0], [0, 1]],
+        [["exp(t)", "t"], ["t", 1]],  # not symmetric for every t
         [[True, 0], [0, 1]],
         [[1, 0], [0, 1], [0, 0]],
     ],
@@ -180,6 +184,7 @@ def refused(args, capsys, monkeypatch, tmp_path, *needles):
 @pytest.mark.parametrize("path, value, fmt", _cases(TOPOLOGY_BAD))
 def test_topology_field(tmp_path, capsys, monkeypatch, path, value, fmt):
     p = write(tmp_path, _set(TOPOLOGY, path, value), fmt)
+    p.write_text(p.read_text().replace("{S}", str(tmp_path / "SENTINEL")))
     line = refused(["check", p], capsys, monkeypatch, tmp_path, str(p))
     assert "forged" not in line or "'dim\\n" in line  # a key with a newline stays quoted
 
