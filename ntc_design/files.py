@@ -313,6 +313,7 @@ SCENARIO_KEYS = {
     "method",
     "stepping",
     "ds",
+    "scheme",
     "workers",
     "block_size",
     "store_paths",
@@ -348,6 +349,7 @@ def parse_scenario(path: str | Path) -> ScenarioData:
     save_every: 0.1              # or save_times: [0, 0.5, 1, ...]
     method: both                 # mc | exact | both
     stepping: uniform            # or intrinsic (with ds)
+    scheme: explicit             # or implicit (drift-implicit; needs stepping: intrinsic)
     """
     doc = read_document(path)
     src = str(path)
