@@ -262,7 +262,8 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
     k_blocks = abs_w @ fmat
     knorm2 = np.linalg.norm(k_blocks, ord=2, axis=(1, 2)) ** 2 if e_n else np.zeros(0)
     mu2 = np.zeros(top.n)
-    np.add.at(mu2, dst, knorm2)
+    if noise.linear:  # a callable f has no matrix: no mean-square estimate for it
+        np.add.at(mu2, dst, knorm2)
     lap_b = grounded_laplacian_sparse(des)
     blocks = _diag_blocks(lap_b, top.n, d)
     rate = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, -1]
@@ -324,8 +325,8 @@ def check_step_size(
     agent alone, with λ_i = λ_max of the symmetric part of its diagonal block of L_B and
     μ_i² = Σ_{e→i}‖K_e‖² (the part of its noise that multiplies its own state), where
     2λ_i > cμ_i² (otherwise the agent alone is unstable in continuous time too: that is
-    the model, not the step). An estimate: on G1 it gives 0.057 where the spectral radius
-    of the exact second-moment recursion crosses 1 between h = 0.05 and 0.1 (tests).
+    the model, not the step). Not applied for a callable f (no matrix). An estimate: on G1 it gives 0.0573 where the spectral radius
+    of the exact second-moment recursion crosses 1 at h = 0.0569 (c = 1; tests).
     The implicit scheme (x_{k+1} = (I + c h L_B)^{-1}(x_k + …)) is stable in the drift for
     any step when every Re λ > 0; it is refused only when some eigenvalue has Re λ <= 0.
 
