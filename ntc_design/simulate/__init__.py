@@ -15,7 +15,7 @@ from ..design import DESIGN_KEYS, ProtocolDesign, design_topology
 from ..errors import InputError, require_positive
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from .grid import TimeGrid, build_grid
-from .moments import Moments, exact_moments
+from .moments import Moments, check_moments_size, exact_moments
 from .montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
 from .system import SCHEMES, ModeSystem, NoiseModel, check_step_size, mode_system
 
@@ -168,6 +168,8 @@ def simulate(
         )
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise InputError(f"seed: must be a non-negative integer, got {seed!r}")
+    if method in ("exact", "both") and noise.linear:
+        check_moments_size(topology.n * topology.dim)
     cfun, gain_text = make_gain(gain)
     notes: list[str] = []
     # modes and their segments on [0, T)

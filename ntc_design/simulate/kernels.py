@@ -15,7 +15,6 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-
 TILE_BYTES = 256 * 2**10  # a tile of paths keeps its state and increments within this
 
 
@@ -27,7 +26,9 @@ def tile_width(p: int, nd: int) -> int:
 
 
 @numba.njit(cache=True, nogil=True)
-def em_steps(x, xi, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst, kmat, gvec, drift, tile):
+def em_steps(
+    x, xi, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst, kmat, gvec, drift, tile
+):
     """Advance every row of ``x`` (p, Nd) in place over the steps ``k_from .. k_to − 1``
     of the batch: ``x += ch[k]·(u − L_B x) + cs[k]·Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e)``
     with ξ1_e = ``xi[k, path, e]``, ξ2_e = ``xi[k, path, E + e]`` (E = len(src)), L_B in

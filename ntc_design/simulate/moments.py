@@ -217,12 +217,7 @@ def em_moments(
         else:
             ls = f.l @ s
             # A S Aᵀ with A = I − c h L_B, plus the noise over one step
-            s = (
-                s
-                - c * h * (ls + ls.T)
-                + (c * h) ** 2 * (f.l @ ls.T).T
-                + c * c * h * f.noise(s)
-            )
+            s = s - c * h * (ls + ls.T) + (c * h) ** 2 * (f.l @ ls.T).T + c * c * h * f.noise(s)
             m = m - c * h * (f.l @ m)
         s = 0.5 * (s + s.T)
         store(k + 1)

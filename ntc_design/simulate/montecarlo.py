@@ -96,7 +96,9 @@ def _run_ends(grid: TimeGrid) -> np.ndarray:
     if k_total > 1:
         cut[1:k_total][grid.mode[1:] != grid.mode[:-1]] = True
     where = np.flatnonzero(cut)
-    return where[np.searchsorted(where, np.arange(k_total + 1), side="right").clip(max=where.size - 1)]
+    return where[
+        np.searchsorted(where, np.arange(k_total + 1), side="right").clip(max=where.size - 1)
+    ]
 
 
 class _Stepper:

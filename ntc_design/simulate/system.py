@@ -131,9 +131,7 @@ class ModeSystem:
         e = np.arange(self.n_edges)
         f = np.broadcast_to(self.fmat, (self.n_edges, self.dim, self.dim))
         shape = (self.n_edges * self.dim, self.nd)
-        return self._block_matrix(e, self.src, f, shape) - self._block_matrix(
-            e, self.dst, f, shape
-        )
+        return self._block_matrix(e, self.src, f, shape) - self._block_matrix(e, self.dst, f, shape)
 
     @cached_property
     def wmat(self) -> sp.csr_matrix:
@@ -312,9 +310,7 @@ class StepCheck:
     warning: str | None
 
 
-def check_step_size(
-    systems, grid, c_grid: np.ndarray, scheme: str = "explicit"
-) -> StepCheck:
+def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit") -> StepCheck:
     """Refuse a step that makes Euler–Maruyama unstable, before anything runs.
 
     Explicit scheme: the drift ε' = −c L_B ε needs ``c·h < 2·Re λ/|λ|²`` for every
