@@ -13,8 +13,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from . import __version__
 from .design import ProtocolDesign, SwitchingDesign, design, structure_report
-from .errors import InputError
+from .errors import InputError, one_line
 from .files import jsonable
 from .model import SwitchingTopology, load
 
@@ -26,6 +27,23 @@ app = typer.Typer(
     "matrix-weighted networks with compound measurement noise.",
 )
 out = Console(highlight=False)
+
+
+def _version(value: bool) -> None:
+    if value:
+        print(f"ntc {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """Certify, design and validate non-trivial consensus protocols on signed
+    matrix-weighted networks with compound measurement noise."""
 
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
@@ -180,14 +198,10 @@ def _print_gain(g: dict) -> None:
     t = Table(title=f"gain c(t) = {g['parsed']}")
     for c in ("condition", "holds", "reason"):
         t.add_column(c)
-    names = {
-        "continuous_nonnegative": "continuous, c >= 0 on [0, ∞)",
-        "integral_diverges": "∫₀^∞ c dt = ∞",
-        "tends_to_zero": "c(t) → 0",
-        "square_integrable": "∫₀^∞ c² dt < ∞",
-    }
+    from .gain import CONDITION_LABELS
+
     yn = {True: "yes", False: "[red]no[/red]", None: "undetermined"}
-    for k, label in names.items():
+    for k, label in CONDITION_LABELS.items():
         t.add_row(label, yn[g[k]["value"]], g[k]["reason"])
     out.print(t)
     out.print(
@@ -215,7 +229,7 @@ def gain(
     as_json: JsonOpt = False,
 ) -> None:
     """Decide the gain conditions of Theorems 1-4 for c(t)."""
-    from .certify import analyse_gain
+    from .gain import analyse_gain
 
     doc = analyse_gain(expr).to_dict()
     print(_json(doc)) if as_json else _print_gain(doc)
@@ -297,14 +311,16 @@ def simulate(
     ] = None,
 ) -> None:
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
-    summary.json, ms_error.csv and paths.npz to --out."""
+    summary.json, ms_error.csv and paths.npz to --out (all or nothing)."""
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
-    from .simulate.scenario import scenario_arguments, write_outputs
+    from .simulate.scenario import check_output, load_scenario, write_outputs
+    from .simulate.spec import MonteCarlo
 
-    top, kw, sc = scenario_arguments(scenario)
+    top, spec, sc = load_scenario(scenario)
     if workers is not None:
-        kw["workers"] = workers
+        spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+    check_output(out_dir)  # before the run, not after it
     prog = _progress()
     with prog:
         task = prog.add_task("simulating", total=1)
@@ -313,10 +329,10 @@ def simulate(
             prog.update(task, completed=done, total=total)
 
         try:
-            res = run(top, progress=tick, **kw)
+            res = run(top, spec, progress=tick)
         except SimulationDiverged as exc:
             write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
-            print(f"error: {exc}", file=sys.stderr)
+            print(f"error: {one_line(str(exc))}", file=sys.stderr)
             raise typer.Exit(1) from None
     write_outputs(res, out_dir, {"scenario": str(scenario)})
     st = res.stats
@@ -378,9 +394,84 @@ def reproduce(
     out.print(f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}")
 
 
-def main() -> None:
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line on stderr (``warning: ...``), without the source line."""
+    print(f"warning: {one_line(str(message))}", file=sys.stderr)
+
+
+def _argv(args: list[str]) -> list[str]:
+    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``,
+    ``--gain "-1"``) is a value, not an option: such tokens are passed after ``--`` for
+    positional arguments; option values are taken as they are by click."""
+    out: list[str] = []
+    for k, tok in enumerate(args):
+        prev = args[k - 1] if k else ""
+        looks_negative = len(tok) > 1 and tok[0] == "-" and (tok[1].isdigit() or tok[1] in "(.")
+        if looks_negative and not (prev.startswith("--") and "=" not in prev) and "--" not in out:
+            out.append("--")
+        out.append(tok)
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the CLI: one line ``error: ...`` on stderr for every user error (exit 2), for
+    an interrupt (exit 130); warnings as ``warning: ...`` lines.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+    """
+    import os
+    import warnings
+
+    try:  # typer >= 0.20 vendors click; its exceptions are what the commands raise
+        from typer._click import exceptions as click
+    except ImportError:  # pragma: no cover - older typer
+        from click import exceptions as click
+
+    args = sys.argv[1:] if argv is None else list(argv)
+    warnings.showwarning = _warning_line
+    warnings.simplefilter("ignore", RuntimeWarning)  # numerical trouble is checked, not warned
+    code = 0
     try:
-        app()
+        try:
+            rv = app(args=_argv(args), prog_name="ntc", standalone_mode=False)
+        except click.NoArgsIsHelpError as exc:
+            print(exc.format_message())
+            code = 2
+        else:
+            code = rv if isinstance(rv, int) else 0
+            if code == 130:  # typer turns KeyboardInterrupt into Exit(130)
+                print("error: interrupted", file=sys.stderr)
     except InputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+        print(f"error: {one_line(str(exc))}", file=sys.stderr)
+        code = 2
+    except click.UsageError as exc:
+        where = f" (see: {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
+        print(f"error: {one_line(exc.format_message())}{where}", file=sys.stderr)
+        code = 2
+    except click.ClickException as exc:  # e.g. an unreadable file argument
+        print(f"error: {one_line(exc.format_message())}", file=sys.stderr)
+        code = 2
+    except (KeyboardInterrupt, typer.Abort):
+        print("error: interrupted", file=sys.stderr)
+        code = 130
+    except MemoryError:
+        print(
+            "error: out of memory: the input asks for more memory than the machine has",
+            file=sys.stderr,
+        )
+        code = 2
+    except BrokenPipeError:
+        code = 1
+    except Exception as exc:  # a bug: one line, the traceback with NTC_DEBUG=1
+        if os.environ.get("NTC_DEBUG"):
+            raise
+        print(
+            f"error: internal error ({exc.__class__.__name__}: {one_line(str(exc))[:300]}); "
+            "re-run with NTC_DEBUG=1 for the traceback",
+            file=sys.stderr,
+        )
+        code = 1
+    sys.exit(code)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..design import ProtocolDesign, SwitchingDesign, design
+from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
 from .certificate import (
     Verification,
@@ -17,7 +18,6 @@ from .certificate import (
     verify_file,
     write_certificate,
 )
-from .gain import GainAnalysis, analyse_gain
 from .theorems import fixed_verdicts, switching_verdicts
 
 
