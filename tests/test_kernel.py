@@ -129,8 +129,9 @@ def test_batch_and_tile_sizes_do_not_change_results(g1_system, monkeypatch):
     spec = _spec(s, 40)
     ref = run_chunk(spec, [0, 1])
     monkeypatch.setattr(montecarlo, "XI_BYTES", 8 * 20 * 16 * 3)  # 3 steps per batch
-    monkeypatch.setattr(kernels, "TILE_BYTES", 1)  # tiles of 8 paths
-    assert tile_width(20, 21) == 8
+    monkeypatch.setattr(kernels, "TILE_MIN", 3)  # tiles of 3 paths (and a last one of 2)
+    monkeypatch.setattr(kernels, "TILE_MAX", 3)
+    assert tile_width(20, 21) == 3
     other = run_chunk(spec, [0, 1])
     for q, r in zip(ref, other, strict=True):
         assert np.array_equal(q.sq, r.sq) and np.array_equal(q.state, r.state)
