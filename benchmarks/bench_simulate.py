@@ -155,6 +155,7 @@ def bench_diffrax(des, x0, n_steps=1000, batch=1000) -> float | None:
             jnp.asarray(x0),
             saveat=diffrax.SaveAt(t1=True),
             max_steps=n_steps + 10,
+            adjoint=diffrax.ForwardMode(),
         )
         return sol.ys
 

@@ -32,6 +32,7 @@ from .system import ModeSystem
 
 KAPPA = 0.2
 MOMENTS_MAX_ND = 3000  # N = 1000 agents in d = 3
+DENSE_MOMENTS_ND = 300  # L_B dense in the moment equations up to this Nd
 MOMENT_COPIES = 12  # dense Nd×Nd matrices alive during an RK4 step (S, stages, products)
 
 
@@ -65,7 +66,9 @@ class Moments:
 
 class _Rhs:
     def __init__(self, s: ModeSystem, n: int, d: int):
-        self.l = s.lap_b.tocsr()  # sparse: products cost O(nnz·Nd)
+        # sparse products cost O(nnz·Nd); at small Nd a dense product is cheaper than
+        # SciPy's call overhead (and gives the numbers of the earlier dense code)
+        self.l = s.lap_b.toarray() if s.nd <= DENSE_MOMENTS_ND else s.lap_b.tocsr()
         self.q = (s.g @ s.g.T).toarray()
         self.n, self.d = n, d
         self.ii = np.array([i for i, _, _ in s.h_blocks], dtype=np.int64)
@@ -207,10 +210,11 @@ def em_moments(
             key = (mode, c * h)
             lu = lus.get(key)
             if lu is None:
-                from scipy.sparse import identity
+                from scipy.sparse import csc_matrix, identity
                 from scipy.sparse.linalg import splu
 
-                lu = lus[key] = splu((identity(n * d, format="csc") + c * h * f.l).tocsc())
+                a = identity(n * d, format="csc") + c * h * csc_matrix(f.l)
+                lu = lus[key] = splu(a.tocsc())
             s = lu.solve(np.asfortranarray(s + c * c * h * f.noise(s)))
             s = lu.solve(np.asfortranarray(s.T))
             m = lu.solve(m)

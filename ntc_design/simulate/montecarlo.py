@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .grid import TimeGrid
-from .kernels import em_steps, numpy_step, tile_width
 from .system import ModeSystem
 
 BATCH = 64  # steps whose normals are drawn at once (fewer when they would pass XI_BYTES)
@@ -125,6 +124,8 @@ class _Stepper:
         self._lu: dict[float, object] = {}
 
     def advance(self, x, xi, k_from, k_to, ch, cs) -> None:
+        from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
+
         tile = tile_width(x.shape[0], x.shape[1])
         if not self.implicit:
             if self.compiled:
@@ -149,6 +150,21 @@ class _Stepper:
             a = identity(self.s.nd, format="csc") + ch * self.s.lap_b.tocsc()
             lu = self._lu[ch] = splu(a.tocsc())
         return lu
+
+
+def prepare(spec: MonteCarloSpec) -> None:
+    """Compile (or load from numba's cache) the kernel for this spec's array types in this
+    process, so that forked workers inherit it instead of each compiling it."""
+    from .kernels import em_steps
+
+    for s in spec.systems:
+        if s.f is None:
+            st = _Stepper(s, False)
+            x = np.zeros((0, s.nd))
+            xi = np.zeros((1, 0, 2 * s.n_edges))
+            one = np.ones(1)
+            em_steps(x, xi, 0, 1, one, one, *st.args, True, 1)
+            return
 
 
 def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
@@ -352,6 +368,7 @@ def run(
         Re-raised after the workers are stopped.
     """
     global _SPEC, _COUNTER
+    prepare(spec)
     n_chunks = -(-spec.n_blocks // blocks_per_chunk)
 
     def chunk(i: int) -> list[int]:
