@@ -45,6 +45,7 @@ def _root(
     """Certify, design and validate non-trivial consensus protocols on signed
     matrix-weighted networks with compound measurement noise."""
 
+
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
 
@@ -319,7 +320,10 @@ def simulate(
 
     top, spec, sc = load_scenario(scenario)
     if workers is not None:
-        spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+        try:
+            spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+        except InputError as exc:
+            raise InputError(f"--{exc}") from None
     check_output(out_dir)  # before the run, not after it
     prog = _progress()
     with prog:
@@ -330,6 +334,8 @@ def simulate(
 
         try:
             res = run(top, spec, progress=tick)
+        except InputError as exc:  # a field of the scenario: name the file
+            raise InputError(f"{sc.source}: {exc}") from None
         except SimulationDiverged as exc:
             write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
             print(f"error: {one_line(str(exc))}", file=sys.stderr)
@@ -379,6 +385,9 @@ def reproduce(
 
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
+    from .outputs import check_output_folder
+
+    check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
     prog = _progress()
     tasks: dict[str, int] = {}
 
@@ -465,6 +474,10 @@ def main(argv: list[str] | None = None) -> None:
         code = 2
     except BrokenPipeError:
         code = 1
+    except OSError as exc:  # a file or folder the user named cannot be read or written
+        where = f"{one_line(str(exc.filename))!r}: " if exc.filename else ""
+        print(f"error: {where}{exc.strerror or exc.__class__.__name__}", file=sys.stderr)
+        code = 2
     except Exception as exc:  # a bug: one line, the traceback with NTC_DEBUG=1
         if os.environ.get("NTC_DEBUG"):
             raise

@@ -6,6 +6,7 @@ from __future__ import annotations
 import base64
 import csv
 import html
+import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -60,8 +61,77 @@ class RunData:
         return np.column_stack([self.table[c] for c in cols])
 
 
+MAX_TEXT_BYTES = 256 * 2**20  # summary.json / ms_error.csv larger than this are refused
+NPZ_KEYS = ("t", "paths", "labels", "theta")
+
+
+def _rerun(d: Path) -> str:
+    return f"re-run: ntc simulate SCENARIO --out {d}"
+
+
+def _read_text(path: Path, d: Path) -> str:
+    try:
+        if path.stat().st_size > MAX_TEXT_BYTES:
+            raise InputError(f"{path}: larger than {MAX_TEXT_BYTES // 2**20} MiB; {_rerun(d)}")
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: unreadable ({exc.__class__.__name__}); {_rerun(d)}") from None
+
+
+def _read_npz(path: Path, d: Path) -> dict[str, np.ndarray]:
+    """paths.npz, refusing a corrupt, empty or oversized (decompression bomb) archive."""
+    import zipfile
+
+    from ..errors import format_bytes
+    from ..simulate.budget import MEMORY_FRACTION, available_memory
+
+    try:
+        with zipfile.ZipFile(path) as zf:
+            size = sum(i.file_size for i in zf.infolist())
+        limit = MEMORY_FRACTION * available_memory()
+        if size > limit:
+            raise InputError(
+                f"{path}: unpacks to {format_bytes(size)}, more than {format_bytes(limit)}; {_rerun(d)}"
+            )
+        with np.load(path, allow_pickle=False) as z:
+            missing = [k for k in NPZ_KEYS if k not in z.files]
+            if missing:
+                raise InputError(f"{path}: missing array {missing[0]!r}; {_rerun(d)}")
+            npz = {k: z[k] for k in z.files}
+    except InputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - BadZipFile, EOFError, zlib.error, ValueError...
+        raise InputError(
+            f"{path}: not a readable .npz archive ({exc.__class__.__name__}); {_rerun(d)}"
+        ) from None
+    if npz["paths"].ndim != 3 or npz["t"].ndim != 1 or npz["labels"].ndim != 1:
+        raise InputError(f"{path}: arrays of the wrong shape; {_rerun(d)}")
+    if npz["labels"].dtype.kind not in "UO" and npz["labels"].size:
+        raise InputError(f"{path}: labels are not text; {_rerun(d)}")
+    for k in ("t", "paths", "theta"):
+        if npz[k].dtype.kind not in "fiu":
+            raise InputError(f"{path}: array {k!r} is not numeric; {_rerun(d)}")
+    return npz
+
+
 def load_run(directory: str | Path) -> RunData:
-    """Read a simulation output directory; name what is missing and how to make it."""
+    """Read a simulation output directory; name what is missing or malformed and how to
+    make it again.
+
+    Parameters
+    ----------
+    directory : str or Path
+        A folder written by ``ntc simulate --out``.
+
+    Returns
+    -------
+    RunData
+
+    Raises
+    ------
+    InputError
+        One line naming the file and what is wrong.
+    """
     d = Path(directory)
     if not d.is_dir():
         raise InputError(f"{d}: no such directory; make it with: ntc simulate SCENARIO --out {d}")
@@ -69,21 +139,44 @@ def load_run(directory: str | Path) -> RunData:
         if not (d / name).is_file():
             raise InputError(f"{d}: missing {name}; make it with: ntc simulate SCENARIO --out {d}")
     try:
-        summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
-        with (d / "ms_error.csv").open(encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
-        header, data = rows[0], np.array([[float(v) for v in r] for r in rows[1:]])
-        z = np.load(d / "paths.npz")
-        npz = {k: z[k] for k in z.files}
-    except (json.JSONDecodeError, ValueError, IndexError, OSError) as exc:
+        summary = json.loads(_read_text(d / "summary.json", d))
+    except (json.JSONDecodeError, RecursionError, ValueError) as exc:
         raise InputError(
-            f"{d}: an output file is unreadable ({exc.__class__.__name__}); re-run: ntc simulate SCENARIO --out {d}"
+            f"{d}/summary.json: not valid JSON ({exc.__class__.__name__}); {_rerun(d)}"
         ) from None
+    if not isinstance(summary, dict):
+        raise InputError(f"{d}/summary.json: expected a mapping; {_rerun(d)}")
     for key in ("parameters", "topologies"):
-        if key not in summary:
+        if not isinstance(summary.get(key), dict) or not summary[key]:
+            raise InputError(f"{d}/summary.json: missing field '{key}'; {_rerun(d)}")
+    for key in ("theta", "margin", "gain"):
+        if key not in summary["parameters"]:
+            raise InputError(f"{d}/summary.json: missing field 'parameters.{key}'; {_rerun(d)}")
+    rows = list(csv.reader(io.StringIO(_read_text(d / "ms_error.csv", d))))
+    if len(rows) < 2:
+        raise InputError(f"{d}/ms_error.csv: no data rows; {_rerun(d)}")
+    header = rows[0]
+    if not header or header[0] != "t" or len(set(header)) != len(header):
+        raise InputError(
+            f"{d}/ms_error.csv: the header must start with 't' (unique columns); {_rerun(d)}"
+        )
+    for k, r in enumerate(rows[1:], start=2):
+        if len(r) != len(header):
             raise InputError(
-                f"{d}/summary.json: missing field '{key}'; re-run: ntc simulate SCENARIO --out {d}"
+                f"{d}/ms_error.csv: line {k} has {len(r)} values, the header {len(header)}; {_rerun(d)}"
             )
+    try:
+        data = np.array([[float(v) for v in r] for r in rows[1:]])
+    except ValueError:
+        raise InputError(f"{d}/ms_error.csv: a value is not a number; {_rerun(d)}") from None
+    if not np.all(np.isfinite(data[:, 0])) or np.any(np.diff(data[:, 0]) <= 0):
+        raise InputError(f"{d}/ms_error.csv: times are not finite and increasing; {_rerun(d)}")
+    npz = _read_npz(d / "paths.npz", d)
+    if npz["t"].shape[0] != data.shape[0]:
+        raise InputError(
+            f"{d}: paths.npz has {npz['t'].shape[0]} save times, ms_error.csv {data.shape[0]} "
+            f"(files from different runs?); {_rerun(d)}"
+        )
     table = {h: data[:, k] for k, h in enumerate(header)}
     return RunData(d, summary, table["t"], table, npz)
 
@@ -327,8 +420,8 @@ def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, 
                 esc(a),
                 fmt(float(mc["mean"][-1, k]), 5) if mc is not None else "—",
                 f"[{fmt(float(mc['lo'][-1, k]), 5)}, {fmt(float(mc['hi'][-1, k]), 5)}]"
-                if mc is not None
-                else "—",
+                if mc is not None and np.isfinite(mc["lo"][-1, k])
+                else ("none (fewer than 2 paths)" if mc is not None else "—"),
                 fmt(float(exact[-1, k]), 5) if exact is not None else "—",
                 fmt(float(exact[0, k]), 5)
                 if exact is not None
@@ -344,7 +437,7 @@ def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, 
         spread = (
             f"<p>Stored sample paths ({sp['stored']}): over t ∈ [{sp['late_window'][0]:g}, {sp['late_window'][1]:g}] "
             f"‖x(t) − 1⊗θ‖ still moves by {sp['late_fluctuation_mean']:.4f} on average (max {sp['late_fluctuation_max']:.4f}); "
-            f"at t = {run.t[-1]:g} its mean is {sp['final_error_norm_mean']:.4f} with spread {sp['final_error_norm_spread']:.4f}.</p>"
+            f"at t = {run.t[-1]:g} its mean is {sp['final_error_norm_mean']:.4f} with spread {fmt(sp['final_error_norm_spread'])}.</p>"
         )
     run_info = run.summary.get("run", {})
     params = {

@@ -151,12 +151,27 @@ def estimate(
             "block_size",
             w * (F8 * b * (4 * nd_ + 3 * ed) + min(F8 * b * BATCH * 2 * edges, XI_BYTES)),
         )
-        parts["statistics at the save times"] = ("save_every", stats * (2 * w + 2) + F8 * saves * 3 * n)
-        parts["stored paths"] = ("store_paths", 3 * F8 * k * saves * nd_)
+        parts["statistics at the save times"] = (
+            "save_every",
+            stats * (2 * w + 2) + F8 * saves * 3 * n,
+        )
+        # k stored paths × S save times × Nd: name the factor that is out of scale
+        parts["stored paths"] = (
+            "store_paths" if k >= saves else "save_every",
+            3 * F8 * k * saves * nd_,
+        )
     if exact:
         parts["exact moments"] = ("method", F8 * (12 * nd_ * nd_ + saves * (nd_ + n)))
     parts["output tables"] = ("save_every", 30.0 * saves * (4 * n + 1))
     return Estimate(parts, float(steps), float(steps) * paths if mc else 0.0)
+
+
+_HINTS = {
+    "method": "use method: mc (the exact second moments are N·d × N·d)",
+    "topology": "the topology is too large for this machine's memory",
+    "dt": "raise dt (or ds), or shorten T",
+    "save_every": "save less often (save_every) or fewer save_times",
+}
 
 
 def check_budget(est: Estimate, available: float | None = None) -> None:
@@ -181,7 +196,7 @@ def check_budget(est: Estimate, available: float | None = None) -> None:
         raise InputError(
             f"{fld}: the run would need about {format_bytes(total)} of memory "
             f"({name}: {format_bytes(b)}), more than {MEMORY_FRACTION:.0%} of the "
-            f"{format_bytes(avail)} available; reduce {fld}"
+            f"{format_bytes(avail)} available; {_HINTS.get(fld, f'reduce {fld}')}"
         )
     if est.path_steps > MAX_PATH_STEPS:
         raise InputError(

@@ -71,7 +71,9 @@ def make_gain(
 
 def _modes(
     topology: AnyTopology, spec: SimulationSpec
-) -> tuple[list[str], Callable[[], dict[str, ProtocolDesign]], list[tuple[float, float, int]], list[str]]:
+) -> tuple[
+    list[str], Callable[[], dict[str, ProtocolDesign]], list[tuple[float, float, int]], list[str]
+]:
     """Mode names, a thunk computing their designs, segments on [0, T), notes."""
     t_end, th, margin = spec.T, spec.theta, spec.margin
     if spec.resample is not None and not isinstance(topology, TimeVaryingTopology):
@@ -80,7 +82,7 @@ def _modes(
         )
     if isinstance(topology, SwitchingTopology):
         durs = np.array([dur for _, dur in topology.schedule], dtype=float)
-        per = float(np.sum(durs))
+        per = float(sum(durs.tolist()))  # Python floats overflow to inf without a warning
         if not np.isfinite(per):
             raise InputError("schedule: the period (sum of durations) overflows to infinity")
         if np.any(durs < 1e-12 * per):
@@ -118,7 +120,9 @@ def _modes(
         if len(set(names)) != len(names):  # %g rounding: fall back to indices
             names = [f"t[{k}]" for k in range(ts.size)]
         segments = [(float(t), float(min(t + step, t_end)), k) for k, t in enumerate(ts)]
-        note = f"topology given as functions of t: sampled and re-designed every {step:g} time units"
+        note = (
+            f"topology given as functions of t: sampled and re-designed every {step:g} time units"
+        )
         return (
             names,
             lambda: {
@@ -218,6 +222,33 @@ def _step_size_guard(
     if check.warning:
         notes.append(check.warning)
         warnings.warn(check.warning, stacklevel=3)
+
+
+# RK4 steps × ((Nd)³ + 2·10⁴) of the exact moments (the constant: per-step overhead);
+# 1e9 is ~ 30 000 steps at N·d = 21 (seconds); the paper's runs take ~ 1 000
+MAX_EXACT_WORK = 1e9
+
+
+def _check_exact_work(
+    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, nd_: int
+) -> None:
+    """The exact moments take RK4 steps h <= κ / (c ρ) (see :mod:`.moments`): estimate
+    their number on the grid and refuse a run that would take hours."""
+    from .moments import KAPPA
+
+    rho_l = np.array([2 * s.spectral_radius for s in systems])
+    rho_q = np.array(
+        [4 * sum(float(np.linalg.norm(k, 2)) ** 2 for _, _, k in s.h_blocks) for s in systems]
+    )
+    m = grid.mode
+    with np.errstate(all="ignore"):
+        steps = float(np.sum(c_grid * grid.h * (rho_l[m] + c_grid * rho_q[m]))) / KAPPA
+    steps += grid.save_times.size
+    if not np.isfinite(steps) or steps * (float(nd_) ** 3 + 2e4) > MAX_EXACT_WORK:
+        raise InputError(
+            f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd_} "
+            "(the gain is large on [0, T]); use method: mc, a smaller gain or a shorter T"
+        )
 
 
 def _check_noise_callable(spec: SimulationSpec, systems: Sequence[ModeSystem], d: int) -> None:
@@ -353,6 +384,7 @@ def simulate(
             notes.append("one sample path: no confidence band")
     if spec.method in ("exact", "both"):
         if spec.noise.linear:
+            _check_exact_work(systems, grid, c_grid, n * d)
             t0 = time.perf_counter()
             exact = exact_moments(
                 systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d

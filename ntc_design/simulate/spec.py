@@ -90,7 +90,8 @@ class SaveAt:
     def count(self, t_end: float) -> float:
         """Number of save times on [0, t_end] (a float: may be astronomically large)."""
         if self.every is not None:
-            return math.floor(t_end / self.every) + 2.0
+            n = t_end / self.every
+            return math.floor(n) + 2.0 if math.isfinite(n) and n < 2**53 else n
         return float(self.times.size + 1)
 
     def resolve(self, t_end: float) -> np.ndarray:
@@ -230,9 +231,7 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
     for key, s in noise.sigma_edges.items():
         if not isinstance(key, tuple) or len(key) != 2:
             raise InputError(f"noise.sigma_edges: key {key!r} is not a (from, to) pair")
-        require_number(
-            f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}", s, minimum=0.0
-        )
+        require_number(f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}", s, minimum=0.0)
     return noise
 
 
@@ -317,6 +316,9 @@ class SimulationSpec:
         if isinstance(self.gain, str):
             if len(self.gain) > MAX_GAIN_TEXT:
                 raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
+            from ..gain import parse_gain
+
+            parse_gain(self.gain)  # a whitelisted expression in t, or one line naming gain
         elif not callable(self.gain):
             raise InputError(
                 f"gain: expected an expression in t or a callable, got {type(self.gain).__name__}"
@@ -380,7 +382,11 @@ class SimulationSpec:
             scheme=o.pop("scheme", "explicit"),
         )
         mc = MonteCarlo(
-            **{k: o.pop(k) for k in ("paths", "seed", "block_size", "store_paths", "workers") if k in o}
+            **{
+                k: o.pop(k)
+                for k in ("paths", "seed", "block_size", "store_paths", "workers")
+                if k in o
+            }
         )
         if o.get("noise") is None:
             o.pop("noise", None)
@@ -486,6 +492,10 @@ def _noise_from_document(doc: Any) -> NoiseModel:
         for r, row in enumerate(f):
             if not isinstance(row, list):
                 raise InputError(f"noise.f[{r}]: expected a row (a list of numbers)")
+            if len(row) != len(f):
+                raise InputError(
+                    f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
+                )
             for c, v in enumerate(row):
                 require_number(f"noise.f[{r}][{c}]", v)
         f = np.asarray(f, dtype=float) if f else f
