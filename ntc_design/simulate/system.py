@@ -382,6 +382,11 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
     worst = int(np.argmax(ratio))
     r = float(ratio[worst])
     sysw = systems[modes[worst]]
+    if r >= 1.0 and not limit[worst] > 0:
+        raise InputError(
+            f"dt: L_B of mode {sysw.name} has an eigenvalue with Re λ <= 0 ({sysw.eig_method}): "
+            "the drift is not stable and Euler–Maruyama has no stable step"
+        )
     if r >= 1.0:
         which = (
             f"2·Re λ/|λ|² = {drift[worst]:.4g}"
