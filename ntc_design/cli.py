@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import sys
+import threading
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -20,7 +22,7 @@ from .files import jsonable
 from .model import SwitchingTopology, load
 
 app = typer.Typer(
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
     no_args_is_help=True,
     help="Certify, design and validate non-trivial consensus protocols on signed "
@@ -172,18 +174,70 @@ def design_cmd(
         _print_design(doc, res.topology.name or str(file))
 
 
-def _progress():
-    """A progress bar on stderr, shown only on a terminal."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+class Progress:
+    """Progress on stderr: a rich bar on a terminal; otherwise (a batch job, a pipe) a plain
+    line every ``every`` seconds from a heartbeat thread, so that a long run is never
+    silent, and one line when a later stage starts."""
 
-    return Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.percentage:>3.0f}%"),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-        disable=not sys.stderr.isatty(),
-    )
+    def __init__(self, what: str, every: float = 5.0, tty: bool | None = None):
+        self.what, self.every = what, every
+        self.tty = sys.stderr.isatty() if tty is None else tty
+        self.t0 = time.monotonic()
+        self.state = "starting"
+        self.tasks: dict[str, int] = {}
+        self._stop = threading.Event()
+        self._bar = None
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> Progress:
+        if self.tty:
+            from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+            from rich.progress import Progress as Bar
+
+            self._bar = Bar(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                TextColumn("{task.percentage:>3.0f}%"),
+                TimeRemainingColumn(),
+                console=Console(stderr=True),
+            )
+            self._bar.__enter__()
+        else:
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+
+    def _line(self, text: str) -> None:
+        print(
+            f"{self.what}: [{time.monotonic() - self.t0:.0f} s] {text}", file=sys.stderr, flush=True
+        )
+
+    def _beat(self) -> None:
+        while not self._stop.wait(self.every):
+            self._line(self.state)
+
+    def stage(self, text: str) -> None:
+        """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
+        once only after the first ``every`` seconds, so that a quick run, or bad input
+        refused at the start, prints nothing but its result or its one error line."""
+        self.state = text
+        if not self.tty and time.monotonic() - self.t0 >= self.every:
+            self._line(text)
+
+    def tick(self, key: str, done: int, total: int) -> None:
+        """``done`` of ``total`` units of Monte Carlo work (path-steps) of run ``key``."""
+        self.state = f"{key}: Monte Carlo {100 * done / max(total, 1):.0f}% done"
+        if self._bar is not None:
+            if key not in self.tasks:
+                self.tasks[key] = self._bar.add_task(key, total=total)
+            self._bar.update(self.tasks[key], completed=done, total=total)
 
 
 def _print_checks(checks) -> None:
@@ -248,20 +302,36 @@ def certify(
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
-    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed."""
+    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed.
+    Exit 0 when one is (or, without --gain, when the certificate is valid), 1 when none is;
+    --out is written only when the certificate is valid."""
     from .certify import certify as run
     from .certify import write_certificate
 
     th = parse_vector(theta, "--theta")
-    if out_path is not None and not out_path.parent.is_dir():
-        raise InputError(f"--out: directory {out_path.parent} does not exist")
-    res = run(load(file), th, margin, gain)
     if out_path is not None:
+        if not out_path.parent.is_dir():
+            raise InputError(f"--out: directory {out_path.parent} does not exist")
+        if out_path.is_dir():
+            raise InputError(f"--out: {out_path} is a directory")
+    res = run(load(file), th, margin, gain)
+    written = out_path is not None and res.verification.valid
+    if written:
         write_certificate(res.certificate, out_path)
     doc = res.to_dict()
     if as_json:
         print(_json(doc))
-        return
+    else:
+        _print_certify(doc, out_path if written else None)
+    if out_path is not None and not written:
+        print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
+    if not res.proven:
+        if out_path is None or written:
+            print("not proven: no theorem is guaranteed", file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _print_certify(doc: dict, written: Path | None) -> None:
     _print_checks(doc["certificate"]["checks"])
     r = doc["certificate"]["results"]
     if "lmi" in r:
@@ -283,24 +353,64 @@ def certify(
     if doc["gain"] is not None:
         _print_gain(doc["gain"])
     _print_theorems(doc["theorems"])
-    if out_path is not None:
-        out.print(f"certificate written to {out_path} (re-check with: ntc verify {out_path})")
+    if written is not None:
+        out.print(f"certificate written to {written} (re-check with: ntc verify {written})")
+
+
+def _print_verification(doc: dict) -> None:
+    ab = doc["certifies"]
+    if ab is not None:
+        print(f"kind: {ab['kind']} ({ab['description']})")
+        for m in ab["modes"]:
+            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
+            print(
+                f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
+                f"d = {m['d']}, {m['topology_hash']}, δ = {m['delta']:.6g}, θ = {m['theta']}{used}"
+            )
+        if ab["schedule"] is not None:
+            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
+            print(f"schedule: {sched} ({ab['switching_hash']})")
+        for p in ab["properties"]:
+            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
+            print(f"certifies: {p['meaning']}{alpha}")
+    for c in doc["checks"]:
+        mark = "ok   " if c["ok"] else "FAILS"
+        print(f"{mark} {c['name']}: {c['detail']}")
+    print(f"note: {doc['digest_note']}")
 
 
 @app.command()
-def verify(cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")]) -> None:
-    """Re-check a certificate without an SDP solver. Exit 0 valid, 1 invalid, 2 malformed."""
+def verify(
+    cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")],
+    topology: Annotated[
+        Path | None,
+        typer.Option(
+            "--topology", help="Your topology or switching file: the certificate must be about it."
+        ),
+    ] = None,
+    theta: Annotated[
+        str | None, typer.Option(help="Your θ, e.g. 1,2,-1: the certificate must be about it.")
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Re-check a certificate without an SDP solver, deriving what must be proven from its
+    kind. Exit 0 valid, 1 invalid (names what fails), 2 malformed."""
     from .certify import verify_file
 
-    ver = verify_file(cert)
-    for c in ver.checks:
-        mark = "ok   " if c.ok else "FAILS"
-        print(f"{mark} {c.name}: {c.detail}")
+    top = load(topology) if topology is not None else None
+    th = parse_vector(theta, "--theta") if theta is not None else None
+    ver = verify_file(cert, top, th)
+    doc = ver.to_dict()
+    if as_json:
+        print(_json(doc))
+    else:
+        _print_verification(doc)
     if not ver.valid:
         names = "; ".join(c.name for c in ver.failed)
         print(f"INVALID ({ver.method}): {names}", file=sys.stderr)
         raise typer.Exit(1)
-    print(f"VALID ({ver.method}): {len(ver.checks)} checks")
+    if not as_json:
+        print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
 @app.command()
@@ -310,9 +420,11 @@ def simulate(
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
     ] = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
-    summary.json, ms_error.csv and paths.npz to --out (all or nothing)."""
+    summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
+    or nothing)."""
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
     from .simulate.scenario import check_output, load_scenario, write_outputs
@@ -325,32 +437,51 @@ def simulate(
         except InputError as exc:
             raise InputError(f"--{exc}") from None
     check_output(out_dir)  # before the run, not after it
-    prog = _progress()
-    with prog:
-        task = prog.add_task("simulating", total=1)
-
-        def tick(done: int, total: int) -> None:
-            prog.update(task, completed=done, total=total)
-
+    with Progress("ntc simulate") as prog:
+        prog.stage(f"simulating {scenario}")
         try:
-            res = run(top, spec, progress=tick)
+            res = run(top, spec, progress=lambda done, total: prog.tick("simulating", done, total))
         except InputError as exc:  # a field of the scenario: name the file
             raise InputError(f"{sc.source}: {exc}") from None
         except SimulationDiverged as exc:
-            write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
+            written = write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
+            if as_json:
+                print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
             print(f"error: {one_line(str(exc))}", file=sys.stderr)
             raise typer.Exit(1) from None
-    write_outputs(res, out_dir, {"scenario": str(scenario)})
+    written = write_outputs(res, out_dir, {"scenario": str(scenario)})
     st = res.stats
+    if as_json:
+        summary = res.summary()
+        print(
+            _json(
+                {
+                    "ok": True,
+                    "out": str(out_dir),
+                    "files": [str(p) for p in written],
+                    "stats": st,
+                    "notes": res.notes,
+                    **{
+                        k: summary[k]
+                        for k in ("final_ms_error_mc", "final_ms_error_exact", "sample_paths")
+                        if k in summary
+                    },
+                }
+            )
+        )
+        return
     rate = (
         f", {st['path_steps_per_second']:.3g} path-steps/s" if "path_steps_per_second" in st else ""
     )
-    out.print(
-        f"{st['path_steps']:.3g} path-steps in {st.get('mc_seconds', 0):.1f} s{rate}; exact moments {st.get('exact_seconds', 0):.2f} s"
-    )
+    parts = []
+    if "mc_seconds" in st:
+        parts.append(f"{st['path_steps']:.3g} path-steps in {st['mc_seconds']:.1f} s{rate}")
+    if "exact_seconds" in st:
+        parts.append(f"exact moments {st['exact_seconds']:.2f} s")
+    out.print("; ".join(parts))
     for n in res.notes:
         out.print(f"note: {n}")
-    out.print(f"wrote {out_dir}/summary.json, ms_error.csv, paths.npz")
+    out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
 @app.command()
@@ -358,12 +489,30 @@ def report(
     directory: Annotated[
         Path, typer.Argument(help="A simulation output directory (ntc simulate --out).")
     ],
+    interactive: Annotated[
+        bool,
+        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+    ] = False,
+    as_json: JsonOpt = False,
 ) -> None:
-    """Turn a simulation output directory into one self-contained report.html."""
+    """Turn a simulation output directory into one self-contained report.html (figures also
+    as PNG, SVG and PDF in DIR/figures)."""
     from .reports.report import write_report
 
-    path = write_report(directory)
-    out.print(f"wrote {path}")
+    path = write_report(directory, interactive=interactive)
+    if as_json:
+        figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
+        print(
+            _json(
+                {
+                    "report": str(path),
+                    "certificate": str(path.parent / "certificate.json"),
+                    "figures": figs,
+                }
+            )
+        )
+        return
+    out.print(f"wrote {path}", soft_wrap=True)
 
 
 @app.command()
@@ -379,6 +528,12 @@ def reproduce(
         str, typer.Option(help="intrinsic (validated fast path) or uniform.")
     ] = "intrinsic",
     workers: Annotated[int, typer.Option(help="Worker processes.")] = 2,
+    seed: Annotated[int, typer.Option(help="Monte Carlo seed.")] = 0,
+    interactive: Annotated[
+        bool,
+        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+    ] = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Run the paper's Section 5 end to end and write one report beside its numbers."""
     from .reports.reproduce import reproduce_paper
@@ -388,19 +543,29 @@ def reproduce(
     from .outputs import check_output_folder
 
     check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
-    prog = _progress()
-    tasks: dict[str, int] = {}
-
-    def tick(key: str, done: int, total: int) -> None:
-        if key not in tasks:
-            tasks[key] = prog.add_task(key, total=total)
-        prog.update(tasks[key], completed=done, total=total)
-
-    with prog:
+    with Progress("ntc reproduce") as prog:
         path, ok, wall = reproduce_paper(
-            out_dir, t_end, paths, dt, stepping, workers, progress=tick
+            out_dir,
+            t_end,
+            paths,
+            dt,
+            stepping,
+            workers,
+            seed,
+            progress=prog.tick,
+            status=prog.stage,
+            interactive=interactive,
         )
-    out.print(f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}")
+    if as_json:
+        doc = json.loads((path.parent / "paper_summary.json").read_text(encoding="utf-8"))
+        print(_json({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))
+    else:
+        out.print(
+            f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}",
+            soft_wrap=True,
+        )
+    if not ok:
+        raise typer.Exit(1)
 
 
 def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:

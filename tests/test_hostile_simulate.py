@@ -555,7 +555,7 @@ def test_reproduce_out_checked_before_the_run(tmp_path, capsys, monkeypatch):
 def test_os_error_is_one_line(tmp_path, capsys, monkeypatch):
     import ntc_design.reports.report as rp
 
-    def denied(directory):
+    def denied(directory, **kw):
         raise PermissionError(13, "Permission denied", str(directory))
 
     monkeypatch.setattr(rp, "write_report", denied)
