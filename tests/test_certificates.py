@@ -386,3 +386,51 @@ def test_verify_uses_verified_float_above_the_exact_size(examples):
     cert["digest"] = digest(cert)
     bad = verify(cert)
     assert not bad.valid and {c.name for c in bad.failed} >= {"P_lyapunov ≻ 0"}
+
+
+def test_verdicts_read_typed_claims_not_names(examples):
+    """Renaming every check leaves the verdict unchanged: theorems.py keys on the claim's
+    property, not on its text."""
+    import dataclasses
+
+    from ntc_design.certify.theorems import fixed_verdicts
+
+    r = certify(nd.load(examples / "g1.yaml"), THETA, gain="1/(1+t)")
+    renamed = dataclasses.replace(
+        r.verification,
+        checks=tuple(
+            dataclasses.replace(c, name=f"check {k}") for k, c in enumerate(r.verification.checks)
+        ),
+    )
+    th = fixed_verdicts(r.design, renamed, r.gain)
+    assert [t.guaranteed for t in th] == [True, True]
+    # and a failing Hurwitz claim is seen whatever it is called
+    broken = dataclasses.replace(
+        renamed,
+        checks=tuple(
+            dataclasses.replace(c, ok=False)
+            if c.claim is not None
+            and c.claim.kind.value == "lyapunov"
+            and c.claim.prop.value == "hurwitz"
+            else c
+            for c in renamed.checks
+        ),
+    )
+    assert [t.guaranteed for t in fixed_verdicts(r.design, broken, r.gain)] == [False, False]
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 9), st.sampled_from([-1e-3, 0.0, 1e-9, 0.5]))
+def test_exact_pd_agrees_with_eigenvalues(seed, n, shift):
+    """FLINT's fraction-free LU (Sylvester) against LAPACK eigenvalues, on matrices whose
+    smallest eigenvalue is clearly away from 0 or exactly 0 (a rank-deficient Gram matrix)."""
+    rng = np.random.default_rng(seed)
+    g = rng.integers(-4, 5, size=(n, max(n - 1, 1))).astype(float)
+    m = g @ g.T  # singular (rank <= n-1) for n >= 2, exact in doubles
+    m = m + shift * np.eye(n)
+    lam = np.linalg.eigvalsh(m)[0]
+    pd = exact_pd(Dyadic.of(m)).holds
+    if abs(lam) > 1e-6 * max(1.0, np.abs(m).max()):
+        assert pd == (lam > 0)
+    elif shift <= 0:
+        assert not pd  # singular or shifted down: never positive definite

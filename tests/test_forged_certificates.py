@@ -547,3 +547,59 @@ def test_never_a_certificate_for_a_false_claim_even_forged(which, picks):
         return  # rejected as malformed
     if ver.valid:
         _independently_true(doc, ver)
+
+
+# ------------------------------------------------------ certify: nothing unproven written
+
+UNPROVEN = {
+    "empty graph": "dim: 1\nagents: 3\nedges: []\n",
+    "agent with no edges": (
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: -1}\n  - {from: 2, to: 1, weight: 1}\n"
+    ),
+    # agents 3 and 4 only listen to each other (cooperatively) and no informed agent
+    # grounds them: their block of L_B is singular, −L_B is not Hurwitz
+    "ungrounded cycle": (
+        "dim: 1\nagents: 4\nedges:\n  - {from: 1, to: 2, weight: -1}\n"
+        "  - {from: 3, to: 4, weight: 1}\n  - {from: 4, to: 3, weight: 1}\n"
+    ),
+}
+
+
+@hostile
+@pytest.mark.parametrize("gain", [None, "1/(1+t)"])
+@pytest.mark.parametrize("name", list(UNPROVEN))
+def test_certify_exits_1_and_writes_nothing_when_nothing_is_proven(
+    tmp_path, capsys, monkeypatch, name, gain
+):
+    top = tmp_path / "t.yaml"
+    top.write_text(UNPROVEN[name])
+    out = tmp_path / "c.json"
+    args = ["certify", top, "--theta", "1", "--out", out] + (["--gain", gain] if gain else [])
+    code, _, err = run_cli(args, capsys, monkeypatch)
+    assert code == 1, err
+    assert "Traceback" not in err and "not proven" in err
+    assert not out.exists() and list(tmp_path.iterdir()) == [top]  # no stray temporary file
+
+
+@hostile
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["verify", "no-such.json"], "no such file"),
+        (["verify", "."], "no such file"),
+        (["verify", CERTS / "g1.json", "--topology", "no-such.yaml"], "no such file"),
+        (["verify", CERTS / "g1.json", "--theta", "1,x"], "--theta"),
+        (["verify", CERTS / "g1.json", "--theta", ""], "--theta"),
+        (["verify", CERTS / "README.md"], "not valid JSON"),
+        (["certify", ROOT / "examples" / "g1.yaml", "--theta", "1,2,-1", "--out", "."], "--out"),
+    ],
+)
+def test_verify_and_certify_bad_arguments_are_one_line(capsys, monkeypatch, args, needle):
+    code, out, err = run_cli(args, capsys, monkeypatch)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and needle in lines[0], (code, err)
+
+
+def test_verify_with_theta_of_the_wrong_length_is_invalid(tmp_path, capsys, monkeypatch):
+    code, _, err = run_cli(["verify", CERTS / "g1.json", "--theta", "1,2"], capsys, monkeypatch)
+    assert code == 1 and "θ is the one given" in err

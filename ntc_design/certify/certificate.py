@@ -75,7 +75,13 @@ DIGEST_NOTE = (
 
 
 def package_versions() -> dict[str, str]:
-    """Versions of Python and of the packages a certificate depends on."""
+    """Versions of Python and of the packages a certificate depends on.
+
+    Returns
+    -------
+    dict
+        Package name -> version (``"not installed"`` when missing).
+    """
     out = {"python": platform.python_version()}
     for pkg in (
         "ntc-design",
@@ -95,7 +101,17 @@ def package_versions() -> dict[str, str]:
 
 
 def canonical(obj: Any) -> bytes:
-    """The canonical JSON bytes that digests are taken of (sorted keys, no spaces)."""
+    """The canonical JSON bytes that digests are taken of (sorted keys, no spaces).
+
+    Parameters
+    ----------
+    obj : Any
+        A JSON-compatible value.
+
+    Returns
+    -------
+    bytes
+    """
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=True).encode()
 
 
@@ -104,7 +120,19 @@ def _sha(obj: Any) -> str:
 
 
 def digest(doc: dict) -> str:
-    """SHA-256 of everything in a certificate but its ``digest`` field (a checksum)."""
+    """SHA-256 of everything in a certificate but its ``digest`` field: a checksum
+    anyone can recompute, not a signature.
+
+    Parameters
+    ----------
+    doc : dict
+        A certificate.
+
+    Returns
+    -------
+    str
+        ``"sha256:<hex>"``.
+    """
     return _sha({k: v for k, v in doc.items() if k != "digest"})
 
 
@@ -139,7 +167,20 @@ def topology_hash(top: Topology) -> str:
 
 def switching_hash(mode_hashes: Mapping[str, str], schedule) -> str:
     """A canonical hash of a switching topology: the hash of every mode by name and the
-    schedule as ``[mode, duration.hex()]`` pairs in order."""
+    schedule as ``[mode, duration.hex()]`` pairs in order.
+
+    Parameters
+    ----------
+    mode_hashes : mapping
+        Mode name -> :func:`topology_hash` of its topology.
+    schedule : sequence of (str, float)
+        The periodic schedule.
+
+    Returns
+    -------
+    str
+        ``"sha256:<hex>"``.
+    """
     return _sha(
         {
             "modes": dict(sorted(mode_hashes.items())),
@@ -252,7 +293,16 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
 
 
 def scheduled_modes(schedule) -> tuple[str, ...]:
-    """The modes a schedule uses, in order of first use."""
+    """The modes a schedule uses, in order of first use.
+
+    Parameters
+    ----------
+    schedule : sequence of (str, float)
+
+    Returns
+    -------
+    tuple of str
+    """
     return tuple(dict.fromkeys(m for m, _ in schedule))
 
 
@@ -322,9 +372,16 @@ def write_certificate(doc: dict, path: str | Path) -> None:
     Raises
     ------
     InputError
-        When the folder cannot be written or the path is a folder.
+        When the folder cannot be written, the path is a folder, or the certificate holds
+        non-finite numbers.
     """
-    write_atomic(path, json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n")
+    try:
+        text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
+    except ValueError:  # JSON has no NaN/Inf: such numbers prove nothing anyway
+        raise InputError(
+            f"{path}: the certificate holds non-finite numbers (nothing is proven); not written"
+        ) from None
+    write_atomic(path, text)
 
 
 # ---------------------------------------------------------------------------- verify
@@ -418,7 +475,18 @@ class Verification:
 
     def property_holds(self, prop: Property, mode: str | None = None) -> bool:
         """Whether ``prop`` (for ``mode``, if given) is proven: the certificate's
-        integrity checks hold and so does every claim of that property (there is one)."""
+        integrity checks hold and so does every claim of that property (there is one).
+
+        Parameters
+        ----------
+        prop : Property
+        mode : str, optional
+            Only the claims about this mode (and those about no mode, such as P ≻ 0).
+
+        Returns
+        -------
+        bool
+        """
         integrity = all(c.ok for c in self.checks if c.claim is None)
         mine = [c for c in self.checks if c.claim is not None and c.claim.prop is prop]
         if mode is not None:  # the claims about this mode, and those about no mode (P ≻ 0)
@@ -489,7 +557,16 @@ def _matrix(x: Any, n: int, where: str) -> np.ndarray:
 
 
 def out_of_range(a: np.ndarray | float) -> bool:
-    """Whether some nonzero entry lies outside ``[2^-NUMBER_EXP, 2^NUMBER_EXP]``."""
+    """Whether some nonzero entry lies outside ``[2^-NUMBER_EXP, 2^NUMBER_EXP]``.
+
+    Parameters
+    ----------
+    a : ndarray or float
+
+    Returns
+    -------
+    bool
+    """
     x = np.abs(np.asarray(a, dtype=float))
     nz = x[x != 0]
     return bool(nz.size) and (
@@ -970,6 +1047,11 @@ def verify(
             f"version {version} is not one this ntc reads ({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
         )
     kind = _need(doc, "kind", str, source)
+    if kind == "time_varying":  # weights as expressions of t: the uniform bound Λ₂
+        from .time_varying import verify_time_varying
+
+        _need(doc, "digest", str, source)
+        return verify_time_varying(doc, source)
     spec: KindSpec | None = KINDS.get(kind)
     if spec is None:
         return _invalid(

@@ -34,6 +34,16 @@ U = 2.0**-53
 
 
 def gamma(k: int) -> float:
+    """γ_k = k·u/(1 − k·u), the rounding-error factor of a k-term sum of products.
+
+    Parameters
+    ----------
+    k : int
+
+    Returns
+    -------
+    float
+    """
     return k * U / (1 - k * U)
 
 
@@ -97,10 +107,21 @@ class Dyadic:
 def first_nonpositive_minor(num: np.ndarray) -> int | None:
     """Sylvester's criterion on an integer symmetric matrix.
 
-    Returns None when every leading principal minor is positive (the matrix is positive
-    definite), else the 1-based order of the first leading minor that is not. The minors
-    are the diagonal of U in FLINT's fraction-free LU; the factorisation exchanges rows
-    only when a leading minor is zero, so a row exchange also marks a non-positive one."""
+    The minors are the diagonal of U in FLINT's fraction-free LU; the factorisation
+    exchanges rows only when a leading minor is zero, so a row exchange also marks a
+    non-positive one.
+
+    Parameters
+    ----------
+    num : ndarray
+        A square object array of Python ints.
+
+    Returns
+    -------
+    int or None
+        None when every leading principal minor is positive (the matrix is positive
+        definite), else the 1-based order of the first leading minor that is not.
+    """
     n = num.shape[0]
     if n == 0:
         return None
@@ -113,7 +134,17 @@ def first_nonpositive_minor(num: np.ndarray) -> int | None:
 
 def exact_affordable(n: int, bits: int) -> bool:
     """Whether an exact test of an n×n integer matrix with entries of ``bits`` bits is
-    within the budget (see the module docstring)."""
+    within the budget (see the module docstring).
+
+    Parameters
+    ----------
+    n : int
+    bits : int
+
+    Returns
+    -------
+    bool
+    """
     return n <= EXACT_MAX_N and n * max(bits, 1) <= EXACT_BIT_BUDGET
 
 
@@ -125,7 +156,16 @@ class PDProof:
 
 
 def exact_pd(m: Dyadic) -> PDProof:
-    """Exact test of ``m ≻ 0`` for a symmetric dyadic matrix."""
+    """Exact test of ``m ≻ 0`` for a symmetric dyadic matrix.
+
+    Parameters
+    ----------
+    m : Dyadic
+
+    Returns
+    -------
+    PDProof
+    """
     if not np.all(m.num == m.num.T):
         return PDProof(False, "exact-rational", "the matrix is not symmetric")
     k = first_nonpositive_minor(m.num)
@@ -136,7 +176,17 @@ def exact_pd(m: Dyadic) -> PDProof:
 
 def verified_float_pd(m: np.ndarray, err: np.ndarray) -> PDProof:
     """Rigorous test of ``M_exact ≻ 0`` from its floating-point value ``m`` and an
-    entrywise bound ``err >= |M_exact − m|`` (see the module docstring)."""
+    entrywise bound ``err >= |M_exact − m|`` (see the module docstring).
+
+    Parameters
+    ----------
+    m : ndarray
+    err : ndarray
+
+    Returns
+    -------
+    PDProof
+    """
     n = m.shape[0]
     ms = 0.5 * (m + m.T)
     err = err + 0.5 * np.abs(m - m.T)  # asymmetry of the float value is error too

@@ -10,6 +10,7 @@ from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
+from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .certificate import Check, Verification, hurwitz_certificate, switching_certificate, verify
 from .theorems import TheoremVerdict, fixed_verdicts, switching_verdicts
 
@@ -61,11 +62,13 @@ def _verify_own(cert: dict) -> Verification:
 
 
 def certify(
-    topology: Topology | SwitchingTopology,
+    topology: Topology | SwitchingTopology | ExpressionTopology,
     theta,
     margin: float = 0.1,
     gain: str | None = None,
     delta: float | None = None,
+    noise_sigma: float = 0.4,
+    noise_f=0.3,
 ) -> CertifyResult:
     """Design (Lemma 1), certify (Lyapunov + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a common
     P), re-verify the certificate exactly, analyse the gain and give the theorem verdict.
@@ -81,6 +84,8 @@ def certify(
         c(t), e.g. ``"1/(1+t)"``.
     delta : float, optional
         An explicit δ instead of C + ΔC.
+    noise_sigma, noise_f : float
+        σ_ji and f(x) = f·x: only the time-varying certificate uses them (p̄, σ̄, t₀).
 
     Returns
     -------
@@ -94,6 +99,20 @@ def certify(
         For a bad θ, margin, δ or gain.
     """
     g = analyse_gain(gain) if gain is not None else None
+    if isinstance(topology, ExpressionTopology):  # weights as expressions of t
+        from .time_varying import (
+            time_varying_certificate,
+            time_varying_verdicts,
+            verify_time_varying,
+        )
+
+        if delta is not None:
+            raise InputError("delta: a time-varying topology uses δ(t) = C(t) + ΔC (Lemma 1)")
+        tdes = TimeVaryingDesign(topology, np.asarray(theta, dtype=float), margin)
+        cert = time_varying_certificate(topology, theta, margin, gain, noise_sigma, noise_f)
+        ver = verify_time_varying(cert)
+        tth = time_varying_verdicts(cert["results"]["time_varying"], ver, g)
+        return CertifyResult(tdes, cert, ver, g, tth)
     des = design(topology, theta, margin, delta)
     th: tuple[TheoremVerdict, ...]
     if isinstance(des, SwitchingDesign):
