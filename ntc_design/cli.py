@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import json
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Annotated
@@ -20,9 +21,10 @@ from .design import ProtocolDesign, SwitchingDesign, design, structure_report
 from .errors import InputError, one_line
 from .files import jsonable
 from .model import SwitchingTopology, load
+from .timevarying import ExpressionTopology, TimeVaryingDesign
 
 app = typer.Typer(
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
     no_args_is_help=True,
     help="Certify, design and validate non-trivial consensus protocols on signed "
@@ -46,6 +48,7 @@ def _root(
 ) -> None:
     """Certify, design and validate non-trivial consensus protocols on signed
     matrix-weighted networks with compound measurement noise."""
+
 
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
@@ -149,6 +152,8 @@ def _print_design(d: dict, title: str) -> None:
 def check(file: FileArg, as_json: JsonOpt = False) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition."""
     top = load(file)
+    if isinstance(top, ExpressionTopology):  # the classes are fixed: the structure at any t
+        top = top.structure
     if isinstance(top, SwitchingTopology):
         rep = {"modes": {k: structure_report(m) for k, m in top.modes.items()}}
         if as_json:
@@ -170,7 +175,15 @@ def design_cmd(
 ) -> None:
     """Lemma 1 protocol parameters with the exact critical couplings δ_H and δ_S."""
     th = parse_vector(theta, "--theta")
-    res: ProtocolDesign | SwitchingDesign = design(load(file), th, margin)
+    top = load(file)
+    if isinstance(top, ExpressionTopology):
+        tdoc = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin).to_dict()
+        if as_json:
+            print(_json(tdoc))
+        else:
+            _print_tv_design(tdoc, top.name or str(file))
+        return
+    res: ProtocolDesign | SwitchingDesign = design(top, th, margin)
     doc = res.to_dict()
     if as_json:
         print(_json(doc))
@@ -181,18 +194,106 @@ def design_cmd(
         _print_design(doc, res.topology.name or str(file))
 
 
-def _progress():
-    """A progress bar on stderr, shown only on a terminal."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-    return Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.percentage:>3.0f}%"),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-        disable=not sys.stderr.isatty(),
+def _print_tv_design(d: dict, title: str) -> None:
+    t = Table(title=f"{title}: Lemma 1 at every instant, θ = {d['theta']}, ΔC = {d['margin']}")
+    t.add_column("quantity")
+    t.add_column("range over the domain")
+    dom = d["domain"]
+    t.add_row(
+        "domain", f"[{dom[0]:.6g}, {dom[1]:.6g}] ({d['samples']} samples)" if dom else "t >= 0"
     )
+    t.add_row("informed V_I = U", _labels(d["informed"]))
+    if d["C"] is not None:
+        t.add_row("C(t)", f"{d['C']['min']:.4f} .. {d['C']['max']:.4f}")
+    t.add_row("δ(t) = C(t) + ΔC", f"{d['delta']['min']:.4f} .. {d['delta']['max']:.4f}")
+    t.add_row(
+        "x0(t) = k1(t)·θ",
+        "["
+        + ", ".join(
+            f"{a:.4f}..{b:.4f}" for a, b in zip(d["x0"]["min"], d["x0"]["max"], strict=True)
+        )
+        + "]",
+    )
+    t.add_row(
+        "λ_min(L_B + L_Bᵀ)", f"{d['sym_min_eig']['min']:.6g} .. {d['sym_min_eig']['max']:.6g}"
+    )
+    t.add_row("identity residual (max)", f"{d['identity_residual']:.2e}")
+    t.add_row(
+        "Assumption 2", "holds at every sample" if d["assumption_holds"] else "FAILS at some t"
+    )
+    out.print(t)
+    if not d["assumption_holds"]:
+        ts = ", ".join(f"{x:.4g}" for x in d["assumption_fails_at"])
+        out.print(
+            f"  note: Assumption 2 fails at t = {ts}, ...; Lemma 1's design is used as given "
+            "(certify the uniform bound Λ₂ before trusting it)"
+        )
+
+
+class Progress:
+    """Progress on stderr: a rich bar on a terminal; otherwise (a batch job, a pipe) a plain
+    line every ``every`` seconds from a heartbeat thread, so that a long run is never
+    silent, and one line when a later stage starts."""
+
+    def __init__(self, what: str, every: float = 5.0, tty: bool | None = None):
+        self.what, self.every = what, every
+        self.tty = sys.stderr.isatty() if tty is None else tty
+        self.t0 = time.monotonic()
+        self.state = "starting"
+        self.tasks: dict[str, int] = {}
+        self._stop = threading.Event()
+        self._bar = None
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> Progress:
+        if self.tty:
+            from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+            from rich.progress import Progress as Bar
+
+            self._bar = Bar(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                TextColumn("{task.percentage:>3.0f}%"),
+                TimeRemainingColumn(),
+                console=Console(stderr=True),
+            )
+            self._bar.__enter__()
+        else:
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+
+    def _line(self, text: str) -> None:
+        print(
+            f"{self.what}: [{time.monotonic() - self.t0:.0f} s] {text}", file=sys.stderr, flush=True
+        )
+
+    def _beat(self) -> None:
+        while not self._stop.wait(self.every):
+            self._line(self.state)
+
+    def stage(self, text: str) -> None:
+        """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
+        once only after the first ``every`` seconds, so that a quick run, or bad input
+        refused at the start, prints nothing but its result or its one error line."""
+        self.state = text
+        if not self.tty and time.monotonic() - self.t0 >= self.every:
+            self._line(text)
+
+    def tick(self, key: str, done: int, total: int) -> None:
+        """``done`` of ``total`` units of Monte Carlo work (path-steps) of run ``key``."""
+        self.state = f"{key}: Monte Carlo {100 * done / max(total, 1):.0f}% done"
+        if self._bar is not None:
+            if key not in self.tasks:
+                self.tasks[key] = self._bar.add_task(key, total=total)
+            self._bar.update(self.tasks[key], completed=done, total=total)
 
 
 def _print_checks(checks) -> None:
@@ -208,14 +309,10 @@ def _print_gain(g: dict) -> None:
     t = Table(title=f"gain c(t) = {g['parsed']}")
     for c in ("condition", "holds", "reason"):
         t.add_column(c)
-    names = {
-        "continuous_nonnegative": "continuous, c >= 0 on [0, ∞)",
-        "integral_diverges": "∫₀^∞ c dt = ∞",
-        "tends_to_zero": "c(t) → 0",
-        "square_integrable": "∫₀^∞ c² dt < ∞",
-    }
+    from .gain import CONDITION_LABELS
+
     yn = {True: "yes", False: "[red]no[/red]", None: "undetermined"}
-    for k, label in names.items():
+    for k, label in CONDITION_LABELS.items():
         t.add_row(label, yn[g[k]["value"]], g[k]["reason"])
     out.print(t)
     out.print(
@@ -243,7 +340,7 @@ def gain(
     as_json: JsonOpt = False,
 ) -> None:
     """Decide the gain conditions of Theorems 1-4 for c(t)."""
-    from .certify import analyse_gain
+    from .gain import analyse_gain
 
     doc = analyse_gain(expr).to_dict()
     print(_json(doc)) if as_json else _print_gain(doc)
@@ -258,23 +355,45 @@ def certify(
     out_path: Annotated[
         Path | None, typer.Option("--out", help="Write the certificate (JSON) here.")
     ] = None,
+    noise_sigma: Annotated[
+        float, typer.Option(help="σ_ji of the additive noise (time-varying: p̄).")
+    ] = 0.4,
+    noise_f: Annotated[
+        float, typer.Option(help="f(x) = f·x, σ̄ = |f| (time-varying: t₀ of μ₂).")
+    ] = 0.3,
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
-    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed."""
+    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed.
+    Exit 0 when one is (or, without --gain, when the certificate is valid), 1 when none is;
+    --out is written only when the certificate is valid."""
     from .certify import certify as run
     from .certify import write_certificate
 
     th = parse_vector(theta, "--theta")
-    if out_path is not None and not out_path.parent.is_dir():
-        raise InputError(f"--out: directory {out_path.parent} does not exist")
-    res = run(load(file), th, margin, gain)
     if out_path is not None:
+        if not out_path.parent.is_dir():
+            raise InputError(f"--out: directory {out_path.parent} does not exist")
+        if out_path.is_dir():
+            raise InputError(f"--out: {out_path} is a directory")
+    res = run(load(file), th, margin, gain, noise_sigma=noise_sigma, noise_f=noise_f)
+    written = out_path is not None and res.verification.valid
+    if written:
         write_certificate(res.certificate, out_path)
     doc = res.to_dict()
     if as_json:
         print(_json(doc))
-        return
+    else:
+        _print_certify(doc, out_path if written else None)
+    if out_path is not None and not written:
+        print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
+    if not res.proven:
+        if out_path is None or written:
+            print("not proven: no theorem is guaranteed", file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _print_certify(doc: dict, written: Path | None) -> None:
     _print_checks(doc["certificate"]["checks"])
     r = doc["certificate"]["results"]
     if "lmi" in r:
@@ -293,27 +412,80 @@ def certify(
             + "; ".join(f"{a['structure']}: {a['status']}" for a in cl["attempts"])
             + ")"
         )
+    if "time_varying" in r:
+        tvr = r["time_varying"]
+        out.print(
+            f"uniform bound over {tvr['domain_text']}: Λ₂ = {tvr['lambda2']:.6g} certified on "
+            f"{tvr['intervals']} t-intervals (sampled infimum {tvr['sampled_inf']:.6g} at "
+            f"t = {tvr['t_at_sampled_inf']:.4g}, gap {100 * tvr['relative_gap']:.2f} %, "
+            f"{tvr['seconds']:.1f} s)"
+        )
+        t0 = f"{tvr['t0']:.6g}" if tvr["t0"] is not None else "—"
+        out.print(
+            f"Assumption 3: D = {tvr['D']:.6g}; Λ₁ = {tvr['Lambda1']:.6g}, p̄ = {tvr['p_bar']:.6g}; "
+            f"μ₂(t) > 0 for t >= t₀ = {t0} (σ̄ = {tvr['sigma_bar']:.4g}; {tvr['t0_proof']})"
+        )
     if doc["gain"] is not None:
         _print_gain(doc["gain"])
     _print_theorems(doc["theorems"])
-    if out_path is not None:
-        out.print(f"certificate written to {out_path} (re-check with: ntc verify {out_path})")
+    if written is not None:
+        out.print(f"certificate written to {written} (re-check with: ntc verify {written})")
+
+
+def _print_verification(doc: dict) -> None:
+    ab = doc["certifies"]
+    if ab is not None:
+        print(f"kind: {ab['kind']} ({ab['description']})")
+        for m in ab["modes"]:
+            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
+            print(
+                f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
+                f"d = {m['d']}, {m['topology_hash']}, δ = {m['delta']:.6g}, θ = {m['theta']}{used}"
+            )
+        if ab["schedule"] is not None:
+            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
+            print(f"schedule: {sched} ({ab['switching_hash']})")
+        for p in ab["properties"]:
+            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
+            print(f"certifies: {p['meaning']}{alpha}")
+    for c in doc["checks"]:
+        mark = "ok   " if c["ok"] else "FAILS"
+        print(f"{mark} {c['name']}: {c['detail']}")
+    print(f"note: {doc['digest_note']}")
 
 
 @app.command()
-def verify(cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")]) -> None:
-    """Re-check a certificate without an SDP solver. Exit 0 valid, 1 invalid, 2 malformed."""
+def verify(
+    cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")],
+    topology: Annotated[
+        Path | None,
+        typer.Option(
+            "--topology", help="Your topology or switching file: the certificate must be about it."
+        ),
+    ] = None,
+    theta: Annotated[
+        str | None, typer.Option(help="Your θ, e.g. 1,2,-1: the certificate must be about it.")
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Re-check a certificate without an SDP solver, deriving what must be proven from its
+    kind. Exit 0 valid, 1 invalid (names what fails), 2 malformed."""
     from .certify import verify_file
 
-    ver = verify_file(cert)
-    for c in ver.checks:
-        mark = "ok   " if c.ok else "FAILS"
-        print(f"{mark} {c.name}: {c.detail}")
+    top = load(topology) if topology is not None else None
+    th = parse_vector(theta, "--theta") if theta is not None else None
+    ver = verify_file(cert, top, th)
+    doc = ver.to_dict()
+    if as_json:
+        print(_json(doc))
+    else:
+        _print_verification(doc)
     if not ver.valid:
         names = "; ".join(c.name for c in ver.failed)
         print(f"INVALID ({ver.method}): {names}", file=sys.stderr)
         raise typer.Exit(1)
-    print(f"VALID ({ver.method}): {len(ver.checks)} checks")
+    if not as_json:
+        print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
 @app.command()
@@ -324,9 +496,11 @@ def simulate(
         int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
     ] = None,
     scheduler: SchedulerOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
-    summary.json, ms_error.csv and paths.npz to --out (all or nothing)."""
+    summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
+    or nothing)."""
     from .distributed import DaskEngine
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
@@ -335,37 +509,64 @@ def simulate(
 
     top, spec, sc = load_scenario(scenario)
     if workers is not None:
-        spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+        try:
+            spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+        except InputError as exc:
+            raise InputError(f"--{exc}") from None
     check_output(out_dir)  # before the run, not after it
     engine = DaskEngine.connect(scheduler) if scheduler else None
-    prog = _progress()
-    try:
-        with prog:
-            task = prog.add_task("simulating", total=1)
-
-            def tick(done: int, total: int) -> None:
-                prog.update(task, completed=done, total=total)
-
-            try:
-                res = run(top, spec, progress=tick, engine=engine)
-            except SimulationDiverged as exc:
-                write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
-                print(f"error: {one_line(str(exc))}", file=sys.stderr)
-                raise typer.Exit(1) from None
-    finally:
+    with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
         if engine is not None:
-            engine.close()
-    write_outputs(res, out_dir, {"scenario": str(scenario)})
+            stack.callback(engine.close)
+        prog.stage(f"simulating {scenario}")
+        try:
+            res = run(
+                top,
+                spec,
+                progress=lambda done, total: prog.tick("simulating", done, total),
+                engine=engine,
+            )
+        except InputError as exc:  # a field of the scenario: name the file
+            raise InputError(f"{sc.source}: {exc}") from None
+        except SimulationDiverged as exc:
+            written = write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
+            if as_json:
+                print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
+            print(f"error: {one_line(str(exc))}", file=sys.stderr)
+            raise typer.Exit(1) from None
+    written = write_outputs(res, out_dir, {"scenario": str(scenario)})
     st = res.stats
+    if as_json:
+        summary = res.summary()
+        print(
+            _json(
+                {
+                    "ok": True,
+                    "out": str(out_dir),
+                    "files": [str(p) for p in written],
+                    "stats": st,
+                    "notes": res.notes,
+                    **{
+                        k: summary[k]
+                        for k in ("final_ms_error_mc", "final_ms_error_exact", "sample_paths")
+                        if k in summary
+                    },
+                }
+            )
+        )
+        return
     rate = (
         f", {st['path_steps_per_second']:.3g} path-steps/s" if "path_steps_per_second" in st else ""
     )
-    out.print(
-        f"{st['path_steps']:.3g} path-steps in {st.get('mc_seconds', 0):.1f} s{rate}; exact moments {st.get('exact_seconds', 0):.2f} s"
-    )
+    parts = []
+    if "mc_seconds" in st:
+        parts.append(f"{st['path_steps']:.3g} path-steps in {st['mc_seconds']:.1f} s{rate}")
+    if "exact_seconds" in st:
+        parts.append(f"exact moments {st['exact_seconds']:.2f} s")
+    out.print("; ".join(parts))
     for n in res.notes:
         out.print(f"note: {n}")
-    out.print(f"wrote {out_dir}/summary.json, ms_error.csv, paths.npz")
+    out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
 def _sweep_progress():
@@ -381,7 +582,16 @@ def _sweep_progress():
                 print(st.line(), file=sys.stderr, flush=True)
 
         return plain, contextlib.nullcontext()
-    prog = _progress()
+    from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+    from rich.progress import Progress as Bar
+
+    prog = Bar(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+    )
     ids: dict[str, int] = {}
 
     def bar(st) -> None:
@@ -438,13 +648,34 @@ def report(
         Path,
         typer.Argument(help="A simulation or sweep output directory (ntc simulate/sweep --out)."),
     ],
+    interactive: Annotated[
+        bool,
+        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+    ] = False,
+    as_json: JsonOpt = False,
 ) -> None:
-    """Turn a simulation or sweep output directory into one self-contained report.html."""
+    """Turn a simulation or sweep output directory into one self-contained report.html
+    (figures also in DIR/figures)."""
     from .reports.report import write_report
     from .reports.sweep import is_sweep_dir, write_sweep_report
 
-    path = write_sweep_report(directory) if is_sweep_dir(directory) else write_report(directory)
-    out.print(f"wrote {path}")
+    if is_sweep_dir(directory):
+        out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
+        return
+    path = write_report(directory, interactive=interactive)
+    if as_json:
+        figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
+        print(
+            _json(
+                {
+                    "report": str(path),
+                    "certificate": str(path.parent / "certificate.json"),
+                    "figures": figs,
+                }
+            )
+        )
+        return
+    out.print(f"wrote {path}", soft_wrap=True)
 
 
 @app.command()
@@ -460,25 +691,44 @@ def reproduce(
         str, typer.Option(help="intrinsic (validated fast path) or uniform.")
     ] = "intrinsic",
     workers: Annotated[int, typer.Option(help="Worker processes.")] = 2,
+    seed: Annotated[int, typer.Option(help="Monte Carlo seed.")] = 0,
+    interactive: Annotated[
+        bool,
+        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+    ] = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Run the paper's Section 5 end to end and write one report beside its numbers."""
     from .reports.reproduce import reproduce_paper
 
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
-    prog = _progress()
-    tasks: dict[str, int] = {}
+    from .outputs import check_output_folder
 
-    def tick(key: str, done: int, total: int) -> None:
-        if key not in tasks:
-            tasks[key] = prog.add_task(key, total=total)
-        prog.update(tasks[key], completed=done, total=total)
-
-    with prog:
+    check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
+    with Progress("ntc reproduce") as prog:
         path, ok, wall = reproduce_paper(
-            out_dir, t_end, paths, dt, stepping, workers, progress=tick
+            out_dir,
+            t_end,
+            paths,
+            dt,
+            stepping,
+            workers,
+            seed,
+            progress=prog.tick,
+            status=prog.stage,
+            interactive=interactive,
         )
-    out.print(f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}")
+    if as_json:
+        doc = json.loads((path.parent / "paper_summary.json").read_text(encoding="utf-8"))
+        print(_json({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))
+    else:
+        out.print(
+            f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}",
+            soft_wrap=True,
+        )
+    if not ok:
+        raise typer.Exit(1)
 
 
 def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
@@ -487,17 +737,23 @@ def _warning_line(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def _argv(args: list[str]) -> list[str]:
-    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``,
-    ``--gain "-1"``) is a value, not an option: such tokens are passed after ``--`` for
-    positional arguments; option values are taken as they are by click."""
-    out: list[str] = []
+    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``, ``--gain "-1"``)
+    is a value, not an option. Option values are taken as they are by click; a positional
+    one (a minus sign followed by a digit, ``(`` or ``.``) is moved after ``--`` at the end
+    (every command has at most one such positional argument)."""
+    if "--" in args:
+        return list(args)
+    rest: list[str] = []
+    negative: list[str] = []
     for k, tok in enumerate(args):
         prev = args[k - 1] if k else ""
         looks_negative = len(tok) > 1 and tok[0] == "-" and (tok[1].isdigit() or tok[1] in "(.")
-        if looks_negative and not (prev.startswith("--") and "=" not in prev) and "--" not in out:
-            out.append("--")
-        out.append(tok)
-    return out
+        takes_value = prev.startswith("-") and "=" not in prev and prev not in _FLAGS
+        (negative if looks_negative and not takes_value else rest).append(tok)
+    return rest + ["--", *negative] if negative else rest
+
+
+_FLAGS = {"--json", "--help", "--version"}  # options that take no value
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -552,6 +808,10 @@ def main(argv: list[str] | None = None) -> None:
         code = 2
     except BrokenPipeError:
         code = 1
+    except OSError as exc:  # a file or folder the user named cannot be read or written
+        where = f"{one_line(str(exc.filename))!r}: " if exc.filename else ""
+        print(f"error: {where}{exc.strerror or exc.__class__.__name__}", file=sys.stderr)
+        code = 2
     except Exception as exc:  # a bug: one line, the traceback with NTC_DEBUG=1
         if os.environ.get("NTC_DEBUG"):
             raise

@@ -161,8 +161,15 @@ class _Builder:
                 return CONSTANTS[node.id], _CONSTANT_VALUES[node.id]
             if node.id in FUNCTIONS:
                 raise self.fail(f"function {node.id!r} used without arguments")
-            allowed = ", ".join(sorted(self.names)) or "none"
-            raise self.fail(f"unknown name {node.id!r} (variables allowed: {allowed})")
+            names = sorted(self.names)
+            allowed = (
+                "no variables are allowed"
+                if not names
+                else f"only the variable {names[0]} is allowed"
+                if len(names) == 1
+                else f"only the variables {', '.join(names)} are allowed"
+            )
+            raise self.fail(f"uses {node.id}; {allowed}")
         if isinstance(node, ast.UnaryOp):
             if isinstance(node.op, (ast.USub, ast.UAdd)):
                 x, ax = self.build(node.operand)

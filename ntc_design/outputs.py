@@ -76,16 +76,17 @@ def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> 
 
 
 def check_output_folder(
-    path: str | Path, replaceable: Iterable[str] = (), option: str = "--out"
+    path: str | Path, replaceable: Iterable[str] | None = (), option: str = "--out"
 ) -> Path:
     """Check, before any work, that ``path`` can become an output folder.
 
     Parameters
     ----------
     path : str or Path
-    replaceable : iterable of str
+    replaceable : iterable of str or None
         Names an existing folder may hold (the outputs of an earlier run, which will be
-        replaced). Anything else in it is the user's: the folder is refused.
+        replaced). Anything else in it is the user's: the folder is refused. None: the
+        folder's content is not checked (the caller writes single files into it).
     option : str
         Named in error messages.
 
@@ -110,7 +111,7 @@ def check_output_folder(
         raise InputError(f"{option}: {one_line(str(parent))!r} in {shown} is a file, not a folder")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError(f"{option}: the folder {one_line(str(parent))!r} is not writable")
-    if p.is_dir():
+    if p.is_dir() and replaceable is not None:
         allowed = set(replaceable)
         try:
             other = sorted(x.name for x in p.iterdir() if x.name not in allowed)

@@ -51,10 +51,11 @@ def test_other_variables():
     assert {s.name for s in a} == {"a", "b"}
     x = sp.Symbol("x")
     assert parse_expression("2*x", "w", variables={"x": x}) == 2 * x
-    with pytest.raises(InputError, match="unknown name 't'"):
+    with pytest.raises(InputError, match="uses t; only the variable s is allowed"):
         parse_expression("t", "w", variables=("s",))
 
 
+@pytest.mark.hostile
 @pytest.mark.parametrize(
     "text, needle",
     [
@@ -74,7 +75,7 @@ def test_other_variables():
         ("log(0)", "out of range"),
         ("sqrt(-1)*t", "out of range"),
         ("(-8)**(1/3)", "non-real"),
-        ("x + t", "unknown name 'x'"),
+        ("x + t", "uses x; only the variable t is allowed"),
         ("t.real", "Attribute"),
         ("t[0]", "Subscript"),
         ("lambda: t", "Lambda"),
@@ -96,7 +97,7 @@ def test_other_variables():
         ("-" * 500 + "t", "too complex"),
         ("+".join(["t"] * 300), "too complex"),
         ("Piecewise((1, t < 1))", "'Piecewise' not allowed"),
-        ("oo", "unknown name 'oo'"),
+        ("oo", "uses oo"),
     ],
 )
 def test_refused_with_one_line(text, needle):

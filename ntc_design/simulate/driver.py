@@ -17,18 +17,18 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..certify.gain import T as T_SYM
-from ..certify.gain import parse_gain
 from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, quote
+from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..timevarying import ExpressionTopology
 from .budget import check_budget, estimate, estimate_steps
 from .grid import TimeGrid, build_grid
-from .moments import exact_moments
+from .moments import check_moments_size, exact_moments
 from .montecarlo import MonteCarloSpec, run
 from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
 from .spec import SimulationSpec, UniformInitial
-from .system import ModeSystem, mode_system
+from .system import ModeSystem, check_step_size, mode_system
 
 AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology
 MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]
@@ -73,10 +73,8 @@ class ExpressionGain:
     a spec holding it ships by value to other processes and machines (no code)."""
 
     def __init__(self, text: str, field_name: str = "gain"):
-        import sympy as sp
-
         self.text, self.field_name = text, field_name
-        self._fn = sp.lambdify(T_SYM, parse_gain(text, field_name), modules="numpy")
+        self._fn = gain_function(text, field_name)
 
     def __reduce__(self):
         return (ExpressionGain, (self.text, self.field_name))
@@ -90,7 +88,9 @@ class ExpressionGain:
 
 def _modes(
     topology: AnyTopology, spec: SimulationSpec
-) -> tuple[list[str], Callable[[], dict[str, ProtocolDesign]], list[tuple[float, float, int]], list[str]]:
+) -> tuple[
+    list[str], Callable[[], dict[str, ProtocolDesign]], list[tuple[float, float, int]], list[str]
+]:
     """Mode names, a thunk computing their designs, segments on [0, T), notes."""
     t_end, th, margin = spec.T, spec.theta, spec.margin
     if spec.resample is not None and not isinstance(topology, TimeVaryingTopology):
@@ -99,7 +99,7 @@ def _modes(
         )
     if isinstance(topology, SwitchingTopology):
         durs = np.array([dur for _, dur in topology.schedule], dtype=float)
-        per = float(np.sum(durs))
+        per = float(sum(durs.tolist()))  # Python floats overflow to inf without a warning
         if not np.isfinite(per):
             raise InputError("schedule: the period (sum of durations) overflows to infinity")
         if np.any(durs < 1e-12 * per):
@@ -137,7 +137,9 @@ def _modes(
         if len(set(names)) != len(names):  # %g rounding: fall back to indices
             names = [f"t[{k}]" for k in range(ts.size)]
         segments = [(float(t), float(min(t + step, t_end)), k) for k, t in enumerate(ts)]
-        note = f"topology given as functions of t: sampled and re-designed every {step:g} time units"
+        note = (
+            f"topology given as functions of t: sampled and re-designed every {step:g} time units"
+        )
         return (
             names,
             lambda: {
@@ -225,27 +227,46 @@ def _check_gain(cfun: Callable, gain_text: str, grid: TimeGrid) -> np.ndarray:
 
 
 def _step_size_guard(
-    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, notes: list[str]
+    systems: Sequence[ModeSystem],
+    grid: TimeGrid,
+    c_grid: np.ndarray,
+    notes: list[str],
+    scheme: str = "explicit",
 ) -> None:
-    """Euler–Maruyama on the drift ε' = −c L_B ε is stable iff c·h < 2 Re λ/|λ|² for
-    every eigenvalue λ of L_B: refuse a grid that breaks it, warn within a factor 2."""
-    if grid.n_steps == 0:
-        return
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = c_grid * grid.h / np.array([systems[m].stability_bound for m in grid.mode])
-    ratio = np.nan_to_num(ratio, nan=np.inf)
-    worst = int(np.argmax(ratio))
-    if ratio[worst] >= 1.0:
-        sysw = systems[grid.mode[worst]]
+    """Refuse an unstable Euler–Maruyama grid, warn within a factor 2
+    (:func:`.system.check_step_size`: drift eigenvalues and the mean-square limit)."""
+    check = check_step_size(systems, grid, c_grid, scheme)
+    if check.warning:
+        notes.append(check.warning)
+        warnings.warn(check.warning, stacklevel=3)
+
+
+# The exact moments' RK4 time, estimated as steps × (5e-5 s + 8·(Nd)³ flops at 1 GFLOP/s):
+# refused above this many seconds (the paper's runs: ~1 000 steps at N·d = 21, < 1 s)
+MAX_EXACT_SECONDS = 300.0
+
+
+def _check_exact_work(
+    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, nd_: int
+) -> None:
+    """The exact moments take RK4 steps h <= κ / (c ρ) (see :mod:`.moments`): estimate
+    their number on the grid and refuse a run that would take hours."""
+    from .moments import KAPPA
+
+    rho_l = np.array([2 * s.spectral_radius for s in systems])
+    rho_q = np.array(
+        [4 * sum(float(np.linalg.norm(k, 2)) ** 2 for _, _, k in s.h_blocks) for s in systems]
+    )
+    m = grid.mode
+    with np.errstate(all="ignore"):
+        steps = float(np.sum(c_grid * grid.h * (rho_l[m] + c_grid * rho_q[m]))) / KAPPA
+    steps += grid.save_times.size
+    seconds = steps * (5e-5 + 8e-9 * float(nd_) ** 3)
+    if not np.isfinite(seconds) or seconds > MAX_EXACT_SECONDS:
         raise InputError(
-            f"dt: Euler–Maruyama is unstable: at t = {grid.t[worst]:.4g}, c·h = {c_grid[worst] * grid.h[worst]:.4g} "
-            f"exceeds 2·Re λ/|λ|² = {sysw.stability_bound:.4g} for L_B of mode {quote(sysw.name)} (ρ(L_B) = {sysw.spectral_radius:.4g}); "
-            f"use dt < {grid.h[worst] / ratio[worst]:.3g}"
+            f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd_} "
+            f"(~{seconds:.3g} s; c(t) is large on [0, T]); use method: mc, a smaller gain or a shorter T"
         )
-    if ratio[worst] > 0.5:
-        msg = f"Euler–Maruyama step within a factor {1 / ratio[worst]:.2f} of instability at t = {grid.t[worst]:.4g}; expect a step-size bias"
-        notes.append(msg)
-        warnings.warn(msg, stacklevel=3)
 
 
 def _check_noise_callable(spec: SimulationSpec, systems: Sequence[ModeSystem], d: int) -> None:
@@ -318,11 +339,19 @@ def simulate(
             f"theta: expected {d} numbers (the state dimension d), got {spec.theta.size}"
         )
     cfun, gain_text = make_gain(spec.gain)
+    if isinstance(topology, ExpressionTopology):  # A(t): the protocol at every step
+        from .timevarying import simulate_expression
+
+        workers = min(spec.mc.workers, os.cpu_count() or 1)
+        _check_size(topology, spec, cfun, 1, 1, workers)
+        return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
     names, make_designs, segments, notes = _modes(topology, spec)
     workers = min(spec.mc.workers, os.cpu_count() or 1)
     if workers < spec.mc.workers:
         notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")
     _check_size(topology, spec, cfun, len(names), len(segments), workers)
+    if spec.method != "mc" and spec.noise.linear:
+        check_moments_size(n * d)
     designs = make_designs()
     for k, des in designs.items():
         if not des.assumption_holds:
@@ -345,7 +374,7 @@ def simulate(
     )
     c_grid = _check_gain(cfun, gain_text, grid)
     if spec.method != "exact":
-        _step_size_guard(systems, grid, c_grid, notes)
+        _step_size_guard(systems, grid, c_grid, notes, st.scheme)
     _check_noise_callable(spec, systems, d)
     params = spec.options()
     params.update(
@@ -372,6 +401,7 @@ def simulate(
             spec.mc.block_size,
             spec.mc.store_paths,
             labels,
+            st.scheme,
         )
         t0 = time.perf_counter()
         if engine is not None:
@@ -387,6 +417,7 @@ def simulate(
             notes.append("one sample path: no confidence band")
     if spec.method in ("exact", "both"):
         if spec.noise.linear:
+            _check_exact_work(systems, grid, c_grid, n * d)
             t0 = time.perf_counter()
             exact = exact_moments(
                 systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d

@@ -145,5 +145,3 @@ def _truncate(res: SimulationResult, k: int) -> SimulationResult:
         )
     res.save_times = res.save_times[:k]
     return res
-
-

@@ -18,7 +18,7 @@ from .spec import SimulationSpec
 
 OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz")
 # what an earlier run's folder may hold besides its outputs (ntc report writes these)
-REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures")
+REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures", "certificate.json", "paths_fine.npz")
 
 
 def load_scenario(path: str | Path) -> tuple[object, SimulationSpec, ScenarioData]:

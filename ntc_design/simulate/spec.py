@@ -90,7 +90,8 @@ class SaveAt:
     def count(self, t_end: float) -> float:
         """Number of save times on [0, t_end] (a float: may be astronomically large)."""
         if self.every is not None:
-            return math.floor(t_end / self.every) + 2.0
+            n = t_end / self.every
+            return math.floor(n) + 2.0 if math.isfinite(n) and n < 2**53 else n
         return float(self.times.size + 1)
 
     def resolve(self, t_end: float) -> np.ndarray:
@@ -112,10 +113,18 @@ class Stepping:
     dt: float = 1e-3
     ds: float | None = None
     h_max: float | None = None
+    scheme: str = "explicit"  # or "implicit": (I + c h L_B) x_{k+1} = x_k + c h u + noise
 
     def __post_init__(self) -> None:
         if self.kind not in ("uniform", "intrinsic"):
             raise InputError(f"stepping: must be uniform or intrinsic, got {self.kind!r}")
+        if self.scheme not in ("explicit", "implicit"):
+            raise InputError(f"scheme: must be explicit or implicit, got {self.scheme!r}")
+        if self.scheme == "implicit" and self.kind != "intrinsic":
+            raise InputError(
+                "scheme: implicit needs stepping: intrinsic (c·h constant, so (I + c h L_B) "
+                "is factorised once per mode)"
+            )
         require_positive("dt", self.dt)
         if self.ds is not None:
             require_positive("ds", self.ds)
@@ -222,9 +231,7 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
     for key, s in noise.sigma_edges.items():
         if not isinstance(key, tuple) or len(key) != 2:
             raise InputError(f"noise.sigma_edges: key {key!r} is not a (from, to) pair")
-        require_number(
-            f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}", s, minimum=0.0
-        )
+        require_number(f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}", s, minimum=0.0)
     return noise
 
 
@@ -247,6 +254,7 @@ SCENARIO_KEYS = (
     "method",
     "stepping",
     "ds",
+    "scheme",
     "workers",
     "block_size",
     "store_paths",
@@ -308,6 +316,9 @@ class SimulationSpec:
         if isinstance(self.gain, str):
             if len(self.gain) > MAX_GAIN_TEXT:
                 raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
+            from ..gain import parse_gain
+
+            parse_gain(self.gain)  # a whitelisted expression in t, or one line naming gain
         elif not callable(self.gain):
             raise InputError(
                 f"gain: expected an expression in t or a callable, got {type(self.gain).__name__}"
@@ -365,10 +376,17 @@ class SimulationSpec:
             every = o.pop("save_every", 0.1)
             save = SaveAt(every=0.1 if every is None else every)
         stepping = Stepping(
-            kind=o.pop("stepping", "uniform"), dt=o.pop("dt", 1e-3), ds=o.pop("ds", None)
+            kind=o.pop("stepping", "uniform"),
+            dt=o.pop("dt", 1e-3),
+            ds=o.pop("ds", None),
+            scheme=o.pop("scheme", "explicit"),
         )
         mc = MonteCarlo(
-            **{k: o.pop(k) for k in ("paths", "seed", "block_size", "store_paths", "workers") if k in o}
+            **{
+                k: o.pop(k)
+                for k in ("paths", "seed", "block_size", "store_paths", "workers")
+                if k in o
+            }
         )
         if o.get("noise") is None:
             o.pop("noise", None)
@@ -418,7 +436,7 @@ class SimulationSpec:
             o["initial"] = _initial_from_document(o["initial"])
         if "gain" in o and not isinstance(o["gain"], str):
             raise InputError(f"gain: expected an expression in t (a string), got {o['gain']!r}")
-        for key in ("method", "stepping"):
+        for key in ("method", "stepping", "scheme"):
             if key in o and not isinstance(o[key], str):
                 raise InputError(f"{key}: expected a string, got {o[key]!r}")
         for key in ("T", "dt", "ds", "margin", "save_every", "resample"):
@@ -443,6 +461,7 @@ class SimulationSpec:
             "dt": self.stepping.dt,
             "stepping": self.stepping.kind,
             "ds": self.stepping.ds,
+            "scheme": self.stepping.scheme,
             "method": self.method,
             "resample": self.resample,
             "noise": {
@@ -473,6 +492,10 @@ def _noise_from_document(doc: Any) -> NoiseModel:
         for r, row in enumerate(f):
             if not isinstance(row, list):
                 raise InputError(f"noise.f[{r}]: expected a row (a list of numbers)")
+            if len(row) != len(f):
+                raise InputError(
+                    f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
+                )
             for c, v in enumerate(row):
                 require_number(f"noise.f[{r}][{c}]", v)
         f = np.asarray(f, dtype=float) if f else f
