@@ -376,7 +376,7 @@ def _certify_cached(top, topology_doc: dict, spec) -> tuple:
             if isinstance(des, SwitchingDesign)
             else des.delta
         )
-        verdict = {th["theorem"]: th["guaranteed"] for th in res.theorems}
+        verdict = {th.theorem: th.guaranteed for th in res.theorems}
         if len(_CERT_CACHE) >= _CERT_CACHE_SIZE:
             _CERT_CACHE.pop(next(iter(_CERT_CACHE)))
         _CERT_CACHE[key] = (

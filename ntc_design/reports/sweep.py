@@ -5,6 +5,8 @@ One self-contained HTML file; the figures are also written to DIR/figures."""
 
 from __future__ import annotations
 
+import base64
+import html
 import itertools
 import json
 import math
@@ -13,11 +15,65 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from . import figures
-from .report import esc, fmt, img, page, table
+
+CSS = (
+    "body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;"
+    "color:#222}h2{border-bottom:2px solid #1f5fbf}table{border-collapse:collapse;"
+    "font-size:.85em}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left}"
+    "th{background:#f0f4fa}img{max-width:100%}.grid{display:flex;flex-wrap:wrap;gap:1em}"
+    ".grid figure{flex:1 1 420px;margin:0}figcaption{font-size:.85em;color:#555}"
+)
+
+
+def esc(x) -> str:
+    return html.escape(str(x))
+
+
+def fmt(x, digits: int = 4) -> str:
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, float):
+        return f"{x:.{digits}g}"
+    return esc(x)
+
+
+def table(headers, rows) -> str:
+    head = "".join(f"<th>{esc(h)}</th>" for h in headers)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def img(png: bytes, alt: str) -> str:
+    data = base64.b64encode(png).decode()
+    return (
+        f'<figure><img alt="{esc(alt)}" src="data:image/png;base64,{data}">'
+        f"<figcaption>{esc(alt)}</figcaption></figure>"
+    )
+
+
+def page(title: str, body: str) -> str:
+    return (
+        f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{esc(title)}'
+        f"</title><style>{CSS}</style></head><body><h1>{esc(title)}</h1>{body}</body></html>\n"
+    )
+
 
 MAX_CURVES = 200  # curves drawn in the overlay (every point is still in curves.parquet)
 MAX_ROWS = 2000  # rows of the HTML table (every point is in results.csv)
+
+
+def _save(fig, stem: Path) -> bytes:
+    """stem.png in DIR/figures; the PNG bytes for inlining."""
+    import io
+
+    import matplotlib.pyplot as plt
+
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    stem.with_suffix(".png").write_bytes(buf.getvalue())
+    return buf.getvalue()
 
 
 def is_sweep_dir(directory: str | Path) -> bool:
@@ -187,9 +243,9 @@ def write_sweep_report(directory: str | Path) -> Path:
         if res[k].nunique(dropna=True) < 2:
             continue
         safe = "".join(ch if ch.isalnum() else "_" for ch in k)
-        _, _, png = figures.save(ms_against_key(res, keys, k), figdir / f"sweep_ms_vs_{safe}")
+        png = _save(ms_against_key(res, keys, k), figdir / f"sweep_ms_vs_{safe}")
         figs.append(img(png, f"final mean-square error against {k}"))
-    _, _, png = figures.save(curves_overlay(curves, res, keys), figdir / "sweep_curves")
+    png = _save(curves_overlay(curves, res, keys), figdir / "sweep_curves")
     figs.append(img(png, "mean-square error of every point (Monte Carlo)"))
     cols = [
         *keys,
