@@ -125,7 +125,7 @@ def ms_against_key(res, keys: list[str], key: str):
     of the other keys' values."""
     import matplotlib.pyplot as plt
 
-    others = [k for k in keys if k != key]
+    others = [k for k in keys if k != key and res[k].nunique(dropna=False) > 1]
     pos, ticks = _positions(list(res[key]))
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     groups = res.groupby(others, sort=False, dropna=False) if others else [((), res)]
