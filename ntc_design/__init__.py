@@ -1,5 +1,16 @@
 """ntc-design: certify, design and validate non-trivial consensus protocols on directed
-signed matrix-weighted networks with compound measurement noise."""
+signed matrix-weighted networks with compound measurement noise.
+
+Equation, lemma, theorem and section numbers in the docstrings are the printed ones of the
+paper below ("Niu & Wu, eq. (8)").
+
+References
+----------
+T. Niu, X. Wu, "Non-trivial consensus on directed signed matrix-weighted networks with
+compound measurement noises and time-varying topologies", submitted to Information Sciences.
+Its Lemma 1 (the protocol design) comes from the authors' earlier, noise-free paper,
+T. Niu, B. Mao, X. Wu, T. Huang, arXiv:2602.11822.
+"""
 
 from .design import ProtocolDesign, SwitchingDesign, assumption2, design
 from .errors import InputError

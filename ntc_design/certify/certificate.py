@@ -147,6 +147,7 @@ def topology_hash(top: Topology) -> str:
     Parameters
     ----------
     top : Topology
+        A fixed topology.
 
     Returns
     -------
@@ -369,6 +370,14 @@ def write_certificate(doc: dict, path: str | Path) -> None:
     """Write a certificate atomically (:func:`ntc_design.outputs.write_atomic`): a reader
     never sees a half-written file.
 
+    Parameters
+    ----------
+    doc : dict
+        The certificate, as made by :func:`hurwitz_certificate` or
+        :func:`switching_certificate`.
+    path : str or pathlib.Path
+        The JSON file to write.
+
     Raises
     ------
     InputError
@@ -398,6 +407,13 @@ class Check:
     claim: Claim | None = None
 
     def to_dict(self) -> dict:
+        """The check as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``name``, ``ok``, ``detail`` and, for a check of a claim, ``claim``.
+        """
         doc = {"name": self.name, "ok": self.ok, "detail": self.detail}
         if self.claim is not None:
             doc["claim"] = self.claim.to_dict()
@@ -417,6 +433,13 @@ class ModeAbout:
     theta: tuple[float, ...]
 
     def to_dict(self) -> dict:
+        """The mode as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``name``, ``topology``, ``N``, ``d``, ``topology_hash``, ``delta``, ``theta``.
+        """
         return {
             "name": self.name,
             "topology": self.topology,
@@ -442,6 +465,14 @@ class About:
     switching_hash: str | None
 
     def to_dict(self) -> dict:
+        """What is certified, as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            The kind, its description, each property with its meaning, the modes, the
+            schedule, α and the switching hash.
+        """
         return {
             "kind": self.kind,
             "description": self.description,
@@ -471,6 +502,7 @@ class Verification:
 
     @property
     def failed(self) -> list[Check]:
+        """The checks that do not hold (empty when the certificate is valid)."""
         return [c for c in self.checks if not c.ok]
 
     def property_holds(self, prop: Property, mode: str | None = None) -> bool:
@@ -480,12 +512,14 @@ class Verification:
         Parameters
         ----------
         prop : Property
+            The property asked about.
         mode : str, optional
             Only the claims about this mode (and those about no mode, such as P ≻ 0).
 
         Returns
         -------
         bool
+            True only when it is proven.
         """
         integrity = all(c.ok for c in self.checks if c.claim is None)
         mine = [c for c in self.checks if c.claim is not None and c.claim.prop is prop]
@@ -496,6 +530,14 @@ class Verification:
         return integrity and bool(mine) and all(c.ok for c in mine)
 
     def to_dict(self) -> dict:
+        """The verification as a JSON-ready mapping (what ``ntc verify --json`` prints).
+
+        Returns
+        -------
+        dict
+            ``valid``, ``method``, the digest note, what is certified, every check and
+            the names of the failed ones.
+        """
         return {
             "valid": self.valid,
             "method": self.method,
@@ -1278,6 +1320,7 @@ def verify_file(
     Parameters
     ----------
     path : str or Path
+        The certificate (JSON).
     topology, theta
         As in :func:`verify`.
 
@@ -1304,3 +1347,24 @@ def verify_file(
     except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
         raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
     return verify(doc, str(p), topology, theta)
+
+
+__all__ = [
+    "DIGEST_NOTE",
+    "About",
+    "Check",
+    "HurwitzProof",
+    "ModeAbout",
+    "Verification",
+    "canonical",
+    "digest",
+    "hurwitz_certificate",
+    "package_versions",
+    "prove_hurwitz",
+    "switching_certificate",
+    "switching_hash",
+    "topology_hash",
+    "verify",
+    "verify_file",
+    "write_certificate",
+]

@@ -66,6 +66,13 @@ class Claim:
         return f"P_{p}·L_B({m}) + L_B({m})ᵀ·P_{p}{rate} ≻ 0"
 
     def to_dict(self) -> dict:
+        """The claim as it is stored in a certificate.
+
+        Returns
+        -------
+        dict
+            ``id``, ``kind``, ``property`` and, where they apply, ``mode``, ``P``, ``alpha``.
+        """
         doc: dict = {"id": self.id, "kind": self.kind.value, "property": self.prop.value}
         if self.mode is not None:
             doc["mode"] = self.mode
@@ -160,3 +167,14 @@ def derive_claims(
         In the order of ``properties``.
     """
     return tuple(c for prop in properties for c in PROPERTY_CLAIMS[prop](modes, alpha))
+
+
+__all__ = [
+    "KINDS",
+    "PROPERTY_TEXT",
+    "Claim",
+    "ClaimKind",
+    "KindSpec",
+    "Property",
+    "derive_claims",
+]

@@ -34,6 +34,14 @@ class CertifyResult:
         return self.gain is None and self.verification.valid
 
     def to_dict(self) -> dict:
+        """The result as a JSON-ready mapping (what ``ntc certify --json`` prints).
+
+        Returns
+        -------
+        dict
+            The design, the certificate's kind, subject, digest, checks and results, the
+            gain analysis, the theorem verdicts and ``proven``.
+        """
         ver = self.verification
         return {
             "design": self.design.to_dict(),
@@ -75,7 +83,8 @@ def certify(
 
     Parameters
     ----------
-    topology : Topology or SwitchingTopology
+    topology : Topology or SwitchingTopology or ExpressionTopology
+        The network: fixed, switching, or with weights that are expressions of t.
     theta : sequence of float
         The target consensus state θ ≠ 0.
     margin : float
@@ -132,3 +141,9 @@ def certify(
         ver = _verify_own(cert)
         th = fixed_verdicts(des, ver, g)
     return CertifyResult(des, cert, ver, g, th)
+
+
+__all__ = [
+    "CertifyResult",
+    "certify",
+]
