@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,7 +11,6 @@ from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
-from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .certificate import Check, Verification, hurwitz_certificate, switching_certificate, verify
 from .theorems import TheoremVerdict, fixed_verdicts, switching_verdicts
 
@@ -62,7 +62,7 @@ def _verify_own(cert: dict) -> Verification:
 
 
 def certify(
-    topology: Topology | SwitchingTopology | ExpressionTopology,
+    topology: Topology | SwitchingTopology | ExpressionTopology,  # noqa: F821
     theta,
     margin: float = 0.1,
     gain: str | None = None,
@@ -99,7 +99,9 @@ def certify(
         For a bad θ, margin, δ or gain.
     """
     g = analyse_gain(gain) if gain is not None else None
-    if isinstance(topology, ExpressionTopology):  # weights as expressions of t
+    tvmod = sys.modules.get("ntc_design.timevarying")  # loaded by any ExpressionTopology
+    if tvmod is not None and isinstance(topology, tvmod.ExpressionTopology):
+        from ..timevarying import TimeVaryingDesign
         from .time_varying import (
             time_varying_certificate,
             time_varying_verdicts,
