@@ -647,17 +647,23 @@ def _warning_line(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def _argv(args: list[str]) -> list[str]:
-    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``,
-    ``--gain "-1"``) is a value, not an option: such tokens are passed after ``--`` for
-    positional arguments; option values are taken as they are by click."""
-    out: list[str] = []
+    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``, ``--gain "-1"``)
+    is a value, not an option. Option values are taken as they are by click; a positional
+    one (a minus sign followed by a digit, ``(`` or ``.``) is moved after ``--`` at the end
+    (every command has at most one such positional argument)."""
+    if "--" in args:
+        return list(args)
+    rest: list[str] = []
+    negative: list[str] = []
     for k, tok in enumerate(args):
         prev = args[k - 1] if k else ""
         looks_negative = len(tok) > 1 and tok[0] == "-" and (tok[1].isdigit() or tok[1] in "(.")
-        if looks_negative and not (prev.startswith("--") and "=" not in prev) and "--" not in out:
-            out.append("--")
-        out.append(tok)
-    return out
+        takes_value = prev.startswith("-") and "=" not in prev and prev not in _FLAGS
+        (negative if looks_negative and not takes_value else rest).append(tok)
+    return rest + ["--", *negative] if negative else rest
+
+
+_FLAGS = {"--json", "--help", "--version"}  # options that take no value
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -24,11 +24,11 @@ from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from .budget import check_budget, estimate, estimate_steps
 from .grid import TimeGrid, build_grid
-from .moments import exact_moments
+from .moments import check_moments_size, exact_moments
 from .montecarlo import MonteCarloSpec, run
 from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
 from .spec import SimulationSpec, UniformInitial
-from .system import ModeSystem, mode_system
+from .system import ModeSystem, check_step_size, mode_system
 
 AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology
 MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]
@@ -211,32 +211,23 @@ def _check_gain(cfun: Callable, gain_text: str, grid: TimeGrid) -> np.ndarray:
 
 
 def _step_size_guard(
-    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, notes: list[str]
+    systems: Sequence[ModeSystem],
+    grid: TimeGrid,
+    c_grid: np.ndarray,
+    notes: list[str],
+    scheme: str = "explicit",
 ) -> None:
-    """Euler–Maruyama on the drift ε' = −c L_B ε is stable iff c·h < 2 Re λ/|λ|² for
-    every eigenvalue λ of L_B: refuse a grid that breaks it, warn within a factor 2."""
-    if grid.n_steps == 0:
-        return
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = c_grid * grid.h / np.array([systems[m].stability_bound for m in grid.mode])
-    ratio = np.nan_to_num(ratio, nan=np.inf)
-    worst = int(np.argmax(ratio))
-    if ratio[worst] >= 1.0:
-        sysw = systems[grid.mode[worst]]
-        raise InputError(
-            f"dt: Euler–Maruyama is unstable: at t = {grid.t[worst]:.4g}, c·h = {c_grid[worst] * grid.h[worst]:.4g} "
-            f"exceeds 2·Re λ/|λ|² = {sysw.stability_bound:.4g} for L_B of mode {quote(sysw.name)} (ρ(L_B) = {sysw.spectral_radius:.4g}); "
-            f"use dt < {grid.h[worst] / ratio[worst]:.3g}"
-        )
-    if ratio[worst] > 0.5:
-        msg = f"Euler–Maruyama step within a factor {1 / ratio[worst]:.2f} of instability at t = {grid.t[worst]:.4g}; expect a step-size bias"
-        notes.append(msg)
-        warnings.warn(msg, stacklevel=3)
+    """Refuse an unstable Euler–Maruyama grid, warn within a factor 2
+    (:func:`.system.check_step_size`: drift eigenvalues and the mean-square limit)."""
+    check = check_step_size(systems, grid, c_grid, scheme)
+    if check.warning:
+        notes.append(check.warning)
+        warnings.warn(check.warning, stacklevel=3)
 
 
-# RK4 steps × ((Nd)³ + 2·10⁴) of the exact moments (the constant: per-step overhead);
-# 1e9 is ~ 30 000 steps at N·d = 21 (seconds); the paper's runs take ~ 1 000
-MAX_EXACT_WORK = 1e9
+# The exact moments' RK4 time, estimated as steps × (5e-5 s + 8·(Nd)³ flops at 1 GFLOP/s):
+# refused above this many seconds (the paper's runs: ~1 000 steps at N·d = 21, < 1 s)
+MAX_EXACT_SECONDS = 300.0
 
 
 def _check_exact_work(
@@ -254,10 +245,11 @@ def _check_exact_work(
     with np.errstate(all="ignore"):
         steps = float(np.sum(c_grid * grid.h * (rho_l[m] + c_grid * rho_q[m]))) / KAPPA
     steps += grid.save_times.size
-    if not np.isfinite(steps) or steps * (float(nd_) ** 3 + 2e4) > MAX_EXACT_WORK:
+    seconds = steps * (5e-5 + 8e-9 * float(nd_) ** 3)
+    if not np.isfinite(seconds) or seconds > MAX_EXACT_SECONDS:
         raise InputError(
             f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd_} "
-            "(the gain is large on [0, T]); use method: mc, a smaller gain or a shorter T"
+            f"(~{seconds:.3g} s; c(t) is large on [0, T]); use method: mc, a smaller gain or a shorter T"
         )
 
 
@@ -338,6 +330,8 @@ def simulate(
     if workers < spec.mc.workers:
         notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")
     _check_size(topology, spec, cfun, len(names), len(segments), workers)
+    if spec.method != "mc" and spec.noise.linear:
+        check_moments_size(n * d)
     designs = make_designs()
     for k, des in designs.items():
         if not des.assumption_holds:
@@ -360,7 +354,7 @@ def simulate(
     )
     c_grid = _check_gain(cfun, gain_text, grid)
     if spec.method != "exact":
-        _step_size_guard(systems, grid, c_grid, notes)
+        _step_size_guard(systems, grid, c_grid, notes, st.scheme)
     _check_noise_callable(spec, systems, d)
     params = spec.options()
     params.update(
@@ -387,6 +381,7 @@ def simulate(
             spec.mc.block_size,
             spec.mc.store_paths,
             labels,
+            st.scheme,
         )
         t0 = time.perf_counter()
         part = run(mspec, workers=workers, progress=progress)
