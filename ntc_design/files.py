@@ -286,8 +286,13 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
     return SwitchingData(modes=modes, schedule=tuple(schedule), source=source)
 
 
-def parse_file(path: str | Path) -> TopologyData | SwitchingData:
-    """Read a topology or a switching file; which one is told by its fields."""
+def parse_file(path: str | Path):
+    """Read a topology or a switching file; which one is told by its fields. A ``.npz``
+    file is a compact edge list (:mod:`ntc_design.edgelist`)."""
+    if str(path).lower().endswith(".npz"):
+        from .edgelist import read_npz
+
+        return read_npz(path)
     doc = read_document(path)
     src = str(path)
     if "modes" in doc or "schedule" in doc:
