@@ -273,12 +273,16 @@ def certify(
     th = parse_vector(theta, "--theta")
     if out_path is not None and not out_path.parent.is_dir():
         raise InputError(f"--out: directory {out_path.parent} does not exist")
-    res = run(load(file), th, margin, gain)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
+        res = run(load(file), th, margin, gain)
     if out_path is not None:
         write_certificate(res.certificate, out_path)
     doc = res.to_dict()
     if as_json:
         print(_json(doc))
+        if not doc["certificate"]["valid"]:
+            raise typer.Exit(1)
         return
     _print_checks(doc["certificate"]["checks"])
     r = doc["certificate"]["results"]
@@ -298,11 +302,22 @@ def certify(
             + "; ".join(f"{a['structure']}: {a['status']}" for a in cl["attempts"])
             + ")"
         )
+    if "rate_estimate" in r:
+        re_ = r["rate_estimate"]
+        out.print(
+            f"components: {r['components']} (largest {r['largest_component_agents']} agents), "
+            f"methods {r['methods']}; decay rate estimate {_fmt(re_['value'], 6)} ({re_['method']})"
+        )
+        for sk in r["skipped"]:
+            out.print(f"  skipped: {sk}")
     if doc["gain"] is not None:
         _print_gain(doc["gain"])
     _print_theorems(doc["theorems"])
     if out_path is not None:
         out.print(f"certificate written to {out_path} (re-check with: ntc verify {out_path})")
+    if not doc["certificate"]["valid"]:
+        print("certificate NOT valid: −L_B is not proven Hurwitz", file=sys.stderr)
+        raise typer.Exit(1)
 
 
 @app.command()

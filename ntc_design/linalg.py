@@ -137,8 +137,7 @@ DENSE_MAX_BYTES = 2.0 * 2**30
 class SPDFamily:
     """Sparse Cholesky (CHOLMOD via cvxopt, fill-reducing ordering, supernodal) of the
     symmetric matrices ``Σ_k c_k·M_k − shift·I`` over one fixed sparsity pattern (the union
-    of the M_k and the diagonal), so the symbolic analysis is done once and each
-    factorisation is numeric only. Only lower triangles are read."""
+    of the M_k and the diagonal), assembled once. Only lower triangles are read."""
 
     def __init__(self, mats) -> None:
         import scipy.sparse as sp
@@ -169,12 +168,11 @@ class SPDFamily:
         old = dict(cholmod.options)
         cholmod.options["supernodal"] = 2
         try:
-            if self._symbolic is None:
-                self._symbolic = cholmod.symbolic(sm, uplo="L")
+            # a fresh symbolic analysis every time: refactorising a factor object that
+            # was already factorised numerically gave wrong answers (cvxopt 1.3)
+            self._symbolic = cholmod.symbolic(sm, uplo="L")
             cholmod.numeric(sm, self._symbolic)
         except ArithmeticError:
-            # the symbolic analysis stays valid after a failed numeric step (CHOLMOD
-            # refactorises from the original values); tested against a fresh analysis
             return False, 0
         finally:
             cholmod.options.clear()

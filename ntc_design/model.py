@@ -222,11 +222,19 @@ class Topology:
     def _where(self, f: str, msg: str) -> str:
         return f"{self.source}: {f}: {msg}" if self.source else f"{f}: {msg}"
 
-    def index(self, label: Label) -> int:
+    @cached_property
+    def _label_index(self) -> dict[str, int]:
+        out: dict[str, int] = {}
         for k, a in enumerate(self.labels):
-            if str(a) == str(label):
-                return k
-        raise InputError(f"unknown agent label {label!r}")
+            out.setdefault(str(a), k)
+        return out
+
+    def index(self, label: Label) -> int:
+        """0-based index of an agent label (O(1))."""
+        k = self._label_index.get(str(label))
+        if k is None:
+            raise InputError(f"unknown agent label {label!r}")
+        return k
 
     def weight(self, i: int, j: int) -> np.ndarray:
         """A_ij (zero matrix when there is no edge j -> i)."""

@@ -233,3 +233,155 @@ def test_sparse_critical_couplings_agree_with_dense():
         if sp_.hurwitz is not None:
             assert sp_.hurwitz == pytest.approx(dense.hurwitz, rel=1e-6, abs=1e-9)
         assert DEF_CODES  # the batched codes table is exported
+
+
+# ----------------------------------------------------------- scalable certificates
+
+
+def _two_agent_cycle(delta):
+    """Two agents hearing each other through ND, strongly anisotropic weights: the
+    comparison matrix is an M-matrix only for δ > 99, L_B + L_Bᵀ ≻ 0 only for δ > ~4.05,
+    yet −L_B is Hurwitz for every δ > 0 (each coordinate is a 2×2 block with positive
+    trace and determinant)."""
+    top = Topology.from_edges(
+        2, 2, [(2, 1, -np.diag([1.0, 0.01])), (1, 2, -np.diag([0.01, 1.0]))], name="cycle"
+    )
+    return nd.design(top, [1.0, 2.0], delta=delta, thresholds=False)
+
+
+def _methods(cert):
+    return cert["results"]["methods"]
+
+
+def test_component_decomposition_is_block_triangular():
+    from ntc_design.thresholds import strong_components
+
+    top = random_network(400, 2, seed=5)
+    des = nd.design(top, [1.0, 1.0], thresholds=False)
+    lb = des.grounded_laplacian_sparse()
+    ncomp, comp = strong_components(lb, 2)
+    ea = top.edge_arrays
+    assert np.all(comp[ea.cols] <= comp[ea.rows])  # every edge goes forward
+    # the eigenvalues of L_B are those of its component blocks
+    dense = lb.toarray()
+    ev = np.sort_complex(np.linalg.eigvals(dense))
+    parts = []
+    for c in range(ncomp):
+        ix = (np.flatnonzero(comp == c)[:, None] * 2 + np.arange(2)).ravel()
+        parts.append(np.linalg.eigvals(dense[np.ix_(ix, ix)]))
+    np.testing.assert_allclose(
+        np.sort_complex(np.concatenate(parts)), ev, atol=1e-8 * abs(ev).max()
+    )
+    assert ncomp > 1 and np.bincount(comp).max() > 1
+
+
+def test_dominance_certificate_and_verify_round_trip(tmp_path):
+    import json
+
+    from ntc_design.certify import scale_certificate, verify, write_certificate
+
+    top = random_network(300, 3, seed=2, family="scale-free")
+    des = nd.design(top, [1.0, -1.0, 2.0], thresholds=False)
+    cert = scale_certificate(des)
+    assert _methods(cert)["dominance"] == cert["results"]["components"]
+    p = tmp_path / "c.json"
+    write_certificate(cert, p)
+    ver = verify(json.loads(p.read_text()))
+    assert ver.valid, ver.failed
+    # a v that breaks M v > 0 is caught
+    bad = json.loads(p.read_text())
+    big = int(np.argmax(np.bincount(bad["components"]["label"])))
+    agents = [i for i, c in enumerate(bad["components"]["label"]) if c == big]
+    assert len(agents) > 1
+    bad["components"]["v"][agents[0]] *= 1e-6
+    bad["digest"] = __import__("ntc_design.certify.certificate", fromlist=["digest"]).digest(bad)
+    assert not verify(bad).valid
+    # an overstated μ is caught
+    bad = json.loads(p.read_text())
+    bad["components"]["mu"][0] *= 1.5
+    bad["digest"] = __import__("ntc_design.certify.certificate", fromlist=["digest"]).digest(bad)
+    ver = verify(bad)
+    assert not ver.valid
+    # a numbering with a backward edge is caught
+    bad = json.loads(p.read_text())
+    lab = bad["components"]["label"]
+    e = bad["subject"]["modes"][top.name]["topology"]
+    j, i = e["from"][0], e["to"][0]
+    lab[j], lab[i] = max(lab[i], lab[j]) + 0, min(lab[i], lab[j])
+    if lab[j] > lab[i]:
+        bad["digest"] = __import__("ntc_design.certify.certificate", fromlist=["digest"]).digest(
+            bad
+        )
+        assert not verify(bad).valid
+
+
+def test_dominance_fails_and_the_fallbacks_decide():
+    from ntc_design.certify import scale_certificate, verify
+
+    low = scale_certificate(_two_agent_cycle(1.0))  # neither dominance nor symmetric part
+    assert _methods(low) == {"dominance": 0, "symmetric": 0, "lyapunov": 1, "none": 0}
+    assert verify(low).valid
+    mid = scale_certificate(_two_agent_cycle(10.0))  # symmetric part ≻ 0, no dominance
+    assert _methods(mid)["symmetric"] == 1 and _methods(mid)["dominance"] == 0
+    assert verify(mid).valid
+    high = scale_certificate(_two_agent_cycle(120.0))  # dominance
+    assert _methods(high)["dominance"] == 1
+    assert verify(high).valid
+
+
+def test_unreached_agent_is_never_certified(tmp_path, capsys, monkeypatch):
+    from ntc_design.certify import certify, scale_certificate, verify
+
+    base = random_network(59, 3, seed=1)
+    lone = Topology(base.labels + (60,), 3, dict(base.weights), name="lonely")
+    with pytest.warns(AssumptionWarning):
+        des = nd.design(lone, [1.0, 0.0, 0.0], thresholds=False)
+    cert = scale_certificate(des)
+    assert _methods(cert)["none"] >= 1
+    ver = verify(cert)
+    assert not ver.valid
+    assert "60" in ver.failed[-1].detail
+    small = Topology.from_edges(3, 1, [(1, 2, [[1.0]]), (2, 1, [[-1.0]])])
+    with pytest.warns(AssumptionWarning):
+        assert not certify(small, [1.0]).verification.valid  # the dense path agrees
+    p = tmp_path / "lonely.npz"
+    write_topology(lone, p)
+    code, _, err = run_cli(["certify", p, "--theta", "1,0,0"], capsys, monkeypatch)
+    assert code == 1 and "NOT valid" in err
+
+
+def test_certify_cli_at_scale_and_the_lmi_guard(tmp_path, capsys, monkeypatch):
+    from ntc_design.certify import hurwitz_certificate
+
+    p = tmp_path / "n200.npz"
+    write_topology(random_network(200, 2, seed=3), p)  # the issue's N = 200, d = 2 abort
+    cert = tmp_path / "c.json"
+    code, out, _ = run_cli(["certify", p, "--theta", "1,2", "--out", cert], capsys, monkeypatch)
+    assert code == 0 and "skipped: decay-rate LMI" in out.replace("\n", " ")
+    code, out, _ = run_cli(["verify", cert], capsys, monkeypatch)
+    assert code == 0 and "VALID" in out
+    des = nd.design(nd.load(p), [1.0, 2.0], thresholds=False)
+    with pytest.raises(DenseRefused, match="decay-rate LMI: a dense 400×400 P needs about"):
+        hurwitz_certificate(des)
+
+
+def test_symmetric_part_bound_just_above_and_below_definiteness():
+    """prove_symmetric_part on L = diag-shifted matrices around λ_min(L + Lᵀ) = 0."""
+    import scipy.sparse as sp
+
+    from ntc_design.certify.scale import prove_symmetric_part
+
+    rng = np.random.default_rng(11)
+    n = 60
+    g = sp.random(n, n, density=0.1, random_state=rng).toarray()
+    s = g + g.T
+    lam = np.linalg.eigvalsh(s)[0]
+    for rel, expect in ((1e-6, True), (-1e-6, False)):
+        shift = -lam / 2 + rel * abs(lam)
+        lap = sp.csr_matrix(g + shift * np.eye(n))
+        ok, _ = prove_symmetric_part(lap, sp.csr_matrix((n, n)))
+        assert ok is expect
+    # an error bound larger than the margin refuses the proof
+    lap = sp.csr_matrix(g + (-lam / 2 + 1e-6 * abs(lam)) * np.eye(n))
+    ok, _ = prove_symmetric_part(lap, sp.csr_matrix(np.full((n, n), 1e-3)))
+    assert not ok

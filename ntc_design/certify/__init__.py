@@ -10,6 +10,7 @@ import numpy as np
 from ..design import ProtocolDesign, SwitchingDesign, design
 from ..model import SwitchingTopology, Topology
 from .certificate import (
+    DENSE_CERT_MAX_ND,
     Verification,
     hurwitz_certificate,
     switching_certificate,
@@ -18,6 +19,7 @@ from .certificate import (
     write_certificate,
 )
 from .gain import GainAnalysis, analyse_gain
+from .scale import scale_certificate, verify_scale
 from .theorems import fixed_verdicts, switching_verdicts
 
 
@@ -53,10 +55,14 @@ def certify(
     gain: str | None = None,
     delta: float | None = None,
 ) -> CertifyResult:
-    """Design (Lemma 1), certify (Lyapunov + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a common
-    P), re-verify the certificate exactly, analyse the gain and give the theorem verdict."""
+    """Design (Lemma 1), certify (Lyapunov + LMI up to Nd = DENSE_CERT_MAX_ND, the
+    component-wise certificate of :mod:`.scale` above it, or per-mode L_B + L_Bᵀ ≻ 0 and
+    a common P), re-verify the certificate, analyse the gain and give the theorem
+    verdict."""
     g = analyse_gain(gain) if gain is not None else None
-    des = design(topology, theta, margin, delta)
+    big = isinstance(topology, Topology) and topology.nd > DENSE_CERT_MAX_ND
+    # at scale the critical couplings are not needed by the certificate (design notes it)
+    des = design(topology, theta, margin, delta, thresholds=False if big else None)
     if isinstance(des, SwitchingDesign):
         cert = switching_certificate(des)
         ver = verify(cert)
@@ -68,8 +74,13 @@ def certify(
         th = switching_verdicts(
             des.to_dict(), ver, g, bound, cert["results"]["symmetric_part_min_eig"]
         )
-    else:
+    elif des.topology.nd <= DENSE_CERT_MAX_ND:
         cert = hurwitz_certificate(des)
+        ver = verify(cert)
+        th = fixed_verdicts(des.to_dict(), ver, g)
+    else:
+        # big networks: component-wise certificate, no dense step (issue 9)
+        cert = scale_certificate(des)
         ver = verify(cert)
         th = fixed_verdicts(des.to_dict(), ver, g)
     return CertifyResult(des, cert, ver, g, th)
@@ -82,8 +93,10 @@ __all__ = [
     "analyse_gain",
     "certify",
     "hurwitz_certificate",
+    "scale_certificate",
     "switching_certificate",
     "verify",
     "verify_file",
+    "verify_scale",
     "write_certificate",
 ]

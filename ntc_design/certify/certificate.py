@@ -76,6 +76,27 @@ def _finish(doc: dict) -> dict:
     return doc
 
 
+#: The dense certificate (Lyapunov + decay-rate LMI on a dense P) is used up to this Nd;
+#: ``certify`` uses the component-wise certificate (:mod:`.scale`) above it.
+DENSE_CERT_MAX_ND = 150
+
+
+def require_lmi(n: int, what: str) -> None:
+    """Refuse, in one line, an LMI on a dense n×n P whose interior-point solve would need
+    more than ``linalg.DENSE_MAX_BYTES``: with m = n(n+1)/2 unknowns its KKT system
+    takes about 12·m² bytes (N = 100, d = 3 took 23 GB)."""
+    from ..linalg import DENSE_MAX_BYTES, DenseRefused
+
+    m = n * (n + 1) / 2
+    need = 12.0 * m * m
+    if need > DENSE_MAX_BYTES:
+        raise DenseRefused(
+            f"{what}: a dense {n}×{n} P needs about {need / 2**30:.0f} GiB "
+            f"(limit {DENSE_MAX_BYTES / 2**30:.1f} GiB); refused — the component-wise "
+            "certificate (ntc_design.certify.scale) applies at this size"
+        )
+
+
 def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool = True) -> dict:
     """Certify −L_B Hurwitz for one design in two independent ways: (a) the Lyapunov
     equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) the LMI maximising the decay rate α."""
@@ -105,6 +126,7 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
     }
     solver = {"name": None, "status": None}
     if rate:
+        require_lmi(lap_b.shape[0], "decay-rate LMI")
         r = decay_rate_lmi(lap_b, eig_bound=eig_bound)
         results["lmi"] = {
             "alpha": r.alpha,
@@ -357,6 +379,10 @@ def verify(doc: Any, source: str = "certificate") -> Verification:
         raise InputError(f"{source}: expected a JSON object")
     if doc.get("format") != FORMAT:
         raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
+    if doc.get("kind") == "hurwitz-scale":
+        from .scale import verify_scale
+
+        return verify_scale(doc, source)
     n = _need(doc, "size", int, source)
     subject = _need(doc, "subject", dict, source)
     modes = _need(subject, "modes", dict, f"{source}: subject")

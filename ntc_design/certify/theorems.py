@@ -65,7 +65,9 @@ def fixed_verdicts(design_doc: dict, ver: Verification, gain: GainAnalysis | Non
     """Theorems 1 (mean square) and 2 (almost sure) for one fixed topology."""
     a2 = design_doc["assumption_holds"]
     viol = "; ".join(f"agent {v['agent']}: {v['reason']}" for v in design_doc["violations"])
-    lyap = [c for c in ver.checks if "P_lyapunov·L_B" in c.name]
+    lyap = [
+        c for c in ver.checks if "P_lyapunov·L_B" in c.name or c.name.startswith("−L_B(")
+    ]
     hurwitz = bool(lyap) and all(c.ok for c in lyap) and ver.valid
     th = design_doc.get("thresholds") or {}
     hdetail = (
