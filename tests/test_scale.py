@@ -279,6 +279,8 @@ def test_dominance_certificate_and_verify_round_trip(tmp_path):
     import json
 
     from ntc_design.certify import scale_certificate, verify, write_certificate
+    from ntc_design.certify.certificate import digest
+    from ntc_design.certify.scale import pack, unpack
 
     top = random_network(300, 3, seed=2, family="scale-free")
     des = nd.design(top, [1.0, -1.0, 2.0], thresholds=False)
@@ -288,31 +290,42 @@ def test_dominance_certificate_and_verify_round_trip(tmp_path):
     write_certificate(cert, p)
     ver = verify(json.loads(p.read_text()))
     assert ver.valid, ver.failed
-    # a v that breaks M v > 0 is caught
+    n = top.n
+
+    def forged(field, change):
+        bad = json.loads(p.read_text())
+        arr = unpack(bad["components"][field], field, "i8" if field == "label" else "f8", (n,))
+        arr = arr.copy()
+        change(arr)
+        bad["components"][field] = pack(arr, "i8" if field == "label" else "f8")
+        bad["digest"] = digest(bad)
+        return verify(bad)
+
+    comp = unpack(cert["components"]["label"], "label", "i8", (n,))
+    big = int(np.argmax(np.bincount(comp)))
+    agent = int(np.flatnonzero(comp == big)[0])
+    assert np.sum(comp == big) > 1
+
+    def shrink_v(a):
+        a[agent] *= 1e-6
+
+    def inflate_mu(a):
+        a[0] *= 1.5
+
+    assert not forged("v", shrink_v).valid  # M v > 0 fails
+    assert not forged("mu", inflate_mu).valid  # μ_0 above λ_min is not proven
+    ea = top.edge_arrays
+    j, i = int(ea.cols[0]), int(ea.rows[0])
+
+    def backward(a):
+        a[i], a[j] = min(a[i], a[j]), max(a[i], a[j]) + 1
+
+    ver = forged("label", backward)
+    assert not ver.valid and any("goes backward" in c.detail for c in ver.failed)
+    # a tampered file without a new digest is caught by the digest
     bad = json.loads(p.read_text())
-    big = int(np.argmax(np.bincount(bad["components"]["label"])))
-    agents = [i for i, c in enumerate(bad["components"]["label"]) if c == big]
-    assert len(agents) > 1
-    bad["components"]["v"][agents[0]] *= 1e-6
-    bad["digest"] = __import__("ntc_design.certify.certificate", fromlist=["digest"]).digest(bad)
+    bad["subject"]["modes"][top.name]["delta"] *= 1.01
     assert not verify(bad).valid
-    # an overstated μ is caught
-    bad = json.loads(p.read_text())
-    bad["components"]["mu"][0] *= 1.5
-    bad["digest"] = __import__("ntc_design.certify.certificate", fromlist=["digest"]).digest(bad)
-    ver = verify(bad)
-    assert not ver.valid
-    # a numbering with a backward edge is caught
-    bad = json.loads(p.read_text())
-    lab = bad["components"]["label"]
-    e = bad["subject"]["modes"][top.name]["topology"]
-    j, i = e["from"][0], e["to"][0]
-    lab[j], lab[i] = max(lab[i], lab[j]) + 0, min(lab[i], lab[j])
-    if lab[j] > lab[i]:
-        bad["digest"] = __import__("ntc_design.certify.certificate", fromlist=["digest"]).digest(
-            bad
-        )
-        assert not verify(bad).valid
 
 
 def test_dominance_fails_and_the_fallbacks_decide():

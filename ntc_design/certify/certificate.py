@@ -101,6 +101,8 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
     """Certify −L_B Hurwitz for one design in two independent ways: (a) the Lyapunov
     equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) the LMI maximising the decay rate α."""
     name = name or d.topology.name or "topology"
+    if rate:  # estimated before any dense step: refused in one line, never an OOM kill
+        require_lmi(d.topology.nd, "decay-rate LMI")
     lap_b = d.grounded_laplacian()
     lya = hurwitz_by_lyapunov(lap_b)
     claims = [
@@ -126,7 +128,6 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
     }
     solver = {"name": None, "status": None}
     if rate:
-        require_lmi(lap_b.shape[0], "decay-rate LMI")
         r = decay_rate_lmi(lap_b, eig_bound=eig_bound)
         results["lmi"] = {
             "alpha": r.alpha,
