@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import sys
+import threading
+import time
 import warnings
 from pathlib import Path
 from typing import Annotated
@@ -14,19 +16,38 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from . import __version__
 from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, design, structure_report
-from .errors import InputError
+from .errors import InputError, one_line
 from .files import jsonable
 from .model import SwitchingTopology, load
 
 app = typer.Typer(
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
     no_args_is_help=True,
     help="Certify, design and validate non-trivial consensus protocols on signed "
     "matrix-weighted networks with compound measurement noise.",
 )
 out = Console(highlight=False)
+
+
+def _version(value: bool) -> None:
+    if value:
+        print(f"ntc {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """Certify, design and validate non-trivial consensus protocols on signed
+    matrix-weighted networks with compound measurement noise."""
+
 
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
@@ -186,18 +207,70 @@ def generate(
     out.print(f"wrote {out_path}: {top.name}, N = {top.n}, d = {top.dim}, {len(top.weights)} edges")
 
 
-def _progress():
-    """A progress bar on stderr, shown only on a terminal."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+class Progress:
+    """Progress on stderr: a rich bar on a terminal; otherwise (a batch job, a pipe) a plain
+    line every ``every`` seconds from a heartbeat thread, so that a long run is never
+    silent, and one line when a later stage starts."""
 
-    return Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.percentage:>3.0f}%"),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-        disable=not sys.stderr.isatty(),
-    )
+    def __init__(self, what: str, every: float = 5.0, tty: bool | None = None):
+        self.what, self.every = what, every
+        self.tty = sys.stderr.isatty() if tty is None else tty
+        self.t0 = time.monotonic()
+        self.state = "starting"
+        self.tasks: dict[str, int] = {}
+        self._stop = threading.Event()
+        self._bar = None
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> Progress:
+        if self.tty:
+            from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+            from rich.progress import Progress as Bar
+
+            self._bar = Bar(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                TextColumn("{task.percentage:>3.0f}%"),
+                TimeRemainingColumn(),
+                console=Console(stderr=True),
+            )
+            self._bar.__enter__()
+        else:
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+
+    def _line(self, text: str) -> None:
+        print(
+            f"{self.what}: [{time.monotonic() - self.t0:.0f} s] {text}", file=sys.stderr, flush=True
+        )
+
+    def _beat(self) -> None:
+        while not self._stop.wait(self.every):
+            self._line(self.state)
+
+    def stage(self, text: str) -> None:
+        """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
+        once only after the first ``every`` seconds, so that a quick run, or bad input
+        refused at the start, prints nothing but its result or its one error line."""
+        self.state = text
+        if not self.tty and time.monotonic() - self.t0 >= self.every:
+            self._line(text)
+
+    def tick(self, key: str, done: int, total: int) -> None:
+        """``done`` of ``total`` units of Monte Carlo work (path-steps) of run ``key``."""
+        self.state = f"{key}: Monte Carlo {100 * done / max(total, 1):.0f}% done"
+        if self._bar is not None:
+            if key not in self.tasks:
+                self.tasks[key] = self._bar.add_task(key, total=total)
+            self._bar.update(self.tasks[key], completed=done, total=total)
 
 
 def _print_checks(checks) -> None:
@@ -213,14 +286,10 @@ def _print_gain(g: dict) -> None:
     t = Table(title=f"gain c(t) = {g['parsed']}")
     for c in ("condition", "holds", "reason"):
         t.add_column(c)
-    names = {
-        "continuous_nonnegative": "continuous, c >= 0 on [0, ∞)",
-        "integral_diverges": "∫₀^∞ c dt = ∞",
-        "tends_to_zero": "c(t) → 0",
-        "square_integrable": "∫₀^∞ c² dt < ∞",
-    }
+    from .gain import CONDITION_LABELS
+
     yn = {True: "yes", False: "[red]no[/red]", None: "undetermined"}
-    for k, label in names.items():
+    for k, label in CONDITION_LABELS.items():
         t.add_row(label, yn[g[k]["value"]], g[k]["reason"])
     out.print(t)
     out.print(
@@ -248,7 +317,7 @@ def gain(
     as_json: JsonOpt = False,
 ) -> None:
     """Decide the gain conditions of Theorems 1-4 for c(t)."""
-    from .certify import analyse_gain
+    from .gain import analyse_gain
 
     doc = analyse_gain(expr).to_dict()
     print(_json(doc)) if as_json else _print_gain(doc)
@@ -343,40 +412,68 @@ def simulate(
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
     ] = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
-    summary.json, ms_error.csv and paths.npz to --out."""
+    summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
+    or nothing)."""
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
-    from .simulate.scenario import scenario_arguments, write_outputs
+    from .simulate.scenario import check_output, load_scenario, write_outputs
+    from .simulate.spec import MonteCarlo
 
-    top, kw, sc = scenario_arguments(scenario)
+    top, spec, sc = load_scenario(scenario)
     if workers is not None:
-        kw["workers"] = workers
-    prog = _progress()
-    with prog:
-        task = prog.add_task("simulating", total=1)
-
-        def tick(done: int, total: int) -> None:
-            prog.update(task, completed=done, total=total)
-
         try:
-            res = run(top, progress=tick, **kw)
+            spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+        except InputError as exc:
+            raise InputError(f"--{exc}") from None
+    check_output(out_dir)  # before the run, not after it
+    with Progress("ntc simulate") as prog:
+        prog.stage(f"simulating {scenario}")
+        try:
+            res = run(top, spec, progress=lambda done, total: prog.tick("simulating", done, total))
+        except InputError as exc:  # a field of the scenario: name the file
+            raise InputError(f"{sc.source}: {exc}") from None
         except SimulationDiverged as exc:
-            write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
-            print(f"error: {exc}", file=sys.stderr)
+            written = write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
+            if as_json:
+                print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
+            print(f"error: {one_line(str(exc))}", file=sys.stderr)
             raise typer.Exit(1) from None
-    write_outputs(res, out_dir, {"scenario": str(scenario)})
+    written = write_outputs(res, out_dir, {"scenario": str(scenario)})
     st = res.stats
+    if as_json:
+        summary = res.summary()
+        print(
+            _json(
+                {
+                    "ok": True,
+                    "out": str(out_dir),
+                    "files": [str(p) for p in written],
+                    "stats": st,
+                    "notes": res.notes,
+                    **{
+                        k: summary[k]
+                        for k in ("final_ms_error_mc", "final_ms_error_exact", "sample_paths")
+                        if k in summary
+                    },
+                }
+            )
+        )
+        return
     rate = (
         f", {st['path_steps_per_second']:.3g} path-steps/s" if "path_steps_per_second" in st else ""
     )
-    out.print(
-        f"{st['path_steps']:.3g} path-steps in {st.get('mc_seconds', 0):.1f} s{rate}; exact moments {st.get('exact_seconds', 0):.2f} s"
-    )
+    parts = []
+    if "mc_seconds" in st:
+        parts.append(f"{st['path_steps']:.3g} path-steps in {st['mc_seconds']:.1f} s{rate}")
+    if "exact_seconds" in st:
+        parts.append(f"exact moments {st['exact_seconds']:.2f} s")
+    out.print("; ".join(parts))
     for n in res.notes:
         out.print(f"note: {n}")
-    out.print(f"wrote {out_dir}/summary.json, ms_error.csv, paths.npz")
+    out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
 @app.command()
@@ -384,12 +481,30 @@ def report(
     directory: Annotated[
         Path, typer.Argument(help="A simulation output directory (ntc simulate --out).")
     ],
+    interactive: Annotated[
+        bool,
+        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+    ] = False,
+    as_json: JsonOpt = False,
 ) -> None:
-    """Turn a simulation output directory into one self-contained report.html."""
+    """Turn a simulation output directory into one self-contained report.html (figures also
+    as PNG, SVG and PDF in DIR/figures)."""
     from .reports.report import write_report
 
-    path = write_report(directory)
-    out.print(f"wrote {path}")
+    path = write_report(directory, interactive=interactive)
+    if as_json:
+        figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
+        print(
+            _json(
+                {
+                    "report": str(path),
+                    "certificate": str(path.parent / "certificate.json"),
+                    "figures": figs,
+                }
+            )
+        )
+        return
+    out.print(f"wrote {path}", soft_wrap=True)
 
 
 @app.command()
@@ -405,30 +520,128 @@ def reproduce(
         str, typer.Option(help="intrinsic (validated fast path) or uniform.")
     ] = "intrinsic",
     workers: Annotated[int, typer.Option(help="Worker processes.")] = 2,
+    seed: Annotated[int, typer.Option(help="Monte Carlo seed.")] = 0,
+    interactive: Annotated[
+        bool,
+        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+    ] = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Run the paper's Section 5 end to end and write one report beside its numbers."""
     from .reports.reproduce import reproduce_paper
 
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
-    prog = _progress()
-    tasks: dict[str, int] = {}
+    from .outputs import check_output_folder
 
-    def tick(key: str, done: int, total: int) -> None:
-        if key not in tasks:
-            tasks[key] = prog.add_task(key, total=total)
-        prog.update(tasks[key], completed=done, total=total)
-
-    with prog:
+    check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
+    with Progress("ntc reproduce") as prog:
         path, ok, wall = reproduce_paper(
-            out_dir, t_end, paths, dt, stepping, workers, progress=tick
+            out_dir,
+            t_end,
+            paths,
+            dt,
+            stepping,
+            workers,
+            seed,
+            progress=prog.tick,
+            status=prog.stage,
+            interactive=interactive,
         )
-    out.print(f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}")
+    if as_json:
+        doc = json.loads((path.parent / "paper_summary.json").read_text(encoding="utf-8"))
+        print(_json({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))
+    else:
+        out.print(
+            f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}",
+            soft_wrap=True,
+        )
+    if not ok:
+        raise typer.Exit(1)
 
 
-def main() -> None:
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line on stderr (``warning: ...``), without the source line."""
+    print(f"warning: {one_line(str(message))}", file=sys.stderr)
+
+
+def _argv(args: list[str]) -> list[str]:
+    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``,
+    ``--gain "-1"``) is a value, not an option: such tokens are passed after ``--`` for
+    positional arguments; option values are taken as they are by click."""
+    out: list[str] = []
+    for k, tok in enumerate(args):
+        prev = args[k - 1] if k else ""
+        looks_negative = len(tok) > 1 and tok[0] == "-" and (tok[1].isdigit() or tok[1] in "(.")
+        if looks_negative and not (prev.startswith("--") and "=" not in prev) and "--" not in out:
+            out.append("--")
+        out.append(tok)
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the CLI: one line ``error: ...`` on stderr for every user error (exit 2), for
+    an interrupt (exit 130); warnings as ``warning: ...`` lines.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+    """
+    import os
+    import warnings
+
+    try:  # typer >= 0.20 vendors click; its exceptions are what the commands raise
+        from typer._click import exceptions as click
+    except ImportError:  # pragma: no cover - older typer
+        from click import exceptions as click
+
+    args = sys.argv[1:] if argv is None else list(argv)
+    warnings.showwarning = _warning_line
+    warnings.simplefilter("ignore", RuntimeWarning)  # numerical trouble is checked, not warned
+    code = 0
     try:
-        app()
+        try:
+            rv = app(args=_argv(args), prog_name="ntc", standalone_mode=False)
+        except click.NoArgsIsHelpError as exc:
+            print(exc.format_message())
+            code = 2
+        else:
+            code = rv if isinstance(rv, int) else 0
+            if code == 130:  # typer turns KeyboardInterrupt into Exit(130)
+                print("error: interrupted", file=sys.stderr)
     except InputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+        print(f"error: {one_line(str(exc))}", file=sys.stderr)
+        code = 2
+    except click.UsageError as exc:
+        where = f" (see: {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
+        print(f"error: {one_line(exc.format_message())}{where}", file=sys.stderr)
+        code = 2
+    except click.ClickException as exc:  # e.g. an unreadable file argument
+        print(f"error: {one_line(exc.format_message())}", file=sys.stderr)
+        code = 2
+    except (KeyboardInterrupt, typer.Abort):
+        print("error: interrupted", file=sys.stderr)
+        code = 130
+    except MemoryError:
+        print(
+            "error: out of memory: the input asks for more memory than the machine has",
+            file=sys.stderr,
+        )
+        code = 2
+    except BrokenPipeError:
+        code = 1
+    except OSError as exc:  # a file or folder the user named cannot be read or written
+        where = f"{one_line(str(exc.filename))!r}: " if exc.filename else ""
+        print(f"error: {where}{exc.strerror or exc.__class__.__name__}", file=sys.stderr)
+        code = 2
+    except Exception as exc:  # a bug: one line, the traceback with NTC_DEBUG=1
+        if os.environ.get("NTC_DEBUG"):
+            raise
+        print(
+            f"error: internal error ({exc.__class__.__name__}: {one_line(str(exc))[:300]}); "
+            "re-run with NTC_DEBUG=1 for the traceback",
+            file=sys.stderr,
+        )
+        code = 1
+    sys.exit(code)

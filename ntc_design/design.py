@@ -346,6 +346,13 @@ class ProtocolDesign:
             "notes": list(self.notes),
         }
 
+    def to_statespace(self):
+        """The noise-free protocol at c = 1 as a ``control.StateSpace`` (state x, input θ,
+        output x; DC gain 1_N ⊗ I_d); see :func:`ntc_design.interop.design_statespace`."""
+        from .interop import design_statespace
+
+        return design_statespace(self)
+
 
 @dataclass(frozen=True, eq=False)
 class SwitchingDesign:

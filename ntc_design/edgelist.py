@@ -28,12 +28,14 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .files import MAX_AGENTS, MAX_DIM  # the same caps as topology files
 
 FORMAT = "ntc-design/edge-list"
 VERSION = 1
-MAX_AGENTS = 10_000_000
+
 MAX_EDGES = 50_000_000
-MAX_DIM = 64
+#: Declared uncompressed size of all arrays (zip headers; zipfile checks them on read).
+MAX_NPZ_BYTES = 2 * 2**30
 KEYS = {"format", "version", "dim", "labels", "from", "to", "weights", "name"}
 
 
@@ -63,6 +65,12 @@ def read_npz(path: str | Path) -> EdgeListData:
     except (OSError, ValueError, zipfile.BadZipFile, EOFError):
         raise InputError(f"{src}: not a readable .npz edge list") from None
     with z:
+        total = sum(i.file_size for i in z.zip.infolist())
+        if total > MAX_NPZ_BYTES:
+            raise InputError(
+                f"{src}: arrays take {total / 2**30:.1f} GiB uncompressed; at most "
+                f"{MAX_NPZ_BYTES / 2**30:.0f} GiB"
+            )
         keys = set(z.files)
         unknown = keys - KEYS
         if unknown:

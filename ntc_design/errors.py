@@ -1,4 +1,9 @@
-"""The one error type a user sees for bad input."""
+"""The one error type a user sees for bad input, and the small checks that raise it."""
+
+from __future__ import annotations
+
+import math
+import numbers
 
 
 class InputError(ValueError):
@@ -9,18 +14,126 @@ class InputError(ValueError):
     """
 
 
-def require_positive(name: str, value, integer: bool = False) -> None:
-    """Raise InputError unless ``value`` is a finite positive number (an integer if asked)."""
-    import math
+def quote(label) -> str:
+    """A label as it may appear inside a one-line message: numbers as written, text
+    repr-quoted (so a label holding a newline cannot split or forge an error line)."""
+    if isinstance(label, numbers.Integral) and not isinstance(label, bool):
+        return str(int(label))
+    return repr(str(label))
 
+
+def one_line(text: str) -> str:
+    """``text`` with every control character escaped: printable on one line."""
+    return "".join(
+        ch if ch.isprintable() or ch == " " else ch.encode("unicode_escape").decode("ascii")
+        for ch in str(text)
+    )
+
+
+def _show(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def require_positive(name: str, value, integer: bool = False) -> None:
+    """Raise InputError unless ``value`` is a finite positive number (an integer if asked).
+
+    Parameters
+    ----------
+    name : str
+        The field named in the message.
+    value : object
+        The value to check.
+    integer : bool
+        Also require an integer (a float such as ``2.0`` is refused).
+
+    Raises
+    ------
+    InputError
+        When the value is not a finite positive number (integer).
+    """
+    if integer:
+        require_int(name, value, minimum=1)
+        return
     bad = (
         isinstance(value, bool)
-        or not isinstance(value, (int, float))
+        or not isinstance(value, numbers.Real)
         or not math.isfinite(value)
         or value <= 0
     )
-    if integer:
-        bad = bad or not float(value).is_integer()
     if bad:
-        kind = "a positive integer" if integer else "a positive number"
-        raise InputError(f"{name}: must be {kind}, got {value!r}")
+        raise InputError(f"{name}: must be a positive number, got {_show(value)}")
+
+
+def require_int(name: str, value, minimum: int = 0, maximum: int | None = None) -> int:
+    """``value`` as an int if it is an integer (not a bool, not a float) in
+    [minimum, maximum].
+
+    Parameters
+    ----------
+    name : str
+        The field named in the message.
+    value : object
+        The value to check.
+    minimum, maximum : int
+        Inclusive bounds (``maximum`` None: unbounded).
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InputError
+        When the value is not an integer in range.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        kind = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
+        raise InputError(f"{name}: must be {kind}, got {_show(value)}")
+    v = int(value)
+    if v < minimum:
+        kind = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
+        raise InputError(f"{name}: must be {kind}, got {v}")
+    if maximum is not None and v > maximum:
+        raise InputError(f"{name}: must be at most {maximum}, got {_show(v)}")
+    return v
+
+
+def require_number(name: str, value, minimum: float | None = None) -> float:
+    """``value`` as a finite float (not a bool), at least ``minimum`` if given.
+
+    Parameters
+    ----------
+    name : str
+        The field named in the message.
+    value : object
+        The value to check.
+    minimum : float, optional
+        Inclusive lower bound.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        When the value is not a finite number at least ``minimum``.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InputError(f"{name}: expected a number, got {_show(value)}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise InputError(f"{name}: must be finite, got {_show(value)}")
+    if minimum is not None and v < minimum:
+        raise InputError(f"{name}: must be >= {minimum:g}, got {_show(value)}")
+    return v
+
+
+def format_bytes(n: float) -> str:
+    """``1.5e9`` -> ``'1.4 GiB'``."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if abs(n) < 1024 or unit == "PiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} PiB"  # pragma: no cover

@@ -370,6 +370,28 @@ class Topology:
         ]
         return doc
 
+    # -- interop (thin wrappers over ntc_design.interop) ------------------------------
+    @classmethod
+    def from_networkx(cls, graph, weight: str = "weight", dim: int | None = None) -> Topology:
+        """From a ``networkx.DiGraph`` (edge u -> v carries A_vu as a d×d matrix, or a
+        number for d = 1); see :func:`ntc_design.interop.topology_from_networkx`."""
+        from .interop import topology_from_networkx
+
+        return topology_from_networkx(graph, weight, dim)
+
+    def to_networkx(self, weight: str = "weight"):
+        """A ``networkx.DiGraph`` with the d×d weights as edge attributes (exact inverse of
+        :meth:`from_networkx`)."""
+        from .interop import topology_to_networkx
+
+        return topology_to_networkx(self, weight)
+
+    def save(self, path: str | Path) -> Path:
+        """Write a topology file (YAML, or JSON by the suffix) that :func:`load` reads back."""
+        from .interop import save_topology
+
+        return save_topology(self, path)
+
 
 def signed_laplacian(top: Topology) -> np.ndarray:
     """Signed Laplacian L (paper, Sec. 2.2): blocks ``L_ij = -A_ij`` (j ≠ i) and

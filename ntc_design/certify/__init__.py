@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..design import ProtocolDesign, SwitchingDesign, design
+from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
 from .certificate import (
     DENSE_CERT_MAX_ND,
@@ -18,7 +19,6 @@ from .certificate import (
     verify_file,
     write_certificate,
 )
-from .gain import GainAnalysis, analyse_gain
 from .scale import scale_certificate, verify_scale
 from .theorems import fixed_verdicts, switching_verdicts
 

@@ -11,8 +11,8 @@ reported as assumed (it holds for f(x) = s·x with σ̄ = |s|).
 
 from __future__ import annotations
 
+from ..gain import CONDITION_LABELS, GainAnalysis
 from .certificate import Verification
-from .gain import GainAnalysis
 
 
 def _premise(name: str, value: bool | None, detail: str) -> dict:
@@ -26,20 +26,11 @@ def _gain_premises(gain: GainAnalysis | None, almost_sure: bool) -> list[dict]:
                 "gain c(t)", None, "no gain given (--gain): the gain conditions are not checked"
             )
         ]
-    out = [
-        _premise(
-            "c continuous and >= 0 on [0, ∞)",
-            gain.continuous_nonnegative.value,
-            gain.continuous_nonnegative.reason,
-        ),
-        _premise("∫₀^∞ c dt = ∞", gain.integral_diverges.value, gain.integral_diverges.reason),
-        _premise("c(t) → 0", gain.tends_to_zero.value, gain.tends_to_zero.reason),
+    keys = [k for k in CONDITION_LABELS if almost_sure or k != "square_integrable"]
+    return [
+        _premise(CONDITION_LABELS[k], gain.condition(k).value, gain.condition(k).reason)
+        for k in keys
     ]
-    if almost_sure:
-        out.append(
-            _premise("∫₀^∞ c² dt < ∞", gain.square_integrable.value, gain.square_integrable.reason)
-        )
-    return out
 
 
 def _verdict(number: int, sense: str, premises: list[dict]) -> dict:

@@ -1,17 +1,31 @@
-"""Figures in the paper's conventions (matplotlib, Agg backend; PNG and SVG).
+"""Figures in the paper's conventions (matplotlib, Agg backend).
 
-* Topology Ĝ: agents on a circle, the external signal x0 as vertex 0 in the middle with
-  its edges to the informed agents; positive edges blue, negative red; definite solid,
-  semidefinite dashed; arrows give the direction j -> i (i listens to j).
-* States of all agents over time, one panel per dimension, θ marked (almost-sure figures).
-* E‖x_i − θ‖² per agent on a log scale: Monte Carlo mean with its 95% band, exact curve.
-* For a switching run the active mode is shaded along the time axis.
+Every figure is sized for a journal column (``ONE_COLUMN`` 3.5 in, ``TWO_COLUMN`` 7.16 in),
+has no title (the caption says what it shows), fonts of 8-9 pt (legends >= 8 pt), and is
+written as vector PDF and SVG beside a 300-dpi PNG by :func:`save`.
+
+* Topology Ĝ: agents on a circle, the external signal x0 (vertex 0) outside the circle next
+  to the informed agents, its edges curved around the agents and in the legend; positive
+  edges blue, negative red; definite solid, semidefinite dashed; arrows j -> i (i listens
+  to j); optional weight labels.
+* Agents differ by colour, line style and marker (:func:`agent_style`).
+* States of all agents over time, one panel per dimension, θ dashed.
+* E‖x_i − θ‖² per agent on a log scale: the legend says which lines are Monte Carlo (solid,
+  95% band shaded) and which exact (dashed).
+* A switching schedule is a thin timeline under the time axis; when its segments are too
+  short to draw they are aggregated (share of each mode per bin), and
+  :func:`schedule_figure` shows one period.
+* The decay rate and λ_min(L_B + L_Bᵀ) against δ with Lemma 1's δ, δ_H, δ_S and the best δ.
+* The gain: c(t), ∫c and ∫c², labelled in mathtext from the parsed expression.
 """
 
 from __future__ import annotations
 
 import io
+import math
 from collections.abc import Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -25,8 +39,58 @@ from matplotlib.patches import Circle, FancyArrowPatch, Patch  # noqa: E402
 from ..linalg import Definiteness, classify  # noqa: E402
 from ..model import Topology  # noqa: E402
 
-BLUE, RED = "#1f5fbf", "#c8322d"
+ONE_COLUMN = 3.5  # inches (IEEE/Elsevier single column)
+TWO_COLUMN = 7.16  # inches (full text width)
+DPI = 300
+FORMATS = ("png", "svg", "pdf")
+BLUE, RED, GREEN = "#1f5fbf", "#c8322d", "#2a7d4f"
 MODE_COLOURS = ["#8ecae6", "#ffb703", "#90be6d", "#f4a3c4", "#bdb2ff", "#cdb4db"]
+_LINESTYLES = ("-", "--", "-.", ":")
+_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">")
+RC = {
+    "font.size": 8,
+    "axes.labelsize": 9,
+    "axes.titlesize": 9,
+    "legend.fontsize": 8,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "lines.linewidth": 1.0,
+    "svg.fonttype": "none",  # text stays text in the SVG
+    "pdf.fonttype": 42,  # TrueType in the PDF (editable, journal-friendly)
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+}
+
+
+@contextmanager
+def paper_style():
+    """matplotlib rc settings of every figure here."""
+    with plt.rc_context(RC):
+        yield
+
+
+@dataclass(frozen=True)
+class AgentStyle:
+    colour: tuple
+    linestyle: str
+    marker: str
+
+
+def agent_style(k: int) -> AgentStyle:
+    """Agent k's colour, line style and marker: no two of the first 40 agents share all
+    three, and neighbours differ in each."""
+    return AgentStyle(
+        plt.get_cmap("tab10")(k % 10), _LINESTYLES[k % 4], _MARKERS[(k + k // 10) % 10]
+    )
+
+
+def _markevery(k: int, n_points: int, count: int = 8):
+    """Markers spread over the curve, shifted per agent so that they do not pile up."""
+    step = max(n_points // count, 1)
+    return (int((k * step) // 7) % step, step)
+
+
+# ---------------------------------------------------------------------------- topology
 
 
 def _style(cls: Definiteness) -> tuple[str, str]:
@@ -34,187 +98,668 @@ def _style(cls: Definiteness) -> tuple[str, str]:
     return colour, ("-" if cls.definite else "--")
 
 
-def _arrow(ax, a, b, colour: str, ls: str, **kw) -> None:
-    ax.add_patch(
-        FancyArrowPatch(a, b, arrowstyle="-|>", color=colour, linestyle=ls, shrinkB=18, **kw)
-    )
+def weight_label(a: np.ndarray) -> str:
+    """A short text for a weight: ``2``, ``−0.5I``, ``diag(1, 1, 0)`` or its entries."""
+    a = np.asarray(a, dtype=float)
+
+    def num(x: float) -> str:
+        return f"{x:.3g}".replace("-", "−")
+
+    if a.shape == (1, 1):
+        return num(a[0, 0])
+    if np.array_equal(a, np.diag(np.diag(a))):
+        dg = np.diag(a)
+        if np.all(dg == dg[0]):
+            return f"{num(dg[0])}I"
+        return "diag(" + ", ".join(num(x) for x in dg) + ")"
+    return "[" + "; ".join(" ".join(num(x) for x in row) for row in a) + "]"
 
 
-def topology_figure(top: Topology, informed: Sequence[int], b: dict, title: str):
-    """Ĝ: the topology with the external signal (vertex 0) and its couplings B_i."""
+def topology_figure(
+    top: Topology,
+    informed: Sequence[int],
+    b: dict,
+    title: str | None = None,
+    weights: bool = False,
+    width: float = ONE_COLUMN,
+):
+    """Ĝ: the topology with the external signal x0 (vertex 0) and its couplings B_i.
+
+    Parameters
+    ----------
+    top
+        The topology.
+    informed
+        Indices of the informed agents (they receive x0).
+    b
+        ``{index: B_i}``.
+    title
+        An optional short title (captions are preferred).
+    weights
+        Label every edge with its weight (:func:`weight_label`).
+    width
+        Figure width in inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     n = top.n
     ang = np.pi / 2 - 2 * np.pi * np.arange(n) / n
     pos = {i: np.array([np.cos(a), np.sin(a)]) for i, a in enumerate(ang)}
-    pos[-1] = np.array([0.0, 0.0])
-    fig, ax = plt.subplots(figsize=(5.2, 5.2))
-    r = 0.11
-    pairs = set(top.edges)
-    for (i, j), cls in top.classes.items():
-        if cls.sign == 0:
-            continue
-        colour, ls = _style(cls)
-        rad = 0.18 if (j, i) in pairs else 0.0
-        _arrow(
-            ax,
-            pos[j],
-            pos[i],
-            colour,
-            ls,
-            mutation_scale=14,
-            linewidth=1.6,
-            shrinkA=18,
-            connectionstyle=f"arc3,rad={rad}",
-        )
-    for i in informed:
-        colour, ls = _style(classify(np.asarray(b[i])))
-        _arrow(
-            ax, pos[-1], pos[i], colour, ls, mutation_scale=12, linewidth=1.2, alpha=0.8, shrinkA=16
-        )
-    for i in range(n):
-        ax.add_patch(
-            Circle(pos[i], r, facecolor="white", edgecolor="black", linewidth=1.2, zorder=3)
-        )
-        ax.text(*pos[i], str(top.labels[i]), ha="center", va="center", fontsize=11, zorder=4)
-    ax.add_patch(
-        Circle(
-            pos[-1],
-            r,
-            facecolor="#eeeeee",
-            edgecolor="black",
-            linewidth=1.2,
-            zorder=3,
-            linestyle=":",
-        )
-    )
-    ax.text(0, 0, "0", ha="center", va="center", fontsize=11, zorder=4)
-    ax.set_xlim(-1.3, 1.3)
-    ax.set_ylim(-1.3, 1.3)
-    ax.set_aspect("equal")
-    ax.axis("off")
-    ax.set_title(title, fontsize=11)
-    ax.legend(
-        handles=[
+    # x0 sits outside the circle, in the direction of the informed agents' mean position
+    if informed:
+        v = np.sum([pos[i] for i in informed], axis=0)
+        phi = math.atan2(v[1], v[0]) if np.linalg.norm(v) > 1e-9 else ang[informed[0]]
+    else:
+        phi = -np.pi / 2
+    # keep x0 off the radial line of an agent so that its straight edges do not hide one
+    pos[-1] = 1.62 * np.array([math.cos(phi), math.sin(phi)])
+    r = 0.13
+    with paper_style():
+        fig, ax = plt.subplots(figsize=(width, width * 0.95), layout="constrained")
+        pairs = set(top.edges)
+        for (i, j), cls in top.classes.items():
+            if cls.sign == 0:
+                continue
+            colour, ls = _style(cls)
+            rad = 0.18 if (j, i) in pairs else 0.0
+            ax.add_patch(
+                FancyArrowPatch(
+                    pos[j],
+                    pos[i],
+                    arrowstyle="-|>",
+                    color=colour,
+                    linestyle=ls,
+                    mutation_scale=10,
+                    linewidth=1.1,
+                    shrinkA=12,
+                    shrinkB=12,
+                    connectionstyle=f"arc3,rad={rad}",
+                    zorder=2,
+                )
+            )
+            if weights:
+                # at 30% from the target end, on the (curved) edge
+                nrm = np.array([-(pos[i] - pos[j])[1], (pos[i] - pos[j])[0]])
+                mid = 0.7 * pos[i] + 0.3 * pos[j] - 0.42 * rad * nrm
+                ax.text(
+                    *mid,
+                    weight_label(top.weights[(i, j)]),
+                    fontsize=5.5,
+                    ha="center",
+                    va="center",
+                    color=colour,
+                    zorder=5,
+                    bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85},
+                )
+        p0 = pos[-1]
+        extent = [pos[k] for k in pos]
+        for i in informed:
+            cls = classify(np.asarray(b[i]))
+            # bend the edge away from the centre so that it runs around the agents' circle
+            chord = pos[i] - p0
+            mid = 0.5 * (pos[i] + p0)
+            nrm = np.array([-chord[1], chord[0]])
+            side = 1.0 if np.dot(nrm, mid) > 0 else -1.0
+            sep = abs(math.remainder(ang[i] - phi, 2 * math.pi))
+            rad = -side * min(0.15 + 0.85 * sep / math.pi, 1.0)
+            extent.append(mid + rad * np.array([chord[1], -chord[0]]) / 2)  # arc3's apex
+            ax.add_patch(
+                FancyArrowPatch(
+                    p0,
+                    pos[i],
+                    arrowstyle="-|>",
+                    color=GREEN,
+                    linestyle="-" if cls.definite else "--",
+                    mutation_scale=10,
+                    linewidth=1.1,
+                    shrinkA=12,
+                    shrinkB=12,
+                    connectionstyle=f"arc3,rad={rad}",
+                    zorder=2,
+                )
+            )
+            if weights:
+                ax.text(
+                    *(0.5 * (pos[i] + p0) + 0.25 * side * nrm / max(np.linalg.norm(nrm), 1e-9)),
+                    f"B={weight_label(b[i])}",
+                    fontsize=6,
+                    ha="center",
+                    va="center",
+                    color=GREEN,
+                    zorder=5,
+                    bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85},
+                )
+        for i in range(n):
+            ax.add_patch(
+                Circle(pos[i], r, facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
+            )
+            ax.text(*pos[i], str(top.labels[i]), ha="center", va="center", fontsize=9, zorder=4)
+        ax.add_patch(Circle(p0, r, facecolor="#e3f1e8", edgecolor=GREEN, linewidth=1.2, zorder=3))
+        ax.text(*p0, "0", ha="center", va="center", fontsize=9, zorder=4, color=GREEN)
+        xy = np.array(extent)
+        ax.set_xlim(xy[:, 0].min() - 0.3, xy[:, 0].max() + 0.3)
+        ax.set_ylim(xy[:, 1].min() - 0.3, xy[:, 1].max() + 0.3)
+        ax.set_aspect("equal")
+        ax.axis("off")
+        if title:
+            ax.set_title(title)
+        handles = [
             Line2D([], [], color=BLUE, label="positive definite"),
-            Line2D([], [], color=BLUE, ls="--", label="positive semidefinite"),
             Line2D([], [], color=RED, label="negative definite"),
-            Line2D([], [], color=RED, ls="--", label="negative semidefinite"),
-        ],
-        loc="lower center",
-        bbox_to_anchor=(0.5, -0.12),
-        ncol=2,
-        fontsize=8,
-        frameon=False,
-    )
-    fig.tight_layout()
+            Line2D([], [], color=BLUE, ls="--", label="positive semidef."),
+            Line2D([], [], color=RED, ls="--", label="negative semidef."),
+            Line2D(
+                [],
+                [],
+                color=GREEN,
+                marker="o",
+                markerfacecolor="#e3f1e8",
+                label=r"$x_0$ (vertex 0) $\to$ informed, $B_i$",
+            ),
+        ]
+        fig.legend(
+            handles=handles,
+            loc="outside lower center",
+            ncol=2,
+            frameon=False,
+            fontsize=8,
+            handlelength=1.8,
+            columnspacing=1.0,
+        )
+    return fig
+
     return fig
 
 
-def shade_modes(ax, segments: Sequence[tuple[float, float, str]] | None) -> list:
-    """Shade the active mode along the time axis (a strip at the bottom of the axes);
-    returns legend handles for the modes."""
-    if not segments:
-        return []
-    names = sorted({m for _, _, m in segments})
-    col = {m: MODE_COLOURS[k % len(MODE_COLOURS)] for k, m in enumerate(names)}
-    for a, b, m in segments:
-        ax.axvspan(a, b, ymin=0.0, ymax=0.035, color=col[m], linewidth=0)
-    return [Patch(color=col[m], label=f"active mode {m}") for m in names]
+# ---------------------------------------------------------------------- mode timelines
 
 
-def states_figure(t, path: np.ndarray, theta: np.ndarray, labels, title: str, segments=None):
-    """One sample path: x_i^(k)(t) for every agent i, one panel per dimension k, θ dashed."""
+def _mode_colours(segments) -> dict[str, str]:
+    names = list(dict.fromkeys(m for _, _, m in segments))
+    return {m: MODE_COLOURS[k % len(MODE_COLOURS)] for k, m in enumerate(sorted(names))}
+
+
+def mode_timeline(ax, segments: Sequence[tuple[float, float, str]], bins: int = 200) -> list:
+    """Draw the active mode on a thin axis ``ax`` (x shared with the plot above); segments
+    shorter than 1/``bins`` of the axis are aggregated into the share of each mode per bin.
+    Returns legend handles."""
+    col = _mode_colours(segments)
+    t0, t1 = segments[0][0], segments[-1][1]
+    span = t1 - t0
+    short = min(b - a for a, b, _ in segments) < span / bins
+    ax.set_yticks([])
+    for s in ("left", "right", "top"):
+        ax.spines[s].set_visible(False)
+    if not short:
+        for a, b, m in segments:
+            ax.axvspan(a, b, color=col[m], linewidth=0)
+        label = "active mode"
+    else:
+        starts = np.array([a for a, _, _ in segments])
+        stops = np.array([b for _, b, _ in segments])
+        modes = np.array([m for _, _, m in segments])
+        edges = np.linspace(t0, t1, bins + 1)
+        share = {}
+        for m in col:
+            sel = modes == m
+            # time of mode m in each bin: overlap of its segments with the bin, summed
+            cum = np.concatenate([[0.0], np.cumsum(stops[sel] - starts[sel])])
+
+            def upto(x, a=starts[sel], b=stops[sel], cum=cum):
+                k = np.searchsorted(a, x, side="right")
+                inside = np.clip(x - a[np.maximum(k - 1, 0)], 0, (b - a)[np.maximum(k - 1, 0)])
+                return cum[np.maximum(k - 1, 0)] + np.where(k > 0, inside, 0.0)
+
+            share[m] = np.diff(upto(edges)) / np.diff(edges)
+        bottom = np.zeros(bins)
+        for m in col:
+            ax.bar(
+                edges[:-1],
+                share[m],
+                width=np.diff(edges),
+                bottom=bottom,
+                align="edge",
+                color=col[m],
+                linewidth=0,
+            )
+            bottom += share[m]
+        ax.set_ylim(0, 1)
+        label = "share of time"
+    ax.set_ylabel(label, rotation=0, ha="right", va="center", fontsize=7)
+    return [Patch(color=col[m], label=f"mode {m}") for m in col]
+
+
+def schedule_figure(schedule: Sequence[tuple[str, float]], width: float = ONE_COLUMN):
+    """One period of a switching schedule as a bar of modes with their durations."""
+    segs, t = [], 0.0
+    for m, dur in schedule:
+        segs.append((t, t + dur, m))
+        t += dur
+    col = _mode_colours(segs)
+    with paper_style():
+        fig, ax = plt.subplots(figsize=(width, 0.95), layout="constrained")
+        for a, b, m in segs:
+            ax.axvspan(a, b, color=col[m], linewidth=0.5, ec="white")
+            ax.text(0.5 * (a + b), 0.5, m, ha="center", va="center", fontsize=8)
+        ax.set_xlim(0, t)
+        ax.set_yticks([])
+        ax.set_xticks([a for a, _, _ in segs] + [t])
+        ax.tick_params(axis="x", labelsize=7)
+        for s in ("left", "right", "top"):
+            ax.spines[s].set_visible(False)
+        ax.set_xlabel(f"t within one period ({t:g}); the schedule repeats")
+    return fig
+
+
+def _time_axes(d_panels: int, segments, width: float, height: float):
+    """Panels sharing t, plus a thin timeline under them when segments are given."""
+    ratios = [1.0] * d_panels + ([0.12] if segments else [])
+    fig, axes = plt.subplots(
+        len(ratios),
+        1,
+        figsize=(width, height),
+        sharex=True,
+        gridspec_kw={"height_ratios": ratios},
+        layout="constrained",
+    )
+    axes = list(np.atleast_1d(axes))
+    tl = axes.pop() if segments else None
+    return fig, axes, tl
+
+
+# ------------------------------------------------------------------------ time series
+
+
+def states_figure(
+    t,
+    path: np.ndarray,
+    theta: np.ndarray,
+    labels,
+    title: str | None = None,
+    segments=None,
+    width: float = TWO_COLUMN,
+    gid: str | None = None,
+):
+    """One sample path: x_i^(k)(t) for every agent i, one panel per dimension k, θ dashed.
+
+    Parameters
+    ----------
+    t
+        Times (S,).
+    path
+        States (S, N·d).
+    theta
+        θ (d,).
+    labels
+        Agent labels (N).
+    title
+        Optional short title.
+    segments
+        Switching segments ``(start, stop, mode)`` for the timeline, or None.
+    width
+        Figure width in inches.
+    gid
+        When given, agent i's artists get SVG ids ``{gid}-ag{i}-…`` (for toggling).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     d = theta.size
     n = len(labels)
     x = path.reshape(t.size, n, d)
-    fig, axes = plt.subplots(d, 1, figsize=(7.5, 2.2 * d + 1.2), sharex=True)
-    axes = np.atleast_1d(axes)
-    cmap = plt.get_cmap("tab10")
-    handles = []
-    for k, ax in enumerate(axes):
-        for i in range(n):
-            ax.plot(t, x[:, i, k], lw=0.9, color=cmap(i % 10), label=f"agent {labels[i]}")
-        ax.axhline(theta[k], color="black", ls="--", lw=1.0)
-        ax.set_ylabel(f"$x_i^{{({k + 1})}}$  (θ = {theta[k]:g})")
-        handles = shade_modes(ax, segments)
-    axes[-1].set_xlabel("t")
-    agents = [Line2D([], [], color=cmap(i % 10), label=f"agent {labels[i]}") for i in range(n)]
-    agents.append(Line2D([], [], color="black", ls="--", label="θ"))
-    fig.suptitle(title, fontsize=11)
-    fig.legend(
-        handles=agents,
-        loc="upper center",
-        ncol=min(len(agents), 8),
-        fontsize=7,
-        frameon=False,
-        bbox_to_anchor=(0.5, 0.955),
-    )
-    if handles:
-        fig.legend(
-            handles=handles, loc="lower center", ncol=len(handles), fontsize=7, frameon=False
+    with paper_style():
+        fig, axes, tl = _time_axes(d, segments, width, 1.45 * d + 1.0)
+        for k, ax in enumerate(axes):
+            for i in range(n):
+                s = agent_style(i)
+                ax.plot(
+                    t,
+                    x[:, i, k],
+                    gid=f"{gid}-ag{i}-{k}" if gid else None,
+                    lw=0.8,
+                    color=s.colour,
+                    ls=s.linestyle,
+                    marker=s.marker,
+                    markersize=3,
+                    markevery=_markevery(i, t.size),
+                )
+            ax.axhline(theta[k], color="black", ls=(0, (5, 2)), lw=1.0)
+            ax.set_ylabel(f"$x_i^{{({k + 1})}}$")
+        last = tl if tl is not None else axes[-1]
+        last.set_xlabel("$t$")
+        handles = [
+            Line2D(
+                [],
+                [],
+                color=agent_style(i).colour,
+                ls=agent_style(i).linestyle,
+                marker=agent_style(i).marker,
+                markersize=3,
+                label=f"agent {labels[i]}",
+            )
+            for i in range(n)
+        ]
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="black",
+                ls=(0, (5, 2)),
+                label=r"$\theta = (" + ", ".join(f"{v:g}" for v in theta) + ")$",
+            )
         )
-    fig.tight_layout(rect=(0, 0.03 if handles else 0, 1, 0.93))
+        if tl is not None:
+            handles += mode_timeline(tl, segments)
+        if title:
+            fig.suptitle(title)
+        fig.legend(
+            handles=handles, loc="outside lower center", ncol=min(len(handles), 5), frameon=False
+        )
     return fig
 
 
 def ms_error_figure(
-    t, mc: dict | None, exact: np.ndarray | None, labels, title: str, segments=None
+    t,
+    mc: dict | None,
+    exact: np.ndarray | None,
+    labels,
+    title: str | None = None,
+    segments=None,
+    width: float = TWO_COLUMN,
+    gid: str | None = None,
 ):
-    """E‖x_i − θ‖² per agent, log scale: MC mean with its 95% band, exact curve dashed."""
-    fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    cmap = plt.get_cmap("tab10")
-    pos_floor = 1e-12
-    for i, a in enumerate(labels):
-        colour = cmap(i % 10)
+    """E‖x_i − θ‖² per agent on a log scale: Monte Carlo mean (solid) with its 95% band,
+    exact moments (dashed); agents differ by colour and marker.
+
+    Parameters
+    ----------
+    t
+        Save times (S,).
+    mc
+        ``{"mean", "lo", "hi"}`` arrays (S, N), or None.
+    exact
+        Exact E‖x_i − θ‖² (S, N), or None.
+    labels
+        Agent labels.
+    title
+        Optional short title.
+    segments
+        Switching segments for the timeline, or None.
+    width
+        Figure width in inches.
+    gid
+        When given, agent i's artists get SVG ids ``{gid}-ag{i}-…`` (for toggling).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    floor = 1e-12
+    with paper_style():
+        fig, (ax,), tl = _time_axes(1, segments, width, 3.0)
+        for i in range(len(labels)):
+            s = agent_style(i)
+            tag = f"{gid}-ag{i}-" if gid else None
+            if mc is not None:
+                ax.plot(
+                    t,
+                    np.maximum(mc["mean"][:, i], floor),
+                    gid=tag and tag + "mc",
+                    color=s.colour,
+                    lw=1.0,
+                    marker=s.marker,
+                    markersize=3,
+                    markevery=_markevery(i, t.size),
+                )
+                ax.fill_between(
+                    t,
+                    np.maximum(mc["lo"][:, i], floor),
+                    np.maximum(mc["hi"][:, i], floor),
+                    color=s.colour,
+                    alpha=0.18,
+                    lw=0,
+                    gid=tag and tag + "band",
+                )
+            if exact is not None:
+                ax.plot(
+                    t,
+                    np.maximum(exact[:, i], floor),
+                    gid=tag and tag + "exact",
+                    color=s.colour,
+                    lw=1.1,
+                    ls=(0, (4, 2)),
+                    marker=None if mc is not None else s.marker,
+                    markersize=3,
+                    markevery=_markevery(i, t.size),
+                )
+        ax.set_yscale("log")
+        ax.set_ylabel(r"$E\,\|x_i - \theta\|^2$")
+        (tl if tl is not None else ax).set_xlabel("$t$")
+        handles = [
+            Line2D(
+                [],
+                [],
+                color=agent_style(i).colour,
+                marker=agent_style(i).marker,
+                markersize=3,
+                label=f"agent {a}",
+            )
+            for i, a in enumerate(labels)
+        ]
         if mc is not None:
-            ax.plot(
-                t, np.maximum(mc["mean"][:, i], pos_floor), color=colour, lw=1.0, label=f"agent {a}"
-            )
-            ax.fill_between(
-                t,
-                np.maximum(mc["lo"][:, i], pos_floor),
-                np.maximum(mc["hi"][:, i], pos_floor),
-                color=colour,
-                alpha=0.2,
-                lw=0,
-            )
+            handles.append(Line2D([], [], color="0.3", lw=1.0, label="Monte Carlo mean (solid)"))
+            handles.append(Patch(color="0.3", alpha=0.25, label="Monte Carlo 95% band"))
         if exact is not None:
-            ax.plot(
-                t,
-                np.maximum(exact[:, i], pos_floor),
-                color=colour,
-                lw=1.2,
-                ls="--",
-                label=None if mc is not None else f"agent {a}",
+            handles.append(
+                Line2D([], [], color="0.3", lw=1.1, ls=(0, (4, 2)), label="exact moments (dashed)")
             )
-    ax.set_yscale("log")
-    ax.set_xlabel("t")
-    ax.set_ylabel(r"$E\|x_i - \theta\|^2$")
-    ax.set_title(
-        title
-        + (
-            "  (solid: Monte Carlo with 95% band, dashed: exact)"
-            if mc is not None and exact is not None
-            else ""
-        ),
-        fontsize=10,
-    )
-    ax.legend(fontsize=7, ncol=4, frameon=False, loc="upper right")
-    handles = shade_modes(ax, segments)
-    if handles:
-        fig.legend(
-            handles=handles, loc="lower center", ncol=len(handles), fontsize=7, frameon=False
-        )
-    fig.tight_layout(rect=(0, 0.04 if handles else 0, 1, 1))
+        if tl is not None:
+            handles += mode_timeline(tl, segments)
+        if title:
+            ax.set_title(title)
+        fig.legend(handles=handles, loc="outside right center", ncol=1, frameon=False, fontsize=8)
     return fig
 
 
-def save(fig, stem: Path) -> tuple[Path, Path, bytes]:
-    """Write stem.png and stem.svg; return both paths and the PNG bytes (for inlining)."""
+# ------------------------------------------------------------------ coupling and gain
+
+
+@dataclass(frozen=True)
+class CouplingCurve:
+    """Decay rate and λ_min(L_B + L_Bᵀ) of one mode against δ, with its marks."""
+
+    name: str
+    delta: np.ndarray
+    rate: np.ndarray  # −max Re λ(−L_B(δ))
+    sym_min: np.ndarray  # λ_min(L_B(δ) + L_B(δ)ᵀ)
+    lemma_delta: float
+    delta_h: float | None
+    delta_s: float | None
+    best_delta: float | None
+    best_rate: float
+
+
+def coupling_curve(des, points: int = 240) -> CouplingCurve:
+    """Sample the decay rate ``−max Re λ(−L_B(δ))`` and ``λ_min(L_B + L_Bᵀ)`` over a
+    logarithmic δ range around Lemma 1's δ and the critical couplings of ``des``
+    (a :class:`~ntc_design.design.ProtocolDesign` with thresholds)."""
+    th = des.thresholds
+    marks = [des.delta] + [
+        v for v in (th.hurwitz, th.symmetric, th.best_rate_delta) if v is not None and v > 0
+    ]
+    lo, hi = min(marks) / 30.0, max(marks) * 30.0
+    delta = np.geomspace(lo, hi, points)
+    lap, dmat = des.topology.laplacian(), des.coupling_matrix()
+    s0 = lap + lap.T
+    rate = np.array([np.min(np.linalg.eigvals(lap + x * dmat).real) for x in delta])
+    sym = np.array([np.linalg.eigvalsh(s0 + 2 * x * dmat)[0] for x in delta])
+    return CouplingCurve(
+        des.topology.name or "topology",
+        delta,
+        rate,
+        sym,
+        des.delta,
+        th.hurwitz,
+        th.symmetric,
+        th.best_rate_delta,
+        th.best_rate,
+    )
+
+
+def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
+    """Two panels against δ (log scale): the decay rate −max Re λ(−L_B(δ)) and
+    λ_min(L_B + L_Bᵀ)(δ); per mode Lemma 1's δ (circle), δ_H (triangle), δ_S (square) and
+    the best δ (star). A δ_H of 0 is stated in the legend (it has no place on a log axis)."""
+    with paper_style():
+        fig, (a1, a2) = plt.subplots(
+            1, 2, figsize=(width, 2.4 + 0.2 * len(curves)), layout="constrained", sharex=True
+        )
+        handles = []
+        for k, c in enumerate(curves):
+            col = plt.get_cmap("tab10")(k % 10)
+            ls = _LINESTYLES[k % 4]
+            for ax, y in ((a1, c.rate), (a2, c.sym_min)):
+                ax.plot(c.delta, y, color=col, ls=ls, lw=1.2)
+
+            def at(x, y=None, c=c):
+                return float(np.interp(np.log(x), np.log(c.delta), y))
+
+            marks = [
+                ("o", c.lemma_delta, r"Lemma 1 $\delta$"),
+                ("^", c.delta_h, r"$\delta_H$"),
+                ("s", c.delta_s, r"$\delta_S$"),
+                ("*", c.best_delta, r"best $\delta$"),
+            ]
+            txt = []
+            for mk, x, lab in marks:
+                if x is None:
+                    txt.append(
+                        f"{lab}: none" if mk != "*" else r"rate grows as $\delta \to \infty$"
+                    )
+                    continue
+                if x <= 0:
+                    txt.append(f"{lab} = 0")
+                    continue
+                txt.append(f"{lab} = {x:.4g}")
+                for ax, y in ((a1, c.rate), (a2, c.sym_min)):
+                    ax.plot(
+                        [x],
+                        [at(x, y)],
+                        marker=mk,
+                        color=col,
+                        markersize=8 if mk == "*" else 5,
+                        markeredgecolor="black",
+                        markeredgewidth=0.6,
+                        ls="none",
+                        zorder=4,
+                    )
+            handles.append(
+                Line2D([], [], color=col, ls=ls, lw=1.2, label=f"{c.name}: " + ", ".join(txt))
+            )
+        for ax in (a1, a2):
+            ax.set_xscale("log")
+            ax.axhline(0.0, color="black", lw=0.6)
+            ax.set_xlabel(r"coupling $\delta$")
+        a1.set_ylabel(r"$-\max\,\mathrm{Re}\,\lambda(-L_B)$")
+        a1.set_title("decay rate", fontsize=8)
+        a2.set_ylabel(r"$\lambda_{\min}(L_B + L_B^{\top})$")
+        a2.set_title("symmetric part", fontsize=8)
+        keys = [
+            Line2D([], [], marker=m, color="0.6", markeredgecolor="black", ls="none", label=lab)
+            for m, lab in (
+                ("o", r"Lemma 1 $\delta$"),
+                ("^", r"$\delta_H$"),
+                ("s", r"$\delta_S$"),
+                ("*", r"best $\delta$"),
+            )
+        ]
+        a2.legend(handles=keys, loc="lower right", ncol=2, frameon=False, fontsize=8)
+        fig.legend(handles=handles, loc="outside lower center", ncol=1, frameon=False)
+    return fig
+
+
+def gain_latex(text: str) -> str:
+    """``c(t) = …`` in mathtext from the parsed gain (sympy.latex of the expression, never
+    of the raw text); falls back to the plain text if mathtext cannot typeset it."""
+    from matplotlib.mathtext import MathTextParser
+    from sympy.printing.latex import LatexPrinter
+
+    from ..gain import parse_gain
+
+    class Printer(LatexPrinter):
+        def _print_Pow(self, expr):  # (1+t)^{-1/3} as the paper writes it, not 1/∛(1+t)
+            b, e = expr.as_base_exp()
+            if e.is_Rational and not e.is_Integer:
+                base = self._print(b)
+                if not (b.is_Symbol or b.is_Number):
+                    base = f"({base})"
+                return f"{base}^{{{e.p}/{e.q}}}"
+            return super()._print_Pow(expr)
+
+    expr = parse_gain(text)
+    tex = Printer().doprint(expr).replace(r"\left", "").replace(r"\right", "")
+    tex = tex.replace(r"\frac", r"\dfrac")
+    out = f"$c(t) = {tex}$"
+    try:
+        MathTextParser("agg").parse(out)
+    except ValueError:
+        return f"c(t) = {text}"
+    return out
+
+
+def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
+    """c(t), ∫₀ᵗ c and ∫₀ᵗ c² on [0, T] (cumulative trapezoid on a fine grid)."""
+    from scipy.integrate import cumulative_trapezoid
+
+    from ..simulate import make_gain
+
+    c, _ = make_gain(text)
+    t = np.linspace(0.0, t_end, 20001)
+    y = c(t)
+    ints = (y, cumulative_trapezoid(y, t, initial=0.0), cumulative_trapezoid(y**2, t, initial=0))
+    labels = ("$c(t)$", r"$\int_0^t c\,ds$", r"$\int_0^t c^2\,ds$")
+    with paper_style():
+        fig, axes = plt.subplots(1, 3, figsize=(width, 2.1), layout="constrained")
+        for ax, v, lab in zip(axes, ints, labels, strict=True):
+            ax.plot(t, v, color=BLUE, lw=1.2)
+            ax.set_ylabel(lab)
+            ax.set_xlabel("$t$")
+            ax.set_ylim(bottom=0)
+        fig.suptitle(gain_latex(text), fontsize=9)
+    return fig
+
+
+# ----------------------------------------------------------------------------- saving
+
+
+@dataclass(frozen=True)
+class SavedFigure:
+    stem: Path
+    files: dict[str, Path]  # format -> path
+    png: bytes
+
+
+def save(fig, stem: Path, formats: Sequence[str] = FORMATS, dpi: int = DPI) -> SavedFigure:
+    """Write ``stem.png`` (``dpi``), ``stem.svg`` and ``stem.pdf``; return the paths and
+    the PNG bytes (for inlining)."""
     stem.parent.mkdir(parents=True, exist_ok=True)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=dpi)
     png = buf.getvalue()
-    stem.with_suffix(".png").write_bytes(png)
-    fig.savefig(stem.with_suffix(".svg"), format="svg")
+    # the layout is settled: the vector formats reuse it rather than solving it again
+    fig.set_layout_engine("none")
+    files = {}
+    for f in formats:
+        p = stem.with_suffix(f".{f}")
+        if f == "png":
+            p.write_bytes(png)
+        else:
+            fig.savefig(
+                p, format=f, metadata={"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(f)
+            )
+        files[f] = p
     plt.close(fig)
-    return stem.with_suffix(".png"), stem.with_suffix(".svg"), png
+    return SavedFigure(stem, files, png)

@@ -1,16 +1,23 @@
-"""Self-contained HTML reports: design, certificate, gain and theorem verdicts, figures,
-final errors, and every parameter needed to re-run (``ntc report DIR``)."""
+"""Self-contained HTML reports (``ntc report DIR``), rendered from the Jinja2 templates in
+``templates/`` with autoescaping: a table of contents, the design with its matrices, the
+coupling figure (decay rate and λ_min(L_B + L_Bᵀ) against δ), the certificate, gain and
+theorem verdicts, a convergence table (fitted against predicted decay exponent), the
+figures (PNG inline; PNG, SVG and PDF linked), final errors, links to every data file, the
+parameters as a table and a re-run command."""
 
 from __future__ import annotations
 
 import base64
 import csv
-import html
+import io
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
+from markupsafe import Markup
 
 from ..certify import certify, verify_file, write_certificate
 from ..certify.certificate import package_versions
@@ -60,8 +67,77 @@ class RunData:
         return np.column_stack([self.table[c] for c in cols])
 
 
+MAX_TEXT_BYTES = 256 * 2**20  # summary.json / ms_error.csv larger than this are refused
+NPZ_KEYS = ("t", "paths", "labels", "theta")
+
+
+def _rerun(d: Path) -> str:
+    return f"re-run: ntc simulate SCENARIO --out {d}"
+
+
+def _read_text(path: Path, d: Path) -> str:
+    try:
+        if path.stat().st_size > MAX_TEXT_BYTES:
+            raise InputError(f"{path}: larger than {MAX_TEXT_BYTES // 2**20} MiB; {_rerun(d)}")
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: unreadable ({exc.__class__.__name__}); {_rerun(d)}") from None
+
+
+def _read_npz(path: Path, d: Path) -> dict[str, np.ndarray]:
+    """paths.npz, refusing a corrupt, empty or oversized (decompression bomb) archive."""
+    import zipfile
+
+    from ..errors import format_bytes
+    from ..simulate.budget import MEMORY_FRACTION, available_memory
+
+    try:
+        with zipfile.ZipFile(path) as zf:
+            size = sum(i.file_size for i in zf.infolist())
+        limit = MEMORY_FRACTION * available_memory()
+        if size > limit:
+            raise InputError(
+                f"{path}: unpacks to {format_bytes(size)}, more than {format_bytes(limit)}; {_rerun(d)}"
+            )
+        with np.load(path, allow_pickle=False) as z:
+            missing = [k for k in NPZ_KEYS if k not in z.files]
+            if missing:
+                raise InputError(f"{path}: missing array {missing[0]!r}; {_rerun(d)}")
+            npz = {k: z[k] for k in z.files}
+    except InputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - BadZipFile, EOFError, zlib.error, ValueError...
+        raise InputError(
+            f"{path}: not a readable .npz archive ({exc.__class__.__name__}); {_rerun(d)}"
+        ) from None
+    if npz["paths"].ndim != 3 or npz["t"].ndim != 1 or npz["labels"].ndim != 1:
+        raise InputError(f"{path}: arrays of the wrong shape; {_rerun(d)}")
+    if npz["labels"].dtype.kind not in "UO" and npz["labels"].size:
+        raise InputError(f"{path}: labels are not text; {_rerun(d)}")
+    for k in ("t", "paths", "theta"):
+        if npz[k].dtype.kind not in "fiu":
+            raise InputError(f"{path}: array {k!r} is not numeric; {_rerun(d)}")
+    return npz
+
+
 def load_run(directory: str | Path) -> RunData:
-    """Read a simulation output directory; name what is missing and how to make it."""
+    """Read a simulation output directory; name what is missing or malformed and how to
+    make it again.
+
+    Parameters
+    ----------
+    directory : str or Path
+        A folder written by ``ntc simulate --out``.
+
+    Returns
+    -------
+    RunData
+
+    Raises
+    ------
+    InputError
+        One line naming the file and what is wrong.
+    """
     d = Path(directory)
     if not d.is_dir():
         raise InputError(f"{d}: no such directory; make it with: ntc simulate SCENARIO --out {d}")
@@ -69,30 +145,136 @@ def load_run(directory: str | Path) -> RunData:
         if not (d / name).is_file():
             raise InputError(f"{d}: missing {name}; make it with: ntc simulate SCENARIO --out {d}")
     try:
-        summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
-        with (d / "ms_error.csv").open(encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
-        header, data = rows[0], np.array([[float(v) for v in r] for r in rows[1:]])
-        z = np.load(d / "paths.npz")
-        npz = {k: z[k] for k in z.files}
-    except (json.JSONDecodeError, ValueError, IndexError, OSError) as exc:
+        summary = json.loads(_read_text(d / "summary.json", d))
+    except (json.JSONDecodeError, RecursionError, ValueError) as exc:
         raise InputError(
-            f"{d}: an output file is unreadable ({exc.__class__.__name__}); re-run: ntc simulate SCENARIO --out {d}"
+            f"{d}/summary.json: not valid JSON ({exc.__class__.__name__}); {_rerun(d)}"
         ) from None
+    if not isinstance(summary, dict):
+        raise InputError(f"{d}/summary.json: expected a mapping; {_rerun(d)}")
     for key in ("parameters", "topologies"):
-        if key not in summary:
+        if not isinstance(summary.get(key), dict) or not summary[key]:
+            raise InputError(f"{d}/summary.json: missing field '{key}'; {_rerun(d)}")
+    for key in ("theta", "margin", "gain"):
+        if key not in summary["parameters"]:
+            raise InputError(f"{d}/summary.json: missing field 'parameters.{key}'; {_rerun(d)}")
+    rows = list(csv.reader(io.StringIO(_read_text(d / "ms_error.csv", d))))
+    if len(rows) < 2:
+        raise InputError(f"{d}/ms_error.csv: no data rows; {_rerun(d)}")
+    header = rows[0]
+    if not header or header[0] != "t" or len(set(header)) != len(header):
+        raise InputError(
+            f"{d}/ms_error.csv: the header must start with 't' (unique columns); {_rerun(d)}"
+        )
+    for k, r in enumerate(rows[1:], start=2):
+        if len(r) != len(header):
             raise InputError(
-                f"{d}/summary.json: missing field '{key}'; re-run: ntc simulate SCENARIO --out {d}"
+                f"{d}/ms_error.csv: line {k} has {len(r)} values, the header {len(header)}; {_rerun(d)}"
             )
+    try:
+        data = np.array([[float(v) for v in r] for r in rows[1:]])
+    except ValueError:
+        raise InputError(f"{d}/ms_error.csv: a value is not a number; {_rerun(d)}") from None
+    if not np.all(np.isfinite(data[:, 0])) or np.any(np.diff(data[:, 0]) <= 0):
+        raise InputError(f"{d}/ms_error.csv: times are not finite and increasing; {_rerun(d)}")
+    npz = _read_npz(d / "paths.npz", d)
+    if npz["t"].shape[0] != data.shape[0]:
+        raise InputError(
+            f"{d}: paths.npz has {npz['t'].shape[0]} save times, ms_error.csv {data.shape[0]} "
+            f"(files from different runs?); {_rerun(d)}"
+        )
     table = {h: data[:, k] for k, h in enumerate(header)}
     return RunData(d, summary, table["t"], table, npz)
 
 
-# ------------------------------------------------------------------------- HTML bits
+# ------------------------------------------------------------------------- rendering
 
 
-def esc(x) -> str:
-    return html.escape(str(x))
+@dataclass(frozen=True)
+class Table:
+    """A table for the templates: header texts and rows of cells; a cell is text or a
+    mapping ``{"matrix": rows}``, ``{"verdict": bool|None, "text": ...}``, ``{"mark": bool}``,
+    ``{"code": ...}``, ``{"lines": [...]}`` or ``{"href": ..., "text": ...}``."""
+
+    headers: tuple[str, ...]
+    rows: list
+    id: str | None = None
+
+
+@dataclass(frozen=True)
+class Figure:
+    id: str
+    caption: str
+    alt: str
+    png_b64: str
+    width_px: int
+    links: tuple[tuple[str, str], ...]
+    svg: Markup | None = None
+
+
+@dataclass(frozen=True)
+class RunSection:
+    key: str
+    title: str
+    rerun: str
+    designs: list
+    coupling: Figure
+    certificate: Table
+    checks: Table
+    gain: Table
+    gain_figure: Figure | None
+    theorems: Table
+    ms_figure: Figure
+    convergence_note: str
+    convergence: Table
+    topology_figures: list
+    path_figures: list
+    final: Table
+    spread: str
+    data_links: list
+    parameters: Table
+    versions: Table
+    interactive_agents: list
+
+    def toc(self) -> dict:
+        sub = [
+            ("design", "Protocol design"),
+            ("coupling", "Coupling δ"),
+            ("certificate", "Certificate"),
+            ("gain", "Gain"),
+            ("theorems", "Theorems"),
+            ("convergence", "Convergence"),
+            ("figures", "Topology and sample paths"),
+            ("final", "Final errors"),
+            ("data", "Data files"),
+            ("parameters", "Parameters"),
+        ]
+        return {
+            "id": self.key,
+            "title": self.title,
+            "children": [{"id": f"{self.key}-{k}", "title": t} for k, t in sub],
+        }
+
+
+ENV = Environment(
+    loader=PackageLoader("ntc_design.reports", "templates"),
+    autoescape=select_autoescape(["html"]),
+    undefined=StrictUndefined,
+    trim_blocks=True,
+    lstrip_blocks=True,
+)
+
+
+def render(template: str, **context) -> str:
+    """Render one of the package's Jinja2 templates (autoescaped)."""
+    return ENV.get_template(template).render(**context)
+
+
+def write_html(path: Path, text: str) -> None:
+    """Write atomically (a temporary file, then a rename)."""
+    tmp = path.with_suffix(".html.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(path)
 
 
 def fmt(x, digits: int = 4) -> str:
@@ -100,53 +282,46 @@ def fmt(x, digits: int = 4) -> str:
         return "—"
     if isinstance(x, bool):
         return "yes" if x else "no"
-    if isinstance(x, float):
+    if isinstance(x, (float, np.floating)):
+        x = float(x)
         return f"{x:.{digits}f}" if 1e-3 <= abs(x) < 1e6 or x == 0 else f"{x:.{digits}g}"
     if isinstance(x, (list, tuple)):
         return "[" + ", ".join(fmt(v, digits) for v in x) + "]"
-    return esc(x)
+    return str(x)
 
 
-def table(headers, rows, cls: str = "") -> str:
-    head = "".join(f"<th>{esc(h)}</th>" for h in headers)
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
-    return f'<table class="{cls}"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+def matrix(m, digits: int = 4) -> dict:
+    """A matrix cell: entries rounded for display (−0 shown as 0)."""
+    a = np.atleast_2d(np.asarray(m, dtype=float))
+    return {"matrix": [[f"{v + 0.0:.{digits}g}" for v in row] for row in a]}
 
 
-def img(png: bytes, alt: str) -> str:
-    return f'<figure><img alt="{esc(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode()}"><figcaption>{esc(alt)}</figcaption></figure>'
+def rel(path: Path, base: Path) -> str:
+    """A link from a report in ``base`` to ``path`` (relative, forward slashes)."""
+    return Path(os.path.relpath(path, base)).as_posix()
 
 
-def verdict(v) -> str:
-    return {
-        True: '<span class="ok">yes</span>',
-        False: '<span class="bad">no</span>',
-        None: '<span class="und">undetermined</span>',
-    }[v]
-
-
-CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
-h1{font-size:1.6em}h2{border-bottom:2px solid #1f5fbf;padding-bottom:.2em;margin-top:2em}h3{margin-top:1.4em}
-table{border-collapse:collapse;margin:.6em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:.25em .6em;text-align:left;vertical-align:top}
-th{background:#f0f4fa}.ok{color:#1a7f37;font-weight:600}.bad{color:#c8322d;font-weight:600}.und{color:#9a6700}
-figure{margin:1em 0}img{max-width:100%;border:1px solid #eee}figcaption{font-size:.85em;color:#555}
-.grid{display:flex;flex-wrap:wrap;gap:1em}.grid figure{flex:1 1 320px}pre{background:#f7f7f7;padding:.6em;overflow-x:auto;font-size:.8em}
-"""
-
-SCRIPT = """<script>
-window.addEventListener('load', function () {
-  var im = document.images, ok = 0;
-  for (var i = 0; i < im.length; i++) { if (im[i].complete && im[i].naturalWidth > 0) ok++; }
-  document.body.setAttribute('data-images-loaded', ok + '/' + im.length);
-});
-</script>"""
-
-
-def page(title: str, body: str) -> str:
-    return (
-        f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{esc(title)}</title>'
-        f"<style>{CSS}</style></head><body><h1>{esc(title)}</h1>{body}{SCRIPT}</body></html>\n"
+def _figure(
+    saved: figures.SavedFigure,
+    fid: str,
+    caption: str,
+    base: Path,
+    width_in: float,
+    interactive: bool = False,
+) -> Figure:
+    links = tuple((f.upper(), rel(p, base)) for f, p in saved.files.items())
+    svg = None
+    if interactive and "svg" in saved.files:
+        text = saved.files["svg"].read_text(encoding="utf-8")
+        svg = Markup(text[text.index("<svg") :])  # our own matplotlib output
+    return Figure(
+        fid,
+        caption,
+        caption,
+        base64.b64encode(saved.png).decode(),
+        int(round(width_in * 110)),
+        links,
+        svg,
     )
 
 
@@ -159,55 +334,83 @@ def _modes(des: ProtocolDesign | SwitchingDesign) -> dict[str, ProtocolDesign]:
     return {des.topology.name or "topology": des}
 
 
-def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[str, dict]:
+def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[list, dict]:
+    """The Lemma 1 parameters as one table with a column per mode (B_i and x0 as
+    matrices); and the designs' dict forms."""
     docs = {name: d.to_dict() for name, d in _modes(des).items()}
-    out = []
-    for name, d in docs.items():
-        th = d["thresholds"] or {}
-        rows = [
-            (
-                "Assumption 2",
-                verdict(d["assumption_holds"])
-                + "".join(
-                    f"<br>agent {esc(v['agent'])}: {esc(v['reason'])}" for v in d["violations"]
-                ),
+    agents = sorted(
+        {a for d in docs.values() for a in d["B"]},
+        key=lambda a: [str(x) for x in next(iter(_modes(des).values())).topology.labels].index(a),
+    )
+
+    def row(label, f):
+        return (label, *[f(d) for d in docs.values()])
+
+    def th(d, k, digits=6):
+        return fmt((d["thresholds"] or {}).get(k), digits)
+
+    rows = [
+        row(
+            "Assumption 2",
+            lambda d: {
+                "verdict": d["assumption_holds"],
+                "text": "; ".join(f"agent {v['agent']}: {v['reason']}" for v in d["violations"]),
+            },
+        ),
+        row("V1 / V2", lambda d: f"{fmt(d['V1'])} / {fmt(d['V2'])}"),
+        row("C", lambda d: fmt(d["C"])),
+        row("δ = C + ΔC", lambda d: fmt(d["delta"])),
+        row("k1 = 1 + 2/δ", lambda d: fmt(d["k1"])),
+        row("θ", lambda d: matrix([d["theta"]])),
+        row("x0 = k1·θ", lambda d: matrix([d["x0"]])),
+        row("informed agents V_I = U", lambda d: fmt(d["informed"])),
+        *[
+            row(f"B_{a}", lambda d, a=a: matrix(d["B"][a]) if a in d["B"] else "— (naive)")
+            for a in agents
+        ],
+        row(
+            "identity residual ‖−L_B(1⊗θ) + k1(Δ⊗I)Bθ‖ (relative)",
+            lambda d: f"{d['identity_residual']:.2e}",
+        ),
+        row("δ_H (−L_B Hurwitz for δ > δ_H)", lambda d: th(d, "hurwitz")),
+        row("δ_S (L_B + L_Bᵀ ≻ 0 for δ > δ_S)", lambda d: th(d, "symmetric")),
+        row("best decay rate", lambda d: th(d, "best_rate")),
+        row(
+            "δ of the best rate",
+            lambda d: (
+                th(d, "best_rate_delta")
+                if (d["thresholds"] or {}).get("best_rate_delta") is not None
+                else "none: the rate grows with δ"
             ),
-            ("V1 / V2", f"{fmt(d['V1'])} / {fmt(d['V2'])}"),
-            ("C", fmt(d["C"])),
-            ("δ = C + ΔC", fmt(d["delta"])),
-            ("k1 = 1 + 2/δ", fmt(d["k1"])),
-            ("x0 = k1·θ", fmt(d["x0"])),
-            ("informed agents V_I = U", fmt(d["informed"])),
-            *[(f"B_{a}", fmt(np.round(np.array(b), 4).tolist())) for a, b in d["B"].items()],
-            ("identity residual", f"{d['identity_residual']:.2e}"),
-            ("δ_H (−L_B Hurwitz for δ > δ_H)", fmt(th.get("hurwitz"), 6)),
-            ("δ_S (L_B + L_Bᵀ ≻ 0 for δ > δ_S)", fmt(th.get("symmetric"), 6)),
-            (
-                "best decay rate / at δ",
-                f"{fmt(th.get('best_rate'), 6)} / {fmt(th.get('best_rate_delta'), 6)}",
-            ),
-        ]
-        out.append(f"<h4>mode {esc(name)}</h4>" + table(["quantity", "value"], rows))
-    return "".join(out), docs
+        ),
+    ]
+    headers = ("quantity", *[f"mode {k}" if len(docs) > 1 else "value" for k in docs])
+    return [("", Table(headers, rows))], docs
 
 
-def certificate_section(res, cert_path: Path) -> tuple[str, dict]:
+def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, dict]:
+    """Write the certificate, re-verify it from the file; summary and checks tables."""
     write_certificate(res.certificate, cert_path)
     ver = verify_file(cert_path)
     r = res.certificate["results"]
-    lines = [
+    rows = [
         (
             "certificate",
-            f"{esc(cert_path.name)} ({esc(res.certificate['kind'])}, {esc(res.certificate['digest'][:23])}…)",
+            {
+                "href": rel(cert_path, base),
+                "text": f"{cert_path.name} ({res.certificate['kind']}, {res.certificate['digest'][:23]}…)",
+            },
         ),
         (
             "re-verified from the file (no SDP solver)",
-            verdict(ver.valid)
-            + f" — {esc(ver.method)}, {sum(c.ok for c in ver.checks)}/{len(ver.checks)} checks",
+            {
+                "verdict": ver.valid,
+                "text": f"— {ver.method}, {sum(c.ok for c in ver.checks)}/{len(ver.checks)} checks",
+            },
         ),
     ]
     if "lmi" in r:
-        lines += [
+        rows += [
             (
                 "−L_B Hurwitz: Lyapunov equation",
                 f"P ≻ 0 proven, residual {r['lyapunov']['residual']:.1e}",
@@ -218,82 +421,234 @@ def certificate_section(res, cert_path: Path) -> tuple[str, dict]:
             ),
         ]
     if "symmetric_part_min_eig" in r:
-        lines.append(
+        rows.append(
             (
                 "λ_min(L_B + L_Bᵀ) per mode",
-                ", ".join(f"{esc(k)}: {v:.6f}" for k, v in r["symmetric_part_min_eig"].items()),
+                ", ".join(f"{k}: {v:.6f}" for k, v in r["symmetric_part_min_eig"].items()),
             )
         )
-        cl = r["common_lyapunov"]
-        lines.append(("common Lyapunov matrix", esc(cl["structure"] or "none found")))
-    checks = table(
-        ["claim", "holds", "proof"],
-        [(esc(c.name), verdict(c.ok), esc(c.detail)) for c in ver.checks],
+        rows.append(("common Lyapunov matrix", r["common_lyapunov"]["structure"] or "none found"))
+    checks = Table(
+        ("claim", "holds", "proof"),
+        [(c.name, {"verdict": c.ok, "text": ""}, c.detail) for c in ver.checks],
     )
-    return table(
-        ["", ""], lines
-    ) + "<details><summary>all checks</summary>" + checks + "</details>", {
-        "valid": ver.valid,
-        "results": r,
-    }
+    return Table(("property", "result"), rows), checks, {"valid": ver.valid, "results": r}
 
 
-def gain_section(g: dict | None) -> str:
+GAIN_CONDITIONS = {
+    "continuous_nonnegative": "c continuous, ≥ 0 on [0, ∞)",
+    "integral_diverges": "∫₀^∞ c dt = ∞",
+    "tends_to_zero": "c(t) → 0",
+    "square_integrable": "∫₀^∞ c² dt < ∞",
+}
+
+
+def gain_table(g: dict | None) -> Table:
     if g is None:
-        return "<p>No gain was given.</p>"
-    names = {
-        "continuous_nonnegative": "c continuous, ≥ 0 on [0, ∞)",
-        "integral_diverges": "∫₀^∞ c dt = ∞",
-        "tends_to_zero": "c(t) → 0",
-        "square_integrable": "∫₀^∞ c² dt < ∞",
-    }
-    rows = [(esc(v), verdict(g[k]["value"]), esc(g[k]["reason"])) for k, v in names.items()]
-    rows += [
-        ("mean square (Theorems 1, 3)", verdict(g["mean_square"]), ""),
-        ("almost sure (Theorems 2, 4)", verdict(g["almost_sure"]), ""),
+        return Table(("condition", "holds", "reason"), [("no gain was given", "—", "")])
+    rows = [
+        (v, {"verdict": g[k]["value"], "text": ""}, g[k]["reason"])
+        for k, v in GAIN_CONDITIONS.items()
     ]
-    return f"<p>c(t) = <code>{esc(g['parsed'])}</code></p>" + table(
-        ["condition", "holds", "reason"], rows
-    )
+    rows += [
+        ("mean square (Theorems 1, 3)", {"verdict": g["mean_square"], "text": ""}, "—"),
+        ("almost sure (Theorems 2, 4)", {"verdict": g["almost_sure"], "text": ""}, "—"),
+    ]
+    return Table(("condition", "holds", "reason"), rows)
 
 
-def theorem_section(ths: list[dict]) -> str:
+def theorem_table(ths: list[dict]) -> Table:
     rows = []
     for th in ths:
-        why = "<br>".join(f"fails: {esc(p['premise'])} — {esc(p['detail'])}" for p in th["failing"])
-        why += "<br>".join(f"undetermined: {esc(p['premise'])}" for p in th["undetermined"])
+        why = [f"fails: {p['premise']} — {p['detail']}" for p in th["failing"]]
+        why += [f"undetermined: {p['premise']}" for p in th["undetermined"]]
         rows.append(
             (
                 f"Theorem {th['theorem']}",
-                esc(th["sense"]),
-                verdict(th["guaranteed"]),
-                why or "all premises hold",
+                th["sense"],
+                {"verdict": th["guaranteed"], "text": ""},
+                {"lines": why or ["all premises hold"]},
             )
         )
-    return table(["theorem", "sense", "guaranteed", "why"], rows)
+    return Table(("theorem", "sense", "guaranteed", "why"), rows)
 
 
-def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, dict]:
-    """One run's section of a report, and the facts a summary table needs."""
+# ------------------------------------------------------------------------ convergence
+
+
+def fitted_exponent(t: np.ndarray, y: np.ndarray, t_from: float) -> float | None:
+    """p in y ≈ K (1+t)^(−p), least squares of log y on log(1+t) over t >= t_from."""
+    sel = (t >= t_from) & (y > 0) & np.isfinite(y)
+    if sel.sum() < 5:
+        return None
+    slope = np.polyfit(np.log1p(t[sel]), np.log(y[sel]), 1)[0]
+    return float(-slope)
+
+
+def predicted_exponent(gain: str, rate: float) -> tuple[float | None, str]:
+    """The decay exponent p of E‖x − 1⊗θ‖² ~ t^(−p) that the moment equations give for a
+    gain c ~ t^(−β) (arXiv, Niu & Wu: the second-moment ODE dΣ/dt = −c(L_BΣ + ΣL_Bᵀ) + c²(…)
+    with a constant additive-noise term): β for 0 < β < 1 (Σ follows c/2 times the noise
+    covariance), min(1, 2α) for β = 1 (α the decay rate of −L_B), 0 for β > 1 (∫c < ∞: the
+    error stalls) and 0 when c does not tend to 0. None when c is not a power of t."""
+    import sympy as sp
+
+    from ..gain import T, _limit, parse_gain
+
+    # the power of c at infinity, lim log c / log t (sympy, time-bounded)
+    p = _limit(sp.log(parse_gain(gain)) / sp.log(T))
+    if p == -sp.oo:
+        return 0.0, "c decays faster than any power of t: ∫c < ∞, so the error stalls"
+    if p is None or p == sp.oo or isinstance(p, sp.AccumBounds):
+        return None, "c(t) is not asymptotically a power of t: no prediction"
+    beta = float(-p)
+    if beta <= 0:
+        return 0.0, "c does not tend to 0: the error settles at a noise floor (exponent 0)"
+    if beta > 1:
+        return 0.0, f"c ~ t^-{beta:g}, β > 1: ∫c < ∞, so the error stalls (exponent 0)"
+    if abs(beta - 1) < 1e-12:
+        return min(1.0, 2 * rate), (
+            f"c ~ 1/t: exponent min(1, 2α) with α = {rate:.4g} the decay rate of −L_B"
+        )
+    return beta, f"c ~ t^-{beta:g}, 0 < β < 1: the error follows c, exponent β"
+
+
+def convergence_table(run: RunData, mc, exact, rate: float) -> tuple[str, Table, dict]:
+    """Fitted exponents per agent and in total over t ∈ [T/10, T] beside the prediction."""
+    t = run.t
+    t_end = float(t[-1])
+    t_from = t_end / 10
+    gain = run.summary["parameters"]["gain"]
+    try:
+        pred, why = predicted_exponent(gain, rate)
+    except InputError:
+        pred, why = None, "the gain is a callable: no prediction"
+    rows = []
+    fits = {}
+    series = [(a, k) for k, a in enumerate(run.labels)] + [("all (Σ_i)", None)]
+    for a, k in series:
+
+        def col(m, k=k):
+            if m is None:
+                return None
+            return m[:, k] if k is not None else m.sum(axis=1)
+
+        fe = fitted_exponent(t, col(exact), t_from) if exact is not None else None
+        fm = fitted_exponent(t, col(mc["mean"]), t_from) if mc is not None else None
+        fits[a] = {"exact": fe, "mc": fm}
+        rows.append((a, fmt(fe, 3), fmt(fm, 3), fmt(pred, 3)))
+    note = (
+        f"Decay exponent p of E‖x_i − θ‖² ≈ K(1+t)^(−p), fitted by least squares in log–log "
+        f"over t ∈ [{t_from:g}, {t_end:g}], against the prediction for c(t) = {gain}: {why}."
+    )
+    return (
+        note,
+        Table(("agent", "fitted p (exact moments)", "fitted p (Monte Carlo)", "predicted p"), rows),
+        {"predicted": pred, "fits": fits},
+    )
+
+
+def _average_rate(des: ProtocolDesign | SwitchingDesign, top) -> float:
+    """Decay rate of −L_B, or of the schedule-averaged −L̄_B for a switching design."""
+    if isinstance(des, SwitchingDesign):
+        per = top.period
+        lb = sum(dur / per * des.modes[m].grounded_laplacian() for m, dur in top.schedule)
+    else:
+        lb = des.grounded_laplacian()
+    return float(np.min(np.linalg.eigvals(lb).real))
+
+
+# --------------------------------------------------------------------------- one run
+
+
+def _flatten(prefix: str, v, out: list) -> None:
+    if isinstance(v, dict) and v:
+        for k, w in v.items():
+            _flatten(f"{prefix}.{k}" if prefix else str(k), w, out)
+    else:
+        out.append((prefix, v))
+
+
+def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
+    rows = []
+    for k, v in p.items():
+        if k == "initial" and isinstance(v, list) and len(v) == n * d:
+            rows.append(("initial x(0) (agents × d)", matrix(np.reshape(v, (n, d)))))
+        elif k == "schedule" and isinstance(v, list):
+            rows.append(
+                ("schedule (one period)", ", ".join(f"{s['mode']} {s['duration']:g}" for s in v))
+            )
+        elif isinstance(v, dict):
+            flat: list = []
+            _flatten(k, v, flat)
+            rows += [(a, fmt(b) if b not in ({}, [], None) else "—") for a, b in flat]
+        else:
+            rows.append((k, fmt(v)))
+    for k in ("steps", "path_steps", "mc_seconds", "path_steps_per_second", "exact_seconds"):
+        if k in run_info:
+            v = run_info[k]
+            rows.append((f"run.{k}", f"{v:.4g}" if isinstance(v, float) else str(v)))
+    return Table(("parameter", "value"), rows)
+
+
+def run_section(
+    run: RunData,
+    figdir: Path,
+    title: str,
+    key: str,
+    base: Path | None = None,
+    rerun: str | None = None,
+    interactive: bool = False,
+    fine: dict | None = None,
+) -> tuple[RunSection, dict]:
+    """One run's section of a report (figures written to ``figdir``, links relative to
+    ``base``), and the facts a summary table needs. ``fine`` optionally holds sample
+    paths at a finer decimation (``{"t", "paths"}``) for the states figure."""
+    base = base or run.path
     p = run.summary["parameters"]
     top = run.topology()
     res = certify(top, p["theta"], p["margin"], p["gain"])
-    des_html, des_docs = design_tables(res.design)  # the design certify made
-    cert_html, cert = certificate_section(res, run.path / "certificate.json")
+    designs, des_docs = design_tables(res.design)
+    cert_tab, checks, cert = certificate_tables(res, run.path / "certificate.json", base)
     doc = res.to_dict()
     labels = run.labels
-    segs = None
-    if isinstance(top, SwitchingTopology):
-        segs = top.segments(float(run.t[-1]))
-    figs = []
-    for name, d_m in _modes(res.design).items():
-        _, _, png = figures.save(
-            figures.topology_figure(
-                d_m.topology, d_m.informed, d_m.B, f"Ĝ of {name}: vertex 0 is x0"
-            ),
-            figdir / f"{key}_topology_{name}",
+    segs = top.segments(float(run.t[-1])) if isinstance(top, SwitchingTopology) else None
+    modes = _modes(res.design)
+
+    def fig(f, stem: str, caption: str, width: float, fid: str) -> Figure:
+        return _figure(figures.save(f, figdir / stem), fid, caption, base, width, interactive)
+
+    coupling = fig(
+        figures.coupling_figure([figures.coupling_curve(m) for m in modes.values()]),
+        f"{key}_coupling",
+        "Decay rate −max Re λ(−L_B(δ)) (left) and λ_min(L_B + L_Bᵀ)(δ) (right) against the "
+        "coupling δ, with B_i and the informed agents fixed: Lemma 1's δ (circle) is sufficient, "
+        "δ_H and δ_S (triangle, square) are the exact thresholds and the star the best δ.",
+        figures.TWO_COLUMN,
+        f"{key}-fig-coupling",
+    )
+    topo = [
+        fig(
+            figures.topology_figure(m.topology, m.informed, m.B),
+            f"{key}_topology_{name}",
+            f"Ĝ of {name}: the agents and, outside their circle, vertex 0 (the external signal "
+            "x0) with its edges to the informed agents.",
+            figures.ONE_COLUMN,
+            f"{key}-fig-topology-{name}",
         )
-        figs.append(img(png, f"{title}: topology {name} with the external signal (vertex 0)"))
+        for name, m in modes.items()
+    ]
+    if isinstance(top, SwitchingTopology):
+        topo.append(
+            fig(
+                figures.schedule_figure(top.schedule),
+                f"{key}_schedule",
+                f"The switching schedule, one period of {top.period:g}; it repeats up to "
+                f"T = {run.t[-1]:g}.",
+                figures.ONE_COLUMN,
+                f"{key}-fig-schedule",
+            )
+        )
     mc = None
     if run.ms("mc") is not None:
         mc = {
@@ -302,66 +657,116 @@ def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, 
             "hi": np.column_stack([run.table[f"mc_{a}_hi"] for a in labels]),
         }
     exact = run.ms("exact")
-    _, _, png = figures.save(
-        figures.ms_error_figure(run.t, mc, exact, labels, f"{title}: mean-square error", segs),
-        figdir / f"{key}_ms_error",
+    what = " and ".join(
+        w
+        for w, x in (("Monte Carlo (solid, 95% band)", mc), ("exact moments (dashed)", exact))
+        if x is not None
     )
-    figs_ts = [img(png, f"{title}: E‖x_i − θ‖² per agent")]
-    if run.npz["paths"].size:
-        _, _, png = figures.save(
-            figures.states_figure(
-                run.npz["t"],
-                run.npz["paths"][0],
-                run.theta,
-                labels,
-                f"{title}: states of one sample path",
-                segs,
-            ),
-            figdir / f"{key}_states",
+    ms_fig = fig(
+        figures.ms_error_figure(
+            run.t, mc, exact, labels, segments=segs, gid=key if interactive else None
+        ),
+        f"{key}_ms_error",
+        f"E‖x_i − θ‖² per agent, {what}"
+        + ("; the strip under the axis shows the active mode." if segs else "."),
+        figures.TWO_COLUMN,
+        f"{key}-fig-ms",
+    )
+    paths_fig = []
+    if fine is not None and fine["paths"].size:
+        t_p, path0, dec = fine["t"], fine["paths"][0], "a finer decimation than the statistics"
+    elif run.npz["paths"].size:
+        t_p, path0, dec = run.npz["t"], run.npz["paths"][0], "the statistics' save times"
+    else:
+        t_p = None
+    if t_p is not None:
+        paths_fig.append(
+            fig(
+                figures.states_figure(
+                    t_p, path0, run.theta, labels, segments=segs, gid=key if interactive else None
+                ),
+                f"{key}_states",
+                f"One sample path: the states of all agents per dimension, θ dashed; stored at "
+                f"{dec} ({t_p.size} points).",
+                figures.TWO_COLUMN,
+                f"{key}-fig-states",
+            )
         )
-        figs_ts.append(img(png, f"{title}: states of all agents (one sample path), θ dashed"))
+    gain_fig = None
+    try:
+        gain_fig = fig(
+            figures.gain_figure(p["gain"], float(run.t[-1])),
+            f"{key}_gain",
+            "The gain c(t) and its integrals ∫c (infinite: the cumulative effect needed for "
+            "consensus) and ∫c² (finite: the noise energy that almost-sure consensus needs).",
+            figures.TWO_COLUMN,
+            f"{key}-fig-gain",
+        )
+    except InputError:
+        pass  # a callable gain: nothing to plot
+    conv_note, conv, conv_facts = convergence_table(run, mc, exact, _average_rate(res.design, top))
     rows = []
     for k, a in enumerate(labels):
         rows.append(
             (
-                esc(a),
+                a,
                 fmt(float(mc["mean"][-1, k]), 5) if mc is not None else "—",
                 f"[{fmt(float(mc['lo'][-1, k]), 5)}, {fmt(float(mc['hi'][-1, k]), 5)}]"
-                if mc is not None
-                else "—",
+                if mc is not None and np.isfinite(mc["lo"][-1, k])
+                else ("none (fewer than 2 paths)" if mc is not None else "—"),
                 fmt(float(exact[-1, k]), 5) if exact is not None else "—",
                 fmt(float(exact[0, k]), 5)
                 if exact is not None
                 else (fmt(float(mc["mean"][0, k]), 5) if mc is not None else "—"),
             )
         )
-    final = table(
-        ["agent", f"MC E‖x_i − θ‖² at t = {run.t[-1]:g}", "95% band", "exact", "at t = 0"], rows
+    final = Table(
+        ("agent", f"MC E‖x_i − θ‖² at t = {run.t[-1]:g}", "95% band", "exact", "at t = 0"), rows
     )
-    sp = run.summary.get("sample_paths", {})
+    sp_ = run.summary.get("sample_paths", {})
     spread = ""
-    if sp.get("stored"):
+    if sp_.get("stored"):
         spread = (
-            f"<p>Stored sample paths ({sp['stored']}): over t ∈ [{sp['late_window'][0]:g}, {sp['late_window'][1]:g}] "
-            f"‖x(t) − 1⊗θ‖ still moves by {sp['late_fluctuation_mean']:.4f} on average (max {sp['late_fluctuation_max']:.4f}); "
-            f"at t = {run.t[-1]:g} its mean is {sp['final_error_norm_mean']:.4f} with spread {sp['final_error_norm_spread']:.4f}.</p>"
+            f"Stored sample paths ({sp_['stored']}): over t ∈ [{sp_['late_window'][0]:g}, {sp_['late_window'][1]:g}] "
+            f"‖x(t) − 1⊗θ‖ still moves by {sp_['late_fluctuation_mean']:.4f} on average (max {sp_['late_fluctuation_max']:.4f}); "
+            f"at t = {run.t[-1]:g} its mean is {sp_['final_error_norm_mean']:.4f} with spread {fmt(sp_['final_error_norm_spread'])}."
         )
-    run_info = run.summary.get("run", {})
-    params = {
-        **p,
-        "run": run_info,
-        "versions": package_versions(),
-        "rerun": f"ntc simulate {run.summary.get('scenario', 'SCENARIO')} --out {run.path}",
-    }
-    body = (
-        f"<h2>{esc(title)}</h2>"
-        f"<h3>Protocol design (Lemma 1) and critical couplings</h3>{des_html}"
-        f"<h3>Certificate</h3>{cert_html}"
-        f"<h3>Gain</h3>{gain_section(doc['gain'])}"
-        f"<h3>Theorems</h3>{theorem_section(doc['theorems'])}"
-        f"<h3>Figures</h3><div class='grid'>{''.join(figs)}</div>{''.join(figs_ts)}"
-        f"<h3>Final errors</h3>{final}{spread}"
-        f"<h3>Parameters, seed and versions</h3><pre>{esc(json.dumps(params, indent=1, ensure_ascii=False))}</pre>"
+    data = [
+        (f.name, rel(f, base))
+        for f in sorted(run.path.iterdir())
+        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.endswith(".tmp")
+    ]
+    data += [
+        (f.name, rel(f, base))
+        for f in sorted(figdir.glob(f"{key}_*"))
+        if f.suffix in (".png", ".svg", ".pdf")
+    ]
+    versions = package_versions()
+    section = RunSection(
+        key=key,
+        title=title,
+        rerun=rerun
+        or f"ntc simulate {run.summary.get('scenario', 'SCENARIO')} --out {run.path} && ntc report {run.path}",
+        designs=designs,
+        coupling=coupling,
+        certificate=cert_tab,
+        checks=checks,
+        gain=gain_table(doc["gain"]),
+        gain_figure=gain_fig,
+        theorems=theorem_table(doc["theorems"]),
+        ms_figure=ms_fig,
+        convergence_note=conv_note,
+        convergence=conv,
+        topology_figures=topo,
+        path_figures=paths_fig,
+        final=final,
+        spread=spread,
+        data_links=data,
+        parameters=parameter_table(p, len(labels), run.theta.size, run.summary.get("run", {})),
+        versions=Table(("package", "version"), sorted(versions.items())),
+        interactive_agents=[(a, f"{key}-ag{i}") for i, a in enumerate(labels)]
+        if interactive
+        else [],
     )
     facts = {
         "designs": des_docs,
@@ -372,19 +777,49 @@ def run_section(run: RunData, figdir: Path, title: str, key: str) -> tuple[str, 
         "exact_last": exact[-1].sum() if exact is not None else None,
         "exact_curve": exact.sum(axis=1) if exact is not None else None,
         "mc_last": mc["mean"][-1].sum() if mc is not None else None,
-        "sample_paths": sp,
+        "sample_paths": sp_,
         "T": float(run.t[-1]),
+        "convergence": conv_facts,
     }
-    return body, facts
+    return section, facts
 
 
-def write_report(directory: str | Path) -> Path:
-    """`ntc report DIR`: DIR/report.html for one simulation output directory."""
+def write_report(directory: str | Path, interactive: bool = False) -> Path:
+    """`ntc report DIR`: DIR/report.html for one simulation output directory.
+
+    Parameters
+    ----------
+    directory
+        A simulation output directory (``ntc simulate --out``).
+    interactive
+        Embed the figures as SVG with per-agent toggles instead of PNG images (the page
+        stays one self-contained file either way).
+
+    Returns
+    -------
+    Path
+        The written report.
+
+    Raises
+    ------
+    InputError
+        A missing or unreadable output file (named).
+    """
     run = load_run(directory)
-    title = run.summary.get("scenario") or str(run.path)
-    body, _ = run_section(run, run.path / "figures", f"Run {Path(title).stem}", "run")
+    scen = run.summary.get("scenario") or str(run.path)
+    title = f"Run {Path(scen).stem}"
+    section, _ = run_section(
+        run, run.path / "figures", title, "run", run.path, interactive=interactive
+    )
     out = run.path / "report.html"
-    tmp = out.with_suffix(".html.tmp")
-    tmp.write_text(page(f"ntc-design report: {Path(title).name}", body), encoding="utf-8")
-    tmp.replace(out)
+    write_html(
+        out,
+        render(
+            "report.html",
+            title=f"ntc-design report: {Path(scen).name}",
+            sections=[section],
+            toc=section.toc()["children"],
+            interactive=interactive,
+        ),
+    )
     return out

@@ -11,6 +11,7 @@ tests validate it against the exact moments), which makes T = 100 cheap; ``stepp
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -18,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import paper
+from ..files import jsonable
 from ..simulate import NoiseModel, simulate
 from ..simulate.scenario import write_outputs
 from . import report as rp
@@ -42,10 +44,6 @@ RUNS = (
 
 def _close(a, b, tol=5e-5) -> bool:
     return bool(np.all(np.abs(np.asarray(a, dtype=float) - np.asarray(b, dtype=float)) <= tol))
-
-
-def _mark(ok: bool) -> str:
-    return '<span class="ok">✓</span>' if ok else '<span class="bad">✗</span>'
 
 
 def summary_rows(facts: dict) -> tuple[list, bool]:
@@ -146,6 +144,51 @@ def summary_rows(facts: dict) -> tuple[list, bool]:
     return rows, all(r[3] for r in rows)
 
 
+FINE_POINTS = 5000  # save points of the sample-path companion run
+
+
+def fine_paths(top, gain: str, x0: np.ndarray, T: float, dt: float, stepping: str, seed: int):  # noqa: N803
+    """Two sample paths saved at ``FINE_POINTS`` times (a companion Monte Carlo run with the
+    same settings and seed; the statistics keep their coarser save grid)."""
+    res = simulate(
+        top,
+        paper.THETA,
+        gain=gain,
+        noise=NoiseModel(paper.SIGMA, paper.F_SCALE),
+        initial=x0,
+        T=T,
+        dt=dt,
+        paths=2,
+        seed=seed,
+        save_every=T / FINE_POINTS,
+        stepping=stepping,
+        ds=dt,
+        method="mc",
+        workers=1,
+        block_size=2,
+        store_paths=2,
+    )
+    return {"t": res.save_times, "paths": res.mc["paths"]}
+
+
+def rerun_command(
+    out: Path, T: float, paths: int, dt: float, stepping: str, workers: int, seed: int
+) -> str:  # noqa: N803
+    """The ``ntc reproduce paper`` command line that re-makes this report."""
+    cmd = f"ntc reproduce paper --out {out}"
+    for flag, v, default in (
+        ("--T", T, 100.0),
+        ("--paths", paths, paper.PATHS),
+        ("--dt", dt, paper.DT),
+        ("--stepping", stepping, "intrinsic"),
+        ("--workers", workers, 2),
+        ("--seed", seed, 0),
+    ):
+        if v != default:
+            cmd += f" {flag} {v:g}" if isinstance(v, float) else f" {flag} {v}"
+    return cmd
+
+
 def reproduce_paper(
     out_dir: str | Path,
     T: float = 100.0,  # noqa: N803
@@ -155,15 +198,38 @@ def reproduce_paper(
     workers: int = 2,
     seed: int = 0,
     progress: Callable[[str, int, int], None] | None = None,
+    interactive: bool = False,
+    status: Callable[[str], None] | None = None,
 ) -> tuple[Path, bool, float]:
     """Run the four experiments, write DIR/<run>/ outputs and DIR/report.html.
-    Returns (report path, whether every row matches the paper, wall seconds)."""
+
+    Parameters
+    ----------
+    out_dir
+        Output directory (created).
+    T, paths, dt, stepping, workers, seed
+        Simulation settings (the paper's by default; ``dt`` is ds for intrinsic stepping).
+    progress
+        Called as ``progress(run, done, total)`` while a run's Monte Carlo blocks finish.
+    interactive
+        Embed SVG figures with per-agent toggles instead of PNG images.
+    status
+        Called with a line of text when a stage starts (run, companion paths, report).
+
+    Returns
+    -------
+    tuple
+        (report path, whether every row matches the paper, wall seconds).
+    """
     t0 = time.perf_counter()
     out = Path(out_dir)
     tops = {"g1": paper.g1(), "switching": paper.switching()}
     x0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3.0, 3.0, size=21)
+    rerun = rerun_command(out, T, paths, dt, stepping, workers, seed)
     sections, facts = [], {}
+    say = status or (lambda text: None)
     for key, title, topkey, gain in RUNS:
+        say(f"{key}: simulating ({paths} paths, T = {T:g})")
         res = simulate(
             tops[topkey],
             paper.THETA,
@@ -183,33 +249,62 @@ def reproduce_paper(
             else None,
         )
         write_outputs(res, out / key, {"scenario": f"ntc reproduce paper (run {key})"})
-        body, f = rp.run_section(rp.load_run(out / key), out / "figures", title, key)
+        say(f"{key}: sample paths at {FINE_POINTS} save times")
+        fine = fine_paths(tops[topkey], gain, x0, T, dt, stepping, seed)
+        np.savez_compressed(out / key / "paths_fine.npz", **fine)
+        say(f"{key}: certificate, figures and report section")
+        body, f = rp.run_section(
+            rp.load_run(out / key),
+            out / "figures",
+            title,
+            key,
+            base=out,
+            rerun=rerun,
+            interactive=interactive,
+            fine=fine,
+        )
         sections.append(body)
         facts[key] = f
     rows, all_ok = summary_rows(facts)
     wall = time.perf_counter() - t0
-    table = rp.table(
-        ["quantity", "paper", "ntc-design", "match"],
-        [(rp.esc(a), rp.esc(b), rp.esc(c), _mark(m)) for a, b, c, m in rows],
+    summary = rp.Table(
+        ("quantity", "paper", "ntc-design", "match"),
+        [(a, b, c, {"mark": m}) for a, b, c, m in rows],
     )
-    intro = (
-        f"<p>The paper's Section 5 reproduced: {paths} sample paths, Euler–Maruyama with "
+    intro = [
+        f"The paper's Section 5 reproduced: {paths} sample paths, Euler–Maruyama with "
         + (
             f"steps uniform in the intrinsic time s = ∫c dt (ds = {dt:g}, the paper's dt at t = 0)"
             if stepping == "intrinsic"
             else f"dt = {dt:g}"
         )
         + f", T = {T:g}, σ = {paper.SIGMA}, f(x) = {paper.F_SCALE}x, θ = {paper.THETA}, x(0) uniform on [-3, 3] (seed 1), "
-        f"Monte Carlo seed {seed}. Wall time {wall:.0f} s.</p>"
-        "<p>G3 breaks Assumption 2 as stated (agents 4 and 7 are not in-degree-dominated and receive no antagonistic edge); "
-        "the paper's δ = 3.1 is Lemma 1's C taken over U, and the certificate proves what Theorems 3-4 use.</p>"
+        f"Monte Carlo seed {seed}. Wall time {wall:.0f} s.",
+        "G3 breaks Assumption 2 as stated (agents 4 and 7 are not in-degree-dominated and receive no antagonistic edge); "
+        "the paper's δ = 3.1 is Lemma 1's C taken over U, and the certificate proves what Theorems 3-4 use.",
+    ]
+    toc = [{"id": "summary", "title": "Summary: the paper beside ntc-design", "children": []}]
+    toc += [s.toc() for s in sections]
+    html = rp.render(
+        "reproduce.html",
+        title="ntc-design: the paper's numerical section reproduced",
+        intro=intro,
+        rerun=rerun,
+        summary=summary,
+        sections=sections,
+        toc=toc,
+        interactive=interactive,
     )
-    html = rp.page(
-        "ntc-design: the paper's numerical section reproduced",
-        f"<h2>Summary: the paper beside ntc-design</h2>{intro}{table}" + "".join(sections),
-    )
+    doc = {
+        "rerun": rerun,
+        "rows": [
+            {"quantity": a, "paper": b, "ntc_design": c, "match": bool(m)} for a, b, c, m in rows
+        ],
+        "convergence": {k: f["convergence"] for k, f in facts.items()},
+    }
+    tmp = out / "paper_summary.json.tmp"
+    tmp.write_text(json.dumps(jsonable(doc), indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    tmp.replace(out / "paper_summary.json")
     path = out / "report.html"
-    tmp = path.with_suffix(".html.tmp")
-    tmp.write_text(html, encoding="utf-8")
-    tmp.replace(path)
+    rp.write_html(path, html)
     return path, all_ok, wall

@@ -76,7 +76,9 @@ def build_grid(
         ts.append(pts)
         ms.append(np.full(pts.size, mode, dtype=np.int64))
     t = np.concatenate(ts)
-    save_steps = np.searchsorted(t, saves)
+    # a save time within rounding of a switching instant (0.02·753 vs 15.06) was merged
+    # with it above: look it up with the same tolerance, not at the next grid point
+    save_steps = np.searchsorted(t, saves - 1e-14 * np.maximum(1.0, saves))
     save_steps = np.minimum(save_steps, t.size - 1)
     # save times are grid points by construction (equality up to rounding of the cut)
     return TimeGrid(

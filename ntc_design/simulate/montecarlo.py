@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -153,8 +153,11 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
 
 
 def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> list[PartialStats]:
-    """Integrate the given blocks; one PartialStats per block (merge them with merge())."""
-    return [_run_block(spec, b, progress) for b in blocks]
+    """Integrate the given blocks; one PartialStats per block (merge them with merge()).
+    Overflow is detected and reported by the kernel (``failure``), so NumPy's floating
+    point warnings are silenced here."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return [_run_block(spec, b, progress) for b in blocks]
 
 
 def merge(parts: Sequence[PartialStats]) -> PartialStats:
@@ -185,9 +188,21 @@ def merge(parts: Sequence[PartialStats]) -> PartialStats:
 
 
 # -- parallel execution (fork: the spec, callables included, is inherited) -----------
+#
+# Chunks are submitted a few at a time (at most 2 per worker in flight) and their
+# results are folded in block order as soon as the next one in order is in, so memory
+# does not grow with the number of blocks. Workers ignore SIGINT: on Ctrl-C (or any
+# error) the parent cancels what is queued, terminates the workers and re-raises, so an
+# interrupt takes effect within a fraction of a second instead of at the end of the run.
 
 _SPEC: MonteCarloSpec | None = None
 _COUNTER = None
+
+
+def _init_worker() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _worker(blocks: list[int]) -> list[PartialStats]:
@@ -203,18 +218,71 @@ def _worker(blocks: list[int]) -> list[PartialStats]:
         return run_chunk(_SPEC, blocks, tick)
 
 
+class _InOrder:
+    """Fold PartialStats in block order as they arrive (bounded buffering)."""
+
+    def __init__(self) -> None:
+        self.acc: PartialStats | None = None
+        self.waiting: dict[int, list[PartialStats]] = {}
+        self.next = 0
+
+    def add(self, index: int, parts: list[PartialStats]) -> None:
+        self.waiting[index] = parts
+        while self.next in self.waiting:
+            got = self.waiting.pop(self.next)
+            self.acc = merge(([self.acc] if self.acc is not None else []) + got)
+            self.next += 1
+
+
+def _terminate(ex: ProcessPoolExecutor) -> None:
+    """Cancel queued work and stop the workers now (not after their current chunk)."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=2)
+        if p.is_alive():
+            p.kill()
+
+
 def run(
     spec: MonteCarloSpec,
     workers: int = 2,
     blocks_per_chunk: int = 1,
     progress: Callable[[int, int], None] | None = None,
 ) -> PartialStats:
-    """Run every block, on ``workers`` processes (1: in this process)."""
+    """Run every block, on ``workers`` processes (1: in this process).
+
+    Parameters
+    ----------
+    spec : MonteCarloSpec
+    workers : int
+        Processes (capped by the caller at the machine's CPUs).
+    blocks_per_chunk : int
+        Blocks per task.
+    progress : callable(done, total), optional
+        Called with path-steps done.
+
+    Returns
+    -------
+    PartialStats
+        Merged in block order: identical for any ``workers`` and ``blocks_per_chunk``.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Re-raised after the workers are stopped.
+    """
     global _SPEC, _COUNTER
-    blocks = list(range(spec.n_blocks))
-    chunks = [blocks[i : i + blocks_per_chunk] for i in range(0, len(blocks), blocks_per_chunk)]
+    n_chunks = -(-spec.n_blocks // blocks_per_chunk)
+
+    def chunk(i: int) -> list[int]:
+        return list(range(i * blocks_per_chunk, min((i + 1) * blocks_per_chunk, spec.n_blocks)))
+
     total = spec.paths * spec.grid.n_steps
-    if workers <= 1 or len(chunks) == 1 or "fork" not in mp.get_all_start_methods():
+    if workers <= 1 or n_chunks == 1 or "fork" not in mp.get_all_start_methods():
         done = 0
 
         def tick(n: int) -> None:
@@ -223,20 +291,32 @@ def run(
             if progress:
                 progress(done, total)
 
-        return merge([q for ch in chunks for q in run_chunk(spec, ch, tick)])
+        fold = _InOrder()
+        for i in range(n_chunks):
+            fold.add(i, run_chunk(spec, chunk(i), tick))
+        return fold.acc
     ctx = mp.get_context("fork")
     _SPEC, _COUNTER = spec, ctx.Value("q", 0)
+    ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
+    fold = _InOrder()
     try:
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
-            futs = [ex.submit(_worker, ch) for ch in chunks]
-            pending = set(futs)
-            while pending:
-                _, pending = wait(pending, timeout=0.2)
-                if progress is not None:
-                    progress(_COUNTER.value, total)
-            parts = [q for f in futs for q in f.result()]
+        pending: dict = {}
+        submitted = 0
+        while submitted < n_chunks or pending:
+            while submitted < n_chunks and len(pending) < 2 * workers:
+                pending[ex.submit(_worker, chunk(submitted))] = submitted
+                submitted += 1
+            done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            for f in done:
+                fold.add(pending.pop(f), f.result())
+            if progress is not None:
+                progress(_COUNTER.value, total)
+        ex.shutdown(wait=True)
         if progress:
             progress(total, total)
+    except BaseException:
+        _terminate(ex)
+        raise
     finally:
         _SPEC, _COUNTER = None, None
-    return merge(parts)
+    return fold.acc

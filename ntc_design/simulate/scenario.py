@@ -1,5 +1,5 @@
-"""Scenario files -> :func:`ntc_design.simulate.simulate` arguments, and the outputs of a run
-(summary.json, ms_error.csv, paths.npz), written atomically."""
+"""Scenario files -> (topology, :class:`SimulationSpec`), and the outputs of a run
+(summary.json, ms_error.csv, paths.npz), written all-or-nothing into an output folder."""
 
 from __future__ import annotations
 
@@ -10,64 +10,42 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
 from ..files import ScenarioData, jsonable, parse_scenario
-from ..model import SwitchingTopology, load
-from .system import NoiseModel
+from ..interop import simulation_frame
+from ..model import load
+from ..outputs import check_output_folder, output_folder
+from .spec import SimulationSpec
+
+OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz")
+# what an earlier run's folder may hold besides its outputs (ntc report writes these)
+REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures", "certificate.json", "paths_fine.npz")
 
 
-def scenario_arguments(path: str | Path) -> tuple[object, dict, ScenarioData]:
-    """(topology, keyword arguments of simulate(), parsed scenario)."""
+def load_scenario(path: str | Path) -> tuple[object, SimulationSpec, ScenarioData]:
+    """Read a scenario file: (topology, spec, the scenario as read).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    (Topology or SwitchingTopology, SimulationSpec, ScenarioData)
+
+    Raises
+    ------
+    InputError
+        ``FILE: FIELD: what is wrong``.
+    """
     sc = parse_scenario(path)
+    spec = SimulationSpec.from_document(sc.document, sc.source)
     top = load(sc.topology)
-    n, d = top.n, top.dim
-    kw = dict(sc.values)
-    kw.pop("name", None)
-    kw.pop("description", None)
-    theta = kw.pop("theta")
-    noise = NoiseModel(
-        sigma=float(sc.noise.get("sigma", 0.4)),
-        f=np.asarray(sc.noise["f"], dtype=float)
-        if isinstance(sc.noise.get("f"), list)
-        else float(sc.noise.get("f", 0.3)),
-        sigma_edges={
-            (e["from"], e["to"]): float(e["sigma"]) for e in sc.noise.get("sigma_edges", []) or []
-        },
-    )
-    kw["noise"] = noise
-    ini = sc.initial
-    if isinstance(ini, dict):
-        if (
-            set(ini) != {"uniform", "seed"}
-            or not isinstance(ini["uniform"], list)
-            or len(ini["uniform"]) != 2
-        ):
-            raise InputError(
-                f"{sc.source}: initial: expected {{uniform: [lo, hi], seed: S}} or a list of {n} states"
-            )
-        lo, hi = (float(v) for v in ini["uniform"])
-        if not lo < hi:
-            raise InputError(f"{sc.source}: initial.uniform: need lo < hi")
-        kw["initial"] = np.random.default_rng(np.random.SeedSequence(int(ini["seed"]))).uniform(
-            lo, hi, size=n * d
-        )
-    elif isinstance(ini, list):
-        try:
-            arr = np.asarray(ini, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"{sc.source}: initial: expected numbers") from None
-        if arr.size != n * d:
-            raise InputError(
-                f"{sc.source}: initial: expected {n} states of {d} numbers ({n * d} values), got {arr.size}"
-            )
-        kw["initial"] = arr
-    elif ini is not None:
-        raise InputError(
-            f"{sc.source}: initial: expected {{uniform: [lo, hi], seed: S}} or a list of {n} states"
-        )
-    if isinstance(top, SwitchingTopology):
-        kw.pop("resample", None)
-    return top, {"theta": theta, **kw}, sc
+    return top, spec, sc
+
+
+def check_output(out_dir: str | Path) -> Path:
+    """Refuse, before a run, an output folder that cannot receive its outputs."""
+    return check_output_folder(out_dir, REPLACEABLE)
 
 
 def ms_error_table(res) -> tuple[list[str], np.ndarray]:
@@ -85,9 +63,26 @@ def ms_error_table(res) -> tuple[list[str], np.ndarray]:
 
 
 def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[Path]:
-    """Write summary.json, ms_error.csv and paths.npz (each via a temporary file)."""
+    """Write summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz into ``out_dir``, all or nothing
+    (see :func:`ntc_design.outputs.output_folder`).
+
+    Parameters
+    ----------
+    res : SimulationResult
+    out_dir : str or Path
+    extra : dict, optional
+        Added to the summary.
+
+    Returns
+    -------
+    list of Path
+
+    Raises
+    ------
+    InputError
+        When the folder cannot be written (``--out: ...``).
+    """
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     summary = res.summary()
     if extra:
         summary.update(extra)
@@ -97,28 +92,27 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
     w.writerow(cols)
     for row in table:
         w.writerow([repr(float(v)) for v in row])
-    files = {
-        "summary.json": json.dumps(jsonable(summary), indent=1, ensure_ascii=False) + "\n",
-        "ms_error.csv": buf.getvalue(),
-    }
-    written = []
-    for name, text in files.items():
-        tmp = out / (name + ".tmp")
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(out / name)
-        written.append(out / name)
-    tmp = out / "paths.tmp.npz"
-    np.savez_compressed(
-        tmp,
-        t=res.save_times,
-        paths=res.mc["paths"] if res.mc is not None else np.zeros((0, res.save_times.size, 0)),
-        mean_state=res.mc["mean_state"] if res.mc is not None else np.zeros((0, 0)),
-        exact_mean=(res.exact.mean + np.tile(res.theta, len(res.labels)))
-        if res.exact is not None
-        else np.zeros((0, 0)),
-        labels=np.array([str(a) for a in res.labels]),
-        theta=res.theta,
-    )
-    tmp.replace(out / "paths.npz")
-    written.append(out / "paths.npz")
-    return written
+    with output_folder(out, REPLACEABLE) as tmp:
+        (tmp / "summary.json").write_text(
+            json.dumps(jsonable(summary), indent=1, ensure_ascii=False) + "\n", encoding="utf-8"
+        )
+        (tmp / "ms_error.csv").write_text(buf.getvalue(), encoding="utf-8")
+        # the same numbers in tidy long form (t, agent, mc, lo, hi, exact), as to_pandas()
+        (tmp / "ms_error_long.csv").write_text(
+            simulation_frame(res).to_csv(index=False), encoding="utf-8"
+        )
+        np.savez_compressed(
+            tmp / "paths.npz",
+            t=res.save_times,
+            paths=res.mc["paths"] if res.mc is not None else np.zeros((0, res.save_times.size, 0)),
+            mean_state=res.mc["mean_state"] if res.mc is not None else np.zeros((0, 0)),
+            exact_mean=(res.exact.mean + np.tile(res.theta, len(res.labels)))
+            if res.exact is not None
+            else np.zeros((0, 0)),
+            labels=np.array([str(a) for a in res.labels]),
+            theta=res.theta,
+        )
+    return [out / name for name in OUTPUT_FILES]
+
+
+__all__ = ["OUTPUT_FILES", "check_output", "load_scenario", "ms_error_table", "write_outputs"]

@@ -1,0 +1,196 @@
+"""Writing outputs so that a reader never sees half of them.
+
+- :func:`write_atomic` writes one file: a temporary file beside the target, flushed and
+  synced, then renamed over it (a rename is atomic on POSIX).
+- :func:`output_folder` makes a folder all-or-nothing: everything is written into a
+  temporary folder beside the target, which replaces the target only when the block
+  finishes without an exception (Ctrl-C included). An interrupted run leaves the old
+  folder as it was (or no folder) and no stray temporary files.
+- :func:`check_output_folder` refuses, before any work, a target that is an existing
+  file, a folder that holds files other than the outputs being replaced, or a place
+  that cannot be written.
+
+Errors are :class:`~ntc_design.errors.InputError`: one line naming the option (``--out``)
+and the path.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+from .errors import InputError, one_line
+
+
+def _oserror(option: str, path: Path, exc: OSError) -> InputError:
+    why = exc.strerror or exc.__class__.__name__
+    return InputError(f"{option}: cannot write {one_line(str(path))!r} ({why})")
+
+
+def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> Path:
+    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file and a rename.
+
+    Parameters
+    ----------
+    path : str or Path
+    data : str or bytes
+    option : str
+        Named in an error message.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        When the folder is missing or not writable, or the path is a folder.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{option}: {one_line(str(p))!r} is a folder, expected a file name")
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    except OSError as exc:
+        raise _oserror(option, p, exc) from None
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(raw)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, p)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise _oserror(option, p, exc) from None
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return p
+
+
+def check_output_folder(
+    path: str | Path, replaceable: Iterable[str] | None = (), option: str = "--out"
+) -> Path:
+    """Check, before any work, that ``path`` can become an output folder.
+
+    Parameters
+    ----------
+    path : str or Path
+    replaceable : iterable of str or None
+        Names an existing folder may hold (the outputs of an earlier run, which will be
+        replaced). Anything else in it is the user's: the folder is refused. None: the
+        folder's content is not checked (the caller writes single files into it).
+    option : str
+        Named in error messages.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        When ``path`` is a file, holds other files, or its parent is missing or not
+        writable.
+    """
+    p = Path(path)
+    shown = repr(one_line(str(p)))
+    if p.exists() and not p.is_dir():
+        raise InputError(f"{option}: {shown} is an existing file, expected a folder")
+    parent = p.resolve().parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent  # missing folders are made
+    if not parent.is_dir():
+        raise InputError(f"{option}: {one_line(str(parent))!r} in {shown} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{option}: the folder {one_line(str(parent))!r} is not writable")
+    if p.is_dir() and replaceable is not None:
+        allowed = set(replaceable)
+        try:
+            other = sorted(x.name for x in p.iterdir() if x.name not in allowed)
+        except OSError as exc:
+            raise _oserror(option, p, exc) from None
+        if other:
+            raise InputError(
+                f"{option}: {shown} exists and holds other files ({one_line(other[0])!r}"
+                + (f" and {len(other) - 1} more" if len(other) > 1 else "")
+                + "); choose a new folder"
+            )
+    return p
+
+
+@contextlib.contextmanager
+def output_folder(
+    path: str | Path, replaceable: Iterable[str] = (), option: str = "--out"
+) -> Iterator[Path]:
+    """All-or-nothing output folder: yields a temporary folder beside ``path``; on
+    success it replaces ``path`` (an earlier folder is moved aside, then removed); on any
+    exception it is removed and ``path`` is left as it was.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder to create or replace.
+    replaceable : iterable of str
+        See :func:`check_output_folder`.
+    option : str
+        Named in error messages.
+
+    Yields
+    ------
+    Path
+        The temporary folder to write into.
+
+    Raises
+    ------
+    InputError
+        See :func:`check_output_folder`; also when a write fails (read-only, disk full).
+    """
+    target = check_output_folder(path, replaceable, option)
+    parent = target.resolve().parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent))
+    except OSError as exc:
+        raise _oserror(option, target, exc) from None
+    try:
+        try:
+            yield tmp
+        except OSError as exc:
+            raise _oserror(option, target, exc) from None
+        os.chmod(tmp, 0o777 & ~_umask())
+        old = None
+        try:
+            if target.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=parent))
+                os.rmdir(old)
+                os.rename(target, old)
+            try:
+                os.rename(tmp, target)
+            except BaseException:
+                if old is not None:
+                    os.rename(old, target)
+                    old = None
+                raise
+        except OSError as exc:
+            raise _oserror(option, target, exc) from None
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+__all__ = ["check_output_folder", "output_folder", "write_atomic"]

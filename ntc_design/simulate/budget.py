@@ -1,0 +1,202 @@
+"""Size before allocation: the memory and the work a simulation will need, estimated from
+its input alone, and a refusal (one line naming the field and the size) when the memory
+exceeds :data:`MEMORY_FRACTION` of the memory available or the work exceeds
+:data:`MAX_PATH_STEPS`.
+
+The estimate counts the arrays the simulation allocates (8-byte floats): the time grid
+and its per-step gains (in each worker), the dense per-mode matrices (L_B, the edge
+difference and weight matrices, in the driver and each worker), each block's state and
+normals, the statistics at the save times (per block in flight and merged), the stored
+paths, the exact second moments (Nd × Nd, RK4 stages) and the written tables. It is an
+estimate of the peak, within a small factor; what it guards against is a request that is
+orders of magnitude too big (a save count of 10¹², 10⁹ stored paths), which used to end
+in a MemoryError deep inside NumPy.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError, format_bytes
+
+MEMORY_FRACTION = 0.5  # refuse a run that needs more than this share of available memory
+MAX_PATH_STEPS = 1e13  # paths × steps: ~ weeks of computation at 10⁷ path-steps per second
+BATCH = 64  # steps whose normals are drawn at once (as in the kernel)
+F8 = 8.0
+
+
+def available_memory() -> float:
+    """Bytes of memory available now: MemAvailable from /proc/meminfo, else the
+    physical memory from os.sysconf, else 4 GiB."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 4.0 * 2**30
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Estimated peak bytes by part: ``parts[name] = (field to change, bytes)``; and the
+    number of time steps and of path-steps."""
+
+    parts: dict[str, tuple[str, float]]
+    steps: float
+    path_steps: float
+
+    @property
+    def total(self) -> float:
+        return float(sum(b for _, b in self.parts.values()))
+
+    def largest(self) -> tuple[str, str, float]:
+        name, (fld, b) = max(self.parts.items(), key=lambda kv: kv[1][1])
+        return name, fld, b
+
+
+def estimate_steps(
+    t_end: float,
+    dt: float,
+    intrinsic_ds: float | None,
+    h_max: float | None,
+    gain: Callable[[np.ndarray], np.ndarray],
+    events: float,
+) -> float:
+    """Number of Euler–Maruyama steps: T/dt (uniform) or ∫c dt / ds + T/h_max (intrinsic),
+    plus one per event (save time or switch). ∫c is a trapezoid on linear and
+    logarithmic samples of [0, T] (an estimate: it only has to get the magnitude)."""
+    if intrinsic_ds is None:
+        return t_end / dt + events
+    ts = np.unique(
+        np.concatenate(
+            [np.linspace(0.0, t_end, 2049), np.geomspace(min(1e-6, t_end / 2), t_end, 2049)]
+        )
+    )
+    with np.errstate(all="ignore"):
+        try:
+            c = np.asarray(gain(ts), dtype=float) * np.ones(ts.shape)
+        except Exception:  # noqa: BLE001 - user code; the driver reports it properly
+            c = np.ones(ts.shape)
+        c = np.nan_to_num(np.abs(c), nan=0.0, posinf=1e300)
+        integral = float(np.sum(0.5 * (c[1:] + c[:-1]) * np.diff(ts)))
+    return integral / intrinsic_ds + t_end / (h_max or t_end) + events
+
+
+def estimate(
+    *,
+    n: int,
+    d: int,
+    edges: int,
+    modes: int,
+    segments: float,
+    saves: float,
+    steps: float,
+    paths: int,
+    block_size: int,
+    store_paths: int,
+    workers: int,
+    mc: bool,
+    exact: bool,
+    mode_field: str = "topology",
+) -> Estimate:
+    """Peak memory by part (see the module docstring) for the sizes given.
+
+    Parameters
+    ----------
+    n, d, edges : int
+        Agents, state dimension, most edges in a mode.
+    modes : int
+        Distinct mode systems (modes of a switching file, or re-designs).
+    segments : float
+        Switching segments on [0, T].
+    saves, steps : float
+        Save times and time steps.
+    paths, block_size, store_paths, workers : int
+        Monte Carlo sizes.
+    mc, exact : bool
+        Which methods run.
+    mode_field : str
+        The field that sets ``modes`` (named in a refusal).
+
+    Returns
+    -------
+    Estimate
+    """
+    nd_ = float(n * d)
+    ed = float(edges * d)
+    w = float(max(1, workers)) if mc else 1.0
+    per_system = F8 * (3 * nd_ * nd_ + 2 * ed * nd_ + nd_ * edges + nd_ * (nd_ + ed))
+    parts: dict[str, tuple[str, float]] = {
+        "time grid": ("dt", F8 * steps * (10 + 4 * w) + 64.0 * segments),
+        "mode systems": (mode_field, per_system * modes * (1 + (w if mc else 0))),
+    }
+    if mc:
+        b = float(min(block_size, paths))
+        stats = F8 * saves * (2 * n + nd_)
+        k = float(min(store_paths, paths))
+        parts["Monte Carlo blocks"] = (
+            "block_size",
+            w * F8 * b * (4 * nd_ + BATCH * 2 * edges + 3 * ed),
+        )
+        parts["statistics at the save times"] = (
+            "save_every",
+            stats * (2 * w + 2) + F8 * saves * 3 * n,
+        )
+        # k stored paths × S save times × Nd: name the factor that is out of scale
+        parts["stored paths"] = (
+            "store_paths" if k >= saves else "save_every",
+            3 * F8 * k * saves * nd_,
+        )
+    if exact:
+        parts["exact moments"] = ("method", F8 * (12 * nd_ * nd_ + saves * (nd_ + n)))
+    parts["output tables"] = ("save_every", 30.0 * saves * (4 * n + 1))
+    return Estimate(parts, float(steps), float(steps) * paths if mc else 0.0)
+
+
+_HINTS = {
+    "method": "use method: mc (the exact second moments are N·d × N·d)",
+    "topology": "the topology is too large for this machine's memory",
+    "dt": "raise dt (or ds), or shorten T",
+    "save_every": "save less often (save_every) or fewer save_times",
+}
+
+
+def check_budget(est: Estimate, available: float | None = None) -> None:
+    """Refuse (InputError naming the field and the size) a run whose estimated peak
+    memory exceeds :data:`MEMORY_FRACTION` of ``available`` (default: what the machine
+    has available now) or whose work exceeds :data:`MAX_PATH_STEPS`.
+
+    Parameters
+    ----------
+    est : Estimate
+    available : float, optional
+        Bytes available.
+
+    Raises
+    ------
+    InputError
+    """
+    avail = available_memory() if available is None else available
+    total = est.total
+    if not math.isfinite(total) or total > MEMORY_FRACTION * avail:
+        name, fld, b = est.largest()
+        raise InputError(
+            f"{fld}: the run would need about {format_bytes(total)} of memory "
+            f"({name}: {format_bytes(b)}), more than {MEMORY_FRACTION:.0%} of the "
+            f"{format_bytes(avail)} available; {_HINTS.get(fld, f'reduce {fld}')}"
+        )
+    if est.path_steps > MAX_PATH_STEPS:
+        raise InputError(
+            f"paths: {est.path_steps:.3g} path-steps (paths × {est.steps:.3g} steps) exceed "
+            f"the limit {MAX_PATH_STEPS:.0e}; reduce paths or T, or raise dt"
+        )

@@ -1,0 +1,428 @@
+"""The simulation driver: a topology and a :class:`SimulationSpec` in, a
+:class:`SimulationResult` out.
+
+Steps: designs per mode (Lemma 1, re-designed per mode of a switching file or every
+``resample`` time units for a topology given as functions of t); size check before any
+large allocation (:mod:`.budget`); the time grid; the gain checked on it; the
+Euler–Maruyama step-size guard; Monte Carlo (:func:`.montecarlo.run`) and/or the exact
+moments (:func:`.moments.exact_moments`).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import warnings
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..design import ProtocolDesign, design_topology
+from ..errors import InputError, quote
+from ..gain import gain_function
+from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from .budget import check_budget, estimate, estimate_steps
+from .grid import TimeGrid, build_grid
+from .moments import exact_moments
+from .montecarlo import MonteCarloSpec, run
+from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
+from .spec import SimulationSpec, UniformInitial
+from .system import ModeSystem, mode_system
+
+AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology
+MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]
+MAX_REDESIGNS = 100_000  # re-designs of a topology given as functions of t
+
+
+def make_gain(
+    gain: str | Callable, field_name: str = "gain"
+) -> tuple[Callable[[np.ndarray], np.ndarray], str]:
+    """A vectorised c(t) (array in, array of the same shape out) from an expression
+    string or a callable, and a label for it.
+
+    Parameters
+    ----------
+    gain : str or callable
+    field_name : str
+        Named in error messages.
+
+    Returns
+    -------
+    (callable, str)
+
+    Raises
+    ------
+    InputError
+        When the expression does not parse or ``gain`` is neither.
+    """
+    if isinstance(gain, str):
+        fn, label = gain_function(gain, field_name), gain
+    elif callable(gain):
+        fn, label = gain, getattr(gain, "__name__", "callable")
+    else:
+        raise InputError(f"{field_name}: expected an expression in t or a callable")
+
+    def c(t):  # a constant expression returns a scalar: broadcast it
+        with np.errstate(all="ignore"):  # overflow shows up as a non-finite value, checked
+            return np.asarray(fn(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
+
+    return c, label
+
+
+def _modes(
+    topology: AnyTopology, spec: SimulationSpec
+) -> tuple[
+    list[str], Callable[[], dict[str, ProtocolDesign]], list[tuple[float, float, int]], list[str]
+]:
+    """Mode names, a thunk computing their designs, segments on [0, T), notes."""
+    t_end, th, margin = spec.T, spec.theta, spec.margin
+    if spec.resample is not None and not isinstance(topology, TimeVaryingTopology):
+        raise InputError(
+            "resample: applies only to a topology given as functions of t, not to a fixed or switching topology"
+        )
+    if isinstance(topology, SwitchingTopology):
+        durs = np.array([dur for _, dur in topology.schedule], dtype=float)
+        per = float(sum(durs.tolist()))  # Python floats overflow to inf without a warning
+        if not np.isfinite(per):
+            raise InputError("schedule: the period (sum of durations) overflows to infinity")
+        if np.any(durs < 1e-12 * per):
+            k = int(np.argmax(durs < 1e-12 * per))
+            raise InputError(
+                f"schedule[{k}].duration: {durs[k]:g} is below 1e-12 of the period {per:g}; "
+                "switching instants would collide in floating point"
+            )
+        n_seg = np.ceil(t_end / per) * len(durs)
+        if n_seg > MAX_SEGMENTS:
+            raise InputError(
+                f"schedule: {n_seg:.3g} switching segments on [0, T={t_end:g}] exceed the limit "
+                f"{MAX_SEGMENTS:.0e}; shorten T or lengthen the durations"
+            )
+        names = list(topology.modes)
+        segments = [(a, b, names.index(m)) for a, b, m in topology.segments(t_end)]
+        return (
+            names,
+            lambda: {
+                k: design_topology(topology.modes[k], th, margin, thresholds=False) for k in names
+            },
+            segments,
+            [],
+        )
+    if isinstance(topology, TimeVaryingTopology):
+        step = spec.resample if spec.resample is not None else 0.1
+        count = np.ceil(t_end / step)
+        if count > MAX_REDESIGNS:
+            raise InputError(
+                f"resample: {count:.3g} re-designs on [0, T={t_end:g}] exceed the limit "
+                f"{MAX_REDESIGNS}; raise resample or shorten T"
+            )
+        ts = np.arange(0.0, t_end, step)
+        names = [f"t={t:g}" for t in ts]
+        if len(set(names)) != len(names):  # %g rounding: fall back to indices
+            names = [f"t[{k}]" for k in range(ts.size)]
+        segments = [(float(t), float(min(t + step, t_end)), k) for k, t in enumerate(ts)]
+        note = (
+            f"topology given as functions of t: sampled and re-designed every {step:g} time units"
+        )
+        return (
+            names,
+            lambda: {
+                k: design_topology(topology.at(float(t)), th, margin, thresholds=False)
+                for k, t in zip(names, ts, strict=True)
+            },
+            segments,
+            [note],
+        )
+    if not isinstance(topology, Topology):
+        raise InputError(f"topology: expected a Topology, got {type(topology).__name__}")
+    name = topology.name or "topology"
+    return (
+        [name],
+        lambda: {name: design_topology(topology, th, margin, thresholds=False)},
+        [(0.0, t_end, 0)],
+        [],
+    )
+
+
+def _initial_state(spec: SimulationSpec, n: int, d: int) -> tuple[np.ndarray, list[str]]:
+    ini = spec.initial
+    if ini is None:
+        return np.zeros(n * d), ["initial state: zero"]
+    if isinstance(ini, UniformInitial):
+        return ini.draw(n * d), []
+    if ini.size != n * d:
+        raise InputError(
+            f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
+        )
+    return np.array(ini, dtype=float), []
+
+
+def _edge_count(topology: AnyTopology) -> int:
+    if isinstance(topology, SwitchingTopology):
+        return max(len(m.edges) for m in topology.modes.values())
+    if isinstance(topology, TimeVaryingTopology):
+        return len(topology.weights)
+    return len(topology.edges)
+
+
+def _check_size(
+    topology: AnyTopology,
+    spec: SimulationSpec,
+    cfun: Callable,
+    n_modes: int,
+    n_segments: int,
+    workers: int,
+) -> None:
+    """Estimate memory and work from the input and refuse before allocating."""
+    saves = spec.save.count(spec.T)
+    st = spec.stepping
+    steps = estimate_steps(
+        spec.T, st.dt, st.intrinsic_ds, st.max_step, cfun, saves + 2 * n_segments
+    )
+    est = estimate(
+        n=topology.n,
+        d=topology.dim,
+        edges=_edge_count(topology),
+        modes=n_modes,
+        segments=n_segments,
+        saves=saves,
+        steps=steps,
+        paths=spec.mc.paths,
+        block_size=spec.mc.block_size,
+        store_paths=spec.mc.store_paths,
+        workers=workers,
+        mc=spec.method != "exact",
+        exact=spec.method != "mc",
+        mode_field="resample" if isinstance(topology, TimeVaryingTopology) else "topology",
+    )
+    check_budget(est)
+
+
+def _check_gain(cfun: Callable, gain_text: str, grid: TimeGrid) -> np.ndarray:
+    c_grid = cfun(grid.t[:-1])
+    if c_grid.shape != grid.t[:-1].shape or not np.all(np.isfinite(c_grid)):
+        raise InputError(f"gain: {gain_text!r} is not finite on [0, T]")
+    if np.any(c_grid < 0):
+        k = int(np.argmax(c_grid < 0))
+        raise InputError(
+            f"gain: {gain_text!r} is negative at t = {grid.t[k]:.6g}; c(t) must be >= 0"
+        )
+    return c_grid
+
+
+def _step_size_guard(
+    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, notes: list[str]
+) -> None:
+    """Euler–Maruyama on the drift ε' = −c L_B ε is stable iff c·h < 2 Re λ/|λ|² for
+    every eigenvalue λ of L_B: refuse a grid that breaks it, warn within a factor 2."""
+    if grid.n_steps == 0:
+        return
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = c_grid * grid.h / np.array([systems[m].stability_bound for m in grid.mode])
+    ratio = np.nan_to_num(ratio, nan=np.inf)
+    worst = int(np.argmax(ratio))
+    if ratio[worst] >= 1.0:
+        sysw = systems[grid.mode[worst]]
+        raise InputError(
+            f"dt: Euler–Maruyama is unstable: at t = {grid.t[worst]:.4g}, c·h = {c_grid[worst] * grid.h[worst]:.4g} "
+            f"exceeds 2·Re λ/|λ|² = {sysw.stability_bound:.4g} for L_B of mode {quote(sysw.name)} (ρ(L_B) = {sysw.spectral_radius:.4g}); "
+            f"use dt < {grid.h[worst] / ratio[worst]:.3g}"
+        )
+    if ratio[worst] > 0.5:
+        msg = f"Euler–Maruyama step within a factor {1 / ratio[worst]:.2f} of instability at t = {grid.t[worst]:.4g}; expect a step-size bias"
+        notes.append(msg)
+        warnings.warn(msg, stacklevel=3)
+
+
+# RK4 steps × ((Nd)³ + 2·10⁴) of the exact moments (the constant: per-step overhead);
+# 1e9 is ~ 30 000 steps at N·d = 21 (seconds); the paper's runs take ~ 1 000
+MAX_EXACT_WORK = 1e9
+
+
+def _check_exact_work(
+    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, nd_: int
+) -> None:
+    """The exact moments take RK4 steps h <= κ / (c ρ) (see :mod:`.moments`): estimate
+    their number on the grid and refuse a run that would take hours."""
+    from .moments import KAPPA
+
+    rho_l = np.array([2 * s.spectral_radius for s in systems])
+    rho_q = np.array(
+        [4 * sum(float(np.linalg.norm(k, 2)) ** 2 for _, _, k in s.h_blocks) for s in systems]
+    )
+    m = grid.mode
+    with np.errstate(all="ignore"):
+        steps = float(np.sum(c_grid * grid.h * (rho_l[m] + c_grid * rho_q[m]))) / KAPPA
+    steps += grid.save_times.size
+    if not np.isfinite(steps) or steps * (float(nd_) ** 3 + 2e4) > MAX_EXACT_WORK:
+        raise InputError(
+            f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd_} "
+            "(the gain is large on [0, T]); use method: mc, a smaller gain or a shorter T"
+        )
+
+
+def _check_noise_callable(spec: SimulationSpec, systems: Sequence[ModeSystem], d: int) -> None:
+    if spec.noise.linear:
+        return
+    probe = np.zeros((2, systems[0].n_edges, d))
+    try:
+        with np.errstate(all="ignore"):
+            outp = np.asarray(spec.noise.f(probe + 1.0))
+    except Exception as exc:  # noqa: BLE001 - user code
+        raise InputError(
+            f"noise.f: calling it on an array of shape {probe.shape} failed ({exc.__class__.__name__})"
+        ) from None
+    if outp.shape != probe.shape:
+        raise InputError(
+            f"noise.f: returned shape {outp.shape} for input shape {probe.shape}; it must return the same shape"
+        )
+
+
+def simulate(
+    topology: AnyTopology,
+    theta: Sequence[float] | SimulationSpec | None = None,
+    spec: SimulationSpec | None = None,
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+) -> SimulationResult:
+    """Simulate the SAN with compound noise under the Lemma 1 protocol by Monte Carlo
+    Euler–Maruyama (``method`` mc), exact moments (exact, linear f only) or both.
+
+    Parameters
+    ----------
+    topology : Topology, SwitchingTopology or TimeVaryingTopology
+    theta : sequence of float or SimulationSpec
+        θ, with the other options as keywords; or a whole spec.
+    spec : SimulationSpec, optional
+        Instead of ``theta`` and keywords.
+    progress : callable(done, total), optional
+        Called with path-steps done.
+    **options
+        The flat options of :meth:`SimulationSpec.build` (T, dt, paths, seed, ...).
+
+    Returns
+    -------
+    SimulationResult
+
+    Raises
+    ------
+    InputError
+        For a bad option, a run too big for the machine, an unstable step size.
+    SimulationDiverged
+        NaN or overflow in the Monte Carlo (the partial result is attached).
+    """
+    if isinstance(theta, SimulationSpec):
+        theta, spec = None, theta
+    if spec is None:
+        if theta is None:
+            raise InputError("theta: missing")
+        spec = SimulationSpec.build(theta, **options)
+    elif theta is not None or options:
+        raise InputError("simulate: give a SimulationSpec or theta with options, not both")
+    n, d, labels = topology.n, topology.dim, tuple(topology.labels)
+    if spec.theta.size != d:
+        raise InputError(
+            f"theta: expected {d} numbers (the state dimension d), got {spec.theta.size}"
+        )
+    cfun, gain_text = make_gain(spec.gain)
+    names, make_designs, segments, notes = _modes(topology, spec)
+    workers = min(spec.mc.workers, os.cpu_count() or 1)
+    if workers < spec.mc.workers:
+        notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")
+    _check_size(topology, spec, cfun, len(names), len(segments), workers)
+    designs = make_designs()
+    for k, des in designs.items():
+        if not des.assumption_holds:
+            notes.append(
+                f"mode {quote(k)}: Assumption 2 fails (the design is used as Lemma 1 gives it)"
+            )
+    th = next(iter(designs.values())).theta
+    systems = [mode_system(designs[k], spec.noise, k) for k in names]
+    x_init, ini_notes = _initial_state(spec, n, d)
+    notes.extend(ini_notes)
+    st = spec.stepping
+    grid = build_grid(
+        spec.T,
+        st.dt,
+        spec.save.resolve(spec.T),
+        segments,
+        gain=cfun,
+        intrinsic_ds=st.intrinsic_ds,
+        h_max=st.max_step,
+    )
+    c_grid = _check_gain(cfun, gain_text, grid)
+    if spec.method != "exact":
+        _step_size_guard(systems, grid, c_grid, notes)
+    _check_noise_callable(spec, systems, d)
+    params = spec.options()
+    params.update(
+        {"theta": th.tolist(), "gain": gain_text, "initial": x_init.tolist(), "workers": workers}
+    )
+    params["save_times"] = int(grid.save_times.size)
+    params["modes"] = names
+    if isinstance(topology, SwitchingTopology):
+        params["schedule"] = [{"mode": m, "duration": t} for m, t in topology.schedule]
+    paths = spec.mc.paths
+    stats: dict = {"steps": grid.n_steps, "path_steps": grid.n_steps * paths}
+    mc = failure = exact = None
+    if spec.method in ("mc", "both"):
+        mspec = MonteCarloSpec(
+            tuple(systems),
+            grid,
+            cfun,
+            th,
+            x_init,
+            n,
+            d,
+            paths,
+            spec.mc.seed,
+            spec.mc.block_size,
+            spec.mc.store_paths,
+            labels,
+        )
+        t0 = time.perf_counter()
+        part = run(mspec, workers=workers, progress=progress)
+        sec = max(time.perf_counter() - t0, 1e-9)
+        stats.update({"mc_seconds": sec, "path_steps_per_second": grid.n_steps * paths / sec})
+        mc = _mc_summary(part)
+        failure = part.failure
+        if paths < 2:
+            notes.append("one sample path: no confidence band")
+    if spec.method in ("exact", "both"):
+        if spec.noise.linear:
+            _check_exact_work(systems, grid, c_grid, n * d)
+            t0 = time.perf_counter()
+            exact = exact_moments(
+                systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d
+            )
+            stats.update(
+                {"exact_seconds": time.perf_counter() - t0, "exact_rk4_steps": exact.steps}
+            )
+            if not (np.all(np.isfinite(exact.ms_error)) and np.all(np.isfinite(exact.mean))):
+                raise InputError(
+                    "method: the exact moments overflow (not finite) on [0, T]; the noise is too "
+                    "strong for this gain and horizon (use method: mc, or a shorter T)"
+                )
+        elif spec.method == "exact":
+            raise InputError("method: exact moments need a linear f (a scalar or a matrix)")
+        else:
+            notes.append("exact moments skipped: f is not linear")
+    res = SimulationResult(
+        labels, th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
+    )
+    if failure is not None:
+        lab = labels[failure["agent"]]
+        k = failure["save_index"]
+        res = _truncate(res, k)
+        res.failure = {**failure, "agent": lab}
+        kept = (
+            f"results kept up to t = {res.save_times[-1]:.6g}"
+            if res.save_times.size
+            else "no results kept"
+        )
+        raise SimulationDiverged(
+            f"simulation diverged (NaN or overflow) by t = {failure['t']:.6g} at agent "
+            f"{quote(lab)} (path {failure['path']}); {kept}",
+            res,
+        )
+    return res

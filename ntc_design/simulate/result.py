@@ -1,0 +1,147 @@
+"""What a simulation returns: :class:`SimulationResult` (curves, designs, parameters,
+run statistics) and its JSON summary."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..design import DESIGN_KEYS, ProtocolDesign
+from .grid import TimeGrid
+from .moments import Moments
+from .montecarlo import PartialStats
+
+Z95 = 1.959963984540054
+
+
+class SimulationDiverged(RuntimeError):
+    """NaN or overflow: the message names the time and the agent; ``result`` keeps what
+    was computed until then."""
+
+    def __init__(self, msg: str, result: SimulationResult):
+        super().__init__(msg)
+        self.result = result
+
+
+@dataclass
+class SimulationResult:
+    labels: tuple
+    theta: np.ndarray
+    save_times: np.ndarray
+    designs: dict[str, ProtocolDesign]
+    mc: dict | None  # mean, lo, hi (S, N); mean_state (S, Nd); paths (k, S, Nd); count
+    exact: Moments | None
+    parameters: dict
+    stats: dict
+    notes: list[str] = field(default_factory=list)
+    failure: dict | None = None
+    grid: TimeGrid | None = None
+
+    def summary(self) -> dict:
+        lab = [str(a) for a in self.labels]
+        out: dict = {
+            "parameters": self.parameters,
+            "topologies": {k: d.topology.to_dict() for k, d in self.designs.items()},
+            "designs": {k: _design_brief(d) for k, d in self.designs.items()},
+            "save_times": {
+                "count": int(self.save_times.size),
+                "first": float(self.save_times[0]),
+                "last": float(self.save_times[-1]),
+            },
+            "run": self.stats,
+            "notes": self.notes,
+            "failure": self.failure,
+        }
+        if self.mc is not None:
+            out["final_ms_error_mc"] = dict(zip(lab, self.mc["mean"][-1].tolist(), strict=True))
+            out["final_ms_error_mc_band"] = {
+                a: [lo, hi]
+                for a, lo, hi in zip(
+                    lab, self.mc["lo"][-1].tolist(), self.mc["hi"][-1].tolist(), strict=True
+                )
+            }
+            out["sample_paths"] = path_spread(self)
+        if self.exact is not None:
+            out["final_ms_error_exact"] = dict(
+                zip(lab, self.exact.ms_error[-1].tolist(), strict=True)
+            )
+            out["min_ms_error_exact"] = float(np.min(self.exact.ms_error.sum(axis=1)))
+        return out
+
+    def to_pandas(self):
+        """Tidy ``pandas.DataFrame``: columns t, agent, mc, lo, hi, exact, one row per save
+        time and agent; see :func:`ntc_design.interop.simulation_frame`."""
+        from ..interop import simulation_frame
+
+        return simulation_frame(self)
+
+
+def _design_brief(d: ProtocolDesign) -> dict:
+    full = d.to_dict()
+    return {k: full[k] for k in DESIGN_KEYS}
+
+
+def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
+    """How much the stored sample paths still move late in the run: over the last
+    ``late_fraction`` of save times, per stored path, max − min of ‖x(t) − 1⊗θ‖, and the
+    spread (std across stored paths) of ‖x(T) − 1⊗θ‖ at the final time."""
+    paths = res.mc["paths"]
+    if paths.size == 0:
+        return {"stored": 0}
+    err = np.linalg.norm(paths - np.tile(res.theta, len(res.labels)), axis=2)  # (k, S)
+    s = err.shape[1]
+    late = err[:, int(np.floor((1 - late_fraction) * (s - 1))) :]
+    return {
+        "stored": int(paths.shape[0]),
+        "late_window": [float(res.save_times[-late.shape[1]]), float(res.save_times[-1])],
+        "late_fluctuation_max": float(np.max(late.max(axis=1) - late.min(axis=1))),
+        "late_fluctuation_mean": float(np.mean(late.max(axis=1) - late.min(axis=1))),
+        "final_error_norm_mean": float(err[:, -1].mean()),
+        "final_error_norm_spread": float(err[:, -1].std()) if err.shape[0] > 1 else None,
+    }
+
+
+def _mc_summary(part: PartialStats) -> dict:
+    """Mean of ‖x_i − θ‖² and its 95% confidence band (normal approximation). With fewer
+    than two paths there is no band: ``lo`` and ``hi`` are NaN (shown as none), never a
+    zero-width band."""
+    p = part.count
+    mean = part.sq / p
+    if p < 2:
+        lo = hi = np.full_like(mean, np.nan)
+    else:
+        var = np.maximum(part.sq2 / p - mean**2, 0.0) * (p / (p - 1))
+        half = Z95 * np.sqrt(var / p)
+        lo, hi = np.maximum(mean - half, 0.0), mean + half
+    return {
+        "mean": mean,
+        "lo": lo,
+        "hi": hi,
+        "mean_state": part.state / p,
+        "paths": part.stored,
+        "count": p,
+        "valid_saves": part.valid_saves,
+    }
+
+
+def _truncate(res: SimulationResult, k: int) -> SimulationResult:
+    if res.mc is not None:
+        res.mc = {
+            key: (
+                v[:k]
+                if key in ("mean", "lo", "hi", "mean_state")
+                else (v[:, :k] if key == "paths" else v)
+            )
+            for key, v in res.mc.items()
+        }
+    if res.exact is not None:
+        res.exact = Moments(
+            res.exact.t[:k],
+            res.exact.mean[:k],
+            res.exact.ms_error[:k],
+            res.exact.second,
+            res.exact.steps,
+        )
+    res.save_times = res.save_times[:k]
+    return res

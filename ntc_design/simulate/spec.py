@@ -1,0 +1,545 @@
+"""What to simulate, as a frozen value that checks itself.
+
+A :class:`SimulationSpec` is built either from keyword arguments
+(:meth:`SimulationSpec.build`, what ``simulate(topology, theta, T=..., paths=...)`` calls)
+or from a scenario document (:meth:`SimulationSpec.from_document`); both go through the
+same small option objects, each of which validates itself on construction (the pattern
+of diffrax's ``SaveAt``):
+
+- :class:`SaveAt` -- ``every`` (a period) or ``times`` (a list);
+- :class:`Stepping` -- ``uniform`` steps ``dt`` or ``intrinsic`` steps ``ds`` in
+  s = ∫c dt, capped at ``h_max``;
+- :class:`MonteCarlo` -- ``paths``, ``seed``, ``block_size``, ``store_paths``, ``workers``;
+- :class:`UniformInitial` -- x(0) drawn uniformly from [lo, hi] with its own seed;
+- the noise (:class:`~ntc_design.simulate.system.NoiseModel`), checked by
+  :func:`check_noise`.
+
+The flat keys of a scenario file (:data:`SCENARIO_KEYS`) are defined here and only here.
+Checks that need the topology (θ's length, the initial state's size, ``resample``) are
+made by the driver. Every error is one line naming the field.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, quote, require_int, require_number, require_positive
+from .system import NoiseModel
+
+MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
+MAX_SEED = 2**128
+MAX_WORKERS = 4096
+
+Noise = NoiseModel
+
+
+def _check_vector(name: str, values, max_size: int = MAX_VECTOR) -> np.ndarray:
+    """A flat, finite float vector from a list of numbers (nested lists refused)."""
+    if isinstance(values, np.ndarray):
+        if values.dtype.kind not in "iuf":
+            raise InputError(f"{name}: expected numbers, got an array of {values.dtype}")
+        arr = values.astype(float).reshape(-1)
+    else:
+        if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Sequence):
+            raise InputError(f"{name}: expected a list of numbers, got {type(values).__name__}")
+        if len(values) > max_size:
+            raise InputError(f"{name}: {len(values)} entries, more than the limit {max_size}")
+        for k, v in enumerate(values):
+            if isinstance(v, bool) or not isinstance(v, numbers.Real):
+                what = "a nested list" if isinstance(v, (list, tuple)) else repr(v)[:40]
+                raise InputError(f"{name}[{k}]: expected a number, got {what}")
+        arr = np.asarray(values, dtype=float).reshape(-1)
+    if arr.size > max_size:
+        raise InputError(f"{name}: {arr.size} entries, more than the limit {max_size}")
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise InputError(f"{name}[{k}]: must be finite, got {arr[k]!r}")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class SaveAt:
+    """Save times: every ``every`` time units from 0 to T (T included), or the listed
+    ``times`` (0 is always added). Exactly one of the two."""
+
+    every: float | None = None
+    times: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if (self.every is None) == (self.times is None):
+            raise InputError("save_every: give save_every or save_times (exactly one)")
+        if self.every is not None:
+            require_positive("save_every", self.every)
+            object.__setattr__(self, "every", float(self.every))
+        else:
+            arr = _check_vector("save_times", self.times)
+            if arr.size == 0:
+                raise InputError("save_times: expected at least one time")
+            if np.any(arr < 0):
+                raise InputError("save_times: times must be >= 0")
+            object.__setattr__(self, "times", arr)
+
+    def count(self, t_end: float) -> float:
+        """Number of save times on [0, t_end] (a float: may be astronomically large)."""
+        if self.every is not None:
+            n = t_end / self.every
+            return math.floor(n) + 2.0 if math.isfinite(n) and n < 2**53 else n
+        return float(self.times.size + 1)
+
+    def resolve(self, t_end: float) -> np.ndarray:
+        """The sorted save times on [0, t_end], 0 and (for ``every``) t_end included."""
+        if self.every is not None:
+            return np.unique(np.concatenate([np.arange(0.0, t_end, self.every), [t_end]]))
+        if np.any(self.times > t_end):
+            raise InputError(f"save_times: expected times in [0, T={t_end:g}]")
+        return np.unique(np.concatenate([[0.0], self.times]))
+
+
+@dataclass(frozen=True)
+class Stepping:
+    """Euler–Maruyama steps: ``uniform`` (h <= dt between events) or ``intrinsic`` (steps
+    uniform in s = ∫c dt: h = min(ds / c(t), h_max)); ``ds`` defaults to ``dt`` and
+    ``h_max`` to max(1, 100·dt)."""
+
+    kind: str = "uniform"
+    dt: float = 1e-3
+    ds: float | None = None
+    h_max: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("uniform", "intrinsic"):
+            raise InputError(f"stepping: must be uniform or intrinsic, got {self.kind!r}")
+        require_positive("dt", self.dt)
+        if self.ds is not None:
+            require_positive("ds", self.ds)
+        if self.h_max is not None:
+            require_positive("h_max", self.h_max)
+
+    @property
+    def intrinsic_ds(self) -> float | None:
+        if self.kind != "intrinsic":
+            return None
+        return float(self.ds if self.ds is not None else self.dt)
+
+    @property
+    def max_step(self) -> float | None:
+        if self.kind != "intrinsic":
+            return None
+        return float(self.h_max if self.h_max is not None else max(1.0, 100 * self.dt))
+
+
+@dataclass(frozen=True)
+class MonteCarlo:
+    """Monte Carlo options: the number of sample ``paths``, the ``seed`` of the run's
+    numpy SeedSequence, paths per ``block_size`` (a block is the unit of work and of
+    randomness), how many paths to keep (``store_paths``) and worker processes."""
+
+    paths: int = 1000
+    seed: int = 0
+    block_size: int = 500
+    store_paths: int = 10
+    workers: int = 2
+
+    def __post_init__(self) -> None:
+        require_int("paths", self.paths, minimum=1)
+        require_int("seed", self.seed, minimum=0, maximum=MAX_SEED)
+        require_int("block_size", self.block_size, minimum=1)
+        require_int("store_paths", self.store_paths, minimum=0)
+        require_int("workers", self.workers, minimum=1, maximum=MAX_WORKERS)
+        for f in fields(self):
+            object.__setattr__(self, f.name, int(getattr(self, f.name)))
+
+
+@dataclass(frozen=True)
+class UniformInitial:
+    """x(0) with every entry uniform on [lo, hi], drawn from SeedSequence(seed)."""
+
+    lo: float
+    hi: float
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        lo = require_number("initial.uniform[0]", self.lo)
+        hi = require_number("initial.uniform[1]", self.hi)
+        if not lo < hi:
+            raise InputError(f"initial.uniform: need lo < hi, got [{lo:g}, {hi:g}]")
+        require_int("initial.seed", self.seed, minimum=0, maximum=MAX_SEED)
+        object.__setattr__(self, "lo", lo)
+        object.__setattr__(self, "hi", hi)
+
+    def draw(self, size: int) -> np.ndarray:
+        rng = np.random.default_rng(np.random.SeedSequence(int(self.seed)))
+        return rng.uniform(self.lo, self.hi, size=size)
+
+
+def check_noise(noise: NoiseModel) -> NoiseModel:
+    """Check σ (finite, >= 0), f (a finite scalar, a finite square matrix or a
+    callable) and the per-edge σ (finite, >= 0, keyed by (from, to) labels).
+
+    Parameters
+    ----------
+    noise : NoiseModel
+
+    Returns
+    -------
+    NoiseModel
+        The same object.
+
+    Raises
+    ------
+    InputError
+        Naming the field (``noise.sigma``, ``noise.f``, ``noise.sigma_edges``).
+    """
+    if not isinstance(noise, NoiseModel):
+        raise InputError(f"noise: expected a NoiseModel, got {type(noise).__name__}")
+    require_number("noise.sigma", noise.sigma, minimum=0.0)
+    f = noise.f
+    if not callable(f):
+        if isinstance(f, bool):
+            raise InputError("noise.f: expected a number or a d×d matrix, got a boolean")
+        if isinstance(f, numbers.Real):
+            require_number("noise.f", f)
+        else:
+            try:
+                arr = np.asarray(f, dtype=float)
+            except (TypeError, ValueError):
+                raise InputError("noise.f: expected a number or a d×d matrix") from None
+            if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.size == 0:
+                raise InputError(
+                    f"noise.f: expected a number or a square matrix, got shape {arr.shape}"
+                )
+            if not np.all(np.isfinite(arr)):
+                raise InputError("noise.f: entries must be finite")
+    if not isinstance(noise.sigma_edges, Mapping):
+        raise InputError("noise.sigma_edges: expected a mapping (from, to) -> σ")
+    for key, s in noise.sigma_edges.items():
+        if not isinstance(key, tuple) or len(key) != 2:
+            raise InputError(f"noise.sigma_edges: key {key!r} is not a (from, to) pair")
+        require_number(f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}", s, minimum=0.0)
+    return noise
+
+
+# The flat keys of a scenario file and of simulate(**options), in one place.
+SCENARIO_KEYS = (
+    "name",
+    "description",
+    "topology",
+    "theta",
+    "margin",
+    "gain",
+    "noise",
+    "initial",
+    "T",
+    "dt",
+    "paths",
+    "seed",
+    "save_every",
+    "save_times",
+    "method",
+    "stepping",
+    "ds",
+    "workers",
+    "block_size",
+    "store_paths",
+    "resample",
+)
+OPTION_KEYS = tuple(k for k in SCENARIO_KEYS if k not in ("name", "description", "topology"))
+METHODS = ("mc", "exact", "both")
+MAX_GAIN_TEXT = 10_000
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationSpec:
+    """Everything a simulation needs besides the topology (see the module docstring).
+
+    Attributes
+    ----------
+    theta : ndarray
+        Target consensus state θ (d numbers).
+    T : float
+        Horizon.
+    margin : float
+        ΔC > 0 of the Lemma 1 design (δ = C + ΔC).
+    gain : str or callable
+        c(t): an expression in t, or a vectorised callable.
+    noise : NoiseModel
+    initial : ndarray, UniformInitial or None
+        x(0) (N·d numbers), a uniform draw, or zero.
+    save : SaveAt
+    stepping : Stepping
+    mc : MonteCarlo
+    method : str
+        ``mc``, ``exact`` or ``both``.
+    resample : float or None
+        Re-design period of a topology given as functions of t.
+    """
+
+    theta: np.ndarray
+    T: float = 10.0  # noqa: N815 - the paper's name
+    margin: float = 0.1
+    gain: str | Callable = "1/(1+t)"
+    noise: NoiseModel = field(default_factory=NoiseModel)
+    initial: np.ndarray | UniformInitial | None = None
+    save: SaveAt = field(default_factory=lambda: SaveAt(every=0.1))
+    stepping: Stepping = field(default_factory=Stepping)
+    mc: MonteCarlo = field(default_factory=MonteCarlo)
+    method: str = "both"
+    resample: float | None = None
+
+    def __post_init__(self) -> None:
+        th = _check_vector("theta", self.theta)
+        if th.size == 0:
+            raise InputError("theta: expected at least one number")
+        if not np.any(th):
+            raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
+        object.__setattr__(self, "theta", th)
+        require_positive("T", self.T)
+        object.__setattr__(self, "T", float(self.T))
+        require_positive("margin", self.margin)
+        if isinstance(self.gain, str):
+            if len(self.gain) > MAX_GAIN_TEXT:
+                raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
+            from ..gain import parse_gain
+
+            parse_gain(self.gain)  # a whitelisted expression in t, or one line naming gain
+        elif not callable(self.gain):
+            raise InputError(
+                f"gain: expected an expression in t or a callable, got {type(self.gain).__name__}"
+            )
+        check_noise(self.noise)
+        ini = self.initial
+        if ini is not None and not isinstance(ini, UniformInitial):
+            object.__setattr__(self, "initial", _check_vector("initial", ini))
+        for name, cls in (("save", SaveAt), ("stepping", Stepping), ("mc", MonteCarlo)):
+            if not isinstance(getattr(self, name), cls):
+                raise InputError(f"{name}: expected a {cls.__name__}")
+        if self.save.times is not None and np.any(self.save.times > self.T):
+            raise InputError(f"save_times: expected times in [0, T={self.T:g}]")
+        if self.method not in METHODS:
+            raise InputError(f"method: must be mc, exact or both, got {self.method!r}")
+        if self.resample is not None:
+            require_positive("resample", self.resample)
+
+    # -- constructors -------------------------------------------------------------
+
+    @classmethod
+    def build(cls, theta, **options: Any) -> SimulationSpec:
+        """A spec from the flat keyword options of :func:`simulate` (the keys of a
+        scenario file: T, dt, paths, seed, save_every or save_times, method, stepping,
+        ds, workers, block_size, store_paths, resample, margin, gain, noise, initial).
+
+        Parameters
+        ----------
+        theta : sequence of float
+        **options
+            Flat options; unknown names are refused.
+
+        Returns
+        -------
+        SimulationSpec
+
+        Raises
+        ------
+        InputError
+            For an unknown option or a bad value, naming it.
+        """
+        unknown = sorted(set(options) - set(OPTION_KEYS))
+        if unknown:
+            raise InputError(
+                f"{unknown[0]}: unknown option (known: {', '.join(sorted(OPTION_KEYS))})"
+            )
+        o = dict(options)
+        if "save_times" in o and o["save_times"] is not None:
+            if o.get("save_every") is not None:
+                raise InputError("save_times: give save_every or save_times, not both")
+            save = SaveAt(times=o.pop("save_times"))
+            o.pop("save_every", None)
+        else:
+            o.pop("save_times", None)
+            every = o.pop("save_every", 0.1)
+            save = SaveAt(every=0.1 if every is None else every)
+        stepping = Stepping(
+            kind=o.pop("stepping", "uniform"), dt=o.pop("dt", 1e-3), ds=o.pop("ds", None)
+        )
+        mc = MonteCarlo(
+            **{
+                k: o.pop(k)
+                for k in ("paths", "seed", "block_size", "store_paths", "workers")
+                if k in o
+            }
+        )
+        if o.get("noise") is None:
+            o.pop("noise", None)
+        return cls(theta=theta, save=save, stepping=stepping, mc=mc, **o)
+
+    @classmethod
+    def from_document(cls, doc: Mapping[str, Any], source: str | None = None) -> SimulationSpec:
+        """A spec from a scenario document (a parsed YAML/JSON mapping; the ``topology``,
+        ``name`` and ``description`` keys are ignored here). ``noise`` is
+        ``{sigma, f, sigma_edges: [{from, to, sigma}]}``; ``initial`` a list of N·d
+        numbers (or N lists of d) or ``{uniform: [lo, hi], seed: S}``.
+
+        Parameters
+        ----------
+        doc : mapping
+        source : str, optional
+            The file name that prefixes error messages.
+
+        Returns
+        -------
+        SimulationSpec
+
+        Raises
+        ------
+        InputError
+            ``SOURCE: FIELD: what is wrong``.
+        """
+        try:
+            return cls._from_document(doc)
+        except InputError as exc:
+            if source:
+                raise InputError(f"{source}: {exc}") from None
+            raise
+
+    @classmethod
+    def _from_document(cls, doc: Mapping[str, Any]) -> SimulationSpec:
+        unknown = sorted(str(k) for k in set(doc) - set(SCENARIO_KEYS))
+        if unknown:
+            raise InputError(
+                f"{quote(unknown[0])}: unknown field (allowed: {', '.join(SCENARIO_KEYS)})"
+            )
+        if "theta" not in doc:
+            raise InputError("theta: missing")
+        o = {k: v for k, v in doc.items() if k in OPTION_KEYS}
+        o["noise"] = _noise_from_document(doc.get("noise"))
+        if "initial" in o:
+            o["initial"] = _initial_from_document(o["initial"])
+        if "gain" in o and not isinstance(o["gain"], str):
+            raise InputError(f"gain: expected an expression in t (a string), got {o['gain']!r}")
+        for key in ("method", "stepping"):
+            if key in o and not isinstance(o[key], str):
+                raise InputError(f"{key}: expected a string, got {o[key]!r}")
+        for key in ("T", "dt", "ds", "margin", "save_every", "resample"):
+            if key in o and o[key] is not None:
+                require_number(key, o[key])
+        if o.get("save_times") is not None and o.get("save_every") is not None:
+            raise InputError("save_times: give save_every or save_times, not both")
+        return cls.build(**o)
+
+    def replace(self, **changes: Any) -> SimulationSpec:
+        """A copy with some fields changed (checked again)."""
+        return replace(self, **changes)
+
+    def options(self) -> dict[str, Any]:
+        """The flat options (as :meth:`build` takes them), for summaries and re-runs."""
+        n = self.noise
+        out: dict[str, Any] = {
+            "theta": self.theta.tolist(),
+            "margin": self.margin,
+            "gain": self.gain if isinstance(self.gain, str) else "callable",
+            "T": self.T,
+            "dt": self.stepping.dt,
+            "stepping": self.stepping.kind,
+            "ds": self.stepping.ds,
+            "method": self.method,
+            "resample": self.resample,
+            "noise": {
+                "sigma": n.sigma,
+                "f": np.asarray(n.f).tolist() if not callable(n.f) else "callable",
+                "sigma_edges": {f"{a}->{b}": s for (a, b), s in n.sigma_edges.items()},
+            },
+        }
+        out.update({f.name: getattr(self.mc, f.name) for f in fields(self.mc)})
+        if self.save.every is not None:
+            out["save_every"] = self.save.every
+        else:
+            out["save_times"] = self.save.times.tolist()
+        return out
+
+
+def _noise_from_document(doc: Any) -> NoiseModel:
+    if doc is None:
+        return NoiseModel()
+    if not isinstance(doc, Mapping):
+        raise InputError("noise: expected {sigma, f, sigma_edges}")
+    extra = sorted(str(k) for k in set(doc) - {"sigma", "f", "sigma_edges"})
+    if extra:
+        raise InputError(f"noise.{extra[0]}: unknown field (allowed: sigma, f, sigma_edges)")
+    sigma = require_number("noise.sigma", doc.get("sigma", 0.4), minimum=0.0)
+    f = doc.get("f", 0.3)
+    if isinstance(f, list):
+        for r, row in enumerate(f):
+            if not isinstance(row, list):
+                raise InputError(f"noise.f[{r}]: expected a row (a list of numbers)")
+            if len(row) != len(f):
+                raise InputError(
+                    f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
+                )
+            for c, v in enumerate(row):
+                require_number(f"noise.f[{r}][{c}]", v)
+        f = np.asarray(f, dtype=float) if f else f
+    elif isinstance(f, bool) or not isinstance(f, (int, float)):
+        raise InputError(f"noise.f: expected a number or a d×d matrix, got {f!r}"[:200])
+    edges = doc.get("sigma_edges") or []
+    if not isinstance(edges, list):
+        raise InputError("noise.sigma_edges: expected a list of {from, to, sigma}")
+    sig: dict[tuple, float] = {}
+    for k, e in enumerate(edges):
+        if not isinstance(e, Mapping) or set(e) != {"from", "to", "sigma"}:
+            raise InputError(f"noise.sigma_edges[{k}]: expected {{from, to, sigma}}")
+        for end in ("from", "to"):
+            if isinstance(e[end], bool) or not isinstance(e[end], (int, str)):
+                raise InputError(f"noise.sigma_edges[{k}].{end}: expected an agent label")
+        key = (e["from"], e["to"])
+        if key in sig:
+            raise InputError(
+                f"noise.sigma_edges[{k}]: edge {quote(key[0])}->{quote(key[1])} listed twice"
+            )
+        sig[key] = require_number(f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0)
+    return NoiseModel(sigma=sigma, f=f, sigma_edges=sig)
+
+
+def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
+    if doc is None:
+        return None
+    if isinstance(doc, Mapping):
+        if set(doc) != {"uniform", "seed"}:
+            raise InputError("initial: expected {uniform: [lo, hi], seed: S} or a list of states")
+        uni = doc["uniform"]
+        if not isinstance(uni, list) or len(uni) != 2:
+            raise InputError("initial.uniform: expected [lo, hi]")
+        return UniformInitial(uni[0], uni[1], doc["seed"])
+    if isinstance(doc, list):
+        flat: list = []
+        for k, row in enumerate(doc):
+            if isinstance(row, list):
+                for v in row:
+                    if isinstance(v, list):
+                        raise InputError(f"initial[{k}]: expected d numbers, got a nested list")
+                    flat.append(v)
+            else:
+                flat.append(row)
+        return _check_vector("initial", flat)
+    raise InputError("initial: expected {uniform: [lo, hi], seed: S} or a list of states")
+
+
+__all__ = [
+    "METHODS",
+    "OPTION_KEYS",
+    "SCENARIO_KEYS",
+    "MonteCarlo",
+    "Noise",
+    "SaveAt",
+    "SimulationSpec",
+    "Stepping",
+    "UniformInitial",
+    "check_noise",
+]

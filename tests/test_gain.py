@@ -1,0 +1,120 @@
+"""Gain conditions of Theorems 1-4 on gains with known answers, and their hard limits.
+
+Known answers (by hand): ∫^∞ t^p diverges iff p >= −1; ∫^∞ 1/(t log^q t) diverges iff
+q <= 1; sin² t = (1 − cos 2t)/2 and |∫^T g·cos(2t)| stays bounded for g → 0 monotone.
+"""
+
+import json
+import time
+
+import pytest
+
+from ntc_design.errors import InputError
+from ntc_design.gain import CONDITION_LABELS, analyse_gain
+
+from .cli_helpers import assert_input_error, run_cli
+
+# gain, ∫c = ∞, c → 0, ∫c² < ∞
+KNOWN = [
+    ("1/(1+t)", True, True, True),
+    ("(1+t)^-2", False, True, True),
+    ("(1+t)^(-1/3)", True, True, False),
+    ("(1+t)^(-1/2)", True, True, False),
+    ("(1+t)^(-3/4)", True, True, True),
+    ("(1+t)^(-0.6)", True, True, True),
+    ("(1+t)^(-0.4)", True, True, False),
+    ("(1+t)^(-1.5)", False, True, True),
+    ("(1+t)^-3", False, True, True),
+    ("1/(1+t)^(0.999)", True, True, True),
+    ("1/log(2+t)", True, True, False),
+    ("1/log(2+t)^2", True, True, False),
+    ("1/((1+t)*log(2+t))", True, True, True),
+    ("1/((1+t)*log(2+t)^2)", False, True, True),
+    ("1/((1+t)*sqrt(log(2+t)))", True, True, True),
+    ("1/((2+t)*log(2+t)*log(log(3+t)))", True, True, True),
+    ("log(2+t)/(1+t)", True, True, True),
+    ("log(2+t)/sqrt(1+t)", True, True, False),
+    ("exp(-t)", False, True, True),
+    ("t*exp(-t)", False, True, True),
+    ("exp(-sqrt(t))", False, True, True),
+    ("1/(1+t^2)", False, True, True),
+    ("1/sqrt(1+t)", True, True, False),
+    ("sqrt(1+t)/(1+t)", True, True, False),
+    ("1/(1+t) + exp(-t)", True, True, True),
+    ("atan(t)/(1+t)", True, True, True),
+    ("tanh(1+t)/(1+t)", True, True, True),
+    ("sin(t)^2/(1+t)", True, True, True),
+    ("(2+sin(t))/(1+t)", True, True, True),
+    ("(1+sin(t)^2)/(1+t)", True, True, True),
+    ("(2+cos(3*t))/sqrt(1+t)", True, True, False),
+    ("(1+cos(t))/(1+t)^2", False, True, True),
+    ("sin(t)^2", True, False, False),
+    ("min(1, 1/(1+t))", True, True, True),
+    ("max(1/(1+t), exp(-t))", True, True, True),
+    ("1", True, False, False),
+    ("2.5", True, False, False),
+    ("0", False, True, True),
+    ("1+t", True, False, False),
+    ("1+exp(-t)", True, False, False),
+]
+
+
+@pytest.mark.parametrize("expr, diverges, to_zero, square", KNOWN, ids=[k[0] for k in KNOWN])
+def test_known_gains(expr, diverges, to_zero, square):
+    g = analyse_gain(expr, seconds=60.0)  # generous: a loaded CI machine must not flip these
+    assert g.continuous_nonnegative.value is True, g.continuous_nonnegative.reason
+    assert g.integral_diverges.value is diverges, g.integral_diverges.reason
+    assert g.tends_to_zero.value is to_zero, g.tends_to_zero.reason
+    assert g.square_integrable.value is square, g.square_integrable.reason
+    assert g.mean_square is (diverges and to_zero)
+    assert g.almost_sure is (diverges and to_zero and square)
+
+
+def test_one_over_log_cli(capsys, monkeypatch):
+    """The reported bug: sympy's `-li(2) + oo` was read as 'does not diverge'."""
+    code, out, err = run_cli(["gain", "1/log(2+t)", "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["integral_diverges"]["value"] is True
+    assert doc["mean_square"] is True and doc["almost_sure"] is False
+
+
+def test_negative_gain_is_parsed_then_refused():
+    with pytest.raises(InputError, match="negative"):
+        analyse_gain("-1/(1+t)")
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "expr", ["t**(10**10)", "factorial(10**9)", "2**2**2**2**2**2", "9**9**9**9"]
+)
+def test_hostile_gains_refused_fast(expr, capsys, monkeypatch):
+    t0 = time.perf_counter()
+    assert_input_error(["gain", expr], capsys, monkeypatch, "gain")
+    assert time.perf_counter() - t0 < 2
+
+
+@pytest.mark.hostile
+def test_slow_gain_stops_at_the_hard_limit():
+    """A gain sympy cannot finish: the forked analysis is killed; undecided, not hung."""
+    t0 = time.perf_counter()
+    g = analyse_gain("sin(t)^1000/(1+t)", seconds=2.0)
+    assert time.perf_counter() - t0 < 5
+    assert None in (g.integral_diverges.value, g.square_integrable.value)
+    assert g.mean_square is not True
+
+
+def test_undecided_is_none_not_a_guess():
+    # ∫ (1 + sin t²)/(1+t) diverges, but sin(t²) is outside the oscillation rule
+    g = analyse_gain("(1 + sin(t^2))/(1+t)", seconds=3.0)
+    assert g.integral_diverges.value in (True, None)
+    assert g.tends_to_zero.value in (True, None)
+
+
+def test_one_label_table():
+    from ntc_design.certify.theorems import _gain_premises
+
+    g = analyse_gain("1/(1+t)")
+    names = [p["premise"] for p in _gain_premises(g, almost_sure=True)]
+    assert names == list(CONDITION_LABELS.values())
+    assert set(g.to_dict()) >= set(CONDITION_LABELS)

@@ -1,0 +1,562 @@
+"""Hostile input to ``ntc simulate``, ``ntc report`` and the CLI's argument parsing: every
+case exits 2 with one line naming the field, no traceback, nothing on stdout, nothing
+written; Ctrl-C with 2 workers stops promptly with exit 130 and leaves no output."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import zipfile
+
+import numpy as np
+import pytest
+
+from .cli_helpers import assert_input_error, run_cli
+from .conftest import ROOT
+
+G1 = str(ROOT / "examples" / "g1.yaml")
+NAN, INF = float("nan"), float("inf")
+BASE = {
+    "topology": G1,
+    "theta": [1, 2, -1],
+    "gain": "1/(1+t)",
+    "noise": {"sigma": 0.4, "f": 0.3},
+    "initial": {"uniform": [-3, 3], "seed": 1},
+    "T": 0.1,
+    "dt": 0.001,
+    "paths": 8,
+    "seed": 0,
+    "save_every": 0.05,
+    "method": "both",
+    "workers": 1,
+}
+DROP = object()
+
+
+def scenario(tmp_path, name="sc.json", **over):
+    doc = {**BASE, **over}
+    if "save_times" in over and "save_every" not in over:
+        doc.pop("save_every")
+    doc = {k: v for k, v in doc.items() if v is not DROP}
+    p = tmp_path / name
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_text(json.dumps(doc))  # JSON: NaN and Infinity survive (Python's json reads them)
+    return p
+
+
+def fails(tmp_path, capsys, monkeypatch, sc, *needles):
+    out = tmp_path / "out"
+    line = assert_input_error(["simulate", sc, "--out", out], capsys, monkeypatch, *needles)
+    assert not out.exists()
+    assert sorted(os.listdir(tmp_path)) == sorted(p.name for p in tmp_path.iterdir())
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp folders
+    return line
+
+
+# (field, bad value, words the one line must hold)
+BAD_FIELDS = [
+    ("theta", [[1, 2], [3]], ["theta[0]", "nested"]),
+    ("theta", [1, NAN, 2], ["theta[1]", "finite"]),
+    ("theta", [1, INF, 2], ["theta[1]", "finite"]),
+    ("theta", [1, True, 2], ["theta[1]"]),
+    ("theta", "1,2,-1", ["theta", "list of numbers"]),
+    ("theta", [], ["theta"]),
+    ("theta", [0, 0, 0], ["theta", "non-zero"]),
+    ("theta", [1, 2], ["theta", "expected 3 numbers"]),
+    ("theta", {"a": 1}, ["theta"]),
+    ("theta", DROP, ["theta", "missing"]),
+    ("margin", 0, ["margin", "positive"]),
+    ("margin", -1, ["margin"]),
+    ("margin", NAN, ["margin", "finite"]),
+    ("margin", INF, ["margin", "finite"]),
+    ("margin", "big", ["margin", "number"]),
+    ("margin", True, ["margin"]),
+    ("gain", 5, ["gain", "expression"]),
+    ("gain", ["t"], ["gain"]),
+    ("gain", "-1", ["gain", "negative"]),
+    ("gain", "0.05 - t", ["gain", "negative"]),
+    ("gain", "1/(t-0.05)", ["gain"]),
+    ("gain", "exp(t)^1000", ["gain"]),
+    ("gain", "1/(1+", ["gain"]),
+    ("gain", "__import__('os').system('true')", ["gain"]),
+    ("gain", "t" * 20001, ["gain"]),
+    ("noise", "loud", ["noise"]),
+    ("noise", [0.4], ["noise"]),
+    ("noise", {"sigma": -1}, ["noise.sigma", ">= 0"]),
+    ("noise", {"sigma": NAN}, ["noise.sigma", "finite"]),
+    ("noise", {"sigma": INF}, ["noise.sigma", "finite"]),
+    ("noise", {"sigma": True}, ["noise.sigma"]),
+    ("noise", {"sigma": "x"}, ["noise.sigma"]),
+    ("noise", {"f": True}, ["noise.f"]),
+    ("noise", {"f": "x"}, ["noise.f"]),
+    ("noise", {"f": NAN}, ["noise.f", "finite"]),
+    ("noise", {"f": [1, 2, 3]}, ["noise.f[0]"]),
+    ("noise", {"f": [[1, 2], [3]]}, ["noise.f"]),
+    ("noise", {"f": [[NAN, 0], [0, 1]]}, ["noise.f[0][0]", "finite"]),
+    ("noise", {"f": [[1, 0], [0, 1]]}, ["noise.f", "3x3"]),
+    ("noise", {"f": [[1, 0, 0], [0, 1, 0]]}, ["noise.f", "square"]),
+    ("noise", {"colour": 1}, ["noise.colour", "unknown field"]),
+    ("noise", {"sigma_edges": "all"}, ["noise.sigma_edges"]),
+    ("noise", {"sigma_edges": [{"from": 2, "to": 1}]}, ["noise.sigma_edges[0]"]),
+    ("noise", {"sigma_edges": [{"from": 2, "to": 1, "sigma": -1}]}, ["sigma_edges[0].sigma"]),
+    ("noise", {"sigma_edges": [{"from": 2, "to": 1, "sigma": NAN}]}, ["sigma_edges[0].sigma"]),
+    ("noise", {"sigma_edges": [{"from": 2, "to": 1, "sigma": "x"}]}, ["sigma_edges[0].sigma"]),
+    ("noise", {"sigma_edges": [{"from": [2], "to": 1, "sigma": 1}]}, ["sigma_edges[0].from"]),
+    ("noise", {"sigma_edges": [{"from": 1, "to": 5, "sigma": 0.1}]}, ["sigma_edges"]),
+    (
+        "noise",
+        {"sigma_edges": [{"from": 2, "to": 1, "sigma": 1}, {"from": 2, "to": 1, "sigma": 2}]},
+        ["sigma_edges[1]", "twice"],
+    ),
+    ("initial", "zero", ["initial"]),
+    ("initial", {"uniform": [3, -3], "seed": 1}, ["initial.uniform", "lo < hi"]),
+    ("initial", {"uniform": [0, NAN], "seed": 1}, ["initial.uniform[1]"]),
+    ("initial", {"uniform": [0, 1], "seed": 1.5}, ["initial.seed"]),
+    ("initial", {"uniform": [0, 1], "seed": -1}, ["initial.seed"]),
+    ("initial", {"uniform": [0, 1]}, ["initial"]),
+    ("initial", {"uniform": 1, "seed": 0}, ["initial.uniform"]),
+    ("initial", [[1, 2, 3]] * 6, ["initial", "expected 7 states"]),
+    ("initial", [[[1, 2, 3]]] * 7, ["initial[0]", "nested"]),
+    ("initial", [NAN] * 21, ["initial[0]", "finite"]),
+    ("initial", [True] * 21, ["initial[0]"]),
+    ("initial", ["a"] * 21, ["initial[0]"]),
+    ("T", 0, ["T", "positive"]),
+    ("T", -1, ["T", "positive"]),
+    ("T", NAN, ["T", "finite"]),
+    ("T", INF, ["T", "finite"]),
+    ("T", "10", ["T", "number"]),
+    ("T", True, ["T"]),
+    ("T", 1e308, ["dt", "memory"]),
+    ("dt", 0, ["dt", "positive"]),
+    ("dt", -0.1, ["dt", "positive"]),
+    ("dt", NAN, ["dt"]),
+    ("dt", "small", ["dt"]),
+    ("dt", 1e-300, ["dt", "memory"]),
+    ("paths", 0, ["paths", "positive integer"]),
+    ("paths", -5, ["paths"]),
+    ("paths", 1.5, ["paths"]),
+    ("paths", 2.0, ["paths"]),
+    ("paths", "10", ["paths"]),
+    ("paths", True, ["paths"]),
+    ("paths", 10**30, ["paths", "path-steps"]),
+    ("seed", -1, ["seed"]),
+    ("seed", 1.5, ["seed"]),
+    ("seed", 1.0, ["seed"]),
+    ("seed", "x", ["seed"]),
+    ("seed", True, ["seed"]),
+    ("seed", 2**200, ["seed", "at most"]),
+    ("save_every", 0, ["save_every", "positive"]),
+    ("save_every", -1, ["save_every"]),
+    ("save_every", NAN, ["save_every"]),
+    ("save_every", "x", ["save_every"]),
+    ("save_every", 1e-300, ["save_every", "memory"]),
+    ("save_times", [], ["save_times"]),
+    ("save_times", [-1], ["save_times", ">= 0"]),
+    ("save_times", [NAN], ["save_times[0]", "finite"]),
+    ("save_times", [100], ["save_times", "[0, T"]),
+    ("save_times", "0.1", ["save_times"]),
+    ("save_times", [[0.1]], ["save_times[0]"]),
+    ("method", "magic", ["method"]),
+    ("method", 3, ["method"]),
+    ("method", ["mc"], ["method"]),
+    ("stepping", "rk4", ["stepping"]),
+    ("stepping", 1, ["stepping"]),
+    ("workers", 0, ["workers", "positive integer"]),
+    ("workers", -1, ["workers"]),
+    ("workers", 1.5, ["workers"]),
+    ("workers", "all", ["workers"]),
+    ("workers", 10**6, ["workers", "at most"]),
+    ("block_size", 0, ["block_size"]),
+    ("block_size", -1, ["block_size"]),
+    ("block_size", 2.5, ["block_size"]),
+    ("store_paths", -1, ["store_paths", ">= 0"]),
+    ("store_paths", 1.5, ["store_paths"]),
+    ("store_paths", "x", ["store_paths"]),
+    ("resample", 0.1, ["resample", "functions of t"]),
+    ("resample", -1, ["resample"]),
+    ("resample", NAN, ["resample"]),
+    ("colour", "red", ["'colour'", "unknown field"]),
+    ("__class__", 1, ["'__class__'", "unknown field"]),
+    ("topology", DROP, ["topology", "missing"]),
+    ("topology", 5, ["topology", "file path"]),
+    ("topology", "nope.yaml", ["topology", "no such file"]),
+    ("topology", "", ["topology"]),
+]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "field, value, needles", BAD_FIELDS, ids=[f"{f}-{k}" for k, (f, _, _) in enumerate(BAD_FIELDS)]
+)
+def test_bad_scenario_field(tmp_path, capsys, monkeypatch, field, value, needles):
+    sc = scenario(tmp_path, **{field: value})
+    line = fails(tmp_path, capsys, monkeypatch, sc, *needles)
+    assert str(sc) in line  # the file is named
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "over, needles",
+    [
+        ({"stepping": "intrinsic", "ds": 0}, ["ds", "positive"]),
+        ({"stepping": "intrinsic", "ds": -1e-3}, ["ds", "positive"]),
+        ({"stepping": "intrinsic", "ds": NAN}, ["ds"]),
+        ({"stepping": "intrinsic", "ds": "x"}, ["ds"]),
+        ({"stepping": "intrinsic", "ds": 1e-300}, ["memory"]),
+        ({"save_times": [0.05], "save_every": 0.05}, ["save_times", "not both"]),
+        ({"dt": 0.3, "T": 1.0, "save_every": 1.0}, ["dt", "unstable"]),
+        ({"method": "exact", "gain": "exp(50*t)"}, ["method", "RK4 steps"]),
+        ({"method": "exact", "gain": "1e4"}, ["method", "RK4 steps"]),
+    ],
+)
+def test_bad_scenario_combinations(tmp_path, capsys, monkeypatch, over, needles):
+    fails(tmp_path, capsys, monkeypatch, scenario(tmp_path, **over), *needles)
+
+
+SWITCHING = [
+    ([1e308, 1e308], ["schedule", "overflows to infinity"]),
+    ([1.0, 1e-300], ["schedule[1].duration", "collide"]),
+    ([1e308, 0.02], ["schedule[1].duration", "collide"]),
+    ([1e-9, 1e-9], ["schedule", "switching segments"]),
+    ([0.02, -0.02], ["schedule[1].duration", "positive"]),
+    ([0.02, NAN], ["schedule[1].duration"]),
+]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("durations, needles", SWITCHING)
+def test_bad_schedules(tmp_path, capsys, monkeypatch, durations, needles):
+    sw = {
+        "modes": {"G1": G1, "G2": str(ROOT / "examples" / "g2.yaml")},
+        "schedule": [
+            {"mode": m, "duration": t} for m, t in zip(("G1", "G2"), durations, strict=True)
+        ],
+    }
+    top = tmp_path / "sw.json"
+    top.write_text(json.dumps(sw))
+    sc = scenario(tmp_path, topology=str(top), T=10.0, method="exact", save_every=5.0)
+    fails(tmp_path, capsys, monkeypatch, sc, *needles)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "text, needles",
+    [
+        ("", ["empty"]),
+        ("[1, 2]", ["mapping"]),
+        ("{", ["not valid"]),
+        ('{"theta": [1, 2, -1]}', ["topology", "missing"]),
+    ],
+)
+def test_bad_scenario_documents(tmp_path, capsys, monkeypatch, text, needles):
+    p = tmp_path / "sc.json"
+    p.write_text(text)
+    fails(tmp_path, capsys, monkeypatch, p, *needles)
+
+
+@pytest.mark.hostile
+def test_label_with_newline_cannot_forge_an_error_line(tmp_path, capsys, monkeypatch):
+    top = tmp_path / "t.json"
+    top.write_text(
+        json.dumps({"dim": 1, "agents": ["a\nerror: forged", "a\nerror: forged"], "edges": []})
+    )
+    code, out, err = run_cli(["check", top], capsys, monkeypatch)
+    lines = err.splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
+    assert "a\\nerror: forged" in lines[0]  # escaped: it cannot start a line of its own
+    sw = {"from": "x\nerror: forged", "to": 1, "sigma": 0.1}
+    sc = scenario(tmp_path, noise={"sigma_edges": [sw, sw]})
+    line = fails(tmp_path, capsys, monkeypatch, sc, "twice")
+    assert "'x\\nerror: forged'" in line
+
+
+def test_runtime_warnings_do_not_leak(tmp_path, capsys, monkeypatch):
+    sc = scenario(tmp_path, gain="exp(t)^400", T=2.0, method="exact", save_every=1.0)
+    line = fails(tmp_path, capsys, monkeypatch, sc, "gain", "not finite")
+    assert "Warning" not in line
+
+
+def test_one_path_shows_no_band(tmp_path, capsys, monkeypatch):
+    sc = scenario(tmp_path, paths=1)
+    out = tmp_path / "o"
+    code, stdout, err = run_cli(["simulate", sc, "--out", out], capsys, monkeypatch)
+    assert code == 0 and err == "", err
+    summ = json.loads((out / "summary.json").read_text())
+    assert set(map(tuple, summ["final_ms_error_mc_band"].values())) == {(None, None)}
+    assert "one sample path: no confidence band" in stdout
+    row = (out / "ms_error.csv").read_text().splitlines()[-1].split(",")
+    assert row[2] == "nan" and row[3] == "nan"  # mc_1_lo, mc_1_hi
+
+
+# --------------------------------------------------------------------------- --out
+
+
+@pytest.mark.hostile
+def test_out_names_an_existing_file(tmp_path, capsys, monkeypatch):
+    f = tmp_path / "taken"
+    f.write_text("mine")
+    assert_input_error(
+        ["simulate", scenario(tmp_path), "--out", f],
+        capsys,
+        monkeypatch,
+        "--out",
+        "existing file",
+    )
+    assert f.read_text() == "mine"
+
+
+@pytest.mark.hostile
+def test_out_under_a_file(tmp_path, capsys, monkeypatch):
+    f = tmp_path / "taken"
+    f.write_text("mine")
+    assert_input_error(
+        ["simulate", scenario(tmp_path), "--out", f / "sub"], capsys, monkeypatch, "--out", "file"
+    )
+
+
+@pytest.mark.hostile
+def test_out_folder_with_other_files_is_refused(tmp_path, capsys, monkeypatch):
+    d = tmp_path / "mine"
+    d.mkdir()
+    (d / "thesis.tex").write_text("x")
+    assert_input_error(
+        ["simulate", scenario(tmp_path), "--out", d], capsys, monkeypatch, "--out", "other files"
+    )
+    assert os.listdir(d) == ["thesis.tex"]
+
+
+@pytest.mark.hostile
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_read_only_out_folder(tmp_path, capsys, monkeypatch):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        assert_input_error(
+            ["simulate", scenario(tmp_path), "--out", ro / "o"],
+            capsys,
+            monkeypatch,
+            "--out",
+            "not writable",
+        )
+    finally:
+        ro.chmod(0o755)
+
+
+def test_rerun_replaces_the_whole_folder(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "o"
+    assert run_cli(["simulate", scenario(tmp_path), "--out", out], capsys, monkeypatch)[0] == 0
+    (out / "report.html").write_text("old report")  # what ntc report adds to a run
+    (out / "certificate.json").write_text("{}")
+    (out / "figures").mkdir()
+    sc2 = scenario(tmp_path, name="sc2.json", seed=5)
+    assert run_cli(["simulate", sc2, "--out", out], capsys, monkeypatch)[0] == 0
+    assert not (out / "report.html").exists()  # nothing from the old run is left beside it
+    assert not (out / "figures").exists() and not (out / "certificate.json").exists()
+    assert json.loads((out / "summary.json").read_text())["parameters"]["seed"] == 5
+    assert sorted(os.listdir(tmp_path)) == ["o", "sc.json", "sc2.json"]
+
+
+# ------------------------------------------------------------------------ ntc report
+
+
+@pytest.fixture(scope="module")
+def good_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("run")
+    sc = scenario(d)
+    code = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "simulate", str(sc), "--out", str(d / "o")],
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        timeout=120,
+    ).returncode
+    assert code == 0
+    return {p.name: p.read_bytes() for p in (d / "o").iterdir()}
+
+
+def _bad_npz_bomb(path):
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+        info = zipfile.ZipInfo("t.npy")
+        zf.writestr(info, b"\0" * 1000)
+    # claim an enormous unpacked size in the directory entry
+    raw = bytearray(path.read_bytes())
+    cd = raw.rfind(b"PK\x01\x02")
+    raw[cd + 24 : cd + 28] = (2**32 - 1).to_bytes(4, "little")
+    path.write_bytes(bytes(raw))
+
+
+CORRUPT = [
+    ("paths.npz", b"", ["paths.npz", "not a readable"]),
+    ("paths.npz", b"PK\x03\x04garbage", ["paths.npz", "not a readable"]),
+    ("paths.npz", "npz-missing-key", ["paths.npz", "missing array 'theta'"]),
+    ("paths.npz", "npz-object", ["paths.npz"]),
+    ("ms_error.csv", b"", ["ms_error.csv", "no data rows"]),
+    ("ms_error.csv", b"t,mc_1\n0.0\n", ["ms_error.csv", "line 2"]),
+    ("ms_error.csv", b"t,mc_1\n0.0,abc\n", ["ms_error.csv", "not a number"]),
+    ("ms_error.csv", b"x,mc_1\n0.0,1\n", ["ms_error.csv", "header"]),
+    ("ms_error.csv", b"t,mc_1\n0.0,1\n0.0,1\n", ["ms_error.csv", "increasing"]),
+    ("ms_error.csv", b"t\n0.0\n", ["save times"]),
+    ("ms_error.csv", b"\xff\xfe", ["ms_error.csv", "unreadable"]),
+    ("summary.json", b"", ["summary.json", "not valid JSON"]),
+    ("summary.json", b"[1, 2]", ["summary.json", "mapping"]),
+    ("summary.json", b"{}", ["summary.json", "parameters"]),
+    ("summary.json", b'{"parameters": {}, "topologies": {"a": 1}}', ["summary.json"]),
+    ("summary.json", b"[" * 100000, ["summary.json", "not valid JSON"]),
+    ("summary.json", None, ["missing summary.json"]),
+    ("paths.npz", None, ["missing paths.npz"]),
+]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("name, content, needles", CORRUPT)
+def test_report_on_a_corrupt_run(tmp_path, capsys, monkeypatch, good_run, name, content, needles):
+    d = tmp_path / "o"
+    d.mkdir()
+    for k, v in good_run.items():
+        (d / k).write_bytes(v)
+    if content is None:
+        (d / name).unlink()
+    elif content == "npz-missing-key":
+        np.savez(d / name, t=np.zeros(3), paths=np.zeros((0, 3, 0)), labels=np.array(["1"]))
+    elif content == "npz-object":
+        np.savez(
+            d / name,
+            t=np.zeros(3),
+            paths=np.zeros((0, 3, 0)),
+            labels=np.array([{"a": 1}], dtype=object),
+            theta=np.ones(3),
+        )
+    else:
+        (d / name).write_bytes(content)
+    before = sorted(os.listdir(d))
+    assert_input_error(["report", d], capsys, monkeypatch, *needles)
+    assert sorted(os.listdir(d)) == before  # no report.html, no figures
+
+
+@pytest.mark.hostile
+def test_report_refuses_a_decompression_bomb(tmp_path, capsys, monkeypatch, good_run):
+    d = tmp_path / "o"
+    d.mkdir()
+    for k, v in good_run.items():
+        (d / k).write_bytes(v)
+    _bad_npz_bomb(d / "paths.npz")
+    monkeypatch.setattr("ntc_design.simulate.budget.available_memory", lambda: 2.0**30)
+    assert_input_error(["report", d], capsys, monkeypatch, "paths.npz", "unpacks to")
+
+
+# ------------------------------------------------------------------ CLI arguments
+
+ARGS = [
+    (["design", G1], ["Missing option '--theta'", "ntc design --help"]),
+    (["certify", G1], ["Missing option '--theta'"]),
+    (["design", G1, "--theta", "1,2,-1", "--bogus"], ["No such option: --bogus"]),
+    (["check", G1, "--bogus"], ["No such option"]),
+    (["simulate", "x.yaml", "--out", "o", "--bogus"], ["No such option"]),
+    (["report", "d", "--bogus"], ["No such option"]),
+    (["verify", "c.json", "--bogus"], ["No such option"]),
+    (["gain", "1/(1+t)", "--bogus"], ["No such option"]),
+    (["design", G1, "--theta", "1,2,-1", "--margin", "abc"], ["'--margin'"]),
+    (["certify", G1, "--theta", "1,2,-1", "--margin", "nan?"], ["'--margin'"]),
+    (["design", G1, "--theta", "1,2,-1", "--margin"], ["--margin"]),
+    (["simulate", "x.yaml", "--out", "o", "--workers", "many"], ["'--workers'"]),
+    (["simulate", "SC", "--out", "o", "--workers", "0"], ["--workers: must be a positive"]),
+    (["simulate", "SC", "--out", "o", "--workers", "-3"], ["--workers: must be a positive"]),
+    (["simulate", "x.yaml"], ["Missing option '--out'"]),
+    (["simulate"], ["Missing argument"]),
+    (["report"], ["Missing argument"]),
+    (["check"], ["Missing argument"]),
+    (["gain"], ["Missing argument"]),
+    (["reproduce", "paper", "--out", "o", "--paths", "1e3"], ["'--paths'"]),
+    (["reproduce", "paper", "--out", "o", "--T", "x"], ["'--T'"]),
+    (["reproduce", "cake", "--out", "o"], ["reproduce", "unknown target"]),
+    (["frobnicate"], ["No such command"]),
+    (["check", "/"], ["no such file"]),
+    (["gain", "-1/(1+t)"], ["gain", "negative"]),
+    (["gain", "-1"], ["gain", "negative"]),
+    (["gain", "-(1+t)^(-1)"], ["gain", "negative"]),
+    (["gain", ".5 - t"], ["gain", "negative"]),
+    (["certify", G1, "--theta", "1,2,-1", "--gain", "-1"], ["gain", "negative"]),
+    (["certify", G1, "--theta", "1,2,-1", "--gain=-1/(1+t)"], ["gain", "negative"]),
+    (["design", G1, "--theta", "0,0,0"], ["theta", "non-zero"]),
+]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("args, needles", ARGS, ids=[" ".join(a[:2]) for a, _ in ARGS])
+def test_argument_errors_are_one_line(tmp_path, capsys, monkeypatch, args, needles):
+    monkeypatch.chdir(tmp_path)
+    if "SC" in args:
+        sc = scenario(tmp_path.parent / "sc", name=f"{tmp_path.name}.json")
+        args = [str(sc) if a == "SC" else a for a in args]
+    assert_input_error(args, capsys, monkeypatch, *needles)
+    assert os.listdir(tmp_path) == []
+
+
+def test_negative_theta_and_version(capsys, monkeypatch):
+    code, out, err = run_cli(["design", G1, "--theta", "-1,2,1", "--json"], capsys, monkeypatch)
+    assert code == 0 and json.loads(out)["theta"] == [-1.0, 2.0, 1.0], err
+    code, out, err = run_cli(["--version"], capsys, monkeypatch)
+    from ntc_design import __version__
+
+    assert code == 0 and out.strip() == f"ntc {__version__}"
+
+
+# ------------------------------------------------------------------------- Ctrl-C
+
+
+def test_ctrl_c_with_two_workers_stops_promptly(tmp_path):
+    """A ~20 s run on 2 workers, SIGINT after 3 s: exit 130 within 3 s, one line, the
+    old output folder untouched and no temporary folder left."""
+    sc = scenario(
+        tmp_path, T=10.0, paths=2000, block_size=100, method="mc", workers=2, save_every=0.1
+    )
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "summary.json").write_text("old")
+    (out / "paths.npz").write_bytes(b"old")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ntc_design", "simulate", str(sc), "--out", str(out)],
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    time.sleep(3.0)
+    assert proc.poll() is None, "the run ended before the interrupt: make it longer"
+    proc.send_signal(signal.SIGINT)
+    t0 = time.monotonic()
+    try:
+        _, err = proc.communicate(timeout=10)
+    finally:
+        proc.kill()
+    waited = time.monotonic() - t0
+    assert proc.returncode == 130, err
+    assert waited < 3.0, f"took {waited:.1f} s to stop"
+    assert err.strip() == "error: interrupted"
+    assert sorted(os.listdir(out)) == ["paths.npz", "summary.json"]
+    assert (out / "summary.json").read_text() == "old"
+    assert sorted(os.listdir(tmp_path)) == ["o", "sc.json"]
+
+
+@pytest.mark.hostile
+def test_reproduce_out_checked_before_the_run(tmp_path, capsys, monkeypatch):
+    f = tmp_path / "taken"
+    f.write_text("mine")
+    t0 = time.monotonic()
+    assert_input_error(
+        ["reproduce", "paper", "--out", f], capsys, monkeypatch, "--out", "existing file"
+    )
+    assert time.monotonic() - t0 < 5 and f.read_text() == "mine"
+
+
+@pytest.mark.hostile
+def test_os_error_is_one_line(tmp_path, capsys, monkeypatch):
+    import ntc_design.reports.report as rp
+
+    def denied(directory, **kw):
+        raise PermissionError(13, "Permission denied", str(directory))
+
+    monkeypatch.setattr(rp, "write_report", denied)
+    assert_input_error(["report", tmp_path], capsys, monkeypatch, "Permission denied")
