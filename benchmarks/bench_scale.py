@@ -92,7 +92,7 @@ def main() -> None:
     print("# columns: wall s, CPU s, peak MiB (child process)")
     rows = []
     # the dense path at its largest documented size, for comparison
-    n_dense = 50
+    n_dense = 20
     f_dense = work / f"net{n_dense}.npz"
     run_child(
         [

@@ -398,3 +398,33 @@ def test_symmetric_part_bound_just_above_and_below_definiteness():
     lap = sp.csr_matrix(g + (-lam / 2 + 1e-6 * abs(lam)) * np.eye(n))
     ok, _ = prove_symmetric_part(lap, sp.csr_matrix(np.full((n, n), 1e-3)))
     assert not ok
+
+
+@pytest.mark.hostile
+def test_malformed_scale_certificate_is_one_line(tmp_path, capsys, monkeypatch):
+    import json
+
+    from ntc_design.certify import scale_certificate, write_certificate
+    from ntc_design.certify.certificate import digest
+
+    des = nd.design(random_network(40, 2, seed=6), [1.0, 1.0], thresholds=False)
+    good = scale_certificate(des)
+    name = des.topology.name
+
+    def topo(doc):
+        return doc["subject"]["modes"][name]["topology"]
+
+    cases = [
+        (lambda d: topo(d)["weights"].update(base64="%%%"), "invalid base64"),
+        (lambda d: topo(d)["from"].update(shape=[3]), "expected dtype i8 and shape"),
+        (lambda d: d["components"].pop("v"), "missing field 'v'"),
+        (lambda d: d["components"]["method"].__setitem__(0, "magic"), "unknown method"),
+        (lambda d: topo(d).update(dim=0), "dim"),
+    ]
+    for k, (change, needle) in enumerate(cases):
+        doc = json.loads(json.dumps(good))
+        change(doc)
+        doc["digest"] = digest(doc)
+        p = tmp_path / f"bad{k}.json"
+        write_certificate(doc, p)
+        assert_input_error(["verify", p], capsys, monkeypatch, str(p), needle)

@@ -77,18 +77,20 @@ def _finish(doc: dict) -> dict:
 
 
 #: The dense certificate (Lyapunov + decay-rate LMI on a dense P) is used up to this Nd;
-#: ``certify`` uses the component-wise certificate (:mod:`.scale`) above it.
-DENSE_CERT_MAX_ND = 150
+#: ``certify`` uses the component-wise certificate (:mod:`.scale`) above it (at Nd = 90
+#: the LMI already takes 2.2 GB and minutes; :func:`require_lmi` refuses it above 2 GiB).
+DENSE_CERT_MAX_ND = 60
 
 
 def require_lmi(n: int, what: str) -> None:
     """Refuse, in one line, an LMI on a dense n×n P whose interior-point solve would need
-    more than ``linalg.DENSE_MAX_BYTES``: with m = n(n+1)/2 unknowns its KKT system
-    takes about 12·m² bytes (N = 100, d = 3 took 23 GB)."""
+    more than ``linalg.DENSE_MAX_BYTES``: with m = n(n+1)/2 unknowns one dense m×m array
+    is 8·m² bytes (the 51,456,320,000-byte abort at n = 400 is exactly that), and the
+    solve holds about 16 of them (n = 150 was measured at 14.6 GB), so 128·m² bytes."""
     from ..linalg import DENSE_MAX_BYTES, DenseRefused
 
     m = n * (n + 1) / 2
-    need = 12.0 * m * m
+    need = 128.0 * m * m
     if need > DENSE_MAX_BYTES:
         raise DenseRefused(
             f"{what}: a dense {n}×{n} P needs about {need / 2**30:.0f} GiB "
