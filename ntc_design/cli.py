@@ -21,6 +21,7 @@ from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, design, 
 from .errors import InputError, one_line
 from .files import jsonable
 from .model import SwitchingTopology, load
+from .timevarying import ExpressionTopology, TimeVaryingDesign
 
 app = typer.Typer(
     add_completion=True,
@@ -143,6 +144,8 @@ def _print_design(d: dict, title: str) -> None:
 def check(file: FileArg, as_json: JsonOpt = False) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition."""
     top = load(file)
+    if isinstance(top, ExpressionTopology):  # the classes are fixed: the structure at any t
+        top = top.structure
     if isinstance(top, SwitchingTopology):
         rep = {"modes": {k: structure_report(m) for k, m in top.modes.items()}}
         if as_json:
@@ -171,10 +174,18 @@ def design_cmd(
 ) -> None:
     """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S."""
     th = parse_vector(theta, "--theta")
+    top = load(file)
+    if isinstance(top, ExpressionTopology):
+        tdoc = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin).to_dict()
+        if as_json:
+            print(_json(tdoc))
+        else:
+            _print_tv_design(tdoc, top.name or str(file))
+        return
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
-        res: ProtocolDesign | SwitchingDesign = design(load(file), th, margin, None, thresholds)
+        res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
     doc = res.to_dict()
     if as_json:
         print(_json(doc))
@@ -183,6 +194,42 @@ def design_cmd(
             _print_design(d, f"mode {k}")
     else:
         _print_design(doc, res.topology.name or str(file))
+
+
+def _print_tv_design(d: dict, title: str) -> None:
+    t = Table(title=f"{title}: Lemma 1 at every instant, θ = {d['theta']}, ΔC = {d['margin']}")
+    t.add_column("quantity")
+    t.add_column("range over the domain")
+    dom = d["domain"]
+    t.add_row(
+        "domain", f"[{dom[0]:.6g}, {dom[1]:.6g}] ({d['samples']} samples)" if dom else "t >= 0"
+    )
+    t.add_row("informed V_I = U", _labels(d["informed"]))
+    if d["C"] is not None:
+        t.add_row("C(t)", f"{d['C']['min']:.4f} .. {d['C']['max']:.4f}")
+    t.add_row("δ(t) = C(t) + ΔC", f"{d['delta']['min']:.4f} .. {d['delta']['max']:.4f}")
+    t.add_row(
+        "x0(t) = k1(t)·θ",
+        "["
+        + ", ".join(
+            f"{a:.4f}..{b:.4f}" for a, b in zip(d["x0"]["min"], d["x0"]["max"], strict=True)
+        )
+        + "]",
+    )
+    t.add_row(
+        "λ_min(L_B + L_Bᵀ)", f"{d['sym_min_eig']['min']:.6g} .. {d['sym_min_eig']['max']:.6g}"
+    )
+    t.add_row("identity residual (max)", f"{d['identity_residual']:.2e}")
+    t.add_row(
+        "Assumption 2", "holds at every sample" if d["assumption_holds"] else "FAILS at some t"
+    )
+    out.print(t)
+    if not d["assumption_holds"]:
+        ts = ", ".join(f"{x:.4g}" for x in d["assumption_fails_at"])
+        out.print(
+            f"  note: Assumption 2 fails at t = {ts}, ...; Lemma 1's design is used as given "
+            "(certify the uniform bound Λ₂ before trusting it)"
+        )
 
 
 @app.command()
@@ -332,27 +379,47 @@ def certify(
     out_path: Annotated[
         Path | None, typer.Option("--out", help="Write the certificate (JSON) here.")
     ] = None,
+    noise_sigma: Annotated[
+        float, typer.Option(help="σ_ji of the additive noise (time-varying: p̄).")
+    ] = 0.4,
+    noise_f: Annotated[
+        float, typer.Option(help="f(x) = f·x, σ̄ = |f| (time-varying: t₀ of μ₂).")
+    ] = 0.3,
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
-    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed."""
+    common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed.
+    Exit 0 when one is (or, without --gain, when the certificate is valid), 1 when none is;
+    --out is written only when the certificate is valid."""
     from .certify import certify as run
     from .certify import write_certificate
 
     th = parse_vector(theta, "--theta")
-    if out_path is not None and not out_path.parent.is_dir():
-        raise InputError(f"--out: directory {out_path.parent} does not exist")
+    if out_path is not None:
+        if not out_path.parent.is_dir():
+            raise InputError(f"--out: directory {out_path.parent} does not exist")
+        if out_path.is_dir():
+            raise InputError(f"--out: {out_path} is a directory")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
-        res = run(load(file), th, margin, gain)
-    if out_path is not None:
+        res = run(load(file), th, margin, gain, noise_sigma=noise_sigma, noise_f=noise_f)
+    written = out_path is not None and res.verification.valid
+    if written:
         write_certificate(res.certificate, out_path)
     doc = res.to_dict()
     if as_json:
         print(_json(doc))
-        if not doc["certificate"]["valid"]:
-            raise typer.Exit(1)
-        return
+    else:
+        _print_certify(doc, out_path if written else None)
+    if out_path is not None and not written:
+        print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
+    if not res.proven:
+        if out_path is None or written:
+            print("not proven: no theorem is guaranteed", file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _print_certify(doc: dict, written: Path | None) -> None:
     _print_checks(doc["certificate"]["checks"])
     r = doc["certificate"]["results"]
     if "lmi" in r:
@@ -360,6 +427,14 @@ def certify(
             f"decay rate: LMI α = {r['lmi']['alpha']:.6g}, eigenvalue bound = {r['lmi']['eig_bound']:.6g} "
             f"(gap {r['lmi']['gap']:.2e}); Lyapunov residual {r['lyapunov']['residual']:.2e}"
         )
+    if "rate_estimate" in r:
+        re_ = r["rate_estimate"]
+        out.print(
+            f"components: {r['components']} (largest {r['largest_component_agents']} agents), "
+            f"methods {r['methods']}; decay rate estimate {_fmt(re_['value'], 6)} ({re_['method']})"
+        )
+        for sk in r["skipped"]:
+            out.print(f"  skipped: {sk}")
     if "common_lyapunov" in r:
         cl = r["common_lyapunov"]
         out.print(
@@ -371,38 +446,80 @@ def certify(
             + "; ".join(f"{a['structure']}: {a['status']}" for a in cl["attempts"])
             + ")"
         )
-    if "rate_estimate" in r:
-        re_ = r["rate_estimate"]
+    if "time_varying" in r:
+        tvr = r["time_varying"]
         out.print(
-            f"components: {r['components']} (largest {r['largest_component_agents']} agents), "
-            f"methods {r['methods']}; decay rate estimate {_fmt(re_['value'], 6)} ({re_['method']})"
+            f"uniform bound over {tvr['domain_text']}: Λ₂ = {tvr['lambda2']:.6g} certified on "
+            f"{tvr['intervals']} t-intervals (sampled infimum {tvr['sampled_inf']:.6g} at "
+            f"t = {tvr['t_at_sampled_inf']:.4g}, gap {100 * tvr['relative_gap']:.2f} %, "
+            f"{tvr['seconds']:.1f} s)"
         )
-        for sk in r["skipped"]:
-            out.print(f"  skipped: {sk}")
+        t0 = f"{tvr['t0']:.6g}" if tvr["t0"] is not None else "—"
+        out.print(
+            f"Assumption 3: D = {tvr['D']:.6g}; Λ₁ = {tvr['Lambda1']:.6g}, p̄ = {tvr['p_bar']:.6g}; "
+            f"μ₂(t) > 0 for t >= t₀ = {t0} (σ̄ = {tvr['sigma_bar']:.4g}; {tvr['t0_proof']})"
+        )
     if doc["gain"] is not None:
         _print_gain(doc["gain"])
     _print_theorems(doc["theorems"])
-    if out_path is not None:
-        out.print(f"certificate written to {out_path} (re-check with: ntc verify {out_path})")
-    if not doc["certificate"]["valid"]:
-        print("certificate NOT valid: −L_B is not proven Hurwitz", file=sys.stderr)
-        raise typer.Exit(1)
+    if written is not None:
+        out.print(f"certificate written to {written} (re-check with: ntc verify {written})")
+
+
+def _print_verification(doc: dict) -> None:
+    ab = doc["certifies"]
+    if ab is not None:
+        print(f"kind: {ab['kind']} ({ab['description']})")
+        for m in ab["modes"]:
+            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
+            print(
+                f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
+                f"d = {m['d']}, {m['topology_hash']}, δ = {m['delta']:.6g}, θ = {m['theta']}{used}"
+            )
+        if ab["schedule"] is not None:
+            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
+            print(f"schedule: {sched} ({ab['switching_hash']})")
+        for p in ab["properties"]:
+            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
+            print(f"certifies: {p['meaning']}{alpha}")
+    for c in doc["checks"]:
+        mark = "ok   " if c["ok"] else "FAILS"
+        print(f"{mark} {c['name']}: {c['detail']}")
+    print(f"note: {doc['digest_note']}")
 
 
 @app.command()
-def verify(cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")]) -> None:
-    """Re-check a certificate without an SDP solver. Exit 0 valid, 1 invalid, 2 malformed."""
+def verify(
+    cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")],
+    topology: Annotated[
+        Path | None,
+        typer.Option(
+            "--topology", help="Your topology or switching file: the certificate must be about it."
+        ),
+    ] = None,
+    theta: Annotated[
+        str | None, typer.Option(help="Your θ, e.g. 1,2,-1: the certificate must be about it.")
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Re-check a certificate without an SDP solver, deriving what must be proven from its
+    kind. Exit 0 valid, 1 invalid (names what fails), 2 malformed."""
     from .certify import verify_file
 
-    ver = verify_file(cert)
-    for c in ver.checks:
-        mark = "ok   " if c.ok else "FAILS"
-        print(f"{mark} {c.name}: {c.detail}")
+    top = load(topology) if topology is not None else None
+    th = parse_vector(theta, "--theta") if theta is not None else None
+    ver = verify_file(cert, top, th)
+    doc = ver.to_dict()
+    if as_json:
+        print(_json(doc))
+    else:
+        _print_verification(doc)
     if not ver.valid:
         names = "; ".join(c.name for c in ver.failed)
         print(f"INVALID ({ver.method}): {names}", file=sys.stderr)
         raise typer.Exit(1)
-    print(f"VALID ({ver.method}): {len(ver.checks)} checks")
+    if not as_json:
+        print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
 @app.command()
@@ -566,17 +683,23 @@ def _warning_line(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def _argv(args: list[str]) -> list[str]:
-    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``,
-    ``--gain "-1"``) is a value, not an option: such tokens are passed after ``--`` for
-    positional arguments; option values are taken as they are by click."""
-    out: list[str] = []
+    """A value that starts with a minus sign (``ntc gain "-1/(1+t)"``, ``--gain "-1"``)
+    is a value, not an option. Option values are taken as they are by click; a positional
+    one (a minus sign followed by a digit, ``(`` or ``.``) is moved after ``--`` at the end
+    (every command has at most one such positional argument)."""
+    if "--" in args:
+        return list(args)
+    rest: list[str] = []
+    negative: list[str] = []
     for k, tok in enumerate(args):
         prev = args[k - 1] if k else ""
         looks_negative = len(tok) > 1 and tok[0] == "-" and (tok[1].isdigit() or tok[1] in "(.")
-        if looks_negative and not (prev.startswith("--") and "=" not in prev) and "--" not in out:
-            out.append("--")
-        out.append(tok)
-    return out
+        takes_value = prev.startswith("-") and "=" not in prev and prev not in _FLAGS
+        (negative if looks_negative and not takes_value else rest).append(tok)
+    return rest + ["--", *negative] if negative else rest
+
+
+_FLAGS = {"--json", "--help", "--version"}  # options that take no value
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -502,9 +502,10 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
     return SwitchingData(modes=modes, schedule=tuple(schedule), source=source)
 
 
-def parse_file(path: str | Path):
-    """Read a topology or a switching file; which one is told by its fields. A ``.npz``
-    file is a compact edge list (:mod:`ntc_design.edgelist`)."""
+def parse_file(path: str | Path) -> Any:
+    """Read a topology, a switching or a time-varying topology file (weights as
+    expressions of t, :mod:`ntc_design.tvfiles`); which one is told by its fields. A
+    ``.npz`` file is a compact edge list (:mod:`ntc_design.edgelist`)."""
     if str(path).lower().endswith(".npz"):
         from .edgelist import read_npz
 
@@ -513,6 +514,10 @@ def parse_file(path: str | Path):
     src = str(path)
     if "modes" in doc or "schedule" in doc:
         return parse_switching(doc, src)
+    from .tvfiles import is_time_varying, parse_time_varying  # it builds on this module
+
+    if is_time_varying(doc):
+        return parse_time_varying(doc, src)
     return parse_topology(doc, src)
 
 

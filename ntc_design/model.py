@@ -600,9 +600,11 @@ class TimeVaryingTopology:
         return len(self.labels)
 
 
-def load(path: str | Path) -> Topology | SwitchingTopology:
-    """Load a topology file or a switching file (YAML or JSON), or a compact ``.npz``
-    edge list (:mod:`ntc_design.edgelist`)."""
+def load(path: str | Path):
+    """Load a topology file, a switching file or a time-varying topology file (YAML or
+    JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`). A time-varying
+    file gives an :class:`~ntc_design.timevarying.ExpressionTopology`, or the fixed
+    :class:`Topology` when every weight is a constant expression."""
     from .edgelist import EdgeListData
 
     data = files.parse_file(path)
@@ -612,4 +614,9 @@ def load(path: str | Path) -> Topology | SwitchingTopology:
         )
     if isinstance(data, files.SwitchingData):
         return SwitchingTopology.from_data(data)
-    return Topology.from_data(data)
+    if isinstance(data, files.TopologyData):
+        return Topology.from_data(data)
+    from .timevarying import ExpressionTopology  # built on this module
+
+    tv = ExpressionTopology.from_data(data)
+    return tv.fixed() if tv.constant else tv

@@ -32,7 +32,10 @@ def write(tmp_path, name, text):
             "  - {from: 1, to: 2, weight: 1}\n  - {from: 1, to: 2, weight: 2}\n",
             ["edge 1->2", "duplicated"],
         ),
-        ("  - {from: 1, to: 2, weight: [[1, x], [x, 1]]}\n", ["edge 1->2", "expected a number"]),
+        (
+            "  - {from: 1, to: 2, weight: [[1, x], [x, 1]]}\n",
+            ["edge 1->2: weight[0][1]", "only the variable t"],
+        ),
         ("  - {from: 1, to: 2, wieght: 1}\n", ["edges[0]", "missing weight"]),
     ],
 )

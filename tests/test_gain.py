@@ -115,6 +115,6 @@ def test_one_label_table():
     from ntc_design.certify.theorems import _gain_premises
 
     g = analyse_gain("1/(1+t)")
-    names = [p["premise"] for p in _gain_premises(g, almost_sure=True)]
+    names = [p.name for p in _gain_premises(g, almost_sure=True)]  # typed Premise
     assert names == list(CONDITION_LABELS.values())
     assert set(g.to_dict()) >= set(CONDITION_LABELS)

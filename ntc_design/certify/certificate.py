@@ -1,18 +1,33 @@
-"""Certificate files: what was certified, the matrices to re-check it, the claimed
-inequalities, the solver and package versions, and a SHA-256 digest of all of it.
+"""Certificate files: what was certified (kind, properties, subject), the matrices to
+re-check it, the claims it needs, the solver log and package versions, and a digest.
 
-``verify`` re-checks a certificate with no SDP solver: it re-derives L_B of every mode
-exactly from the stated topology, informed agents, B_i and δ (dyadic rational arithmetic,
-:mod:`ntc_design.certify.exact`), checks it against the stated L_B, and proves every claim
-exactly (Nd <= EXACT_MAX_N) or with a rigorous floating-point test (larger Nd); the
-certificate records which was used. Any edit of the file breaks the digest.
+``verify`` re-checks a certificate with no SDP solver and trusts nothing it lists:
+
+* what must be proven is derived from the certificate's *kind*, the *properties* it
+  certifies and its *subject* (:mod:`ntc_design.certify.claims`); the listed claims are
+  only compared with the derived ones;
+* the subject is re-derived: L_B of every mode exactly from its topology, informed agents
+  (= U), B_i (= Σ_{Ω_i}|A_ij|) and δ (dyadic rational arithmetic,
+  :mod:`ntc_design.certify.exact`), ``k1 = 1 + 2/δ`` and ``x0 = k1·θ``, and a canonical
+  hash of each topology (:func:`topology_hash`) that ``ntc verify --topology FILE``
+  compares with the user's own file;
+* every claim is proven exactly (Sylvester's criterion on integers) while that is
+  affordable, else with a rigorous floating-point test; every number entering a proof
+  must have a magnitude in ``[2^-NUMBER_EXP, 2^NUMBER_EXP]`` (or be 0), so neither
+  arithmetic can blow up, overflow or underflow;
+* every reported result (eigenvalue bound, α, residuals) is recomputed.
+
+The digest is a SHA-256 checksum of the file's content. Anyone can recompute it: it
+detects accidental damage, it does not authenticate anyone (it is not a signature).
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import math
 import platform
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
@@ -23,17 +38,61 @@ import numpy as np
 from ..design import ProtocolDesign, SwitchingDesign, coupling_matrix
 from ..errors import InputError
 from ..files import parse_topology
-from ..model import Topology, antagonistic_in_weight
-from .exact import EXACT_MAX_N, Dyadic, PDProof, exact_pd, gamma, verified_float_pd
+from ..model import SwitchingTopology, Topology, antagonistic_in_weight
+from ..outputs import write_atomic
+from .claims import KINDS, PROPERTY_TEXT, Claim, ClaimKind, KindSpec, Property, derive_claims
+from .exact import (
+    EXACT_MAX_N,
+    Dyadic,
+    PDProof,
+    exact_affordable,
+    exact_pd,
+    gamma,
+    verified_float_pd,
+)
 from .lyapunov import common_lyapunov, decay_rate_lmi, hurwitz_by_lyapunov
 
 FORMAT = "ntc-design/certificate"
-VERSION = 1
+VERSION = 2
+SUPPORTED_VERSIONS = (2,)
+MAX_SIZE = 2000  # Nd of the largest certificate verify reads (its P alone is 32 MB)
+MAX_MODES = 64
+MAX_SCHEDULE = 10_000
+MAX_CERT_BYTES = 256 * 2**20
+#: Every nonzero number entering a proof has 2^-NUMBER_EXP <= |x| <= 2^NUMBER_EXP: a
+#: product of three such numbers neither overflows nor underflows a double, and exact
+#: entries stay a few hundred bits long.
+NUMBER_EXP = 250
+#: Reported floating-point results (eigenvalues, residuals) are recomputed and must agree
+#: within RESULT_RTOL relative to the norm of the matrix they come from: eigenvalue
+#: solvers differ in the last digits between machines.
+RESULT_RTOL = 1e-8
+
+DIGEST_NOTE = (
+    "the digest is a SHA-256 checksum anyone can recompute: it detects accidental damage, "
+    "it is not a signature; validity comes from the proofs, re-derived from the content"
+)
 
 
 def package_versions() -> dict[str, str]:
+    """Versions of Python and of the packages a certificate depends on.
+
+    Returns
+    -------
+    dict
+        Package name -> version (``"not installed"`` when missing).
+    """
     out = {"python": platform.python_version()}
-    for pkg in ("ntc-design", "numpy", "scipy", "sympy", "cvxpy", "clarabel", "control"):
+    for pkg in (
+        "ntc-design",
+        "numpy",
+        "scipy",
+        "sympy",
+        "cvxpy",
+        "clarabel",
+        "control",
+        "python-flint",
+    ):
         try:
             out[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
@@ -42,38 +101,130 @@ def package_versions() -> dict[str, str]:
 
 
 def canonical(obj: Any) -> bytes:
+    """The canonical JSON bytes that digests are taken of (sorted keys, no spaces).
+
+    Parameters
+    ----------
+    obj : Any
+        A JSON-compatible value.
+
+    Returns
+    -------
+    bytes
+    """
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=True).encode()
 
 
+def _sha(obj: Any) -> str:
+    return "sha256:" + hashlib.sha256(canonical(obj)).hexdigest()
+
+
 def digest(doc: dict) -> str:
-    body = {k: v for k, v in doc.items() if k != "digest"}
-    return "sha256:" + hashlib.sha256(canonical(body)).hexdigest()
+    """SHA-256 of everything in a certificate but its ``digest`` field: a checksum
+    anyone can recompute, not a signature.
+
+    Parameters
+    ----------
+    doc : dict
+        A certificate.
+
+    Returns
+    -------
+    str
+        ``"sha256:<hex>"``.
+    """
+    return _sha({k: v for k, v in doc.items() if k != "digest"})
+
+
+def topology_hash(top: Topology) -> str:
+    """A canonical hash of a topology: the same network gives the same hash whatever the
+    file's layout (named matrices, ``diag``, edge order, its name).
+
+    Hashed: the agent labels in order, d, and every edge with a nonzero weight as
+    ``[from, to, weight]`` sorted by (to, from) index, each entry as the exact hex form of
+    its double (``float.hex``; −0.0 is written as 0.0).
+
+    Parameters
+    ----------
+    top : Topology
+
+    Returns
+    -------
+    str
+        ``"sha256:<hex>"``.
+    """
+    edges = [
+        [
+            top.labels[j],
+            top.labels[i],
+            [[(float(x) + 0.0).hex() for x in row] for row in np.asarray(a).tolist()],
+        ]
+        for (i, j), a in sorted(top.weights.items())
+        if np.any(a)
+    ]
+    return _sha({"labels": list(top.labels), "dim": top.dim, "edges": edges})
+
+
+def switching_hash(mode_hashes: Mapping[str, str], schedule) -> str:
+    """A canonical hash of a switching topology: the hash of every mode by name and the
+    schedule as ``[mode, duration.hex()]`` pairs in order.
+
+    Parameters
+    ----------
+    mode_hashes : mapping
+        Mode name -> :func:`topology_hash` of its topology.
+    schedule : sequence of (str, float)
+        The periodic schedule.
+
+    Returns
+    -------
+    str
+        ``"sha256:<hex>"``.
+    """
+    return _sha(
+        {
+            "modes": dict(sorted(mode_hashes.items())),
+            "schedule": [[m, float(t).hex()] for m, t in schedule],
+        }
+    )
+
+
+# ---------------------------------------------------------------------------- issue
 
 
 def _mode_subject(d: ProtocolDesign) -> dict:
     lab = d.topology.labels
     return {
         "topology": d.topology.to_dict(),
+        "topology_hash": topology_hash(d.topology),
         "theta": d.theta.tolist(),
         "margin": d.margin,
         "delta": d.delta,
+        "k1": d.k1,
+        "x0": d.x0.tolist(),
         "informed": [lab[i] for i in d.informed],
         "B": {str(lab[i]): b.tolist() for i, b in sorted(d.B.items())},
     }
 
 
 def _min_eig(m: np.ndarray) -> float:
+    if not np.all(np.isfinite(m)):
+        return float("nan")
     return float(np.linalg.eigvalsh(0.5 * (m + m.T))[0])
 
 
 def _finish(doc: dict) -> dict:
-    doc["subject_digest"] = "sha256:" + hashlib.sha256(canonical(doc["subject"])).hexdigest()
+    doc["subject_digest"] = _sha(doc["subject"])
     doc["versions"] = package_versions()
-    doc["verification_method"] = (
-        "exact-rational" if doc["size"] <= EXACT_MAX_N else "verified-float"
-    )
     doc["digest"] = digest(doc)
     return doc
+
+
+def _eig_bound(lap_b: np.ndarray) -> float:
+    """−max Re λ(−L_B) = min Re λ(L_B): the best decay rate of ε̇ = −L_B ε."""
+    if not np.all(np.isfinite(lap_b)) or lap_b.size == 0:
+        return float("nan")
+    return float(np.min(np.linalg.eigvals(lap_b).real))
 
 
 #: The dense certificate (Lyapunov + decay-rate LMI on a dense P) is used up to this Nd;
@@ -101,25 +252,31 @@ def require_lmi(n: int, what: str) -> None:
 
 def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool = True) -> dict:
     """Certify −L_B Hurwitz for one design in two independent ways: (a) the Lyapunov
-    equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) the LMI maximising the decay rate α."""
+    equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) the LMI maximising the decay rate α.
+
+    Parameters
+    ----------
+    d : ProtocolDesign
+        The Lemma 1 design whose L_B is certified.
+    name : str, optional
+        The mode's name (default: the topology's name, or ``"topology"``).
+    rate : bool
+        Also look for a decay rate with the LMI (needs an SDP solver).
+
+    Returns
+    -------
+    dict
+        The certificate (kind ``hurwitz``); it certifies ``hurwitz`` always and
+        ``decay_rate`` when the LMI found a P. Check it with :func:`verify`: a
+        non-Hurwitz −L_B gives a certificate that does not verify.
+    """
     name = name or d.topology.name or "topology"
     if rate:  # estimated before any dense step: refused in one line, never an OOM kill
         require_lmi(d.topology.nd, "decay-rate LMI")
     lap_b = d.grounded_laplacian()
     lya = hurwitz_by_lyapunov(lap_b)
-    claims = [
-        {"id": "P_lyapunov ≻ 0", "kind": "pd", "P": "lyapunov"},
-        {
-            "id": f"P_lyapunov·L_B({name}) + L_B({name})ᵀ·P_lyapunov ≻ 0",
-            "kind": "lyapunov",
-            "P": "lyapunov",
-            "mode": name,
-            "alpha": 0.0,
-            "min_eig": _min_eig(lya.p @ lap_b + lap_b.T @ lya.p),
-        },
-    ]
+    eig_bound = _eig_bound(lap_b)
     matrices: dict[str, Any] = {"L_B": {name: lap_b.tolist()}, "P": {"lyapunov": lya.p.tolist()}}
-    eig_bound = float(np.min(np.linalg.eigvals(lap_b).real))
     results: dict[str, Any] = {
         "eig_bound": eig_bound,
         "lyapunov": {
@@ -128,93 +285,96 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
             "method": "Schur, blocked Bartels–Stewart",
         },
     }
-    solver = {"name": None, "status": None}
+    props = [Property.HURWITZ]
+    alpha = 0.0
+    solver: dict[str, Any] = {"name": None, "status": None}
     if rate:
         r = decay_rate_lmi(lap_b, eig_bound=eig_bound)
+        if r.p is not None:
+            props.append(Property.DECAY_RATE)
+            alpha = r.alpha
+            matrices["P"]["rate"] = r.p.tolist()
         results["lmi"] = {
-            "alpha": r.alpha,
-            "eig_bound": r.eig_bound,
-            "gap": r.eig_bound - r.alpha,
+            "alpha": alpha,
+            "eig_bound": eig_bound,
+            "gap": eig_bound - alpha,
             "status": r.status,
             "bisection_steps": r.iterations,
         }
         solver = {"name": "Clarabel (via cvxpy)", "status": r.status}
-        if r.p is not None:
-            matrices["P"]["rate"] = r.p.tolist()
-            m = r.p @ lap_b + lap_b.T @ r.p - 2 * r.alpha * r.p
-            claims += [
-                {"id": "P_rate ≻ 0", "kind": "pd", "P": "rate"},
-                {
-                    "id": f"P_rate·L_B({name}) + L_B({name})ᵀ·P_rate − 2α·P_rate ≻ 0",
-                    "kind": "lyapunov",
-                    "P": "rate",
-                    "mode": name,
-                    "alpha": r.alpha,
-                    "min_eig": _min_eig(m),
-                },
-            ]
     doc = {
         "format": FORMAT,
         "version": VERSION,
         "kind": "hurwitz",
+        "certifies": [p.value for p in props],
         "size": int(lap_b.shape[0]),
         "subject": {"modes": {name: _mode_subject(d)}},
         "matrices": matrices,
-        "claims": claims,
+        "claims": [c.to_dict() for c in derive_claims(props, [name], alpha)],
         "results": results,
         "solver": solver,
     }
     return _finish(doc)
 
 
+def scheduled_modes(schedule) -> tuple[str, ...]:
+    """The modes a schedule uses, in order of first use.
+
+    Parameters
+    ----------
+    schedule : sequence of (str, float)
+
+    Returns
+    -------
+    tuple of str
+    """
+    return tuple(dict.fromkeys(m for m, _ in schedule))
+
+
 def switching_certificate(
     sd: SwitchingDesign, structures=("identity", "block-diagonal", "dense")
 ) -> dict:
-    """Certify a switching set: L_B(k) + L_B(k)ᵀ ≻ 0 per mode (Theorems 3-4) with its
-    smallest eigenvalue, and a common Lyapunov matrix P for all modes when one is found."""
+    """Certify a switching set: L_B(k) + L_B(k)ᵀ ≻ 0 for every scheduled mode k
+    (Theorems 3-4), and a common Lyapunov matrix P for all of them when one is found.
+
+    Parameters
+    ----------
+    sd : SwitchingDesign
+        One Lemma 1 design per mode.
+    structures : sequence of str
+        Structures tried for the common P, cheapest first.
+
+    Returns
+    -------
+    dict
+        The certificate (kind ``switching``); it certifies ``symmetric_part`` always (a
+        mode where it fails makes the certificate fail to verify) and
+        ``common_lyapunov`` when a P was found.
+    """
+    used = scheduled_modes(sd.switching.schedule)
     laps = {k: d.grounded_laplacian() for k, d in sd.modes.items()}
     n = next(iter(laps.values())).shape[0]
-    claims: list[dict] = []
-    sym = {}
-    for k, lap in laps.items():
-        lam = _min_eig(lap + lap.T)
-        sym[k] = lam
-        if lam > 0:
-            claims.append(
-                {
-                    "id": f"L_B({k}) + L_B({k})ᵀ ≻ 0",
-                    "kind": "symmetric_part",
-                    "mode": k,
-                    "min_eig": lam,
-                }
-            )
-    common = common_lyapunov(laps, sd.switching.dim, structures)
+    sym = {k: _min_eig(lap + lap.T) for k, lap in laps.items()}
+    common = common_lyapunov({k: laps[k] for k in used}, sd.switching.dim, structures)
     matrices: dict[str, Any] = {"L_B": {k: v.tolist() for k, v in laps.items()}, "P": {}}
+    props = [Property.SYMMETRIC_PART]
     if common.p is not None:
         matrices["P"]["common"] = common.p.tolist()
-        claims.append({"id": "P_common ≻ 0", "kind": "pd", "P": "common"})
-        for k, lap in laps.items():
-            claims.append(
-                {
-                    "id": f"P_common·L_B({k}) + L_B({k})ᵀ·P_common ≻ 0",
-                    "kind": "lyapunov",
-                    "P": "common",
-                    "mode": k,
-                    "alpha": 0.0,
-                    "min_eig": _min_eig(common.p @ lap + lap.T @ common.p),
-                }
-            )
+        props.append(Property.COMMON_LYAPUNOV)
+    mode_hashes = {k: topology_hash(d.topology) for k, d in sd.modes.items()}
     doc = {
         "format": FORMAT,
         "version": VERSION,
         "kind": "switching",
+        "certifies": [p.value for p in props],
         "size": int(n),
         "subject": {
             "modes": {k: _mode_subject(d) for k, d in sd.modes.items()},
             "schedule": [{"mode": m, "duration": t} for m, t in sd.switching.schedule],
+            "switching_hash": switching_hash(mode_hashes, sd.switching.schedule),
         },
         "matrices": matrices,
-        "claims": claims,
+        "claims": [c.to_dict() for c in derive_claims(props, used, 0.0)],
         "results": {
             "symmetric_part_min_eig": sym,
             "common_lyapunov": {
@@ -231,11 +391,22 @@ def switching_certificate(
 
 
 def write_certificate(doc: dict, path: str | Path) -> None:
-    p = Path(path)
-    text = json.dumps(doc, indent=1, ensure_ascii=False) + "\n"
-    tmp = p.with_name(p.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(p)  # nothing half-written
+    """Write a certificate atomically (:func:`ntc_design.outputs.write_atomic`): a reader
+    never sees a half-written file.
+
+    Raises
+    ------
+    InputError
+        When the folder cannot be written, the path is a folder, or the certificate holds
+        non-finite numbers.
+    """
+    try:
+        text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
+    except ValueError:  # JSON has no NaN/Inf: such numbers prove nothing anyway
+        raise InputError(
+            f"{path}: the certificate holds non-finite numbers (nothing is proven); not written"
+        ) from None
+    write_atomic(path, text)
 
 
 # ---------------------------------------------------------------------------- verify
@@ -243,49 +414,195 @@ def write_certificate(doc: dict, path: str | Path) -> None:
 
 @dataclass(frozen=True)
 class Check:
+    """One thing verify established or failed to: ``claim`` is the inequality when the
+    check proves one, None for a check of the certificate's integrity."""
+
     name: str
     ok: bool
     detail: str
+    claim: Claim | None = None
+
+    def to_dict(self) -> dict:
+        doc = {"name": self.name, "ok": self.ok, "detail": self.detail}
+        if self.claim is not None:
+            doc["claim"] = self.claim.to_dict()
+        return doc
+
+
+@dataclass(frozen=True)
+class ModeAbout:
+    """A mode of the certified subject: its topology and protocol parameters."""
+
+    name: str
+    topology: str | None
+    n: int
+    d: int
+    topology_hash: str
+    delta: float
+    theta: tuple[float, ...]
+
+    def to_dict(self) -> dict:
+        return {
+            "name": self.name,
+            "topology": self.topology,
+            "N": self.n,
+            "d": self.d,
+            "topology_hash": self.topology_hash,
+            "delta": self.delta,
+            "theta": list(self.theta),
+        }
+
+
+@dataclass(frozen=True)
+class About:
+    """What a certificate certifies about which topology (as verify derived it)."""
+
+    kind: str
+    description: str
+    properties: tuple[Property, ...]
+    modes: tuple[ModeAbout, ...]
+    scheduled: tuple[str, ...]
+    schedule: tuple[tuple[str, float], ...] | None
+    alpha: float | None
+    switching_hash: str | None
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": self.kind,
+            "description": self.description,
+            "properties": [
+                {"property": p.value, "meaning": PROPERTY_TEXT[p]} for p in self.properties
+            ],
+            "modes": [m.to_dict() for m in self.modes],
+            "scheduled_modes": list(self.scheduled),
+            "schedule": (
+                [{"mode": m, "duration": t} for m, t in self.schedule]
+                if self.schedule is not None
+                else None
+            ),
+            "alpha": self.alpha,
+            "switching_hash": self.switching_hash,
+        }
 
 
 @dataclass(frozen=True)
 class Verification:
+    """The outcome of :func:`verify`: valid when every check holds."""
+
     valid: bool
     method: str
     checks: tuple[Check, ...] = field(default=())
+    about: About | None = None
 
     @property
     def failed(self) -> list[Check]:
         return [c for c in self.checks if not c.ok]
 
+    def property_holds(self, prop: Property, mode: str | None = None) -> bool:
+        """Whether ``prop`` (for ``mode``, if given) is proven: the certificate's
+        integrity checks hold and so does every claim of that property (there is one).
+
+        Parameters
+        ----------
+        prop : Property
+        mode : str, optional
+            Only the claims about this mode (and those about no mode, such as P ≻ 0).
+
+        Returns
+        -------
+        bool
+        """
+        integrity = all(c.ok for c in self.checks if c.claim is None)
+        mine = [c for c in self.checks if c.claim is not None and c.claim.prop is prop]
+        if mode is not None:  # the claims about this mode, and those about no mode (P ≻ 0)
+            if not any(c.claim is not None and c.claim.mode == mode for c in mine):
+                return False
+            mine = [c for c in mine if c.claim is not None and c.claim.mode in (None, mode)]
+        return integrity and bool(mine) and all(c.ok for c in mine)
+
+    def to_dict(self) -> dict:
+        return {
+            "valid": self.valid,
+            "method": self.method,
+            "digest_note": DIGEST_NOTE,
+            "certifies": self.about.to_dict() if self.about is not None else None,
+            "checks": [c.to_dict() for c in self.checks],
+            "failed": [c.name for c in self.failed],
+        }
+
+
+def _need(doc: dict, key: str, typ: type | tuple, where: str) -> Any:
+    if key not in doc:
+        raise InputError(f"{where}: missing field '{key}'")
+    v = doc[key]
+    if isinstance(v, bool) and bool not in (typ if isinstance(typ, tuple) else (typ,)):
+        raise InputError(f"{where}: field '{key}' has the wrong type (bool)")
+    if not isinstance(v, typ):
+        raise InputError(f"{where}: field '{key}' has the wrong type ({type(v).__name__})")
+    return v
+
+
+def _number(x: Any, where: str) -> float:
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        raise InputError(f"{where}: expected a number, got {type(x).__name__}")
+    try:
+        v = float(x)
+    except OverflowError:
+        raise InputError(f"{where}: number too large") from None
+    if not math.isfinite(v):
+        raise InputError(f"{where}: must be finite")
+    return v
+
+
+def _vector(x: Any, n: int, where: str) -> np.ndarray:
+    if not isinstance(x, list) or len(x) != n:
+        raise InputError(f"{where}: expected a list of {n} numbers")
+    return np.array([_number(v, where) for v in x], dtype=float)
+
 
 def _matrix(x: Any, n: int, where: str) -> np.ndarray:
+    """An n×n matrix of finite numbers (shape checked before anything is allocated)."""
     if (
         not isinstance(x, list)
         or len(x) != n
         or any(not isinstance(r, list) or len(r) != n for r in x)
     ):
         raise InputError(f"{where}: expected a {n}x{n} matrix")
+    for r in x:
+        for v in r:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise InputError(f"{where}: non-numeric entry")
     try:
         a = np.array(x, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{where}: non-numeric entry") from None
-    if any(isinstance(v, (bool, str)) or v is None for r in x for v in r):
-        raise InputError(f"{where}: non-numeric entry")
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{where}: non-numeric or too large entry") from None
     if not np.all(np.isfinite(a)):
         raise InputError(f"{where}: non-finite entry")
     return a
 
 
-def _need(doc: dict, key: str, typ: type | tuple, where: str) -> Any:
-    if key not in doc:
-        raise InputError(f"{where}: missing field '{key}'")
-    if not isinstance(doc[key], typ):
-        raise InputError(f"{where}: field '{key}' has the wrong type")
-    return doc[key]
+def out_of_range(a: np.ndarray | float) -> bool:
+    """Whether some nonzero entry lies outside ``[2^-NUMBER_EXP, 2^NUMBER_EXP]``.
+
+    Parameters
+    ----------
+    a : ndarray or float
+
+    Returns
+    -------
+    bool
+    """
+    x = np.abs(np.asarray(a, dtype=float))
+    nz = x[x != 0]
+    return bool(nz.size) and (
+        float(nz.min()) < 2.0**-NUMBER_EXP or float(nz.max()) > 2.0**NUMBER_EXP
+    )
 
 
-def _lap_b_exact(top: Topology, b: dict[int, np.ndarray], delta: float) -> Dyadic:
+RANGE_TEXT = f"a nonzero |entry| outside [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}] (cannot be bounded)"
+
+
+def _lap_b_exact(top: Topology, b: Mapping[int, np.ndarray], delta: float) -> Dyadic:
     """``L_B = L + δ·blockdiag(B_i)`` exactly. Every weight, B_i and δ is a double, i.e. a
     dyadic rational, so L_B is an integer matrix over one power of two: assembled block by
     block (O(E·d²) conversions, not O(E·N²d²))."""
@@ -308,7 +625,7 @@ def _lap_b_exact(top: Topology, b: dict[int, np.ndarray], delta: float) -> Dyadi
 
 
 def _lap_b_float(
-    top: Topology, b: dict[int, np.ndarray], delta: float
+    top: Topology, b: Mapping[int, np.ndarray], delta: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``L_B`` in floating point and an entrywise bound on its distance from the exact
     L_B: each entry is a sum of at most N+1 products of doubles, so the error is at most
@@ -323,6 +640,32 @@ def _lap_b_float(
     return lap_b, gamma(top.n + 2) * (mag + delta * np.abs(dmat))
 
 
+def _float_expr_pd(
+    p: np.ndarray, lap_f: np.ndarray | None, alpha: float, err_l: np.ndarray | None
+) -> PDProof:
+    """Verified-float proof of P ≻ 0 (lap None) or P L_B + L_Bᵀ P − 2αP ≻ 0, where
+    ``err_l`` bounds |L_B exact − lap_f| entrywise."""
+    n = p.shape[0]
+    if lap_f is None:
+        return verified_float_pd(p, np.zeros_like(p))
+    ap, al = np.abs(p), np.abs(lap_f)
+    m = p @ lap_f + lap_f.T @ p - 2 * alpha * p
+    err = gamma(n + 3) * (ap @ al + al.T @ ap + 2 * abs(alpha) * ap)
+    if err_l is not None:
+        err += ap @ err_l + err_l.T @ ap
+    return verified_float_pd(m, 2 * err * (1 + 8 * gamma(n)))
+
+
+def _exact_expr(p: np.ndarray, lap: Dyadic | None, alpha: float) -> Dyadic:
+    pd_ = Dyadic.of(p)
+    if lap is None:
+        return pd_
+    m = pd_ @ lap + lap.T @ pd_
+    if alpha != 0.0:
+        m = m - pd_.scale(Dyadic.of(2.0 * alpha))
+    return m
+
+
 def _prove_pd_expr(
     p: np.ndarray,
     lap_exact: Dyadic | None,
@@ -331,23 +674,13 @@ def _prove_pd_expr(
     err_l: np.ndarray | None,
     exact: bool,
 ) -> PDProof:
-    """Prove P ≻ 0 (lap None) or P L_B + L_Bᵀ P − 2αP ≻ 0."""
-    if exact:
-        pd_ = Dyadic.of(p)
-        if lap_exact is None:
-            return exact_pd(pd_)
-        m = pd_ @ lap_exact + lap_exact.T @ pd_
-        if alpha != 0.0:
-            m = m - pd_.scale(Dyadic.of(2.0 * alpha))
-        return exact_pd(m)
-    n = p.shape[0]
-    if lap_f is None:
-        return verified_float_pd(p, np.zeros_like(p))
-    ap, al = np.abs(p), np.abs(lap_f)
-    m = p @ lap_f + lap_f.T @ p - 2 * alpha * p
-    err = gamma(n + 3) * (ap @ al + al.T @ ap + 2 * abs(alpha) * ap)
-    err += ap @ err_l + err_l.T @ ap
-    return verified_float_pd(m, 2 * err * (1 + 8 * gamma(n)))
+    """Prove P ≻ 0 (no L_B) or P L_B + L_Bᵀ P − 2αP ≻ 0: exactly when asked and the
+    bit lengths allow it (:func:`exact_affordable`), else by the verified-float test."""
+    if exact and (lap_f is None or lap_exact is not None):
+        m = _exact_expr(p, lap_exact, alpha)
+        if exact_affordable(m.num.shape[0], m.bits):
+            return exact_pd(m)
+    return _float_expr_pd(p, lap_f, alpha, err_l)
 
 
 @dataclass(frozen=True)
@@ -362,155 +695,641 @@ class HurwitzProof:
 
 
 def prove_hurwitz(lap_b: np.ndarray, exact: bool | None = None) -> HurwitzProof:
-    """Solve P L_B + L_Bᵀ P = I and prove both inequalities for the given float L_B
-    (exactly up to EXACT_MAX_N, else by the rigorous floating-point test)."""
+    """Solve P L_B + L_Bᵀ P = I and prove both inequalities for the given float L_B.
+
+    Parameters
+    ----------
+    lap_b : ndarray
+        L_B, taken as exact.
+    exact : bool, optional
+        Force the exact (True) or verified-float (False) test; default: exact up to
+        ``EXACT_MAX_N``.
+
+    Returns
+    -------
+    HurwitzProof
+    """
     import time
 
     t0 = time.perf_counter()
     n = lap_b.shape[0]
     exact = n <= EXACT_MAX_N if exact is None else exact
     p = hurwitz_by_lyapunov(lap_b).p
+    if not np.all(np.isfinite(p)):
+        bad = PDProof(False, "none", "the Lyapunov equation has no finite solution")
+        return HurwitzProof(False, p, bad, bad, time.perf_counter() - t0)
     lap_exact = Dyadic.of(lap_b) if exact else None
     p1 = _prove_pd_expr(p, None, None, 0.0, None, exact)
     p2 = _prove_pd_expr(p, lap_exact, lap_b, 0.0, np.zeros_like(lap_b), exact)
     return HurwitzProof(p1.holds and p2.holds, p, p1, p2, time.perf_counter() - t0)
 
 
-def verify(doc: Any, source: str = "certificate") -> Verification:
-    """Re-check a certificate mapping. Raises InputError when it is malformed."""
+@dataclass(frozen=True, eq=False)
+class _Mode:
+    """A mode of the subject, parsed and re-derived."""
+
+    name: str
+    top: Topology
+    theta: np.ndarray
+    delta: float
+    b: Mapping[int, np.ndarray]
+    hash: str
+    lap: np.ndarray  # float L_B derived from topology, B and δ
+    err: np.ndarray  # entrywise bound on |L_B exact − lap|
+    exact: Dyadic | None  # exact L_B (None above EXACT_MAX_N or out of range)
+    in_range: bool
+
+
+class _Context:
+    """What the provers need: the modes, the matrices P (parsed on demand), the method."""
+
+    def __init__(
+        self, source: str, n: int, modes: dict[str, _Mode], ps: dict, scheduled: tuple[str, ...]
+    ) -> None:
+        self.source, self.n, self.modes, self.ps = source, n, modes, ps
+        self.scheduled = scheduled
+        self.exact = n <= EXACT_MAX_N
+        self._p: dict[str, np.ndarray | None] = {}
+        self.methods: set[str] = set()
+
+    def p(self, name: str) -> np.ndarray | None:
+        """P by name (InputError when malformed); None when out of range."""
+        if name not in self._p:
+            if name not in self.ps:
+                raise InputError(f"{self.source}: matrices.P: missing {name!r}")
+            a = _matrix(self.ps[name], self.n, f"{self.source}: matrices.P.{name}")
+            self._p[name] = None if out_of_range(a) else a
+        return self._p[name]
+
+
+def _unproven(why: str) -> PDProof:
+    return PDProof(False, "not attempted", why)
+
+
+def _prove_pd(c: Claim, ctx: _Context) -> PDProof:
+    p = ctx.p(c.p or "")
+    if p is None:
+        return _unproven(f"matrices.P.{c.p} has {RANGE_TEXT}")
+    return _prove_pd_expr(p, None, None, 0.0, None, ctx.exact)
+
+
+def _prove_lyapunov(c: Claim, ctx: _Context) -> PDProof:
+    p = ctx.p(c.p or "")
+    mode = ctx.modes.get(c.mode or "")
+    if mode is None:
+        return _unproven(f"the certificate does not describe mode {c.mode!r}")
+    if p is None:
+        return _unproven(f"matrices.P.{c.p} has {RANGE_TEXT}")
+    if not mode.in_range or out_of_range(c.alpha):
+        return _unproven(f"mode {mode.name} or α has {RANGE_TEXT}")
+    return _prove_pd_expr(p, mode.exact, mode.lap, c.alpha, mode.err, ctx.exact)
+
+
+def _prove_symmetric(c: Claim, ctx: _Context) -> PDProof:
+    mode = ctx.modes.get(c.mode or "")
+    if mode is None:
+        return _unproven(f"the certificate does not describe mode {c.mode!r}")
+    if not mode.in_range:
+        return _unproven(f"mode {mode.name} has {RANGE_TEXT}")
+    if mode.exact is not None:
+        m = mode.exact + mode.exact.T
+        if exact_affordable(ctx.n, m.bits):
+            return exact_pd(m)
+    s = mode.lap + mode.lap.T
+    return verified_float_pd(s, gamma(2) * np.abs(s) + mode.err + mode.err.T)
+
+
+def _prove_positive_rate(c: Claim, ctx: _Context) -> PDProof:
+    ok = c.alpha > 0 and not out_of_range(c.alpha)
+    return PDProof(ok, "exact-rational", f"α = {c.alpha!r}" + (" > 0" if ok else " is not > 0"))
+
+
+#: How each kind of claim is proven.
+PROVERS: dict[ClaimKind, Callable[[Claim, _Context], PDProof]] = {
+    ClaimKind.PD: _prove_pd,
+    ClaimKind.LYAPUNOV: _prove_lyapunov,
+    ClaimKind.SYMMETRIC_PART: _prove_symmetric,
+    ClaimKind.POSITIVE_RATE: _prove_positive_rate,
+}
+
+
+def _check_topology_fields(t: dict, size: int, where: str) -> None:
+    """Sizes of a subject topology before it is parsed (nothing large is allocated)."""
+    dim, agents, edges = t.get("dim"), t.get("agents"), t.get("edges")
+    if isinstance(dim, int) and not isinstance(dim, bool) and not 1 <= dim <= size:
+        raise InputError(f"{where}.dim: must be between 1 and the certificate size {size}")
+    n = agents if isinstance(agents, int) else len(agents) if isinstance(agents, list) else 0
+    if n > size:
+        raise InputError(f"{where}.agents: more agents than the certificate size {size}")
+    if isinstance(edges, list) and len(edges) > max(n * (n - 1), 0):
+        raise InputError(f"{where}.edges: more edges than N(N−1)")
+
+
+def _parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -> _Mode:
+    where = f"{source}: subject.modes.{name}"
+    if not isinstance(sub, dict):
+        raise InputError(f"{where}: expected an object")
+    tdoc = _need(sub, "topology", dict, where)
+    _check_topology_fields(tdoc, n, f"{where}.topology")
+    top = Topology.from_data(parse_topology(tdoc, f"{where}.topology"))
+    if top.nd != n:
+        raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {n}")
+    d = top.dim
+    theta = _vector(_need(sub, "theta", list, where), d, f"{where}.theta")
+    delta = _number(_need(sub, "delta", (int, float), where), f"{where}.delta")
+    if not delta > 0:
+        raise InputError(f"{where}.delta: must be positive")
+    k1 = _number(_need(sub, "k1", (int, float), where), f"{where}.k1")
+    x0 = _vector(_need(sub, "x0", list, where), d, f"{where}.x0")
+    _number(_need(sub, "margin", (int, float), where), f"{where}.margin")
+    stated_hash = _need(sub, "topology_hash", str, where)
+    informed_l = _need(sub, "informed", list, where)
+    try:
+        informed = [top.index(x) for x in informed_l]
+    except InputError:
+        raise InputError(f"{where}.informed: lists an unknown agent") from None
+    bd = _need(sub, "B", dict, where)
+    try:
+        b = {top.index(k): _matrix(v, d, f"{where}.B.{k}") for k, v in bd.items()}
+    except InputError as exc:
+        if "unknown agent" in str(exc):
+            raise InputError(f"{where}.B: lists an unknown agent") from None
+        raise
+
+    h = topology_hash(top)
+    checks.append(
+        Check(
+            f"{name}: topology hash",
+            h == stated_hash,
+            h if h == stated_hash else f"stated {stated_hash}, the topology hashes to {h}",
+        )
+    )
+    ok_inf = sorted(informed) == sorted(top.antagonised) and set(b) == set(informed)
+    checks.append(
+        Check(
+            f"{name}: informed agents are U",
+            ok_inf,
+            "V_I = U" if ok_inf else "V_I ≠ U, or B listed for other agents",
+        )
+    )
+    in_range = not (
+        any(out_of_range(a) for a in top.weights.values())
+        or any(out_of_range(a) for a in b.values())
+        or out_of_range(delta)
+    )
+    ok_b = ok_inf and all(
+        Dyadic.of(b[i]).equals(Dyadic.of(antagonistic_in_weight(top, i))) for i in b
+    )
+    checks.append(
+        Check(
+            f"{name}: B_i = Σ_Ω|A_ij|",
+            ok_b,
+            "exact" if ok_b else "a B_i differs from Σ_{Ω_i}|A_ij| of the topology",
+        )
+    )
+    # the issuer computed k1 = 1 + 2/δ and x0 = k1·θ in IEEE double: the same operations
+    # give the same bits, so θ cannot change without x0 (or k1) changing too
+    want_k1 = 1.0 + 2.0 / delta
+    ok_x = k1 == want_k1 and bool(np.array_equal(x0, want_k1 * theta)) and bool(np.any(theta))
+    checks.append(
+        Check(
+            f"{name}: k1 = 1 + 2/δ, x0 = k1·θ, θ ≠ 0",
+            ok_x,
+            f"θ = {theta.tolist()}, x0 = {x0.tolist()}"
+            if ok_x
+            else f"k1 = {k1!r}, x0 = {x0.tolist()} do not follow from δ = {delta!r}, θ = {theta.tolist()}",
+        )
+    )
+    checks.append(
+        Check(
+            f"{name}: numbers within range",
+            in_range,
+            "every weight, B_i and δ can be bounded" if in_range else f"{RANGE_TEXT}",
+        )
+    )
+    if in_range:
+        lap, err = _lap_b_float(top, b, delta)
+        exact = _lap_b_exact(top, b, delta) if n <= EXACT_MAX_N else None
+    else:
+        lap, err, exact = np.zeros((n, n)), np.zeros((n, n)), None
+    return _Mode(name, top, theta, delta, b, h, lap, err, exact, in_range)
+
+
+def _result_close(reported: Any, value: float, scale: float) -> bool:
+    if isinstance(reported, bool) or not isinstance(reported, (int, float)):
+        return False
+    if not (math.isfinite(value) and math.isfinite(float(reported))):
+        return False
+    return abs(float(reported) - value) <= RESULT_RTOL * max(scale, abs(value), 1e-300)
+
+
+def _results_hurwitz(doc: dict, ctx: _Context, alpha: float, rated: bool) -> list[Check]:
+    (mode,) = ctx.modes.values()
+    res = _need(doc, "results", dict, ctx.source)
+    scale = float(np.max(np.abs(mode.lap))) if mode.in_range else 1.0
+    eig = _eig_bound(mode.lap)
+    out = []
+    ok = _result_close(res.get("eig_bound"), eig, scale)
+    out.append(Check("reported eigenvalue bound", ok, f"min Re λ(L_B) = {eig:.10g}"))
+    lya = res.get("lyapunov")
+    p = ctx.p("lyapunov") if "lyapunov" in ctx.ps else None
+    if isinstance(lya, dict) and p is not None:
+        pn = float(np.max(np.abs(p)))
+        r = p @ mode.lap + mode.lap.T @ p - np.eye(ctx.n)
+        resid = float(np.linalg.norm(r) / np.sqrt(ctx.n))
+        pmin = _min_eig(p)
+        ok = _result_close(lya.get("P_min_eig"), pmin, pn) and _result_close(
+            lya.get("residual"), resid, 1.0
+        )
+        out.append(
+            Check(
+                "reported Lyapunov residual and λ_min(P)",
+                ok,
+                f"residual {resid:.3g}, λ_min(P_lyapunov) = {pmin:.10g}",
+            )
+        )
+    lmi = res.get("lmi")
+    if rated and not isinstance(lmi, dict):
+        raise InputError(f"{ctx.source}: results: missing field 'lmi' (the decay rate α)")
+    if isinstance(lmi, dict):
+        ok = (
+            _result_close(lmi.get("eig_bound"), eig, scale)
+            and _result_close(lmi.get("gap"), eig - alpha, scale)
+            and alpha <= eig * (1 + RESULT_RTOL)
+        )
+        out.append(
+            Check(
+                "reported α is the proven one, below the eigenvalue bound",
+                ok,
+                f"α = {alpha:.10g} <= {eig:.10g}, gap {eig - alpha:.3g}"
+                if rated
+                else "no rate certified (α = 0)",
+            )
+        )
+    return out
+
+
+def _results_switching(doc: dict, ctx: _Context, alpha: float, rated: bool) -> list[Check]:
+    res = _need(doc, "results", dict, ctx.source)
+    sym = _need(res, "symmetric_part_min_eig", dict, f"{ctx.source}: results")
+    out = []
+    bad = []
+    for k, m in ctx.modes.items():
+        s = m.lap + m.lap.T
+        lam = _min_eig(s)
+        if not _result_close(sym.get(k), lam, float(np.max(np.abs(s)))):
+            bad.append(f"{k}: reported {sym.get(k)!r}, recomputed {lam:.10g}")
+    extra = sorted(set(sym) - set(ctx.modes))
+    bad += [f"{k}: not a mode" for k in extra]
+    out.append(
+        Check(
+            "reported λ_min(L_B + L_Bᵀ)",
+            not bad,
+            "; ".join(bad)
+            or ", ".join(f"{k} {_min_eig(m.lap + m.lap.T):.6g}" for k, m in ctx.modes.items()),
+        )
+    )
+    cl = res.get("common_lyapunov")
+    if isinstance(cl, dict) and cl.get("margin") is not None:
+        from .lyapunov import _verified_margin
+
+        p = ctx.p("common") if "common" in ctx.ps else None
+        used = [ctx.modes[k].lap for k in ctx.modes if k in ctx.scheduled]
+        ok = p is not None and _result_close(cl["margin"], _verified_margin(used, p, 0.0), 1.0)
+        out.append(Check("reported common-P margin", ok, "recomputed" if ok else "differs"))
+    return out
+
+
+#: Re-derivation of each kind's reported results.
+RESULTS: dict[str, Callable[[dict, _Context, float, bool], list[Check]]] = {
+    "hurwitz": _results_hurwitz,
+    "switching": _results_switching,
+}
+
+
+def _parse_schedule(subject: dict, where: str) -> tuple[tuple[str, float], ...]:
+    sched = _need(subject, "schedule", list, where)
+    if not sched or len(sched) > MAX_SCHEDULE:
+        raise InputError(f"{where}.schedule: expected 1 to {MAX_SCHEDULE} entries")
+    out = []
+    for k, item in enumerate(sched):
+        w = f"{where}.schedule[{k}]"
+        if not isinstance(item, dict) or set(item) != {"mode", "duration"}:
+            raise InputError(f"{w}: expected {{mode, duration}}")
+        if not isinstance(item["mode"], str):
+            raise InputError(f"{w}.mode: expected a mode name")
+        t = _number(item["duration"], f"{w}.duration")
+        if not 0 < t < 1e300:
+            raise InputError(f"{w}.duration: must be positive and finite")
+        out.append((item["mode"], t))
+    return tuple(out)
+
+
+def _invalid(method: str, name: str, detail: str) -> Verification:
+    return Verification(False, method, (Check(name, False, detail),))
+
+
+def verify(
+    doc: Any,
+    source: str = "certificate",
+    topology: Topology | SwitchingTopology | None = None,
+    theta: Any = None,
+) -> Verification:
+    """Re-check a certificate mapping, deriving what must be proven from its kind.
+
+    Parameters
+    ----------
+    doc : Any
+        The parsed JSON of a certificate.
+    source : str
+        Its name in messages (the file).
+    topology : Topology or SwitchingTopology, optional
+        The user's own topology: the certificate must be about it (canonical hashes).
+    theta : sequence of float, optional
+        The user's θ: the certificate must be about it.
+
+    Returns
+    -------
+    Verification
+        ``valid`` when every check holds; an unknown format version or kind gives an
+        invalid verification (nothing can be proven about it).
+
+    Raises
+    ------
+    InputError
+        When the certificate is malformed (wrong types or shapes, missing fields, sizes
+        above the bounds).
+    """
     if not isinstance(doc, dict):
         raise InputError(f"{source}: expected a JSON object")
     if doc.get("format") != FORMAT:
         raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
-    if doc.get("kind") == "hurwitz-scale":
+    version = _need(doc, "version", int, source)
+    if version not in SUPPORTED_VERSIONS:
+        return _invalid(
+            "none",
+            "format version",
+            f"version {version} is not one this ntc reads ({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
+        )
+    kind = _need(doc, "kind", str, source)
+    if kind == "hurwitz-scale":  # big networks: component by component (issue 9)
         from .scale import verify_scale
 
         return verify_scale(doc, source)
+    if kind == "time_varying":  # weights as expressions of t: the uniform bound Λ₂
+        from .time_varying import verify_time_varying
+
+        _need(doc, "digest", str, source)
+        return verify_time_varying(doc, source)
+    spec: KindSpec | None = KINDS.get(kind)
+    if spec is None:
+        return _invalid(
+            "none",
+            "certificate kind",
+            f"unknown kind {kind!r} (known: {', '.join(KINDS)}); nothing is proven",
+        )
     n = _need(doc, "size", int, source)
+    if not 1 <= n <= MAX_SIZE:
+        raise InputError(f"{source}: size: must be between 1 and {MAX_SIZE}, got {n}")
     subject = _need(doc, "subject", dict, source)
-    modes = _need(subject, "modes", dict, f"{source}: subject")
+    modes_doc = _need(subject, "modes", dict, f"{source}: subject")
+    if not modes_doc or len(modes_doc) > MAX_MODES:
+        raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
     mats = _need(doc, "matrices", dict, source)
-    lbs = _need(mats, "L_B", dict, f"{source}: matrices")
+    lbs = mats.get("L_B", {})
+    if not isinstance(lbs, dict):
+        raise InputError(f"{source}: matrices.L_B: expected an object mode -> matrix")
     ps = _need(mats, "P", dict, f"{source}: matrices")
-    claims = _need(doc, "claims", list, source)
-    _need(doc, "digest", str, source)
-    method = "exact-rational" if n <= EXACT_MAX_N else "verified-float"
+    listed = _need(doc, "claims", list, source)
+    props_doc = _need(doc, "certifies", list, source)
+    stated_digest = _need(doc, "digest", str, source)
+    if any(not isinstance(p, str) for p in props_doc):
+        raise InputError(f"{source}: certifies: expected a list of property names")
+
     checks: list[Check] = []
-    want = digest(doc)
+    ok_d = digest(doc) == stated_digest
     checks.append(
         Check(
             "digest",
-            want == doc["digest"],
-            "matches" if want == doc["digest"] else "the file was modified after it was issued",
+            ok_d,
+            ("matches (" if ok_d else "does not match: the file changed after it was issued (")
+            + "a checksum, not a signature)",
+        )
+    )
+    ok_s = _sha(subject) == doc.get("subject_digest")
+    checks.append(Check("subject digest", ok_s, "matches" if ok_s else "does not match"))
+
+    # --- the subject: modes, schedule, what the certificate is about
+    modes = {str(k): _parse_mode(str(k), v, n, source, checks) for k, v in modes_doc.items()}
+    for name, m in modes.items():
+        if name not in lbs:  # L_B is re-derived anyway; a stated one must match
+            continue
+        stated = _matrix(lbs[name], n, f"{source}: matrices.L_B.{name}")
+        diff = float(np.max(np.abs(m.lap - stated))) if m.in_range else math.inf
+        bound = float(np.max(m.err + RESULT_RTOL * np.abs(m.lap))) if m.in_range else 0.0
+        checks.append(
+            Check(
+                f"L_B({name}) matches its topology, B and δ",
+                diff <= bound,
+                f"max deviation {diff:.2e}",
+            )
+        )
+    thetas = {tuple(m.theta.tolist()) for m in modes.values()}
+    if len(thetas) > 1:
+        checks.append(Check("one θ for every mode", False, f"modes differ: {sorted(thetas)}"))
+    if spec.switching:
+        schedule: tuple[tuple[str, float], ...] | None = _parse_schedule(
+            subject, f"{source}: subject"
+        )
+        scheduled = tuple(dict.fromkeys(m for m, _ in schedule))
+        missing = [m for m in scheduled if m not in modes]
+        checks.append(
+            Check(
+                "every scheduled mode is described",
+                not missing,
+                f"schedule uses {', '.join(scheduled)}"
+                if not missing
+                else f"the schedule uses {', '.join(map(repr, missing))}, which the certificate does not describe",
+            )
+        )
+        sw_hash = switching_hash({k: m.hash for k, m in modes.items()}, schedule)
+        ok_h = subject.get("switching_hash") == sw_hash
+        checks.append(
+            Check(
+                "switching hash",
+                ok_h,
+                sw_hash if ok_h else f"stated {subject.get('switching_hash')!r}, is {sw_hash}",
+            )
+        )
+    else:
+        schedule, sw_hash = None, None
+        if len(modes) != 1:
+            raise InputError(f"{source}: subject.modes: a {kind!r} certificate has one mode")
+        scheduled = tuple(modes)
+    ctx = _Context(source, n, modes, ps, scheduled)
+
+    # --- the user's own topology and θ
+    if topology is not None:
+        checks.append(_same_topology(topology, modes, schedule, sw_hash))
+    if theta is not None:
+        want = np.asarray(theta, dtype=float).reshape(-1)
+        got = next(iter(modes.values())).theta
+        ok_t = want.shape == got.shape and bool(np.array_equal(want, got))
+        checks.append(
+            Check(
+                "θ is the one given",
+                ok_t,
+                f"θ = {got.tolist()}"
+                if ok_t
+                else f"the certificate is about θ = {got.tolist()}, not {want.tolist()}",
+            )
+        )
+
+    # --- what the kind certifies, and the claims that needs
+    unknown = [p for p in props_doc if p not in {q.value for q in spec.properties}]
+    props = tuple(q for q in spec.properties if q.value in props_doc)
+    lacking = sorted(q.value for q in spec.required - set(props))
+    ok_p = not unknown and not lacking and bool(props) and len(set(props_doc)) == len(props_doc)
+    checks.append(
+        Check(
+            f"certifies what kind {kind!r} can",
+            ok_p,
+            ", ".join(q.value for q in props)
+            if ok_p
+            else "; ".join(
+                [f"unknown property {u!r}" for u in unknown]
+                + [f"kind {kind!r} must certify {q!r}" for q in lacking]
+                + (["certifies nothing"] if not props else [])
+                + (["a property is listed twice"] if len(set(props_doc)) != len(props_doc) else [])
+            ),
+        )
+    )
+    rated = Property.DECAY_RATE in props
+    alpha = 0.0
+    if rated:
+        res = _need(doc, "results", dict, source)
+        lmi = _need(res, "lmi", dict, f"{source}: results")
+        alpha = _number(_need(lmi, "alpha", (int, float), f"{source}: results.lmi"), "α")
+    claims = derive_claims(props, scheduled, alpha)
+    want_claims = sorted(canonical(c.to_dict()) for c in claims)
+    got_claims = sorted(canonical(c) for c in listed)
+    ok_c = want_claims == got_claims
+    ids = {c.id for c in claims}
+    listed_ids = {c["id"] for c in listed if isinstance(c, dict) and isinstance(c.get("id"), str)}
+    checks.append(
+        Check(
+            "listed claims are those the kind and subject require",
+            ok_c,
+            f"{len(claims)} claims"
+            if ok_c
+            else "; ".join(
+                [f"missing {i!r}" for i in sorted(ids - listed_ids)]
+                + [f"not required {str(i)!r}" for i in sorted(listed_ids - ids, key=str)]
+            )
+            or "a listed claim differs from the derived one",
         )
     )
 
-    exact_l: dict[str, Dyadic] = {}
-    float_l: dict[str, np.ndarray] = {}
-    err_l: dict[str, np.ndarray] = {}
-    for name, sub in modes.items():
-        where = f"{source}: subject.modes.{name}"
-        if not isinstance(sub, dict):
-            raise InputError(f"{where}: expected an object")
-        top = Topology.from_data(parse_topology(_need(sub, "topology", dict, where), where))
-        if top.nd != n:
-            raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {n}")
-        delta = _need(sub, "delta", (int, float), where)
-        if isinstance(delta, bool) or not delta > 0:
-            raise InputError(f"{where}: delta must be a positive number")
-        informed_l = _need(sub, "informed", list, where)
-        try:
-            informed = [top.index(x) for x in informed_l]
-        except InputError:
-            raise InputError(f"{where}: informed lists an unknown agent") from None
-        bd = _need(sub, "B", dict, where)
-        b = {top.index(k): _matrix(v, top.dim, f"{where}.B.{k}") for k, v in bd.items()}
-        ok_inf = sorted(informed) == sorted(top.antagonised) and set(b) == set(informed)
-        checks.append(
-            Check(
-                f"informed agents of {name} are U",
-                ok_inf,
-                "V_I = U" if ok_inf else "V_I ≠ U or B listed for other agents",
-            )
-        )
-        ok_b = (
-            all(Dyadic.of(b[i]).equals(Dyadic.of(antagonistic_in_weight(top, i))) for i in b)
-            if ok_inf
-            else False
-        )
-        checks.append(
-            Check(
-                f"B_i of {name} are Σ_Ω|A_ij|",
-                ok_b,
-                "exact" if ok_b else "a B_i differs from Σ_{Ω_i}|A_ij|",
-            )
-        )
-        if name not in lbs:
-            raise InputError(f"{source}: matrices.L_B: missing mode {name!r}")
-        stated = _matrix(lbs[name], n, f"{source}: matrices.L_B.{name}")
-        if method == "exact-rational":
-            exact_l[name] = _lap_b_exact(top, b, float(delta))
-            diff = np.abs(exact_l[name].to_float() - stated)
-            err_l[name] = diff
-        else:
-            lap_b, bound = _lap_b_float(top, b, float(delta))
-            diff = np.abs(lap_b - stated)
-            err_l[name] = diff + bound  # bounds |L_B exact − stated|
-        scale = max(float(np.max(np.abs(stated))), 1e-300)
-        ok_l = float(np.max(diff)) <= 1e-12 * scale
-        checks.append(
-            Check(
-                f"L_B({name}) matches its topology and δ", ok_l, f"max deviation {np.max(diff):.2e}"
-            )
-        )
-        float_l[name] = stated
-    for k, c in enumerate(claims):
-        where = f"{source}: claims[{k}]"
-        if not isinstance(c, dict):
-            raise InputError(f"{where}: expected an object")
-        cid = str(_need(c, "id", str, where))
-        kind = _need(c, "kind", str, where)
-        if kind == "symmetric_part":
-            mode = _need(c, "mode", str, where)
-            if mode not in float_l:
-                raise InputError(f"{where}: unknown mode {mode!r}")
-            if method == "exact-rational":
-                proof = exact_pd(exact_l[mode] + exact_l[mode].T)
-            else:
-                s = float_l[mode] + float_l[mode].T
-                proof = verified_float_pd(s, gamma(2) * np.abs(s) + err_l[mode] + err_l[mode].T)
-        elif kind in ("pd", "lyapunov"):
-            pname = _need(c, "P", str, where)
-            if pname not in ps:
-                raise InputError(f"{where}: matrices.P has no {pname!r}")
-            p = _matrix(ps[pname], n, f"{source}: matrices.P.{pname}")
-            if kind == "pd":
-                proof = _prove_pd_expr(p, None, None, 0.0, None, method == "exact-rational")
-            else:
-                mode = _need(c, "mode", str, where)
-                if mode not in float_l:
-                    raise InputError(f"{where}: unknown mode {mode!r}")
-                alpha = _need(c, "alpha", (int, float), where)
-                proof = _prove_pd_expr(
-                    p,
-                    exact_l.get(mode),
-                    float_l[mode],
-                    float(alpha),
-                    err_l[mode],
-                    method == "exact-rational",
-                )
-        else:
-            raise InputError(f"{where}: unknown claim kind {kind!r}")
-        checks.append(Check(cid, proof.holds, f"{proof.method}: {proof.detail}"))
-    return Verification(all(c.ok for c in checks), method, tuple(checks))
+    # --- the proofs
+    for c in claims:
+        proof = PROVERS[c.kind](c, ctx)
+        ctx.methods.add(proof.method)
+        detail = f"{proof.method}: {proof.detail}"
+        if c.kind is ClaimKind.LYAPUNOV and c.prop is Property.DECAY_RATE:
+            detail += f" (α = {c.alpha!r})"
+        checks.append(Check(c.id, proof.holds, detail, c))
+    checks += RESULTS[kind](doc, ctx, alpha, rated)
+
+    used = sorted(ctx.methods - {"not attempted"}) or ["none"]
+    method = " + ".join(used)
+    about = About(
+        kind,
+        spec.description,
+        props,
+        tuple(
+            ModeAbout(k, m.top.name, m.top.n, m.top.dim, m.hash, m.delta, tuple(m.theta.tolist()))
+            for k, m in modes.items()
+        ),
+        scheduled,
+        schedule,
+        alpha if rated else None,
+        sw_hash,
+    )
+    return Verification(all(c.ok for c in checks), method, tuple(checks), about)
 
 
-def verify_file(path: str | Path) -> Verification:
+def _same_topology(
+    topology: Topology | SwitchingTopology,
+    modes: Mapping[str, _Mode],
+    schedule: tuple[tuple[str, float], ...] | None,
+    sw_hash: str | None,
+) -> Check:
+    name = "about the given topology"
+    if isinstance(topology, SwitchingTopology):
+        if schedule is None:
+            return Check(
+                name, False, "a switching file was given; the certificate is about one topology"
+            )
+        mine = switching_hash(
+            {k: topology_hash(t) for k, t in topology.modes.items()}, topology.schedule
+        )
+        ok = mine == sw_hash
+        return Check(
+            name,
+            ok,
+            f"switching hash {mine}"
+            if ok
+            else f"the file hashes to {mine}, the certificate is about {sw_hash}",
+        )
+    if schedule is not None:
+        return Check(
+            name, False, "one topology was given; the certificate is about a switching set"
+        )
+    mine = topology_hash(topology)
+    (mode,) = modes.values()
+    ok = mine == mode.hash
+    return Check(
+        name,
+        ok,
+        f"topology hash {mine}"
+        if ok
+        else f"the file hashes to {mine}, the certificate is about {mode.hash}",
+    )
+
+
+def verify_file(
+    path: str | Path,
+    topology: Topology | SwitchingTopology | None = None,
+    theta: Any = None,
+) -> Verification:
+    """Read a certificate file (size-capped) and :func:`verify` it.
+
+    Parameters
+    ----------
+    path : str or Path
+    topology, theta
+        As in :func:`verify`.
+
+    Returns
+    -------
+    Verification
+
+    Raises
+    ------
+    InputError
+        When the file is missing, too large, not JSON, or malformed.
+    """
     p = Path(path)
     if not p.is_file():
         raise InputError(f"{p}: no such file")
+    if p.stat().st_size > MAX_CERT_BYTES:
+        raise InputError(f"{p}: larger than {MAX_CERT_BYTES // 2**20} MB")
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{p}: not valid JSON ({exc.__class__.__name__})") from None
-    return verify(doc, str(p))
+    except RecursionError:
+        raise InputError(f"{p}: nested too deeply") from None
+    except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
+        raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
+    return verify(doc, str(p), topology, theta)

@@ -4,11 +4,14 @@ Every IEEE double is a dyadic rational m·2^e, and sums and products of dyadic r
 are dyadic. So a matrix expression in the numbers of a certificate (P, the topology's
 weights, δ, α) is computed *exactly* as an integer matrix times a power of two
 (:class:`Dyadic`), and positive definiteness is decided exactly by Sylvester's criterion:
-all leading principal minors are positive, computed by fraction-free Bareiss elimination
-on Python integers (equivalent to an exact LDLᵀ with positive pivots).
+all leading principal minors are positive. They are the pivots of a fraction-free LU
+factorisation without row exchanges (FLINT's ``fmpz_mat.fflu`` through python-flint;
+equivalent to an exact LDLᵀ with positive pivots).
 
-Above ``EXACT_MAX_N`` (where big-integer arithmetic gets slow) a rigorous floating-point
-test is used instead: the expression is evaluated in floating point with an entrywise
+The cost of exact arithmetic grows with the size n and with the bit length of the entries
+(a matrix mixing 1e-300 and 1e300 has 2000-bit entries), so it is used only while
+``n <= EXACT_MAX_N`` and ``n · bits <= EXACT_BIT_BUDGET`` (:func:`exact_affordable`);
+otherwise a rigorous floating-point test is used instead: the expression is evaluated in floating point with an entrywise
 bound E on its rounding error (standard model, γ_k = k·u/(1 − k·u), u = 2⁻⁵³), and a
 floating-point Cholesky factorisation of ``M − c·I`` must succeed, with
 ``c = 2·γ_{n+1}/(1 − γ_{n+1})·tr(M) + ‖E‖_F·(1 + 4nu)`` (Rump, "Verification of positive
@@ -20,13 +23,27 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import flint
 import numpy as np
 
 EXACT_MAX_N = 80
+#: n · (largest entry bit length) above which the exact test is not attempted: at n = 21
+#: about 760-bit entries (G1's Lyapunov inequality needs ~150), at n = 80 about 200 bits.
+EXACT_BIT_BUDGET = 16_000
 U = 2.0**-53
 
 
 def gamma(k: int) -> float:
+    """γ_k = k·u/(1 − k·u), the rounding-error factor of a k-term sum of products.
+
+    Parameters
+    ----------
+    k : int
+
+    Returns
+    -------
+    float
+    """
     return k * U / (1 - k * U)
 
 
@@ -60,7 +77,14 @@ class Dyadic:
         return Dyadic(a - b, e)
 
     def __matmul__(self, other: Dyadic) -> Dyadic:
-        return Dyadic(np.dot(self.num, other.num), self.exp + other.exp)
+        prod = flint.fmpz_mat(self.num.tolist()) * flint.fmpz_mat(other.num.tolist())
+        num = np.array([[int(x) for x in row] for row in prod.tolist()], dtype=object)
+        return Dyadic(num.reshape(self.num.shape[0], other.num.shape[1]), self.exp + other.exp)
+
+    @property
+    def bits(self) -> int:
+        """The largest bit length of a numerator: what exact arithmetic costs."""
+        return max((abs(int(x)).bit_length() for x in self.num.ravel()), default=0)
 
     def scale(self, s: Dyadic) -> Dyadic:
         """Multiply by a dyadic scalar (a 1×1 Dyadic)."""
@@ -81,23 +105,47 @@ class Dyadic:
 
 
 def first_nonpositive_minor(num: np.ndarray) -> int | None:
-    """Sylvester's criterion by Bareiss elimination on an integer symmetric matrix.
+    """Sylvester's criterion on an integer symmetric matrix.
 
-    Returns None when every leading principal minor is positive (the matrix is positive
-    definite), else the 1-based order of the first leading minor that is not."""
-    a = np.array(num, dtype=object, copy=True)
-    n = a.shape[0]
-    prev = 1
+    The minors are the diagonal of U in FLINT's fraction-free LU; the factorisation
+    exchanges rows only when a leading minor is zero, so a row exchange also marks a
+    non-positive one.
+
+    Parameters
+    ----------
+    num : ndarray
+        A square object array of Python ints.
+
+    Returns
+    -------
+    int or None
+        None when every leading principal minor is positive (the matrix is positive
+        definite), else the 1-based order of the first leading minor that is not.
+    """
+    n = num.shape[0]
+    if n == 0:
+        return None
+    perm, _, _, upper = flint.fmpz_mat(np.asarray(num, dtype=object).tolist()).fflu()
     for k in range(n):
-        piv = a[k, k]
-        if piv <= 0:
+        if perm[k, k] != 1 or upper[k, k] <= 0:
             return k + 1
-        if k + 1 < n:
-            sub = a[k + 1 :, k + 1 :] * piv - np.outer(a[k + 1 :, k], a[k, k + 1 :])
-            # Bareiss: the division is exact
-            a[k + 1 :, k + 1 :] = sub // prev
-        prev = piv
     return None
+
+
+def exact_affordable(n: int, bits: int) -> bool:
+    """Whether an exact test of an n×n integer matrix with entries of ``bits`` bits is
+    within the budget (see the module docstring).
+
+    Parameters
+    ----------
+    n : int
+    bits : int
+
+    Returns
+    -------
+    bool
+    """
+    return n <= EXACT_MAX_N and n * max(bits, 1) <= EXACT_BIT_BUDGET
 
 
 @dataclass(frozen=True)
@@ -108,7 +156,16 @@ class PDProof:
 
 
 def exact_pd(m: Dyadic) -> PDProof:
-    """Exact test of ``m ≻ 0`` for a symmetric dyadic matrix."""
+    """Exact test of ``m ≻ 0`` for a symmetric dyadic matrix.
+
+    Parameters
+    ----------
+    m : Dyadic
+
+    Returns
+    -------
+    PDProof
+    """
     if not np.all(m.num == m.num.T):
         return PDProof(False, "exact-rational", "the matrix is not symmetric")
     k = first_nonpositive_minor(m.num)
@@ -119,7 +176,17 @@ def exact_pd(m: Dyadic) -> PDProof:
 
 def verified_float_pd(m: np.ndarray, err: np.ndarray) -> PDProof:
     """Rigorous test of ``M_exact ≻ 0`` from its floating-point value ``m`` and an
-    entrywise bound ``err >= |M_exact − m|`` (see the module docstring)."""
+    entrywise bound ``err >= |M_exact − m|`` (see the module docstring).
+
+    Parameters
+    ----------
+    m : ndarray
+    err : ndarray
+
+    Returns
+    -------
+    PDProof
+    """
     n = m.shape[0]
     ms = 0.5 * (m + m.T)
     err = err + 0.5 * np.abs(m - m.T)  # asymmetry of the float value is error too

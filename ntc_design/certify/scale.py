@@ -59,7 +59,7 @@ from ..thresholds import strong_components
 from .exact import U, gamma
 
 FORMAT = "ntc-design/certificate"
-VERSION = 1
+VERSION = 2  # the certificate format version (ntc_design.certify.certificate.VERSION)
 KIND = "hurwitz-scale"
 #: Largest component (Nd) that may fall back to a dense Lyapunov equation.
 LYAPUNOV_COMPONENT_MAX_ND = 600
@@ -533,6 +533,7 @@ def verify_scale(doc: dict, source: str = "certificate"):
     """Re-check a ``hurwitz-scale`` certificate without any solver (module docstring).
     Raises InputError when it is malformed."""
     from .certificate import Check, Verification, digest
+    from .claims import Claim, ClaimKind, Property
 
     def need(d: dict, key: str, typ, where: str):
         if not isinstance(d, dict) or key not in d:
@@ -677,6 +678,7 @@ def verify_scale(doc: dict, source: str = "certificate"):
             else f"{none.size} component(s) not certified (e.g. component {none[0]}, agents "
             + ", ".join(str(top.labels[i]) for i in np.flatnonzero(comp == none[0])[:5])
             + ")",
+            Claim(ClaimKind.COMPONENTS, Property.HURWITZ, mode=mname),
         )
     )
     return Verification(all(c.ok for c in checks), "verified-float (component-wise)", tuple(checks))

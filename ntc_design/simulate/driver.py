@@ -21,6 +21,7 @@ from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, quote
 from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..timevarying import ExpressionTopology
 from .budget import check_budget, estimate, estimate_steps
 from .grid import TimeGrid, build_grid
 from .moments import exact_moments
@@ -233,9 +234,9 @@ def _step_size_guard(
         warnings.warn(msg, stacklevel=3)
 
 
-# RK4 steps × ((Nd)³ + 2·10⁴) of the exact moments (the constant: per-step overhead);
-# 1e9 is ~ 30 000 steps at N·d = 21 (seconds); the paper's runs take ~ 1 000
-MAX_EXACT_WORK = 1e9
+# The exact moments' RK4 time, estimated as steps × (5e-5 s + 8·(Nd)³ flops at 1 GFLOP/s):
+# refused above this many seconds (the paper's runs: ~1 000 steps at N·d = 21, < 1 s)
+MAX_EXACT_SECONDS = 300.0
 
 
 def _check_exact_work(
@@ -253,10 +254,11 @@ def _check_exact_work(
     with np.errstate(all="ignore"):
         steps = float(np.sum(c_grid * grid.h * (rho_l[m] + c_grid * rho_q[m]))) / KAPPA
     steps += grid.save_times.size
-    if not np.isfinite(steps) or steps * (float(nd_) ** 3 + 2e4) > MAX_EXACT_WORK:
+    seconds = steps * (5e-5 + 8e-9 * float(nd_) ** 3)
+    if not np.isfinite(seconds) or seconds > MAX_EXACT_SECONDS:
         raise InputError(
             f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd_} "
-            "(the gain is large on [0, T]); use method: mc, a smaller gain or a shorter T"
+            f"(~{seconds:.3g} s; c(t) is large on [0, T]); use method: mc, a smaller gain or a shorter T"
         )
 
 
@@ -325,6 +327,12 @@ def simulate(
             f"theta: expected {d} numbers (the state dimension d), got {spec.theta.size}"
         )
     cfun, gain_text = make_gain(spec.gain)
+    if isinstance(topology, ExpressionTopology):  # A(t): the protocol at every step
+        from .timevarying import simulate_expression
+
+        workers = min(spec.mc.workers, os.cpu_count() or 1)
+        _check_size(topology, spec, cfun, 1, 1, workers)
+        return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
     names, make_designs, segments, notes = _modes(topology, spec)
     workers = min(spec.mc.workers, os.cpu_count() or 1)
     if workers < spec.mc.workers:

@@ -1,0 +1,165 @@
+"""What a certificate kind certifies: properties, the claims each property needs, typed.
+
+A certificate names its *kind* (``hurwitz``, ``switching``) and the *properties* it
+certifies. What must be proven is derived from these and from the subject (its modes and
+schedule), never read from the certificate's list of claims: that list is only compared
+with the derived one. Adding a kind means adding a :class:`KindSpec` to :data:`KINDS`
+(and, for a new property, its claim builder in :data:`PROPERTY_CLAIMS`); adding a kind of
+inequality means a :class:`ClaimKind` member and a prover in
+:data:`ntc_design.certify.certificate.PROVERS`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+
+
+class Property(StrEnum):
+    """A property of the error dynamics ε̇ = −L_B ε a certificate can prove."""
+
+    HURWITZ = "hurwitz"  # −L_B Hurwitz (Lemma 1's conclusion; Theorems 1-2)
+    DECAY_RATE = "decay_rate"  # ‖ε(t)‖ <= κ e^{−αt} ‖ε(0)‖ with α > 0
+    SYMMETRIC_PART = "symmetric_part"  # L_B(k) + L_B(k)ᵀ ≻ 0 for every mode (Theorems 3-4)
+    COMMON_LYAPUNOV = "common_lyapunov"  # one P for every mode: stable under any switching
+
+
+PROPERTY_TEXT = {
+    Property.HURWITZ: "−L_B Hurwitz (Lemma 1's conclusion, used by Theorems 1-2)",
+    Property.DECAY_RATE: "decay rate α > 0: ‖ε(t)‖ <= κ·e^(−αt)·‖ε(0)‖",
+    Property.SYMMETRIC_PART: "L_B(k) + L_B(k)ᵀ ≻ 0 in every scheduled mode (Theorems 3-4)",
+    Property.COMMON_LYAPUNOV: "a common Lyapunov matrix P for every scheduled mode",
+}
+
+
+class ClaimKind(StrEnum):
+    """The kind of inequality a claim states (what its prover checks)."""
+
+    PD = "pd"  # P ≻ 0
+    LYAPUNOV = "lyapunov"  # P·L_B + L_Bᵀ·P − 2α·P ≻ 0
+    SYMMETRIC_PART = "symmetric_part"  # L_B + L_Bᵀ ≻ 0
+    POSITIVE_RATE = "positive_rate"  # α > 0
+    COMPONENTS = "components"  # every strongly connected component block (hurwitz-scale)
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One inequality a property needs, with the mode and the matrix P it is about."""
+
+    kind: ClaimKind
+    prop: Property
+    mode: str | None = None
+    p: str | None = None
+    alpha: float = 0.0
+
+    @property
+    def id(self) -> str:
+        """A readable statement of the inequality (not used to decide anything)."""
+        m, p = self.mode, self.p
+        if self.kind is ClaimKind.PD:
+            return f"P_{p} ≻ 0"
+        if self.kind is ClaimKind.SYMMETRIC_PART:
+            return f"L_B({m}) + L_B({m})ᵀ ≻ 0"
+        if self.kind is ClaimKind.POSITIVE_RATE:
+            return "α > 0"
+        if self.kind is ClaimKind.COMPONENTS:
+            return f"−L_B({m}) Hurwitz: every component block certified"
+        rate = f" − 2α·P_{p}" if self.prop is Property.DECAY_RATE else ""
+        return f"P_{p}·L_B({m}) + L_B({m})ᵀ·P_{p}{rate} ≻ 0"
+
+    def to_dict(self) -> dict:
+        doc: dict = {"id": self.id, "kind": self.kind.value, "property": self.prop.value}
+        if self.mode is not None:
+            doc["mode"] = self.mode
+        if self.p is not None:
+            doc["P"] = self.p
+        if self.kind in (ClaimKind.LYAPUNOV, ClaimKind.POSITIVE_RATE):
+            doc["alpha"] = self.alpha
+        return doc
+
+
+def _hurwitz(modes: Sequence[str], alpha: float) -> list[Claim]:
+    (m,) = modes
+    return [
+        Claim(ClaimKind.PD, Property.HURWITZ, p="lyapunov"),
+        Claim(ClaimKind.LYAPUNOV, Property.HURWITZ, mode=m, p="lyapunov"),
+    ]
+
+
+def _rate(modes: Sequence[str], alpha: float) -> list[Claim]:
+    (m,) = modes
+    return [
+        Claim(ClaimKind.POSITIVE_RATE, Property.DECAY_RATE, alpha=alpha),
+        Claim(ClaimKind.PD, Property.DECAY_RATE, p="rate"),
+        Claim(ClaimKind.LYAPUNOV, Property.DECAY_RATE, mode=m, p="rate", alpha=alpha),
+    ]
+
+
+def _symmetric(modes: Sequence[str], alpha: float) -> list[Claim]:
+    return [Claim(ClaimKind.SYMMETRIC_PART, Property.SYMMETRIC_PART, mode=k) for k in modes]
+
+
+def _common(modes: Sequence[str], alpha: float) -> list[Claim]:
+    return [Claim(ClaimKind.PD, Property.COMMON_LYAPUNOV, p="common")] + [
+        Claim(ClaimKind.LYAPUNOV, Property.COMMON_LYAPUNOV, mode=k, p="common") for k in modes
+    ]
+
+
+#: The claims a property needs for the modes it covers and the rate α it states.
+PROPERTY_CLAIMS: dict[Property, Callable[[Sequence[str], float], list[Claim]]] = {
+    Property.HURWITZ: _hurwitz,
+    Property.DECAY_RATE: _rate,
+    Property.SYMMETRIC_PART: _symmetric,
+    Property.COMMON_LYAPUNOV: _common,
+}
+
+
+@dataclass(frozen=True)
+class KindSpec:
+    """A certificate kind: the properties it may certify, those it must, and whether its
+    subject is one topology or a schedule of modes."""
+
+    description: str
+    properties: tuple[Property, ...]
+    required: frozenset[Property]
+    switching: bool
+
+
+KINDS: dict[str, KindSpec] = {
+    "hurwitz": KindSpec(
+        "one topology: −L_B Hurwitz, with a decay rate when one is proven",
+        (Property.HURWITZ, Property.DECAY_RATE),
+        frozenset({Property.HURWITZ}),
+        switching=False,
+    ),
+    "switching": KindSpec(
+        "a switching topology: every mode its schedule uses",
+        (Property.SYMMETRIC_PART, Property.COMMON_LYAPUNOV),
+        frozenset(),
+        switching=True,
+    ),
+}
+
+
+def derive_claims(
+    properties: Sequence[Property], modes: Sequence[str], alpha: float
+) -> tuple[Claim, ...]:
+    """Every claim the given properties need for the given (scheduled) modes.
+
+    Parameters
+    ----------
+    properties : sequence of Property
+        What the certificate certifies.
+    modes : sequence of str
+        The modes covered: the one mode of a ``hurwitz`` certificate, or every mode a
+        switching schedule uses.
+    alpha : float
+        The decay rate the certificate states (used by :attr:`Property.DECAY_RATE`).
+
+    Returns
+    -------
+    tuple of Claim
+        In the order of ``properties``.
+    """
+    return tuple(c for prop in properties for c in PROPERTY_CLAIMS[prop](modes, alpha))

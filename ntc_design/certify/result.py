@@ -1,0 +1,149 @@
+"""``certify``: design (Lemma 1), certify, re-verify and give the theorem verdict."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..design import ProtocolDesign, SwitchingDesign, design
+from ..errors import InputError
+from ..gain import GainAnalysis, analyse_gain
+from ..model import SwitchingTopology, Topology
+from ..timevarying import ExpressionTopology, TimeVaryingDesign
+from .certificate import (
+    DENSE_CERT_MAX_ND,
+    Check,
+    Verification,
+    hurwitz_certificate,
+    switching_certificate,
+    verify,
+)
+from .theorems import TheoremVerdict, fixed_verdicts, switching_verdicts
+
+
+@dataclass(frozen=True)
+class CertifyResult:
+    """A design, its certificate and verification, the gain analysis and the verdicts."""
+
+    design: ProtocolDesign | SwitchingDesign
+    certificate: dict
+    verification: Verification
+    gain: GainAnalysis | None
+    theorems: tuple[TheoremVerdict, ...]
+
+    @property
+    def proven(self) -> bool:
+        """What ``ntc certify`` exits 0 on: a theorem is guaranteed, or no gain was given
+        and the certificate is valid (the theorems then wait only for a gain)."""
+        if any(t.guaranteed is True for t in self.theorems):
+            return True
+        return self.gain is None and self.verification.valid
+
+    def to_dict(self) -> dict:
+        ver = self.verification
+        return {
+            "design": self.design.to_dict(),
+            "certificate": {
+                "kind": self.certificate["kind"],
+                "certifies": self.certificate["certifies"],
+                "digest": self.certificate["digest"],
+                "valid": ver.valid,
+                "method": ver.method,
+                "checks": [c.to_dict() for c in ver.checks],
+                "results": self.certificate["results"],
+            },
+            "gain": self.gain.to_dict() if self.gain is not None else None,
+            "theorems": [t.to_dict() for t in self.theorems],
+            "proven": self.proven,
+        }
+
+
+def _verify_own(cert: dict) -> Verification:
+    """Verify a certificate just issued; numbers that make no checkable certificate (a
+    Lyapunov equation without a finite solution) make it invalid, not bad input."""
+    try:
+        return verify(cert)
+    except InputError as exc:
+        return Verification(False, "none", (Check("certificate well-formed", False, str(exc)),))
+
+
+def certify(
+    topology: Topology | SwitchingTopology | ExpressionTopology,
+    theta,
+    margin: float = 0.1,
+    gain: str | None = None,
+    delta: float | None = None,
+    noise_sigma: float = 0.4,
+    noise_f=0.3,
+) -> CertifyResult:
+    """Design (Lemma 1), certify (Lyapunov + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a common
+    P), re-verify the certificate exactly, analyse the gain and give the theorem verdict.
+
+    Parameters
+    ----------
+    topology : Topology or SwitchingTopology
+    theta : sequence of float
+        The target consensus state θ ≠ 0.
+    margin : float
+        ΔC > 0: δ = C + ΔC.
+    gain : str, optional
+        c(t), e.g. ``"1/(1+t)"``.
+    delta : float, optional
+        An explicit δ instead of C + ΔC.
+    noise_sigma, noise_f : float
+        σ_ji and f(x) = f·x: only the time-varying certificate uses them (p̄, σ̄, t₀).
+
+    Returns
+    -------
+    CertifyResult
+        ``verification.valid`` says whether the certificate proves what its kind says;
+        ``proven`` whether a theorem is guaranteed.
+
+    Raises
+    ------
+    InputError
+        For a bad θ, margin, δ or gain.
+    """
+    g = analyse_gain(gain) if gain is not None else None
+    if isinstance(topology, ExpressionTopology):  # weights as expressions of t
+        from .time_varying import (
+            time_varying_certificate,
+            time_varying_verdicts,
+            verify_time_varying,
+        )
+
+        if delta is not None:
+            raise InputError("delta: a time-varying topology uses δ(t) = C(t) + ΔC (Lemma 1)")
+        tdes = TimeVaryingDesign(topology, np.asarray(theta, dtype=float), margin)
+        cert = time_varying_certificate(topology, theta, margin, gain, noise_sigma, noise_f)
+        ver = verify_time_varying(cert)
+        tth = time_varying_verdicts(cert["results"]["time_varying"], ver, g)
+        return CertifyResult(tdes, cert, ver, g, tth)
+    big = isinstance(topology, Topology) and topology.nd > DENSE_CERT_MAX_ND
+    # at scale the critical couplings are not needed by the certificate (design notes it)
+    des = design(topology, theta, margin, delta, thresholds=False if big else None)
+    th: tuple[TheoremVerdict, ...]
+    if isinstance(des, SwitchingDesign):
+        cert = switching_certificate(des)
+        ver = _verify_own(cert)
+        bound = max(
+            (
+                float(np.max(np.abs(a)))
+                for top in des.switching.modes.values()
+                for a in top.weights.values()
+            ),
+            default=0.0,
+        )
+        th = switching_verdicts(des, ver, g, bound, cert["results"]["symmetric_part_min_eig"])
+    elif not big:
+        cert = hurwitz_certificate(des)
+        ver = _verify_own(cert)
+        th = fixed_verdicts(des, ver, g)
+    else:  # big networks: component-wise certificate, no dense step (issue 9)
+        from .scale import scale_certificate
+
+        cert = scale_certificate(des)
+        ver = _verify_own(cert)
+        th = fixed_verdicts(des, ver, g)
+    return CertifyResult(des, cert, ver, g, th)

@@ -1,0 +1,763 @@
+"""Theorems 3-4 certified for every t: the uniform bound Λ₂ of a continuously time-varying
+topology, by branch and bound on t-intervals (arXiv: Niu & Wu, proof of Theorem 3).
+
+The proof of Theorem 3 needs a *uniform* bound λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for all
+t >= 0 (positive definiteness at every t is not enough: a weight fading like e^{−t} is
+positive definite at every t and has no such Λ₂). With the weights periodic (or constant
+after T) the infimum over t >= 0 is the infimum over one period (or over [0, T]).
+
+On a t-interval I the certified lower bound is computed as follows (every step rigorous):
+
+1. every weight entry is enclosed over I in Arb ball arithmetic (:mod:`ntc_design.interval`);
+2. δ(t) = C(t) + ΔC (Lemma 1, evaluated at each t) is bounded below on I: each C_i(t) =
+   ½ λ_max(S_i⁻¹M_i) is at least ½ xᵀM_i x / xᵀS_i x for any fixed x (x = the top generalised
+   eigenvector at the midpoint, the quotient enclosed in ball arithmetic); V1(t) is the
+   C-minimising admissible set, so C(t) >= the least max over every set *possibly*
+   admissible on I (in-degree-domination possibly true: an upper bound on λ_min by a
+   Rayleigh quotient); the least such max is attained by a prefix in the order of the lower
+   bounds (admissibility is closed under adding agents);
+3. L_B + L_Bᵀ = (L + Lᵀ) + 2δ·blockdiag(B_i) with blockdiag(B_i) ⪰ 0, so λ_min is
+   non-decreasing in δ and δ may be replaced by its lower bound; the entries of the
+   resulting symmetric interval matrix give a midpoint M and a radius R (rounding included);
+4. λ_min >= λ_min(M) − ‖R‖₂ (Weyl), with λ_min(M) proven by a shifted verified Cholesky and
+   ‖R‖₂ <= the largest row sum of R (Perron).
+
+Intervals whose bound is below (1 − ``rtol``)× the best sampled value are bisected. The
+certificate records the intervals with their bounds; ``ntc verify`` recomputes every bound
+from the topology's expressions. From the same enclosures come Assumption 3's
+D = sup|a_kl(t)|, the proof's Λ₁ >= λ_max²(|A_ij(t)|) and p̄ >= Σ σ² Σ_l (Σ_k |a|_lk)², and
+the time t₀ after which μ₂(t) = c(t)[Λ₂ − 2σ̄Λ₁N c(t)] > 0 for the given gain.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from ..errors import InputError
+from ..expr import compile_expression, parse_expression, symbol
+from ..interval import _T, bounds, enclose, t_ball
+from ..linalg import DEF_RTOL
+from ..timevarying import (
+    ExpressionTopology,
+    Lemma1Structure,
+    from_document,
+    grounded_laplacian_batch,
+    interval_mid_rad,
+    lemma1_batch,
+    lemma1_structure,
+    sym_min_eig_lower,
+)
+from .exact import gamma
+
+RTOL = 0.008  # bisect until the certified Λ₂ is within 0.8 % of the sampled infimum
+MAX_INTERVALS = 4000
+FIRST_PIECES = 32
+
+
+class CertificationRefused(InputError):
+    """The uniform bound of Theorems 3-4 cannot be certified; the message says why."""
+
+
+@dataclass(frozen=True)
+class LeafBound:
+    a: float
+    b: float
+    lower: float  # certified lower bound on λ_min(L_B + L_Bᵀ) on [a, b]
+    sample: float  # λ_min at the midpoint (floating point, the design as computed)
+    delta_lo: float
+    D: float
+    lambda1: float
+    p_bar: float
+
+
+class _Enclosures:
+    """Per t-interval enclosures of the weights and what is built from them."""
+
+    def __init__(self, tv: ExpressionTopology, st: Lemma1Structure, margin: float, sigma: float):
+        self.tv, self.st, self.margin, self.sigma = tv, st, float(margin), float(sigma)
+        d = tv.dim
+        self.live = [k for k, e in enumerate(tv.edges) if e.sign != 0]
+        self.varying = [k for k in self.live if not tv.edges[k].weight.constant]
+        self.const_w = {
+            k: np.array([[float(v) for v in r] for r in tv.edges[k].weight.entries])
+            for k in self.live
+            if k not in self.varying
+        }
+        self.d = d
+        t = symbol("t")
+        # first and second derivatives of the varying entries (sympy, on parsed input)
+        self.deriv: dict[int, tuple[list, list] | None] = {}
+        self.scale_d: dict[int, tuple[sp.Expr, sp.Expr]] = {}
+        for k in self.varying:
+            ents = tv.edges[k].weight.entries
+            try:
+                d1 = [[sp.diff(x, t) for x in row] for row in ents]
+                d2 = [[sp.diff(x, t, 2) for x in row] for row in d1]
+                enclose(sum((x for row in d2 for x in row), sp.Integer(0)), t_ball(0.0, 1.0))
+                self.deriv[k] = (d1, d2)
+                w = tv.edges[k].weight
+                if w.form == "scale":
+                    s1 = sp.diff(w.scale, t)
+                    self.scale_d[k] = (s1, sp.diff(s1, t))
+            except Exception:  # noqa: BLE001 - no usable derivative: zero-order bound
+                self.deriv[k] = None
+        # agents whose incident edges are all constant: their C_i and in-degree-domination
+        # never change (computed once, exactly as the design computes them)
+        touched = set()
+        for k in self.varying:
+            touched |= {int(st.ii[k]), int(st.jj[k])}
+        self.touched = touched
+        self._static_c: dict[int, float] = {}
+        self._static_idd: dict[int, bool] = {}
+
+    def taylor(self, a: float, b: float) -> tuple[np.ndarray, ...]:
+        """Taylor data of the weights on [a, b] about m = (a + b)/2: A(m) and A'(m) as
+        (mid, rad), A''(ξ) enclosed over [a, b] as (mid, rad), and R0, the full radius of
+        edges without a usable derivative (their variation is bounded in zero order)."""
+        tv, d = self.tv, self.d
+        e_n = len(tv.edges)
+        m = 0.5 * (a + b)
+        tl = tv.local_time([a, m, b])
+        tm, tb = t_ball(float(tl[1]), float(tl[1])), t_ball(float(tl[0]), float(tl[2]))
+        shape = (e_n, d, d)
+        v_lo, v_hi = np.zeros(shape), np.zeros(shape)
+        d1_lo, d1_hi = np.zeros(shape), np.zeros(shape)
+        d2_lo, d2_hi = np.zeros(shape), np.zeros(shape)
+        r0_lo, r0_hi = np.zeros(shape), np.zeros(shape)
+        for k, w in self.const_w.items():
+            v_lo[k] = v_hi[k] = w
+        c_m: dict = {}
+        c_b: dict = {}
+        for k in self.varying:
+            w = tv.edges[k].weight
+            der = self.deriv[k]
+            if w.form == "scale" and der is not None:
+                # A = s(t)·W: enclose s, s', s'' once, then scale W (outward rounding)
+                base = np.asarray(w.base, dtype=float)
+                for (lo_a, hi_a), e, tb_ in (
+                    ((v_lo, v_hi), w.scale, tm),
+                    ((d1_lo, d1_hi), self.scale_d[k][0], tm),
+                    ((d2_lo, d2_hi), self.scale_d[k][1], tb),
+                ):
+                    lo, hi = bounds(enclose(e, tb_, c_m if tb_ is tm else c_b))
+                    p1, p2 = base * lo, base * hi
+                    lo_a[k] = np.nextafter(np.minimum(p1, p2), -np.inf)
+                    hi_a[k] = np.nextafter(np.maximum(p1, p2), np.inf)
+                continue
+            ents = w.entries
+            for r in range(d):
+                for c in range(d):
+                    x = ents[r][c]
+                    if not x.has(_T):
+                        v_lo[k, r, c] = v_hi[k, r, c] = float(x)
+                        continue
+                    if der is None:
+                        lo, hi = bounds(enclose(x, tb, c_b))
+                        mid = 0.5 * lo + 0.5 * hi
+                        v_lo[k, r, c] = v_hi[k, r, c] = mid
+                        r0_lo[k, r, c], r0_hi[k, r, c] = lo - mid, hi - mid
+                        continue
+                    v_lo[k, r, c], v_hi[k, r, c] = bounds(enclose(x, tm, c_m))
+                    d1_lo[k, r, c], d1_hi[k, r, c] = bounds(enclose(der[0][r][c], tm, c_m))
+                    d2_lo[k, r, c], d2_hi[k, r, c] = bounds(enclose(der[1][r][c], tb, c_b))
+        out = []
+        for lo, hi in ((v_lo, v_hi), (d1_lo, d1_hi), (d2_lo, d2_hi), (r0_lo, r0_hi)):
+            out += list(interval_mid_rad(lo, hi))
+        return tuple(out)
+
+    def samples(self, ts: np.ndarray) -> np.ndarray:
+        """λ_min(L_B(t) + L_B(t)ᵀ) of the design as computed (floating point) at times ts."""
+        tv = self.tv
+        per = max(1, int(32 * 2**20 // (8 * 2 * tv.nd * tv.nd)))
+        out = []
+        for chunk in np.array_split(ts, -(-len(ts) // per)):
+            lb = lemma1_batch(tv, self.st, chunk, np.ones(self.d), self.margin)
+            lap = lb.lap_b(self.st)
+            out.append(np.linalg.eigvalsh(lap + np.swapaxes(lap, 1, 2))[:, 0])
+        return np.concatenate(out)
+
+    def leaf(self, a: float, b: float, sample: float = math.nan) -> LeafBound:
+        st, tv, d = self.st, self.tv, self.d
+        tay = self.taylor(a, b)
+        vm, vr, d1m, d1r, d2m, d2r, r0m, r0r = tay
+        h = 0.5 * (b - a)
+        mid = vm
+        rad = vr + h * (np.abs(d1m) + d1r) + 0.5 * h * h * (np.abs(d2m) + d2r) + np.abs(r0m) + r0r
+        rad = rad * (1 + 1e-12)
+        if not (np.all(np.isfinite(rad)) and np.all(np.isfinite(mid))):
+            k = int(np.argmax(~np.all(np.isfinite(rad) & np.isfinite(mid), axis=(1, 2))))
+            raise CertificationRefused(
+                f"{tv.edges[k].field}: weight unbounded on t ∈ [{a:.6g}, {b:.6g}] "
+                "(Assumption 3 needs bounded entries)"
+            )
+        g = gamma(4 * d + 8)
+        live = np.array(self.live, dtype=np.int64)
+        hi = (np.abs(mid) + rad)[live] * (1 + g)  # |a_kl| <= hi
+        d_sup = float(np.max(hi)) if hi.size else 0.0
+        inf_norm = np.max(np.sum(hi, axis=2), axis=1) * (1 + g)
+        fro = np.sqrt(np.sum(hi * hi, axis=(1, 2))) * (1 + g)
+        lam1 = float(np.max(np.minimum(inf_norm, fro) ** 2)) * (1 + g) if hi.size else 0.0
+        sgn = st.sign[live][:, None]
+        rs_m = sgn * np.sum(mid[live], axis=2)
+        rs_r = np.sum(rad[live], axis=2) + g * np.sum(np.abs(mid[live]), axis=2)
+        rs_hi = np.abs(rs_m) + rs_r
+        p_up = float(self.sigma**2 * np.sum(rs_hi * rs_hi)) * (1 + g)
+        dl = self.delta_lower(mid, rad)
+        lower = self.lambda_lower(a, b, dl, tay)
+        return LeafBound(a, b, lower, sample, dl, d_sup, lam1, p_up)
+
+    def delta_lower(self, mid: np.ndarray, rad: np.ndarray) -> float:
+        """A lower bound on δ(t) = C(t) + ΔC over an interval where every weight lies in
+        mid ± rad (see the module docstring); midpoint-radius arithmetic with rounding."""
+        st, d, n = self.st, self.d, self.st.n
+        if not st.candidates:
+            return self.margin
+        g = gamma(4 * d + 2 * len(st.sign) + 8)
+        absmid = st.sign[:, None, None] * mid
+        inn_m = np.einsum("ie,eab->iab", st.in_inc, absmid)
+        out_m = np.einsum("ie,eab->iab", st.out_inc, absmid)
+        s_m = np.einsum("ie,eab->iab", st.neg_in, absmid)
+        inn_r = np.einsum("ie,eab->iab", st.in_inc, rad) + g * np.einsum(
+            "ie,eab->iab", st.in_inc, np.abs(mid)
+        )
+        out_r = np.einsum("ie,eab->iab", st.out_inc, rad) + g * np.einsum(
+            "ie,eab->iab", st.out_inc, np.abs(mid)
+        )
+        s_r = np.einsum("ie,eab->iab", st.neg_in, rad) + g * np.einsum(
+            "ie,eab->iab", st.neg_in, np.abs(mid)
+        )
+
+        def quad(x: np.ndarray, mm: np.ndarray, mr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            ax = np.abs(x)
+            v = np.einsum("ka,kab,kb->k", x, mm, x)
+            r = np.einsum("ka,kab,kb->k", ax, mr + g * np.abs(mm), ax) * (1 + g)
+            return v - r, v + r
+
+        cand = np.array(st.candidates)
+        mm = out_m[cand] - inn_m[cand]
+        mm = 0.5 * (mm + np.swapaxes(mm, 1, 2))
+        ss = 0.5 * (s_m[cand] + np.swapaxes(s_m[cand], 1, 2))
+        lc = np.linalg.cholesky(ss)
+        z = np.linalg.solve(lc, np.swapaxes(np.linalg.solve(lc, mm), 1, 2))
+        _, vec = np.linalg.eigh(0.5 * (z + np.swapaxes(z, 1, 2)))
+        x = np.linalg.solve(np.swapaxes(lc, 1, 2), vec[:, :, -1:])[:, :, 0]
+        n_lo, _ = quad(x, mm, out_r[cand] + inn_r[cand])
+        d_lo, d_hi = quad(x, ss, s_r[cand])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            q = np.where(n_lo >= 0, n_lo / d_hi, n_lo / d_lo)
+        q = np.where(d_lo > 0, q * (1 - 4 * g) - 1e-300, -np.inf)
+        c_lo = 0.5 * q
+        # in-degree-domination possibly true: an upper bound on λ_min(Σ_in − Σ_out)
+        xm = inn_m - out_m
+        xm = 0.5 * (xm + np.swapaxes(xm, 1, 2))
+        _, vec = np.linalg.eigh(xm)
+        v = vec[:, :, 0]
+        _, up = quad(v, xm, inn_r + out_r)
+        up = up / (np.sum(v * v, axis=1) * (1 - 4 * g))
+        sc = np.maximum(
+            np.sqrt(np.sum((np.abs(inn_m) + inn_r) ** 2, axis=(1, 2))),
+            np.sqrt(np.sum((np.abs(out_m) + out_r) ** 2, axis=(1, 2))),
+        ) * (1 + g)
+        possibly = up >= -DEF_RTOL * sc
+        order = np.argsort(c_lo, kind="stable")
+        covered = np.zeros(n, dtype=bool)
+        in_v1 = np.zeros(n, dtype=bool)
+        c_low = float(np.max(c_lo))
+        for q_ in order:
+            covered |= st.reach[q_]
+            in_v1[st.candidates[q_]] = True
+            if covered.all() and np.all(possibly | in_v1):
+                c_low = float(c_lo[q_])
+                break
+        v_ = c_low + self.margin
+        # the design computes δ in floating point: allow a relative 1e-12 below
+        return max(v_ - 1e-12 * abs(v_) - 1e-300, 0.0) if math.isfinite(v_) else 0.0
+
+    def _assemble(self, w: np.ndarray, dl: float, magnitude: bool = False) -> np.ndarray:
+        """S = L + Lᵀ + 2δ·blockdiag(B_i) for weights ``w`` (E, d, d) (linear in w), or the
+        same with every coefficient's absolute value (``magnitude``, w >= 0)."""
+        st = self.st
+        sg = np.ones_like(st.sign) if magnitude else st.sign
+        absw = sg[:, None, None] * w
+        b = np.einsum("ie,eab->iab", st.neg_in, absw)
+        off = -w if magnitude else w
+        lap = grounded_laplacian_batch(st, off[None], absw[None], dl, b[None])[0]
+        return lap + lap.T
+
+    def lambda_lower(self, a: float, b: float, dl: float, tay=None) -> float:
+        """Certified lower bound on λ_min(L + Lᵀ + 2δ_lo·blockdiag(B_i)) on [a, b].
+
+        S(t) = S(m) + τ S'(m) + τ²/2 S''(ξ) with |τ| <= h = (b − a)/2. λ_min of the affine
+        family S(m) + τ S'(m) is concave in τ, so its least value on [−h, h] is at τ = ±h;
+        the remainder costs h²/2·‖S''‖₂ (Weyl). Every matrix carries its rounding and
+        enclosure radii into the Weyl term."""
+        st = self.st
+        vm, vr, d1m, d1r, d2m, d2r, r0m, r0r = tay if tay is not None else self.taylor(a, b)
+        h = 0.5 * (b - a)
+        s0 = self._assemble(vm, dl)
+        s1 = self._assemble(d1m, dl)
+        mag = lambda x: self._assemble(np.abs(x), dl, magnitude=True)  # noqa: E731
+        g = gamma(st.n + 8)
+        err0 = mag(vr) + g * mag(np.abs(vm)) + h * (mag(d1r) + g * mag(np.abs(d1m)))
+        rem = 0.5 * h * h * mag(np.abs(d2m) + d2r) + mag(np.abs(r0m) + r0r)
+        rho_rem = float(np.max(np.sum(rem, axis=1))) * (1 + 1e-12) if rem.size else 0.0
+        lows = [
+            sym_min_eig_lower(s0 + sgn * h * s1, err0 + g * (np.abs(s0) + h * np.abs(s1)))
+            for sgn in (-1.0, 1.0)
+        ]
+        return float(np.nextafter(min(lows) - rho_rem, -np.inf))
+
+
+def _domain(tv: ExpressionTopology) -> tuple[float, float, str]:
+    from ..interval import upper
+
+    if tv.period is not None:
+        return 0.0, upper(enclose(tv.period, t_ball(0.0, 0.0))), f"one period [0, {tv.period}]"
+    if tv.constant_after is not None:
+        return (
+            0.0,
+            upper(enclose(tv.constant_after, t_ball(0.0, 0.0))),
+            f"[0, {tv.constant_after}] and the constant tail",
+        )
+    raise AssertionError
+
+
+def refuse_unbounded_horizon(tv: ExpressionTopology, margin: float) -> None:
+    """Neither period nor constant_after: say why no uniform bound can be certified."""
+    t = symbol("t")
+    limits = []
+    for e in tv.edges:
+        lim = np.zeros((tv.dim, tv.dim))
+        for r, row in enumerate(e.weight.entries):
+            for c, x in enumerate(row):
+                if not x.has(t):
+                    lim[r, c] = float(x)
+                    continue
+                try:
+                    v = sp.limit(x, t, sp.oo)
+                except Exception:  # noqa: BLE001 - sympy may fail on anything
+                    v = None
+                if v is None or not v.is_number or v.has(sp.AccumBounds):
+                    if v is not None and v.has(sp.AccumBounds):
+                        continue
+                    raise CertificationRefused(
+                        f"{e.field}: entry [{r}][{c}] = {x} has no limit as t → ∞ that sympy "
+                        "can find; declare period or constant_after to certify Theorems 3-4"
+                    )
+                if v in (sp.oo, -sp.oo, sp.zoo):
+                    raise CertificationRefused(
+                        f"{e.field}: entry [{r}][{c}] = {x} is unbounded (→ {v} as t → ∞): "
+                        "Assumption 3 (|a_kl(t)| <= D) fails"
+                    )
+                lim[r, c] = float(v)
+        limits.append(lim)
+    fading = [
+        e.field for e, lim in zip(tv.edges, limits, strict=True) if e.sign != 0 and not np.any(lim)
+    ]
+    from ..design import design_topology
+    from ..model import Topology
+
+    w = {(e.i, e.j): lim for e, lim in zip(tv.edges, limits, strict=True) if np.any(lim)}
+    lam_inf = None
+    try:
+        top = Topology(tv.labels, tv.dim, w)
+        des = design_topology(top, np.ones(tv.dim), margin, thresholds=False)
+        lb = des.grounded_laplacian()
+        lb = np.asarray(lb.todense()) if hasattr(lb, "todense") else np.asarray(lb)
+        lam_inf = float(np.linalg.eigvalsh(lb + lb.T)[0])
+    except InputError:
+        pass
+    if fading or (lam_inf is not None and lam_inf <= 1e-12):
+        why = (
+            f"{', '.join(fading)} fade{'s' if len(fading) == 1 else ''} to 0"
+            if fading
+            else (f"the limit topology has λ_min(L_B + L_Bᵀ) = {lam_inf:.3g}")
+        )
+        raise CertificationRefused(
+            f"Λ₂ = 0: {why} as t → ∞, so inf_t λ_min(L_B(t) + L_B(t)ᵀ) = 0 although it may be "
+            "positive at every t; the proof of Theorems 3-4 needs a uniform Λ₂ > 0"
+        )
+    raise CertificationRefused(
+        "the weights are neither periodic nor constant after a time: declare period or "
+        "constant_after to certify the uniform bound Λ₂ of Theorems 3-4"
+    )
+
+
+@dataclass(frozen=True)
+class TimeVaryingBound:
+    lambda2: float
+    sampled_inf: float
+    t_at_inf: float
+    D: float
+    lambda1: float
+    p_bar: float
+    leaves: tuple[LeafBound, ...]
+    domain: tuple[float, float]
+    domain_text: str
+    seconds: float
+
+
+def certify_lambda2(
+    tv: ExpressionTopology,
+    margin: float = 0.1,
+    sigma: float = 0.4,
+    rtol: float = RTOL,
+    max_intervals: int = MAX_INTERVALS,
+) -> TimeVaryingBound:
+    """Branch and bound for Λ₂ <= inf_t λ_min(L_B(t) + L_B(t)ᵀ) (see the module docstring).
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        The topology (its sign classes already proven).
+    margin : float
+        ΔC of Lemma 1 (δ(t) = C(t) + ΔC).
+    sigma : float
+        The additive noise intensity σ_ji (for p̄).
+    rtol : float
+        Bisect until the certified bound is within this fraction of the sampled infimum.
+    max_intervals : int
+        A bound on the number of leaves.
+
+    Returns
+    -------
+    TimeVaryingBound
+
+    Raises
+    ------
+    CertificationRefused
+        No period or constant_after (with the reason: Λ₂ = 0, unbounded, ...), a weight
+        unbounded on the domain, or L_B + L_Bᵀ not positive definite at some t.
+    """
+    t_start = time.perf_counter()
+    if tv.domain is None:
+        refuse_unbounded_horizon(tv, margin)
+    a0, b0, text = _domain(tv)
+    st = lemma1_structure(tv)
+    enc = _Enclosures(tv, st, margin, sigma)
+    pieces = np.linspace(a0, b0, FIRST_PIECES + 1)
+    pieces[-1] = b0
+    heap: list[tuple[float, int, LeafBound]] = []
+    best, best_t = math.inf, 0.0
+    count = 0
+    todo = [(float(x), float(y)) for x, y in zip(pieces[:-1], pieces[1:], strict=True)]
+    while todo:
+        mids = np.array([0.5 * (x + y) for x, y in todo])
+        smp = enc.samples(mids)
+        k = int(np.argmin(smp))
+        if smp[k] < best:
+            best, best_t = float(smp[k]), float(mids[k])
+        if best <= 0:
+            raise CertificationRefused(
+                f"L_B(t) + L_B(t)ᵀ is not positive definite at t = {best_t:.6g} "
+                f"(λ_min = {best:.4g}): Theorems 3-4 do not apply"
+            )
+        for (x, y), sm in zip(todo, smp, strict=True):
+            leaf = enc.leaf(x, y, float(sm))
+            heapq.heappush(heap, (leaf.lower, count, leaf))
+            count += 1
+        todo = []
+        target = (1 - rtol) * best
+        while heap and heap[0][0] < target and len(heap) + len(todo) < max_intervals:
+            _, _, leaf = heapq.heappop(heap)
+            m = 0.5 * (leaf.a + leaf.b)
+            if not leaf.a < m < leaf.b or len(todo) >= 128:
+                heapq.heappush(heap, (leaf.lower, count, leaf))
+                count += 1
+                break
+            todo += [(leaf.a, m), (m, leaf.b)]
+        if len(heap) + len(todo) >= max_intervals:
+            for x, y in todo:  # evaluate what was split, then stop
+                leaf = enc.leaf(x, y)
+                heapq.heappush(heap, (leaf.lower, count, leaf))
+                count += 1
+            break
+    leaves = tuple(sorted((x[2] for x in heap), key=lambda q: q.a))
+    lam2 = min(q.lower for q in leaves)
+    if not lam2 > 0:
+        raise CertificationRefused(
+            f"could not certify λ_min(L_B(t) + L_B(t)ᵀ) > 0 on {text} with {len(leaves)} "
+            f"intervals (certified {lam2:.4g}, sampled infimum {best:.4g} at t = {best_t:.6g})"
+        )
+    return TimeVaryingBound(
+        lam2,
+        best,
+        best_t,
+        max(q.D for q in leaves),
+        max(q.lambda1 for q in leaves),
+        max(q.p_bar for q in leaves),
+        leaves,
+        (a0, b0),
+        text,
+        time.perf_counter() - t_start,
+    )
+
+
+# ------------------------------------------------------------------ t0 of μ₂(t)
+
+T0_SCAN_END = 1e9
+
+
+def mu2_threshold(lambda2: float, lambda1: float, sigma_bar: float, n: int) -> float:
+    """κ = Λ₂ / (2σ̄Λ₁N): μ₂(t) = c(t)[Λ₂ − 2σ̄Λ₁N c(t)] > 0 exactly when 0 < c(t) < κ."""
+    den = 2.0 * sigma_bar * lambda1 * n
+    return math.inf if den == 0 else lambda2 / den
+
+
+def mu2_t0(gain: str, kappa: float) -> tuple[float | None, str]:
+    """The least t₀ on a fine scan with c(t) < κ for every t >= t₀, and how it was proven:
+    ball arithmetic on [t₀, 10⁹] and sympy's monotonicity of c beyond."""
+    c = parse_expression(gain, "gain")
+    t = symbol("t")
+    if not c.has(t):
+        v = float(c)
+        return (
+            (0.0, "constant gain below κ") if v < kappa else (None, f"constant gain {v:.4g} >= κ")
+        )
+    fn = compile_expression(c)
+    grid = np.concatenate([[0.0], np.geomspace(1e-6, T0_SCAN_END, 4000)])
+    vals = fn(grid)
+    above = np.nonzero(~(vals < kappa))[0]
+    if above.size == 0:
+        t0 = 0.0
+    elif above[-1] == grid.size - 1:
+        return None, f"c(t) >= κ = {kappa:.4g} still at t = {T0_SCAN_END:g}"
+    else:
+        lo, hi = grid[above[-1]], grid[above[-1] + 1]
+        for _ in range(60):
+            m = 0.5 * (lo + hi)
+            if fn(np.array([m]))[0] < kappa:
+                hi = m
+            else:
+                lo = m
+        # a little above the crossing (6 significant digits, rounded up) so that the
+        # ball-arithmetic proof below closes
+        e10 = 10 ** (math.floor(math.log10(hi)) - 5) if hi > 0 else 1e-6
+        t0 = float(math.ceil(hi * (1 + 1e-7) / e10) * e10)
+    # prove c < κ on [t0, T0_SCAN_END] by bisection in ball arithmetic
+    stack = [(t0, T0_SCAN_END)]
+    n_ev = 0
+    while stack:
+        a, b = stack.pop()
+        n_ev += 1
+        hi_c = bounds(enclose(c, t_ball(a, b)))[1]
+        if hi_c < kappa:
+            continue
+        if b - a < 1e-9 * max(1.0, a) or n_ev > 20000:
+            return t0, "numerical (the ball-arithmetic proof did not close)"
+        m = 0.5 * (a + b) if b < 2 * max(a, 1.0) else max(2 * a, a + 1.0)
+        stack += [(a, m), (m, b)]
+    try:
+        dec = sp.is_decreasing(c, sp.Interval(T0_SCAN_END, sp.oo))
+    except Exception:  # noqa: BLE001 - sympy may fail on anything
+        dec = None
+    if dec:
+        return t0, "ball arithmetic on t0 <= t <= 1e9, c decreasing beyond (sympy)"
+    return t0, "ball arithmetic on t0 <= t <= 1e9; beyond 1e9 not proven"
+
+
+# ------------------------------------------------------------------ certificate
+
+
+def noise_sigma_bar(f: Any) -> float:
+    """σ̄ of Assumption 1 for f(x) = s·x (|s|) or f(x) = F x (‖F‖₂)."""
+    arr = np.asarray(f, dtype=float)
+    return float(abs(arr)) if arr.ndim == 0 else float(np.linalg.norm(arr, 2))
+
+
+def time_varying_certificate(
+    tv: ExpressionTopology,
+    theta,
+    margin: float = 0.1,
+    gain: str | None = None,
+    sigma: float = 0.4,
+    f: Any = 0.3,
+) -> dict:
+    """Certify the uniform bound of Theorems 3-4 and write it as a certificate mapping."""
+    from .certificate import FORMAT, VERSION, _finish
+
+    bound = certify_lambda2(tv, margin, sigma)
+    sigma_bar = noise_sigma_bar(f)
+    kappa = mu2_threshold(bound.lambda2, bound.lambda1, sigma_bar, tv.n)
+    t0, t0_how = mu2_t0(gain, kappa) if gain is not None else (None, "no gain given")
+    results = {
+        "lambda2": bound.lambda2,
+        "sampled_inf": bound.sampled_inf,
+        "t_at_sampled_inf": bound.t_at_inf,
+        "relative_gap": (bound.sampled_inf - bound.lambda2) / bound.sampled_inf,
+        "D": bound.D,
+        "Lambda1": bound.lambda1,
+        "p_bar": bound.p_bar,
+        "sigma_bar": sigma_bar,
+        "kappa": kappa,
+        "t0": t0,
+        "t0_proof": t0_how,
+        "domain": list(bound.domain),
+        "domain_text": bound.domain_text,
+        "intervals": len(bound.leaves),
+        "seconds": bound.seconds,
+    }
+    doc = {
+        "format": FORMAT,
+        "version": VERSION,
+        "kind": "time_varying",
+        "certifies": ["uniform_symmetric_part"],
+        "size": int(tv.nd),
+        "subject": {
+            "topology": tv.to_dict(),
+            "theta": [float(x) for x in np.asarray(theta, dtype=float)],
+            "margin": float(margin),
+            "noise": {"sigma": float(sigma), "f": np.asarray(f, dtype=float).tolist()},
+            "gain": gain,
+        },
+        "intervals": [[q.a, q.b, q.lower] for q in bound.leaves],
+        "claims": [
+            {"id": "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval", "kind": "lambda2"},
+            {"id": "|a_kl(t)| <= D (Assumption 3)", "kind": "D"},
+            {"id": "λ_max²(|A_ij(t)|) <= Λ₁ and Σσ²Σ_l(Σ_k|a_lk|)² <= p̄", "kind": "lambda1"},
+            {"id": "μ₂(t) > 0 for t >= t₀", "kind": "t0"},
+        ],
+        "results": {"time_varying": results},
+        "solver": {"name": "branch and bound, Arb ball arithmetic", "status": "ok"},
+    }
+    doc["verification_method"] = "interval"
+    return _finish(doc)
+
+
+def verify_time_varying(doc: dict, source: str = "certificate"):
+    """Re-check a time-varying certificate: re-parse the topology (re-proving its sign
+    classes), re-enclose every recorded interval and check its bound, the cover of the
+    domain, D, Λ₁, p̄ and t₀. Raises InputError when malformed."""
+    from .certificate import Check, Verification, _need, digest
+
+    checks: list[Check] = []
+    want = digest(doc)
+    checks.append(
+        Check(
+            "digest",
+            want == doc["digest"],
+            "matches" if want == doc["digest"] else "the file was modified after it was issued",
+        )
+    )
+    subj = _need(doc, "subject", dict, source)
+    top_doc = _need(subj, "topology", dict, f"{source}: subject")
+    margin = _need(subj, "margin", (int, float), f"{source}: subject")
+    noise = _need(subj, "noise", dict, f"{source}: subject")
+    gain = subj.get("gain")
+    res = _need(_need(doc, "results", dict, source), "time_varying", dict, f"{source}: results")
+    ivs = _need(doc, "intervals", list, source)
+    tv = from_document(top_doc, f"{source}: subject.topology")
+    if tv.domain is None:
+        raise InputError(f"{source}: the topology declares neither period nor constant_after")
+    lam2 = res.get("lambda2")
+    for key in ("lambda2", "D", "Lambda1", "p_bar"):
+        v = res.get(key)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise InputError(f"{source}: results.time_varying.{key} must be a number")
+    if not ivs or any(
+        not isinstance(q, list)
+        or len(q) != 3
+        or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in q)
+        for q in ivs
+    ):
+        raise InputError(f"{source}: intervals must be a non-empty list of [a, b, bound]")
+    if len(ivs) > 100000:
+        raise InputError(f"{source}: too many intervals")
+    a0, b0, text = _domain(tv)
+    cover = (
+        ivs[0][0] <= a0
+        and ivs[-1][1] >= b0
+        and all(ivs[k][1] == ivs[k + 1][0] and ivs[k][0] < ivs[k][1] for k in range(len(ivs) - 1))
+    )
+    checks.append(
+        Check(
+            "the intervals cover the domain",
+            bool(cover),
+            f"{len(ivs)} intervals over {text}" if cover else "gap, overlap or short cover",
+        )
+    )
+    sigma = float(_need(noise, "sigma", (int, float), f"{source}: subject.noise"))
+    enc = _Enclosures(tv, lemma1_structure(tv), float(margin), sigma)
+    worst = math.inf
+    d_max = lam1 = p_bar = 0.0
+    for a, b, _ in ivs:
+        leaf = enc.leaf(float(a), float(b))
+        worst = min(worst, leaf.lower)
+        d_max, lam1, p_bar = max(d_max, leaf.D), max(lam1, leaf.lambda1), max(p_bar, leaf.p_bar)
+    ok2 = lam2 > 0 and worst >= lam2
+    checks.append(
+        Check(
+            "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval",
+            ok2,
+            f"re-enclosed: least bound {worst:.6g} vs claimed Λ₂ = {lam2:.6g}",
+        )
+    )
+    checks.append(
+        Check(
+            "|a_kl(t)| <= D (Assumption 3)",
+            d_max <= res["D"],
+            f"re-enclosed sup {d_max:.6g} vs claimed D = {res['D']:.6g}",
+        )
+    )
+    checks.append(
+        Check(
+            "λ_max²(|A_ij(t)|) <= Λ₁ and p̄",
+            lam1 <= res["Lambda1"] and p_bar <= res["p_bar"],
+            f"re-enclosed Λ₁ {lam1:.6g} (claimed {res['Lambda1']:.6g}), "
+            f"p̄ {p_bar:.6g} (claimed {res['p_bar']:.6g})",
+        )
+    )
+    t0 = res.get("t0")
+    if gain is not None and t0 is not None:
+        sigma_bar = noise_sigma_bar(noise.get("f", 0.3))
+        kappa = mu2_threshold(float(lam2), float(res["Lambda1"]), sigma_bar, tv.n)
+        t0_new, how = mu2_t0(str(gain), kappa)
+        ok = t0_new is not None and t0_new <= float(t0) * (1 + 1e-9) + 1e-12
+        checks.append(Check("μ₂(t) > 0 for t >= t₀", ok, f"t₀ = {t0_new} ({how}) vs claimed {t0}"))
+    return Verification(all(c.ok for c in checks), "interval", tuple(checks))
+
+
+def time_varying_verdicts(result: dict, ver, gain) -> tuple:
+    """Theorems 3 and 4 for a continuously time-varying topology."""
+    from .theorems import Premise, TheoremVerdict, _gain_premises
+
+    r = result
+    a1 = Premise(
+        "Assumption 1 (‖f_ji(x)‖ <= σ̄‖x‖)", True, f"f(x) = F x with σ̄ = {r['sigma_bar']:.4g}"
+    )
+    a3 = Premise(
+        "Assumption 3 (bounded weight entries)",
+        ver.valid,
+        f"|a_kl(t)| <= D = {r['D']:.6g} for every t (ball arithmetic over {r['domain_text']})",
+    )
+    lam = Premise(
+        "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for every t (uniform, used by the proof)",
+        ver.valid and r["lambda2"] > 0,
+        f"Λ₂ = {r['lambda2']:.6g} certified on {r['intervals']} t-intervals "
+        f"(sampled infimum {r['sampled_inf']:.6g})",
+    )
+    return (
+        TheoremVerdict(3, "mean square", (a1, a3, lam, *_gain_premises(gain, False))),
+        TheoremVerdict(4, "almost sure", (a1, a3, lam, *_gain_premises(gain, True))),
+    )
+
+
+__all__ = [
+    "CertificationRefused",
+    "LeafBound",
+    "TimeVaryingBound",
+    "certify_lambda2",
+    "mu2_t0",
+    "mu2_threshold",
+    "refuse_unbounded_horizon",
+    "time_varying_certificate",
+    "time_varying_verdicts",
+    "verify_time_varying",
+]

@@ -1,0 +1,132 @@
+"""Rigorous enclosures of expressions of t over a t-interval (ball arithmetic, python-flint).
+
+:func:`enclose` evaluates a sympy expression (built by :mod:`ntc_design.expr`, never user
+text) in Arb ball arithmetic with t ranging over a closed interval [a, b]: the result is a
+ball guaranteed to contain the expression's value at every t in [a, b] (Arb's outward
+rounding; functions are evaluated on balls by their enclosure rules). A value that is not
+finite on the interval (a pole of tan, log near 0, an overflow) gives a non-finite ball,
+which callers treat as "unbounded here".
+
+:func:`bounds` turns a ball into a pair of doubles (lo, hi) with lo <= every value <= hi
+(one extra ulp outwards after Arb's own rounding).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import sympy as sp
+from flint import arb
+
+from .expr import symbol
+
+_T = symbol("t")
+
+
+class NotEnclosable(ValueError):
+    """The expression uses an operation without an interval rule here."""
+
+
+def t_ball(a: float, b: float) -> arb:
+    """A ball containing the interval [a, b] of doubles."""
+    return arb(a).union(arb(b))
+
+
+def _pow(base: arb, e: sp.Expr, ev: Callable[[sp.Expr], arb]) -> arb:
+    if isinstance(e, sp.Integer):
+        n = int(e)
+        if n >= 0:
+            return base**n
+        return 1 / base ** (-n)
+    if isinstance(e, sp.Rational) and int(e.q) == 2:
+        r = base.sqrt()
+        return r ** int(e.p) if e.p > 0 else 1 / r ** int(-e.p)
+    return (ev(e) * base.log()).exp()
+
+
+def enclose(expr: sp.Expr, t: arb, cache: dict | None = None) -> arb:
+    """A ball containing ``expr(τ)`` for every τ in the ball ``t``."""
+    ts = _T
+    memo: dict = cache if cache is not None else {}
+
+    def ev(e: sp.Expr) -> arb:
+        if e in memo:
+            return memo[e]
+        if e == ts:
+            r = t
+        elif isinstance(e, sp.Integer):
+            r = arb(int(e))
+        elif isinstance(e, sp.Rational):
+            r = arb(int(e.p)) / int(e.q)
+        elif isinstance(e, sp.Float):
+            r = arb(float(e))
+        elif e is sp.pi:
+            r = arb.pi()
+        elif e is sp.E:
+            r = arb(1).exp()
+        elif isinstance(e, sp.Add):
+            r = arb(0)
+            for a in e.args:
+                r = r + ev(a)
+        elif isinstance(e, sp.Mul):
+            r = arb(1)
+            for a in e.args:
+                r = r * ev(a)
+        elif isinstance(e, sp.Pow):
+            r = _pow(ev(e.args[0]), e.args[1], ev)
+        elif isinstance(e, sp.Abs):
+            x = ev(e.args[0])
+            lo, hi = x.lower(), x.upper()
+            if lo >= 0:
+                r = x
+            elif hi <= 0:
+                r = -x
+            else:
+                r = arb(0).union(-lo if -lo > hi else hi)
+        elif isinstance(e, (sp.Min, sp.Max)):
+            xs = [ev(a) for a in e.args]
+            pick = min if isinstance(e, sp.Min) else max
+            lo = pick(x.lower() for x in xs)
+            hi = pick(x.upper() for x in xs)
+            r = arb(lo).union(arb(hi))
+        else:
+            fn = {
+                sp.exp: arb.exp,
+                sp.log: arb.log,
+                sp.sin: arb.sin,
+                sp.cos: arb.cos,
+                sp.tan: arb.tan,
+                sp.sinh: arb.sinh,
+                sp.cosh: arb.cosh,
+                sp.tanh: arb.tanh,
+                sp.atan: arb.atan,
+            }.get(type(e))
+            if fn is None:
+                raise NotEnclosable(f"no interval rule for {type(e).__name__}")
+            r = fn(ev(e.args[0]))
+        memo[e] = r
+        return r
+
+    return ev(expr)
+
+
+def bounds(x: arb) -> tuple[float, float]:
+    """(lo, hi) doubles with lo <= x <= hi for every point of the ball (±inf if unbounded)."""
+    if not x.is_finite():
+        return -math.inf, math.inf
+    lo = float(x.lower())
+    hi = float(x.upper())
+    return float(np.nextafter(lo, -np.inf)), float(np.nextafter(hi, np.inf))
+
+
+def upper(x: arb) -> float:
+    return bounds(x)[1]
+
+
+def lower(x: arb) -> float:
+    return bounds(x)[0]
+
+
+__all__ = ["NotEnclosable", "bounds", "enclose", "lower", "t_ball", "upper"]

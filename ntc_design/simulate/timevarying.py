@@ -1,0 +1,492 @@
+"""Simulation with a continuously time-varying topology: A(t) and the Lemma 1 protocol
+re-evaluated at every Euler–Maruyama step and inside the moment equations (arXiv: Niu & Wu,
+eq. (SAN_noise) with G(t)).
+
+Per batch of steps the weights are evaluated by the compiled expressions and Lemma 1 by
+:func:`ntc_design.timevarying.lemma1_batch` (batched Cholesky/eigenvalues), giving for each
+step the drift matrix −L_B(t)ᵀ, the input u(t) = (Δ(t)⊗I)B(t)x0(t), the additive-noise
+directions G(t) and the multiplicative weights |A_ij(t)|; the step itself is the fixed
+topology's (one matrix product for drift and edge differences). The moment equations
+
+    dm/dt = −c L_B(t) m,  dS/dt = −c (L_B(t) S + S L_B(t)ᵀ) + c² (G(t)G(t)ᵀ + Σ_e K_e(t)…)
+
+are integrated by classical RK4 with the matrices evaluated at t, t + h/2 and t + h.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..timevarying import ExpressionTopology, Lemma1Structure, TimeVaryingDesign
+from .grid import TimeGrid
+from .moments import KAPPA, Moments
+from .montecarlo import PartialStats, _first_bad
+from .system import NoiseModel
+
+BATCH = 64  # steps whose matrices and normals are made at once
+MAX_BATCH_BYTES = 32 * 2**20
+
+
+@dataclass(frozen=True, eq=False)
+class TimeVaryingSystem:
+    """The SAN with A(t): constant edge-difference matrix, per-edge σ, f and the design."""
+
+    design: TimeVaryingDesign
+    dmat: np.ndarray  # Ed×Nd edge differences (F applied when f is linear)
+    sigma: np.ndarray  # (E,) σ_ji per live edge
+    fmat: np.ndarray  # d×d
+    f: Callable[[np.ndarray], np.ndarray] | None
+    live: np.ndarray  # indices of the edges with a non-zero sign
+
+    @property
+    def structure(self) -> Lemma1Structure:
+        return self.design.structure
+
+    @property
+    def n_edges(self) -> int:
+        return int(self.live.size)
+
+    def matrices(self, ts: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Per time: M1 = [−L_Bᵀ | Dᵀ] (K, Nd, Nd+Ed), Gᵀ (K, E, Nd), Wᵀ (K, Ed, Nd),
+        u (K, Nd) and L_B (K, Nd, Nd)."""
+        st = self.structure
+        b = self.design.at(ts)
+        lap = b.lap_b(st)
+        u = b.input_vector()
+        k_n, nd_ = lap.shape[0], lap.shape[1]
+        d = st.d
+        absw = b.abs_w[:, self.live]  # (K, E, d, d)
+        e_n = absw.shape[1]
+        ii = st.ii[self.live]
+        m1 = np.empty((k_n, nd_, nd_ + e_n * d))
+        m1[:, :, :nd_] = -np.swapaxes(lap, 1, 2)
+        m1[:, :, nd_:] = self.dmat.T
+        gt = np.zeros((k_n, e_n, st.n, d))
+        gt[:, np.arange(e_n), ii] = self.sigma[None, :, None] * absw.sum(axis=3)
+        wt = np.zeros((k_n, e_n, d, st.n, d))
+        wt[:, np.arange(e_n), :, ii, :] = np.swapaxes(absw, 2, 3).transpose(1, 0, 2, 3)
+        return (
+            m1,
+            gt.reshape(k_n, e_n, nd_),
+            wt.reshape(k_n, e_n * d, nd_),
+            u,
+            lap,
+            absw,
+        )
+
+
+def time_varying_system(des: TimeVaryingDesign, noise: NoiseModel) -> TimeVaryingSystem:
+    tv = des.topology
+    st = des.structure
+    d = tv.dim
+    live = np.nonzero(st.sign != 0)[0]
+    fmat = noise.f_matrix(d) if noise.linear else np.eye(d)
+    dmat = np.zeros((live.size * d, tv.nd))
+    lab = tv.labels
+    sig_by = {(str(a), str(b)): float(s) for (a, b), s in noise.sigma_edges.items()}
+    sig = np.empty(live.size)
+    for k, e in enumerate(live):
+        i, j = int(st.ii[e]), int(st.jj[e])
+        dmat[k * d : (k + 1) * d, j * d : (j + 1) * d] = fmat
+        dmat[k * d : (k + 1) * d, i * d : (i + 1) * d] = -fmat
+        sig[k] = sig_by.pop((str(lab[j]), str(lab[i])), noise.sigma)
+    if sig_by:
+        a, b_ = next(iter(sig_by))
+        raise InputError(f"noise.sigma_edges: no edge {a}->{b_} in {tv.name or 'the topology'}")
+    return TimeVaryingSystem(des, dmat, sig, fmat, None if noise.linear else noise.f, live)
+
+
+def _batch_size(sys_: TimeVaryingSystem) -> int:
+    nd_ = sys_.structure.n * sys_.structure.d
+    per = 8 * nd_ * (2 * nd_ + 2 * sys_.n_edges * sys_.structure.d + sys_.n_edges)
+    return int(max(1, min(BATCH, MAX_BATCH_BYTES // max(per, 1))))
+
+
+@dataclass(frozen=True, eq=False)
+class TimeVaryingMonteCarloSpec:
+    """What :func:`ntc_design.simulate.montecarlo.run` needs; ``run_block`` integrates one
+    block of paths (same seeding and statistics as the fixed-topology blocks)."""
+
+    system: TimeVaryingSystem
+    grid: TimeGrid
+    gain: Callable[[np.ndarray], np.ndarray]
+    theta: np.ndarray
+    x_init: np.ndarray
+    n_agents: int
+    dim: int
+    paths: int
+    seed: int
+    block_size: int = 500
+    store_paths: int = 10
+
+    @property
+    def n_blocks(self) -> int:
+        return -(-self.paths // self.block_size)
+
+    def run_block(self, b: int, progress=None) -> PartialStats:
+        return _run_block_tv(self, b, progress)
+
+
+def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> PartialStats:
+    grid, sys_ = spec.grid, spec.system
+    nd_, n_, d = spec.x_init.size, spec.n_agents, spec.dim
+    p0 = b * spec.block_size
+    p = min(spec.block_size, spec.paths - p0)
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
+    s_n = grid.save_steps.size
+    sq = np.zeros((s_n, n_))
+    sq2 = np.zeros((s_n, n_))
+    state = np.zeros((s_n, nd_))
+    n_store = max(0, min(spec.store_paths - p0, p))
+    stored = np.zeros((n_store, s_n, nd_))
+    theta_t = np.tile(spec.theta, n_)
+    x = np.tile(spec.x_init, (p, 1))
+    ne = sys_.n_edges
+    c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
+    h_all = np.diff(grid.t)
+    ch_all = c_all * h_all
+    cs_all = c_all * np.sqrt(h_all)
+    save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
+    failure = None
+    valid = 0
+
+    def result() -> PartialStats:
+        idx = list(range(p0, p0 + n_store))
+        return PartialStats([b], p, sq, sq2, state, stored, idx, failure, valid)
+
+    def record(i: int) -> bool:
+        nonlocal valid, failure
+        where = _first_bad(x, d)
+        if where is not None:
+            failure = {
+                "t": float(grid.save_times[i]),
+                "agent": where[1],
+                "path": p0 + where[0],
+                "save_index": valid,
+            }
+            return False
+        e = (x - theta_t).reshape(p, n_, d)
+        e2 = np.einsum("pnd,pnd->pn", e, e)
+        sq[i] = e2.sum(axis=0)
+        sq2[i] = (e2 * e2).sum(axis=0)
+        state[i] = x.sum(axis=0)
+        if n_store:
+            stored[:, i] = x[:n_store]
+        valid = i + 1
+        return True
+
+    if 0 in save_at and not record(save_at[0]):
+        return result()
+    batch = _batch_size(sys_)
+    xi = np.empty((batch, p, 2 * ne))
+    for k0 in range(0, grid.n_steps, batch):
+        kb = min(batch, grid.n_steps - k0)
+        m1, gt, wt, u, _, _ = sys_.matrices(grid.t[k0 : k0 + kb])
+        rng.standard_normal(out=xi[:kb])
+        for kk in range(kb):
+            k = k0 + kk
+            y = x @ m1[kk]
+            drift = y[:, :nd_]
+            drift += u[kk]
+            diff = y[:, nd_:].reshape(p, ne, d)
+            if sys_.f is not None:
+                diff = sys_.f(diff)
+            z = (diff * xi[kk, :, ne : 2 * ne, None]).reshape(p, ne * d)
+            noise = xi[kk, :, :ne] @ gt[kk]
+            noise += z @ wt[kk]
+            x += ch_all[k] * drift + cs_all[k] * noise
+            if k + 1 in save_at and not record(save_at[k + 1]):
+                return result()
+        if progress is not None:
+            progress(kb * p)
+        where = _first_bad(x, d)
+        if where is not None:
+            failure = {
+                "t": float(grid.t[k0 + kb]),
+                "agent": where[1],
+                "path": p0 + where[0],
+                "save_index": valid,
+            }
+            return result()
+    return result()
+
+
+def _noise_term(s: np.ndarray, q: np.ndarray, kmat: np.ndarray, ii, jj, n: int, d: int):
+    """``G Gᵀ + Σ_e K_e (S_jj − S_ji − S_ij + S_ii) K_eᵀ`` into the (i, i) blocks."""
+    out = q.copy()
+    if kmat.size:
+        s4 = s.reshape(n, d, n, d)
+        delta = s4[jj, :, jj, :] - s4[jj, :, ii, :] - s4[ii, :, jj, :] + s4[ii, :, ii, :]
+        val = np.einsum("eab,ebc,edc->ead", kmat, delta, kmat)
+        acc = np.zeros((n, d, d))
+        np.add.at(acc, ii, val)
+        ar = np.arange(n)
+        out.reshape(n, d, n, d)[ar, :, ar, :] += acc
+    return out
+
+
+def exact_moments_tv(
+    sys_: TimeVaryingSystem,
+    gain: Callable[[np.ndarray], np.ndarray],
+    eps0: np.ndarray,
+    save_times: np.ndarray,
+    t_end: float,
+) -> Moments:
+    """Integrate the moment equations with A(t) from m(0) = ε0, S(0) = ε0ε0ᵀ by RK4 with
+    steps h <= κ / (c(t) ρ), ρ bounding the generator's spectral radius over [0, T]."""
+    st = sys_.structure
+    n, d = st.n, st.d
+    ii, jj = st.ii[sys_.live], st.jj[sys_.live]
+    # ρ over [0, T]: sampled finely (the weights are smooth) with a 25 % allowance
+    probe = np.linspace(0.0, t_end, 801)
+    _, gt, _, _, lap, absw = sys_.matrices(probe)
+    rho_l = 2 * float(np.max(np.abs(np.linalg.eigvals(lap)))) * 1.25
+    kn = np.linalg.norm(absw @ sys_.fmat, ord=2, axis=(2, 3))
+    rho_q = 4 * float(np.max(np.sum(kn**2, axis=1))) * 1.25 if kn.size else 0.0
+    saves = np.asarray(save_times, dtype=float)
+    # the step grid: through every save time
+    ts = [0.0]
+    t = 0.0
+    stops = list(saves[saves > 0]) + ([t_end] if t_end > saves[-1] else [])
+    for stop in stops:
+        while stop - t > 1e-14 * max(1.0, stop):
+            c0 = float(gain(np.array([t]))[0])
+            rho = rho_l + c0 * rho_q
+            h = min(stop - t, KAPPA / (c0 * rho)) if c0 * rho > 0 else stop - t
+            if stop - t - h < 0.25 * h:
+                h = stop - t
+            t = stop if h == stop - t else t + h
+            ts.append(t)
+    ts = np.array(ts)
+    m = eps0.astype(float).copy()
+    s = np.outer(eps0, eps0)
+    means = np.zeros((saves.size, m.size))
+    ms = np.zeros((saves.size, n))
+    k_save = 0
+
+    def store(tt: float) -> None:
+        nonlocal k_save
+        while k_save < saves.size and abs(saves[k_save] - tt) <= 1e-12 * max(1.0, tt):
+            means[k_save] = m
+            ms[k_save] = np.einsum("iaia->i", s.reshape(n, d, n, d))
+            k_save += 1
+
+    store(0.0)
+    chunk = 256
+    fm = sys_.fmat
+    for c0 in range(0, ts.size - 1, chunk):
+        ta = ts[c0 : min(c0 + chunk, ts.size - 1) + 1]
+        hs = np.diff(ta)
+        tq = np.concatenate([ta[:-1], ta[:-1] + hs / 2, ta[1:]])
+        _, gtq, _, _, lq, aq = sys_.matrices(tq)
+        qq = np.einsum("kea,keb->kab", gtq, gtq)
+        kq = aq @ fm
+        cq = np.asarray(gain(tq), dtype=float) * np.ones(tq.size)
+        kn_ = hs.size
+
+        def f(idx: int, m_: np.ndarray, s_: np.ndarray, lq=lq, cq=cq, qq=qq, kq=kq):
+            lb = lq[idx]
+            c = cq[idx]
+            ls = lb @ s_
+            return -c * (lb @ m_), -c * (ls + ls.T) + c * c * _noise_term(
+                s_, qq[idx], kq[idx], ii, jj, n, d
+            )
+
+        for k in range(kn_):
+            h = hs[k]
+            k1m, k1s = f(k, m, s)
+            k2m, k2s = f(kn_ + k, m + h / 2 * k1m, s + h / 2 * k1s)
+            k3m, k3s = f(kn_ + k, m + h / 2 * k2m, s + h / 2 * k2s)
+            k4m, k4s = f(2 * kn_ + k, m + h * k3m, s + h * k3s)
+            m = m + h / 6 * (k1m + 2 * k2m + 2 * k3m + k4m)
+            s = s + h / 6 * (k1s + 2 * k2s + 2 * k3s + k4s)
+            s = 0.5 * (s + s.T)
+            store(float(ta[k + 1]))
+    return Moments(saves, means, ms, s, int(ts.size - 1))
+
+
+def stability_ratio(sys_: TimeVaryingSystem, grid: TimeGrid, c_grid: np.ndarray) -> tuple:
+    """max over steps of c·h / (2 Re λ / |λ|²) for L_B(t) (explicit Euler on ε' = −c L_B ε),
+    evaluated on up to 2000 steps (every k-th) and at the worst one found."""
+    k_n = grid.n_steps
+    idx = np.unique(np.linspace(0, k_n - 1, min(k_n, 2000)).astype(np.int64))
+    lap = sys_.matrices(grid.t[idx])[4]
+    lam = np.linalg.eigvals(lap)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bnd = np.where(lam.real > 0, 2 * lam.real / np.abs(lam) ** 2, 0.0).min(axis=1)
+    ratio = c_grid[idx] * grid.h[idx] / bnd
+    w = int(np.argmax(ratio))
+    return float(ratio[w]), float(grid.t[idx[w]]), float(bnd[w]), float(grid.h[idx[w]])
+
+
+def simulate_time_varying(
+    tv: ExpressionTopology,
+    theta,
+    *,
+    margin: float,
+    cfun: Callable[[np.ndarray], np.ndarray],
+    noise: NoiseModel,
+    x_init: np.ndarray,
+    grid: TimeGrid,
+    method: str,
+    paths: int,
+    seed: int,
+    block_size: int,
+    store_paths: int,
+    workers: int,
+    progress=None,
+) -> tuple[dict, object, object, dict, list[str]]:
+    """Run Monte Carlo and/or the exact moments with A(t); returns (designs, partial MC
+    statistics or None, moments or None, stats, notes)."""
+    from ..design import design_topology
+    from .montecarlo import run
+
+    th = np.asarray(theta, dtype=float)
+    des = TimeVaryingDesign(tv, th, float(margin))
+    sys_ = time_varying_system(des, noise)
+    notes = [
+        "time-varying topology: A(t), C(t), δ(t), B_i(t), x0(t) re-evaluated at every step "
+        "(Lemma 1 at each instant); the design table shows t = 0"
+    ]
+    designs = {
+        f"{tv.name or 'topology'} at t=0": design_topology(tv.at(0.0), th, margin, thresholds=False)
+    }
+    stats: dict = {}
+    c_grid = cfun(grid.t[:-1])
+    if method != "exact":
+        ratio, tw, bnd, hw = stability_ratio(sys_, grid, c_grid)
+        if ratio >= 1.0:
+            raise InputError(
+                f"dt: Euler–Maruyama is unstable: at t = {tw:.4g}, c·h exceeds 2·Re λ/|λ|² = "
+                f"{bnd:.4g} for L_B(t); use dt < {hw / ratio:.3g}"
+            )
+        if ratio > 0.5:
+            notes.append(
+                f"Euler–Maruyama step within a factor {1 / ratio:.2f} of instability at "
+                f"t = {tw:.4g}; expect a step-size bias"
+            )
+    part = None
+    if method in ("mc", "both"):
+        spec = TimeVaryingMonteCarloSpec(
+            sys_, grid, cfun, th, x_init, tv.n, tv.dim, paths, seed, block_size, store_paths
+        )
+        t0 = time.perf_counter()
+        part = run(spec, workers=workers, progress=progress)
+        sec = time.perf_counter() - t0
+        stats.update({"mc_seconds": sec, "path_steps_per_second": grid.n_steps * paths / sec})
+    exact = None
+    if method in ("exact", "both"):
+        if noise.linear:
+            t0 = time.perf_counter()
+            exact = exact_moments_tv(
+                sys_, cfun, x_init - np.tile(th, tv.n), grid.save_times, float(grid.t[-1])
+            )
+            stats.update(
+                {"exact_seconds": time.perf_counter() - t0, "exact_rk4_steps": exact.steps}
+            )
+        elif method == "exact":
+            raise InputError("method: exact moments need a linear f (a scalar or a matrix)")
+        else:
+            notes.append("exact moments skipped: f is not linear")
+    return designs, part, exact, stats, notes
+
+
+def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, workers: int, progress):
+    """The driver's path for an :class:`ExpressionTopology` (``simulate`` dispatches here):
+    grid, checks, Monte Carlo and exact moments with A(t), and the result."""
+    from ..errors import quote
+    from .grid import build_grid
+    from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
+    from .spec import UniformInitial
+
+    n, d = tv.n, tv.dim
+    ini = spec.initial
+    if ini is None:
+        x_init, ini_notes = np.zeros(n * d), ["initial state: zero"]
+    elif isinstance(ini, UniformInitial):
+        x_init, ini_notes = ini.draw(n * d), []
+    else:
+        if ini.size != n * d:
+            raise InputError(
+                f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
+            )
+        x_init, ini_notes = np.array(ini, dtype=float), []
+    st = spec.stepping
+    grid = build_grid(
+        spec.T,
+        st.dt,
+        spec.save.resolve(spec.T),
+        None,
+        gain=cfun,
+        intrinsic_ds=st.intrinsic_ds,
+        h_max=st.max_step,
+    )
+    c_grid = cfun(grid.t[:-1])
+    if c_grid.shape != grid.t[:-1].shape or not np.all(np.isfinite(c_grid)) or np.any(c_grid < 0):
+        raise InputError(f"gain: {gain_text!r} must be finite and >= 0 on [0, T]")
+    designs, part, exact, stats, notes = simulate_time_varying(
+        tv,
+        spec.theta,
+        margin=spec.margin,
+        cfun=cfun,
+        noise=spec.noise,
+        x_init=x_init,
+        grid=grid,
+        method=spec.method,
+        paths=spec.mc.paths,
+        seed=spec.mc.seed,
+        block_size=spec.mc.block_size,
+        store_paths=spec.mc.store_paths,
+        workers=workers,
+        progress=progress,
+    )
+    notes = ini_notes + notes
+    th = np.asarray(spec.theta, dtype=float)
+    params = spec.options()
+    params.update(
+        {
+            "theta": th.tolist(),
+            "gain": gain_text,
+            "initial": x_init.tolist(),
+            "workers": workers,
+            "save_times": int(grid.save_times.size),
+            "modes": list(designs),
+        }
+    )
+    params["time_varying"] = {
+        "period": str(tv.period) if tv.period is not None else None,
+        "constant_after": str(tv.constant_after) if tv.constant_after is not None else None,
+        "topology": tv.to_dict(),
+    }
+    stats = {"steps": grid.n_steps, "path_steps": grid.n_steps * spec.mc.paths, **stats}
+    mc = _mc_summary(part) if part is not None else None
+    labels = tuple(tv.labels)
+    res = SimulationResult(
+        labels, th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
+    )
+    failure = part.failure if part is not None else None
+    if failure is not None:
+        lab = labels[failure["agent"]]
+        res = _truncate(res, failure["save_index"])
+        res.failure = {**failure, "agent": lab}
+        raise SimulationDiverged(
+            f"simulation diverged (NaN or overflow) by t = {failure['t']:.6g} at agent "
+            f"{quote(lab)} (path {failure['path']})",
+            res,
+        )
+    return res
+
+
+__all__ = [
+    "TimeVaryingMonteCarloSpec",
+    "simulate_expression",
+    "TimeVaryingSystem",
+    "exact_moments_tv",
+    "simulate_time_varying",
+    "time_varying_system",
+]
