@@ -85,6 +85,7 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bench_scale_"))
     base = run_child(["-c", IMPORT])
+    base_design = run_child(["-c", "import ntc_design"])
     print(
         f"# bench_scale: d = {args.d}, seed {args.seed}, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.1f}; import alone: {base['rss']:.0f} MiB"
@@ -92,7 +93,7 @@ def main() -> None:
     print("# columns: wall s, CPU s, peak MiB (child process)")
     rows = []
     # the dense path at its largest documented size, for comparison
-    n_dense = 20
+    n_dense = 7
     f_dense = work / f"net{n_dense}.npz"
     run_child(
         [
@@ -110,6 +111,8 @@ def main() -> None:
         ]
     )
     dense_small = run_child(["-c", DENSE, str(f_dense)])
+    if dense_small["rc"] != 0:
+        print(f"dense path at N = {n_dense} failed: {dense_small['err']}")
     print(
         f"dense path (Lyapunov + decay-rate LMI) at N = {n_dense} (Nd = {n_dense * args.d}): "
         f"{dense_small['wall']:.2f} s wall, {dense_small['cpu']:.2f} s CPU, "
@@ -180,8 +183,8 @@ def main() -> None:
     print("# growth (ratio to the previous size): edges, CPU of certify / verify / design,")
     print("# design peak memory above the bare import")
     for (n0, e0, c0, v0, d0, _), (n1, e1, c1, v1, d1, _) in zip(rows, rows[1:], strict=False):
-        mem0 = max(d0["rss"] - base["rss"], 1.0)
-        mem1 = max(d1["rss"] - base["rss"], 1.0)
+        mem0 = max(d0["rss"] - base_design["rss"], 1.0)
+        mem1 = max(d1["rss"] - base_design["rss"], 1.0)
         vv = f"{v1['cpu'] / v0['cpu']:.1f}" if v0 and v1 else "—"
         print(
             f"{n0:>7} -> {n1:<7}: edges ×{e1 / e0:.1f}; certify CPU ×{c1['cpu'] / c0['cpu']:.1f}; "

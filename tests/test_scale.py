@@ -360,7 +360,7 @@ def test_unreached_agent_is_never_certified(tmp_path, capsys, monkeypatch):
     p = tmp_path / "lonely.npz"
     write_topology(lone, p)
     code, _, err = run_cli(["certify", p, "--theta", "1,0,0"], capsys, monkeypatch)
-    assert code == 1 and "NOT valid" in err
+    assert code == 1 and "not proven" in err
 
 
 def test_certify_cli_at_scale_and_the_lmi_guard(tmp_path, capsys, monkeypatch):

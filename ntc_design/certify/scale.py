@@ -457,6 +457,7 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
         "format": FORMAT,
         "version": VERSION,
         "kind": KIND,
+        "certifies": ["hurwitz"],
         "size": int(top.nd),
         "subject": {"modes": {name: _subject(des)}},
         "components": {
