@@ -123,7 +123,8 @@ def read_document(path: str | Path) -> dict[str, Any]:
     except (OSError, ValueError) as exc:  # a name with a NUL byte, a loop of links
         raise InputError(f"{p}: cannot read the file ({exc.__class__.__name__})") from None
     if not exists:
-        raise InputError(f"{p}: no such file")
+        kind = "no such file (not a regular file)" if p.exists() else "no such file"
+        raise InputError(f"{p}: {kind}")
     if size > MAX_FILE_BYTES:
         raise InputError(
             f"{p}: file of {size / 2**20:.0f} MB is larger than the "
@@ -172,7 +173,7 @@ def _one_line(msg: str, n: int = 80) -> str:
 
 def _check_depth(doc: Any, p: Path) -> None:
     """Refuse JSON nested deeper than MAX_DEPTH (walked iteratively)."""
-    stack = [(doc, 1)]
+    stack = [(doc, 1)] if isinstance(doc, (dict, list)) else []
     while stack:
         x, d = stack.pop()
         if d > MAX_DEPTH:
@@ -303,13 +304,15 @@ def _err(source: str | None, field: str, msg: str) -> InputError:
 
 def _show(x: Any, n: int = 40) -> str:
     """A value for a one-line message: repr, newlines escaped, at most ``n`` characters."""
-    r = repr(x) if not isinstance(x, int) or x.bit_length() < 200 else "a huge integer"
+    if isinstance(x, int) and x.bit_length() >= 200:
+        return f"<an integer of {len(str(x)) if x.bit_length() < 14_000 else 'over 4000'} digits>"
+    r = repr(x)
     return r if len(r) <= n else r[: n - 1] + "…"
 
 
 def _q(key: Any) -> str:
     """A label or key as it appears in a field name: plain if short and printable."""
-    s = str(key) if not isinstance(key, int) or key.bit_length() < 200 else "<huge>"
+    s = str(key) if not isinstance(key, int) or key.bit_length() < 200 else _show(key)
     return s if s.isprintable() and len(s) <= 40 and s.strip() == s else _show(s)
 
 
@@ -481,7 +484,11 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
     for name, spec in modes_doc.items():
         if isinstance(spec, str):
             path = base / spec
-            modes[str(name)] = parse_topology(read_document(path), str(path))
+            try:
+                mode_doc = read_document(path)
+            except InputError as exc:  # say which switching file and mode named it
+                raise _err(source, f"modes.{_q(name)}", str(exc)) from None
+            modes[str(name)] = parse_topology(mode_doc, str(path))
         elif isinstance(spec, dict):
             inner = f"{source}: modes.{_q(name)}" if source else f"modes.{_q(name)}"
             modes[str(name)] = parse_topology(spec, inner)

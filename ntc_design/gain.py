@@ -360,11 +360,45 @@ def _tail_form(expr: sp.Expr) -> sp.Expr:
         return expr
 
 
+def _monotone_bounds(h: sp.Expr, name: str) -> tuple[bool | None, str]:
+    """Bounds for ``|sin u|``, ``|cos u|`` factors (u → ∞): where h is nondecreasing in
+    the factor y ∈ [0, 1], ``y² <= y <= 1`` give ``h(y²) <= h <= h(1)``; a divergent lower
+    bound or a convergent upper bound decides ∫ h."""
+    atoms = [
+        a for a in h.atoms(sp.Abs) if a.args[0].func in (sp.sin, sp.cos) and _oscillating(a.args[0])
+    ]
+    if not atoms:
+        return None, ""
+    ys = [sp.Dummy("y", nonnegative=True) for _ in atoms]
+    hy = h.xreplace(dict(zip(atoms, ys, strict=True)))
+    try:
+        increasing = all(
+            _bounded(lambda y=y: sp.diff(hy, y).is_nonnegative, _step[0] / 2) for y in ys
+        )
+    except (_Timeout, Exception):  # noqa: BLE001
+        increasing = False
+    if not increasing:
+        return None, ""
+    lower = hy.xreplace({y: a.args[0] ** 2 for y, a in zip(ys, atoms, strict=True)})
+    conv, why = _integral(lower, f"({lower})")
+    if conv is False:
+        return False, f"{name} >= {lower} (|sin| >= sin², {name} increasing in it); {why}"
+    upper = hy.xreplace({y: sp.Integer(1) for y in ys})
+    conv, why = _compare(upper, f"({upper})")
+    if conv is True:
+        return True, f"{name} <= {upper} (|sin| <= 1, {name} increasing in it); {why}"
+    return None, ""
+
+
 def _integral(h: sp.Expr, name: str) -> tuple[bool | None, str]:
     """Does ∫₀^∞ h dt converge? (h continuous and >= 0 on [0, ∞))."""
     h = sp.factor_terms(h)
     if h == 0:
         return True, f"{name} = 0: the integral is 0"
+    if any(a.args[0].func in (sp.sin, sp.cos) for a in h.atoms(sp.Abs)):
+        conv, why = _monotone_bounds(h, name)
+        if conv is not None:
+            return conv, why
     split = _split(h)
     if split is None or not split[1]:  # no oscillation to take apart
         conv, why = _compare(h, name)

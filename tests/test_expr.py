@@ -55,6 +55,7 @@ def test_other_variables():
         parse_expression("t", "w", variables=("s",))
 
 
+@pytest.mark.hostile
 @pytest.mark.parametrize(
     "text, needle",
     [

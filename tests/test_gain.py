@@ -1,7 +1,8 @@
 """Gain conditions of Theorems 1-4 on gains with known answers, and their hard limits.
 
 Known answers (by hand): ∫^∞ t^p diverges iff p >= −1; ∫^∞ 1/(t log^q t) diverges iff
-q <= 1; sin² t = (1 − cos 2t)/2 and |∫^T g·cos(2t)| stays bounded for g → 0 monotone.
+q <= 1; sin² t = (1 − cos 2t)/2 and |∫^T g·cos(2t)| stays bounded for g → 0 monotone;
+sin² t <= |sin t| <= 1.
 """
 
 import json
@@ -49,6 +50,10 @@ KNOWN = [
     ("(2+cos(3*t))/sqrt(1+t)", True, True, False),
     ("(1+cos(t))/(1+t)^2", False, True, True),
     ("sin(t)^2", True, False, False),
+    ("abs(sin(t))/(1+t)", True, True, True),
+    ("abs(sin(t))/sqrt(1+t)", True, True, False),
+    ("abs(cos(2*t))/(1+t)^2", False, True, True),
+    ("(1+abs(sin(t)))/(1+t)", True, True, True),
     ("min(1, 1/(1+t))", True, True, True),
     ("max(1/(1+t), exp(-t))", True, True, True),
     ("1", True, False, False),

@@ -4,9 +4,9 @@ exceeds :data:`MEMORY_FRACTION` of the memory available or the work exceeds
 :data:`MAX_PATH_STEPS`.
 
 The estimate counts the arrays the simulation allocates (8-byte floats): the time grid
-and its per-step gains (in each worker), the dense per-mode matrices (L_B, the edge
-difference and weight matrices, in the driver and each worker), each block's state and
-normals, the statistics at the save times (per block in flight and merged), the stored
+and its per-step gains (in each worker), the per-mode sparse L_B and edge arrays (with
+the dense L_B and its eigenvalues at small Nd; in the driver and each worker), each
+block's state and normals (at most XI_BYTES of normals), the statistics at the save times (per block in flight and merged), the stored
 paths, the exact second moments (Nd × Nd, RK4 stages) and the written tables. It is an
 estimate of the peak, within a small factor; what it guards against is a request that is
 orders of magnitude too big (a save count of 10¹², 10⁹ stored paths), which used to end
@@ -23,10 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, format_bytes
+from .montecarlo import BATCH, XI_BYTES
+from .system import DENSE_EIG_MAX_ND, DENSE_LB_MAX_ND
 
 MEMORY_FRACTION = 0.5  # refuse a run that needs more than this share of available memory
 MAX_PATH_STEPS = 1e13  # paths × steps: ~ weeks of computation at 10⁷ path-steps per second
-BATCH = 64  # steps whose normals are drawn at once (as in the kernel)
 F8 = 8.0
 
 
@@ -135,7 +136,11 @@ def estimate(
     nd_ = float(n * d)
     ed = float(edges * d)
     w = float(max(1, workers)) if mc else 1.0
-    per_system = F8 * (3 * nd_ * nd_ + 2 * ed * nd_ + nd_ * edges + nd_ * (nd_ + ed))
+    nnz = (n + edges) * d * d
+    dense = min(nd_, DENSE_LB_MAX_ND) ** 2 + 3 * min(nd_, DENSE_EIG_MAX_ND) ** 2
+    # the Lemma 1 design is still dense (L, D and L_B: 3 Nd² per mode) until the sparse
+    # model lands; the simulation's own matrices are sparse
+    per_system = F8 * (4 * nnz + edges * (2 * d * d + d + 3) + 6 * nd_ + dense + 3 * nd_ * nd_)
     parts: dict[str, tuple[str, float]] = {
         "time grid": ("dt", F8 * steps * (10 + 4 * w) + 64.0 * segments),
         "mode systems": (mode_field, per_system * modes * (1 + (w if mc else 0))),
@@ -146,7 +151,7 @@ def estimate(
         k = float(min(store_paths, paths))
         parts["Monte Carlo blocks"] = (
             "block_size",
-            w * F8 * b * (4 * nd_ + BATCH * 2 * edges + 3 * ed),
+            w * (F8 * b * (4 * nd_ + 3 * ed) + min(F8 * b * BATCH * 2 * edges, XI_BYTES)),
         )
         parts["statistics at the save times"] = (
             "save_every",

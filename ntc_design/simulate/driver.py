@@ -24,11 +24,11 @@ from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..timevarying import ExpressionTopology
 from .budget import check_budget, estimate, estimate_steps
 from .grid import TimeGrid, build_grid
-from .moments import exact_moments
+from .moments import check_moments_size, exact_moments
 from .montecarlo import MonteCarloSpec, run
 from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
 from .spec import SimulationSpec, UniformInitial
-from .system import ModeSystem, mode_system
+from .system import ModeSystem, check_step_size, mode_system
 
 AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology
 MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]
@@ -211,27 +211,18 @@ def _check_gain(cfun: Callable, gain_text: str, grid: TimeGrid) -> np.ndarray:
 
 
 def _step_size_guard(
-    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, notes: list[str]
+    systems: Sequence[ModeSystem],
+    grid: TimeGrid,
+    c_grid: np.ndarray,
+    notes: list[str],
+    scheme: str = "explicit",
 ) -> None:
-    """Euler–Maruyama on the drift ε' = −c L_B ε is stable iff c·h < 2 Re λ/|λ|² for
-    every eigenvalue λ of L_B: refuse a grid that breaks it, warn within a factor 2."""
-    if grid.n_steps == 0:
-        return
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = c_grid * grid.h / np.array([systems[m].stability_bound for m in grid.mode])
-    ratio = np.nan_to_num(ratio, nan=np.inf)
-    worst = int(np.argmax(ratio))
-    if ratio[worst] >= 1.0:
-        sysw = systems[grid.mode[worst]]
-        raise InputError(
-            f"dt: Euler–Maruyama is unstable: at t = {grid.t[worst]:.4g}, c·h = {c_grid[worst] * grid.h[worst]:.4g} "
-            f"exceeds 2·Re λ/|λ|² = {sysw.stability_bound:.4g} for L_B of mode {quote(sysw.name)} (ρ(L_B) = {sysw.spectral_radius:.4g}); "
-            f"use dt < {grid.h[worst] / ratio[worst]:.3g}"
-        )
-    if ratio[worst] > 0.5:
-        msg = f"Euler–Maruyama step within a factor {1 / ratio[worst]:.2f} of instability at t = {grid.t[worst]:.4g}; expect a step-size bias"
-        notes.append(msg)
-        warnings.warn(msg, stacklevel=3)
+    """Refuse an unstable Euler–Maruyama grid, warn within a factor 2
+    (:func:`.system.check_step_size`: drift eigenvalues and the mean-square limit)."""
+    check = check_step_size(systems, grid, c_grid, scheme)
+    if check.warning:
+        notes.append(check.warning)
+        warnings.warn(check.warning, stacklevel=3)
 
 
 # The exact moments' RK4 time, estimated as steps × (5e-5 s + 8·(Nd)³ flops at 1 GFLOP/s):
@@ -338,6 +329,8 @@ def simulate(
     if workers < spec.mc.workers:
         notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")
     _check_size(topology, spec, cfun, len(names), len(segments), workers)
+    if spec.method != "mc" and spec.noise.linear:
+        check_moments_size(n * d)
     designs = make_designs()
     for k, des in designs.items():
         if not des.assumption_holds:
@@ -360,7 +353,7 @@ def simulate(
     )
     c_grid = _check_gain(cfun, gain_text, grid)
     if spec.method != "exact":
-        _step_size_guard(systems, grid, c_grid, notes)
+        _step_size_guard(systems, grid, c_grid, notes, st.scheme)
     _check_noise_callable(spec, systems, d)
     params = spec.options()
     params.update(
@@ -387,6 +380,7 @@ def simulate(
             spec.mc.block_size,
             spec.mc.store_paths,
             labels,
+            st.scheme,
         )
         t0 = time.perf_counter()
         part = run(mspec, workers=workers, progress=progress)

@@ -13,6 +13,11 @@ Here ``Σ g_k g_kᵀ = G Gᵀ`` and ``G_e S G_eᵀ`` lands in block (i, i) as
 every switching instant and save time, with steps ``h <= κ / (c(t) ρ)`` (ρ the spectral
 radius of the S-equation's generator, κ = 0.2), so c·h·ρ stays in RK4's accurate range;
 the tests compare it with SciPy's DOP853 at rtol 1e-11.
+
+L_B is sparse, so one evaluation costs O(nnz(L_B)·Nd + E·d³) on top of the dense S
+(Nd×Nd). S and the RK4 stages hold about ``MOMENT_COPIES`` dense Nd×Nd matrices:
+the moments are refused above ``MOMENTS_MAX_ND`` (3000, about 0.9 GB) with the
+estimate, before anything is allocated.
 """
 
 from __future__ import annotations
@@ -22,9 +27,32 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
 from .system import ModeSystem
 
 KAPPA = 0.2
+MOMENTS_MAX_ND = 3000  # N = 1000 agents in d = 3
+DENSE_MOMENTS_ND = 300  # L_B dense in the moment equations up to this Nd
+MOMENT_COPIES = 12  # dense Nd×Nd matrices alive during an RK4 step (S, stages, products)
+
+
+def moments_memory(nd_: int) -> int:
+    """Bytes the exact moments need at this Nd (about)."""
+    return MOMENT_COPIES * 8 * nd_ * nd_
+
+
+def check_moments_size(nd_: int) -> None:
+    """Refuse the exact moments above ``MOMENTS_MAX_ND`` (one line, with the estimate).
+
+    Raises
+    ------
+    InputError
+        Nd is above the limit."""
+    if nd_ > MOMENTS_MAX_ND:
+        raise InputError(
+            f"method: exact moments at Nd = {nd_} need about {moments_memory(nd_) / 2**30:.1f} GB "
+            f"(dense Nd×Nd second moments; limit Nd <= {MOMENTS_MAX_ND}); use method: mc"
+        )
 
 
 @dataclass(frozen=True)
@@ -38,8 +66,10 @@ class Moments:
 
 class _Rhs:
     def __init__(self, s: ModeSystem, n: int, d: int):
-        self.l = s.lap_b
-        self.q = s.g @ s.g.T
+        # sparse products cost O(nnz·Nd); at small Nd a dense product is cheaper than
+        # SciPy's call overhead (and gives the numbers of the earlier dense code)
+        self.l = s.lap_b.toarray() if s.nd <= DENSE_MOMENTS_ND else s.lap_b.tocsr()
+        self.q = (s.g @ s.g.T).toarray()
         self.n, self.d = n, d
         self.ii = np.array([i for i, _, _ in s.h_blocks], dtype=np.int64)
         self.jj = np.array([j for _, j, _ in s.h_blocks], dtype=np.int64)
@@ -81,7 +111,13 @@ def exact_moments(
     n: int,
     d: int,
 ) -> Moments:
-    """Integrate the moment equations from m(0) = ε0, S(0) = ε0ε0ᵀ (a deterministic start)."""
+    """Integrate the moment equations from m(0) = ε0, S(0) = ε0ε0ᵀ (a deterministic start).
+
+    Raises
+    ------
+    InputError
+        Nd is above ``MOMENTS_MAX_ND``."""
+    check_moments_size(n * d)
     rhs = [_Rhs(s, n, d) for s in systems]
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
@@ -131,13 +167,24 @@ def em_moments(
     eps0: np.ndarray,
     n: int,
     d: int,
+    scheme: str = "explicit",
 ) -> Moments:
     """Exact moments of the Euler–Maruyama *recursion* on ``grid`` (what the Monte Carlo
-    estimates without time-discretisation error): with A = I − c h L_B,
+    estimates without time-discretisation error). Explicit, with A = I − c h L_B:
 
-        m_{k+1} = A m_k,   S_{k+1} = A S_k Aᵀ + c² h (G Gᵀ + Σ_e G_e S_k G_eᵀ).
+        m_{k+1} = A m_k,   S_{k+1} = A S_k Aᵀ + c² h (G Gᵀ + Σ_e G_e S_k G_eᵀ);
 
-    The difference from :func:`exact_moments` is Euler–Maruyama's O(h) bias."""
+    drift-implicit (``scheme="implicit"``), with R = (I + c h L_B)^{-1}:
+
+        m_{k+1} = R m_k,   S_{k+1} = R (S_k + c² h (G Gᵀ + Σ_e G_e S_k G_eᵀ)) Rᵀ.
+
+    The difference from :func:`exact_moments` is the scheme's O(h) bias.
+
+    Raises
+    ------
+    InputError
+        Nd is above ``MOMENTS_MAX_ND``."""
+    check_moments_size(n * d)
     rhs = [_Rhs(s, n, d) for s in systems]
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
@@ -146,6 +193,7 @@ def em_moments(
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     means = np.zeros((grid.save_steps.size, m.size))
     ms = np.zeros((grid.save_steps.size, n))
+    lus: dict = {}
 
     def store(k: int) -> None:
         if k in save_at:
@@ -155,12 +203,26 @@ def em_moments(
 
     store(0)
     for k in range(grid.n_steps):
-        f = rhs[grid.mode[k]]
+        mode = grid.mode[k]
+        f = rhs[mode]
         c, h = c_all[k], h_all[k]
-        ls = f.l @ s
-        # A S Aᵀ with A = I − c h L_B, plus the noise over one step
-        s = s - c * h * (ls + ls.T) + (c * h) ** 2 * (ls @ f.l.T) + c * c * h * f.noise(s)
-        m = m - c * h * (f.l @ m)
+        if scheme == "implicit":
+            key = (mode, c * h)
+            lu = lus.get(key)
+            if lu is None:
+                from scipy.sparse import csc_matrix, identity
+                from scipy.sparse.linalg import splu
+
+                a = identity(n * d, format="csc") + c * h * csc_matrix(f.l)
+                lu = lus[key] = splu(a.tocsc())
+            s = lu.solve(np.asfortranarray(s + c * c * h * f.noise(s)))
+            s = lu.solve(np.asfortranarray(s.T))
+            m = lu.solve(m)
+        else:
+            ls = f.l @ s
+            # A S Aᵀ with A = I − c h L_B, plus the noise over one step
+            s = s - c * h * (ls + ls.T) + (c * h) ** 2 * (f.l @ ls.T).T + c * c * h * f.noise(s)
+            m = m - c * h * (f.l @ m)
         s = 0.5 * (s + s.T)
         store(k + 1)
     return Moments(grid.save_times, means, ms, s, grid.n_steps)

@@ -1,8 +1,15 @@
 """Monte Carlo Euler–Maruyama for the SAN with compound noise, in bounded memory.
 
-Paths are integrated in fixed *blocks* (``block_size`` paths each); block b draws its
-normals from ``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of the run's
-SeedSequence), so a path's noise depends only on (seed, block_size, its index). Each
+Paths are integrated in fixed *blocks* of ``block_paths = min(block_size, ⌈paths/2⌉)``
+paths (at least two blocks, so that two workers both have work however few the paths;
+the split depends on ``paths`` only); block b draws its normals from
+``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of the run's SeedSequence), step
+by step, rows (paths) of 2·E normals (E additive, then E multiplicative), so a path's
+noise depends only on (seed, block_paths, its index). The per-block kernel is the
+compiled edge-list step of :mod:`.kernels` (a SciPy-sparse step for a callable f); with
+``scheme="implicit"`` the drift is taken at the new point,
+``x_{k+1} = (I + c h L_B)^{-1}(x_k + c h u + noise(x_k))``, with one sparse LU per mode
+and value of c·h. Each
 block streams its statistics at the save times (sums of ‖x_i − θ‖² and of its square,
 the summed state, a few stored paths) and never keeps the trajectory; blocks are merged
 in block order. Results are therefore identical whatever the number of workers and the
@@ -22,7 +29,9 @@ import numpy as np
 from .grid import TimeGrid
 from .system import ModeSystem
 
-BATCH = 64  # steps whose normals are drawn at once
+BATCH = 64  # steps whose normals are drawn at once (fewer when they would pass XI_BYTES)
+XI_BYTES = 16 * 2**20  # bound on the buffer of normals of one batch
+MIN_BLOCKS = 2  # paths are split into at least this many blocks (both cores busy)
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,10 +48,17 @@ class MonteCarloSpec:
     block_size: int = 500
     store_paths: int = 10
     agent_labels: tuple = ()
+    scheme: str = "explicit"  # or "implicit": x_{k+1} = (I + c h L_B)^{-1}(x_k + …)
+
+    @property
+    def block_paths(self) -> int:
+        """Paths per block: ``block_size``, or fewer so that there are at least
+        MIN_BLOCKS blocks (a function of ``paths`` only, never of the workers)."""
+        return max(1, min(self.block_size, -(-self.paths // MIN_BLOCKS)))
 
     @property
     def n_blocks(self) -> int:
-        return -(-self.paths // self.block_size)
+        return -(-self.paths // self.block_paths)
 
 
 @dataclass
@@ -69,11 +85,94 @@ def _first_bad(x: np.ndarray, d: int) -> tuple[int, int] | None:
     return int(row), int(col // d)
 
 
+def _run_ends(grid: TimeGrid) -> np.ndarray:
+    """``ends[k]``: the first grid index after k where a run of steps must stop (a save
+    point, or a step of another mode); each run has one mode and records at its end."""
+    k_total = grid.n_steps
+    cut = np.zeros(k_total + 1, dtype=bool)
+    cut[grid.save_steps] = True
+    cut[k_total] = True
+    if k_total > 1:
+        cut[1:k_total][grid.mode[1:] != grid.mode[:-1]] = True
+    where = np.flatnonzero(cut)
+    return where[
+        np.searchsorted(where, np.arange(k_total + 1), side="right").clip(max=where.size - 1)
+    ]
+
+
+class _Stepper:
+    """One mode's arrays for the kernels, and the implicit solver's factorisations
+    (one per distinct c·h: with intrinsic stepping c·h = ds except next to events)."""
+
+    def __init__(self, s: ModeSystem, implicit: bool):
+        self.s = s
+        self.compiled = s.f is None
+        if self.compiled:
+            lap = s.lap_b.tocsr()
+            lap.sort_indices()
+            self.args = (
+                lap.indptr.astype(np.int64),
+                lap.indices.astype(np.int64),
+                lap.data,
+                s.u,
+                s.src,
+                s.dst,
+                s.k_blocks,
+                s.g_edge.reshape(s.n_edges, s.dim),
+            )
+        self.implicit = implicit
+        self._lu: dict[float, object] = {}
+
+    def advance(self, x, xi, k_from, k_to, ch, cs) -> None:
+        from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
+
+        tile = tile_width(x.shape[0], x.shape[1])
+        if not self.implicit:
+            if self.compiled:
+                em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile)
+            else:
+                for k in range(k_from, k_to):
+                    numpy_step(x, xi[k], ch[k], cs[k], self.s)
+            return
+        for k in range(k_from, k_to):
+            if self.compiled:
+                em_steps(x, xi, k, k + 1, ch, cs, *self.args, False, tile)
+            else:
+                numpy_step(x, xi[k], ch[k], cs[k], self.s, drift=False)
+            x[...] = self.solver(ch[k]).solve(x.T).T
+
+    def solver(self, ch: float):
+        lu = self._lu.get(ch)
+        if lu is None:
+            from scipy.sparse import identity
+            from scipy.sparse.linalg import splu
+
+            a = identity(self.s.nd, format="csc") + ch * self.s.lap_b.tocsc()
+            lu = self._lu[ch] = splu(a.tocsc())
+        return lu
+
+
+def prepare(spec: MonteCarloSpec) -> None:
+    """Compile (or load from numba's cache) the kernel for this spec's array types in this
+    process, so that forked workers inherit it instead of each compiling it."""
+    from .kernels import em_steps
+
+    for s in getattr(spec, "systems", ()):  # a spec with its own run_block has none
+        if s.f is None:
+            st = _Stepper(s, False)
+            x = np.zeros((0, s.nd))
+            xi = np.zeros((1, 0, 2 * s.n_edges))
+            one = np.ones(1)
+            em_steps(x, xi, 0, 1, one, one, *st.args, True, 1)
+            return
+
+
 def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     grid = spec.grid
     nd_, n_, d = spec.x_init.size, spec.n_agents, spec.dim
-    p0 = b * spec.block_size
-    p = min(spec.block_size, spec.paths - p0)
+    bp = spec.block_paths
+    p0 = b * bp
+    p = min(bp, spec.paths - p0)
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
     s_n = grid.save_steps.size
     sq = np.zeros((s_n, n_))
@@ -84,16 +183,13 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     theta_t = np.tile(spec.theta, n_)
     x = np.tile(spec.x_init, (p, 1))
     e_max = max(s.n_edges for s in spec.systems)
-    # per mode: M1 = [−L_Bᵀ | Dᵀ], Gᵀ, Wᵀ
-    mats = [
-        (np.hstack([-s.lap_b.T, s.dmat.T]), s.g.T.copy(), s.wmat.T.copy(), s.u, s.n_edges, s.f)
-        for s in spec.systems
-    ]
+    steppers = [_Stepper(s, spec.scheme == "implicit") for s in spec.systems]
     c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
     h_all = np.diff(grid.t)
     ch_all = c_all * h_all
     cs_all = c_all * np.sqrt(h_all)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
+    ends = _run_ends(grid)
     failure = None
     valid = 0
 
@@ -123,25 +219,21 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
 
     if 0 in save_at and not record(save_at[0]):
         return result()
-    xi = np.empty((BATCH, p, 2 * e_max))
+    # the normals of step k are rows (p, 2·e_max) drawn in step order: the batch size
+    # changes how many are drawn per call, not which (Generator fills sequentially)
+    batch = int(np.clip(XI_BYTES // (8 * p * max(2 * e_max, 1)), 1, BATCH))
+    xi = np.empty((batch, p, 2 * e_max))
     k_total = grid.n_steps
-    for k0 in range(0, k_total, BATCH):
-        kb = min(BATCH, k_total - k0)
+    for k0 in range(0, k_total, batch):
+        kb = min(batch, k_total - k0)
         rng.standard_normal(out=xi[:kb])
-        for kk in range(kb):
-            k = k0 + kk
-            m1, gt, wt, u, ne, f = mats[grid.mode[k]]
-            y = x @ m1
-            drift = y[:, :nd_]
-            drift += u
-            diff = y[:, nd_:].reshape(p, ne, d)
-            if f is not None:
-                diff = f(diff)
-            z = (diff * xi[kk, :, ne : 2 * ne, None]).reshape(p, ne * d)
-            noise = xi[kk, :, :ne] @ gt
-            noise += z @ wt
-            x += ch_all[k] * drift + cs_all[k] * noise
-            if k + 1 in save_at and not record(save_at[k + 1]):
+        ch, cs = ch_all[k0 : k0 + kb], cs_all[k0 : k0 + kb]
+        k = k0
+        while k < k0 + kb:
+            stop = min(int(ends[k]), k0 + kb)
+            steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs)
+            k = stop
+            if k in save_at and not record(save_at[k]):
                 return result()
         if progress is not None:
             progress(kb * p)
@@ -280,6 +372,7 @@ def run(
         Re-raised after the workers are stopped.
     """
     global _SPEC, _COUNTER
+    prepare(spec)
     n_chunks = -(-spec.n_blocks // blocks_per_chunk)
 
     def chunk(i: int) -> list[int]:

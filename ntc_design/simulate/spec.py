@@ -113,10 +113,18 @@ class Stepping:
     dt: float = 1e-3
     ds: float | None = None
     h_max: float | None = None
+    scheme: str = "explicit"  # or "implicit": (I + c h L_B) x_{k+1} = x_k + c h u + noise
 
     def __post_init__(self) -> None:
         if self.kind not in ("uniform", "intrinsic"):
             raise InputError(f"stepping: must be uniform or intrinsic, got {self.kind!r}")
+        if self.scheme not in ("explicit", "implicit"):
+            raise InputError(f"scheme: must be explicit or implicit, got {self.scheme!r}")
+        if self.scheme == "implicit" and self.kind != "intrinsic":
+            raise InputError(
+                "scheme: implicit needs stepping: intrinsic (c·h constant, so (I + c h L_B) "
+                "is factorised once per mode)"
+            )
         require_positive("dt", self.dt)
         if self.ds is not None:
             require_positive("ds", self.ds)
@@ -246,6 +254,7 @@ SCENARIO_KEYS = (
     "method",
     "stepping",
     "ds",
+    "scheme",
     "workers",
     "block_size",
     "store_paths",
@@ -367,7 +376,10 @@ class SimulationSpec:
             every = o.pop("save_every", 0.1)
             save = SaveAt(every=0.1 if every is None else every)
         stepping = Stepping(
-            kind=o.pop("stepping", "uniform"), dt=o.pop("dt", 1e-3), ds=o.pop("ds", None)
+            kind=o.pop("stepping", "uniform"),
+            dt=o.pop("dt", 1e-3),
+            ds=o.pop("ds", None),
+            scheme=o.pop("scheme", "explicit"),
         )
         mc = MonteCarlo(
             **{
@@ -424,7 +436,7 @@ class SimulationSpec:
             o["initial"] = _initial_from_document(o["initial"])
         if "gain" in o and not isinstance(o["gain"], str):
             raise InputError(f"gain: expected an expression in t (a string), got {o['gain']!r}")
-        for key in ("method", "stepping"):
+        for key in ("method", "stepping", "scheme"):
             if key in o and not isinstance(o[key], str):
                 raise InputError(f"{key}: expected a string, got {o[key]!r}")
         for key in ("T", "dt", "ds", "margin", "save_every", "resample"):
@@ -449,6 +461,7 @@ class SimulationSpec:
             "dt": self.stepping.dt,
             "stepping": self.stepping.kind,
             "ds": self.stepping.ds,
+            "scheme": self.stepping.scheme,
             "method": self.method,
             "resample": self.resample,
             "noise": {
