@@ -511,7 +511,12 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
 
 def parse_file(path: str | Path) -> Any:
     """Read a topology, a switching or a time-varying topology file (weights as
-    expressions of t, :mod:`ntc_design.tvfiles`); which one is told by its fields."""
+    expressions of t, :mod:`ntc_design.tvfiles`); which one is told by its fields. A
+    ``.npz`` file is a compact edge list (:mod:`ntc_design.edgelist`)."""
+    if str(path).lower().endswith(".npz"):
+        from .edgelist import read_npz
+
+        return read_npz(path)
     doc = read_document(path)
     src = str(path)
     if "modes" in doc or "schedule" in doc:

@@ -11,7 +11,14 @@ from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
-from .certificate import Check, Verification, hurwitz_certificate, switching_certificate, verify
+from .certificate import (
+    DENSE_CERT_MAX_ND,
+    Check,
+    Verification,
+    hurwitz_certificate,
+    switching_certificate,
+    verify,
+)
 from .theorems import TheoremVerdict, fixed_verdicts, switching_verdicts
 
 
@@ -115,7 +122,9 @@ def certify(
         ver = verify_time_varying(cert)
         tth = time_varying_verdicts(cert["results"]["time_varying"], ver, g)
         return CertifyResult(tdes, cert, ver, g, tth)
-    des = design(topology, theta, margin, delta)
+    big = isinstance(topology, Topology) and topology.nd > DENSE_CERT_MAX_ND
+    # at scale the critical couplings are not needed by the certificate (design notes it)
+    des = design(topology, theta, margin, delta, thresholds=False if big else None)
     th: tuple[TheoremVerdict, ...]
     if isinstance(des, SwitchingDesign):
         cert = switching_certificate(des)
@@ -129,8 +138,14 @@ def certify(
             default=0.0,
         )
         th = switching_verdicts(des, ver, g, bound, cert["results"]["symmetric_part_min_eig"])
-    else:
+    elif not big:
         cert = hurwitz_certificate(des)
+        ver = _verify_own(cert)
+        th = fixed_verdicts(des, ver, g)
+    else:  # big networks: component-wise certificate, no dense step (issue 9)
+        from .scale import scale_certificate
+
+        cert = scale_certificate(des)
         ver = _verify_own(cert)
         th = fixed_verdicts(des, ver, g)
     return CertifyResult(des, cert, ver, g, th)
