@@ -12,13 +12,15 @@ Its Lemma 1 (the protocol design) comes from the authors' earlier, noise-free pa
 T. Niu, B. Mao, X. Wu, T. Huang, arXiv:2602.11822.
 """
 
-from .design import ProtocolDesign, SwitchingDesign, assumption2, design
+from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, assumption2, design
 from .errors import InputError
+from .generate import random_network
 from .model import SwitchingTopology, TimeVaryingTopology, Topology, load
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "AssumptionWarning",
     "InputError",
     "ProtocolDesign",
     "SwitchingDesign",
@@ -28,4 +30,5 @@ __all__ = [
     "assumption2",
     "design",
     "load",
+    "random_network",
 ]

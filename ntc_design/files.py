@@ -591,12 +591,13 @@ def parse_file(path: str | Path) -> Any:
     """Read a topology, a switching or a time-varying topology file.
 
     Which one is told by its fields: ``modes``/``schedule`` for switching, weights that are
-    expressions of t for time-varying (:mod:`ntc_design.tvfiles`).
+    expressions of t for time-varying (:mod:`ntc_design.tvfiles`). A ``.npz`` file is a
+    compact edge list (:mod:`ntc_design.edgelist`).
 
     Parameters
     ----------
     path : str or pathlib.Path
-        A YAML or JSON file.
+        A YAML or JSON file, or an ``.npz`` edge list.
 
     Returns
     -------
@@ -608,15 +609,40 @@ def parse_file(path: str | Path) -> Any:
     InputError
         The file cannot be read or is not a valid topology of any kind.
     """
+    if str(path).lower().endswith(".npz"):
+        from .edgelist import read_npz
+
+        return read_npz(path)
     doc = read_document(path)
     src = str(path)
     if "modes" in doc or "schedule" in doc:
         return parse_switching(doc, src)
-    from .tvfiles import is_time_varying, parse_time_varying  # it builds on this module
-
     if is_time_varying(doc):
+        from .tvfiles import parse_time_varying  # it builds on this module (and sympy)
+
         return parse_time_varying(doc, src)
     return parse_topology(doc, src)
+
+
+def _has_text(x: Any) -> bool:
+    if isinstance(x, str):
+        return True
+    if isinstance(x, dict):
+        return any(_has_text(v) for k, v in x.items() if k != "matrix")
+    if isinstance(x, list):
+        return any(_has_text(v) for v in x)
+    return False
+
+
+def is_time_varying(doc: dict[str, Any]) -> bool:
+    """A topology mapping is time-varying (:mod:`ntc_design.tvfiles`) when it declares
+    ``period``/``constant_after`` or a weight holds an expression (a string)."""
+    if {"period", "constant_after"} & set(doc):
+        return True
+    edges = doc.get("edges")
+    return isinstance(edges, list) and any(
+        isinstance(e, dict) and _has_text(e.get("weight")) for e in edges
+    )
 
 
 @dataclass(frozen=True)

@@ -228,6 +228,29 @@ def _eig_bound(lap_b: np.ndarray) -> float:
     return float(np.min(np.linalg.eigvals(lap_b).real))
 
 
+#: The dense certificate (Lyapunov + decay-rate LMI on a dense P) is used up to this Nd;
+#: ``certify`` uses the component-wise certificate (:mod:`.scale`) above it (at Nd = 90
+#: the LMI already takes 2.2 GB and minutes; :func:`require_lmi` refuses it above 2 GiB).
+DENSE_CERT_MAX_ND = 60
+
+
+def require_lmi(n: int, what: str) -> None:
+    """Refuse, in one line, an LMI on a dense n×n P whose interior-point solve would need
+    more than ``linalg.DENSE_MAX_BYTES``: with m = n(n+1)/2 unknowns one dense m×m array
+    is 8·m² bytes (the 51,456,320,000-byte abort at n = 400 is exactly that), and the
+    solve holds about 16 of them (n = 150 was measured at 14.6 GB), so 128·m² bytes."""
+    from ..linalg import DENSE_MAX_BYTES, DenseRefused
+
+    m = n * (n + 1) / 2
+    need = 128.0 * m * m
+    if need > DENSE_MAX_BYTES:
+        raise DenseRefused(
+            f"{what}: a dense {n}×{n} P needs about {need / 2**30:.0f} GiB "
+            f"(limit {DENSE_MAX_BYTES / 2**30:.1f} GiB); refused — the component-wise "
+            "certificate (ntc_design.certify.scale) applies at this size"
+        )
+
+
 def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool = True) -> dict:
     """Certify −L_B Hurwitz for one design in two independent ways: (a) the Lyapunov
     equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) the LMI maximising the decay rate α.
@@ -249,6 +272,8 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
         non-Hurwitz −L_B gives a certificate that does not verify.
     """
     name = name or d.topology.name or "topology"
+    if rate:  # estimated before any dense step: refused in one line, never an OOM kill
+        require_lmi(d.topology.nd, "decay-rate LMI")
     lap_b = d.grounded_laplacian()
     lya = hurwitz_by_lyapunov(lap_b)
     eig_bound = _eig_bound(lap_b)
@@ -1089,6 +1114,10 @@ def verify(
             f"version {version} is not one this ntc reads ({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
         )
     kind = _need(doc, "kind", str, source)
+    if kind == "hurwitz-scale":  # big networks: component by component (issue 9)
+        from .scale import verify_scale
+
+        return verify_scale(doc, source)
     if kind == "time_varying":  # weights as expressions of t: the uniform bound Λ₂
         from .time_varying import verify_time_varying
 
