@@ -601,7 +601,7 @@ def parse_file(path: str | Path) -> Any:
 
     Returns
     -------
-    TopologyData or SwitchingData or ntc_design.tvfiles.TimeVaryingData
+    TopologyData or SwitchingData or TimeVaryingData or EdgeListData
         The validated file contents.
 
     Raises
@@ -635,8 +635,19 @@ def _has_text(x: Any) -> bool:
 
 
 def is_time_varying(doc: dict[str, Any]) -> bool:
-    """A topology mapping is time-varying (:mod:`ntc_design.tvfiles`) when it declares
-    ``period``/``constant_after`` or a weight holds an expression (a string)."""
+    """Whether a topology mapping is time-varying (:mod:`ntc_design.tvfiles`).
+
+    Parameters
+    ----------
+    doc : dict
+        A topology mapping as read.
+
+    Returns
+    -------
+    bool
+        True when it declares ``period``/``constant_after`` or a weight holds an
+        expression (a string).
+    """
     if {"period", "constant_after"} & set(doc):
         return True
     edges = doc.get("edges")

@@ -245,7 +245,8 @@ def check_function(fn) -> list[str]:
 
 @pytest.mark.parametrize("fn", FUNCTIONS)
 def test_public_function_documents_its_interface(fn):
-    assert check_function(fn) == []
+    problems = check_function(fn)
+    assert not problems, "; ".join(problems)
 
 
 def _own_doc(obj) -> str:
