@@ -1,13 +1,26 @@
 """ntc-design: certify, design and validate non-trivial consensus protocols on directed
-signed matrix-weighted networks with compound measurement noise."""
+signed matrix-weighted networks with compound measurement noise.
 
-from .design import ProtocolDesign, SwitchingDesign, assumption2, design
+Equation, lemma, theorem and section numbers in the docstrings are the printed ones of the
+paper below ("Niu & Wu, eq. (8)").
+
+References
+----------
+T. Niu, X. Wu, "Non-trivial consensus on directed signed matrix-weighted networks with
+compound measurement noises and time-varying topologies", submitted to Information Sciences.
+Its Lemma 1 (the protocol design) comes from the authors' earlier, noise-free paper,
+T. Niu, B. Mao, X. Wu, T. Huang, arXiv:2602.11822.
+"""
+
+from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, assumption2, design
 from .errors import InputError
+from .generate import random_network
 from .model import SwitchingTopology, TimeVaryingTopology, Topology, load
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "AssumptionWarning",
     "InputError",
     "ProtocolDesign",
     "SwitchingDesign",
@@ -17,4 +30,5 @@ __all__ = [
     "assumption2",
     "design",
     "load",
+    "random_network",
 ]

@@ -4,36 +4,82 @@ couplings of the same design family (:mod:`ntc_design.thresholds`)."""
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sparse
+from scipy.sparse import csgraph
 
 from .errors import InputError, require_positive
-from .linalg import pd
+from .linalg import pd_batch, require_dense
 from .model import (
     SwitchingTopology,
     Topology,
     antagonistic_in_weight,
-    in_degree_dominated,
+    in_degree_dominated_all,
     in_out_difference,
-    positive_negative_reachable,
 )
-from .thresholds import CriticalCouplings, critical_couplings
+from .thresholds import CriticalCouplings, critical_couplings, critical_couplings_sparse
 
-THRESHOLDS_MAX_ND = 200  # above this Nd the thresholds are skipped unless asked for
+#: Up to this Nd the critical couplings are computed densely (exact Kronecker pencil /
+#: eigenvalue scans, :func:`critical_couplings`); above it by the sparse method
+#: (:func:`~ntc_design.thresholds.critical_couplings_sparse`), which says what it computed.
+THRESHOLDS_MAX_ND = 200
+#: By default the critical couplings are computed up to this Nd; above it only when asked
+#: (``thresholds=True``, ``ntc design --thresholds``), and a note says so.
+THRESHOLDS_DEFAULT_MAX_ND = 30_000
+
+
+class AssumptionWarning(UserWarning):
+    """Assumption 2 fails for a topology being designed: Lemma 1 does not apply and the
+    design must be certified before it is trusted (also flagged by
+    ``ProtocolDesign.assumption_holds``)."""
 
 
 @dataclass(frozen=True)
 class Violation:
-    agent: int  # index
+    agent: int  # index (internal); labels in to_dict()/structure_report
     reason: str
+
+
+class _Paths(Mapping):
+    """V2 agent -> one shortest positive-negative path from V1 (agent indices), read
+    lazily from a BFS predecessor array (storing every path would cost O(N·depth))."""
+
+    def __init__(self, keys: Sequence[int], pred: np.ndarray, root: int) -> None:
+        self._keys = tuple(keys)
+        self._set = frozenset(self._keys)
+        self._pred = pred
+        self._root = root
+
+    def __getitem__(self, i: int) -> tuple[int, ...]:
+        if i not in self._set:
+            raise KeyError(i)
+        path = [int(i)]
+        while True:
+            p = int(self._pred[path[-1]])
+            if p == self._root or p < 0:
+                break
+            path.append(p)
+        return tuple(reversed(path))
+
+    def __iter__(self):
+        return iter(self._keys)
+
+    def __len__(self) -> int:
+        return len(self._keys)
 
 
 @dataclass(frozen=True)
 class Decomposition:
-    """Result of the Assumption 2 check: ``holds`` with the C-minimising V1, or the
-    violations. ``coefficients`` holds C_i for every agent whose Σ_{Ω_i}|A_ij| ≻ 0."""
+    """Result of the Assumption 2 check (agent indices; labels via
+    :meth:`ProtocolDesign.to_dict` or :meth:`agents`): ``holds`` with the C-minimising V1,
+    or the violations. ``coefficients`` holds C_i for every agent whose
+    Σ_{Ω_i}|A_ij| ≻ 0. When Assumption 2 fails, V1 is every agent that can be in V1 and
+    V2 only the agents that satisfy the V2 conditions; the violating agents are in
+    neither."""
 
     holds: bool
     v1: tuple[int, ...]
@@ -41,6 +87,15 @@ class Decomposition:
     coefficients: Mapping[int, float]
     violations: tuple[Violation, ...]
     paths: Mapping[int, tuple[int, ...]]  # V2 agent -> a positive-negative path from V1
+
+    def agents(self, top: Topology) -> dict:
+        """V1, V2 and the violating agents as labels of ``top``."""
+        lab = top.labels
+        return {
+            "V1": [lab[i] for i in self.v1],
+            "V2": [lab[i] for i in self.v2],
+            "violating": [lab[v.agent] for v in self.violations],
+        }
 
 
 def lemma1_coefficient(top: Topology, i: int) -> float:
@@ -56,62 +111,122 @@ def lemma1_coefficient(top: Topology, i: int) -> float:
     return 0.5 * float(sla.eigh(0.5 * (m + m.T), 0.5 * (s + s.T), eigvals_only=True)[-1])
 
 
+def lemma1_coefficients(top: Topology) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`lemma1_coefficient` for every agent at once: ``(candidate, C)`` arrays of
+    length N, ``candidate[i]`` when Σ_{Ω_i}|A_ij| ≻ 0 (C_i is NaN otherwise). The
+    generalised eigenproblems are solved batched: with S = R Rᵀ (Cholesky),
+    λ(S⁻¹M) = λ(R⁻¹ M R⁻ᵀ)."""
+    inn, out, ant = top.degree_sums
+    cand = pd_batch(ant) if top.n else np.zeros(0, dtype=bool)
+    c = np.full(top.n, np.nan)
+    k = np.flatnonzero(cand)
+    if k.size:
+        s = ant[k]
+        m = out[k] - inn[k]
+        m = 0.5 * (m + m.transpose(0, 2, 1))
+        r = np.linalg.cholesky(0.5 * (s + s.transpose(0, 2, 1)))
+        x = np.linalg.solve(r, m)  # R⁻¹ M
+        y = np.linalg.solve(r, x.transpose(0, 2, 1))  # R⁻¹ (R⁻¹ M)ᵀ = R⁻¹ M R⁻ᵀ
+        c[k] = 0.5 * np.linalg.eigvalsh(0.5 * (y + y.transpose(0, 2, 1)))[:, -1]
+    return cand, c
+
+
+def _reach(top: Topology, graph: sparse.csr_matrix, sources: np.ndarray):
+    """BFS over the definite edges from a virtual root joined to ``sources``: returns
+    (reached mask, predecessor array, root index)."""
+    n = top.n
+    root = n
+    extra = sparse.csr_matrix(
+        (np.ones(sources.size, dtype=np.int8), (np.full(sources.size, root), sources)),
+        shape=(n + 1, n + 1),
+    )
+    g = sparse.bmat([[graph, None], [None, sparse.csr_matrix((1, 1), dtype=np.int8)]]).tocsr()
+    g = (g + extra).tocsr()
+    g.sort_indices()
+    order, pred = csgraph.breadth_first_order(g, root, directed=True, return_predecessors=True)
+    reached = np.zeros(n + 1, dtype=bool)
+    reached[order] = True
+    return reached[:n], pred, root
+
+
 def assumption2(top: Topology) -> Decomposition:
     """Decide Assumption 2 and return the decomposition V = V1 ∪ V2 minimising C.
 
     A V2 agent must be in-degree-dominated (Definition 2) and reached from V1 by a
     positive-negative path (Definition 1); a V1 agent needs Σ_{Ω_i}|A_ij| ≻ 0 so that C_i
-    is defined. Validity only improves as V1 grows, so the least C is found by taking the
-    candidates in order of C_i and growing V1 until the rest is covered; V1 is then every
-    candidate with C_i <= C.
+    is defined. Validity only improves as V1 grows, so the least C is the least level
+    ``c`` for which V1 = {candidates with C_i <= c} covers the rest; as coverage is
+    monotone in c the level is found by bisection over the sorted C_i (O(E log N)).
+    Everything is vectorised over agents and edges; reachability is a BFS
+    (``scipy.sparse.csgraph``) from a virtual root joined to V1.
     """
     n = top.n
-    idd = [in_degree_dominated(top, i) for i in range(n)]
-    cands = {i: lemma1_coefficient(top, i) for i in range(n) if pd(antagonistic_in_weight(top, i))}
+    idd = in_degree_dominated_all(top)
+    cand, cvals = lemma1_coefficients(top)
+    cands = {int(i): float(cvals[i]) for i in np.flatnonzero(cand)}
+    ant = set(top.antagonised)
     violations: list[Violation] = []
-    for i in range(n):
-        if not idd[i] and i not in cands:
-            why = (
-                "has no antagonistic in-edge"
-                if not top.omega(i)
-                else "its antagonistic in-weight Σ_{Ω_i}|A_ij| is only semidefinite"
-            )
-            violations.append(
-                Violation(
-                    i, f"not in-degree-dominated and {why}, so it can be neither in V1 nor in V2"
-                )
-            )
-    required = [i for i in range(n) if not idd[i] and i in cands]
-    floor = max((cands[i] for i in required), default=-math.inf)
-    levels = sorted({c for c in cands.values() if c >= floor})
-    if not violations:
-        for level in levels:
-            v1 = [i for i in sorted(cands) if cands[i] <= level]
-            paths = positive_negative_reachable(top, v1)
-            if all(i in paths for i in range(n)):
-                v1s = tuple(v1)
-                v2 = tuple(i for i in range(n) if i not in v1s)
-                return Decomposition(True, v1s, v2, cands, (), {i: tuple(paths[i]) for i in v2})
+    for i in np.flatnonzero(~idd & ~cand).tolist():
+        why = (
+            "has no antagonistic in-edge"
+            if i not in ant
+            else "its antagonistic in-weight Σ_{Ω_i}|A_ij| is only semidefinite"
+        )
+        violations.append(
+            Violation(i, f"not in-degree-dominated and {why}, so it can be neither in V1 nor in V2")
+        )
+    required = ~idd & cand
+    floor = float(np.max(cvals[required])) if required.any() else -math.inf
+    levels = np.unique(cvals[cand & (cvals >= floor)]) if cand.any() else np.zeros(0)
+    graph = top.definite_graph()
+    if not violations and levels.size:
+
+        def covers(level: float):
+            v1 = np.flatnonzero(cand & (cvals <= level))
+            reached, pred, root = _reach(top, graph, v1)
+            return bool(reached.all()), v1, pred, root
+
+        lo, hi = 0, levels.size - 1
+        ok_hi = covers(levels[hi])
+        if ok_hi[0]:
+            best = ok_hi
+            while lo < hi:
+                mid = (lo + hi) // 2
+                res = covers(levels[mid])
+                if res[0]:
+                    hi, best = mid, res
+                else:
+                    lo = mid + 1
+            _, v1, pred, root = best
+            in_v1 = np.zeros(n, dtype=bool)
+            in_v1[v1] = True
+            v2 = tuple(np.flatnonzero(~in_v1).tolist())
+            return Decomposition(True, tuple(v1.tolist()), v2, cands, (), _Paths(v2, pred, root))
     # Report who cannot be covered even with every candidate in V1.
-    v1 = tuple(sorted(cands))
-    paths = positive_negative_reachable(top, v1)
-    bad = {v.agent for v in violations}
-    for i in range(n):
-        if i not in paths and i not in bad:
-            violations.append(
-                Violation(
-                    i,
-                    "not reached by any positive-negative path from an agent that can be in V1"
-                    + (
-                        " (no agent has a positive definite antagonistic in-weight)"
-                        if not v1
-                        else ""
-                    ),
-                )
+    v1a = np.flatnonzero(cand)
+    reached, pred, root = _reach(top, graph, v1a)
+    bad = np.zeros(n, dtype=bool)
+    bad[[v.agent for v in violations]] = True
+    for i in np.flatnonzero(~reached & ~bad).tolist():
+        violations.append(
+            Violation(
+                i,
+                "not reached by any positive-negative path from an agent that can be in V1"
+                + (
+                    " (no agent has a positive definite antagonistic in-weight)"
+                    if not v1a.size
+                    else ""
+                ),
             )
+        )
     violations.sort(key=lambda v: v.agent)
-    v2 = tuple(i for i in range(n) if i not in v1)
-    return Decomposition(False, v1, v2, cands, tuple(violations), {})
+    for v in violations:
+        bad[v.agent] = True
+    # V2: only agents that meet the V2 conditions (issue 8: violators are in neither set)
+    v2 = tuple(np.flatnonzero(~cand & idd & reached & ~bad).tolist())
+    return Decomposition(
+        False, tuple(v1a.tolist()), v2, cands, tuple(violations), _Paths(v2, pred, root)
+    )
 
 
 #: Keys of the stable ``ntc design --json`` format (per mode for a switching file).
@@ -156,6 +271,42 @@ class ProtocolDesign:
     @property
     def assumption_holds(self) -> bool:
         return self.decomposition.holds
+
+    @property
+    def informed_agents(self) -> tuple:
+        """V_I = U as agent labels (``informed`` holds the internal 0-based indices)."""
+        lab = self.topology.labels
+        return tuple(lab[i] for i in self.informed)
+
+    @property
+    def v1_agents(self) -> tuple:
+        """V1 as agent labels."""
+        return tuple(self.decomposition.agents(self.topology)["V1"])
+
+    @property
+    def v2_agents(self) -> tuple:
+        """V2 as agent labels."""
+        return tuple(self.decomposition.agents(self.topology)["V2"])
+
+    @property
+    def violating_agents(self) -> tuple:
+        """Agents that violate Assumption 2, as labels (empty when it holds)."""
+        return tuple(self.decomposition.agents(self.topology)["violating"])
+
+    @property
+    def B_by_agent(self) -> dict:  # noqa: N802 - B_i is the paper's name
+        """B_i keyed by agent label."""
+        lab = self.topology.labels
+        return {lab[i]: b for i, b in self.B.items()}
+
+    def coupling_matrix_sparse(self) -> sparse.csr_matrix:
+        """``D = blockdiag(|B_i|)`` as a sparse matrix."""
+        return coupling_matrix_sparse(self.topology, self.B)
+
+    def grounded_laplacian_sparse(self, delta: float | None = None) -> sparse.csr_matrix:
+        """``L_B = L + δD`` as a sparse CSR matrix (d×d blocks), linear in the edges."""
+        dl = self.delta if delta is None else delta
+        return (self.topology.laplacian_sparse() + dl * self.coupling_matrix_sparse()).tocsr()
 
     def coupling_matrix(self) -> np.ndarray:
         """``D = blockdiag(|B_i|)`` with zero blocks for naive agents, so L_B = L + δD."""
@@ -218,7 +369,17 @@ class SwitchingDesign:
         }
 
 
+def coupling_matrix_sparse(top: Topology, b: Mapping[int, np.ndarray]) -> sparse.csr_matrix:
+    """``blockdiag(B_i)`` (zero blocks for agents not in ``b``) as CSR."""
+    from .model import _block_coo
+
+    idx = np.array(sorted(b), dtype=np.int64)
+    blocks = np.array([b[i] for i in idx.tolist()]).reshape(-1, top.dim, top.dim)
+    return _block_coo(top.n, top.dim, idx, idx, blocks)
+
+
 def coupling_matrix(top: Topology, b: Mapping[int, np.ndarray]) -> np.ndarray:
+    require_dense(top.nd, "coupling matrix D")
     d = top.dim
     out = np.zeros((top.nd, top.nd))
     for i, bi in b.items():
@@ -231,10 +392,11 @@ def input_vector(
 ) -> np.ndarray:
     """``(Δ⊗I_d) B x0`` with δ_i = δ on the informed agents (the keys of ``b``)."""
     d = top.dim
-    u = np.zeros(top.nd)
-    for i, bi in b.items():
-        u[i * d : (i + 1) * d] = delta * bi @ x0
-    return u
+    u = np.zeros((top.n, d))
+    if b:
+        idx = np.array(list(b), dtype=np.int64)
+        u[idx] = delta * (np.array([b[i] for i in idx.tolist()]) @ x0)
+    return u.reshape(-1)
 
 
 def _theta(theta: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:
@@ -251,12 +413,22 @@ def _theta(theta: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:
     return th
 
 
-def identity_residual(lap_b: np.ndarray, u: np.ndarray, theta: np.ndarray) -> float:
-    """``‖-L_B(1⊗θ) + k1(Δ⊗I_d)Bθ‖_∞`` relative to ``‖L_B‖_∞‖θ‖_∞`` (eq. LBt property)."""
+def identity_residual(lap_b, u: np.ndarray, theta: np.ndarray) -> float:
+    """``‖-L_B(1⊗θ) + k1(Δ⊗I_d)Bθ‖_∞`` relative to ``‖L_B‖_∞‖θ‖_∞`` (eq. LBt property);
+    ``lap_b`` dense or sparse."""
     n = lap_b.shape[0] // theta.size
-    r = -lap_b @ np.tile(theta, n) + u
-    scale = max(np.linalg.norm(lap_b, np.inf) * np.max(np.abs(theta)), 1e-300)
+    r = -(lap_b @ np.tile(theta, n)) + u
+    if sparse.issparse(lap_b):
+        norm = float(abs(lap_b).sum(axis=1).max()) if lap_b.nnz else 0.0
+    else:
+        norm = np.linalg.norm(lap_b, np.inf)
+    scale = max(norm * np.max(np.abs(theta)), 1e-300)
     return float(np.max(np.abs(r)) / scale)
+
+
+#: Up to this Nd the design also assembles the dense L_B (results identical to the
+#: dense-only releases at the paper's size); above it everything is sparse.
+DENSE_DESIGN_MAX_ND = 600
 
 
 def design_topology(
@@ -293,17 +465,45 @@ def design_topology(
         dl = float(delta)
         if c is not None and dl <= c:
             notes.append(f"explicit δ = {dl:.6g} is not above C = {c:.6g}: Lemma 1 does not apply")
+    if not dec.holds:
+        warnings.warn(
+            f"Assumption 2 fails for {top.name or 'the topology'} "
+            f"({len(dec.violations)} violating agent(s), e.g. "
+            f"{top.labels[dec.violations[0].agent]}): Lemma 1 does not apply",
+            AssumptionWarning,
+            stacklevel=3,
+        )
     informed = top.antagonised
-    b = {i: antagonistic_in_weight(top, i) for i in informed}
+    ant = top.degree_sums[2]
+    b = {i: ant[i].copy() for i in informed}
     k1 = 1.0 + 2.0 / dl
     x0 = k1 * th
-    lap = top.laplacian()
-    dmat = coupling_matrix(top, b)
-    res = identity_residual(lap + dl * dmat, input_vector(top, b, dl, x0), th)
-    want = thresholds if thresholds is not None else top.nd <= THRESHOLDS_MAX_ND
-    crit = critical_couplings(lap, dmat) if want else None
-    if not want:
-        notes.append(f"critical couplings skipped (Nd = {top.nd} > {THRESHOLDS_MAX_ND})")
+    u = input_vector(top, b, dl, x0)
+    if top.nd <= DENSE_DESIGN_MAX_ND:
+        lap = top.laplacian()
+        dmat = coupling_matrix(top, b)
+        res = identity_residual(lap + dl * dmat, u, th)
+    else:
+        lap_s = top.laplacian_sparse()
+        dmat_s = coupling_matrix_sparse(top, b)
+        res = identity_residual((lap_s + dl * dmat_s).tocsr(), u, th)
+    want = top.nd <= THRESHOLDS_DEFAULT_MAX_ND if thresholds is None else bool(thresholds)
+    if want and top.nd <= THRESHOLDS_MAX_ND:
+        crit = critical_couplings(lap, dmat)
+    elif want:
+        crit = critical_couplings_sparse(
+            top.laplacian_sparse(), coupling_matrix_sparse(top, b), top.dim
+        )
+    else:
+        crit = None
+        notes.append(
+            "critical couplings δ_H, δ_S not computed "
+            + (
+                "(thresholds=False)"
+                if thresholds is False
+                else f"by default above Nd = {THRESHOLDS_DEFAULT_MAX_ND} (ask with thresholds=True)"
+            )
+        )
     return ProtocolDesign(
         top, th, float(margin), dec, c, dl, k1, x0, informed, b, res, crit, tuple(notes)
     )
@@ -336,6 +536,7 @@ def structure_report(top: Topology) -> dict:
     violations (labels, not indices)."""
     lab = top.labels
     dec = assumption2(top)
+    idd = in_degree_dominated_all(top)
     agents = {}
     for i in range(top.n):
         agents[str(lab[i])] = {
@@ -343,7 +544,7 @@ def structure_report(top: Topology) -> dict:
             "out_neighbours": [lab[j] for j in top.out_neighbours(i)],
             "omega": [lab[j] for j in top.omega(i)],
             "gamma": [lab[j] for j in top.gamma(i)],
-            "in_degree_dominated": in_degree_dominated(top, i),
+            "in_degree_dominated": bool(idd[i]),
             "C_i": dec.coefficients.get(i),
         }
     return {

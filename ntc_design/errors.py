@@ -15,15 +15,37 @@ class InputError(ValueError):
 
 
 def quote(label) -> str:
-    """A label as it may appear inside a one-line message: numbers as written, text
-    repr-quoted (so a label holding a newline cannot split or forge an error line)."""
+    """A label as it may appear inside a one-line message.
+
+    Parameters
+    ----------
+    label : int or str
+        An agent or mode label.
+
+    Returns
+    -------
+    str
+        An integer as written, anything else repr-quoted (so a label holding a newline
+        cannot split or forge an error line).
+    """
     if isinstance(label, numbers.Integral) and not isinstance(label, bool):
         return str(int(label))
     return repr(str(label))
 
 
 def one_line(text: str) -> str:
-    """``text`` with every control character escaped: printable on one line."""
+    """``text`` with every control character escaped, printable on one line.
+
+    Parameters
+    ----------
+    text : str
+        Any text (converted with ``str``).
+
+    Returns
+    -------
+    str
+        The text with non-printable characters as ``unicode_escape`` sequences.
+    """
     return "".join(
         ch if ch.isprintable() or ch == " " else ch.encode("unicode_escape").decode("ascii")
         for ch in str(text)
@@ -131,9 +153,31 @@ def require_number(name: str, value, minimum: float | None = None) -> float:
 
 
 def format_bytes(n: float) -> str:
-    """``1.5e9`` -> ``'1.4 GiB'``."""
+    """A byte count in binary units, e.g. ``1.5e9`` -> ``'1.4 GiB'``.
+
+    Parameters
+    ----------
+    n : float
+        Number of bytes.
+
+    Returns
+    -------
+    str
+        The count in B, KiB, ..., PiB with one decimal (none for bytes).
+    """
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if abs(n) < 1024 or unit == "PiB":
             return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
         n /= 1024
     return f"{n:.1f} PiB"  # pragma: no cover
+
+
+__all__ = [
+    "InputError",
+    "format_bytes",
+    "one_line",
+    "quote",
+    "require_int",
+    "require_number",
+    "require_positive",
+]

@@ -52,6 +52,9 @@ class EdgeData:
 
 @dataclass(frozen=True)
 class TopologyData:
+    """A topology file as read: name, dimension d, agent labels and edges (validated
+    field by field; the network checks are :class:`ntc_design.model.Topology`'s)."""
+
     name: str | None
     dim: int
     labels: tuple[Label, ...]
@@ -61,14 +64,28 @@ class TopologyData:
 
 @dataclass(frozen=True)
 class SwitchingData:
+    """A switching file as read: each mode's topology and the periodic schedule as
+    (mode, duration) pairs."""
+
     modes: dict[str, TopologyData]
     schedule: tuple[tuple[str, float], ...]
     source: str | None
 
 
 def jsonable(x: Any) -> Any:
-    """A value JSON can hold: NumPy scalars and arrays to Python, non-finite floats to
-    null (JSON has no NaN), mapping keys to strings."""
+    """A value JSON can hold.
+
+    Parameters
+    ----------
+    x : Any
+        A value built of NumPy arrays and scalars, floats, mappings and sequences.
+
+    Returns
+    -------
+    Any
+        The same value with NumPy scalars and arrays as Python objects, non-finite floats
+        as ``None`` (JSON has no NaN) and mapping keys as strings.
+    """
     if isinstance(x, np.ndarray):
         return jsonable(x.tolist())
     if isinstance(x, np.generic):
@@ -345,8 +362,32 @@ def parse_weight(
     field: str,
     named: dict[str, np.ndarray] | None = None,
 ) -> np.ndarray:
-    """A d×d weight from its file form: rows, ``{diag: [...]}``, ``{identity: s}``,
-    ``{matrix: NAME, scale: s}`` or a plain number ``s`` (meaning ``s·I``)."""
+    """A d×d edge weight from its file form.
+
+    Parameters
+    ----------
+    spec : Any
+        Rows, ``{diag: [...]}``, ``{identity: s}``, ``{matrix: NAME, scale: s}`` or a plain
+        number ``s`` (meaning ``s·I``).
+    dim : int
+        The weight's size d.
+    source : str or None
+        The file it came from, for messages.
+    field : str
+        The field it came from, for messages.
+    named : dict of str to numpy.ndarray, optional
+        The file's named matrices, for the ``matrix`` form.
+
+    Returns
+    -------
+    numpy.ndarray
+        The d×d weight (not symmetrised: the model checks symmetry).
+
+    Raises
+    ------
+    InputError
+        A non-numeric entry, a wrong shape, an unknown name or form.
+    """
     if isinstance(spec, list):
         return _square(spec, dim, source, field)
     if isinstance(spec, (int, float)) and not isinstance(spec, bool):
@@ -405,7 +446,25 @@ EDGE_KEYS = {"from", "to", "weight"}
 
 
 def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyData:
-    """Validate a topology mapping (see the module docstring for the form)."""
+    """Validate a topology mapping (see the module docstring for the form).
+
+    Parameters
+    ----------
+    doc : dict
+        The mapping as read from a file.
+    source : str, optional
+        The file it came from, for messages.
+
+    Returns
+    -------
+    TopologyData
+        Labels, dimension and edges with their d×d weights.
+
+    Raises
+    ------
+    InputError
+        An unknown or missing field, a bad label, edge or weight.
+    """
     unknown = sorted(set(doc) - TOPOLOGY_KEYS, key=str)
     if unknown:
         raise _err(
@@ -472,7 +531,26 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
 
 
 def parse_switching(doc: dict[str, Any], source: str | None = None) -> SwitchingData:
-    """Validate a switching mapping: named modes and a periodic schedule."""
+    """Validate a switching mapping: named modes and a periodic schedule.
+
+    Parameters
+    ----------
+    doc : dict
+        The mapping as read from a file; a mode is a topology file (relative to
+        ``source``) or an inline topology.
+    source : str, optional
+        The file it came from, for messages and for locating mode files.
+
+    Returns
+    -------
+    SwitchingData
+        The modes' topologies and the schedule as (mode, duration) pairs.
+
+    Raises
+    ------
+    InputError
+        An unknown field, an unreadable or invalid mode, a malformed schedule entry.
+    """
     unknown = sorted(set(doc) - {"name", "description", "modes", "schedule"}, key=str)
     if unknown:
         raise _err(source, _q(unknown[0]), "unknown field (allowed: modes, schedule, name)")
@@ -510,17 +588,72 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
 
 
 def parse_file(path: str | Path) -> Any:
-    """Read a topology, a switching or a time-varying topology file (weights as
-    expressions of t, :mod:`ntc_design.tvfiles`); which one is told by its fields."""
+    """Read a topology, a switching or a time-varying topology file.
+
+    Which one is told by its fields: ``modes``/``schedule`` for switching, weights that are
+    expressions of t for time-varying (:mod:`ntc_design.tvfiles`). A ``.npz`` file is a
+    compact edge list (:mod:`ntc_design.edgelist`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A YAML or JSON file, or an ``.npz`` edge list.
+
+    Returns
+    -------
+    TopologyData or SwitchingData or TimeVaryingData or EdgeListData
+        The validated file contents.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read or is not a valid topology of any kind.
+    """
+    if str(path).lower().endswith(".npz"):
+        from .edgelist import read_npz
+
+        return read_npz(path)
     doc = read_document(path)
     src = str(path)
     if "modes" in doc or "schedule" in doc:
         return parse_switching(doc, src)
-    from .tvfiles import is_time_varying, parse_time_varying  # it builds on this module
-
     if is_time_varying(doc):
+        from .tvfiles import parse_time_varying  # it builds on this module (and sympy)
+
         return parse_time_varying(doc, src)
     return parse_topology(doc, src)
+
+
+def _has_text(x: Any) -> bool:
+    if isinstance(x, str):
+        return True
+    if isinstance(x, dict):
+        return any(_has_text(v) for k, v in x.items() if k != "matrix")
+    if isinstance(x, list):
+        return any(_has_text(v) for v in x)
+    return False
+
+
+def is_time_varying(doc: dict[str, Any]) -> bool:
+    """Whether a topology mapping is time-varying (:mod:`ntc_design.tvfiles`).
+
+    Parameters
+    ----------
+    doc : dict
+        A topology mapping as read.
+
+    Returns
+    -------
+    bool
+        True when it declares ``period``/``constant_after`` or a weight holds an
+        expression (a string).
+    """
+    if {"period", "constant_after"} & set(doc):
+        return True
+    edges = doc.get("edges")
+    return isinstance(edges, list) and any(
+        isinstance(e, dict) and _has_text(e.get("weight")) for e in edges
+    )
 
 
 @dataclass(frozen=True)
@@ -535,8 +668,25 @@ class ScenarioData:
 
 
 def parse_scenario(path: str | Path) -> ScenarioData:
-    """Read a scenario file and locate the topology file it names (relative to the
-    scenario); the simulation keys are the simulation layer's business."""
+    """Read a scenario file and locate the topology file it names.
+
+    The simulation keys are checked by the simulation layer, not here.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A YAML or JSON scenario with a ``topology`` field (relative to the scenario).
+
+    Returns
+    -------
+    ScenarioData
+        The source, the topology file's path and the document.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, or its ``topology`` is missing or names no file.
+    """
     doc = read_document(path)
     src = str(path)
     if "topology" not in doc:
@@ -548,3 +698,18 @@ def parse_scenario(path: str | Path) -> ScenarioData:
     if not tpath.is_file():
         raise _err(src, "topology", f"no such file {str(tpath)!r}")
     return ScenarioData(src, tpath, doc)
+
+
+__all__ = [
+    "EdgeData",
+    "ScenarioData",
+    "SwitchingData",
+    "TopologyData",
+    "jsonable",
+    "parse_file",
+    "parse_scenario",
+    "parse_switching",
+    "parse_topology",
+    "parse_weight",
+    "read_document",
+]

@@ -1,4 +1,5 @@
-"""Conditions on the control gain c(t) of Theorems 1-4 (arXiv, Niu & Wu), decided safely.
+"""Conditions on the control gain c(t) of Theorems 1-4 (Niu & Wu, eqs. (13), (16), (17)
+and (20)), decided safely.
 
 The conditions (labels in :data:`CONDITION_LABELS`, the one table every layer uses):
 
@@ -75,12 +76,21 @@ class Condition:
     reason: str
 
     def to_dict(self) -> dict:
+        """The condition as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``value`` (True, False or None) and ``reason``.
+        """
         return {"value": self.value, "reason": self.reason}
 
 
 @dataclass(frozen=True)
 class GainAnalysis:
-    """The four gain conditions of Theorems 1-4 for one gain c(t)."""
+    """The four gain conditions of Theorems 1-4 for one gain c(t): ∫c = ∞ and c → 0
+    (eqs. (13) and (17)), plus ∫c² < ∞ (eqs. (16) and (20)), with c continuous and
+    nonnegative (Niu & Wu)."""
 
     expression: str
     expr: sp.Expr
@@ -91,7 +101,7 @@ class GainAnalysis:
 
     @property
     def mean_square(self) -> bool | None:
-        """Premises on c of Theorems 1 and 3."""
+        """Premises on c of Theorems 1 and 3 (eqs. (13), (17)); None if undetermined."""
         return _and(
             self.continuous_nonnegative.value,
             self.integral_diverges.value,
@@ -100,14 +110,34 @@ class GainAnalysis:
 
     @property
     def almost_sure(self) -> bool | None:
-        """Premises on c of Theorems 2 and 4."""
+        """Premises on c of Theorems 2 and 4 (eqs. (16), (20)); None if undetermined."""
         return _and(self.mean_square, self.square_integrable.value)
 
     def condition(self, key: str) -> Condition:
-        """The condition stored under a key of :data:`CONDITION_LABELS`."""
+        """The condition stored under a key of :data:`CONDITION_LABELS`.
+
+        Parameters
+        ----------
+        key : str
+            ``continuous_nonnegative``, ``integral_diverges``, ``tends_to_zero`` or
+            ``square_integrable``.
+
+        Returns
+        -------
+        Condition
+            Its value and reason.
+        """
         return getattr(self, key)
 
     def to_dict(self) -> dict:
+        """The analysis as a JSON-ready mapping (what ``ntc gain --json`` prints).
+
+        Returns
+        -------
+        dict
+            The expression as given and parsed, each condition, ``mean_square`` and
+            ``almost_sure``.
+        """
         out: dict[str, Any] = {"expression": self.expression, "parsed": str(self.expr)}
         for key in CONDITION_LABELS:
             out[key] = self.condition(key).to_dict()

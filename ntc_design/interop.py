@@ -185,7 +185,7 @@ def design_statespace(des: ProtocolDesign) -> control.StateSpace:
     ``ẋ = −L_B x + k1 (Δ⊗I_d) B θ``, input θ (d), output x (Nd).
 
     Its DC gain ``L_B⁻¹ k1 (Δ⊗I_d) B`` is ``1_N ⊗ I_d`` exactly when the identity
-    ``−L_B(1⊗θ) + k1(Δ⊗I_d)Bθ = 0`` holds (arXiv, Niu & Wu, Lemma 1) and −L_B is Hurwitz.
+    ``−L_B(1⊗θ) + k1(Δ⊗I_d)Bθ = 0`` holds (Niu & Wu, Lemma 1, eq. (11)) and −L_B is Hurwitz.
 
     Parameters
     ----------
@@ -251,3 +251,12 @@ def simulation_frame(res: Any) -> pd.DataFrame:
         "exact": (res.exact.ms_error if res.exact is not None else nan).reshape(-1),
     }
     return pd.DataFrame(cols, columns=list(TIDY_COLUMNS))
+
+
+__all__ = [
+    "design_statespace",
+    "save_topology",
+    "simulation_frame",
+    "topology_from_networkx",
+    "topology_to_networkx",
+]

@@ -16,8 +16,14 @@ from enum import StrEnum
 
 import numpy as np
 
+from .errors import InputError
+
 SYM_RTOL = 1e-12
 DEF_RTOL = 1e-10
+
+
+class DenseRefused(InputError):
+    """A dense step refused by its memory estimate (see :func:`require_dense`)."""
 
 
 class Definiteness(StrEnum):
@@ -75,3 +81,110 @@ def classify(a: np.ndarray, rtol: float = DEF_RTOL) -> Definiteness:
 def pd(a: np.ndarray, rtol: float = DEF_RTOL) -> bool:
     """``a ≻ 0`` for a symmetric ``a``: smallest eigenvalue above ``rtol·‖a‖₂``."""
     return classify(a, rtol) is Definiteness.PD
+
+
+#: Integer codes of :class:`Definiteness` used by the batched classifier.
+DEF_CODES: tuple[Definiteness, ...] = (
+    Definiteness.ZERO,
+    Definiteness.PD,
+    Definiteness.PSD,
+    Definiteness.ND,
+    Definiteness.NSD,
+    Definiteness.INDEFINITE,
+)
+CODE_SIGN = np.array([0, 1, 1, -1, -1, 0], dtype=np.int8)
+CODE_DEFINITE = np.array([False, True, False, True, False, False])
+
+
+def classify_codes(a: np.ndarray, rtol: float = DEF_RTOL) -> np.ndarray:
+    """:func:`classify` for a stack ``a`` of shape (E, d, d) with one batched
+    ``eigvalsh``: an int8 array of indices into :data:`DEF_CODES` (same rule, same
+    tolerance)."""
+    lam = np.linalg.eigvalsh(0.5 * (a + a.transpose(0, 2, 1)))
+    tol = rtol * np.max(np.abs(lam), axis=1)
+    lo, hi = lam[:, 0], lam[:, -1]
+    out = np.full(a.shape[0], 5, dtype=np.int8)
+    out[hi <= tol] = 4
+    out[lo >= -tol] = 2
+    out[hi < -tol] = 3
+    out[lo > tol] = 1
+    out[~np.any(a, axis=(1, 2))] = 0
+    return out
+
+
+def pd_batch(a: np.ndarray, rtol: float = DEF_RTOL) -> np.ndarray:
+    """:func:`pd` for a stack of symmetric matrices (E, d, d): a boolean array."""
+    return classify_codes(a, rtol) == 1
+
+
+def require_dense(n: int, what: str, copies: float = 1.0, limit: float | None = None) -> None:
+    """Refuse a dense n×n float step whose memory estimate exceeds ``DENSE_MAX_BYTES``
+    (one line, :class:`~ntc_design.errors.InputError`), so no input ends in an
+    out-of-memory kill. ``copies`` is how many n×n arrays the step holds at once."""
+    need = copies * 8.0 * float(n) ** 2
+    cap = DENSE_MAX_BYTES if limit is None else limit
+    if need > cap:
+        raise DenseRefused(
+            f"{what}: a dense {n}×{n} step needs about {need / 2**30:.1f} GiB "
+            f"(limit {cap / 2**30:.1f} GiB); refused — use the sparse path"
+        )
+
+
+#: Memory a dense step may take (bytes): estimated before the step, refused above.
+DENSE_MAX_BYTES = 2.0 * 2**30
+
+
+class SPDFamily:
+    """Sparse Cholesky (CHOLMOD via cvxopt, fill-reducing ordering, supernodal) of the
+    symmetric matrices ``Σ_k c_k·M_k − shift·I`` over one fixed sparsity pattern (the union
+    of the M_k and the diagonal), assembled once. Only lower triangles are read."""
+
+    def __init__(self, mats) -> None:
+        import scipy.sparse as sp
+
+        n = mats[0].shape[0]
+        self.n = n
+        parts = [sp.tril(m, format="coo") for m in mats] + [sp.identity(n, format="coo")]
+        key = np.concatenate([p.row.astype(np.int64) * n + p.col for p in parts])
+        tag = np.concatenate([np.full(p.nnz, k) for k, p in enumerate(parts)])
+        data = np.concatenate([p.data.astype(float) for p in parts])
+        uniq, inv = np.unique(key, return_inverse=True)
+        self.vals = np.zeros((len(parts), uniq.size))
+        np.add.at(self.vals, (tag, inv), data)
+        self.rows = uniq // n
+        self.cols = uniq % n
+        self._symbolic = None
+
+    def factor(self, coeffs, shift: float = 0.0, row_counts: bool = False):
+        """Factorise ``Σ c_k M_k − shift·I``. Returns ``(ok, row_max)``: ``ok`` when
+        every pivot is positive; ``row_max`` (with ``row_counts``) the largest number of
+        non-zeros in a row of the factor, i.e. the longest dot product of the
+        factorisation (0 otherwise)."""
+        from cvxopt import cholmod, matrix, spmatrix
+
+        c = np.concatenate([np.asarray(coeffs, dtype=float), [-float(shift)]])
+        v = c @ self.vals
+        sm = spmatrix(matrix(v), matrix(self.rows), matrix(self.cols), (self.n, self.n))
+        old = dict(cholmod.options)
+        cholmod.options["supernodal"] = 2
+        try:
+            # a fresh symbolic analysis every time: refactorising a factor object that
+            # was already factorised numerically gave wrong answers (cvxopt 1.3)
+            self._symbolic = cholmod.symbolic(sm, uplo="L")
+            cholmod.numeric(sm, self._symbolic)
+        except ArithmeticError:
+            return False, 0
+        finally:
+            cholmod.options.clear()
+            cholmod.options.update(old)
+        if not row_counts:
+            return True, 0
+        fac = cholmod.getfactor(self._symbolic)
+        cnt = np.bincount(np.array(fac.I, dtype=np.int64).ravel(), minlength=self.n)
+        return True, int(cnt.max(initial=0))
+
+
+def sparse_cholesky(a, shift: float = 0.0, row_counts: bool = True):
+    """One sparse Cholesky of the symmetric ``a − shift·I`` (see :class:`SPDFamily`):
+    ``(ok, row_max)``."""
+    return SPDFamily([a]).factor([1.0], shift, row_counts)

@@ -15,12 +15,43 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sparse
 
 from . import files
 from .errors import InputError
-from .linalg import DEF_RTOL, Definiteness, classify, is_symmetric
+from .linalg import (
+    CODE_DEFINITE,
+    CODE_SIGN,
+    DEF_CODES,
+    DEF_RTOL,
+    SYM_RTOL,
+    Definiteness,
+    classify_codes,
+    require_dense,
+)
 
 Label = files.Label
+_INDEF = 5  # code of Definiteness.INDEFINITE in linalg.DEF_CODES
+
+
+@dataclass(frozen=True, eq=False)
+class EdgeArrays:
+    """The listed weights as arrays (internal, 0-based): edge k is ``cols[k] -> rows[k]``
+    with weight ``w[k] = A_{rows[k], cols[k]}`` and class ``DEF_CODES[codes[k]]``."""
+
+    rows: np.ndarray
+    cols: np.ndarray
+    w: np.ndarray
+    codes: np.ndarray
+
+    @cached_property
+    def sign(self) -> np.ndarray:
+        return CODE_SIGN[self.codes].astype(float)
+
+    @cached_property
+    def abs_w(self) -> np.ndarray:
+        """|A_ij| = sgn(A_ij)·A_ij per edge."""
+        return self.sign[:, None, None] * self.w
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,33 +74,70 @@ class Topology:
         n, d = len(self.labels), self.dim
         if n < 1 or d < 1:
             raise InputError(self._where("topology", "needs at least one agent and dim >= 1"))
-        frozen = {}
-        for (i, j), a in self.weights.items():
-            f = self.edge_field(i, j)
-            if not (0 <= i < n and 0 <= j < n):
-                raise InputError(self._where(f, "agent index out of range"))
-            if i == j:
-                raise InputError(self._where(f, "self-loop (an agent cannot listen to itself)"))
-            a = np.array(a, dtype=float, copy=True)
-            if a.shape != (d, d):
-                raise InputError(self._where(f, f"weight has shape {a.shape}, expected ({d}, {d})"))
-            if not np.all(np.isfinite(a)):
+        keys = list(self.weights.keys())
+        e = len(keys)
+        ij = np.array(keys, dtype=np.int64).reshape(e, 2)
+        rows, cols = ij[:, 0], ij[:, 1]
+        bad = np.flatnonzero((rows < 0) | (rows >= n) | (cols < 0) | (cols >= n))
+        if bad.size:
+            k = keys[bad[0]]
+            raise InputError(self._where(self.edge_field(*k), "agent index out of range"))
+        loop = np.flatnonzero(rows == cols)
+        if loop.size:
+            k = keys[loop[0]]
+            raise InputError(
+                self._where(self.edge_field(*k), "self-loop (an agent cannot listen to itself)")
+            )
+        w = self._stack(keys, d)
+        # Checks vectorised over all edges; the first offending edge is named.
+        finite = np.all(np.isfinite(w), axis=(1, 2))
+        asym = np.max(np.abs(w - w.transpose(0, 2, 1)), axis=(1, 2), initial=0.0)
+        scale = np.max(np.abs(w), axis=(1, 2), initial=0.0)
+        codes = classify_codes(w) if e else np.zeros(0, dtype=np.int8)
+        for k in np.flatnonzero(~finite | (asym > SYM_RTOL * scale) | (codes == _INDEF)):
+            f = self.edge_field(*keys[k])
+            if not finite[k]:
                 raise InputError(self._where(f, "weight has a NaN or infinite entry"))
-            if not is_symmetric(a):
+            if asym[k] > SYM_RTOL * scale[k]:
                 raise InputError(self._where(f, "weight is not symmetric (A_ij must equal A_ijᵀ)"))
-            cls = classify(a)
-            if cls is Definiteness.INDEFINITE:
-                lam = np.linalg.eigvalsh(0.5 * (a + a.T))
+            lam = np.linalg.eigvalsh(0.5 * (w[k] + w[k].T))
+            raise InputError(
+                self._where(
+                    f,
+                    f"weight is indefinite (eigenvalues {lam[0]:.4g} .. {lam[-1]:.4g}); "
+                    "a weight must be positive or negative (semi)definite",
+                )
+            )
+        w.setflags(write=False)
+        object.__setattr__(self, "weights", {k: w[m] for m, k in enumerate(keys)})
+        object.__setattr__(self, "_arrays", EdgeArrays(rows, cols, w, codes))
+
+    def _stack(self, keys: list, d: int) -> np.ndarray:
+        """All weights as one (E, d, d) float array (a copy); a bad shape or entry is
+        reported for its edge."""
+        vals = list(self.weights.values())
+        if not vals:
+            return np.zeros((0, d, d))
+        try:
+            w = np.array(vals, dtype=float)
+            if w.shape == (len(keys), d, d):
+                return w
+        except (TypeError, ValueError):
+            pass
+        for k, a in zip(keys, vals, strict=True):
+            try:
+                a = np.array(a, dtype=float)
+            except (TypeError, ValueError):
+                raise InputError(
+                    self._where(self.edge_field(*k), "weight has a non-numeric entry")
+                ) from None
+            if a.shape != (d, d):
                 raise InputError(
                     self._where(
-                        f,
-                        f"weight is indefinite (eigenvalues {lam[0]:.4g} .. {lam[-1]:.4g}); "
-                        "a weight must be positive or negative (semi)definite",
+                        self.edge_field(*k), f"weight has shape {a.shape}, expected ({d}, {d})"
                     )
                 )
-            a.setflags(write=False)
-            frozen[(i, j)] = a
-        object.__setattr__(self, "weights", frozen)
+        raise InputError(self._where("edges", "weights could not be read"))  # unreachable
 
     # -- construction -------------------------------------------------------------
     @classmethod
@@ -98,6 +166,28 @@ class Topology:
         return cls(labels, dim, weights, name=name)
 
     @classmethod
+    def from_arrays(
+        cls,
+        labels: Iterable[Label],
+        dim: int,
+        rows: np.ndarray,
+        cols: np.ndarray,
+        weights: np.ndarray,
+        name: str | None = None,
+        source: str | None = None,
+    ) -> Topology:
+        """Build from arrays: edge k is ``cols[k] -> rows[k]`` (0-based agent indices)
+        with weight ``weights[k] = A_{rows[k], cols[k]}``; duplicates are an error."""
+        rows = np.asarray(rows, dtype=np.int64)
+        cols = np.asarray(cols, dtype=np.int64)
+        w = np.asarray(weights, dtype=float)
+        keys = list(zip(rows.tolist(), cols.tolist(), strict=True))
+        mapping = dict(zip(keys, w, strict=True))
+        if len(mapping) != len(keys):
+            raise InputError(f"{source + ': ' if source else ''}edges: duplicated edge")
+        return cls(tuple(labels), dim, mapping, name=name, source=source)
+
+    @classmethod
     def from_data(cls, data: files.TopologyData) -> Topology:
         index = {str(a): k for k, a in enumerate(data.labels)}
         weights, fields = {}, {}
@@ -108,6 +198,11 @@ class Topology:
         return cls(data.labels, data.dim, weights, data.name, data.source, fields)
 
     # -- basic accessors ----------------------------------------------------------
+    @property
+    def edge_arrays(self) -> EdgeArrays:
+        """Every listed weight as arrays (0-based indices, in listing order)."""
+        return self._arrays
+
     @property
     def n(self) -> int:
         return len(self.labels)
@@ -127,11 +222,19 @@ class Topology:
     def _where(self, f: str, msg: str) -> str:
         return f"{self.source}: {f}: {msg}" if self.source else f"{f}: {msg}"
 
-    def index(self, label: Label) -> int:
+    @cached_property
+    def _label_index(self) -> dict[str, int]:
+        out: dict[str, int] = {}
         for k, a in enumerate(self.labels):
-            if str(a) == str(label):
-                return k
-        raise InputError(f"unknown agent label {label!r}")
+            out.setdefault(str(a), k)
+        return out
+
+    def index(self, label: Label) -> int:
+        """0-based index of an agent label (O(1))."""
+        k = self._label_index.get(str(label))
+        if k is None:
+            raise InputError(f"unknown agent label {label!r}")
+        return k
 
     def weight(self, i: int, j: int) -> np.ndarray:
         """A_ij (zero matrix when there is no edge j -> i)."""
@@ -141,7 +244,11 @@ class Topology:
     @cached_property
     def classes(self) -> dict[tuple[int, int], Definiteness]:
         """Definiteness class of every listed weight."""
-        return {k: classify(a) for k, a in self.weights.items()}
+        ea = self._arrays
+        return {
+            (int(i), int(j)): DEF_CODES[c]
+            for i, j, c in zip(ea.rows.tolist(), ea.cols.tolist(), ea.codes.tolist(), strict=True)
+        }
 
     def sign(self, i: int, j: int) -> int:
         """sgn(A_ij) (paper, Sec. 2.1)."""
@@ -155,37 +262,96 @@ class Topology:
     @cached_property
     def edges(self) -> tuple[tuple[int, int], ...]:
         """Edges (i, j) with sgn(A_ij) ≠ 0, i.e. j -> i, in a stable order."""
-        return tuple(sorted(k for k, c in self.classes.items() if c.sign != 0))
+        ea = self._arrays
+        k = np.flatnonzero(CODE_SIGN[ea.codes] != 0)
+        order = np.lexsort((ea.cols[k], ea.rows[k]))
+        return tuple(zip(ea.rows[k][order].tolist(), ea.cols[k][order].tolist(), strict=True))
+
+    @cached_property
+    def _adjacency(self) -> tuple[sparse.csr_matrix, sparse.csr_matrix]:
+        """Signed agent adjacency (entry (i, j) = sgn(A_ij)) by rows and by columns."""
+        ea = self._arrays
+        sg = CODE_SIGN[ea.codes]
+        k = sg != 0
+        a = sparse.csr_matrix(
+            (sg[k].astype(np.int8), (ea.rows[k], ea.cols[k])), shape=(self.n, self.n)
+        )
+        a.sort_indices()
+        at = a.T.tocsr()
+        at.sort_indices()
+        return a, at
 
     def in_neighbours(self, i: int) -> list[int]:
         """N_i = {j : sgn(A_ij) ≠ 0}."""
-        return [j for (a, j) in self.edges if a == i]
+        a = self._adjacency[0]
+        return a.indices[a.indptr[i] : a.indptr[i + 1]].tolist()
 
     def out_neighbours(self, i: int) -> list[int]:
         """N'_i = {j : sgn(A_ji) ≠ 0}."""
-        return [a for (a, j) in self.edges if j == i]
+        a = self._adjacency[1]
+        return a.indices[a.indptr[i] : a.indptr[i + 1]].tolist()
 
     def omega(self, i: int) -> list[int]:
         """Ω_i = {j : sgn(A_ij) = -1}: in-neighbours with an antagonistic edge into i."""
-        return [j for j in self.in_neighbours(i) if self.sign(i, j) == -1]
+        a = self._adjacency[0]
+        sl = slice(a.indptr[i], a.indptr[i + 1])
+        return a.indices[sl][a.data[sl] < 0].tolist()
 
     def gamma(self, i: int) -> list[int]:
         """Γ_i = {j : sgn(A_ij) = +1}: in-neighbours with a cooperative edge into i."""
-        return [j for j in self.in_neighbours(i) if self.sign(i, j) == 1]
+        a = self._adjacency[0]
+        sl = slice(a.indptr[i], a.indptr[i + 1])
+        return a.indices[sl][a.data[sl] > 0].tolist()
 
     @cached_property
     def antagonised(self) -> tuple[int, ...]:
         """U = {i : ∃ j, sgn(A_ij) = -1}: agents with at least one negative in-edge."""
-        return tuple(i for i in range(self.n) if self.omega(i))
+        ea = self._arrays
+        return tuple(np.unique(ea.rows[CODE_SIGN[ea.codes] < 0]).tolist())
+
+    @cached_property
+    def degree_sums(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per agent (arrays of shape (N, d, d)): ``Σ_{N_i}|A_ij|`` (in),
+        ``Σ_{N'_i}|A_ji|`` (out) and ``Σ_{Ω_i}|A_ij|`` (antagonistic in-weight), summed
+        in edge order."""
+        ea, d = self._arrays, self.dim
+        inn = np.zeros((self.n, d, d))
+        out = np.zeros((self.n, d, d))
+        ant = np.zeros((self.n, d, d))
+        np.add.at(inn, ea.rows, ea.abs_w)
+        np.add.at(out, ea.cols, ea.abs_w)
+        neg = CODE_SIGN[ea.codes] < 0
+        np.add.at(ant, ea.rows[neg], ea.abs_w[neg])
+        for x in (inn, out, ant):
+            x.setflags(write=False)
+        return inn, out, ant
+
+    def definite_graph(self) -> sparse.csr_matrix:
+        """Agent graph of the definite (PD or ND) edges, entry (j, i) for the edge j -> i
+        (the edges a positive-negative path may use, Definition 1)."""
+        ea = self._arrays
+        k = CODE_DEFINITE[ea.codes]
+        return sparse.csr_matrix(
+            (np.ones(int(k.sum()), dtype=np.int8), (ea.cols[k], ea.rows[k])),
+            shape=(self.n, self.n),
+        )
 
     @cached_property
     def _laplacian(self) -> np.ndarray:
-        return signed_laplacian(self)
+        lap = signed_laplacian(self)
+        lap.setflags(write=False)
+        return lap
 
     def laplacian(self) -> np.ndarray:
-        """The signed Laplacian L (Nd×Nd); see :func:`signed_laplacian` (built once, a
-        copy is returned)."""
+        """The signed Laplacian L (Nd×Nd, dense); see :func:`signed_laplacian` (built once,
+        a copy is returned). Refused above ``linalg.DENSE_MAX_BYTES``: use
+        :meth:`laplacian_sparse`."""
         return self._laplacian.copy()
+
+    def laplacian_sparse(self) -> sparse.csr_matrix:
+        """The signed Laplacian L as a sparse CSR matrix (d×d blocks), assembled from the
+        edge list in time and memory linear in the edges."""
+        return signed_laplacian_sparse(self)
 
     def to_dict(self) -> dict:
         """A plain mapping in the topology-file form (round-trips through JSON/YAML)."""
@@ -229,43 +395,72 @@ class Topology:
 
 def signed_laplacian(top: Topology) -> np.ndarray:
     """Signed Laplacian L (paper, Sec. 2.2): blocks ``L_ij = -A_ij`` (j ≠ i) and
-    ``L_ii = Σ_{k≠i} |A_ik|``."""
-    d = top.dim
-    lap = np.zeros((top.nd, top.nd))
-    for (i, j), a in top.weights.items():
-        s = top.sign(i, j)
-        lap[i * d : (i + 1) * d, j * d : (j + 1) * d] -= a
-        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += s * a
-    return lap
+    ``L_ii = Σ_{k≠i} |A_ik|`` (dense; the memory is estimated first and a step above
+    ``linalg.DENSE_MAX_BYTES`` is refused with one line)."""
+    require_dense(top.nd, "signed Laplacian L")
+    d, n = top.dim, top.n
+    ea = top._arrays
+    lap4 = np.zeros((n, d, n, d))
+    lap4[ea.rows, :, ea.cols, :] = -ea.w
+    diag = top.degree_sums[0]
+    idx = np.arange(n)
+    lap4[idx, :, idx, :] = diag
+    return lap4.reshape(top.nd, top.nd)
+
+
+def _block_coo(
+    n: int, d: int, rows: np.ndarray, cols: np.ndarray, blocks: np.ndarray
+) -> sparse.csr_matrix:
+    """CSR (nd×nd) from d×d blocks placed at agent positions (rows[k], cols[k])."""
+    a, b = np.meshgrid(np.arange(d), np.arange(d), indexing="ij")
+    r = (rows[:, None, None] * d + a).ravel()
+    c = (cols[:, None, None] * d + b).ravel()
+    m = sparse.csr_matrix((blocks.ravel(), (r, c)), shape=(n * d, n * d))
+    m.sum_duplicates()
+    return m
+
+
+def signed_laplacian_sparse(top: Topology) -> sparse.csr_matrix:
+    """:func:`signed_laplacian` as CSR, O(E·d²) time and memory."""
+    ea, n, d = top._arrays, top.n, top.dim
+    idx = np.arange(n)
+    rows = np.concatenate([ea.rows, idx])
+    cols = np.concatenate([ea.cols, idx])
+    blocks = np.concatenate([-ea.w, top.degree_sums[0]])
+    return _block_coo(n, d, rows, cols, blocks)
 
 
 def antagonistic_in_weight(top: Topology, i: int) -> np.ndarray:
     """``Σ_{j∈Ω_i} |A_ij|``: the total antagonistic weight into agent i (Lemma 1)."""
-    return sum((top.abs_weight(i, j) for j in top.omega(i)), np.zeros((top.dim, top.dim)))
-
-
-def _in_out_degrees(top: Topology, i: int) -> tuple[np.ndarray, np.ndarray]:
-    z = np.zeros((top.dim, top.dim))
-    inn = sum((top.abs_weight(i, j) for j in top.in_neighbours(i)), z)
-    out = sum((top.abs_weight(j, i) for j in top.out_neighbours(i)), z)
-    return inn, out
+    return top.degree_sums[2][i].copy()
 
 
 def in_out_difference(top: Topology, i: int) -> np.ndarray:
     """``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji|`` (Definition 2)."""
-    inn, out = _in_out_degrees(top, i)
-    return inn - out
+    inn, out, _ = top.degree_sums
+    return inn[i] - out[i]
+
+
+def in_degree_dominated_all(top: Topology) -> np.ndarray:
+    """:func:`in_degree_dominated` for every agent at once (batched eigenvalues)."""
+    inn, out, _ = top.degree_sums
+    if top.n == 0:
+        return np.zeros(0, dtype=bool)
+    # ‖·‖₂ of the PSD sums is their largest eigenvalue
+    scale = np.maximum(np.linalg.eigvalsh(inn)[:, -1], np.linalg.eigvalsh(out)[:, -1])
+    lam = np.linalg.eigvalsh(inn - out)[:, 0]
+    return (scale == 0.0) | (lam >= -DEF_RTOL * scale)
 
 
 def in_degree_dominated(top: Topology, i: int) -> bool:
     """Definition 2: agent i is in-degree-dominated when
     ``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji| ⪰ 0`` (zero eigenvalues up to the tolerance of
     :mod:`ntc_design.linalg`, relative to the norms of the two sums)."""
-    inn, out = _in_out_degrees(top, i)
-    scale = max(np.linalg.norm(inn, 2), np.linalg.norm(out, 2))
+    inn, out, _ = top.degree_sums
+    scale = max(np.linalg.norm(inn[i], 2), np.linalg.norm(out[i], 2))
     if scale == 0.0:
         return True
-    lam = np.linalg.eigvalsh(inn - out)
+    lam = np.linalg.eigvalsh(inn[i] - out[i])
     return bool(lam[0] >= -DEF_RTOL * scale)
 
 
@@ -407,9 +602,16 @@ class TimeVaryingTopology:
 
 def load(path: str | Path):
     """Load a topology file, a switching file or a time-varying topology file (YAML or
-    JSON). A time-varying file gives an :class:`~ntc_design.timevarying.ExpressionTopology`,
-    or the fixed :class:`Topology` when every weight is a constant expression."""
+    JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`). A time-varying
+    file gives an :class:`~ntc_design.timevarying.ExpressionTopology`, or the fixed
+    :class:`Topology` when every weight is a constant expression."""
+    from .edgelist import EdgeListData
+
     data = files.parse_file(path)
+    if isinstance(data, EdgeListData):
+        return Topology.from_arrays(
+            data.labels, data.dim, data.rows, data.cols, data.w, data.name, data.source
+        )
     if isinstance(data, files.SwitchingData):
         return SwitchingTopology.from_data(data)
     if isinstance(data, files.TopologyData):

@@ -37,7 +37,9 @@ def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> 
     Parameters
     ----------
     path : str or Path
+        The file to write.
     data : str or bytes
+        Its whole content (text is written as UTF-8).
     option : str
         Named in an error message.
 
@@ -83,6 +85,7 @@ def check_output_folder(
     Parameters
     ----------
     path : str or Path
+        The output folder asked for.
     replaceable : iterable of str or None
         Names an existing folder may hold (the outputs of an earlier run, which will be
         replaced). Anything else in it is the user's: the folder is refused. None: the

@@ -35,7 +35,16 @@ import numpy as np
 import sympy as sp
 
 from .expr import parse_expression, symbol
-from .files import TOPOLOGY_KEYS, Label, _err, _kind, _labels, parse_weight
+from .files import (
+    TOPOLOGY_KEYS,
+    Label,
+    _err,
+    _has_text,
+    _kind,
+    _labels,
+    is_time_varying,
+    parse_weight,
+)
 
 TIME_KEYS = {"period", "constant_after"}
 MAX_PERIOD = 1e6  # a declared period or constant_after above this is refused
@@ -79,27 +88,6 @@ class TimeVaryingData:
     constant_after: sp.Expr | None
     source: str | None
     document: dict  # the mapping as read (re-parsed by ``ntc verify``)
-
-
-def _has_text(x: Any) -> bool:
-    if isinstance(x, str):
-        return True
-    if isinstance(x, dict):
-        return any(_has_text(v) for k, v in x.items() if k != "matrix")
-    if isinstance(x, list):
-        return any(_has_text(v) for v in x)
-    return False
-
-
-def is_time_varying(doc: dict[str, Any]) -> bool:
-    """A topology mapping is time-varying when it declares ``period``/``constant_after``
-    or a weight holds an expression (a string)."""
-    if TIME_KEYS & set(doc):
-        return True
-    edges = doc.get("edges")
-    return isinstance(edges, list) and any(
-        isinstance(e, dict) and _has_text(e.get("weight")) for e in edges
-    )
 
 
 def _entry(x: Any, source: str | None, field: str) -> sp.Expr:

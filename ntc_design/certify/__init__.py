@@ -16,9 +16,12 @@ from .certificate import (
 )
 from .claims import KINDS, Claim, ClaimKind, KindSpec, Property
 from .result import CertifyResult, certify
+from .scale import scale_certificate, verify_scale
 from .theorems import Premise, TheoremVerdict
 
 __all__ = [
+    "scale_certificate",
+    "verify_scale",
     "DIGEST_NOTE",
     "GainAnalysis",
     "analyse_gain",

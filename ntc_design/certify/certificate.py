@@ -147,6 +147,7 @@ def topology_hash(top: Topology) -> str:
     Parameters
     ----------
     top : Topology
+        A fixed topology.
 
     Returns
     -------
@@ -227,6 +228,29 @@ def _eig_bound(lap_b: np.ndarray) -> float:
     return float(np.min(np.linalg.eigvals(lap_b).real))
 
 
+#: The dense certificate (Lyapunov + decay-rate LMI on a dense P) is used up to this Nd;
+#: ``certify`` uses the component-wise certificate (:mod:`.scale`) above it (at Nd = 90
+#: the LMI already takes 2.2 GB and minutes; :func:`require_lmi` refuses it above 2 GiB).
+DENSE_CERT_MAX_ND = 60
+
+
+def require_lmi(n: int, what: str) -> None:
+    """Refuse, in one line, an LMI on a dense n×n P whose interior-point solve would need
+    more than ``linalg.DENSE_MAX_BYTES``: with m = n(n+1)/2 unknowns one dense m×m array
+    is 8·m² bytes (the 51,456,320,000-byte abort at n = 400 is exactly that), and the
+    solve holds about 16 of them (n = 150 was measured at 14.6 GB), so 128·m² bytes."""
+    from ..linalg import DENSE_MAX_BYTES, DenseRefused
+
+    m = n * (n + 1) / 2
+    need = 128.0 * m * m
+    if need > DENSE_MAX_BYTES:
+        raise DenseRefused(
+            f"{what}: a dense {n}×{n} P needs about {need / 2**30:.0f} GiB "
+            f"(limit {DENSE_MAX_BYTES / 2**30:.1f} GiB); refused — the component-wise "
+            "certificate (ntc_design.certify.scale) applies at this size"
+        )
+
+
 def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool = True) -> dict:
     """Certify −L_B Hurwitz for one design in two independent ways: (a) the Lyapunov
     equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) the LMI maximising the decay rate α.
@@ -248,6 +272,8 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
         non-Hurwitz −L_B gives a certificate that does not verify.
     """
     name = name or d.topology.name or "topology"
+    if rate:  # estimated before any dense step: refused in one line, never an OOM kill
+        require_lmi(d.topology.nd, "decay-rate LMI")
     lap_b = d.grounded_laplacian()
     lya = hurwitz_by_lyapunov(lap_b)
     eig_bound = _eig_bound(lap_b)
@@ -369,6 +395,14 @@ def write_certificate(doc: dict, path: str | Path) -> None:
     """Write a certificate atomically (:func:`ntc_design.outputs.write_atomic`): a reader
     never sees a half-written file.
 
+    Parameters
+    ----------
+    doc : dict
+        The certificate, as made by :func:`hurwitz_certificate` or
+        :func:`switching_certificate`.
+    path : str or pathlib.Path
+        The JSON file to write.
+
     Raises
     ------
     InputError
@@ -398,6 +432,13 @@ class Check:
     claim: Claim | None = None
 
     def to_dict(self) -> dict:
+        """The check as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``name``, ``ok``, ``detail`` and, for a check of a claim, ``claim``.
+        """
         doc = {"name": self.name, "ok": self.ok, "detail": self.detail}
         if self.claim is not None:
             doc["claim"] = self.claim.to_dict()
@@ -417,6 +458,13 @@ class ModeAbout:
     theta: tuple[float, ...]
 
     def to_dict(self) -> dict:
+        """The mode as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``name``, ``topology``, ``N``, ``d``, ``topology_hash``, ``delta``, ``theta``.
+        """
         return {
             "name": self.name,
             "topology": self.topology,
@@ -442,6 +490,14 @@ class About:
     switching_hash: str | None
 
     def to_dict(self) -> dict:
+        """What is certified, as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            The kind, its description, each property with its meaning, the modes, the
+            schedule, α and the switching hash.
+        """
         return {
             "kind": self.kind,
             "description": self.description,
@@ -471,6 +527,7 @@ class Verification:
 
     @property
     def failed(self) -> list[Check]:
+        """The checks that do not hold (empty when the certificate is valid)."""
         return [c for c in self.checks if not c.ok]
 
     def property_holds(self, prop: Property, mode: str | None = None) -> bool:
@@ -480,12 +537,14 @@ class Verification:
         Parameters
         ----------
         prop : Property
+            The property asked about.
         mode : str, optional
             Only the claims about this mode (and those about no mode, such as P ≻ 0).
 
         Returns
         -------
         bool
+            True only when it is proven.
         """
         integrity = all(c.ok for c in self.checks if c.claim is None)
         mine = [c for c in self.checks if c.claim is not None and c.claim.prop is prop]
@@ -496,6 +555,14 @@ class Verification:
         return integrity and bool(mine) and all(c.ok for c in mine)
 
     def to_dict(self) -> dict:
+        """The verification as a JSON-ready mapping (what ``ntc verify --json`` prints).
+
+        Returns
+        -------
+        dict
+            ``valid``, ``method``, the digest note, what is certified, every check and
+            the names of the failed ones.
+        """
         return {
             "valid": self.valid,
             "method": self.method,
@@ -1047,6 +1114,10 @@ def verify(
             f"version {version} is not one this ntc reads ({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
         )
     kind = _need(doc, "kind", str, source)
+    if kind == "hurwitz-scale":  # big networks: component by component (issue 9)
+        from .scale import verify_scale
+
+        return verify_scale(doc, source)
     if kind == "time_varying":  # weights as expressions of t: the uniform bound Λ₂
         from .time_varying import verify_time_varying
 
@@ -1278,6 +1349,7 @@ def verify_file(
     Parameters
     ----------
     path : str or Path
+        The certificate (JSON).
     topology, theta
         As in :func:`verify`.
 
@@ -1304,3 +1376,24 @@ def verify_file(
     except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
         raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
     return verify(doc, str(p), topology, theta)
+
+
+__all__ = [
+    "DIGEST_NOTE",
+    "About",
+    "Check",
+    "HurwitzProof",
+    "ModeAbout",
+    "Verification",
+    "canonical",
+    "digest",
+    "hurwitz_certificate",
+    "package_versions",
+    "prove_hurwitz",
+    "switching_certificate",
+    "switching_hash",
+    "topology_hash",
+    "verify",
+    "verify_file",
+    "write_certificate",
+]

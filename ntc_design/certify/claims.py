@@ -40,6 +40,7 @@ class ClaimKind(StrEnum):
     LYAPUNOV = "lyapunov"  # P·L_B + L_Bᵀ·P − 2α·P ≻ 0
     SYMMETRIC_PART = "symmetric_part"  # L_B + L_Bᵀ ≻ 0
     POSITIVE_RATE = "positive_rate"  # α > 0
+    COMPONENTS = "components"  # every strongly connected component block (hurwitz-scale)
 
 
 @dataclass(frozen=True)
@@ -62,10 +63,19 @@ class Claim:
             return f"L_B({m}) + L_B({m})ᵀ ≻ 0"
         if self.kind is ClaimKind.POSITIVE_RATE:
             return "α > 0"
+        if self.kind is ClaimKind.COMPONENTS:
+            return f"−L_B({m}) Hurwitz: every component block certified"
         rate = f" − 2α·P_{p}" if self.prop is Property.DECAY_RATE else ""
         return f"P_{p}·L_B({m}) + L_B({m})ᵀ·P_{p}{rate} ≻ 0"
 
     def to_dict(self) -> dict:
+        """The claim as it is stored in a certificate.
+
+        Returns
+        -------
+        dict
+            ``id``, ``kind``, ``property`` and, where they apply, ``mode``, ``P``, ``alpha``.
+        """
         doc: dict = {"id": self.id, "kind": self.kind.value, "property": self.prop.value}
         if self.mode is not None:
             doc["mode"] = self.mode
@@ -160,3 +170,14 @@ def derive_claims(
         In the order of ``properties``.
     """
     return tuple(c for prop in properties for c in PROPERTY_CLAIMS[prop](modes, alpha))
+
+
+__all__ = [
+    "KINDS",
+    "PROPERTY_TEXT",
+    "Claim",
+    "ClaimKind",
+    "KindSpec",
+    "Property",
+    "derive_claims",
+]

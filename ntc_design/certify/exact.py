@@ -39,6 +39,7 @@ def gamma(k: int) -> float:
     Parameters
     ----------
     k : int
+        Number of terms.
 
     Returns
     -------
@@ -56,6 +57,23 @@ class Dyadic:
 
     @classmethod
     def of(cls, a: np.ndarray | float) -> Dyadic:
+        """The exact value of a float matrix (every finite double is dyadic).
+
+        Parameters
+        ----------
+        a : numpy.ndarray or float
+            A matrix or a scalar (taken as 1×1).
+
+        Returns
+        -------
+        Dyadic
+            ``a`` exactly, over the smallest common power of two.
+
+        Raises
+        ------
+        ValueError
+            An entry is NaN or infinite.
+        """
         arr = np.atleast_2d(np.asarray(a, dtype=float))
         if not np.all(np.isfinite(arr)):
             raise ValueError("non-finite entry")
@@ -87,19 +105,50 @@ class Dyadic:
         return max((abs(int(x)).bit_length() for x in self.num.ravel()), default=0)
 
     def scale(self, s: Dyadic) -> Dyadic:
-        """Multiply by a dyadic scalar (a 1×1 Dyadic)."""
+        """Multiply by a dyadic scalar, exactly.
+
+        Parameters
+        ----------
+        s : Dyadic
+            A 1×1 Dyadic.
+
+        Returns
+        -------
+        Dyadic
+            ``s·self``.
+        """
         return Dyadic(self.num * s.num[0, 0], self.exp + s.exp)
 
     @property
     def T(self) -> Dyadic:  # noqa: N802 - matrix transpose, as numpy
+        """The transpose."""
         return Dyadic(self.num.T.copy(), self.exp)
 
     def to_float(self) -> np.ndarray:
+        """The nearest floats.
+
+        Returns
+        -------
+        numpy.ndarray
+            The matrix rounded to float64.
+        """
         return np.array([float(x) for x in (self.num.ravel() / (2**self.exp))]).reshape(
             self.num.shape
         )
 
     def equals(self, other: Dyadic) -> bool:
+        """Exact equality of the values (not of the representations).
+
+        Parameters
+        ----------
+        other : Dyadic
+            A matrix of the same shape.
+
+        Returns
+        -------
+        bool
+            True when every entry is equal.
+        """
         a, b, _ = self._align(other)
         return bool(np.all(a == b))
 
@@ -139,7 +188,9 @@ def exact_affordable(n: int, bits: int) -> bool:
     Parameters
     ----------
     n : int
+        The matrix size.
     bits : int
+        The largest bit length of an entry.
 
     Returns
     -------
@@ -150,6 +201,8 @@ def exact_affordable(n: int, bits: int) -> bool:
 
 @dataclass(frozen=True)
 class PDProof:
+    """Whether ``m ≻ 0`` was proven, by which method and why."""
+
     holds: bool
     method: str  # "exact-rational" or "verified-float"
     detail: str
@@ -161,10 +214,12 @@ def exact_pd(m: Dyadic) -> PDProof:
     Parameters
     ----------
     m : Dyadic
+        The matrix, exactly.
 
     Returns
     -------
     PDProof
+        ``holds`` True when every leading principal minor is positive (Sylvester).
     """
     if not np.all(m.num == m.num.T):
         return PDProof(False, "exact-rational", "the matrix is not symmetric")
@@ -181,7 +236,9 @@ def verified_float_pd(m: np.ndarray, err: np.ndarray) -> PDProof:
     Parameters
     ----------
     m : ndarray
+        The computed matrix.
     err : ndarray
+        An entrywise bound on its rounding error.
 
     Returns
     -------
@@ -204,3 +261,14 @@ def verified_float_pd(m: np.ndarray, err: np.ndarray) -> PDProof:
     return PDProof(
         True, "verified-float", f"Cholesky of M − {c:.3g}·I succeeds (shift covers rounding)"
     )
+
+
+__all__ = [
+    "Dyadic",
+    "PDProof",
+    "exact_affordable",
+    "exact_pd",
+    "first_nonpositive_minor",
+    "gamma",
+    "verified_float_pd",
+]

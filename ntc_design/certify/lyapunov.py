@@ -3,7 +3,8 @@
 Conventions (python-control's ``lyap(A, Q)`` solves ``A X + X Aᵀ + Q = 0``; SciPy's
 ``solve_continuous_lyapunov(A, Q)`` solves ``A X + X Aᴴ = Q``). Here everything is
 written for the consensus error dynamics ``ε̇ = −L_B ε``: −L_B is Hurwitz iff there is
-``P ≻ 0`` with ``P L_B + L_Bᵀ P ≻ 0`` (the paper's eq. LBP with the sign moved).
+``P ≻ 0`` with ``P L_B + L_Bᵀ P ≻ 0``; with right-hand side I this is the Lyapunov
+equation (14) of Niu & Wu, ``−P L_B − L_Bᵀ P = −I``, with the sign moved.
 """
 
 from __future__ import annotations
@@ -48,12 +49,30 @@ def _sylv_upper(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
 
 
 def lyapunov_solve(lap_b: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
-    """Solve ``P L_B + L_Bᵀ P = Q`` (Q = I by default) for P.
+    """Solve ``P L_B + L_Bᵀ P = Q`` (Q = I by default; Niu & Wu, eq. (14)) for P.
 
     Real Schur form ``L_B = Z T Zᵀ`` turns it into ``Tᵀ Y + Y T = Zᵀ Q Z`` with
     ``P = Z Y Zᵀ``; reversing the row order (J) makes ``J Tᵀ J`` upper quasi-triangular,
     so a recursive blocked Bartels–Stewart solve applies. Equivalent to python-control's
-    ``lyap(L_Bᵀ, -Q)`` and SciPy's ``solve_continuous_lyapunov(L_Bᵀ, Q)``, but level-3."""
+    ``lyap(L_Bᵀ, -Q)`` and SciPy's ``solve_continuous_lyapunov(L_Bᵀ, Q)``, but level-3.
+
+    Parameters
+    ----------
+    lap_b : numpy.ndarray
+        The Nd×Nd matrix L_B (eq. (8)).
+    q : numpy.ndarray, optional
+        The right-hand side, symmetric; the identity when omitted.
+
+    Returns
+    -------
+    numpy.ndarray
+        The symmetric solution P (unique when −L_B is Hurwitz).
+
+    Raises
+    ------
+    RuntimeError
+        LAPACK's ``dtrsyl`` reports an illegal argument (non-finite input).
+    """
     n = lap_b.shape[0]
     q = np.eye(n) if q is None else q
     t, z = sla.schur(lap_b, output="real")
@@ -67,6 +86,9 @@ def lyapunov_solve(lap_b: np.ndarray, q: np.ndarray | None = None) -> np.ndarray
 
 @dataclass(frozen=True)
 class LyapunovResult:
+    """The Lyapunov-equation P with its relative residual, smallest eigenvalue and the
+    seconds taken."""
+
     p: np.ndarray
     residual: float  # ‖P L_B + L_Bᵀ P − Q‖_F / ‖Q‖_F
     p_min_eig: float
@@ -74,7 +96,20 @@ class LyapunovResult:
 
 
 def hurwitz_by_lyapunov(lap_b: np.ndarray) -> LyapunovResult:
-    """(a) of the certificate: P from the Lyapunov equation with Q = I."""
+    """(a) of the certificate: P from the Lyapunov equation with Q = I (eq. (14)).
+
+    Parameters
+    ----------
+    lap_b : numpy.ndarray
+        The Nd×Nd matrix L_B (eq. (8)).
+
+    Returns
+    -------
+    LyapunovResult
+        P, the residual ``‖P L_B + L_Bᵀ P − I‖_F / √(Nd)``, λ_min(P) and the time taken;
+        −L_B is Hurwitz when λ_min(P) > 0 and the residual is small (proven exactly by
+        :func:`ntc_design.certify.certificate.prove_hurwitz`).
+    """
     t0 = time.perf_counter()
     p = lyapunov_solve(lap_b)
     r = p @ lap_b + lap_b.T @ p - np.eye(lap_b.shape[0])
@@ -85,6 +120,9 @@ def hurwitz_by_lyapunov(lap_b: np.ndarray) -> LyapunovResult:
 
 @dataclass(frozen=True)
 class RateResult:
+    """The decay rate α of the LMI bisection, the eigenvalue bound it is compared with,
+    the P that proves α, the solver status, the bisection steps and the seconds taken."""
+
     alpha: float  # certified decay rate (verified in floating point), or 0
     eig_bound: float  # −max Re λ(−L_B)
     p: np.ndarray | None
@@ -125,7 +163,25 @@ def decay_rate_lmi(
     ``P L_B + L_Bᵀ P − 2αP ⪰ 0`` (so ``‖ε(t)‖ <= κ e^{−αt}‖ε(0)‖`` for ε̇ = −L_B ε),
     by bisection on α with one Clarabel SDP per step. Each accepted α is checked on the
     returned P in floating point (a strict margin), so α never exceeds what P proves;
-    the result is compared with the eigenvalue bound ``−max Re λ(−L_B)``."""
+    the result is compared with the eigenvalue bound ``−max Re λ(−L_B)``.
+
+    Parameters
+    ----------
+    lap_b : numpy.ndarray
+        The Nd×Nd matrix L_B (eq. (8)).
+    tol : float, optional
+        Bisection stops when the bracket is below ``tol`` times the eigenvalue bound.
+    max_iter : int, optional
+        At most this many SDP solves.
+    eig_bound : float, optional
+        The eigenvalue bound, when the caller has it already.
+
+    Returns
+    -------
+    RateResult
+        α (0 when none is verified or −L_B is not Hurwitz) with its P and the solver
+        status.
+    """
     cp = _cvx()
     t0 = time.perf_counter()
     n = lap_b.shape[0]
@@ -248,7 +304,28 @@ def common_lyapunov(
     P = I (holds iff every L_B + L_Bᵀ ≻ 0), then per-agent block-diagonal P (an SDP with
     N·d(d+1)/2 variables, vectorised and sparse), then a dense P (the naive LMI).
     Solver results are accepted only after a floating-point check with a strict margin;
-    an infeasible or inaccurate result is reported with its status, never as a P."""
+    an infeasible or inaccurate result is reported with its status, never as a P.
+
+    Parameters
+    ----------
+    mats : Mapping of str to numpy.ndarray
+        Each mode's L_B (eq. (8)), all of one size Nd×Nd.
+    block : int
+        The block size d of the block-diagonal structure.
+    structures : sequence of str, optional
+        Which of ``"identity"``, ``"block-diagonal"``, ``"dense"`` to try, in order.
+
+    Returns
+    -------
+    CommonLyapunov
+        The first verified P with its structure and margin, and every attempt's status
+        (P None when none is verified).
+
+    Raises
+    ------
+    ValueError
+        An unknown structure name.
+    """
     lst = list(mats.values())
     n = lst[0].shape[0]
     attempts: list[tuple[str, str, float]] = []
@@ -281,3 +358,14 @@ def common_lyapunov(
             status = f"{status} but the float check fails (margin {m:.3g})"
         attempts.append((s, status, time.perf_counter() - t0))
     return CommonLyapunov(None, None, tuple(attempts), None)
+
+
+__all__ = [
+    "CommonLyapunov",
+    "LyapunovResult",
+    "RateResult",
+    "common_lyapunov",
+    "decay_rate_lmi",
+    "hurwitz_by_lyapunov",
+    "lyapunov_solve",
+]

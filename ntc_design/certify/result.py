@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,8 +11,14 @@ from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
-from ..timevarying import ExpressionTopology, TimeVaryingDesign
-from .certificate import Check, Verification, hurwitz_certificate, switching_certificate, verify
+from .certificate import (
+    DENSE_CERT_MAX_ND,
+    Check,
+    Verification,
+    hurwitz_certificate,
+    switching_certificate,
+    verify,
+)
 from .theorems import TheoremVerdict, fixed_verdicts, switching_verdicts
 
 
@@ -34,6 +41,14 @@ class CertifyResult:
         return self.gain is None and self.verification.valid
 
     def to_dict(self) -> dict:
+        """The result as a JSON-ready mapping (what ``ntc certify --json`` prints).
+
+        Returns
+        -------
+        dict
+            The design, the certificate's kind, subject, digest, checks and results, the
+            gain analysis, the theorem verdicts and ``proven``.
+        """
         ver = self.verification
         return {
             "design": self.design.to_dict(),
@@ -62,7 +77,7 @@ def _verify_own(cert: dict) -> Verification:
 
 
 def certify(
-    topology: Topology | SwitchingTopology | ExpressionTopology,
+    topology: Topology | SwitchingTopology | ExpressionTopology,  # noqa: F821
     theta,
     margin: float = 0.1,
     gain: str | None = None,
@@ -75,7 +90,8 @@ def certify(
 
     Parameters
     ----------
-    topology : Topology or SwitchingTopology
+    topology : Topology or SwitchingTopology or ExpressionTopology
+        The network: fixed, switching, or with weights that are expressions of t.
     theta : sequence of float
         The target consensus state θ ≠ 0.
     margin : float
@@ -99,7 +115,9 @@ def certify(
         For a bad θ, margin, δ or gain.
     """
     g = analyse_gain(gain) if gain is not None else None
-    if isinstance(topology, ExpressionTopology):  # weights as expressions of t
+    tvmod = sys.modules.get("ntc_design.timevarying")  # loaded by any ExpressionTopology
+    if tvmod is not None and isinstance(topology, tvmod.ExpressionTopology):
+        from ..timevarying import TimeVaryingDesign
         from .time_varying import (
             time_varying_certificate,
             time_varying_verdicts,
@@ -113,7 +131,9 @@ def certify(
         ver = verify_time_varying(cert)
         tth = time_varying_verdicts(cert["results"]["time_varying"], ver, g)
         return CertifyResult(tdes, cert, ver, g, tth)
-    des = design(topology, theta, margin, delta)
+    big = isinstance(topology, Topology) and topology.nd > DENSE_CERT_MAX_ND
+    # at scale the critical couplings are not needed by the certificate (design notes it)
+    des = design(topology, theta, margin, delta, thresholds=False if big else None)
     th: tuple[TheoremVerdict, ...]
     if isinstance(des, SwitchingDesign):
         cert = switching_certificate(des)
@@ -127,8 +147,20 @@ def certify(
             default=0.0,
         )
         th = switching_verdicts(des, ver, g, bound, cert["results"]["symmetric_part_min_eig"])
-    else:
+    elif not big:
         cert = hurwitz_certificate(des)
         ver = _verify_own(cert)
         th = fixed_verdicts(des, ver, g)
+    else:  # big networks: component-wise certificate, no dense step (issue 9)
+        from .scale import scale_certificate
+
+        cert = scale_certificate(des)
+        ver = _verify_own(cert)
+        th = fixed_verdicts(des, ver, g)
     return CertifyResult(des, cert, ver, g, th)
+
+
+__all__ = [
+    "CertifyResult",
+    "certify",
+]

@@ -1,4 +1,4 @@
-"""Which of Theorems 1-4 (arXiv, Niu & Wu) is guaranteed for a design, a certificate and
+"""Which of Theorems 1-4 (Niu & Wu, Sec. 4) is guaranteed for a design, a certificate and
 a gain.
 
 Theorems 1-2 (fixed topology): Assumptions 1-2 and the gain conditions; their proofs use
@@ -32,6 +32,13 @@ class Premise:
     detail: str
 
     def to_dict(self) -> dict:
+        """The premise as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``premise`` (its name), ``holds`` and ``detail``.
+        """
         return {"premise": self.name, "holds": self.holds, "detail": self.detail}
 
 
@@ -53,13 +60,23 @@ class TheoremVerdict:
 
     @property
     def failing(self) -> tuple[Premise, ...]:
+        """The premises that fail."""
         return tuple(p for p in self.premises if p.holds is False)
 
     @property
     def undetermined(self) -> tuple[Premise, ...]:
+        """The premises that could not be decided."""
         return tuple(p for p in self.premises if p.holds is None)
 
     def to_dict(self) -> dict:
+        """The verdict as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``theorem``, ``sense``, ``guaranteed`` and the premises (all, failing,
+            undetermined).
+        """
         return {
             "theorem": self.theorem,
             "sense": self.sense,
@@ -99,9 +116,11 @@ def fixed_verdicts(
     Parameters
     ----------
     design : ProtocolDesign
+        The Lemma 1 design (Assumption 2 is read from it).
     ver : Verification
         The verification of the design's ``hurwitz`` certificate.
     gain : GainAnalysis or None
+        The gain's conditions; None when no gain was given.
 
     Returns
     -------
@@ -141,9 +160,11 @@ def switching_verdicts(
     Parameters
     ----------
     design : SwitchingDesign
+        The per-mode Lemma 1 design.
     ver : Verification
         The verification of the design's ``switching`` certificate.
     gain : GainAnalysis or None
+        The gain's conditions; None when no gain was given.
     bound : float
         The largest |weight entry| over the modes (Assumption 3's D).
     sym_min : dict
@@ -198,3 +219,11 @@ def switching_verdicts(
         TheoremVerdict(3, "mean square", (a1, a2, a3, *sym_prem, *_gain_premises(gain, False))),
         TheoremVerdict(4, "almost sure", (a1, a2, a3, *sym_prem, *_gain_premises(gain, True))),
     )
+
+
+__all__ = [
+    "Premise",
+    "TheoremVerdict",
+    "fixed_verdicts",
+    "switching_verdicts",
+]

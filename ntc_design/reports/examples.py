@@ -2,7 +2,7 @@
 
     python -m ntc_design.reports.examples [--out examples/figures] [--paths 1000]
 
-Uses the paper's settings (arXiv, Niu & Wu, Sec. 5: σ = 0.4, f(x) = 0.3x, θ = [1, 2, -1],
+Uses the paper's settings (Niu & Wu, Sec. 5: σ = 0.4, f(x) = 0.3x, θ = [1, 2, -1],
 x(0) uniform on [-3, 3] with seed 1, T = 100, intrinsic Euler–Maruyama steps ds = 1e-3) and
 Monte Carlo seed 0, so the figures are identical on every re-run.
 """

@@ -763,3 +763,18 @@ def save(fig, stem: Path, formats: Sequence[str] = FORMATS, dpi: int = DPI) -> S
         files[f] = p
     plt.close(fig)
     return SavedFigure(stem, files, png)
+
+
+__all__ = [
+    "CouplingCurve",
+    "SavedFigure",
+    "coupling_curve",
+    "coupling_figure",
+    "gain_figure",
+    "gain_latex",
+    "ms_error_figure",
+    "save",
+    "schedule_figure",
+    "states_figure",
+    "topology_figure",
+]

@@ -487,10 +487,11 @@ def fitted_exponent(t: np.ndarray, y: np.ndarray, t_from: float) -> float | None
 
 def predicted_exponent(gain: str, rate: float) -> tuple[float | None, str]:
     """The decay exponent p of E‖x − 1⊗θ‖² ~ t^(−p) that the moment equations give for a
-    gain c ~ t^(−β) (arXiv, Niu & Wu: the second-moment ODE dΣ/dt = −c(L_BΣ + ΣL_Bᵀ) + c²(…)
-    with a constant additive-noise term): β for 0 < β < 1 (Σ follows c/2 times the noise
-    covariance), min(1, 2α) for β = 1 (α the decay rate of −L_B), 0 for β > 1 (∫c < ∞: the
-    error stalls) and 0 when c does not tend to 0. None when c is not a power of t."""
+    gain c ~ t^(−β) (the second-moment ODE of the error dynamics, Niu & Wu, eq. (12):
+    dΣ/dt = −c(L_BΣ + ΣL_Bᵀ) + c²(…) with a constant additive-noise term): β for
+    0 < β < 1 (Σ follows c/2 times the noise covariance), min(1, 2α) for β = 1 (α the decay
+    rate of −L_B), 0 for β > 1 (∫c < ∞: the error stalls) and 0 when c does not tend to 0.
+    None when c is not a power of t."""
     import sympy as sp
 
     from ..gain import T, _limit, parse_gain
@@ -868,3 +869,10 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
         ),
     )
     return out
+
+
+__all__ = [
+    "RunData",
+    "load_run",
+    "write_report",
+]

@@ -308,3 +308,8 @@ def reproduce_paper(
     path = out / "report.html"
     rp.write_html(path, html)
     return path, all_ok, wall
+
+
+__all__ = [
+    "reproduce_paper",
+]

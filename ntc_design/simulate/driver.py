@@ -11,6 +11,7 @@ moments (:func:`.moments.exact_moments`).
 from __future__ import annotations
 
 import os
+import sys
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -21,7 +22,6 @@ from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, quote
 from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
-from ..timevarying import ExpressionTopology
 from .budget import check_budget, estimate, estimate_steps
 from .grid import TimeGrid, build_grid
 from .moments import check_moments_size, exact_moments
@@ -339,7 +339,8 @@ def simulate(
             f"theta: expected {d} numbers (the state dimension d), got {spec.theta.size}"
         )
     cfun, gain_text = make_gain(spec.gain)
-    if isinstance(topology, ExpressionTopology):  # A(t): the protocol at every step
+    tvmod = sys.modules.get("ntc_design.timevarying")  # loaded by any ExpressionTopology
+    if tvmod is not None and isinstance(topology, tvmod.ExpressionTopology):  # A(t)
         from .timevarying import simulate_expression
 
         workers = min(spec.mc.workers, os.cpu_count() or 1)

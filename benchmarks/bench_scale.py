@@ -1,0 +1,197 @@
+"""Issue 9 benchmark: design, certify and verify at N = 1,000 / 10,000 / 100,000 (d = 3).
+
+One run prints side by side, per size: ``ntc certify`` (design + certificate + verdict)
+and ``ntc verify`` (wall time, CPU time, peak memory), the certificate's size, the
+design alone (time and peak memory: linear in the edges?), and the dense path (the
+small certificate: Lyapunov + decay-rate LMI) with its time or its one-line refusal.
+Then how the cost grows with size (ratios against the edge ratio).
+
+Every figure is measured in a child process (``os.wait4`` gives its own CPU time and
+peak resident memory), so one run cannot skew the next. The networks come from
+``ntc generate`` (random family, seed 1). On a shared machine wall times are noisy; the
+CPU time is the steadier figure.
+
+Usage::
+
+    python benchmarks/bench_scale.py                 # 1e3, 1e4, 1e5
+    python benchmarks/bench_scale.py --sizes 1000 10000
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+TARGETS = {1000: (5.0, None), 10_000: (10.0, 4096.0), 100_000: (120.0, 8192.0)}
+THETA = "1,2,3"
+
+
+def run_child(args: list[str]) -> dict:
+    """Run ``python args...`` and return wall/CPU seconds, peak RSS (MiB), exit code and
+    the last line of stderr."""
+    with tempfile.TemporaryFile() as err:
+        t0 = time.perf_counter()
+        p = subprocess.Popen([sys.executable, *args], stdout=subprocess.DEVNULL, stderr=err)
+        _, status, ru = os.wait4(p.pid, 0)
+        wall = time.perf_counter() - t0
+        p.returncode = os.waitstatus_to_exitcode(status)
+        err.seek(0)
+        lines = [ln for ln in err.read().decode(errors="replace").splitlines() if ln.strip()]
+    return {
+        "wall": wall,
+        "cpu": ru.ru_utime + ru.ru_stime,
+        "rss": ru.ru_maxrss / 1024.0,
+        "rc": p.returncode,
+        "err": lines[-1] if lines else "",
+    }
+
+
+DESIGN = (
+    "import sys, warnings; import ntc_design as nd; "
+    "warnings.simplefilter('ignore'); "
+    "d = nd.design(nd.load(sys.argv[1]), [1, 2, 3], thresholds=False); "
+    "assert d.assumption_holds"
+)
+DENSE = (
+    "import sys, warnings; import ntc_design as nd; "
+    "from ntc_design.certify import hurwitz_certificate, verify; "
+    "from ntc_design.errors import InputError; "
+    "warnings.simplefilter('ignore'); "
+    "d = nd.design(nd.load(sys.argv[1]), [1, 2, 3], thresholds=False)\n"
+    "try:\n"
+    "    c = hurwitz_certificate(d); assert verify(c).valid\n"
+    "except InputError as e:\n"
+    "    print('refused: ' + str(e), file=sys.stderr); sys.exit(3)"
+)
+IMPORT = "import ntc_design, ntc_design.certify"
+
+
+def fmt(r: dict) -> str:
+    if r["rc"] not in (0,):
+        return f"rc={r['rc']}"
+    return f"{r['wall']:7.2f} {r['cpu']:7.2f} {r['rss']:7.0f}"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 10_000, 100_000])
+    ap.add_argument("--d", type=int, default=3)
+    ap.add_argument("--seed", type=int, default=1)
+    args = ap.parse_args()
+    work = Path(tempfile.mkdtemp(prefix="bench_scale_"))
+    base = run_child(["-c", IMPORT])
+    base_design = run_child(["-c", "import ntc_design"])
+    print(
+        f"# bench_scale: d = {args.d}, seed {args.seed}, {os.cpu_count()} CPUs, "
+        f"load average {os.getloadavg()[0]:.1f}; import alone: {base['rss']:.0f} MiB"
+    )
+    print("# columns: wall s, CPU s, peak MiB (child process)")
+    rows = []
+    # the dense path at its largest documented size, for comparison
+    n_dense = 7
+    f_dense = work / f"net{n_dense}.npz"
+    run_child(
+        [
+            "-m",
+            "ntc_design",
+            "generate",
+            "--n",
+            str(n_dense),
+            "--d",
+            str(args.d),
+            "--seed",
+            str(args.seed),
+            "--out",
+            str(f_dense),
+        ]
+    )
+    dense_small = run_child(["-c", DENSE, str(f_dense)])
+    if dense_small["rc"] != 0:
+        print(f"dense path at N = {n_dense} failed: {dense_small['err']}")
+    print(
+        f"dense path (Lyapunov + decay-rate LMI) at N = {n_dense} (Nd = {n_dense * args.d}): "
+        f"{dense_small['wall']:.2f} s wall, {dense_small['cpu']:.2f} s CPU, "
+        f"{dense_small['rss']:.0f} MiB"
+    )
+    header = (
+        f"{'N':>7} {'edges':>7} | {'certify (wall cpu MiB)':>24} | {'verify (wall cpu MiB)':>23} "
+        f"| {'cert MB':>7} | {'design (wall cpu MiB)':>23} | dense path"
+    )
+    print(header)
+    print("-" * len(header))
+    for n in args.sizes:
+        f = work / f"net{n}.npz"
+        gen = run_child(
+            [
+                "-m",
+                "ntc_design",
+                "generate",
+                "--n",
+                str(n),
+                "--d",
+                str(args.d),
+                "--seed",
+                str(args.seed),
+                "--out",
+                str(f),
+            ]
+        )
+        if gen["rc"] != 0:
+            print(f"{n:>7} generate failed: {gen['err']}")
+            continue
+        import numpy as np
+
+        with np.load(f) as z:
+            edges = int(z["from"].shape[0])
+        cert = work / f"cert{n}.json"
+        c = run_child(["-m", "ntc_design", "certify", str(f), "--theta", THETA, "--out", str(cert)])
+        v = run_child(["-m", "ntc_design", "verify", str(cert)]) if cert.exists() else None
+        des = run_child(["-c", DESIGN, str(f)])
+        dn = run_child(["-c", DENSE, str(f)])
+        dense = (
+            f"{dn['wall']:.1f} s"
+            if dn["rc"] == 0
+            else (dn["err"][:90] if dn["rc"] == 3 else f"rc={dn['rc']} {dn['err'][:60]}")
+        )
+        size_mb = cert.stat().st_size / 1e6 if cert.exists() else float("nan")
+        print(
+            f"{n:>7} {edges:>7} | {fmt(c):>24} | {fmt(v) if v else '—':>23} | {size_mb:7.1f} "
+            f"| {fmt(des):>23} | {dense}"
+        )
+        rows.append((n, edges, c, v, des, gen))
+    print()
+    print("# targets (issue 9): certify N=1e3 <= 5 s; 1e4 <= 10 s & 4 GB; 1e5 <= 120 s & 8 GB;")
+    print("# verify within the same times")
+    for n, _, c, v, _, _ in rows:
+        t, m = TARGETS.get(n, (None, None))
+        if t is None:
+            continue
+        ok_c = c["rc"] == 0 and c["wall"] <= t and (m is None or c["rss"] <= m)
+        ok_v = v is not None and v["rc"] == 0 and v["wall"] <= t and (m is None or v["rss"] <= m)
+        print(
+            f"N = {n}: certify {'meets' if ok_c else 'MISSES'} the target "
+            f"(wall {c['wall']:.1f} s, CPU {c['cpu']:.1f} s, {c['rss']:.0f} MiB); "
+            f"verify {'meets' if ok_v else 'MISSES'} it"
+            + (f" (wall {v['wall']:.1f} s, CPU {v['cpu']:.1f} s, {v['rss']:.0f} MiB)" if v else "")
+        )
+    print()
+    print("# growth (ratio to the previous size): edges, CPU of certify / verify / design,")
+    print("# design peak memory above the bare import")
+    for (n0, e0, c0, v0, d0, _), (n1, e1, c1, v1, d1, _) in zip(rows, rows[1:], strict=False):
+        mem0 = max(d0["rss"] - base_design["rss"], 1.0)
+        mem1 = max(d1["rss"] - base_design["rss"], 1.0)
+        vv = f"{v1['cpu'] / v0['cpu']:.1f}" if v0 and v1 else "—"
+        print(
+            f"{n0:>7} -> {n1:<7}: edges ×{e1 / e0:.1f}; certify CPU ×{c1['cpu'] / c0['cpu']:.1f}; "
+            f"verify CPU ×{vv}; design CPU ×{d1['cpu'] / d0['cpu']:.1f}; "
+            f"design memory ×{mem1 / mem0:.1f} ({mem0:.0f} -> {mem1:.0f} MiB above import)"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,311 @@
+"""Random directed signed matrix-weighted networks that satisfy Assumption 2 by
+construction (arXiv: Niu & Wu, Assumption 2 with Definitions 1–2), for users and
+benchmarks.
+
+Construction (every step vectorised, O(E·d³)):
+
+1. An undirected base graph of the chosen ``family``: ``random`` (a random recursive
+   tree plus ``extra·N`` random chords: about 1.1·N edges by default), ``ring``
+   (k nearest neighbours on a cycle), ``grid`` (a square lattice), ``small-world``
+   (Watts–Strogatz) or ``scale-free`` (Barabási–Albert); the last two come from
+   networkx.
+2. A set V1 of root agents (a fraction ``v1_fraction``); a breadth-first spanning forest
+   of the base graph from V1 gives every other agent a parent. Each tree edge is
+   oriented parent -> child and is *definite* (PD or ND, sign drawn with probability
+   ``p_negative`` for ND), so every agent is reached from V1 by a positive-negative path
+   (Definition 1).
+3. Every V1 agent gets one extra *ND* in-edge from a random other agent, so its
+   antagonistic in-weight Σ_{Ω_i}|A_ij| is positive definite (it can be in V1).
+4. The remaining base edges become chords, oriented at random, with random-signed PD or
+   PSD weights of size ``chord_scale``.
+5. In-degree domination of every V2 agent (Definition 2): agents are processed from the
+   deepest tree level up; a V2 agent's tree in-edge gets
+   ``|A_{i,parent}| = Σ_{N'_i}|A_ji| − Σ_{other in-edges}|A_ij| (clipped) + R_i`` with a
+   random R_i ≻ 0, so ``Σ_{N_i}|A_ij| − Σ_{N'_i}|A_ji| ⪰ R_i ≻ 0``. Its out-weight is
+   known by then because every out-edge ends at a deeper agent (tree) or was drawn in
+   step 3–4.
+
+Randomness comes only from ``numpy.random.SeedSequence(seed)``: the same arguments give
+the same network on every machine.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sparse
+from scipy.sparse import csgraph
+
+from .errors import InputError, require_positive
+from .model import Topology
+
+FAMILIES = ("random", "ring", "grid", "small-world", "scale-free")
+
+
+def _random_pd(rng: np.random.Generator, m: int, d: int, scale: float = 1.0) -> np.ndarray:
+    """m random symmetric PD d×d matrices, eigenvalues roughly in [0.5, 2]·scale."""
+    g = rng.normal(size=(m, d, d))
+    return scale * (g @ g.transpose(0, 2, 1) / (2.0 * d) + 0.5 * np.eye(d))
+
+
+def _random_psd(rng: np.random.Generator, m: int, d: int, scale: float = 1.0) -> np.ndarray:
+    """m random symmetric PSD d×d matrices of rank d−1 (rank 1 when d = 1 is PD)."""
+    if d == 1:
+        return _random_pd(rng, m, d, scale)
+    g = rng.normal(size=(m, d, d - 1))
+    return scale * (g @ g.transpose(0, 2, 1)) / d
+
+
+def _base_edges(
+    family: str, n: int, rng: np.random.Generator, extra: float, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Undirected base graph as (u, v) arrays without self-loops or duplicates."""
+    if family == "random":
+        # random recursive tree: agent t > 0 attaches to a uniform earlier agent
+        u = np.arange(1, n)
+        v = (rng.random(n - 1) * u).astype(np.int64)
+        m = int(round(extra * n))
+        cu, cv = rng.integers(0, n, m), rng.integers(0, n, m)
+        u, v = np.concatenate([u, cu]), np.concatenate([v, cv])
+    elif family == "ring":
+        idx = np.arange(n)
+        hops = np.arange(1, max(1, k // 2) + 1)
+        u = np.repeat(idx, hops.size)
+        v = (u + np.tile(hops, n)) % n
+    elif family == "grid":
+        side = int(np.ceil(np.sqrt(n)))
+        idx = np.arange(n)
+        right = idx + 1
+        ok_r = (right % side != 0) & (right < n)
+        down = idx + side
+        ok_d = down < n
+        u = np.concatenate([idx[ok_r], idx[ok_d]])
+        v = np.concatenate([right[ok_r], down[ok_d]])
+    else:
+        import networkx as nx
+
+        s = int(rng.integers(0, 2**31 - 1))
+        if family == "small-world":
+            g = (
+                nx.connected_watts_strogatz_graph(n, max(2, k), 0.1, seed=s)
+                if n > 2
+                else nx.path_graph(n)
+            )
+        else:
+            g = (
+                nx.barabasi_albert_graph(n, max(1, k // 2), seed=s)
+                if n > max(1, k // 2)
+                else nx.path_graph(n)
+            )
+        e = np.array(list(g.edges()), dtype=np.int64).reshape(-1, 2)
+        u, v = e[:, 0], e[:, 1]
+    keep = u != v
+    u, v = np.minimum(u[keep], v[keep]), np.maximum(u[keep], v[keep])
+    key = np.unique(u * n + v)
+    return key // n, key % n
+
+
+def random_network(
+    n: int,
+    d: int = 3,
+    seed: int = 0,
+    family: str = "random",
+    *,
+    p_negative: float = 0.3,
+    v1_fraction: float = 0.05,
+    extra: float = 0.1,
+    k: int = 4,
+    chord_scale: float = 0.2,
+    name: str | None = None,
+) -> Topology:
+    """A random network of ``n`` agents with d×d weights that satisfies Assumption 2.
+
+    Parameters
+    ----------
+    n, d : int
+        Number of agents (>= 2) and state dimension (>= 1).
+    seed : int
+        Seed of the ``SeedSequence`` all randomness comes from.
+    family : str
+        Base graph: one of :data:`FAMILIES` (see the module docstring).
+    p_negative : float
+        Probability that a tree edge or chord is antagonistic (ND/NSD), in [0, 1].
+    v1_fraction : float
+        Fraction of agents drawn as V1 roots (at least one), in (0, 1].
+    extra : float
+        ``random`` family: chords per agent.
+    k : int
+        ``ring``/``small-world``: neighbours per agent; ``scale-free``: 2·(edges per new
+        agent).
+    chord_scale : float
+        Size of the chord weights relative to the tree weights.
+    name : str, optional
+        Name of the topology (default: ``family-n-d-seed``).
+
+    Returns
+    -------
+    Topology
+        Agents labelled 1..n; ``assumption2(top).holds`` is true by construction.
+
+    Raises
+    ------
+    InputError
+        For an unknown family or a parameter out of range.
+    """
+    require_positive("n", n, integer=True)
+    require_positive("d", d, integer=True)
+    if n < 2:
+        raise InputError("n: a network needs at least 2 agents")
+    if family not in FAMILIES:
+        raise InputError(f"family: unknown {family!r} (known: {', '.join(FAMILIES)})")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed: must be a non-negative integer, got {seed!r}")
+    if not 0.0 <= p_negative <= 1.0:
+        raise InputError(f"p_negative: must be in [0, 1], got {p_negative}")
+    if not 0.0 < v1_fraction <= 1.0:
+        raise InputError(f"v1_fraction: must be in (0, 1], got {v1_fraction}")
+    if not (extra >= 0 and np.isfinite(extra)):
+        raise InputError(f"extra: must be a non-negative number, got {extra}")
+    require_positive("k", k, integer=True)
+    require_positive("chord_scale", chord_scale)
+    n, d = int(n), int(d)
+    rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
+
+    u, v = _base_edges(family, n, rng, extra, k)
+    n_v1 = max(1, int(round(v1_fraction * n)))
+    v1 = np.sort(rng.choice(n, size=n_v1, replace=False))
+    in_v1 = np.zeros(n, dtype=bool)
+    in_v1[v1] = True
+
+    # BFS forest from V1 over the base graph (a virtual root joined to V1); agents the
+    # base graph leaves unreached (disconnected families) hang on a random V1 agent.
+    und = sparse.coo_matrix((np.ones(u.size, dtype=np.int8), (u, v)), shape=(n + 1, n + 1)).tocsr()
+    und = und + und.T
+    root = sparse.csr_matrix(
+        (np.ones(n_v1, dtype=np.int8), (np.full(n_v1, n), v1)), shape=(n + 1, n + 1)
+    )
+    g = (und + root).tocsr()
+    g.sort_indices()
+    order, pred = csgraph.breadth_first_order(g, n, directed=True, return_predecessors=True)
+    parent = pred[:n].astype(np.int64)
+    parent[in_v1] = -1
+    lost = np.flatnonzero((parent < 0) & ~in_v1)
+    parent[lost] = v1[rng.integers(0, n_v1, lost.size)]
+    depth = np.zeros(n, dtype=np.int64)
+    for i in order[1:]:
+        if parent[i] >= 0:
+            depth[i] = depth[parent[i]] + 1
+    for i in lost:  # their parents are V1 agents (depth 0)
+        depth[i] = 1
+
+    # tree edges parent -> child (weights set in step 5)
+    child = np.flatnonzero(parent >= 0)
+    tree_from, tree_to = parent[child], child
+    # chords: base edges not in the tree, random orientation
+    tkey = set((np.minimum(tree_from, tree_to) * n + np.maximum(tree_from, tree_to)).tolist())
+    ckey = u * n + v
+    chord = np.array([x not in tkey for x in ckey.tolist()], dtype=bool)
+    cu, cv = u[chord], v[chord]
+    flip = rng.random(cu.size) < 0.5
+    ch_from, ch_to = np.where(flip, cv, cu), np.where(flip, cu, cv)
+    # V1 antagonistic in-edges from a random other agent (not an existing edge)
+    src = (v1 + 1 + rng.integers(0, n - 1, n_v1)) % n
+    used = set((tree_to * n + tree_from).tolist()) | set((ch_to * n + ch_from).tolist())
+    ok = np.array([x not in used for x in (v1 * n + src).tolist()], dtype=bool)
+    an_from, an_to = src[ok], v1[ok]
+    # a V1 agent whose draw collided gets its ND weight on the colliding edge instead
+    clash_to, clash_from = v1[~ok], src[~ok]
+
+    neg_ch = rng.random(cu.size) < p_negative
+    w_ch = np.where(
+        (rng.random(cu.size) < 0.5)[:, None, None],
+        _random_pd(rng, cu.size, d, chord_scale),
+        _random_psd(rng, cu.size, d, chord_scale),
+    )
+    w_an = _random_pd(rng, an_to.size, d)
+    sgn_tree = np.where(rng.random(tree_to.size) < p_negative, -1.0, 1.0)
+    r_tree = _random_pd(rng, tree_to.size, d)
+
+    # make colliding V1 antagonistic edges ND: override sign/weight of that edge
+    if clash_to.size:
+        ck = clash_to * n + clash_from
+        tpos = {x: m for m, x in enumerate((tree_to * n + tree_from).tolist())}
+        cpos = {x: m for m, x in enumerate((ch_to * n + ch_from).tolist())}
+        for x in ck.tolist():
+            if x in tpos:
+                sgn_tree[tpos[x]] = -1.0
+            else:
+                m = cpos[x]
+                neg_ch[m] = True
+                w_ch[m] = _random_pd(rng, 1, d)[0]
+
+    # Step 5: tree weights, deepest level first.
+    mag_in_other = np.zeros((n, d, d))  # Σ |A_ij| over in-edges other than the tree edge
+    out = np.zeros((n, d, d))  # Σ_{N'_i} |A_ji|
+    np.add.at(mag_in_other, ch_to, w_ch)
+    np.add.at(out, ch_from, w_ch)
+    np.add.at(mag_in_other, an_to, w_an)
+    np.add.at(out, an_from, w_an)
+    w_tree = np.zeros((tree_to.size, d, d))
+    tdepth = depth[tree_to]
+    for lev in range(int(tdepth.max(initial=0)), 0, -1):
+        m = np.flatnonzero(tdepth == lev)
+        i = tree_to[m]
+        need = out[i] - mag_in_other[i]
+        lam, vec = np.linalg.eigh(0.5 * (need + need.transpose(0, 2, 1)))
+        need_psd = (vec * np.maximum(lam, 0.0)[:, None, :]) @ vec.transpose(0, 2, 1)
+        w = need_psd + r_tree[m]
+        w = 0.5 * (w + w.transpose(0, 2, 1))
+        w_tree[m] = w
+        np.add.at(out, tree_from[m], w)
+
+    rows = np.concatenate([tree_to, ch_to, an_to])
+    cols = np.concatenate([tree_from, ch_from, an_from])
+    sg = np.concatenate([sgn_tree, np.where(neg_ch, -1.0, 1.0), -np.ones(an_to.size)])
+    wts = sg[:, None, None] * np.concatenate([w_tree, w_ch, w_an])
+    order_e = np.lexsort((cols, rows))
+    return Topology.from_arrays(
+        tuple(range(1, n + 1)),
+        d,
+        rows[order_e],
+        cols[order_e],
+        wts[order_e],
+        name=name or f"{family}-{n}-{d}-{seed}",
+    )
+
+
+def write_topology(top: Topology, path: str | Path) -> Path:
+    """Write ``top``: ``.npz`` (compact edge list, :mod:`ntc_design.edgelist`) or
+    ``.json``/``.yaml`` (the topology-file form), atomically.
+
+    Raises
+    ------
+    InputError
+        For an unknown file type or a missing directory."""
+    import json
+
+    import yaml
+
+    from .edgelist import write_npz
+
+    p = Path(path)
+    if not p.parent.is_dir():
+        raise InputError(f"{p}: directory {p.parent} does not exist")
+    suf = p.suffix.lower()
+    if suf == ".npz":
+        ea = top.edge_arrays
+        write_npz(p, top.labels, top.dim, ea.rows, ea.cols, ea.w, top.name)
+        return p
+    if suf not in (".json", ".yaml", ".yml"):
+        raise InputError(f"{p}: unknown topology file type (use .npz, .json or .yaml)")
+    doc = top.to_dict()
+    text = (
+        json.dumps(doc, indent=1) + "\n"
+        if suf == ".json"
+        else yaml.safe_dump(doc, sort_keys=False, default_flow_style=None)
+    )
+    tmp = p.with_name(p.name + ".tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(p)
+    return p
