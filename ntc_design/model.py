@@ -8,6 +8,7 @@ the definition it implements.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
@@ -516,8 +517,23 @@ class SwitchingTopology:
                 raise InputError(
                     f"{where}schedule[{k}]: unknown mode {m!r} (modes: {', '.join(self.modes)})"
                 )
-            if not dur > 0:
-                raise InputError(f"{where}schedule[{k}].duration: must be positive, got {dur}")
+            if not (dur > 0 and math.isfinite(dur)):
+                raise InputError(
+                    f"{where}schedule[{k}].duration: must be a finite positive number, got {dur}"
+                )
+        # every switching instant must be a distinct float: a period that overflows to
+        # infinity, or a duration lost in rounding (1e308 + 0.02), would silently drop modes
+        ends = np.cumsum([d for _, d in self.schedule])
+        if not math.isfinite(float(ends[-1])):
+            raise InputError(f"{where}schedule: the period (sum of durations) overflows to infinity")
+        starts = np.concatenate([[0.0], ends[:-1]])
+        lost = np.flatnonzero(ends <= starts)
+        if lost.size:
+            k = int(lost[0])
+            raise InputError(
+                f"{where}schedule[{k}].duration: {self.schedule[k][1]!r} is lost in rounding "
+                f"next to the other durations (switching instant {float(starts[k])!r})"
+            )
 
     @classmethod
     def from_data(cls, data: files.SwitchingData) -> SwitchingTopology:
