@@ -138,9 +138,11 @@ def estimate(
     w = float(max(1, workers)) if mc else 1.0
     nnz = (n + edges) * d * d
     dense = min(nd_, DENSE_LB_MAX_ND) ** 2 + 3 * min(nd_, DENSE_EIG_MAX_ND) ** 2
-    # the Lemma 1 design is still dense (L, D and L_B: 3 Nd² per mode) until the sparse
-    # model lands; the simulation's own matrices are sparse
-    per_system = F8 * (4 * nnz + edges * (2 * d * d + d + 3) + 6 * nd_ + dense + 3 * nd_ * nd_)
+    # the design's dense L, D and L_B (3 Nd² per mode) exist only up to DENSE_LB_MAX_ND;
+    # above it the design and the simulation's own matrices are sparse
+    per_system = F8 * (
+        4 * nnz + edges * (2 * d * d + d + 3) + 6 * nd_ + dense + 3 * min(nd_, DENSE_LB_MAX_ND) ** 2
+    )
     parts: dict[str, tuple[str, float]] = {
         "time grid": ("dt", F8 * steps * (10 + 4 * w) + 64.0 * segments),
         "mode systems": (mode_field, per_system * modes * (1 + (w if mc else 0))),
