@@ -532,7 +532,24 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
 
 def verify_scale(doc: dict, source: str = "certificate"):
     """Re-check a ``hurwitz-scale`` certificate without any solver (module docstring).
-    Raises InputError when it is malformed."""
+
+    Parameters
+    ----------
+    doc : dict
+        The certificate.
+    source : str, optional
+        Its name, for messages.
+
+    Returns
+    -------
+    Verification
+        Valid when every check holds.
+
+    Raises
+    ------
+    InputError
+        The certificate or its topology is malformed.
+    """
     from .certificate import Check, Verification, digest
     from .claims import Claim, ClaimKind, Property
 
