@@ -1,5 +1,5 @@
-"""The semi-autonomous network with compound noise (eq. SAN_noise) as sparse matrices and
-edge arrays.
+"""The semi-autonomous network with compound noise (Niu & Wu, eq. (5)) as sparse matrices
+and edge arrays.
 
 For one mode with design (L_B, x0, B_i) and noise (σ_ji, f_ji), on the stacked state
 x ∈ R^{Nd}:
@@ -51,9 +51,29 @@ class NoiseModel:
 
     @property
     def linear(self) -> bool:
+        """Whether f(x) = F x (a number or a matrix rather than a callable)."""
         return not callable(self.f)
 
     def f_matrix(self, d: int) -> np.ndarray:
+        """The matrix F of a linear f(x) = F x.
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+            F, d×d (s·I for a number s).
+
+        Raises
+        ------
+        ValueError
+            f is a callable.
+        InputError
+            f is a matrix of the wrong shape.
+        """
         if callable(self.f):
             raise ValueError("f is a callable")
         f = np.asarray(self.f, dtype=float)
@@ -89,10 +109,12 @@ class ModeSystem:
 
     @property
     def n_edges(self) -> int:
+        """The number of edges E (nonzero A_ij)."""
         return int(self.dst.size)
 
     @property
     def nd(self) -> int:
+        """N·d, the size of the stacked state."""
         return self.n_agents * self.dim
 
     @cached_property
@@ -140,6 +162,13 @@ class ModeSystem:
         return self._block_matrix(self.dst, e, self.abs_w, (self.nd, self.n_edges * self.dim))
 
     def lap_b_dense(self) -> np.ndarray:
+        """L_B as a dense matrix.
+
+        Returns
+        -------
+        numpy.ndarray
+            L_B, Nd×Nd.
+        """
         return self.lap_b.toarray()
 
 
