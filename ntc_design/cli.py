@@ -3,6 +3,7 @@ stderr, exit code 2."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import threading
@@ -51,6 +52,14 @@ def _root(
 
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
+SchedulerOpt = Annotated[
+    str | None,
+    typer.Option(
+        help="Run on a Dask cluster: the scheduler's address, e.g. tcp://10.0.0.5:8786 "
+        "(start one with `dask scheduler` and `dask worker ADDRESS`). Default: this machine."
+    ),
+]
+PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
 
 
 def parse_vector(text: str, field: str) -> list[float]:
@@ -536,11 +545,13 @@ def simulate(
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
     ] = None,
+    scheduler: SchedulerOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
     summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
     or nothing)."""
+    from .distributed import DaskEngine
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
     from .simulate.scenario import check_output, load_scenario, write_outputs
@@ -553,10 +564,18 @@ def simulate(
         except InputError as exc:
             raise InputError(f"--{exc}") from None
     check_output(out_dir)  # before the run, not after it
-    with Progress("ntc simulate") as prog:
+    engine = DaskEngine.connect(scheduler) if scheduler else None
+    with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
+        if engine is not None:
+            stack.callback(engine.close)
         prog.stage(f"simulating {scenario}")
         try:
-            res = run(top, spec, progress=lambda done, total: prog.tick("simulating", done, total))
+            res = run(
+                top,
+                spec,
+                progress=lambda done, total: prog.tick("simulating", done, total),
+                engine=engine,
+            )
         except InputError as exc:  # a field of the scenario: name the file
             raise InputError(f"{sc.source}: {exc}") from None
         except SimulationDiverged as exc:
@@ -600,10 +619,84 @@ def simulate(
     out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
+def _sweep_progress():
+    """(callback, context): a bar for points and path-steps on a terminal, otherwise a
+    plain line on stderr every PLAIN_EVERY seconds (and at the end), for batch jobs."""
+    if not sys.stderr.isatty():
+        last = [0.0]
+
+        def plain(st) -> None:
+            now = time.monotonic()
+            if now - last[0] >= PLAIN_EVERY or st.points_done == st.points_total:
+                last[0] = now
+                print(st.line(), file=sys.stderr, flush=True)
+
+        return plain, contextlib.nullcontext()
+    from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+    from rich.progress import Progress as Bar
+
+    prog = Bar(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+    )
+    ids: dict[str, int] = {}
+
+    def bar(st) -> None:
+        if not ids:
+            ids["p"] = prog.add_task("points", total=st.points_total)
+            ids["s"] = prog.add_task("path-steps", total=max(st.path_steps_total, 1))
+        prog.update(ids["p"], completed=st.points_done, total=st.points_total)
+        prog.update(ids["s"], completed=st.path_steps_done, total=max(st.path_steps_total, 1))
+
+    return bar, prog
+
+
+@app.command()
+def sweep(
+    sweep_file: Annotated[Path, typer.Argument(help="A sweep file (YAML/JSON).")],
+    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    scheduler: SchedulerOpt = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(help="Local processes per point without --scheduler (default: 2)."),
+    ] = None,
+) -> None:
+    """Design, certify and simulate every point of a sweep (a grid or a list of points over
+    a base scenario); points already in --out are reused. Writes results.csv,
+    results.parquet, curves.parquet and points/. Exit 1 when some point failed."""
+    from .sweep import load_sweep, run_sweep
+
+    sw = load_sweep(sweep_file)
+    callback, ctx = _sweep_progress()
+    with ctx:
+        res = run_sweep(sw, out_dir, scheduler=scheduler, workers=workers, progress=callback)
+    out.print(
+        f"{res.points} points in {res.seconds:.1f} s: {res.computed} computed, {res.reused} reused, "
+        f"{res.failed} failed"
+    )
+    if res.failed:
+        import pandas as pd
+
+        table = pd.read_csv(out_dir / "results.csv")
+        for _, row in table[table["error"].notna()].head(10).iterrows():
+            vals = ", ".join(f"{k}={row[k]}" for k in sw.keys)
+            out.print(f"  failed: {vals}: {row['error']}", soft_wrap=True)
+    out.print(
+        f"wrote {out_dir}/results.csv, results.parquet, curves.parquet (report: ntc report {out_dir})",
+        soft_wrap=True,
+    )
+    if res.failed:
+        raise typer.Exit(1)
+
+
 @app.command()
 def report(
     directory: Annotated[
-        Path, typer.Argument(help="A simulation output directory (ntc simulate --out).")
+        Path,
+        typer.Argument(help="A simulation or sweep output directory (ntc simulate/sweep --out)."),
     ],
     interactive: Annotated[
         bool,
@@ -611,10 +704,14 @@ def report(
     ] = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Turn a simulation output directory into one self-contained report.html (figures also
-    as PNG, SVG and PDF in DIR/figures)."""
+    """Turn a simulation or sweep output directory into one self-contained report.html
+    (figures also in DIR/figures)."""
     from .reports.report import write_report
+    from .reports.sweep import is_sweep_dir, write_sweep_report
 
+    if is_sweep_dir(directory):
+        out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
+        return
     path = write_report(directory, interactive=interactive)
     if as_json:
         figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())

@@ -596,7 +596,11 @@ def _run(expr: sp.Expr, text: str, seconds: float) -> tuple[dict[str, Any], str]
     """Run :func:`_decide` in a forked child killed at the deadline; (results, why missing)."""
     results: dict[str, Any] = {}
     step = max(STEP_SECONDS, seconds / 3)
-    if "fork" not in multiprocessing.get_all_start_methods() or sys.platform != "linux":
+    if (
+        "fork" not in multiprocessing.get_all_start_methods()
+        or sys.platform != "linux"
+        or multiprocessing.current_process().daemon  # e.g. a Dask worker: no children
+    ):
         old, _step[0] = _step[0], step
         try:
             with warnings.catch_warnings():

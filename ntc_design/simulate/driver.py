@@ -58,17 +58,33 @@ def make_gain(
         When the expression does not parse or ``gain`` is neither.
     """
     if isinstance(gain, str):
-        fn, label = gain_function(gain, field_name), gain
-    elif callable(gain):
-        fn, label = gain, getattr(gain, "__name__", "callable")
-    else:
+        return ExpressionGain(gain, field_name), gain
+    if not callable(gain):
         raise InputError(f"{field_name}: expected an expression in t or a callable")
 
     def c(t):  # a constant expression returns a scalar: broadcast it
         with np.errstate(all="ignore"):  # overflow shows up as a non-finite value, checked
-            return np.asarray(fn(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
+            return np.asarray(gain(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
 
-    return c, label
+    return c, getattr(gain, "__name__", "callable")
+
+
+class ExpressionGain:
+    """c(t) from an expression: pickled as its text and rebuilt where it is unpickled, so
+    a spec holding it ships by value to other processes and machines (no code)."""
+
+    def __init__(self, text: str, field_name: str = "gain"):
+        self.text, self.field_name = text, field_name
+        self._fn = gain_function(text, field_name)
+
+    def __reduce__(self):
+        return (ExpressionGain, (self.text, self.field_name))
+
+    def __call__(self, t):  # a constant expression returns a scalar: broadcast it
+        with np.errstate(all="ignore"):  # overflow shows up as a non-finite value, checked
+            return np.asarray(self._fn(np.asarray(t, dtype=float)), dtype=float) * np.ones(
+                np.shape(t)
+            )
 
 
 def _modes(
@@ -277,6 +293,7 @@ def simulate(
     spec: SimulationSpec | None = None,
     *,
     progress: Callable[[int, int], None] | None = None,
+    engine=None,
     **options,
 ) -> SimulationResult:
     """Simulate the SAN with compound noise under the Lemma 1 protocol by Monte Carlo
@@ -292,6 +309,10 @@ def simulate(
         Instead of ``theta`` and keywords.
     progress : callable(done, total), optional
         Called with path-steps done.
+    engine : optional
+        Runs the Monte Carlo blocks elsewhere: an object with ``run_mc(spec, progress)``
+        and ``describe()``, e.g. :class:`ntc_design.distributed.DaskEngine`. None: on
+        ``workers`` local processes. The result is the same either way.
     **options
         The flat options of :meth:`SimulationSpec.build` (T, dt, paths, seed, ...).
 
@@ -386,7 +407,11 @@ def simulate(
             st.scheme,
         )
         t0 = time.perf_counter()
-        part = run(mspec, workers=workers, progress=progress)
+        if engine is not None:
+            part = engine.run_mc(mspec, progress)
+            stats["engine"] = engine.describe()
+        else:
+            part = run(mspec, workers=workers, progress=progress)
         sec = max(time.perf_counter() - t0, 1e-9)
         stats.update({"mc_seconds": sec, "path_steps_per_second": grid.n_steps * paths / sec})
         mc = _mc_summary(part)
