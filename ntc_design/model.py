@@ -628,8 +628,23 @@ class Topology:
 
 def signed_laplacian(top: Topology) -> np.ndarray:
     """Signed Laplacian L (Niu & Wu, Sec. 2.3): blocks ``L_ij = -A_ij`` (j ≠ i) and
-    ``L_ii = Σ_{k≠i} |A_ik|`` (dense; the memory is estimated first and a step above
-    ``linalg.DENSE_MAX_BYTES`` is refused with one line)."""
+    ``L_ii = Σ_{k≠i} |A_ik|``.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    numpy.ndarray
+        L, Nd×Nd, dense.
+
+    Raises
+    ------
+    InputError
+        The dense matrix would exceed ``linalg.DENSE_MAX_BYTES`` (estimated first).
+    """
     require_dense(top.nd, "signed Laplacian L")
     d, n = top.dim, top.n
     ea = top._arrays
@@ -654,7 +669,18 @@ def _block_coo(
 
 
 def signed_laplacian_sparse(top: Topology) -> sparse.csr_matrix:
-    """:func:`signed_laplacian` as CSR, O(E·d²) time and memory."""
+    """:func:`signed_laplacian` as a sparse matrix, in O(E·d²) time and memory.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        L, Nd×Nd.
+    """
     ea, n, d = top._arrays, top.n, top.dim
     idx = np.arange(n)
     rows = np.concatenate([ea.rows, idx])
@@ -664,18 +690,55 @@ def signed_laplacian_sparse(top: Topology) -> sparse.csr_matrix:
 
 
 def antagonistic_in_weight(top: Topology, i: int) -> np.ndarray:
-    """``Σ_{j∈Ω_i} |A_ij|``: the total antagonistic weight into agent i (Lemma 1)."""
+    """The total antagonistic weight into agent i, ``Σ_{j∈Ω_i} |A_ij|`` (Lemma 1).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    numpy.ndarray
+        d×d, positive semidefinite.
+    """
     return top.degree_sums[2][i].copy()
 
 
 def in_out_difference(top: Topology, i: int) -> np.ndarray:
-    """``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji|`` (Niu & Wu, Definition 4, eq. (10))."""
+    """In- minus out-weight of agent i (Niu & Wu, Definition 4, eq. (10)).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji|``, d×d.
+    """
     inn, out, _ = top.degree_sums
     return inn[i] - out[i]
 
 
 def in_degree_dominated_all(top: Topology) -> np.ndarray:
-    """:func:`in_degree_dominated` for every agent at once (batched eigenvalues)."""
+    """:func:`in_degree_dominated` for every agent at once (batched eigenvalues).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    numpy.ndarray
+        N booleans.
+    """
     inn, out, _ = top.degree_sums
     if top.n == 0:
         return np.zeros(0, dtype=bool)
@@ -688,7 +751,20 @@ def in_degree_dominated_all(top: Topology) -> np.ndarray:
 def in_degree_dominated(top: Topology, i: int) -> bool:
     """Niu & Wu, Definition 4 (eq. (10)): agent i is in-degree-dominated when
     ``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji| ⪰ 0`` (zero eigenvalues up to the tolerance of
-    :mod:`ntc_design.linalg`, relative to the norms of the two sums)."""
+    :mod:`ntc_design.linalg`, relative to the norms of the two sums).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    bool
+        Whether agent i is in-degree-dominated.
+    """
     inn, out, _ = top.degree_sums
     scale = max(np.linalg.norm(inn[i], 2), np.linalg.norm(out[i], 2))
     if scale == 0.0:
@@ -700,7 +776,20 @@ def in_degree_dominated(top: Topology, i: int) -> bool:
 def positive_negative_reachable(top: Topology, sources: Iterable[int]) -> dict[int, list[int]]:
     """Agents reached from ``sources`` by positive-negative paths (Niu & Wu, Definition 3:
     every edge of the path is PD or ND), with one shortest such path to each (sources
-    included, with the trivial path)."""
+    included, with the trivial path).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    sources : iterable of int
+        0-based indices of the start agents.
+
+    Returns
+    -------
+    dict of int to list of int
+        Each reached agent -> a shortest positive-negative path to it (indices).
+    """
     succ: dict[int, list[int]] = {k: [] for k in range(top.n)}
     for (i, j), c in top.classes.items():
         if c.definite:
