@@ -279,6 +279,18 @@ def write_topology(top: Topology, path: str | Path) -> Path:
     """Write ``top``: ``.npz`` (compact edge list, :mod:`ntc_design.edgelist`) or
     ``.json``/``.yaml`` (the topology-file form), atomically.
 
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    path : str or pathlib.Path
+        The file; its suffix picks the format.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
     Raises
     ------
     InputError
