@@ -38,12 +38,28 @@ MOMENT_COPIES = 12  # dense Nd×Nd matrices alive during an RK4 step (S, stages,
 
 
 def moments_memory(nd_: int) -> int:
-    """Bytes the exact moments need at this Nd (about)."""
+    """Bytes the exact moments need at this Nd (about).
+
+    Parameters
+    ----------
+    nd_ : int
+        N·d.
+
+    Returns
+    -------
+    int
+        ``MOMENT_COPIES`` dense Nd×Nd float matrices.
+    """
     return MOMENT_COPIES * 8 * nd_ * nd_
 
 
 def check_moments_size(nd_: int) -> None:
     """Refuse the exact moments above ``MOMENTS_MAX_ND`` (one line, with the estimate).
+
+    Parameters
+    ----------
+    nd_ : int
+        N·d.
 
     Raises
     ------
@@ -205,6 +221,28 @@ def em_moments(
         m_{k+1} = R m_k,   S_{k+1} = R (S_k + c² h (G Gᵀ + Σ_e G_e S_k G_eᵀ)) Rᵀ.
 
     The difference from :func:`exact_moments` is the scheme's O(h) bias.
+
+    Parameters
+    ----------
+    systems : sequence of ModeSystem
+        One system per mode.
+    grid : TimeGrid
+        The Monte Carlo grid.
+    gain : callable
+        Vectorised c(t).
+    eps0 : numpy.ndarray
+        ε(0), length Nd.
+    n : int
+        The number of agents N.
+    d : int
+        The state dimension d.
+    scheme : {"explicit", "implicit"}, optional
+        The Euler–Maruyama scheme.
+
+    Returns
+    -------
+    Moments
+        The recursion's moments at the grid's save times.
 
     Raises
     ------

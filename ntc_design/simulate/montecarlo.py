@@ -159,7 +159,13 @@ class _Stepper:
 
 def prepare(spec: MonteCarloSpec) -> None:
     """Compile (or load from numba's cache) the kernel for this spec's array types in this
-    process, so that forked workers inherit it instead of each compiling it."""
+    process, so that forked workers inherit it instead of each compiling it.
+
+    Parameters
+    ----------
+    spec : MonteCarloSpec
+        The run (a spec with its own ``run_block`` needs nothing).
+    """
     from .kernels import em_steps
 
     for s in getattr(spec, "systems", ()):  # a spec with its own run_block has none

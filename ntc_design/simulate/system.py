@@ -174,7 +174,19 @@ class ModeSystem:
 
 def grounded_laplacian_sparse(des: ProtocolDesign) -> sp.csr_matrix:
     """``L_B = L + (Δ⊗I_d) blockdiag(|B_i|)`` assembled from the edge list (time and memory
-    linear in the edges): blocks ``−A_ij`` at (i, j), ``Σ_j |A_ij| + δ|B_i|`` at (i, i)."""
+    linear in the edges): blocks ``−A_ij`` at (i, j), ``Σ_j |A_ij| + δ|B_i|`` at (i, i)
+    (Niu & Wu, eq. (8)).
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The design.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        L_B, Nd×Nd (the design's own dense matrix, made sparse, at small Nd).
+    """
     top = des.topology
     d, n = top.dim, top.n
     if top.nd <= DENSE_LB_MAX_ND:  # the design's own matrix: the same numbers as before
@@ -327,6 +339,20 @@ def _ms_limit(lam: np.ndarray, mu2: np.ndarray, c: np.ndarray) -> np.ndarray:
 
 
 def sysw_label(s: ModeSystem, i: int) -> str:
+    """An agent's label for messages.
+
+    Parameters
+    ----------
+    s : ModeSystem
+        The system.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    str
+        Its label (the index when the system has none).
+    """
     return str(s.labels[i]) if s.labels else str(i)
 
 
@@ -358,14 +384,18 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
     Parameters
     ----------
     systems : sequence of ModeSystem
+        One system per mode.
     grid : TimeGrid
+        The grid (its step sizes and modes).
     c_grid : ndarray
         c(t_k) on the grid's steps.
     scheme : {"explicit", "implicit"}
+        The Euler–Maruyama scheme.
 
     Returns
     -------
     StepCheck
+        The worst ratio and a warning when it is close.
 
     Raises
     ------
