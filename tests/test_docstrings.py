@@ -96,10 +96,7 @@ def _public_api():
     return sorted(seen.values(), key=lambda t: t[0])
 
 
-# Modules whose API is checked: all of them (a set of dotted names would restrict the check
-# while a module is being rewritten).
-CHECKED: set[str] | None = None
-API = [t for t in _public_api() if CHECKED is None or t[2].__module__ in CHECKED]
+API = _public_api()
 FUNCTIONS = [pytest.param(obj, id=name) for name, kind, obj in API if kind == "function"]
 OTHERS = [pytest.param(obj, id=name) for name, kind, obj in API if kind != "function"]
 
@@ -376,16 +373,6 @@ INTERNAL = re.compile(
 
 def _doc_files():
     files = sorted(ROOT.rglob("*.py")) + sorted(ROOT.rglob("*.html"))
-    if CHECKED is not None:
-        mods = CHECKED | {"ntc_design", "ntc_design.reports.examples"}
-        files = [
-            f
-            for f in files
-            if ".".join(("ntc_design", *f.relative_to(ROOT).with_suffix("").parts)).removesuffix(
-                ".__init__"
-            )
-            in mods
-        ]
     yield from files
     readme = ROOT.parent / "README.md"
     if readme.exists():
