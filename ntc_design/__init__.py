@@ -1,8 +1,9 @@
 """ntc-design: certify, design and validate non-trivial consensus protocols on directed
 signed matrix-weighted networks with compound measurement noise.
 
-Equation, lemma, theorem and section numbers in the docstrings are the printed ones of the
-paper below ("Niu & Wu, eq. (8)").
+Equation, definition, lemma, theorem and section numbers in the docstrings are the printed
+ones of the paper below ("Niu & Wu, eq. (8)"). Assumptions 1, 2, 3 are its Assumptions 3.1,
+3.2 and 4.1 (numbered within sections in print).
 
 References
 ----------

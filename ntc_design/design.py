@@ -1,4 +1,4 @@
-"""Assumption 2 and the Lemma 1 protocol design (paper, Sec. 3), with the exact critical
+"""Assumption 2 and the Lemma 1 protocol design (Niu & Wu, Sec. 3), with the exact critical
 couplings of the same design family (:mod:`ntc_design.thresholds`)."""
 
 from __future__ import annotations
@@ -40,6 +40,8 @@ class AssumptionWarning(UserWarning):
 
 @dataclass(frozen=True)
 class Violation:
+    """An agent that can be in neither V1 nor V2 of Assumption 2, and why."""
+
     agent: int  # index (internal); labels in to_dict()/structure_report
     reason: str
 
@@ -89,7 +91,18 @@ class Decomposition:
     paths: Mapping[int, tuple[int, ...]]  # V2 agent -> a positive-negative path from V1
 
     def agents(self, top: Topology) -> dict:
-        """V1, V2 and the violating agents as labels of ``top``."""
+        """V1, V2 and the violating agents as labels.
+
+        Parameters
+        ----------
+        top : Topology
+            The topology this decomposition is of.
+
+        Returns
+        -------
+        dict
+            ``V1``, ``V2`` and ``violating``, each a list of labels.
+        """
         lab = top.labels
         return {
             "V1": [lab[i] for i in self.v1],
@@ -103,7 +116,20 @@ def lemma1_coefficient(top: Topology, i: int) -> float:
 
     Requires ``Σ_{Ω_i}|A_ij| ≻ 0``. The eigenvalues are real: with S = Σ_{Ω_i}|A_ij| ≻ 0
     the product is similar to ``S^{-1/2} M S^{-1/2}`` (M symmetric), which is what is
-    computed (a symmetric-definite generalised eigenproblem)."""
+    computed (a symmetric-definite generalised eigenproblem).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    i : int
+        0-based agent index, with a positive definite antagonistic in-weight.
+
+    Returns
+    -------
+    float
+        C_i.
+    """
     import scipy.linalg as sla
 
     s = antagonistic_in_weight(top, i)
@@ -152,13 +178,23 @@ def _reach(top: Topology, graph: sparse.csr_matrix, sources: np.ndarray):
 def assumption2(top: Topology) -> Decomposition:
     """Decide Assumption 2 and return the decomposition V = V1 ∪ V2 minimising C.
 
-    A V2 agent must be in-degree-dominated (Definition 2) and reached from V1 by a
-    positive-negative path (Definition 1); a V1 agent needs Σ_{Ω_i}|A_ij| ≻ 0 so that C_i
+    A V2 agent must be in-degree-dominated (Niu & Wu, Definition 4) and reached from V1 by
+    a positive-negative path (Definition 3); a V1 agent needs Σ_{Ω_i}|A_ij| ≻ 0 so that C_i
     is defined. Validity only improves as V1 grows, so the least C is the least level
     ``c`` for which V1 = {candidates with C_i <= c} covers the rest; as coverage is
     monotone in c the level is found by bisection over the sorted C_i (O(E log N)).
     Everything is vectorised over agents and edges; reachability is a BFS
     (``scipy.sparse.csgraph``) from a virtual root joined to V1.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    Decomposition
+        ``holds`` with V1, V2, C_i and a path to each V2 agent, or the violations.
     """
     n = top.n
     idd = in_degree_dominated_all(top)
@@ -251,7 +287,8 @@ class ProtocolDesign:
     """Lemma 1 parameters for one topology and target θ.
 
     ``informed = U``; ``B_i = Σ_{Ω_i}|A_ij|`` (sgn B_i = +1); δ_i = δ on informed agents;
-    ``k1 = 1 + 2/δ``; ``x0 = k1·θ``; ``L_B = L + (Δ⊗I_d)·blockdiag(|B_i|)``.
+    ``k1 = 1 + 2/δ``; ``x0 = k1·θ``; ``L_B = L + (Δ⊗I_d)·blockdiag(|B_i|)`` (Niu & Wu,
+    Lemma 1 and eq. (8)).
     """
 
     topology: Topology
@@ -270,6 +307,7 @@ class ProtocolDesign:
 
     @property
     def assumption_holds(self) -> bool:
+        """Whether Assumption 2 holds (else Lemma 1 does not apply: certify first)."""
         return self.decomposition.holds
 
     @property
@@ -300,28 +338,76 @@ class ProtocolDesign:
         return {lab[i]: b for i, b in self.B.items()}
 
     def coupling_matrix_sparse(self) -> sparse.csr_matrix:
-        """``D = blockdiag(|B_i|)`` as a sparse matrix."""
+        """``D = blockdiag(|B_i|)`` as a sparse matrix.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix
+            D, Nd×Nd, zero blocks for naive agents.
+        """
         return coupling_matrix_sparse(self.topology, self.B)
 
     def grounded_laplacian_sparse(self, delta: float | None = None) -> sparse.csr_matrix:
-        """``L_B = L + δD`` as a sparse CSR matrix (d×d blocks), linear in the edges."""
+        """``L_B = L + δD`` (eq. (8)) as a sparse matrix, linear in the edges.
+
+        Parameters
+        ----------
+        delta : float, optional
+            δ; this design's when omitted.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix
+            L_B, Nd×Nd (d×d blocks).
+        """
         dl = self.delta if delta is None else delta
         return (self.topology.laplacian_sparse() + dl * self.coupling_matrix_sparse()).tocsr()
 
     def coupling_matrix(self) -> np.ndarray:
-        """``D = blockdiag(|B_i|)`` with zero blocks for naive agents, so L_B = L + δD."""
+        """``D = blockdiag(|B_i|)`` with zero blocks for naive agents, so L_B = L + δD.
+
+        Returns
+        -------
+        numpy.ndarray
+            D, Nd×Nd, dense.
+        """
         return coupling_matrix(self.topology, self.B)
 
     def grounded_laplacian(self, delta: float | None = None) -> np.ndarray:
-        """``L_B = L + (Δ⊗I_d)·blockdiag(|B_i|)`` (eq. LB), at this design's δ or another."""
+        """``L_B = L + (Δ⊗I_d)·blockdiag(|B_i|)`` (Niu & Wu, eq. (8)).
+
+        Parameters
+        ----------
+        delta : float, optional
+            δ; this design's when omitted.
+
+        Returns
+        -------
+        numpy.ndarray
+            L_B, Nd×Nd, dense.
+        """
         dl = self.delta if delta is None else delta
         return self.topology.laplacian() + dl * self.coupling_matrix()
 
     def input_vector(self) -> np.ndarray:
-        """``k1 (Δ⊗I_d) B θ`` = ``(Δ⊗I_d) B x0``: the constant drift from the external signal."""
+        """The constant drift from the external signal, ``k1 (Δ⊗I_d) B θ = (Δ⊗I_d) B x0``.
+
+        Returns
+        -------
+        numpy.ndarray
+            A vector of length Nd.
+        """
         return input_vector(self.topology, self.B, self.delta, self.x0)
 
     def to_dict(self) -> dict:
+        """The design as a JSON-ready mapping, agents as labels.
+
+        Returns
+        -------
+        dict
+            θ, ΔC, C and C_i, δ, k1, x0, the informed agents and B_i, V1, V2, the
+            violations, the identity residual, the critical couplings and notes.
+        """
         lab = self.topology.labels
         dec = self.decomposition
         th = self.thresholds
@@ -347,8 +433,13 @@ class ProtocolDesign:
         }
 
     def to_statespace(self):
-        """The noise-free protocol at c = 1 as a ``control.StateSpace`` (state x, input θ,
-        output x; DC gain 1_N ⊗ I_d); see :func:`ntc_design.interop.design_statespace`."""
+        """The noise-free protocol at c = 1; see :func:`ntc_design.interop.design_statespace`.
+
+        Returns
+        -------
+        control.StateSpace
+            State x, input θ, output x; DC gain 1_N ⊗ I_d.
+        """
         from .interop import design_statespace
 
         return design_statespace(self)
@@ -362,6 +453,13 @@ class SwitchingDesign:
     modes: Mapping[str, ProtocolDesign]
 
     def to_dict(self) -> dict:
+        """The designs as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            The schedule, its period and each mode's :meth:`ProtocolDesign.to_dict`.
+        """
         return {
             "schedule": [{"mode": m, "duration": d} for m, d in self.switching.schedule],
             "period": self.switching.period,
@@ -414,7 +512,7 @@ def _theta(theta: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:
 
 
 def identity_residual(lap_b, u: np.ndarray, theta: np.ndarray) -> float:
-    """``‖-L_B(1⊗θ) + k1(Δ⊗I_d)Bθ‖_∞`` relative to ``‖L_B‖_∞‖θ‖_∞`` (eq. LBt property);
+    """``‖-L_B(1⊗θ) + k1(Δ⊗I_d)Bθ‖_∞`` relative to ``‖L_B‖_∞‖θ‖_∞`` (Niu & Wu, eq. (11));
     ``lap_b`` dense or sparse."""
     n = lap_b.shape[0] // theta.size
     r = -(lap_b @ np.tile(theta, n)) + u
@@ -438,7 +536,33 @@ def design_topology(
     delta: float | None = None,
     thresholds: bool | None = None,
 ) -> ProtocolDesign:
-    """Lemma 1 design for one topology: δ = C + ΔC (``margin``), or an explicit δ."""
+    """Lemma 1 design for one topology: δ = C + ΔC (``margin``), or an explicit δ.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    theta : sequence of float
+        The target consensus state θ ≠ 0 (d numbers).
+    margin : float, optional
+        ΔC > 0.
+    delta : float, optional
+        An explicit δ > 0 instead of C + ΔC.
+    thresholds : bool, optional
+        Compute the critical couplings δ_H, δ_S; by default only up to
+        ``THRESHOLDS_DEFAULT_MAX_ND``.
+
+    Returns
+    -------
+    ProtocolDesign
+        The parameters; ``assumption_holds`` False (with an :class:`AssumptionWarning`)
+        when Assumption 2 fails.
+
+    Raises
+    ------
+    InputError
+        A bad θ, margin or δ.
+    """
     th = _theta(theta, top.dim)
     require_positive("margin (ΔC)", margin)
     dec = assumption2(top)
@@ -518,7 +642,31 @@ def design(
 ) -> ProtocolDesign | SwitchingDesign:
     """Lemma 1 design for a topology, or one per mode for a switching topology.
 
-    For a topology given as functions of time use ``design(tv.at(t), theta)``."""
+    For a topology given as functions of time use ``design(tv.at(t), theta)``.
+
+    Parameters
+    ----------
+    topology : Topology or SwitchingTopology
+        The network.
+    theta : sequence of float
+        The target consensus state θ ≠ 0 (d numbers).
+    margin : float, optional
+        ΔC > 0: δ = C + ΔC.
+    delta : float, optional
+        An explicit δ > 0 instead of C + ΔC.
+    thresholds : bool, optional
+        Compute the critical couplings δ_H, δ_S (see :func:`design_topology`).
+
+    Returns
+    -------
+    ProtocolDesign or SwitchingDesign
+        One design, or one per mode.
+
+    Raises
+    ------
+    InputError
+        A bad θ, margin or δ.
+    """
     if isinstance(topology, SwitchingTopology):
         return SwitchingDesign(
             topology,
@@ -531,9 +679,19 @@ def design(
 
 
 def structure_report(top: Topology) -> dict:
-    """What ``ntc check`` shows: edge classes, N_i, N'_i, Ω_i, Γ_i, U, the
-    in-degree-dominated test and C_i per agent, and the Assumption 2 decomposition or its
-    violations (labels, not indices)."""
+    """What ``ntc check`` shows about a topology's structure.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    dict
+        Edge classes, N_i, N'_i, Ω_i, Γ_i, U, the in-degree-dominated test and C_i per
+        agent, and the Assumption 2 decomposition or its violations (labels, not indices).
+    """
     lab = top.labels
     dec = assumption2(top)
     idd = in_degree_dominated_all(top)

@@ -68,9 +68,30 @@ class LocalEngine:
         self.workers = workers
 
     def describe(self) -> dict:
+        """What runs the work, for summaries.
+
+        Returns
+        -------
+        dict
+            ``engine`` ("local") and ``workers``.
+        """
         return {"engine": "local", "workers": self.workers}
 
     def run_mc(self, spec: MonteCarloSpec, progress=None) -> PartialStats:
+        """Every Monte Carlo block of ``spec`` on the local process pool.
+
+        Parameters
+        ----------
+        spec : MonteCarloSpec
+            The run.
+        progress : callable(done, total), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        PartialStats
+            Merged in block order.
+        """
         return run(spec, workers=self.workers or 2, progress=progress)
 
     def map_unordered(
@@ -79,7 +100,22 @@ class LocalEngine:
         items: Sequence[tuple[str, tuple]],
         progress: Callable[[str, int, int], None] | None = None,
     ) -> Iterator[tuple[str, Any, BaseException | None]]:
-        """Yield ``(key, fn(*args, progress=...), None)`` for each ``(key, args)`` in order."""
+        """Run ``fn(*args)`` for each ``(key, args)`` in order, in this process.
+
+        Parameters
+        ----------
+        fn : callable
+            Called as ``fn(*args, progress=..., remote=False)``.
+        items : sequence of (str, tuple)
+            Keys and arguments.
+        progress : callable(key, done, total), optional
+            Called as the items progress.
+
+        Yields
+        ------
+        tuple
+            ``(key, result, None)`` per item.
+        """
         for key, args in items:
 
             def tick(done: int, total: int, key=key) -> None:
@@ -89,9 +125,22 @@ class LocalEngine:
             yield key, fn(*args, progress=tick, remote=False), None
 
     def scatter(self, obj):
+        """Nothing to ship locally.
+
+        Parameters
+        ----------
+        obj : Any
+            Any object.
+
+        Returns
+        -------
+        Any
+            ``obj`` itself.
+        """
         return obj
 
     def close(self) -> None:
+        """Nothing to release."""
         pass
 
     def __enter__(self):
@@ -114,6 +163,18 @@ class DaskEngine:
     def connect(cls, address: str, **kw) -> DaskEngine:
         """Connect to the scheduler at ``address`` (e.g. ``tcp://10.0.0.5:8786``).
 
+        Parameters
+        ----------
+        address : str
+            The scheduler's address.
+        **kw
+            ``retries`` and ``blocks_per_chunk`` of the engine.
+
+        Returns
+        -------
+        DaskEngine
+            An engine that closes its client on :meth:`close`.
+
         Raises
         ------
         InputError
@@ -135,22 +196,59 @@ class DaskEngine:
 
     @property
     def address(self) -> str:
+        """The scheduler's address."""
         return self.client.scheduler.address
 
     def n_workers(self) -> int:
+        """The number of workers connected now.
+
+        Returns
+        -------
+        int
+            The count reported by the scheduler.
+        """
         return len(self.client.scheduler_info(n_workers=-1)["workers"])
 
     def describe(self) -> dict:
+        """What runs the work, for summaries.
+
+        Returns
+        -------
+        dict
+            ``engine`` ("dask"), ``scheduler`` and ``workers``.
+        """
         return {"engine": "dask", "scheduler": self.address, "workers": self.n_workers()}
 
     def scatter(self, obj):
-        """Ship ``obj`` to the cluster once (a copy on every worker); pass the returned
-        future to tasks instead of the object."""
+        """Ship ``obj`` to the cluster once (a copy on every worker).
+
+        Parameters
+        ----------
+        obj : Any
+            A picklable object.
+
+        Returns
+        -------
+        distributed.Future
+            Pass it to tasks instead of the object.
+        """
         return self.client.scatter(obj, broadcast=True, hash=False)
 
     def run_mc(self, spec: MonteCarloSpec, progress=None) -> PartialStats:
-        """Every Monte Carlo block of ``spec`` as tasks (``blocks_per_chunk`` per task),
-        merged in block order: the same PartialStats as a local run."""
+        """Every Monte Carlo block of ``spec`` as tasks (``blocks_per_chunk`` per task).
+
+        Parameters
+        ----------
+        spec : MonteCarloSpec
+            The run (scattered once).
+        progress : callable(done, total), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        PartialStats
+            Merged in block order: the same as a local run.
+        """
         from distributed import as_completed
 
         blocks = list(range(spec.n_blocks))
@@ -183,9 +281,23 @@ class DaskEngine:
         items: Sequence[tuple[str, tuple]],
         progress: Callable[[str, int, int], None] | None = None,
     ) -> Iterator[tuple[str, Any, BaseException | None]]:
-        """Submit ``fn(*args)`` per ``(key, args)`` and yield ``(key, result, None)`` as
-        tasks finish, or ``(key, None, error)`` when the cluster gave up on one (e.g. its
-        workers kept dying). ``fn`` gets ``progress=TaskProgress(...)`` and ``remote=True``."""
+        """Submit ``fn(*args)`` per ``(key, args)`` and yield results as tasks finish.
+
+        Parameters
+        ----------
+        fn : callable
+            Called on a worker as ``fn(*args, progress=TaskProgress(...), remote=True)``.
+        items : sequence of (str, tuple)
+            Keys and arguments.
+        progress : callable(key, done, total), optional
+            Called (in this thread) with the tasks' progress events.
+
+        Yields
+        ------
+        tuple
+            ``(key, result, None)``, or ``(key, None, error)`` when the cluster gave up on
+            a task (e.g. its workers kept dying).
+        """
         from distributed import wait
 
         topic = f"ntc-progress-{uuid.uuid4().hex[:12]}"
@@ -232,6 +344,7 @@ class DaskEngine:
                 self.client.unsubscribe_topic(topic)
 
     def close(self) -> None:
+        """Close the client if this engine opened it."""
         if self._own:
             self.client.close()
 
@@ -243,5 +356,25 @@ class DaskEngine:
 
 
 def engine_for(scheduler: str | None, workers: int | None = None, **kw):
-    """A :class:`DaskEngine` connected to ``scheduler``, or a :class:`LocalEngine`."""
+    """The engine for a ``--scheduler`` option.
+
+    Parameters
+    ----------
+    scheduler : str or None
+        A Dask scheduler's address, or None for this machine.
+    workers : int, optional
+        Local worker processes.
+    **kw
+        Options of :meth:`DaskEngine.connect`.
+
+    Returns
+    -------
+    DaskEngine or LocalEngine
+        Connected to ``scheduler``, or local.
+
+    Raises
+    ------
+    InputError
+        The scheduler cannot be reached.
+    """
     return DaskEngine.connect(scheduler, **kw) if scheduler else LocalEngine(workers)

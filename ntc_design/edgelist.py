@@ -54,7 +54,24 @@ class EdgeListData:
 
 def read_npz(path: str | Path) -> EdgeListData:
     """Read and check an edge-list ``.npz`` file (structure only; symmetry and sign of
-    the weights are the model's business)."""
+    the weights are the model's business).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.npz`` file.
+
+    Returns
+    -------
+    EdgeListData
+        Labels, d and the edge arrays.
+
+    Raises
+    ------
+    InputError
+        An unreadable file, arrays too large, an unknown or missing array, or arrays of
+        the wrong type, shape or range.
+    """
     src = str(path)
 
     def bad(field: str, msg: str) -> InputError:
@@ -144,8 +161,23 @@ def write_npz(
     w: np.ndarray,
     name: str | None = None,
 ) -> None:
-    """Write an edge list (edge k is ``cols[k] -> rows[k]`` carrying ``w[k]``) as
-    ``.npz``, atomically (nothing half-written)."""
+    """Write an edge list as ``.npz``, atomically (nothing half-written).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+    labels : sequence of int or str
+        The agent labels.
+    dim : int
+        The weight size d.
+    rows, cols : numpy.ndarray
+        0-based target and source of each edge (edge k is ``cols[k] -> rows[k]``).
+    w : numpy.ndarray
+        The weights, shape (E, d, d).
+    name : str, optional
+        The topology's name.
+    """
     p = Path(path)
     lab = (
         np.array([str(x) for x in labels])

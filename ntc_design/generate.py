@@ -1,5 +1,5 @@
 """Random directed signed matrix-weighted networks that satisfy Assumption 2 by
-construction (arXiv: Niu & Wu, Assumption 2 with Definitions 1–2), for users and
+construction (Niu & Wu, Assumption 2 with Definitions 3–4), for users and
 benchmarks.
 
 Construction (every step vectorised, O(E·d³)):
@@ -13,12 +13,12 @@ Construction (every step vectorised, O(E·d³)):
    of the base graph from V1 gives every other agent a parent. Each tree edge is
    oriented parent -> child and is *definite* (PD or ND, sign drawn with probability
    ``p_negative`` for ND), so every agent is reached from V1 by a positive-negative path
-   (Definition 1).
+   (Definition 3).
 3. Every V1 agent gets one extra *ND* in-edge from a random other agent, so its
    antagonistic in-weight Σ_{Ω_i}|A_ij| is positive definite (it can be in V1).
 4. The remaining base edges become chords, oriented at random, with random-signed PD or
    PSD weights of size ``chord_scale``.
-5. In-degree domination of every V2 agent (Definition 2): agents are processed from the
+5. In-degree domination of every V2 agent (Definition 4): agents are processed from the
    deepest tree level up; a V2 agent's tree in-edge gets
    ``|A_{i,parent}| = Σ_{N'_i}|A_ji| − Σ_{other in-edges}|A_ij| (clipped) + R_i`` with a
    random R_i ≻ 0, so ``Σ_{N_i}|A_ij| − Σ_{N'_i}|A_ji| ⪰ R_i ≻ 0``. Its out-weight is
@@ -278,6 +278,18 @@ def random_network(
 def write_topology(top: Topology, path: str | Path) -> Path:
     """Write ``top``: ``.npz`` (compact edge list, :mod:`ntc_design.edgelist`) or
     ``.json``/``.yaml`` (the topology-file form), atomically.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    path : str or pathlib.Path
+        The file; its suffix picks the format.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
 
     Raises
     ------

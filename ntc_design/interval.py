@@ -30,7 +30,18 @@ class NotEnclosable(ValueError):
 
 
 def t_ball(a: float, b: float) -> arb:
-    """A ball containing the interval [a, b] of doubles."""
+    """A ball containing the interval [a, b] of doubles.
+
+    Parameters
+    ----------
+    a, b : float
+        The ends, a <= b.
+
+    Returns
+    -------
+    flint.arb
+        A ball containing [a, b].
+    """
     return arb(a).union(arb(b))
 
 
@@ -47,7 +58,27 @@ def _pow(base: arb, e: sp.Expr, ev: Callable[[sp.Expr], arb]) -> arb:
 
 
 def enclose(expr: sp.Expr, t: arb, cache: dict | None = None) -> arb:
-    """A ball containing ``expr(τ)`` for every τ in the ball ``t``."""
+    """A ball containing ``expr(τ)`` for every τ in the ball ``t``.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        An expression of t built by :mod:`ntc_design.expr`.
+    t : flint.arb
+        The ball t ranges over (see :func:`t_ball`).
+    cache : dict, optional
+        Enclosures of subexpressions over this same ``t``, shared between calls.
+
+    Returns
+    -------
+    flint.arb
+        The enclosure; not finite where the expression is unbounded on ``t``.
+
+    Raises
+    ------
+    NotEnclosable
+        A function without an interval rule here.
+    """
     ts = _T
     memo: dict = cache if cache is not None else {}
 
@@ -113,7 +144,19 @@ def enclose(expr: sp.Expr, t: arb, cache: dict | None = None) -> arb:
 
 
 def bounds(x: arb) -> tuple[float, float]:
-    """(lo, hi) doubles with lo <= x <= hi for every point of the ball (±inf if unbounded)."""
+    """Double bounds of a ball.
+
+    Parameters
+    ----------
+    x : flint.arb
+        A ball.
+
+    Returns
+    -------
+    tuple of float
+        (lo, hi) with lo <= x <= hi for every point of the ball, one ulp outwards
+        (−inf, inf when the ball is not finite).
+    """
     if not x.is_finite():
         return -math.inf, math.inf
     lo = float(x.lower())
@@ -122,10 +165,34 @@ def bounds(x: arb) -> tuple[float, float]:
 
 
 def upper(x: arb) -> float:
+    """An upper bound of a ball as a double.
+
+    Parameters
+    ----------
+    x : flint.arb
+        A ball.
+
+    Returns
+    -------
+    float
+        ``bounds(x)[1]``.
+    """
     return bounds(x)[1]
 
 
 def lower(x: arb) -> float:
+    """A lower bound of a ball as a double.
+
+    Parameters
+    ----------
+    x : flint.arb
+        A ball.
+
+    Returns
+    -------
+    float
+        ``bounds(x)[0]``.
+    """
     return bounds(x)[0]
 
 

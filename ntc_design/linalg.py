@@ -48,11 +48,36 @@ class Definiteness(StrEnum):
 
 
 def sym_eigvalsh(a: np.ndarray) -> np.ndarray:
-    """Eigenvalues of the symmetric part of ``a``, ascending."""
+    """Eigenvalues of the symmetric part of ``a``.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        A square matrix.
+
+    Returns
+    -------
+    numpy.ndarray
+        The eigenvalues of (a + aᵀ)/2, ascending.
+    """
     return np.linalg.eigvalsh(0.5 * (a + a.T))
 
 
 def is_symmetric(a: np.ndarray, rtol: float = SYM_RTOL) -> bool:
+    """Symmetry up to the project's tolerance (see the module docstring).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        A square matrix.
+    rtol : float, optional
+        ``max|A − Aᵀ| <= rtol·max|A|`` counts as symmetric.
+
+    Returns
+    -------
+    bool
+        Whether ``a`` is symmetric.
+    """
     scale = float(np.max(np.abs(a))) if a.size else 0.0
     return bool(np.max(np.abs(a - a.T), initial=0.0) <= rtol * scale)
 
@@ -61,6 +86,18 @@ def classify(a: np.ndarray, rtol: float = DEF_RTOL) -> Definiteness:
     """Classify a symmetric matrix as PD, PSD, ND, NSD, zero or indefinite.
 
     An eigenvalue counts as zero when ``|λ| <= rtol·‖A‖₂`` (see module docstring).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        A symmetric matrix.
+    rtol : float, optional
+        The relative zero tolerance.
+
+    Returns
+    -------
+    Definiteness
+        Its class; sgn of the paper (Niu & Wu, Sec. 2.1) is ``.sign``.
     """
     if not np.any(a):
         return Definiteness.ZERO
@@ -79,7 +116,20 @@ def classify(a: np.ndarray, rtol: float = DEF_RTOL) -> Definiteness:
 
 
 def pd(a: np.ndarray, rtol: float = DEF_RTOL) -> bool:
-    """``a ≻ 0`` for a symmetric ``a``: smallest eigenvalue above ``rtol·‖a‖₂``."""
+    """Whether a symmetric ``a`` is positive definite.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        A symmetric matrix.
+    rtol : float, optional
+        The relative zero tolerance.
+
+    Returns
+    -------
+    bool
+        ``a ≻ 0``: its smallest eigenvalue is above ``rtol·‖a‖₂``.
+    """
     return classify(a, rtol) is Definiteness.PD
 
 
@@ -98,8 +148,20 @@ CODE_DEFINITE = np.array([False, True, False, True, False, False])
 
 def classify_codes(a: np.ndarray, rtol: float = DEF_RTOL) -> np.ndarray:
     """:func:`classify` for a stack ``a`` of shape (E, d, d) with one batched
-    ``eigvalsh``: an int8 array of indices into :data:`DEF_CODES` (same rule, same
-    tolerance)."""
+    ``eigvalsh`` (same rule, same tolerance).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        Shape (E, d, d).
+    rtol : float, optional
+        The relative zero tolerance.
+
+    Returns
+    -------
+    numpy.ndarray
+        int8 indices into :data:`DEF_CODES`, length E.
+    """
     lam = np.linalg.eigvalsh(0.5 * (a + a.transpose(0, 2, 1)))
     tol = rtol * np.max(np.abs(lam), axis=1)
     lo, hi = lam[:, 0], lam[:, -1]
@@ -113,14 +175,44 @@ def classify_codes(a: np.ndarray, rtol: float = DEF_RTOL) -> np.ndarray:
 
 
 def pd_batch(a: np.ndarray, rtol: float = DEF_RTOL) -> np.ndarray:
-    """:func:`pd` for a stack of symmetric matrices (E, d, d): a boolean array."""
+    """:func:`pd` for a stack of symmetric matrices.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        Shape (E, d, d).
+    rtol : float, optional
+        The relative zero tolerance.
+
+    Returns
+    -------
+    numpy.ndarray
+        E booleans.
+    """
     return classify_codes(a, rtol) == 1
 
 
 def require_dense(n: int, what: str, copies: float = 1.0, limit: float | None = None) -> None:
     """Refuse a dense n×n float step whose memory estimate exceeds ``DENSE_MAX_BYTES``
     (one line, :class:`~ntc_design.errors.InputError`), so no input ends in an
-    out-of-memory kill. ``copies`` is how many n×n arrays the step holds at once."""
+    out-of-memory kill.
+
+    Parameters
+    ----------
+    n : int
+        The matrix size.
+    what : str
+        What the step computes, for the message.
+    copies : float, optional
+        How many n×n arrays the step holds at once.
+    limit : float, optional
+        Bytes allowed instead of ``DENSE_MAX_BYTES``.
+
+    Raises
+    ------
+    DenseRefused
+        The estimate exceeds the limit (an :class:`~ntc_design.errors.InputError`).
+    """
     need = copies * 8.0 * float(n) ** 2
     cap = DENSE_MAX_BYTES if limit is None else limit
     if need > cap:
@@ -156,10 +248,24 @@ class SPDFamily:
         self._symbolic = None
 
     def factor(self, coeffs, shift: float = 0.0, row_counts: bool = False):
-        """Factorise ``Σ c_k M_k − shift·I``. Returns ``(ok, row_max)``: ``ok`` when
-        every pivot is positive; ``row_max`` (with ``row_counts``) the largest number of
-        non-zeros in a row of the factor, i.e. the longest dot product of the
-        factorisation (0 otherwise)."""
+        """Factorise ``Σ c_k M_k − shift·I``.
+
+        Parameters
+        ----------
+        coeffs : sequence of float
+            The c_k, one per matrix of the family.
+        shift : float, optional
+            The diagonal shift.
+        row_counts : bool, optional
+            Also count the factor's non-zeros per row.
+
+        Returns
+        -------
+        tuple of (bool, int)
+            ``ok`` when every pivot is positive (the matrix is positive definite);
+            ``row_max`` (with ``row_counts``) the largest number of non-zeros in a row of
+            the factor, i.e. the longest dot product of the factorisation (0 otherwise).
+        """
         from cvxopt import cholmod, matrix, spmatrix
 
         c = np.concatenate([np.asarray(coeffs, dtype=float), [-float(shift)]])
@@ -185,6 +291,20 @@ class SPDFamily:
 
 
 def sparse_cholesky(a, shift: float = 0.0, row_counts: bool = True):
-    """One sparse Cholesky of the symmetric ``a − shift·I`` (see :class:`SPDFamily`):
-    ``(ok, row_max)``."""
+    """One sparse Cholesky of the symmetric ``a − shift·I`` (see :class:`SPDFamily`).
+
+    Parameters
+    ----------
+    a : scipy.sparse matrix
+        Symmetric (only the lower triangle is read).
+    shift : float, optional
+        The diagonal shift.
+    row_counts : bool, optional
+        Also count the factor's non-zeros per row.
+
+    Returns
+    -------
+    tuple of (bool, int)
+        ``(ok, row_max)`` as :meth:`SPDFamily.factor`.
+    """
     return SPDFamily([a]).factor([1.0], shift, row_counts)

@@ -1,6 +1,6 @@
-"""The signed matrix-weighted network model (paper, Sec. 2).
+"""The signed matrix-weighted network model (Niu & Wu, Sec. 2).
 
-Conventions (NOTES.md): ``A_ij`` is the d×d symmetric weight of the directed edge from
+Conventions: ``A_ij`` is the d×d symmetric weight of the directed edge from
 agent j to agent i (i listens to j). Agents are indexed 0..N-1 internally and shown by
 their labels. The algorithms are plain functions over a :class:`Topology`, each stating
 the definition it implements.
@@ -149,7 +149,30 @@ class Topology:
         edges: Iterable[tuple[Label, Label, np.ndarray]],
         name: str | None = None,
     ) -> Topology:
-        """Build from ``(from_label, to_label, A_ij)`` triples (edge j -> i)."""
+        """Build from ``(from_label, to_label, A_ij)`` triples (edge j -> i).
+
+        Parameters
+        ----------
+        n_or_labels : int or iterable of label
+            The agent labels, or N for the labels 1..N.
+        dim : int
+            The weight size d.
+        edges : iterable of (label, label, array_like)
+            ``(j, i, A_ij)`` for each edge j -> i.
+        name : str, optional
+            The topology's name.
+
+        Returns
+        -------
+        Topology
+            The validated topology.
+
+        Raises
+        ------
+        InputError
+            An unknown label, a duplicated edge, or a weight that is not symmetric and of
+            one sign.
+        """
         if isinstance(n_or_labels, int):
             labels: tuple[Label, ...] = tuple(range(1, n_or_labels + 1))
         else:
@@ -178,7 +201,33 @@ class Topology:
         source: str | None = None,
     ) -> Topology:
         """Build from arrays: edge k is ``cols[k] -> rows[k]`` (0-based agent indices)
-        with weight ``weights[k] = A_{rows[k], cols[k]}``; duplicates are an error."""
+        with weight ``weights[k] = A_{rows[k], cols[k]}``.
+
+        Parameters
+        ----------
+        labels : iterable of label
+            The agent labels, in index order.
+        dim : int
+            The weight size d.
+        rows, cols : numpy.ndarray
+            0-based target and source index of each edge.
+        weights : numpy.ndarray
+            The weights, shape (E, d, d).
+        name : str, optional
+            The topology's name.
+        source : str, optional
+            The file it came from, for messages.
+
+        Returns
+        -------
+        Topology
+            The validated topology.
+
+        Raises
+        ------
+        InputError
+            A duplicated edge, or a weight that is not symmetric and of one sign.
+        """
         rows = np.asarray(rows, dtype=np.int64)
         cols = np.asarray(cols, dtype=np.int64)
         w = np.asarray(weights, dtype=float)
@@ -190,6 +239,18 @@ class Topology:
 
     @classmethod
     def from_data(cls, data: files.TopologyData) -> Topology:
+        """Build from a parsed topology file.
+
+        Parameters
+        ----------
+        data : ntc_design.files.TopologyData
+            As :func:`ntc_design.files.parse_topology` returns it.
+
+        Returns
+        -------
+        Topology
+            The validated topology (messages name the file's edges).
+        """
         index = {str(a): k for k, a in enumerate(data.labels)}
         weights, fields = {}, {}
         for e in data.edges:
@@ -206,13 +267,27 @@ class Topology:
 
     @property
     def n(self) -> int:
+        """The number of agents N."""
         return len(self.labels)
 
     @property
     def nd(self) -> int:
+        """N·d, the size of the stacked state."""
         return self.n * self.dim
 
     def edge_field(self, i: int, j: int) -> str:
+        """How messages name the edge j -> i (as the file wrote it, when known).
+
+        Parameters
+        ----------
+        i, j : int
+            0-based target and source indices.
+
+        Returns
+        -------
+        str
+            E.g. ``"edge 2->1"``.
+        """
         if (i, j) in self.fields:
             return self.fields[(i, j)]
         lab = self.labels
@@ -231,14 +306,41 @@ class Topology:
         return out
 
     def index(self, label: Label) -> int:
-        """0-based index of an agent label (O(1))."""
+        """0-based index of an agent label (O(1)).
+
+        Parameters
+        ----------
+        label : int or str
+            An agent label (compared as text).
+
+        Returns
+        -------
+        int
+            Its index.
+
+        Raises
+        ------
+        InputError
+            The label is not an agent's.
+        """
         k = self._label_index.get(str(label))
         if k is None:
             raise InputError(f"unknown agent label {label!r}")
         return k
 
     def weight(self, i: int, j: int) -> np.ndarray:
-        """A_ij (zero matrix when there is no edge j -> i)."""
+        """The weight A_ij of the edge j -> i.
+
+        Parameters
+        ----------
+        i, j : int
+            0-based target and source indices.
+
+        Returns
+        -------
+        numpy.ndarray
+            A_ij, d×d (zero when there is no edge j -> i).
+        """
         a = self.weights.get((i, j))
         return a if a is not None else np.zeros((self.dim, self.dim))
 
@@ -252,12 +354,34 @@ class Topology:
         }
 
     def sign(self, i: int, j: int) -> int:
-        """sgn(A_ij) (paper, Sec. 2.1)."""
+        """The matrix sign sgn(A_ij) (Niu & Wu, Sec. 2.1).
+
+        Parameters
+        ----------
+        i, j : int
+            0-based target and source indices.
+
+        Returns
+        -------
+        int
+            1 for A_ij ⪰ 0, −1 for A_ij ⪯ 0 (nonzero), 0 for no edge or a zero weight.
+        """
         c = self.classes.get((i, j))
         return c.sign if c is not None else 0
 
     def abs_weight(self, i: int, j: int) -> np.ndarray:
-        """|A_ij| = sgn(A_ij)·A_ij."""
+        """|A_ij| = sgn(A_ij)·A_ij (Niu & Wu, Sec. 2.1).
+
+        Parameters
+        ----------
+        i, j : int
+            0-based target and source indices.
+
+        Returns
+        -------
+        numpy.ndarray
+            |A_ij|, d×d, positive semidefinite.
+        """
         return self.sign(i, j) * self.weight(i, j)
 
     @cached_property
@@ -283,23 +407,69 @@ class Topology:
         return a, at
 
     def in_neighbours(self, i: int) -> list[int]:
-        """N_i = {j : sgn(A_ij) ≠ 0}."""
+        """The in-neighbours N_i = {j : sgn(A_ij) ≠ 0} (Niu & Wu, Sec. 2.2).
+
+        Parameters
+        ----------
+        i : int
+            0-based agent index.
+
+        Returns
+        -------
+        list of int
+            0-based indices, ascending.
+        """
         a = self._adjacency[0]
         return a.indices[a.indptr[i] : a.indptr[i + 1]].tolist()
 
     def out_neighbours(self, i: int) -> list[int]:
-        """N'_i = {j : sgn(A_ji) ≠ 0}."""
+        """The out-neighbours N'_i = {j : sgn(A_ji) ≠ 0} (Niu & Wu, Sec. 2.2).
+
+        Parameters
+        ----------
+        i : int
+            0-based agent index.
+
+        Returns
+        -------
+        list of int
+            0-based indices, ascending.
+        """
         a = self._adjacency[1]
         return a.indices[a.indptr[i] : a.indptr[i + 1]].tolist()
 
     def omega(self, i: int) -> list[int]:
-        """Ω_i = {j : sgn(A_ij) = -1}: in-neighbours with an antagonistic edge into i."""
+        """Ω_i = {j : sgn(A_ij) = −1}: in-neighbours with an antagonistic edge into i
+        (Niu & Wu, Sec. 2.2).
+
+        Parameters
+        ----------
+        i : int
+            0-based agent index.
+
+        Returns
+        -------
+        list of int
+            0-based indices, ascending.
+        """
         a = self._adjacency[0]
         sl = slice(a.indptr[i], a.indptr[i + 1])
         return a.indices[sl][a.data[sl] < 0].tolist()
 
     def gamma(self, i: int) -> list[int]:
-        """Γ_i = {j : sgn(A_ij) = +1}: in-neighbours with a cooperative edge into i."""
+        """Γ_i = {j : sgn(A_ij) = +1}: in-neighbours with a cooperative edge into i
+        (Niu & Wu, Sec. 2.2).
+
+        Parameters
+        ----------
+        i : int
+            0-based agent index.
+
+        Returns
+        -------
+        list of int
+            0-based indices, ascending.
+        """
         a = self._adjacency[0]
         sl = slice(a.indptr[i], a.indptr[i + 1])
         return a.indices[sl][a.data[sl] > 0].tolist()
@@ -328,8 +498,14 @@ class Topology:
         return inn, out, ant
 
     def definite_graph(self) -> sparse.csr_matrix:
-        """Agent graph of the definite (PD or ND) edges, entry (j, i) for the edge j -> i
-        (the edges a positive-negative path may use, Definition 1)."""
+        """Agent graph of the definite (PD or ND) edges (the edges a positive-negative
+        path may use, Niu & Wu, Definition 3).
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix
+            N×N, entry (j, i) = 1 for a definite edge j -> i.
+        """
         ea = self._arrays
         k = CODE_DEFINITE[ea.codes]
         return sparse.csr_matrix(
@@ -344,18 +520,39 @@ class Topology:
         return lap
 
     def laplacian(self) -> np.ndarray:
-        """The signed Laplacian L (Nd×Nd, dense); see :func:`signed_laplacian` (built once,
-        a copy is returned). Refused above ``linalg.DENSE_MAX_BYTES``: use
-        :meth:`laplacian_sparse`."""
+        """The signed Laplacian L (Niu & Wu, Sec. 2.3); see :func:`signed_laplacian`.
+
+        Returns
+        -------
+        numpy.ndarray
+            L, Nd×Nd (built once, a copy is returned).
+
+        Raises
+        ------
+        InputError
+            Above ``linalg.DENSE_MAX_BYTES``: use :meth:`laplacian_sparse`.
+        """
         return self._laplacian.copy()
 
     def laplacian_sparse(self) -> sparse.csr_matrix:
-        """The signed Laplacian L as a sparse CSR matrix (d×d blocks), assembled from the
-        edge list in time and memory linear in the edges."""
+        """The signed Laplacian L as a sparse matrix, assembled from the edge list in time
+        and memory linear in the edges.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix
+            L, Nd×Nd (d×d blocks).
+        """
         return signed_laplacian_sparse(self)
 
     def to_dict(self) -> dict:
-        """A plain mapping in the topology-file form (round-trips through JSON/YAML)."""
+        """The topology in the topology-file form.
+
+        Returns
+        -------
+        dict
+            ``name``, ``dim``, ``agents`` and ``edges`` (round-trips through JSON/YAML).
+        """
         doc: dict = {}
         if self.name is not None:
             doc["name"] = self.name
@@ -374,30 +571,81 @@ class Topology:
     # -- interop (thin wrappers over ntc_design.interop) ------------------------------
     @classmethod
     def from_networkx(cls, graph, weight: str = "weight", dim: int | None = None) -> Topology:
-        """From a ``networkx.DiGraph`` (edge u -> v carries A_vu as a d×d matrix, or a
-        number for d = 1); see :func:`ntc_design.interop.topology_from_networkx`."""
+        """Build from a ``networkx.DiGraph``; see
+        :func:`ntc_design.interop.topology_from_networkx`.
+
+        Parameters
+        ----------
+        graph : networkx.DiGraph
+            Edge u -> v carries A_vu as a d×d matrix (or a number for d = 1).
+        weight : str, optional
+            The edge attribute holding the weight.
+        dim : int, optional
+            d, when the graph has no edges to infer it from.
+
+        Returns
+        -------
+        Topology
+            The validated topology.
+        """
         from .interop import topology_from_networkx
 
         return topology_from_networkx(graph, weight, dim)
 
     def to_networkx(self, weight: str = "weight"):
-        """A ``networkx.DiGraph`` with the d×d weights as edge attributes (exact inverse of
-        :meth:`from_networkx`)."""
+        """The topology as a ``networkx.DiGraph`` (exact inverse of :meth:`from_networkx`).
+
+        Parameters
+        ----------
+        weight : str, optional
+            The edge attribute to hold the d×d weights.
+
+        Returns
+        -------
+        networkx.DiGraph
+            Nodes are the labels; edge j -> i carries A_ij.
+        """
         from .interop import topology_to_networkx
 
         return topology_to_networkx(self, weight)
 
     def save(self, path: str | Path) -> Path:
-        """Write a topology file (YAML, or JSON by the suffix) that :func:`load` reads back."""
+        """Write a topology file that :func:`load` reads back.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file: YAML, or JSON by the ``.json`` suffix.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+        """
         from .interop import save_topology
 
         return save_topology(self, path)
 
 
 def signed_laplacian(top: Topology) -> np.ndarray:
-    """Signed Laplacian L (paper, Sec. 2.2): blocks ``L_ij = -A_ij`` (j ≠ i) and
-    ``L_ii = Σ_{k≠i} |A_ik|`` (dense; the memory is estimated first and a step above
-    ``linalg.DENSE_MAX_BYTES`` is refused with one line)."""
+    """Signed Laplacian L (Niu & Wu, Sec. 2.3): blocks ``L_ij = -A_ij`` (j ≠ i) and
+    ``L_ii = Σ_{k≠i} |A_ik|``.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    numpy.ndarray
+        L, Nd×Nd, dense.
+
+    Raises
+    ------
+    InputError
+        The dense matrix would exceed ``linalg.DENSE_MAX_BYTES`` (estimated first).
+    """
     require_dense(top.nd, "signed Laplacian L")
     d, n = top.dim, top.n
     ea = top._arrays
@@ -422,7 +670,18 @@ def _block_coo(
 
 
 def signed_laplacian_sparse(top: Topology) -> sparse.csr_matrix:
-    """:func:`signed_laplacian` as CSR, O(E·d²) time and memory."""
+    """:func:`signed_laplacian` as a sparse matrix, in O(E·d²) time and memory.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        L, Nd×Nd.
+    """
     ea, n, d = top._arrays, top.n, top.dim
     idx = np.arange(n)
     rows = np.concatenate([ea.rows, idx])
@@ -432,18 +691,55 @@ def signed_laplacian_sparse(top: Topology) -> sparse.csr_matrix:
 
 
 def antagonistic_in_weight(top: Topology, i: int) -> np.ndarray:
-    """``Σ_{j∈Ω_i} |A_ij|``: the total antagonistic weight into agent i (Lemma 1)."""
+    """The total antagonistic weight into agent i, ``Σ_{j∈Ω_i} |A_ij|`` (Lemma 1).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    numpy.ndarray
+        d×d, positive semidefinite.
+    """
     return top.degree_sums[2][i].copy()
 
 
 def in_out_difference(top: Topology, i: int) -> np.ndarray:
-    """``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji|`` (Definition 2)."""
+    """In- minus out-weight of agent i (Niu & Wu, Definition 4, eq. (10)).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji|``, d×d.
+    """
     inn, out, _ = top.degree_sums
     return inn[i] - out[i]
 
 
 def in_degree_dominated_all(top: Topology) -> np.ndarray:
-    """:func:`in_degree_dominated` for every agent at once (batched eigenvalues)."""
+    """:func:`in_degree_dominated` for every agent at once (batched eigenvalues).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    numpy.ndarray
+        N booleans.
+    """
     inn, out, _ = top.degree_sums
     if top.n == 0:
         return np.zeros(0, dtype=bool)
@@ -454,9 +750,22 @@ def in_degree_dominated_all(top: Topology) -> np.ndarray:
 
 
 def in_degree_dominated(top: Topology, i: int) -> bool:
-    """Definition 2: agent i is in-degree-dominated when
+    """Niu & Wu, Definition 4 (eq. (10)): agent i is in-degree-dominated when
     ``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji| ⪰ 0`` (zero eigenvalues up to the tolerance of
-    :mod:`ntc_design.linalg`, relative to the norms of the two sums)."""
+    :mod:`ntc_design.linalg`, relative to the norms of the two sums).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    bool
+        Whether agent i is in-degree-dominated.
+    """
     inn, out, _ = top.degree_sums
     scale = max(np.linalg.norm(inn[i], 2), np.linalg.norm(out[i], 2))
     if scale == 0.0:
@@ -466,9 +775,22 @@ def in_degree_dominated(top: Topology, i: int) -> bool:
 
 
 def positive_negative_reachable(top: Topology, sources: Iterable[int]) -> dict[int, list[int]]:
-    """Agents reached from ``sources`` by positive-negative paths (Definition 1: every edge
-    of the path is PD or ND), with one shortest such path to each (sources included,
-    with the trivial path)."""
+    """Agents reached from ``sources`` by positive-negative paths (Niu & Wu, Definition 3:
+    every edge of the path is PD or ND), with one shortest such path to each (sources
+    included, with the trivial path).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    sources : iterable of int
+        0-based indices of the start agents.
+
+    Returns
+    -------
+    dict of int to list of int
+        Each reached agent -> a shortest positive-negative path to it (indices).
+    """
     succ: dict[int, list[int]] = {k: [] for k in range(top.n)}
     for (i, j), c in top.classes.items():
         if c.definite:
@@ -537,29 +859,65 @@ class SwitchingTopology:
 
     @classmethod
     def from_data(cls, data: files.SwitchingData) -> SwitchingTopology:
+        """Build from a parsed switching file.
+
+        Parameters
+        ----------
+        data : ntc_design.files.SwitchingData
+            As :func:`ntc_design.files.parse_switching` returns it.
+
+        Returns
+        -------
+        SwitchingTopology
+            The validated modes and schedule.
+
+        Raises
+        ------
+        InputError
+            Modes over different agents or d, an unknown mode or a non-positive duration
+            in the schedule, or an invalid weight in a mode.
+        """
         modes = {k: Topology.from_data(v) for k, v in data.modes.items()}
         return cls(modes, data.schedule, data.source)
 
     @property
     def labels(self) -> tuple[Label, ...]:
+        """The agent labels (shared by every mode)."""
         return next(iter(self.modes.values())).labels
 
     @property
     def dim(self) -> int:
+        """The weight size d."""
         return next(iter(self.modes.values())).dim
 
     @property
     def n(self) -> int:
+        """The number of agents N."""
         return len(self.labels)
 
     @property
     def period(self) -> float:
+        """The schedule's period (the sum of its durations)."""
         return float(sum(d for _, d in self.schedule))
 
     def segments(self, t_end: float, t_start: float = 0.0) -> list[tuple[float, float, str]]:
-        """The schedule unrolled on [t_start, t_end): ``(start, stop, mode)`` triples.
+        """The schedule unrolled on [t_start, t_end).
+
         Switch times are ``k·period + offset`` (no drift from repeated addition), and each
-        segment stops exactly where the next one starts."""
+        segment stops exactly where the next one starts.
+
+        Parameters
+        ----------
+        t_end : float
+            End of the horizon.
+        t_start : float, optional
+            Its start.
+
+        Returns
+        -------
+        list of (float, float, str)
+            ``(start, stop, mode)`` triples covering the horizon.
+        """
         offsets = np.concatenate([[0.0], np.cumsum([d for _, d in self.schedule])[:-1]])
         per = self.period
         m_n = len(self.schedule)
@@ -581,7 +939,18 @@ class SwitchingTopology:
             k += 1
 
     def mode_at(self, t: float) -> str:
-        """Name of the mode active at time t (a switching instant belongs to the next mode)."""
+        """The mode active at time t.
+
+        Parameters
+        ----------
+        t : float
+            A time (a switching instant belongs to the next mode).
+
+        Returns
+        -------
+        str
+            The mode's name.
+        """
         per = self.period
         tau = t - np.floor(t / per) * per
         ends = np.cumsum([d for _, d in self.schedule])
@@ -601,6 +970,24 @@ class TimeVaryingTopology:
     name: str | None = None
 
     def at(self, t: float) -> Topology:
+        """The topology frozen at time t.
+
+        Parameters
+        ----------
+        t : float
+            The time.
+
+        Returns
+        -------
+        Topology
+            The weights A(t), validated at that t.
+
+        Raises
+        ------
+        InputError
+            An edge names an unknown label, or a weight is not symmetric and of one sign
+            at t.
+        """
         index = {str(a): k for k, a in enumerate(self.labels)}
         w, fields = {}, {}
         for (j, i), fn in self.weights.items():
@@ -613,14 +1000,31 @@ class TimeVaryingTopology:
 
     @property
     def n(self) -> int:
+        """The number of agents N."""
         return len(self.labels)
 
 
 def load(path: str | Path):
     """Load a topology file, a switching file or a time-varying topology file (YAML or
-    JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`). A time-varying
-    file gives an :class:`~ntc_design.timevarying.ExpressionTopology`, or the fixed
-    :class:`Topology` when every weight is a constant expression."""
+    JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    Topology or SwitchingTopology or ExpressionTopology
+        A time-varying file gives an :class:`~ntc_design.timevarying.ExpressionTopology`,
+        or the fixed :class:`Topology` when every weight is a constant expression.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read or is not a valid topology (one line naming the file and
+        the field or edge).
+    """
     from .edgelist import EdgeListData
 
     data = files.parse_file(path)

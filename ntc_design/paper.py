@@ -23,6 +23,13 @@ _A12_G1 = np.diag([1.0, 1.0, 2.0])
 
 
 def g1() -> Topology:
+    """G1 of Niu & Wu, Sec. 5.1 (the fixed-topology example, 7 agents, d = 3).
+
+    Returns
+    -------
+    Topology
+        G1.
+    """
     return Topology.from_edges(
         7,
         3,
@@ -41,6 +48,13 @@ def g1() -> Topology:
 
 
 def g2() -> Topology:
+    """G2 of Niu & Wu, Sec. 5.2 (weights as in eq. (22)).
+
+    Returns
+    -------
+    Topology
+        G2.
+    """
     a65 = np.array([[6.0, 1, -1], [1, 8, 2], [-1, 2, 6]])
     a47 = -np.diag([0.0, 1.0, 0.0])
     return Topology.from_edges(
@@ -63,6 +77,13 @@ def g2() -> Topology:
 
 
 def g3() -> Topology:
+    """G3 of Niu & Wu, Sec. 5.2 (weights as in eq. (23)).
+
+    Returns
+    -------
+    Topology
+        G3.
+    """
     return Topology.from_edges(
         7,
         3,
@@ -81,6 +102,14 @@ def g3() -> Topology:
 
 
 def switching() -> SwitchingTopology:
+    """The switching example of Niu & Wu, Sec. 5.2: G1, G2, G3 in the paper's pattern,
+    each for the same dwell time.
+
+    Returns
+    -------
+    SwitchingTopology
+        The modes and the periodic schedule.
+    """
     return SwitchingTopology(
         {"G1": g1(), "G2": g2(), "G3": g3()}, tuple((m, DWELL) for m in PATTERN)
     )

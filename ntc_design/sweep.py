@@ -69,6 +69,13 @@ class Sweep:
     name: str = ""
 
     def tasks(self) -> list[PointTask]:
+        """One task per point, in sweep order.
+
+        Returns
+        -------
+        list of PointTask
+            Each with its resolved scenario and hash.
+        """
         return [_task(self, p) for p in self.points]
 
 
@@ -84,6 +91,7 @@ class PointTask:
 
     @property
     def path_steps_estimate(self) -> int:
+        """paths × T/dt from the scenario (0 when they are not numbers)."""
         v = {**DEFAULTS, **{k: self.scenario[k] for k in DEFAULTS if k in self.scenario}}
         try:
             return int(v["paths"]) * max(1, math.ceil(float(v["T"]) / float(v["dt"])))
@@ -140,9 +148,17 @@ class SweepProgress:
 
     @property
     def elapsed(self) -> float:
+        """Seconds since the sweep started."""
         return time.monotonic() - self.started
 
     def line(self) -> str:
+        """The progress as one line.
+
+        Returns
+        -------
+        str
+            Points done (failed, reused), path-steps and seconds.
+        """
         return (
             f"sweep: {self.points_done}/{self.points_total} points ({self.failed} failed, "
             f"{self.reused} reused), {self.path_steps_done:.3g}/{self.path_steps_total:.3g} "
@@ -152,6 +168,9 @@ class SweepProgress:
 
 @dataclass(frozen=True)
 class SweepOutcome:
+    """What a finished sweep did: its folder, points computed, reused and failed, the
+    files written and the seconds taken."""
+
     out_dir: Path
     points: int
     computed: int
@@ -333,7 +352,20 @@ def _resolve(sweep: Sweep, overrides: dict) -> tuple[dict, dict]:
 
 
 def point_hash(scenario: dict, topology_doc: dict) -> str:
-    """16 hex digits of SHA-256 over the resolved parameters (canonical JSON)."""
+    """The identity of a point: it names the point's files and lets a re-run reuse them.
+
+    Parameters
+    ----------
+    scenario : dict
+        The resolved scenario.
+    topology_doc : dict
+        The inlined topology.
+
+    Returns
+    -------
+    str
+        16 hex digits of SHA-256 over both (canonical JSON).
+    """
     body = {"format": FORMAT, "scenario": scenario, "topology": topology_doc}
     text = json.dumps(jsonable(body), sort_keys=True, separators=(",", ":"), default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -350,7 +382,25 @@ def _task(sweep: Sweep, overrides: dict) -> PointTask:
 
 
 def topology_from_document(doc: dict, source: str = "topology"):
-    """A Topology or SwitchingTopology from its (inlined) document."""
+    """A topology from its (inlined) document.
+
+    Parameters
+    ----------
+    doc : dict
+        A topology or switching mapping.
+    source : str, optional
+        Its name, for messages.
+
+    Returns
+    -------
+    Topology or SwitchingTopology
+        The validated topology.
+
+    Raises
+    ------
+    InputError
+        The document is not a valid topology.
+    """
     from .model import SwitchingTopology, Topology
 
     if "modes" in doc or "schedule" in doc:
@@ -488,8 +538,23 @@ def _atomic_write(path: Path, data: bytes) -> None:
 
 
 def save_point(out_dir: Path, res: PointResult) -> Path:
-    """``points/<hash>.npz`` (curves), then ``points/<hash>.json`` (row): a point counts
-    as done once its JSON file exists, and each file appears whole or not at all."""
+    """Store one point: ``points/<hash>.npz`` (curves), then ``points/<hash>.json`` (row).
+
+    A point counts as done once its JSON file exists, and each file appears whole or not
+    at all.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        The sweep's folder.
+    res : PointResult
+        The point's result.
+
+    Returns
+    -------
+    pathlib.Path
+        The JSON file.
+    """
     pdir = out_dir / "points"
     pdir.mkdir(parents=True, exist_ok=True)
     arrays = {"t": res.t, "labels": np.array(res.labels, dtype=str)}
@@ -507,7 +572,20 @@ def save_point(out_dir: Path, res: PointResult) -> Path:
 
 
 def load_point(out_dir: Path, point: str) -> PointResult | None:
-    """The stored result of a point, or None (missing or unreadable: compute it again)."""
+    """The stored result of a point.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        The sweep's folder.
+    point : str
+        The point's hash.
+
+    Returns
+    -------
+    PointResult or None
+        None when missing or unreadable (compute it again).
+    """
     pdir = out_dir / "points"
     try:
         doc = json.loads((pdir / f"{point}.json").read_text(encoding="utf-8"))
@@ -545,7 +623,22 @@ def _cell(v: Any) -> Any:
 def write_tables(sweep: Sweep, out_dir: Path, results: dict[str, PointResult]) -> list[Path]:
     """``results.csv``, ``results.parquet`` (one row per point, in sweep order: the swept
     keys as named in the file, then :data:`ROW_FIELDS`) and ``curves.parquet`` (long form:
-    point, t, agent, mc, lo, hi, exact), each written atomically."""
+    point, t, agent, mc, lo, hi, exact), each written atomically.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep.
+    out_dir : pathlib.Path
+        Its folder.
+    results : dict of str to PointResult
+        The points' results by hash (a missing point gets an error row).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
     import pandas as pd
 
     rows, curves = [], []

@@ -30,6 +30,9 @@ REL = 1e-12
 
 @dataclass(frozen=True)
 class CriticalCouplings:
+    """The critical couplings of the design family L + δD: δ_H with the Hurwitz set, δ_S,
+    the best decay rate and its δ, and how they were computed."""
+
     hurwitz: float | None  # δ_H; None when no δ makes -L_B Hurwitz for all larger δ
     hurwitz_intervals: tuple[tuple[float, float], ...]  # the Hurwitz set, (lo, hi) with hi=inf
     symmetric: float | None  # δ_S; None when no δ gives L_B + L_Bᵀ ≻ 0
@@ -39,6 +42,14 @@ class CriticalCouplings:
     notes: tuple[str, ...] = field(default=())
 
     def to_dict(self) -> dict:
+        """The couplings as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``hurwitz``, ``hurwitz_intervals`` (an open end as None), ``symmetric``,
+            ``best_rate``, ``best_rate_delta``, ``method`` and ``notes``.
+        """
         return {
             "hurwitz": self.hurwitz,
             "hurwitz_intervals": [
@@ -53,7 +64,22 @@ class CriticalCouplings:
 
 
 def spectral_abscissa(lap: np.ndarray, d: np.ndarray, delta: float) -> float:
-    """``α(δ) = max Re λ(-(L + δD))``; -L_B(δ) is Hurwitz iff α(δ) < 0."""
+    """The spectral abscissa of −L_B(δ).
+
+    Parameters
+    ----------
+    lap : numpy.ndarray
+        L, Nd×Nd.
+    d : numpy.ndarray
+        D = blockdiag(B_i), Nd×Nd.
+    delta : float
+        δ.
+
+    Returns
+    -------
+    float
+        ``α(δ) = max Re λ(-(L + δD))``; −L_B(δ) is Hurwitz iff α(δ) < 0.
+    """
     return float(-np.min(np.linalg.eigvals(lap + delta * d).real))
 
 
@@ -81,7 +107,24 @@ def hurwitz_set(
 ) -> tuple[list[tuple[float, float]], float | None, str]:
     """The Hurwitz set {δ > 0 : −(L + δD) Hurwitz} as intervals, δ_H and the method (see
     the module docstring); ``D ≠ 0``. Notes are appended to ``notes``. ``kron=False``
-    uses the logarithmic scan at every size (cheaper for many small components)."""
+    uses the logarithmic scan at every size (cheaper for many small components).
+
+    Parameters
+    ----------
+    lap : numpy.ndarray
+        L, Nd×Nd.
+    d : numpy.ndarray
+        D = blockdiag(B_i), non-zero.
+    notes : list of str
+        Receives notes on the computation.
+    kron : bool, optional
+        Use the Kronecker pencil up to ``KRON_MAX``.
+
+    Returns
+    -------
+    tuple
+        (intervals (lo, hi) with hi = inf for the last, δ_H or None, method).
+    """
     n = lap.shape[0]
     nl = max(np.linalg.norm(lap, 2), 1e-300)
     ndn = np.linalg.norm(d, 2)
@@ -136,7 +179,20 @@ def hurwitz_set(
 
 
 def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
-    """Critical couplings of ``L + δD`` over δ > 0 (see the module docstring)."""
+    """Critical couplings of ``L + δD`` over δ > 0 (see the module docstring).
+
+    Parameters
+    ----------
+    lap : numpy.ndarray
+        L, Nd×Nd, dense.
+    d : numpy.ndarray
+        D = blockdiag(B_i), Nd×Nd.
+
+    Returns
+    -------
+    CriticalCouplings
+        δ_H, δ_S and the best rate.
+    """
     notes: list[str] = []
     nl = max(np.linalg.norm(lap, 2), 1e-300)
     ndn = np.linalg.norm(d, 2)
@@ -241,7 +297,20 @@ def _intersect(a: list[tuple[float, float]], b: list[tuple[float, float]]):
 def strong_components(lap, dim: int) -> tuple[int, np.ndarray]:
     """Strongly connected components of the agent graph of a block matrix (an agent
     edge j -> i wherever the block (i, j) is non-zero): ``(count, label per agent)``,
-    labels numbered in a topological order of the condensation (sources first)."""
+    labels numbered in a topological order of the condensation (sources first).
+
+    Parameters
+    ----------
+    lap : scipy.sparse matrix
+        A block matrix, Nd×Nd.
+    dim : int
+        The block size d.
+
+    Returns
+    -------
+    tuple of (int, numpy.ndarray)
+        The number of components and each agent's component.
+    """
     from scipy.sparse import csgraph, csr_matrix
 
     n = lap.shape[0] // dim
@@ -279,7 +348,20 @@ def strong_components(lap, dim: int) -> tuple[int, np.ndarray]:
 
 
 def diagonal_blocks(a, dim: int) -> np.ndarray:
-    """The d×d diagonal blocks of a sparse block matrix, shape (N, d, d)."""
+    """The d×d diagonal blocks of a sparse block matrix.
+
+    Parameters
+    ----------
+    a : scipy.sparse matrix
+        Nd×Nd.
+    dim : int
+        The block size d.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (N, d, d).
+    """
     n = a.shape[0] // dim
     c = a.tocoo()
     m = c.row // dim == c.col // dim
@@ -303,6 +385,20 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
       Cholesky factorisation (CHOLMOD) of ``L + Lᵀ + 2δD − τI`` with τ = 1e-12·‖·‖_∞;
       bracket width ``BISECT_RTOL`` (δ_S is the upper end: L_B + L_Bᵀ ≻ 0 there).
     * The best decay rate is not computed (it needs the whole spectrum): NaN, with a note.
+
+    Parameters
+    ----------
+    lap : scipy.sparse matrix
+        L, Nd×Nd.
+    d : scipy.sparse matrix
+        D = blockdiag(B_i), Nd×Nd.
+    dim : int
+        The block size d.
+
+    Returns
+    -------
+    CriticalCouplings
+        δ_H (None when a component is too large), δ_S and the notes.
     """
     from .linalg import SPDFamily
 

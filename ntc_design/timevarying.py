@@ -1,5 +1,5 @@
 """Continuously time-varying topologies: weights A_ij(t) written as expressions of t, and the
-Lemma 1 protocol evaluated at every instant (arXiv: Niu & Wu, Lemma 1 and Sec. 3.2).
+Lemma 1 protocol evaluated at every instant (Niu & Wu, Lemma 1 and Sec. 4.2).
 
 :class:`ExpressionTopology` holds the weights as parsed expressions
 (:mod:`ntc_design.tvfiles`), compiled once to vectorised NumPy functions. Construction
@@ -40,6 +40,9 @@ SIGN_MIN_WIDTH = 1e-7  # relative to the domain: below this the proof gives up a
 
 @dataclass(frozen=True, eq=False)
 class ExprEdge:
+    """One edge j -> i of an :class:`ExpressionTopology`: its weight A_ij(t) and the sign
+    class proven for every t of the domain."""
+
     i: int  # to
     j: int  # from
     weight: ExprWeight
@@ -48,6 +51,7 @@ class ExprEdge:
 
     @property
     def sign(self) -> int:
+        """sgn(A_ij(t)), the same for every t."""
         return self.cls.sign
 
 
@@ -184,7 +188,26 @@ class _SignProof:
 
 
 def enclose_matrix(entries, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
-    """(mid, rad) doubles with |A(t) − mid| <= rad entrywise for every t in [a, b]."""
+    """A rigorous entrywise enclosure of a matrix of expressions over a t-interval.
+
+    Parameters
+    ----------
+    entries : sequence of sequences of sympy.Expr
+        The d×d entries of A(t).
+    a, b : float
+        The interval [a, b] of t.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (mid, rad) with |A(t) − mid| <= rad entrywise for every t in [a, b] (rad infinite
+        where an entry is unbounded).
+
+    Raises
+    ------
+    NotEnclosable
+        An entry uses a function without an interval rule.
+    """
     tb = t_ball(a, b)
     cache: dict = {}
     d = len(entries)
@@ -217,7 +240,20 @@ def sym_min_eig_lower(mid: np.ndarray, rad: np.ndarray) -> float:
     Weyl: λ_min(M) >= λ_min(mid) − ‖M − mid‖₂ >= λ_min(mid) − ρ(rad) and ρ(rad) <= the
     largest row sum of rad (Perron). λ_min(mid) is computed in floating point and then
     proven: mid − s·I ≻ 0 for s = λ̃ − η by a Cholesky factorisation whose shift covers
-    every rounding error (:func:`ntc_design.certify.exact.verified_float_pd`, Rump 2006)."""
+    every rounding error (:func:`ntc_design.certify.exact.verified_float_pd`, Rump 2006).
+
+    Parameters
+    ----------
+    mid : numpy.ndarray
+        The midpoint matrix (symmetrised here).
+    rad : numpy.ndarray
+        The entrywise radius, >= 0.
+
+    Returns
+    -------
+    float
+        The bound (−inf when nothing could be proven or rad is not finite).
+    """
     from .certify.exact import gamma, verified_float_pd
 
     n = mid.shape[0]
@@ -261,6 +297,24 @@ class ExpressionTopology:
     # -- construction --------------------------------------------------------------
     @classmethod
     def from_data(cls, data: TimeVaryingData) -> ExpressionTopology:
+        """Build from a parsed file, proving each weight's sign class on the domain.
+
+        Parameters
+        ----------
+        data : ntc_design.tvfiles.TimeVaryingData
+            As :func:`ntc_design.tvfiles.parse_time_varying` returns it.
+
+        Returns
+        -------
+        ExpressionTopology
+            The topology with every edge's proven class.
+
+        Raises
+        ------
+        InputError
+            A weight whose class cannot be proven fixed (naming the edge and the t), or a
+            weight that is not periodic with the declared period.
+        """
         index = {str(a): k for k, a in enumerate(data.labels)}
         dom = None
         if data.period is not None:
@@ -292,10 +346,12 @@ class ExpressionTopology:
     # -- basic accessors ---------------------------------------------------------------
     @property
     def n(self) -> int:
+        """The number of agents N."""
         return len(self.labels)
 
     @property
     def nd(self) -> int:
+        """N·d, the size of the stacked state."""
         return self.n * self.dim
 
     @property
@@ -305,6 +361,7 @@ class ExpressionTopology:
 
     @property
     def domain(self) -> tuple[float, float] | None:
+        """[0, period], [0, constant_after], or None for every t >= 0."""
         if self.period is not None:
             return (0.0, float(self.period))
         if self.constant_after is not None:
@@ -344,14 +401,41 @@ class ExpressionTopology:
         return out
 
     def local_time(self, ts: np.ndarray) -> np.ndarray:
-        """The time at which the expressions are evaluated: t, or min(t, constant_after)."""
+        """The time at which the expressions are evaluated.
+
+        Parameters
+        ----------
+        ts : numpy.ndarray
+            Times.
+
+        Returns
+        -------
+        numpy.ndarray
+            t, or min(t, constant_after), flattened.
+        """
         ts = np.asarray(ts, dtype=float).reshape(-1)
         if self.constant_after is not None:
             return np.minimum(ts, float(self.constant_after))
         return ts
 
     def weights_at(self, ts: Sequence[float] | np.ndarray) -> np.ndarray:
-        """A_ij(t) for every edge at every time: shape (K, E, d, d)."""
+        """A_ij(t) for every edge at every time.
+
+        Parameters
+        ----------
+        ts : sequence of float or numpy.ndarray
+            K times.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (K, E, d, d), edges in :attr:`edges` order.
+
+        Raises
+        ------
+        InputError
+            A weight is not finite at one of the times.
+        """
         tl = self.local_time(ts)
         if not self.edges:
             return np.zeros((tl.size, 0, self.dim, self.dim))
@@ -364,14 +448,36 @@ class ExpressionTopology:
         return w
 
     def at(self, t: float) -> Topology:
-        """The topology frozen at time t (a :class:`~ntc_design.model.Topology`)."""
+        """The topology frozen at time t.
+
+        Parameters
+        ----------
+        t : float
+            The time.
+
+        Returns
+        -------
+        Topology
+            The weights A_ij(t) as a :class:`~ntc_design.model.Topology`.
+        """
         w = self.weights_at([t])[0]
         weights = {(e.i, e.j): w[k] for k, e in enumerate(self.edges)}
         fields = {(e.i, e.j): e.field for e in self.edges}
         return Topology(self.labels, self.dim, weights, self.name, self.source, fields)
 
     def fixed(self) -> Topology:
-        """The fixed topology of constant weights (requires :attr:`constant`)."""
+        """The fixed topology of constant weights.
+
+        Returns
+        -------
+        Topology
+            The same network as a :class:`~ntc_design.model.Topology`.
+
+        Raises
+        ------
+        ValueError
+            A weight depends on t (see :attr:`constant`).
+        """
         if not self.constant:
             raise ValueError("the weights depend on t")
         weights = {
@@ -396,6 +502,13 @@ class ExpressionTopology:
         return top
 
     def to_dict(self) -> dict:
+        """The topology in its file form.
+
+        Returns
+        -------
+        dict
+            A copy of the mapping as read.
+        """
         return dict(self.document)
 
 
@@ -509,6 +622,19 @@ class Lemma1Structure:
 
 
 def lemma1_structure(tv: ExpressionTopology) -> Lemma1Structure:
+    """What Lemma 1 needs that does not move with t: incidence arrays, U, the V1
+    candidates and the positive-negative reachability from each.
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        The topology.
+
+    Returns
+    -------
+    Lemma1Structure
+        The fixed structure.
+    """
     top = tv.structure
     n, d = tv.n, tv.dim
     e_n = len(tv.edges)
@@ -553,11 +679,28 @@ class Lemma1Batch:
     v1_size: np.ndarray  # (K,)
 
     def lap_b(self, st: Lemma1Structure) -> np.ndarray:
-        """L_B(t) = L(t) + δ(t)·blockdiag(B_i(t)), shape (K, Nd, Nd)."""
+        """L_B(t) = L(t) + δ(t)·blockdiag(B_i(t)) (Niu & Wu, eq. (8)) at each time.
+
+        Parameters
+        ----------
+        st : Lemma1Structure
+            The structure this batch was computed with.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (K, Nd, Nd).
+        """
         return grounded_laplacian_batch(st, self.weights, self.abs_w, self.delta, self.B)
 
     def input_vector(self) -> np.ndarray:
-        """u(t) = (Δ(t)⊗I) B(t) x0(t), shape (K, Nd)."""
+        """The drift from the external signal, u(t) = (Δ(t)⊗I) B(t) x0(t), at each time.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (K, Nd).
+        """
         u = np.einsum("knab,kb->kna", self.B, self.x0) * self.delta[:, None, None]
         return u.reshape(u.shape[0], -1)
 
@@ -569,7 +712,26 @@ def grounded_laplacian_batch(
     delta: np.ndarray | float,
     b: np.ndarray,
 ) -> np.ndarray:
-    """``L_B = L + δ·blockdiag(B_i)`` for a batch: blocks L_ij = −A_ij, L_ii = Σ|A_ik|."""
+    """``L_B = L + δ·blockdiag(B_i)`` (Niu & Wu, eq. (8)) for a batch of times.
+
+    Parameters
+    ----------
+    st : Lemma1Structure
+        Edge incidence and signs.
+    weights : numpy.ndarray
+        A_ij(t), shape (K, E, d, d).
+    abs_w : numpy.ndarray
+        |A_ij(t)|, shape (K, E, d, d).
+    delta : numpy.ndarray or float
+        δ(t), shape (K,), or one δ.
+    b : numpy.ndarray
+        B_i(t), shape (K, N, d, d) (zero for naive agents).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (K, Nd, Nd): blocks L_ij = −A_ij, L_ii = Σ|A_ik| + δ B_i.
+    """
     k_n = weights.shape[0]
     n, d = st.n, st.d
     lap = np.zeros((k_n, n, n, d, d))
@@ -589,7 +751,31 @@ def lemma1_batch(
     theta: np.ndarray,
     margin: float,
 ) -> Lemma1Batch:
-    """Lemma 1 at every time of ``ts`` (vectorised over the batch)."""
+    """Lemma 1 at every time of ``ts`` (vectorised over the batch).
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        The topology.
+    st : Lemma1Structure
+        ``lemma1_structure(tv)``.
+    ts : sequence of float or numpy.ndarray
+        K times.
+    theta : numpy.ndarray
+        The target θ (d numbers).
+    margin : float
+        ΔC > 0: δ(t) = C(t) + ΔC.
+
+    Returns
+    -------
+    Lemma1Batch
+        C(t), δ(t), k1(t), x0(t), B_i(t) and whether Assumption 2 holds at each time.
+
+    Raises
+    ------
+    InputError
+        A weight is not finite at one of the times.
+    """
     ts = np.asarray(ts, dtype=float).reshape(-1)
     k_n, n, d = ts.size, st.n, st.d
     w = tv.weights_at(ts)
@@ -609,7 +795,7 @@ def lemma1_batch(
         y = np.linalg.solve(lc, m)
         z = np.linalg.solve(lc, np.swapaxes(y, -1, -2))
         c_i = 0.5 * np.linalg.eigvalsh(0.5 * (z + np.swapaxes(z, -1, -2)))[..., -1]
-        # in-degree-domination of every agent at every t (Definition 2, model tolerance)
+        # in-degree-domination of every agent at every t (Definition 4, model tolerance)
         diff = inn - out
         lam = np.linalg.eigvalsh(0.5 * (diff + np.swapaxes(diff, -1, -2)))[..., 0]
         scale = np.maximum(
@@ -664,16 +850,50 @@ class TimeVaryingDesign:
 
     @cached_property
     def structure(self) -> Lemma1Structure:
+        """The topology's :class:`Lemma1Structure` (computed once)."""
         return lemma1_structure(self.topology)
 
     def at(self, ts: Sequence[float] | np.ndarray) -> Lemma1Batch:
+        """Lemma 1 at the times ``ts``; see :func:`lemma1_batch`.
+
+        Parameters
+        ----------
+        ts : sequence of float or numpy.ndarray
+            K times.
+
+        Returns
+        -------
+        Lemma1Batch
+            The design at each time.
+        """
         return lemma1_batch(self.topology, self.structure, ts, self.theta, self.margin)
 
     def sample_times(self, k: int = DESIGN_SAMPLES) -> np.ndarray:
+        """Evenly spaced times over the domain ([0, 10] when it is every t >= 0).
+
+        Parameters
+        ----------
+        k : int, optional
+            How many.
+
+        Returns
+        -------
+        numpy.ndarray
+            The times, ends included.
+        """
         a, b = self.topology.domain or (0.0, 10.0)
         return np.linspace(a, b, k)
 
     def to_dict(self) -> dict:
+        """The design summarised over a sample of the domain, as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            Ranges of C, δ, k1, x0 and λ_min(L_B + L_Bᵀ), whether Assumption 2 holds at
+            every sample (and the first times it fails), the identity residual of
+            eq. (11) and the edges with their classes.
+        """
         tv, st = self.topology, self.structure
         # fewer samples and bounded batches for large networks (L_B is K×Nd×Nd)
         ts = self.sample_times(DESIGN_SAMPLES if tv.nd <= 100 else 181)
@@ -739,6 +959,23 @@ class TimeVaryingDesign:
 
 
 def load_time_varying(path: str | Path) -> ExpressionTopology:
+    """Read a time-varying topology file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A YAML or JSON file with weights as expressions of t.
+
+    Returns
+    -------
+    ExpressionTopology
+        The topology with every edge's proven sign class.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, is malformed, or a weight's class cannot be proven.
+    """
     from .files import read_document
 
     return ExpressionTopology.from_data(parse_time_varying(read_document(path), str(path)))

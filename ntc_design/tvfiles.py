@@ -66,12 +66,15 @@ class ExprWeight:
 
     @property
     def constant(self) -> bool:
+        """True when no entry depends on t."""
         t = symbol("t")
         return not any(e.has(t) for row in self.entries for e in row)
 
 
 @dataclass(frozen=True)
 class ExprEdgeData:
+    """One directed edge j -> i whose weight A_ij(t) may hold expressions of t."""
+
     source: Label  # j
     target: Label  # i
     weight: ExprWeight
@@ -80,6 +83,9 @@ class ExprEdgeData:
 
 @dataclass(frozen=True)
 class TimeVaryingData:
+    """A time-varying topology file as read: labels, d, edges with weights A_ij(t), the
+    declared ``period`` or ``constant_after`` (None if absent) and the document itself."""
+
     name: str | None
     dim: int
     labels: tuple[Label, ...]
@@ -110,8 +116,34 @@ def _constant_matrix(m: np.ndarray) -> tuple[tuple[sp.Expr, ...], ...]:
 def parse_expr_weight(
     spec: Any, dim: int, source: str | None, field: str, named: dict[str, np.ndarray]
 ) -> ExprWeight:
-    """A weight whose entries may be expressions of t: rows, ``{diag: [...]}``,
-    ``{matrix: NAME, scale: s(t)}``, ``{identity: s(t)}`` or any constant form."""
+    """A d×d weight whose entries may be expressions of t.
+
+    Parameters
+    ----------
+    spec : Any
+        Rows, ``{diag: [...]}``, ``{matrix: NAME, scale: s(t)}``, ``{identity: s(t)}``, a
+        scalar expression s(t) (meaning s(t)·I) or any constant form of
+        :func:`ntc_design.files.parse_weight`.
+    dim : int
+        The weight's size d.
+    source : str or None
+        The file it came from, for messages.
+    field : str
+        The field it came from, for messages.
+    named : dict of str to numpy.ndarray
+        The file's named constant matrices.
+
+    Returns
+    -------
+    ExprWeight
+        The entries as sympy expressions of t, with the form as written.
+
+    Raises
+    ------
+    InputError
+        A malformed weight, an expression that is not allowed or uses a variable other
+        than t, a non-finite constant.
+    """
     if not _has_text(spec):
         m = parse_weight(spec, dim, source, field, named)
         return ExprWeight("rows", _constant_matrix(m), text=spec)
@@ -183,7 +215,26 @@ def _time_constant(x: Any, source: str | None, key: str) -> sp.Expr:
 
 
 def parse_time_varying(doc: dict[str, Any], source: str | None = None) -> TimeVaryingData:
-    """Validate a time-varying topology mapping (see the module docstring)."""
+    """Validate a time-varying topology mapping (see the module docstring).
+
+    Parameters
+    ----------
+    doc : dict
+        The mapping as read.
+    source : str, optional
+        The file it came from, for messages.
+
+    Returns
+    -------
+    TimeVaryingData
+        Labels, d, edges with expression weights and the declared time structure.
+
+    Raises
+    ------
+    InputError
+        An unknown or missing field, both ``period`` and ``constant_after``, a bad label,
+        edge, weight or time value.
+    """
     allowed = TOPOLOGY_KEYS | TIME_KEYS
     unknown = sorted(set(doc) - allowed)
     if unknown:

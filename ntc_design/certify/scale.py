@@ -74,7 +74,18 @@ RATE_ARPACK_MAX_ND = 20_000
 
 def chol_ok_batch(a: np.ndarray) -> np.ndarray:
     """Floating-point Cholesky of every matrix of a stack (K, d, d), vectorised over K
-    (the standard column algorithm): True where every pivot is positive and finite."""
+    (the standard column algorithm).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        Symmetric matrices, shape (K, d, d).
+
+    Returns
+    -------
+    numpy.ndarray
+        K booleans: True where every pivot is positive and finite.
+    """
     k, d, _ = a.shape
     low = np.zeros_like(a)
     ok = np.ones(k, dtype=bool)
@@ -91,7 +102,20 @@ def chol_ok_batch(a: np.ndarray) -> np.ndarray:
 def verified_pd_batch(m: np.ndarray, err: np.ndarray) -> np.ndarray:
     """Rigorous ``M_exact ≻ 0`` for a stack of d×d matrices from float values ``m`` and
     entrywise bounds ``err >= |M_exact − m|``: the shifted-Cholesky test of
-    :func:`ntc_design.certify.exact.verified_float_pd`, batched."""
+    :func:`ntc_design.certify.exact.verified_float_pd`, batched.
+
+    Parameters
+    ----------
+    m : numpy.ndarray
+        Float values, shape (K, d, d).
+    err : numpy.ndarray
+        Entrywise error bounds, shape (K, d, d).
+
+    Returns
+    -------
+    numpy.ndarray
+        K booleans: True where positive definiteness is proven.
+    """
     d = m.shape[1]
     mt = m.transpose(0, 2, 1)
     ms = 0.5 * (m + mt)
@@ -120,7 +144,20 @@ def lap_b_blocks(top: Topology, delta: float) -> BlockData:
     entrywise error bound: each term carries at most two roundings (1 + δ, the
     product), the sum of m_i terms m_i − 1 more, so the error is at most
     γ_{m_i+3} times the sum of the absolute terms (taken ×(1 + 2u) for their own
-    rounding)."""
+    rounding).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    delta : float
+        δ of the design.
+
+    Returns
+    -------
+    BlockData
+        The diagonal blocks with their error bounds.
+    """
     ea = top.edge_arrays
     n, d = top.n, top.dim
     sg = CODE_SIGN[ea.codes].astype(float)
@@ -139,8 +176,18 @@ def lap_b_blocks(top: Topology, delta: float) -> BlockData:
 
 def edge_norm_bounds(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rigorous upper bounds ν_k >= ‖w_k‖₂ for a stack of d×d weights: ν = ν_sym + ‖skew‖_F
-    with ν_sym proven by νI ∓ sym(w) ≻ 0 (batched verified Cholesky). Returns
-    ``(nu, proven)``."""
+    with ν_sym proven by νI ∓ sym(w) ≻ 0 (batched verified Cholesky).
+
+    Parameters
+    ----------
+    w : numpy.ndarray
+        Weights, shape (K, d, d).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(nu, proven)``: the bounds and where they are proven.
+    """
     d = w.shape[1]
     sym = 0.5 * (w + w.transpose(0, 2, 1))
     skew = 0.5 * (w - w.transpose(0, 2, 1))
@@ -157,7 +204,22 @@ def edge_norm_bounds(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def prove_mu(blocks: BlockData, idx: np.ndarray, mu: np.ndarray) -> np.ndarray:
-    """Prove ``λ_min(sym(L_B,ii)) >= μ_i`` for the agents ``idx`` (True where proven)."""
+    """Prove ``λ_min(sym(L_B,ii)) >= μ_i`` for some agents.
+
+    Parameters
+    ----------
+    blocks : BlockData
+        L_B's diagonal blocks with error bounds.
+    idx : numpy.ndarray
+        Agent indices.
+    mu : numpy.ndarray
+        The claimed μ_i, one per index.
+
+    Returns
+    -------
+    numpy.ndarray
+        True where proven.
+    """
     d = blocks.top.dim
     m = blocks.diag[idx] - mu[:, None, None] * np.eye(d)
     err = blocks.diag_err[idx] + U * np.abs(m) + U * np.abs(mu)[:, None, None] * np.eye(d)
@@ -173,7 +235,28 @@ def dominance_holds(
     agents: np.ndarray,
 ) -> np.ndarray:
     """Rigorous ``μ_i v_i > Σ_{j∈C(i), j≠i} ν_ij v_j`` for every agent of the boolean mask
-    ``agents`` (per-agent result; rounding of products and sums bounded)."""
+    ``agents`` (rounding of products and sums bounded).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    comp : numpy.ndarray
+        Each agent's dominance component C(i).
+    mu : numpy.ndarray
+        μ_i per agent.
+    v : numpy.ndarray
+        The positive weights v_i.
+    nu : numpy.ndarray
+        ν_ij >= ‖A_ij‖₂ per edge.
+    agents : numpy.ndarray
+        Boolean mask of the agents to check.
+
+    Returns
+    -------
+    numpy.ndarray
+        Per agent: True where the inequality is proven.
+    """
     ea = top.edge_arrays
     n = top.n
     same = comp[ea.rows] == comp[ea.cols]
@@ -189,7 +272,20 @@ def dominance_holds(
 def component_matrix(
     blocks: BlockData, agents: np.ndarray
 ) -> tuple[sparse.csr_matrix, sparse.csr_matrix]:
-    """Float L_B[C, C] (sparse) and an entrywise error bound for the agents ``agents``."""
+    """L_B restricted to some agents, with an error bound.
+
+    Parameters
+    ----------
+    blocks : BlockData
+        L_B's diagonal blocks with error bounds.
+    agents : numpy.ndarray
+        Agent indices C.
+
+    Returns
+    -------
+    tuple of scipy.sparse.csr_matrix
+        Float L_B[C, C] and an entrywise bound on its error.
+    """
     top = blocks.top
     ea, d = top.edge_arrays, top.dim
     pos = np.full(top.n, -1, dtype=np.int64)
@@ -209,7 +305,20 @@ def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tupl
     """Rigorous ``L + Lᵀ ≻ 0`` for the exact matrix within ``err`` of the float ``lap``:
     sparse Cholesky (CHOLMOD) of ``S − cI`` with Rump's shift
     ``c = (2γ_{k+1}/(1−γ_{k+1})·tr S + ‖E‖_F(1+4nu))(1+4u)``, k the longest row of the
-    factor (the longest inner product), E = err + errᵀ + u|S|."""
+    factor (the longest inner product), E = err + errᵀ + u|S|.
+
+    Parameters
+    ----------
+    lap : scipy.sparse.csr_matrix
+        The float matrix L.
+    err : scipy.sparse.csr_matrix
+        An entrywise bound on |L_exact − L|.
+
+    Returns
+    -------
+    tuple of (bool, str)
+        Whether it is proven, and how (or why not).
+    """
     s = (lap + lap.T).tocsr()
     n = s.shape[0]
     e = (err + err.T + U * abs(s)).tocsr()
@@ -234,7 +343,20 @@ _DTYPES = {"f8": "<f8", "i8": "<i8", "u1": "<u1"}
 
 def pack(a: np.ndarray, kind: str) -> dict:
     """An array as ``{"dtype", "shape", "base64"}`` (little-endian bytes, exact): a
-    100,000-edge certificate stays compact and hashes fast."""
+    100,000-edge certificate stays compact and hashes fast.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        The array.
+    kind : {"f8", "i8", "u1"}
+        The stored dtype.
+
+    Returns
+    -------
+    dict
+        ``dtype``, ``shape`` and the little-endian bytes in base64.
+    """
     arr = np.ascontiguousarray(a, dtype=_DTYPES[kind])
     return {
         "dtype": kind,
@@ -244,7 +366,29 @@ def pack(a: np.ndarray, kind: str) -> dict:
 
 
 def unpack(x: Any, where: str, kind: str, shape: tuple[int, ...]) -> np.ndarray:
-    """Inverse of :func:`pack`, checking dtype, shape and length (InputError otherwise)."""
+    """Inverse of :func:`pack`, checking dtype, shape and length.
+
+    Parameters
+    ----------
+    x : Any
+        The packed form read from a certificate.
+    where : str
+        The field, for messages.
+    kind : {"f8", "i8", "u1"}
+        The dtype expected.
+    shape : tuple of int
+        The shape expected.
+
+    Returns
+    -------
+    numpy.ndarray
+        The array.
+
+    Raises
+    ------
+    InputError
+        Not a packed array, or the wrong dtype, shape, base64 or length.
+    """
     if not isinstance(x, dict) or set(x) != {"dtype", "shape", "base64"}:
         raise InputError(f"{where}: expected a packed array {{dtype, shape, base64}}")
     if x["dtype"] != kind or x["shape"] != list(shape):
@@ -339,7 +483,22 @@ def _rate_estimate(blocks: BlockData, comp: np.ndarray, ncomp: int) -> tuple[flo
 def dominance_rate_bound(mu: np.ndarray, v: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """Per agent ``μ_i − (Σ_j ν_ij v_j)/v_i``: by the Feingold–Varga argument with μ_i
     replaced by μ_i − r, no eigenvalue of a dominance component has Re s <= r for any r
-    below the minimum over its agents, so the minimum bounds the decay rate from below."""
+    below the minimum over its agents, so the minimum bounds the decay rate from below.
+
+    Parameters
+    ----------
+    mu : numpy.ndarray
+        μ_i per agent.
+    v : numpy.ndarray
+        The positive weights v_i.
+    rhs : numpy.ndarray
+        Σ_j ν_ij v_j per agent.
+
+    Returns
+    -------
+    numpy.ndarray
+        The per-agent bound.
+    """
     return mu - rhs / v
 
 
@@ -504,7 +663,25 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
 
 
 def topology_from_subject(sub: dict, where: str) -> Topology:
-    """The topology of a scale certificate's subject (arrays), validated by the model."""
+    """The topology of a scale certificate's subject (arrays), validated by the model.
+
+    Parameters
+    ----------
+    sub : dict
+        The subject's ``topology``.
+    where : str
+        The field, for messages.
+
+    Returns
+    -------
+    Topology
+        The validated topology.
+
+    Raises
+    ------
+    InputError
+        A missing or malformed field, or an invalid weight.
+    """
     if not isinstance(sub, dict):
         raise InputError(f"{where}: expected an object")
     for key in ("dim", "agents", "edges", "from", "to", "weights"):
@@ -532,7 +709,24 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
 
 def verify_scale(doc: dict, source: str = "certificate"):
     """Re-check a ``hurwitz-scale`` certificate without any solver (module docstring).
-    Raises InputError when it is malformed."""
+
+    Parameters
+    ----------
+    doc : dict
+        The certificate.
+    source : str, optional
+        Its name, for messages.
+
+    Returns
+    -------
+    Verification
+        Valid when every check holds.
+
+    Raises
+    ------
+    InputError
+        The certificate or its topology is malformed.
+    """
     from .certificate import Check, Verification, digest
     from .claims import Claim, ClaimKind, Property
 

@@ -1,5 +1,5 @@
 """Theorems 3-4 certified for every t: the uniform bound Λ₂ of a continuously time-varying
-topology, by branch and bound on t-intervals (arXiv: Niu & Wu, proof of Theorem 3).
+topology, by branch and bound on t-intervals (Niu & Wu, proof of Theorem 3, after eq. (19)).
 
 The proof of Theorem 3 needs a *uniform* bound λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for all
 t >= 0 (positive definiteness at every t is not enough: a weight fading like e^{−t} is
@@ -67,6 +67,9 @@ class CertificationRefused(InputError):
 
 @dataclass(frozen=True)
 class LeafBound:
+    """What one t-interval [a, b] certifies: the lower bound on λ_min(L_B + L_Bᵀ), the
+    midpoint sample, the lower bound on δ and the interval's D, Λ₁ and p̄."""
+
     a: float
     b: float
     lower: float  # certified lower bound on λ_min(L_B + L_Bᵀ) on [a, b]
@@ -330,7 +333,21 @@ def _domain(tv: ExpressionTopology) -> tuple[float, float, str]:
 
 
 def refuse_unbounded_horizon(tv: ExpressionTopology, margin: float) -> None:
-    """Neither period nor constant_after: say why no uniform bound can be certified."""
+    """Neither period nor constant_after: say why no uniform bound can be certified.
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        A topology with weights given for every t >= 0.
+    margin : float
+        ΔC of Lemma 1, for the limit topology's L_B.
+
+    Raises
+    ------
+    CertificationRefused
+        Always, with the reason: an entry without a limit or unbounded as t → ∞, a weight
+        fading to 0, a limit topology with λ_min(L_B + L_Bᵀ) = 0, or none of these found.
+    """
     t = symbol("t")
     limits = []
     for e in tv.edges:
@@ -392,6 +409,9 @@ def refuse_unbounded_horizon(tv: ExpressionTopology, margin: float) -> None:
 
 @dataclass(frozen=True)
 class TimeVaryingBound:
+    """The certified uniform bound Λ₂ with the sampled infimum it is compared with,
+    Assumption 3's D, the proof's Λ₁ and p̄, the intervals and the domain."""
+
     lambda2: float
     sampled_inf: float
     t_at_inf: float
@@ -429,6 +449,7 @@ def certify_lambda2(
     Returns
     -------
     TimeVaryingBound
+        Λ₂ with its intervals.
 
     Raises
     ------
@@ -517,14 +538,52 @@ T0_SCAN_END = 1e9
 
 
 def mu2_threshold(lambda2: float, lambda1: float, sigma_bar: float, n: int) -> float:
-    """κ = Λ₂ / (2σ̄Λ₁N): μ₂(t) = c(t)[Λ₂ − 2σ̄Λ₁N c(t)] > 0 exactly when 0 < c(t) < κ."""
+    """The gain level below which μ₂(t) = c(t)[Λ₂ − 2σ̄Λ₁N c(t)] > 0 (Niu & Wu, proof of
+    Theorem 3).
+
+    Parameters
+    ----------
+    lambda2 : float
+        Λ₂, the uniform lower bound on λ_min(L_B(t) + L_B(t)ᵀ).
+    lambda1 : float
+        Λ₁ >= λ_max²(|A_ij(t)|).
+    sigma_bar : float
+        σ̄ of Assumption 1 (eq. (4)).
+    n : int
+        The number of agents N.
+
+    Returns
+    -------
+    float
+        κ = Λ₂ / (2σ̄Λ₁N) (inf when the denominator is 0): μ₂(t) > 0 exactly when
+        0 < c(t) < κ.
+    """
     den = 2.0 * sigma_bar * lambda1 * n
     return math.inf if den == 0 else lambda2 / den
 
 
 def mu2_t0(gain: str, kappa: float) -> tuple[float | None, str]:
-    """The least t₀ on a fine scan with c(t) < κ for every t >= t₀, and how it was proven:
-    ball arithmetic on [t₀, 10⁹] and sympy's monotonicity of c beyond."""
+    """The time t₀ after which c(t) < κ, and how it was proven.
+
+    Parameters
+    ----------
+    gain : str
+        The gain c(t) as text (parsed safely, :mod:`ntc_design.expr`).
+    kappa : float
+        The level from :func:`mu2_threshold`.
+
+    Returns
+    -------
+    tuple of (float or None, str)
+        The least t₀ on a fine scan with c(t) < κ for every t >= t₀ (None if c is still
+        >= κ at 10⁹), and how it was proven: ball arithmetic on [t₀, 10⁹] and sympy's
+        monotonicity of c beyond.
+
+    Raises
+    ------
+    InputError
+        The gain is not an allowed expression of t.
+    """
     c = parse_expression(gain, "gain")
     t = symbol("t")
     if not c.has(t):
@@ -591,7 +650,33 @@ def time_varying_certificate(
     sigma: float = 0.4,
     f: Any = 0.3,
 ) -> dict:
-    """Certify the uniform bound of Theorems 3-4 and write it as a certificate mapping."""
+    """Certify the uniform bound of Theorems 3-4 and write it as a certificate mapping.
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        The topology, with ``period`` or ``constant_after``.
+    theta : sequence of float
+        The target θ (recorded in the subject).
+    margin : float, optional
+        ΔC of Lemma 1.
+    gain : str, optional
+        c(t), for t₀.
+    sigma : float, optional
+        The additive noise intensity σ_ji.
+    f : float or array_like, optional
+        The multiplicative noise f(x) = f·x (or F x).
+
+    Returns
+    -------
+    dict
+        A ``time_varying`` certificate with its digest.
+
+    Raises
+    ------
+    CertificationRefused
+        The uniform bound cannot be certified (see :func:`certify_lambda2`).
+    """
     from .certificate import FORMAT, VERSION, _finish
 
     bound = certify_lambda2(tv, margin, sigma)
@@ -645,7 +730,26 @@ def time_varying_certificate(
 def verify_time_varying(doc: dict, source: str = "certificate"):
     """Re-check a time-varying certificate: re-parse the topology (re-proving its sign
     classes), re-enclose every recorded interval and check its bound, the cover of the
-    domain, D, Λ₁, p̄ and t₀. Raises InputError when malformed."""
+    domain, D, Λ₁, p̄ and t₀.
+
+    Parameters
+    ----------
+    doc : dict
+        The certificate.
+    source : str, optional
+        Its name, for messages.
+
+    Returns
+    -------
+    Verification
+        Valid when every check holds.
+
+    Raises
+    ------
+    InputError
+        A malformed certificate or topology, or a topology without period or
+        constant_after.
+    """
     from .certificate import Check, Verification, _need, digest
 
     checks: list[Check] = []
@@ -739,7 +843,22 @@ def verify_time_varying(doc: dict, source: str = "certificate"):
 
 
 def time_varying_verdicts(result: dict, ver, gain) -> tuple:
-    """Theorems 3 and 4 for a continuously time-varying topology."""
+    """Theorems 3 and 4 for a continuously time-varying topology.
+
+    Parameters
+    ----------
+    result : dict
+        The certificate's ``results.time_varying``.
+    ver : Verification
+        Its verification.
+    gain : GainAnalysis or None
+        The gain's conditions; None when no gain was given.
+
+    Returns
+    -------
+    tuple of TheoremVerdict
+        The verdicts of Theorems 3 and 4.
+    """
     from .theorems import Premise, TheoremVerdict, _gain_premises
 
     r = result

@@ -32,8 +32,14 @@ F8 = 8.0
 
 
 def available_memory() -> float:
-    """Bytes of memory available now: MemAvailable from /proc/meminfo, else the
-    physical memory from os.sysconf, else 4 GiB."""
+    """Memory available now.
+
+    Returns
+    -------
+    float
+        Bytes: MemAvailable from /proc/meminfo, else the physical memory from
+        os.sysconf, else 4 GiB.
+    """
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:
@@ -58,9 +64,17 @@ class Estimate:
 
     @property
     def total(self) -> float:
+        """The estimated peak, bytes."""
         return float(sum(b for _, b in self.parts.values()))
 
     def largest(self) -> tuple[str, str, float]:
+        """The part that takes the most memory.
+
+        Returns
+        -------
+        tuple of (str, str, float)
+            Its name, the field that changes it, and its bytes.
+        """
         name, (fld, b) = max(self.parts.items(), key=lambda kv: kv[1][1])
         return name, fld, b
 
@@ -75,7 +89,28 @@ def estimate_steps(
 ) -> float:
     """Number of Euler–Maruyama steps: T/dt (uniform) or ∫c dt / ds + T/h_max (intrinsic),
     plus one per event (save time or switch). ∫c is a trapezoid on linear and
-    logarithmic samples of [0, T] (an estimate: it only has to get the magnitude)."""
+    logarithmic samples of [0, T] (an estimate: it only has to get the magnitude).
+
+    Parameters
+    ----------
+    t_end : float
+        The horizon T.
+    dt : float
+        The uniform step.
+    intrinsic_ds : float or None
+        The intrinsic step ds; None for uniform stepping.
+    h_max : float or None
+        The largest intrinsic step.
+    gain : callable
+        Vectorised c(t).
+    events : float
+        The number of save times and switches.
+
+    Returns
+    -------
+    float
+        The estimated number of steps.
+    """
     if intrinsic_ds is None:
         return t_end / dt + events
     ts = np.unique(
@@ -186,12 +221,14 @@ def check_budget(est: Estimate, available: float | None = None) -> None:
     Parameters
     ----------
     est : Estimate
+        The run's estimate.
     available : float, optional
         Bytes available.
 
     Raises
     ------
     InputError
+        The estimate is above the limits (naming the field to change and the size).
     """
     avail = available_memory() if available is None else available
     total = est.total

@@ -44,6 +44,7 @@ def make_gain(
     Parameters
     ----------
     gain : str or callable
+        c(t) as an expression of t, or a function of t.
     field_name : str
         Named in error messages.
 
@@ -301,6 +302,7 @@ def simulate(
     Parameters
     ----------
     topology : Topology, SwitchingTopology or TimeVaryingTopology
+        The network.
     theta : sequence of float or SimulationSpec
         θ, with the other options as keywords; or a whole spec.
     spec : SimulationSpec, optional

@@ -16,6 +16,9 @@ import numpy as np
 
 @dataclass(frozen=True)
 class TimeGrid:
+    """The integration grid: K+1 times, the mode of each step and where the save times
+    fall on it."""
+
     t: np.ndarray  # K+1 grid times, t[0] = 0, t[-1] = T
     mode: np.ndarray  # K: mode index of each step [t_k, t_{k+1})
     save_steps: np.ndarray  # grid indices of the save times
@@ -23,10 +26,12 @@ class TimeGrid:
 
     @property
     def h(self) -> np.ndarray:
+        """The K step sizes."""
         return np.diff(self.t)
 
     @property
     def n_steps(self) -> int:
+        """The number of steps K."""
         return self.t.size - 1
 
 
@@ -41,8 +46,28 @@ def build_grid(
 ) -> TimeGrid:
     """Grid on [0, t_end] through every save time and every segment boundary.
 
-    ``segments`` are (start, stop, mode index) covering [0, t_end] (one mode if None).
-    With ``intrinsic_ds`` steps are h = min(ds / c(t), h_max, time to next event)."""
+    Parameters
+    ----------
+    t_end : float
+        The horizon T.
+    dt : float
+        The uniform step bound (without ``intrinsic_ds``).
+    save_times : sequence of float
+        Times that must be grid points (clipped to [0, t_end]).
+    segments : sequence of (float, float, int), optional
+        (start, stop, mode index) covering [0, t_end]; one mode if None.
+    gain : callable, optional
+        Vectorised c(t), for intrinsic steps.
+    intrinsic_ds : float, optional
+        Steps h = min(ds / c(t), h_max, time to the next event).
+    h_max : float, optional
+        The largest intrinsic step.
+
+    Returns
+    -------
+    TimeGrid
+        The grid with every save time and switching instant on it.
+    """
     segs = list(segments) if segments else [(0.0, t_end, 0)]
     saves = np.unique(np.clip(np.asarray(save_times, dtype=float), 0.0, t_end))
     events = np.unique(

@@ -22,7 +22,20 @@ TILE_MIN, TILE_MAX = 16, 64  # paths per tile: wide enough for SIMD, small enoug
 def tile_width(p: int, nd: int) -> int:
     """Paths integrated together (their states side by side, so the inner loops run over
     paths and vectorise). The result does not depend on it: every path's arithmetic is
-    the same."""
+    the same.
+
+    Parameters
+    ----------
+    p : int
+        Paths in the block.
+    nd : int
+        N·d.
+
+    Returns
+    -------
+    int
+        The tile width, between 1 and p.
+    """
     return int(max(1, min(p, TILE_MAX, max(TILE_MIN, TILE_BYTES // (16 * max(nd, 1))))))
 
 
@@ -91,8 +104,24 @@ def em_steps(
 
 
 def numpy_step(x, xi_k, ch, cs, s, drift=True):
-    """One step of the same recursion with SciPy sparse products (any f, callable ones
-    included: f acts on the (p, E, d) array of differences)."""
+    """One step of the same recursion with SciPy sparse products, in place (any f,
+    callable ones included: f acts on the (p, E, d) array of differences).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        States, shape (p, Nd); updated in place.
+    xi_k : numpy.ndarray
+        The step's normals, shape (p, 2E).
+    ch : float
+        c(t_k)·h.
+    cs : float
+        c(t_k)·√h.
+    s : ModeSystem
+        The mode's matrices.
+    drift : bool, optional
+        Include −L_B x (False for the implicit scheme, which solves for it).
+    """
     p = x.shape[0]
     ne, d = s.n_edges, s.dim
     x3 = x.reshape(p, s.n_agents, d)

@@ -1,6 +1,7 @@
-"""Exact first and second moments of ε = x − 1⊗θ when the noise is linear (NOTES.md).
+"""Exact first and second moments of ε = x − 1⊗θ when the noise is linear.
 
-With ``dε = −c L_B ε dt + c Σ_k (g_k + G_k ε) dw_k`` Itô's formula gives, for
+With ``dε = −c L_B ε dt + c Σ_k (g_k + G_k ε) dw_k`` (Niu & Wu, eq. (12), with
+f(x) = F x) Itô's formula gives, for
 ``m = E[ε]`` and ``S = E[εεᵀ]``,
 
     dm/dt = −c L_B m
@@ -37,12 +38,28 @@ MOMENT_COPIES = 12  # dense Nd×Nd matrices alive during an RK4 step (S, stages,
 
 
 def moments_memory(nd_: int) -> int:
-    """Bytes the exact moments need at this Nd (about)."""
+    """Bytes the exact moments need at this Nd (about).
+
+    Parameters
+    ----------
+    nd_ : int
+        N·d.
+
+    Returns
+    -------
+    int
+        ``MOMENT_COPIES`` dense Nd×Nd float matrices.
+    """
     return MOMENT_COPIES * 8 * nd_ * nd_
 
 
 def check_moments_size(nd_: int) -> None:
     """Refuse the exact moments above ``MOMENTS_MAX_ND`` (one line, with the estimate).
+
+    Parameters
+    ----------
+    nd_ : int
+        N·d.
 
     Raises
     ------
@@ -57,6 +74,9 @@ def check_moments_size(nd_: int) -> None:
 
 @dataclass(frozen=True)
 class Moments:
+    """Exact moments at the save times: E[ε], E‖x_i − θ‖² per agent, the final second
+    moment S and the number of RK4 steps."""
+
     t: np.ndarray  # save times
     mean: np.ndarray  # (S, Nd) E[ε]
     ms_error: np.ndarray  # (S, N) E‖x_i − θ‖²
@@ -112,6 +132,28 @@ def exact_moments(
     d: int,
 ) -> Moments:
     """Integrate the moment equations from m(0) = ε0, S(0) = ε0ε0ᵀ (a deterministic start).
+
+    Parameters
+    ----------
+    systems : sequence of ModeSystem
+        One system per mode.
+    segments : sequence of (float, float, int)
+        (start, stop, mode index) covering the horizon.
+    gain : callable
+        Vectorised c(t).
+    eps0 : numpy.ndarray
+        ε(0) = x(0) − 1⊗θ, length Nd.
+    save_times : numpy.ndarray
+        Where to record the moments.
+    n : int
+        The number of agents N.
+    d : int
+        The state dimension d.
+
+    Returns
+    -------
+    Moments
+        The moments at the save times.
 
     Raises
     ------
@@ -179,6 +221,28 @@ def em_moments(
         m_{k+1} = R m_k,   S_{k+1} = R (S_k + c² h (G Gᵀ + Σ_e G_e S_k G_eᵀ)) Rᵀ.
 
     The difference from :func:`exact_moments` is the scheme's O(h) bias.
+
+    Parameters
+    ----------
+    systems : sequence of ModeSystem
+        One system per mode.
+    grid : TimeGrid
+        The Monte Carlo grid.
+    gain : callable
+        Vectorised c(t).
+    eps0 : numpy.ndarray
+        ε(0), length Nd.
+    n : int
+        The number of agents N.
+    d : int
+        The state dimension d.
+    scheme : {"explicit", "implicit"}, optional
+        The Euler–Maruyama scheme.
+
+    Returns
+    -------
+    Moments
+        The recursion's moments at the grid's save times.
 
     Raises
     ------

@@ -36,6 +36,10 @@ MIN_BLOCKS = 2  # paths are split into at least this many blocks (both cores bus
 
 @dataclass(frozen=True, eq=False)
 class MonteCarloSpec:
+    """Everything a Monte Carlo run needs: the mode systems, the grid, c(t), θ, the
+    initial state, the path count and seed (block b draws from the seed's b-th child),
+    the block size, how many paths to store and the step scheme."""
+
     systems: tuple[ModeSystem, ...]
     grid: TimeGrid
     gain: Callable[[np.ndarray], np.ndarray]
@@ -58,6 +62,7 @@ class MonteCarloSpec:
 
     @property
     def n_blocks(self) -> int:
+        """The number of blocks of :attr:`block_paths` paths."""
         return -(-self.paths // self.block_paths)
 
 
@@ -154,7 +159,13 @@ class _Stepper:
 
 def prepare(spec: MonteCarloSpec) -> None:
     """Compile (or load from numba's cache) the kernel for this spec's array types in this
-    process, so that forked workers inherit it instead of each compiling it."""
+    process, so that forked workers inherit it instead of each compiling it.
+
+    Parameters
+    ----------
+    spec : MonteCarloSpec
+        The run (a spec with its own ``run_block`` needs nothing).
+    """
     from .kernels import em_steps
 
     for s in getattr(spec, "systems", ()):  # a spec with its own run_block has none
@@ -245,10 +256,26 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
 
 
 def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> list[PartialStats]:
-    """Integrate the given blocks; one PartialStats per block (merge them with merge()).
+    """Integrate the given blocks.
+
     A spec with its own ``run_block`` (time-varying topologies) integrates itself.
     Overflow is detected and reported by the kernel (``failure``), so NumPy's floating
-    point warnings are silenced here."""
+    point warnings are silenced here.
+
+    Parameters
+    ----------
+    spec : MonteCarloSpec
+        The run.
+    blocks : sequence of int
+        Block indices.
+    progress : callable(done, total), optional
+        Called with path-steps done.
+
+    Returns
+    -------
+    list of PartialStats
+        One per block (combine them with :func:`merge`).
+    """
     block = getattr(spec, "run_block", None)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         if block is not None:
@@ -257,7 +284,18 @@ def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> lis
 
 
 def merge(parts: Sequence[PartialStats]) -> PartialStats:
-    """Sum partial statistics in block order (so the result does not depend on chunking)."""
+    """Sum partial statistics in block order (so the result does not depend on chunking).
+
+    Parameters
+    ----------
+    parts : sequence of PartialStats
+        Statistics of disjoint blocks (at least one).
+
+    Returns
+    -------
+    PartialStats
+        Their sums, the stored paths in block order and the earliest failure.
+    """
     parts = sorted(parts, key=lambda q: q.blocks[0])
     first = parts[0]
     sq, sq2, state = first.sq.copy(), first.sq2.copy(), first.state.copy()
@@ -354,6 +392,7 @@ def run(
     Parameters
     ----------
     spec : MonteCarloSpec
+        The run.
     workers : int
         Processes (capped by the caller at the machine's CPUs).
     blocks_per_chunk : int

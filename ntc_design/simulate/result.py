@@ -26,6 +26,10 @@ class SimulationDiverged(RuntimeError):
 
 @dataclass
 class SimulationResult:
+    """A simulation's outcome: the mean-square error curves E‖x_i − θ‖² (Monte Carlo with a
+    95 % band, and exact moments where the noise is linear) at the save times, the designs
+    per mode, the parameters, run statistics, notes and any failure."""
+
     labels: tuple
     theta: np.ndarray
     save_times: np.ndarray
@@ -39,6 +43,15 @@ class SimulationResult:
     grid: TimeGrid | None = None
 
     def summary(self) -> dict:
+        """The JSON summary written as ``summary.json``.
+
+        Returns
+        -------
+        dict
+            Parameters, topologies, design briefs, save times, run statistics, notes,
+            the failure, and the final mean-square errors (with band and sample-path
+            spread) of each method.
+        """
         lab = [str(a) for a in self.labels]
         out: dict = {
             "parameters": self.parameters,
@@ -70,8 +83,13 @@ class SimulationResult:
         return out
 
     def to_pandas(self):
-        """Tidy ``pandas.DataFrame``: columns t, agent, mc, lo, hi, exact, one row per save
-        time and agent; see :func:`ntc_design.interop.simulation_frame`."""
+        """The curves as a tidy table; see :func:`ntc_design.interop.simulation_frame`.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns t, agent, mc, lo, hi, exact; one row per save time and agent.
+        """
         from ..interop import simulation_frame
 
         return simulation_frame(self)
@@ -83,9 +101,22 @@ def _design_brief(d: ProtocolDesign) -> dict:
 
 
 def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
-    """How much the stored sample paths still move late in the run: over the last
-    ``late_fraction`` of save times, per stored path, max − min of ‖x(t) − 1⊗θ‖, and the
-    spread (std across stored paths) of ‖x(T) − 1⊗θ‖ at the final time."""
+    """How much the stored sample paths still move late in the run.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        A result with Monte Carlo curves.
+    late_fraction : float, optional
+        The final fraction of the save times to look at.
+
+    Returns
+    -------
+    dict
+        Over the late window, per stored path, max − min of ‖x(t) − 1⊗θ‖ (largest and
+        mean), and the mean and spread (std across stored paths) of ‖x(T) − 1⊗θ‖;
+        ``{"stored": 0}`` when no path was stored.
+    """
     paths = res.mc["paths"]
     if paths.size == 0:
         return {"stored": 0}

@@ -27,10 +27,12 @@ def load_scenario(path: str | Path) -> tuple[object, SimulationSpec, ScenarioDat
     Parameters
     ----------
     path : str or Path
+        The scenario file (YAML or JSON).
 
     Returns
     -------
     (Topology or SwitchingTopology, SimulationSpec, ScenarioData)
+        The topology it names, the checked spec and the scenario as read.
 
     Raises
     ------
@@ -44,12 +46,41 @@ def load_scenario(path: str | Path) -> tuple[object, SimulationSpec, ScenarioDat
 
 
 def check_output(out_dir: str | Path) -> Path:
-    """Refuse, before a run, an output folder that cannot receive its outputs."""
+    """Refuse, before a run, an output folder that cannot receive its outputs.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The output folder asked for.
+
+    Returns
+    -------
+    Path
+        The folder (it may not exist yet).
+
+    Raises
+    ------
+    InputError
+        A file by that name, a folder holding other files than an earlier run's
+        outputs, or a folder that cannot be written.
+    """
     return check_output_folder(out_dir, REPLACEABLE)
 
 
 def ms_error_table(res) -> tuple[list[str], np.ndarray]:
-    """Columns t, mc_a, mc_a_lo, mc_a_hi, exact_a (a = agent label)."""
+    """The mean-square errors as a wide table (what ``ms_error.csv`` holds).
+
+    Parameters
+    ----------
+    res : SimulationResult
+        The result.
+
+    Returns
+    -------
+    (list of str, numpy.ndarray)
+        Column names t, mc_a, mc_a_lo, mc_a_hi, exact_a (a = agent label; only the
+        methods that ran) and the table, one row per save time.
+    """
     cols = ["t"]
     data = [res.save_times]
     for k, a in enumerate(res.labels):
@@ -63,19 +94,22 @@ def ms_error_table(res) -> tuple[list[str], np.ndarray]:
 
 
 def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[Path]:
-    """Write summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz into ``out_dir``, all or nothing
-    (see :func:`ntc_design.outputs.output_folder`).
+    """Write summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz into
+    ``out_dir``, all or nothing (see :func:`ntc_design.outputs.output_folder`).
 
     Parameters
     ----------
     res : SimulationResult
+        The result.
     out_dir : str or Path
+        The output folder (created, or an earlier run's replaced).
     extra : dict, optional
         Added to the summary.
 
     Returns
     -------
     list of Path
+        The files written.
 
     Raises
     ------

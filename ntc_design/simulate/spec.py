@@ -88,14 +88,41 @@ class SaveAt:
             object.__setattr__(self, "times", arr)
 
     def count(self, t_end: float) -> float:
-        """Number of save times on [0, t_end] (a float: may be astronomically large)."""
+        """Number of save times on [0, t_end], before allocating them.
+
+        Parameters
+        ----------
+        t_end : float
+            The horizon T.
+
+        Returns
+        -------
+        float
+            The count (a float: it may be astronomically large).
+        """
         if self.every is not None:
             n = t_end / self.every
             return math.floor(n) + 2.0 if math.isfinite(n) and n < 2**53 else n
         return float(self.times.size + 1)
 
     def resolve(self, t_end: float) -> np.ndarray:
-        """The sorted save times on [0, t_end], 0 and (for ``every``) t_end included."""
+        """The save times on [0, t_end].
+
+        Parameters
+        ----------
+        t_end : float
+            The horizon T.
+
+        Returns
+        -------
+        numpy.ndarray
+            Sorted, 0 included, and t_end too for ``every``.
+
+        Raises
+        ------
+        InputError
+            A listed time is beyond t_end.
+        """
         if self.every is not None:
             return np.unique(np.concatenate([np.arange(0.0, t_end, self.every), [t_end]]))
         if np.any(self.times > t_end):
@@ -133,12 +160,14 @@ class Stepping:
 
     @property
     def intrinsic_ds(self) -> float | None:
+        """The intrinsic step ds (``dt`` when not given); None for uniform stepping."""
         if self.kind != "intrinsic":
             return None
         return float(self.ds if self.ds is not None else self.dt)
 
     @property
     def max_step(self) -> float | None:
+        """The largest intrinsic step h_max; None for uniform stepping."""
         if self.kind != "intrinsic":
             return None
         return float(self.h_max if self.h_max is not None else max(1.0, 100 * self.dt))
@@ -184,6 +213,18 @@ class UniformInitial:
         object.__setattr__(self, "hi", hi)
 
     def draw(self, size: int) -> np.ndarray:
+        """Draw x(0) (the same on every call).
+
+        Parameters
+        ----------
+        size : int
+            N·d.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``size`` numbers uniform on [lo, hi].
+        """
         rng = np.random.default_rng(np.random.SeedSequence(int(self.seed)))
         return rng.uniform(self.lo, self.hi, size=size)
 
@@ -195,6 +236,7 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
     Parameters
     ----------
     noise : NoiseModel
+        The noise to check.
 
     Returns
     -------
@@ -348,6 +390,7 @@ class SimulationSpec:
         Parameters
         ----------
         theta : sequence of float
+            The target consensus state θ ≠ 0.
         **options
             Flat options; unknown names are refused.
 
@@ -402,6 +445,7 @@ class SimulationSpec:
         Parameters
         ----------
         doc : mapping
+            The scenario as read.
         source : str, optional
             The file name that prefixes error messages.
 
@@ -447,11 +491,34 @@ class SimulationSpec:
         return cls.build(**o)
 
     def replace(self, **changes: Any) -> SimulationSpec:
-        """A copy with some fields changed (checked again)."""
+        """A copy with some fields changed (checked again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of this spec.
+
+        Returns
+        -------
+        SimulationSpec
+            The new spec.
+
+        Raises
+        ------
+        InputError
+            A changed value is bad.
+        """
         return replace(self, **changes)
 
     def options(self) -> dict[str, Any]:
-        """The flat options (as :meth:`build` takes them), for summaries and re-runs."""
+        """The flat options (as :meth:`build` takes them), for summaries and re-runs.
+
+        Returns
+        -------
+        dict
+            θ, ΔC, the gain, T, the stepping, the method, ``resample``, the noise, the
+            Monte Carlo options and the save times.
+        """
         n = self.noise
         out: dict[str, Any] = {
             "theta": self.theta.tolist(),

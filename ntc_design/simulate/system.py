@@ -1,5 +1,5 @@
-"""The semi-autonomous network with compound noise (eq. SAN_noise) as sparse matrices and
-edge arrays.
+"""The semi-autonomous network with compound noise (Niu & Wu, eq. (5)) as sparse matrices
+and edge arrays.
 
 For one mode with design (L_B, x0, B_i) and noise (σ_ji, f_ji), on the stacked state
 x ∈ R^{Nd}:
@@ -51,9 +51,29 @@ class NoiseModel:
 
     @property
     def linear(self) -> bool:
+        """Whether f(x) = F x (a number or a matrix rather than a callable)."""
         return not callable(self.f)
 
     def f_matrix(self, d: int) -> np.ndarray:
+        """The matrix F of a linear f(x) = F x.
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+            F, d×d (s·I for a number s).
+
+        Raises
+        ------
+        ValueError
+            f is a callable.
+        InputError
+            f is a matrix of the wrong shape.
+        """
         if callable(self.f):
             raise ValueError("f is a callable")
         f = np.asarray(self.f, dtype=float)
@@ -89,10 +109,12 @@ class ModeSystem:
 
     @property
     def n_edges(self) -> int:
+        """The number of edges E (nonzero A_ij)."""
         return int(self.dst.size)
 
     @property
     def nd(self) -> int:
+        """N·d, the size of the stacked state."""
         return self.n_agents * self.dim
 
     @cached_property
@@ -140,12 +162,31 @@ class ModeSystem:
         return self._block_matrix(self.dst, e, self.abs_w, (self.nd, self.n_edges * self.dim))
 
     def lap_b_dense(self) -> np.ndarray:
+        """L_B as a dense matrix.
+
+        Returns
+        -------
+        numpy.ndarray
+            L_B, Nd×Nd.
+        """
         return self.lap_b.toarray()
 
 
 def grounded_laplacian_sparse(des: ProtocolDesign) -> sp.csr_matrix:
     """``L_B = L + (Δ⊗I_d) blockdiag(|B_i|)`` assembled from the edge list (time and memory
-    linear in the edges): blocks ``−A_ij`` at (i, j), ``Σ_j |A_ij| + δ|B_i|`` at (i, i)."""
+    linear in the edges): blocks ``−A_ij`` at (i, j), ``Σ_j |A_ij| + δ|B_i|`` at (i, i)
+    (Niu & Wu, eq. (8)).
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The design.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        L_B, Nd×Nd (the design's own dense matrix, made sparse, at small Nd).
+    """
     top = des.topology
     d, n = top.dim, top.n
     if top.nd <= DENSE_LB_MAX_ND:  # the design's own matrix: the same numbers as before
@@ -308,6 +349,20 @@ def _ms_limit(lam: np.ndarray, mu2: np.ndarray, c: np.ndarray) -> np.ndarray:
 
 
 def sysw_label(s: ModeSystem, i: int) -> str:
+    """An agent's label for messages.
+
+    Parameters
+    ----------
+    s : ModeSystem
+        The system.
+    i : int
+        0-based agent index.
+
+    Returns
+    -------
+    str
+        Its label (the index when the system has none).
+    """
     return str(s.labels[i]) if s.labels else str(i)
 
 
@@ -339,14 +394,18 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
     Parameters
     ----------
     systems : sequence of ModeSystem
+        One system per mode.
     grid : TimeGrid
+        The grid (its step sizes and modes).
     c_grid : ndarray
         c(t_k) on the grid's steps.
     scheme : {"explicit", "implicit"}
+        The Euler–Maruyama scheme.
 
     Returns
     -------
     StepCheck
+        The worst ratio and a warning when it is close.
 
     Raises
     ------

@@ -1,6 +1,6 @@
 """Simulation with a continuously time-varying topology: A(t) and the Lemma 1 protocol
-re-evaluated at every Euler–Maruyama step and inside the moment equations (arXiv: Niu & Wu,
-eq. (SAN_noise) with G(t)).
+re-evaluated at every Euler–Maruyama step and inside the moment equations (Niu & Wu,
+eq. (5) with a time-varying G(t)).
 
 Per batch of steps the weights are evaluated by the compiled expressions and Lemma 1 by
 :func:`ntc_design.timevarying.lemma1_batch` (batched Cholesky/eigenvalues), giving for each
@@ -45,15 +45,28 @@ class TimeVaryingSystem:
 
     @property
     def structure(self) -> Lemma1Structure:
+        """The design's fixed Lemma 1 structure."""
         return self.design.structure
 
     @property
     def n_edges(self) -> int:
+        """The number of live edges E (non-zero sign)."""
         return int(self.live.size)
 
     def matrices(self, ts: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Per time: M1 = [−L_Bᵀ | Dᵀ] (K, Nd, Nd+Ed), Gᵀ (K, E, Nd), Wᵀ (K, Ed, Nd),
-        u (K, Nd) and L_B (K, Nd, Nd)."""
+        """The step matrices at K times.
+
+        Parameters
+        ----------
+        ts : numpy.ndarray
+            K times.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            M1 = [−L_Bᵀ | Dᵀ] (K, Nd, Nd+Ed), Gᵀ (K, E, Nd), Wᵀ (K, Ed, Nd), u (K, Nd),
+            L_B (K, Nd, Nd) and |A_ij(t)| (K, E, d, d).
+        """
         st = self.structure
         b = self.design.at(ts)
         lap = b.lap_b(st)
@@ -81,6 +94,25 @@ class TimeVaryingSystem:
 
 
 def time_varying_system(des: TimeVaryingDesign, noise: NoiseModel) -> TimeVaryingSystem:
+    """The SAN with A(t) for a design and a noise model.
+
+    Parameters
+    ----------
+    des : TimeVaryingDesign
+        Lemma 1 at every instant.
+    noise : NoiseModel
+        σ_ji (per edge where given) and f.
+
+    Returns
+    -------
+    TimeVaryingSystem
+        Edge-difference matrix, per-edge σ and the design.
+
+    Raises
+    ------
+    InputError
+        A per-edge σ names an edge the topology does not have.
+    """
     tv = des.topology
     st = des.structure
     d = tv.dim
@@ -126,9 +158,24 @@ class TimeVaryingMonteCarloSpec:
 
     @property
     def n_blocks(self) -> int:
+        """The number of blocks of ``block_size`` paths."""
         return -(-self.paths // self.block_size)
 
     def run_block(self, b: int, progress=None) -> PartialStats:
+        """Integrate block b of the paths.
+
+        Parameters
+        ----------
+        b : int
+            The block index (its normals come from the b-th child of the seed).
+        progress : callable(done, total), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        PartialStats
+            The block's sums at the save times.
+        """
         return _run_block_tv(self, b, progress)
 
 
@@ -238,7 +285,26 @@ def exact_moments_tv(
     t_end: float,
 ) -> Moments:
     """Integrate the moment equations with A(t) from m(0) = ε0, S(0) = ε0ε0ᵀ by RK4 with
-    steps h <= κ / (c(t) ρ), ρ bounding the generator's spectral radius over [0, T]."""
+    steps h <= κ / (c(t) ρ), ρ bounding the generator's spectral radius over [0, T].
+
+    Parameters
+    ----------
+    sys_ : TimeVaryingSystem
+        The system (f linear).
+    gain : callable
+        Vectorised c(t).
+    eps0 : numpy.ndarray
+        ε(0) = x(0) − 1⊗θ, length Nd.
+    save_times : numpy.ndarray
+        Where to record the moments.
+    t_end : float
+        The horizon T.
+
+    Returns
+    -------
+    Moments
+        The moments at the save times.
+    """
     st = sys_.structure
     n, d = st.n, st.d
     ii, jj = st.ii[sys_.live], st.jj[sys_.live]
@@ -341,8 +407,45 @@ def simulate_time_varying(
     workers: int,
     progress=None,
 ) -> tuple[dict, object, object, dict, list[str]]:
-    """Run Monte Carlo and/or the exact moments with A(t); returns (designs, partial MC
-    statistics or None, moments or None, stats, notes)."""
+    """Run Monte Carlo and/or the exact moments with A(t).
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        The topology.
+    theta : sequence of float
+        The target θ.
+    margin : float
+        ΔC of Lemma 1.
+    cfun : callable
+        Vectorised c(t).
+    noise : NoiseModel
+        σ_ji and f.
+    x_init : numpy.ndarray
+        x(0), length Nd.
+    grid : TimeGrid
+        The integration grid.
+    method : str
+        ``"mc"``, ``"exact"`` or ``"both"``.
+    paths, seed, block_size, store_paths : int
+        Monte Carlo options (see :class:`~ntc_design.simulate.spec.MonteCarlo`).
+    workers : int
+        Processes.
+    progress : callable(done, total), optional
+        Called with path-steps done.
+
+    Returns
+    -------
+    tuple
+        (designs at t = 0, partial Monte Carlo statistics or None, moments or None,
+        stats, notes).
+
+    Raises
+    ------
+    InputError
+        An unstable Euler–Maruyama step, exact moments asked for a non-linear f, or a
+        per-edge σ on a missing edge.
+    """
     from ..design import design_topology
     from .montecarlo import run
 
@@ -398,7 +501,36 @@ def simulate_time_varying(
 
 def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, workers: int, progress):
     """The driver's path for an :class:`ExpressionTopology` (``simulate`` dispatches here):
-    grid, checks, Monte Carlo and exact moments with A(t), and the result."""
+    grid, checks, Monte Carlo and exact moments with A(t), and the result.
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        The topology.
+    spec : SimulationSpec
+        The checked simulation options.
+    cfun : callable
+        Vectorised c(t).
+    gain_text : str
+        The gain as written, for messages and the summary.
+    workers : int
+        Processes.
+    progress : callable(done, total) or None
+        Called with path-steps done.
+
+    Returns
+    -------
+    SimulationResult
+        The curves, design at t = 0, parameters and statistics.
+
+    Raises
+    ------
+    InputError
+        A wrong initial state, a gain negative or not finite on [0, T], or what
+        :func:`simulate_time_varying` refuses.
+    SimulationDiverged
+        NaN or overflow in a path (the partial result is attached).
+    """
     from ..errors import quote
     from .grid import build_grid
     from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
