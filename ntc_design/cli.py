@@ -30,7 +30,9 @@ app = typer.Typer(
     help="Certify, design and validate non-trivial consensus protocols on signed "
     "matrix-weighted networks with compound measurement noise.",
 )
-out = Console(highlight=False)
+# Off a terminal (pipes, CI logs) rich would wrap at 80 columns and split result lines:
+# print each line whole, and let tables use up to 120 columns.
+out = Console(highlight=False, soft_wrap=not sys.stdout.isatty(), width=None if sys.stdout.isatty() else 120)
 
 
 def _version(value: bool) -> None:

@@ -757,9 +757,13 @@ def save(fig, stem: Path, formats: Sequence[str] = FORMATS, dpi: int = DPI) -> S
         if f == "png":
             p.write_bytes(png)
         else:
-            fig.savefig(
-                p, format=f, metadata={"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(f)
-            )
+            # a fixed hash salt: SVG clip-path ids (random by default) repeat run to run
+            with plt.rc_context({"svg.hashsalt": "ntc-design"}):
+                fig.savefig(
+                    p,
+                    format=f,
+                    metadata={"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(f),
+                )
         files[f] = p
     plt.close(fig)
     return SavedFigure(stem, files, png)

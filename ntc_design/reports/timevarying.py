@@ -41,7 +41,6 @@ def lambda_min_figure(
     if lambda2 is not None:
         ax.axhline(lambda2, color=figures.RED, ls="--", lw=1.2, label=f"Λ₂ = {lambda2:.4g}")
     ax.set_xlabel("t")
-    ax.set_title(f"{tv.name or 'topology'}: the uniform bound of Theorems 3-4")
     ax.legend(fontsize=8, loc="best")
     ax.grid(alpha=0.3)
     fig.tight_layout()
