@@ -854,7 +854,7 @@ class SwitchingTopology:
             k = int(lost[0])
             raise InputError(
                 f"{where}schedule[{k}].duration: {self.schedule[k][1]!r} is lost in rounding "
-                f"next to the other durations (switching instant {float(starts[k])!r})"
+                f"next to the other durations: its switching instants collide at {float(starts[k])!r}"
             )
 
     @classmethod
