@@ -408,35 +408,55 @@ def topology_from_document(doc: dict, source: str = "topology"):
     return Topology.from_data(parse_topology(doc, source))
 
 
-def _certify_cached(top, topology_doc: dict, spec) -> tuple:
-    """(δ, certificate valid, MS verdict, a.s. verdict, digest): the certificate depends
-    only on the topology, θ, the margin and the gain."""
+def _certify_key(topology_doc: dict, spec) -> str:
+    """What a point's certificate depends on: the topology, θ, the margin and the gain."""
+    gain = spec.gain if isinstance(spec.gain, str) else None
+    return json.dumps(
+        jsonable([topology_doc, spec.theta, spec.margin, gain]), sort_keys=True, default=repr
+    )
+
+
+def _certify_row(top, spec) -> tuple:
+    """(δ, certificate valid, MS verdict, a.s. verdict, digest) of one certification."""
     from .certify import certify
     from .design import SwitchingDesign
 
     gain = spec.gain if isinstance(spec.gain, str) else None
-    key = json.dumps(
-        jsonable([topology_doc, spec.theta, spec.margin, gain]), sort_keys=True, default=repr
+    res = certify(top, spec.theta, spec.margin, gain)
+    des = res.design
+    delta = (
+        max(d.delta for d in des.modes.values()) if isinstance(des, SwitchingDesign) else des.delta
     )
+    verdict = {th.theorem: th.guaranteed for th in res.theorems}
+    return (
+        float(delta),
+        bool(res.verification.valid),
+        verdict.get(1, verdict.get(3)),
+        verdict.get(2, verdict.get(4)),
+        res.certificate["digest"],
+    )
+
+
+def _certify_cached(top, topology_doc: dict, spec) -> tuple:
+    """:func:`_certify_row`, cached per process (points that differ only in noise, seed or
+    T share one certificate)."""
+    key = _certify_key(topology_doc, spec)
     if key not in _CERT_CACHE:
-        res = certify(top, spec.theta, spec.margin, gain)
-        des = res.design
-        delta = (
-            max(d.delta for d in des.modes.values())
-            if isinstance(des, SwitchingDesign)
-            else des.delta
-        )
-        verdict = {th.theorem: th.guaranteed for th in res.theorems}
+        row = _certify_row(top, spec)
         if len(_CERT_CACHE) >= _CERT_CACHE_SIZE:
             _CERT_CACHE.pop(next(iter(_CERT_CACHE)))
-        _CERT_CACHE[key] = (
-            float(delta),
-            bool(res.verification.valid),
-            verdict.get(1, verdict.get(3)),
-            verdict.get(2, verdict.get(4)),
-            res.certificate["digest"],
-        )
+        _CERT_CACHE[key] = row
     return _CERT_CACHE[key]
+
+
+def _certify_any(task: PointTask, topology_doc=None, progress=None, remote=False) -> tuple:
+    """One certification as a cluster task (the first point of its key stands for all)."""
+    from .simulate import SimulationSpec
+
+    del progress, remote  # a certification reports no path-steps
+    doc = topology_doc if topology_doc is not None else task.topology_doc
+    spec = SimulationSpec.from_document(task.scenario)
+    return _certify_cached(topology_from_document(doc), doc, spec)
 
 
 def run_point(
@@ -444,6 +464,7 @@ def run_point(
     progress: Callable[[int, int], None] | None = None,
     remote: bool = False,
     workers: int | None = None,
+    certificate: tuple | None = None,
 ) -> PointResult:
     """Design, certify and simulate one point. Errors inside the point (a bad parameter, a
     divergence, a failed design) become the row's ``error``; nothing is raised.
@@ -459,6 +480,9 @@ def run_point(
         thread (the cluster's workers are the parallelism).
     workers
         Local processes for the Monte Carlo when not remote (None: the scenario's).
+    certificate
+        The point's certification row when it was computed as a task of its own (the
+        sweep certifies each distinct topology, θ, margin and gain once on a cluster).
 
     Returns
     -------
@@ -485,7 +509,7 @@ def run_point(
             row["ms_guaranteed"],
             row["as_guaranteed"],
             row["certificate_digest"],
-        ) = _certify_cached(top, task.topology_doc, spec)
+        ) = certificate or _certify_cached(top, task.topology_doc, spec)
         with threadpool_limits(limits=1 if remote else None):
             try:
                 res = simulate(top, spec, progress=progress)
@@ -800,15 +824,11 @@ def run_sweep(
         if todo:
             items = [(t.point, (t, None, workers)) for t in todo]
             if not isinstance(eng, LocalEngine):
-                # one copy of each distinct topology on the cluster, not one per task
-                shared: dict[str, Any] = {}
-                items = []
-                for t in todo:
-                    tk = point_hash({}, t.topology_doc)
-                    if tk not in shared:
-                        shared[tk] = eng.scatter(t.topology_doc)
-                    stripped = PointTask(t.point, t.params, t.scenario, {})
-                    items.append((t.point, (stripped, shared[tk])))
+                # Tasks carry their topology by value: a scattered copy can be lost with a
+                # killed worker once Dask's memory manager has dropped the other replicas
+                # (7 points cancelled in the killed-worker test).
+                certs = _cluster_certificates(eng, todo)
+                items = [(t.point, (t, None, None, certs.get(t.point))) for t in todo]
             for point, res, exc in eng.map_unordered(_run_any, items, progress=tick):
                 if exc is not None:  # the cluster gave up: a row now, a retry next run
                     task = next(t for t in todo if t.point == point)
@@ -840,10 +860,42 @@ def run_sweep(
     )
 
 
+def _cluster_certificates(eng, todo: list[PointTask]) -> dict:
+    """Certify each distinct (topology, θ, margin, gain) once, as tasks of their own, so
+    that two workers never repeat a certification; point -> certification row. A key
+    whose task fails (or whose scenario is malformed) is left to its points."""
+    from .simulate import SimulationSpec
+
+    first: dict[str, str] = {}
+    key_of: dict[str, str] = {}
+    by_point = {t.point: t for t in todo}
+    for t in todo:
+        try:
+            spec = SimulationSpec.from_document(t.scenario)
+        except InputError:
+            continue
+        key = _certify_key(t.topology_doc, spec)
+        key_of[t.point] = key
+        first.setdefault(key, t.point)
+    rows = {}
+    for point, row, exc in eng.map_unordered(
+        _certify_any, [(p, (by_point[p],)) for p in first.values()]
+    ):
+        if exc is None:
+            rows[point] = row
+    by_key = {k: rows[p] for k, p in first.items() if p in rows}
+    return {p: by_key[k] for p, k in key_of.items() if k in by_key}
+
+
 def _run_any(
-    task: PointTask, topology_doc=None, workers=None, progress=None, remote=False
+    task: PointTask,
+    topology_doc=None,
+    workers=None,
+    certificate=None,
+    progress=None,
+    remote=False,
 ) -> PointResult:
     """run_point, with the topology document passed separately when it was scattered."""
     if topology_doc is not None:
         task = PointTask(task.point, task.params, task.scenario, topology_doc)
-    return run_point(task, progress, remote, workers)
+    return run_point(task, progress, remote, workers, certificate)
