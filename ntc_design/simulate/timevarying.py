@@ -231,10 +231,48 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
         return result()
     batch = _batch_size(sys_)
     xi = np.empty((batch, p, 2 * ne))
+    compiled = sys_.f is None  # a linear f: the compiled edge kernel of the fixed case
+    if compiled:
+        from .kernels import em_steps, tile_width
+
+        st = sys_.structure
+        src = np.ascontiguousarray(st.jj[sys_.live], dtype=np.int64)
+        dst = np.ascontiguousarray(st.ii[sys_.live], dtype=np.int64)
+        # L_B(t) as a dense CSR pattern: its nonzeros move with t, Nd is small here
+        indptr = np.arange(0, nd_ * nd_ + 1, nd_, dtype=np.int64)
+        indices = np.tile(np.arange(nd_, dtype=np.int64), nd_)
+        tile = tile_width(p, nd_)
     for k0 in range(0, grid.n_steps, batch):
         kb = min(batch, grid.n_steps - k0)
-        m1, gt, wt, u, _, _ = sys_.matrices(grid.t[k0 : k0 + kb])
         rng.standard_normal(out=xi[:kb])
+        if compiled:
+            b_t = sys_.design.at(grid.t[k0 : k0 + kb])
+            lap = np.ascontiguousarray(b_t.lap_b(st).reshape(kb, -1))
+            u = np.ascontiguousarray(b_t.input_vector())
+            absw = b_t.abs_w[:, sys_.live]
+            kmat = np.ascontiguousarray(absw @ sys_.fmat)  # K_e(t) = |A_ij(t)| F
+            gvec = np.ascontiguousarray(sys_.sigma[None, :, None] * absw.sum(axis=3))  # σ|A|1
+            ch_b, cs_b = ch_all[k0 : k0 + kb], cs_all[k0 : k0 + kb]
+            for kk in range(kb):
+                em_steps(
+                    x, xi, kk, kk + 1, ch_b, cs_b, indptr, indices, lap[kk], u[kk], src, dst,
+                    kmat[kk], gvec[kk], True, tile,
+                )  # fmt: skip
+                if k0 + kk + 1 in save_at and not record(save_at[k0 + kk + 1]):
+                    return result()
+            if progress is not None:
+                progress(kb * p)
+            where = _first_bad(x, d)
+            if where is not None:
+                failure = {
+                    "t": float(grid.t[k0 + kb]),
+                    "agent": where[1],
+                    "path": p0 + where[0],
+                    "save_index": valid,
+                }
+                return result()
+            continue
+        m1, gt, wt, u, _, _ = sys_.matrices(grid.t[k0 : k0 + kb])
         for kk in range(kb):
             k = k0 + kk
             y = x @ m1[kk]
