@@ -28,7 +28,7 @@ from .moments import KAPPA, Moments
 from .montecarlo import PartialStats, _first_bad
 from .system import NoiseModel
 
-BATCH = 64  # steps whose matrices and normals are made at once
+BATCH = 256  # steps whose matrices and normals are made at once (Lemma 1 per batch is ~6 ms)
 MAX_BATCH_BYTES = 32 * 2**20
 
 
