@@ -260,33 +260,22 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
                 )  # fmt: skip
                 if k0 + kk + 1 in save_at and not record(save_at[k0 + kk + 1]):
                     return result()
-            if progress is not None:
-                progress(kb * p)
-            where = _first_bad(x, d)
-            if where is not None:
-                failure = {
-                    "t": float(grid.t[k0 + kb]),
-                    "agent": where[1],
-                    "path": p0 + where[0],
-                    "save_index": valid,
-                }
-                return result()
-            continue
-        m1, gt, wt, u, _, _ = sys_.matrices(grid.t[k0 : k0 + kb])
-        for kk in range(kb):
-            k = k0 + kk
-            y = x @ m1[kk]
-            drift = y[:, :nd_]
-            drift += u[kk]
-            diff = y[:, nd_:].reshape(p, ne, d)
-            if sys_.f is not None:
-                diff = sys_.f(diff)
-            z = (diff * xi[kk, :, ne : 2 * ne, None]).reshape(p, ne * d)
-            noise = xi[kk, :, :ne] @ gt[kk]
-            noise += z @ wt[kk]
-            x += ch_all[k] * drift + cs_all[k] * noise
-            if k + 1 in save_at and not record(save_at[k + 1]):
-                return result()
+        else:  # a callable f: NumPy steps on the dense step matrices
+            m1, gt, wt, u, _, _ = sys_.matrices(grid.t[k0 : k0 + kb])
+            for kk in range(kb):
+                k = k0 + kk
+                y = x @ m1[kk]
+                drift = y[:, :nd_]
+                drift += u[kk]
+                diff = y[:, nd_:].reshape(p, ne, d)
+                if sys_.f is not None:
+                    diff = sys_.f(diff)
+                z = (diff * xi[kk, :, ne : 2 * ne, None]).reshape(p, ne * d)
+                noise = xi[kk, :, :ne] @ gt[kk]
+                noise += z @ wt[kk]
+                x += ch_all[k] * drift + cs_all[k] * noise
+                if k + 1 in save_at and not record(save_at[k + 1]):
+                    return result()
         if progress is not None:
             progress(kb * p)
         where = _first_bad(x, d)
