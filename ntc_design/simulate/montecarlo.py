@@ -178,20 +178,73 @@ def prepare(spec: MonteCarloSpec) -> None:
             return
 
 
+class _BlockStats:
+    """One block's streamed statistics at the save times (shared by the fixed and the
+    time-varying blocks): Σ‖x_i − θ‖², its square, Σx, a few stored paths, and the first
+    non-finite state (which stops the block)."""
+
+    def __init__(self, spec, b: int, p0: int, p: int):
+        grid = spec.grid
+        s_n, nd_ = grid.save_steps.size, spec.x_init.size
+        self.b, self.p0, self.p, self.d, self.n = b, p0, p, spec.dim, spec.n_agents
+        self.save_times, self.t = grid.save_times, grid.t
+        self.sq = np.zeros((s_n, self.n))
+        self.sq2 = np.zeros((s_n, self.n))
+        self.state = np.zeros((s_n, nd_))
+        self.n_store = max(0, min(spec.store_paths - p0, p))
+        self.stored = np.zeros((self.n_store, s_n, nd_))
+        self.theta_t = np.tile(spec.theta, self.n)
+        self.failure: dict | None = None
+        self.valid = 0
+
+    def _fail(self, where: tuple[int, int], t: float) -> None:
+        self.failure = {
+            "t": t,
+            "agent": where[1],
+            "path": self.p0 + where[0],
+            "save_index": self.valid,
+        }
+
+    def record(self, x: np.ndarray, i: int) -> bool:
+        """Add the state at save time i; False (and the failure kept) when it is not finite."""
+        where = _first_bad(x, self.d)
+        if where is not None:
+            self._fail(where, float(self.save_times[i]))
+            return False
+        e = (x - self.theta_t).reshape(self.p, self.n, self.d)
+        e2 = np.einsum("pnd,pnd->pn", e, e)
+        self.sq[i] = e2.sum(axis=0)
+        self.sq2[i] = (e2 * e2).sum(axis=0)
+        self.state[i] = x.sum(axis=0)
+        if self.n_store:
+            self.stored[:, i] = x[: self.n_store]
+        self.valid = i + 1
+        return True
+
+    def check(self, x: np.ndarray, k: int) -> bool:
+        """After step k − 1 (grid time t_k): False, with the failure kept, when x is not finite."""
+        where = _first_bad(x, self.d)
+        if where is not None:
+            self._fail(where, float(self.t[k]))
+            return False
+        return True
+
+    def result(self) -> PartialStats:
+        """The block's PartialStats."""
+        idx = list(range(self.p0, self.p0 + self.n_store))
+        return PartialStats(
+            [self.b], self.p, self.sq, self.sq2, self.state, self.stored, idx, self.failure,
+            self.valid,
+        )  # fmt: skip
+
+
 def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     grid = spec.grid
-    nd_, n_, d = spec.x_init.size, spec.n_agents, spec.dim
     bp = spec.block_paths
     p0 = b * bp
     p = min(bp, spec.paths - p0)
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
-    s_n = grid.save_steps.size
-    sq = np.zeros((s_n, n_))
-    sq2 = np.zeros((s_n, n_))
-    state = np.zeros((s_n, nd_))
-    n_store = max(0, min(spec.store_paths - p0, p))
-    stored = np.zeros((n_store, s_n, nd_))
-    theta_t = np.tile(spec.theta, n_)
+    stats = _BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     e_max = max(s.n_edges for s in spec.systems)
     steppers = [_Stepper(s, spec.scheme == "implicit") for s in spec.systems]
@@ -201,35 +254,8 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     cs_all = c_all * np.sqrt(h_all)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     ends = _run_ends(grid)
-    failure = None
-    valid = 0
-
-    def fail(where: tuple[int, int], t: float) -> None:
-        nonlocal failure
-        failure = {"t": t, "agent": where[1], "path": p0 + where[0], "save_index": valid}
-
-    def result() -> PartialStats:
-        idx = list(range(p0, p0 + n_store))
-        return PartialStats([b], p, sq, sq2, state, stored, idx, failure, valid)
-
-    def record(i: int) -> bool:
-        nonlocal valid
-        where = _first_bad(x, d)
-        if where is not None:
-            fail(where, float(grid.save_times[i]))
-            return False
-        e = (x - theta_t).reshape(p, n_, d)
-        e2 = np.einsum("pnd,pnd->pn", e, e)
-        sq[i] = e2.sum(axis=0)
-        sq2[i] = (e2 * e2).sum(axis=0)
-        state[i] = x.sum(axis=0)
-        if n_store:
-            stored[:, i] = x[:n_store]
-        valid = i + 1
-        return True
-
-    if 0 in save_at and not record(save_at[0]):
-        return result()
+    if 0 in save_at and not stats.record(x, save_at[0]):
+        return stats.result()
     # the normals of step k are rows (p, 2·e_max) drawn in step order: the batch size
     # changes how many are drawn per call, not which (Generator fills sequentially)
     batch = int(np.clip(XI_BYTES // (8 * p * max(2 * e_max, 1)), 1, BATCH))
@@ -244,15 +270,13 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
             stop = min(int(ends[k]), k0 + kb)
             steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs)
             k = stop
-            if k in save_at and not record(save_at[k]):
-                return result()
+            if k in save_at and not stats.record(x, save_at[k]):
+                return stats.result()
         if progress is not None:
             progress(kb * p)
-        where = _first_bad(x, d)
-        if where is not None:
-            fail(where, float(grid.t[k0 + kb]))
-            return result()
-    return result()
+        if not stats.check(x, k0 + kb):
+            return stats.result()
+    return stats.result()
 
 
 def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> list[PartialStats]:

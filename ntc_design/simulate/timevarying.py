@@ -25,7 +25,7 @@ from ..errors import InputError
 from ..timevarying import ExpressionTopology, Lemma1Structure, TimeVaryingDesign
 from .grid import TimeGrid
 from .moments import KAPPA, Moments
-from .montecarlo import PartialStats, _first_bad
+from .montecarlo import PartialStats, _BlockStats
 from .system import NoiseModel
 
 BATCH = 256  # steps whose matrices and normals are made at once (Lemma 1 per batch is ~6 ms)
@@ -181,17 +181,11 @@ class TimeVaryingMonteCarloSpec:
 
 def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> PartialStats:
     grid, sys_ = spec.grid, spec.system
-    nd_, n_, d = spec.x_init.size, spec.n_agents, spec.dim
+    nd_, d = spec.x_init.size, spec.dim
     p0 = b * spec.block_size
     p = min(spec.block_size, spec.paths - p0)
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
-    s_n = grid.save_steps.size
-    sq = np.zeros((s_n, n_))
-    sq2 = np.zeros((s_n, n_))
-    state = np.zeros((s_n, nd_))
-    n_store = max(0, min(spec.store_paths - p0, p))
-    stored = np.zeros((n_store, s_n, nd_))
-    theta_t = np.tile(spec.theta, n_)
+    stats = _BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     ne = sys_.n_edges
     c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
@@ -199,36 +193,8 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
     ch_all = c_all * h_all
     cs_all = c_all * np.sqrt(h_all)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
-    failure = None
-    valid = 0
-
-    def result() -> PartialStats:
-        idx = list(range(p0, p0 + n_store))
-        return PartialStats([b], p, sq, sq2, state, stored, idx, failure, valid)
-
-    def record(i: int) -> bool:
-        nonlocal valid, failure
-        where = _first_bad(x, d)
-        if where is not None:
-            failure = {
-                "t": float(grid.save_times[i]),
-                "agent": where[1],
-                "path": p0 + where[0],
-                "save_index": valid,
-            }
-            return False
-        e = (x - theta_t).reshape(p, n_, d)
-        e2 = np.einsum("pnd,pnd->pn", e, e)
-        sq[i] = e2.sum(axis=0)
-        sq2[i] = (e2 * e2).sum(axis=0)
-        state[i] = x.sum(axis=0)
-        if n_store:
-            stored[:, i] = x[:n_store]
-        valid = i + 1
-        return True
-
-    if 0 in save_at and not record(save_at[0]):
-        return result()
+    if 0 in save_at and not stats.record(x, save_at[0]):
+        return stats.result()
     batch = _batch_size(sys_)
     xi = np.empty((batch, p, 2 * ne))
     compiled = sys_.f is None  # a linear f: the compiled edge kernel of the fixed case
@@ -258,8 +224,8 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
                     x, xi, kk, kk + 1, ch_b, cs_b, indptr, indices, lap[kk], u[kk], src, dst,
                     kmat[kk], gvec[kk], True, tile,
                 )  # fmt: skip
-                if k0 + kk + 1 in save_at and not record(save_at[k0 + kk + 1]):
-                    return result()
+                if k0 + kk + 1 in save_at and not stats.record(x, save_at[k0 + kk + 1]):
+                    return stats.result()
         else:  # a callable f: NumPy steps on the dense step matrices
             m1, gt, wt, u, _, _ = sys_.matrices(grid.t[k0 : k0 + kb])
             for kk in range(kb):
@@ -274,20 +240,13 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
                 noise = xi[kk, :, :ne] @ gt[kk]
                 noise += z @ wt[kk]
                 x += ch_all[k] * drift + cs_all[k] * noise
-                if k + 1 in save_at and not record(save_at[k + 1]):
-                    return result()
+                if k + 1 in save_at and not stats.record(x, save_at[k + 1]):
+                    return stats.result()
         if progress is not None:
             progress(kb * p)
-        where = _first_bad(x, d)
-        if where is not None:
-            failure = {
-                "t": float(grid.t[k0 + kb]),
-                "agent": where[1],
-                "path": p0 + where[0],
-                "save_index": valid,
-            }
-            return result()
-    return result()
+        if not stats.check(x, k0 + kb):
+            return stats.result()
+    return stats.result()
 
 
 def _noise_term(s: np.ndarray, q: np.ndarray, kmat: np.ndarray, ii, jj, n: int, d: int):
