@@ -4,7 +4,10 @@ One run prints side by side, per size: ``ntc certify`` (design + certificate + v
 and ``ntc verify`` (wall time, CPU time, peak memory), the certificate's size, the
 design alone (time and peak memory: linear in the edges?), and the dense path (the
 small certificate: Lyapunov + decay-rate LMI) with its time or its one-line refusal.
-Then how the cost grows with size (ratios against the edge ratio).
+Then how the cost grows with size (ratios against the edge ratio). Then the same for a
+switching set of two such networks (seeds s and s + 1, ``.npz`` modes): the sparse
+certificate per mode (``switching-scale``), the Cholesky factor's fill that drives its
+cost, and the dense switching certificate beside it.
 
 Every figure is measured in a child process (``os.wait4`` gives its own CPU time and
 peak resident memory), so one run cannot skew the next. The networks come from
@@ -15,6 +18,7 @@ Usage::
 
     python benchmarks/bench_scale.py                 # 1e3, 1e4, 1e5
     python benchmarks/bench_scale.py --sizes 1000 10000
+    python benchmarks/bench_scale.py --switching-only --sizes 1000 10000
 """
 
 from __future__ import annotations
@@ -69,6 +73,25 @@ DENSE = (
     "    print('refused: ' + str(e), file=sys.stderr); sys.exit(3)"
 )
 IMPORT = "import ntc_design, ntc_design.certify"
+DENSE_SWITCHING = (
+    "import sys, warnings; import ntc_design as nd; "
+    "from ntc_design.certify import switching_certificate, verify; "
+    "from ntc_design.errors import InputError; "
+    "warnings.simplefilter('ignore')\n"
+    "try:\n"
+    "    d = nd.design(nd.load(sys.argv[1]), [1, 2, 3], thresholds=False)\n"
+    "    c = switching_certificate(d); assert verify(c).valid\n"
+    "except InputError as e:\n"
+    "    print('refused: ' + str(e), file=sys.stderr); sys.exit(3)"
+)
+FILL = (
+    "import sys, warnings, numpy as np; import ntc_design as nd; "
+    "from ntc_design.linalg import cholesky_fill; "
+    "warnings.simplefilter('ignore'); "
+    "d = nd.design(nd.load(sys.argv[1]), [1, 2, 3], thresholds=False); "
+    "l = d.grounded_laplacian_sparse(); f = cholesky_fill((l + l.T).tocsr()); "
+    "print(f.nnz, f.row_max, f.flops)"
+)
 
 
 def fmt(r: dict) -> str:
@@ -77,13 +100,93 @@ def fmt(r: dict) -> str:
     return f"{r['wall']:7.2f} {r['cpu']:7.2f} {r['rss']:7.0f}"
 
 
+def generate(work: Path, n: int, d: int, seed: int) -> tuple[Path, dict]:
+    f = work / f"net{n}-{seed}.npz"
+    gen = run_child(
+        [
+            "-m",
+            "ntc_design",
+            "generate",
+            "--n",
+            str(n),
+            "--d",
+            str(d),
+            "--seed",
+            str(seed),
+            "--out",
+            str(f),
+        ]
+    )
+    return f, gen
+
+
+def switching(args, work: Path) -> None:
+    """Two-mode switching sets: the sparse certificate per mode beside the dense one."""
+    print()
+    print("# switching sets of two modes (seeds s, s+1): kind switching-scale")
+    header = (
+        f"{'N':>7} {'edges/mode':>10} | {'certify (wall cpu MiB)':>24} | "
+        f"{'verify (wall cpu MiB)':>23} | {'cert MB':>7} | {'nnz(L) mode 1':>13} "
+        f"{'flops':>8} | dense switching path"
+    )
+    print(header)
+    print("-" * len(header))
+    prev = None
+    for n in args.sizes:
+        fa, ga = generate(work, n, args.d, args.seed)
+        fb, gb = generate(work, n, args.d, args.seed + 1)
+        if ga["rc"] or gb["rc"]:
+            print(f"{n:>7} generate failed: {ga['err'] or gb['err']}")
+            continue
+        import numpy as np
+
+        with np.load(fa) as z:
+            edges = int(z["from"].shape[0])
+        sw = work / f"sw{n}.yaml"
+        sw.write_text(
+            f"modes: {{A: {fa.name}, B: {fb.name}}}\n"
+            "schedule: [{mode: A, duration: 0.1}, {mode: B, duration: 0.2}]\n"
+        )
+        cert = work / f"swcert{n}.json"
+        c = run_child(
+            ["-m", "ntc_design", "certify", str(sw), "--theta", THETA, "--out", str(cert)]
+        )
+        v = run_child(["-m", "ntc_design", "verify", str(cert)]) if cert.exists() else None
+        out = subprocess.run(
+            [sys.executable, "-c", FILL, str(fa)], capture_output=True, text=True, check=False
+        ).stdout.split()
+        nnz, flops = (int(out[0]), float(out[2])) if len(out) == 3 else (0, float("nan"))
+        dn = run_child(["-c", DENSE_SWITCHING, str(sw)])
+        dense = (
+            f"{dn['wall']:.1f} s"
+            if dn["rc"] == 0
+            else (dn["err"][:90] if dn["rc"] == 3 else f"rc={dn['rc']} {dn['err'][:60]}")
+        )
+        size_mb = cert.stat().st_size / 1e6 if cert.exists() else float("nan")
+        print(
+            f"{n:>7} {edges:>10} | {fmt(c):>24} | {fmt(v) if v else '—':>23} | {size_mb:7.1f} "
+            f"| {nnz:>13} {flops:8.2g} | {dense}"
+        )
+        if prev is not None and v is not None and prev[2] is not None:
+            n0, c0, v0, nnz0 = prev
+            print(
+                f"{'':>7} growth ×{n / n0:.0f} agents: certify CPU ×{c['cpu'] / c0['cpu']:.1f}, "
+                f"verify CPU ×{v['cpu'] / v0['cpu']:.1f}, factor nnz ×{nnz / max(nnz0, 1):.1f}"
+            )
+        prev = (n, c, v, nnz)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 10_000, 100_000])
     ap.add_argument("--d", type=int, default=3)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--switching-only", action="store_true")
     args = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bench_scale_"))
+    if args.switching_only:
+        switching(args, work)
+        return
     base = run_child(["-c", IMPORT])
     base_design = run_child(["-c", "import ntc_design"])
     print(
@@ -191,6 +294,7 @@ def main() -> None:
             f"verify CPU ×{vv}; design CPU ×{d1['cpu'] / d0['cpu']:.1f}; "
             f"design memory ×{mem1 / mem0:.1f} ({mem0:.0f} -> {mem1:.0f} MiB above import)"
         )
+    switching(args, work)
 
 
 if __name__ == "__main__":

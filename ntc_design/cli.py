@@ -453,7 +453,19 @@ def _print_certify(doc: dict, written: Path | None) -> None:
         )
         for sk in r["skipped"]:
             out.print(f"  skipped: {sk}")
-    if "common_lyapunov" in r:
+    if "symmetric_part_lower_bound" in r:  # switching-scale
+        lb = r["symmetric_part_lower_bound"]
+        out.print(
+            "λ_min(L_B + L_Bᵀ): "
+            + ", ".join(
+                f"{k} {_fmt(v, 6)} (proven > {_fmt(lb[k], 6) if k in lb else 'not proven'})"
+                for k, v in r["symmetric_part_min_eig"].items()
+            )
+        )
+        out.print(f"common Lyapunov matrix: {r['common_lyapunov']['note']}")
+        for sk in r["skipped"]:
+            out.print(f"  skipped: {sk}")
+    elif "common_lyapunov" in r:
         cl = r["common_lyapunov"]
         out.print(
             "λ_min(L_B + L_Bᵀ): "

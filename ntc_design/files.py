@@ -67,7 +67,7 @@ class SwitchingData:
     """A switching file as read: each mode's topology and the periodic schedule as
     (mode, duration) pairs."""
 
-    modes: dict[str, TopologyData]
+    modes: dict[str, Any]  # TopologyData, or EdgeListData for an .npz mode file
     schedule: tuple[tuple[str, float], ...]
     source: str | None
 
@@ -563,6 +563,11 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
         if isinstance(spec, str):
             path = base / spec
             try:
+                if spec.lower().endswith(".npz"):  # a compact edge list (big networks)
+                    from .edgelist import read_npz
+
+                    modes[str(name)] = read_npz(path)
+                    continue
                 mode_doc = read_document(path)
             except InputError as exc:  # say which switching file and mode named it
                 raise _err(source, f"modes.{_q(name)}", str(exc)) from None

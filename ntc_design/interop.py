@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,6 +25,7 @@ import yaml
 
 from .errors import InputError
 from .files import jsonable
+from .outputs import write_atomic
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     import control
@@ -166,15 +165,7 @@ def save_topology(top: Topology, path: str | Path) -> Path:
         text = json.dumps(doc, indent=1, ensure_ascii=False) + "\n"
     else:
         text = yaml.safe_dump(doc, sort_keys=False, allow_unicode=True, default_flow_style=None)
-    fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=p.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, p)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return p
+    return write_atomic(p, text)
 
 
 # ---------------------------------------------------------------------- python-control

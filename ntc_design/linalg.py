@@ -12,8 +12,10 @@ Tolerances (documented once, used everywhere):
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from enum import StrEnum
 
+import numba
 import numpy as np
 
 from .errors import InputError
@@ -226,10 +228,140 @@ def require_dense(n: int, what: str, copies: float = 1.0, limit: float | None = 
 DENSE_MAX_BYTES = 2.0 * 2**30
 
 
+#: Memory a sparse Cholesky factor may take (bytes, estimated from the exact fill before
+#: the numeric factorisation, :func:`cholesky_fill`): refused above, in one line.
+SPARSE_FACTOR_MAX_BYTES = 4.0 * 2**30
+#: Bytes per non-zero of a CHOLMOD factor while it is computed (value, row index,
+#: supernodal workspace; measured 17-22 bytes per non-zero on random networks).
+FACTOR_BYTES_PER_NNZ = 24.0
+#: Floating-point operations a sparse Cholesky may take: refused above, so no input hangs
+#: a certificate (CHOLMOD's supernodal factorisation ran at about 3e10 flop/s on 2 cores,
+#: so this is about 100 s; a 100,000-agent random network needs 6.3e11).
+SPARSE_FACTOR_MAX_FLOPS = 3e12
+
+
+@dataclass(frozen=True)
+class CholeskyFill:
+    """The exact structure of a Cholesky factor of a sparse symmetric matrix under the
+    approximate minimum degree ordering: non-zeros, the longest row (the longest inner
+    product of the factorisation) and the operation count Σ_j colcount_j²."""
+
+    n: int
+    nnz: int
+    row_max: int
+    flops: float
+
+    @property
+    def bytes(self) -> float:
+        """Estimated peak memory of the numeric factorisation (bytes)."""
+        return FACTOR_BYTES_PER_NNZ * self.nnz
+
+
+@numba.njit(cache=True, nogil=True)
+def _row_counts(indptr, indices, n):  # pragma: no cover - compiled
+    """Elimination tree (Liu, with path compression) and row counts by row-subtree
+    traversal of the strictly lower pattern (row i lists columns k < i), O(nnz(L))."""
+    parent = np.full(n, -1, dtype=np.int64)
+    anc = np.full(n, -1, dtype=np.int64)
+    for i in range(n):
+        for p in range(indptr[i], indptr[i + 1]):
+            k = indices[p]
+            while k != -1 and k < i:
+                nxt = anc[k]
+                anc[k] = i
+                if nxt == -1:
+                    parent[k] = i
+                k = nxt
+    mark = np.full(n, -1, dtype=np.int64)
+    rows = np.ones(n, dtype=np.int64)
+    cols = np.ones(n, dtype=np.int64)
+    for i in range(n):
+        mark[i] = i
+        for p in range(indptr[i], indptr[i + 1]):
+            j = indices[p]
+            while j != -1 and mark[j] != i:
+                mark[j] = i
+                rows[i] += 1
+                cols[j] += 1
+                j = parent[j]
+    return rows, cols
+
+
+def cholesky_fill(a) -> CholeskyFill:
+    """The structure of the Cholesky factor of a sparse symmetric matrix ``a`` under the
+    approximate minimum degree ordering (AMD, Amestoy–Davis–Duff 1996, as CHOLMOD uses it),
+    computed symbolically: the elimination tree and the row subtrees (Liu, "The role of
+    elimination trees in sparse factorization", SIAM J. Matrix Anal. Appl. 11, 1990). It
+    costs O(nnz(L)) integer work and no floating-point factorisation, so a factorisation
+    that would not fit is refused before it starts.
+
+    Parameters
+    ----------
+    a : scipy.sparse matrix
+        Symmetric, n×n (its pattern is symmetrised).
+
+    Returns
+    -------
+    CholeskyFill
+        Non-zeros of the factor (diagonal included), its longest row and the flop count.
+    """
+    import scipy.sparse as sp
+    from cvxopt import amd, matrix, spmatrix
+
+    n = a.shape[0]
+    if n == 0:
+        return CholeskyFill(0, 0, 0, 0.0)
+    low = sp.tril(abs(a) + abs(a.T), k=-1, format="coo")
+    eye = np.arange(n)
+    pat = spmatrix(
+        matrix(np.ones(low.nnz + n)),
+        matrix(np.concatenate([low.row, eye]).astype(np.int64)),
+        matrix(np.concatenate([low.col, eye]).astype(np.int64)),
+        (n, n),
+    )
+    perm = np.array(amd.order(pat, uplo="L"), dtype=np.int64).ravel()
+    inv = np.empty(n, dtype=np.int64)
+    inv[perm] = np.arange(n)
+    r, c = inv[low.row], inv[low.col]
+    r, c = np.maximum(r, c), np.minimum(r, c)  # lower triangle of the permuted matrix
+    m = sp.csr_matrix((np.ones(r.size), (r, c)), shape=(n, n))
+    m.sum_duplicates()
+    rows, cols = _row_counts(m.indptr.astype(np.int64), m.indices.astype(np.int64), n)
+    return CholeskyFill(n, int(rows.sum()), int(rows.max()), float(np.sum(cols.astype(float) ** 2)))
+
+
+def require_sparse_factor(fill: CholeskyFill, what: str) -> None:
+    """Refuse, in one line, a sparse Cholesky factorisation whose factor would exceed
+    ``SPARSE_FACTOR_MAX_BYTES`` or whose work would exceed ``SPARSE_FACTOR_MAX_FLOPS``.
+
+    Parameters
+    ----------
+    fill : CholeskyFill
+        The factor's structure (:func:`cholesky_fill`).
+    what : str
+        What the factorisation is for, for the message.
+
+    Raises
+    ------
+    DenseRefused
+        Above either limit (an :class:`~ntc_design.errors.InputError`).
+    """
+    if fill.bytes > SPARSE_FACTOR_MAX_BYTES or fill.flops > SPARSE_FACTOR_MAX_FLOPS:
+        raise DenseRefused(
+            f"{what}: the sparse Cholesky factor of this {fill.n}×{fill.n} matrix has "
+            f"{fill.nnz:.3g} non-zeros (about {fill.bytes / 2**30:.1f} GiB, limit "
+            f"{SPARSE_FACTOR_MAX_BYTES / 2**30:.0f} GiB) and needs {fill.flops:.2g} flops "
+            f"(limit {SPARSE_FACTOR_MAX_FLOPS:.2g}); refused — the network's symmetrised "
+            "graph fills in too much"
+        )
+
+
 class SPDFamily:
     """Sparse Cholesky (CHOLMOD via cvxopt, fill-reducing ordering, supernodal) of the
     symmetric matrices ``Σ_k c_k·M_k − shift·I`` over one fixed sparsity pattern (the union
-    of the M_k and the diagonal), assembled once. Only lower triangles are read."""
+    of the M_k and the diagonal), assembled once. Only lower triangles are read. The
+    factor's size and work are estimated first (:func:`cholesky_fill`) and refused above
+    the limits (:func:`require_sparse_factor`)."""
 
     def __init__(self, mats) -> None:
         import scipy.sparse as sp
@@ -246,6 +378,18 @@ class SPDFamily:
         self.rows = uniq // n
         self.cols = uniq % n
         self._symbolic = None
+        self._ok = False
+        self._fill: CholeskyFill | None = None
+
+    @property
+    def fill(self) -> CholeskyFill:
+        """The factor's structure (computed once: the pattern is fixed)."""
+        if self._fill is None:
+            import scipy.sparse as sp
+
+            pat = sp.coo_matrix((np.ones(self.rows.size), (self.rows, self.cols)), (self.n,) * 2)
+            self._fill = cholesky_fill(pat)
+        return self._fill
 
     def factor(self, coeffs, shift: float = 0.0, row_counts: bool = False):
         """Factorise ``Σ c_k M_k − shift·I``.
@@ -265,9 +409,15 @@ class SPDFamily:
             ``ok`` when every pivot is positive (the matrix is positive definite);
             ``row_max`` (with ``row_counts``) the largest number of non-zeros in a row of
             the factor, i.e. the longest dot product of the factorisation (0 otherwise).
+
+        Raises
+        ------
+        DenseRefused
+            The factor would exceed the memory or work limits (:func:`require_sparse_factor`).
         """
         from cvxopt import cholmod, matrix, spmatrix
 
+        require_sparse_factor(self.fill, "sparse Cholesky")
         c = np.concatenate([np.asarray(coeffs, dtype=float), [-float(shift)]])
         v = c @ self.vals
         sm = spmatrix(matrix(v), matrix(self.rows), matrix(self.cols), (self.n, self.n))
@@ -279,15 +429,43 @@ class SPDFamily:
             self._symbolic = cholmod.symbolic(sm, uplo="L")
             cholmod.numeric(sm, self._symbolic)
         except ArithmeticError:
+            self._ok = False
             return False, 0
         finally:
             cholmod.options.clear()
             cholmod.options.update(old)
+        self._ok = True
         if not row_counts:
             return True, 0
         fac = cholmod.getfactor(self._symbolic)
         cnt = np.bincount(np.array(fac.I, dtype=np.int64).ravel(), minlength=self.n)
         return True, int(cnt.max(initial=0))
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """Solve with the last successful factorisation: ``(Σ c_k M_k − shift·I) x = b``.
+
+        Parameters
+        ----------
+        b : numpy.ndarray
+            Right-hand side, length n.
+
+        Returns
+        -------
+        numpy.ndarray
+            x.
+
+        Raises
+        ------
+        ValueError
+            The last factorisation failed, or there was none.
+        """
+        from cvxopt import cholmod, matrix
+
+        if not self._ok:
+            raise ValueError("no successful factorisation to solve with")
+        x = matrix(np.asarray(b, dtype=float).reshape(-1, 1))
+        cholmod.solve(self._symbolic, x)
+        return np.array(x).ravel()
 
 
 def sparse_cholesky(a, shift: float = 0.0, row_counts: bool = True):

@@ -238,19 +238,26 @@ class Topology:
         return cls(tuple(labels), dim, mapping, name=name, source=source)
 
     @classmethod
-    def from_data(cls, data: files.TopologyData) -> Topology:
-        """Build from a parsed topology file.
+    def from_data(cls, data) -> Topology:
+        """Build from a parsed topology file or ``.npz`` edge list.
 
         Parameters
         ----------
-        data : ntc_design.files.TopologyData
-            As :func:`ntc_design.files.parse_topology` returns it.
+        data : ntc_design.files.TopologyData or ntc_design.edgelist.EdgeListData
+            As :func:`ntc_design.files.parse_topology` or
+            :func:`ntc_design.edgelist.read_npz` returns it.
 
         Returns
         -------
         Topology
             The validated topology (messages name the file's edges).
         """
+        from .edgelist import EdgeListData
+
+        if isinstance(data, EdgeListData):
+            return cls.from_arrays(
+                data.labels, data.dim, data.rows, data.cols, data.w, data.name, data.source
+            )
         index = {str(a): k for k, a in enumerate(data.labels)}
         weights, fields = {}, {}
         for e in data.edges:
@@ -1029,9 +1036,7 @@ def load(path: str | Path):
 
     data = files.parse_file(path)
     if isinstance(data, EdgeListData):
-        return Topology.from_arrays(
-            data.labels, data.dim, data.rows, data.cols, data.w, data.name, data.source
-        )
+        return Topology.from_data(data)
     if isinstance(data, files.SwitchingData):
         return SwitchingTopology.from_data(data)
     if isinstance(data, files.TopologyData):

@@ -61,6 +61,7 @@ def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> 
     except OSError as exc:
         raise _oserror(option, p, exc) from None
     try:
+        os.fchmod(fd, 0o666 & ~_umask())  # mkstemp makes 0600: a shared file, not a secret
         with os.fdopen(fd, "wb") as fh:
             fh.write(raw)
             fh.flush()

@@ -87,6 +87,9 @@ def certify(
 ) -> CertifyResult:
     """Design (Lemma 1), certify (Lyapunov + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a common
     P), re-verify the certificate exactly, analyse the gain and give the theorem verdict.
+    Above Nd = ``DENSE_CERT_MAX_ND`` no step is dense: component by component for one
+    topology (:mod:`.scale`), a sparse Cholesky per mode for a switching set
+    (:mod:`.switching_scale`).
 
     Parameters
     ----------
@@ -131,12 +134,20 @@ def certify(
         ver = verify_time_varying(cert)
         tth = time_varying_verdicts(cert["results"]["time_varying"], ver, g)
         return CertifyResult(tdes, cert, ver, g, tth)
-    big = isinstance(topology, Topology) and topology.nd > DENSE_CERT_MAX_ND
+    big = (
+        isinstance(topology, (Topology, SwitchingTopology))
+        and topology.n * topology.dim > DENSE_CERT_MAX_ND
+    )
     # at scale the critical couplings are not needed by the certificate (design notes it)
     des = design(topology, theta, margin, delta, thresholds=False if big else None)
     th: tuple[TheoremVerdict, ...]
     if isinstance(des, SwitchingDesign):
-        cert = switching_certificate(des)
+        if big:  # a sparse proof per mode, no dense step (issue 9)
+            from .switching_scale import switching_scale_certificate
+
+            cert = switching_scale_certificate(des)
+        else:
+            cert = switching_certificate(des)
         ver = _verify_own(cert)
         bound = max(
             (

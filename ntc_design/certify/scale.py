@@ -24,8 +24,7 @@ one-agent component is the case v = 1 with no off-diagonal term (μ_i > 0).
 **Fallbacks per component.** Where dominance does not apply: (a) the symmetric part
 L_B[C,C] + L_B[C,C]ᵀ ≻ 0 (then Re x*L_B x > 0 for every x ≠ 0), proven by a sparse
 Cholesky factorisation (CHOLMOD) of the shifted matrix with Rump's rounding bound
-(Rump, BIT 46, 2006; :mod:`ntc_design.certify.exact`) with the longest inner product of
-the factor in place of n; (b) the Lyapunov equation on that component only (dense,
+(Rump, BIT 46, 2006; :func:`rump_shift`); (b) the Lyapunov equation on that component only (dense,
 Nd_C <= ``LYAPUNOV_COMPONENT_MAX_ND``), P stored and re-proven.
 
 **Rigour.** ``verify`` rebuilds every number from the stated topology and δ: the
@@ -53,7 +52,7 @@ import scipy.sparse as sparse
 
 from ..design import ProtocolDesign
 from ..errors import InputError
-from ..linalg import CODE_SIGN, SPDFamily
+from ..linalg import CODE_SIGN, DenseRefused, SPDFamily
 from ..model import Topology
 from ..thresholds import strong_components
 from .exact import U, gamma
@@ -301,11 +300,89 @@ def component_matrix(
     return _block_coo(m, d, rows, cols, vals), _block_coo(m, d, rows, cols, errs)
 
 
+@dataclass(frozen=True)
+class SymmetricPartProof:
+    """The outcome of :func:`symmetric_part_bound`: whether ``L + Lᵀ − shift·I ≻ 0`` is
+    proven, with Rump's shift ``c`` that covered the rounding."""
+
+    holds: bool
+    shift: float
+    c: float
+    detail: str
+
+
+def rump_shift(a: sparse.csr_matrix, e: sparse.csr_matrix) -> float:
+    """Rump's shift for a float symmetric n×n ``a`` within ``e`` (entrywise) of an exact
+    matrix: ``c = (2γ_{n+1}/(1−γ_{n+1})·tr|A| + ‖E‖_F(1+4nu))(1+4u)``. If the
+    floating-point Cholesky factorisation of ``A − cI`` runs to completion, the exact
+    matrix is positive definite (Rump, "Verification of positive definiteness", BIT 46,
+    2006, Theorem 2.3 with the data error ‖E‖ added): the bound holds for any order of
+    the inner products, so for CHOLMOD's supernodal blocked factorisation too.
+
+    Parameters
+    ----------
+    a : scipy.sparse.csr_matrix
+        The float matrix.
+    e : scipy.sparse.csr_matrix
+        An entrywise bound on its distance from the exact matrix.
+
+    Returns
+    -------
+    float
+        The shift c.
+    """
+    n = a.shape[0]
+    g = gamma(n + 1)
+    tr = float(np.abs(a.diagonal()).sum())
+    e_f = float(np.sqrt((e.data**2).sum())) * (1 + 4 * n * U)
+    return (2 * g / (1 - g) * tr + e_f) * (1 + 4 * U)
+
+
+def symmetric_part_bound(
+    lap: sparse.csr_matrix, err: sparse.csr_matrix, shift: float = 0.0
+) -> SymmetricPartProof:
+    """Rigorous ``λ_min(L + Lᵀ) > shift`` for the exact matrix within ``err`` of the float
+    ``lap``: one sparse Cholesky factorisation (CHOLMOD) of ``A − cI`` succeeds, where
+    A = fl(L + Lᵀ − shift·I) and c is :func:`rump_shift` with
+    E = err + errᵀ + u|L + Lᵀ| + 2u(|diag| + shift), which bounds the distance of A from
+    the exact L + Lᵀ − shift·I.
+
+    Parameters
+    ----------
+    lap : scipy.sparse.csr_matrix
+        The float matrix L.
+    err : scipy.sparse.csr_matrix
+        An entrywise bound on |L_exact − L|.
+    shift : float, optional
+        The lower bound to prove (0: positive definiteness only).
+
+    Returns
+    -------
+    SymmetricPartProof
+        Whether it is proven, and how (or why not).
+
+    Raises
+    ------
+    InputError
+        The factorisation would not fit (:func:`~ntc_design.linalg.require_sparse_factor`).
+    """
+    s = (lap + lap.T).tocsr()
+    n = s.shape[0]
+    a = (s - shift * sparse.identity(n, format="csr")).tocsr() if shift else s
+    dg = np.abs(s.diagonal()) + shift
+    e = (err + err.T + U * abs(s) + sparse.diags(2 * U * dg)).tocsr()
+    c = rump_shift(a, e)
+    what = "L + Lᵀ" if not shift else f"L + Lᵀ − {shift:.6g}·I"
+    ok, _ = SPDFamily([a]).factor([1.0], c)
+    if not ok:
+        return SymmetricPartProof(False, shift, c, f"sparse Cholesky of {what} − {c:.3g}·I fails")
+    return SymmetricPartProof(
+        True, shift, c, f"sparse Cholesky of {what} − {c:.3g}·I succeeds (shift covers rounding)"
+    )
+
+
 def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tuple[bool, str]:
-    """Rigorous ``L + Lᵀ ≻ 0`` for the exact matrix within ``err`` of the float ``lap``:
-    sparse Cholesky (CHOLMOD) of ``S − cI`` with Rump's shift
-    ``c = (2γ_{k+1}/(1−γ_{k+1})·tr S + ‖E‖_F(1+4nu))(1+4u)``, k the longest row of the
-    factor (the longest inner product), E = err + errᵀ + u|S|.
+    """Rigorous ``L + Lᵀ ≻ 0`` (:func:`symmetric_part_bound` with shift 0).
 
     Parameters
     ----------
@@ -318,22 +395,14 @@ def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tupl
     -------
     tuple of (bool, str)
         Whether it is proven, and how (or why not).
+
+    Raises
+    ------
+    InputError
+        The factorisation would not fit (:func:`~ntc_design.linalg.require_sparse_factor`).
     """
-    s = (lap + lap.T).tocsr()
-    n = s.shape[0]
-    e = (err + err.T + U * abs(s)).tocsr()
-    fam = SPDFamily([s])
-    ok, k = fam.factor([1.0], 0.0, row_counts=True)
-    if not ok:
-        return False, "sparse Cholesky of L + Lᵀ fails (not positive definite)"
-    g = gamma(k + 1)
-    tr = float(np.abs(s.diagonal()).sum())
-    e_f = float(np.sqrt((e.data**2).sum())) * (1 + 4 * n * U)
-    c = (2 * g / (1 - g) * tr + e_f) * (1 + 4 * U)
-    ok2, _ = fam.factor([1.0], c)
-    if not ok2:
-        return False, f"sparse Cholesky of L + Lᵀ − {c:.3g}·I fails"
-    return True, f"sparse Cholesky of L + Lᵀ − {c:.3g}·I succeeds (k = {k}, shift covers rounding)"
+    p = symmetric_part_bound(lap, err)
+    return p.holds, p.detail
 
 
 # ------------------------------------------------------------ compact arrays
@@ -568,7 +637,10 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
     for c in np.flatnonzero(~comp_dom).tolist():
         agents = np.flatnonzero(comp == c)
         lap_c, err_c = component_matrix(blocks, agents)
-        ok, how = prove_symmetric_part(lap_c, err_c)
+        try:
+            ok, how = prove_symmetric_part(lap_c, err_c)
+        except DenseRefused as exc:  # too much fill: the dense fallback below decides
+            ok, how = False, str(exc)
         if ok:
             methods[c] = "symmetric"
             details[str(c)] = how
@@ -707,7 +779,7 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
 
 
-def verify_scale(doc: dict, source: str = "certificate"):
+def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=None):
     """Re-check a ``hurwitz-scale`` certificate without any solver (module docstring).
 
     Parameters
@@ -716,6 +788,10 @@ def verify_scale(doc: dict, source: str = "certificate"):
         The certificate.
     source : str, optional
         Its name, for messages.
+    topology : Topology or SwitchingTopology, optional
+        The user's own file: the certificate must be about it (canonical hash).
+    theta : sequence of float, optional
+        The user's θ: the certificate must be about it.
 
     Returns
     -------
@@ -727,7 +803,16 @@ def verify_scale(doc: dict, source: str = "certificate"):
     InputError
         The certificate or its topology is malformed.
     """
-    from .certificate import Check, Verification, digest
+    from .certificate import (
+        About,
+        Check,
+        ModeAbout,
+        Verification,
+        _same_topology,
+        _vector,
+        digest,
+        topology_hash,
+    )
     from .claims import Claim, ClaimKind, Property
 
     def need(d: dict, key: str, typ, where: str):
@@ -768,6 +853,9 @@ def verify_scale(doc: dict, source: str = "certificate"):
     checks.append(
         Check(f"informed agents of {mname} are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
     )
+    theta_c = _vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
+    ok_t0 = bool(np.any(theta_c))
+    checks.append(Check("θ ≠ 0", ok_t0, f"θ = {theta_c.tolist()}"))
     n = top.n
     cw = f"{source}: components"
     comps = need(doc, "components", dict, source)
@@ -876,4 +964,32 @@ def verify_scale(doc: dict, source: str = "certificate"):
             Claim(ClaimKind.COMPONENTS, Property.HURWITZ, mode=mname),
         )
     )
-    return Verification(all(c.ok for c in checks), "verified-float (component-wise)", tuple(checks))
+    # 5. about the user's own file and θ (after the claim: they are not part of its proof)
+    thash = topology_hash(top)
+    if topology is not None:
+        checks.append(_same_topology(topology, {mname: thash}, None, None))
+    if theta is not None:
+        want = np.asarray(theta, dtype=float).reshape(-1)
+        ok_g = want.shape == theta_c.shape and bool(np.array_equal(want, theta_c))
+        checks.append(
+            Check(
+                "θ is the one given",
+                ok_g,
+                f"θ = {theta_c.tolist()}"
+                if ok_g
+                else f"the certificate is about θ = {theta_c.tolist()}, not {want.tolist()}",
+            )
+        )
+    about = About(
+        KIND,
+        "one topology at scale: −L_B Hurwitz, component by component",
+        (Property.HURWITZ,),
+        (ModeAbout(mname, top.name, top.n, top.dim, thash, float(delta), tuple(theta_c.tolist())),),
+        (mname,),
+        None,
+        None,
+        None,
+    )
+    return Verification(
+        all(c.ok for c in checks), "verified-float (component-wise)", tuple(checks), about
+    )

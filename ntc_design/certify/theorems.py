@@ -190,11 +190,11 @@ def switching_verdicts(
             detail = f"certified ({lam}, {proof[0].detail})"
         else:
             short = -lam_v if lam_v is not None and lam_v <= 0 else None
-            detail = f"fails{f' by {short:.6g} ({lam})' if short is not None else ''}"
-            if short is None:
-                detail += "; not certified: " + (
-                    "; ".join(c.name for c in ver.failed) or "no proof"
-                )
+            if short is not None:
+                detail = f"fails by {short:.6g} ({lam})"
+            else:  # no proof, but no evidence that it fails either: say which
+                why = "; ".join(f"{c.name}: {c.detail}" for c in ver.failed) or "no proof"
+                detail = f"not certified{f' ({lam})' if lam else ''}: {why}"
             th = mode.thresholds
             if th is not None and th.symmetric is not None:
                 detail += (

@@ -1,0 +1,301 @@
+"""Issue 9 (switching half): big switching sets get a sparse certificate per mode
+(``switching-scale``), cross-checked against dense eigenvalues and the dense switching
+certificate; forgeries fail; the sparse-factor memory guard; ``.npz`` modes; the
+vectorised topology hash against the reference formula."""
+
+import copy
+import json
+import os
+import stat
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from ntc_design.certify import certify, verify
+from ntc_design.certify.certificate import _sha, digest, switching_certificate, topology_hash
+from ntc_design.certify.switching_scale import (
+    switching_scale_certificate,
+    verify_switching_scale,
+)
+from ntc_design.design import design
+from ntc_design.errors import InputError
+from ntc_design.generate import random_network, write_topology
+from ntc_design.linalg import SPDFamily, cholesky_fill
+from ntc_design.model import SwitchingTopology, Topology, load
+
+from .cli_helpers import assert_input_error, run_cli
+
+THETA = [1.0, -2.0, 0.5]
+
+
+def _switching(n=30, d=3, seeds=(1, 2), families=("random", "small-world")):
+    modes = {}
+    for k, (s, f) in enumerate(zip(seeds, families, strict=True)):
+        t = random_network(n, d, seed=s, family=f)
+        # every mode over the same agents: relabel onto mode 0's labels
+        modes["AB"[k]] = t
+    labels = modes["A"].labels
+    modes = {
+        k: Topology.from_arrays(labels, d, t.edge_arrays.rows, t.edge_arrays.cols, t.edge_arrays.w)
+        for k, t in modes.items()
+    }
+    return SwitchingTopology(modes, (("A", 0.1), ("B", 0.2)))
+
+
+def _dense_sym_min(des):
+    lap = des.grounded_laplacian()
+    return float(np.linalg.eigvalsh(lap + lap.T)[0])
+
+
+def _refresh(doc):
+    doc["subject_digest"] = _sha(doc["subject"])
+    doc["digest"] = digest(doc)
+    return doc
+
+
+@pytest.fixture(scope="module")
+def sw():
+    return _switching()
+
+
+@pytest.fixture(scope="module")
+def cert(sw):
+    return switching_scale_certificate(design(sw, THETA, thresholds=False))
+
+
+def test_proven_bound_brackets_the_dense_eigenvalue(sw, cert):
+    des = design(sw, THETA, thresholds=False)
+    for k, d in des.modes.items():
+        lam = _dense_sym_min(d)
+        lo = cert["proofs"][k]["lower"]
+        est = cert["results"]["symmetric_part_min_eig"][k]
+        assert lam > 0
+        assert est == pytest.approx(lam, rel=1e-9)
+        assert 0 < lo < lam  # a lower bound ...
+        assert lo > lam * (1 - 2e-3)  # ... and a tight one
+    ver = verify(cert)
+    assert ver.valid, [c for c in ver.failed]
+    assert ver.about.kind == "switching-scale"
+    assert ver.about.scheduled == ("A", "B")
+
+
+def test_certify_uses_the_sparse_kind_above_the_dense_size_and_agrees_with_dense(sw):
+    res = certify(sw, THETA, gain="1/(1+t)")
+    assert res.certificate["kind"] == "switching-scale"
+    assert res.verification.valid and res.proven
+    assert [t.guaranteed for t in res.theorems] == [True, True]
+    # the dense switching certificate on the same designs: same verdict, same λ_min
+    dense = switching_certificate(res.design)
+    dver = verify(dense)
+    assert dver.valid
+    for k, lam in dense["results"]["symmetric_part_min_eig"].items():
+        assert res.certificate["results"]["symmetric_part_min_eig"][k] == pytest.approx(
+            lam, rel=1e-9
+        )
+
+
+def test_a_failing_mode_is_never_certified(sw):
+    des = design(sw, THETA, thresholds=True)
+    ds = des.modes["B"].thresholds.symmetric
+    assert ds is not None and ds > 0
+    # δ below δ_S in every mode: L_B + L_Bᵀ is indefinite in at least mode B
+    res = certify(sw, THETA, delta=0.5 * ds, gain="1/(1+t)")
+    assert res.certificate["kind"] == "switching-scale"
+    assert not res.verification.valid and not res.proven
+    assert "B" not in res.certificate["proofs"]
+    lam = res.certificate["results"]["symmetric_part_min_eig"]["B"]
+    assert lam < 0
+    prem = [p for p in res.theorems[0].premises if p.name.startswith("L_B(B)")][0]
+    assert prem.holds is False and prem.detail.startswith(f"fails by {-lam:.6g}")
+
+
+@pytest.mark.filterwarnings("ignore::ntc_design.design.AssumptionWarning")
+def test_an_agent_nothing_reaches_is_never_certified():
+    a = random_network(25, 3, seed=4)
+    ea = a.edge_arrays
+    keep = ea.rows != 7  # agent 7 loses every in-edge: its row of L_B is 0
+    b = Topology.from_arrays(a.labels, 3, ea.rows[keep], ea.cols[keep], ea.w[keep])
+    sw = SwitchingTopology({"A": a, "B": b}, (("A", 1.0), ("B", 1.0)))
+    res = certify(sw, THETA)
+    assert res.certificate["kind"] == "switching-scale"
+    assert not res.verification.valid and not res.proven
+    assert "B" not in res.certificate["proofs"] and "A" in res.certificate["proofs"]
+
+
+@pytest.mark.parametrize(
+    "forge, needle",
+    [
+        (lambda d: d["proofs"]["A"].update(lower=d["proofs"]["A"]["lower"] * 1.01), "L_B(A)"),
+        (lambda d: d["proofs"].pop("B"), "L_B(B)"),
+        (lambda d: d["claims"].pop(), "listed claims"),
+        (lambda d: d.update(certifies=["symmetric_part", "common_lyapunov"]), "certifies"),
+        (lambda d: d["subject"]["schedule"].pop(), "switching hash"),
+        (lambda d: d["subject"]["modes"]["B"].update(theta=[1.0, 2.0, 3.0]), "one θ"),
+        (lambda d: d["subject"]["modes"]["A"].update(informed=[]), "informed"),
+    ],
+)
+def test_forgeries_fail_after_the_digest_is_recomputed(cert, forge, needle):
+    doc = copy.deepcopy(cert)
+    forge(doc)
+    ver = verify(_refresh(doc))
+    assert not ver.valid
+    assert any(needle in c.name for c in ver.failed), [c.name for c in ver.failed]
+    assert all(c.ok for c in ver.checks if c.name == "digest")
+
+
+@pytest.mark.parametrize(
+    "field, value, needle",
+    [
+        ("lower", -1.0, "lower"),
+        ("lower", float("nan"), "lower"),
+        ("lower", 1e300, "lower"),
+        ("lower", True, "lower"),
+        ("k", 3, "expected {lower}"),
+    ],
+)
+def test_malformed_proof_fields_are_bad_input(cert, field, value, needle):
+    doc = copy.deepcopy(cert)
+    doc["proofs"]["A"][field] = value
+    with pytest.raises(InputError, match=needle):
+        verify_switching_scale(_refresh(doc))
+
+
+def test_verify_checks_the_users_topology_and_theta(sw, cert):
+    assert verify(cert, topology=sw, theta=THETA).valid
+    other = SwitchingTopology(dict(sw.modes), (("A", 0.1), ("B", 0.3)))
+    ver = verify(cert, topology=other)
+    assert [c.name for c in ver.failed] == ["about the given topology"]
+    ver = verify(cert, theta=[1.0, 2.0, 0.5])
+    assert [c.name for c in ver.failed] == ["θ is the one given"]
+    ver = verify(cert, topology=sw.modes["A"])
+    assert [c.name for c in ver.failed] == ["about the given topology"]
+
+
+def test_hurwitz_scale_verify_checks_the_users_topology_and_theta():
+    top = random_network(40, 3, seed=5)
+    res = certify(top, THETA)
+    assert res.certificate["kind"] == "hurwitz-scale" and res.verification.valid
+    assert verify(res.certificate, topology=top, theta=THETA).valid
+    other = random_network(40, 3, seed=6)
+    assert [c.name for c in verify(res.certificate, topology=other).failed] == [
+        "about the given topology"
+    ]
+    assert [c.name for c in verify(res.certificate, theta=[1, 1, 1]).failed] == [
+        "θ is the one given"
+    ]
+    assert verify(res.certificate).about.modes[0].topology_hash == topology_hash(top)
+
+
+def test_memory_guard_refuses_a_factor_that_will_not_fit(sw, cert, monkeypatch):
+    import ntc_design.linalg as la
+
+    monkeypatch.setattr(la, "SPARSE_FACTOR_MAX_BYTES", 1000.0)
+    res = certify(sw, THETA)
+    assert not res.verification.valid and not res.proven
+    assert res.certificate["proofs"] == {}
+    assert "refused" in res.certificate["results"]["details"]["A"]
+    with pytest.raises(InputError, match="refused"):
+        verify(cert)
+
+
+def _reference_fill(a, perm):
+    """nnz and longest row of the Cholesky factor of a[perm, perm], from a dense numeric
+    factorisation of an SPD matrix with that pattern (random values: no cancellation)."""
+    rng = np.random.default_rng(0)
+    pat = (abs(a) + abs(a.T)).toarray() != 0
+    m = np.where(pat, rng.uniform(-1, 1, pat.shape), 0.0)
+    m = 0.5 * (m + m.T)
+    m += np.diag(np.abs(m).sum(axis=1) + 1.0)
+    low = np.linalg.cholesky(m[np.ix_(perm, perm)])
+    nz = np.abs(low) > 0
+    return int(nz.sum()), int(nz.sum(axis=1).max())
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_cholesky_fill_is_the_exact_factor_structure(seed):
+    from cvxopt import amd, matrix, spmatrix
+
+    top = random_network(60, 2, seed=seed, family=["random", "grid", "scale-free", "ring"][seed])
+    s = (top.laplacian_sparse() + top.laplacian_sparse().T).tocoo()
+    n = s.shape[0]
+    low = sp.tril(abs(s) + abs(s.T), k=-1, format="coo")
+    eye = np.arange(n)
+    pat = spmatrix(
+        matrix(np.ones(low.nnz + n)),
+        matrix(np.concatenate([low.row, eye]).astype(np.int64)),
+        matrix(np.concatenate([low.col, eye]).astype(np.int64)),
+        (n, n),
+    )
+    perm = np.array(amd.order(pat, uplo="L"), dtype=np.int64).ravel()
+    fill = cholesky_fill(s)
+    assert (fill.nnz, fill.row_max) == _reference_fill(s, perm)
+    # and CHOLMOD's (supernodal, padded) factor is at least as long in its longest row
+    spd = abs(s).tocsr()
+    spd = spd + sp.diags(np.asarray(spd.sum(axis=1)).ravel() + 1.0)  # same pattern, SPD
+    fam = SPDFamily([spd.tocsr()])
+    ok, k = fam.factor([1.0], 0.0, row_counts=True)
+    assert ok and k >= fill.row_max
+
+
+def test_npz_modes_in_a_switching_file(tmp_path, sw, capsys, monkeypatch):
+    for k, t in sw.modes.items():
+        write_topology(t, tmp_path / f"{k}.npz")
+    f = tmp_path / "sw.yaml"
+    f.write_text(
+        "modes: {A: A.npz, B: B.npz}\nschedule: [{mode: A, duration: 0.1}, {mode: B, duration: 0.2}]\n"
+    )
+    got = load(f)
+    for k, t in sw.modes.items():
+        assert topology_hash(got.modes[k]) == topology_hash(t)
+    out = tmp_path / "c.json"
+    code, text, err = run_cli(
+        ["certify", f, "--theta", "1,-2,0.5", "--out", out, "--gain", "1/(1+t)"],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 0, err
+    assert "proven >" in text and "Theorem 3 (mean square): guaranteed" in text
+    mode = stat.S_IMODE(os.stat(out).st_mode)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert mode == 0o666 & ~umask  # a file to share, not a private temporary file
+    code, text, err = run_cli(
+        ["verify", out, "--topology", f, "--theta", "1,-2,0.5"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert "kind: switching-scale" in text and "VALID" in text
+    doc = json.loads(out.read_text())
+    doc["proofs"]["A"]["lower"] *= 1.5
+    out.write_text(json.dumps(_refresh(doc)))
+    code, _, err = run_cli(["verify", out], capsys, monkeypatch)
+    assert code == 1 and "L_B(A) + L_B(A)ᵀ ≻ 0" in err
+    (tmp_path / "B.npz").write_bytes(b"not a zip")
+    assert_input_error(["check", f], capsys, monkeypatch, "sw.yaml", "modes.B", "B.npz")
+
+
+def _reference_hash(top):
+    edges = [
+        [
+            top.labels[j],
+            top.labels[i],
+            [[(float(x) + 0.0).hex() for x in row] for row in np.asarray(a).tolist()],
+        ]
+        for (i, j), a in sorted(top.weights.items())
+        if np.any(a)
+    ]
+    return _sha({"labels": list(top.labels), "dim": top.dim, "edges": edges})
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_topology_hash_is_the_canonical_json_hash(seed, tmp_path):
+    top = random_network(30, 1 + seed % 3, seed=seed)
+    assert topology_hash(top) == _reference_hash(top)
+    # labels that JSON escapes, −0.0 and an all-zero weight (not hashed)
+    labels = ["α", 'q"uote', "back\\slash", "x"]
+    w = np.array([[[-0.0]], [[2.5]], [[0.0]]])
+    t = Topology.from_arrays(labels, 1, np.array([1, 2, 3]), np.array([0, 1, 0]), w)
+    assert topology_hash(t) == _reference_hash(t)
+    path = tmp_path / "t.yaml"
+    write_topology(top, path)
+    assert topology_hash(load(path)) == topology_hash(top)
