@@ -299,3 +299,35 @@ def test_topology_hash_is_the_canonical_json_hash(seed, tmp_path):
     path = tmp_path / "t.yaml"
     write_topology(top, path)
     assert topology_hash(load(path)) == topology_hash(top)
+
+
+def test_delta_s_is_skipped_with_a_reason_when_the_bisection_would_not_fit(monkeypatch):
+    import ntc_design.linalg as la
+
+    top = random_network(80, 3, seed=2)
+    full = design(top, THETA, thresholds=True).thresholds
+    assert full.symmetric is not None and full.symmetric > 0
+    monkeypatch.setattr(
+        la,
+        "SPARSE_FACTOR_MAX_FLOPS",
+        10 * la.cholesky_fill((top.laplacian_sparse() + top.laplacian_sparse().T).tocsr()).flops,
+    )
+    th = design(top, THETA, thresholds=True).thresholds
+    assert th.symmetric is None
+    assert any(n.startswith("δ_S not computed: the bisection needs about 50") for n in th.notes)
+    assert th.hurwitz == full.hurwitz  # the per-component δ_H does not factorise
+
+
+def test_rate_estimate_skips_a_component_that_fills_in(monkeypatch):
+    import ntc_design.certify.scale as sc
+
+    top = random_network(700, 3, seed=1, extra=2.0)
+    res = certify(top, THETA)
+    assert res.certificate["kind"] == "hurwitz-scale" and res.verification.valid
+    big = res.certificate["results"]["largest_component_agents"]
+    assert big * 3 > sc.RATE_DENSE_MAX_ND  # the big component goes to ARPACK ...
+    assert "ARPACK" in res.certificate["results"]["rate_estimate"]["method"]
+    monkeypatch.setattr(sc, "RATE_ARPACK_MAX_FLOPS", 1.0)  # ... unless it fills in
+    res2 = certify(top, THETA)
+    assert res2.verification.valid
+    assert "filling in too much" in res2.certificate["results"]["rate_estimate"]["method"]

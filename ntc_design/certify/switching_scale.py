@@ -121,6 +121,7 @@ def prove_mode(top: Topology, delta: float) -> dict[str, Any]:
         out.update(estimate=math.nan, estimate_method="not estimated", detail=str(exc))
         return out
     est, how = _min_eig_estimate(lap, fam if pd else None)
+    fam = None  # free the factor before the proof's own: one factor in memory at a time
     out.update(estimate=est, estimate_method=how)
     if not pd:
         out["detail"] = "sparse Cholesky of L + Lᵀ fails (not positive definite)"
