@@ -1196,16 +1196,7 @@ def verify(
             subject, f"{source}: subject"
         )
         scheduled = tuple(dict.fromkeys(m for m, _ in schedule))
-        missing = [m for m in scheduled if m not in modes]
-        checks.append(
-            Check(
-                "every scheduled mode is described",
-                not missing,
-                f"schedule uses {', '.join(scheduled)}"
-                if not missing
-                else f"the schedule uses {', '.join(map(repr, missing))}, which the certificate does not describe",
-            )
-        )
+        checks.append(scheduled_described(scheduled, modes))
         sw_hash = switching_hash({k: m.hash for k, m in modes.items()}, schedule)
         ok_h = subject.get("switching_hash") == sw_hash
         checks.append(
@@ -1228,18 +1219,7 @@ def verify(
             _same_topology(topology, {k: m.hash for k, m in modes.items()}, schedule, sw_hash)
         )
     if theta is not None:
-        want = np.asarray(theta, dtype=float).reshape(-1)
-        got = next(iter(modes.values())).theta
-        ok_t = want.shape == got.shape and bool(np.array_equal(want, got))
-        checks.append(
-            Check(
-                "θ is the one given",
-                ok_t,
-                f"θ = {got.tolist()}"
-                if ok_t
-                else f"the certificate is about θ = {got.tolist()}, not {want.tolist()}",
-            )
-        )
+        checks.append(same_theta(theta, next(iter(modes.values())).theta))
 
     # --- what the kind certifies, and the claims that needs
     unknown = [p for p in props_doc if p not in {q.value for q in spec.properties}]
@@ -1312,6 +1292,56 @@ def verify(
         sw_hash,
     )
     return Verification(all(c.ok for c in checks), method, tuple(checks), about)
+
+
+def same_theta(theta: Any, got: np.ndarray) -> Check:
+    """The check that a certificate is about the user's θ.
+
+    Parameters
+    ----------
+    theta : sequence of float
+        The user's θ.
+    got : numpy.ndarray
+        The certificate's θ.
+
+    Returns
+    -------
+    Check
+    """
+    want = np.asarray(theta, dtype=float).reshape(-1)
+    ok = want.shape == got.shape and bool(np.array_equal(want, got))
+    return Check(
+        "θ is the one given",
+        ok,
+        f"θ = {got.tolist()}"
+        if ok
+        else f"the certificate is about θ = {got.tolist()}, not {want.tolist()}",
+    )
+
+
+def scheduled_described(scheduled: tuple[str, ...], modes: Mapping[str, Any]) -> Check:
+    """The check that every mode a schedule uses is described by the certificate.
+
+    Parameters
+    ----------
+    scheduled : tuple of str
+        The modes the schedule uses.
+    modes : mapping
+        The modes the certificate describes, by name.
+
+    Returns
+    -------
+    Check
+    """
+    missing = [m for m in scheduled if m not in modes]
+    return Check(
+        "every scheduled mode is described",
+        not missing,
+        f"schedule uses {', '.join(scheduled)}"
+        if not missing
+        else f"the schedule uses {', '.join(map(repr, missing))}, which the certificate "
+        "does not describe",
+    )
 
 
 def _same_topology(

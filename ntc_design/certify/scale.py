@@ -819,6 +819,7 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
         _same_topology,
         _vector,
         digest,
+        same_theta,
         topology_hash,
     )
     from .claims import Claim, ClaimKind, Property
@@ -977,17 +978,7 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
     if topology is not None:
         checks.append(_same_topology(topology, {mname: thash}, None, None))
     if theta is not None:
-        want = np.asarray(theta, dtype=float).reshape(-1)
-        ok_g = want.shape == theta_c.shape and bool(np.array_equal(want, theta_c))
-        checks.append(
-            Check(
-                "θ is the one given",
-                ok_g,
-                f"θ = {theta_c.tolist()}"
-                if ok_g
-                else f"the certificate is about θ = {theta_c.tolist()}, not {want.tolist()}",
-            )
-        )
+        checks.append(same_theta(theta, theta_c))
     about = About(
         KIND,
         "one topology at scale: −L_B Hurwitz, component by component",

@@ -280,6 +280,8 @@ def verify_switching_scale(
         _vector,
         canonical,
         digest,
+        same_theta,
+        scheduled_described,
         switching_hash,
         topology_hash,
     )
@@ -339,16 +341,7 @@ def verify_switching_scale(
     )
     schedule = _parse_schedule(subject, f"{source}: subject")
     scheduled = tuple(dict.fromkeys(m for m, _ in schedule))
-    missing = [m for m in scheduled if m not in tops]
-    checks.append(
-        Check(
-            "every scheduled mode is described",
-            not missing,
-            f"schedule uses {', '.join(scheduled)}"
-            if not missing
-            else f"the schedule uses {', '.join(map(repr, missing))}, which the certificate does not describe",
-        )
-    )
+    checks.append(scheduled_described(scheduled, tops))
     hashes = {k: topology_hash(t) for k, t in tops.items()}
     sw_hash = switching_hash(hashes, schedule)
     ok_h = subject.get("switching_hash") == sw_hash
@@ -362,18 +355,7 @@ def verify_switching_scale(
     if topology is not None:
         checks.append(_same_topology(topology, hashes, schedule, sw_hash))
     if theta is not None:
-        want = np.asarray(theta, dtype=float).reshape(-1)
-        got_t = next(iter(thetas.values()))
-        ok_g = want.shape == got_t.shape and bool(np.array_equal(want, got_t))
-        checks.append(
-            Check(
-                "θ is the one given",
-                ok_g,
-                f"θ = {got_t.tolist()}"
-                if ok_g
-                else f"the certificate is about θ = {got_t.tolist()}, not {want.tolist()}",
-            )
-        )
+        checks.append(same_theta(theta, next(iter(thetas.values()))))
     props = _need(doc, "certifies", list, source)
     ok_p = props == [Property.SYMMETRIC_PART.value]
     checks.append(
