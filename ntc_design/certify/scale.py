@@ -60,6 +60,8 @@ from .exact import U, gamma
 FORMAT = "ntc-design/certificate"
 VERSION = 2  # the certificate format version (ntc_design.certify.certificate.VERSION)
 KIND = "hurwitz-scale"
+#: The smallest positive double (subnormal): Rump's underflow term.
+ETA = 2.0**-1074
 #: Largest component (Nd) that may fall back to a dense Lyapunov equation.
 LYAPUNOV_COMPONENT_MAX_ND = 600
 #: Largest component (Nd) whose eigenvalues are computed densely for the rate estimate.
@@ -104,7 +106,8 @@ def chol_ok_batch(a: np.ndarray) -> np.ndarray:
 def verified_pd_batch(m: np.ndarray, err: np.ndarray) -> np.ndarray:
     """Rigorous ``M_exact ≻ 0`` for a stack of d×d matrices from float values ``m`` and
     entrywise bounds ``err >= |M_exact − m|``: the shifted-Cholesky test of
-    :func:`ntc_design.certify.exact.verified_float_pd`, batched.
+    :func:`ntc_design.certify.exact.verified_float_pd`, batched, with Rump's underflow
+    term (:func:`rump_shift`).
 
     Parameters
     ----------
@@ -124,8 +127,10 @@ def verified_pd_batch(m: np.ndarray, err: np.ndarray) -> np.ndarray:
     err = err + 0.5 * np.abs(m - mt)
     e_f = np.sqrt(np.sum(err**2, axis=(1, 2))) * (1 + 4 * d * U)
     g = gamma(d + 1)
-    tr = np.abs(np.diagonal(ms, axis1=1, axis2=2)).sum(axis=1)
-    c = (2 * g / (1 - g) * tr + e_f) * (1 + 4 * U)
+    dg = np.abs(np.diagonal(ms, axis1=1, axis2=2))
+    tr = dg.sum(axis=1)
+    eta = 4 * (d + 2) * (2 * (d + 2) + dg.max(axis=1, initial=0.0)) * ETA  # underflow
+    c = (2 * g / (1 - g) * tr + e_f + eta) * (1 + 4 * U)
     return chol_ok_batch(ms - c[:, None, None] * np.eye(d))
 
 
@@ -319,8 +324,10 @@ def rump_shift(a: sparse.csr_matrix, e: sparse.csr_matrix) -> float:
     matrix: ``c = (2γ_{n+1}/(1−γ_{n+1})·tr|A| + ‖E‖_F(1+4nu))(1+4u)``. If the
     floating-point Cholesky factorisation of ``A − cI`` runs to completion, the exact
     matrix is positive definite (Rump, "Verification of positive definiteness", BIT 46,
-    2006, Theorem 2.3 with the data error ‖E‖ added): the bound holds for any order of
-    the inner products, so for CHOLMOD's supernodal blocked factorisation too.
+    2006, Theorem 2.3 with the data error ‖E‖ added, and its underflow term
+    4(n+2)(2(n+2) + max|a_ii|)·η, η = 2⁻¹⁰⁷⁴, since the weights of a big network are not
+    range-checked): the bound holds for any order of the inner products, so for
+    CHOLMOD's supernodal blocked factorisation too.
 
     Parameters
     ----------
@@ -336,9 +343,11 @@ def rump_shift(a: sparse.csr_matrix, e: sparse.csr_matrix) -> float:
     """
     n = a.shape[0]
     g = gamma(n + 1)
-    tr = float(np.abs(a.diagonal()).sum())
+    dg = np.abs(a.diagonal())
+    tr = float(dg.sum())
     e_f = float(np.sqrt((e.data**2).sum())) * (1 + 4 * n * U)
-    return (2 * g / (1 - g) * tr + e_f) * (1 + 4 * U)
+    eta = 4 * (n + 2) * (2 * (n + 2) + float(dg.max(initial=0.0))) * ETA  # underflow
+    return (2 * g / (1 - g) * tr + e_f + eta) * (1 + 4 * U)
 
 
 def symmetric_part_bound(
