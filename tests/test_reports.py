@@ -293,3 +293,38 @@ def test_save_times_on_switching_instants_keep_their_paths():
     assert np.all(np.diff(res.grid.save_steps) > 0)
     assert not np.any(np.all(res.mc["paths"][0] == 0, axis=1))
     assert np.all(res.mc["mean"][1:].sum(axis=1) > 0)
+
+
+def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkeypatch):
+    """Nd = 75 > 60: the certificate is switching-scale, its proven bounds are reported; a
+    report wider than REPORT_MAX_AGENTS is refused in one line."""
+    from ntc_design.generate import random_network, write_topology
+
+    for k, seed in (("a", 3), ("b", 4)):
+        t = random_network(25, 3, seed=seed)
+        write_topology(t, tmp_path / f"{k}.yaml")
+    (tmp_path / "sw.yaml").write_text(
+        "modes: {A: a.yaml, B: b.yaml}\n"
+        "schedule: [{mode: A, duration: 0.1}, {mode: B, duration: 0.2}]\n"
+    )
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        "topology: sw.yaml\ntheta: [1, 2, 3]\ngain: '1/(1+t)'\nnoise: {sigma: 0.4, f: 0.0}\n"
+        "initial: {uniform: [-3, 3], seed: 1}\nT: 0.2\ndt: 0.0002\npaths: 20\n"
+        "save_every: 0.05\nworkers: 1\nmethod: mc\n"
+    )
+    out = tmp_path / "run"
+    code, _, err = run_cli(["simulate", sc, "--out", out], capsys, monkeypatch)
+    assert code == 0, err
+    code, _, err = run_cli(["report", out], capsys, monkeypatch)
+    assert code == 0, err
+    html = (out / "report.html").read_text()
+    cert = json.loads((out / "certificate.json").read_text())
+    assert cert["kind"] == "switching-scale"
+    for k, lo in cert["proofs"].items():
+        assert f"{k}: {lo['lower']:.6f}" in html  # the proven bound, per mode
+    assert "Theorem 3" in html and ("λ_min &gt; ℓ" in html or "λ_min > ℓ" in html)
+    import ntc_design.reports.report as rep
+
+    monkeypatch.setattr(rep, "REPORT_MAX_AGENTS", 24)
+    assert_input_error(["report", out], capsys, monkeypatch, "N = 25 agents", "up to N = 24")

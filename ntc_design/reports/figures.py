@@ -585,11 +585,10 @@ class CouplingCurve:
 def coupling_curve(des, points: int = 240) -> CouplingCurve:
     """Sample the decay rate ``−max Re λ(−L_B(δ))`` and ``λ_min(L_B + L_Bᵀ)`` over a
     logarithmic δ range around Lemma 1's δ and the critical couplings of ``des``
-    (a :class:`~ntc_design.design.ProtocolDesign` with thresholds)."""
+    (a :class:`~ntc_design.design.ProtocolDesign`; without thresholds only δ is marked)."""
     th = des.thresholds
-    marks = [des.delta] + [
-        v for v in (th.hurwitz, th.symmetric, th.best_rate_delta) if v is not None and v > 0
-    ]
+    crit = (th.hurwitz, th.symmetric, th.best_rate_delta) if th is not None else ()
+    marks = [des.delta] + [v for v in crit if v is not None and v > 0]
     lo, hi = min(marks) / 30.0, max(marks) * 30.0
     delta = np.geomspace(lo, hi, points)
     lap, dmat = des.topology.laplacian(), des.coupling_matrix()
@@ -602,10 +601,11 @@ def coupling_curve(des, points: int = 240) -> CouplingCurve:
         rate,
         sym,
         des.delta,
-        th.hurwitz,
-        th.symmetric,
-        th.best_rate_delta,
-        th.best_rate,
+        *(
+            (th.hurwitz, th.symmetric, th.best_rate_delta, th.best_rate)
+            if th is not None
+            else (None,) * 4
+        ),
     )
 
 

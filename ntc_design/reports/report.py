@@ -68,6 +68,8 @@ class RunData:
 
 
 MAX_TEXT_BYTES = 256 * 2**20  # summary.json / ms_error.csv larger than this are refused
+#: A report draws every agent (topology figure, per-agent curves and tables): refused above.
+REPORT_MAX_AGENTS = 200
 NPZ_KEYS = ("t", "paths", "labels", "theta")
 
 
@@ -424,10 +426,37 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
         rows.append(
             (
                 "λ_min(L_B + L_Bᵀ) per mode",
-                ", ".join(f"{k}: {v:.6f}" for k, v in r["symmetric_part_min_eig"].items()),
+                ", ".join(
+                    f"{k}: {v:.6f}" if v is not None else f"{k}: not estimated"
+                    for k, v in r["symmetric_part_min_eig"].items()
+                ),
             )
         )
+        if "symmetric_part_lower_bound" in r:  # switching-scale: the proven bounds
+            rows.append(
+                (
+                    "proven lower bound ℓ: λ_min > ℓ (sparse Cholesky)",
+                    ", ".join(f"{k}: {v:.6f}" for k, v in r["symmetric_part_lower_bound"].items())
+                    or "none proven",
+                )
+            )
         rows.append(("common Lyapunov matrix", r["common_lyapunov"]["structure"] or "none found"))
+    if "rate_estimate" in r:  # hurwitz-scale
+        est = r["rate_estimate"]["value"]
+        rows.append(
+            (
+                "components (strongly connected) and methods",
+                f"{r['components']} components, largest {r['largest_component_agents']} "
+                f"agents; {r['methods']}",
+            )
+        )
+        rows.append(
+            (
+                "decay rate estimate (not proven)",
+                (f"{est:.6f}" if est is not None and np.isfinite(est) else "—")
+                + f" ({r['rate_estimate']['method']})",
+            )
+        )
     checks = Table(
         ("claim", "holds", "proof"),
         [(c.name, {"verdict": c.ok, "text": ""}, c.detail) for c in ver.checks],
@@ -647,6 +676,12 @@ def run_section(
     base = base or run.path
     p = run.summary["parameters"]
     top = run.topology()
+    if top.n > REPORT_MAX_AGENTS:  # per-agent figures and tables: refused, not half-drawn
+        raise InputError(
+            f"{run.path}: N = {top.n} agents; the report draws every agent (figures, tables) "
+            f"up to N = {REPORT_MAX_AGENTS}: use summary.json and ms_error_long.csv, and "
+            "ntc certify for the certificate"
+        )
     res = certify(top, p["theta"], p["margin"], p["gain"])
     designs, des_docs = design_tables(res.design)
     # weights as expressions of t: the design tables show t = 0, the certificate and the
