@@ -77,6 +77,8 @@ def read_npz(path: str | Path) -> EdgeListData:
     def bad(field: str, msg: str) -> InputError:
         return InputError(f"{src}: {field}: {msg}")
 
+    if not Path(path).is_file():
+        raise InputError(f"{src}: no such file")
     try:
         z = np.load(path, allow_pickle=False)
     except (OSError, ValueError, zipfile.BadZipFile, EOFError):

@@ -331,3 +331,69 @@ def test_rate_estimate_skips_a_component_that_fills_in(monkeypatch):
     res2 = certify(top, THETA)
     assert res2.verification.valid
     assert "filling in too much" in res2.certificate["results"]["rate_estimate"]["method"]
+
+
+@pytest.mark.parametrize(
+    "forge",
+    [
+        lambda d: d["results"]["symmetric_part_min_eig"].update(A=0.5),  # below its bound
+        lambda d: d["results"]["symmetric_part_lower_bound"].update(A=0.99),
+        lambda d: d["results"]["common_lyapunov"].update(structure=None),
+        lambda d: d["proofs"].update(C={"lower": 0.0}),  # a mode the schedule never uses
+    ],
+)
+def test_forged_switching_results_fail(cert, forge):
+    doc = copy.deepcopy(cert)
+    forge(doc)
+    ver = verify(_refresh(doc))
+    assert [c.name for c in ver.failed] == [
+        "reported results (bounds are the proven ones; estimates above them)"
+    ]
+
+
+@pytest.mark.parametrize(
+    "forge, needle",
+    [
+        (lambda r: r.update(eig_bound=-5.0), "eig_bound differs"),
+        (
+            lambda r: (r.update(eig_bound=-5.0), r["rate_estimate"].update(value=-5.0)),
+            "not positive",
+        ),
+        (
+            lambda r: r["rate_lower_bound"].update(value=r["rate_lower_bound"]["value"] * 2),
+            "recomputed",
+        ),
+        (lambda r: r.update(components=r["components"] + 1), "components: reported"),
+    ],
+)
+def test_forged_hurwitz_scale_results_fail(forge, needle):
+    top = random_network(40, 3, seed=5)
+    cert = certify(top, THETA).certificate
+    doc = copy.deepcopy(cert)
+    forge(doc["results"])
+    ver = verify(_refresh(doc))
+    assert len(ver.failed) == 1 and ver.failed[0].name.startswith("reported results")
+    assert needle in ver.failed[0].detail
+
+
+def test_an_unscheduled_mode_is_neither_proven_nor_reported(sw):
+    once = SwitchingTopology(dict(sw.modes), (("A", 0.5),))
+    res = certify(once, THETA)
+    c = res.certificate
+    assert res.verification.valid
+    assert set(c["proofs"]) == {"A"} and set(c["results"]["symmetric_part_min_eig"]) == {"A"}
+
+
+def test_a_topology_mismatch_names_the_mode(sw, cert):
+    other = SwitchingTopology({"A": sw.modes["A"], "B": sw.modes["A"]}, (("A", 0.1), ("B", 0.2)))
+    (bad,) = verify(cert, topology=other).failed
+    assert "(mode B differs)" in bad.detail
+    moved = SwitchingTopology(dict(sw.modes), (("A", 0.1), ("B", 0.25)))
+    (bad,) = verify(cert, topology=moved).failed
+    assert "(the schedule differs)" in bad.detail
+
+
+def test_a_missing_npz_mode_says_so(tmp_path, capsys, monkeypatch):
+    f = tmp_path / "sw.yaml"
+    f.write_text("modes: {A: nope.npz}\nschedule: [{mode: A, duration: 1}]\n")
+    assert_input_error(["check", f], capsys, monkeypatch, "modes.A", "nope.npz: no such file")

@@ -1358,16 +1358,23 @@ def _same_topology(
             return Check(
                 name, False, "a switching file was given; the certificate is about one topology"
             )
-        mine = switching_hash(
-            {k: topology_hash(t) for k, t in topology.modes.items()}, topology.schedule
-        )
+        mine_modes = {k: topology_hash(t) for k, t in topology.modes.items()}
+        mine = switching_hash(mine_modes, topology.schedule)
         ok = mine == sw_hash
+        if ok:
+            return Check(name, True, f"switching hash {mine}")
+        diff = [
+            f"mode {k} differs" if k in hashes else f"mode {k} is not in the certificate"
+            for k, h in mine_modes.items()
+            if hashes.get(k) != h
+        ] + [f"mode {k} is not in the file" for k in hashes if k not in mine_modes]
+        if tuple(topology.schedule) != tuple(schedule):
+            diff.append("the schedule differs")
         return Check(
             name,
-            ok,
-            f"switching hash {mine}"
-            if ok
-            else f"the file hashes to {mine}, the certificate is about {sw_hash}",
+            False,
+            f"the file hashes to {mine}, the certificate is about {sw_hash}"
+            + (f" ({'; '.join(diff)})" if diff else ""),
         )
     if schedule is not None:
         return Check(

@@ -552,7 +552,8 @@ def _rate_estimate(blocks: BlockData, comp: np.ndarray, ncomp: int) -> tuple[flo
         how.append(
             f"components up to Nd = {RATE_DENSE_MAX_ND}: dense eigenvalues"
             + (
-                f"; {arpack} up to Nd = {RATE_ARPACK_MAX_ND}: ARPACK eigenvalue nearest 0"
+                f"; {arpack} component(s) up to Nd = {RATE_ARPACK_MAX_ND}: ARPACK eigenvalue "
+                "nearest 0"
                 if arpack
                 else ""
             )
@@ -726,7 +727,7 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
             "rate_lower_bound": {
                 "value": lower,
                 "method": "min_i μ_i − (Σ_j ν_ij v_j)/v_i over the dominance components "
-                "(Feingold–Varga with a shifted s; from the certified μ, ν, v, not re-checked "
+                "(Feingold–Varga with a shifted s; from the certified μ, ν, v; recomputed "
                 "by verify)",
             },
             "skipped": [
@@ -794,6 +795,54 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     if cols.size and (min(cols.min(), rows.min()) < 0 or max(cols.max(), rows.max()) >= n):
         raise InputError(f"{where}: an edge index is out of range")
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
+
+
+def _scale_results(doc: dict, source: str, comp: np.ndarray, meth: list, lower_re):
+    """The check of a hurwitz-scale certificate's reported results."""
+    from .certificate import RESULT_RTOL, Check
+
+    res = doc.get("results")
+    if not isinstance(res, dict):
+        raise InputError(f"{source}: results: expected an object")
+    bad = []
+    sizes = np.bincount(comp, minlength=len(meth)) if comp.size else np.zeros(0, dtype=int)
+    counts = {m: meth.count(m) for m in ("dominance", "symmetric", "lyapunov", "none")}
+    if res.get("components") != len(meth):
+        bad.append(f"components: reported {res.get('components')!r}, is {len(meth)}")
+    if res.get("largest_component_agents") != int(sizes.max(initial=0)):
+        bad.append("largest_component_agents differs")
+    if res.get("methods") != counts:
+        bad.append(f"methods: reported {res.get('methods')!r}, is {counts}")
+    est = (
+        res.get("rate_estimate", {}).get("value")
+        if isinstance(res.get("rate_estimate"), dict)
+        else "?"
+    )
+    if res.get("eig_bound") != est:
+        bad.append("eig_bound differs from rate_estimate.value")
+    elif (
+        counts["none"] == 0
+        and isinstance(est, (int, float))
+        and not isinstance(est, bool)
+        and not est > 0
+    ):
+        bad.append(f"the decay-rate estimate {est!r} is not positive, yet −L_B is claimed Hurwitz")
+    lb = res.get("rate_lower_bound", {})
+    got = lb.get("value") if isinstance(lb, dict) else "?"
+    if lower_re is None:
+        if got is not None:
+            bad.append("rate_lower_bound given without dominance components")
+    elif (
+        isinstance(got, bool)
+        or not isinstance(got, (int, float))
+        or not (abs(got - lower_re) <= RESULT_RTOL * max(abs(lower_re), 1e-300))
+    ):
+        bad.append(f"rate_lower_bound: reported {got!r}, recomputed {lower_re:.10g}")
+    return Check(
+        "reported results (counts, rate lower bound recomputed; estimate consistent)",
+        not bad,
+        "; ".join(bad) or "recomputed",
+    )
 
 
 def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=None):
@@ -930,6 +979,11 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
             else f"fails at agent {top.labels[idx[np.argmin(ok_mu & dom[idx])]]}"
         )
         checks.append(Check("block diagonal dominance (Feingold–Varga)", ok, detail))
+        rhs = np.zeros(n)
+        np.add.at(rhs, ea.rows[inner], nu[inner] * v[ea.cols[inner]])
+        lower_re = float(np.min(dominance_rate_bound(mu[idx], v[idx], rhs[idx]))) * (1 - 1e-12)
+    else:
+        lower_re = None
     # 3. symmetric-part and Lyapunov components
     sym_ok, sym_n, sym_fail = True, 0, ""
     for c in np.flatnonzero(methods == "symmetric").tolist():
@@ -982,7 +1036,10 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
             Claim(ClaimKind.COMPONENTS, Property.HURWITZ, mode=mname),
         )
     )
-    # 5. about the user's own file and θ (after the claim: they are not part of its proof)
+    # 5. the reported results: counts and the rate's lower bound recomputed, the estimate
+    # (not a proof) consistent with a Hurwitz −L_B
+    checks.append(_scale_results(doc, source, comp, meth, lower_re))
+    # 6. about the user's own file and θ (after the claim: they are not part of its proof)
     thash = topology_hash(top)
     if topology is not None:
         checks.append(_same_topology(topology, {mname: thash}, None, None))

@@ -169,7 +169,8 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
     sched = sd.switching.schedule
     used = scheduled_modes(sched)
     proofs, est, lower, details = {}, {}, {}, {}
-    for k, des in sd.modes.items():
+    for k in used:  # the schedule's modes only: a mode it never uses needs no proof
+        des = sd.modes[k]
         r = prove_mode(des.topology, des.delta)
         est[k] = r["estimate"] if math.isfinite(r["estimate"]) else None
         details[k] = f"{r['detail']}; λ_min estimate: {r['estimate_method']}"
@@ -232,6 +233,40 @@ def _proof_fields(x: Any, where: str) -> float:
     if lo < 0 or (lo != 0 and not 2.0**-NUMBER_EXP <= lo <= 2.0**NUMBER_EXP):
         raise InputError(f"{where}.lower: must be 0 or in [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}]")
     return float(lo)
+
+
+def _results_check(doc: dict, source: str, proofs: dict, scheduled: tuple[str, ...]):
+    """The reported results against the proofs: the lower bounds are the proven ℓ, every
+    estimate lies above its proven bound, P = I is claimed exactly when every scheduled
+    mode is proven, and no proof is given for a mode the schedule does not use."""
+    from .certificate import Check
+
+    res = doc.get("results")
+    if not isinstance(res, dict):
+        raise InputError(f"{source}: results: expected an object")
+    bad = [f"proofs.{k}: the schedule does not use mode {k}" for k in proofs if k not in scheduled]
+    want = {k: p.get("lower") for k, p in proofs.items() if isinstance(p, dict)}
+    if res.get("symmetric_part_lower_bound") != want:
+        bad.append("symmetric_part_lower_bound differs from the proven bounds")
+    est = res.get("symmetric_part_min_eig")
+    if not isinstance(est, dict):
+        bad.append("symmetric_part_min_eig: expected an object")
+    else:
+        for k, lo in want.items():
+            e = est.get(k)
+            if e is not None and (
+                isinstance(e, bool) or not isinstance(e, (int, float)) or not e > lo
+            ):
+                bad.append(f"mode {k}: the estimate {e!r} is not above the proven bound {lo!r}")
+    all_proven = all(k in proofs for k in scheduled)
+    cl = res.get("common_lyapunov")
+    if not isinstance(cl, dict) or cl.get("structure") != ("identity" if all_proven else None):
+        bad.append("common_lyapunov: P = I is claimed exactly when every scheduled mode is proven")
+    return Check(
+        "reported results (bounds are the proven ones; estimates above them)",
+        not bad,
+        "; ".join(bad) or "consistent",
+    )
 
 
 def verify_switching_scale(
@@ -336,7 +371,9 @@ def verify_switching_scale(
         Check(
             "one θ ≠ 0 for every mode",
             ok_t,
-            f"θ = {sorted(distinct)[0]}" if ok_t else f"{sorted(distinct)}",
+            f"θ = {list(sorted(distinct)[0])}"
+            if ok_t
+            else f"{[list(t) for t in sorted(distinct)]}",
         )
     )
     schedule = _parse_schedule(subject, f"{source}: subject")
@@ -386,6 +423,7 @@ def verify_switching_scale(
         p = symmetric_part_bound(lap, err, lo)
         bound = f"λ_min > {lo:.6g}: " if lo else ""
         checks.append(Check(c.id, p.holds, f"verified-float: {bound}{p.detail}", c))
+    checks.append(_results_check(doc, source, proofs, scheduled))
     about = About(
         KIND,
         DESCRIPTION,
