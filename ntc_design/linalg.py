@@ -420,6 +420,9 @@ class SPDFamily:
         require_sparse_factor(self.fill, "sparse Cholesky")
         c = np.concatenate([np.asarray(coeffs, dtype=float), [-float(shift)]])
         v = c @ self.vals
+        if not np.all(np.isfinite(v)):  # CHOLMOD would take a NaN pivot for a positive one
+            self._ok = False
+            return False, 0
         sm = spmatrix(matrix(v), matrix(self.rows), matrix(self.cols), (self.n, self.n))
         old = dict(cholmod.options)
         cholmod.options["supernodal"] = 2
@@ -428,12 +431,18 @@ class SPDFamily:
             # was already factorised numerically gave wrong answers (cvxopt 1.3)
             self._symbolic = cholmod.symbolic(sm, uplo="L")
             cholmod.numeric(sm, self._symbolic)
+            # CHOLMOD tests a pivot with "d <= 0", which a NaN passes (an overflow inside
+            # the factorisation): success needs every diagonal entry finite and positive
+            dg = np.array(cholmod.diag(self._symbolic)).ravel()
         except ArithmeticError:
             self._ok = False
             return False, 0
         finally:
             cholmod.options.clear()
             cholmod.options.update(old)
+        if not (np.all(np.isfinite(dg)) and np.all(dg > 0)):
+            self._ok = False
+            return False, 0
         self._ok = True
         if not row_counts:
             return True, 0

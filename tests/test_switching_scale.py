@@ -14,6 +14,7 @@ import scipy.sparse as sp
 
 from ntc_design.certify import certify, verify
 from ntc_design.certify.certificate import _sha, digest, switching_certificate, topology_hash
+from ntc_design.certify.scale import component_matrix, lap_b_blocks, symmetric_part_bound
 from ntc_design.certify.switching_scale import (
     switching_scale_certificate,
     verify_switching_scale,
@@ -397,3 +398,68 @@ def test_a_missing_npz_mode_says_so(tmp_path, capsys, monkeypatch):
     f = tmp_path / "sw.yaml"
     f.write_text("modes: {A: nope.npz}\nschedule: [{mode: A, duration: 1}]\n")
     assert_input_error(["check", f], capsys, monkeypatch, "modes.A", "nope.npz: no such file")
+
+
+def test_overflow_or_nan_never_proves_anything():
+    """Review findings: an overflowing shift made CHOLMOD take NaN pivots as positive."""
+    fam = SPDFamily([sp.csr_matrix(np.array([[np.nan, 1, 1], [1, 1, 1], [1, 1, -1.0]]))])
+    assert fam.factor([1.0], 0.0) == (False, 0)
+    # antagonistic −[[1,1],[1,1]] both ways and δ = 1e308: L_B x = 0 for x = (1,−1,1,−1)
+    w = -np.ones((2, 2, 2))
+    top = Topology.from_arrays(["a", "b"], 2, np.array([0, 1]), np.array([1, 0]), w)
+    lap, err = component_matrix(lap_b_blocks(top, 1e308), np.arange(2))
+    p = symmetric_part_bound(lap, err)
+    assert not p.holds and "overflows" in p.detail
+    # cooperative 1e308 and 1.7e308: L + Lᵀ indefinite, entries overflow
+    w2 = np.array([[[1e308]], [[1.7e308]]])
+    top2 = Topology.from_arrays(["a", "b"], 1, np.array([0, 1]), np.array([1, 0]), w2)
+    lap2, err2 = component_matrix(lap_b_blocks(top2, 1.0), np.arange(2))
+    assert not symmetric_part_bound(lap2, err2, 2.0**250).holds
+
+
+@pytest.mark.parametrize(
+    "path, value, needle",
+    [
+        (("subject", "modes", "A", "delta"), 10**400, "delta"),
+        (("subject", "modes", "A", "delta"), 1e300, "delta"),
+        (("proofs", "A", "lower"), 10**400, "lower"),
+    ],
+)
+def test_out_of_range_numbers_are_bad_input(cert, path, value, needle):
+    doc = copy.deepcopy(cert)
+    node = doc
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    with pytest.raises(InputError, match=needle):
+        verify(_refresh(doc))
+
+
+def test_tiny_weights_are_bad_input_not_a_proof(cert):
+    from ntc_design.certify.scale import pack
+
+    doc = copy.deepcopy(cert)
+    t = doc["subject"]["modes"]["A"]["topology"]
+    from ntc_design.certify.scale import unpack
+
+    w = unpack(t["weights"], "w", "f8", (t["edges"], 3, 3))
+    w[0] = np.eye(3) * 2.0**-1074  # a subnormal weight
+    t["weights"] = pack(w, "f8")
+    with pytest.raises(InputError, match="weights"):
+        verify(_refresh(doc))
+
+
+def test_the_block_memory_guard(monkeypatch):
+    import ntc_design.certify.scale as sc
+
+    top = random_network(50, 3, seed=1)
+    monkeypatch.setattr(sc, "DENSE_MAX_BYTES", 4 * 8.0 * 50 * 9 - 1)
+    with pytest.raises(InputError, match="diagonal blocks: N = 50 agents of d = 3"):
+        lap_b_blocks(top, 1.0)
+
+
+def test_structured_labels_hash_like_the_reference():
+    w = np.array([[[1.0]], [[-2.0]]])
+    labels = [[1, "a"], {"k": 2, "b": [1]}, "c"]
+    t = Topology(labels, 1, {(1, 0): w[0], (2, 1): w[1]})
+    assert topology_hash(t) == _reference_hash(t)

@@ -162,7 +162,9 @@ def topology_hash(top: Topology) -> str:
     order = np.lexsort((ea.cols, ea.rows))
     order = order[keep[order]]
     d = top.dim
-    lab = [json.dumps(x, ensure_ascii=True) for x in top.labels]
+    lab = [
+        json.dumps(x, ensure_ascii=True, sort_keys=True, separators=(",", ":")) for x in top.labels
+    ]
     hexes = [float.hex(x) for x in (ea.w[order] + 0.0).ravel().tolist()]
     rows = [",".join(f'"{h}"' for h in hexes[k : k + d]) for k in range(0, len(hexes), d)]
     mats = ["[[" + "],[".join(rows[k : k + d]) + "]]" for k in range(0, len(rows), d)]

@@ -52,7 +52,7 @@ import scipy.sparse as sparse
 
 from ..design import ProtocolDesign
 from ..errors import InputError
-from ..linalg import CODE_SIGN, DenseRefused, SPDFamily, cholesky_fill
+from ..linalg import CODE_SIGN, DENSE_MAX_BYTES, DenseRefused, SPDFamily, cholesky_fill
 from ..model import Topology
 from ..thresholds import strong_components
 from .exact import U, gamma
@@ -125,7 +125,9 @@ def verified_pd_batch(m: np.ndarray, err: np.ndarray) -> np.ndarray:
     mt = m.transpose(0, 2, 1)
     ms = 0.5 * (m + mt)
     err = err + 0.5 * np.abs(m - mt)
-    e_f = np.sqrt(np.sum(err**2, axis=(1, 2))) * (1 + 4 * d * U)
+    em = np.max(np.abs(err), axis=(1, 2), initial=0.0)
+    scale_ = np.where((em > 0) & np.isfinite(em), em, 1.0)
+    e_f = em * np.sqrt(np.sum((err / scale_[:, None, None]) ** 2, axis=(1, 2))) * (1 + 4 * d * U)
     g = gamma(d + 1)
     dg = np.abs(np.diagonal(ms, axis1=1, axis2=2))
     tr = dg.sum(axis=1)
@@ -164,9 +166,20 @@ def lap_b_blocks(top: Topology, delta: float) -> BlockData:
     -------
     BlockData
         The diagonal blocks with their error bounds.
+
+    Raises
+    ------
+    DenseRefused
+        The (N, d, d) blocks would exceed ``DENSE_MAX_BYTES`` (an InputError).
     """
     ea = top.edge_arrays
     n, d = top.n, top.dim
+    need = 4 * 8.0 * n * d * d  # diag, err and their working copies, (N, d, d) each
+    if need > DENSE_MAX_BYTES:
+        raise DenseRefused(
+            f"L_B's diagonal blocks: N = {n} agents of d = {d} need about "
+            f"{need / 2**30:.1f} GiB (limit {DENSE_MAX_BYTES / 2**30:.1f} GiB); refused"
+        )
     sg = CODE_SIGN[ea.codes].astype(float)
     neg = sg < 0
     fac = np.where(neg, 1.0 + delta, 1.0)
@@ -319,6 +332,14 @@ class SymmetricPartProof:
     detail: str
 
 
+def _frobenius(x: np.ndarray) -> float:
+    """‖x‖₂ scaled by max|x| first, so the squares neither underflow nor overflow."""
+    m = float(np.max(np.abs(x), initial=0.0))
+    if m == 0.0 or not np.isfinite(m):
+        return m
+    return m * float(np.sqrt(np.sum((x / m) ** 2)))
+
+
 def rump_shift(a: sparse.csr_matrix, e: sparse.csr_matrix) -> float:
     """Rump's shift for a float symmetric n×n ``a`` within ``e`` (entrywise) of an exact
     matrix: ``c = (2γ_{n+1}/(1−γ_{n+1})·tr|A| + ‖E‖_F(1+4nu))(1+4u)``. If the
@@ -345,7 +366,7 @@ def rump_shift(a: sparse.csr_matrix, e: sparse.csr_matrix) -> float:
     g = gamma(n + 1)
     dg = np.abs(a.diagonal())
     tr = float(dg.sum())
-    e_f = float(np.sqrt((e.data**2).sum())) * (1 + 4 * n * U)
+    e_f = _frobenius(e.data) * (1 + 4 * n * U)
     eta = 4 * (n + 2) * (2 * (n + 2) + float(dg.max(initial=0.0))) * ETA  # underflow
     return (2 * g / (1 - g) * tr + e_f + eta) * (1 + 4 * U)
 
@@ -385,6 +406,10 @@ def symmetric_part_bound(
     e = (err + err.T + U * abs(s) + sparse.diags(2 * U * dg)).tocsr()
     c = rump_shift(a, e)
     what = "L + Lᵀ" if not shift else f"L + Lᵀ − {shift:.6g}·I"
+    if not (np.isfinite(c) and np.all(np.isfinite(a.data)) and np.all(np.isfinite(e.data))):
+        return SymmetricPartProof(
+            False, shift, c, f"{what} or its rounding bound overflows: nothing is proven"
+        )
     ok, _ = SPDFamily([a]).factor([1.0], c)
     if not ok:
         return SymmetricPartProof(False, shift, c, f"sparse Cholesky of {what} − {c:.3g}·I fails")
@@ -794,6 +819,10 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     n = len(labels)
     if cols.size and (min(cols.min(), rows.min()) < 0 or max(cols.max(), rows.max()) >= n):
         raise InputError(f"{where}: an edge index is out of range")
+    from .certificate import RANGE_TEXT, out_of_range
+
+    if out_of_range(w):  # so no product in a proof overflows or underflows
+        raise InputError(f"{where}.weights: {RANGE_TEXT}")
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
 
 
@@ -874,9 +903,11 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
         Check,
         ModeAbout,
         Verification,
+        _number,
         _same_topology,
         _vector,
         digest,
+        out_of_range,
         same_theta,
         topology_hash,
     )
@@ -908,9 +939,9 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
     size = need(doc, "size", int, source)
     if top.nd != size:
         raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-    delta = need(sub, "delta", (int, float), where)
-    if not (np.isfinite(delta) and delta > 0):
-        raise InputError(f"{where}: delta must be a positive number")
+    delta = _number(need(sub, "delta", (int, float), where), f"{where}.delta")
+    if not delta > 0 or out_of_range(delta):
+        raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
     informed = need(sub, "informed", list, where)
     try:
         inf_idx = sorted(top.index(x) for x in informed)

@@ -227,9 +227,9 @@ def _proof_fields(x: Any, where: str) -> float:
 
     if not isinstance(x, dict) or set(x) != {"lower"}:
         raise InputError(f"{where}: expected {{lower}}")
-    lo = x["lower"]
-    if isinstance(lo, bool) or not isinstance(lo, (int, float)) or not math.isfinite(lo):
-        raise InputError(f"{where}.lower: expected a finite number")
+    from .certificate import _number
+
+    lo = _number(x["lower"], f"{where}.lower")
     if lo < 0 or (lo != 0 and not 2.0**-NUMBER_EXP <= lo <= 2.0**NUMBER_EXP):
         raise InputError(f"{where}.lower: must be 0 or in [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}]")
     return float(lo)
@@ -309,12 +309,14 @@ def verify_switching_scale(
         ModeAbout,
         Verification,
         _need,
+        _number,
         _parse_schedule,
         _same_topology,
         _sha,
         _vector,
         canonical,
         digest,
+        out_of_range,
         same_theta,
         scheduled_described,
         switching_hash,
@@ -344,9 +346,9 @@ def verify_switching_scale(
         top = topology_from_subject(_need(sub, "topology", dict, where), f"{where}.topology")
         if top.nd != size:
             raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-        delta = _need(sub, "delta", (int, float), where)
-        if not (math.isfinite(delta) and delta > 0):
-            raise InputError(f"{where}.delta: must be a positive number")
+        delta = _number(_need(sub, "delta", (int, float), where), f"{where}.delta")
+        if not delta > 0 or out_of_range(delta):
+            raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
         theta_m = _vector(_need(sub, "theta", list, where), top.dim, f"{where}.theta")
         informed = _need(sub, "informed", list, where)
         try:
