@@ -182,6 +182,7 @@ def main() -> None:
     ap.add_argument("--d", type=int, default=3)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--switching-only", action="store_true")
+    ap.add_argument("--no-switching", action="store_true")
     args = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bench_scale_"))
     if args.switching_only:
@@ -294,7 +295,8 @@ def main() -> None:
             f"verify CPU ×{vv}; design CPU ×{d1['cpu'] / d0['cpu']:.1f}; "
             f"design memory ×{mem1 / mem0:.1f} ({mem0:.0f} -> {mem1:.0f} MiB above import)"
         )
-    switching(args, work)
+    if not args.no_switching:
+        switching(args, work)
 
 
 if __name__ == "__main__":

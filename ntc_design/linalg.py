@@ -12,10 +12,10 @@ Tolerances (documented once, used everywhere):
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from enum import StrEnum
 
-import numba
 import numpy as np
 
 from .errors import InputError
@@ -257,8 +257,7 @@ class CholeskyFill:
         return FACTOR_BYTES_PER_NNZ * self.nnz
 
 
-@numba.njit(cache=True, nogil=True)
-def _row_counts(indptr, indices, n):  # pragma: no cover - compiled
+def _row_counts_py(indptr, indices, n):  # pragma: no cover - compiled by _row_counts
     """Elimination tree (Liu, with path compression) and row counts by row-subtree
     traversal of the strictly lower pattern (row i lists columns k < i), O(nnz(L))."""
     parent = np.full(n, -1, dtype=np.int64)
@@ -285,6 +284,15 @@ def _row_counts(indptr, indices, n):  # pragma: no cover - compiled
                 cols[j] += 1
                 j = parent[j]
     return rows, cols
+
+
+@functools.cache
+def _row_counts():
+    """The compiled kernel (numba is imported on first use: ``import ntc_design`` stays
+    light)."""
+    import numba
+
+    return numba.njit(cache=True, nogil=True)(_row_counts_py)
 
 
 def cholesky_fill(a) -> CholeskyFill:
@@ -326,7 +334,7 @@ def cholesky_fill(a) -> CholeskyFill:
     r, c = np.maximum(r, c), np.minimum(r, c)  # lower triangle of the permuted matrix
     m = sp.csr_matrix((np.ones(r.size), (r, c)), shape=(n, n))
     m.sum_duplicates()
-    rows, cols = _row_counts(m.indptr.astype(np.int64), m.indices.astype(np.int64), n)
+    rows, cols = _row_counts()(m.indptr.astype(np.int64), m.indices.astype(np.int64), n)
     return CholeskyFill(n, int(rows.sum()), int(rows.max()), float(np.sum(cols.astype(float) ** 2)))
 
 
