@@ -463,3 +463,13 @@ def test_structured_labels_hash_like_the_reference():
     labels = [[1, "a"], {"k": 2, "b": [1]}, "c"]
     t = Topology(labels, 1, {(1, 0): w[0], (2, 1): w[1]})
     assert topology_hash(t) == _reference_hash(t)
+
+
+def test_topology_hash_in_chunks_is_the_same(monkeypatch):
+    import ntc_design.certify.certificate as cc
+
+    top = random_network(60, 2, seed=9)
+    want = _reference_hash(top)
+    for chunk in (1, 7, 10_000):
+        monkeypatch.setattr(cc, "HASH_CHUNK", chunk)
+        assert topology_hash(top) == want

@@ -136,6 +136,10 @@ def digest(doc: dict) -> str:
     return _sha({k: v for k, v in doc.items() if k != "digest"})
 
 
+#: Edges hashed per chunk by :func:`topology_hash` (its memory does not grow with E).
+HASH_CHUNK = 20_000
+
+
 def topology_hash(top: Topology) -> str:
     """A canonical hash of a topology: the same network gives the same hash whatever the
     file's layout (named matrices, ``diag``, edge order, its name).
@@ -165,15 +169,19 @@ def topology_hash(top: Topology) -> str:
     lab = [
         json.dumps(x, ensure_ascii=True, sort_keys=True, separators=(",", ":")) for x in top.labels
     ]
-    hexes = [float.hex(x) for x in (ea.w[order] + 0.0).ravel().tolist()]
-    rows = [",".join(f'"{h}"' for h in hexes[k : k + d]) for k in range(0, len(hexes), d)]
-    mats = ["[[" + "],[".join(rows[k : k + d]) + "]]" for k in range(0, len(rows), d)]
-    edges = ",".join(
-        f"[{lab[j]},{lab[i]},{m}]"
-        for j, i, m in zip(ea.cols[order].tolist(), ea.rows[order].tolist(), mats, strict=True)
-    )
-    text = f'{{"dim":{d},"edges":[{edges}],"labels":[{",".join(lab)}]}}'
-    return "sha256:" + hashlib.sha256(text.encode()).hexdigest()
+    h = hashlib.sha256(f'{{"dim":{d},"edges":['.encode())
+    for k0 in range(0, order.size, HASH_CHUNK):  # in chunks: memory stays small at any E
+        part = order[k0 : k0 + HASH_CHUNK]
+        hexes = [float.hex(x) for x in (ea.w[part] + 0.0).ravel().tolist()]
+        rows = [",".join(f'"{x}"' for x in hexes[k : k + d]) for k in range(0, len(hexes), d)]
+        mats = ["[[" + "],[".join(rows[k : k + d]) + "]]" for k in range(0, len(rows), d)]
+        text = ",".join(
+            f"[{lab[j]},{lab[i]},{m}]"
+            for j, i, m in zip(ea.cols[part].tolist(), ea.rows[part].tolist(), mats, strict=True)
+        )
+        h.update((("," if k0 else "") + text).encode())
+    h.update(f'],"labels":[{",".join(lab)}]}}'.encode())
+    return "sha256:" + h.hexdigest()
 
 
 def switching_hash(mode_hashes: Mapping[str, str], schedule) -> str:
