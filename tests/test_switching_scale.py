@@ -473,3 +473,71 @@ def test_topology_hash_in_chunks_is_the_same(monkeypatch):
     for chunk in (1, 7, 10_000):
         monkeypatch.setattr(cc, "HASH_CHUNK", chunk)
         assert topology_hash(top) == want
+
+
+def test_rate_lower_bound_only_when_every_component_is_dominance():
+    """Second review: a bound over the dominance components only is not a bound on the
+    decay rate when a 'symmetric' component decays slower."""
+    from ntc_design.certify.scale import scale_certificate
+
+    i2, s2 = np.eye(2), np.diag([1.0, 1e-3])
+    top = Topology.from_edges(4, 2, [(1, 2, -i2), (2, 1, -i2), (3, 4, -s2), (4, 3, -s2)])
+    des = design(top, [1.0, -2.0], thresholds=False)
+    c = scale_certificate(des)
+    assert c["results"]["methods"]["symmetric"] == 1
+    assert c["results"]["rate_lower_bound"]["value"] is None
+    assert verify(c).valid
+    doc = copy.deepcopy(c)
+    doc["results"]["rate_lower_bound"]["value"] = 0.09
+    (bad,) = verify(_refresh(doc)).failed
+    assert "not every component is a dominance one" in bad.detail
+    # all-dominance network: the bound is there, below the estimate, and checked
+    c2 = certify(random_network(40, 3, seed=5), THETA).certificate
+    lo, est = c2["results"]["rate_lower_bound"]["value"], c2["results"]["eig_bound"]
+    assert lo is not None and 0 < lo <= est
+    doc = copy.deepcopy(c2)
+    doc["results"]["eig_bound"] = doc["results"]["rate_estimate"]["value"] = lo / 10
+    (bad,) = verify(_refresh(doc)).failed
+    assert "below the proven lower bound" in bad.detail
+
+
+@pytest.mark.parametrize(
+    "forge",
+    [
+        lambda d: d.update(certifies=["hurwitz", "decay_rate"]),
+        lambda d: d["claims"].append({"id": "made up", "kind": "components", "mode": "x"}),
+        lambda d: d.update(subject_digest="sha256:0"),
+        lambda d: d["results"]["rate_lower_bound"].update(value=10**400),
+    ],
+)
+def test_hurwitz_scale_checks_what_it_certifies_and_claims(forge):
+    cert = certify(random_network(40, 3, seed=5), THETA).certificate
+    doc = copy.deepcopy(cert)
+    forge(doc)
+    doc["digest"] = digest(doc)
+    if "subject_digest" in doc and doc["subject_digest"] != "sha256:0":
+        _refresh(doc)
+    assert not verify(doc).valid
+
+
+@pytest.mark.parametrize("value", ["abc", [1], None, 10**400])
+def test_malformed_unscheduled_proof_is_invalid_not_a_crash(cert, value):
+    doc = copy.deepcopy(cert)
+    doc["proofs"]["Z"] = {"lower": value}
+    doc["results"]["symmetric_part_min_eig"]["Z"] = 1.0
+    ver = verify(_refresh(doc))
+    assert [c.name for c in ver.failed] == [
+        "reported results (bounds are the proven ones; estimates above them)"
+    ]
+
+
+def test_a_bound_below_the_number_range_is_issued_as_zero():
+    """Second review: ℓ < 2^-250 made an honest certificate unreadable; it is issued as 0."""
+    s = 2.0**-240
+    i2, t2 = np.eye(2) * s, np.diag([1.0, 2.0**-9]) * s
+    a = Topology.from_edges(4, 2, [(1, 2, -i2), (2, 1, -i2), (3, 4, -t2), (4, 3, -t2)])
+    b = Topology.from_edges(4, 2, [(1, 2, -i2), (2, 1, -i2), (3, 4, -i2), (4, 3, -i2)])
+    sw = SwitchingTopology({"A": a, "B": b}, (("A", 1.0), ("B", 1.0)))
+    c = switching_scale_certificate(design(sw, [1.0, -2.0], thresholds=False))
+    assert c["proofs"]["A"]["lower"] == 0.0 and c["results"]["symmetric_part_min_eig"]["A"] > 0
+    assert verify(json.loads(json.dumps(c))).valid

@@ -978,7 +978,10 @@ def _parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -
 def _result_close(reported: Any, value: float, scale: float) -> bool:
     if isinstance(reported, bool) or not isinstance(reported, (int, float)):
         return False
-    if not (math.isfinite(value) and math.isfinite(float(reported))):
+    try:
+        if not (math.isfinite(value) and math.isfinite(float(reported))):
+            return False
+    except OverflowError:  # a JSON integer beyond any double
         return False
     return abs(float(reported) - value) <= RESULT_RTOL * max(scale, abs(value), 1e-300)
 

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -714,9 +715,10 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
     rhs = np.zeros(n)
     np.add.at(rhs, ea.rows[same], nu[same] * v[ea.cols[same]])
     in_dom = comp_dom[comp]
+    # a bound on min Re λ(L_B) only when every component is a dominance one
     lower = (
-        float(np.min(dominance_rate_bound(mu[in_dom], v[in_dom], rhs[in_dom]))) * (1 - 1e-12)
-        if in_dom.any()
+        float(np.min(dominance_rate_bound(mu, v, rhs))) * (1 - 1e-12)
+        if n and in_dom.all()
         else None
     )
     claims = [
@@ -751,9 +753,9 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
             "rate_estimate": {"value": rate, "method": rate_how},
             "rate_lower_bound": {
                 "value": lower,
-                "method": "min_i μ_i − (Σ_j ν_ij v_j)/v_i over the dominance components "
-                "(Feingold–Varga with a shifted s; from the certified μ, ν, v; recomputed "
-                "by verify)",
+                "method": "min_i μ_i − (Σ_j ν_ij v_j)/v_i when every component is proven by "
+                "dominance (Feingold–Varga with a shifted s; from the certified μ, ν, v; "
+                "recomputed by verify), else None",
             },
             "skipped": [
                 "decay-rate LMI, dense common P and exact rational Sylvester: not run "
@@ -826,6 +828,17 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
 
 
+def _close(x: Any, value: float, rtol: float) -> bool:
+    """x is a finite JSON number within rtol of value (False for anything else)."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return False
+    try:
+        xf = float(x)
+    except OverflowError:
+        return False
+    return math.isfinite(xf) and abs(xf - value) <= rtol * max(abs(value), 1e-300)
+
+
 def _scale_results(doc: dict, source: str, comp: np.ndarray, meth: list, lower_re):
     """The check of a hurwitz-scale certificate's reported results."""
     from .certificate import RESULT_RTOL, Check
@@ -860,13 +873,11 @@ def _scale_results(doc: dict, source: str, comp: np.ndarray, meth: list, lower_r
     got = lb.get("value") if isinstance(lb, dict) else "?"
     if lower_re is None:
         if got is not None:
-            bad.append("rate_lower_bound given without dominance components")
-    elif (
-        isinstance(got, bool)
-        or not isinstance(got, (int, float))
-        or not (abs(got - lower_re) <= RESULT_RTOL * max(abs(lower_re), 1e-300))
-    ):
+            bad.append("rate_lower_bound given, but not every component is a dominance one")
+    elif not _close(got, lower_re, RESULT_RTOL):
         bad.append(f"rate_lower_bound: reported {got!r}, recomputed {lower_re:.10g}")
+    elif _close(est, 0.0, math.inf) and est < lower_re * (1 - 1e-6):
+        bad.append(f"the rate estimate {est!r} lies below the proven lower bound {lower_re:.10g}")
     return Check(
         "reported results (counts, rate lower bound recomputed; estimate consistent)",
         not bad,
@@ -905,6 +916,7 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
         Verification,
         _number,
         _same_topology,
+        _sha,
         _vector,
         digest,
         out_of_range,
@@ -930,10 +942,32 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
             "matches" if want == got else "the file was modified after it was issued",
         )
     )
-    modes = need(need(doc, "subject", dict, source), "modes", dict, f"{source}: subject")
+    subject = need(doc, "subject", dict, source)
+    ok_s = _sha(subject) == doc.get("subject_digest")
+    checks.append(Check("subject digest", ok_s, "matches" if ok_s else "does not match"))
+    modes = need(subject, "modes", dict, f"{source}: subject")
     if len(modes) != 1:
         raise InputError(f"{source}: subject.modes: a hurwitz-scale certificate has one mode")
     ((mname, sub),) = modes.items()
+    # what it certifies and claims: exactly what the kind derives
+    ok_p = doc.get("certifies") == ["hurwitz"]
+    checks.append(
+        Check(
+            f"certifies what kind {KIND!r} can",
+            ok_p,
+            "hurwitz" if ok_p else f"kind {KIND!r} certifies exactly ['hurwitz']",
+        )
+    )
+    claim = Claim(ClaimKind.COMPONENTS, Property.HURWITZ, mode=mname)
+    want_c = [{"id": claim.id, "kind": "components", "mode": mname}]
+    ok_c = doc.get("claims") == want_c
+    checks.append(
+        Check(
+            "listed claims are those the kind and subject require",
+            ok_c,
+            "1 claim" if ok_c else "the listed claims differ from the derived one",
+        )
+    )
     where = f"{source}: subject.modes.{mname}"
     top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
     size = need(doc, "size", int, source)
@@ -1012,7 +1046,11 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
         checks.append(Check("block diagonal dominance (Feingold–Varga)", ok, detail))
         rhs = np.zeros(n)
         np.add.at(rhs, ea.rows[inner], nu[inner] * v[ea.cols[inner]])
-        lower_re = float(np.min(dominance_rate_bound(mu[idx], v[idx], rhs[idx]))) * (1 - 1e-12)
+        lower_re = (
+            float(np.min(dominance_rate_bound(mu[idx], v[idx], rhs[idx]))) * (1 - 1e-12)
+            if idx.size == n
+            else None
+        )
     else:
         lower_re = None
     # 3. symmetric-part and Lyapunov components

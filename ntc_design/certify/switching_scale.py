@@ -130,7 +130,11 @@ def prove_mode(top: Topology, delta: float) -> dict[str, Any]:
     c0 = rump_shift(s, (err + err.T + U * abs(s)).tocsr())
     if math.isfinite(est) and est > 4 * c0:
         tries.insert(0, float(np.nextafter((est - 2 * c0) * (1 - LOWER_RTOL), 0.0)))
+    from .certificate import NUMBER_EXP
+
     for lower in tries:
+        if lower and not 2.0**-NUMBER_EXP <= lower <= 2.0**NUMBER_EXP:
+            lower = min(lower, 2.0**NUMBER_EXP) if lower > 2.0**-NUMBER_EXP else 0.0
         p = symmetric_part_bound(lap, err, lower)
         if p.holds:
             out.update(holds=True, lower=p.shift, detail=p.detail)
@@ -235,6 +239,21 @@ def _proof_fields(x: Any, where: str) -> float:
     return float(lo)
 
 
+def _as_float(x: Any) -> float | None:
+    """A finite JSON number as a float, else None."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return None
+    try:
+        xf = float(x)
+    except OverflowError:
+        return None
+    return xf if math.isfinite(xf) else None
+
+
+def _same_number(x: Any, value: float) -> bool:
+    return _as_float(x) == value
+
+
 def _results_check(doc: dict, source: str, proofs: dict, scheduled: tuple[str, ...]):
     """The reported results against the proofs: the lower bounds are the proven ℓ, every
     estimate lies above its proven bound, P = I is claimed exactly when every scheduled
@@ -245,8 +264,14 @@ def _results_check(doc: dict, source: str, proofs: dict, scheduled: tuple[str, .
     if not isinstance(res, dict):
         raise InputError(f"{source}: results: expected an object")
     bad = [f"proofs.{k}: the schedule does not use mode {k}" for k in proofs if k not in scheduled]
-    want = {k: p.get("lower") for k, p in proofs.items() if isinstance(p, dict)}
-    if res.get("symmetric_part_lower_bound") != want:
+    # the scheduled modes' proofs were validated (and re-proven) before this check
+    want = {k: float(proofs[k]["lower"]) for k in scheduled if k in proofs}
+    got_lb = res.get("symmetric_part_lower_bound")
+    if (
+        not isinstance(got_lb, dict)
+        or set(got_lb) != set(want)
+        or any(not _same_number(got_lb[k], v) for k, v in want.items())
+    ):
         bad.append("symmetric_part_lower_bound differs from the proven bounds")
     est = res.get("symmetric_part_min_eig")
     if not isinstance(est, dict):
@@ -254,9 +279,8 @@ def _results_check(doc: dict, source: str, proofs: dict, scheduled: tuple[str, .
     else:
         for k, lo in want.items():
             e = est.get(k)
-            if e is not None and (
-                isinstance(e, bool) or not isinstance(e, (int, float)) or not e > lo
-            ):
+            ef = _as_float(e)
+            if e is not None and not (ef is not None and ef > lo):
                 bad.append(f"mode {k}: the estimate {e!r} is not above the proven bound {lo!r}")
     all_proven = all(k in proofs for k in scheduled)
     cl = res.get("common_lyapunov")
