@@ -338,7 +338,7 @@ def cholesky_fill(a) -> CholeskyFill:
     return CholeskyFill(n, int(rows.sum()), int(rows.max()), float(np.sum(cols.astype(float) ** 2)))
 
 
-def require_sparse_factor(fill: CholeskyFill, what: str) -> None:
+def require_sparse_factor(fill: CholeskyFill, what: str, factorisations: int = 1) -> None:
     """Refuse, in one line, a sparse Cholesky factorisation whose factor would exceed
     ``SPARSE_FACTOR_MAX_BYTES`` or whose work would exceed ``SPARSE_FACTOR_MAX_FLOPS``.
 
@@ -348,17 +348,21 @@ def require_sparse_factor(fill: CholeskyFill, what: str) -> None:
         The factor's structure (:func:`cholesky_fill`).
     what : str
         What the factorisation is for, for the message.
+    factorisations : int, optional
+        How many factorisations of this structure the step needs (the flops add up).
 
     Raises
     ------
     DenseRefused
         Above either limit (an :class:`~ntc_design.errors.InputError`).
     """
-    if fill.bytes > SPARSE_FACTOR_MAX_BYTES or fill.flops > SPARSE_FACTOR_MAX_FLOPS:
+    flops = fill.flops * factorisations
+    if fill.bytes > SPARSE_FACTOR_MAX_BYTES or flops > SPARSE_FACTOR_MAX_FLOPS:
+        times = f"{factorisations} factorisations of " if factorisations > 1 else ""
         raise DenseRefused(
-            f"{what}: the sparse Cholesky factor of this {fill.n}×{fill.n} matrix has "
+            f"{what}: {times}the sparse Cholesky factor of this {fill.n}×{fill.n} matrix has "
             f"{fill.nnz:.3g} non-zeros (about {fill.bytes / 2**30:.1f} GiB, limit "
-            f"{SPARSE_FACTOR_MAX_BYTES / 2**30:.0f} GiB) and needs {fill.flops:.2g} flops "
+            f"{SPARSE_FACTOR_MAX_BYTES / 2**30:.0f} GiB) and need {flops:.2g} flops "
             f"(limit {SPARSE_FACTOR_MAX_FLOPS:.2g}); refused — the network's symmetrised "
             "graph fills in too much"
         )

@@ -400,7 +400,7 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
     CriticalCouplings
         δ_H (None when a component is too large), δ_S and the notes.
     """
-    from .linalg import SPARSE_FACTOR_MAX_BYTES, SPARSE_FACTOR_MAX_FLOPS, SPDFamily
+    from .linalg import DenseRefused, SPDFamily, require_sparse_factor
 
     notes: list[str] = []
     ncomp, comp = strong_components(lap, dim)
@@ -474,15 +474,14 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
         return fam.factor([1.0, 2.0 * x], tau)[0]
 
     delta_s: float | None
-    fill = fam.fill
-    if fill.bytes > SPARSE_FACTOR_MAX_BYTES or fill.flops * 50 > SPARSE_FACTOR_MAX_FLOPS:
-        # about 50 factorisations: skipped (with the reason) rather than refusing the design
+    try:  # about 50 factorisations: skipped with the reason rather than refusing the design
+        require_sparse_factor(fam.fill, "δ_S", factorisations=50)
+        refused = None
+    except DenseRefused as exc:
+        refused = str(exc)
+    if refused is not None:
         delta_s = None
-        notes.append(
-            f"δ_S not computed: the bisection needs about 50 sparse Cholesky factorisations "
-            f"of {fill.nnz:.3g} non-zeros and {fill.flops:.2g} flops each (limits "
-            f"{SPARSE_FACTOR_MAX_BYTES / 2**30:.0f} GiB, {SPARSE_FACTOR_MAX_FLOPS:.2g} flops in all)"
-        )
+        notes.append(f"δ_S not computed: the bisection needs about 50 factorisations; {refused}")
     elif pos(0.0):
         delta_s = 0.0
     elif ndn == 0.0:

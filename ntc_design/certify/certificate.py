@@ -232,9 +232,26 @@ def _min_eig(m: np.ndarray) -> float:
     return float(np.linalg.eigvalsh(0.5 * (m + m.T))[0])
 
 
-def _finish(doc: dict) -> dict:
+def finish(doc: dict, method: str | None = None) -> dict:
+    """Seal a certificate: the subject's digest, package versions, the verification
+    method (when given) and the digest of everything.
+
+    Parameters
+    ----------
+    doc : dict
+        The certificate without its digests.
+    method : str, optional
+        ``verification_method``, for the kinds that state it.
+
+    Returns
+    -------
+    dict
+        ``doc``, completed.
+    """
     doc["subject_digest"] = _sha(doc["subject"])
     doc["versions"] = package_versions()
+    if method is not None:
+        doc["verification_method"] = method
     doc["digest"] = digest(doc)
     return doc
 
@@ -333,7 +350,7 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
         "results": results,
         "solver": solver,
     }
-    return _finish(doc)
+    return finish(doc)
 
 
 def scheduled_modes(schedule) -> tuple[str, ...]:
@@ -406,7 +423,7 @@ def switching_certificate(
         },
         "solver": {"name": "Clarabel (via cvxpy)", "status": [a[1] for a in common.attempts]},
     }
-    return _finish(doc)
+    return finish(doc)
 
 
 def write_certificate(doc: dict, path: str | Path) -> None:
@@ -975,15 +992,33 @@ def _parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -
     return _Mode(name, top, theta, delta, b, h, lap, err, exact, in_range)
 
 
-def _result_close(reported: Any, value: float, scale: float) -> bool:
-    if isinstance(reported, bool) or not isinstance(reported, (int, float)):
-        return False
+def finite_number(x: Any) -> float | None:
+    """A JSON number as a finite float, else None (a bool, a string, NaN, or an integer
+    beyond any double).
+
+    Parameters
+    ----------
+    x : Any
+        A value read from a certificate.
+
+    Returns
+    -------
+    float or None
+    """
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return None
     try:
-        if not (math.isfinite(value) and math.isfinite(float(reported))):
-            return False
-    except OverflowError:  # a JSON integer beyond any double
+        xf = float(x)
+    except OverflowError:
+        return None
+    return xf if math.isfinite(xf) else None
+
+
+def _result_close(reported: Any, value: float, scale: float) -> bool:
+    r = finite_number(reported)
+    if r is None or not math.isfinite(value):
         return False
-    return abs(float(reported) - value) <= RESULT_RTOL * max(scale, abs(value), 1e-300)
+    return abs(r - value) <= RESULT_RTOL * max(scale, abs(value), 1e-300)
 
 
 def _results_hurwitz(doc: dict, ctx: _Context, alpha: float, rated: bool) -> list[Check]:
@@ -1173,18 +1208,7 @@ def verify(
     if any(not isinstance(p, str) for p in props_doc):
         raise InputError(f"{source}: certifies: expected a list of property names")
 
-    checks: list[Check] = []
-    ok_d = digest(doc) == stated_digest
-    checks.append(
-        Check(
-            "digest",
-            ok_d,
-            ("matches (" if ok_d else "does not match: the file changed after it was issued (")
-            + "a checksum, not a signature)",
-        )
-    )
-    ok_s = _sha(subject) == doc.get("subject_digest")
-    checks.append(Check("subject digest", ok_s, "matches" if ok_s else "does not match"))
+    checks: list[Check] = integrity_checks(doc, subject, stated_digest)
 
     # --- the subject: modes, schedule, what the certificate is about
     modes = {str(k): _parse_mode(str(k), v, n, source, checks) for k, v in modes_doc.items()}
@@ -1205,19 +1229,8 @@ def verify(
     if len(thetas) > 1:
         checks.append(Check("one θ for every mode", False, f"modes differ: {sorted(thetas)}"))
     if spec.switching:
-        schedule: tuple[tuple[str, float], ...] | None = _parse_schedule(
-            subject, f"{source}: subject"
-        )
-        scheduled = tuple(dict.fromkeys(m for m, _ in schedule))
-        checks.append(scheduled_described(scheduled, modes))
-        sw_hash = switching_hash({k: m.hash for k, m in modes.items()}, schedule)
-        ok_h = subject.get("switching_hash") == sw_hash
-        checks.append(
-            Check(
-                "switching hash",
-                ok_h,
-                sw_hash if ok_h else f"stated {subject.get('switching_hash')!r}, is {sw_hash}",
-            )
+        schedule, scheduled, sw_hash = schedule_checks(
+            subject, source, {k: m.hash for k, m in modes.items()}, checks
         )
     else:
         schedule, sw_hash = None, None
@@ -1305,6 +1318,77 @@ def verify(
         sw_hash,
     )
     return Verification(all(c.ok for c in checks), method, tuple(checks), about)
+
+
+def integrity_checks(doc: dict, subject: Any, stated: str) -> list[Check]:
+    """The digest and subject-digest checks every kind starts with.
+
+    Parameters
+    ----------
+    doc : dict
+        The certificate.
+    subject : Any
+        Its subject.
+    stated : str
+        The digest it states.
+
+    Returns
+    -------
+    list of Check
+    """
+    ok_d = digest(doc) == stated
+    ok_s = _sha(subject) == doc.get("subject_digest")
+    return [
+        Check(
+            "digest",
+            ok_d,
+            ("matches (" if ok_d else "does not match: the file changed after it was issued (")
+            + "a checksum, not a signature)",
+        ),
+        Check("subject digest", ok_s, "matches" if ok_s else "does not match"),
+    ]
+
+
+def schedule_checks(
+    subject: dict, source: str, hashes: Mapping[str, str], checks: list[Check]
+) -> tuple[tuple[tuple[str, float], ...], tuple[str, ...], str]:
+    """Parse a switching subject's schedule and append the checks that every scheduled
+    mode is described and that the stated switching hash is the recomputed one.
+
+    Parameters
+    ----------
+    subject : dict
+        The certificate's subject.
+    source : str
+        The certificate's name, for messages.
+    hashes : mapping
+        Mode name -> :func:`topology_hash`, as re-derived.
+    checks : list of Check
+        Appended to.
+
+    Returns
+    -------
+    tuple
+        The schedule, the modes it uses (in order of first use) and the switching hash.
+
+    Raises
+    ------
+    InputError
+        A malformed schedule.
+    """
+    schedule = _parse_schedule(subject, f"{source}: subject")
+    scheduled = scheduled_modes(schedule)
+    checks.append(scheduled_described(scheduled, hashes))
+    sw_hash = switching_hash(hashes, schedule)
+    ok_h = subject.get("switching_hash") == sw_hash
+    checks.append(
+        Check(
+            "switching hash",
+            ok_h,
+            sw_hash if ok_h else f"stated {subject.get('switching_hash')!r}, is {sw_hash}",
+        )
+    )
+    return schedule, scheduled, sw_hash
 
 
 def same_theta(theta: Any, got: np.ndarray) -> Check:
@@ -1453,6 +1537,10 @@ __all__ = [
     "Verification",
     "canonical",
     "digest",
+    "finish",
+    "finite_number",
+    "integrity_checks",
+    "schedule_checks",
     "hurwitz_certificate",
     "package_versions",
     "prove_hurwitz",

@@ -16,7 +16,7 @@ bound E on its rounding error (standard model, γ_k = k·u/(1 − k·u), u = 2�
 floating-point Cholesky factorisation of ``M − c·I`` must succeed, with
 ``c = 2·γ_{n+1}/(1 − γ_{n+1})·tr(M) + ‖E‖_F·(1 + 4nu)`` (Rump, "Verification of positive
 definiteness", BIT 46, 2006: success of the shifted Cholesky proves M ≻ 0; the factor 2 is
-a safety margin; the matrices here have no subnormal entries, so underflow does not enter).
+a safety margin; :func:`rump_shift_value` adds Rump's underflow term too).
 """
 
 from __future__ import annotations
@@ -229,6 +229,39 @@ def exact_pd(m: Dyadic) -> PDProof:
     return PDProof(False, "exact-rational", f"leading principal minor of order {k} is not positive")
 
 
+#: The smallest positive double (subnormal): Rump's underflow term.
+ETA = 2.0**-1074
+
+
+def rump_shift_value(n: int, trace, e_frobenius, max_diag):
+    """Rump's shift ``c = (2γ_{n+1}/(1−γ_{n+1})·tr|A| + ‖E‖_F(1+4nu)
+    + 4(n+2)(2(n+2) + max|a_ii|)·η)(1+4u)``, η = 2⁻¹⁰⁷⁴ (Rump, "Verification of positive
+    definiteness", BIT 46, 2006, Theorem 2.3 with the data error ‖E‖ added): if the
+    floating-point Cholesky factorisation of A − cI runs to completion, the exact matrix
+    within E of A is positive definite, for any order of the inner products. The factor 2
+    is a safety margin. Works elementwise on arrays (a batch of matrices).
+
+    Parameters
+    ----------
+    n : int
+        The order of A.
+    trace : float or numpy.ndarray
+        tr|A| (Σ|a_ii|).
+    e_frobenius : float or numpy.ndarray
+        ‖E‖_F as computed (its own rounding is covered here).
+    max_diag : float or numpy.ndarray
+        max|a_ii|.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        c.
+    """
+    g = gamma(n + 1)
+    eta = 4 * (n + 2) * (2 * (n + 2) + max_diag) * ETA  # underflow
+    return (2 * g / (1 - g) * trace + e_frobenius * (1 + 4 * n * U) + eta) * (1 + 4 * U)
+
+
 def verified_float_pd(m: np.ndarray, err: np.ndarray) -> PDProof:
     """Rigorous test of ``M_exact ≻ 0`` from its floating-point value ``m`` and an
     entrywise bound ``err >= |M_exact − m|`` (see the module docstring).
@@ -247,10 +280,8 @@ def verified_float_pd(m: np.ndarray, err: np.ndarray) -> PDProof:
     n = m.shape[0]
     ms = 0.5 * (m + m.T)
     err = err + 0.5 * np.abs(m - m.T)  # asymmetry of the float value is error too
-    e_f = float(np.linalg.norm(err, "fro")) * (1 + 4 * n * U)
-    g = gamma(n + 1)
-    c = 2 * g / (1 - g) * float(np.sum(np.abs(np.diag(ms)))) + e_f
-    c *= 1 + 4 * U
+    dg = np.abs(np.diag(ms))
+    c = float(rump_shift_value(n, dg.sum(), float(np.linalg.norm(err, "fro")), dg.max()))
     shifted = ms - c * np.eye(n)
     try:
         r = np.linalg.cholesky(shifted)
@@ -270,5 +301,6 @@ __all__ = [
     "exact_pd",
     "first_nonpositive_minor",
     "gamma",
+    "rump_shift_value",
     "verified_float_pd",
 ]

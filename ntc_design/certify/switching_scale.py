@@ -27,7 +27,6 @@ networks (d = 3) a factorisation takes 0.05 s at N = 10⁴ and 20 s at N = 10⁵
 
 from __future__ import annotations
 
-import hashlib
 import math
 import time
 from typing import Any
@@ -38,6 +37,28 @@ from ..design import SwitchingDesign
 from ..errors import InputError
 from ..linalg import DenseRefused, SPDFamily
 from ..model import SwitchingTopology, Topology
+from .certificate import (
+    MAX_MODES,
+    NUMBER_EXP,
+    About,
+    Check,
+    ModeAbout,
+    Verification,
+    _need,
+    _number,
+    _same_topology,
+    _vector,
+    canonical,
+    finish,
+    finite_number,
+    integrity_checks,
+    out_of_range,
+    same_theta,
+    schedule_checks,
+    scheduled_modes,
+    switching_hash,
+    topology_hash,
+)
 from .claims import Claim, ClaimKind, Property
 from .exact import U
 from .scale import (
@@ -130,7 +151,6 @@ def prove_mode(top: Topology, delta: float) -> dict[str, Any]:
     c0 = rump_shift(s, (err + err.T + U * abs(s)).tocsr())
     if math.isfinite(est) and est > 4 * c0:
         tries.insert(0, float(np.nextafter((est - 2 * c0) * (1 - LOWER_RTOL), 0.0)))
-    from .certificate import NUMBER_EXP
 
     for lower in tries:
         if lower and not 2.0**-NUMBER_EXP <= lower <= 2.0**NUMBER_EXP:
@@ -160,14 +180,6 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
         not proven makes it fail to verify). Re-check it with :func:`verify_switching_scale`
         or ``ntc verify``.
     """
-    from .certificate import (
-        canonical,
-        digest,
-        package_versions,
-        scheduled_modes,
-        switching_hash,
-        topology_hash,
-    )
 
     t0 = time.perf_counter()
     sched = sd.switching.schedule
@@ -215,11 +227,7 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
         },
         "solver": {"name": None, "status": None},
     }
-    doc["subject_digest"] = "sha256:" + hashlib.sha256(canonical(doc["subject"])).hexdigest()
-    doc["versions"] = package_versions()
-    doc["verification_method"] = "verified-float (sparse Cholesky per mode)"
-    doc["digest"] = digest(doc)
-    return doc
+    return finish(doc, "verified-float (sparse Cholesky per mode)")
 
 
 def _claims(modes) -> list[Claim]:
@@ -227,11 +235,9 @@ def _claims(modes) -> list[Claim]:
 
 
 def _proof_fields(x: Any, where: str) -> float:
-    from .certificate import NUMBER_EXP
 
     if not isinstance(x, dict) or set(x) != {"lower"}:
         raise InputError(f"{where}: expected {{lower}}")
-    from .certificate import _number
 
     lo = _number(x["lower"], f"{where}.lower")
     if lo < 0 or (lo != 0 and not 2.0**-NUMBER_EXP <= lo <= 2.0**NUMBER_EXP):
@@ -239,26 +245,15 @@ def _proof_fields(x: Any, where: str) -> float:
     return float(lo)
 
 
-def _as_float(x: Any) -> float | None:
-    """A finite JSON number as a float, else None."""
-    if isinstance(x, bool) or not isinstance(x, (int, float)):
-        return None
-    try:
-        xf = float(x)
-    except OverflowError:
-        return None
-    return xf if math.isfinite(xf) else None
-
-
 def _same_number(x: Any, value: float) -> bool:
-    return _as_float(x) == value
+
+    return finite_number(x) == value
 
 
 def _results_check(doc: dict, source: str, proofs: dict, scheduled: tuple[str, ...]):
     """The reported results against the proofs: the lower bounds are the proven ℓ, every
     estimate lies above its proven bound, P = I is claimed exactly when every scheduled
     mode is proven, and no proof is given for a mode the schedule does not use."""
-    from .certificate import Check
 
     res = doc.get("results")
     if not isinstance(res, dict):
@@ -279,7 +274,7 @@ def _results_check(doc: dict, source: str, proofs: dict, scheduled: tuple[str, .
     else:
         for k, lo in want.items():
             e = est.get(k)
-            ef = _as_float(e)
+            ef = finite_number(e)
             if e is not None and not (ef is not None and ef > lo):
                 bad.append(f"mode {k}: the estimate {e!r} is not above the proven bound {lo!r}")
     all_proven = all(k in proofs for k in scheduled)
@@ -326,36 +321,10 @@ def verify_switching_scale(
         The certificate or a topology in it is malformed, or a factorisation would not
         fit.
     """
-    from .certificate import (
-        MAX_MODES,
-        About,
-        Check,
-        ModeAbout,
-        Verification,
-        _need,
-        _number,
-        _parse_schedule,
-        _same_topology,
-        _sha,
-        _vector,
-        canonical,
-        digest,
-        out_of_range,
-        same_theta,
-        scheduled_described,
-        switching_hash,
-        topology_hash,
-    )
 
-    checks: list = []
     got = _need(doc, "digest", str, source)
-    ok_d = digest(doc) == got
-    checks.append(
-        Check("digest", ok_d, "matches" if ok_d else "the file was modified after it was issued")
-    )
     subject = _need(doc, "subject", dict, source)
-    ok_s = _sha(subject) == doc.get("subject_digest")
-    checks.append(Check("subject digest", ok_s, "matches" if ok_s else "does not match"))
+    checks: list = integrity_checks(doc, subject, got)
     size = _need(doc, "size", int, source)
     modes_doc = _need(subject, "modes", dict, f"{source}: subject")
     if not modes_doc or len(modes_doc) > MAX_MODES:
@@ -402,19 +371,8 @@ def verify_switching_scale(
             else f"{[list(t) for t in sorted(distinct)]}",
         )
     )
-    schedule = _parse_schedule(subject, f"{source}: subject")
-    scheduled = tuple(dict.fromkeys(m for m, _ in schedule))
-    checks.append(scheduled_described(scheduled, tops))
     hashes = {k: topology_hash(t) for k, t in tops.items()}
-    sw_hash = switching_hash(hashes, schedule)
-    ok_h = subject.get("switching_hash") == sw_hash
-    checks.append(
-        Check(
-            "switching hash",
-            ok_h,
-            sw_hash if ok_h else f"stated {subject.get('switching_hash')!r}, is {sw_hash}",
-        )
-    )
+    schedule, scheduled, sw_hash = schedule_checks(subject, source, hashes, checks)
     if topology is not None:
         checks.append(_same_topology(topology, hashes, schedule, sw_hash))
     if theta is not None:
