@@ -357,14 +357,40 @@ def rump_shift(a: sparse.csr_matrix, e: sparse.csr_matrix) -> float:
     return float(rump_shift_value(a.shape[0], dg.sum(), _frobenius(e.data), dg.max(initial=0.0)))
 
 
+def shifted_symmetric_part(
+    lap: sparse.csr_matrix, err: sparse.csr_matrix, shift: float = 0.0
+) -> tuple[sparse.csr_matrix, sparse.csr_matrix]:
+    """A = fl(L + Lᵀ − shift·I) and E = err + errᵀ + u|L + Lᵀ| + 2u(|diag| + shift), an
+    entrywise bound on the distance of A from the exact L + Lᵀ − shift·I.
+
+    Parameters
+    ----------
+    lap : scipy.sparse.csr_matrix
+        The float matrix L.
+    err : scipy.sparse.csr_matrix
+        An entrywise bound on |L_exact − L|.
+    shift : float, optional
+        The shift.
+
+    Returns
+    -------
+    tuple of scipy.sparse.csr_matrix
+        A and E.
+    """
+    s = (lap + lap.T).tocsr()
+    n = s.shape[0]
+    a = (s - shift * sparse.identity(n, format="csr")).tocsr() if shift else s
+    dg = np.abs(s.diagonal()) + shift
+    e = (err + err.T + U * abs(s) + sparse.diags(2 * U * dg)).tocsr()
+    return a, e
+
+
 def symmetric_part_bound(
     lap: sparse.csr_matrix, err: sparse.csr_matrix, shift: float = 0.0
 ) -> SymmetricPartProof:
     """Rigorous ``λ_min(L + Lᵀ) > shift`` for the exact matrix within ``err`` of the float
-    ``lap``: one sparse Cholesky factorisation (CHOLMOD) of ``A − cI`` succeeds, where
-    A = fl(L + Lᵀ − shift·I) and c is :func:`rump_shift` with
-    E = err + errᵀ + u|L + Lᵀ| + 2u(|diag| + shift), which bounds the distance of A from
-    the exact L + Lᵀ − shift·I.
+    ``lap``: one sparse Cholesky factorisation (CHOLMOD) of ``A − cI`` succeeds, with A
+    and E from :func:`shifted_symmetric_part` and c = :func:`rump_shift` (A, E).
 
     Parameters
     ----------
@@ -385,11 +411,7 @@ def symmetric_part_bound(
     InputError
         The factorisation would not fit (:func:`~ntc_design.linalg.require_sparse_factor`).
     """
-    s = (lap + lap.T).tocsr()
-    n = s.shape[0]
-    a = (s - shift * sparse.identity(n, format="csr")).tocsr() if shift else s
-    dg = np.abs(s.diagonal()) + shift
-    e = (err + err.T + U * abs(s) + sparse.diags(2 * U * dg)).tocsr()
+    a, e = shifted_symmetric_part(lap, err, shift)
     c = rump_shift(a, e)
     what = "L + Lᵀ" if not shift else f"L + Lᵀ − {shift:.6g}·I"
     if not (np.isfinite(c) and np.all(np.isfinite(a.data)) and np.all(np.isfinite(e.data))):

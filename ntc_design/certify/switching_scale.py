@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -60,13 +61,13 @@ from .certificate import (
     topology_hash,
 )
 from .claims import Claim, ClaimKind, Property
-from .exact import U
 from .scale import (
     FORMAT,
     VERSION,
     component_matrix,
     lap_b_blocks,
     rump_shift,
+    shifted_symmetric_part,
     symmetric_part_bound,
     topology_from_subject,
 )
@@ -85,13 +86,12 @@ def _sym_matrices(top: Topology, delta: float):
     return component_matrix(blocks, np.arange(top.n))
 
 
-def _min_eig_estimate(lap, fam: SPDFamily | None) -> tuple[float, str]:
-    """λ_min(L + Lᵀ) estimated: dense up to EIG_DENSE_MAX_ND, else ARPACK shift-invert at
-    0 with the Cholesky factor (``fam``, when L + Lᵀ factorised), else ARPACK's smallest
-    algebraic eigenvalue (bounded iterations; NaN when it does not converge)."""
+def _min_eig_estimate(s, fam: SPDFamily | None) -> tuple[float, str]:
+    """λ_min(S), S = L + Lᵀ, estimated: dense up to EIG_DENSE_MAX_ND, else ARPACK
+    shift-invert at 0 with the Cholesky factor (``fam``, when S factorised), else ARPACK's
+    smallest algebraic eigenvalue (bounded iterations; NaN when it does not converge)."""
     from scipy.sparse.linalg import ArpackError, LinearOperator, eigsh
 
-    s = (lap + lap.T).tocsr()
     n = s.shape[0]
     if n <= EIG_DENSE_MAX_ND:
         return float(np.linalg.eigvalsh(s.toarray())[0]), "dense eigenvalues"
@@ -115,7 +115,19 @@ def _min_eig_estimate(lap, fam: SPDFamily | None) -> tuple[float, str]:
         return math.nan, "ARPACK did not converge"
 
 
-def prove_mode(top: Topology, delta: float) -> dict[str, Any]:
+@dataclass(frozen=True)
+class ModeProof:
+    """One mode's outcome: whether ``λ_min(L_B + L_Bᵀ) > lower`` is proven, the
+    eigenvalue estimate (NaN when none) and how each was obtained."""
+
+    holds: bool
+    lower: float | None
+    estimate: float
+    estimate_method: str
+    detail: str
+
+
+def prove_mode(top: Topology, delta: float) -> ModeProof:
     """Prove ``λ_min(L_B + L_Bᵀ) > ℓ >= 0`` for one mode with the largest ℓ that the
     eigenvalue estimate allows (module docstring).
 
@@ -128,39 +140,33 @@ def prove_mode(top: Topology, delta: float) -> dict[str, Any]:
 
     Returns
     -------
-    dict
-        ``holds``, ``lower`` (ℓ), ``estimate`` (λ_min), ``estimate_method`` and
-        ``detail``.
+    ModeProof
+        Whether it is proven, ℓ, the estimate and how.
     """
     lap, err = _sym_matrices(top, delta)
-    out: dict[str, Any] = {"holds": False, "lower": None}
-    s = (lap + lap.T).tocsr()
+    s, e0 = shifted_symmetric_part(lap, err)
     fam = SPDFamily([s])
     try:  # L + Lᵀ itself: the eigensolver's inverse (and a failure says "indefinite")
         pd = fam.factor([1.0], 0.0)[0]
     except DenseRefused as exc:
-        out.update(estimate=math.nan, estimate_method="not estimated", detail=str(exc))
-        return out
-    est, how = _min_eig_estimate(lap, fam if pd else None)
+        return ModeProof(False, None, math.nan, "not estimated", str(exc))
+    est, how = _min_eig_estimate(s, fam if pd else None)
     fam = None  # free the factor before the proof's own: one factor in memory at a time
-    out.update(estimate=est, estimate_method=how)
     if not pd:
-        out["detail"] = "sparse Cholesky of L + Lᵀ fails (not positive definite)"
-        return out
+        return ModeProof(
+            False, None, est, how, "sparse Cholesky of L + Lᵀ fails (not positive definite)"
+        )
     tries = [0.0]
-    c0 = rump_shift(s, (err + err.T + U * abs(s)).tocsr())
+    c0 = rump_shift(s, e0)
     if math.isfinite(est) and est > 4 * c0:
         tries.insert(0, float(np.nextafter((est - 2 * c0) * (1 - LOWER_RTOL), 0.0)))
-
     for lower in tries:
         if lower and not 2.0**-NUMBER_EXP <= lower <= 2.0**NUMBER_EXP:
             lower = min(lower, 2.0**NUMBER_EXP) if lower > 2.0**-NUMBER_EXP else 0.0
         p = symmetric_part_bound(lap, err, lower)
         if p.holds:
-            out.update(holds=True, lower=p.shift, detail=p.detail)
-            return out
-    out["detail"] = p.detail
-    return out
+            return ModeProof(True, p.shift, est, how, p.detail)
+    return ModeProof(False, None, est, how, p.detail)
 
 
 def switching_scale_certificate(sd: SwitchingDesign) -> dict:
@@ -188,11 +194,11 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
     for k in used:  # the schedule's modes only: a mode it never uses needs no proof
         des = sd.modes[k]
         r = prove_mode(des.topology, des.delta)
-        est[k] = r["estimate"] if math.isfinite(r["estimate"]) else None
-        details[k] = f"{r['detail']}; λ_min estimate: {r['estimate_method']}"
-        if r["holds"]:
-            proofs[k] = {"lower": r["lower"]}
-            lower[k] = r["lower"]
+        est[k] = r.estimate if math.isfinite(r.estimate) else None
+        details[k] = f"{r.detail}; λ_min estimate: {r.estimate_method}"
+        if r.holds:
+            proofs[k] = {"lower": r.lower}
+            lower[k] = r.lower
     hashes = {k: topology_hash(d.topology) for k, d in sd.modes.items()}
     all_proven = all(k in proofs for k in used)
     doc = {
@@ -428,6 +434,7 @@ def verify_switching_scale(
 
 __all__ = [
     "KIND",
+    "ModeProof",
     "prove_mode",
     "switching_scale_certificate",
     "verify_switching_scale",

@@ -677,7 +677,7 @@ def time_varying_certificate(
     CertificationRefused
         The uniform bound cannot be certified (see :func:`certify_lambda2`).
     """
-    from .certificate import FORMAT, VERSION, _finish
+    from .certificate import FORMAT, VERSION, finish
 
     bound = certify_lambda2(tv, margin, sigma)
     sigma_bar = noise_sigma_bar(f)
@@ -723,8 +723,7 @@ def time_varying_certificate(
         "results": {"time_varying": results},
         "solver": {"name": "branch and bound, Arb ball arithmetic", "status": "ok"},
     }
-    doc["verification_method"] = "interval"
-    return _finish(doc)
+    return finish(doc, "interval")
 
 
 def verify_time_varying(doc: dict, source: str = "certificate"):
@@ -750,18 +749,10 @@ def verify_time_varying(doc: dict, source: str = "certificate"):
         A malformed certificate or topology, or a topology without period or
         constant_after.
     """
-    from .certificate import Check, Verification, _need, digest
+    from .certificate import Check, Verification, _need, integrity_checks
 
-    checks: list[Check] = []
-    want = digest(doc)
-    checks.append(
-        Check(
-            "digest",
-            want == doc["digest"],
-            "matches" if want == doc["digest"] else "the file was modified after it was issued",
-        )
-    )
     subj = _need(doc, "subject", dict, source)
+    checks: list[Check] = integrity_checks(doc, subj, doc["digest"])
     top_doc = _need(subj, "topology", dict, f"{source}: subject")
     margin = _need(subj, "margin", (int, float), f"{source}: subject")
     noise = _need(subj, "noise", dict, f"{source}: subject")
