@@ -178,8 +178,8 @@ class DaskEngine:
         Raises
         ------
         InputError
-            When the address is malformed or no scheduler answers within
-            :data:`CONNECT_TIMEOUT` seconds.
+            When the address is malformed, no scheduler answers within
+            :data:`CONNECT_TIMEOUT` seconds, or what answers is not a Dask scheduler.
         """
         from distributed import Client
 
@@ -187,6 +187,11 @@ class DaskEngine:
             raise InputError("--scheduler: expected an address such as tcp://127.0.0.1:8786")
         try:
             client = Client(address, timeout=CONNECT_TIMEOUT)
+        except MemoryError:  # something answered, but not in Dask's protocol: its reply
+            # was read as a frame length of exabytes
+            raise InputError(
+                f"--scheduler: {address} answered, but not as a Dask scheduler"
+            ) from None
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             msg = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
             raise InputError(

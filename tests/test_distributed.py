@@ -233,6 +233,48 @@ def test_unreachable_scheduler_is_one_line(files, tmp_path, capsys, monkeypatch)
 
 
 @pytest.mark.hostile
+def test_a_service_that_is_not_dask_is_one_line(files, tmp_path, capsys, monkeypatch):
+    """A non-Dask service at the address: its reply was read as a frame length of
+    exabytes (MemoryError, reported as 'out of memory')."""
+    import threading
+
+    monkeypatch.setattr(dist, "CONNECT_TIMEOUT", 2.0)
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    stop = threading.Event()
+
+    def answer():
+        srv.settimeout(0.2)
+        while not stop.is_set():
+            try:
+                conn, _ = srv.accept()
+            except OSError:
+                continue
+            conn.sendall(b"HTTP/1.1 400 Bad Request\r\n\r\n" * 4)
+            time.sleep(0.5)
+            conn.close()
+
+    th = threading.Thread(target=answer, daemon=True)
+    th.start()
+    addr = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    try:
+        line = assert_input_error(
+            ["sweep", files / "sw.yaml", "--out", tmp_path / "b", "--scheduler", addr],
+            capsys,
+            monkeypatch,
+            "--scheduler",
+            addr,
+        )
+    finally:
+        stop.set()
+        th.join()
+        srv.close()
+    assert "out of memory" not in line
+    assert not (tmp_path / "b").exists()
+
+
+@pytest.mark.hostile
 @pytest.mark.parametrize(
     "body, needles",
     [
