@@ -609,6 +609,8 @@ class Verification:
 
 
 def _need(doc: dict, key: str, typ: type | tuple, where: str) -> Any:
+    if not isinstance(doc, dict):
+        raise InputError(f"{where}: expected an object")
     if key not in doc:
         raise InputError(f"{where}: missing field '{key}'")
     v = doc[key]

@@ -914,6 +914,7 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
         Check,
         ModeAbout,
         Verification,
+        _need,
         _number,
         _same_topology,
         _vector,
@@ -924,17 +925,10 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
     )
     from .claims import Claim, ClaimKind, Property
 
-    def need(d: dict, key: str, typ, where: str):
-        if not isinstance(d, dict) or key not in d:
-            raise InputError(f"{where}: missing field '{key}'")
-        if not isinstance(d[key], typ) or isinstance(d[key], bool):
-            raise InputError(f"{where}: field '{key}' has the wrong type")
-        return d[key]
-
-    got = need(doc, "digest", str, source)
-    subject = need(doc, "subject", dict, source)
+    got = _need(doc, "digest", str, source)
+    subject = _need(doc, "subject", dict, source)
     checks: list = integrity_checks(doc, subject, got)
-    modes = need(subject, "modes", dict, f"{source}: subject")
+    modes = _need(subject, "modes", dict, f"{source}: subject")
     if len(modes) != 1:
         raise InputError(f"{source}: subject.modes: a hurwitz-scale certificate has one mode")
     ((mname, sub),) = modes.items()
@@ -958,14 +952,14 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
         )
     )
     where = f"{source}: subject.modes.{mname}"
-    top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
-    size = need(doc, "size", int, source)
+    top = topology_from_subject(_need(sub, "topology", dict, where), f"{where}.topology")
+    size = _need(doc, "size", int, source)
     if top.nd != size:
         raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-    delta = _number(need(sub, "delta", (int, float), where), f"{where}.delta")
+    delta = _number(_need(sub, "delta", (int, float), where), f"{where}.delta")
     if not delta > 0 or out_of_range(delta):
         raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
-    informed = need(sub, "informed", list, where)
+    informed = _need(sub, "informed", list, where)
     try:
         inf_idx = sorted(top.index(x) for x in informed)
     except InputError:
@@ -974,22 +968,22 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
     checks.append(
         Check(f"informed agents of {mname} are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
     )
-    theta_c = _vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
+    theta_c = _vector(_need(sub, "theta", list, where), top.dim, f"{where}.theta")
     ok_t0 = bool(np.any(theta_c))
     checks.append(Check("θ ≠ 0", ok_t0, f"θ = {theta_c.tolist()}"))
     n = top.n
     cw = f"{source}: components"
-    comps = need(doc, "components", dict, source)
-    comp = unpack(need(comps, "label", dict, cw), f"{cw}.label", "i8", (n,))
-    meth = need(comps, "method", list, cw)
+    comps = _need(doc, "components", dict, source)
+    comp = unpack(_need(comps, "label", dict, cw), f"{cw}.label", "i8", (n,))
+    meth = _need(comps, "method", list, cw)
     if any(not isinstance(m, str) for m in meth):
         raise InputError(f"{cw}.method: expected strings")
     ncomp = len(meth)
     if n and (comp.min() < 0 or comp.max() >= ncomp):
         raise InputError(f"{cw}.label: a component number is out of range 0..{ncomp - 1}")
-    v = unpack(need(comps, "v", dict, cw), f"{cw}.v", "f8", (n,))
-    mu = unpack(need(comps, "mu", dict, cw), f"{cw}.mu", "f8", (n,))
-    lyap = need(comps, "lyapunov", dict, cw)
+    v = unpack(_need(comps, "v", dict, cw), f"{cw}.v", "f8", (n,))
+    mu = unpack(_need(comps, "mu", dict, cw), f"{cw}.mu", "f8", (n,))
+    lyap = _need(comps, "lyapunov", dict, cw)
     if not (np.all(np.isfinite(v)) and np.all(np.isfinite(mu))):
         raise InputError(f"{cw}: v and mu must be finite")
     # 1. the numbering makes L_B block triangular: every edge goes forward
@@ -1066,9 +1060,9 @@ def verify_scale(doc: dict, source: str = "certificate", topology=None, theta=No
         m = agents.size * top.dim
         if m > LYAPUNOV_COMPONENT_MAX_ND:
             raise InputError(f"{cw}.lyapunov.{c}: component above Nd = {LYAPUNOV_COMPONENT_MAX_ND}")
-        entry = need(lyap, str(c), dict, f"{cw}.lyapunov")
+        entry = _need(lyap, str(c), dict, f"{cw}.lyapunov")
         p = unpack(
-            need(entry, "P", dict, f"{cw}.lyapunov.{c}"), f"{cw}.lyapunov.{c}.P", "f8", (m, m)
+            _need(entry, "P", dict, f"{cw}.lyapunov.{c}"), f"{cw}.lyapunov.{c}.P", "f8", (m, m)
         )
         lap_c, err_c = component_matrix(blocks, agents)
         p1 = _prove_pd_expr(p, None, None, 0.0, None, False)
