@@ -84,6 +84,29 @@ class Moments:
     steps: int
 
 
+class _MomentRecorder:
+    """E[ε] and E‖x_i − θ‖² = tr of agent i's d×d block of S, recorded at the save times
+    in order: by time (``at``, a save time within 1e-12 relative) or by slot (``put``)."""
+
+    def __init__(self, saves: np.ndarray, n: int, d: int) -> None:
+        self.saves, self.n, self.d = np.asarray(saves, dtype=float), n, d
+        self.means = np.zeros((self.saves.size, n * d))
+        self.ms = np.zeros((self.saves.size, n))
+        self.k = 0
+
+    def put(self, i: int, m: np.ndarray, s: np.ndarray) -> None:
+        self.means[i] = m
+        self.ms[i] = np.einsum("iaia->i", s.reshape(self.n, self.d, self.n, self.d))
+
+    def at(self, t: float, m: np.ndarray, s: np.ndarray) -> None:
+        while self.k < self.saves.size and abs(self.saves[self.k] - t) <= 1e-12 * max(1.0, t):
+            self.put(self.k, m, s)
+            self.k += 1
+
+    def result(self, s: np.ndarray, steps: int) -> Moments:
+        return Moments(self.saves, self.means, self.ms, s, steps)
+
+
 class _Rhs:
     def __init__(self, s: ModeSystem, n: int, d: int):
         # sparse products cost O(nnz·Nd); at small Nd a dense product is cheaper than
@@ -163,19 +186,9 @@ def exact_moments(
     rhs = [_Rhs(s, n, d) for s in systems]
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
-    saves = np.asarray(save_times, dtype=float)
-    means = np.zeros((saves.size, m.size))
-    ms = np.zeros((saves.size, n))
-    k_save = 0
-
-    def store(t: float) -> None:
-        nonlocal k_save
-        while k_save < saves.size and abs(saves[k_save] - t) <= 1e-12 * max(1.0, t):
-            means[k_save] = m
-            ms[k_save] = np.einsum("iaia->i", s.reshape(n, d, n, d))
-            k_save += 1
-
-    store(0.0)
+    rec = _MomentRecorder(save_times, n, d)
+    saves = rec.saves
+    rec.at(0.0, m, s)
     steps = 0
     for a, b, mode in segments:
         f = rhs[mode]
@@ -198,8 +211,8 @@ def exact_moments(
                 s = 0.5 * (s + s.T)
                 t = stop if h == stop - t else t + h
                 steps += 1
-            store(t)
-    return Moments(saves, means, ms, s, steps)
+            rec.at(t, m, s)
+    return rec.result(s, steps)
 
 
 def em_moments(
@@ -255,17 +268,10 @@ def em_moments(
     c_all = np.asarray(gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
     h_all = np.diff(grid.t)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
-    means = np.zeros((grid.save_steps.size, m.size))
-    ms = np.zeros((grid.save_steps.size, n))
+    rec = _MomentRecorder(grid.save_times, n, d)
     lus: dict = {}
-
-    def store(k: int) -> None:
-        if k in save_at:
-            i = save_at[k]
-            means[i] = m
-            ms[i] = np.einsum("iaia->i", s.reshape(n, d, n, d))
-
-    store(0)
+    if 0 in save_at:
+        rec.put(save_at[0], m, s)
     for k in range(grid.n_steps):
         mode = grid.mode[k]
         f = rhs[mode]
@@ -288,5 +294,6 @@ def em_moments(
             s = s - c * h * (ls + ls.T) + (c * h) ** 2 * (f.l @ ls.T).T + c * c * h * f.noise(s)
             m = m - c * h * (f.l @ m)
         s = 0.5 * (s + s.T)
-        store(k + 1)
-    return Moments(grid.save_times, means, ms, s, grid.n_steps)
+        if k + 1 in save_at:
+            rec.put(save_at[k + 1], m, s)
+    return rec.result(s, grid.n_steps)

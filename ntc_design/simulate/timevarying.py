@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import InputError
 from ..timevarying import ExpressionTopology, Lemma1Structure, TimeVaryingDesign
 from .grid import TimeGrid
-from .moments import KAPPA, Moments
+from .moments import KAPPA, Moments, _MomentRecorder
 from .montecarlo import PartialStats, _BlockStats
 from .system import NoiseModel
 
@@ -317,18 +317,8 @@ def exact_moments_tv(
     ts = np.array(ts)
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
-    means = np.zeros((saves.size, m.size))
-    ms = np.zeros((saves.size, n))
-    k_save = 0
-
-    def store(tt: float) -> None:
-        nonlocal k_save
-        while k_save < saves.size and abs(saves[k_save] - tt) <= 1e-12 * max(1.0, tt):
-            means[k_save] = m
-            ms[k_save] = np.einsum("iaia->i", s.reshape(n, d, n, d))
-            k_save += 1
-
-    store(0.0)
+    rec = _MomentRecorder(saves, n, d)
+    rec.at(0.0, m, s)
     chunk = 256
     fm = sys_.fmat
     for c0 in range(0, ts.size - 1, chunk):
@@ -358,8 +348,8 @@ def exact_moments_tv(
             m = m + h / 6 * (k1m + 2 * k2m + 2 * k3m + k4m)
             s = s + h / 6 * (k1s + 2 * k2s + 2 * k3s + k4s)
             s = 0.5 * (s + s.T)
-            store(float(ta[k + 1]))
-    return Moments(saves, means, ms, s, int(ts.size - 1))
+            rec.at(float(ta[k + 1]), m, s)
+    return rec.result(s, int(ts.size - 1))
 
 
 def stability_ratio(sys_: TimeVaryingSystem, grid: TimeGrid, c_grid: np.ndarray) -> tuple:
