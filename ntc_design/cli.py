@@ -504,7 +504,9 @@ def _print_verification(doc: dict) -> None:
             used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
             print(
                 f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
-                f"d = {m['d']}, {m['topology_hash']}, δ = {m['delta']:.6g}, θ = {m['theta']}{used}"
+                f"d = {m['d']}, {m['topology_hash']}, "
+                + (f"δ = {m['delta']:.6g}" if m["delta"] is not None else "δ(t) = C(t) + ΔC")
+                + f", θ = {m['theta']}{used}"
             )
         if ab["schedule"] is not None:
             sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])

@@ -271,7 +271,7 @@ def test_the_checked_api_is_the_whole_api():
         "ntc_design.design.design",
         "ntc_design.model.load",
         "ntc_design.certify.result.certify",
-        "ntc_design.certify.certificate.verify",
+        "ntc_design.certify.verify.verify",
         "ntc_design.gain.analyse_gain",
         "ntc_design.simulate.driver.simulate",
     ):

@@ -117,9 +117,9 @@ def test_undecided_is_none_not_a_guess():
 
 
 def test_one_label_table():
-    from ntc_design.certify.theorems import _gain_premises
+    from ntc_design.certify.theorems import gain_premises
 
     g = analyse_gain("1/(1+t)")
-    names = [p.name for p in _gain_premises(g, almost_sure=True)]  # typed Premise
+    names = [p.name for p in gain_premises(g, almost_sure=True)]  # typed Premise
     assert names == list(CONDITION_LABELS.values())
     assert set(g.to_dict()) >= set(CONDITION_LABELS)

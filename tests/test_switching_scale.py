@@ -17,7 +17,7 @@ from ntc_design.certify.certificate import _sha, digest, switching_certificate, 
 from ntc_design.certify.scale import component_matrix, lap_b_blocks, symmetric_part_bound
 from ntc_design.certify.switching_scale import (
     switching_scale_certificate,
-    verify_switching_scale,
+
 )
 from ntc_design.design import design
 from ntc_design.errors import InputError
@@ -132,7 +132,7 @@ def test_an_agent_nothing_reaches_is_never_certified():
         (lambda d: d["claims"].pop(), "listed claims"),
         (lambda d: d.update(certifies=["symmetric_part", "common_lyapunov"]), "certifies"),
         (lambda d: d["subject"]["schedule"].pop(), "switching hash"),
-        (lambda d: d["subject"]["modes"]["B"].update(theta=[1.0, 2.0, 3.0]), "one θ"),
+        (lambda d: d["subject"]["modes"]["B"].update(theta=[1.0, 2.0, 3.0]), "θ ≠ 0, one for every mode"),
         (lambda d: d["subject"]["modes"]["A"].update(informed=[]), "informed"),
     ],
 )
@@ -159,7 +159,7 @@ def test_malformed_proof_fields_are_bad_input(cert, field, value, needle):
     doc = copy.deepcopy(cert)
     doc["proofs"]["A"][field] = value
     with pytest.raises(InputError, match=needle):
-        verify_switching_scale(_refresh(doc))
+        verify(_refresh(doc))
 
 
 def test_verify_checks_the_users_topology_and_theta(sw, cert):
@@ -348,7 +348,7 @@ def test_forged_switching_results_fail(cert, forge):
     forge(doc)
     ver = verify(_refresh(doc))
     assert [c.name for c in ver.failed] == [
-        "reported results (bounds are the proven ones; estimates above them)"
+        "reported results (each number recomputed, bounded or informational)"
     ]
 
 
@@ -527,7 +527,7 @@ def test_malformed_unscheduled_proof_is_invalid_not_a_crash(cert, value):
     doc["results"]["symmetric_part_min_eig"]["Z"] = 1.0
     ver = verify(_refresh(doc))
     assert [c.name for c in ver.failed] == [
-        "reported results (bounds are the proven ones; estimates above them)"
+        "reported results (each number recomputed, bounded or informational)"
     ]
 
 

@@ -11,7 +11,8 @@ import yaml
 
 import ntc_design as nd
 from ntc_design.certify import certify
-from ntc_design.certify.certificate import digest, verify
+from ntc_design.certify import verify
+from ntc_design.certify.certificate import digest
 from ntc_design.certify.time_varying import CertificationRefused, certify_lambda2
 from ntc_design.design import design, design_topology
 from ntc_design.errors import InputError
@@ -130,13 +131,20 @@ def test_cli_certify_json_and_verify(tmp_path, capsys, monkeypatch):
     forged["digest"] = digest(forged)
     ver = verify(forged)
     assert not ver.valid and [c.name for c in ver.failed] == [
-        "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval"
+        "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval",
+        "reported results (each number recomputed, bounded or informational)",
     ]
+    assert "lambda2: reported" in ver.failed[1].detail
     # an interval dropped: the cover fails
     gap = copy.deepcopy(cert)
     del gap["intervals"][len(gap["intervals"]) // 2]
     gap["digest"] = digest(gap)
-    assert [c.name for c in verify(gap).failed] == ["the intervals cover the domain"]
+    failed = verify(gap).failed
+    assert [c.name for c in failed][:2] == [
+        "the intervals cover the domain",
+        "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval",
+    ]
+    assert "time_varying.intervals: reported" in failed[-1].detail
     # a weight edited: the digest breaks
     edited = copy.deepcopy(cert)
     edited["subject"]["topology"]["edges"][0]["weight"] = {"diag": ["-1 - 0.4*sin(t)", -2]}

@@ -1,5 +1,7 @@
 """Certificates layer: Lyapunov equations, LMIs, exact re-check, gain conditions and the
-theorem verdict."""
+theorem verdict. Certificate kinds live in :mod:`ntc_design.certify.kinds` (a base class,
+one module per kind, and the registry :data:`KINDS`); :func:`verify` re-checks any kind
+through one path."""
 
 from ..gain import GainAnalysis, analyse_gain
 from .certificate import (
@@ -10,34 +12,34 @@ from .certificate import (
     hurwitz_certificate,
     switching_certificate,
     topology_hash,
-    verify,
-    verify_file,
     write_certificate,
 )
-from .claims import KINDS, Claim, ClaimKind, KindSpec, Property
+from .claims import Claim, ClaimKind, Property
+from .kinds import KINDS, CertificateKind, kind_for
 from .result import CertifyResult, certify
-from .scale import scale_certificate, verify_scale
+from .scale import scale_certificate
 from .theorems import Premise, TheoremVerdict
+from .verify import verify, verify_file
 
 __all__ = [
-    "scale_certificate",
-    "verify_scale",
     "DIGEST_NOTE",
-    "GainAnalysis",
-    "analyse_gain",
     "KINDS",
     "About",
+    "CertificateKind",
     "CertifyResult",
     "Check",
     "Claim",
     "ClaimKind",
-    "KindSpec",
+    "GainAnalysis",
     "Premise",
     "Property",
     "TheoremVerdict",
     "Verification",
+    "analyse_gain",
     "certify",
     "hurwitz_certificate",
+    "kind_for",
+    "scale_certificate",
     "switching_certificate",
     "topology_hash",
     "verify",

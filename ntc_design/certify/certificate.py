@@ -40,7 +40,7 @@ from ..errors import InputError
 from ..files import parse_topology
 from ..model import SwitchingTopology, Topology, antagonistic_in_weight
 from ..outputs import write_atomic
-from .claims import KINDS, PROPERTY_TEXT, Claim, ClaimKind, KindSpec, Property, derive_claims
+from .claims import PROPERTY_TEXT, Claim, ClaimKind, Property, derive_claims
 from .exact import (
     EXACT_MAX_N,
     Dyadic,
@@ -116,7 +116,23 @@ def canonical(obj: Any) -> bytes:
 
 
 def _sha(obj: Any) -> str:
-    return "sha256:" + hashlib.sha256(canonical(obj)).hexdigest()
+    return document_hash(obj)
+
+
+def document_hash(doc: Any) -> str:
+    """``sha256:`` and the SHA-256 of a document's canonical JSON (the hash of a
+    time-varying topology, whose weights are expressions).
+
+    Parameters
+    ----------
+    doc : Any
+        A JSON-ready document.
+
+    Returns
+    -------
+    str
+    """
+    return "sha256:" + hashlib.sha256(canonical(doc)).hexdigest()
 
 
 def digest(doc: dict) -> str:
@@ -804,7 +820,7 @@ def prove_hurwitz(lap_b: np.ndarray, exact: bool | None = None) -> HurwitzProof:
 
 
 @dataclass(frozen=True, eq=False)
-class _Mode:
+class DenseMode:
     """A mode of the subject, parsed and re-derived."""
 
     name: str
@@ -819,20 +835,33 @@ class _Mode:
     in_range: bool
 
 
-class _Context:
+class DenseContext:
     """What the provers need: the modes, the matrices P (parsed on demand), the method."""
 
-    def __init__(
-        self, source: str, n: int, modes: dict[str, _Mode], ps: dict, scheduled: tuple[str, ...]
-    ) -> None:
+    def __init__(self, source: str, n: int, modes: dict[str, DenseMode], ps: dict) -> None:
         self.source, self.n, self.modes, self.ps = source, n, modes, ps
-        self.scheduled = scheduled
         self.exact = n <= EXACT_MAX_N
         self._p: dict[str, np.ndarray | None] = {}
         self.methods: set[str] = set()
 
     def p(self, name: str) -> np.ndarray | None:
-        """P by name (InputError when malformed); None when out of range."""
+        """A matrix P of the certificate by name, parsed once.
+
+        Parameters
+        ----------
+        name : str
+            ``lyapunov``, ``rate`` or ``common``.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            None when an entry is out of range (nothing can be proven with it).
+
+        Raises
+        ------
+        InputError
+            Missing or malformed.
+        """
         if name not in self._p:
             if name not in self.ps:
                 raise InputError(f"{self.source}: matrices.P: missing {name!r}")
@@ -845,14 +874,14 @@ def _unproven(why: str) -> PDProof:
     return PDProof(False, "not attempted", why)
 
 
-def _prove_pd(c: Claim, ctx: _Context) -> PDProof:
+def _prove_pd(c: Claim, ctx: DenseContext) -> PDProof:
     p = ctx.p(c.p or "")
     if p is None:
         return _unproven(f"matrices.P.{c.p} has {RANGE_TEXT}")
     return _prove_pd_expr(p, None, None, 0.0, None, ctx.exact)
 
 
-def _prove_lyapunov(c: Claim, ctx: _Context) -> PDProof:
+def _prove_lyapunov(c: Claim, ctx: DenseContext) -> PDProof:
     p = ctx.p(c.p or "")
     mode = ctx.modes.get(c.mode or "")
     if mode is None:
@@ -864,7 +893,7 @@ def _prove_lyapunov(c: Claim, ctx: _Context) -> PDProof:
     return _prove_pd_expr(p, mode.exact, mode.lap, c.alpha, mode.err, ctx.exact)
 
 
-def _prove_symmetric(c: Claim, ctx: _Context) -> PDProof:
+def _prove_symmetric(c: Claim, ctx: DenseContext) -> PDProof:
     mode = ctx.modes.get(c.mode or "")
     if mode is None:
         return _unproven(f"the certificate does not describe mode {c.mode!r}")
@@ -878,13 +907,13 @@ def _prove_symmetric(c: Claim, ctx: _Context) -> PDProof:
     return verified_float_pd(s, gamma(2) * np.abs(s) + mode.err + mode.err.T)
 
 
-def _prove_positive_rate(c: Claim, ctx: _Context) -> PDProof:
+def _prove_positive_rate(c: Claim, ctx: DenseContext) -> PDProof:
     ok = c.alpha > 0 and not out_of_range(c.alpha)
     return PDProof(ok, "exact-rational", f"α = {c.alpha!r}" + (" > 0" if ok else " is not > 0"))
 
 
 #: How each kind of claim is proven.
-PROVERS: dict[ClaimKind, Callable[[Claim, _Context], PDProof]] = {
+PROVERS: dict[ClaimKind, Callable[[Claim, DenseContext], PDProof]] = {
     ClaimKind.PD: _prove_pd,
     ClaimKind.LYAPUNOV: _prove_lyapunov,
     ClaimKind.SYMMETRIC_PART: _prove_symmetric,
@@ -904,7 +933,34 @@ def _check_topology_fields(t: dict, size: int, where: str) -> None:
         raise InputError(f"{where}.edges: more edges than N(N−1)")
 
 
-def _parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -> _Mode:
+def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -> DenseMode:
+    """Read one mode of a dense certificate's subject and re-derive it: the topology and
+    its hash, informed agents = U, B_i = Σ_{Ω_i}|A_ij| exactly, k1 and x0 from δ and θ,
+    and L_B (float with an error bound, and exact while affordable).
+
+    Parameters
+    ----------
+    name : str
+        The mode's name.
+    sub : Any
+        Its subject entry.
+    n : int
+        The certificate's size Nd.
+    source : str
+        The certificate's name, for messages.
+    checks : list of Check
+        The subject checks are appended to it.
+
+    Returns
+    -------
+    DenseMode
+        The mode, parsed and re-derived.
+
+    Raises
+    ------
+    InputError
+        A missing or malformed field.
+    """
     where = f"{source}: subject.modes.{name}"
     if not isinstance(sub, dict):
         raise InputError(f"{where}: expected an object")
@@ -969,10 +1025,10 @@ def _parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -
     # the issuer computed k1 = 1 + 2/δ and x0 = k1·θ in IEEE double: the same operations
     # give the same bits, so θ cannot change without x0 (or k1) changing too
     want_k1 = 1.0 + 2.0 / delta
-    ok_x = k1 == want_k1 and bool(np.array_equal(x0, want_k1 * theta)) and bool(np.any(theta))
+    ok_x = k1 == want_k1 and bool(np.array_equal(x0, want_k1 * theta))
     checks.append(
         Check(
-            f"{name}: k1 = 1 + 2/δ, x0 = k1·θ, θ ≠ 0",
+            f"{name}: k1 = 1 + 2/δ, x0 = k1·θ",
             ok_x,
             f"θ = {theta.tolist()}, x0 = {x0.tolist()}"
             if ok_x
@@ -991,7 +1047,7 @@ def _parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -
         exact = _lap_b_exact(top, b, delta) if n <= EXACT_MAX_N else None
     else:
         lap, err, exact = np.zeros((n, n)), np.zeros((n, n)), None
-    return _Mode(name, top, theta, delta, b, h, lap, err, exact, in_range)
+    return DenseMode(name, top, theta, delta, b, h, lap, err, exact, in_range)
 
 
 def finite_number(x: Any) -> float | None:
@@ -1016,97 +1072,6 @@ def finite_number(x: Any) -> float | None:
     return xf if math.isfinite(xf) else None
 
 
-def _result_close(reported: Any, value: float, scale: float) -> bool:
-    r = finite_number(reported)
-    if r is None or not math.isfinite(value):
-        return False
-    return abs(r - value) <= RESULT_RTOL * max(scale, abs(value), 1e-300)
-
-
-def _results_hurwitz(doc: dict, ctx: _Context, alpha: float, rated: bool) -> list[Check]:
-    (mode,) = ctx.modes.values()
-    res = _need(doc, "results", dict, ctx.source)
-    scale = float(np.max(np.abs(mode.lap))) if mode.in_range else 1.0
-    eig = _eig_bound(mode.lap)
-    out = []
-    ok = _result_close(res.get("eig_bound"), eig, scale)
-    out.append(Check("reported eigenvalue bound", ok, f"min Re λ(L_B) = {eig:.10g}"))
-    lya = res.get("lyapunov")
-    p = ctx.p("lyapunov") if "lyapunov" in ctx.ps else None
-    if isinstance(lya, dict) and p is not None:
-        pn = float(np.max(np.abs(p)))
-        r = p @ mode.lap + mode.lap.T @ p - np.eye(ctx.n)
-        resid = float(np.linalg.norm(r) / np.sqrt(ctx.n))
-        pmin = _min_eig(p)
-        ok = _result_close(lya.get("P_min_eig"), pmin, pn) and _result_close(
-            lya.get("residual"), resid, 1.0
-        )
-        out.append(
-            Check(
-                "reported Lyapunov residual and λ_min(P)",
-                ok,
-                f"residual {resid:.3g}, λ_min(P_lyapunov) = {pmin:.10g}",
-            )
-        )
-    lmi = res.get("lmi")
-    if rated and not isinstance(lmi, dict):
-        raise InputError(f"{ctx.source}: results: missing field 'lmi' (the decay rate α)")
-    if isinstance(lmi, dict):
-        ok = (
-            _result_close(lmi.get("eig_bound"), eig, scale)
-            and _result_close(lmi.get("gap"), eig - alpha, scale)
-            and alpha <= eig * (1 + RESULT_RTOL)
-        )
-        out.append(
-            Check(
-                "reported α is the proven one, below the eigenvalue bound",
-                ok,
-                f"α = {alpha:.10g} <= {eig:.10g}, gap {eig - alpha:.3g}"
-                if rated
-                else "no rate certified (α = 0)",
-            )
-        )
-    return out
-
-
-def _results_switching(doc: dict, ctx: _Context, alpha: float, rated: bool) -> list[Check]:
-    res = _need(doc, "results", dict, ctx.source)
-    sym = _need(res, "symmetric_part_min_eig", dict, f"{ctx.source}: results")
-    out = []
-    bad = []
-    for k, m in ctx.modes.items():
-        s = m.lap + m.lap.T
-        lam = _min_eig(s)
-        if not _result_close(sym.get(k), lam, float(np.max(np.abs(s)))):
-            bad.append(f"{k}: reported {sym.get(k)!r}, recomputed {lam:.10g}")
-    extra = sorted(set(sym) - set(ctx.modes))
-    bad += [f"{k}: not a mode" for k in extra]
-    out.append(
-        Check(
-            "reported λ_min(L_B + L_Bᵀ)",
-            not bad,
-            "; ".join(bad)
-            or ", ".join(f"{k} {_min_eig(m.lap + m.lap.T):.6g}" for k, m in ctx.modes.items()),
-        )
-    )
-    cl = res.get("common_lyapunov")
-    if isinstance(cl, dict) and cl.get("margin") is not None:
-        from .lyapunov import _verified_margin
-
-        p = ctx.p("common") if "common" in ctx.ps else None
-        used = [ctx.modes[k].lap for k in ctx.modes if k in ctx.scheduled]
-        ok = p is not None and _result_close(cl["margin"], _verified_margin(used, p, 0.0), 1.0)
-        out.append(Check("reported common-P margin", ok, "recomputed" if ok else "differs"))
-    return out
-
-
-#: Re-derivation of each kind's reported results.
-RESULTS: dict[str, Callable[[dict, _Context, float, bool], list[Check]]] = {
-    "hurwitz": _results_hurwitz,
-    "switching": _results_switching,
-}
-
-
 def _parse_schedule(subject: dict, where: str) -> tuple[tuple[str, float], ...]:
     sched = _need(subject, "schedule", list, where)
     if not sched or len(sched) > MAX_SCHEDULE:
@@ -1123,203 +1088,6 @@ def _parse_schedule(subject: dict, where: str) -> tuple[tuple[str, float], ...]:
             raise InputError(f"{w}.duration: must be positive and finite")
         out.append((item["mode"], t))
     return tuple(out)
-
-
-def _invalid(method: str, name: str, detail: str) -> Verification:
-    return Verification(False, method, (Check(name, False, detail),))
-
-
-def verify(
-    doc: Any,
-    source: str = "certificate",
-    topology: Topology | SwitchingTopology | None = None,
-    theta: Any = None,
-) -> Verification:
-    """Re-check a certificate mapping, deriving what must be proven from its kind.
-
-    Parameters
-    ----------
-    doc : Any
-        The parsed JSON of a certificate.
-    source : str
-        Its name in messages (the file).
-    topology : Topology or SwitchingTopology, optional
-        The user's own topology: the certificate must be about it (canonical hashes).
-    theta : sequence of float, optional
-        The user's θ: the certificate must be about it.
-
-    Returns
-    -------
-    Verification
-        ``valid`` when every check holds; an unknown format version or kind gives an
-        invalid verification (nothing can be proven about it).
-
-    Raises
-    ------
-    InputError
-        When the certificate is malformed (wrong types or shapes, missing fields, sizes
-        above the bounds).
-    """
-    if not isinstance(doc, dict):
-        raise InputError(f"{source}: expected a JSON object")
-    if doc.get("format") != FORMAT:
-        raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
-    version = _need(doc, "version", int, source)
-    if version not in SUPPORTED_VERSIONS:
-        return _invalid(
-            "none",
-            "format version",
-            f"version {version} is not one this ntc reads ({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
-        )
-    kind = _need(doc, "kind", str, source)
-    if kind == "hurwitz-scale":  # big networks: component by component (issue 9)
-        from .scale import verify_scale
-
-        return verify_scale(doc, source, topology, theta)
-    if kind == "switching-scale":  # big switching sets: a sparse proof per mode (issue 9)
-        from .switching_scale import verify_switching_scale
-
-        return verify_switching_scale(doc, source, topology, theta)
-    if kind == "time_varying":  # weights as expressions of t: the uniform bound Λ₂
-        from .time_varying import verify_time_varying
-
-        _need(doc, "digest", str, source)
-        return verify_time_varying(doc, source)
-    spec: KindSpec | None = KINDS.get(kind)
-    if spec is None:
-        return _invalid(
-            "none",
-            "certificate kind",
-            f"unknown kind {kind!r} (known: {', '.join(KINDS)}); nothing is proven",
-        )
-    n = _need(doc, "size", int, source)
-    if not 1 <= n <= MAX_SIZE:
-        raise InputError(f"{source}: size: must be between 1 and {MAX_SIZE}, got {n}")
-    subject = _need(doc, "subject", dict, source)
-    modes_doc = _need(subject, "modes", dict, f"{source}: subject")
-    if not modes_doc or len(modes_doc) > MAX_MODES:
-        raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
-    mats = _need(doc, "matrices", dict, source)
-    lbs = mats.get("L_B", {})
-    if not isinstance(lbs, dict):
-        raise InputError(f"{source}: matrices.L_B: expected an object mode -> matrix")
-    ps = _need(mats, "P", dict, f"{source}: matrices")
-    listed = _need(doc, "claims", list, source)
-    props_doc = _need(doc, "certifies", list, source)
-    stated_digest = _need(doc, "digest", str, source)
-    if any(not isinstance(p, str) for p in props_doc):
-        raise InputError(f"{source}: certifies: expected a list of property names")
-
-    checks: list[Check] = integrity_checks(doc, subject, stated_digest)
-
-    # --- the subject: modes, schedule, what the certificate is about
-    modes = {str(k): _parse_mode(str(k), v, n, source, checks) for k, v in modes_doc.items()}
-    for name, m in modes.items():
-        if name not in lbs:  # L_B is re-derived anyway; a stated one must match
-            continue
-        stated = _matrix(lbs[name], n, f"{source}: matrices.L_B.{name}")
-        diff = float(np.max(np.abs(m.lap - stated))) if m.in_range else math.inf
-        bound = float(np.max(m.err + RESULT_RTOL * np.abs(m.lap))) if m.in_range else 0.0
-        checks.append(
-            Check(
-                f"L_B({name}) matches its topology, B and δ",
-                diff <= bound,
-                f"max deviation {diff:.2e}",
-            )
-        )
-    thetas = {tuple(m.theta.tolist()) for m in modes.values()}
-    if len(thetas) > 1:
-        checks.append(Check("one θ for every mode", False, f"modes differ: {sorted(thetas)}"))
-    if spec.switching:
-        schedule, scheduled, sw_hash = schedule_checks(
-            subject, source, {k: m.hash for k, m in modes.items()}, checks
-        )
-    else:
-        schedule, sw_hash = None, None
-        if len(modes) != 1:
-            raise InputError(f"{source}: subject.modes: a {kind!r} certificate has one mode")
-        scheduled = tuple(modes)
-    ctx = _Context(source, n, modes, ps, scheduled)
-
-    # --- the user's own topology and θ
-    if topology is not None:
-        checks.append(
-            _same_topology(topology, {k: m.hash for k, m in modes.items()}, schedule, sw_hash)
-        )
-    if theta is not None:
-        checks.append(same_theta(theta, next(iter(modes.values())).theta))
-
-    # --- what the kind certifies, and the claims that needs
-    unknown = [p for p in props_doc if p not in {q.value for q in spec.properties}]
-    props = tuple(q for q in spec.properties if q.value in props_doc)
-    lacking = sorted(q.value for q in spec.required - set(props))
-    ok_p = not unknown and not lacking and bool(props) and len(set(props_doc)) == len(props_doc)
-    checks.append(
-        Check(
-            f"certifies what kind {kind!r} can",
-            ok_p,
-            ", ".join(q.value for q in props)
-            if ok_p
-            else "; ".join(
-                [f"unknown property {u!r}" for u in unknown]
-                + [f"kind {kind!r} must certify {q!r}" for q in lacking]
-                + (["certifies nothing"] if not props else [])
-                + (["a property is listed twice"] if len(set(props_doc)) != len(props_doc) else [])
-            ),
-        )
-    )
-    rated = Property.DECAY_RATE in props
-    alpha = 0.0
-    if rated:
-        res = _need(doc, "results", dict, source)
-        lmi = _need(res, "lmi", dict, f"{source}: results")
-        alpha = _number(_need(lmi, "alpha", (int, float), f"{source}: results.lmi"), "α")
-    claims = derive_claims(props, scheduled, alpha)
-    want_claims = sorted(canonical(c.to_dict()) for c in claims)
-    got_claims = sorted(canonical(c) for c in listed)
-    ok_c = want_claims == got_claims
-    ids = {c.id for c in claims}
-    listed_ids = {c["id"] for c in listed if isinstance(c, dict) and isinstance(c.get("id"), str)}
-    checks.append(
-        Check(
-            "listed claims are those the kind and subject require",
-            ok_c,
-            f"{len(claims)} claims"
-            if ok_c
-            else "; ".join(
-                [f"missing {i!r}" for i in sorted(ids - listed_ids)]
-                + [f"not required {str(i)!r}" for i in sorted(listed_ids - ids, key=str)]
-            )
-            or "a listed claim differs from the derived one",
-        )
-    )
-
-    # --- the proofs
-    for c in claims:
-        proof = PROVERS[c.kind](c, ctx)
-        ctx.methods.add(proof.method)
-        detail = f"{proof.method}: {proof.detail}"
-        if c.kind is ClaimKind.LYAPUNOV and c.prop is Property.DECAY_RATE:
-            detail += f" (α = {c.alpha!r})"
-        checks.append(Check(c.id, proof.holds, detail, c))
-    checks += RESULTS[kind](doc, ctx, alpha, rated)
-
-    used = sorted(ctx.methods - {"not attempted"}) or ["none"]
-    method = " + ".join(used)
-    about = About(
-        kind,
-        spec.description,
-        props,
-        tuple(
-            ModeAbout(k, m.top.name, m.top.n, m.top.dim, m.hash, m.delta, tuple(m.theta.tolist()))
-            for k, m in modes.items()
-        ),
-        scheduled,
-        schedule,
-        alpha if rated else None,
-        sw_hash,
-    )
-    return Verification(all(c.ok for c in checks), method, tuple(checks), about)
 
 
 def integrity_checks(doc: dict, subject: Any, stated: str) -> list[Check]:
@@ -1349,48 +1117,6 @@ def integrity_checks(doc: dict, subject: Any, stated: str) -> list[Check]:
         ),
         Check("subject digest", ok_s, "matches" if ok_s else "does not match"),
     ]
-
-
-def schedule_checks(
-    subject: dict, source: str, hashes: Mapping[str, str], checks: list[Check]
-) -> tuple[tuple[tuple[str, float], ...], tuple[str, ...], str]:
-    """Parse a switching subject's schedule and append the checks that every scheduled
-    mode is described and that the stated switching hash is the recomputed one.
-
-    Parameters
-    ----------
-    subject : dict
-        The certificate's subject.
-    source : str
-        The certificate's name, for messages.
-    hashes : mapping
-        Mode name -> :func:`topology_hash`, as re-derived.
-    checks : list of Check
-        Appended to.
-
-    Returns
-    -------
-    tuple
-        The schedule, the modes it uses (in order of first use) and the switching hash.
-
-    Raises
-    ------
-    InputError
-        A malformed schedule.
-    """
-    schedule = _parse_schedule(subject, f"{source}: subject")
-    scheduled = scheduled_modes(schedule)
-    checks.append(scheduled_described(scheduled, hashes))
-    sw_hash = switching_hash(hashes, schedule)
-    ok_h = subject.get("switching_hash") == sw_hash
-    checks.append(
-        Check(
-            "switching hash",
-            ok_h,
-            sw_hash if ok_h else f"stated {subject.get('switching_hash')!r}, is {sw_hash}",
-        )
-    )
-    return schedule, scheduled, sw_hash
 
 
 def same_theta(theta: Any, got: np.ndarray) -> Check:
@@ -1491,45 +1217,6 @@ def _same_topology(
     )
 
 
-def verify_file(
-    path: str | Path,
-    topology: Topology | SwitchingTopology | None = None,
-    theta: Any = None,
-) -> Verification:
-    """Read a certificate file (size-capped) and :func:`verify` it.
-
-    Parameters
-    ----------
-    path : str or Path
-        The certificate (JSON).
-    topology, theta
-        As in :func:`verify`.
-
-    Returns
-    -------
-    Verification
-
-    Raises
-    ------
-    InputError
-        When the file is missing, too large, not JSON, or malformed.
-    """
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: no such file")
-    if p.stat().st_size > MAX_CERT_BYTES:
-        raise InputError(f"{p}: larger than {MAX_CERT_BYTES // 2**20} MB")
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{p}: not valid JSON ({exc.__class__.__name__})") from None
-    except RecursionError:
-        raise InputError(f"{p}: nested too deeply") from None
-    except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
-        raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
-    return verify(doc, str(p), topology, theta)
-
-
 __all__ = [
     "DIGEST_NOTE",
     "About",
@@ -1539,17 +1226,17 @@ __all__ = [
     "Verification",
     "canonical",
     "digest",
+    "document_hash",
     "finish",
     "finite_number",
     "integrity_checks",
-    "schedule_checks",
     "hurwitz_certificate",
     "package_versions",
     "prove_hurwitz",
     "switching_certificate",
     "switching_hash",
     "topology_hash",
-    "verify",
-    "verify_file",
+    "DenseContext",
+    "parse_mode",
     "write_certificate",
 ]

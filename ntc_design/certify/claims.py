@@ -3,10 +3,9 @@
 A certificate names its *kind* (``hurwitz``, ``switching``) and the *properties* it
 certifies. What must be proven is derived from these and from the subject (its modes and
 schedule), never read from the certificate's list of claims: that list is only compared
-with the derived one. Adding a kind means adding a :class:`KindSpec` to :data:`KINDS`
-(and, for a new property, its claim builder in :data:`PROPERTY_CLAIMS`); adding a kind of
-inequality means a :class:`ClaimKind` member and a prover in
-:data:`ntc_design.certify.certificate.PROVERS`.
+with the derived one. A kind (:mod:`ntc_design.certify.kinds`) derives its claims from
+these builders; a new property adds its claim builder to :data:`PROPERTY_CLAIMS`, a new
+kind of inequality a :class:`ClaimKind` member and a prover.
 """
 
 from __future__ import annotations
@@ -23,6 +22,7 @@ class Property(StrEnum):
     DECAY_RATE = "decay_rate"  # ‖ε(t)‖ <= κ e^{−αt} ‖ε(0)‖ with α > 0
     SYMMETRIC_PART = "symmetric_part"  # L_B(k) + L_B(k)ᵀ ≻ 0 for every mode (Theorems 3-4)
     COMMON_LYAPUNOV = "common_lyapunov"  # one P for every mode: stable under any switching
+    UNIFORM_SYMMETRIC_PART = "uniform_symmetric_part"  # λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0, all t
 
 
 PROPERTY_TEXT = {
@@ -30,6 +30,8 @@ PROPERTY_TEXT = {
     Property.DECAY_RATE: "decay rate α > 0: ‖ε(t)‖ <= κ·e^(−αt)·‖ε(0)‖",
     Property.SYMMETRIC_PART: "L_B(k) + L_B(k)ᵀ ≻ 0 in every scheduled mode (Theorems 3-4)",
     Property.COMMON_LYAPUNOV: "a common Lyapunov matrix P for every scheduled mode",
+    Property.UNIFORM_SYMMETRIC_PART: "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for every t, with "
+    "Assumption 3's bound D, Λ₁, p̄ and t₀ of μ₂ (Theorems 3-4)",
 }
 
 
@@ -41,6 +43,19 @@ class ClaimKind(StrEnum):
     SYMMETRIC_PART = "symmetric_part"  # L_B + L_Bᵀ ≻ 0
     POSITIVE_RATE = "positive_rate"  # α > 0
     COMPONENTS = "components"  # every strongly connected component block (hurwitz-scale)
+    LAMBDA2 = "lambda2"  # λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every t-interval (time_varying)
+    WEIGHT_BOUND = "D"  # |a_kl(t)| <= D for every t (Assumption 3)
+    LAMBDA1 = "lambda1"  # λ_max²(|A_ij(t)|) <= Λ₁ and the noise bound p̄
+    T0 = "t0"  # μ₂(t) > 0 for t >= t₀ (the gain is small enough from t₀ on)
+
+
+#: The statements of the time-varying kind's claims (their certificates list exactly these).
+TV_CLAIM_TEXT = {
+    ClaimKind.LAMBDA2: "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval",
+    ClaimKind.WEIGHT_BOUND: "|a_kl(t)| <= D (Assumption 3)",
+    ClaimKind.LAMBDA1: "λ_max²(|A_ij(t)|) <= Λ₁ and Σσ²Σ_l(Σ_k|a_lk|)² <= p̄",
+    ClaimKind.T0: "μ₂(t) > 0 for t >= t₀",
+}
 
 
 @dataclass(frozen=True)
@@ -65,6 +80,8 @@ class Claim:
             return "α > 0"
         if self.kind is ClaimKind.COMPONENTS:
             return f"−L_B({m}) Hurwitz: every component block certified"
+        if self.kind in TV_CLAIM_TEXT:
+            return TV_CLAIM_TEXT[self.kind]
         rate = f" − 2α·P_{p}" if self.prop is Property.DECAY_RATE else ""
         return f"P_{p}·L_B({m}) + L_B({m})ᵀ·P_{p}{rate} ≻ 0"
 
@@ -122,33 +139,6 @@ PROPERTY_CLAIMS: dict[Property, Callable[[Sequence[str], float], list[Claim]]] =
 }
 
 
-@dataclass(frozen=True)
-class KindSpec:
-    """A certificate kind: the properties it may certify, those it must, and whether its
-    subject is one topology or a schedule of modes."""
-
-    description: str
-    properties: tuple[Property, ...]
-    required: frozenset[Property]
-    switching: bool
-
-
-KINDS: dict[str, KindSpec] = {
-    "hurwitz": KindSpec(
-        "one topology: −L_B Hurwitz, with a decay rate when one is proven",
-        (Property.HURWITZ, Property.DECAY_RATE),
-        frozenset({Property.HURWITZ}),
-        switching=False,
-    ),
-    "switching": KindSpec(
-        "a switching topology: every mode its schedule uses",
-        (Property.SYMMETRIC_PART, Property.COMMON_LYAPUNOV),
-        frozenset(),
-        switching=True,
-    ),
-}
-
-
 def derive_claims(
     properties: Sequence[Property], modes: Sequence[str], alpha: float
 ) -> tuple[Claim, ...]:
@@ -173,11 +163,9 @@ def derive_claims(
 
 
 __all__ = [
-    "KINDS",
     "PROPERTY_TEXT",
     "Claim",
     "ClaimKind",
-    "KindSpec",
     "Property",
     "derive_claims",
 ]

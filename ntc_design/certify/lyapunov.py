@@ -147,7 +147,7 @@ def _solve(prob) -> str:
     return str(prob.status)
 
 
-def _verified_margin(mats: Sequence[np.ndarray], p: np.ndarray, alpha: float) -> float:
+def verified_margin(mats: Sequence[np.ndarray], p: np.ndarray, alpha: float) -> float:
     """Smallest eigenvalue (relative) of P and of every P L + Lᵀ P − 2αP, in floats."""
     worst = np.linalg.eigvalsh(p)[0] / np.linalg.norm(p, 2)
     for lap in mats:
@@ -200,7 +200,7 @@ def decay_rate_lmi(
         status = _solve(prob)
         if status in ("optimal", "optimal_inaccurate") and p_var.value is not None:
             p = 0.5 * (p_var.value + p_var.value.T)
-            if _verified_margin([lap_b], p, mid) > 1e-9:
+            if verified_margin([lap_b], p, mid) > 1e-9:
                 lo, best = mid, p
                 continue
         hi = mid
@@ -333,7 +333,7 @@ def common_lyapunov(
         t0 = time.perf_counter()
         if s == "identity":
             p = np.eye(n)
-            m = _verified_margin(lst, p, 0.0)
+            m = verified_margin(lst, p, 0.0)
             ok = m > 1e-9
             attempts.append(
                 (s, "verified" if ok else f"fails (margin {m:.3g})", time.perf_counter() - t0)
@@ -351,7 +351,7 @@ def common_lyapunov(
         pv = value() if status in ("optimal", "optimal_inaccurate") else None
         if pv is not None:
             p = 0.5 * (pv + pv.T)
-            m = _verified_margin(lst, p, 0.0)
+            m = verified_margin(lst, p, 0.0)
             if m > 1e-9:
                 attempts.append((s, f"{status}, verified", time.perf_counter() - t0))
                 return CommonLyapunov(p, s, tuple(attempts), m)

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -11,22 +11,18 @@ from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
-from .certificate import (
-    DENSE_CERT_MAX_ND,
-    Check,
-    Verification,
-    hurwitz_certificate,
-    switching_certificate,
-    verify,
-)
-from .theorems import TheoremVerdict, fixed_verdicts, switching_verdicts
+from ..timevarying import ExpressionTopology, TimeVaryingDesign
+from .certificate import DENSE_CERT_MAX_ND, Check, Verification
+from .kinds import kind_for
+from .theorems import TheoremVerdict
+from .verify import verify
 
 
 @dataclass(frozen=True)
 class CertifyResult:
     """A design, its certificate and verification, the gain analysis and the verdicts."""
 
-    design: ProtocolDesign | SwitchingDesign
+    design: ProtocolDesign | SwitchingDesign | TimeVaryingDesign
     certificate: dict
     verification: Verification
     gain: GainAnalysis | None
@@ -77,7 +73,7 @@ def _verify_own(cert: dict) -> Verification:
 
 
 def certify(
-    topology: Topology | SwitchingTopology | ExpressionTopology,  # noqa: F821
+    topology: Topology | SwitchingTopology | ExpressionTopology,
     theta,
     margin: float = 0.1,
     gain: str | None = None,
@@ -118,57 +114,18 @@ def certify(
         For a bad θ, margin, δ or gain.
     """
     g = analyse_gain(gain) if gain is not None else None
-    tvmod = sys.modules.get("ntc_design.timevarying")  # loaded by any ExpressionTopology
-    if tvmod is not None and isinstance(topology, tvmod.ExpressionTopology):
-        from ..timevarying import TimeVaryingDesign
-        from .time_varying import (
-            time_varying_certificate,
-            time_varying_verdicts,
-            verify_time_varying,
-        )
-
+    if isinstance(topology, ExpressionTopology):
         if delta is not None:
             raise InputError("delta: a time-varying topology uses δ(t) = C(t) + ΔC (Lemma 1)")
-        tdes = TimeVaryingDesign(topology, np.asarray(theta, dtype=float), margin)
-        cert = time_varying_certificate(topology, theta, margin, gain, noise_sigma, noise_f)
-        ver = verify_time_varying(cert)
-        tth = time_varying_verdicts(cert["results"]["time_varying"], ver, g)
-        return CertifyResult(tdes, cert, ver, g, tth)
-    big = (
-        isinstance(topology, (Topology, SwitchingTopology))
-        and topology.n * topology.dim > DENSE_CERT_MAX_ND
-    )
-    # at scale the critical couplings are not needed by the certificate (design notes it)
-    des = design(topology, theta, margin, delta, thresholds=False if big else None)
-    th: tuple[TheoremVerdict, ...]
-    if isinstance(des, SwitchingDesign):
-        if big:  # a sparse proof per mode, no dense step (issue 9)
-            from .switching_scale import switching_scale_certificate
-
-            cert = switching_scale_certificate(des)
-        else:
-            cert = switching_certificate(des)
-        ver = _verify_own(cert)
-        bound = max(
-            (
-                float(np.max(np.abs(a)))
-                for top in des.switching.modes.values()
-                for a in top.weights.values()
-            ),
-            default=0.0,
-        )
-        th = switching_verdicts(des, ver, g, bound, cert["results"]["symmetric_part_min_eig"])
-    elif not big:
-        cert = hurwitz_certificate(des)
-        ver = _verify_own(cert)
-        th = fixed_verdicts(des, ver, g)
-    else:  # big networks: component-wise certificate, no dense step (issue 9)
-        from .scale import scale_certificate
-
-        cert = scale_certificate(des)
-        ver = _verify_own(cert)
-        th = fixed_verdicts(des, ver, g)
-    return CertifyResult(des, cert, ver, g, th)
+        des: Any = TimeVaryingDesign(topology, np.asarray(theta, dtype=float), margin)
+    else:
+        big = topology.n * topology.dim > DENSE_CERT_MAX_ND
+        # at scale the critical couplings are not needed by the certificate (design notes it)
+        des = design(topology, theta, margin, delta, thresholds=False if big else None)
+    kind = kind_for(des)
+    cert = kind.issue(des, gain=gain, noise_sigma=noise_sigma, noise_f=noise_f)
+    ver = _verify_own(cert)
+    return CertifyResult(des, cert, ver, g, kind.verdicts(des, cert, ver, g))
 
 
 __all__ = [

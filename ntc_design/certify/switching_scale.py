@@ -37,25 +37,11 @@ import numpy as np
 from ..design import SwitchingDesign
 from ..errors import InputError
 from ..linalg import DenseRefused, SPDFamily
-from ..model import SwitchingTopology, Topology
+from ..model import Topology
 from .certificate import (
-    MAX_MODES,
     NUMBER_EXP,
-    About,
-    Check,
-    ModeAbout,
-    Verification,
-    _need,
     _number,
-    _same_topology,
-    _vector,
-    canonical,
     finish,
-    finite_number,
-    integrity_checks,
-    out_of_range,
-    same_theta,
-    schedule_checks,
     scheduled_modes,
     switching_hash,
     topology_hash,
@@ -69,7 +55,6 @@ from .scale import (
     rump_shift,
     shifted_symmetric_part,
     symmetric_part_bound,
-    topology_from_subject,
 )
 from .scale import _subject as mode_subject
 
@@ -81,7 +66,21 @@ LOWER_RTOL = 1e-4
 EIG_DENSE_MAX_ND = 1500
 
 
-def _sym_matrices(top: Topology, delta: float):
+def sym_matrices(top: Topology, delta: float):
+    """L_B (sparse) and an entrywise bound on its rounding error, rebuilt from the
+    topology and δ.
+
+    Parameters
+    ----------
+    top : Topology
+        The mode's topology.
+    delta : float
+        δ of its design.
+
+    Returns
+    -------
+    tuple of scipy.sparse matrices
+    """
     blocks = lap_b_blocks(top, delta)
     return component_matrix(blocks, np.arange(top.n))
 
@@ -143,7 +142,7 @@ def prove_mode(top: Topology, delta: float) -> ModeProof:
     ModeProof
         Whether it is proven, ℓ, the estimate and how.
     """
-    lap, err = _sym_matrices(top, delta)
+    lap, err = sym_matrices(top, delta)
     s, e0 = shifted_symmetric_part(lap, err)
     fam = SPDFamily([s])
     try:  # L + Lᵀ itself: the eigensolver's inverse (and a failure says "indefinite")
@@ -183,8 +182,8 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
     -------
     dict
         The certificate, digest included; it certifies ``symmetric_part`` (a mode that is
-        not proven makes it fail to verify). Re-check it with :func:`verify_switching_scale`
-        or ``ntc verify``.
+        not proven makes it fail to verify). Re-check it with
+        :func:`ntc_design.certify.verify` or ``ntc verify``.
     """
 
     t0 = time.perf_counter()
@@ -213,7 +212,9 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
             "switching_hash": switching_hash(hashes, sched),
         },
         "proofs": proofs,
-        "claims": [c.to_dict() for c in _claims(used)],
+        "claims": [
+            Claim(ClaimKind.SYMMETRIC_PART, Property.SYMMETRIC_PART, mode=k).to_dict() for k in used
+        ],
         "results": {
             "symmetric_part_min_eig": est,
             "symmetric_part_lower_bound": lower,
@@ -236,12 +237,25 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
     return finish(doc, "verified-float (sparse Cholesky per mode)")
 
 
-def _claims(modes) -> list[Claim]:
-    return [Claim(ClaimKind.SYMMETRIC_PART, Property.SYMMETRIC_PART, mode=k) for k in modes]
+def proof_fields(x: Any, where: str) -> float:
+    """The proven lower bound ℓ of a mode's ``{lower}`` record (0 or a bounded number).
 
+    Parameters
+    ----------
+    x : Any
+        The record.
+    where : str
+        Its field, for messages.
 
-def _proof_fields(x: Any, where: str) -> float:
+    Returns
+    -------
+    float
 
+    Raises
+    ------
+    InputError
+        Not ``{lower}``, or ℓ negative or out of range.
+    """
     if not isinstance(x, dict) or set(x) != {"lower"}:
         raise InputError(f"{where}: expected {{lower}}")
 
@@ -251,191 +265,11 @@ def _proof_fields(x: Any, where: str) -> float:
     return float(lo)
 
 
-def _same_number(x: Any, value: float) -> bool:
-
-    return finite_number(x) == value
-
-
-def _results_check(doc: dict, source: str, proofs: dict, scheduled: tuple[str, ...]):
-    """The reported results against the proofs: the lower bounds are the proven ℓ, every
-    estimate lies above its proven bound, P = I is claimed exactly when every scheduled
-    mode is proven, and no proof is given for a mode the schedule does not use."""
-
-    res = doc.get("results")
-    if not isinstance(res, dict):
-        raise InputError(f"{source}: results: expected an object")
-    bad = [f"proofs.{k}: the schedule does not use mode {k}" for k in proofs if k not in scheduled]
-    # the scheduled modes' proofs were validated (and re-proven) before this check
-    want = {k: float(proofs[k]["lower"]) for k in scheduled if k in proofs}
-    got_lb = res.get("symmetric_part_lower_bound")
-    if (
-        not isinstance(got_lb, dict)
-        or set(got_lb) != set(want)
-        or any(not _same_number(got_lb[k], v) for k, v in want.items())
-    ):
-        bad.append("symmetric_part_lower_bound differs from the proven bounds")
-    est = res.get("symmetric_part_min_eig")
-    if not isinstance(est, dict):
-        bad.append("symmetric_part_min_eig: expected an object")
-    else:
-        for k, lo in want.items():
-            e = est.get(k)
-            ef = finite_number(e)
-            if e is not None and not (ef is not None and ef > lo):
-                bad.append(f"mode {k}: the estimate {e!r} is not above the proven bound {lo!r}")
-    all_proven = all(k in proofs for k in scheduled)
-    cl = res.get("common_lyapunov")
-    if not isinstance(cl, dict) or cl.get("structure") != ("identity" if all_proven else None):
-        bad.append("common_lyapunov: P = I is claimed exactly when every scheduled mode is proven")
-    return Check(
-        "reported results (bounds are the proven ones; estimates above them)",
-        not bad,
-        "; ".join(bad) or "consistent",
-    )
-
-
-def verify_switching_scale(
-    doc: dict,
-    source: str = "certificate",
-    topology: Topology | SwitchingTopology | None = None,
-    theta: Any = None,
-):
-    """Re-check a ``switching-scale`` certificate without any solver (module docstring):
-    the digests, the subject (informed agents = U, one θ, the schedule, the switching
-    hash), that the listed claims are those the scheduled modes require, and each
-    scheduled mode's bound ``λ_min(L_B + L_Bᵀ) > ℓ`` by one sparse factorisation.
-
-    Parameters
-    ----------
-    doc : dict
-        The certificate.
-    source : str, optional
-        Its name, for messages.
-    topology : Topology or SwitchingTopology, optional
-        The user's own file: the certificate must be about it (canonical hashes).
-    theta : sequence of float, optional
-        The user's θ: the certificate must be about it.
-
-    Returns
-    -------
-    Verification
-        Valid when every check holds.
-
-    Raises
-    ------
-    InputError
-        The certificate or a topology in it is malformed, or a factorisation would not
-        fit.
-    """
-
-    got = _need(doc, "digest", str, source)
-    subject = _need(doc, "subject", dict, source)
-    checks: list = integrity_checks(doc, subject, got)
-    size = _need(doc, "size", int, source)
-    modes_doc = _need(subject, "modes", dict, f"{source}: subject")
-    if not modes_doc or len(modes_doc) > MAX_MODES:
-        raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
-    tops: dict[str, Topology] = {}
-    deltas: dict[str, float] = {}
-    thetas: dict[str, np.ndarray] = {}
-    for name, sub in modes_doc.items():
-        where = f"{source}: subject.modes.{name}"
-        if not isinstance(sub, dict):
-            raise InputError(f"{where}: expected an object")
-        top = topology_from_subject(_need(sub, "topology", dict, where), f"{where}.topology")
-        if top.nd != size:
-            raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-        delta = _number(_need(sub, "delta", (int, float), where), f"{where}.delta")
-        if not delta > 0 or out_of_range(delta):
-            raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
-        theta_m = _vector(_need(sub, "theta", list, where), top.dim, f"{where}.theta")
-        informed = _need(sub, "informed", list, where)
-        try:
-            inf_idx = sorted(top.index(x) for x in informed)
-        except InputError:
-            raise InputError(f"{where}.informed: lists an unknown agent") from None
-        ok_u = inf_idx == sorted(top.antagonised)
-        checks.append(
-            Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
-        )
-        tops[str(name)], deltas[str(name)], thetas[str(name)] = top, float(delta), theta_m
-    first = next(iter(tops.values()))
-    same_agents = all(
-        [str(x) for x in t.labels] == [str(x) for x in first.labels] for t in tops.values()
-    )
-    checks.append(
-        Check("every mode has the same agents", same_agents, "yes" if same_agents else "no")
-    )
-    distinct = {tuple(t.tolist()) for t in thetas.values()}
-    ok_t = len(distinct) == 1 and bool(np.any(next(iter(thetas.values()))))
-    checks.append(
-        Check(
-            "one θ ≠ 0 for every mode",
-            ok_t,
-            f"θ = {list(sorted(distinct)[0])}"
-            if ok_t
-            else f"{[list(t) for t in sorted(distinct)]}",
-        )
-    )
-    hashes = {k: topology_hash(t) for k, t in tops.items()}
-    schedule, scheduled, sw_hash = schedule_checks(subject, source, hashes, checks)
-    if topology is not None:
-        checks.append(_same_topology(topology, hashes, schedule, sw_hash))
-    if theta is not None:
-        checks.append(same_theta(theta, next(iter(thetas.values()))))
-    props = _need(doc, "certifies", list, source)
-    ok_p = props == [Property.SYMMETRIC_PART.value]
-    checks.append(
-        Check(
-            f"certifies what kind {KIND!r} can",
-            ok_p,
-            "symmetric_part" if ok_p else f"kind {KIND!r} certifies exactly ['symmetric_part']",
-        )
-    )
-    claims = _claims(m for m in scheduled if m in tops)
-    listed = _need(doc, "claims", list, source)
-    ok_c = sorted(canonical(c.to_dict()) for c in claims) == sorted(canonical(c) for c in listed)
-    checks.append(
-        Check(
-            "listed claims are those the kind and subject require",
-            ok_c,
-            f"{len(claims)} claims" if ok_c else "the listed claims differ from the derived ones",
-        )
-    )
-    proofs = _need(doc, "proofs", dict, source)
-    for c in claims:
-        k = c.mode or ""
-        if k not in proofs:
-            checks.append(Check(c.id, False, "no proof given for this mode", c))
-            continue
-        lo = _proof_fields(proofs[k], f"{source}: proofs.{k}")
-        lap, err = _sym_matrices(tops[k], deltas[k])
-        p = symmetric_part_bound(lap, err, lo)
-        bound = f"λ_min > {lo:.6g}: " if lo else ""
-        checks.append(Check(c.id, p.holds, f"verified-float: {bound}{p.detail}", c))
-    checks.append(_results_check(doc, source, proofs, scheduled))
-    about = About(
-        KIND,
-        DESCRIPTION,
-        (Property.SYMMETRIC_PART,),
-        tuple(
-            ModeAbout(k, t.name, t.n, t.dim, hashes[k], deltas[k], tuple(thetas[k].tolist()))
-            for k, t in tops.items()
-        ),
-        scheduled,
-        schedule,
-        None,
-        sw_hash,
-    )
-    return Verification(
-        all(c.ok for c in checks), "verified-float (sparse Cholesky per mode)", tuple(checks), about
-    )
-
-
 __all__ = [
     "KIND",
     "ModeProof",
     "prove_mode",
     "switching_scale_certificate",
-    "verify_switching_scale",
+    "proof_fields",
+    "sym_matrices",
 ]

@@ -87,7 +87,20 @@ class TheoremVerdict:
         }
 
 
-def _gain_premises(gain: GainAnalysis | None, almost_sure: bool) -> list[Premise]:
+def gain_premises(gain: GainAnalysis | None, almost_sure: bool) -> list[Premise]:
+    """The gain's premises: ∫c = ∞ and c → 0, and ∫c² < ∞ for almost-sure consensus.
+
+    Parameters
+    ----------
+    gain : GainAnalysis or None
+        None when no gain was given (the premise is then unknown).
+    almost_sure : bool
+        Add ∫c² < ∞ (Theorems 2 and 4).
+
+    Returns
+    -------
+    list of Premise
+    """
     if gain is None:
         return [
             Premise(
@@ -143,8 +156,8 @@ def fixed_verdicts(
         hdetail += f"; Assumption 2 itself fails ({viol}) and is replaced by this certificate"
     structural = Premise("−L_B Hurwitz (Lemma 1's conclusion, used by the proof)", hurwitz, hdetail)
     return (
-        TheoremVerdict(1, "mean square", (A1, structural, *_gain_premises(gain, False))),
-        TheoremVerdict(2, "almost sure", (A1, structural, *_gain_premises(gain, True))),
+        TheoremVerdict(1, "mean square", (A1, structural, *gain_premises(gain, False))),
+        TheoremVerdict(2, "almost sure", (A1, structural, *gain_premises(gain, True))),
     )
 
 
@@ -216,12 +229,52 @@ def switching_verdicts(
     )
     a1 = Premise("Assumption 1 (‖f_ji(x)‖ <= σ̄‖x‖)", True, "assumed: a property of the noise model")
     return (
-        TheoremVerdict(3, "mean square", (a1, a2, a3, *sym_prem, *_gain_premises(gain, False))),
-        TheoremVerdict(4, "almost sure", (a1, a2, a3, *sym_prem, *_gain_premises(gain, True))),
+        TheoremVerdict(3, "mean square", (a1, a2, a3, *sym_prem, *gain_premises(gain, False))),
+        TheoremVerdict(4, "almost sure", (a1, a2, a3, *sym_prem, *gain_premises(gain, True))),
+    )
+
+
+def time_varying_verdicts(result: dict, ver, gain) -> tuple:
+    """Theorems 3 and 4 for a continuously time-varying topology.
+
+    Parameters
+    ----------
+    result : dict
+        The certificate's ``results.time_varying``.
+    ver : Verification
+        Its verification.
+    gain : GainAnalysis or None
+        The gain's conditions; None when no gain was given.
+
+    Returns
+    -------
+    tuple of TheoremVerdict
+        The verdicts of Theorems 3 and 4.
+    """
+    r = result
+    a1 = Premise(
+        "Assumption 1 (‖f_ji(x)‖ <= σ̄‖x‖)", True, f"f(x) = F x with σ̄ = {r['sigma_bar']:.4g}"
+    )
+    a3 = Premise(
+        "Assumption 3 (bounded weight entries)",
+        ver.valid,
+        f"|a_kl(t)| <= D = {r['D']:.6g} for every t (ball arithmetic over {r['domain_text']})",
+    )
+    lam = Premise(
+        "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for every t (uniform, used by the proof)",
+        ver.valid and r["lambda2"] > 0,
+        f"Λ₂ = {r['lambda2']:.6g} certified on {r['intervals']} t-intervals "
+        f"(sampled infimum {r['sampled_inf']:.6g})",
+    )
+    return (
+        TheoremVerdict(3, "mean square", (a1, a3, lam, *gain_premises(gain, False))),
+        TheoremVerdict(4, "almost sure", (a1, a3, lam, *gain_premises(gain, True))),
     )
 
 
 __all__ = [
+    "gain_premises",
+    "time_varying_verdicts",
     "Premise",
     "TheoremVerdict",
     "fixed_verdicts",

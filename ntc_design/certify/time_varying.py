@@ -47,7 +47,6 @@ from ..linalg import DEF_RTOL
 from ..timevarying import (
     ExpressionTopology,
     Lemma1Structure,
-    from_document,
     grounded_laplacian_batch,
     interval_mid_rad,
     lemma1_batch,
@@ -80,7 +79,7 @@ class LeafBound:
     p_bar: float
 
 
-class _Enclosures:
+class Enclosures:
     """Per t-interval enclosures of the weights and what is built from them."""
 
     def __init__(self, tv: ExpressionTopology, st: Lemma1Structure, margin: float, sigma: float):
@@ -120,7 +119,7 @@ class _Enclosures:
         self._static_c: dict[int, float] = {}
         self._static_idd: dict[int, bool] = {}
 
-    def taylor(self, a: float, b: float) -> tuple[np.ndarray, ...]:
+    def _taylor(self, a: float, b: float) -> tuple[np.ndarray, ...]:
         """Taylor data of the weights on [a, b] about m = (a + b)/2: A(m) and A'(m) as
         (mid, rad), A''(ξ) enclosed over [a, b] as (mid, rad), and R0, the full radius of
         edges without a usable derivative (their variation is bounded in zero order)."""
@@ -176,7 +175,18 @@ class _Enclosures:
         return tuple(out)
 
     def samples(self, ts: np.ndarray) -> np.ndarray:
-        """λ_min(L_B(t) + L_B(t)ᵀ) of the design as computed (floating point) at times ts."""
+        """λ_min(L_B(t) + L_B(t)ᵀ) of the design as computed (floating point): an estimate.
+
+        Parameters
+        ----------
+        ts : numpy.ndarray
+            The times.
+
+        Returns
+        -------
+        numpy.ndarray
+            One value per time.
+        """
         tv = self.tv
         per = max(1, int(32 * 2**20 // (8 * 2 * tv.nd * tv.nd)))
         out = []
@@ -187,8 +197,26 @@ class _Enclosures:
         return np.concatenate(out)
 
     def leaf(self, a: float, b: float, sample: float = math.nan) -> LeafBound:
+        """The certified bounds on the t-interval [a, b] (module docstring, steps 1-4).
+
+        Parameters
+        ----------
+        a, b : float
+            The interval.
+        sample : float, optional
+            The sampled λ_min in it, recorded with the bounds.
+
+        Returns
+        -------
+        LeafBound
+
+        Raises
+        ------
+        CertificationRefused
+            A weight is unbounded on the interval.
+        """
         st, tv, d = self.st, self.tv, self.d
-        tay = self.taylor(a, b)
+        tay = self._taylor(a, b)
         vm, vr, d1m, d1r, d2m, d2r, r0m, r0r = tay
         h = 0.5 * (b - a)
         mid = vm
@@ -212,11 +240,11 @@ class _Enclosures:
         rs_r = np.sum(rad[live], axis=2) + g * np.sum(np.abs(mid[live]), axis=2)
         rs_hi = np.abs(rs_m) + rs_r
         p_up = float(self.sigma**2 * np.sum(rs_hi * rs_hi)) * (1 + g)
-        dl = self.delta_lower(mid, rad)
-        lower = self.lambda_lower(a, b, dl, tay)
+        dl = self._delta_lower(mid, rad)
+        lower = self._lambda_lower(a, b, dl, tay)
         return LeafBound(a, b, lower, sample, dl, d_sup, lam1, p_up)
 
-    def delta_lower(self, mid: np.ndarray, rad: np.ndarray) -> float:
+    def _delta_lower(self, mid: np.ndarray, rad: np.ndarray) -> float:
         """A lower bound on δ(t) = C(t) + ΔC over an interval where every weight lies in
         mid ± rad (see the module docstring); midpoint-radius arithmetic with rounding."""
         st, d, n = self.st, self.d, self.st.n
@@ -294,7 +322,7 @@ class _Enclosures:
         lap = grounded_laplacian_batch(st, off[None], absw[None], dl, b[None])[0]
         return lap + lap.T
 
-    def lambda_lower(self, a: float, b: float, dl: float, tay=None) -> float:
+    def _lambda_lower(self, a: float, b: float, dl: float, tay=None) -> float:
         """Certified lower bound on λ_min(L + Lᵀ + 2δ_lo·blockdiag(B_i)) on [a, b].
 
         S(t) = S(m) + τ S'(m) + τ²/2 S''(ξ) with |τ| <= h = (b − a)/2. λ_min of the affine
@@ -302,7 +330,7 @@ class _Enclosures:
         the remainder costs h²/2·‖S''‖₂ (Weyl). Every matrix carries its rounding and
         enclosure radii into the Weyl term."""
         st = self.st
-        vm, vr, d1m, d1r, d2m, d2r, r0m, r0r = tay if tay is not None else self.taylor(a, b)
+        vm, vr, d1m, d1r, d2m, d2r, r0m, r0r = tay if tay is not None else self._taylor(a, b)
         h = 0.5 * (b - a)
         s0 = self._assemble(vm, dl)
         s1 = self._assemble(d1m, dl)
@@ -318,7 +346,24 @@ class _Enclosures:
         return float(np.nextafter(min(lows) - rho_rem, -np.inf))
 
 
-def _domain(tv: ExpressionTopology) -> tuple[float, float, str]:
+def domain_of(tv: ExpressionTopology) -> tuple[float, float, str]:
+    """The t-domain whose infimum is the infimum over t >= 0: one period, or [0, T] with
+    the constant tail, as an upper-rounded interval and in words.
+
+    Parameters
+    ----------
+    tv : ExpressionTopology
+        With ``period`` or ``constant_after``.
+
+    Returns
+    -------
+    tuple of (float, float, str)
+
+    Raises
+    ------
+    InputError
+        Neither is declared.
+    """
     from ..interval import upper
 
     if tv.period is not None:
@@ -329,7 +374,7 @@ def _domain(tv: ExpressionTopology) -> tuple[float, float, str]:
             upper(enclose(tv.constant_after, t_ball(0.0, 0.0))),
             f"[0, {tv.constant_after}] and the constant tail",
         )
-    raise AssertionError
+    raise InputError("the topology declares neither period nor constant_after")
 
 
 def refuse_unbounded_horizon(tv: ExpressionTopology, margin: float) -> None:
@@ -471,9 +516,9 @@ def _certify_lambda2(
     t_start = time.perf_counter()
     if tv.domain is None:
         refuse_unbounded_horizon(tv, margin)
-    a0, b0, text = _domain(tv)
+    a0, b0, text = domain_of(tv)
     st = lemma1_structure(tv)
-    enc = _Enclosures(tv, st, margin, sigma)
+    enc = Enclosures(tv, st, margin, sigma)
     pieces = np.linspace(a0, b0, FIRST_PIECES + 1)
     pieces[-1] = b0
     heap: list[tuple[float, int, LeafBound]] = []
@@ -637,7 +682,17 @@ def mu2_t0(gain: str, kappa: float) -> tuple[float | None, str]:
 
 
 def noise_sigma_bar(f: Any) -> float:
-    """σ̄ of Assumption 1 for f(x) = s·x (|s|) or f(x) = F x (‖F‖₂)."""
+    """σ̄ of Assumption 1 for f(x) = s·x (|s|) or f(x) = F x (‖F‖₂).
+
+    Parameters
+    ----------
+    f : float or array_like
+        s or F.
+
+    Returns
+    -------
+    float
+    """
     arr = np.asarray(f, dtype=float)
     return float(abs(arr)) if arr.ndim == 0 else float(np.linalg.norm(arr, 2))
 
@@ -726,153 +781,6 @@ def time_varying_certificate(
     return finish(doc, "interval")
 
 
-def verify_time_varying(doc: dict, source: str = "certificate"):
-    """Re-check a time-varying certificate: re-parse the topology (re-proving its sign
-    classes), re-enclose every recorded interval and check its bound, the cover of the
-    domain, D, Λ₁, p̄ and t₀.
-
-    Parameters
-    ----------
-    doc : dict
-        The certificate.
-    source : str, optional
-        Its name, for messages.
-
-    Returns
-    -------
-    Verification
-        Valid when every check holds.
-
-    Raises
-    ------
-    InputError
-        A malformed certificate or topology, or a topology without period or
-        constant_after.
-    """
-    from .certificate import Check, Verification, _need, integrity_checks
-
-    subj = _need(doc, "subject", dict, source)
-    checks: list[Check] = integrity_checks(doc, subj, doc["digest"])
-    top_doc = _need(subj, "topology", dict, f"{source}: subject")
-    margin = _need(subj, "margin", (int, float), f"{source}: subject")
-    noise = _need(subj, "noise", dict, f"{source}: subject")
-    gain = subj.get("gain")
-    res = _need(_need(doc, "results", dict, source), "time_varying", dict, f"{source}: results")
-    ivs = _need(doc, "intervals", list, source)
-    tv = from_document(top_doc, f"{source}: subject.topology")
-    if tv.domain is None:
-        raise InputError(f"{source}: the topology declares neither period nor constant_after")
-    lam2 = res.get("lambda2")
-    for key in ("lambda2", "D", "Lambda1", "p_bar"):
-        v = res.get(key)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise InputError(f"{source}: results.time_varying.{key} must be a number")
-    if not ivs or any(
-        not isinstance(q, list)
-        or len(q) != 3
-        or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in q)
-        for q in ivs
-    ):
-        raise InputError(f"{source}: intervals must be a non-empty list of [a, b, bound]")
-    if len(ivs) > 100000:
-        raise InputError(f"{source}: too many intervals")
-    a0, b0, text = _domain(tv)
-    cover = (
-        ivs[0][0] <= a0
-        and ivs[-1][1] >= b0
-        and all(ivs[k][1] == ivs[k + 1][0] and ivs[k][0] < ivs[k][1] for k in range(len(ivs) - 1))
-    )
-    checks.append(
-        Check(
-            "the intervals cover the domain",
-            bool(cover),
-            f"{len(ivs)} intervals over {text}" if cover else "gap, overlap or short cover",
-        )
-    )
-    sigma = float(_need(noise, "sigma", (int, float), f"{source}: subject.noise"))
-    enc = _Enclosures(tv, lemma1_structure(tv), float(margin), sigma)
-    worst = math.inf
-    d_max = lam1 = p_bar = 0.0
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1):
-        leaves = [enc.leaf(float(a), float(b)) for a, b, _ in ivs]
-    for leaf in leaves:
-        worst = min(worst, leaf.lower)
-        d_max, lam1, p_bar = max(d_max, leaf.D), max(lam1, leaf.lambda1), max(p_bar, leaf.p_bar)
-    ok2 = lam2 > 0 and worst >= lam2
-    checks.append(
-        Check(
-            "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval",
-            ok2,
-            f"re-enclosed: least bound {worst:.6g} vs claimed Λ₂ = {lam2:.6g}",
-        )
-    )
-    checks.append(
-        Check(
-            "|a_kl(t)| <= D (Assumption 3)",
-            d_max <= res["D"],
-            f"re-enclosed sup {d_max:.6g} vs claimed D = {res['D']:.6g}",
-        )
-    )
-    checks.append(
-        Check(
-            "λ_max²(|A_ij(t)|) <= Λ₁ and p̄",
-            lam1 <= res["Lambda1"] and p_bar <= res["p_bar"],
-            f"re-enclosed Λ₁ {lam1:.6g} (claimed {res['Lambda1']:.6g}), "
-            f"p̄ {p_bar:.6g} (claimed {res['p_bar']:.6g})",
-        )
-    )
-    t0 = res.get("t0")
-    if gain is not None and t0 is not None:
-        sigma_bar = noise_sigma_bar(noise.get("f", 0.3))
-        kappa = mu2_threshold(float(lam2), float(res["Lambda1"]), sigma_bar, tv.n)
-        t0_new, how = mu2_t0(str(gain), kappa)
-        ok = t0_new is not None and t0_new <= float(t0) * (1 + 1e-9) + 1e-12
-        checks.append(Check("μ₂(t) > 0 for t >= t₀", ok, f"t₀ = {t0_new} ({how}) vs claimed {t0}"))
-    return Verification(all(c.ok for c in checks), "interval", tuple(checks))
-
-
-def time_varying_verdicts(result: dict, ver, gain) -> tuple:
-    """Theorems 3 and 4 for a continuously time-varying topology.
-
-    Parameters
-    ----------
-    result : dict
-        The certificate's ``results.time_varying``.
-    ver : Verification
-        Its verification.
-    gain : GainAnalysis or None
-        The gain's conditions; None when no gain was given.
-
-    Returns
-    -------
-    tuple of TheoremVerdict
-        The verdicts of Theorems 3 and 4.
-    """
-    from .theorems import Premise, TheoremVerdict, _gain_premises
-
-    r = result
-    a1 = Premise(
-        "Assumption 1 (‖f_ji(x)‖ <= σ̄‖x‖)", True, f"f(x) = F x with σ̄ = {r['sigma_bar']:.4g}"
-    )
-    a3 = Premise(
-        "Assumption 3 (bounded weight entries)",
-        ver.valid,
-        f"|a_kl(t)| <= D = {r['D']:.6g} for every t (ball arithmetic over {r['domain_text']})",
-    )
-    lam = Premise(
-        "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for every t (uniform, used by the proof)",
-        ver.valid and r["lambda2"] > 0,
-        f"Λ₂ = {r['lambda2']:.6g} certified on {r['intervals']} t-intervals "
-        f"(sampled infimum {r['sampled_inf']:.6g})",
-    )
-    return (
-        TheoremVerdict(3, "mean square", (a1, a3, lam, *_gain_premises(gain, False))),
-        TheoremVerdict(4, "almost sure", (a1, a3, lam, *_gain_premises(gain, True))),
-    )
-
-
 __all__ = [
     "CertificationRefused",
     "LeafBound",
@@ -882,6 +790,7 @@ __all__ = [
     "mu2_threshold",
     "refuse_unbounded_horizon",
     "time_varying_certificate",
-    "time_varying_verdicts",
-    "verify_time_varying",
+    "Enclosures",
+    "domain_of",
+    "noise_sigma_bar",
 ]

@@ -1,0 +1,14 @@
+"""Certificate kinds: a base class, one module per kind, and the registry."""
+
+from .base import CertificateKind, ModeReading, Reading, ResultsAudit, Subject
+from .registry import KINDS, kind_for
+
+__all__ = [
+    "KINDS",
+    "CertificateKind",
+    "ModeReading",
+    "Reading",
+    "ResultsAudit",
+    "Subject",
+    "kind_for",
+]

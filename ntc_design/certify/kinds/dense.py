@@ -1,0 +1,131 @@
+"""What the two dense kinds (``hurwitz``, ``switching``) share: the subject read with every
+L_B re-derived exactly (:func:`ntc_design.certify.certificate.parse_mode`), stated L_B
+compared with it, and each claim proven by its prover
+(:data:`ntc_design.certify.certificate.PROVERS`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...errors import InputError
+from ..certificate import (
+    MAX_MODES,
+    MAX_SIZE,
+    PROVERS,
+    RESULT_RTOL,
+    Check,
+    DenseContext,
+    _matrix,
+    _need,
+    parse_mode,
+)
+from ..claims import Claim, ClaimKind, Property
+from .base import ModeReading, Reading, Subject
+
+
+def read_dense(doc: dict, source: str) -> Reading:
+    """Read a dense certificate's subject and matrices.
+
+    Parameters
+    ----------
+    doc : dict
+        The certificate.
+    source : str
+        Its name, for messages.
+
+    Returns
+    -------
+    Reading
+        The modes, their subject checks, and a :class:`DenseContext` for the provers.
+
+    Raises
+    ------
+    InputError
+        A malformed field, or sizes above the bounds.
+    """
+    n = _need(doc, "size", int, source)
+    if not 1 <= n <= MAX_SIZE:
+        raise InputError(f"{source}: size: must be between 1 and {MAX_SIZE}, got {n}")
+    subject = _need(doc, "subject", dict, source)
+    modes_doc = _need(subject, "modes", dict, f"{source}: subject")
+    if not modes_doc or len(modes_doc) > MAX_MODES:
+        raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
+    mats = _need(doc, "matrices", dict, source)
+    lbs = mats.get("L_B", {})
+    if not isinstance(lbs, dict):
+        raise InputError(f"{source}: matrices.L_B: expected an object mode -> matrix")
+    ps = _need(mats, "P", dict, f"{source}: matrices")
+    checks: list[Check] = []
+    modes = {str(k): parse_mode(str(k), v, n, source, checks) for k, v in modes_doc.items()}
+    for name, m in modes.items():
+        if name not in lbs:  # L_B is re-derived anyway; a stated one must match
+            continue
+        stated = _matrix(lbs[name], n, f"{source}: matrices.L_B.{name}")
+        diff = float(np.max(np.abs(m.lap - stated))) if m.in_range else math.inf
+        bound = float(np.max(m.err + RESULT_RTOL * np.abs(m.lap))) if m.in_range else 0.0
+        checks.append(
+            Check(
+                f"L_B({name}) matches its topology, B and δ",
+                diff <= bound,
+                f"max deviation {diff:.2e}",
+            )
+        )
+    readings = {
+        k: ModeReading(
+            k,
+            m.top.name,
+            tuple(str(x) for x in m.top.labels),
+            m.top.dim,
+            m.hash,
+            m.delta,
+            m.theta,
+        )
+        for k, m in modes.items()
+    }
+    return Reading(readings, tuple(checks), DenseContext(source, n, modes, ps))
+
+
+def prove_dense(claim: Claim, subject: Subject, reading: Reading) -> Check:
+    """Prove one claim of a dense kind (exactly while affordable, else verified float).
+
+    Parameters
+    ----------
+    claim : Claim
+        The claim.
+    subject : Subject
+        The subject.
+    reading : Reading
+        From :func:`read_dense`.
+
+    Returns
+    -------
+    Check
+    """
+    ctx: DenseContext = reading.state
+    proof = PROVERS[claim.kind](claim, ctx)
+    ctx.methods.add(proof.method)
+    detail = f"{proof.method}: {proof.detail}"
+    if claim.kind is ClaimKind.LYAPUNOV and claim.prop is Property.DECAY_RATE:
+        detail += f" (α = {claim.alpha!r})"
+    return Check(claim.id, proof.holds, detail, claim)
+
+
+def dense_method(reading: Reading) -> str:
+    """The proof methods used, joined (``exact-rational + verified-float``).
+
+    Parameters
+    ----------
+    reading : Reading
+        From :func:`read_dense`, after the proofs.
+
+    Returns
+    -------
+    str
+    """
+    used = sorted(reading.state.methods - {"not attempted"}) or ["none"]
+    return " + ".join(used)
+
+
+__all__ = ["dense_method", "prove_dense", "read_dense"]

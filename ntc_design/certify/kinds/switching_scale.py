@@ -1,0 +1,167 @@
+"""Kind ``switching-scale``: a big switching set, a proven lower bound
+λ_min(L_B(k) + L_B(k)ᵀ) > ℓ_k >= 0 per scheduled mode by one sparse factorisation
+(:mod:`ntc_design.certify.switching_scale` has the mathematics)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...design import SwitchingDesign
+from ...errors import InputError
+from ..certificate import (
+    DENSE_CERT_MAX_ND,
+    MAX_MODES,
+    Check,
+    _need,
+    _number,
+    _vector,
+    out_of_range,
+    topology_hash,
+)
+from ..claims import Claim, ClaimKind, Property
+from ..scale import symmetric_part_bound, topology_from_subject
+from ..switching_scale import proof_fields, switching_scale_certificate, sym_matrices
+from ..theorems import TheoremVerdict, switching_verdicts
+from .base import CertificateKind, ModeReading, Reading, ResultsAudit, Subject
+from .switching import switching_nd, weight_bound
+
+
+@dataclass(frozen=True, eq=False)
+class SwitchingScaleState:
+    """The modes' topologies and δ, and the stated proofs (mode -> {lower})."""
+
+    tops: dict
+    deltas: dict[str, float]
+    proofs: dict
+    source: str
+
+
+class SwitchingScaleKind(CertificateKind):
+    """A switching set above Nd = ``DENSE_CERT_MAX_ND``: a sparse proof per mode."""
+
+    name = "switching-scale"
+    description = "a switching topology at scale: every mode its schedule uses"
+    properties = (Property.SYMMETRIC_PART,)
+    required = frozenset({Property.SYMMETRIC_PART})
+    switching = True
+    method = "verified-float (sparse Cholesky per mode)"
+
+    def accepts(self, design: Any) -> bool:
+        return isinstance(design, SwitchingDesign) and switching_nd(design) > DENSE_CERT_MAX_ND
+
+    def issue(self, design: Any, **options: Any) -> dict:
+        return switching_scale_certificate(design)
+
+    def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
+        est = certificate["results"]["symmetric_part_min_eig"]
+        return switching_verdicts(design, verification, gain, weight_bound(design), est)
+
+    def read(self, doc: dict, source: str) -> Reading:
+        # Each mode's topology (arrays), δ, θ and informed agents = U.
+        subject = _need(doc, "subject", dict, source)
+        size = _need(doc, "size", int, source)
+        modes_doc = _need(subject, "modes", dict, f"{source}: subject")
+        if not modes_doc or len(modes_doc) > MAX_MODES:
+            raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
+        checks, modes, tops, deltas = [], {}, {}, {}
+        for name, sub in modes_doc.items():
+            where = f"{source}: subject.modes.{name}"
+            if not isinstance(sub, dict):
+                raise InputError(f"{where}: expected an object")
+            top = topology_from_subject(_need(sub, "topology", dict, where), f"{where}.topology")
+            if top.nd != size:
+                raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
+            delta = _number(_need(sub, "delta", (int, float), where), f"{where}.delta")
+            if not delta > 0 or out_of_range(delta):
+                raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
+            theta = _vector(_need(sub, "theta", list, where), top.dim, f"{where}.theta")
+            informed = _need(sub, "informed", list, where)
+            try:
+                inf_idx = sorted(top.index(x) for x in informed)
+            except InputError:
+                raise InputError(f"{where}.informed: lists an unknown agent") from None
+            ok_u = inf_idx == sorted(top.antagonised)
+            checks.append(
+                Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
+            )
+            k = str(name)
+            tops[k], deltas[k] = top, float(delta)
+            modes[k] = ModeReading(
+                k,
+                top.name,
+                tuple(str(x) for x in top.labels),
+                top.dim,
+                topology_hash(top),
+                float(delta),
+                theta,
+            )
+        proofs = _need(doc, "proofs", dict, source)
+        return Reading(modes, tuple(checks), SwitchingScaleState(tops, deltas, proofs, source))
+
+    def claims(
+        self, properties, subject: Subject, reading: Reading, alpha: float
+    ) -> tuple[Claim, ...]:
+        return tuple(
+            Claim(ClaimKind.SYMMETRIC_PART, Property.SYMMETRIC_PART, mode=k)
+            for k in subject.scheduled
+            if k in subject.modes
+        )
+
+    def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check:
+        # One sparse factorisation of L_B + L_Bᵀ − ℓI with Rump's shift.
+        st: SwitchingScaleState = reading.state
+        k = claim.mode or ""
+        if k not in st.proofs:
+            return Check(claim.id, False, "no proof given for this mode", claim)
+        lo = proof_fields(st.proofs[k], f"{st.source}: proofs.{k}")
+        lap, err = sym_matrices(st.tops[k], st.deltas[k])
+        p = symmetric_part_bound(lap, err, lo)
+        bound = f"λ_min > {lo:.6g}: " if lo else ""
+        return Check(claim.id, p.holds, f"verified-float: {bound}{p.detail}", claim)
+
+    def audit(
+        self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float
+    ) -> None:
+        # The lower bounds are the proven ℓ; each estimate lies above its proven bound
+        # and below min_i (L_B + L_Bᵀ)_ii (a Rayleigh quotient); P = I is claimed exactly
+        # when every scheduled mode is proven; no proof for a mode the schedule skips.
+        st: SwitchingScaleState = reading.state
+        for k in st.proofs:
+            if k not in subject.scheduled:
+                audit.fail(f"proofs.{k}: the schedule does not use mode {k}")
+        proven = {
+            k: proof_fields(st.proofs[k], f"{st.source}: proofs.{k}")
+            for k in subject.scheduled
+            if k in st.proofs
+        }
+        lbs = audit.get("symmetric_part_lower_bound")
+        if not isinstance(lbs, dict) or set(lbs) != set(proven):
+            audit.fail("symmetric_part_lower_bound: one entry per proven scheduled mode")
+        for k, lo in proven.items():
+            audit.exact(("symmetric_part_lower_bound", k), lo)
+        est = audit.get("symmetric_part_min_eig")
+        if not isinstance(est, dict) or not set(est) <= set(subject.scheduled):
+            audit.fail("symmetric_part_min_eig: an object scheduled mode -> estimate")
+        else:
+            for k in est:
+                if k not in st.tops:
+                    continue
+                lap, _ = sym_matrices(st.tops[k], st.deltas[k])
+                upper = float(np.min((lap + lap.T).diagonal()))
+                audit.estimate(
+                    ("symmetric_part_min_eig", k),
+                    proven.get(k),
+                    upper,
+                    " (λ_min(S) <= min_i S_ii)",
+                    optional=True,
+                    rtol=1e-6,
+                )
+        all_proven = all(k in proven for k in subject.scheduled)
+        audit.exact(("common_lyapunov", "structure"), "identity" if all_proven else None)
+        audit.informational(("seconds",))
+
+
+__all__ = ["SwitchingScaleKind"]

@@ -1,0 +1,307 @@
+"""``verify``: re-check a certificate of any kind through one path.
+
+What every kind shares is done here, once: the format and version, the digests, the
+subject's θ (finite, of length d, non-zero, one for every mode), for a switching subject
+its schedule (every scheduled mode described, the same agents, the switching hash), the
+certified properties (those the kind may certify, its required ones included), the claims
+(derived by the kind from its subject and compared with the listed ones, never read from
+the file), the audit of every reported number, and whether the certificate is about the
+user's own file and θ. The kind (:mod:`ntc_design.certify.kinds`) reads its subject,
+derives its claims, proves each one and audits its results.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import SwitchingTopology, Topology
+from ..timevarying import ExpressionTopology
+from .certificate import (
+    FORMAT,
+    MAX_CERT_BYTES,
+    SUPPORTED_VERSIONS,
+    About,
+    Check,
+    ModeAbout,
+    Verification,
+    _need,
+    _parse_schedule,
+    _same_topology,
+    canonical,
+    document_hash,
+    integrity_checks,
+    same_theta,
+    scheduled_described,
+    scheduled_modes,
+    switching_hash,
+)
+from .claims import Property
+from .kinds.base import CertificateKind, Reading, ResultsAudit, Subject
+from .kinds.registry import KINDS
+
+
+def _invalid(method: str, name: str, detail: str) -> Verification:
+    return Verification(False, method, (Check(name, False, detail),))
+
+
+def _theta_check(reading: Reading) -> Check:
+    """One θ ≠ 0 for every mode (each mode's θ was read as d finite numbers)."""
+    thetas = {tuple(m.theta.tolist()) for m in reading.modes.values()}
+    first = next(iter(reading.modes.values())).theta
+    ok = len(thetas) == 1 and bool(np.any(first != 0))
+    detail = (
+        f"θ = {first.tolist()}"
+        if ok
+        else "θ = 0 (Lemma 1 needs θ ≠ 0)"
+        if len(thetas) == 1
+        else f"modes differ: {sorted(thetas)}"
+    )
+    return Check("θ ≠ 0, one for every mode", ok, detail)
+
+
+def _subject(
+    kind: CertificateKind, doc_subject: dict, reading: Reading, source: str, checks: list[Check]
+) -> Subject:
+    """The schedule and the checks on it (switching kinds), or the one mode."""
+    modes = reading.modes
+    if not kind.switching:
+        if len(modes) != 1:
+            raise InputError(f"{source}: subject.modes: a {kind.name!r} certificate has one mode")
+        return Subject(modes, None, tuple(modes), None)
+    schedule = _parse_schedule(doc_subject, f"{source}: subject")
+    scheduled = scheduled_modes(schedule)
+    hashes = {k: m.hash for k, m in modes.items()}
+    checks.append(scheduled_described(scheduled, hashes))
+    first = next(iter(modes.values())).labels
+    same = all(m.labels == first for m in modes.values())
+    checks.append(Check("every mode has the same agents", same, "yes" if same else "no"))
+    sw_hash = switching_hash(hashes, schedule)
+    ok_h = doc_subject.get("switching_hash") == sw_hash
+    checks.append(
+        Check(
+            "switching hash",
+            ok_h,
+            sw_hash if ok_h else f"stated {doc_subject.get('switching_hash')!r}, is {sw_hash}",
+        )
+    )
+    return Subject(modes, schedule, scheduled, sw_hash)
+
+
+def _properties(kind: CertificateKind, listed: list, checks: list[Check]) -> tuple[Property, ...]:
+    """The properties certified, in the kind's order, with the check that they are ones
+    the kind can certify and include the ones it must."""
+    if any(not isinstance(p, str) for p in listed):
+        raise InputError("certifies: expected a list of property names")
+    names = {q.value for q in kind.properties}
+    unknown = [p for p in listed if p not in names]
+    props = tuple(q for q in kind.properties if q.value in listed)
+    lacking = sorted(q.value for q in kind.required - set(props))
+    twice = len(set(listed)) != len(listed)
+    ok = not unknown and not lacking and bool(props) and not twice
+    why = (
+        [f"unknown property {u!r}" for u in unknown]
+        + [f"kind {kind.name!r} must certify {q!r}" for q in lacking]
+        + (["certifies nothing"] if not props else [])
+        + (["a property is listed twice"] if twice else [])
+    )
+    checks.append(
+        Check(
+            f"certifies what kind {kind.name!r} can",
+            ok,
+            ", ".join(q.value for q in props) if ok else "; ".join(why),
+        )
+    )
+    return props
+
+
+def _claims_check(kind: CertificateKind, claims: tuple, listed: list) -> Check:
+    """The listed claims are exactly the derived ones (compared canonically)."""
+    want = sorted(canonical(kind.record(c)) for c in claims)
+    got = sorted(canonical(c) for c in listed)
+    ok = want == got
+    ids = {c.id for c in claims}
+    listed_ids = {c["id"] for c in listed if isinstance(c, dict) and isinstance(c.get("id"), str)}
+    why = [f"missing {i!r}" for i in sorted(ids - listed_ids)] + [
+        f"not required {i!r}" for i in sorted(listed_ids - ids)
+    ]
+    return Check(
+        "listed claims are those the kind and subject require",
+        ok,
+        f"{len(claims)} claims"
+        if ok
+        else "; ".join(why) or "a listed claim differs from the derived one",
+    )
+
+
+def _user_topology(
+    topology: Topology | SwitchingTopology | ExpressionTopology, subject: Subject
+) -> Check:
+    hashes = {k: m.hash for k, m in subject.modes.items()}
+    if isinstance(topology, ExpressionTopology):
+        mine = document_hash(topology.to_dict())
+        ok = subject.schedule is None and list(hashes.values()) == [mine]
+        return Check(
+            "about the given topology",
+            ok,
+            f"topology hash {mine}" if ok else "the certificate is about another topology",
+        )
+    return _same_topology(topology, hashes, subject.schedule, subject.switching_hash)
+
+
+def verify(
+    doc: Any,
+    source: str = "certificate",
+    topology: Topology | SwitchingTopology | ExpressionTopology | None = None,
+    theta: Any = None,
+) -> Verification:
+    """Re-check a certificate mapping of any kind, deriving what must be proven from its
+    kind and subject.
+
+    Parameters
+    ----------
+    doc : Any
+        The parsed JSON of a certificate.
+    source : str
+        Its name in messages (the file).
+    topology : Topology, SwitchingTopology or ExpressionTopology, optional
+        The user's own topology: the certificate must be about it (canonical hashes).
+    theta : sequence of float, optional
+        The user's θ: the certificate must be about it.
+
+    Returns
+    -------
+    Verification
+        ``valid`` when every check holds; an unknown format version or kind gives an
+        invalid verification (nothing can be proven about it).
+
+    Raises
+    ------
+    InputError
+        When the certificate is malformed (wrong types or shapes, missing fields, sizes
+        above the bounds).
+
+    Examples
+    --------
+    >>> import json
+    >>> from ntc_design.certify import verify
+    >>> doc = json.load(open("certificates/g1.json"))
+    >>> ver = verify(doc)
+    >>> ver.valid, ver.about.kind
+    (True, 'hurwitz')
+    >>> doc["results"]["eig_bound"] = 100.0  # a forged number, even when re-digested,
+    >>> verify(doc).valid                   # makes the certificate invalid
+    False
+    """
+    if not isinstance(doc, dict):
+        raise InputError(f"{source}: expected a JSON object")
+    if doc.get("format") != FORMAT:
+        raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
+    version = _need(doc, "version", int, source)
+    if version not in SUPPORTED_VERSIONS:
+        return _invalid(
+            "none",
+            "format version",
+            f"version {version} is not one this ntc reads "
+            f"({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
+        )
+    name = _need(doc, "kind", str, source)
+    kind = KINDS.get(name)
+    if kind is None:
+        return _invalid(
+            "none",
+            "certificate kind",
+            f"unknown kind {name!r} (known: {', '.join(KINDS)}); nothing is proven",
+        )
+    doc_subject = _need(doc, "subject", dict, source)
+    stated = _need(doc, "digest", str, source)
+    listed = _need(doc, "claims", list, source)
+    listed_props = _need(doc, "certifies", list, source)
+    checks: list[Check] = integrity_checks(doc, doc_subject, stated)
+
+    reading = kind.read(doc, source)
+    checks += reading.checks
+    checks.append(_theta_check(reading))
+    subject = _subject(kind, doc_subject, reading, source, checks)
+    if topology is not None:
+        checks.append(_user_topology(topology, subject))
+    if theta is not None:
+        checks.append(same_theta(theta, next(iter(subject.modes.values())).theta))
+
+    try:
+        props = _properties(kind, listed_props, checks)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    alpha = kind.rate(doc, source) if Property.DECAY_RATE in props else 0.0
+    claims = kind.claims(props, subject, reading, alpha)
+    checks.append(_claims_check(kind, claims, listed))
+    for c in claims:
+        proof = kind.prove(c, subject, reading)
+        checks += proof if isinstance(proof, list) else [proof]
+
+    audit = ResultsAudit(doc.get("results"), source)
+    kind.audit(audit, doc, subject, reading, alpha)
+    checks.append(audit.check())
+
+    about = About(
+        kind.name,
+        kind.description,
+        props,
+        tuple(
+            ModeAbout(k, m.topology, m.n, m.d, m.hash, m.delta, tuple(m.theta.tolist()))
+            for k, m in subject.modes.items()
+        ),
+        subject.scheduled,
+        subject.schedule,
+        alpha if Property.DECAY_RATE in props else None,
+        subject.switching_hash,
+    )
+    return Verification(
+        all(c.ok for c in checks), kind.verification_method(reading), tuple(checks), about
+    )
+
+
+def verify_file(
+    path: str | Path,
+    topology: Topology | SwitchingTopology | ExpressionTopology | None = None,
+    theta: Any = None,
+) -> Verification:
+    """Read a certificate file (size-capped) and :func:`verify` it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The certificate (JSON).
+    topology, theta
+        As in :func:`verify`.
+
+    Returns
+    -------
+    Verification
+
+    Raises
+    ------
+    InputError
+        When the file is missing, too large, not JSON, or malformed.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"{p}: no such file")
+    if p.stat().st_size > MAX_CERT_BYTES:
+        raise InputError(f"{p}: larger than {MAX_CERT_BYTES // 2**20} MB")
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{p}: not valid JSON ({exc.__class__.__name__})") from None
+    except RecursionError:
+        raise InputError(f"{p}: nested too deeply") from None
+    except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
+        raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
+    return verify(doc, str(p), topology, theta)
+
+
+__all__ = ["verify", "verify_file"]
