@@ -17,7 +17,6 @@ from ntc_design.certify.certificate import _sha, digest, switching_certificate, 
 from ntc_design.certify.scale import component_matrix, lap_b_blocks, symmetric_part_bound
 from ntc_design.certify.switching_scale import (
     switching_scale_certificate,
-
 )
 from ntc_design.design import design
 from ntc_design.errors import InputError

@@ -10,8 +10,7 @@ import pytest
 import yaml
 
 import ntc_design as nd
-from ntc_design.certify import certify
-from ntc_design.certify import verify
+from ntc_design.certify import certify, verify
 from ntc_design.certify.certificate import digest
 from ntc_design.certify.time_varying import CertificationRefused, certify_lambda2
 from ntc_design.design import design, design_topology
