@@ -544,11 +544,26 @@ def _subject(des: ProtocolDesign) -> dict:
     }
 
 
-def _rate_estimate(blocks: BlockData, comp: np.ndarray, ncomp: int) -> tuple[float, str]:
+def rate_estimate(blocks: BlockData, comp: np.ndarray, ncomp: int) -> tuple[float, str]:
     """min Re λ(L_B) estimated: eigenvalues of one-agent blocks, dense eigenvalues of
     components up to RATE_DENSE_MAX_ND, ARPACK (shift-invert at 0, the eigenvalue nearest
     0) up to RATE_ARPACK_MAX_ND and RATE_ARPACK_MAX_FLOPS; larger components are left to
-    the proven lower bound."""
+    the proven lower bound.
+
+    Parameters
+    ----------
+    blocks : BlockData
+        L_B's blocks.
+    comp : numpy.ndarray
+        The component of each agent.
+    ncomp : int
+        The number of components.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The estimate (inf when no component was estimated) and how it was made.
+    """
     from scipy.sparse.linalg import eigs
 
     sizes = np.bincount(comp, minlength=ncomp)
@@ -717,7 +732,7 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
                 f"component {c} (Nd = {lap_c.shape[0]}): no dense Lyapunov fallback above "
                 f"Nd = {LYAPUNOV_COMPONENT_MAX_ND}"
             )
-    rate, rate_how = _rate_estimate(blocks, comp, ncomp)
+    rate, rate_how = rate_estimate(blocks, comp, ncomp)
     rhs = np.zeros(n)
     np.add.at(rhs, ea.rows[same], nu[same] * v[ea.cols[same]])
     in_dom = comp_dom[comp]

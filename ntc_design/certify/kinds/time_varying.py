@@ -298,7 +298,7 @@ class TimeVaryingKind(CertificateKind):
         if isinstance(s_inf, (int, float)) and not isinstance(s_inf, bool) and s_inf < lam2:
             audit.fail(f"sampled_inf {s_inf!r} lies below the certified Λ₂ {lam2!r}")
         if isinstance(s_inf, (int, float)) and not isinstance(s_inf, bool) and s_inf > 0:
-            audit.recomputed((*tv, "relative_gap"), (s_inf - lam2) / s_inf, 1.0)
+            audit.recomputed((*tv, "relative_gap"), (s_inf - lam2) / s_inf)
         else:
             audit.exact((*tv, "relative_gap"), None)
         sigma_bar = noise_sigma_bar(st.f)
