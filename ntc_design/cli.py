@@ -118,8 +118,16 @@ def _print_check(rep: dict, title: str) -> None:
             out.print(f"  {a} reached by the positive-negative path {' -> '.join(map(str, p))}")
     else:
         out.print("[bold red]Assumption 2 fails:[/bold red]")
-        for v in rep["violations"]:
-            out.print(f"  agent {v['agent']}: {v['reason']}")
+        for line in _capped(rep["violations"], "  agent {agent}: {reason}"):
+            out.print(line)
+
+
+def _capped(items: list[dict], line: str, most: int = 10) -> list[str]:
+    """The first ``most`` items as lines, then how many more (--json has them all)."""
+    lines = [line.format(**v) for v in items[:most]]
+    if len(items) > most:
+        lines.append(f"  … and {len(items) - most} more (--json lists them all)")
+    return lines
 
 
 def _print_design(d: dict, title: str) -> None:
@@ -143,8 +151,8 @@ def _print_design(d: dict, title: str) -> None:
         t.add_row("best decay rate", _fmt(th["best_rate"], 6))
         t.add_row("δ of best rate", _fmt(th["best_rate_delta"], 6))
     out.print(t)
-    for v in d["violations"]:
-        out.print(f"  violation, agent {v['agent']}: {v['reason']}")
+    for line in _capped(d["violations"], "  violation, agent {agent}: {reason}"):
+        out.print(line)
     notes = list(d["notes"]) + (list(th["notes"]) if th else [])
     for n in notes:
         out.print(f"  note: {n}")

@@ -2,6 +2,7 @@
 coefficients, Assumption 2 by BFS against the reference scan, labels in public results,
 the generator's promise, the .npz edge list, the memory guard."""
 
+import json
 import math
 import warnings
 
@@ -428,3 +429,39 @@ def test_malformed_scale_certificate_is_one_line(tmp_path, capsys, monkeypatch):
         p = tmp_path / f"bad{k}.json"
         write_certificate(doc, p)
         assert_input_error(["verify", p], capsys, monkeypatch, str(p), needle)
+
+
+@pytest.mark.hostile
+def test_unreached_agents_are_refused_in_bulk_not_one_by_one(tmp_path, capsys, monkeypatch):
+    """20,000 agents, one edge: every other agent is a one-agent block L_ii = 0. No
+    fallback can prove such a block, so none is tried (the work stays linear in N: it
+    took a sparse factorisation and a pass over all agents per agent before), and the
+    verdict names the first violations only."""
+    import warnings
+
+    import yaml
+
+    from ntc_design.certify import scale as scale_mod
+
+    from .cli_helpers import run_cli
+
+    calls = []
+    real = scale_mod.prove_symmetric_part
+    monkeypatch.setattr(scale_mod, "prove_symmetric_part", lambda *a: calls.append(1) or real(*a))
+    f = tmp_path / "one_edge.yaml"
+    f.write_text(
+        yaml.safe_dump(
+            {"dim": 1, "agents": 20000, "edges": [{"from": 1, "to": 2, "weight": [[-1.0]]}]}
+        )
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code, out, err = run_cli(["certify", f, "--theta", "1", "--json"], capsys, monkeypatch)
+    assert code == 1 and calls == []
+    doc = json.loads(out)
+    res = doc["certificate"]["results"]
+    assert res["methods"]["none"] == 19999 and res["methods"]["dominance"] == 1
+    assert any("19999 one-agent component(s)" in s for s in res["skipped"])
+    detail = doc["theorems"][0]["premises"][1]["detail"]
+    assert "… 19994 more agents" in detail and len(detail) < 2000
+    assert "replaced by this certificate" not in detail

@@ -497,7 +497,7 @@ def test_rate_lower_bound_only_when_every_component_is_dominance():
     doc = copy.deepcopy(c2)
     doc["results"]["eig_bound"] = doc["results"]["rate_estimate"]["value"] = lo / 10
     (bad,) = verify(_refresh(doc)).failed
-    assert "below the proven lower bound" in bad.detail
+    assert "rate_estimate.value: reported" in bad.detail  # redone: the network is small
 
 
 @pytest.mark.parametrize(

@@ -87,6 +87,27 @@ class TheoremVerdict:
         }
 
 
+def violations_text(design, most: int = 5) -> str:
+    """Assumption 2's violations in words, the first ``most`` agents named (a network of
+    10⁵ unreached agents gives one short line, not a megabyte).
+
+    Parameters
+    ----------
+    design : ProtocolDesign
+        A design whose decomposition failed.
+    most : int, optional
+        How many agents to name.
+
+    Returns
+    -------
+    str
+    """
+    lab = design.topology.labels
+    viol = design.decomposition.violations
+    text = "; ".join(f"agent {lab[v.agent]}: {v.reason}" for v in viol[:most])
+    return text + (f"; … {len(viol) - most} more agents" if len(viol) > most else "")
+
+
 def gain_premises(gain: GainAnalysis | None, almost_sure: bool) -> list[Premise]:
     """The gain's premises: ∫c = ∞ and c → 0, and ∫c² < ∞ for almost-sure consensus.
 
@@ -139,7 +160,6 @@ def fixed_verdicts(
     -------
     tuple of TheoremVerdict
     """
-    lab = design.topology.labels
     hurwitz = ver.property_holds(Property.HURWITZ)
     th = design.thresholds
     proofs = [c for c in ver.checks if c.claim is not None and c.claim.prop is Property.HURWITZ]
@@ -150,10 +170,9 @@ def fixed_verdicts(
     if th is not None and th.hurwitz is not None:
         hdetail += f"; δ = {design.delta:.6g} vs exact threshold δ_H = {th.hurwitz:.6g}"
     if not design.assumption_holds:
-        viol = "; ".join(
-            f"agent {lab[v.agent]}: {v.reason}" for v in design.decomposition.violations
+        hdetail += f"; Assumption 2 itself fails ({violations_text(design)})" + (
+            " and is replaced by this certificate" if hurwitz else ""
         )
-        hdetail += f"; Assumption 2 itself fails ({viol}) and is replaced by this certificate"
     structural = Premise("−L_B Hurwitz (Lemma 1's conclusion, used by the proof)", hurwitz, hdetail)
     return (
         TheoremVerdict(1, "mean square", (A1, structural, *gain_premises(gain, False))),
@@ -273,6 +292,7 @@ def time_varying_verdicts(result: dict, ver, gain) -> tuple:
 
 
 __all__ = [
+    "violations_text",
     "gain_premises",
     "time_varying_verdicts",
     "Premise",

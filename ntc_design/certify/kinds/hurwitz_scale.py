@@ -259,9 +259,16 @@ class HurwitzScaleKind(CertificateKind):
 
     def _fallbacks(self, st: ScaleState) -> list[Check]:
         checks = []
+        # the agents of each component, grouped once (not a pass over all agents each)
+        order = np.argsort(st.comp, kind="stable")
+        starts = np.concatenate([[0], np.cumsum(np.bincount(st.comp, minlength=st.methods.size))])
+
+        def agents_of(c: int) -> np.ndarray:
+            return order[starts[c] : starts[c + 1]]
+
         sym_ok, sym_n, sym_fail = True, 0, ""
         for c in np.flatnonzero(st.methods == "symmetric").tolist():
-            lap_c, err_c = component_matrix(st.blocks, np.flatnonzero(st.comp == c))
+            lap_c, err_c = component_matrix(st.blocks, agents_of(c))
             ok, how = prove_symmetric_part(lap_c, err_c)
             sym_n += 1
             if not ok:
@@ -276,7 +283,7 @@ class HurwitzScaleKind(CertificateKind):
             )
         cw = f"{st.source}: components"
         for c in np.flatnonzero(st.methods == "lyapunov").tolist():
-            agents = np.flatnonzero(st.comp == c)
+            agents = agents_of(c)
             m = agents.size * st.top.dim
             if m > LYAPUNOV_COMPONENT_MAX_ND:
                 raise InputError(
@@ -326,8 +333,10 @@ class HurwitzScaleKind(CertificateKind):
             audit.fail("rate_lower_bound given, but not every component is a dominance one")
         hurwitz = meth.count("none") == 0
         d = st.top.dim
-        if sizes.size and int(np.sum((sizes * d) ** 3)) <= RECOMPUTE_FLOPS and bool(
-            np.all(sizes * d <= RATE_DENSE_MAX_ND)
+        if (
+            sizes.size
+            and int(np.sum((sizes * d) ** 3)) <= RECOMPUTE_FLOPS
+            and bool(np.all(sizes * d <= RATE_DENSE_MAX_ND))
         ):  # every block dense and small: the issuer's estimate, redone
             rate, _ = rate_estimate(st.blocks, st.comp, ncomp)
             audit.recomputed(("rate_estimate", "value"), rate, rtol=1e-9)
