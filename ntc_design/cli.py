@@ -464,7 +464,7 @@ def _print_certify(doc: dict, written: Path | None) -> None:
     if "symmetric_part_lower_bound" in r:  # switching-scale
         lb = r["symmetric_part_lower_bound"]
         out.print(
-            "λ_min(L_B + L_Bᵀ): "
+            "λ_min(L_B + L_Bᵀ) estimate: "
             + ", ".join(
                 f"{k} {_fmt(v, 6)} (proven > {_fmt(lb[k], 6) if k in lb else 'not proven'})"
                 for k, v in r["symmetric_part_min_eig"].items()

@@ -425,7 +425,8 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
     if "symmetric_part_min_eig" in r:
         rows.append(
             (
-                "λ_min(L_B + L_Bᵀ) per mode",
+                "λ_min(L_B + L_Bᵀ) per mode"
+                + (" (estimate)" if "symmetric_part_lower_bound" in r else ""),
                 ", ".join(
                     f"{k}: {v:.6f}" if v is not None else f"{k}: not estimated"
                     for k, v in r["symmetric_part_min_eig"].items()
