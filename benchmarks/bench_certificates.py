@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg as sla
 
 import ntc_design as nd
-from ntc_design.certify.certificate import prove_hurwitz
+from ntc_design.certify.dense import prove_hurwitz
 from ntc_design.certify.lyapunov import common_lyapunov
 
 

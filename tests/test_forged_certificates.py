@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 
 import ntc_design as nd
 from ntc_design.certify import hurwitz_certificate, switching_certificate, verify
-from ntc_design.certify.certificate import _sha, digest
 from ntc_design.certify.claims import Property, derive_claims
+from ntc_design.certify.format import digest, document_hash
 from ntc_design.errors import InputError
 
 from .cli_helpers import run_cli
@@ -31,7 +31,7 @@ hostile = pytest.mark.hostile
 def redigest(doc):
     """What a forger does after editing: recompute both checksums."""
     if isinstance(doc.get("subject"), dict):
-        doc["subject_digest"] = _sha(doc["subject"])
+        doc["subject_digest"] = document_hash(doc["subject"])
     doc["digest"] = digest(doc)
     return doc
 
@@ -106,7 +106,7 @@ def test_switching_mode_removed_everywhere_is_not_the_users_system(
     del doc["results"]["symmetric_part_min_eig"]["G3"]
     doc["results"]["common_lyapunov"]["margin"] = None
     sub = doc["subject"]
-    from ntc_design.certify.certificate import switching_hash
+    from ntc_design.certify.format import switching_hash
 
     sub["switching_hash"] = switching_hash(
         {k: m["topology_hash"] for k, m in sub["modes"].items()},
@@ -150,7 +150,7 @@ def test_schedule_changed_consistently_is_caught_by_topology(
     doc = copy.deepcopy(SW)
     doc["subject"]["schedule"][1]["duration"] = 7.0
     sub = doc["subject"]
-    from ntc_design.certify.certificate import switching_hash
+    from ntc_design.certify.format import switching_hash
 
     sub["switching_hash"] = switching_hash(
         {k: m["topology_hash"] for k, m in sub["modes"].items()},

@@ -21,7 +21,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.certify import KINDS, verify
-from ntc_design.certify.certificate import _sha, digest, topology_hash
+from ntc_design.certify.format import digest, document_hash, topology_hash
 from ntc_design.certify.scale import scale_certificate, topology_from_subject
 from ntc_design.certify.switching_scale import switching_scale_certificate
 from ntc_design.design import design
@@ -147,9 +147,7 @@ def _truth_dense(doc: dict) -> list[str]:
     ps = {k: np.array(v) for k, v in doc["matrices"]["P"].items()}
     res = doc["results"]
     # the certified properties, whatever the claims list says
-    if "symmetric_part" in doc["certifies"] and not all(
-        _pos(laps[k] + laps[k].T) for k in used
-    ):
+    if "symmetric_part" in doc["certifies"] and not all(_pos(laps[k] + laps[k].T) for k in used):
         bad.append("a scheduled mode with L_B + L_Bᵀ not ≻ 0")
     if "common_lyapunov" in doc["certifies"]:
         p = ps.get("common")
@@ -226,9 +224,10 @@ def _truth_hurwitz_scale(doc: dict, honest_doc: dict) -> list[str]:
         bad.append("largest component")
     if res["methods"] != honest_doc["results"]["methods"]:
         bad.append("methods")
-    if not _close(res["rate_estimate"]["value"], eig) or res["eig_bound"] != res[
-        "rate_estimate"
-    ]["value"]:
+    if (
+        not _close(res["rate_estimate"]["value"], eig)
+        or res["eig_bound"] != res["rate_estimate"]["value"]
+    ):
         bad.append("rate estimate")
     lower = res["rate_lower_bound"]["value"]
     if lower is not None and not lower <= eig:
@@ -383,7 +382,7 @@ def _mutants(doc):
 
 def _redigest(doc):
     if isinstance(doc.get("subject"), dict):
-        doc["subject_digest"] = _sha(doc["subject"])
+        doc["subject_digest"] = document_hash(doc["subject"])
     doc["digest"] = digest(doc)
     return doc
 
@@ -525,6 +524,7 @@ def test_an_added_number_in_results_is_invalid(honest):
         doc["results"]["decay_rate_proven"] = 1000.0
         ver = verify(_redigest(doc))
         assert not ver.valid, which
-        assert "decay_rate_proven: a reported number this kind does not report" in ver.failed[
-            -1
-        ].detail
+        assert (
+            "decay_rate_proven: a reported number this kind does not report"
+            in ver.failed[-1].detail
+        )

@@ -280,7 +280,7 @@ def test_dominance_certificate_and_verify_round_trip(tmp_path):
     import json
 
     from ntc_design.certify import scale_certificate, verify, write_certificate
-    from ntc_design.certify.certificate import digest
+    from ntc_design.certify.format import digest
     from ntc_design.certify.scale import pack, unpack
 
     top = random_network(300, 3, seed=2, family="scale-free")
@@ -406,7 +406,7 @@ def test_malformed_scale_certificate_is_one_line(tmp_path, capsys, monkeypatch):
     import json
 
     from ntc_design.certify import scale_certificate, write_certificate
-    from ntc_design.certify.certificate import digest
+    from ntc_design.certify.format import digest
 
     des = nd.design(random_network(40, 2, seed=6), [1.0, 1.0], thresholds=False)
     good = scale_certificate(des)

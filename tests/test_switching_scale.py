@@ -13,7 +13,8 @@ import pytest
 import scipy.sparse as sp
 
 from ntc_design.certify import certify, verify
-from ntc_design.certify.certificate import _sha, digest, switching_certificate, topology_hash
+from ntc_design.certify.format import digest, document_hash, topology_hash
+from ntc_design.certify.kinds.switching import switching_certificate
 from ntc_design.certify.scale import component_matrix, lap_b_blocks, symmetric_part_bound
 from ntc_design.certify.switching_scale import (
     switching_scale_certificate,
@@ -49,7 +50,7 @@ def _dense_sym_min(des):
 
 
 def _refresh(doc):
-    doc["subject_digest"] = _sha(doc["subject"])
+    doc["subject_digest"] = document_hash(doc["subject"])
     doc["digest"] = digest(doc)
     return doc
 
@@ -131,7 +132,10 @@ def test_an_agent_nothing_reaches_is_never_certified():
         (lambda d: d["claims"].pop(), "listed claims"),
         (lambda d: d.update(certifies=["symmetric_part", "common_lyapunov"]), "certifies"),
         (lambda d: d["subject"]["schedule"].pop(), "switching hash"),
-        (lambda d: d["subject"]["modes"]["B"].update(theta=[1.0, 2.0, 3.0]), "θ ≠ 0, one for every mode"),
+        (
+            lambda d: d["subject"]["modes"]["B"].update(theta=[1.0, 2.0, 3.0]),
+            "θ ≠ 0, one for every mode",
+        ),
         (lambda d: d["subject"]["modes"]["A"].update(informed=[]), "informed"),
     ],
 )
@@ -284,7 +288,7 @@ def _reference_hash(top):
         for (i, j), a in sorted(top.weights.items())
         if np.any(a)
     ]
-    return _sha({"labels": list(top.labels), "dim": top.dim, "edges": edges})
+    return document_hash({"labels": list(top.labels), "dim": top.dim, "edges": edges})
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -465,7 +469,7 @@ def test_structured_labels_hash_like_the_reference():
 
 
 def test_topology_hash_in_chunks_is_the_same(monkeypatch):
-    import ntc_design.certify.certificate as cc
+    import ntc_design.certify.format as cc
 
     top = random_network(60, 2, seed=9)
     want = _reference_hash(top)

@@ -11,7 +11,7 @@ import yaml
 
 import ntc_design as nd
 from ntc_design.certify import certify, verify
-from ntc_design.certify.certificate import digest
+from ntc_design.certify.format import digest
 from ntc_design.certify.time_varying import CertificationRefused, certify_lambda2
 from ntc_design.design import design, design_topology
 from ntc_design.errors import InputError

@@ -4,18 +4,12 @@ one module per kind, and the registry :data:`KINDS`); :func:`verify` re-checks a
 through one path."""
 
 from ..gain import GainAnalysis, analyse_gain
-from .certificate import (
-    DIGEST_NOTE,
-    About,
-    Check,
-    Verification,
-    hurwitz_certificate,
-    switching_certificate,
-    topology_hash,
-    write_certificate,
-)
+from .checks import About, Check, Verification
 from .claims import Claim, ClaimKind, Property
+from .format import DIGEST_NOTE, topology_hash, write_certificate
 from .kinds import KINDS, CertificateKind, kind_for
+from .kinds.hurwitz import hurwitz_certificate
+from .kinds.switching import switching_certificate
 from .result import CertifyResult, certify
 from .scale import scale_certificate
 from .theorems import Premise, TheoremVerdict

@@ -108,7 +108,7 @@ def hurwitz_by_lyapunov(lap_b: np.ndarray) -> LyapunovResult:
     LyapunovResult
         P, the residual ``‖P L_B + L_Bᵀ P − I‖_F / √(Nd)``, λ_min(P) and the time taken;
         −L_B is Hurwitz when λ_min(P) > 0 and the residual is small (proven exactly by
-        :func:`ntc_design.certify.certificate.prove_hurwitz`).
+        :func:`ntc_design.certify.dense.prove_hurwitz`).
     """
     t0 = time.perf_counter()
     p = lyapunov_solve(lap_b)

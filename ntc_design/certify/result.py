@@ -12,7 +12,8 @@ from ..errors import InputError
 from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..timevarying import ExpressionTopology, TimeVaryingDesign
-from .certificate import DENSE_CERT_MAX_ND, Check, Verification
+from .checks import Check, Verification
+from .dense import DENSE_CERT_MAX_ND
 from .kinds import kind_for
 from .theorems import TheoremVerdict
 from .verify import verify

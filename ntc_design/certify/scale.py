@@ -54,10 +54,12 @@ from ..errors import InputError
 from ..linalg import CODE_SIGN, DENSE_MAX_BYTES, DenseRefused, SPDFamily, cholesky_fill
 from ..model import Topology
 from ..thresholds import strong_components
+from .dense import prove_pd_expr
 from .exact import U, gamma, rump_shift_value
+from .fields import RANGE_TEXT, out_of_range
+from .format import FORMAT, VERSION, finish
+from .lyapunov import hurwitz_by_lyapunov
 
-FORMAT = "ntc-design/certificate"
-VERSION = 2  # the certificate format version (ntc_design.certify.certificate.VERSION)
 KIND = "hurwitz-scale"
 #: Largest component (Nd) that may fall back to a dense Lyapunov equation.
 LYAPUNOV_COMPONENT_MAX_ND = 600
@@ -723,17 +725,14 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
             details[str(c)] = how
             continue
         if lap_c.shape[0] <= LYAPUNOV_COMPONENT_MAX_ND:
-            from .certificate import _prove_pd_expr
-            from .lyapunov import hurwitz_by_lyapunov
-
             dense = lap_c.toarray()
             try:
                 p = hurwitz_by_lyapunov(dense).p
             except (np.linalg.LinAlgError, ValueError):
                 p = None
             if p is not None and np.all(np.isfinite(p)):
-                p1 = _prove_pd_expr(p, None, None, 0.0, None, False)
-                p2 = _prove_pd_expr(p, None, dense, 0.0, err_c.toarray(), False)
+                p1 = prove_pd_expr(p, None, None, 0.0, None, False)
+                p2 = prove_pd_expr(p, None, dense, 0.0, err_c.toarray(), False)
                 if p1.holds and p2.holds:
                     methods[c] = "lyapunov"
                     extra[str(c)] = {"P": pack(p, "f8")}
@@ -800,7 +799,6 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
         },
         "solver": {"name": None, "status": None},
     }
-    from .certificate import finish
 
     return finish(doc, "verified-float (component-wise)")
 
@@ -850,7 +848,6 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     n = len(labels)
     if cols.size and (min(cols.min(), rows.min()) < 0 or max(cols.max(), rows.max()) >= n):
         raise InputError(f"{where}: an edge index is out of range")
-    from .certificate import RANGE_TEXT, out_of_range
 
     if out_of_range(w):  # so no product in a proof overflows or underflows
         raise InputError(f"{where}.weights: {RANGE_TEXT}")

@@ -38,25 +38,25 @@ from ..design import SwitchingDesign
 from ..errors import InputError
 from ..linalg import DenseRefused, SPDFamily
 from ..model import Topology
-from .certificate import (
+from .claims import Claim, ClaimKind, Property
+from .fields import number
+from .format import (
+    FORMAT,
     NUMBER_EXP,
-    _number,
+    VERSION,
     finish,
     scheduled_modes,
     switching_hash,
     topology_hash,
 )
-from .claims import Claim, ClaimKind, Property
+from .scale import _subject as mode_subject
 from .scale import (
-    FORMAT,
-    VERSION,
     component_matrix,
     lap_b_blocks,
     rump_shift,
     shifted_symmetric_part,
     symmetric_part_bound,
 )
-from .scale import _subject as mode_subject
 
 KIND = "switching-scale"
 DESCRIPTION = "a switching topology at scale: every mode its schedule uses"
@@ -259,7 +259,7 @@ def proof_fields(x: Any, where: str) -> float:
     if not isinstance(x, dict) or set(x) != {"lower"}:
         raise InputError(f"{where}: expected {{lower}}")
 
-    lo = _number(x["lower"], f"{where}.lower")
+    lo = number(x["lower"], f"{where}.lower")
     if lo < 0 or (lo != 0 and not 2.0**-NUMBER_EXP <= lo <= 2.0**NUMBER_EXP):
         raise InputError(f"{where}.lower: must be 0 or in [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}]")
     return float(lo)

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from ..design import ProtocolDesign, SwitchingDesign
 from ..gain import CONDITION_LABELS, GainAnalysis
-from .certificate import Verification
+from .checks import Verification
 from .claims import Property
 
 

@@ -42,7 +42,7 @@ import sympy as sp
 
 from ..errors import InputError
 from ..expr import compile_expression, parse_expression, symbol
-from ..interval import _T, bounds, enclose, t_ball
+from ..interval import _T, bounds, enclose, t_ball, upper
 from ..linalg import DEF_RTOL
 from ..timevarying import (
     ExpressionTopology,
@@ -54,6 +54,7 @@ from ..timevarying import (
     sym_min_eig_lower,
 )
 from .exact import gamma
+from .format import FORMAT, VERSION, finish
 
 RTOL = 0.008  # bisect until the certified Λ₂ is within 0.8 % of the sampled infimum
 MAX_INTERVALS = 4000
@@ -364,7 +365,6 @@ def domain_of(tv: ExpressionTopology) -> tuple[float, float, str]:
     InputError
         Neither is declared.
     """
-    from ..interval import upper
 
     if tv.period is not None:
         return 0.0, upper(enclose(tv.period, t_ball(0.0, 0.0))), f"one period [0, {tv.period}]"
@@ -732,7 +732,6 @@ def time_varying_certificate(
     CertificationRefused
         The uniform bound cannot be certified (see :func:`certify_lambda2`).
     """
-    from .certificate import FORMAT, VERSION, finish
 
     bound = certify_lambda2(tv, margin, sigma)
     sigma_bar = noise_sigma_bar(f)

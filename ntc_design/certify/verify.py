@@ -21,26 +21,27 @@ import numpy as np
 from ..errors import InputError
 from ..model import SwitchingTopology, Topology
 from ..timevarying import ExpressionTopology
-from .certificate import (
-    FORMAT,
-    MAX_CERT_BYTES,
-    SUPPORTED_VERSIONS,
+from .checks import (
     About,
     Check,
     ModeAbout,
     Verification,
-    _need,
-    _parse_schedule,
-    _same_topology,
-    canonical,
-    document_hash,
     integrity_checks,
     same_theta,
+    same_topology,
     scheduled_described,
+)
+from .claims import Property
+from .fields import need, parse_schedule
+from .format import (
+    FORMAT,
+    MAX_CERT_BYTES,
+    SUPPORTED_VERSIONS,
+    canonical,
+    document_hash,
     scheduled_modes,
     switching_hash,
 )
-from .claims import Property
 from .kinds.base import CertificateKind, Reading, ResultsAudit, Subject
 from .kinds.registry import KINDS
 
@@ -73,7 +74,7 @@ def _subject(
         if len(modes) != 1:
             raise InputError(f"{source}: subject.modes: a {kind.name!r} certificate has one mode")
         return Subject(modes, None, tuple(modes), None)
-    schedule = _parse_schedule(doc_subject, f"{source}: subject")
+    schedule = parse_schedule(doc_subject, f"{source}: subject")
     scheduled = scheduled_modes(schedule)
     hashes = {k: m.hash for k, m in modes.items()}
     checks.append(scheduled_described(scheduled, hashes))
@@ -150,7 +151,7 @@ def _user_topology(
             ok,
             f"topology hash {mine}" if ok else "the certificate is about another topology",
         )
-    return _same_topology(topology, hashes, subject.schedule, subject.switching_hash)
+    return same_topology(topology, hashes, subject.schedule, subject.switching_hash)
 
 
 def verify(
@@ -201,7 +202,7 @@ def verify(
         raise InputError(f"{source}: expected a JSON object")
     if doc.get("format") != FORMAT:
         raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
-    version = _need(doc, "version", int, source)
+    version = need(doc, "version", int, source)
     if version not in SUPPORTED_VERSIONS:
         return _invalid(
             "none",
@@ -209,7 +210,7 @@ def verify(
             f"version {version} is not one this ntc reads "
             f"({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
         )
-    name = _need(doc, "kind", str, source)
+    name = need(doc, "kind", str, source)
     kind = KINDS.get(name)
     if kind is None:
         return _invalid(
@@ -217,10 +218,10 @@ def verify(
             "certificate kind",
             f"unknown kind {name!r} (known: {', '.join(KINDS)}); nothing is proven",
         )
-    doc_subject = _need(doc, "subject", dict, source)
-    stated = _need(doc, "digest", str, source)
-    listed = _need(doc, "claims", list, source)
-    listed_props = _need(doc, "certifies", list, source)
+    doc_subject = need(doc, "subject", dict, source)
+    stated = need(doc, "digest", str, source)
+    listed = need(doc, "claims", list, source)
+    listed_props = need(doc, "certifies", list, source)
     checks: list[Check] = integrity_checks(doc, doc_subject, stated)
 
     reading = kind.read(doc, source)

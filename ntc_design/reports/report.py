@@ -19,8 +19,9 @@ import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 from markupsafe import Markup
 
+from ntc_design.certify.format import package_versions
+
 from ..certify import certify, verify_file, write_certificate
-from ..certify.certificate import package_versions
 from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError
 from ..files import parse_topology

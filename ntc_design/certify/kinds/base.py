@@ -20,8 +20,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ...errors import InputError
-from ..certificate import RESULT_RTOL, Check, finite_number
+from ..checks import Check
 from ..claims import Claim, Property
+from ..fields import finite_number
+from ..format import RESULT_RTOL
 from ..theorems import TheoremVerdict
 
 _MISSING = object()

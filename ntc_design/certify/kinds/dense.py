@@ -1,7 +1,7 @@
 """What the two dense kinds (``hurwitz``, ``switching``) share: the subject read with every
-L_B re-derived exactly (:func:`ntc_design.certify.certificate.parse_mode`), stated L_B
+L_B re-derived exactly (:func:`ntc_design.certify.dense.parse_mode`), stated L_B
 compared with it, and each claim proven by its prover
-(:data:`ntc_design.certify.certificate.PROVERS`)."""
+(:data:`ntc_design.certify.dense.PROVERS`)."""
 
 from __future__ import annotations
 
@@ -10,18 +10,11 @@ import math
 import numpy as np
 
 from ...errors import InputError
-from ..certificate import (
-    MAX_MODES,
-    MAX_SIZE,
-    PROVERS,
-    RESULT_RTOL,
-    Check,
-    DenseContext,
-    _matrix,
-    _need,
-    parse_mode,
-)
+from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
+from ..dense import PROVERS, DenseContext, parse_mode
+from ..fields import matrix, need
+from ..format import MAX_MODES, MAX_SIZE, RESULT_RTOL
 from .base import ModeReading, Reading, Subject
 
 
@@ -45,24 +38,24 @@ def read_dense(doc: dict, source: str) -> Reading:
     InputError
         A malformed field, or sizes above the bounds.
     """
-    n = _need(doc, "size", int, source)
+    n = need(doc, "size", int, source)
     if not 1 <= n <= MAX_SIZE:
         raise InputError(f"{source}: size: must be between 1 and {MAX_SIZE}, got {n}")
-    subject = _need(doc, "subject", dict, source)
-    modes_doc = _need(subject, "modes", dict, f"{source}: subject")
+    subject = need(doc, "subject", dict, source)
+    modes_doc = need(subject, "modes", dict, f"{source}: subject")
     if not modes_doc or len(modes_doc) > MAX_MODES:
         raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
-    mats = _need(doc, "matrices", dict, source)
+    mats = need(doc, "matrices", dict, source)
     lbs = mats.get("L_B", {})
     if not isinstance(lbs, dict):
         raise InputError(f"{source}: matrices.L_B: expected an object mode -> matrix")
-    ps = _need(mats, "P", dict, f"{source}: matrices")
+    ps = need(mats, "P", dict, f"{source}: matrices")
     checks: list[Check] = []
     modes = {str(k): parse_mode(str(k), v, n, source, checks) for k, v in modes_doc.items()}
     for name, m in modes.items():
         if name not in lbs:  # L_B is re-derived anyway; a stated one must match
             continue
-        stated = _matrix(lbs[name], n, f"{source}: matrices.L_B.{name}")
+        stated = matrix(lbs[name], n, f"{source}: matrices.L_B.{name}")
         diff = float(np.max(np.abs(m.lap - stated))) if m.in_range else math.inf
         bound = float(np.max(m.err + RESULT_RTOL * np.abs(m.lap))) if m.in_range else 0.0
         checks.append(

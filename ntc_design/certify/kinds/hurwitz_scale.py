@@ -12,17 +12,11 @@ import numpy as np
 
 from ...design import ProtocolDesign
 from ...errors import InputError
-from ..certificate import (
-    DENSE_CERT_MAX_ND,
-    Check,
-    _need,
-    _number,
-    _prove_pd_expr,
-    _vector,
-    out_of_range,
-    topology_hash,
-)
+from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
+from ..dense import DENSE_CERT_MAX_ND, prove_pd_expr
+from ..fields import need, number, out_of_range, vector
+from ..format import topology_hash
 from ..scale import (
     LYAPUNOV_COMPONENT_MAX_ND,
     RATE_DENSE_MAX_ND,
@@ -122,20 +116,20 @@ class HurwitzScaleKind(CertificateKind):
 
     def read(self, doc: dict, source: str) -> Reading:
         # The topology (arrays), δ, θ, informed agents = U, and the component data.
-        subject = _need(doc, "subject", dict, source)
-        modes = _need(subject, "modes", dict, f"{source}: subject")
+        subject = need(doc, "subject", dict, source)
+        modes = need(subject, "modes", dict, f"{source}: subject")
         if len(modes) != 1:
             raise InputError(f"{source}: subject.modes: a hurwitz-scale certificate has one mode")
         ((mname, sub),) = modes.items()
         where = f"{source}: subject.modes.{mname}"
-        top = topology_from_subject(_need(sub, "topology", dict, where), f"{where}.topology")
-        size = _need(doc, "size", int, source)
+        top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
+        size = need(doc, "size", int, source)
         if top.nd != size:
             raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-        delta = _number(_need(sub, "delta", (int, float), where), f"{where}.delta")
+        delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
         if not delta > 0 or out_of_range(delta):
             raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
-        informed = _need(sub, "informed", list, where)
+        informed = need(sub, "informed", list, where)
         try:
             inf_idx = sorted(top.index(x) for x in informed)
         except InputError:
@@ -144,12 +138,12 @@ class HurwitzScaleKind(CertificateKind):
         checks = [
             Check(f"informed agents of {mname} are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
         ]
-        theta = _vector(_need(sub, "theta", list, where), top.dim, f"{where}.theta")
+        theta = vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
         n = top.n
         cw = f"{source}: components"
-        comps = _need(doc, "components", dict, source)
-        comp = unpack(_need(comps, "label", dict, cw), f"{cw}.label", "i8", (n,))
-        meth = _need(comps, "method", list, cw)
+        comps = need(doc, "components", dict, source)
+        comp = unpack(need(comps, "label", dict, cw), f"{cw}.label", "i8", (n,))
+        meth = need(comps, "method", list, cw)
         if any(not isinstance(m, str) for m in meth):
             raise InputError(f"{cw}.method: expected strings")
         unknown = set(meth) - set(METHODS)
@@ -157,9 +151,9 @@ class HurwitzScaleKind(CertificateKind):
             raise InputError(f"{cw}.method: unknown method {sorted(unknown)[0]!r}")
         if n and (comp.min() < 0 or comp.max() >= len(meth)):
             raise InputError(f"{cw}.label: a component number is out of range 0..{len(meth) - 1}")
-        v = unpack(_need(comps, "v", dict, cw), f"{cw}.v", "f8", (n,))
-        mu = unpack(_need(comps, "mu", dict, cw), f"{cw}.mu", "f8", (n,))
-        lyap = _need(comps, "lyapunov", dict, cw)
+        v = unpack(need(comps, "v", dict, cw), f"{cw}.v", "f8", (n,))
+        mu = unpack(need(comps, "mu", dict, cw), f"{cw}.mu", "f8", (n,))
+        lyap = need(comps, "lyapunov", dict, cw)
         state = ScaleState(
             str(mname),
             top,
@@ -289,13 +283,13 @@ class HurwitzScaleKind(CertificateKind):
                 raise InputError(
                     f"{cw}.lyapunov.{c}: component above Nd = {LYAPUNOV_COMPONENT_MAX_ND}"
                 )
-            entry = _need(st.lyapunov, str(c), dict, f"{cw}.lyapunov")
+            entry = need(st.lyapunov, str(c), dict, f"{cw}.lyapunov")
             p = unpack(
-                _need(entry, "P", dict, f"{cw}.lyapunov.{c}"), f"{cw}.lyapunov.{c}.P", "f8", (m, m)
+                need(entry, "P", dict, f"{cw}.lyapunov.{c}"), f"{cw}.lyapunov.{c}.P", "f8", (m, m)
             )
             lap_c, err_c = component_matrix(st.blocks, agents)
-            p1 = _prove_pd_expr(p, None, None, 0.0, None, False)
-            p2 = _prove_pd_expr(p, None, lap_c.toarray(), 0.0, err_c.toarray(), False)
+            p1 = prove_pd_expr(p, None, None, 0.0, None, False)
+            p2 = prove_pd_expr(p, None, lap_c.toarray(), 0.0, err_c.toarray(), False)
             checks.append(
                 Check(
                     f"Lyapunov P on component {c} (Nd = {m})",

@@ -11,17 +11,11 @@ import numpy as np
 
 from ...design import SwitchingDesign
 from ...errors import InputError
-from ..certificate import (
-    DENSE_CERT_MAX_ND,
-    MAX_MODES,
-    Check,
-    _need,
-    _number,
-    _vector,
-    out_of_range,
-    topology_hash,
-)
+from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
+from ..dense import DENSE_CERT_MAX_ND
+from ..fields import need, number, out_of_range, vector
+from ..format import MAX_MODES, topology_hash
 from ..scale import symmetric_part_bound, topology_from_subject
 from ..switching_scale import (
     EIG_DENSE_MAX_ND,
@@ -66,9 +60,9 @@ class SwitchingScaleKind(CertificateKind):
 
     def read(self, doc: dict, source: str) -> Reading:
         # Each mode's topology (arrays), δ, θ and informed agents = U.
-        subject = _need(doc, "subject", dict, source)
-        size = _need(doc, "size", int, source)
-        modes_doc = _need(subject, "modes", dict, f"{source}: subject")
+        subject = need(doc, "subject", dict, source)
+        size = need(doc, "size", int, source)
+        modes_doc = need(subject, "modes", dict, f"{source}: subject")
         if not modes_doc or len(modes_doc) > MAX_MODES:
             raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
         checks, modes, tops, deltas = [], {}, {}, {}
@@ -76,14 +70,14 @@ class SwitchingScaleKind(CertificateKind):
             where = f"{source}: subject.modes.{name}"
             if not isinstance(sub, dict):
                 raise InputError(f"{where}: expected an object")
-            top = topology_from_subject(_need(sub, "topology", dict, where), f"{where}.topology")
+            top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
             if top.nd != size:
                 raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-            delta = _number(_need(sub, "delta", (int, float), where), f"{where}.delta")
+            delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
             if not delta > 0 or out_of_range(delta):
                 raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
-            theta = _vector(_need(sub, "theta", list, where), top.dim, f"{where}.theta")
-            informed = _need(sub, "informed", list, where)
+            theta = vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
+            informed = need(sub, "informed", list, where)
             try:
                 inf_idx = sorted(top.index(x) for x in informed)
             except InputError:
@@ -103,7 +97,7 @@ class SwitchingScaleKind(CertificateKind):
                 float(delta),
                 theta,
             )
-        proofs = _need(doc, "proofs", dict, source)
+        proofs = need(doc, "proofs", dict, source)
         return Reading(modes, tuple(checks), SwitchingScaleState(tops, deltas, proofs, source))
 
     def claims(

@@ -15,8 +15,10 @@ from threadpoolctl import threadpool_limits
 
 from ...errors import InputError
 from ...timevarying import ExpressionTopology, TimeVaryingDesign, from_document, lemma1_structure
-from ..certificate import Check, _matrix, _need, _number, _vector, document_hash
+from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
+from ..fields import matrix, need, number, vector
+from ..format import document_hash
 from ..theorems import TheoremVerdict, time_varying_verdicts
 from ..time_varying import (
     Enclosures,
@@ -74,7 +76,7 @@ class TimeVaryingState:
 
     def number(self, key: str) -> float:
         # A reported result that the claims use (read as a finite number).
-        return _number(self.results.get(key), f"{self.source}: results.time_varying.{key}")
+        return number(self.results.get(key), f"{self.source}: results.time_varying.{key}")
 
     @property
     def t0(self) -> tuple[float | None, str]:
@@ -120,33 +122,33 @@ class TimeVaryingKind(CertificateKind):
     def read(self, doc: dict, source: str) -> Reading:
         # The topology (its sign classes re-proven), θ (length d), ΔC > 0, the noise
         # (σ >= 0, f a number or a d×d matrix), the gain, the intervals.
-        subj = _need(doc, "subject", dict, source)
+        subj = need(doc, "subject", dict, source)
         w = f"{source}: subject"
-        tv = from_document(_need(subj, "topology", dict, w), f"{w}.topology")
+        tv = from_document(need(subj, "topology", dict, w), f"{w}.topology")
         if tv.domain is None:
             raise InputError(f"{w}.topology: declares neither period nor constant_after")
-        size = _need(doc, "size", int, source)
+        size = need(doc, "size", int, source)
         if tv.nd != size:
             raise InputError(f"{w}.topology: has Nd={tv.nd}, certificate size is {size}")
-        theta = _vector(_need(subj, "theta", list, w), tv.dim, f"{w}.theta")
-        margin = _number(_need(subj, "margin", (int, float), w), f"{w}.margin")
+        theta = vector(need(subj, "theta", list, w), tv.dim, f"{w}.theta")
+        margin = number(need(subj, "margin", (int, float), w), f"{w}.margin")
         if not margin > 0:
             raise InputError(f"{w}.margin: ΔC must be positive")
-        noise = _need(subj, "noise", dict, w)
-        sigma = _number(_need(noise, "sigma", (int, float), f"{w}.noise"), f"{w}.noise.sigma")
+        noise = need(subj, "noise", dict, w)
+        sigma = number(need(noise, "sigma", (int, float), f"{w}.noise"), f"{w}.noise.sigma")
         if sigma < 0:
             raise InputError(f"{w}.noise.sigma: must be >= 0")
-        f = _need(noise, "f", (int, float, list), f"{w}.noise")
+        f = need(noise, "f", (int, float, list), f"{w}.noise")
         f = (
-            _number(f, f"{w}.noise.f")
+            number(f, f"{w}.noise.f")
             if not isinstance(f, list)
-            else _matrix(f, tv.dim, f"{w}.noise.f")
+            else matrix(f, tv.dim, f"{w}.noise.f")
         )
         gain = subj.get("gain")
         if gain is not None and not isinstance(gain, str):
             raise InputError(f"{w}.gain: expected an expression of t or null")
-        res = _need(_need(doc, "results", dict, source), "time_varying", dict, f"{source}: results")
-        ivs = _need(doc, "intervals", list, source)
+        res = need(need(doc, "results", dict, source), "time_varying", dict, f"{source}: results")
+        ivs = need(doc, "intervals", list, source)
         if (
             not ivs
             or len(ivs) > MAX_INTERVALS
@@ -162,7 +164,7 @@ class TimeVaryingKind(CertificateKind):
             )
         for k, q in enumerate(ivs):
             for x in q:
-                _number(x, f"{source}: intervals[{k}]")
+                number(x, f"{source}: intervals[{k}]")
         state = TimeVaryingState(tv, margin, sigma, f, gain, ivs, res, source)
         mode = ModeReading(
             tv.name or "topology",
@@ -215,7 +217,7 @@ class TimeVaryingKind(CertificateKind):
             )
         if t0 is None:
             return Check(claim.id, t0_new is None, f"no t₀ claimed ({how})", claim)
-        t0f = _number(t0, f"{st.source}: results.time_varying.t0")
+        t0f = number(t0, f"{st.source}: results.time_varying.t0")
         ok = t0_new is not None and t0_new <= t0f * (1 + 1e-9) + 1e-12
         return Check(claim.id, ok, f"t₀ = {t0_new} ({how}) vs claimed {t0f}", claim)
 
@@ -287,7 +289,7 @@ class TimeVaryingKind(CertificateKind):
         t_inf = audit.get(*tv, "t_at_sampled_inf")
         audit.estimate((*tv, "t_at_sampled_inf"), a0, b0, " (outside the domain)")
         t = (
-            _number(t_inf, f"{st.source}: results.time_varying.t_at_sampled_inf")
+            number(t_inf, f"{st.source}: results.time_varying.t_at_sampled_inf")
             if isinstance(t_inf, (int, float)) and not isinstance(t_inf, bool)
             else a0
         )

@@ -1,0 +1,237 @@
+"""Readers of certificate fields: each value read from a file is type- and range-checked
+and a malformed one raises one ``InputError`` line naming the field."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .format import MAX_SCHEDULE, NUMBER_EXP
+
+
+def need(doc: dict, key: str, typ: type | tuple, where: str) -> Any:
+    """A required field of the given JSON type (a bool is not a number).
+
+    Parameters
+    ----------
+    doc : dict
+        The object holding it.
+    key : str
+        The field.
+    typ : type or tuple of type
+        The accepted types.
+    where : str
+        The object, for messages.
+
+    Returns
+    -------
+    Any
+        The value.
+
+    Raises
+    ------
+    InputError
+        Missing, not an object, or of the wrong type.
+    """
+    if not isinstance(doc, dict):
+        raise InputError(f"{where}: expected an object")
+    if key not in doc:
+        raise InputError(f"{where}: missing field '{key}'")
+    v = doc[key]
+    if isinstance(v, bool) and bool not in (typ if isinstance(typ, tuple) else (typ,)):
+        raise InputError(f"{where}: field '{key}' has the wrong type (bool)")
+    if not isinstance(v, typ):
+        raise InputError(f"{where}: field '{key}' has the wrong type ({type(v).__name__})")
+    return v
+
+
+def number(x: Any, where: str) -> float:
+    """A finite JSON number as a float.
+
+    Parameters
+    ----------
+    x : Any
+        The value.
+    where : str
+        The field, for messages.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Not a number, too large for a double, or not finite.
+    """
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        raise InputError(f"{where}: expected a number, got {type(x).__name__}")
+    try:
+        v = float(x)
+    except OverflowError:
+        raise InputError(f"{where}: number too large") from None
+    if not math.isfinite(v):
+        raise InputError(f"{where}: must be finite")
+    return v
+
+
+def vector(x: Any, n: int, where: str) -> np.ndarray:
+    """A list of n finite numbers.
+
+    Parameters
+    ----------
+    x : Any
+        The value.
+    n : int
+        Its length.
+    where : str
+        The field, for messages.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    InputError
+        Not a list of n numbers.
+    """
+    if not isinstance(x, list) or len(x) != n:
+        raise InputError(f"{where}: expected a list of {n} numbers")
+    return np.array([number(v, where) for v in x], dtype=float)
+
+
+def matrix(x: Any, n: int, where: str) -> np.ndarray:
+    """An n×n matrix of finite numbers (shape checked before anything is allocated).
+
+    Parameters
+    ----------
+    x : Any
+        The field's value.
+    n : int
+        The size.
+    where : str
+        The field, for messages.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    InputError
+        Not an n×n matrix of finite numbers.
+    """
+    if (
+        not isinstance(x, list)
+        or len(x) != n
+        or any(not isinstance(r, list) or len(r) != n for r in x)
+    ):
+        raise InputError(f"{where}: expected a {n}x{n} matrix")
+    for r in x:
+        for v in r:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise InputError(f"{where}: non-numeric entry")
+    try:
+        a = np.array(x, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{where}: non-numeric or too large entry") from None
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{where}: non-finite entry")
+    return a
+
+
+def out_of_range(a: np.ndarray | float) -> bool:
+    """Whether some nonzero entry lies outside ``[2^-NUMBER_EXP, 2^NUMBER_EXP]``.
+
+    Parameters
+    ----------
+    a : ndarray or float
+        The numbers.
+
+    Returns
+    -------
+    bool
+    """
+    x = np.abs(np.asarray(a, dtype=float))
+    nz = x[x != 0]
+    return bool(nz.size) and (
+        float(nz.min()) < 2.0**-NUMBER_EXP or float(nz.max()) > 2.0**NUMBER_EXP
+    )
+
+
+RANGE_TEXT = f"a nonzero |entry| outside [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}] (cannot be bounded)"
+
+
+def finite_number(x: Any) -> float | None:
+    """A JSON number as a finite float, else None (a bool, a string, NaN, or an integer
+    beyond any double).
+
+    Parameters
+    ----------
+    x : Any
+        A value read from a certificate.
+
+    Returns
+    -------
+    float or None
+    """
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return None
+    try:
+        xf = float(x)
+    except OverflowError:
+        return None
+    return xf if math.isfinite(xf) else None
+
+
+def parse_schedule(subject: dict, where: str) -> tuple[tuple[str, float], ...]:
+    """A switching subject's schedule: 1 to ``MAX_SCHEDULE`` entries ``{mode, duration}``
+    with positive finite durations.
+
+    Parameters
+    ----------
+    subject : dict
+        The certificate's subject.
+    where : str
+        Its name, for messages.
+
+    Returns
+    -------
+    tuple of (str, float)
+
+    Raises
+    ------
+    InputError
+        A malformed schedule.
+    """
+    sched = need(subject, "schedule", list, where)
+    if not sched or len(sched) > MAX_SCHEDULE:
+        raise InputError(f"{where}.schedule: expected 1 to {MAX_SCHEDULE} entries")
+    out = []
+    for k, item in enumerate(sched):
+        w = f"{where}.schedule[{k}]"
+        if not isinstance(item, dict) or set(item) != {"mode", "duration"}:
+            raise InputError(f"{w}: expected {{mode, duration}}")
+        if not isinstance(item["mode"], str):
+            raise InputError(f"{w}.mode: expected a mode name")
+        t = number(item["duration"], f"{w}.duration")
+        if not 0 < t < 1e300:
+            raise InputError(f"{w}.duration: must be positive and finite")
+        out.append((item["mode"], t))
+    return tuple(out)
+
+
+__all__ = [
+    "RANGE_TEXT",
+    "finite_number",
+    "matrix",
+    "need",
+    "number",
+    "out_of_range",
+    "parse_schedule",
+    "vector",
+]
