@@ -126,9 +126,9 @@ def hurwitz_set(
         (intervals (lo, hi) with hi = inf for the last, δ_H or None, method).
     """
     n = lap.shape[0]
-    nl = max(np.linalg.norm(lap, 2), 1e-300)
+    nl = max(float(np.linalg.norm(lap, 2)), 1e-300)
     ndn = np.linalg.norm(d, 2)
-    scale = nl / ndn
+    scale = float(nl / ndn)
     alpha = lambda x: spectral_abscissa(lap, d, x)  # noqa: E731
     if kron and n <= KRON_MAX:
         # Roots at δ ≈ 0 are the singular L itself, perturbed by rounding: not crossings.
@@ -194,7 +194,7 @@ def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
         δ_H, δ_S and the best rate.
     """
     notes: list[str] = []
-    nl = max(np.linalg.norm(lap, 2), 1e-300)
+    nl = max(float(np.linalg.norm(lap, 2)), 1e-300)
     ndn = np.linalg.norm(d, 2)
     if ndn == 0.0:
         a0 = spectral_abscissa(lap, d, 1.0)
@@ -209,7 +209,7 @@ def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
             "constant",
             tuple(notes),
         )
-    scale = nl / ndn
+    scale = float(nl / ndn)
     alpha = lambda x: spectral_abscissa(lap, d, x)  # noqa: E731
     intervals, delta_h, method = hurwitz_set(lap, d, notes)
 
@@ -437,7 +437,7 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
         db_c = d_c[ix][:, ix].toarray()
         sub_notes: list[str] = []
         if not np.any(db_c):
-            hur = spectral_abscissa(lb_c, db_c, 1.0) < -REL * max(np.linalg.norm(lb_c, 2), 1e-300)
+            hur = spectral_abscissa(lb_c, db_c, 1.0) < -REL * max(float(np.linalg.norm(lb_c, 2)), 1e-300)
             iv = [(0.0, math.inf)] if hur else []
         else:
             iv, _, _ = hurwitz_set(lb_c, db_c, sub_notes, kron=False)

@@ -47,7 +47,7 @@ class ModeAbout:
     n: int
     d: int
     topology_hash: str
-    delta: float
+    delta: float | None  # None: δ(t) = C(t) + ΔC (time-varying)
     theta: tuple[float, ...]
 
     def to_dict(self) -> dict:

@@ -150,7 +150,7 @@ def prove_mode(top: Topology, delta: float) -> ModeProof:
     except DenseRefused as exc:
         return ModeProof(False, None, math.nan, "not estimated", str(exc))
     est, how = _min_eig_estimate(s, fam if pd else None)
-    fam = None  # free the factor before the proof's own: one factor in memory at a time
+    del fam  # free the factor before the proof's own: one factor in memory at a time
     if not pd:
         return ModeProof(
             False, None, est, how, "sparse Cholesky of L + Lᵀ fails (not positive definite)"

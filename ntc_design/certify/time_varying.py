@@ -127,15 +127,15 @@ class Enclosures:
         tv, d = self.tv, self.d
         e_n = len(tv.edges)
         m = 0.5 * (a + b)
-        tl = tv.local_time([a, m, b])
+        tl = tv.local_time(np.array([a, m, b]))
         tm, tb = t_ball(float(tl[1]), float(tl[1])), t_ball(float(tl[0]), float(tl[2]))
         shape = (e_n, d, d)
         v_lo, v_hi = np.zeros(shape), np.zeros(shape)
         d1_lo, d1_hi = np.zeros(shape), np.zeros(shape)
         d2_lo, d2_hi = np.zeros(shape), np.zeros(shape)
         r0_lo, r0_hi = np.zeros(shape), np.zeros(shape)
-        for k, w in self.const_w.items():
-            v_lo[k] = v_hi[k] = w
+        for k, wc in self.const_w.items():
+            v_lo[k] = v_hi[k] = wc
         c_m: dict = {}
         c_b: dict = {}
         for k in self.varying:
@@ -171,8 +171,8 @@ class Enclosures:
                     d1_lo[k, r, c], d1_hi[k, r, c] = bounds(enclose(der[0][r][c], tm, c_m))
                     d2_lo[k, r, c], d2_hi[k, r, c] = bounds(enclose(der[1][r][c], tb, c_b))
         out = []
-        for lo, hi in ((v_lo, v_hi), (d1_lo, d1_hi), (d2_lo, d2_hi), (r0_lo, r0_hi)):
-            out += list(interval_mid_rad(lo, hi))
+        for a_lo, a_hi in ((v_lo, v_hi), (d1_lo, d1_hi), (d2_lo, d2_hi), (r0_lo, r0_hi)):
+            out += list(interval_mid_rad(a_lo, a_hi))
         return tuple(out)
 
     def samples(self, ts: np.ndarray) -> np.ndarray:
