@@ -408,6 +408,7 @@ KIND_OF = {
 
 
 @hostile
+@pytest.mark.slow
 @pytest.mark.parametrize("which", list(KIND_OF))
 def test_no_valid_forgery_states_something_false(which, honest):
     base = honest[which]

@@ -276,6 +276,7 @@ def test_component_decomposition_is_block_triangular():
     assert ncomp > 1 and np.bincount(comp).max() > 1
 
 
+@pytest.mark.slow
 def test_dominance_certificate_and_verify_round_trip(tmp_path):
     import json
 
