@@ -382,6 +382,8 @@ def _print_theorems(ths: list[dict]) -> None:
             out.print(f"  fails: {p['premise']}: {p['detail']}")
         for p in th["undetermined"]:
             out.print(f"  undetermined: {p['premise']}: {p['detail']}")
+        for p in th["replaced"]:
+            out.print(f"  replaced: {p['premise']} {p['detail']}; in its place: {p['replaced_by']}")
 
 
 @app.command()

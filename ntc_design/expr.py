@@ -72,6 +72,54 @@ _BINARY = {
 }
 
 
+_SYMPY_SPELLING = (("**", "^"), ("zoo", "complex ∞"), ("oo", "∞"))
+
+
+def user_text(text: str) -> str:
+    """Text for users in mathematical notation, not SymPy's: ``^`` for ``**`` and ``∞``
+    for ``oo`` (``-oo`` becomes ``-∞``, ``zoo`` complex infinity).
+
+    Parameters
+    ----------
+    text : str
+        A message that may contain printed SymPy expressions.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> user_text("lim c·t = oo > 0, c = (t + 1)**(-1/3)")
+    'lim c·t = ∞ > 0, c = (t + 1)^(-1/3)'
+    """
+    import re
+
+    text = text.replace("**", "^")
+    text = re.sub(r"\bzoo\b", "complex ∞", text)
+    return re.sub(r"\boo\b", "∞", text)
+
+
+def show(expr: sp.Basic) -> str:
+    """An expression as users read it (:func:`user_text` of SymPy's string).
+
+    Parameters
+    ----------
+    expr : sympy.Basic
+        The expression.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> show(parse_expression("(1+t)^(-1/3)", "gain"))
+    '(t + 1)^(-1/3)'
+    """
+    return user_text(sp.sstr(expr))
+
+
 def symbol(name: str) -> sp.Symbol:
     """The sympy symbol used for a variable: ``t`` is time (real, ``t >= 0``), others real.
 
@@ -396,4 +444,4 @@ def compile_expression(
     return evaluate
 
 
-__all__ = ["FUNCTIONS", "compile_expression", "parse_expression", "symbol"]
+__all__ = ["FUNCTIONS", "compile_expression", "parse_expression", "show", "symbol", "user_text"]

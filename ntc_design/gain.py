@@ -48,7 +48,7 @@ import numpy as np
 import sympy as sp
 
 from .errors import InputError
-from .expr import compile_expression, parse_expression, symbol
+from .expr import compile_expression, parse_expression, show, symbol, user_text
 
 T = symbol("t")
 GAIN_SECONDS = 6.0  # hard limit of one gain analysis (the child process is killed)
@@ -74,6 +74,10 @@ class Condition:
 
     value: bool | None
     reason: str
+
+    def __post_init__(self) -> None:
+        # reasons interpolate SymPy values: users read ∞ and ^, not oo and **
+        object.__setattr__(self, "reason", user_text(self.reason))
 
     def to_dict(self) -> dict:
         """The condition as a JSON-ready mapping.
@@ -138,7 +142,7 @@ class GainAnalysis:
             The expression as given and parsed, each condition, ``mean_square`` and
             ``almost_sure``.
         """
-        out: dict[str, Any] = {"expression": self.expression, "parsed": str(self.expr)}
+        out: dict[str, Any] = {"expression": self.expression, "parsed": show(self.expr)}
         for key in CONDITION_LABELS:
             out[key] = self.condition(key).to_dict()
         out["mean_square"] = self.mean_square

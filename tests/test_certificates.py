@@ -435,3 +435,27 @@ def test_exact_pd_agrees_with_eigenvalues(seed, n, shift):
         assert pd == (lam > 0)
     elif shift <= 0:
         assert not pd  # singular or shifted down: never positive definite
+
+
+@pytest.mark.parametrize(
+    "file, theorems",
+    [("switching.yaml", ("Theorem 3", "Theorem 4")), ("g3.yaml", ("Theorem 1", "Theorem 2"))],
+)
+def test_terminal_verdict_names_a_replaced_assumption_2(file, theorems, capsys, monkeypatch):
+    """G3 fails Assumption 2; the certified −L_B Hurwitz (or L_B + L_Bᵀ ≻ 0) replaces it, and
+    the terminal says so under each theorem, as --json does."""
+    from .cli_helpers import run_cli
+
+    args = ["certify", ROOT / "examples" / file, "--theta", "1,2,-1", "--gain", "1/(1+t)"]
+    code, out, _ = run_cli(args, capsys, monkeypatch)
+    assert code == 0
+    for th in theorems:
+        block = out.split(th)[1].split("Theorem")[0]
+        assert "guaranteed" in block and "replaced: Assumption 2" in block
+        assert "in its place:" in block
+    code, out, _ = run_cli([*args, "--json"], capsys, monkeypatch)
+    doc = json.loads(out)
+    for th in doc["theorems"]:
+        (rep,) = th["replaced"]
+        assert rep["premise"].startswith("Assumption 2") and rep["holds"] is True
+        assert rep["replaced_by"] and "fails" in rep["detail"]

@@ -123,3 +123,16 @@ def test_one_label_table():
     names = [p.name for p in gain_premises(g, almost_sure=True)]  # typed Premise
     assert names == list(CONDITION_LABELS.values())
     assert set(g.to_dict()) >= set(CONDITION_LABELS)
+
+
+@pytest.mark.parametrize(
+    "gain", ["(1+t)^(-1/3)", "1/(1+t)", "(1+t)^(-2)", "exp(-t)", "1", "(2+t)^(-0.7)"]
+)
+def test_no_sympy_spelling_reaches_a_user(gain, capsys, monkeypatch):
+    from .cli_helpers import run_cli
+
+    for extra in ([], ["--json"]):
+        code, out, err = run_cli(["gain", gain, *extra], capsys, monkeypatch)
+        assert code == 0 and out
+        assert "**" not in out and " oo" not in out and "zoo" not in out, out
+        assert "oo " not in out.replace("too ", "").replace("goo", "")

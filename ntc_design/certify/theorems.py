@@ -30,6 +30,10 @@ class Premise:
     name: str
     holds: bool | None
     detail: str
+    #: what stands in for a premise that fails as stated but whose use in the proof is
+    #: certified directly (Assumption 2, replaced by the certified −L_B Hurwitz or
+    #: L_B + L_Bᵀ ≻ 0); None when the premise holds as stated
+    replaced_by: str | None = None
 
     def to_dict(self) -> dict:
         """The premise as a JSON-ready mapping.
@@ -37,9 +41,14 @@ class Premise:
         Returns
         -------
         dict
-            ``premise`` (its name), ``holds`` and ``detail``.
+            ``premise`` (its name), ``holds``, ``detail`` and ``replaced_by``.
         """
-        return {"premise": self.name, "holds": self.holds, "detail": self.detail}
+        return {
+            "premise": self.name,
+            "holds": self.holds,
+            "detail": self.detail,
+            "replaced_by": self.replaced_by,
+        }
 
 
 @dataclass(frozen=True)
@@ -68,6 +77,11 @@ class TheoremVerdict:
         """The premises that could not be decided."""
         return tuple(p for p in self.premises if p.holds is None)
 
+    @property
+    def replaced(self) -> tuple[Premise, ...]:
+        """The premises that fail as stated and are replaced by what is certified."""
+        return tuple(p for p in self.premises if p.replaced_by is not None)
+
     def to_dict(self) -> dict:
         """The verdict as a JSON-ready mapping.
 
@@ -75,7 +89,7 @@ class TheoremVerdict:
         -------
         dict
             ``theorem``, ``sense``, ``guaranteed`` and the premises (all, failing,
-            undetermined).
+            undetermined, replaced).
         """
         return {
             "theorem": self.theorem,
@@ -84,6 +98,7 @@ class TheoremVerdict:
             "premises": [p.to_dict() for p in self.premises],
             "failing": [p.to_dict() for p in self.failing],
             "undetermined": [p.to_dict() for p in self.undetermined],
+            "replaced": [p.to_dict() for p in self.replaced],
         }
 
 
@@ -169,14 +184,23 @@ def fixed_verdicts(
         hdetail = "not certified: " + ("; ".join(c.name for c in ver.failed) or "no proof")
     if th is not None and th.hurwitz is not None:
         hdetail += f"; δ = {design.delta:.6g} vs exact threshold δ_H = {th.hurwitz:.6g}"
-    if not design.assumption_holds:
-        hdetail += f"; Assumption 2 itself fails ({violations_text(design)})" + (
-            " and is replaced by this certificate" if hurwitz else ""
-        )
     structural = Premise("−L_B Hurwitz (Lemma 1's conclusion, used by the proof)", hurwitz, hdetail)
+    name = "Assumption 2 (V1/V2 decomposition; used through −L_B Hurwitz)"
+    if design.assumption_holds:
+        a2 = Premise(name, True, "holds")
+    else:
+        why = f"fails ({violations_text(design)})"
+        a2 = Premise(
+            name,
+            hurwitz,
+            why,
+            "−L_B Hurwitz, certified directly (Lemma 1's conclusion is what the proof uses)"
+            if hurwitz
+            else None,
+        )
     return (
-        TheoremVerdict(1, "mean square", (A1, structural, *gain_premises(gain, False))),
-        TheoremVerdict(2, "almost sure", (A1, structural, *gain_premises(gain, True))),
+        TheoremVerdict(1, "mean square", (A1, structural, a2, *gain_premises(gain, False))),
+        TheoremVerdict(2, "almost sure", (A1, structural, a2, *gain_premises(gain, True))),
     )
 
 
@@ -239,12 +263,15 @@ def switching_verdicts(
         f"finite set of modes: |a_kl| <= D = {bound:.6g}",
     )
     a2_fail = [k for k in used if not design.modes[k].assumption_holds]
+    all_sym = all(p.holds for p in sym_prem)
     a2 = Premise(
         "Assumption 2 in every mode (used through L_B + L_Bᵀ ≻ 0)",
-        True if all(p.holds for p in sym_prem) else (not a2_fail),
-        "holds in every mode"
-        if not a2_fail
-        else f"fails in mode(s) {', '.join(a2_fail)}; the proofs of Theorems 3-4 use only L_B + L_Bᵀ ≻ 0, certified directly",
+        True if all_sym else (not a2_fail),
+        "holds in every mode" if not a2_fail else f"fails in mode(s) {', '.join(a2_fail)}",
+        "L_B(k) + L_B(k)ᵀ ≻ 0 in every scheduled mode, certified directly (the proofs of "
+        "Theorems 3-4 use only that)"
+        if a2_fail and all_sym
+        else None,
     )
     a1 = Premise("Assumption 1 (‖f_ji(x)‖ <= σ̄‖x‖)", True, "assumed: a property of the noise model")
     return (
