@@ -8,11 +8,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from ..timevarying import ExpressionTopology, TimeVaryingDesign
+from ..timevarying import TimeVaryingDesign
 from . import figures
 
 plt = figures.plt
@@ -78,35 +76,4 @@ def weights_figure(des: TimeVaryingDesign, samples: int = 1000):
     return fig
 
 
-def time_varying_section(
-    tv: ExpressionTopology, cert_result, figdir: Path, key: str
-) -> tuple[str, list[bytes]]:
-    """HTML rows for the design over time and the two figures (PNG bytes)."""
-    import html
-
-    des = cert_result.design
-    r = cert_result.certificate["results"]["time_varying"]
-    d = des.to_dict()
-    rows = [
-        ("domain", html.escape(r["domain_text"])),
-        ("informed V_I = U", html.escape(str(d["informed"]))),
-        ("C(t)", f"{d['C']['min']:.4f} .. {d['C']['max']:.4f}" if d["C"] else "—"),
-        ("δ(t) = C(t) + ΔC", f"{d['delta']['min']:.4f} .. {d['delta']['max']:.4f}"),
-        ("Assumption 2", "holds at every sample" if d["assumption_holds"] else "fails at some t"),
-        ("Λ₂ (certified) / sampled infimum", f"{r['lambda2']:.6g} / {r['sampled_inf']:.6g}"),
-        ("D, Λ₁, p̄", f"{r['D']:.6g}, {r['Lambda1']:.6g}, {r['p_bar']:.6g}"),
-        ("t₀ (μ₂ > 0 after)", f"{r['t0']}" if r["t0"] is not None else "—"),
-    ]
-    body = "<table>" + "".join(f"<tr><th>{a}</th><td>{b}</td></tr>" for a, b in rows) + "</table>"
-    ivs = cert_result.certificate.get("intervals")
-    pngs = []
-    for name, fig in (
-        ("lambda_min", lambda_min_figure(des, r["lambda2"], ivs)),
-        ("weights", weights_figure(des)),
-    ):
-        _, _, png = figures.save(fig, figdir / f"{key}_{name}")
-        pngs.append(png)
-    return body, pngs
-
-
-__all__ = ["lambda_min_figure", "time_varying_section", "weights_figure"]
+__all__ = ["lambda_min_figure", "weights_figure"]
