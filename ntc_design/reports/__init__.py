@@ -1,0 +1,1 @@
+"""Presentation: HTML reports, paper figures and the paper reproduction."""
