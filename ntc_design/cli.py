@@ -431,10 +431,10 @@ def certify(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(load(file), th, margin, gain, noise_sigma=noise_sigma, noise_f=noise_f)
+    doc = res.to_dict()  # every step that can fail runs before anything is written
     written = out_path is not None and res.verification.valid
     if written:
         write_certificate(res.certificate, out_path)
-    doc = res.to_dict()
     if as_json:
         print(_json(doc))
     else:

@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse import csgraph
 
-from .errors import InputError, require_positive
+from .errors import require_positive, require_theta
 from .linalg import pd_batch, require_dense
 from .model import (
     SwitchingTopology,
@@ -497,20 +497,6 @@ def input_vector(
     return u.reshape(-1)
 
 
-def _theta(theta: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:
-    try:
-        th = np.asarray(theta, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"theta: expected {dim} numbers, got {theta!r}") from None
-    if th.size != dim:
-        raise InputError(f"theta: expected {dim} numbers (the state dimension d), got {th.size}")
-    if not np.all(np.isfinite(th)):
-        raise InputError("theta: entries must be finite")
-    if not np.any(th):
-        raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
-    return th
-
-
 def identity_residual(lap_b, u: np.ndarray, theta: np.ndarray) -> float:
     """``‖-L_B(1⊗θ) + k1(Δ⊗I_d)Bθ‖_∞`` relative to ``‖L_B‖_∞‖θ‖_∞`` (Niu & Wu, eq. (11));
     ``lap_b`` dense or sparse."""
@@ -563,7 +549,7 @@ def design_topology(
     InputError
         A bad θ, margin or δ.
     """
-    th = _theta(theta, top.dim)
+    th = require_theta(theta, top.dim)
     require_positive("margin (ΔC)", margin)
     dec = assumption2(top)
     notes: list[str] = []

@@ -98,18 +98,22 @@ def read_npz(path: str | Path) -> EdgeListData:
             if k not in keys:
                 raise bad(k, "missing array")
         try:
-            fmt = z["format"]
+            arrs = {k: z[k] for k in sorted(keys)}  # each member read once
+            for k, a in arrs.items():  # a member that is not a .npy array reads back as bytes
+                if not isinstance(a, np.ndarray):
+                    raise bad(k, "not a .npy array")
+            fmt = arrs["format"]
             if fmt.shape != () or str(fmt) != FORMAT:
                 raise bad("format", f"must be {FORMAT!r}")
-            if "version" in keys and int(z["version"]) != VERSION:
+            if "version" in keys and int(arrs["version"]) != VERSION:
                 raise bad("version", f"unsupported version (this reader knows {VERSION})")
-            dim_a = z["dim"]
+            dim_a = arrs["dim"]
             if dim_a.shape != () or dim_a.dtype.kind not in "iu":
                 raise bad("dim", "must be one integer")
             dim = int(dim_a)
             if not 1 <= dim <= MAX_DIM:
                 raise bad("dim", f"must be in 1..{MAX_DIM}, got {dim}")
-            labels_a = z["labels"]
+            labels_a = arrs["labels"]
             if labels_a.ndim != 1 or labels_a.dtype.kind not in "iuU":
                 raise bad("labels", "must be a 1-d array of integers or strings")
             n = labels_a.shape[0]
@@ -118,10 +122,10 @@ def read_npz(path: str | Path) -> EdgeListData:
             labels = tuple(labels_a.tolist())
             if len({str(x) for x in labels}) != n:
                 raise bad("labels", "agent labels must be unique")
-            cols, rows, w = z["from"], z["to"], z["weights"]
+            cols, rows, w = arrs["from"], arrs["to"], arrs["weights"]
             name = None
             if "name" in keys:
-                nm = z["name"]
+                nm = arrs["name"]
                 if nm.shape != () or nm.dtype.kind != "U":
                     raise bad("name", "must be one string")
                 name = str(nm)

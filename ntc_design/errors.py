@@ -57,6 +57,41 @@ def _show(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def require_theta(theta, dim: int):
+    """θ as d finite numbers, not all zero (the target of non-trivial consensus).
+
+    Parameters
+    ----------
+    theta : sequence of float or numpy.ndarray
+        The target state.
+    dim : int
+        The state dimension d.
+
+    Returns
+    -------
+    numpy.ndarray
+        θ, shape (d,).
+
+    Raises
+    ------
+    InputError
+        Not d finite numbers, or θ = 0.
+    """
+    import numpy as np
+
+    try:
+        th = np.asarray(theta, dtype=float).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"theta: expected {dim} numbers, got {theta!r}") from None
+    if th.size != dim:
+        raise InputError(f"theta: expected {dim} numbers (the state dimension d), got {th.size}")
+    if not np.all(np.isfinite(th)):
+        raise InputError("theta: entries must be finite")
+    if not np.any(th):
+        raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
+    return th
+
+
 def require_positive(name: str, value, integer: bool = False) -> None:
     """Raise InputError unless ``value`` is a finite positive number (an integer if asked).
 
@@ -173,6 +208,7 @@ def format_bytes(n: float) -> str:
 
 
 __all__ = [
+    "require_theta",
     "InputError",
     "format_bytes",
     "one_line",

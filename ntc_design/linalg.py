@@ -20,6 +20,35 @@ import numpy as np
 
 from .errors import InputError
 
+#: Every nonzero weight, and every number entering a proof, has a magnitude in
+#: [2^-MAGNITUDE_EXP, 2^MAGNITUDE_EXP] (about [5.5e-76, 1.8e75]): sums over 10^7 edges of
+#: products of three such numbers neither overflow nor underflow a double, and exact
+#: dyadic entries stay a few hundred bits long.
+MAGNITUDE_EXP = 250
+
+
+def out_of_range(a: np.ndarray | float) -> bool:
+    """Whether some nonzero entry lies outside ``[2^-MAGNITUDE_EXP, 2^MAGNITUDE_EXP]``.
+
+    Parameters
+    ----------
+    a : ndarray or float
+        The numbers.
+
+    Returns
+    -------
+    bool
+    """
+    x = np.abs(np.asarray(a, dtype=float))
+    nz = x[x != 0]
+    return bool(nz.size) and (
+        float(nz.min()) < 2.0**-MAGNITUDE_EXP or float(nz.max()) > 2.0**MAGNITUDE_EXP
+    )
+
+
+RANGE_TEXT = f"a nonzero |entry| outside [2^-{MAGNITUDE_EXP}, 2^{MAGNITUDE_EXP}] (cannot be bounded)"
+
+
 SYM_RTOL = 1e-12
 DEF_RTOL = 1e-10
 

@@ -25,6 +25,7 @@ from .linalg import (
     CODE_SIGN,
     DEF_CODES,
     DEF_RTOL,
+    MAGNITUDE_EXP,
     SYM_RTOL,
     Definiteness,
     classify_codes,
@@ -94,11 +95,30 @@ class Topology:
         finite = np.all(np.isfinite(w), axis=(1, 2))
         asym = np.max(np.abs(w - w.transpose(0, 2, 1)), axis=(1, 2), initial=0.0)
         scale = np.max(np.abs(w), axis=(1, 2), initial=0.0)
-        codes = classify_codes(w) if e else np.zeros(0, dtype=np.int8)
-        for k in np.flatnonzero(~finite | (asym > SYM_RTOL * scale) | (codes == _INDEF)):
+        # nonzero magnitudes in [2^-MAGNITUDE_EXP, 2^MAGNITUDE_EXP]: beyond, the sums and
+        # eigenvalues of the design overflow or underflow (and no proof can bound them)
+        mag = np.abs(np.where(np.isfinite(w), w, 0.0))
+        tiny = np.min(np.where(mag > 0, mag, np.inf), axis=(1, 2), initial=np.inf)
+        out = (scale > 2.0**MAGNITUDE_EXP) | (tiny < 2.0**-MAGNITUDE_EXP)
+        codes = (
+            classify_codes(np.where(np.isfinite(w), w, 0.0) * ~out[:, None, None])
+            if e
+            else np.zeros(0, dtype=np.int8)
+        )
+        for k in np.flatnonzero(~finite | out | (asym > SYM_RTOL * scale) | (codes == _INDEF)):
             f = self.edge_field(*keys[k])
             if not finite[k]:
                 raise InputError(self._where(f, "weight has a NaN or infinite entry"))
+            if out[k]:
+                x = scale[k] if scale[k] > 2.0**MAGNITUDE_EXP else tiny[k]
+                raise InputError(
+                    self._where(
+                        f,
+                        f"weight has an entry of magnitude {x:.3g}, outside "
+                        f"[2^-{MAGNITUDE_EXP}, 2^{MAGNITUDE_EXP}] ≈ [5.5e-76, 1.8e75] (or 0): "
+                        "its sums and eigenvalues would overflow or underflow; rescale the weights",
+                    )
+                )
             if asym[k] > SYM_RTOL * scale[k]:
                 raise InputError(self._where(f, "weight is not symmetric (A_ij must equal A_ijᵀ)"))
             lam = np.linalg.eigvalsh(0.5 * (w[k] + w[k].T))

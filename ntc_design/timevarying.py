@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from .errors import InputError
+from .errors import InputError, require_theta
 from .expr import compile_expression, symbol
 from .interval import NotEnclosable, bounds, enclose, t_ball
 from .linalg import DEF_RTOL, Definiteness, classify, is_symmetric, pd
@@ -847,6 +847,10 @@ class TimeVaryingDesign:
     topology: ExpressionTopology
     theta: np.ndarray
     margin: float
+
+    def __post_init__(self) -> None:
+        # θ checked up front (its length against d), before any certificate or run
+        object.__setattr__(self, "theta", require_theta(self.theta, self.topology.dim))
 
     @cached_property
     def structure(self) -> Lemma1Structure:

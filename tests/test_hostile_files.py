@@ -698,3 +698,91 @@ def test_hypothesis_expressions(text):
     else:
         assert expr.free_symbols <= {symbol("t")}
     assert time.perf_counter() - t0 < 2
+
+
+# -- magnitudes, .npz members, θ of a time-varying file (issue 16) ---------------------
+
+
+def _npz(path, w, d=1):
+    import numpy as np
+
+    np.savez(
+        path,
+        format=np.array("ntc-design/edge-list"),
+        version=np.array(1),
+        dim=np.array(d),
+        labels=np.array([1, 2, 3]),
+        **{
+            "from": np.array([1, 2, 0, 1]),
+            "to": np.array([0, 0, 1, 2]),
+            "weights": np.array(w, dtype=float).reshape(-1, d, d),
+        },
+    )
+
+
+@pytest.mark.parametrize("command", ["design", "certify"])
+@pytest.mark.parametrize(
+    "w, magnitude",
+    [
+        ([-1.7e308, -1.7e308, 1.0, 1.0], "1.7e+308"),  # their sum on agent 1 overflows
+        ([-1e200, -1e200, 1.0, 1.0], "1e+200"),
+        ([-5e-324, -5e-324, 1.0, 1.0], "4.94e-324"),  # subnormal
+        ([1.0, 1.0, 1e-80, 1.0], "1e-80"),
+    ],
+)
+def test_weights_outside_the_magnitude_range_are_refused(
+    command, w, magnitude, tmp_path, capsys, monkeypatch
+):
+    f = tmp_path / "net.npz"
+    _npz(f, w)
+    line = assert_input_error([command, f, "--theta", "1"], capsys, monkeypatch, "net.npz: edge")
+    assert f"magnitude {magnitude}, outside [2^-250, 2^250]" in line
+
+
+def test_the_magnitude_range_is_the_certificates():
+    from ntc_design.certify.format import NUMBER_EXP
+    from ntc_design.linalg import MAGNITUDE_EXP, out_of_range
+    from ntc_design.model import Topology
+
+    assert NUMBER_EXP == MAGNITUDE_EXP == 250
+    edge = 2.0**MAGNITUDE_EXP  # the bounds themselves are accepted
+    top = Topology.from_edges(2, 1, [(1, 2, [[edge]]), (2, 1, [[2.0**-MAGNITUDE_EXP]])])
+    assert top.n == 2 and not out_of_range(edge) and out_of_range(edge * 2)
+    with pytest.raises(InputError, match="outside"):
+        Topology.from_edges(2, 1, [(1, 2, [[edge * 2]])])
+
+
+@pytest.mark.parametrize("member", ["X.npy", "X"])  # garbage in a .npy member, or no .npy
+def test_npz_members_that_are_not_arrays(member, tmp_path, capsys, monkeypatch):
+    import zipfile
+
+    f = tmp_path / "net.npz"
+    with zipfile.ZipFile(f, "w") as z:
+        for k in ["format", "dim", "labels", "from", "to", "weights"]:
+            z.writestr(member.replace("X", k), b"not an array")
+    assert_input_error(
+        ["design", f, "--theta", "1"], capsys, monkeypatch, "net.npz: dim: not a .npy array"
+    )
+
+
+def test_time_varying_theta_of_the_wrong_length_writes_nothing(tmp_path, capsys, monkeypatch):
+    tv = {
+        "dim": 2,
+        "agents": 3,
+        "period": "2*pi",
+        "edges": [
+            {"from": 1, "to": 2, "weight": {"diag": ["-1 - 0.5*sin(t)", -2]}},
+            {"from": 2, "to": 3, "weight": [[2, 0], [0, 1]]},
+            {"from": 3, "to": 1, "weight": {"identity": 1}},
+            {"from": 2, "to": 1, "weight": {"identity": 1}},
+        ],
+    }
+    f = tmp_path / "tv.yaml"
+    f.write_text(yaml.safe_dump(tv))
+    out = tmp_path / "cert.json"
+    for args in (
+        ["certify", f, "--theta", "1", "--gain", "1/(1+t)", "--out", out],
+        ["design", f, "--theta", "1"],
+    ):
+        assert_input_error(args, capsys, monkeypatch, "theta: expected 2 numbers")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tv.yaml"]

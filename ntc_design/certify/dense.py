@@ -21,7 +21,7 @@ import numpy as np
 from ..design import ProtocolDesign, coupling_matrix
 from ..errors import InputError
 from ..files import parse_topology
-from ..linalg import DENSE_MAX_BYTES, DenseRefused
+from ..linalg import DENSE_MAX_BYTES, RANGE_TEXT, DenseRefused, out_of_range
 from ..model import Topology, antagonistic_in_weight
 from .checks import Check
 from .claims import Claim, ClaimKind
@@ -34,7 +34,7 @@ from .exact import (
     gamma,
     verified_float_pd,
 )
-from .fields import RANGE_TEXT, matrix, need, number, out_of_range, vector
+from .fields import matrix, need, number, vector
 from .format import topology_hash
 from .lyapunov import hurwitz_by_lyapunov
 

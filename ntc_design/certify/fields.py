@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .format import MAX_SCHEDULE, NUMBER_EXP
+from .format import MAX_SCHEDULE
 
 
 def need(doc: dict, key: str, typ: type | tuple, where: str) -> Any:
@@ -144,28 +144,6 @@ def matrix(x: Any, n: int, where: str) -> np.ndarray:
     return a
 
 
-def out_of_range(a: np.ndarray | float) -> bool:
-    """Whether some nonzero entry lies outside ``[2^-NUMBER_EXP, 2^NUMBER_EXP]``.
-
-    Parameters
-    ----------
-    a : ndarray or float
-        The numbers.
-
-    Returns
-    -------
-    bool
-    """
-    x = np.abs(np.asarray(a, dtype=float))
-    nz = x[x != 0]
-    return bool(nz.size) and (
-        float(nz.min()) < 2.0**-NUMBER_EXP or float(nz.max()) > 2.0**NUMBER_EXP
-    )
-
-
-RANGE_TEXT = f"a nonzero |entry| outside [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}] (cannot be bounded)"
-
-
 def finite_number(x: Any) -> float | None:
     """A JSON number as a finite float, else None (a bool, a string, NaN, or an integer
     beyond any double).
@@ -226,12 +204,10 @@ def parse_schedule(subject: dict, where: str) -> tuple[tuple[str, float], ...]:
 
 
 __all__ = [
-    "RANGE_TEXT",
     "finite_number",
     "matrix",
     "need",
     "number",
-    "out_of_range",
     "parse_schedule",
     "vector",
 ]

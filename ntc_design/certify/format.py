@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..linalg import MAGNITUDE_EXP
 from ..model import Topology
 from ..outputs import write_atomic
 
@@ -42,10 +43,9 @@ MAX_SCHEDULE = 10_000
 MAX_CERT_BYTES = 256 * 2**20
 
 
-#: Every nonzero number entering a proof has 2^-NUMBER_EXP <= |x| <= 2^NUMBER_EXP: a
-#: product of three such numbers neither overflows nor underflows a double, and exact
-#: entries stay a few hundred bits long.
-NUMBER_EXP = 250
+#: The magnitude range of every nonzero number entering a proof (the model's weight range,
+#: :data:`ntc_design.linalg.MAGNITUDE_EXP`).
+NUMBER_EXP = MAGNITUDE_EXP
 
 
 #: Reported floating-point results (eigenvalues, residuals) are recomputed and must agree

@@ -51,12 +51,19 @@ import scipy.sparse as sparse
 
 from ..design import ProtocolDesign
 from ..errors import InputError
-from ..linalg import CODE_SIGN, DENSE_MAX_BYTES, DenseRefused, SPDFamily, cholesky_fill
+from ..linalg import (
+    CODE_SIGN,
+    DENSE_MAX_BYTES,
+    RANGE_TEXT,
+    DenseRefused,
+    SPDFamily,
+    cholesky_fill,
+    out_of_range,
+)
 from ..model import Topology
 from ..thresholds import strong_components
 from .dense import prove_pd_expr
 from .exact import U, gamma, rump_shift_value
-from .fields import RANGE_TEXT, out_of_range
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov
 

@@ -43,7 +43,20 @@ def _run(top, gain: str, x0: np.ndarray, paths: int):
 
 
 def regenerate(out: Path, paths: int = paper.PATHS) -> list[Path]:
-    """Write every README figure into ``out``; returns the PNG paths."""
+    """Write every README figure into ``out``.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The folder.
+    paths : int, optional
+        Monte Carlo paths of the simulated figures.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The PNG files.
+    """
     out.mkdir(parents=True, exist_ok=True)
     written = []
 
@@ -83,6 +96,13 @@ def regenerate(out: Path, paths: int = paper.PATHS) -> list[Path]:
 
 
 def main(argv: list[str] | None = None) -> None:
+    """Regenerate the README's figures (``python -m ntc_design.reports.examples``).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command line (default: ``sys.argv``).
+    """
     ap = argparse.ArgumentParser(
         prog="python -m ntc_design.reports.examples", description=__doc__.split("\n")[0]
     )

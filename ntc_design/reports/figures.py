@@ -332,7 +332,19 @@ def mode_timeline(ax, segments: Sequence[tuple[float, float, str]], bins: int = 
 
 
 def schedule_figure(schedule: Sequence[tuple[str, float]], width: float = ONE_COLUMN):
-    """One period of a switching schedule as a bar of modes with their durations."""
+    """One period of a switching schedule as a bar of modes with their durations.
+
+    Parameters
+    ----------
+    schedule : sequence of (str, float)
+        (mode, duration) pairs.
+    width : float, optional
+        Figure width in inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     segs, t = [], 0.0
     for m, dur in schedule:
         segs.append((t, t + dur, m))
@@ -585,7 +597,19 @@ class CouplingCurve:
 def coupling_curve(des, points: int = 240) -> CouplingCurve:
     """Sample the decay rate ``−max Re λ(−L_B(δ))`` and ``λ_min(L_B + L_Bᵀ)`` over a
     logarithmic δ range around Lemma 1's δ and the critical couplings of ``des``
-    (a :class:`~ntc_design.design.ProtocolDesign`; without thresholds only δ is marked)."""
+    (a :class:`~ntc_design.design.ProtocolDesign`; without thresholds only δ is marked).
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The design.
+    points : int, optional
+        Samples of δ.
+
+    Returns
+    -------
+    CouplingCurve
+    """
     th = des.thresholds
     crit = (th.hurwitz, th.symmetric, th.best_rate_delta) if th is not None else ()
     marks = [des.delta] + [v for v in crit if v is not None and v > 0]
@@ -612,7 +636,19 @@ def coupling_curve(des, points: int = 240) -> CouplingCurve:
 def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
     """Two panels against δ (log scale): the decay rate −max Re λ(−L_B(δ)) and
     λ_min(L_B + L_Bᵀ)(δ); per mode Lemma 1's δ (circle), δ_H (triangle), δ_S (square) and
-    the best δ (star). A δ_H of 0 is stated in the legend (it has no place on a log axis)."""
+    the best δ (star). A δ_H of 0 is stated in the legend (it has no place on a log axis).
+
+    Parameters
+    ----------
+    curves : sequence of CouplingCurve
+        One per mode.
+    width : float, optional
+        Figure width in inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     with paper_style():
         fig, (a1, a2) = plt.subplots(
             1, 2, figsize=(width, 2.4 + 0.2 * len(curves)), layout="constrained", sharex=True
@@ -683,7 +719,17 @@ def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
 
 def gain_latex(text: str) -> str:
     """``c(t) = …`` in mathtext from the parsed gain (sympy.latex of the expression, never
-    of the raw text); falls back to the plain text if mathtext cannot typeset it."""
+    of the raw text); falls back to the plain text if mathtext cannot typeset it.
+
+    Parameters
+    ----------
+    text : str
+        The gain as the user wrote it.
+
+    Returns
+    -------
+    str
+    """
     from matplotlib.mathtext import MathTextParser
     from sympy.printing.latex import LatexPrinter
 
@@ -711,7 +757,21 @@ def gain_latex(text: str) -> str:
 
 
 def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
-    """c(t), ∫₀ᵗ c and ∫₀ᵗ c² on [0, T] (cumulative trapezoid on a fine grid)."""
+    """c(t), ∫₀ᵗ c and ∫₀ᵗ c² on [0, T] (cumulative trapezoid on a fine grid).
+
+    Parameters
+    ----------
+    text : str
+        The gain c(t).
+    t_end : float
+        T.
+    width : float, optional
+        Figure width in inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from scipy.integrate import cumulative_trapezoid
 
     from ..simulate import make_gain
@@ -737,6 +797,8 @@ def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
 
 @dataclass(frozen=True)
 class SavedFigure:
+    """A figure written to disk: its stem, the file per format, and the PNG bytes."""
+
     stem: Path
     files: dict[str, Path]  # format -> path
     png: bytes
@@ -744,7 +806,23 @@ class SavedFigure:
 
 def save(fig, stem: Path, formats: Sequence[str] = FORMATS, dpi: int = DPI) -> SavedFigure:
     """Write ``stem.png`` (``dpi``), ``stem.svg`` and ``stem.pdf``; return the paths and
-    the PNG bytes (for inlining)."""
+    the PNG bytes (for inlining).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards).
+    stem : pathlib.Path
+        The path without suffix.
+    formats : sequence of str, optional
+        The formats to write.
+    dpi : int, optional
+        The PNG resolution.
+
+    Returns
+    -------
+    SavedFigure
+    """
     stem.parent.mkdir(parents=True, exist_ok=True)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)

@@ -220,6 +220,11 @@ def reproduce_paper(
     -------
     tuple
         (report path, whether every row matches the paper, wall seconds).
+
+    Raises
+    ------
+    InputError
+        A setting out of range, or the output folder cannot be written.
     """
     t0 = time.perf_counter()
     out = Path(out_dir)

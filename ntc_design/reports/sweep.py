@@ -289,3 +289,6 @@ def write_sweep_report(directory: str | Path) -> Path:
     tmp.write_text(page(f"ntc-design sweep: {man.get('name', d.name)}", body), encoding="utf-8")
     tmp.replace(out)
     return out
+
+
+__all__ = ["is_sweep_dir", "write_sweep_report"]

@@ -23,7 +23,23 @@ def lambda_min_figure(
     samples: int = 1500,
 ):
     """λ_min(L_B(t) + L_B(t)ᵀ) over the domain with Λ₂ marked (and the certified bound on
-    each branch-and-bound interval, as a step curve)."""
+    each branch-and-bound interval, as a step curve).
+
+    Parameters
+    ----------
+    des : TimeVaryingDesign
+        The design.
+    lambda2 : float, optional
+        The certified Λ₂.
+    intervals : list, optional
+        The certificate's [a, b, bound] intervals.
+    samples : int, optional
+        Times sampled.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     tv = des.topology
     a, b = tv.domain or (0.0, 10.0)
     ts = np.linspace(a, b, samples)
@@ -46,7 +62,19 @@ def lambda_min_figure(
 
 
 def weights_figure(des: TimeVaryingDesign, samples: int = 1000):
-    """Every entry of each time-varying weight over the domain, and δ(t) = C(t) + ΔC."""
+    """Every entry of each time-varying weight over the domain, and δ(t) = C(t) + ΔC.
+
+    Parameters
+    ----------
+    des : TimeVaryingDesign
+        The design.
+    samples : int, optional
+        Times sampled.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     tv = des.topology
     a, b = tv.domain or (0.0, 10.0)
     ts = np.linspace(a, b, samples)

@@ -12,10 +12,11 @@ import numpy as np
 
 from ...design import ProtocolDesign
 from ...errors import InputError
+from ...linalg import out_of_range
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import DENSE_CERT_MAX_ND, prove_pd_expr
-from ..fields import need, number, out_of_range, vector
+from ..fields import need, number, vector
 from ..format import topology_hash
 from ..scale import (
     LYAPUNOV_COMPONENT_MAX_ND,

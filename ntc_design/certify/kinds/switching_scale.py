@@ -11,10 +11,11 @@ import numpy as np
 
 from ...design import SwitchingDesign
 from ...errors import InputError
+from ...linalg import out_of_range
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import DENSE_CERT_MAX_ND
-from ..fields import need, number, out_of_range, vector
+from ..fields import need, number, vector
 from ..format import MAX_MODES, topology_hash
 from ..scale import symmetric_part_bound, topology_from_subject
 from ..switching_scale import (
