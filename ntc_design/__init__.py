@@ -16,7 +16,8 @@ T. Niu, B. Mao, X. Wu, T. Huang, arXiv:2602.11822.
 from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, assumption2, design
 from .errors import InputError
 from .generate import random_network
-from .model import SwitchingTopology, TimeVaryingTopology, Topology, load
+from .loader import load
+from .model import SwitchingTopology, TimeVaryingTopology, Topology
 
 __version__ = "0.1.0"
 

@@ -21,7 +21,8 @@ from . import __version__
 from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, design, structure_report
 from .errors import InputError, one_line
 from .files import jsonable
-from .model import SwitchingTopology, load
+from .loader import load
+from .model import SwitchingTopology
 
 app = typer.Typer(
     add_completion=True,

@@ -18,6 +18,7 @@ from .model import (
     SwitchingTopology,
     Topology,
     antagonistic_in_weight,
+    block_coo,
     in_degree_dominated_all,
     in_out_difference,
 )
@@ -432,18 +433,6 @@ class ProtocolDesign:
             "notes": list(self.notes),
         }
 
-    def to_statespace(self):
-        """The noise-free protocol at c = 1; see :func:`ntc_design.interop.design_statespace`.
-
-        Returns
-        -------
-        control.StateSpace
-            State x, input θ, output x; DC gain 1_N ⊗ I_d.
-        """
-        from .interop import design_statespace
-
-        return design_statespace(self)
-
 
 @dataclass(frozen=True, eq=False)
 class SwitchingDesign:
@@ -469,11 +458,10 @@ class SwitchingDesign:
 
 def coupling_matrix_sparse(top: Topology, b: Mapping[int, np.ndarray]) -> sparse.csr_matrix:
     """``blockdiag(B_i)`` (zero blocks for agents not in ``b``) as CSR."""
-    from .model import _block_coo
 
     idx = np.array(sorted(b), dtype=np.int64)
     blocks = np.array([b[i] for i in idx.tolist()]).reshape(-1, top.dim, top.dim)
-    return _block_coo(top.n, top.dim, idx, idx, blocks)
+    return block_coo(top.n, top.dim, idx, idx, blocks)
 
 
 def coupling_matrix(top: Topology, b: Mapping[int, np.ndarray]) -> np.ndarray:

@@ -28,11 +28,13 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
-from .files import MAX_AGENTS, MAX_DIM  # the same caps as topology files
 
 FORMAT = "ntc-design/edge-list"
 VERSION = 1
 
+#: Size limits shared by every topology file (``files`` reads them from here).
+MAX_DIM = 1000  # size of one weight matrix (d x d)
+MAX_AGENTS = 10**6
 MAX_EDGES = 50_000_000
 #: Declared uncompressed size of all arrays (zip headers; zipfile checks them on read).
 MAX_NPZ_BYTES = 2 * 2**30

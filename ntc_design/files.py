@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from .edgelist import MAX_AGENTS, MAX_DIM, read_npz
 from .errors import InputError
 
 Label = int | str
@@ -105,8 +106,6 @@ def jsonable(x: Any) -> Any:
 MAX_FILE_BYTES = 64 * 2**20
 MAX_DEPTH = 64
 MAX_EXPANDED_NODES = 20_000_000
-MAX_DIM = 1000  # size of one weight matrix (d x d)
-MAX_AGENTS = 10**6
 
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser where present
 
@@ -564,8 +563,6 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
             path = base / spec
             try:
                 if spec.lower().endswith(".npz"):  # a compact edge list (big networks)
-                    from .edgelist import read_npz
-
                     modes[str(name)] = read_npz(path)
                     continue
                 mode_doc = read_document(path)
@@ -590,43 +587,6 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
         dur = _number(item["duration"], source, f"{field}.duration")
         schedule.append((mode, dur))
     return SwitchingData(modes=modes, schedule=tuple(schedule), source=source)
-
-
-def parse_file(path: str | Path) -> Any:
-    """Read a topology, a switching or a time-varying topology file.
-
-    Which one is told by its fields: ``modes``/``schedule`` for switching, weights that are
-    expressions of t for time-varying (:mod:`ntc_design.tvfiles`). A ``.npz`` file is a
-    compact edge list (:mod:`ntc_design.edgelist`).
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        A YAML or JSON file, or an ``.npz`` edge list.
-
-    Returns
-    -------
-    TopologyData or SwitchingData or TimeVaryingData or EdgeListData
-        The validated file contents.
-
-    Raises
-    ------
-    InputError
-        The file cannot be read or is not a valid topology of any kind.
-    """
-    if str(path).lower().endswith(".npz"):
-        from .edgelist import read_npz
-
-        return read_npz(path)
-    doc = read_document(path)
-    src = str(path)
-    if "modes" in doc or "schedule" in doc:
-        return parse_switching(doc, src)
-    if is_time_varying(doc):
-        from .tvfiles import parse_time_varying  # it builds on this module (and sympy)
-
-        return parse_time_varying(doc, src)
-    return parse_topology(doc, src)
 
 
 def _has_text(x: Any) -> bool:
@@ -711,7 +671,6 @@ __all__ = [
     "SwitchingData",
     "TopologyData",
     "jsonable",
-    "parse_file",
     "parse_scenario",
     "parse_switching",
     "parse_topology",

@@ -13,12 +13,12 @@ from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sparse
 
 from . import files
+from .edgelist import EdgeListData
 from .errors import InputError
 from .linalg import (
     CODE_DEFINITE,
@@ -272,8 +272,6 @@ class Topology:
         Topology
             The validated topology (messages name the file's edges).
         """
-        from .edgelist import EdgeListData
-
         if isinstance(data, EdgeListData):
             return cls.from_arrays(
                 data.labels, data.dim, data.rows, data.cols, data.w, data.name, data.source
@@ -595,64 +593,6 @@ class Topology:
         ]
         return doc
 
-    # -- interop (thin wrappers over ntc_design.interop) ------------------------------
-    @classmethod
-    def from_networkx(cls, graph, weight: str = "weight", dim: int | None = None) -> Topology:
-        """Build from a ``networkx.DiGraph``; see
-        :func:`ntc_design.interop.topology_from_networkx`.
-
-        Parameters
-        ----------
-        graph : networkx.DiGraph
-            Edge u -> v carries A_vu as a d×d matrix (or a number for d = 1).
-        weight : str, optional
-            The edge attribute holding the weight.
-        dim : int, optional
-            d, when the graph has no edges to infer it from.
-
-        Returns
-        -------
-        Topology
-            The validated topology.
-        """
-        from .interop import topology_from_networkx
-
-        return topology_from_networkx(graph, weight, dim)
-
-    def to_networkx(self, weight: str = "weight"):
-        """The topology as a ``networkx.DiGraph`` (exact inverse of :meth:`from_networkx`).
-
-        Parameters
-        ----------
-        weight : str, optional
-            The edge attribute to hold the d×d weights.
-
-        Returns
-        -------
-        networkx.DiGraph
-            Nodes are the labels; edge j -> i carries A_ij.
-        """
-        from .interop import topology_to_networkx
-
-        return topology_to_networkx(self, weight)
-
-    def save(self, path: str | Path) -> Path:
-        """Write a topology file that :func:`load` reads back.
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            The file: YAML, or JSON by the ``.json`` suffix.
-
-        Returns
-        -------
-        pathlib.Path
-            The path written.
-        """
-        from .interop import save_topology
-
-        return save_topology(self, path)
-
 
 def signed_laplacian(top: Topology) -> np.ndarray:
     """Signed Laplacian L (Niu & Wu, Sec. 2.3): blocks ``L_ij = -A_ij`` (j ≠ i) and
@@ -684,10 +624,24 @@ def signed_laplacian(top: Topology) -> np.ndarray:
     return lap4.reshape(top.nd, top.nd)
 
 
-def _block_coo(
+def block_coo(
     n: int, d: int, rows: np.ndarray, cols: np.ndarray, blocks: np.ndarray
 ) -> sparse.csr_matrix:
-    """CSR (nd×nd) from d×d blocks placed at agent positions (rows[k], cols[k])."""
+    """CSR (nd×nd) from d×d blocks placed at agent positions (rows[k], cols[k]).
+
+    Parameters
+    ----------
+    n, d : int
+        Agents and block size.
+    rows, cols : numpy.ndarray
+        The agent position of each block.
+    blocks : numpy.ndarray
+        The blocks, shape (K, d, d); repeated positions are summed.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+    """
     a, b = np.meshgrid(np.arange(d), np.arange(d), indexing="ij")
     r = (rows[:, None, None] * d + a).ravel()
     c = (cols[:, None, None] * d + b).ravel()
@@ -714,7 +668,7 @@ def signed_laplacian_sparse(top: Topology) -> sparse.csr_matrix:
     rows = np.concatenate([ea.rows, idx])
     cols = np.concatenate([ea.cols, idx])
     blocks = np.concatenate([-ea.w, top.degree_sums[0]])
-    return _block_coo(n, d, rows, cols, blocks)
+    return block_coo(n, d, rows, cols, blocks)
 
 
 def antagonistic_in_weight(top: Topology, i: int) -> np.ndarray:
@@ -1030,38 +984,3 @@ class TimeVaryingTopology:
         """The number of agents N."""
         return len(self.labels)
 
-
-def load(path: str | Path):
-    """Load a topology file, a switching file or a time-varying topology file (YAML or
-    JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`).
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The file.
-
-    Returns
-    -------
-    Topology or SwitchingTopology or ExpressionTopology
-        A time-varying file gives an :class:`~ntc_design.timevarying.ExpressionTopology`,
-        or the fixed :class:`Topology` when every weight is a constant expression.
-
-    Raises
-    ------
-    InputError
-        The file cannot be read or is not a valid topology (one line naming the file and
-        the field or edge).
-    """
-    from .edgelist import EdgeListData
-
-    data = files.parse_file(path)
-    if isinstance(data, EdgeListData):
-        return Topology.from_data(data)
-    if isinstance(data, files.SwitchingData):
-        return SwitchingTopology.from_data(data)
-    if isinstance(data, files.TopologyData):
-        return Topology.from_data(data)
-    from .timevarying import ExpressionTopology  # built on this module
-
-    tv = ExpressionTopology.from_data(data)
-    return tv.fixed() if tv.constant else tv

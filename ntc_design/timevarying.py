@@ -5,7 +5,7 @@ Lemma 1 protocol evaluated at every instant (Niu & Wu, Lemma 1 and Sec. 4.2).
 (:mod:`ntc_design.tvfiles`), compiled once to vectorised NumPy functions. Construction
 *proves* that every weight keeps one sign class (PD, PSD, ND, NSD; for a semidefinite weight
 with a fixed kernel) for every t of its domain — one period, [0, constant_after], or t >= 0
-— by interval arithmetic on t-intervals (:mod:`ntc_design.interval`), and refuses the file
+— by interval arithmetic on t-intervals (:mod:`ntc_design.rigorous.interval`), and refuses the file
 naming the edge and the t where the proof fails. Because the classes are fixed, so are the
 edges, U, Ω_i and the positive-negative paths; what moves with t is the weights, C(t),
 δ(t) = C(t) + ΔC, B_i(t), x0(t) and L_B(t).
@@ -29,9 +29,11 @@ import sympy as sp
 
 from .errors import InputError, require_theta
 from .expr import compile_expression, symbol
-from .interval import NotEnclosable, bounds, enclose, t_ball
+from .files import read_document
 from .linalg import DEF_RTOL, Definiteness, classify, is_symmetric, pd
-from .model import Label, Topology, positive_negative_reachable
+from .model import Label, Topology, antagonistic_in_weight, positive_negative_reachable
+from .rigorous.exact import gamma, verified_float_pd
+from .rigorous.interval import NotEnclosable, bounds, enclose, t_ball
 from .tvfiles import ExprWeight, TimeVaryingData, parse_time_varying
 
 SIGN_PIECES = 64  # first split of the domain for the sign-class proofs
@@ -240,7 +242,7 @@ def sym_min_eig_lower(mid: np.ndarray, rad: np.ndarray) -> float:
     Weyl: λ_min(M) >= λ_min(mid) − ‖M − mid‖₂ >= λ_min(mid) − ρ(rad) and ρ(rad) <= the
     largest row sum of rad (Perron). λ_min(mid) is computed in floating point and then
     proven: mid − s·I ≻ 0 for s = λ̃ − η by a Cholesky factorisation whose shift covers
-    every rounding error (:func:`ntc_design.certify.exact.verified_float_pd`, Rump 2006).
+    every rounding error (:func:`ntc_design.rigorous.exact.verified_float_pd`, Rump 2006).
 
     Parameters
     ----------
@@ -254,7 +256,6 @@ def sym_min_eig_lower(mid: np.ndarray, rad: np.ndarray) -> float:
     float
         The bound (−inf when nothing could be proven or rad is not finite).
     """
-    from .certify.exact import gamma, verified_float_pd
 
     n = mid.shape[0]
     ms = 0.5 * (mid + mid.T)
@@ -650,7 +651,6 @@ def lemma1_structure(tv: ExpressionTopology) -> Lemma1Structure:
             out_inc[jj[k], k] = 1
             if sign[k] < 0:
                 neg_in[ii[k], k] = 1
-    from .model import antagonistic_in_weight
 
     cands = tuple(i for i in range(n) if pd(antagonistic_in_weight(top, i)))
     reach = np.zeros((len(cands), n), dtype=bool)
@@ -980,7 +980,6 @@ def load_time_varying(path: str | Path) -> ExpressionTopology:
     InputError
         The file cannot be read, is malformed, or a weight's class cannot be proven.
     """
-    from .files import read_document
 
     return ExpressionTopology.from_data(parse_time_varying(read_document(path), str(path)))
 

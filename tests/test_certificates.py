@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 import ntc_design as nd
 from ntc_design.certify import certify, hurwitz_certificate, switching_certificate, verify
 from ntc_design.certify.dense import prove_hurwitz
-from ntc_design.certify.exact import Dyadic, exact_pd, verified_float_pd
 from ntc_design.certify.format import digest
 from ntc_design.certify.lyapunov import common_lyapunov, decay_rate_lmi, lyapunov_solve
+from ntc_design.rigorous.exact import Dyadic, exact_pd, verified_float_pd
 
 from .cli_helpers import assert_input_error, run_cli
 from .conftest import ROOT

@@ -269,7 +269,7 @@ def test_the_checked_api_is_the_whole_api():
     assert len(FUNCTIONS) >= 200
     for must in (
         "ntc_design.design.design",
-        "ntc_design.model.load",
+        "ntc_design.loader.load",
         "ntc_design.certify.result.certify",
         "ntc_design.certify.verify.verify",
         "ntc_design.gain.analyse_gain",

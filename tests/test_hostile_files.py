@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from ntc_design.errors import InputError
 from ntc_design.expr import parse_expression, symbol
 from ntc_design.files import MAX_FILE_BYTES, read_document
-from ntc_design.model import load
+from ntc_design.loader import load
 
 from .cli_helpers import assert_input_error
 from .conftest import ROOT

@@ -1,7 +1,7 @@
 """Dense re-derivation and proofs for the ``hurwitz`` and ``switching`` kinds.
 
 * L_B of every mode is re-derived exactly from its topology, informed agents (= U),
-  B_i (= Σ_{Ω_i}|A_ij|) and δ (dyadic rational arithmetic, :mod:`ntc_design.certify.exact`),
+  B_i (= Σ_{Ω_i}|A_ij|) and δ (dyadic rational arithmetic, :mod:`ntc_design.rigorous.exact`),
   ``k1 = 1 + 2/δ`` and ``x0 = k1·θ``;
 * every claim is proven exactly (Sylvester's criterion on integers) while that is
   affordable, else with a rigorous floating-point test; every number entering a proof
@@ -23,9 +23,7 @@ from ..errors import InputError
 from ..files import parse_topology
 from ..linalg import DENSE_MAX_BYTES, RANGE_TEXT, DenseRefused, out_of_range
 from ..model import Topology, antagonistic_in_weight
-from .checks import Check
-from .claims import Claim, ClaimKind
-from .exact import (
+from ..rigorous.exact import (
     EXACT_MAX_N,
     Dyadic,
     PDProof,
@@ -34,6 +32,8 @@ from .exact import (
     gamma,
     verified_float_pd,
 )
+from .checks import Check
+from .claims import Claim, ClaimKind
 from .fields import matrix, need, number, vector
 from .format import topology_hash
 from .lyapunov import hurwitz_by_lyapunov
@@ -209,7 +209,7 @@ def prove_pd_expr(
     exact: bool,
 ) -> PDProof:
     """Prove P ≻ 0 (no L_B) or P L_B + L_Bᵀ P − 2αP ≻ 0: exactly when asked and the
-    bit lengths allow it (:func:`~ntc_design.certify.exact.exact_affordable`), else by the
+    bit lengths allow it (:func:`~ntc_design.rigorous.exact.exact_affordable`), else by the
     verified-float test.
 
     Parameters

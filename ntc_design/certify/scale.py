@@ -60,10 +60,10 @@ from ..linalg import (
     cholesky_fill,
     out_of_range,
 )
-from ..model import Topology
+from ..model import Topology, block_coo
+from ..rigorous.exact import U, gamma, rump_shift_value
 from ..thresholds import strong_components
 from .dense import prove_pd_expr
-from .exact import U, gamma, rump_shift_value
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov
 
@@ -112,7 +112,7 @@ def chol_ok_batch(a: np.ndarray) -> np.ndarray:
 def verified_pd_batch(m: np.ndarray, err: np.ndarray) -> np.ndarray:
     """Rigorous ``M_exact ≻ 0`` for a stack of d×d matrices from float values ``m`` and
     entrywise bounds ``err >= |M_exact − m|``: the shifted-Cholesky test of
-    :func:`ntc_design.certify.exact.verified_float_pd`, batched, with Rump's underflow
+    :func:`ntc_design.rigorous.exact.verified_float_pd`, batched, with Rump's underflow
     term (:func:`rump_shift`).
 
     Parameters
@@ -314,14 +314,13 @@ def component_matrix(
     pos = np.full(top.n, -1, dtype=np.int64)
     pos[agents] = np.arange(agents.size)
     k = (pos[ea.rows] >= 0) & (pos[ea.cols] >= 0)
-    from ..model import _block_coo
 
     m = agents.size
     rows = np.concatenate([pos[ea.rows[k]], np.arange(m)])
     cols = np.concatenate([pos[ea.cols[k]], np.arange(m)])
     vals = np.concatenate([-ea.w[k], blocks.diag[agents]])
     errs = np.concatenate([np.zeros_like(ea.w[k]), blocks.diag_err[agents]])
-    return _block_coo(m, d, rows, cols, vals), _block_coo(m, d, rows, cols, errs)
+    return block_coo(m, d, rows, cols, vals), block_coo(m, d, rows, cols, errs)
 
 
 @dataclass(frozen=True)
@@ -344,7 +343,7 @@ def _frobenius(x: np.ndarray) -> float:
 
 
 def rump_shift(a: sparse.csr_matrix, e: sparse.csr_matrix) -> float:
-    """Rump's shift (:func:`~ntc_design.certify.exact.rump_shift_value`) for a float
+    """Rump's shift (:func:`~ntc_design.rigorous.exact.rump_shift_value`) for a float
     symmetric sparse ``a`` within ``e`` (entrywise) of an exact matrix: the bound holds for
     any order of the inner products, so for CHOLMOD's supernodal blocked factorisation
     too, and its underflow term covers weights that are not range-checked.

@@ -8,7 +8,7 @@ after T) the infimum over t >= 0 is the infimum over one period (or over [0, T])
 
 On a t-interval I the certified lower bound is computed as follows (every step rigorous):
 
-1. every weight entry is enclosed over I in Arb ball arithmetic (:mod:`ntc_design.interval`);
+1. every weight entry is enclosed over I in Arb ball arithmetic (:mod:`ntc_design.rigorous.interval`);
 2. δ(t) = C(t) + ΔC (Lemma 1, evaluated at each t) is bounded below on I: each C_i(t) =
    ½ λ_max(S_i⁻¹M_i) is at least ½ xᵀM_i x / xᵀS_i x for any fixed x (x = the top generalised
    eigenvector at the midpoint, the quotient enclosed in ball arithmetic); V1(t) is the
@@ -42,8 +42,9 @@ import sympy as sp
 
 from ..errors import InputError
 from ..expr import compile_expression, parse_expression, symbol
-from ..interval import _T, bounds, enclose, t_ball, upper
 from ..linalg import DEF_RTOL
+from ..rigorous.exact import gamma
+from ..rigorous.interval import bounds, enclose, t_ball, upper
 from ..timevarying import (
     ExpressionTopology,
     Lemma1Structure,
@@ -53,9 +54,9 @@ from ..timevarying import (
     lemma1_structure,
     sym_min_eig_lower,
 )
-from .exact import gamma
 from .format import FORMAT, VERSION, finish
 
+_T = symbol("t")
 RTOL = 0.008  # bisect until the certified Λ₂ is within 0.8 % of the sampled infimum
 MAX_INTERVALS = 4000
 FIRST_PIECES = 32

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..files import ScenarioData, jsonable, parse_scenario
 from ..interop import simulation_frame
-from ..model import load
+from ..loader import load
 from ..outputs import check_output_folder, output_folder
 from .spec import SimulationSpec
 

@@ -20,7 +20,7 @@ import numpy as np
 import sympy as sp
 from flint import arb
 
-from .expr import symbol
+from ..expr import symbol
 
 _T = symbol("t")
 

@@ -1,0 +1,47 @@
+"""``load``: any topology file as its model object (the one place that knows every kind of
+topology: fixed, switching, time-varying)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .edgelist import EdgeListData
+from .files import SwitchingData, TopologyData
+from .model import SwitchingTopology, Topology
+from .readers import parse_file
+from .timevarying import ExpressionTopology
+
+
+def load(path: str | Path):
+    """Load a topology file, a switching file or a time-varying topology file (YAML or
+    JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    Topology or SwitchingTopology or ExpressionTopology
+        A time-varying file gives an :class:`~ntc_design.timevarying.ExpressionTopology`,
+        or the fixed :class:`Topology` when every weight is a constant expression.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read or is not a valid topology (one line naming the file and
+        the field or edge).
+    """
+    data = parse_file(path)
+    if isinstance(data, EdgeListData):
+        return Topology.from_data(data)
+    if isinstance(data, SwitchingData):
+        return SwitchingTopology.from_data(data)
+    if isinstance(data, TopologyData):
+        return Topology.from_data(data)
+    tv = ExpressionTopology.from_data(data)
+    return tv.fixed() if tv.constant else tv
+
+
+__all__ = ["load"]

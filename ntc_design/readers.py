@@ -1,0 +1,47 @@
+"""One dispatcher for topology files: a topology, a switching set, a time-varying
+topology (YAML or JSON), or a compact ``.npz`` edge list."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from .edgelist import read_npz
+from .files import is_time_varying, parse_switching, parse_topology, read_document
+from .tvfiles import parse_time_varying
+
+
+def parse_file(path: str | Path) -> Any:
+    """Read a topology, a switching or a time-varying topology file.
+
+    Which one is told by its fields: ``modes``/``schedule`` for switching, weights that are
+    expressions of t for time-varying (:mod:`ntc_design.tvfiles`). A ``.npz`` file is a
+    compact edge list (:mod:`ntc_design.edgelist`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A YAML or JSON file, or an ``.npz`` edge list.
+
+    Returns
+    -------
+    TopologyData or SwitchingData or TimeVaryingData or EdgeListData
+        The validated file contents.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read or is not a valid topology of any kind.
+    """
+    if str(path).lower().endswith(".npz"):
+        return read_npz(path)
+    doc = read_document(path)
+    src = str(path)
+    if "modes" in doc or "schedule" in doc:
+        return parse_switching(doc, src)
+    if is_time_varying(doc):
+        return parse_time_varying(doc, src)
+    return parse_topology(doc, src)
+
+
+__all__ = ["parse_file"]
