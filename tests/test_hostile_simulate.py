@@ -14,6 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ntc_design.errors import InputError
+from ntc_design.simulate import NoiseModel, SimulationSpec
+
 from .cli_helpers import assert_input_error, run_cli
 from .conftest import ROOT
 
@@ -65,6 +68,7 @@ BAD_FIELDS = [
     ("theta", "1,2,-1", ["theta", "list of numbers"]),
     ("theta", [], ["theta"]),
     ("theta", [0, 0, 0], ["theta", "non-zero"]),
+    ("theta", [1e300, 2, -1], ["theta[0]", "at most 1e+100"]),
     ("theta", [1, 2], ["theta", "expected 3 numbers"]),
     ("theta", {"a": 1}, ["theta"]),
     ("theta", DROP, ["theta", "missing"]),
@@ -99,6 +103,11 @@ BAD_FIELDS = [
     ("noise", {"f": [[1, 0], [0, 1]]}, ["noise.f", "3x3"]),
     ("noise", {"f": [[1, 0, 0], [0, 1, 0]]}, ["noise.f", "square"]),
     ("noise", {"colour": 1}, ["noise.colour", "unknown field"]),
+    # magnitudes bounded (MAX_MAGNITUDE = 1e100): 1e300 used to overflow inside the run
+    ("noise", {"f": 1e300}, ["noise.f", "at most 1e+100 in magnitude"]),
+    ("noise", {"f": -1e101}, ["noise.f", "at most 1e+100"]),
+    ("noise", {"f": [[1e300, 0, 0], [0, 1, 0], [0, 0, 1]]}, ["noise.f[0][0]", "at most"]),
+    ("noise", {"sigma": 1e300}, ["noise.sigma", "at most 1e+100"]),
     ("noise", {"sigma_edges": "all"}, ["noise.sigma_edges"]),
     ("noise", {"sigma_edges": [{"from": 2, "to": 1}]}, ["noise.sigma_edges[0]"]),
     ("noise", {"sigma_edges": [{"from": 2, "to": 1, "sigma": -1}]}, ["sigma_edges[0].sigma"]),
@@ -106,6 +115,11 @@ BAD_FIELDS = [
     ("noise", {"sigma_edges": [{"from": 2, "to": 1, "sigma": "x"}]}, ["sigma_edges[0].sigma"]),
     ("noise", {"sigma_edges": [{"from": [2], "to": 1, "sigma": 1}]}, ["sigma_edges[0].from"]),
     ("noise", {"sigma_edges": [{"from": 1, "to": 5, "sigma": 0.1}]}, ["sigma_edges"]),
+    (
+        "noise",
+        {"sigma_edges": [{"from": 2, "to": 1, "sigma": 1e300}]},
+        ["sigma_edges[0].sigma", "at most 1e+100"],
+    ),
     (
         "noise",
         {"sigma_edges": [{"from": 2, "to": 1, "sigma": 1}, {"from": 2, "to": 1, "sigma": 2}]},
@@ -118,6 +132,10 @@ BAD_FIELDS = [
     ("initial", {"uniform": [0, 1], "seed": -1}, ["initial.seed"]),
     ("initial", {"uniform": [0, 1]}, ["initial"]),
     ("initial", {"uniform": 1, "seed": 0}, ["initial.uniform"]),
+    # rng.uniform raised OverflowError (high - low range exceeds valid bounds)
+    ("initial", {"uniform": [-1e308, 1e308], "seed": 1}, ["initial.uniform[0]", "at most 1e+100"]),
+    ("initial", {"uniform": [0, 1e101], "seed": 1}, ["initial.uniform[1]", "at most 1e+100"]),
+    ("initial", [0] * 20 + [1e300], ["initial[20]", "at most 1e+100"]),
     ("initial", [[1, 2, 3]] * 6, ["initial", "expected 7 states"]),
     ("initial", [[[1, 2, 3]]] * 7, ["initial[0]", "nested"]),
     ("initial", [NAN] * 21, ["initial[0]", "finite"]),
@@ -254,6 +272,24 @@ def test_bad_scenario_documents(tmp_path, capsys, monkeypatch, text, needles):
     p = tmp_path / "sc.json"
     p.write_text(text)
     fails(tmp_path, capsys, monkeypatch, p, *needles)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "noise, field",
+    [
+        (NoiseModel(f=1e300), "noise.f"),
+        (NoiseModel(f=np.diag([1e300, 1.0, 1.0])), "noise.f"),
+        (NoiseModel(sigma=1e300), "noise.sigma"),
+        (NoiseModel(sigma_edges={(2, 1): 1e300}), "noise.sigma_edges 2->1"),
+    ],
+)
+def test_noise_magnitude_is_bounded_in_the_api(noise, field):
+    # the Python API reaches check_noise directly, without the scenario reader
+    with pytest.raises(InputError) as exc:
+        SimulationSpec.build([1, 2, -1], noise=noise)
+    assert str(exc.value).startswith(field + ":"), exc.value
+    assert "at most 1e+100 in magnitude" in str(exc.value)
 
 
 @pytest.mark.hostile

@@ -16,7 +16,9 @@ of diffrax's ``SaveAt``):
 
 The flat keys of a scenario file (:data:`SCENARIO_KEYS`) are defined here and only here.
 Checks that need the topology (θ's length, the initial state's size, ``resample``) are
-made by the driver. Every error is one line naming the field.
+made by the driver.
+θ, x(0), σ and f are bounded by :data:`MAX_MAGNITUDE` (1e100). Every error is one line
+naming the field.
 """
 
 from __future__ import annotations
@@ -35,12 +37,20 @@ from .system import NoiseModel
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
 MAX_SEED = 2**128
 MAX_WORKERS = 4096
+# States and noise intensities (θ, x(0), σ, f) are squared and summed over agents, edges
+# and paths (mean-square errors, noise covariances, f² in the moment equations): at most
+# 1e100 in magnitude keeps every such sum far inside the float range (1.8e308), so a value
+# like 1e300 is refused naming its field instead of overflowing deep inside a run.
+MAX_MAGNITUDE = 1e100
 
 Noise = NoiseModel
 
 
-def _check_vector(name: str, values, max_size: int = MAX_VECTOR) -> np.ndarray:
-    """A flat, finite float vector from a list of numbers (nested lists refused)."""
+def _check_vector(
+    name: str, values, max_size: int = MAX_VECTOR, bound: float | None = None
+) -> np.ndarray:
+    """A flat, finite float vector from a list of numbers (nested lists refused), with
+    every entry at most ``bound`` in magnitude if given."""
     if isinstance(values, np.ndarray):
         if values.dtype.kind not in "iuf":
             raise InputError(f"{name}: expected numbers, got an array of {values.dtype}")
@@ -60,7 +70,12 @@ def _check_vector(name: str, values, max_size: int = MAX_VECTOR) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
         k = int(np.argmax(bad))
-        raise InputError(f"{name}[{k}]: must be finite, got {arr[k]!r}")
+        raise InputError(f"{name}[{k}]: must be finite, got {float(arr[k])!r}")
+    if bound is not None and np.any(np.abs(arr) > bound):
+        k = int(np.argmax(np.abs(arr) > bound))
+        raise InputError(
+            f"{name}[{k}]: must be at most {bound:g} in magnitude, got {float(arr[k])!r}"
+        )
     arr.setflags(write=False)
     return arr
 
@@ -204,8 +219,9 @@ class UniformInitial:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        lo = require_number("initial.uniform[0]", self.lo)
-        hi = require_number("initial.uniform[1]", self.hi)
+        # bounded: rng.uniform needs hi - lo finite (±1e308 overflows it)
+        lo = require_number("initial.uniform[0]", self.lo, bound=MAX_MAGNITUDE)
+        hi = require_number("initial.uniform[1]", self.hi, bound=MAX_MAGNITUDE)
         if not lo < hi:
             raise InputError(f"initial.uniform: need lo < hi, got [{lo:g}, {hi:g}]")
         require_int("initial.seed", self.seed, minimum=0, maximum=MAX_SEED)
@@ -231,7 +247,8 @@ class UniformInitial:
 
 def check_noise(noise: NoiseModel) -> NoiseModel:
     """Check σ (finite, >= 0), f (a finite scalar, a finite square matrix or a
-    callable) and the per-edge σ (finite, >= 0, keyed by (from, to) labels).
+    callable) and the per-edge σ (finite, >= 0, keyed by (from, to) labels); every
+    number at most :data:`MAX_MAGNITUDE` in magnitude.
 
     Parameters
     ----------
@@ -250,13 +267,13 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
     """
     if not isinstance(noise, NoiseModel):
         raise InputError(f"noise: expected a NoiseModel, got {type(noise).__name__}")
-    require_number("noise.sigma", noise.sigma, minimum=0.0)
+    require_number("noise.sigma", noise.sigma, minimum=0.0, bound=MAX_MAGNITUDE)
     f = noise.f
     if not callable(f):
         if isinstance(f, bool):
             raise InputError("noise.f: expected a number or a d×d matrix, got a boolean")
         if isinstance(f, numbers.Real):
-            require_number("noise.f", f)
+            require_number("noise.f", f, bound=MAX_MAGNITUDE)
         else:
             try:
                 arr = np.asarray(f, dtype=float)
@@ -268,12 +285,19 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
                 )
             if not np.all(np.isfinite(arr)):
                 raise InputError("noise.f: entries must be finite")
+            if np.any(np.abs(arr) > MAX_MAGNITUDE):
+                raise InputError(f"noise.f: entries must be at most {MAX_MAGNITUDE:g} in magnitude")
     if not isinstance(noise.sigma_edges, Mapping):
         raise InputError("noise.sigma_edges: expected a mapping (from, to) -> σ")
     for key, s in noise.sigma_edges.items():
         if not isinstance(key, tuple) or len(key) != 2:
             raise InputError(f"noise.sigma_edges: key {key!r} is not a (from, to) pair")
-        require_number(f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}", s, minimum=0.0)
+        require_number(
+            f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}",
+            s,
+            minimum=0.0,
+            bound=MAX_MAGNITUDE,
+        )
     return noise
 
 
@@ -346,7 +370,7 @@ class SimulationSpec:
     resample: float | None = None
 
     def __post_init__(self) -> None:
-        th = _check_vector("theta", self.theta)
+        th = _check_vector("theta", self.theta, bound=MAX_MAGNITUDE)
         if th.size == 0:
             raise InputError("theta: expected at least one number")
         if not np.any(th):
@@ -368,7 +392,7 @@ class SimulationSpec:
         check_noise(self.noise)
         ini = self.initial
         if ini is not None and not isinstance(ini, UniformInitial):
-            object.__setattr__(self, "initial", _check_vector("initial", ini))
+            object.__setattr__(self, "initial", _check_vector("initial", ini, bound=MAX_MAGNITUDE))
         for name, cls in (("save", SaveAt), ("stepping", Stepping), ("mc", MonteCarlo)):
             if not isinstance(getattr(self, name), cls):
                 raise InputError(f"{name}: expected a {cls.__name__}")
@@ -553,7 +577,7 @@ def _noise_from_document(doc: Any) -> NoiseModel:
     extra = sorted(str(k) for k in set(doc) - {"sigma", "f", "sigma_edges"})
     if extra:
         raise InputError(f"noise.{extra[0]}: unknown field (allowed: sigma, f, sigma_edges)")
-    sigma = require_number("noise.sigma", doc.get("sigma", 0.4), minimum=0.0)
+    sigma = require_number("noise.sigma", doc.get("sigma", 0.4), minimum=0.0, bound=MAX_MAGNITUDE)
     f = doc.get("f", 0.3)
     if isinstance(f, list):
         for r, row in enumerate(f):
@@ -564,10 +588,12 @@ def _noise_from_document(doc: Any) -> NoiseModel:
                     f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
                 )
             for c, v in enumerate(row):
-                require_number(f"noise.f[{r}][{c}]", v)
+                require_number(f"noise.f[{r}][{c}]", v, bound=MAX_MAGNITUDE)
         f = np.asarray(f, dtype=float) if f else f
     elif isinstance(f, bool) or not isinstance(f, (int, float)):
         raise InputError(f"noise.f: expected a number or a d×d matrix, got {f!r}"[:200])
+    else:
+        require_number("noise.f", f, bound=MAX_MAGNITUDE)
     edges = doc.get("sigma_edges") or []
     if not isinstance(edges, list):
         raise InputError("noise.sigma_edges: expected a list of {from, to, sigma}")
@@ -583,7 +609,9 @@ def _noise_from_document(doc: Any) -> NoiseModel:
             raise InputError(
                 f"noise.sigma_edges[{k}]: edge {quote(key[0])}->{quote(key[1])} listed twice"
             )
-        sig[key] = require_number(f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0)
+        sig[key] = require_number(
+            f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0, bound=MAX_MAGNITUDE
+        )
     return NoiseModel(sigma=sigma, f=f, sigma_edges=sig)
 
 
@@ -607,7 +635,7 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
                     flat.append(v)
             else:
                 flat.append(row)
-        return _check_vector("initial", flat)
+        return _check_vector("initial", flat, bound=MAX_MAGNITUDE)
     raise InputError("initial: expected {uniform: [lo, hi], seed: S} or a list of states")
 
 
