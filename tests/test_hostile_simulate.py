@@ -135,7 +135,16 @@ BAD_FIELDS = [
     # rng.uniform raised OverflowError (high - low range exceeds valid bounds)
     ("initial", {"uniform": [-1e308, 1e308], "seed": 1}, ["initial.uniform[0]", "at most 1e+100"]),
     ("initial", {"uniform": [0, 1e101], "seed": 1}, ["initial.uniform[1]", "at most 1e+100"]),
+    ("initial", [[1e300, 0, 0]] + [[0, 0, 0]] * 6, ["initial[0][0]", "at most 1e+100"]),
     ("initial", [0] * 20 + [1e300], ["initial[20]", "at most 1e+100"]),
+    # ragged or mixed states used to be flattened and run (21 numbers in all)
+    (
+        "initial",
+        [[1, 2, 3], [1, 2], [1, 2, 3, 4]] + [[1, 2, 3]] * 4,
+        ["initial[1]", "2 numbers", "initial[0] has 3"],
+    ),
+    ("initial", [[1] * 7, [2] * 7, [3] * 7], ["expected 7 states of 3", "3 states of 7"]),
+    ("initial", [1, 2, 3] + [[1, 2, 3]] * 6, ["initial[0]", "expected a state", "initial[3]"]),
     ("initial", [[1, 2, 3]] * 6, ["initial", "expected 7 states"]),
     ("initial", [[[1, 2, 3]]] * 7, ["initial[0]", "nested"]),
     ("initial", [NAN] * 21, ["initial[0]", "finite"]),
@@ -290,6 +299,25 @@ def test_noise_magnitude_is_bounded_in_the_api(noise, field):
         SimulationSpec.build([1, 2, -1], noise=noise)
     assert str(exc.value).startswith(field + ":"), exc.value
     assert "at most 1e+100 in magnitude" in str(exc.value)
+
+
+@pytest.mark.hostile
+def test_ragged_initial_array_in_the_api():
+    spec = SimulationSpec.build([1, 2, -1], initial=np.zeros((3, 7)))
+    with pytest.raises(InputError, match="expected 7 states of 3 numbers, got 3 states of 7"):
+        spec.initial_state(7, 3)
+
+
+def test_initial_rows_equal_the_flat_list(tmp_path, capsys, monkeypatch):
+    x = (np.arange(21.0).reshape(7, 3) - 10) / 4
+    got = {}
+    for name, ini in (("rows", x.tolist()), ("flat", x.reshape(-1).tolist())):
+        sc = scenario(tmp_path, name=f"{name}.json", initial=ini, method="exact")
+        code, _, err = run_cli(["simulate", sc, "--out", tmp_path / name], capsys, monkeypatch)
+        assert code == 0, err
+        got[name] = json.loads((tmp_path / name / "summary.json").read_text())
+    assert got["rows"]["parameters"]["initial"] == x.reshape(-1).tolist()
+    assert got["rows"]["final_ms_error_exact"] == got["flat"]["final_ms_error_exact"]
 
 
 @pytest.mark.hostile

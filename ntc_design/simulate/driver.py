@@ -27,7 +27,7 @@ from .grid import TimeGrid, build_grid
 from .moments import check_moments_size, exact_moments
 from .montecarlo import MonteCarloSpec, run
 from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
-from .spec import SimulationSpec, UniformInitial
+from .spec import SimulationSpec
 from .system import ModeSystem, check_step_size, mode_system
 
 AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology
@@ -159,19 +159,6 @@ def _modes(
         [(0.0, t_end, 0)],
         [],
     )
-
-
-def _initial_state(spec: SimulationSpec, n: int, d: int) -> tuple[np.ndarray, list[str]]:
-    ini = spec.initial
-    if ini is None:
-        return np.zeros(n * d), ["initial state: zero"]
-    if isinstance(ini, UniformInitial):
-        return ini.draw(n * d), []
-    if ini.size != n * d:
-        raise InputError(
-            f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
-        )
-    return np.array(ini, dtype=float), []
 
 
 def _edge_count(topology: AnyTopology) -> int:
@@ -363,7 +350,7 @@ def simulate(
             )
     th = next(iter(designs.values())).theta
     systems = [mode_system(designs[k], spec.noise, k) for k in names]
-    x_init, ini_notes = _initial_state(spec, n, d)
+    x_init, ini_notes = spec.initial_state(n, d)
     notes.extend(ini_notes)
     st = spec.stepping
     grid = build_grid(

@@ -16,7 +16,7 @@ of diffrax's ``SaveAt``):
 
 The flat keys of a scenario file (:data:`SCENARIO_KEYS`) are defined here and only here.
 Checks that need the topology (θ's length, the initial state's size, ``resample``) are
-made by the driver.
+made by the driver (the initial state's through :meth:`SimulationSpec.initial_state`).
 θ, x(0), σ and f are bounded by :data:`MAX_MAGNITUDE` (1e100). Every error is one line
 naming the field.
 """
@@ -78,6 +78,42 @@ def _check_vector(
         )
     arr.setflags(write=False)
     return arr
+
+
+def _check_states(values) -> np.ndarray:
+    """x(0) as given: N·d numbers (flat) or N states of d numbers (rows, or a 2-D
+    array); finite and at most :data:`MAX_MAGNITUDE` in magnitude. Rows keep their
+    shape so that the driver can check it against (N, d): a ragged list (states of
+    different lengths) is refused here rather than flattened into N·d numbers that
+    happen to add up."""
+    if isinstance(values, np.ndarray) and values.ndim == 2:
+        arr = _check_vector("initial", values, bound=MAX_MAGNITUDE).reshape(values.shape)
+        arr.setflags(write=False)
+        return arr
+    if isinstance(values, (list, tuple)) and any(isinstance(v, (list, tuple)) for v in values):
+        first = next(k for k, v in enumerate(values) if isinstance(v, (list, tuple)))
+        width = len(values[first])
+        for k, row in enumerate(values):
+            if not isinstance(row, (list, tuple)):
+                raise InputError(
+                    f"initial[{k}]: expected a state (a list of d numbers) like "
+                    f"initial[{first}], got {repr(row)[:40]}"
+                )
+            if len(row) != width:
+                raise InputError(
+                    f"initial[{k}]: {len(row)} numbers, but initial[{first}] has {width}; "
+                    "every state has d numbers"
+                )
+            for j, v in enumerate(row):
+                if isinstance(v, (list, tuple)):
+                    raise InputError(f"initial[{k}]: expected d numbers, got a nested list")
+                require_number(f"initial[{k}][{j}]", v, bound=MAX_MAGNITUDE)
+        if len(values) * width > MAX_VECTOR:
+            raise InputError(f"initial: more than the limit {MAX_VECTOR} numbers")
+        arr = np.array(values, dtype=float).reshape(len(values), width)
+        arr.setflags(write=False)
+        return arr
+    return _check_vector("initial", values, bound=MAX_MAGNITUDE)
 
 
 @dataclass(frozen=True, eq=False)
@@ -392,7 +428,7 @@ class SimulationSpec:
         check_noise(self.noise)
         ini = self.initial
         if ini is not None and not isinstance(ini, UniformInitial):
-            object.__setattr__(self, "initial", _check_vector("initial", ini, bound=MAX_MAGNITUDE))
+            object.__setattr__(self, "initial", _check_states(ini))
         for name, cls in (("save", SaveAt), ("stepping", Stepping), ("mc", MonteCarlo)):
             if not isinstance(getattr(self, name), cls):
                 raise InputError(f"{name}: expected a {cls.__name__}")
@@ -464,7 +500,7 @@ class SimulationSpec:
         """A spec from a scenario document (a parsed YAML/JSON mapping; the ``topology``,
         ``name`` and ``description`` keys are ignored here). ``noise`` is
         ``{sigma, f, sigma_edges: [{from, to, sigma}]}``; ``initial`` a list of N·d
-        numbers (or N lists of d) or ``{uniform: [lo, hi], seed: S}``.
+        numbers (or N lists of d, all of one length) or ``{uniform: [lo, hi], seed: S}``.
 
         Parameters
         ----------
@@ -533,6 +569,42 @@ class SimulationSpec:
             A changed value is bad.
         """
         return replace(self, **changes)
+
+    def initial_state(self, n: int, d: int) -> tuple[np.ndarray, list[str]]:
+        """x(0) for a network of ``n`` agents in dimension ``d`` (one check for every
+        topology kind).
+
+        Parameters
+        ----------
+        n, d : int
+            Agents and state dimension.
+
+        Returns
+        -------
+        (numpy.ndarray, list of str)
+            x(0) (N·d numbers) and notes (``initial state: zero`` when none is given).
+
+        Raises
+        ------
+        InputError
+            The given states do not have the network's shape: N·d numbers, or N states
+            of d numbers each.
+        """
+        ini = self.initial
+        if ini is None:
+            return np.zeros(n * d), ["initial state: zero"]
+        if isinstance(ini, UniformInitial):
+            return ini.draw(n * d), []
+        if ini.ndim == 2 and ini.shape != (n, d):
+            raise InputError(
+                f"initial: expected {n} states of {d} numbers, got {ini.shape[0]} states of "
+                f"{ini.shape[1]}"
+            )
+        if ini.size != n * d:
+            raise InputError(
+                f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
+            )
+        return np.array(ini, dtype=float).reshape(-1), []
 
     def options(self) -> dict[str, Any]:
         """The flat options (as :meth:`build` takes them), for summaries and re-runs.
@@ -626,16 +698,7 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
             raise InputError("initial.uniform: expected [lo, hi]")
         return UniformInitial(uni[0], uni[1], doc["seed"])
     if isinstance(doc, list):
-        flat: list = []
-        for k, row in enumerate(doc):
-            if isinstance(row, list):
-                for v in row:
-                    if isinstance(v, list):
-                        raise InputError(f"initial[{k}]: expected d numbers, got a nested list")
-                    flat.append(v)
-            else:
-                flat.append(row)
-        return _check_vector("initial", flat, bound=MAX_MAGNITUDE)
+        return _check_states(doc)
     raise InputError("initial: expected {uniform: [lo, hi], seed: S} or a list of states")
 
 

@@ -510,20 +510,8 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
     from ..errors import quote
     from .grid import build_grid
     from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
-    from .spec import UniformInitial
 
-    n, d = tv.n, tv.dim
-    ini = spec.initial
-    if ini is None:
-        x_init, ini_notes = np.zeros(n * d), ["initial state: zero"]
-    elif isinstance(ini, UniformInitial):
-        x_init, ini_notes = ini.draw(n * d), []
-    else:
-        if ini.size != n * d:
-            raise InputError(
-                f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
-            )
-        x_init, ini_notes = np.array(ini, dtype=float), []
+    x_init, ini_notes = spec.initial_state(tv.n, tv.dim)
     st = spec.stepping
     grid = build_grid(
         spec.T,
