@@ -21,6 +21,7 @@ from .cli_helpers import assert_input_error, run_cli
 from .conftest import ROOT
 
 G1 = str(ROOT / "examples" / "g1.yaml")
+G1_TV = str(ROOT / "examples" / "g1_tv.yaml")
 NAN, INF = float("nan"), float("inf")
 BASE = {
     "topology": G1,
@@ -240,6 +241,31 @@ def test_bad_scenario_field(tmp_path, capsys, monkeypatch, field, value, needles
 )
 def test_bad_scenario_combinations(tmp_path, capsys, monkeypatch, over, needles):
     fails(tmp_path, capsys, monkeypatch, scenario(tmp_path, **over), *needles)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "topology, over",
+    [
+        # 5·10⁶ save times: refused only after ~50 s of building the time grid
+        (G1, {"T": 1e7, "dt": 1.0, "save_every": 2.0}),
+        (G1, {"T": 1e7, "gain": "1", "dt": 10.0, "save_every": 1e5}),
+        (G1, {"T": 1e7, "gain": "1", "dt": 10.0, "save_every": 1e5, "method": "both"}),
+        # A(t): the RK4 steps were not bounded at all (ran until memory ran out)
+        (G1_TV, {"T": 1e7, "gain": "1", "dt": 10.0, "save_every": 1e5}),
+    ],
+    ids=["saves", "constant-gain", "before-the-mc", "time-varying"],
+)
+def test_long_exact_run_is_refused_before_the_grid(tmp_path, capsys, monkeypatch, topology, over):
+    def no_grid(*args, **kw):
+        raise AssertionError("the time grid was built before the exact-moment estimate")
+
+    monkeypatch.setattr("ntc_design.simulate.driver.build_grid", no_grid)
+    monkeypatch.setattr("ntc_design.simulate.grid.build_grid", no_grid)
+    sc = scenario(tmp_path, topology=topology, **{"method": "exact", **over})
+    t0 = time.monotonic()
+    fails(tmp_path, capsys, monkeypatch, sc, "method", "RK4 steps", "more than 300 s")
+    assert time.monotonic() - t0 < 30
 
 
 SWITCHING = [

@@ -92,6 +92,29 @@ def test_spec_is_frozen_and_rechecked_on_replace():
     assert not s.theta.flags.writeable
 
 
+@pytest.mark.parametrize(
+    "topology, gain, t_end, every",
+    [
+        ("g1.yaml", "1/(1+t)", 100.0, 1.0),
+        ("g1.yaml", "2/(1+t)^0.5", 10.0, 1.0),
+        ("g1.yaml", "1", 20.0, 0.5),
+        ("switching.yaml", "1/(1+t)", 10.0, 0.1),  # the largest ρ of the modes, and switches
+    ],
+)
+def test_exact_step_estimate_matches_the_run(monkeypatch, topology, gain, t_end, every):
+    """The estimate that refuses long exact runs counts the RK4 steps the run takes (within
+    a factor of 2, never below by more than 10 %)."""
+    import ntc_design.simulate.driver as drv
+
+    seen = []
+    orig = drv.estimate_exact_steps
+    monkeypatch.setattr(drv, "estimate_exact_steps", lambda *a: seen.append(orig(*a)) or seen[-1])
+    top = nd.load(ROOT / "examples" / topology)
+    res = simulate(top, THETA, T=t_end, gain=gain, method="exact", save_every=every)
+    steps = res.stats["exact_rk4_steps"]
+    assert len(seen) == 1 and 0.9 * steps <= seen[0] <= 2 * steps, (seen, steps)
+
+
 @pytest.mark.hostile
 @pytest.mark.parametrize(
     "make, needle",
