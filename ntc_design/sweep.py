@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .files import jsonable, parse_switching, parse_topology, read_document
+from .files import jsonable, parse_switching, parse_topology, read_document, text_field
 from .simulate.spec import SCENARIO_KEYS
 
 FORMAT = 1
@@ -190,7 +190,7 @@ def _err(src: Path, fieldname: str, msg: str) -> InputError:
 def _check_key(src: Path, where: str, key: Any, base_doc: dict) -> str:
     if not isinstance(key, str) or not key:
         raise _err(src, where, f"expected a scenario field name, got {key!r}")
-    head, _, rest = key.partition(".")
+    head, dot, rest = key.partition(".")
     if head not in TOP_KEYS:
         raise _err(
             src,
@@ -199,7 +199,7 @@ def _check_key(src: Path, where: str, key: Any, base_doc: dict) -> str:
             + ", ".join(sorted(TOP_KEYS))
             + ", noise.sigma|f|sigma_edges, initial.uniform|seed)",
         )
-    if rest:
+    if dot:  # "noise." (nothing after the dot) is no field either, not all of noise
         if head not in NESTED_KEYS or rest not in NESTED_KEYS[head]:
             allowed = ", ".join(f"{h}.{k}" for h in NESTED_KEYS for k in sorted(NESTED_KEYS[h]))
             raise _err(
@@ -263,6 +263,8 @@ def load_sweep(path: str | Path) -> Sweep:
         raise _err(
             src, unknown[0], "unknown field (allowed: " + ", ".join(sorted(SWEEP_KEYS)) + ")"
         )
+    for key in ("name", "description"):
+        text_field(doc, key, str(src))
     if not isinstance(doc.get("base"), str) or not doc["base"]:
         raise _err(src, "base", "expected the path of a scenario file")
     base = src.parent / doc["base"]

@@ -207,6 +207,7 @@ BAD_FIELDS = [
     ("resample", -1, ["resample"]),
     ("resample", NAN, ["resample"]),
     ("colour", "red", ["'colour'", "unknown field"]),
+    ("description", {"a": 1}, ["description", "expected text"]),
     ("__class__", 1, ["'__class__'", "unknown field"]),
     ("topology", DROP, ["topology", "missing"]),
     ("topology", 5, ["topology", "file path"]),
@@ -291,6 +292,14 @@ def test_bad_schedules(tmp_path, capsys, monkeypatch, durations, needles):
     top.write_text(json.dumps(sw))
     sc = scenario(tmp_path, topology=str(top), T=10.0, method="exact", save_every=5.0)
     fails(tmp_path, capsys, monkeypatch, sc, *needles)
+
+
+@pytest.mark.hostile
+def test_scenario_name_must_be_text(tmp_path, capsys, monkeypatch):
+    p = tmp_path / "sc.json"
+    p.write_text(json.dumps({**BASE, "name": [1]}))  # was accepted as the text "[1]"
+    line = fails(tmp_path, capsys, monkeypatch, p, "name", "expected text, got list [1]")
+    assert str(p) in line
 
 
 @pytest.mark.hostile
@@ -553,6 +562,10 @@ ARGS = [
     (["simulate", "x.yaml", "--out", "o", "--workers", "many"], ["'--workers'"]),
     (["simulate", "SC", "--out", "o", "--workers", "0"], ["--workers: must be a positive"]),
     (["simulate", "SC", "--out", "o", "--workers", "-3"], ["--workers: must be a positive"]),
+    (["simulate", "SC", "--out", "o", "--workers", "5000"], ["--workers: must be at most 4096"]),
+    # an empty address ran locally as if no --scheduler had been given
+    (["simulate", "SC", "--out", "o", "--scheduler", ""], ["--scheduler", "expected an address"]),
+    (["reproduce", "paper", "--out", "o", "--workers", "0"], ["--workers: must be a positive"]),
     (["simulate", "x.yaml"], ["Missing option '--out'"]),
     (["simulate"], ["Missing argument"]),
     (["report"], ["Missing argument"]),

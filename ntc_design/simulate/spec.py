@@ -46,6 +46,29 @@ MAX_MAGNITUDE = 1e100
 Noise = NoiseModel
 
 
+def check_workers(value, name: str = "workers") -> int:
+    """A number of worker processes: a positive integer at most :data:`MAX_WORKERS` (one
+    check for a scenario's ``workers``, ``--workers`` of every command and the engines).
+
+    Parameters
+    ----------
+    value : object
+        The value given.
+    name : str
+        The field or option named in the message.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InputError
+        Not an integer in [1, MAX_WORKERS].
+    """
+    return require_int(name, value, minimum=1, maximum=MAX_WORKERS)
+
+
 def _check_vector(
     name: str, values, max_size: int = MAX_VECTOR, bound: float | None = None
 ) -> np.ndarray:
@@ -241,7 +264,7 @@ class MonteCarlo:
         require_int("seed", self.seed, minimum=0, maximum=MAX_SEED)
         require_int("block_size", self.block_size, minimum=1)
         require_int("store_paths", self.store_paths, minimum=0)
-        require_int("workers", self.workers, minimum=1, maximum=MAX_WORKERS)
+        check_workers(self.workers)
         for f in fields(self):
             object.__setattr__(self, f.name, int(getattr(self, f.name)))
 
@@ -713,4 +736,5 @@ __all__ = [
     "Stepping",
     "UniformInitial",
     "check_noise",
+    "check_workers",
 ]
