@@ -534,6 +534,87 @@ def test_report_on_a_corrupt_run(tmp_path, capsys, monkeypatch, good_run, name, 
     assert sorted(os.listdir(d)) == before  # no report.html, no figures
 
 
+def _set_param(key, value):
+    def change(summary, npz):
+        summary["parameters"][key] = value
+
+    return change
+
+
+def _set_npz(key, fn):
+    def change(summary, npz):
+        npz[key] = fn(npz[key])
+
+    return change
+
+
+# a run whose files parse but do not fit together: (what, change, file, words)
+MISMATCHED = [
+    ("schedule-text", _set_param("schedule", "x"), "summary.json", ["parameters.schedule"]),
+    ("schedule-entry", _set_param("schedule", ["x"]), "summary.json", ["parameters.schedule"]),
+    (
+        "schedule-mode",
+        _set_param("schedule", [{"mode": "nope", "duration": 1.0}]),
+        "summary.json",
+        ["schedule[0]", "unknown mode 'nope'"],
+    ),
+    ("theta-text", _set_param("theta", "x"), "summary.json", ["parameters.theta", "list"]),
+    ("theta-short", _set_param("theta", [1.0]), "summary.json", ["parameters.theta", "d = 3"]),
+    ("margin", _set_param("margin", [1]), "summary.json", ["parameters.margin", "positive"]),
+    ("gain-list", _set_param("gain", ["t"]), "summary.json", ["parameters.gain", "expression"]),
+    ("gain-text", _set_param("gain", "x"), "summary.json", ["parameters.gain", "variable t"]),
+    ("noise", _set_param("noise", "x"), "summary.json", ["parameters.noise", "mapping"]),
+    (
+        "sample-paths",
+        lambda s, z: s.__setitem__("sample_paths", "x"),
+        "summary.json",
+        ["sample_paths", "mapping"],
+    ),
+    (
+        "spread",
+        lambda s, z: s["sample_paths"].__setitem__("final_error_norm_mean", "x"),
+        "summary.json",
+        ["sample_paths", "numbers"],
+    ),
+    ("run-info", lambda s, z: s.__setitem__("run", 5), "summary.json", ["run", "mapping"]),
+    ("scenario", lambda s, z: s.__setitem__("scenario", 5), "summary.json", ["scenario"]),
+    # "cannot reshape array of size 36 into shape (6,1,2)": labels of another run
+    ("labels-fewer", _set_npz("labels", lambda a: a[:6]), "paths.npz", ["labels", "6 agents"]),
+    (
+        "labels-renamed",
+        _set_npz("labels", lambda a: np.array([f"x{k}" for k in range(a.size)])),
+        "paths.npz",
+        ["labels", "different runs"],
+    ),
+    ("paths-shape", _set_npz("paths", lambda a: a[:, :, :-1]), "paths.npz", ["paths", "N·d = 21"]),
+    ("paths-times", _set_npz("paths", lambda a: a[:, :1, :]), "paths.npz", ["paths", "save times"]),
+    ("theta-npz", _set_npz("theta", lambda a: a[:2]), "paths.npz", ["theta", "(3,)"]),
+]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "change, file, needles", [m[1:] for m in MISMATCHED], ids=[m[0] for m in MISMATCHED]
+)
+def test_report_on_a_mismatched_run(tmp_path, capsys, monkeypatch, good_run, change, file, needles):
+    """Each used to end in a TypeError or ValueError (an internal error), some after the
+    certificate and the figures were written."""
+    d = tmp_path / "o"
+    d.mkdir()
+    for k, v in good_run.items():
+        (d / k).write_bytes(v)
+    summary = json.loads((d / "summary.json").read_text())
+    with np.load(d / "paths.npz") as z:
+        npz = {k: z[k] for k in z.files}
+    change(summary, npz)
+    (d / "summary.json").write_text(json.dumps(summary))
+    np.savez_compressed(d / "paths.npz", **npz)
+    before = sorted(os.listdir(d))
+    line = assert_input_error(["report", d], capsys, monkeypatch, f"{d / file}", *needles)
+    assert "re-run" in line or "schedule[0]" in line
+    assert sorted(os.listdir(d)) == before  # no certificate.json, figures/, report.html
+
+
 @pytest.mark.hostile
 def test_report_refuses_a_decompression_bomb(tmp_path, capsys, monkeypatch, good_run):
     d = tmp_path / "o"
