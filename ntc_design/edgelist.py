@@ -29,6 +29,7 @@ import numpy as np
 
 from .errors import InputError
 from .files import MAX_AGENTS, MAX_DIM  # the same caps as topology files
+from .outputs import atomic_path
 
 FORMAT = "ntc-design/edge-list"
 VERSION = 1
@@ -197,6 +198,5 @@ def write_npz(
     }
     if name is not None:
         arrays["name"] = np.array(str(name))
-    tmp = p.with_name(p.name + ".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(p)
+    with atomic_path(p) as tmp:
+        np.savez_compressed(tmp, **arrays)

@@ -27,7 +27,6 @@ import hashlib
 import itertools
 import json
 import math
-import os
 import socket
 import time
 from collections.abc import Callable
@@ -39,6 +38,7 @@ import numpy as np
 
 from .errors import InputError
 from .files import jsonable, parse_switching, parse_topology, read_document, text_field
+from .outputs import atomic_path, write_atomic
 from .simulate.spec import SCENARIO_KEYS
 
 FORMAT = 1
@@ -557,12 +557,6 @@ def _worker_name(remote: bool) -> str:
 # -- point files -----------------------------------------------------------------------
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
-
-
 def save_point(out_dir: Path, res: PointResult) -> Path:
     """Store one point: ``points/<hash>.npz`` (curves), then ``points/<hash>.json`` (row).
 
@@ -588,12 +582,11 @@ def save_point(out_dir: Path, res: PointResult) -> Path:
         v = getattr(res, k)
         if v is not None:
             arrays[k] = v
-    tmp = pdir / f".{res.point}.{os.getpid()}.tmp.npz"
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, pdir / f"{res.point}.npz")
+    with atomic_path(pdir / f"{res.point}.npz") as tmp:
+        np.savez_compressed(tmp, **arrays)
     doc = {"format": FORMAT, "point": res.point, "params": res.params, "row": res.row}
     path = pdir / f"{res.point}.json"
-    _atomic_write(path, (json.dumps(jsonable(doc), indent=1) + "\n").encode())
+    write_atomic(path, json.dumps(jsonable(doc), indent=1) + "\n")
     return path
 
 
@@ -724,9 +717,8 @@ def write_tables(sweep: Sweep, out_dir: Path, results: dict[str, PointResult]) -
         ("results.parquet", lambda p: table.to_parquet(p, index=False)),
         ("curves.parquet", lambda p: long.to_parquet(p, index=False)),
     ):
-        tmp = out_dir / f".{name}.{os.getpid()}.tmp"
-        write(tmp)
-        os.replace(tmp, out_dir / name)
+        with atomic_path(out_dir / name) as tmp:
+            write(tmp)
         written.append(out_dir / name)
     return written
 
@@ -742,7 +734,7 @@ def _write_manifest(sweep: Sweep, out_dir: Path) -> Path:
         "points": [{"point": t.point, "params": t.params} for t in sweep.tasks()],
     }
     path = out_dir / "sweep.json"
-    _atomic_write(path, (json.dumps(jsonable(doc), indent=1) + "\n").encode())
+    write_atomic(path, json.dumps(jsonable(doc), indent=1) + "\n")
     return path
 
 

@@ -616,6 +616,22 @@ def test_report_on_a_mismatched_run(tmp_path, capsys, monkeypatch, good_run, cha
 
 
 @pytest.mark.hostile
+def test_report_html_that_is_a_folder(tmp_path, capsys, monkeypatch, good_run):
+    """One line already, but report.html.tmp was left behind (and the certificate and
+    figures written before the refusal)."""
+    d = tmp_path / "o"
+    d.mkdir()
+    for k, v in good_run.items():
+        (d / k).write_bytes(v)
+    (d / "report.html").mkdir()
+    before = sorted(os.listdir(d))
+    assert_input_error(
+        ["report", d], capsys, monkeypatch, "report:", f"{d / 'report.html'}", "is a folder"
+    )
+    assert sorted(os.listdir(d)) == before and os.listdir(d / "report.html") == []
+
+
+@pytest.mark.hostile
 def test_report_refuses_a_decompression_bomb(tmp_path, capsys, monkeypatch, good_run):
     d = tmp_path / "o"
     d.mkdir()

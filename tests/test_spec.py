@@ -4,6 +4,7 @@ parser; size before allocation; all-or-nothing outputs; the executor's ordering.
 import dataclasses
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from hypothesis import strategies as st
 
 import ntc_design as nd
 from ntc_design.errors import InputError, one_line, quote
-from ntc_design.outputs import output_folder, write_atomic
+from ntc_design.outputs import atomic_path, output_folder, write_atomic
 from ntc_design.simulate import (
     MonteCarlo,
     NoiseModel,
@@ -301,6 +302,30 @@ def test_write_atomic_replaces_whole_file(tmp_path):
     assert p.read_text() == "new" and os.listdir(tmp_path) == ["f.txt"]
     with pytest.raises(InputError, match=r"^--out: .* is a folder"):
         write_atomic(tmp_path, "x")
+
+
+@pytest.mark.hostile
+def test_atomic_writer_removes_its_temporary_file(tmp_path, monkeypatch):
+    """The rename fails (a folder took the target's name after the check), the writer
+    raises, Ctrl-C: each leaves only what was there, never a temporary file."""
+    import ntc_design.outputs as outputs
+
+    target = tmp_path / "report.html"
+    target.mkdir()
+    monkeypatch.setattr(outputs, "check_output_file", lambda p, option="--out": Path(p))
+    with pytest.raises(InputError, match=r"^report: cannot write .*report.html"):
+        write_atomic(target, "x", option="report")
+    assert os.listdir(tmp_path) == ["report.html"] and os.listdir(target) == []
+    monkeypatch.undo()
+    for exc in (RuntimeError, KeyboardInterrupt):
+        with pytest.raises(exc), atomic_path(tmp_path / "a.npz") as tmp:
+            np.savez_compressed(tmp, x=np.ones(3))
+            raise exc
+    assert os.listdir(tmp_path) == ["report.html"]
+    with atomic_path(tmp_path / "a.npz") as tmp:  # NumPy adds no second .npz to the name
+        np.savez_compressed(tmp, x=np.ones(3))
+    assert sorted(os.listdir(tmp_path)) == ["a.npz", "report.html"]
+    assert np.load(tmp_path / "a.npz")["x"].tolist() == [1.0, 1.0, 1.0]
 
 
 def test_output_folder_is_all_or_nothing(tmp_path):

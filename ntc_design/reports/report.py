@@ -25,6 +25,7 @@ from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError, require_number, require_positive
 from ..files import parse_topology
 from ..model import SwitchingTopology, Topology
+from ..outputs import check_output_file, write_atomic
 from . import figures
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
@@ -388,10 +389,9 @@ def render(template: str, **context) -> str:
 
 
 def write_html(path: Path, text: str) -> None:
-    """Write atomically (a temporary file, then a rename)."""
-    tmp = path.with_suffix(".html.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(path)
+    """Write atomically (:func:`ntc_design.outputs.write_atomic`: no temporary file is left
+    when the write fails)."""
+    write_atomic(path, text, option="report")
 
 
 def fmt(x, digits: int = 4) -> str:
@@ -930,7 +930,7 @@ def run_section(
     data = [
         (f.name, rel(f, base))
         for f in sorted(run.path.iterdir())
-        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.endswith(".tmp")
+        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.startswith(".")
     ]
     data += [
         (f.name, rel(f, base))
@@ -1002,6 +1002,7 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
         A missing or unreadable output file (named).
     """
     run = load_run(directory)
+    check_output_file(run.path / "report.html", "report")  # before the certificate and figures
     scen = run.summary.get("scenario") or str(run.path)
     title = f"Run {Path(scen).stem}"
     section, _ = run_section(
