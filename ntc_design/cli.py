@@ -582,16 +582,15 @@ def simulate(
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
     from .simulate.scenario import check_output, load_scenario, write_outputs
-    from .simulate.spec import MonteCarlo
+    from .simulate.spec import MonteCarlo, check_workers
 
     top, spec, sc = load_scenario(scenario)
     if workers is not None:
-        try:
-            spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
-        except InputError as exc:
-            raise InputError(f"--{exc}") from None
+        check_workers(workers, "--workers")
+        spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
     check_output(out_dir)  # before the run, not after it
-    engine = DaskEngine.connect(scheduler) if scheduler else None
+    # "" is a malformed address (refused by connect), not "no scheduler"
+    engine = DaskEngine.connect(scheduler) if scheduler is not None else None
     with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
         if engine is not None:
             stack.callback(engine.close)
@@ -781,7 +780,9 @@ def reproduce(
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
     from .outputs import check_output_folder
+    from .simulate.spec import check_workers
 
+    check_workers(workers, "--workers")
     check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
     with Progress("ntc reproduce") as prog:
         path, ok, wall = reproduce_paper(

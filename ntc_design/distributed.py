@@ -24,6 +24,7 @@ from typing import Any
 
 from .errors import InputError
 from .simulate.montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
+from .simulate.spec import check_workers
 
 RETRIES = 3  # re-runs of a task that raised (a lost worker is re-scheduled regardless)
 CONNECT_TIMEOUT = 30.0  # seconds to reach a scheduler (generous: a loaded scheduler is slow)
@@ -62,10 +63,11 @@ class TaskProgress:
 
 class LocalEngine:
     """Everything on this machine: items one after the other in this process, Monte Carlo
-    blocks on ``workers`` local processes."""
+    blocks on ``workers`` local processes (checked here: 0 used to become 2 silently, and
+    a sweep ran every point into the same error)."""
 
     def __init__(self, workers: int | None = None):
-        self.workers = workers
+        self.workers = None if workers is None else check_workers(workers, "--workers")
 
     def describe(self) -> dict:
         """What runs the work, for summaries.
@@ -380,6 +382,11 @@ def engine_for(scheduler: str | None, workers: int | None = None, **kw):
     Raises
     ------
     InputError
-        The scheduler cannot be reached.
+        A bad number of workers, or a scheduler address that is malformed (an empty one
+        too: it is not "no scheduler") or cannot be reached.
     """
-    return DaskEngine.connect(scheduler, **kw) if scheduler else LocalEngine(workers)
+    if scheduler is None:
+        return LocalEngine(workers)
+    if workers is not None:  # not used on a cluster, but not silently wrong either
+        check_workers(workers, "--workers")
+    return DaskEngine.connect(scheduler, **kw)

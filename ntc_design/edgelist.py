@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .outputs import atomic_path
 
 FORMAT = "ntc-design/edge-list"
 VERSION = 1
@@ -203,6 +204,5 @@ def write_npz(
     }
     if name is not None:
         arrays["name"] = np.array(str(name))
-    tmp = p.with_name(p.name + ".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(p)
+    with atomic_path(p) as tmp:
+        np.savez_compressed(tmp, **arrays)

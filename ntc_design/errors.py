@@ -156,8 +156,11 @@ def require_int(name: str, value, minimum: int = 0, maximum: int | None = None) 
     return v
 
 
-def require_number(name: str, value, minimum: float | None = None) -> float:
-    """``value`` as a finite float (not a bool), at least ``minimum`` if given.
+def require_number(
+    name: str, value, minimum: float | None = None, bound: float | None = None
+) -> float:
+    """``value`` as a finite float (not a bool), at least ``minimum`` and at most
+    ``bound`` in magnitude if given.
 
     Parameters
     ----------
@@ -167,6 +170,8 @@ def require_number(name: str, value, minimum: float | None = None) -> float:
         The value to check.
     minimum : float, optional
         Inclusive lower bound.
+    bound : float, optional
+        Largest magnitude allowed (|value| <= bound).
 
     Returns
     -------
@@ -175,7 +180,7 @@ def require_number(name: str, value, minimum: float | None = None) -> float:
     Raises
     ------
     InputError
-        When the value is not a finite number at least ``minimum``.
+        When the value is not a finite number at least ``minimum`` (and within ``bound``).
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputError(f"{name}: expected a number, got {_show(value)}")
@@ -184,6 +189,8 @@ def require_number(name: str, value, minimum: float | None = None) -> float:
         raise InputError(f"{name}: must be finite, got {_show(value)}")
     if minimum is not None and v < minimum:
         raise InputError(f"{name}: must be >= {minimum:g}, got {_show(value)}")
+    if bound is not None and abs(v) > bound:
+        raise InputError(f"{name}: must be at most {bound:g} in magnitude, got {_show(value)}")
     return v
 
 

@@ -332,6 +332,34 @@ def _q(key: Any) -> str:
     return s if s.isprintable() and len(s) <= 40 and s.strip() == s else _show(s)
 
 
+def text_field(doc: dict[str, Any], key: str, source: str | None = None) -> str | None:
+    """An optional free-text field (``name``, ``description``) of a scenario or sweep file.
+
+    Parameters
+    ----------
+    doc : dict
+        The document.
+    key : str
+        The field.
+    source : str, optional
+        The file, for messages.
+
+    Returns
+    -------
+    str or None
+        The text, None when absent or null.
+
+    Raises
+    ------
+    InputError
+        Anything else (a list, a number): refused, not used as its repr.
+    """
+    v = doc.get(key)
+    if v is None or isinstance(v, str):
+        return v
+    raise _err(source, key, f"expected text, got {_kind(v)} {_show(v)}")
+
+
 def _number(x: Any, source: str | None, field: str) -> float:
     if isinstance(x, bool) or not isinstance(x, (int, float)):
         raise _err(source, field, f"expected a number, got {_show(x)}")
@@ -650,10 +678,13 @@ def parse_scenario(path: str | Path) -> ScenarioData:
     Raises
     ------
     InputError
-        The file cannot be read, or its ``topology`` is missing or names no file.
+        The file cannot be read, its ``name`` or ``description`` is not text, or its
+        ``topology`` is missing or names no file.
     """
     doc = read_document(path)
     src = str(path)
+    for key in ("name", "description"):
+        text_field(doc, key, src)
     if "topology" not in doc:
         raise _err(src, "topology", "missing")
     topo = doc["topology"]
@@ -676,4 +707,5 @@ __all__ = [
     "parse_topology",
     "parse_weight",
     "read_document",
+    "text_field",
 ]

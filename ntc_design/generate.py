@@ -39,6 +39,7 @@ from scipy.sparse import csgraph
 
 from .errors import InputError, require_positive
 from .model import Topology
+from .outputs import write_atomic
 
 FAMILIES = ("random", "ring", "grid", "small-world", "scale-free")
 
@@ -317,7 +318,4 @@ def write_topology(top: Topology, path: str | Path) -> Path:
         if suf == ".json"
         else yaml.safe_dump(doc, sort_keys=False, default_flow_style=None)
     )
-    tmp = p.with_name(p.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(p)
-    return p
+    return write_atomic(p, text)

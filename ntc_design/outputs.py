@@ -1,7 +1,10 @@
 """Writing outputs so that a reader never sees half of them.
 
 - :func:`write_atomic` writes one file: a temporary file beside the target, flushed and
-  synced, then renamed over it (a rename is atomic on POSIX).
+  synced, then renamed over it (a rename is atomic on POSIX). :func:`atomic_path` is the
+  same for writers that want a file name (NumPy, pandas, Parquet). Both remove their
+  temporary file whatever fails (a folder in the target's place, a full disk, Ctrl-C), so
+  no ``.tmp`` is ever left behind; every file the package writes whole goes through them.
 - :func:`output_folder` makes a folder all-or-nothing: everything is written into a
   temporary folder beside the target, which replaces the target only when the block
   finishes without an exception (Ctrl-C included). An interrupted run leaves the old
@@ -31,8 +34,82 @@ def _oserror(option: str, path: Path, exc: OSError) -> InputError:
     return InputError(f"{option}: cannot write {one_line(str(path))!r} ({why})")
 
 
+def check_output_file(path: str | Path, option: str = "--out") -> Path:
+    """Refuse, before any work, a file target that is a folder.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to be written.
+    option : str
+        Named in the message.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        ``path`` is a folder.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{option}: {one_line(str(p))!r} is a folder, expected a file name")
+    return p
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path, option: str = "--out") -> Iterator[Path]:
+    """A temporary file beside ``path`` to write (its name ends like ``path``'s, so NumPy
+    adds no second ``.npz``); when the block finishes it is synced and renamed over
+    ``path``, and on any failure, the rename's included, it is removed.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    option : str
+        Named in an error message.
+
+    Yields
+    ------
+    Path
+        The temporary file (empty) to write to.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a folder, or its folder is missing or cannot be written.
+    """
+    p = check_output_file(path, option)
+    try:
+        fd, name = tempfile.mkstemp(prefix=f".{p.name}.", suffix=f".tmp{p.suffix}", dir=p.parent)
+    except OSError as exc:
+        raise _oserror(option, p, exc) from None
+    tmp = Path(name)
+    try:
+        try:
+            os.fchmod(fd, 0o666 & ~_umask())  # mkstemp makes 0600: a shared file, not a secret
+        finally:
+            os.close(fd)
+        yield tmp
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, p)
+    except OSError as exc:
+        raise _oserror(option, p, exc) from None
+    finally:  # after a successful rename there is nothing left to remove
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+
+
 def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> Path:
-    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file and a rename.
+    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file and a rename
+    (:func:`atomic_path`).
 
     Parameters
     ----------
@@ -52,30 +129,10 @@ def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> 
     InputError
         When the folder is missing or not writable, or the path is a folder.
     """
-    p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{option}: {one_line(str(p))!r} is a folder, expected a file name")
     raw = data.encode("utf-8") if isinstance(data, str) else data
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    except OSError as exc:
-        raise _oserror(option, p, exc) from None
-    try:
-        os.fchmod(fd, 0o666 & ~_umask())  # mkstemp makes 0600: a shared file, not a secret
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(raw)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, p)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise _oserror(option, p, exc) from None
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    return p
+    with atomic_path(path, option) as tmp:
+        tmp.write_bytes(raw)
+    return Path(path)
 
 
 def check_output_folder(
@@ -197,4 +254,10 @@ def _umask() -> int:
     return mask
 
 
-__all__ = ["check_output_folder", "output_folder", "write_atomic"]
+__all__ = [
+    "atomic_path",
+    "check_output_file",
+    "check_output_folder",
+    "output_folder",
+    "write_atomic",
+]

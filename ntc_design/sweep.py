@@ -27,7 +27,6 @@ import hashlib
 import itertools
 import json
 import math
-import os
 import socket
 import time
 from collections.abc import Callable
@@ -38,7 +37,8 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .files import jsonable, parse_switching, parse_topology, read_document
+from .files import jsonable, parse_switching, parse_topology, read_document, text_field
+from .outputs import atomic_path, write_atomic
 from .simulate.spec import SCENARIO_KEYS
 
 FORMAT = 1
@@ -190,7 +190,7 @@ def _err(src: Path, fieldname: str, msg: str) -> InputError:
 def _check_key(src: Path, where: str, key: Any, base_doc: dict) -> str:
     if not isinstance(key, str) or not key:
         raise _err(src, where, f"expected a scenario field name, got {key!r}")
-    head, _, rest = key.partition(".")
+    head, dot, rest = key.partition(".")
     if head not in TOP_KEYS:
         raise _err(
             src,
@@ -199,7 +199,7 @@ def _check_key(src: Path, where: str, key: Any, base_doc: dict) -> str:
             + ", ".join(sorted(TOP_KEYS))
             + ", noise.sigma|f|sigma_edges, initial.uniform|seed)",
         )
-    if rest:
+    if dot:  # "noise." (nothing after the dot) is no field either, not all of noise
         if head not in NESTED_KEYS or rest not in NESTED_KEYS[head]:
             allowed = ", ".join(f"{h}.{k}" for h in NESTED_KEYS for k in sorted(NESTED_KEYS[h]))
             raise _err(
@@ -263,6 +263,8 @@ def load_sweep(path: str | Path) -> Sweep:
         raise _err(
             src, unknown[0], "unknown field (allowed: " + ", ".join(sorted(SWEEP_KEYS)) + ")"
         )
+    for key in ("name", "description"):
+        text_field(doc, key, str(src))
     if not isinstance(doc.get("base"), str) or not doc["base"]:
         raise _err(src, "base", "expected the path of a scenario file")
     base = src.parent / doc["base"]
@@ -555,12 +557,6 @@ def _worker_name(remote: bool) -> str:
 # -- point files -----------------------------------------------------------------------
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
-
-
 def save_point(out_dir: Path, res: PointResult) -> Path:
     """Store one point: ``points/<hash>.npz`` (curves), then ``points/<hash>.json`` (row).
 
@@ -586,12 +582,11 @@ def save_point(out_dir: Path, res: PointResult) -> Path:
         v = getattr(res, k)
         if v is not None:
             arrays[k] = v
-    tmp = pdir / f".{res.point}.{os.getpid()}.tmp.npz"
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, pdir / f"{res.point}.npz")
+    with atomic_path(pdir / f"{res.point}.npz") as tmp:
+        np.savez_compressed(tmp, **arrays)
     doc = {"format": FORMAT, "point": res.point, "params": res.params, "row": res.row}
     path = pdir / f"{res.point}.json"
-    _atomic_write(path, (json.dumps(jsonable(doc), indent=1) + "\n").encode())
+    write_atomic(path, json.dumps(jsonable(doc), indent=1) + "\n")
     return path
 
 
@@ -722,9 +717,8 @@ def write_tables(sweep: Sweep, out_dir: Path, results: dict[str, PointResult]) -
         ("results.parquet", lambda p: table.to_parquet(p, index=False)),
         ("curves.parquet", lambda p: long.to_parquet(p, index=False)),
     ):
-        tmp = out_dir / f".{name}.{os.getpid()}.tmp"
-        write(tmp)
-        os.replace(tmp, out_dir / name)
+        with atomic_path(out_dir / name) as tmp:
+            write(tmp)
         written.append(out_dir / name)
     return written
 
@@ -740,7 +734,7 @@ def _write_manifest(sweep: Sweep, out_dir: Path) -> Path:
         "points": [{"point": t.point, "params": t.params} for t in sweep.tasks()],
     }
     path = out_dir / "sweep.json"
-    _atomic_write(path, (json.dumps(jsonable(doc), indent=1) + "\n").encode())
+    write_atomic(path, json.dumps(jsonable(doc), indent=1) + "\n")
     return path
 
 

@@ -14,6 +14,7 @@ import pytest
 
 from ntc_design import distributed as dist
 from ntc_design.distributed import DaskEngine, LocalEngine
+from ntc_design.errors import InputError
 from ntc_design.simulate import simulate
 from ntc_design.simulate.scenario import load_scenario
 from ntc_design.sweep import MAX_POINTS, load_sweep, run_sweep
@@ -297,6 +298,13 @@ def test_a_service_that_is_not_dask_is_one_line(files, tmp_path, capsys, monkeyp
             ["noise.sigma", "conflicts"],
         ),
         ("base: sc.yaml\ngrid: {seed: [1, 2]\n", ["not valid YAML"]),
+        # a trailing dot used to set all of noise to each value: every point failed
+        ('base: sc.yaml\ngrid: {"noise.": [0.1, 0.2]}\n', ["grid.noise.", "no such field"]),
+        ('base: sc.yaml\npoints: [{"noise.": 0.1}]\n', ["points[0].noise.", "no such field"]),
+        ('base: sc.yaml\ngrid: {"initial.": [1]}\n', ["grid.initial.", "no such field"]),
+        # a name that is not text used to be used as its repr
+        ("name: [1]\nbase: sc.yaml\ngrid: {seed: [0]}\n", ["name", "expected text, got list"]),
+        ("description: {a: 1}\nbase: sc.yaml\ngrid: {seed: [0]}\n", ["description", "text"]),
     ],
 )
 def test_bad_sweep_files(files, tmp_path, capsys, monkeypatch, body, needles):
@@ -305,6 +313,47 @@ def test_bad_sweep_files(files, tmp_path, capsys, monkeypatch, body, needles):
     sw = tmp_path / "sw.yaml"
     sw.write_text(body)
     assert_input_error(["sweep", sw, "--out", tmp_path / "o"], capsys, monkeypatch, *needles)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "opts, needles",
+    [
+        (["--workers", "0"], ["--workers", "must be a positive integer, got 0"]),
+        (["--workers", "-1"], ["--workers", "must be a positive integer, got -1"]),
+        (["--workers", "1000000"], ["--workers", "at most 4096"]),
+        (["--scheduler", ""], ["--scheduler", "expected an address"]),
+        (["--scheduler", "  "], ["--scheduler", "expected an address"]),
+        (["--scheduler", "tcp://127.0.0.1:1", "--workers", "0"], ["--workers", "positive"]),
+    ],
+    ids=["workers-0", "workers--1", "workers-1e6", "scheduler-empty", "scheduler-blank", "both"],
+)
+def test_bad_sweep_options_are_refused_before_any_point(
+    files, tmp_path, capsys, monkeypatch, opts, needles
+):
+    """Every point used to fail with the same error (workers), or the empty address was
+    taken as 'no scheduler', and out/ was written either way."""
+
+    def no_point(*args, **kw):
+        raise AssertionError("a point ran")
+
+    monkeypatch.setattr("ntc_design.sweep.run_point", no_point)
+    out = tmp_path / "o"
+    assert_input_error(
+        ["sweep", files / "sw.yaml", "--out", out, *opts], capsys, monkeypatch, *needles
+    )
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+def test_bad_workers_and_scheduler_in_the_api(files, tmp_path):
+    with pytest.raises(InputError, match="--workers: must be a positive integer"):
+        dist.LocalEngine(0)  # used to run on 2 processes
+    with pytest.raises(InputError, match="--scheduler: expected an address"):
+        dist.engine_for("")
+    with pytest.raises(InputError, match="--workers: must be at most 4096"):
+        run_sweep(files / "sw.yaml", tmp_path / "o", workers=10**6)
     assert not (tmp_path / "o").exists()
 
 

@@ -14,10 +14,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ntc_design.errors import InputError
+from ntc_design.simulate import NoiseModel, SimulationSpec
+
 from .cli_helpers import assert_input_error, run_cli
 from .conftest import ROOT
 
 G1 = str(ROOT / "examples" / "g1.yaml")
+G1_TV = str(ROOT / "examples" / "g1_tv.yaml")
 NAN, INF = float("nan"), float("inf")
 BASE = {
     "topology": G1,
@@ -65,6 +69,7 @@ BAD_FIELDS = [
     ("theta", "1,2,-1", ["theta", "list of numbers"]),
     ("theta", [], ["theta"]),
     ("theta", [0, 0, 0], ["theta", "non-zero"]),
+    ("theta", [1e300, 2, -1], ["theta[0]", "at most 1e+100"]),
     ("theta", [1, 2], ["theta", "expected 3 numbers"]),
     ("theta", {"a": 1}, ["theta"]),
     ("theta", DROP, ["theta", "missing"]),
@@ -99,6 +104,11 @@ BAD_FIELDS = [
     ("noise", {"f": [[1, 0], [0, 1]]}, ["noise.f", "3x3"]),
     ("noise", {"f": [[1, 0, 0], [0, 1, 0]]}, ["noise.f", "square"]),
     ("noise", {"colour": 1}, ["noise.colour", "unknown field"]),
+    # magnitudes bounded (MAX_MAGNITUDE = 1e100): 1e300 used to overflow inside the run
+    ("noise", {"f": 1e300}, ["noise.f", "at most 1e+100 in magnitude"]),
+    ("noise", {"f": -1e101}, ["noise.f", "at most 1e+100"]),
+    ("noise", {"f": [[1e300, 0, 0], [0, 1, 0], [0, 0, 1]]}, ["noise.f[0][0]", "at most"]),
+    ("noise", {"sigma": 1e300}, ["noise.sigma", "at most 1e+100"]),
     ("noise", {"sigma_edges": "all"}, ["noise.sigma_edges"]),
     ("noise", {"sigma_edges": [{"from": 2, "to": 1}]}, ["noise.sigma_edges[0]"]),
     ("noise", {"sigma_edges": [{"from": 2, "to": 1, "sigma": -1}]}, ["sigma_edges[0].sigma"]),
@@ -106,6 +116,11 @@ BAD_FIELDS = [
     ("noise", {"sigma_edges": [{"from": 2, "to": 1, "sigma": "x"}]}, ["sigma_edges[0].sigma"]),
     ("noise", {"sigma_edges": [{"from": [2], "to": 1, "sigma": 1}]}, ["sigma_edges[0].from"]),
     ("noise", {"sigma_edges": [{"from": 1, "to": 5, "sigma": 0.1}]}, ["sigma_edges"]),
+    (
+        "noise",
+        {"sigma_edges": [{"from": 2, "to": 1, "sigma": 1e300}]},
+        ["sigma_edges[0].sigma", "at most 1e+100"],
+    ),
     (
         "noise",
         {"sigma_edges": [{"from": 2, "to": 1, "sigma": 1}, {"from": 2, "to": 1, "sigma": 2}]},
@@ -118,6 +133,19 @@ BAD_FIELDS = [
     ("initial", {"uniform": [0, 1], "seed": -1}, ["initial.seed"]),
     ("initial", {"uniform": [0, 1]}, ["initial"]),
     ("initial", {"uniform": 1, "seed": 0}, ["initial.uniform"]),
+    # rng.uniform raised OverflowError (high - low range exceeds valid bounds)
+    ("initial", {"uniform": [-1e308, 1e308], "seed": 1}, ["initial.uniform[0]", "at most 1e+100"]),
+    ("initial", {"uniform": [0, 1e101], "seed": 1}, ["initial.uniform[1]", "at most 1e+100"]),
+    ("initial", [[1e300, 0, 0]] + [[0, 0, 0]] * 6, ["initial[0][0]", "at most 1e+100"]),
+    ("initial", [0] * 20 + [1e300], ["initial[20]", "at most 1e+100"]),
+    # ragged or mixed states used to be flattened and run (21 numbers in all)
+    (
+        "initial",
+        [[1, 2, 3], [1, 2], [1, 2, 3, 4]] + [[1, 2, 3]] * 4,
+        ["initial[1]", "2 numbers", "initial[0] has 3"],
+    ),
+    ("initial", [[1] * 7, [2] * 7, [3] * 7], ["expected 7 states of 3", "3 states of 7"]),
+    ("initial", [1, 2, 3] + [[1, 2, 3]] * 6, ["initial[0]", "expected a state", "initial[3]"]),
     ("initial", [[1, 2, 3]] * 6, ["initial", "expected 7 states"]),
     ("initial", [[[1, 2, 3]]] * 7, ["initial[0]", "nested"]),
     ("initial", [NAN] * 21, ["initial[0]", "finite"]),
@@ -179,6 +207,7 @@ BAD_FIELDS = [
     ("resample", -1, ["resample"]),
     ("resample", NAN, ["resample"]),
     ("colour", "red", ["'colour'", "unknown field"]),
+    ("description", {"a": 1}, ["description", "expected text"]),
     ("__class__", 1, ["'__class__'", "unknown field"]),
     ("topology", DROP, ["topology", "missing"]),
     ("topology", 5, ["topology", "file path"]),
@@ -215,6 +244,31 @@ def test_bad_scenario_combinations(tmp_path, capsys, monkeypatch, over, needles)
     fails(tmp_path, capsys, monkeypatch, scenario(tmp_path, **over), *needles)
 
 
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "topology, over",
+    [
+        # 5·10⁶ save times: refused only after ~50 s of building the time grid
+        (G1, {"T": 1e7, "dt": 1.0, "save_every": 2.0}),
+        (G1, {"T": 1e7, "gain": "1", "dt": 10.0, "save_every": 1e5}),
+        (G1, {"T": 1e7, "gain": "1", "dt": 10.0, "save_every": 1e5, "method": "both"}),
+        # A(t): the RK4 steps were not bounded at all (ran until memory ran out)
+        (G1_TV, {"T": 1e7, "gain": "1", "dt": 10.0, "save_every": 1e5}),
+    ],
+    ids=["saves", "constant-gain", "before-the-mc", "time-varying"],
+)
+def test_long_exact_run_is_refused_before_the_grid(tmp_path, capsys, monkeypatch, topology, over):
+    def no_grid(*args, **kw):
+        raise AssertionError("the time grid was built before the exact-moment estimate")
+
+    monkeypatch.setattr("ntc_design.simulate.driver.build_grid", no_grid)
+    monkeypatch.setattr("ntc_design.simulate.grid.build_grid", no_grid)
+    sc = scenario(tmp_path, topology=topology, **{"method": "exact", **over})
+    t0 = time.monotonic()
+    fails(tmp_path, capsys, monkeypatch, sc, "method", "RK4 steps", "more than 300 s")
+    assert time.monotonic() - t0 < 30
+
+
 SWITCHING = [
     ([1e308, 1e308], ["schedule", "overflows to infinity"]),
     ([1.0, 1e-300], ["schedule[1].duration", "collide"]),
@@ -241,6 +295,14 @@ def test_bad_schedules(tmp_path, capsys, monkeypatch, durations, needles):
 
 
 @pytest.mark.hostile
+def test_scenario_name_must_be_text(tmp_path, capsys, monkeypatch):
+    p = tmp_path / "sc.json"
+    p.write_text(json.dumps({**BASE, "name": [1]}))  # was accepted as the text "[1]"
+    line = fails(tmp_path, capsys, monkeypatch, p, "name", "expected text, got list [1]")
+    assert str(p) in line
+
+
+@pytest.mark.hostile
 @pytest.mark.parametrize(
     "text, needles",
     [
@@ -254,6 +316,43 @@ def test_bad_scenario_documents(tmp_path, capsys, monkeypatch, text, needles):
     p = tmp_path / "sc.json"
     p.write_text(text)
     fails(tmp_path, capsys, monkeypatch, p, *needles)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "noise, field",
+    [
+        (NoiseModel(f=1e300), "noise.f"),
+        (NoiseModel(f=np.diag([1e300, 1.0, 1.0])), "noise.f"),
+        (NoiseModel(sigma=1e300), "noise.sigma"),
+        (NoiseModel(sigma_edges={(2, 1): 1e300}), "noise.sigma_edges 2->1"),
+    ],
+)
+def test_noise_magnitude_is_bounded_in_the_api(noise, field):
+    # the Python API reaches check_noise directly, without the scenario reader
+    with pytest.raises(InputError) as exc:
+        SimulationSpec.build([1, 2, -1], noise=noise)
+    assert str(exc.value).startswith(field + ":"), exc.value
+    assert "at most 1e+100 in magnitude" in str(exc.value)
+
+
+@pytest.mark.hostile
+def test_ragged_initial_array_in_the_api():
+    spec = SimulationSpec.build([1, 2, -1], initial=np.zeros((3, 7)))
+    with pytest.raises(InputError, match="expected 7 states of 3 numbers, got 3 states of 7"):
+        spec.initial_state(7, 3)
+
+
+def test_initial_rows_equal_the_flat_list(tmp_path, capsys, monkeypatch):
+    x = (np.arange(21.0).reshape(7, 3) - 10) / 4
+    got = {}
+    for name, ini in (("rows", x.tolist()), ("flat", x.reshape(-1).tolist())):
+        sc = scenario(tmp_path, name=f"{name}.json", initial=ini, method="exact")
+        code, _, err = run_cli(["simulate", sc, "--out", tmp_path / name], capsys, monkeypatch)
+        assert code == 0, err
+        got[name] = json.loads((tmp_path / name / "summary.json").read_text())
+    assert got["rows"]["parameters"]["initial"] == x.reshape(-1).tolist()
+    assert got["rows"]["final_ms_error_exact"] == got["flat"]["final_ms_error_exact"]
 
 
 @pytest.mark.hostile
@@ -435,6 +534,103 @@ def test_report_on_a_corrupt_run(tmp_path, capsys, monkeypatch, good_run, name, 
     assert sorted(os.listdir(d)) == before  # no report.html, no figures
 
 
+def _set_param(key, value):
+    def change(summary, npz):
+        summary["parameters"][key] = value
+
+    return change
+
+
+def _set_npz(key, fn):
+    def change(summary, npz):
+        npz[key] = fn(npz[key])
+
+    return change
+
+
+# a run whose files parse but do not fit together: (what, change, file, words)
+MISMATCHED = [
+    ("schedule-text", _set_param("schedule", "x"), "summary.json", ["parameters.schedule"]),
+    ("schedule-entry", _set_param("schedule", ["x"]), "summary.json", ["parameters.schedule"]),
+    (
+        "schedule-mode",
+        _set_param("schedule", [{"mode": "nope", "duration": 1.0}]),
+        "summary.json",
+        ["schedule[0]", "unknown mode 'nope'"],
+    ),
+    ("theta-text", _set_param("theta", "x"), "summary.json", ["parameters.theta", "list"]),
+    ("theta-short", _set_param("theta", [1.0]), "summary.json", ["parameters.theta", "d = 3"]),
+    ("margin", _set_param("margin", [1]), "summary.json", ["parameters.margin", "positive"]),
+    ("gain-list", _set_param("gain", ["t"]), "summary.json", ["parameters.gain", "expression"]),
+    ("gain-text", _set_param("gain", "x"), "summary.json", ["parameters.gain", "variable t"]),
+    ("noise", _set_param("noise", "x"), "summary.json", ["parameters.noise", "mapping"]),
+    (
+        "sample-paths",
+        lambda s, z: s.__setitem__("sample_paths", "x"),
+        "summary.json",
+        ["sample_paths", "mapping"],
+    ),
+    (
+        "spread",
+        lambda s, z: s["sample_paths"].__setitem__("final_error_norm_mean", "x"),
+        "summary.json",
+        ["sample_paths", "numbers"],
+    ),
+    ("run-info", lambda s, z: s.__setitem__("run", 5), "summary.json", ["run", "mapping"]),
+    ("scenario", lambda s, z: s.__setitem__("scenario", 5), "summary.json", ["scenario"]),
+    # "cannot reshape array of size 36 into shape (6,1,2)": labels of another run
+    ("labels-fewer", _set_npz("labels", lambda a: a[:6]), "paths.npz", ["labels", "6 agents"]),
+    (
+        "labels-renamed",
+        _set_npz("labels", lambda a: np.array([f"x{k}" for k in range(a.size)])),
+        "paths.npz",
+        ["labels", "different runs"],
+    ),
+    ("paths-shape", _set_npz("paths", lambda a: a[:, :, :-1]), "paths.npz", ["paths", "N·d = 21"]),
+    ("paths-times", _set_npz("paths", lambda a: a[:, :1, :]), "paths.npz", ["paths", "save times"]),
+    ("theta-npz", _set_npz("theta", lambda a: a[:2]), "paths.npz", ["theta", "(3,)"]),
+]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "change, file, needles", [m[1:] for m in MISMATCHED], ids=[m[0] for m in MISMATCHED]
+)
+def test_report_on_a_mismatched_run(tmp_path, capsys, monkeypatch, good_run, change, file, needles):
+    """Each used to end in a TypeError or ValueError (an internal error), some after the
+    certificate and the figures were written."""
+    d = tmp_path / "o"
+    d.mkdir()
+    for k, v in good_run.items():
+        (d / k).write_bytes(v)
+    summary = json.loads((d / "summary.json").read_text())
+    with np.load(d / "paths.npz") as z:
+        npz = {k: z[k] for k in z.files}
+    change(summary, npz)
+    (d / "summary.json").write_text(json.dumps(summary))
+    np.savez_compressed(d / "paths.npz", **npz)
+    before = sorted(os.listdir(d))
+    line = assert_input_error(["report", d], capsys, monkeypatch, f"{d / file}", *needles)
+    assert "re-run" in line or "schedule[0]" in line
+    assert sorted(os.listdir(d)) == before  # no certificate.json, figures/, report.html
+
+
+@pytest.mark.hostile
+def test_report_html_that_is_a_folder(tmp_path, capsys, monkeypatch, good_run):
+    """One line already, but report.html.tmp was left behind (and the certificate and
+    figures written before the refusal)."""
+    d = tmp_path / "o"
+    d.mkdir()
+    for k, v in good_run.items():
+        (d / k).write_bytes(v)
+    (d / "report.html").mkdir()
+    before = sorted(os.listdir(d))
+    assert_input_error(
+        ["report", d], capsys, monkeypatch, "report:", f"{d / 'report.html'}", "is a folder"
+    )
+    assert sorted(os.listdir(d)) == before and os.listdir(d / "report.html") == []
+
+
 @pytest.mark.hostile
 def test_report_refuses_a_decompression_bomb(tmp_path, capsys, monkeypatch, good_run):
     d = tmp_path / "o"
@@ -463,6 +659,10 @@ ARGS = [
     (["simulate", "x.yaml", "--out", "o", "--workers", "many"], ["'--workers'"]),
     (["simulate", "SC", "--out", "o", "--workers", "0"], ["--workers: must be a positive"]),
     (["simulate", "SC", "--out", "o", "--workers", "-3"], ["--workers: must be a positive"]),
+    (["simulate", "SC", "--out", "o", "--workers", "5000"], ["--workers: must be at most 4096"]),
+    # an empty address ran locally as if no --scheduler had been given
+    (["simulate", "SC", "--out", "o", "--scheduler", ""], ["--scheduler", "expected an address"]),
+    (["reproduce", "paper", "--out", "o", "--workers", "0"], ["--workers: must be a positive"]),
     (["simulate", "x.yaml"], ["Missing option '--out'"]),
     (["simulate"], ["Missing argument"]),
     (["report"], ["Missing argument"]),

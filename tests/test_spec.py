@@ -4,6 +4,7 @@ parser; size before allocation; all-or-nothing outputs; the executor's ordering.
 import dataclasses
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from hypothesis import strategies as st
 
 import ntc_design as nd
 from ntc_design.errors import InputError, one_line, quote
-from ntc_design.outputs import output_folder, write_atomic
+from ntc_design.outputs import atomic_path, output_folder, write_atomic
 from ntc_design.simulate import (
     MonteCarlo,
     NoiseModel,
@@ -90,6 +91,29 @@ def test_spec_is_frozen_and_rechecked_on_replace():
     with pytest.raises(InputError, match=r"^T: must be a positive number"):
         s.replace(T=-1.0)
     assert not s.theta.flags.writeable
+
+
+@pytest.mark.parametrize(
+    "topology, gain, t_end, every",
+    [
+        ("g1.yaml", "1/(1+t)", 100.0, 1.0),
+        ("g1.yaml", "2/(1+t)^0.5", 10.0, 1.0),
+        ("g1.yaml", "1", 20.0, 0.5),
+        ("switching.yaml", "1/(1+t)", 10.0, 0.1),  # the largest ρ of the modes, and switches
+    ],
+)
+def test_exact_step_estimate_matches_the_run(monkeypatch, topology, gain, t_end, every):
+    """The estimate that refuses long exact runs counts the RK4 steps the run takes (within
+    a factor of 2, never below by more than 10 %)."""
+    import ntc_design.simulate.driver as drv
+
+    seen = []
+    orig = drv.estimate_exact_steps
+    monkeypatch.setattr(drv, "estimate_exact_steps", lambda *a: seen.append(orig(*a)) or seen[-1])
+    top = nd.load(ROOT / "examples" / topology)
+    res = simulate(top, THETA, T=t_end, gain=gain, method="exact", save_every=every)
+    steps = res.stats["exact_rk4_steps"]
+    assert len(seen) == 1 and 0.9 * steps <= seen[0] <= 2 * steps, (seen, steps)
 
 
 @pytest.mark.hostile
@@ -278,6 +302,30 @@ def test_write_atomic_replaces_whole_file(tmp_path):
     assert p.read_text() == "new" and os.listdir(tmp_path) == ["f.txt"]
     with pytest.raises(InputError, match=r"^--out: .* is a folder"):
         write_atomic(tmp_path, "x")
+
+
+@pytest.mark.hostile
+def test_atomic_writer_removes_its_temporary_file(tmp_path, monkeypatch):
+    """The rename fails (a folder took the target's name after the check), the writer
+    raises, Ctrl-C: each leaves only what was there, never a temporary file."""
+    import ntc_design.outputs as outputs
+
+    target = tmp_path / "report.html"
+    target.mkdir()
+    monkeypatch.setattr(outputs, "check_output_file", lambda p, option="--out": Path(p))
+    with pytest.raises(InputError, match=r"^report: cannot write .*report.html"):
+        write_atomic(target, "x", option="report")
+    assert os.listdir(tmp_path) == ["report.html"] and os.listdir(target) == []
+    monkeypatch.undo()
+    for exc in (RuntimeError, KeyboardInterrupt):
+        with pytest.raises(exc), atomic_path(tmp_path / "a.npz") as tmp:
+            np.savez_compressed(tmp, x=np.ones(3))
+            raise exc
+    assert os.listdir(tmp_path) == ["report.html"]
+    with atomic_path(tmp_path / "a.npz") as tmp:  # NumPy adds no second .npz to the name
+        np.savez_compressed(tmp, x=np.ones(3))
+    assert sorted(os.listdir(tmp_path)) == ["a.npz", "report.html"]
+    assert np.load(tmp_path / "a.npz")["x"].tolist() == [1.0, 1.0, 1.0]
 
 
 def test_output_folder_is_all_or_nothing(tmp_path):

@@ -23,9 +23,10 @@ from ntc_design.certify.format import package_versions
 
 from ..certify import certify, verify_file, write_certificate
 from ..design import ProtocolDesign, SwitchingDesign
-from ..errors import InputError
+from ..errors import InputError, require_number, require_positive
 from ..files import parse_topology
 from ..model import SwitchingTopology, Topology
+from ..outputs import check_output_file, write_atomic
 from . import figures
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
@@ -48,13 +49,33 @@ class RunData:
         return np.asarray(self.summary["parameters"]["theta"], dtype=float)
 
     def topology(self) -> Topology | SwitchingTopology:
-        tops = {
-            k: Topology.from_data(parse_topology(v, f"{self.path}/summary.json: topologies.{k}"))
-            for k, v in self.summary["topologies"].items()
-        }
+        where = f"{self.path}/summary.json"
+        tops = {}
+        for k, v in self.summary["topologies"].items():
+            if not isinstance(v, dict):
+                raise InputError(
+                    f"{where}: topologies.{k}: expected a topology; {_rerun(self.path)}"
+                )
+            tops[k] = Topology.from_data(parse_topology(v, f"{where}: topologies.{k}"))
         sched = self.summary["parameters"].get("schedule")
-        if sched:
-            return SwitchingTopology(tops, tuple((s["mode"], float(s["duration"])) for s in sched))
+        if sched is not None:  # a switching run: [{mode, duration}, ...] over the topologies
+            ok = isinstance(sched, list) and all(
+                isinstance(s, dict)
+                and isinstance(s.get("mode"), str)
+                and isinstance(s.get("duration"), (int, float))
+                and not isinstance(s.get("duration"), bool)
+                for s in sched
+            )
+            if not ok:
+                raise InputError(
+                    f"{where}: parameters.schedule: expected a list of {{mode, duration}}; "
+                    f"{_rerun(self.path)}"
+                )
+            return SwitchingTopology(
+                tops,
+                tuple((s["mode"], float(s["duration"])) for s in sched),
+                source=f"{where}: parameters",
+            )
         if len(tops) != 1:
             raise InputError(
                 f"{self.path}: a run over a topology given as functions of t has no single topology to certify"
@@ -187,7 +208,102 @@ def load_run(directory: str | Path) -> RunData:
             f"(files from different runs?); {_rerun(d)}"
         )
     table = {h: data[:, k] for k, h in enumerate(header)}
-    return RunData(d, summary, table["t"], table, npz)
+    run = RunData(d, summary, table["t"], table, npz)
+    _check_run(run)
+    return run
+
+
+def _check_run(run: RunData) -> None:
+    """The fields of summary.json and paths.npz that the report reads, checked against each
+    other before anything is written (certificate, figures, report.html): a damaged run, or
+    files from different runs, is one line naming the file and the field rather than a
+    TypeError or a failed reshape halfway through the figures."""
+    d = run.path
+    where = f"{d}/summary.json"
+
+    def bad(field: str, what: str, file: str = where) -> InputError:
+        return InputError(f"{file}: {field}: {what}; {_rerun(d)}")
+
+    p = run.summary["parameters"]
+    theta = p["theta"]
+    if not isinstance(theta, list) or not theta:
+        raise bad("parameters.theta", "expected a list of numbers")
+    try:
+        for k, v in enumerate(theta):
+            require_number(f"parameters.theta[{k}]", v)
+        require_positive("parameters.margin", p["margin"])
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}; {_rerun(d)}") from None
+    if not isinstance(p["gain"], str):
+        raise bad("parameters.gain", "expected an expression in t (text)")
+    from ..gain import parse_gain
+
+    try:
+        parse_gain(p["gain"])
+    except InputError as exc:  # "gain: ..." from the parser
+        raise InputError(f"{where}: parameters.{exc}; {_rerun(d)}") from None
+    for key in ("noise", "time_varying"):
+        if p.get(key) is not None and not isinstance(p[key], dict):
+            raise bad(f"parameters.{key}", "expected a mapping")
+    for key in ("run", "sample_paths"):
+        if not isinstance(run.summary.get(key, {}), dict):
+            raise bad(key, "expected a mapping")
+    if not isinstance(run.summary.get("scenario", ""), str):
+        raise bad("scenario", "expected a file name")
+    sp_ = run.summary.get("sample_paths", {})
+    if sp_.get("stored"):
+        window = sp_.get("late_window")
+        numbers = [sp_.get(k) for k in SPREAD_KEYS] + (window if isinstance(window, list) else [])
+        if not (isinstance(window, list) and len(window) == 2) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in numbers
+        ):
+            raise bad("sample_paths", f"expected numbers {', '.join(SPREAD_KEYS)}, late_window")
+    top = run.topology()
+    labels = [str(a) for a in top.labels]
+    npz_file = f"{d}/paths.npz"
+    if run.labels != labels:
+        raise bad(
+            "labels",
+            f"{len(run.labels)} agents {_few(run.labels)}, summary.json's topology has "
+            f"{len(labels)} {_few(labels)} (files from different runs?)",
+            npz_file,
+        )
+    if len(theta) != top.dim:
+        raise bad("parameters.theta", f"{len(theta)} numbers, the topology has d = {top.dim}")
+    if np.asarray(run.npz["theta"]).shape != (top.dim,):
+        raise bad(
+            "theta", f"shape {np.asarray(run.npz['theta']).shape}, expected ({top.dim},)", npz_file
+        )
+    paths = run.npz["paths"]
+    if paths.size and paths.shape[1:] != (run.t.size, top.n * top.dim):
+        raise bad(
+            "paths",
+            f"shape {paths.shape}, expected (paths, {run.t.size} save times, N·d = "
+            f"{top.n * top.dim})",
+            npz_file,
+        )
+    if run.ms("mc") is None and run.ms("exact") is None:
+        raise bad(
+            "header",
+            f"no mc_<agent> or exact_<agent> column for every agent {_few(labels)}",
+            f"{d}/ms_error.csv",
+        )
+    if run.ms("mc") is not None and not all(
+        f"mc_{a}_{b}" in run.table for a in labels for b in ("lo", "hi")
+    ):
+        raise bad("header", "an mc_<agent> column without its _lo and _hi", f"{d}/ms_error.csv")
+
+
+SPREAD_KEYS = (
+    "late_fluctuation_mean",
+    "late_fluctuation_max",
+    "final_error_norm_mean",
+)
+
+
+def _few(labels: list[str]) -> str:
+    shown = ", ".join(labels[:4]) + (", …" if len(labels) > 4 else "")
+    return f"[{shown}]"
 
 
 # ------------------------------------------------------------------------- rendering
@@ -274,10 +390,9 @@ def render(template: str, **context) -> str:
 
 
 def write_html(path: Path, text: str) -> None:
-    """Write atomically (a temporary file, then a rename)."""
-    tmp = path.with_suffix(".html.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(path)
+    """Write atomically (:func:`ntc_design.outputs.write_atomic`: no temporary file is left
+    when the write fails)."""
+    write_atomic(path, text, option="report")
 
 
 def fmt(x, digits: int = 4) -> str:
@@ -817,7 +932,7 @@ def run_section(
     data = [
         (f.name, rel(f, base))
         for f in sorted(run.path.iterdir())
-        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.endswith(".tmp")
+        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.startswith(".")
     ]
     data += [
         (f.name, rel(f, base))
@@ -889,6 +1004,7 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
         A missing or unreadable output file (named).
     """
     run = load_run(directory)
+    check_output_file(run.path / "report.html", "report")  # before the certificate and figures
     scen = run.summary.get("scenario") or str(run.path)
     title = f"Run {Path(scen).stem}"
     section, _ = run_section(

@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import paper
 from ..files import jsonable
+from ..outputs import write_atomic
 from ..simulate import NoiseModel, simulate
 from ..simulate.scenario import write_outputs
 from . import report as rp
@@ -307,9 +308,9 @@ def reproduce_paper(
         ],
         "convergence": {k: f["convergence"] for k, f in facts.items()},
     }
-    tmp = out / "paper_summary.json.tmp"
-    tmp.write_text(json.dumps(jsonable(doc), indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
-    tmp.replace(out / "paper_summary.json")
+    write_atomic(
+        out / "paper_summary.json", json.dumps(jsonable(doc), indent=1, ensure_ascii=False) + "\n"
+    )
     path = out / "report.html"
     rp.write_html(path, html)
     return path, all_ok, wall

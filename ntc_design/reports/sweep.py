@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..outputs import check_output_file, write_atomic
 
 CSS = (
     "body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;"
@@ -237,6 +238,7 @@ def write_sweep_report(directory: str | Path) -> Path:
     """
     d = Path(directory)
     man, res, curves, keys = _load(d)
+    check_output_file(d / "report.html", "report")  # before the figures
     figdir = d / "figures"
     figs = []
     for k in keys:
@@ -285,9 +287,7 @@ def write_sweep_report(directory: str | Path) -> Path:
         )
     )
     out = d / "report.html"
-    tmp = out.with_suffix(".html.tmp")
-    tmp.write_text(page(f"ntc-design sweep: {man.get('name', d.name)}", body), encoding="utf-8")
-    tmp.replace(out)
+    write_atomic(out, page(f"ntc-design sweep: {man.get('name', d.name)}", body), "report")
     return out
 
 

@@ -11,6 +11,14 @@ paths, the exact second moments (Nd × Nd, RK4 stages) and the written tables. I
 estimate of the peak, within a small factor; what it guards against is a request that is
 orders of magnitude too big (a save count of 10¹², 10⁹ stored paths), which used to end
 in a MemoryError deep inside NumPy.
+
+The exact moments take their own RK4 steps (h <= κ / (c ρ), :mod:`.moments`), as many as
+∫ c (ρ_L + c ρ_Q) dt / κ plus one per save time and switch: :func:`estimate_exact_steps`
+counts them from c(t) on samples of [0, T] (:func:`gain_samples`, the same samples as the
+intrinsic step count) and :func:`check_exact_work` refuses a run that would take longer than
+:data:`MAX_EXACT_SECONDS`, before the time grid is built and before any Monte Carlo runs
+(a horizon of 10⁷ used to build its grid, run, and only then be refused or run out of
+memory).
 """
 
 from __future__ import annotations
@@ -28,6 +36,10 @@ from .system import DENSE_EIG_MAX_ND, DENSE_LB_MAX_ND
 
 MEMORY_FRACTION = 0.5  # refuse a run that needs more than this share of available memory
 MAX_PATH_STEPS = 1e13  # paths × steps: ~ weeks of computation at 10⁷ path-steps per second
+# The exact moments' RK4 time, estimated as steps × (5e-5 s + 8·(Nd)³ flops at 1 GFLOP/s):
+# refused above this many seconds (the paper's runs: ~1 000 steps at N·d = 21, < 1 s)
+MAX_EXACT_SECONDS = 300.0
+GAIN_SAMPLES = 2049  # linear and as many logarithmic samples of [0, T]
 F8 = 8.0
 
 
@@ -79,6 +91,69 @@ class Estimate:
         return name, fld, b
 
 
+def gain_samples(t_end: float) -> np.ndarray:
+    """Times on [0, T] at which the estimates evaluate c(t): linear and logarithmic
+    samples (the logarithmic ones resolve a gain that changes fast near t = 0).
+
+    Parameters
+    ----------
+    t_end : float
+        The horizon T.
+
+    Returns
+    -------
+    numpy.ndarray
+        Sorted times, 0 and T included.
+    """
+    return np.unique(
+        np.concatenate(
+            [
+                np.linspace(0.0, t_end, GAIN_SAMPLES),
+                np.geomspace(min(1e-6, t_end / 2), t_end, GAIN_SAMPLES),
+            ]
+        )
+    )
+
+
+def check_gain(gain: Callable[[np.ndarray], np.ndarray], text: str, ts: np.ndarray) -> np.ndarray:
+    """c(t) at the times ``ts``, refused when it is not finite or negative there: on the
+    samples of [0, T] before an estimate integrates it, and on the time grid before a
+    run uses it.
+
+    Parameters
+    ----------
+    gain : callable
+        Vectorised c(t).
+    text : str
+        The gain as written (named in the message).
+    ts : numpy.ndarray
+        The times.
+
+    Returns
+    -------
+    numpy.ndarray
+        c at ``ts``.
+
+    Raises
+    ------
+    InputError
+        c is not finite, or negative, at one of the times.
+    """
+    c = gain(ts)
+    if c.shape != ts.shape or not np.all(np.isfinite(c)):
+        raise InputError(f"gain: {text!r} is not finite on [0, T]")
+    if np.any(c < 0):
+        k = int(np.argmax(c < 0))
+        raise InputError(f"gain: {text!r} is negative at t = {ts[k]:.6g}; c(t) must be >= 0")
+    return c
+
+
+def _integral(ts: np.ndarray, y: np.ndarray) -> float:
+    """Trapezoid rule (inf on overflow: the estimates refuse it)."""
+    with np.errstate(all="ignore"):
+        return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(ts)))
+
+
 def estimate_steps(
     t_end: float,
     dt: float,
@@ -113,19 +188,67 @@ def estimate_steps(
     """
     if intrinsic_ds is None:
         return t_end / dt + events
-    ts = np.unique(
-        np.concatenate(
-            [np.linspace(0.0, t_end, 2049), np.geomspace(min(1e-6, t_end / 2), t_end, 2049)]
-        )
-    )
+    ts = gain_samples(t_end)
     with np.errstate(all="ignore"):
         try:
             c = np.asarray(gain(ts), dtype=float) * np.ones(ts.shape)
         except Exception:  # noqa: BLE001 - user code; the driver reports it properly
             c = np.ones(ts.shape)
         c = np.nan_to_num(np.abs(c), nan=0.0, posinf=1e300)
-        integral = float(np.sum(0.5 * (c[1:] + c[:-1]) * np.diff(ts)))
-    return integral / intrinsic_ds + t_end / (h_max or t_end) + events
+    return _integral(ts, c) / intrinsic_ds + t_end / (h_max or t_end) + events
+
+
+def estimate_exact_steps(
+    ts: np.ndarray, c: np.ndarray, rho_l: float, rho_q: float, events: float
+) -> float:
+    """RK4 steps of the exact moments: steps h <= κ / (c ρ) with ρ = ρ_L + c·ρ_Q (the
+    generator's spectral radius bound, :func:`.moments.generator_radius`) make about
+    ∫ c (ρ_L + c ρ_Q) dt / κ steps, plus one per event (save time or switch).
+
+    Parameters
+    ----------
+    ts, c : numpy.ndarray
+        Samples of [0, T] (:func:`gain_samples`) and c(t) there (:func:`check_gain`).
+    rho_l, rho_q : float
+        ρ_L and ρ_Q, the largest over the modes.
+    events : float
+        Save times and switching segments.
+
+    Returns
+    -------
+    float
+        The estimated number of steps (inf when it overflows).
+    """
+    from .moments import KAPPA
+
+    with np.errstate(all="ignore"):
+        y = c * (rho_l + c * rho_q)
+    return _integral(ts, y) / KAPPA + events
+
+
+def check_exact_work(steps: float, nd: int) -> None:
+    """Refuse exact moments that would take longer than :data:`MAX_EXACT_SECONDS`
+    (``steps`` × (5e-5 s + 8·(Nd)³ flops at 1 GFLOP/s)).
+
+    Parameters
+    ----------
+    steps : float
+        RK4 steps (:func:`estimate_exact_steps`).
+    nd : int
+        N·d.
+
+    Raises
+    ------
+    InputError
+        Naming ``method``, the steps and the time.
+    """
+    seconds = steps * (5e-5 + 8e-9 * float(nd) ** 3)
+    if not math.isfinite(seconds) or seconds > MAX_EXACT_SECONDS:
+        raise InputError(
+            f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd} "
+            f"(~{seconds:.3g} s, more than {MAX_EXACT_SECONDS:g} s); use method: mc, fewer "
+            "save times, a smaller gain or a shorter T"
+        )
 
 
 def estimate(

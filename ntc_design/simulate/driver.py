@@ -22,12 +22,20 @@ from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, quote
 from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
-from .budget import check_budget, estimate, estimate_steps
+from .budget import (
+    check_budget,
+    check_exact_work,
+    check_gain,
+    estimate,
+    estimate_exact_steps,
+    estimate_steps,
+    gain_samples,
+)
 from .grid import TimeGrid, build_grid
-from .moments import check_moments_size, exact_moments
+from .moments import check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec, run
 from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
-from .spec import SimulationSpec, UniformInitial
+from .spec import SimulationSpec
 from .system import ModeSystem, check_step_size, mode_system
 
 AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology
@@ -161,19 +169,6 @@ def _modes(
     )
 
 
-def _initial_state(spec: SimulationSpec, n: int, d: int) -> tuple[np.ndarray, list[str]]:
-    ini = spec.initial
-    if ini is None:
-        return np.zeros(n * d), ["initial state: zero"]
-    if isinstance(ini, UniformInitial):
-        return ini.draw(n * d), []
-    if ini.size != n * d:
-        raise InputError(
-            f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
-        )
-    return np.array(ini, dtype=float), []
-
-
 def _edge_count(topology: AnyTopology) -> int:
     if isinstance(topology, SwitchingTopology):
         return max(len(m.edges) for m in topology.modes.values())
@@ -215,18 +210,6 @@ def _check_size(
     check_budget(est)
 
 
-def _check_gain(cfun: Callable, gain_text: str, grid: TimeGrid) -> np.ndarray:
-    c_grid = cfun(grid.t[:-1])
-    if c_grid.shape != grid.t[:-1].shape or not np.all(np.isfinite(c_grid)):
-        raise InputError(f"gain: {gain_text!r} is not finite on [0, T]")
-    if np.any(c_grid < 0):
-        k = int(np.argmax(c_grid < 0))
-        raise InputError(
-            f"gain: {gain_text!r} is negative at t = {grid.t[k]:.6g}; c(t) must be >= 0"
-        )
-    return c_grid
-
-
 def _step_size_guard(
     systems: Sequence[ModeSystem],
     grid: TimeGrid,
@@ -242,32 +225,18 @@ def _step_size_guard(
         warnings.warn(check.warning, stacklevel=3)
 
 
-# The exact moments' RK4 time, estimated as steps × (5e-5 s + 8·(Nd)³ flops at 1 GFLOP/s):
-# refused above this many seconds (the paper's runs: ~1 000 steps at N·d = 21, < 1 s)
-MAX_EXACT_SECONDS = 300.0
-
-
 def _check_exact_work(
-    systems: Sequence[ModeSystem], grid: TimeGrid, c_grid: np.ndarray, nd_: int
+    systems: Sequence[ModeSystem], spec: SimulationSpec, cfun: Callable, gain_text: str, n_seg: int
 ) -> None:
-    """The exact moments take RK4 steps h <= κ / (c ρ) (see :mod:`.moments`): estimate
-    their number on the grid and refuse a run that would take hours."""
-    from .moments import KAPPA
-
-    rho_l = np.array([2 * s.spectral_radius for s in systems])
-    rho_q = np.array(
-        [4 * sum(float(np.linalg.norm(k, 2)) ** 2 for _, _, k in s.h_blocks) for s in systems]
-    )
-    m = grid.mode
-    with np.errstate(all="ignore"):
-        steps = float(np.sum(c_grid * grid.h * (rho_l[m] + c_grid * rho_q[m]))) / KAPPA
-    steps += grid.save_times.size
-    seconds = steps * (5e-5 + 8e-9 * float(nd_) ** 3)
-    if not np.isfinite(seconds) or seconds > MAX_EXACT_SECONDS:
-        raise InputError(
-            f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd_} "
-            f"(~{seconds:.3g} s; c(t) is large on [0, T]); use method: mc, a smaller gain or a shorter T"
-        )
+    """Refuse, before the time grid is built and before any Monte Carlo, exact moments
+    that would take too long (:func:`.budget.check_exact_work`; ρ is the largest over the
+    modes, and every switch and save time is a step)."""
+    rho = np.array([generator_radius(s) for s in systems])
+    ts = gain_samples(spec.T)
+    c = check_gain(cfun, gain_text, ts)
+    events = spec.save.count(spec.T) + n_seg
+    steps = estimate_exact_steps(ts, c, float(rho[:, 0].max()), float(rho[:, 1].max()), events)
+    check_exact_work(steps, systems[0].nd)
 
 
 def _check_noise_callable(spec: SimulationSpec, systems: Sequence[ModeSystem], d: int) -> None:
@@ -363,8 +332,10 @@ def simulate(
             )
     th = next(iter(designs.values())).theta
     systems = [mode_system(designs[k], spec.noise, k) for k in names]
-    x_init, ini_notes = _initial_state(spec, n, d)
+    x_init, ini_notes = spec.initial_state(n, d)
     notes.extend(ini_notes)
+    if spec.method != "mc" and spec.noise.linear:
+        _check_exact_work(systems, spec, cfun, gain_text, len(segments))
     st = spec.stepping
     grid = build_grid(
         spec.T,
@@ -375,7 +346,7 @@ def simulate(
         intrinsic_ds=st.intrinsic_ds,
         h_max=st.max_step,
     )
-    c_grid = _check_gain(cfun, gain_text, grid)
+    c_grid = check_gain(cfun, gain_text, grid.t[:-1])
     if spec.method != "exact":
         _step_size_guard(systems, grid, c_grid, notes, st.scheme)
     _check_noise_callable(spec, systems, d)
@@ -419,8 +390,7 @@ def simulate(
         if paths < 2:
             notes.append("one sample path: no confidence band")
     if spec.method in ("exact", "both"):
-        if spec.noise.linear:
-            _check_exact_work(systems, grid, c_grid, n * d)
+        if spec.noise.linear:  # its work was estimated before the grid was built
             t0 = time.perf_counter()
             exact = exact_moments(
                 systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d

@@ -107,6 +107,28 @@ class _MomentRecorder:
         return Moments(self.saves, self.means, self.ms, s, steps)
 
 
+def generator_radius(s: ModeSystem) -> tuple[float, float]:
+    """(ρ_L, ρ_Q): the S-equation's generator has spectral radius at most ρ_L + c·ρ_Q with
+    ρ_L = 2ρ(L_B) and ρ_Q = 4·Σ_e ‖K_e‖² (RK4 steps h <= κ / (c ρ); also the step-count
+    estimate of :func:`.budget.estimate_exact_steps`). NumPy floats: a huge weight gives
+    inf, which the estimate refuses, not an OverflowError.
+
+    Parameters
+    ----------
+    s : ModeSystem
+        One mode's system.
+
+    Returns
+    -------
+    (float, float)
+        ρ_L and ρ_Q.
+    """
+    k = s.k_blocks
+    with np.errstate(over="ignore", invalid="ignore"):
+        rho_q = 4 * float(np.sum(np.linalg.norm(k, ord=2, axis=(1, 2)) ** 2)) if k.size else 0.0
+    return 2 * s.spectral_radius, rho_q
+
+
 class _Rhs:
     def __init__(self, s: ModeSystem, n: int, d: int):
         # sparse products cost O(nnz·Nd); at small Nd a dense product is cheaper than
@@ -118,12 +140,7 @@ class _Rhs:
         self.jj = np.array([j for _, j, _ in s.h_blocks], dtype=np.int64)
         self.k = np.array([k for _, _, k in s.h_blocks]).reshape(-1, d, d)
         # generator's spectral radius bound: 2ρ(L_B) + c·Σ‖K_e‖²·4 (used with c <= c(t))
-        self.rho_l = 2 * s.spectral_radius
-        self.rho_q = (
-            4 * float(np.sum(np.linalg.norm(self.k, ord=2, axis=(1, 2)) ** 2))
-            if self.k.size
-            else 0.0
-        )
+        self.rho_l, self.rho_q = generator_radius(s)
         self.ar = np.arange(n)
 
     def noise(self, s: np.ndarray) -> np.ndarray:

@@ -16,7 +16,9 @@ of diffrax's ``SaveAt``):
 
 The flat keys of a scenario file (:data:`SCENARIO_KEYS`) are defined here and only here.
 Checks that need the topology (θ's length, the initial state's size, ``resample``) are
-made by the driver. Every error is one line naming the field.
+made by the driver (the initial state's through :meth:`SimulationSpec.initial_state`).
+θ, x(0), σ and f are bounded by :data:`MAX_MAGNITUDE` (1e100). Every error is one line
+naming the field.
 """
 
 from __future__ import annotations
@@ -35,12 +37,43 @@ from .system import NoiseModel
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
 MAX_SEED = 2**128
 MAX_WORKERS = 4096
+# States and noise intensities (θ, x(0), σ, f) are squared and summed over agents, edges
+# and paths (mean-square errors, noise covariances, f² in the moment equations): at most
+# 1e100 in magnitude keeps every such sum far inside the float range (1.8e308), so a value
+# like 1e300 is refused naming its field instead of overflowing deep inside a run.
+MAX_MAGNITUDE = 1e100
 
 Noise = NoiseModel
 
 
-def _check_vector(name: str, values, max_size: int = MAX_VECTOR) -> np.ndarray:
-    """A flat, finite float vector from a list of numbers (nested lists refused)."""
+def check_workers(value, name: str = "workers") -> int:
+    """A number of worker processes: a positive integer at most :data:`MAX_WORKERS` (one
+    check for a scenario's ``workers``, ``--workers`` of every command and the engines).
+
+    Parameters
+    ----------
+    value : object
+        The value given.
+    name : str
+        The field or option named in the message.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InputError
+        Not an integer in [1, MAX_WORKERS].
+    """
+    return require_int(name, value, minimum=1, maximum=MAX_WORKERS)
+
+
+def _check_vector(
+    name: str, values, max_size: int = MAX_VECTOR, bound: float | None = None
+) -> np.ndarray:
+    """A flat, finite float vector from a list of numbers (nested lists refused), with
+    every entry at most ``bound`` in magnitude if given."""
     if isinstance(values, np.ndarray):
         if values.dtype.kind not in "iuf":
             raise InputError(f"{name}: expected numbers, got an array of {values.dtype}")
@@ -60,9 +93,50 @@ def _check_vector(name: str, values, max_size: int = MAX_VECTOR) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
         k = int(np.argmax(bad))
-        raise InputError(f"{name}[{k}]: must be finite, got {arr[k]!r}")
+        raise InputError(f"{name}[{k}]: must be finite, got {float(arr[k])!r}")
+    if bound is not None and np.any(np.abs(arr) > bound):
+        k = int(np.argmax(np.abs(arr) > bound))
+        raise InputError(
+            f"{name}[{k}]: must be at most {bound:g} in magnitude, got {float(arr[k])!r}"
+        )
     arr.setflags(write=False)
     return arr
+
+
+def _check_states(values) -> np.ndarray:
+    """x(0) as given: N·d numbers (flat) or N states of d numbers (rows, or a 2-D
+    array); finite and at most :data:`MAX_MAGNITUDE` in magnitude. Rows keep their
+    shape so that the driver can check it against (N, d): a ragged list (states of
+    different lengths) is refused here rather than flattened into N·d numbers that
+    happen to add up."""
+    if isinstance(values, np.ndarray) and values.ndim == 2:
+        arr = _check_vector("initial", values, bound=MAX_MAGNITUDE).reshape(values.shape)
+        arr.setflags(write=False)
+        return arr
+    if isinstance(values, (list, tuple)) and any(isinstance(v, (list, tuple)) for v in values):
+        first = next(k for k, v in enumerate(values) if isinstance(v, (list, tuple)))
+        width = len(values[first])
+        for k, row in enumerate(values):
+            if not isinstance(row, (list, tuple)):
+                raise InputError(
+                    f"initial[{k}]: expected a state (a list of d numbers) like "
+                    f"initial[{first}], got {repr(row)[:40]}"
+                )
+            if len(row) != width:
+                raise InputError(
+                    f"initial[{k}]: {len(row)} numbers, but initial[{first}] has {width}; "
+                    "every state has d numbers"
+                )
+            for j, v in enumerate(row):
+                if isinstance(v, (list, tuple)):
+                    raise InputError(f"initial[{k}]: expected d numbers, got a nested list")
+                require_number(f"initial[{k}][{j}]", v, bound=MAX_MAGNITUDE)
+        if len(values) * width > MAX_VECTOR:
+            raise InputError(f"initial: more than the limit {MAX_VECTOR} numbers")
+        arr = np.array(values, dtype=float).reshape(len(values), width)
+        arr.setflags(write=False)
+        return arr
+    return _check_vector("initial", values, bound=MAX_MAGNITUDE)
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,7 +264,7 @@ class MonteCarlo:
         require_int("seed", self.seed, minimum=0, maximum=MAX_SEED)
         require_int("block_size", self.block_size, minimum=1)
         require_int("store_paths", self.store_paths, minimum=0)
-        require_int("workers", self.workers, minimum=1, maximum=MAX_WORKERS)
+        check_workers(self.workers)
         for f in fields(self):
             object.__setattr__(self, f.name, int(getattr(self, f.name)))
 
@@ -204,8 +278,9 @@ class UniformInitial:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        lo = require_number("initial.uniform[0]", self.lo)
-        hi = require_number("initial.uniform[1]", self.hi)
+        # bounded: rng.uniform needs hi - lo finite (±1e308 overflows it)
+        lo = require_number("initial.uniform[0]", self.lo, bound=MAX_MAGNITUDE)
+        hi = require_number("initial.uniform[1]", self.hi, bound=MAX_MAGNITUDE)
         if not lo < hi:
             raise InputError(f"initial.uniform: need lo < hi, got [{lo:g}, {hi:g}]")
         require_int("initial.seed", self.seed, minimum=0, maximum=MAX_SEED)
@@ -231,7 +306,8 @@ class UniformInitial:
 
 def check_noise(noise: NoiseModel) -> NoiseModel:
     """Check σ (finite, >= 0), f (a finite scalar, a finite square matrix or a
-    callable) and the per-edge σ (finite, >= 0, keyed by (from, to) labels).
+    callable) and the per-edge σ (finite, >= 0, keyed by (from, to) labels); every
+    number at most :data:`MAX_MAGNITUDE` in magnitude.
 
     Parameters
     ----------
@@ -250,13 +326,13 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
     """
     if not isinstance(noise, NoiseModel):
         raise InputError(f"noise: expected a NoiseModel, got {type(noise).__name__}")
-    require_number("noise.sigma", noise.sigma, minimum=0.0)
+    require_number("noise.sigma", noise.sigma, minimum=0.0, bound=MAX_MAGNITUDE)
     f = noise.f
     if not callable(f):
         if isinstance(f, bool):
             raise InputError("noise.f: expected a number or a d×d matrix, got a boolean")
         if isinstance(f, numbers.Real):
-            require_number("noise.f", f)
+            require_number("noise.f", f, bound=MAX_MAGNITUDE)
         else:
             try:
                 arr = np.asarray(f, dtype=float)
@@ -268,12 +344,19 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
                 )
             if not np.all(np.isfinite(arr)):
                 raise InputError("noise.f: entries must be finite")
+            if np.any(np.abs(arr) > MAX_MAGNITUDE):
+                raise InputError(f"noise.f: entries must be at most {MAX_MAGNITUDE:g} in magnitude")
     if not isinstance(noise.sigma_edges, Mapping):
         raise InputError("noise.sigma_edges: expected a mapping (from, to) -> σ")
     for key, s in noise.sigma_edges.items():
         if not isinstance(key, tuple) or len(key) != 2:
             raise InputError(f"noise.sigma_edges: key {key!r} is not a (from, to) pair")
-        require_number(f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}", s, minimum=0.0)
+        require_number(
+            f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}",
+            s,
+            minimum=0.0,
+            bound=MAX_MAGNITUDE,
+        )
     return noise
 
 
@@ -346,7 +429,7 @@ class SimulationSpec:
     resample: float | None = None
 
     def __post_init__(self) -> None:
-        th = _check_vector("theta", self.theta)
+        th = _check_vector("theta", self.theta, bound=MAX_MAGNITUDE)
         if th.size == 0:
             raise InputError("theta: expected at least one number")
         if not np.any(th):
@@ -368,7 +451,7 @@ class SimulationSpec:
         check_noise(self.noise)
         ini = self.initial
         if ini is not None and not isinstance(ini, UniformInitial):
-            object.__setattr__(self, "initial", _check_vector("initial", ini))
+            object.__setattr__(self, "initial", _check_states(ini))
         for name, cls in (("save", SaveAt), ("stepping", Stepping), ("mc", MonteCarlo)):
             if not isinstance(getattr(self, name), cls):
                 raise InputError(f"{name}: expected a {cls.__name__}")
@@ -440,7 +523,7 @@ class SimulationSpec:
         """A spec from a scenario document (a parsed YAML/JSON mapping; the ``topology``,
         ``name`` and ``description`` keys are ignored here). ``noise`` is
         ``{sigma, f, sigma_edges: [{from, to, sigma}]}``; ``initial`` a list of N·d
-        numbers (or N lists of d) or ``{uniform: [lo, hi], seed: S}``.
+        numbers (or N lists of d, all of one length) or ``{uniform: [lo, hi], seed: S}``.
 
         Parameters
         ----------
@@ -510,6 +593,42 @@ class SimulationSpec:
         """
         return replace(self, **changes)
 
+    def initial_state(self, n: int, d: int) -> tuple[np.ndarray, list[str]]:
+        """x(0) for a network of ``n`` agents in dimension ``d`` (one check for every
+        topology kind).
+
+        Parameters
+        ----------
+        n, d : int
+            Agents and state dimension.
+
+        Returns
+        -------
+        (numpy.ndarray, list of str)
+            x(0) (N·d numbers) and notes (``initial state: zero`` when none is given).
+
+        Raises
+        ------
+        InputError
+            The given states do not have the network's shape: N·d numbers, or N states
+            of d numbers each.
+        """
+        ini = self.initial
+        if ini is None:
+            return np.zeros(n * d), ["initial state: zero"]
+        if isinstance(ini, UniformInitial):
+            return ini.draw(n * d), []
+        if ini.ndim == 2 and ini.shape != (n, d):
+            raise InputError(
+                f"initial: expected {n} states of {d} numbers, got {ini.shape[0]} states of "
+                f"{ini.shape[1]}"
+            )
+        if ini.size != n * d:
+            raise InputError(
+                f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
+            )
+        return np.array(ini, dtype=float).reshape(-1), []
+
     def options(self) -> dict[str, Any]:
         """The flat options (as :meth:`build` takes them), for summaries and re-runs.
 
@@ -553,7 +672,7 @@ def _noise_from_document(doc: Any) -> NoiseModel:
     extra = sorted(str(k) for k in set(doc) - {"sigma", "f", "sigma_edges"})
     if extra:
         raise InputError(f"noise.{extra[0]}: unknown field (allowed: sigma, f, sigma_edges)")
-    sigma = require_number("noise.sigma", doc.get("sigma", 0.4), minimum=0.0)
+    sigma = require_number("noise.sigma", doc.get("sigma", 0.4), minimum=0.0, bound=MAX_MAGNITUDE)
     f = doc.get("f", 0.3)
     if isinstance(f, list):
         for r, row in enumerate(f):
@@ -564,10 +683,12 @@ def _noise_from_document(doc: Any) -> NoiseModel:
                     f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
                 )
             for c, v in enumerate(row):
-                require_number(f"noise.f[{r}][{c}]", v)
+                require_number(f"noise.f[{r}][{c}]", v, bound=MAX_MAGNITUDE)
         f = np.asarray(f, dtype=float) if f else f
     elif isinstance(f, bool) or not isinstance(f, (int, float)):
         raise InputError(f"noise.f: expected a number or a d×d matrix, got {f!r}"[:200])
+    else:
+        require_number("noise.f", f, bound=MAX_MAGNITUDE)
     edges = doc.get("sigma_edges") or []
     if not isinstance(edges, list):
         raise InputError("noise.sigma_edges: expected a list of {from, to, sigma}")
@@ -583,7 +704,9 @@ def _noise_from_document(doc: Any) -> NoiseModel:
             raise InputError(
                 f"noise.sigma_edges[{k}]: edge {quote(key[0])}->{quote(key[1])} listed twice"
             )
-        sig[key] = require_number(f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0)
+        sig[key] = require_number(
+            f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0, bound=MAX_MAGNITUDE
+        )
     return NoiseModel(sigma=sigma, f=f, sigma_edges=sig)
 
 
@@ -598,16 +721,7 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
             raise InputError("initial.uniform: expected [lo, hi]")
         return UniformInitial(uni[0], uni[1], doc["seed"])
     if isinstance(doc, list):
-        flat: list = []
-        for k, row in enumerate(doc):
-            if isinstance(row, list):
-                for v in row:
-                    if isinstance(v, list):
-                        raise InputError(f"initial[{k}]: expected d numbers, got a nested list")
-                    flat.append(v)
-            else:
-                flat.append(row)
-        return _check_vector("initial", flat)
+        return _check_states(doc)
     raise InputError("initial: expected {uniform: [lo, hi], seed: S} or a list of states")
 
 
@@ -622,4 +736,5 @@ __all__ = [
     "Stepping",
     "UniformInitial",
     "check_noise",
+    "check_workers",
 ]

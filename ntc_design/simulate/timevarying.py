@@ -263,6 +263,31 @@ def _noise_term(s: np.ndarray, q: np.ndarray, kmat: np.ndarray, ii, jj, n: int, 
     return out
 
 
+def generator_radius_tv(sys_: TimeVaryingSystem, t_end: float) -> tuple[float, float]:
+    """(ρ_L, ρ_Q) of :func:`.moments.generator_radius` over [0, T]: sampled finely (the
+    weights are smooth) with a 25 % allowance.
+
+    Parameters
+    ----------
+    sys_ : TimeVaryingSystem
+        The system.
+    t_end : float
+        The horizon T.
+
+    Returns
+    -------
+    (float, float)
+        ρ_L and ρ_Q.
+    """
+    probe = np.linspace(0.0, t_end, 801)
+    _, _, _, _, lap, absw = sys_.matrices(probe)
+    rho_l = 2 * float(np.max(np.abs(np.linalg.eigvals(lap)))) * 1.25
+    with np.errstate(over="ignore", invalid="ignore"):
+        kn = np.linalg.norm(absw @ sys_.fmat, ord=2, axis=(2, 3))
+        rho_q = 4 * float(np.max(np.sum(kn**2, axis=1))) * 1.25 if kn.size else 0.0
+    return rho_l, rho_q
+
+
 def exact_moments_tv(
     sys_: TimeVaryingSystem,
     gain: Callable[[np.ndarray], np.ndarray],
@@ -294,12 +319,7 @@ def exact_moments_tv(
     st = sys_.structure
     n, d = st.n, st.d
     ii, jj = st.ii[sys_.live], st.jj[sys_.live]
-    # ρ over [0, T]: sampled finely (the weights are smooth) with a 25 % allowance
-    probe = np.linspace(0.0, t_end, 801)
-    _, gt, _, _, lap, absw = sys_.matrices(probe)
-    rho_l = 2 * float(np.max(np.abs(np.linalg.eigvals(lap)))) * 1.25
-    kn = np.linalg.norm(absw @ sys_.fmat, ord=2, axis=(2, 3))
-    rho_q = 4 * float(np.max(np.sum(kn**2, axis=1))) * 1.25 if kn.size else 0.0
+    rho_l, rho_q = generator_radius_tv(sys_, t_end)
     saves = np.asarray(save_times, dtype=float)
     # the step grid: through every save time
     ts = [0.0]
@@ -382,6 +402,7 @@ def simulate_time_varying(
     store_paths: int,
     workers: int,
     progress=None,
+    system: TimeVaryingSystem | None = None,
 ) -> tuple[dict, object, object, dict, list[str]]:
     """Run Monte Carlo and/or the exact moments with A(t).
 
@@ -409,6 +430,8 @@ def simulate_time_varying(
         Processes.
     progress : callable(done, total), optional
         Called with path-steps done.
+    system : TimeVaryingSystem, optional
+        The system of this design and noise when the caller has built it already.
 
     Returns
     -------
@@ -426,8 +449,9 @@ def simulate_time_varying(
     from .montecarlo import run
 
     th = np.asarray(theta, dtype=float)
-    des = TimeVaryingDesign(tv, th, float(margin))
-    sys_ = time_varying_system(des, noise)
+    if system is None:
+        system = time_varying_system(TimeVaryingDesign(tv, th, float(margin)), noise)
+    sys_ = system
     notes = [
         "time-varying topology: A(t), C(t), δ(t), B_i(t), x0(t) re-evaluated at every step "
         "(Lemma 1 at each instant); the design table shows t = 0"
@@ -508,22 +532,26 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         NaN or overflow in a path (the partial result is attached).
     """
     from ..errors import quote
+    from .budget import (
+        check_exact_work,
+        check_gain,
+        estimate_exact_steps,
+        gain_samples,
+    )
     from .grid import build_grid
     from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
-    from .spec import UniformInitial
 
-    n, d = tv.n, tv.dim
-    ini = spec.initial
-    if ini is None:
-        x_init, ini_notes = np.zeros(n * d), ["initial state: zero"]
-    elif isinstance(ini, UniformInitial):
-        x_init, ini_notes = ini.draw(n * d), []
-    else:
-        if ini.size != n * d:
-            raise InputError(
-                f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
-            )
-        x_init, ini_notes = np.array(ini, dtype=float), []
+    x_init, ini_notes = spec.initial_state(tv.n, tv.dim)
+    th = np.asarray(spec.theta, dtype=float)
+    sys_ = time_varying_system(TimeVaryingDesign(tv, th, float(spec.margin)), spec.noise)
+    if spec.method != "mc" and spec.noise.linear:
+        # the RK4 steps with A(t), estimated before the grid is built (they were not
+        # bounded at all: a long horizon ran until memory ran out)
+        ts = gain_samples(spec.T)
+        c = check_gain(cfun, gain_text, ts)
+        rho_l, rho_q = generator_radius_tv(sys_, spec.T)
+        steps = estimate_exact_steps(ts, c, rho_l, rho_q, spec.save.count(spec.T))
+        check_exact_work(steps, tv.n * tv.dim)
     st = spec.stepping
     grid = build_grid(
         spec.T,
@@ -534,9 +562,7 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         intrinsic_ds=st.intrinsic_ds,
         h_max=st.max_step,
     )
-    c_grid = cfun(grid.t[:-1])
-    if c_grid.shape != grid.t[:-1].shape or not np.all(np.isfinite(c_grid)) or np.any(c_grid < 0):
-        raise InputError(f"gain: {gain_text!r} must be finite and >= 0 on [0, T]")
+    check_gain(cfun, gain_text, grid.t[:-1])
     designs, part, exact, stats, notes = simulate_time_varying(
         tv,
         spec.theta,
@@ -552,9 +578,9 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         store_paths=spec.mc.store_paths,
         workers=workers,
         progress=progress,
+        system=sys_,
     )
     notes = ini_notes + notes
-    th = np.asarray(spec.theta, dtype=float)
     params = spec.options()
     params.update(
         {
@@ -595,6 +621,7 @@ __all__ = [
     "simulate_expression",
     "TimeVaryingSystem",
     "exact_moments_tv",
+    "generator_radius_tv",
     "simulate_time_varying",
     "time_varying_system",
 ]
