@@ -23,6 +23,7 @@ from .errors import InputError, one_line
 from .files import jsonable
 from .loader import load
 from .model import SwitchingTopology
+from .timevarying import ExpressionTopology
 
 app = typer.Typer(
     add_completion=True,
@@ -218,9 +219,8 @@ def design_cmd(
 
 
 def _expression(top) -> bool:
-    """Weights given as expressions of t (the module is loaded by any such topology)."""
-    mod = sys.modules.get("ntc_design.timevarying")
-    return mod is not None and isinstance(top, mod.ExpressionTopology)
+    """Weights given as expressions of t."""
+    return isinstance(top, ExpressionTopology)
 
 
 def _print_tv_design(d: dict, title: str) -> None:

@@ -16,9 +16,8 @@ so that this module sits below the simulation layer.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import yaml
@@ -26,16 +25,15 @@ import yaml
 from .errors import InputError
 from .files import jsonable
 from .outputs import write_atomic
+from .simulate.result import simulation_frame
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     import control
     import networkx as nx
-    import pandas as pd
 
     from .design import ProtocolDesign
     from .model import Topology
 
-TIDY_COLUMNS = ("t", "agent", "mc", "lo", "hi", "exact")
 
 
 # ---------------------------------------------------------------------------- networkx
@@ -209,39 +207,6 @@ def design_statespace(des: ProtocolDesign) -> control.StateSpace:
 
 
 # ------------------------------------------------------------------------------ pandas
-
-
-def simulation_frame(res: Any) -> pd.DataFrame:
-    """A simulation result as a tidy DataFrame, one row per (save time, agent).
-
-    Parameters
-    ----------
-    res
-        A :class:`ntc_design.simulate.SimulationResult`.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns ``t``, ``agent`` (label as text), ``mc`` (Monte Carlo E‖x_i − θ‖²),
-        ``lo``, ``hi`` (its 95% band) and ``exact`` (the exact moment curve); a column
-        that was not computed is NaN.
-    """
-    import pandas as pd
-
-    t = np.asarray(res.save_times, dtype=float)
-    labels = [str(a) for a in res.labels]
-    s, n = t.size, len(labels)
-    nan = np.full((s, n), math.nan)
-    mc = res.mc
-    cols = {
-        "t": np.repeat(t, n),
-        "agent": np.tile(np.array(labels, dtype=object), s),
-        "mc": (mc["mean"] if mc is not None else nan).reshape(-1),
-        "lo": (mc["lo"] if mc is not None else nan).reshape(-1),
-        "hi": (mc["hi"] if mc is not None else nan).reshape(-1),
-        "exact": (res.exact.ms_error if res.exact is not None else nan).reshape(-1),
-    }
-    return pd.DataFrame(cols, columns=list(TIDY_COLUMNS))
 
 
 __all__ = [

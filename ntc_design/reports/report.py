@@ -34,6 +34,9 @@ REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
 
 @dataclass
 class RunData:
+    """A simulation run as ``ntc report`` reads it: summary.json, the curves table and the
+    paths, checked against each other once by :func:`load_run`."""
+
     path: Path
     summary: dict
     t: np.ndarray
@@ -42,13 +45,26 @@ class RunData:
 
     @property
     def labels(self) -> list[str]:
+        """The agent labels, as text."""
         return [str(a) for a in self.npz["labels"]]
 
     @property
     def theta(self) -> np.ndarray:
+        """The target θ of the run."""
         return np.asarray(self.summary["parameters"]["theta"], dtype=float)
 
     def topology(self) -> Topology | SwitchingTopology:
+        """The run's topology (or switching set), rebuilt from summary.json.
+
+        Returns
+        -------
+        Topology or SwitchingTopology
+
+        Raises
+        ------
+        InputError
+            A malformed topology or schedule, or a run over a time-varying topology.
+        """
         where = f"{self.path}/summary.json"
         tops = {}
         for k, v in self.summary["topologies"].items():
@@ -83,6 +99,18 @@ class RunData:
         return next(iter(tops.values()))
 
     def ms(self, kind: str) -> np.ndarray | None:
+        """The per-agent E‖x_i − θ‖² curves of one kind.
+
+        Parameters
+        ----------
+        kind : str
+            ``mc``, ``lo``, ``hi`` or ``exact``: the column prefix in ms_error.csv.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            Shape (save times, N); None when the run has no such curves.
+        """
         cols = [f"{kind}_{a}" for a in self.labels]
         if not all(c in self.table for c in cols):
             return None

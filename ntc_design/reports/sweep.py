@@ -78,7 +78,17 @@ def _save(fig, stem: Path) -> bytes:
 
 
 def is_sweep_dir(directory: str | Path) -> bool:
-    """True when ``directory`` holds the output of ``ntc sweep`` (its sweep.json)."""
+    """Whether ``directory`` holds the output of ``ntc sweep`` (its sweep.json).
+
+    Parameters
+    ----------
+    directory : str or pathlib.Path
+        A folder.
+
+    Returns
+    -------
+    bool
+    """
     p = Path(directory) / "sweep.json"
     if not p.is_file():
         return False

@@ -11,7 +11,6 @@ moments (:func:`.moments.exact_moments`).
 from __future__ import annotations
 
 import os
-import sys
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -22,6 +21,7 @@ from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, quote
 from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..timevarying import ExpressionTopology
 from .budget import (
     check_budget,
     check_exact_work,
@@ -310,8 +310,7 @@ def simulate(
             f"theta: expected {d} numbers (the state dimension d), got {spec.theta.size}"
         )
     cfun, gain_text = make_gain(spec.gain)
-    tvmod = sys.modules.get("ntc_design.timevarying")  # loaded by any ExpressionTopology
-    if tvmod is not None and isinstance(topology, tvmod.ExpressionTopology):  # A(t)
+    if isinstance(topology, ExpressionTopology):  # A(t)
         from .timevarying import simulate_expression
 
         workers = min(spec.mc.workers, os.cpu_count() or 1)

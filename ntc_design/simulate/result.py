@@ -3,6 +3,7 @@ run statistics) and its JSON summary."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -11,6 +12,9 @@ from ..design import DESIGN_KEYS, ProtocolDesign
 from .grid import TimeGrid
 from .moments import Moments
 from .montecarlo import PartialStats
+
+#: The columns of the tidy table (``ms_error_long.csv``, ``SimulationResult.to_pandas``).
+TIDY_COLUMNS = ("t", "agent", "mc", "lo", "hi", "exact")
 
 Z95 = 1.959963984540054
 
@@ -83,16 +87,47 @@ class SimulationResult:
         return out
 
     def to_pandas(self):
-        """The curves as a tidy table; see :func:`ntc_design.interop.simulation_frame`.
+        """The curves as a tidy table; see :func:`simulation_frame`.
 
         Returns
         -------
         pandas.DataFrame
             Columns t, agent, mc, lo, hi, exact; one row per save time and agent.
         """
-        from ..interop import simulation_frame
-
         return simulation_frame(self)
+
+
+def simulation_frame(res: SimulationResult):
+    """A simulation result as a tidy DataFrame, one row per (save time, agent).
+
+    Parameters
+    ----------
+    res
+        A :class:`ntc_design.simulate.SimulationResult`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``t``, ``agent`` (label as text), ``mc`` (Monte Carlo E‖x_i − θ‖²),
+        ``lo``, ``hi`` (its 95% band) and ``exact`` (the exact moment curve); a column
+        that was not computed is NaN.
+    """
+    import pandas as pd
+
+    t = np.asarray(res.save_times, dtype=float)
+    labels = [str(a) for a in res.labels]
+    s, n = t.size, len(labels)
+    nan = np.full((s, n), math.nan)
+    mc = res.mc
+    cols = {
+        "t": np.repeat(t, n),
+        "agent": np.tile(np.array(labels, dtype=object), s),
+        "mc": (mc["mean"] if mc is not None else nan).reshape(-1),
+        "lo": (mc["lo"] if mc is not None else nan).reshape(-1),
+        "hi": (mc["hi"] if mc is not None else nan).reshape(-1),
+        "exact": (res.exact.ms_error if res.exact is not None else nan).reshape(-1),
+    }
+    return pd.DataFrame(cols, columns=list(TIDY_COLUMNS))
 
 
 def _design_brief(d: ProtocolDesign) -> dict:

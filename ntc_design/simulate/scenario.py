@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from ..files import ScenarioData, jsonable, parse_scenario
-from ..interop import simulation_frame
 from ..loader import load
 from ..outputs import check_output_folder, output_folder
+from .result import simulation_frame
 from .spec import SimulationSpec
 
 OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz")
