@@ -306,7 +306,7 @@ class ResultsAudit:
         bad = self.bad + [
             f"{self.name(p)}: a reported number this kind does not report" for p in unread[:5]
         ]
-        note = f" ({len(self.estimates)} estimates within their bounds)" if self.estimates else ""
+        note = f" ({len(self.estimates)} estimate(s) within their bounds)" if self.estimates else ""
         return Check(
             "reported results (each number recomputed, bounded or informational)",
             not bad,
