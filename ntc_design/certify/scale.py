@@ -532,7 +532,19 @@ def unpack(x: Any, where: str, kind: str, shape: tuple[int, ...]) -> np.ndarray:
 # ----------------------------------------------------------------------- certify
 
 
-def _subject(des: ProtocolDesign) -> dict:
+def mode_subject(des: ProtocolDesign) -> dict:
+    """A design as a scale certificate's subject mode: the topology as packed arrays, θ,
+    ΔC, δ and the informed agents.
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The design.
+
+    Returns
+    -------
+    dict
+    """
     top = des.topology
     ea = top.edge_arrays
     return {
@@ -773,7 +785,7 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
         "kind": KIND,
         "certifies": ["hurwitz"],
         "size": int(top.nd),
-        "subject": {"modes": {name: _subject(des)}},
+        "subject": {"modes": {name: mode_subject(des)}},
         "components": {
             "label": pack(comp, "i8"),
             "method": [str(m) for m in methods.tolist()],

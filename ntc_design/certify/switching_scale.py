@@ -49,10 +49,10 @@ from .format import (
     switching_hash,
     topology_hash,
 )
-from .scale import _subject as mode_subject
 from .scale import (
     component_matrix,
     lap_b_blocks,
+    mode_subject,
     rump_shift,
     shifted_symmetric_part,
     symmetric_part_bound,
