@@ -459,3 +459,22 @@ def test_terminal_verdict_names_a_replaced_assumption_2(file, theorems, capsys, 
         (rep,) = th["replaced"]
         assert rep["premise"].startswith("Assumption 2") and rep["holds"] is True
         assert rep["replaced_by"] and "fails" in rep["detail"]
+
+
+@pytest.mark.parametrize("file", ["g1.yaml", "switching.yaml"])
+def test_terminal_and_html_show_the_kinds_rows(file, tmp_path, capsys, monkeypatch):
+    """One presentation model: the kind's rows, labels written once, in both faces."""
+    from ntc_design.reports.report import certificate_tables
+
+    from .cli_helpers import run_cli
+
+    args = ["certify", ROOT / "examples" / file, "--theta", "1,2,-1", "--gain", "1/(1+t)"]
+    code, out, _ = run_cli(args, capsys, monkeypatch)
+    assert code == 0
+    res = certify(nd.load(ROOT / "examples" / file), [1.0, 2.0, -1.0], gain="1/(1+t)")
+    summary, _, _ = certificate_tables(res, tmp_path / "c.json", tmp_path)
+    html = {(a, b) for a, b in summary.rows if isinstance(b, str)}
+    assert res.rows
+    for row in res.rows:
+        assert f"{row.label}: {row.value}" in out
+        assert (row.label, row.value) in html

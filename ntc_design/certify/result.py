@@ -14,7 +14,7 @@ from ..model import SwitchingTopology, Topology
 from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
-from .kinds import kind_for
+from .kinds import KINDS, ResultRow, kind_for
 from .theorems import TheoremVerdict
 from .verify import verify
 
@@ -37,13 +37,18 @@ class CertifyResult:
             return True
         return self.gain is None and self.verification.valid
 
+    @property
+    def rows(self) -> tuple[ResultRow, ...]:
+        """What the certificate reports, as rows (the same on every face)."""
+        return KINDS[self.certificate["kind"]].rows(self.certificate["results"])
+
     def to_dict(self) -> dict:
         """The result as a JSON-ready mapping (what ``ntc certify --json`` prints).
 
         Returns
         -------
         dict
-            The design, the certificate's kind, subject, digest, checks and results, the
+            The design, the certificate's kind, subject, digest, checks, results and rows, the
             gain analysis, the theorem verdicts and ``proven``.
         """
         ver = self.verification
@@ -57,6 +62,7 @@ class CertifyResult:
                 "method": ver.method,
                 "checks": [c.to_dict() for c in ver.checks],
                 "results": self.certificate["results"],
+                "rows": [row.to_dict() for row in self.rows],
             },
             "gain": self.gain.to_dict() if self.gain is not None else None,
             "theorems": [t.to_dict() for t in self.theorems],

@@ -555,53 +555,7 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
             },
         ),
     ]
-    if "lmi" in r:
-        rows += [
-            (
-                "−L_B Hurwitz: Lyapunov equation",
-                f"P ≻ 0 proven, residual {r['lyapunov']['residual']:.1e}",
-            ),
-            (
-                "decay rate: LMI α vs eigenvalue bound",
-                f"{r['lmi']['alpha']:.6f} vs {r['lmi']['eig_bound']:.6f} (gap {r['lmi']['gap']:.1e})",
-            ),
-        ]
-    if "symmetric_part_min_eig" in r:
-        rows.append(
-            (
-                "λ_min(L_B + L_Bᵀ) per mode"
-                + (" (estimate)" if "symmetric_part_lower_bound" in r else ""),
-                ", ".join(
-                    f"{k}: {v:.6f}" if v is not None else f"{k}: not estimated"
-                    for k, v in r["symmetric_part_min_eig"].items()
-                ),
-            )
-        )
-        if "symmetric_part_lower_bound" in r:  # switching-scale: the proven bounds
-            rows.append(
-                (
-                    "proven lower bound ℓ: λ_min > ℓ (sparse Cholesky)",
-                    ", ".join(f"{k}: {v:.6f}" for k, v in r["symmetric_part_lower_bound"].items())
-                    or "none proven",
-                )
-            )
-        rows.append(("common Lyapunov matrix", r["common_lyapunov"]["structure"] or "none found"))
-    if "rate_estimate" in r:  # hurwitz-scale
-        est = r["rate_estimate"]["value"]
-        rows.append(
-            (
-                "components (strongly connected) and methods",
-                f"{r['components']} components, largest {r['largest_component_agents']} "
-                f"agents; {r['methods']}",
-            )
-        )
-        rows.append(
-            (
-                "decay rate estimate (not proven)",
-                (f"{est:.6f}" if est is not None and np.isfinite(est) else "—")
-                + f" ({r['rate_estimate']['method']})",
-            )
-        )
+    rows += [(row.label + (" (estimate)" if row.estimate else ""), row.value) for row in res.rows]
     checks = Table(
         ("claim", "holds", "proof"),
         [(c.name, {"verdict": c.ok, "text": ""}, c.detail) for c in ver.checks],

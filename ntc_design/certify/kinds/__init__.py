@@ -1,6 +1,6 @@
 """Certificate kinds: a base class, one module per kind, and the registry."""
 
-from .base import CertificateKind, ModeReading, Reading, ResultsAudit, Subject
+from .base import CertificateKind, ModeReading, Reading, ResultRow, ResultsAudit, Subject
 from .registry import KINDS, kind_for
 
 __all__ = [
@@ -8,6 +8,7 @@ __all__ = [
     "CertificateKind",
     "ModeReading",
     "Reading",
+    "ResultRow",
     "ResultsAudit",
     "Subject",
     "kind_for",

@@ -58,6 +58,44 @@ class Reading:
 
 
 @dataclass(frozen=True)
+class ResultRow:
+    """One line of what a certificate reports, as every face shows it (the terminal, the
+    HTML report, notebooks): the label is written once, here, by the kind."""
+
+    label: str
+    value: str
+    estimate: bool = False  # an estimate, not a proof: every face says so
+
+    def to_dict(self) -> dict:
+        """The row as a JSON-ready mapping.
+
+        Returns
+        -------
+        dict
+            ``label``, ``value`` and ``estimate``.
+        """
+        return {"label": self.label, "value": self.value, "estimate": self.estimate}
+
+
+def number_text(x: Any, digits: int = 6) -> str:
+    """A reported number as text (``—`` when there is none).
+
+    Parameters
+    ----------
+    x : Any
+        The number, or None.
+    digits : int, optional
+        Significant digits.
+
+    Returns
+    -------
+    str
+    """
+    v = finite_number(x)
+    return "—" if v is None else f"{v:.{digits}g}"
+
+
+@dataclass(frozen=True)
 class Subject:
     """The subject as the common checks established it: the modes, the schedule (None
     for one topology) and the modes it uses, and the switching hash."""
@@ -524,6 +562,20 @@ class CertificateKind(ABC):
             A malformed field read only by this proof.
         """
 
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        """What a certificate of this kind reports, as rows for every face.
+
+        Parameters
+        ----------
+        results : dict
+            The certificate's ``results`` (as issued and verified).
+
+        Returns
+        -------
+        tuple of ResultRow
+        """
+        return ()
+
     @abstractmethod
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float
@@ -552,6 +604,8 @@ class CertificateKind(ABC):
 
 __all__ = [
     "CertificateKind",
+    "ResultRow",
+    "number_text",
     "ModeReading",
     "Reading",
     "ResultsAudit",

@@ -3,6 +3,7 @@ with a decay rate α when the LMI found one (P ≻ 0, P L_B + L_Bᵀ P − 2αP 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -14,7 +15,7 @@ from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
 from ..lyapunov import decay_rate_lmi, hurwitz_by_lyapunov
 from ..theorems import TheoremVerdict, fixed_verdicts
-from .base import CertificateKind, Reading, ResultsAudit, Subject
+from .base import CertificateKind, Reading, ResultRow, ResultsAudit, Subject
 from .dense import dense_method, prove_dense, read_dense
 
 
@@ -122,6 +123,19 @@ class HurwitzKind(CertificateKind):
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading):
         return prove_dense(claim, subject, reading)
+
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        lya, lmi = results.get("lyapunov") or {}, results.get("lmi")
+        resid = f"Lyapunov residual {lya.get('residual', math.nan):.2e}"
+        if not lmi:
+            return (ResultRow("decay rate", f"not certified; {resid}"),)
+        return (
+            ResultRow(
+                "decay rate",
+                f"LMI α = {lmi['alpha']:.6g}, eigenvalue bound = {lmi['eig_bound']:.6g} "
+                f"(gap {lmi['gap']:.2e}); {resid}",
+            ),
+        )
 
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float

@@ -35,7 +35,15 @@ from ..scale import (
     unpack,
 )
 from ..theorems import TheoremVerdict, fixed_verdicts
-from .base import CertificateKind, ModeReading, Reading, ResultsAudit, Subject
+from .base import (
+    CertificateKind,
+    ModeReading,
+    Reading,
+    ResultRow,
+    ResultsAudit,
+    Subject,
+    number_text,
+)
 
 METHODS = ("dominance", "symmetric", "lyapunov", "none")
 #: verify redoes the rate estimate when its dense eigenvalue work, Σ (n_C·d)³ over the
@@ -299,6 +307,18 @@ class HurwitzScaleKind(CertificateKind):
                 )
             )
         return checks
+
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        r, est = results, results["rate_estimate"]
+        return (
+            ResultRow(
+                "components",
+                f"{r['components']} (largest {r['largest_component_agents']} agents), "
+                f"methods {r['methods']}",
+            ),
+            ResultRow("decay rate", f"{number_text(est['value'])} ({est['method']})", True),
+            *(ResultRow("skipped", sk) for sk in r["skipped"]),
+        )
 
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float

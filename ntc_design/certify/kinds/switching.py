@@ -13,7 +13,7 @@ from ..dense import DENSE_CERT_MAX_ND, min_eig, mode_subject
 from ..format import FORMAT, VERSION, finish, scheduled_modes, switching_hash, topology_hash
 from ..lyapunov import common_lyapunov, verified_margin
 from ..theorems import TheoremVerdict, switching_verdicts
-from .base import CertificateKind, Reading, ResultsAudit, Subject
+from .base import CertificateKind, Reading, ResultRow, ResultsAudit, Subject, number_text
 from .dense import dense_method, prove_dense, read_dense
 
 
@@ -146,6 +146,23 @@ class SwitchingKind(CertificateKind):
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading):
         return prove_dense(claim, subject, reading)
+
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        cl = results["common_lyapunov"]
+        return (
+            ResultRow(
+                "λ_min(L_B + L_Bᵀ)",
+                ", ".join(
+                    f"{k} {number_text(v)}" for k, v in results["symmetric_part_min_eig"].items()
+                ),
+            ),
+            ResultRow(
+                "common Lyapunov matrix",
+                f"{cl['structure'] or 'none found'} ("
+                + "; ".join(f"{a['structure']}: {a['status']}" for a in cl["attempts"])
+                + ")",
+            ),
+        )
 
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float

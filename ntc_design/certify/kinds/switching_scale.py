@@ -25,7 +25,15 @@ from ..switching_scale import (
     sym_matrices,
 )
 from ..theorems import TheoremVerdict, switching_verdicts
-from .base import CertificateKind, ModeReading, Reading, ResultsAudit, Subject
+from .base import (
+    CertificateKind,
+    ModeReading,
+    Reading,
+    ResultRow,
+    ResultsAudit,
+    Subject,
+    number_text,
+)
 from .switching import switching_nd, weight_bound
 
 
@@ -121,6 +129,23 @@ class SwitchingScaleKind(CertificateKind):
         p = symmetric_part_bound(lap, err, lo)
         bound = f"λ_min > {lo:.6g}: " if lo else ""
         return Check(claim.id, p.holds, f"verified-float: {bound}{p.detail}", claim)
+
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        lb = results["symmetric_part_lower_bound"]
+        est = results["symmetric_part_min_eig"]
+        return (
+            ResultRow(
+                "λ_min(L_B + L_Bᵀ)",
+                ", ".join(f"{k} {number_text(v)}" for k, v in est.items()),
+                True,
+            ),
+            ResultRow(
+                "proven lower bound ℓ: λ_min > ℓ (sparse Cholesky)",
+                ", ".join(f"{k}: {number_text(lb.get(k))}" for k in est) or "none proven",
+            ),
+            ResultRow("common Lyapunov matrix", results["common_lyapunov"]["note"]),
+            *(ResultRow("skipped", sk) for sk in results["skipped"]),
+        )
 
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float

@@ -29,7 +29,15 @@ from ..time_varying import (
     noise_sigma_bar,
     time_varying_certificate,
 )
-from .base import CertificateKind, ModeReading, Reading, ResultsAudit, Subject
+from .base import (
+    CertificateKind,
+    ModeReading,
+    Reading,
+    ResultRow,
+    ResultsAudit,
+    Subject,
+    number_text,
+)
 
 MAX_INTERVALS = 100_000
 #: Relative agreement of re-enclosed numbers with the reported ones (the same Arb and
@@ -264,6 +272,24 @@ class TimeVaryingKind(CertificateKind):
             )
         )
         return checks
+
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        r = results["time_varying"]
+        return (
+            ResultRow(
+                "uniform bound",
+                f"over {r['domain_text']}: Λ₂ = {r['lambda2']:.6g} certified on "
+                f"{r['intervals']} t-intervals (sampled infimum {r['sampled_inf']:.6g} at "
+                f"t = {r['t_at_sampled_inf']:.4g}, gap {100 * r['relative_gap']:.2f} %, "
+                f"{r['seconds']:.1f} s)",
+            ),
+            ResultRow(
+                "Assumption 3",
+                f"D = {r['D']:.6g}; Λ₁ = {r['Lambda1']:.6g}, p̄ = {r['p_bar']:.6g}; "
+                f"μ₂(t) > 0 for t >= t₀ = {number_text(r['t0'])} (σ̄ = {r['sigma_bar']:.4g}; "
+                f"{r['t0_proof']})",
+            ),
+        )
 
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float
