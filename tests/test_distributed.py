@@ -98,6 +98,7 @@ def _alive(pid: int) -> bool:
     return True
 
 
+@pytest.mark.slow
 def test_sweep_on_cluster_survives_a_killed_worker(files, reference, cluster):
     addr = cluster.scheduler.address
     assert addr.startswith("tcp://127.0.0.1:")

@@ -53,10 +53,11 @@ def scenario(tmp_path, name="sc.json", **over):
 
 def fails(tmp_path, capsys, monkeypatch, sc, *needles):
     out = tmp_path / "out"
+    before = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
     line = assert_input_error(["simulate", sc, "--out", out], capsys, monkeypatch, *needles)
     assert not out.exists()
-    assert sorted(os.listdir(tmp_path)) == sorted(p.name for p in tmp_path.iterdir())
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp folders
+    # nothing written anywhere below tmp_path (no output, no temporary file or folder)
+    assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before
     return line
 
 

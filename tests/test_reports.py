@@ -59,6 +59,7 @@ def _assert_links_resolve(path: Path) -> int:
     return len(files)
 
 
+@pytest.mark.slow
 def test_reproduce_paper_summary_matches(paper_run):
     out, path, ok, wall = paper_run
     html = path.read_text()
@@ -167,6 +168,7 @@ def test_report_opens_in_headless_chromium(paper_run, tmp_path):
     assert shot.stat().st_size > 50_000
 
 
+@pytest.mark.slow
 def test_ntc_report_on_a_simulation(tmp_path, capsys, monkeypatch):
     sc = tmp_path / "sc.yaml"
     sc.write_text(
@@ -295,6 +297,7 @@ def test_save_times_on_switching_instants_keep_their_paths():
     assert np.all(res.mc["mean"][1:].sum(axis=1) > 0)
 
 
+@pytest.mark.slow
 def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkeypatch):
     """Nd = 75 > 60: the certificate is switching-scale, its proven bounds are reported; a
     report wider than REPORT_MAX_AGENTS is refused in one line."""

@@ -260,7 +260,7 @@ def test_npz_modes_in_a_switching_file(tmp_path, sw, capsys, monkeypatch):
         monkeypatch,
     )
     assert code == 0, err
-    assert "proven >" in text and "Theorem 3 (mean square): guaranteed" in text
+    assert "proven lower bound ℓ: λ_min > ℓ" in text and "Theorem 3 (mean square): guaranteed" in text
     mode = stat.S_IMODE(os.stat(out).st_mode)
     umask = os.umask(0)
     os.umask(umask)
