@@ -493,7 +493,7 @@ def identity_residual(lap_b, u: np.ndarray, theta: np.ndarray) -> float:
     if sparse.issparse(lap_b):
         norm = float(abs(lap_b).sum(axis=1).max()) if lap_b.nnz else 0.0
     else:
-        norm = np.linalg.norm(lap_b, np.inf)
+        norm = float(np.linalg.norm(lap_b, np.inf))
     scale = max(norm * np.max(np.abs(theta)), 1e-300)
     return float(np.max(np.abs(r)) / scale)
 

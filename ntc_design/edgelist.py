@@ -205,4 +205,4 @@ def write_npz(
     if name is not None:
         arrays["name"] = np.array(str(name))
     with atomic_path(p) as tmp:
-        np.savez_compressed(tmp, **arrays)
+        np.savez_compressed(tmp, **arrays)  # type: ignore[arg-type]  # numpy stub: **kwds typed as allow_pickle

@@ -26,6 +26,7 @@ import decimal
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -144,7 +145,7 @@ def _short(text: str, n: int = 60) -> str:
     return repr(s)
 
 
-_MATH = {
+_MATH: dict[Any, Callable[..., float]] = {
     sp.exp: math.exp,
     sp.log: math.log,
     sp.sqrt: math.sqrt,

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .edgelist import MAX_AGENTS, MAX_DIM, read_npz
+from .edgelist import MAX_AGENTS, MAX_DIM, EdgeListData, read_npz
 from .errors import InputError
 
 Label = int | str
@@ -585,7 +585,7 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
     if not isinstance(modes_doc, dict) or not modes_doc:
         raise _err(source, "modes", "expected a non-empty mapping name -> file or topology")
     base = Path(source).parent if source else Path(".")
-    modes: dict[str, TopologyData] = {}
+    modes: dict[str, TopologyData | EdgeListData] = {}
     for name, spec in modes_doc.items():
         if isinstance(spec, str):
             path = base / spec

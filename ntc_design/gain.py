@@ -34,6 +34,7 @@ arithmetic; inside the child each sympy call also has its own smaller budget
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import os
 import signal
@@ -279,6 +280,18 @@ def _scale():
     ]
 
 
+def _nonnegative_derivative(h: sp.Expr, y: sp.Symbol) -> bool | None:
+    """∂h/∂y >= 0 (sympy's assumptions; None when undecided)."""
+    return sp.diff(h, y).is_nonnegative
+
+
+def _integral_piece(f: Callable[[float], Any], a: float, b: float) -> float:
+    """∫_a^b f by adaptive quadrature."""
+    from scipy.integrate import quad
+
+    return float(quad(lambda x: float(f(x)), a, b, limit=100)[0])
+
+
 def _compare(h: sp.Expr, name: str) -> tuple[bool | None, str]:
     """Limit comparison of ∫^∞ h with the logarithmic scale: (converges?, reason)."""
     for psi, psi_l2, div_ref, conv_ref in _scale():
@@ -331,7 +344,7 @@ def _split(h: sp.Expr) -> tuple[sp.Expr, list[tuple[sp.Expr, sp.Expr]]] | None:
         if nxt == cur:
             break
         cur = nxt
-    smooth, parts = sp.Integer(0), {}
+    smooth, parts = sp.Integer(0), dict[sp.Expr, sp.Expr]()
     for term in sp.Add.make_args(cur):
         atoms = [a for a in term.atoms(*trig) if a.func is not sp.tan and _linear_in_t(a.args[0])]
         atoms = [a for a in atoms if a.args[0].has(T)]
@@ -407,7 +420,7 @@ def _monotone_bounds(h: sp.Expr, name: str) -> tuple[bool | None, str]:
     hy = h.xreplace(dict(zip(atoms, ys, strict=True)))
     try:
         increasing = all(
-            _bounded(lambda y=y: sp.diff(hy, y).is_nonnegative, _step[0] / 2) for y in ys
+            _bounded(functools.partial(_nonnegative_derivative, hy, y), _step[0] / 2) for y in ys
         )
     except (_Timeout, Exception):  # noqa: BLE001
         increasing = False
@@ -474,7 +487,6 @@ def _integral(h: sp.Expr, name: str) -> tuple[bool | None, str]:
 
 def _numeric_integrals(expr: sp.Expr) -> str:
     """A stated numerical observation (not a decision): ∫₀^T for growing T."""
-    from scipy.integrate import quad
 
     f = compile_expression(expr, (T,))
     edges = np.concatenate([[0.0], np.logspace(-2, 6, 81)])
@@ -482,7 +494,7 @@ def _numeric_integrals(expr: sp.Expr) -> str:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             parts = [
-                _bounded(lambda a=a, b=b: quad(lambda x: float(f(x)), a, b, limit=100)[0], 1.0)
+                _bounded(functools.partial(_integral_piece, f, a, b), 1.0)
                 for a, b in zip(edges[:-1], edges[1:], strict=True)
             ]
     except _Timeout:

@@ -251,15 +251,15 @@ def random_network(
     w_tree = np.zeros((tree_to.size, d, d))
     tdepth = depth[tree_to]
     for lev in range(int(tdepth.max(initial=0)), 0, -1):
-        m = np.flatnonzero(tdepth == lev)
-        i = tree_to[m]
+        at = np.flatnonzero(tdepth == lev)
+        i = tree_to[at]
         need = out[i] - mag_in_other[i]
         lam, vec = np.linalg.eigh(0.5 * (need + need.transpose(0, 2, 1)))
         need_psd = (vec * np.maximum(lam, 0.0)[:, None, :]) @ vec.transpose(0, 2, 1)
-        w = need_psd + r_tree[m]
+        w = need_psd + r_tree[at]
         w = 0.5 * (w + w.transpose(0, 2, 1))
-        w_tree[m] = w
-        np.add.at(out, tree_from[m], w)
+        w_tree[at] = w
+        np.add.at(out, tree_from[at], w)
 
     rows = np.concatenate([tree_to, ch_to, an_to])
     cols = np.concatenate([tree_from, ch_from, an_from])

@@ -71,6 +71,7 @@ class Topology:
     name: str | None = None
     source: str | None = None
     fields: Mapping[tuple[int, int], str] = field(default_factory=dict, repr=False)
+    _arrays: EdgeArrays = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         n, d = len(self.labels), self.dim
