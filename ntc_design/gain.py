@@ -232,8 +232,20 @@ def _bounded(fn: Callable[[], Any], seconds: float | None = None) -> Any:
         signal.signal(signal.SIGALRM, old)
 
 
-def _limit(expr: sp.Expr, seconds: float | None = None) -> sp.Expr | None:
-    """lim_(t→∞) expr: a number, ±oo, an AccumBounds, or None if sympy fails or times out."""
+def limit_at_infinity(expr: sp.Expr, seconds: float | None = None) -> sp.Expr | None:
+    """lim_(t→∞) expr: a number, ±∞, an AccumBounds, or None if sympy fails or times out.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        An expression of t.
+    seconds : float, optional
+        The time limit (default: the module's).
+
+    Returns
+    -------
+    sympy.Expr or None
+    """
     try:
         val = _bounded(lambda: sp.limit(expr, T, sp.oo), seconds)
     except _Timeout:
@@ -295,14 +307,14 @@ def _integral_piece(f: Callable[[float], Any], a: float, b: float) -> float:
 def _compare(h: sp.Expr, name: str) -> tuple[bool | None, str]:
     """Limit comparison of ∫^∞ h with the logarithmic scale: (converges?, reason)."""
     for psi, psi_l2, div_ref, conv_ref in _scale():
-        lo, _ = _bounds(d) if (d := _limit(h * psi)) is not None else (None, None)
+        lo, _ = _bounds(d) if (d := limit_at_infinity(h * psi)) is not None else (None, None)
         if lo is not None and _pos(lo):
             what = "liminf" if isinstance(d, sp.AccumBounds) else "lim"
             return False, (
                 f"{what} {name}·{_mul_name(div_ref)} = {lo} > 0: ∫ {name} dt diverges like "
                 f"∫ {div_ref} dt (limit comparison)"
             )
-        c = _limit(h * psi_l2)
+        c = limit_at_infinity(h * psi_l2)
         if c is not None:
             clo, chi = _bounds(c)
             if _finite(chi) and _finite(clo):
@@ -319,7 +331,7 @@ def _mul_name(ref: str) -> str:
 
 def _oscillating(a: sp.Expr) -> bool:
     """sin/cos/tan of an argument that tends to ±∞ (others are eventually monotone)."""
-    lim = _limit(a.args[0], STEP_SECONDS / 2)
+    lim = limit_at_infinity(a.args[0], STEP_SECONDS / 2)
     return lim in (sp.oo, -sp.oo) or lim is None or isinstance(lim, sp.AccumBounds)
 
 
@@ -456,7 +468,7 @@ def _integral(h: sp.Expr, name: str) -> tuple[bool | None, str]:
         # g with a finite limit G is eventually monotone: ∫^T g·sin(a t + b) stays bounded
         # (Dirichlet's test for g − G, and G·∫ sin is bounded); as c >= 0, ∫^T c is
         # increasing, so ∫ c and ∫ smooth converge or diverge together.
-        if all((g_lim := _limit(g)) is not None and _finite(g_lim) for g, _ in parts):
+        if all((g_lim := limit_at_infinity(g)) is not None and _finite(g_lim) for g, _ in parts):
             osc = ", ".join(str(a) for _, a in parts)
             if smooth == 0:
                 return True, (
@@ -557,7 +569,7 @@ def _sign(expr: sp.Expr, text: str, continuous: bool | None) -> str:
 
 
 def _tends_to_zero(expr: sp.Expr) -> Condition:
-    lim = _limit(expr)
+    lim = limit_at_infinity(expr)
     if lim is not None and not isinstance(lim, sp.AccumBounds):
         return Condition(bool(lim == 0), f"lim_(t→∞) c(t) = {lim} (sympy)")
     if isinstance(lim, sp.AccumBounds) and _pos(lim.min):
@@ -565,8 +577,8 @@ def _tends_to_zero(expr: sp.Expr) -> Condition:
     split = _split(expr)
     if split is not None and split[1]:
         smooth, parts = split
-        s_lim = _limit(smooth)
-        g_lims = [_limit(g) for g, _ in parts]
+        s_lim = limit_at_infinity(smooth)
+        g_lims = [limit_at_infinity(g) for g, _ in parts]
         if s_lim is not None and all(g is not None and _finite(g) for g in g_lims):
             if s_lim == 0 and all(g == 0 for g in g_lims):
                 return Condition(True, "c = s + Σ g·sin/cos with s → 0 and every g → 0")

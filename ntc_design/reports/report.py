@@ -622,10 +622,10 @@ def predicted_exponent(gain: str, rate: float) -> tuple[float | None, str]:
     None when c is not a power of t."""
     import sympy as sp
 
-    from ..gain import T, _limit, parse_gain
+    from ..gain import T, limit_at_infinity, parse_gain
 
     # the power of c at infinity, lim log c / log t (sympy, time-bounded)
-    p = _limit(sp.log(parse_gain(gain)) / sp.log(T))
+    p = limit_at_infinity(sp.log(parse_gain(gain)) / sp.log(T))
     if p == -sp.oo:
         return 0.0, "c decays faster than any power of t: ∫c < ∞, so the error stalls"
     if p is None or p == sp.oo or isinstance(p, sp.AccumBounds):

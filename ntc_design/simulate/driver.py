@@ -34,7 +34,7 @@ from .budget import (
 from .grid import TimeGrid, build_grid
 from .moments import check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec, run
-from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
+from .result import SimulationDiverged, SimulationResult, mc_summary, truncate_result
 from .spec import SimulationSpec
 from .system import ModeSystem, check_step_size, mode_system
 
@@ -384,7 +384,7 @@ def simulate(
             part = run(mspec, workers=workers, progress=progress)
         sec = max(time.perf_counter() - t0, 1e-9)
         stats.update({"mc_seconds": sec, "path_steps_per_second": grid.n_steps * paths / sec})
-        mc = _mc_summary(part)
+        mc = mc_summary(part)
         failure = part.failure
         if paths < 2:
             notes.append("one sample path: no confidence band")
@@ -412,7 +412,7 @@ def simulate(
     if failure is not None:
         lab = labels[failure["agent"]]
         k = failure["save_index"]
-        res = _truncate(res, k)
+        res = truncate_result(res, k)
         res.failure = {**failure, "agent": lab}
         kept = (
             f"results kept up to t = {res.save_times[-1]:.6g}"

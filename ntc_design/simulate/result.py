@@ -168,10 +168,21 @@ def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
     }
 
 
-def _mc_summary(part: PartialStats) -> dict:
+def mc_summary(part: PartialStats) -> dict:
     """Mean of ‖x_i − θ‖² and its 95% confidence band (normal approximation). With fewer
     than two paths there is no band: ``lo`` and ``hi`` are NaN (shown as none), never a
-    zero-width band."""
+    zero-width band.
+
+    Parameters
+    ----------
+    part : PartialStats
+        The Monte Carlo sums over the paths.
+
+    Returns
+    -------
+    dict
+        ``mean``, ``lo``, ``hi`` (S, N), ``mean_state``, ``paths``, ``count``, ``valid_saves``.
+    """
     p = part.count
     mean = part.sq / p
     if p < 2:
@@ -191,7 +202,20 @@ def _mc_summary(part: PartialStats) -> dict:
     }
 
 
-def _truncate(res: SimulationResult, k: int) -> SimulationResult:
+def truncate_result(res: SimulationResult, k: int) -> SimulationResult:
+    """The result cut to its first ``k`` save times (after a divergence).
+
+    Parameters
+    ----------
+    res : SimulationResult
+        The result.
+    k : int
+        Save times kept.
+
+    Returns
+    -------
+    SimulationResult
+    """
     if res.mc is not None:
         res.mc = {
             key: (

@@ -539,7 +539,7 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         gain_samples,
     )
     from .grid import build_grid
-    from .result import SimulationDiverged, SimulationResult, _mc_summary, _truncate
+    from .result import SimulationDiverged, SimulationResult, mc_summary, truncate_result
 
     x_init, ini_notes = spec.initial_state(tv.n, tv.dim)
     th = np.asarray(spec.theta, dtype=float)
@@ -598,7 +598,7 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         "topology": tv.to_dict(),
     }
     stats = {"steps": grid.n_steps, "path_steps": grid.n_steps * spec.mc.paths, **stats}
-    mc = _mc_summary(part) if part is not None else None
+    mc = mc_summary(part) if part is not None else None
     labels = tuple(tv.labels)
     res = SimulationResult(
         labels, th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
@@ -606,7 +606,7 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
     failure = part.failure if part is not None else None
     if failure is not None:
         lab = labels[failure["agent"]]
-        res = _truncate(res, failure["save_index"])
+        res = truncate_result(res, failure["save_index"])
         res.failure = {**failure, "agent": lab}
         raise SimulationDiverged(
             f"simulation diverged (NaN or overflow) by t = {failure['t']:.6g} at agent "
