@@ -240,12 +240,13 @@ def _check_exact_work(
 
 
 def _check_noise_callable(spec: SimulationSpec, systems: Sequence[ModeSystem], d: int) -> None:
-    if spec.noise.linear:
+    f = spec.noise.f
+    if spec.noise.linear or not callable(f):
         return
     probe = np.zeros((2, systems[0].n_edges, d))
     try:
         with np.errstate(all="ignore"):
-            outp = np.asarray(spec.noise.f(probe + 1.0))
+            outp = np.asarray(f(probe + 1.0))
     except Exception as exc:  # noqa: BLE001 - user code
         raise InputError(
             f"noise.f: calling it on an array of shape {probe.shape} failed ({exc.__class__.__name__})"

@@ -38,7 +38,7 @@ class TimeGrid:
 def build_grid(
     t_end: float,
     dt: float,
-    save_times: Sequence[float],
+    save_times: Sequence[float] | np.ndarray,
     segments: Sequence[tuple[float, float, int]] | None = None,
     gain: Callable[[np.ndarray], np.ndarray] | None = None,
     intrinsic_ds: float | None = None,

@@ -152,6 +152,8 @@ def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
         mean), and the mean and spread (std across stored paths) of ‖x(T) − 1⊗θ‖;
         ``{"stored": 0}`` when no path was stored.
     """
+    if res.mc is None:
+        return {"stored": 0}
     paths = res.mc["paths"]
     if paths.size == 0:
         return {"stored": 0}

@@ -147,6 +147,12 @@ class SaveAt:
     every: float | None = None
     times: np.ndarray | None = None
 
+    def _listed(self) -> np.ndarray:
+        # the listed times (the constructor made sure that every or times is given)
+        if self.times is None:
+            raise InputError("save_times: not given")
+        return self.times
+
     def __post_init__(self) -> None:
         if (self.every is None) == (self.times is None):
             raise InputError("save_every: give save_every or save_times (exactly one)")
@@ -177,7 +183,7 @@ class SaveAt:
         if self.every is not None:
             n = t_end / self.every
             return math.floor(n) + 2.0 if math.isfinite(n) and n < 2**53 else n
-        return float(self.times.size + 1)
+        return float(self._listed().size + 1)
 
     def resolve(self, t_end: float) -> np.ndarray:
         """The save times on [0, t_end].
@@ -199,7 +205,7 @@ class SaveAt:
         """
         if self.every is not None:
             return np.unique(np.concatenate([np.arange(0.0, t_end, self.every), [t_end]]))
-        if np.any(self.times > t_end):
+        if np.any(self._listed() > t_end):
             raise InputError(f"save_times: expected times in [0, T={t_end:g}]")
         return np.unique(np.concatenate([[0.0], self.times]))
 
@@ -660,7 +666,7 @@ class SimulationSpec:
         if self.save.every is not None:
             out["save_every"] = self.save.every
         else:
-            out["save_times"] = self.save.times.tolist()
+            out["save_times"] = self.save._listed().tolist()
         return out
 
 
