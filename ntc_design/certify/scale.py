@@ -63,7 +63,9 @@ from ..linalg import (
 from ..model import Topology, block_coo
 from ..rigorous.exact import U, gamma, rump_shift_value
 from ..thresholds import strong_components
+from .checks import Check
 from .dense import prove_pd_expr
+from .fields import need, number, vector
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov
 
@@ -870,3 +872,46 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     if out_of_range(w):  # so no product in a proof overflows or underflows
         raise InputError(f"{where}.weights: {RANGE_TEXT}")
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
+
+
+def read_array_mode(sub: Any, where: str, size: int) -> tuple[Topology, float, np.ndarray, Check]:
+    """One mode of a scale certificate's subject: its topology (arrays, validated by the
+    model), δ, θ, and the check that its informed agents are U.
+
+    Parameters
+    ----------
+    sub : Any
+        The mode's subject entry.
+    where : str
+        The field, for messages (it ends with the mode's name).
+    size : int
+        The certificate's Nd.
+
+    Returns
+    -------
+    tuple
+        (topology, δ, θ, the informed-agents check).
+
+    Raises
+    ------
+    InputError
+        A missing or malformed field, or a size that differs from the certificate's.
+    """
+    if not isinstance(sub, dict):
+        raise InputError(f"{where}: expected an object")
+    top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
+    if top.nd != size:
+        raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
+    delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
+    if not delta > 0 or out_of_range(delta):
+        raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
+    theta = vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
+    informed = need(sub, "informed", list, where)
+    try:
+        inf_idx = sorted(top.index(x) for x in informed)
+    except InputError:
+        raise InputError(f"{where}.informed: lists an unknown agent") from None
+    ok_u = inf_idx == sorted(top.antagonised)
+    name = where.rsplit("subject.modes.", 1)[-1]
+    check = Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
+    return top, float(delta), theta, check

@@ -12,11 +12,10 @@ import numpy as np
 
 from ...design import ProtocolDesign
 from ...errors import InputError
-from ...linalg import out_of_range
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import DENSE_CERT_MAX_ND, prove_pd_expr
-from ..fields import need, number, vector
+from ..fields import need
 from ..format import topology_hash
 from ..scale import (
     LYAPUNOV_COMPONENT_MAX_ND,
@@ -30,8 +29,8 @@ from ..scale import (
     prove_mu,
     prove_symmetric_part,
     rate_estimate,
+    read_array_mode,
     scale_certificate,
-    topology_from_subject,
     unpack,
 )
 from ..theorems import TheoremVerdict, fixed_verdicts
@@ -131,23 +130,8 @@ class HurwitzScaleKind(CertificateKind):
             raise InputError(f"{source}: subject.modes: a hurwitz-scale certificate has one mode")
         ((mname, sub),) = modes.items()
         where = f"{source}: subject.modes.{mname}"
-        top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
-        size = need(doc, "size", int, source)
-        if top.nd != size:
-            raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-        delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
-        if not delta > 0 or out_of_range(delta):
-            raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
-        informed = need(sub, "informed", list, where)
-        try:
-            inf_idx = sorted(top.index(x) for x in informed)
-        except InputError:
-            raise InputError(f"{where}: informed lists an unknown agent") from None
-        ok_u = inf_idx == sorted(top.antagonised)
-        checks = [
-            Check(f"informed agents of {mname} are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
-        ]
-        theta = vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
+        top, delta, theta, informed = read_array_mode(sub, where, need(doc, "size", int, source))
+        checks = [informed]
         n = top.n
         cw = f"{source}: components"
         comps = need(doc, "components", dict, source)

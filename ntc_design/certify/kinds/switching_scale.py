@@ -11,13 +11,12 @@ import numpy as np
 
 from ...design import SwitchingDesign
 from ...errors import InputError
-from ...linalg import out_of_range
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import DENSE_CERT_MAX_ND
-from ..fields import need, number, vector
+from ..fields import need
 from ..format import MAX_MODES, topology_hash
-from ..scale import symmetric_part_bound, topology_from_subject
+from ..scale import read_array_mode, symmetric_part_bound
 from ..switching_scale import (
     EIG_DENSE_MAX_ND,
     proof_fields,
@@ -77,24 +76,8 @@ class SwitchingScaleKind(CertificateKind):
         checks, modes, tops, deltas = [], {}, {}, {}
         for name, sub in modes_doc.items():
             where = f"{source}: subject.modes.{name}"
-            if not isinstance(sub, dict):
-                raise InputError(f"{where}: expected an object")
-            top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
-            if top.nd != size:
-                raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-            delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
-            if not delta > 0 or out_of_range(delta):
-                raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
-            theta = vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
-            informed = need(sub, "informed", list, where)
-            try:
-                inf_idx = sorted(top.index(x) for x in informed)
-            except InputError:
-                raise InputError(f"{where}.informed: lists an unknown agent") from None
-            ok_u = inf_idx == sorted(top.antagonised)
-            checks.append(
-                Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
-            )
+            top, delta, theta, informed = read_array_mode(sub, where, size)
+            checks.append(informed)
             k = str(name)
             tops[k], deltas[k] = top, float(delta)
             modes[k] = ModeReading(
