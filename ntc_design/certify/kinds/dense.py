@@ -11,11 +11,11 @@ import numpy as np
 
 from ...errors import InputError
 from ..checks import Check
-from ..claims import Claim, ClaimKind, Property
+from ..claims import Claim, ClaimKind, Property, derive_claims
 from ..dense import PROVERS, DenseContext, parse_mode
 from ..fields import matrix, need
 from ..format import MAX_MODES, MAX_SIZE, RESULT_RTOL
-from .base import ModeReading, Reading, Subject
+from .base import CertificateKind, ModeReading, Reading, Subject
 
 
 def read_dense(doc: dict, source: str) -> Reading:
@@ -121,4 +121,24 @@ def dense_method(reading: Reading) -> str:
     return " + ".join(used)
 
 
-__all__ = ["dense_method", "prove_dense", "read_dense"]
+class DenseKind(CertificateKind):
+    """What the dense kinds share: their subject is read with L_B re-derived exactly, their
+    claims are the property claims of :mod:`~ntc_design.certify.claims` for the scheduled
+    modes, and each is proven by its dense prover."""
+
+    def read(self, doc: dict, source: str) -> Reading:
+        return read_dense(doc, source)
+
+    def verification_method(self, reading: Reading) -> str:
+        return dense_method(reading)
+
+    def claims(
+        self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
+    ) -> tuple[Claim, ...]:
+        return derive_claims(properties, subject.scheduled, alpha)
+
+    def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
+        return prove_dense(claim, subject, reading)
+
+
+__all__ = ["DenseKind", "dense_method", "prove_dense", "read_dense"]

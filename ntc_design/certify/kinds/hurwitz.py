@@ -9,14 +9,14 @@ from typing import Any
 import numpy as np
 
 from ...design import ProtocolDesign
-from ..claims import Claim, Property, derive_claims
+from ..claims import Property, derive_claims
 from ..dense import DENSE_CERT_MAX_ND, eig_bound, min_eig, mode_subject, require_lmi
 from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
 from ..lyapunov import decay_rate_lmi, hurwitz_by_lyapunov
 from ..theorems import TheoremVerdict, fixed_verdicts
-from .base import CertificateKind, Reading, ResultRow, ResultsAudit, Subject
-from .dense import dense_method, prove_dense, read_dense
+from .base import Reading, ResultRow, ResultsAudit, Subject
+from .dense import DenseKind
 
 
 def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool = True) -> dict:
@@ -86,7 +86,7 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
     return finish(doc)
 
 
-class HurwitzKind(CertificateKind):
+class HurwitzKind(DenseKind):
     """One topology up to Nd = ``DENSE_CERT_MAX_ND``: dense P, exact re-check."""
 
     name = "hurwitz"
@@ -105,24 +105,10 @@ class HurwitzKind(CertificateKind):
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         return fixed_verdicts(design, verification, gain)
 
-    def read(self, doc: dict, source: str) -> Reading:
-        return read_dense(doc, source)
-
-    def verification_method(self, reading: Reading) -> str:
-        return dense_method(reading)
-
     def rate(self, doc: dict, source: str) -> float:
         res = need(doc, "results", dict, source)
         lmi = need(res, "lmi", dict, f"{source}: results")
         return number(need(lmi, "alpha", (int, float), f"{source}: results.lmi"), "α")
-
-    def claims(
-        self, properties, subject: Subject, reading: Reading, alpha: float
-    ) -> tuple[Claim, ...]:
-        return derive_claims(properties, subject.scheduled, alpha)
-
-    def prove(self, claim: Claim, subject: Subject, reading: Reading):
-        return prove_dense(claim, subject, reading)
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
         lya, lmi = results.get("lyapunov") or {}, results.get("lmi")

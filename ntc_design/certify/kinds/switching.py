@@ -8,13 +8,13 @@ from typing import Any
 import numpy as np
 
 from ...design import SwitchingDesign
-from ..claims import Claim, Property, derive_claims
+from ..claims import Property, derive_claims
 from ..dense import DENSE_CERT_MAX_ND, min_eig, mode_subject
 from ..format import FORMAT, VERSION, finish, scheduled_modes, switching_hash, topology_hash
 from ..lyapunov import common_lyapunov, verified_margin
 from ..theorems import TheoremVerdict, switching_verdicts
-from .base import CertificateKind, Reading, ResultRow, ResultsAudit, Subject, number_text
-from .dense import dense_method, prove_dense, read_dense
+from .base import Reading, ResultRow, ResultsAudit, Subject, number_text
+from .dense import DenseKind
 
 
 def switching_nd(design: SwitchingDesign) -> int:
@@ -113,7 +113,7 @@ def switching_certificate(
     return finish(doc)
 
 
-class SwitchingKind(CertificateKind):
+class SwitchingKind(DenseKind):
     """A switching set up to Nd = ``DENSE_CERT_MAX_ND``: dense matrices, exact re-check."""
 
     name = "switching"
@@ -132,20 +132,6 @@ class SwitchingKind(CertificateKind):
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         est = certificate["results"]["symmetric_part_min_eig"]
         return switching_verdicts(design, verification, gain, weight_bound(design), est)
-
-    def read(self, doc: dict, source: str) -> Reading:
-        return read_dense(doc, source)
-
-    def verification_method(self, reading: Reading) -> str:
-        return dense_method(reading)
-
-    def claims(
-        self, properties, subject: Subject, reading: Reading, alpha: float
-    ) -> tuple[Claim, ...]:
-        return derive_claims(properties, subject.scheduled, alpha)
-
-    def prove(self, claim: Claim, subject: Subject, reading: Reading):
-        return prove_dense(claim, subject, reading)
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
         cl = results["common_lyapunov"]
