@@ -10,7 +10,7 @@ import threading
 import time
 import warnings
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -163,9 +163,9 @@ def _print_design(d: dict, title: str) -> None:
 @app.command()
 def check(file: FileArg, as_json: JsonOpt = False) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition."""
-    top = load(file)
-    if _expression(top):  # the classes are fixed: the structure at any t
-        top = top.structure
+    loaded = load(file)
+    # a time-varying topology's classes are fixed: its structure at any t
+    top = loaded.structure if isinstance(loaded, ExpressionTopology) else loaded
     if isinstance(top, SwitchingTopology):
         rep = {"modes": {k: structure_report(m) for k, m in top.modes.items()}}
         if as_json:
@@ -195,7 +195,7 @@ def design_cmd(
     """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S."""
     th = parse_vector(theta, "--theta")
     top = load(file)
-    if _expression(top):
+    if isinstance(top, ExpressionTopology):
         from .timevarying import TimeVaryingDesign
 
         tdoc = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin).to_dict()
@@ -216,11 +216,6 @@ def design_cmd(
             _print_design(d, f"mode {k}")
     else:
         _print_design(doc, res.topology.name or str(file))
-
-
-def _expression(top) -> bool:
-    """Weights given as expressions of t."""
-    return isinstance(top, ExpressionTopology)
 
 
 def _print_tv_design(d: dict, title: str) -> None:
@@ -293,7 +288,7 @@ class Progress:
         self.state = "starting"
         self.tasks: dict[str, int] = {}
         self._stop = threading.Event()
-        self._bar = None
+        self._bar: Any = None  # a rich progress bar on a terminal
         self._thread: threading.Thread | None = None
 
     def __enter__(self) -> Progress:
@@ -434,7 +429,7 @@ def certify(
         res = run(load(file), th, margin, gain, noise_sigma=noise_sigma, noise_f=noise_f)
     doc = res.to_dict()  # every step that can fail runs before anything is written
     written = out_path is not None and res.verification.valid
-    if written:
+    if out_path is not None and written:
         write_certificate(res.certificate, out_path)
     if as_json:
         print(_json(doc))
@@ -802,7 +797,7 @@ def main(argv: list[str] | None = None) -> None:
     try:  # typer >= 0.20 vendors click; its exceptions are what the commands raise
         from typer._click import exceptions as click
     except ImportError:  # pragma: no cover - older typer
-        from click import exceptions as click
+        from click import exceptions as click  # type: ignore[no-redef]
 
     args = sys.argv[1:] if argv is None else list(argv)
     warnings.showwarning = _warning_line

@@ -12,7 +12,7 @@ from .readers import parse_file
 from .timevarying import ExpressionTopology
 
 
-def load(path: str | Path):
+def load(path: str | Path) -> Topology | SwitchingTopology | ExpressionTopology:
     """Load a topology file, a switching file or a time-varying topology file (YAML or
     JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`).
 

@@ -38,7 +38,7 @@ from .result import SimulationDiverged, SimulationResult, mc_summary, truncate_r
 from .spec import SimulationSpec
 from .system import ModeSystem, check_step_size, mode_system
 
-AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology
+AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology | ExpressionTopology
 MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]
 MAX_REDESIGNS = 100_000  # re-designs of a topology given as functions of t
 

@@ -13,6 +13,7 @@ import numpy as np
 from ..files import ScenarioData, jsonable, parse_scenario
 from ..loader import load
 from ..outputs import check_output_folder, output_folder
+from .driver import AnyTopology
 from .result import simulation_frame
 from .spec import SimulationSpec
 
@@ -21,7 +22,7 @@ OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz"
 REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures", "certificate.json", "paths_fine.npz")
 
 
-def load_scenario(path: str | Path) -> tuple[object, SimulationSpec, ScenarioData]:
+def load_scenario(path: str | Path) -> tuple[AnyTopology, SimulationSpec, ScenarioData]:
     """Read a scenario file: (topology, spec, the scenario as read).
 
     Parameters
