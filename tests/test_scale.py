@@ -281,8 +281,8 @@ def test_dominance_certificate_and_verify_round_trip(tmp_path):
     import json
 
     from ntc_design.certify import scale_certificate, verify, write_certificate
+    from ntc_design.certify.arrays import pack, unpack
     from ntc_design.certify.format import digest
-    from ntc_design.certify.scale import pack, unpack
 
     top = random_network(300, 3, seed=2, family="scale-free")
     des = nd.design(top, [1.0, -1.0, 2.0], thresholds=False)

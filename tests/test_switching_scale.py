@@ -443,11 +443,11 @@ def test_out_of_range_numbers_are_bad_input(cert, path, value, needle):
 
 
 def test_tiny_weights_are_bad_input_not_a_proof(cert):
-    from ntc_design.certify.scale import pack
+    from ntc_design.certify.arrays import pack
 
     doc = copy.deepcopy(cert)
     t = doc["subject"]["modes"]["A"]["topology"]
-    from ntc_design.certify.scale import unpack
+    from ntc_design.certify.arrays import unpack
 
     w = unpack(t["weights"], "w", "f8", (t["edges"], 3, 3))
     w[0] = np.eye(3) * 2.0**-1074  # a subnormal weight

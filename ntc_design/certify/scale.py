@@ -41,7 +41,6 @@ with a sparse eigensolver.
 
 from __future__ import annotations
 
-import base64
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -50,22 +49,18 @@ import numpy as np
 import scipy.sparse as sparse
 
 from ..design import ProtocolDesign
-from ..errors import InputError
 from ..linalg import (
     CODE_SIGN,
     DENSE_MAX_BYTES,
-    RANGE_TEXT,
     DenseRefused,
     SPDFamily,
     cholesky_fill,
-    out_of_range,
 )
 from ..model import Topology, block_coo
 from ..rigorous.exact import U, gamma, rump_shift_value
 from ..thresholds import strong_components
-from .checks import Check
+from .arrays import mode_subject, pack
 from .dense import prove_pd_expr
-from .fields import need, number, vector
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov
 
@@ -459,111 +454,9 @@ def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tupl
     return p.holds, p.detail
 
 
-# ------------------------------------------------------------ compact arrays
-
-_DTYPES = {"f8": "<f8", "i8": "<i8", "u1": "<u1"}
-
-
-def pack(a: np.ndarray, kind: str) -> dict:
-    """An array as ``{"dtype", "shape", "base64"}`` (little-endian bytes, exact): a
-    100,000-edge certificate stays compact and hashes fast.
-
-    Parameters
-    ----------
-    a : numpy.ndarray
-        The array.
-    kind : {"f8", "i8", "u1"}
-        The stored dtype.
-
-    Returns
-    -------
-    dict
-        ``dtype``, ``shape`` and the little-endian bytes in base64.
-    """
-    arr = np.ascontiguousarray(a, dtype=_DTYPES[kind])
-    return {
-        "dtype": kind,
-        "shape": list(arr.shape),
-        "base64": base64.b64encode(arr.tobytes()).decode("ascii"),
-    }
-
-
-def unpack(x: Any, where: str, kind: str, shape: tuple[int, ...]) -> np.ndarray:
-    """Inverse of :func:`pack`, checking dtype, shape and length.
-
-    Parameters
-    ----------
-    x : Any
-        The packed form read from a certificate.
-    where : str
-        The field, for messages.
-    kind : {"f8", "i8", "u1"}
-        The dtype expected.
-    shape : tuple of int
-        The shape expected.
-
-    Returns
-    -------
-    numpy.ndarray
-        The array.
-
-    Raises
-    ------
-    InputError
-        Not a packed array, or the wrong dtype, shape, base64 or length.
-    """
-    if not isinstance(x, dict) or set(x) != {"dtype", "shape", "base64"}:
-        raise InputError(f"{where}: expected a packed array {{dtype, shape, base64}}")
-    if x["dtype"] != kind or x["shape"] != list(shape):
-        raise InputError(f"{where}: expected dtype {kind} and shape {list(shape)}")
-    if not isinstance(x["base64"], str):
-        raise InputError(f"{where}: base64 must be a string")
-    try:
-        raw = base64.b64decode(x["base64"].encode("ascii"), validate=True)
-    except (ValueError, UnicodeEncodeError):
-        raise InputError(f"{where}: invalid base64") from None
-    dt = np.dtype(_DTYPES[kind])
-    if len(raw) != dt.itemsize * int(np.prod(shape, dtype=np.int64)):
-        raise InputError(f"{where}: {len(raw)} bytes do not fit shape {list(shape)}")
-    arr = np.frombuffer(raw, dtype=dt).reshape(shape).astype(dt.newbyteorder("="))
-    if kind == "f8" and not np.all(np.isfinite(arr)):
-        raise InputError(f"{where}: non-finite entry")
-    return arr
-
 
 # ----------------------------------------------------------------------- certify
 
-
-def mode_subject(des: ProtocolDesign) -> dict:
-    """A design as a scale certificate's subject mode: the topology as packed arrays, θ,
-    ΔC, δ and the informed agents.
-
-    Parameters
-    ----------
-    des : ProtocolDesign
-        The design.
-
-    Returns
-    -------
-    dict
-    """
-    top = des.topology
-    ea = top.edge_arrays
-    return {
-        "topology": {
-            "name": top.name,
-            "dim": top.dim,
-            "agents": list(top.labels),
-            "edges": len(ea.rows),
-            "from": pack(ea.cols, "i8"),
-            "to": pack(ea.rows, "i8"),
-            "weights": pack(ea.w, "f8"),
-        },
-        "theta": des.theta.tolist(),
-        "margin": des.margin,
-        "delta": des.delta,
-        "informed": list(des.informed_agents),
-    }
 
 
 def rate_estimate(blocks: BlockData, comp: np.ndarray, ncomp: int) -> tuple[float, str]:
@@ -821,97 +714,3 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
     }
 
     return finish(doc, "verified-float (component-wise)")
-
-
-# ------------------------------------------------------------------------ verify
-
-
-def topology_from_subject(sub: dict, where: str) -> Topology:
-    """The topology of a scale certificate's subject (arrays), validated by the model.
-
-    Parameters
-    ----------
-    sub : dict
-        The subject's ``topology``.
-    where : str
-        The field, for messages.
-
-    Returns
-    -------
-    Topology
-        The validated topology.
-
-    Raises
-    ------
-    InputError
-        A missing or malformed field, or an invalid weight.
-    """
-    if not isinstance(sub, dict):
-        raise InputError(f"{where}: expected an object")
-    for key in ("dim", "agents", "edges", "from", "to", "weights"):
-        if key not in sub:
-            raise InputError(f"{where}: missing field '{key}'")
-    d = sub["dim"]
-    if isinstance(d, bool) or not isinstance(d, int) or not 1 <= d <= 64:
-        raise InputError(f"{where}.dim: must be an integer in 1..64")
-    labels = sub["agents"]
-    if not isinstance(labels, list) or not labels:
-        raise InputError(f"{where}.agents: expected a non-empty list of labels")
-    if len({str(x) for x in labels}) != len(labels):
-        raise InputError(f"{where}.agents: labels must be unique")
-    e = sub["edges"]
-    if isinstance(e, bool) or not isinstance(e, int) or not 0 <= e <= 50_000_000:
-        raise InputError(f"{where}.edges: must be an edge count")
-    cols = unpack(sub["from"], f"{where}.from", "i8", (e,))
-    rows = unpack(sub["to"], f"{where}.to", "i8", (e,))
-    w = unpack(sub["weights"], f"{where}.weights", "f8", (e, d, d))
-    n = len(labels)
-    if cols.size and (min(cols.min(), rows.min()) < 0 or max(cols.max(), rows.max()) >= n):
-        raise InputError(f"{where}: an edge index is out of range")
-
-    if out_of_range(w):  # so no product in a proof overflows or underflows
-        raise InputError(f"{where}.weights: {RANGE_TEXT}")
-    return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
-
-
-def read_array_mode(sub: Any, where: str, size: int) -> tuple[Topology, float, np.ndarray, Check]:
-    """One mode of a scale certificate's subject: its topology (arrays, validated by the
-    model), δ, θ, and the check that its informed agents are U.
-
-    Parameters
-    ----------
-    sub : Any
-        The mode's subject entry.
-    where : str
-        The field, for messages (it ends with the mode's name).
-    size : int
-        The certificate's Nd.
-
-    Returns
-    -------
-    tuple
-        (topology, δ, θ, the informed-agents check).
-
-    Raises
-    ------
-    InputError
-        A missing or malformed field, or a size that differs from the certificate's.
-    """
-    if not isinstance(sub, dict):
-        raise InputError(f"{where}: expected an object")
-    top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
-    if top.nd != size:
-        raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
-    delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
-    if not delta > 0 or out_of_range(delta):
-        raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
-    theta = vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
-    informed = need(sub, "informed", list, where)
-    try:
-        inf_idx = sorted(top.index(x) for x in informed)
-    except InputError:
-        raise InputError(f"{where}.informed: lists an unknown agent") from None
-    ok_u = inf_idx == sorted(top.antagonised)
-    name = where.rsplit("subject.modes.", 1)[-1]
-    check = Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
-    return top, float(delta), theta, check

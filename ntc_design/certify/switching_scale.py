@@ -38,6 +38,7 @@ from ..design import SwitchingDesign
 from ..errors import InputError
 from ..linalg import DenseRefused, SPDFamily
 from ..model import Topology
+from .arrays import mode_subject
 from .claims import Claim, ClaimKind, Property
 from .fields import number
 from .format import (
@@ -52,7 +53,6 @@ from .format import (
 from .scale import (
     component_matrix,
     lap_b_blocks,
-    mode_subject,
     rump_shift,
     shifted_symmetric_part,
     symmetric_part_bound,

@@ -12,6 +12,7 @@ import numpy as np
 
 from ...design import ProtocolDesign
 from ...errors import InputError
+from ..arrays import read_array_mode, unpack
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import DENSE_CERT_MAX_ND, prove_pd_expr
@@ -29,9 +30,7 @@ from ..scale import (
     prove_mu,
     prove_symmetric_part,
     rate_estimate,
-    read_array_mode,
     scale_certificate,
-    unpack,
 )
 from ..theorems import TheoremVerdict, fixed_verdicts
 from .base import (

@@ -11,12 +11,13 @@ import numpy as np
 
 from ...design import SwitchingDesign
 from ...errors import InputError
+from ..arrays import read_array_mode
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import DENSE_CERT_MAX_ND
 from ..fields import need
 from ..format import MAX_MODES, topology_hash
-from ..scale import read_array_mode, symmetric_part_bound
+from ..scale import symmetric_part_bound
 from ..switching_scale import (
     EIG_DENSE_MAX_ND,
     proof_fields,
