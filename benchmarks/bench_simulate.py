@@ -54,7 +54,7 @@ def bench_ntc(top, x0, t_end=10.0, workers=2) -> float:
     res = simulate(
         top, THETA, T=t_end, dt=1e-3, paths=1000, seed=0, initial=x0, method="mc", workers=workers
     )
-    return res.stats["path_steps_per_second"]
+    return res.stats.path_steps_per_second
 
 
 def drift_diffusion(des):
@@ -248,7 +248,10 @@ def large_case(n: int, paths: int = 1000, steps: int = 40, workers: int = 2) -> 
     dt = 0.5 * h_lim
     grid = build_grid(steps * dt, dt, [0.0, steps * dt])
     x0 = np.tile(des.x0 * 0 + THETA[: top.dim], n) + 0.5
-    spec = MonteCarloSpec((s,), grid, gain, des.theta, x0, n, top.dim, paths, 0, 500, 0)
+    spec = MonteCarloSpec(
+        systems=(s,), grid=grid, gain=gain, theta=des.theta, x_init=x0, n_agents=n,
+        dim=top.dim, paths=paths, seed=0, block_size=500, store_paths=0,
+    )  # fmt: skip
     t0 = time.perf_counter()
     run(spec, workers=workers)
     sec = time.perf_counter() - t0
@@ -264,8 +267,9 @@ def large_case(n: int, paths: int = 1000, steps: int = 40, workers: int = 2) -> 
     # the implicit scheme at a step 20× the explicit limit (one sparse LU, reused)
     ig = build_grid(steps * 20 * dt, 20 * dt, [0.0, steps * 20 * dt])
     ispec = MonteCarloSpec(
-        (s,), ig, lambda t: np.ones_like(np.asarray(t, float)), des.theta, x0, n, top.dim,
-        paths, 0, 500, 0, (), "implicit",
+        systems=(s,), grid=ig, gain=lambda t: np.ones_like(np.asarray(t, float)),
+        theta=des.theta, x_init=x0, n_agents=n, dim=top.dim, paths=paths, seed=0,
+        block_size=500, store_paths=0, scheme="implicit",
     )  # fmt: skip
     t0 = time.perf_counter()
     part = run(ispec, workers=workers)
@@ -397,7 +401,7 @@ def main() -> None:
         )
         print(
             f"paper run (T = 100, 1e8 path-steps, MC + exact): {wall:.1f} s, "
-            f"{res.stats['path_steps_per_second']:.3g} path-steps/s, peak RSS of one process {rss / 1024:.0f} MB"
+            f"{res.stats.path_steps_per_second:.3g} path-steps/s, peak RSS of one process {rss / 1024:.0f} MB"
         )
 
 

@@ -110,7 +110,7 @@ def bench_mc(paths: int) -> None:
         best = 0.0
         for _ in range(2):
             r = simulate(top, [1, 2, -1], **kw)
-            best = max(best, r.stats["path_steps_per_second"])
+            best = max(best, r.stats.path_steps_per_second)
         rates[name] = best
         print(f"{name:<22} Monte Carlo: {best:.3g} path-steps/s (best of 2, 1 worker)")
     print(f"ratio time-varying / fixed = {rates['time-varying G1'] / rates['fixed G1']:.2f}")

@@ -568,8 +568,8 @@ def simulate(
                     "ok": True,
                     "out": str(out_dir),
                     "files": [str(p) for p in written],
-                    "stats": st,
-                    "notes": res.notes,
+                    "stats": st.to_dict(),
+                    "notes": list(res.notes),
                     **{
                         k: summary[k]
                         for k in ("final_ms_error_mc", "final_ms_error_exact", "sample_paths")
@@ -580,13 +580,15 @@ def simulate(
         )
         return
     rate = (
-        f", {st['path_steps_per_second']:.3g} path-steps/s" if "path_steps_per_second" in st else ""
+        f", {st.path_steps_per_second:.3g} path-steps/s"
+        if st.path_steps_per_second is not None
+        else ""
     )
     parts = []
-    if "mc_seconds" in st:
-        parts.append(f"{st['path_steps']:.3g} path-steps in {st['mc_seconds']:.1f} s{rate}")
-    if "exact_seconds" in st:
-        parts.append(f"exact moments {st['exact_seconds']:.2f} s")
+    if st.mc_seconds is not None:
+        parts.append(f"{st.path_steps:.3g} path-steps in {st.mc_seconds:.1f} s{rate}")
+    if st.exact_seconds is not None:
+        parts.append(f"exact moments {st.exact_seconds:.2f} s")
     out.print("; ".join(parts))
     for n in res.notes:
         out.print(f"note: {n}")

@@ -517,9 +517,9 @@ def run_point(
                 res = simulate(top, spec, progress=progress)
             except SimulationDiverged as exc:
                 res, row["error"] = exc.result, str(exc)
-        row["path_steps"] = res.stats["path_steps"]
+        row["path_steps"] = res.stats.path_steps
         if res.mc is not None and row["error"] is None:
-            row["ms_final_mc"] = float(res.mc["mean"][-1].sum())
+            row["ms_final_mc"] = float(res.mc.mean[-1].sum())
         if res.exact is not None and row["error"] is None:
             row["ms_final_exact"] = float(res.exact.ms_error[-1].sum())
     except InputError as exc:
@@ -536,9 +536,9 @@ def run_point(
         row,
         np.asarray(res.save_times, dtype=float),
         [str(a) for a in res.labels],
-        None if mc is None else mc["mean"],
-        None if mc is None else mc["lo"],
-        None if mc is None else mc["hi"],
+        None if mc is None else mc.mean,
+        None if mc is None else mc.lo,
+        None if mc is None else mc.hi,
         None if ex is None else ex.ms_error,
     )
 

@@ -262,7 +262,7 @@ def test_long_exact_run_is_refused_before_the_grid(tmp_path, capsys, monkeypatch
     def no_grid(*args, **kw):
         raise AssertionError("the time grid was built before the exact-moment estimate")
 
-    monkeypatch.setattr("ntc_design.simulate.driver.build_grid", no_grid)
+    monkeypatch.setattr("ntc_design.simulate.steps.build_grid", no_grid)
     monkeypatch.setattr("ntc_design.simulate.grid.build_grid", no_grid)
     sc = scenario(tmp_path, topology=topology, **{"method": "exact", **over})
     t0 = time.monotonic()

@@ -121,7 +121,7 @@ def test_tidy_dataframe_and_long_csv(tmp_path):
     assert not df.isna().any().any()
     row = df[(df.agent == "4") & np.isclose(df.t, 0.3)].iloc[0]
     k = int(np.argmin(np.abs(res.save_times - 0.3)))
-    assert row.mc == res.mc["mean"][k, 3] and row.exact == res.exact.ms_error[k, 3]
+    assert row.mc == res.mc.mean[k, 3] and row.exact == res.exact.ms_error[k, 3]
     assert (df.lo <= df.mc).all() and (df.mc <= df.hi).all()
     # pivoting back gives the wide matrix
     wide = df.pivot(index="t", columns="agent", values="exact")[[str(a) for a in res.labels]]

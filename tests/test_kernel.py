@@ -110,8 +110,8 @@ def _spec(system_, paths, block=500, scheme="explicit", t_end=0.3, grid=None):
     grid = grid or build_grid(t_end, 1e-3, np.arange(0, t_end + 1e-9, 0.1))
     gain = lambda t: 1.0 / (1.0 + t)  # noqa: E731
     return MonteCarloSpec(
-        (system_,), grid, gain, np.array(THETA, float), X0, 7, 3, paths, 11, block, 5,
-        (), scheme,
+        systems=(system_,), grid=grid, gain=gain, theta=np.array(THETA, float), x_init=X0,
+        n_agents=7, dim=3, paths=paths, seed=11, block_size=block, store_paths=5, scheme=scheme,
     )  # fmt: skip
 
 
@@ -205,8 +205,8 @@ def test_stiff_network_is_refused_up_front_and_runs_implicitly():
         top, THETA, T=0.05, ds=1e-3, stepping="intrinsic", scheme="implicit", paths=4,
         method="mc", save_every=0.05, workers=1, initial=np.tile([1.0, 0.0, 0.0], 1000),
     )  # fmt: skip
-    assert res.stats["steps"] >= 40 and np.all(np.isfinite(res.mc["mean"]))
-    assert res.mc["mean"][-1].sum() < 0.7 * res.mc["mean"][0].sum()
+    assert res.stats.steps >= 40 and np.all(np.isfinite(res.mc.mean))
+    assert res.mc.mean[-1].sum() < 0.7 * res.mc.mean[0].sum()
 
 
 def test_implicit_needs_intrinsic_stepping(g1):
@@ -238,7 +238,7 @@ def test_implicit_monte_carlo_matches_its_exact_recursion():
         return em_moments(systems, grid, gain, eps0, 12, 3, scheme="implicit")
 
     em = recursion(0.02)
-    mc, half = res.mc["mean"][1:], np.maximum(res.mc["hi"] - res.mc["mean"], 1e-12)[1:]
+    mc, half = res.mc.mean[1:], np.maximum(res.mc.hi - res.mc.mean, 1e-12)[1:]
     z = np.abs(mc - em.ms_error[1:]) / half * 1.96
     assert np.median(z) < 1.2 and np.max(z) < 6.0
     ex = exact_moments(systems, [(0.0, t_end, 0)], gain, eps0, saves, 12, 3)

@@ -26,7 +26,7 @@ def test_guard_arpack_matches_dense_eigenvalues():
 def test_sparse_network_above_the_dense_sizes_simulates():
     top = random_network(3000, 3, seed=2)  # Nd = 9000: sparse design and sparse L_B
     res = simulate(top, [1, 2, -1], T=2e-4, dt=1e-5, paths=4, method="mc", save_every=1e-4)
-    ms = res.mc["mean"]
+    ms = res.mc.mean
     assert ms.shape == (3, 3000) and np.all(np.isfinite(ms))
     # zero initial state: the error starts at ‖θ‖² = 6 for every agent; the informed agents
     # (δ in the hundreds) already move towards θ

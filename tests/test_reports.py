@@ -293,8 +293,8 @@ def test_save_times_on_switching_instants_keep_their_paths():
         store_paths=2,
     )
     assert np.all(np.diff(res.grid.save_steps) > 0)
-    assert not np.any(np.all(res.mc["paths"][0] == 0, axis=1))
-    assert np.all(res.mc["mean"][1:].sum(axis=1) > 0)
+    assert not np.any(np.all(res.mc.paths[0] == 0, axis=1))
+    assert np.all(res.mc.mean[1:].sum(axis=1) > 0)
 
 
 @pytest.mark.slow

@@ -44,9 +44,9 @@ def assert_mc_matches_exact(res, max_outside=0.15, max_z=6.0, exact=None):
     fraction outside, the median standardized error (a bias of one standard error would
     push it above 1) and the worst case."""
     mc, ex = res.mc, (res.exact.ms_error if exact is None else exact)
-    half = np.maximum(mc["hi"] - mc["mean"], 1e-12)
-    z = np.abs(mc["mean"][1:] - ex[1:]) / half[1:] * 1.96
-    outside = np.mean((ex[1:] < mc["lo"][1:]) | (ex[1:] > mc["hi"][1:]))
+    half = np.maximum(mc.hi - mc.mean, 1e-12)
+    z = np.abs(mc.mean[1:] - ex[1:]) / half[1:] * 1.96
+    outside = np.mean((ex[1:] < mc.lo[1:]) | (ex[1:] > mc.hi[1:]))
     assert outside <= max_outside, f"{outside:.0%} of (time, agent) pairs outside the 95% band"
     assert np.median(z) < 1.2, f"median |MC − exact| = {np.median(z):.2f} standard errors"
     assert np.max(z) < max_z, f"max |MC − exact| = {np.max(z):.2f} standard errors"
@@ -57,10 +57,10 @@ def test_g1_monte_carlo_agrees_with_exact(g1):
     discretisation gap: a sharp test), and the recursion against the continuous moments
     (the O(dt) bias of Euler–Maruyama, visible for agent 3 at dt = 1e-3)."""
     res = simulate(g1, THETA, T=2.0, dt=1e-3, paths=2000, seed=3, initial=X0, save_every=0.1)
-    assert res.mc["count"] == 2000
+    assert res.mc.count == 2000
     em = em_exact(res)
     assert_mc_matches_exact(res, exact=em)
-    np.testing.assert_allclose(res.mc["mean"][0], res.exact.ms_error[0], rtol=1e-9)
+    np.testing.assert_allclose(res.mc.mean[0], res.exact.ms_error[0], rtol=1e-9)
     gap = np.abs(em[1:] - res.exact.ms_error[1:]) / res.exact.ms_error[1:]
     assert 1e-5 < np.max(gap) < 0.02  # O(dt) bias: present, and small
     fine = simulate(g1, THETA, T=2.0, dt=2.5e-4, paths=2000, seed=3, initial=X0, save_every=0.1)
@@ -162,7 +162,10 @@ def _spec(g1, paths=1100, block=250):
     sysm = mode_system(des, NoiseModel())
     grid = build_grid(0.3, 1e-3, np.arange(0, 0.31, 0.1))
     gain = lambda t: 1.0 / (1.0 + t)  # noqa: E731
-    return MonteCarloSpec((sysm,), grid, gain, des.theta, X0, 7, 3, paths, 11, block, 5)
+    return MonteCarloSpec(
+        systems=(sysm,), grid=grid, gain=gain, theta=des.theta, x_init=X0, n_agents=7, dim=3,
+        paths=paths, seed=11, block_size=block, store_paths=5,
+    )  # fmt: skip
 
 
 def test_same_seed_identical_across_workers_and_chunks(g1):
@@ -182,7 +185,7 @@ def test_same_seed_identical_across_workers_and_chunks(g1):
 def test_intrinsic_stepping_matches_exact_with_fewer_steps(g1):
     kw = dict(T=50.0, paths=2000, seed=9, initial=X0, save_every=2.5)
     res = simulate(g1, THETA, stepping="intrinsic", ds=1e-3, **kw)
-    assert res.stats["steps"] < 50_000 / 8  # uniform dt = 1e-3 would take 50 000 steps
+    assert res.stats.steps < 50_000 / 8  # uniform dt = 1e-3 would take 50 000 steps
     em = em_exact(res)
     assert_mc_matches_exact(res, exact=em, max_outside=0.2)
     # the intrinsic-time Euler–Maruyama bias against the continuous moments stays O(ds)
@@ -217,8 +220,8 @@ def test_divergence_names_time_and_agent_and_keeps_results(g1):
         )
     res = exc.value.result
     assert 0 < res.save_times.size < 501
-    assert np.all(np.isfinite(res.mc["mean"]))
-    assert res.failure["t"] > 0
+    assert np.all(np.isfinite(res.mc.mean))
+    assert res.failure.t > 0
 
 
 def test_noise_callable_shape_is_checked(g1):

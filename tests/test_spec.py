@@ -80,7 +80,7 @@ def test_spec_and_keywords_give_identical_runs(g1):
     kw = dict(T=0.2, dt=1e-3, paths=20, seed=2, save_every=0.1, workers=1)
     a = simulate(g1, THETA, **kw)
     b = simulate(g1, SimulationSpec.build(THETA, **kw))
-    assert np.array_equal(a.mc["mean"], b.mc["mean"])
+    assert np.array_equal(a.mc.mean, b.mc.mean)
     assert np.array_equal(a.exact.ms_error, b.exact.ms_error)
 
 
@@ -112,7 +112,7 @@ def test_exact_step_estimate_matches_the_run(monkeypatch, topology, gain, t_end,
     monkeypatch.setattr(drv, "estimate_exact_steps", lambda *a: seen.append(orig(*a)) or seen[-1])
     top = nd.load(ROOT / "examples" / topology)
     res = simulate(top, THETA, T=t_end, gain=gain, method="exact", save_every=every)
-    steps = res.stats["exact_rk4_steps"]
+    steps = res.stats.exact_rk4_steps
     assert len(seen) == 1 and 0.9 * steps <= seen[0] <= 2 * steps, (seen, steps)
 
 
@@ -270,12 +270,12 @@ def test_huge_requests_refused_by_field(g1, over, needle):
 
 def test_one_path_has_no_band(g1):
     res = simulate(g1, THETA, T=0.1, paths=1, save_every=0.05, workers=1, method="mc")
-    assert np.all(np.isnan(res.mc["lo"])) and np.all(np.isnan(res.mc["hi"]))
+    assert np.all(np.isnan(res.mc.lo)) and np.all(np.isnan(res.mc.hi))
     summ = json.loads(json.dumps(nd.files.jsonable(res.summary())))
     assert all(v == [None, None] for v in summ["final_ms_error_mc_band"].values())
     assert summ["sample_paths"]["final_error_norm_spread"] is None
     two = simulate(g1, THETA, T=0.1, paths=2, save_every=0.05, workers=1, method="mc")
-    assert np.all(two.mc["hi"][1:] > two.mc["lo"][1:])
+    assert np.all(two.mc.hi[1:] > two.mc.lo[1:])
 
 
 def test_workers_capped_at_the_machine(g1):
@@ -283,7 +283,7 @@ def test_workers_capped_at_the_machine(g1):
     assert res.parameters["workers"] == (os.cpu_count() or 1)
     assert any("workers: 4096 asked" in n for n in res.notes)
     one = simulate(g1, THETA, T=0.05, paths=4, block_size=2, save_every=0.05, workers=1)
-    assert np.array_equal(res.mc["mean"], one.mc["mean"])
+    assert np.array_equal(res.mc.mean, one.mc.mean)
 
 
 def test_quote_and_one_line():

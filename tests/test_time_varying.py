@@ -204,7 +204,7 @@ def test_monte_carlo_matches_exact_moments_with_a_of_t(g1tv):
     res = simulate(
         g1tv, THETA, T=2.0, dt=1e-3, paths=2000, seed=3, initial=X0, save_every=0.1, workers=1
     )
-    assert res.mc["count"] == 2000 and res.exact is not None
+    assert res.mc.count == 2000 and res.exact is not None
     assert_mc_matches_exact(res)
     # the moments really depend on t: frozen at t = 0 they differ
     frozen = simulate(
@@ -284,5 +284,5 @@ def test_compiled_and_numpy_time_varying_steps_agree():
     kw = dict(T=0.3, dt=1e-3, paths=64, workers=1, method="mc", seed=3)
     a = simulate(top, [1, 2, -1], noise=NoiseModel(sigma=0.4, f=0.3), **kw)
     b = simulate(top, [1, 2, -1], noise=NoiseModel(sigma=0.4, f=lambda z: 0.3 * z), **kw)
-    np.testing.assert_allclose(a.mc["mean"], b.mc["mean"], rtol=1e-12)
-    assert np.all(np.diff(a.mc["mean"].sum(axis=1)[:5]) != 0)  # the state really moves
+    np.testing.assert_allclose(a.mc.mean, b.mc.mean, rtol=1e-12)
+    assert np.all(np.diff(a.mc.mean.sum(axis=1)[:5]) != 0)  # the state really moves

@@ -38,6 +38,7 @@ from matplotlib.patches import Circle, FancyArrowPatch, Patch  # noqa: E402
 
 from ..linalg import Definiteness, classify  # noqa: E402
 from ..model import Topology  # noqa: E402
+from ..simulate.result import MeanSquareBand  # noqa: E402
 
 ONE_COLUMN = 3.5  # inches (IEEE/Elsevier single column)
 TWO_COLUMN = 7.16  # inches (full text width)
@@ -475,7 +476,7 @@ def states_figure(
 
 def ms_error_figure(
     t,
-    mc: dict | None,
+    mc: MeanSquareBand | None,
     exact: np.ndarray | None,
     labels,
     title: str | None = None,
@@ -491,7 +492,8 @@ def ms_error_figure(
     t
         Save times (S,).
     mc
-        ``{"mean", "lo", "hi"}`` arrays (S, N), or None.
+        The Monte Carlo mean and band, arrays (S, N) (a
+        :class:`~ntc_design.simulate.result.MonteCarloCurves` will do), or None.
     exact
         Exact E‖x_i − θ‖² (S, N), or None.
     labels
@@ -518,7 +520,7 @@ def ms_error_figure(
             if mc is not None:
                 ax.plot(
                     t,
-                    np.maximum(mc["mean"][:, i], floor),
+                    np.maximum(mc.mean[:, i], floor),
                     gid=tag and tag + "mc",
                     color=s.colour,
                     lw=1.0,
@@ -528,8 +530,8 @@ def ms_error_figure(
                 )
                 ax.fill_between(
                     t,
-                    np.maximum(mc["lo"][:, i], floor),
-                    np.maximum(mc["hi"][:, i], floor),
+                    np.maximum(mc.lo[:, i], floor),
+                    np.maximum(mc.hi[:, i], floor),
                     color=s.colour,
                     alpha=0.18,
                     lw=0,

@@ -27,6 +27,7 @@ from ..errors import InputError, require_number, require_positive
 from ..files import parse_topology
 from ..model import SwitchingTopology, Topology
 from ..outputs import check_output_file, write_atomic
+from ..simulate.result import MeanSquareBand
 from . import figures
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
@@ -663,7 +664,7 @@ def convergence_table(run: RunData, mc, exact, rate: float) -> tuple[str, Table,
             return m[:, k] if k is not None else m.sum(axis=1)
 
         fe = fitted_exponent(t, col(exact), t_from) if exact is not None else None
-        fm = fitted_exponent(t, col(mc["mean"]), t_from) if mc is not None else None
+        fm = fitted_exponent(t, col(mc.mean), t_from) if mc is not None else None
         fits[a] = {"exact": fe, "mc": fm}
         rows.append((a, fmt(fe, 3), fmt(fm, 3), fmt(pred, 3)))
     note = (
@@ -831,11 +832,11 @@ def run_section(
         )
     mc = None
     if run.ms("mc") is not None:
-        mc = {
-            "mean": run.ms("mc"),
-            "lo": np.column_stack([run.table[f"mc_{a}_lo"] for a in labels]),
-            "hi": np.column_stack([run.table[f"mc_{a}_hi"] for a in labels]),
-        }
+        mc = MeanSquareBand(
+            mean=run.ms("mc"),
+            lo=np.column_stack([run.table[f"mc_{a}_lo"] for a in labels]),
+            hi=np.column_stack([run.table[f"mc_{a}_hi"] for a in labels]),
+        )
     exact = run.ms("exact")
     what = " and ".join(
         w
@@ -890,14 +891,14 @@ def run_section(
         rows.append(
             (
                 a,
-                fmt(float(mc["mean"][-1, k]), 5) if mc is not None else "—",
-                f"[{fmt(float(mc['lo'][-1, k]), 5)}, {fmt(float(mc['hi'][-1, k]), 5)}]"
-                if mc is not None and np.isfinite(mc["lo"][-1, k])
+                fmt(float(mc.mean[-1, k]), 5) if mc is not None else "—",
+                f"[{fmt(float(mc.lo[-1, k]), 5)}, {fmt(float(mc.hi[-1, k]), 5)}]"
+                if mc is not None and np.isfinite(mc.lo[-1, k])
                 else ("none (fewer than 2 paths)" if mc is not None else "—"),
                 fmt(float(exact[-1, k]), 5) if exact is not None else "—",
                 fmt(float(exact[0, k]), 5)
                 if exact is not None
-                else (fmt(float(mc["mean"][0, k]), 5) if mc is not None else "—"),
+                else (fmt(float(mc.mean[0, k]), 5) if mc is not None else "—"),
             )
         )
     final = Table(
@@ -956,7 +957,7 @@ def run_section(
         "exact_first": exact[0].sum() if exact is not None else None,
         "exact_last": exact[-1].sum() if exact is not None else None,
         "exact_curve": exact.sum(axis=1) if exact is not None else None,
-        "mc_last": mc["mean"][-1].sum() if mc is not None else None,
+        "mc_last": mc.mean[-1].sum() if mc is not None else None,
         "sample_paths": sp_,
         "T": float(run.t[-1]),
         "convergence": conv_facts,

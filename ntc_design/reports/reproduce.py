@@ -169,7 +169,7 @@ def fine_paths(top, gain: str, x0: np.ndarray, T: float, dt: float, stepping: st
         block_size=2,
         store_paths=2,
     )
-    return {"t": res.save_times, "paths": res.mc["paths"]}
+    return {"t": res.save_times, "paths": res.mc.paths}
 
 
 def rerun_command(

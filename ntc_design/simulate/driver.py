@@ -11,7 +11,6 @@ moments (:func:`.moments.exact_moments`).
 from __future__ import annotations
 
 import os
-import time
 import warnings
 from collections.abc import Callable, Sequence
 
@@ -31,12 +30,14 @@ from .budget import (
     estimate_steps,
     gain_samples,
 )
-from .grid import TimeGrid, build_grid
+from .grid import TimeGrid
 from .moments import check_moments_size, exact_moments, generator_radius
-from .montecarlo import MonteCarloSpec, run
-from .result import SimulationDiverged, SimulationResult, mc_summary, truncate_result
+from .montecarlo import MonteCarloSpec
+from .result import SimulationResult, finish, mc_summary
 from .spec import SimulationSpec
+from .steps import run_exact, run_monte_carlo, run_parameters, run_stats, spec_grid
 from .system import ModeSystem, check_step_size, mode_system
+from .timevarying import simulate_expression
 
 AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology | ExpressionTopology
 MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]
@@ -297,31 +298,21 @@ def simulate(
     SimulationDiverged
         NaN or overflow in the Monte Carlo (the partial result is attached).
     """
-    if isinstance(theta, SimulationSpec):
-        theta, spec = None, theta
-    if spec is None:
-        if theta is None:
-            raise InputError("theta: missing")
-        spec = SimulationSpec.build(theta, **options)
-    elif theta is not None or options:
-        raise InputError("simulate: give a SimulationSpec or theta with options, not both")
-    n, d, labels = topology.n, topology.dim, tuple(topology.labels)
-    if spec.theta.size != d:
+    spec = _resolve_spec(theta, spec, options)
+    if spec.theta.size != topology.dim:
         raise InputError(
-            f"theta: expected {d} numbers (the state dimension d), got {spec.theta.size}"
+            f"theta: expected {topology.dim} numbers (the state dimension d), got {spec.theta.size}"
         )
     cfun, gain_text = make_gain(spec.gain)
+    workers = min(spec.mc.workers, os.cpu_count() or 1)
     if isinstance(topology, ExpressionTopology):  # A(t)
-        from .timevarying import simulate_expression
-
-        workers = min(spec.mc.workers, os.cpu_count() or 1)
         _check_size(topology, spec, cfun, 1, 1, workers)
         return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
     names, make_designs, segments, notes = _modes(topology, spec)
-    workers = min(spec.mc.workers, os.cpu_count() or 1)
     if workers < spec.mc.workers:
         notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")
     _check_size(topology, spec, cfun, len(names), len(segments), workers)
+    n, d = topology.n, topology.dim
     if spec.method != "mc" and spec.noise.linear:
         check_moments_size(n * d)
     designs = make_designs()
@@ -336,93 +327,60 @@ def simulate(
     notes.extend(ini_notes)
     if spec.method != "mc" and spec.noise.linear:
         _check_exact_work(systems, spec, cfun, gain_text, len(segments))
-    st = spec.stepping
-    grid = build_grid(
-        spec.T,
-        st.dt,
-        spec.save.resolve(spec.T),
-        segments,
-        gain=cfun,
-        intrinsic_ds=st.intrinsic_ds,
-        h_max=st.max_step,
-    )
+    grid = spec_grid(spec, cfun, segments)
     c_grid = check_gain(cfun, gain_text, grid.t[:-1])
     if spec.method != "exact":
-        _step_size_guard(systems, grid, c_grid, notes, st.scheme)
+        _step_size_guard(systems, grid, c_grid, notes, spec.stepping.scheme)
     _check_noise_callable(spec, systems, d)
-    params = spec.options()
-    params.update(
-        {"theta": th.tolist(), "gain": gain_text, "initial": x_init.tolist(), "workers": workers}
-    )
-    params["save_times"] = int(grid.save_times.size)
-    params["modes"] = names
+    params = run_parameters(spec, th, gain_text, x_init, workers, grid, names)
     if isinstance(topology, SwitchingTopology):
         params["schedule"] = [{"mode": m, "duration": t} for m, t in topology.schedule]
-    paths = spec.mc.paths
-    stats: dict = {"steps": grid.n_steps, "path_steps": grid.n_steps * paths}
-    mc = failure = exact = None
-    if spec.method in ("mc", "both"):
-        mspec = MonteCarloSpec(
-            tuple(systems),
-            grid,
-            cfun,
-            th,
-            x_init,
-            n,
-            d,
-            paths,
-            spec.mc.seed,
-            spec.mc.block_size,
-            spec.mc.store_paths,
-            labels,
-            st.scheme,
-        )
-        t0 = time.perf_counter()
-        if engine is not None:
-            part = engine.run_mc(mspec, progress)
-            stats["engine"] = engine.describe()
-        else:
-            part = run(mspec, workers=workers, progress=progress)
-        sec = max(time.perf_counter() - t0, 1e-9)
-        stats.update({"mc_seconds": sec, "path_steps_per_second": grid.n_steps * paths / sec})
-        mc = mc_summary(part)
-        failure = part.failure
-        if paths < 2:
-            notes.append("one sample path: no confidence band")
-    if spec.method in ("exact", "both"):
-        if spec.noise.linear:  # its work was estimated before the grid was built
-            t0 = time.perf_counter()
-            exact = exact_moments(
-                systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d
-            )
-            stats.update(
-                {"exact_seconds": time.perf_counter() - t0, "exact_rk4_steps": exact.steps}
-            )
-            if not (np.all(np.isfinite(exact.ms_error)) and np.all(np.isfinite(exact.mean))):
-                raise InputError(
-                    "method: the exact moments overflow (not finite) on [0, T]; the noise is too "
-                    "strong for this gain and horizon (use method: mc, or a shorter T)"
-                )
-        elif spec.method == "exact":
-            raise InputError("method: exact moments need a linear f (a scalar or a matrix)")
-        else:
-            notes.append("exact moments skipped: f is not linear")
-    res = SimulationResult(
-        labels, th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
+    mspec = MonteCarloSpec(
+        systems=tuple(systems),
+        grid=grid,
+        gain=cfun,
+        theta=th,
+        x_init=x_init,
+        n_agents=n,
+        dim=d,
+        paths=spec.mc.paths,
+        seed=spec.mc.seed,
+        block_size=spec.mc.block_size,
+        store_paths=spec.mc.store_paths,
+        agent_labels=tuple(topology.labels),
+        scheme=spec.stepping.scheme,
     )
-    if failure is not None:
-        lab = labels[failure["agent"]]
-        k = failure["save_index"]
-        res = truncate_result(res, k)
-        res.failure = {**failure, "agent": lab}
-        kept = (
-            f"results kept up to t = {res.save_times[-1]:.6g}"
-            if res.save_times.size
-            else "no results kept"
-        )
-        raise SimulationDiverged(
-            f"simulation diverged (NaN or overflow) by t = {failure['t']:.6g} at agent "
-            f"{quote(lab)} (path {failure['path']}); {kept}",
-            res,
-        )
-    return res
+    part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, engine, notes)
+    exact, exact_stats = run_exact(
+        spec,
+        notes,
+        lambda: exact_moments(
+            systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d
+        ),
+    )
+    res = SimulationResult(
+        labels=tuple(topology.labels),
+        theta=th,
+        save_times=grid.save_times,
+        designs=designs,
+        mc=mc_summary(part) if part is not None else None,
+        exact=exact,
+        parameters=params,
+        stats=run_stats(grid, spec.mc.paths, mc_stats, exact_stats),
+        notes=tuple(notes),
+        grid=grid,
+    )
+    return finish(res, part)
+
+
+def _resolve_spec(theta, spec: SimulationSpec | None, options: dict) -> SimulationSpec:
+    """The spec from ``simulate``'s arguments: a spec, or θ with flat options."""
+    if isinstance(theta, SimulationSpec):
+        theta, spec = None, theta
+    if spec is None:
+        if theta is None:
+            raise InputError("theta: missing")
+        return SimulationSpec.build(theta, **options)
+    if theta is not None or options:
+        raise InputError("simulate: give a SimulationSpec or theta with options, not both")
+    return spec

@@ -84,7 +84,7 @@ class Moments:
     steps: int
 
 
-class _MomentRecorder:
+class MomentRecorder:
     """E[ε] and E‖x_i − θ‖² = tr of agent i's d×d block of S, recorded at the save times
     in order: by time (``at``, a save time within 1e-12 relative) or by slot (``put``)."""
 
@@ -95,15 +95,50 @@ class _MomentRecorder:
         self.k = 0
 
     def put(self, i: int, m: np.ndarray, s: np.ndarray) -> None:
+        """Record the moments in save slot ``i``.
+
+        Parameters
+        ----------
+        i : int
+            The save slot.
+        m : numpy.ndarray
+            E[ε], length Nd.
+        s : numpy.ndarray
+            E[εεᵀ], Nd × Nd.
+        """
         self.means[i] = m
         self.ms[i] = np.einsum("iaia->i", s.reshape(self.n, self.d, self.n, self.d))
 
     def at(self, t: float, m: np.ndarray, s: np.ndarray) -> None:
+        """Record the moments in every save slot at time ``t`` (none if t is not one).
+
+        Parameters
+        ----------
+        t : float
+            The time reached.
+        m : numpy.ndarray
+            E[ε], length Nd.
+        s : numpy.ndarray
+            E[εεᵀ], Nd × Nd.
+        """
         while self.k < self.saves.size and abs(self.saves[self.k] - t) <= 1e-12 * max(1.0, t):
             self.put(self.k, m, s)
             self.k += 1
 
     def result(self, s: np.ndarray, steps: int) -> Moments:
+        """The recorded curves.
+
+        Parameters
+        ----------
+        s : numpy.ndarray
+            The final E[εεᵀ].
+        steps : int
+            RK4 steps taken.
+
+        Returns
+        -------
+        Moments
+        """
         return Moments(self.saves, self.means, self.ms, s, steps)
 
 
@@ -203,7 +238,7 @@ def exact_moments(
     rhs = [_Rhs(s, n, d) for s in systems]
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
-    rec = _MomentRecorder(save_times, n, d)
+    rec = MomentRecorder(save_times, n, d)
     saves = rec.saves
     rec.at(0.0, m, s)
     steps = 0
@@ -285,7 +320,7 @@ def em_moments(
     c_all = np.asarray(gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
     h_all = np.diff(grid.t)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
-    rec = _MomentRecorder(grid.save_times, n, d)
+    rec = MomentRecorder(grid.save_times, n, d)
     lus: dict = {}
     if 0 in save_at:
         rec.put(save_at[0], m, s)

@@ -34,7 +34,7 @@ XI_BYTES = 16 * 2**20  # bound on the buffer of normals of one batch
 MIN_BLOCKS = 2  # paths are split into at least this many blocks (both cores busy)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class MonteCarloSpec:
     """Everything a Monte Carlo run needs: the mode systems, the grid, c(t), θ, the
     initial state, the path count and seed (block b draws from the seed's b-th child),
@@ -178,7 +178,7 @@ def prepare(spec: MonteCarloSpec) -> None:
             return
 
 
-class _BlockStats:
+class BlockStats:
     """One block's streamed statistics at the save times (shared by the fixed and the
     time-varying blocks): Σ‖x_i − θ‖², its square, Σx, a few stored paths, and the first
     non-finite state (which stops the block)."""
@@ -206,7 +206,20 @@ class _BlockStats:
         }
 
     def record(self, x: np.ndarray, i: int) -> bool:
-        """Add the state at save time i; False (and the failure kept) when it is not finite."""
+        """Add the state at save time i.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The block's states, (paths, Nd).
+        i : int
+            The save slot.
+
+        Returns
+        -------
+        bool
+            False (and the failure kept) when a state is not finite.
+        """
         where = _first_bad(x, self.d)
         if where is not None:
             self._fail(where, float(self.save_times[i]))
@@ -222,7 +235,20 @@ class _BlockStats:
         return True
 
     def check(self, x: np.ndarray, k: int) -> bool:
-        """After step k − 1 (grid time t_k): False, with the failure kept, when x is not finite."""
+        """Check the states after step k − 1 (grid time t_k).
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The block's states, (paths, Nd).
+        k : int
+            The grid index reached.
+
+        Returns
+        -------
+        bool
+            False, with the failure kept, when a state is not finite.
+        """
         where = _first_bad(x, self.d)
         if where is not None:
             self._fail(where, float(self.t[k]))
@@ -230,7 +256,12 @@ class _BlockStats:
         return True
 
     def result(self) -> PartialStats:
-        """The block's PartialStats."""
+        """The block's sums.
+
+        Returns
+        -------
+        PartialStats
+        """
         idx = list(range(self.p0, self.p0 + self.n_store))
         return PartialStats(
             [self.b], self.p, self.sq, self.sq2, self.state, self.stored, idx, self.failure,
@@ -244,7 +275,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     p0 = b * bp
     p = min(bp, spec.paths - p0)
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
-    stats = _BlockStats(spec, b, p0, p)
+    stats = BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     e_max = max(s.n_edges for s in spec.systems)
     steppers = [_Stepper(s, spec.scheme == "implicit") for s in spec.systems]

@@ -4,11 +4,13 @@ run statistics) and its JSON summary."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from ..design import DESIGN_KEYS, ProtocolDesign
+from ..errors import quote
 from .grid import TimeGrid
 from .moments import Moments
 from .montecarlo import PartialStats
@@ -28,7 +30,139 @@ class SimulationDiverged(RuntimeError):
         self.result = result
 
 
-@dataclass
+@dataclass(frozen=True, eq=False)
+class MeanSquareBand:
+    """A Monte Carlo estimate of E‖x_i − θ‖² at the save times with its 95 % band (what a
+    figure draws; also read back from a run's CSV).
+
+    Attributes
+    ----------
+    mean, lo, hi : numpy.ndarray
+        (S, N): the sample mean of ‖x_i − θ‖² and its 95 % band (NaN with one path).
+    """
+
+    mean: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class MonteCarloCurves(MeanSquareBand):
+    """The Monte Carlo statistics at the save times: E‖x_i − θ‖² with its 95 % band, the
+    mean state, the stored sample paths.
+
+    Attributes
+    ----------
+    mean, lo, hi : numpy.ndarray
+        (S, N): the sample mean of ‖x_i − θ‖² and its 95 % band (NaN with one path).
+    mean_state : numpy.ndarray
+        (S, Nd): the sample mean of x.
+    paths : numpy.ndarray
+        (k, S, Nd): the first k sample paths.
+    count : int
+        The number of paths.
+    valid_saves : int
+        The save times every path reached with a finite state.
+    """
+
+    mean_state: np.ndarray
+    paths: np.ndarray
+    count: int
+    valid_saves: int
+
+    def truncated(self, k: int) -> MonteCarloCurves:
+        """The curves at the first ``k`` save times.
+
+        Parameters
+        ----------
+        k : int
+            Save times kept.
+
+        Returns
+        -------
+        MonteCarloCurves
+        """
+        return replace(
+            self,
+            mean=self.mean[:k],
+            lo=self.lo[:k],
+            hi=self.hi[:k],
+            mean_state=self.mean_state[:k],
+            paths=self.paths[:, :k],
+        )
+
+
+@dataclass(frozen=True)
+class Failure:
+    """Where a Monte Carlo run stopped: the first non-finite state.
+
+    Attributes
+    ----------
+    t : float
+        The time of the first non-finite state.
+    agent : object
+        The agent's label (its index inside the kernels).
+    path : int
+        The sample path.
+    save_index : int
+        The save times recorded before it.
+    """
+
+    t: float
+    agent: Any
+    path: int
+    save_index: int
+
+    def to_dict(self) -> dict:
+        """The failure as JSON data.
+
+        Returns
+        -------
+        dict
+            ``t``, ``agent``, ``path``, ``save_index``.
+        """
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class RunStats:
+    """What a simulation run cost.
+
+    Attributes
+    ----------
+    steps : int
+        Time steps of the grid.
+    path_steps : int
+        Steps × paths.
+    mc_seconds, path_steps_per_second : float or None
+        Monte Carlo wall time and throughput (None without Monte Carlo).
+    exact_seconds : float or None
+        Wall time of the exact moments.
+    exact_rk4_steps : int or None
+        RK4 steps of the exact moments.
+    engine : dict or None
+        The remote engine's description, when one ran the paths.
+    """
+
+    steps: int
+    path_steps: int
+    mc_seconds: float | None = None
+    path_steps_per_second: float | None = None
+    exact_seconds: float | None = None
+    exact_rk4_steps: int | None = None
+    engine: dict | None = None
+
+    def to_dict(self) -> dict:
+        """The statistics as JSON data, without the ones not measured.
+
+        Returns
+        -------
+        dict
+        """
+        return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+@dataclass(frozen=True, eq=False)
 class SimulationResult:
     """A simulation's outcome: the mean-square error curves E‖x_i − θ‖² (Monte Carlo with a
     95 % band, and exact moments where the noise is linear) at the save times, the designs
@@ -38,12 +172,12 @@ class SimulationResult:
     theta: np.ndarray
     save_times: np.ndarray
     designs: dict[str, ProtocolDesign]
-    mc: dict | None  # mean, lo, hi (S, N); mean_state (S, Nd); paths (k, S, Nd); count
+    mc: MonteCarloCurves | None
     exact: Moments | None
     parameters: dict
-    stats: dict
-    notes: list[str] = field(default_factory=list)
-    failure: dict | None = None
+    stats: RunStats
+    notes: tuple[str, ...] = ()
+    failure: Failure | None = None
     grid: TimeGrid | None = None
 
     def summary(self) -> dict:
@@ -66,16 +200,16 @@ class SimulationResult:
                 "first": float(self.save_times[0]),
                 "last": float(self.save_times[-1]),
             },
-            "run": self.stats,
-            "notes": self.notes,
-            "failure": self.failure,
+            "run": self.stats.to_dict(),
+            "notes": list(self.notes),
+            "failure": self.failure.to_dict() if self.failure is not None else None,
         }
         if self.mc is not None:
-            out["final_ms_error_mc"] = dict(zip(lab, self.mc["mean"][-1].tolist(), strict=True))
+            out["final_ms_error_mc"] = dict(zip(lab, self.mc.mean[-1].tolist(), strict=True))
             out["final_ms_error_mc_band"] = {
                 a: [lo, hi]
                 for a, lo, hi in zip(
-                    lab, self.mc["lo"][-1].tolist(), self.mc["hi"][-1].tolist(), strict=True
+                    lab, self.mc.lo[-1].tolist(), self.mc.hi[-1].tolist(), strict=True
                 )
             }
             out["sample_paths"] = path_spread(self)
@@ -122,9 +256,9 @@ def simulation_frame(res: SimulationResult):
     cols = {
         "t": np.repeat(t, n),
         "agent": np.tile(np.array(labels, dtype=object), s),
-        "mc": (mc["mean"] if mc is not None else nan).reshape(-1),
-        "lo": (mc["lo"] if mc is not None else nan).reshape(-1),
-        "hi": (mc["hi"] if mc is not None else nan).reshape(-1),
+        "mc": (mc.mean if mc is not None else nan).reshape(-1),
+        "lo": (mc.lo if mc is not None else nan).reshape(-1),
+        "hi": (mc.hi if mc is not None else nan).reshape(-1),
         "exact": (res.exact.ms_error if res.exact is not None else nan).reshape(-1),
     }
     return pd.DataFrame(cols, columns=list(TIDY_COLUMNS))
@@ -154,7 +288,7 @@ def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
     """
     if res.mc is None:
         return {"stored": 0}
-    paths = res.mc["paths"]
+    paths = res.mc.paths
     if paths.size == 0:
         return {"stored": 0}
     err = np.linalg.norm(paths - np.tile(res.theta, len(res.labels)), axis=2)  # (k, S)
@@ -170,7 +304,7 @@ def path_spread(res: SimulationResult, late_fraction: float = 0.2) -> dict:
     }
 
 
-def mc_summary(part: PartialStats) -> dict:
+def mc_summary(part: PartialStats) -> MonteCarloCurves:
     """Mean of ‖x_i − θ‖² and its 95% confidence band (normal approximation). With fewer
     than two paths there is no band: ``lo`` and ``hi`` are NaN (shown as none), never a
     zero-width band.
@@ -182,8 +316,7 @@ def mc_summary(part: PartialStats) -> dict:
 
     Returns
     -------
-    dict
-        ``mean``, ``lo``, ``hi`` (S, N), ``mean_state``, ``paths``, ``count``, ``valid_saves``.
+    MonteCarloCurves
     """
     p = part.count
     mean = part.sq / p
@@ -193,15 +326,15 @@ def mc_summary(part: PartialStats) -> dict:
         var = np.maximum(part.sq2 / p - mean**2, 0.0) * (p / (p - 1))
         half = Z95 * np.sqrt(var / p)
         lo, hi = np.maximum(mean - half, 0.0), mean + half
-    return {
-        "mean": mean,
-        "lo": lo,
-        "hi": hi,
-        "mean_state": part.state / p,
-        "paths": part.stored,
-        "count": p,
-        "valid_saves": part.valid_saves,
-    }
+    return MonteCarloCurves(
+        mean=mean,
+        lo=lo,
+        hi=hi,
+        mean_state=part.state / p,
+        paths=part.stored,
+        count=p,
+        valid_saves=part.valid_saves,
+    )
 
 
 def truncate_result(res: SimulationResult, k: int) -> SimulationResult:
@@ -217,23 +350,56 @@ def truncate_result(res: SimulationResult, k: int) -> SimulationResult:
     Returns
     -------
     SimulationResult
+        A new result; ``res`` is unchanged.
     """
-    if res.mc is not None:
-        res.mc = {
-            key: (
-                v[:k]
-                if key in ("mean", "lo", "hi", "mean_state")
-                else (v[:, :k] if key == "paths" else v)
-            )
-            for key, v in res.mc.items()
-        }
-    if res.exact is not None:
-        res.exact = Moments(
-            res.exact.t[:k],
-            res.exact.mean[:k],
-            res.exact.ms_error[:k],
-            res.exact.second,
-            res.exact.steps,
-        )
-    res.save_times = res.save_times[:k]
-    return res
+    exact = res.exact
+    if exact is not None:
+        exact = Moments(exact.t[:k], exact.mean[:k], exact.ms_error[:k], exact.second, exact.steps)
+    return replace(
+        res,
+        mc=res.mc.truncated(k) if res.mc is not None else None,
+        exact=exact,
+        save_times=res.save_times[:k],
+    )
+
+
+def finish(res: SimulationResult, part: PartialStats | None) -> SimulationResult:
+    """The result, or :class:`SimulationDiverged` when a path met NaN or overflow: the
+    result is then cut to the save times every path reached, with the failure's agent
+    named by its label (one message for every kind of topology).
+
+    Parameters
+    ----------
+    res : SimulationResult
+        The complete result (its ``failure`` None).
+    part : PartialStats or None
+        The Monte Carlo sums, None without Monte Carlo.
+
+    Returns
+    -------
+    SimulationResult
+        ``res`` when no path failed.
+
+    Raises
+    ------
+    SimulationDiverged
+        A path met NaN or overflow; the truncated result is attached.
+    """
+    raw = part.failure if part is not None else None
+    if raw is None:
+        return res
+    lab = res.labels[raw["agent"]]
+    fail = Failure(
+        t=float(raw["t"]), agent=lab, path=int(raw["path"]), save_index=int(raw["save_index"])
+    )
+    cut = replace(truncate_result(res, fail.save_index), failure=fail)
+    kept = (
+        f"results kept up to t = {cut.save_times[-1]:.6g}"
+        if cut.save_times.size
+        else "no results kept"
+    )
+    raise SimulationDiverged(
+        f"simulation diverged (NaN or overflow) by t = {fail.t:.6g} at agent "
+        f"{quote(lab)} (path {fail.path}); {kept}",
+        cut,
+    )

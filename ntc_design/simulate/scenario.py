@@ -87,7 +87,7 @@ def ms_error_table(res) -> tuple[list[str], np.ndarray]:
     for k, a in enumerate(res.labels):
         if res.mc is not None:
             cols += [f"mc_{a}", f"mc_{a}_lo", f"mc_{a}_hi"]
-            data += [res.mc["mean"][:, k], res.mc["lo"][:, k], res.mc["hi"][:, k]]
+            data += [res.mc.mean[:, k], res.mc.lo[:, k], res.mc.hi[:, k]]
         if res.exact is not None:
             cols.append(f"exact_{a}")
             data.append(res.exact.ms_error[:, k])
@@ -139,8 +139,8 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
         np.savez_compressed(
             tmp / "paths.npz",
             t=res.save_times,
-            paths=res.mc["paths"] if res.mc is not None else np.zeros((0, res.save_times.size, 0)),
-            mean_state=res.mc["mean_state"] if res.mc is not None else np.zeros((0, 0)),
+            paths=res.mc.paths if res.mc is not None else np.zeros((0, res.save_times.size, 0)),
+            mean_state=res.mc.mean_state if res.mc is not None else np.zeros((0, 0)),
             exact_mean=(res.exact.mean + np.tile(res.theta, len(res.labels)))
             if res.exact is not None
             else np.zeros((0, 0)),

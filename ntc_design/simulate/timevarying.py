@@ -15,17 +15,20 @@ are integrated by classical RK4 with the matrices evaluated at t, t + h/2 and t 
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..design import design_topology
 from ..errors import InputError
 from ..timevarying import ExpressionTopology, Lemma1Structure, TimeVaryingDesign
+from .budget import check_exact_work, check_gain, estimate_exact_steps, gain_samples
 from .grid import TimeGrid
-from .moments import KAPPA, Moments, _MomentRecorder
-from .montecarlo import PartialStats, _BlockStats
+from .moments import KAPPA, MomentRecorder, Moments
+from .montecarlo import BlockStats, PartialStats
+from .result import SimulationResult, finish, mc_summary
+from .steps import run_exact, run_monte_carlo, run_parameters, run_stats, spec_grid
 from .system import NoiseModel
 
 BATCH = 256  # steps whose matrices and normals are made at once (Lemma 1 per batch is ~6 ms)
@@ -139,7 +142,7 @@ def _batch_size(sys_: TimeVaryingSystem) -> int:
     return int(max(1, min(BATCH, MAX_BATCH_BYTES // max(per, 1))))
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class TimeVaryingMonteCarloSpec:
     """What :func:`ntc_design.simulate.montecarlo.run` needs; ``run_block`` integrates one
     block of paths (same seeding and statistics as the fixed-topology blocks)."""
@@ -185,7 +188,7 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
     p0 = b * spec.block_size
     p = min(spec.block_size, spec.paths - p0)
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
-    stats = _BlockStats(spec, b, p0, p)
+    stats = BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     ne = sys_.n_edges
     c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
@@ -337,7 +340,7 @@ def exact_moments_tv(
     ts = np.array(ts)
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
-    rec = _MomentRecorder(saves, n, d)
+    rec = MomentRecorder(saves, n, d)
     rec.at(0.0, m, s)
     chunk = 256
     fm = sys_.fmat
@@ -386,122 +389,67 @@ def stability_ratio(sys_: TimeVaryingSystem, grid: TimeGrid, c_grid: np.ndarray)
     return float(ratio[w]), float(grid.t[idx[w]]), float(bnd[w]), float(grid.h[idx[w]])
 
 
-def simulate_time_varying(
-    tv: ExpressionTopology,
-    theta,
-    *,
-    margin: float,
-    cfun: Callable[[np.ndarray], np.ndarray],
-    noise: NoiseModel,
-    x_init: np.ndarray,
-    grid: TimeGrid,
-    method: str,
-    paths: int,
-    seed: int,
-    block_size: int,
-    store_paths: int,
-    workers: int,
-    progress=None,
-    system: TimeVaryingSystem | None = None,
-) -> tuple[dict, object, object, dict, list[str]]:
-    """Run Monte Carlo and/or the exact moments with A(t).
+def tv_designs(tv: ExpressionTopology, theta: np.ndarray, margin: float) -> dict:
+    """The design shown for an A(t) run: Lemma 1 at t = 0.
 
     Parameters
     ----------
     tv : ExpressionTopology
         The topology.
-    theta : sequence of float
-        The target θ.
+    theta : numpy.ndarray
+        θ.
     margin : float
         ΔC of Lemma 1.
-    cfun : callable
-        Vectorised c(t).
-    noise : NoiseModel
-        σ_ji and f.
-    x_init : numpy.ndarray
-        x(0), length Nd.
-    grid : TimeGrid
-        The integration grid.
-    method : str
-        ``"mc"``, ``"exact"`` or ``"both"``.
-    paths, seed, block_size, store_paths : int
-        Monte Carlo options (see :class:`~ntc_design.simulate.spec.MonteCarlo`).
-    workers : int
-        Processes.
-    progress : callable(done, total), optional
-        Called with path-steps done.
-    system : TimeVaryingSystem, optional
-        The system of this design and noise when the caller has built it already.
 
     Returns
     -------
-    tuple
-        (designs at t = 0, partial Monte Carlo statistics or None, moments or None,
-        stats, notes).
-
-    Raises
-    ------
-    InputError
-        An unstable Euler–Maruyama step, exact moments asked for a non-linear f, or a
-        per-edge σ on a missing edge.
+    dict
+        One :class:`~ntc_design.design.ProtocolDesign`, keyed by the name at t = 0.
     """
-    from ..design import design_topology
-    from .montecarlo import run
-
-    th = np.asarray(theta, dtype=float)
-    if system is None:
-        system = time_varying_system(TimeVaryingDesign(tv, th, float(margin)), noise)
-    sys_ = system
-    notes = [
-        "time-varying topology: A(t), C(t), δ(t), B_i(t), x0(t) re-evaluated at every step "
-        "(Lemma 1 at each instant); the design table shows t = 0"
-    ]
-    designs = {
-        f"{tv.name or 'topology'} at t=0": design_topology(tv.at(0.0), th, margin, thresholds=False)
-    }
-    stats: dict = {}
-    c_grid = cfun(grid.t[:-1])
-    if method != "exact":
-        ratio, tw, bnd, hw = stability_ratio(sys_, grid, c_grid)
-        if ratio >= 1.0:
-            raise InputError(
-                f"dt: Euler–Maruyama is unstable: at t = {tw:.4g}, c·h exceeds 2·Re λ/|λ|² = "
-                f"{bnd:.4g} for L_B(t); use dt < {hw / ratio:.3g}"
-            )
-        if ratio > 0.5:
-            notes.append(
-                f"Euler–Maruyama step within a factor {1 / ratio:.2f} of instability at "
-                f"t = {tw:.4g}; expect a step-size bias"
-            )
-    part = None
-    if method in ("mc", "both"):
-        spec = TimeVaryingMonteCarloSpec(
-            sys_, grid, cfun, th, x_init, tv.n, tv.dim, paths, seed, block_size, store_paths
+    return {
+        f"{tv.name or 'topology'} at t=0": design_topology(
+            tv.at(0.0), theta, margin, thresholds=False
         )
-        t0 = time.perf_counter()
-        part = run(spec, workers=workers, progress=progress)
-        sec = time.perf_counter() - t0
-        stats.update({"mc_seconds": sec, "path_steps_per_second": grid.n_steps * paths / sec})
-    exact = None
-    if method in ("exact", "both"):
-        if noise.linear:
-            t0 = time.perf_counter()
-            exact = exact_moments_tv(
-                sys_, cfun, x_init - np.tile(th, tv.n), grid.save_times, float(grid.t[-1])
-            )
-            stats.update(
-                {"exact_seconds": time.perf_counter() - t0, "exact_rk4_steps": exact.steps}
-            )
-        elif method == "exact":
-            raise InputError("method: exact moments need a linear f (a scalar or a matrix)")
-        else:
-            notes.append("exact moments skipped: f is not linear")
-    return designs, part, exact, stats, notes
+    }
+
+
+TV_NOTE = (
+    "time-varying topology: A(t), C(t), δ(t), B_i(t), x0(t) re-evaluated at every step "
+    "(Lemma 1 at each instant); the design table shows t = 0"
+)
+
+
+def _step_guard(
+    sys_: TimeVaryingSystem, grid: TimeGrid, c_grid: np.ndarray, notes: list[str]
+) -> None:
+    """Refuse an unstable Euler–Maruyama grid for L_B(t); note one within a factor 2."""
+    ratio, tw, bnd, hw = stability_ratio(sys_, grid, c_grid)
+    if ratio >= 1.0:
+        raise InputError(
+            f"dt: Euler–Maruyama is unstable: at t = {tw:.4g}, c·h exceeds 2·Re λ/|λ|² = "
+            f"{bnd:.4g} for L_B(t); use dt < {hw / ratio:.3g}"
+        )
+    if ratio > 0.5:
+        notes.append(
+            f"Euler–Maruyama step within a factor {1 / ratio:.2f} of instability at "
+            f"t = {tw:.4g}; expect a step-size bias"
+        )
+
+
+def _check_exact_work_tv(sys_: TimeVaryingSystem, spec, cfun, gain_text: str) -> None:
+    """Refuse, before the grid is built, RK4 moments with A(t) that would take too long."""
+    ts = gain_samples(spec.T)
+    c = check_gain(cfun, gain_text, ts)
+    rho_l, rho_q = generator_radius_tv(sys_, spec.T)
+    steps = estimate_exact_steps(ts, c, rho_l, rho_q, spec.save.count(spec.T))
+    check_exact_work(steps, sys_.design.topology.n * sys_.design.topology.dim)
 
 
 def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, workers: int, progress):
     """The driver's path for an :class:`ExpressionTopology` (``simulate`` dispatches here):
-    grid, checks, Monte Carlo and exact moments with A(t), and the result.
+    grid, checks, Monte Carlo and exact moments with A(t), and the result; the grid, the
+    parameters, the runs and the divergence check are the fixed topology's
+    (:mod:`.steps`, :func:`.result.finish`).
 
     Parameters
     ----------
@@ -526,94 +474,62 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
     Raises
     ------
     InputError
-        A wrong initial state, a gain negative or not finite on [0, T], or what
-        :func:`simulate_time_varying` refuses.
+        A wrong initial state, a gain negative or not finite on [0, T], an unstable
+        Euler–Maruyama step, exact moments asked for a non-linear f.
     SimulationDiverged
         NaN or overflow in a path (the partial result is attached).
     """
-    from ..errors import quote
-    from .budget import (
-        check_exact_work,
-        check_gain,
-        estimate_exact_steps,
-        gain_samples,
-    )
-    from .grid import build_grid
-    from .result import SimulationDiverged, SimulationResult, mc_summary, truncate_result
-
-    x_init, ini_notes = spec.initial_state(tv.n, tv.dim)
+    x_init, notes = spec.initial_state(tv.n, tv.dim)
     th = np.asarray(spec.theta, dtype=float)
     sys_ = time_varying_system(TimeVaryingDesign(tv, th, float(spec.margin)), spec.noise)
     if spec.method != "mc" and spec.noise.linear:
-        # the RK4 steps with A(t), estimated before the grid is built (they were not
-        # bounded at all: a long horizon ran until memory ran out)
-        ts = gain_samples(spec.T)
-        c = check_gain(cfun, gain_text, ts)
-        rho_l, rho_q = generator_radius_tv(sys_, spec.T)
-        steps = estimate_exact_steps(ts, c, rho_l, rho_q, spec.save.count(spec.T))
-        check_exact_work(steps, tv.n * tv.dim)
-    st = spec.stepping
-    grid = build_grid(
-        spec.T,
-        st.dt,
-        spec.save.resolve(spec.T),
-        None,
-        gain=cfun,
-        intrinsic_ds=st.intrinsic_ds,
-        h_max=st.max_step,
-    )
-    check_gain(cfun, gain_text, grid.t[:-1])
-    designs, part, exact, stats, notes = simulate_time_varying(
-        tv,
-        spec.theta,
-        margin=spec.margin,
-        cfun=cfun,
-        noise=spec.noise,
-        x_init=x_init,
+        _check_exact_work_tv(sys_, spec, cfun, gain_text)
+    grid = spec_grid(spec, cfun, None)
+    c_grid = check_gain(cfun, gain_text, grid.t[:-1])
+    notes.append(TV_NOTE)
+    designs = tv_designs(tv, th, spec.margin)
+    if spec.method != "exact":
+        _step_guard(sys_, grid, c_grid, notes)
+    mspec = TimeVaryingMonteCarloSpec(
+        system=sys_,
         grid=grid,
-        method=spec.method,
+        gain=cfun,
+        theta=th,
+        x_init=x_init,
+        n_agents=tv.n,
+        dim=tv.dim,
         paths=spec.mc.paths,
         seed=spec.mc.seed,
         block_size=spec.mc.block_size,
         store_paths=spec.mc.store_paths,
-        workers=workers,
-        progress=progress,
-        system=sys_,
     )
-    notes = ini_notes + notes
-    params = spec.options()
-    params.update(
-        {
-            "theta": th.tolist(),
-            "gain": gain_text,
-            "initial": x_init.tolist(),
-            "workers": workers,
-            "save_times": int(grid.save_times.size),
-            "modes": list(designs),
-        }
+    part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, None, notes)
+    exact, exact_stats = run_exact(
+        spec,
+        notes,
+        lambda: exact_moments_tv(
+            sys_, cfun, x_init - np.tile(th, tv.n), grid.save_times, float(grid.t[-1])
+        ),
     )
+    params = run_parameters(spec, th, gain_text, x_init, workers, grid, list(designs))
     params["time_varying"] = {
         "period": str(tv.period) if tv.period is not None else None,
         "constant_after": str(tv.constant_after) if tv.constant_after is not None else None,
         "topology": tv.to_dict(),
     }
-    stats = {"steps": grid.n_steps, "path_steps": grid.n_steps * spec.mc.paths, **stats}
-    mc = mc_summary(part) if part is not None else None
-    labels = tuple(tv.labels)
     res = SimulationResult(
-        labels, th, grid.save_times, designs, mc, exact, params, stats, notes, None, grid
+        labels=tuple(tv.labels),
+        theta=th,
+        save_times=grid.save_times,
+        designs=designs,
+        mc=mc_summary(part) if part is not None else None,
+        exact=exact,
+        parameters=params,
+        stats=run_stats(grid, spec.mc.paths, mc_stats, exact_stats),
+        notes=tuple(notes),
+        grid=grid,
     )
-    failure = part.failure if part is not None else None
-    if failure is not None:
-        lab = labels[failure["agent"]]
-        res = truncate_result(res, failure["save_index"])
-        res.failure = {**failure, "agent": lab}
-        raise SimulationDiverged(
-            f"simulation diverged (NaN or overflow) by t = {failure['t']:.6g} at agent "
-            f"{quote(lab)} (path {failure['path']})",
-            res,
-        )
-    return res
+    return finish(res, part)
 
 
 __all__ = [
@@ -622,6 +538,6 @@ __all__ = [
     "TimeVaryingSystem",
     "exact_moments_tv",
     "generator_radius_tv",
-    "simulate_time_varying",
+    "tv_designs",
     "time_varying_system",
 ]
