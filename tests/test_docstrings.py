@@ -32,7 +32,7 @@ from pathlib import Path
 import pytest
 
 import ntc_design
-from ntc_design.errors import require_positive
+from ntc_design.errors import InputError, require_positive
 
 ROOT = Path(ntc_design.__file__).parent
 
@@ -183,9 +183,15 @@ def _returns_value(fn) -> bool:
 
 
 def _calls_input_error_raiser(fn) -> str | None:
-    """The first ntc_design function that fn calls by name and that raises InputError."""
-    for node in _own_nodes(_body(fn)):
-        if isinstance(node, ast.Call):
+    """The first ntc_design function that fn calls by name and that raises InputError,
+    outside a ``try`` that catches InputError (or Exception)."""
+    nodes = list(_own_nodes(_body(fn)))
+    caught = set()
+    for node in nodes:
+        if isinstance(node, ast.Try) and any(_catches_input_error(h) for h in node.handlers):
+            caught.update(id(n) for stmt in node.body for n in ast.walk(stmt))
+    for node in nodes:
+        if isinstance(node, ast.Call) and id(node) not in caught:
             f = node.func
             name = f.id if isinstance(f, ast.Name) else None
             callee = fn.__globals__.get(name) if name else None
@@ -196,6 +202,14 @@ def _calls_input_error_raiser(fn) -> str | None:
                 except (OSError, TypeError):
                     continue
     return None
+
+
+def _catches_input_error(handler: ast.ExceptHandler) -> bool:
+    t = handler.type
+    names = t.elts if isinstance(t, ast.Tuple) else [t] if t is not None else []
+    return t is None or any(
+        getattr(n, "id", None) in ("InputError", "Exception", "BaseException") for n in names
+    )
 
 
 def check_function(fn) -> list[str]:
@@ -341,6 +355,26 @@ def _validates(x):
     require_positive("x", x)
 
 
+def _validates_quietly(x):
+    """Check, turning a bad value into False.
+
+    Parameters
+    ----------
+    x : float
+        A value.
+
+    Returns
+    -------
+    bool
+        Whether x is positive.
+    """
+    try:
+        require_positive("x", x)
+    except InputError:
+        return False
+    return True
+
+
 def test_checker_finds_each_kind_of_mistake():
     problems = check_function(_bad)
     assert "parameter 'y' not documented" in problems
@@ -353,6 +387,8 @@ def test_checker_finds_each_kind_of_mistake():
     assert check_function(_validates) == [
         "raises InputError (through require_positive()) but its Raises section does not say so"
     ]
+    # ... but not when the call sits in a try that catches InputError
+    assert check_function(_validates_quietly) == []
 
 
 # -- citations: printed numbers, not the spec's internal labels ---------------------------
