@@ -6,61 +6,38 @@ One self-contained HTML file; the figures are also written to DIR/figures."""
 from __future__ import annotations
 
 import base64
-import html
 import itertools
 import json
 import math
 from pathlib import Path
 
 import numpy as np
+from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from ..errors import InputError
 from ..outputs import check_output_file, write_atomic
 
-CSS = (
-    "body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;"
-    "color:#222}h2{border-bottom:2px solid #1f5fbf}table{border-collapse:collapse;"
-    "font-size:.85em}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left}"
-    "th{background:#f0f4fa}img{max-width:100%}.grid{display:flex;flex-wrap:wrap;gap:1em}"
-    ".grid figure{flex:1 1 420px;margin:0}figcaption{font-size:.85em;color:#555}"
+ENV = Environment(
+    loader=PackageLoader("ntc_design.reports", "templates"),
+    autoescape=select_autoescape(["html"]),
+    undefined=StrictUndefined,
 )
 
 
-def esc(x) -> str:
-    return html.escape(str(x))
-
-
-def fmt(x, digits: int = 4) -> str:
+def _fmt(x, digits: int = 4) -> str:
     if isinstance(x, bool):
         return "yes" if x else "no"
     if isinstance(x, float):
         return f"{x:.{digits}g}"
-    return esc(x)
-
-
-def table(headers, rows) -> str:
-    head = "".join(f"<th>{esc(h)}</th>" for h in headers)
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
-def img(png: bytes, alt: str) -> str:
-    data = base64.b64encode(png).decode()
-    return (
-        f'<figure><img alt="{esc(alt)}" src="data:image/png;base64,{data}">'
-        f"<figcaption>{esc(alt)}</figcaption></figure>"
-    )
-
-
-def page(title: str, body: str) -> str:
-    return (
-        f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{esc(title)}'
-        f"</title><style>{CSS}</style></head><body><h1>{esc(title)}</h1>{body}</body></html>\n"
-    )
+    return str(x)
 
 
 MAX_CURVES = 200  # curves drawn in the overlay (every point is still in curves.parquet)
 MAX_ROWS = 2000  # rows of the HTML table (every point is in results.csv)
+
+
+def _figure(png: bytes, alt: str) -> dict:
+    return {"alt": alt, "png_b64": base64.b64encode(png).decode()}
 
 
 def _save(fig, stem: Path) -> bytes:
@@ -215,9 +192,9 @@ def _cell(v) -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return "—"
     if isinstance(v, (np.bool_, bool)):
-        return fmt(bool(v))
+        return _fmt(bool(v))
     if isinstance(v, (np.floating, float)):
-        return fmt(float(v), 5)
+        return _fmt(float(v), 5)
     try:
         import pandas as pd
 
@@ -225,7 +202,7 @@ def _cell(v) -> str:
             return "—"
     except ImportError:  # pragma: no cover
         pass
-    return esc(v)
+    return str(v)
 
 
 def write_sweep_report(directory: str | Path) -> Path:
@@ -256,9 +233,9 @@ def write_sweep_report(directory: str | Path) -> Path:
             continue
         safe = "".join(ch if ch.isalnum() else "_" for ch in k)
         png = _save(ms_against_key(res, keys, k), figdir / f"sweep_ms_vs_{safe}")
-        figs.append(img(png, f"final mean-square error against {k}"))
+        figs.append(_figure(png, f"final mean-square error against {k}"))
     png = _save(curves_overlay(curves, res, keys), figdir / "sweep_curves")
-    figs.append(img(png, "mean-square error of every point (Monte Carlo)"))
+    figs.append(_figure(png, "mean-square error of every point (Monte Carlo)"))
     cols = [
         *keys,
         *(
@@ -278,26 +255,21 @@ def write_sweep_report(directory: str | Path) -> Path:
         ),
     ]
     rows = [[_cell(r[c]) for c in cols] for _, r in res.head(MAX_ROWS).iterrows()]
-    n_fail = int(res["error"].notna().sum())
-    links = " · ".join(
-        f'<a href="{n}">{n}</a>'
-        for n in ("results.csv", "results.parquet", "curves.parquet", "sweep.json")
-    )
-    body = (
-        f"<p>{len(res)} points over {esc(', '.join(keys))}; base scenario "
-        f"<code>{esc(man.get('base', ''))}</code>; {n_fail} failed. Data: {links} "
-        f"(per point: <code>points/&lt;point&gt;.json</code> and <code>.npz</code>).</p>"
-        f'<h2>Final mean-square error</h2><div class="grid">{"".join(figs)}</div>'
-        f"<h2>Points</h2>"
-        + table(cols, rows)
-        + (
-            f"<p>First {MAX_ROWS} of {len(res)} rows; all in results.csv.</p>"
-            if len(res) > MAX_ROWS
-            else ""
-        )
+    html = ENV.get_template("sweep.html").render(
+        title=f"ntc-design sweep: {man.get('name', d.name)}",
+        toc=[{"id": "final", "title": "Final mean-square error"}, {"id": "points", "title": "Points"}],
+        interactive=False,
+        n_points=len(res),
+        keys=keys,
+        base=str(man.get("base", "")),
+        n_failed=int(res["error"].notna().sum()),
+        data_files=("results.csv", "results.parquet", "curves.parquet", "sweep.json"),
+        figures=figs,
+        points={"id": "points-table", "headers": cols, "rows": rows},
+        truncated=len(res) > MAX_ROWS,
     )
     out = d / "report.html"
-    write_atomic(out, page(f"ntc-design sweep: {man.get('name', d.name)}", body), "report")
+    write_atomic(out, html, "report")
     return out
 
 
