@@ -4,6 +4,7 @@ from .driver import make_gain, simulate
 from .grid import TimeGrid, build_grid
 from .moments import Moments, exact_moments
 from .montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
+from .noise import NoiseModel
 from .result import SimulationDiverged, SimulationResult, path_spread
 from .spec import (
     SCENARIO_KEYS,
@@ -14,7 +15,7 @@ from .spec import (
     Stepping,
     UniformInitial,
 )
-from .system import ModeSystem, NoiseModel, mode_system
+from .system import ModeSystem, mode_system
 
 __all__ = [
     "SCENARIO_KEYS",

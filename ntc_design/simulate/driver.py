@@ -240,24 +240,6 @@ def _check_exact_work(
     check_exact_work(steps, systems[0].nd)
 
 
-def _check_noise_callable(spec: SimulationSpec, systems: Sequence[ModeSystem], d: int) -> None:
-    f = spec.noise.f
-    if spec.noise.linear or not callable(f):
-        return
-    probe = np.zeros((2, systems[0].n_edges, d))
-    try:
-        with np.errstate(all="ignore"):
-            outp = np.asarray(f(probe + 1.0))
-    except Exception as exc:  # noqa: BLE001 - user code
-        raise InputError(
-            f"noise.f: calling it on an array of shape {probe.shape} failed ({exc.__class__.__name__})"
-        ) from None
-    if outp.shape != probe.shape:
-        raise InputError(
-            f"noise.f: returned shape {outp.shape} for input shape {probe.shape}; it must return the same shape"
-        )
-
-
 def simulate(
     topology: AnyTopology,
     theta: Sequence[float] | SimulationSpec | None = None,
@@ -331,7 +313,7 @@ def simulate(
     c_grid = check_gain(cfun, gain_text, grid.t[:-1])
     if spec.method != "exact":
         _step_size_guard(systems, grid, c_grid, notes, spec.stepping.scheme)
-    _check_noise_callable(spec, systems, d)
+    spec.noise.term.check(d, systems[0].n_edges)
     params = run_parameters(spec, th, gain_text, x_init, workers, grid, names)
     if isinstance(topology, SwitchingTopology):
         params["schedule"] = [{"mode": m, "duration": t} for m, t in topology.schedule]

@@ -23,6 +23,7 @@ import multiprocessing as mp
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -385,7 +386,7 @@ def merge(parts: Sequence[PartialStats]) -> PartialStats:
 # interrupt takes effect within a fraction of a second instead of at the end of the run.
 
 _SPEC: MonteCarloSpec | None = None
-_COUNTER = None
+_COUNTER: Any = None  # a multiprocessing Value, made with the fork context
 
 
 def _init_worker() -> None:
@@ -403,6 +404,7 @@ def _worker(blocks: list[int]) -> list[PartialStats]:
 
     # one BLAS thread per worker: the processes are the parallelism (2 workers × 2 BLAS
     # threads on 2 cores made the switching example 5× slower)
+    assert _SPEC is not None  # set by run() before the fork
     with threadpool_limits(limits=1):
         return run_chunk(_SPEC, blocks, tick)
 
@@ -421,6 +423,11 @@ class _InOrder:
             got = self.waiting.pop(self.next)
             self.acc = merge(([self.acc] if self.acc is not None else []) + got)
             self.next += 1
+
+    def result(self) -> PartialStats:
+        """Everything folded (at least one chunk was added)."""
+        assert self.acc is not None, "no chunk was folded"
+        return self.acc
 
 
 def _terminate(ex: ProcessPoolExecutor) -> None:
@@ -485,7 +492,7 @@ def run(
         fold = _InOrder()
         for i in range(n_chunks):
             fold.add(i, run_chunk(spec, chunk(i), tick))
-        return fold.acc
+        return fold.result()
     ctx = mp.get_context("fork")
     _SPEC, _COUNTER = spec, ctx.Value("q", 0)
     ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
@@ -497,8 +504,8 @@ def run(
             while submitted < n_chunks and len(pending) < 2 * workers:
                 pending[ex.submit(_worker, chunk(submitted))] = submitted
                 submitted += 1
-            done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-            for f in done:
+            finished, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            for f in finished:
                 fold.add(pending.pop(f), f.result())
             if progress is not None:
                 progress(_COUNTER.value, total)
@@ -510,4 +517,4 @@ def run(
         raise
     finally:
         _SPEC, _COUNTER = None, None
-    return fold.acc
+    return fold.result()

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, quote, require_int, require_number, require_positive
-from .system import NoiseModel
+from .noise import NoiseModel
 
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
 MAX_SEED = 2**128

@@ -24,8 +24,8 @@ The step-size guard (:func:`check_step_size`) uses every eigenvalue of L_B up to
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -33,55 +33,11 @@ import scipy.sparse as sp
 
 from ..design import ProtocolDesign
 from ..errors import InputError
+from .noise import NoiseModel
 
 DENSE_EIG_MAX_ND = 600  # every eigenvalue of L_B (dense) up to this Nd; ARPACK above
 DENSE_LB_MAX_ND = 2000  # below this the design's own dense L_B is used (same numbers)
 N_EIGS = 6  # eigenvalues ARPACK computes at each end of the spectrum
-
-
-@dataclass(frozen=True)
-class NoiseModel:
-    """σ_ji (a default and per-edge overrides keyed by (from, to) labels) and f_ji: a
-    scalar s (f(x) = s·x), a d×d matrix F (f(x) = F x) or a callable acting on arrays of
-    differences of shape (..., d) (it must satisfy Assumption 1: ‖f(x)‖ <= σ̄‖x‖)."""
-
-    sigma: float = 0.4
-    f: float | np.ndarray | Callable[[np.ndarray], np.ndarray] = 0.3
-    sigma_edges: Mapping[tuple, float] = field(default_factory=dict)
-
-    @property
-    def linear(self) -> bool:
-        """Whether f(x) = F x (a number or a matrix rather than a callable)."""
-        return not callable(self.f)
-
-    def f_matrix(self, d: int) -> np.ndarray:
-        """The matrix F of a linear f(x) = F x.
-
-        Parameters
-        ----------
-        d : int
-            The state dimension.
-
-        Returns
-        -------
-        numpy.ndarray
-            F, d×d (s·I for a number s).
-
-        Raises
-        ------
-        ValueError
-            f is a callable.
-        InputError
-            f is a matrix of the wrong shape.
-        """
-        if callable(self.f):
-            raise ValueError("f is a callable")
-        f = np.asarray(self.f, dtype=float)
-        if f.ndim == 0:
-            return float(f) * np.eye(d)
-        if f.shape != (d, d):
-            raise InputError(f"noise.f: expected a scalar or a {d}x{d} matrix, got shape {f.shape}")
-        return f
 
 
 @dataclass(frozen=True, eq=False)
@@ -291,7 +247,8 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
     d = top.dim
     edges = top.edges  # (i, j): j -> i
     e_n = len(edges)
-    fmat = noise.f_matrix(d) if noise.linear else np.eye(d)
+    term = noise.term
+    fmat = term.matrix(d)
     lab = top.labels
     sig_by = {(str(a), str(b)): float(s) for (a, b), s in noise.sigma_edges.items()}
     known = {(str(lab[j]), str(lab[i])) for i, j in edges}
@@ -311,7 +268,7 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
     k_blocks = abs_w @ fmat
     knorm2 = np.linalg.norm(k_blocks, ord=2, axis=(1, 2)) ** 2 if e_n else np.zeros(0)
     mu2 = np.zeros(top.n)
-    if noise.linear:  # a callable f has no matrix: no mean-square estimate for it
+    if term.linear:  # a callable f has no matrix: no mean-square estimate for it
         np.add.at(mu2, dst, knorm2)
     lap_b = grounded_laplacian_sparse(des)
     blocks = _diag_blocks(lap_b, top.n, d)
@@ -329,7 +286,7 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
         abs_w=np.ascontiguousarray(abs_w),
         g_edge=np.ascontiguousarray(g_edge),
         fmat=fmat,
-        f=None if noise.linear else noise.f,
+        f=term.function,
         spectral_radius=rho,
         stability_bound=bound,
         min_real=min_re,

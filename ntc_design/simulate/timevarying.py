@@ -27,9 +27,9 @@ from .budget import check_exact_work, check_gain, estimate_exact_steps, gain_sam
 from .grid import TimeGrid
 from .moments import KAPPA, MomentRecorder, Moments
 from .montecarlo import BlockStats, PartialStats
+from .noise import NoiseModel
 from .result import SimulationResult, finish, mc_summary
 from .steps import run_exact, run_monte_carlo, run_parameters, run_stats, spec_grid
-from .system import NoiseModel
 
 BATCH = 256  # steps whose matrices and normals are made at once (Lemma 1 per batch is ~6 ms)
 MAX_BATCH_BYTES = 32 * 2**20
@@ -120,7 +120,8 @@ def time_varying_system(des: TimeVaryingDesign, noise: NoiseModel) -> TimeVaryin
     st = des.structure
     d = tv.dim
     live = np.nonzero(st.sign != 0)[0]
-    fmat = noise.f_matrix(d) if noise.linear else np.eye(d)
+    term = noise.term
+    fmat = term.matrix(d)
     dmat = np.zeros((live.size * d, tv.nd))
     lab = tv.labels
     sig_by = {(str(a), str(b)): float(s) for (a, b), s in noise.sigma_edges.items()}
@@ -133,7 +134,7 @@ def time_varying_system(des: TimeVaryingDesign, noise: NoiseModel) -> TimeVaryin
     if sig_by:
         a, b_ = next(iter(sig_by))
         raise InputError(f"noise.sigma_edges: no edge {a}->{b_} in {tv.name or 'the topology'}")
-    return TimeVaryingSystem(des, dmat, sig, fmat, None if noise.linear else noise.f, live)
+    return TimeVaryingSystem(des, dmat, sig, fmat, term.function, live)
 
 
 def _batch_size(sys_: TimeVaryingSystem) -> int:
@@ -325,7 +326,7 @@ def exact_moments_tv(
     rho_l, rho_q = generator_radius_tv(sys_, t_end)
     saves = np.asarray(save_times, dtype=float)
     # the step grid: through every save time
-    ts = [0.0]
+    steps = [0.0]
     t = 0.0
     stops = list(saves[saves > 0]) + ([t_end] if t_end > saves[-1] else [])
     for stop in stops:
@@ -336,8 +337,8 @@ def exact_moments_tv(
             if stop - t - h < 0.25 * h:
                 h = stop - t
             t = stop if h == stop - t else t + h
-            ts.append(t)
-    ts = np.array(ts)
+            steps.append(t)
+    ts = np.array(steps)
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
     rec = MomentRecorder(saves, n, d)

@@ -1,0 +1,269 @@
+"""The measurement noise of Niu & Wu, eq. (5): σ_ji per edge (additive) and the
+state-dependent f_ji (multiplicative), with Assumption 1's ‖f(x)‖ <= σ̄‖x‖.
+
+:class:`NoiseModel` is what users write (σ, f, per-edge σ). Its ``f`` may be a number s
+(f(x) = s·x), a d×d matrix F (f(x) = F x) or a callable on arrays of differences; each
+form is a :class:`StateNoise` (:class:`ScalarNoise`, :class:`MatrixNoise`,
+:class:`CallableNoise`) with one interface: whether it is linear (so that the exact
+moments apply), the matrix the kernels multiply the edge differences by, the function
+applied instead when it is not linear, and a check against the state dimension. The
+kernels and the moment equations ask that interface, never the type of ``f``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+
+
+class StateNoise:
+    """The state-dependent noise term f of one model: the base of the three forms."""
+
+    #: Whether f(x) = F x, so that the moment equations are exact.
+    linear: bool = True
+
+    def matrix(self, d: int) -> np.ndarray:
+        """The matrix the edge differences are multiplied by.
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+            F (d×d) for a linear f; the identity when f is applied as a function.
+        """
+        return np.eye(d)
+
+    @property
+    def function(self) -> Callable[[np.ndarray], np.ndarray] | None:
+        """The function applied to the (F-multiplied) differences; None when linear.
+
+        Returns
+        -------
+        callable or None
+        """
+        return None
+
+    def check(self, d: int, n_edges: int) -> None:
+        """Refuse an f that does not fit d-dimensional states (before a run).
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+        n_edges : int
+            Edges of the largest mode (the shape the kernels call f with).
+
+        Raises
+        ------
+        InputError
+            f does not fit.
+        """
+        self.matrix(d)
+
+
+@dataclass(frozen=True)
+class ScalarNoise(StateNoise):
+    """f(x) = s·x.
+
+    Attributes
+    ----------
+    s : float
+        The scale.
+    """
+
+    s: float
+
+    def matrix(self, d: int) -> np.ndarray:
+        """s·I.
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        return float(self.s) * np.eye(d)
+
+
+@dataclass(frozen=True, eq=False)
+class MatrixNoise(StateNoise):
+    """f(x) = F x.
+
+    Attributes
+    ----------
+    f : numpy.ndarray
+        F, d×d.
+    """
+
+    f: np.ndarray
+
+    def matrix(self, d: int) -> np.ndarray:
+        """F, checked against d.
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+
+        Raises
+        ------
+        InputError
+            F is not d×d.
+        """
+        if self.f.shape != (d, d):
+            raise InputError(
+                f"noise.f: expected a scalar or a {d}x{d} matrix, got shape {self.f.shape}"
+            )
+        return self.f
+
+
+@dataclass(frozen=True, eq=False)
+class CallableNoise(StateNoise):
+    """f given as a function on arrays of differences of shape (..., d); Monte Carlo only.
+
+    Attributes
+    ----------
+    fn : callable
+        The function; it must return an array of the shape it was given.
+    """
+
+    fn: Callable[[np.ndarray], np.ndarray]
+    linear = False
+
+    @property
+    def function(self) -> Callable[[np.ndarray], np.ndarray]:
+        """The user's function.
+
+        Returns
+        -------
+        callable
+        """
+        return self.fn
+
+    def check(self, d: int, n_edges: int) -> None:
+        """Call f once on a probe of the kernels' shape and check what comes back.
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+        n_edges : int
+            Edges of the largest mode.
+
+        Raises
+        ------
+        InputError
+            f fails on the probe or returns another shape.
+        """
+        probe = np.zeros((2, n_edges, d))
+        try:
+            with np.errstate(all="ignore"):
+                out = np.asarray(self.fn(probe + 1.0))
+        except Exception as exc:  # noqa: BLE001 - user code
+            raise InputError(
+                f"noise.f: calling it on an array of shape {probe.shape} failed "
+                f"({exc.__class__.__name__})"
+            ) from None
+        if out.shape != probe.shape:
+            raise InputError(
+                f"noise.f: returned shape {out.shape} for input shape {probe.shape}; it must "
+                "return the same shape"
+            )
+
+
+def state_noise(f: float | np.ndarray | Callable[[np.ndarray], np.ndarray]) -> StateNoise:
+    """The :class:`StateNoise` of a user's f.
+
+    Parameters
+    ----------
+    f : float, array_like or callable
+        A number, a d×d matrix or a function.
+
+    Returns
+    -------
+    StateNoise
+    """
+    if callable(f):
+        return CallableNoise(f)
+    arr = np.asarray(f, dtype=float)
+    return ScalarNoise(float(arr)) if arr.ndim == 0 else MatrixNoise(arr)
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """σ_ji (a default and per-edge overrides keyed by (from, to) labels) and f_ji: a
+    scalar s (f(x) = s·x), a d×d matrix F (f(x) = F x) or a callable acting on arrays of
+    differences of shape (..., d) (it must satisfy Assumption 1: ‖f(x)‖ <= σ̄‖x‖)."""
+
+    sigma: float = 0.4
+    f: float | np.ndarray | Callable[[np.ndarray], np.ndarray] = 0.3
+    sigma_edges: Mapping[tuple, float] = field(default_factory=dict)
+
+    @property
+    def term(self) -> StateNoise:
+        """f as a :class:`StateNoise`.
+
+        Returns
+        -------
+        StateNoise
+        """
+        return state_noise(self.f)
+
+    @property
+    def linear(self) -> bool:
+        """Whether f(x) = F x (a number or a matrix rather than a callable).
+
+        Returns
+        -------
+        bool
+        """
+        return self.term.linear
+
+    def f_matrix(self, d: int) -> np.ndarray:
+        """The matrix F of a linear f(x) = F x.
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+            F, d×d (s·I for a number s).
+
+        Raises
+        ------
+        ValueError
+            f is a callable.
+        InputError
+            f is a matrix of the wrong shape.
+        """
+        if not self.linear:
+            raise ValueError("f is a callable")
+        return self.term.matrix(d)
+
+
+__all__ = [
+    "CallableNoise",
+    "MatrixNoise",
+    "NoiseModel",
+    "ScalarNoise",
+    "StateNoise",
+    "state_noise",
+]
