@@ -290,6 +290,20 @@ def simulate(
     if isinstance(topology, ExpressionTopology):  # A(t)
         _check_size(topology, spec, cfun, 1, 1, workers)
         return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
+    return _simulate_modes(topology, spec, cfun, gain_text, workers, progress, engine)
+
+
+def _simulate_modes(
+    topology: Topology | SwitchingTopology | TimeVaryingTopology,
+    spec: SimulationSpec,
+    cfun: Callable,
+    gain_text: str,
+    workers: int,
+    progress,
+    engine,
+) -> SimulationResult:
+    """:func:`simulate` for one topology, a switching set or a sampled A(t): one design
+    per mode, checks, the grid, the runs."""
     names, make_designs, segments, notes = _modes(topology, spec)
     if workers < spec.mc.workers:
         notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")

@@ -114,56 +114,19 @@ def run_sweep(
         write_manifest(sw, out)
         tasks = sw.tasks()
         results: dict[str, PointResult] = {}
-        todo = []
         for t in tasks:
             got = load_point(out, t.point)
-            if got is None:
-                todo.append(t)
-            else:
+            if got is not None:
                 results[t.point] = got
-        state = SweepProgress(len(tasks), reused=len(results), points_done=len(results))
-        total = {t.point: t.path_steps_estimate for t in tasks}
-        done = {p: total[p] for p in results}
-        state.failed = sum(1 for r in results.values() if r.row.error)
-
-        def report() -> None:
-            state.path_steps_total = sum(total.values())
-            state.path_steps_done = sum(done.values())
-            if progress is not None:
-                progress(state)
-
-        def tick(point: str, d: int, n: int) -> None:
-            total[point], done[point] = n, d
-            report()
-
-        report()
+        todo = [t for t in tasks if t.point not in results]
+        tracker = _Tracker(tasks, results, progress)
         if todo:
-            items: list[tuple[str, tuple]] = [(t.point, (t, None, workers)) for t in todo]
-            if not isinstance(eng, LocalEngine):
-                # Tasks carry their topology by value: a scattered copy can be lost with a
-                # killed worker once Dask's memory manager has dropped the other replicas
-                # (7 points cancelled in the killed-worker test).
-                certs = _cluster_certificates(eng, todo)
-                items = [(t.point, (t, None, None, certs.get(t.point))) for t in todo]
-            for point, res, exc in eng.map_unordered(_run_any, items, progress=tick):
-                if exc is not None:  # the cluster gave up: a row now, a retry next run
-                    task = next(t for t in todo if t.point == point)
-                    row = PointRow(
-                        point=point, error=f"not computed: {exc.__class__.__name__}: {exc}"[:500]
-                    )
-                    results[point] = PointResult(point, task.params, row, np.zeros(0), [])
-                else:
-                    save_point(out, res)
-                    results[point] = res
-                if results[point].row.error:
-                    state.failed += 1
-                state.points_done += 1
-                done[point] = total[point]
-                report()
+            _run_points(eng, todo, workers, out, results, tracker)
         files = write_tables(sw, out, results)
     finally:
         if own:
             eng.close()
+    state = tracker.state
     return SweepOutcome(
         out,
         len(sw.points),
@@ -173,6 +136,64 @@ def run_sweep(
         (out / "sweep.json", *files),
         time.monotonic() - t0,
     )
+
+
+class _Tracker:
+    """The sweep's progress: points done and path-steps (estimates until each point
+    reports its own total), told to the caller's callback."""
+
+    def __init__(self, tasks: list[PointTask], reused: dict[str, PointResult], progress):
+        self.state = SweepProgress(len(tasks), reused=len(reused), points_done=len(reused))
+        self.state.failed = sum(1 for r in reused.values() if r.row.error)
+        self.total = {t.point: t.path_steps_estimate for t in tasks}
+        self.done = {p: self.total[p] for p in reused}
+        self.progress = progress
+        self.report()
+
+    def report(self) -> None:
+        self.state.path_steps_total = sum(self.total.values())
+        self.state.path_steps_done = sum(self.done.values())
+        if self.progress is not None:
+            self.progress(self.state)
+
+    def tick(self, point: str, d: int, n: int) -> None:
+        self.total[point], self.done[point] = n, d
+        self.report()
+
+    def finished(self, point: str, failed: bool) -> None:
+        self.state.failed += int(failed)
+        self.state.points_done += 1
+        self.done[point] = self.total[point]
+        self.report()
+
+
+def _run_points(
+    eng,
+    todo: list[PointTask],
+    workers: int | None,
+    out: Path,
+    results: dict[str, PointResult],
+    tracker: _Tracker,
+) -> None:
+    """Run the points not stored yet; store each as it arrives."""
+    items: list[tuple[str, tuple]] = [(t.point, (t, None, workers)) for t in todo]
+    if not isinstance(eng, LocalEngine):
+        # Tasks carry their topology by value: a scattered copy can be lost with a
+        # killed worker once Dask's memory manager has dropped the other replicas
+        # (7 points cancelled in the killed-worker test).
+        certs = _cluster_certificates(eng, todo)
+        items = [(t.point, (t, None, None, certs.get(t.point))) for t in todo]
+    for point, res, exc in eng.map_unordered(_run_any, items, progress=tracker.tick):
+        if exc is not None:  # the cluster gave up: a row now, a retry next run
+            task = next(t for t in todo if t.point == point)
+            row = PointRow(
+                point=point, error=f"not computed: {exc.__class__.__name__}: {exc}"[:500]
+            )
+            results[point] = PointResult(point, task.params, row, np.zeros(0), [])
+        else:
+            save_point(out, res)
+            results[point] = res
+        tracker.finished(point, bool(results[point].row.error))
 
 
 def _cluster_certificates(eng, todo: list[PointTask]) -> dict:
