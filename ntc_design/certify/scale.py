@@ -42,11 +42,12 @@ with a sparse eigensolver.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sparse
+from scipy.sparse.linalg import splu
 
 from ..design import ProtocolDesign
 from ..linalg import (
@@ -573,34 +574,14 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
     top = des.topology
     name = name or top.name or "topology"
     blocks = lap_b_blocks(top, des.delta)
-    lap_b = des.grounded_laplacian_sparse()
-    ncomp, comp = strong_components(lap_b, top.dim)
+    ncomp, comp = strong_components(des.grounded_laplacian_sparse(), top.dim)
     ea = top.edge_arrays
     n = top.n
     sizes = np.bincount(comp, minlength=ncomp)
-    # μ_i: λ_min of the symmetric diagonal block, lowered so the proof has room
-    sym = 0.5 * (blocks.diag + blocks.diag.transpose(0, 2, 1))
-    lam = np.linalg.eigvalsh(sym) if n else np.zeros((0, top.dim))
-    scale = np.max(np.abs(lam), axis=1)
-    errf = np.sqrt(np.sum(blocks.diag_err**2, axis=(1, 2)))
-    mu = lam[:, 0] - 1e-9 * scale - 4 * errf - 4 * gamma(top.dim + 1) * scale
+    lam, mu = _agent_bounds(blocks, top.dim, n)
     nu, nu_ok = edge_norm_bounds(ea.w)
-    # v: 1 on one-agent components, M_C v = 1 on the others
-    v = np.ones(n)
     same = comp[ea.rows] == comp[ea.cols]
-    if (sizes > 1).any():
-        mm = sparse.csr_matrix(
-            (-nu[same], (ea.rows[same], ea.cols[same])), shape=(n, n)
-        ) + sparse.diags(mu)
-        from scipy.sparse.linalg import splu
-
-        multi = np.flatnonzero(sizes[comp] > 1)
-        sub = mm[multi][:, multi].tocsc()
-        try:
-            sol = splu(sub).solve(np.ones(multi.size))
-            v[multi] = np.where(np.isfinite(sol), sol, -1.0)
-        except RuntimeError:  # singular comparison matrix
-            v[multi] = -1.0
+    v = _comparison_vector(n, comp, sizes, ea, same, nu, mu)
     mu_proven = np.zeros(n, dtype=bool)
     pos_mu = mu > 0
     mu_proven[pos_mu] = prove_mu(blocks, np.flatnonzero(pos_mu), mu[pos_mu])
@@ -610,69 +591,17 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
     comp_dom = np.ones(ncomp, dtype=bool)
     np.logical_and.at(comp_dom, comp, dom)
     comp_dom[bad_edge_comp] = False
-    methods = np.where(comp_dom, "dominance", "none").astype(object)
-    extra: dict[str, Any] = {}
-    details: dict[str, str] = {}
-    skipped: list[str] = []
-    # the agents of each component, grouped once (not a pass over all agents per component)
-    order = np.argsort(comp, kind="stable")
-    starts = np.concatenate([[0], np.cumsum(sizes)])
-    # a one-agent block L_ii = Σ|A_ik| + δB_i is symmetric: when its λ_min is not positive
-    # no method can prove it (an agent nothing reaches), so it is not tried one by one
-    hopeless = (sizes == 1) & ~comp_dom
-    hopeless[hopeless] = lam[order[starts[:-1][hopeless]], 0] <= 0
-    if hopeless.any():
-        skipped.append(
-            f"{int(hopeless.sum())} one-agent component(s) with λ_min(L_ii) <= 0 (e.g. an agent "
-            "that no edge and no x0 reaches): −L_B is not Hurwitz there"
-        )
-    for c in np.flatnonzero(~comp_dom & ~hopeless).tolist():
-        agents = order[starts[c] : starts[c + 1]]
-        lap_c, err_c = component_matrix(blocks, agents)
-        try:
-            ok, how = prove_symmetric_part(lap_c, err_c)
-        except DenseRefused as exc:  # too much fill: the dense fallback below decides
-            ok, how = False, str(exc)
-        if ok:
-            methods[c] = "symmetric"
-            details[str(c)] = how
-            continue
-        if lap_c.shape[0] <= LYAPUNOV_COMPONENT_MAX_ND:
-            dense = lap_c.toarray()
-            try:
-                p = hurwitz_by_lyapunov(dense).p
-            except (np.linalg.LinAlgError, ValueError):
-                p = None
-            if p is not None and np.all(np.isfinite(p)):
-                p1 = prove_pd_expr(p, None, None, 0.0, None, False)
-                p2 = prove_pd_expr(p, None, dense, 0.0, err_c.toarray(), False)
-                if p1.holds and p2.holds:
-                    methods[c] = "lyapunov"
-                    extra[str(c)] = {"P": pack(p, "f8")}
-                    details[str(c)] = f"{p1.detail}; {p2.detail}"
-                    continue
-        else:
-            skipped.append(
-                f"component {c} (Nd = {lap_c.shape[0]}): no dense Lyapunov fallback above "
-                f"Nd = {LYAPUNOV_COMPONENT_MAX_ND}"
-            )
+    fb = _fallbacks(blocks, comp, sizes, comp_dom, lam)
     rate, rate_how = rate_estimate(blocks, comp, ncomp)
     rhs = np.zeros(n)
     np.add.at(rhs, ea.rows[same], nu[same] * v[ea.cols[same]])
-    in_dom = comp_dom[comp]
     # a bound on min Re λ(L_B) only when every component is a dominance one
     lower = (
         float(np.min(dominance_rate_bound(mu, v, rhs))) * (1 - 1e-12)
-        if n and in_dom.all()
+        if n and comp_dom[comp].all()
         else None
     )
-    claims = [
-        {
-            "id": f"−L_B({name}) Hurwitz: every component block certified",
-            "kind": "components",
-            "mode": name,
-        }
-    ]
+    methods = fb.methods
     counts = {m: int(np.sum(methods == m)) for m in ("dominance", "symmetric", "lyapunov", "none")}
     doc = {
         "format": FORMAT,
@@ -686,14 +615,20 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
             "method": [str(m) for m in methods.tolist()],
             "v": pack(v, "f8"),
             "mu": pack(mu, "f8"),
-            "lyapunov": extra,
+            "lyapunov": fb.extra,
         },
-        "claims": claims,
+        "claims": [
+            {
+                "id": f"−L_B({name}) Hurwitz: every component block certified",
+                "kind": "components",
+                "mode": name,
+            }
+        ],
         "results": {
             "components": int(ncomp),
             "largest_component_agents": int(sizes.max(initial=0)),
             "methods": counts,
-            "details": details,
+            "details": fb.details,
             "eig_bound": rate,
             "rate_estimate": {"value": rate, "method": rate_how},
             "rate_lower_bound": {
@@ -706,11 +641,102 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
                 "decay-rate LMI, dense common P and exact rational Sylvester: not run "
                 "above the dense sizes (memory grows as (Nd)^4 for the LMI); the rate is "
                 "estimated instead",
-                *skipped,
+                *fb.skipped,
             ],
             "seconds": time.perf_counter() - t0,
         },
         "solver": {"name": None, "status": None},
     }
-
     return finish(doc, "verified-float (component-wise)")
+
+
+def _agent_bounds(blocks, d: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(eigenvalues of each symmetric diagonal block, μ_i): λ_min lowered so that the
+    proof has room for the rounding of the blocks and of the eigenvalues."""
+    sym = 0.5 * (blocks.diag + blocks.diag.transpose(0, 2, 1))
+    lam = np.linalg.eigvalsh(sym) if n else np.zeros((0, d))
+    scale = np.max(np.abs(lam), axis=1)
+    errf = np.sqrt(np.sum(blocks.diag_err**2, axis=(1, 2)))
+    return lam, lam[:, 0] - 1e-9 * scale - 4 * errf - 4 * gamma(d + 1) * scale
+
+
+def _comparison_vector(n, comp, sizes, ea, same, nu, mu) -> np.ndarray:
+    """v: 1 on one-agent components, M_C v = 1 on the others (−1 where M_C is singular
+    or the solve is not finite: dominance then fails there)."""
+    v = np.ones(n)
+    if (sizes > 1).any():
+        mm = sparse.csr_matrix(
+            (-nu[same], (ea.rows[same], ea.cols[same])), shape=(n, n)
+        ) + sparse.diags(mu)
+        multi = np.flatnonzero(sizes[comp] > 1)
+        sub = mm[multi][:, multi].tocsc()
+        try:
+            sol = splu(sub).solve(np.ones(multi.size))
+            v[multi] = np.where(np.isfinite(sol), sol, -1.0)
+        except RuntimeError:  # singular comparison matrix
+            v[multi] = -1.0
+    return v
+
+
+@dataclass
+class _Fallbacks:
+    """The method per component and what the non-dominance proofs left."""
+
+    methods: np.ndarray
+    extra: dict[str, Any] = field(default_factory=dict)
+    details: dict[str, str] = field(default_factory=dict)
+    skipped: list[str] = field(default_factory=list)
+
+
+def _fallbacks(blocks, comp, sizes, comp_dom, lam) -> _Fallbacks:
+    """The components dominance did not prove: the symmetric part, then a dense
+    Lyapunov P for small ones."""
+    fb = _Fallbacks(np.where(comp_dom, "dominance", "none").astype(object))
+    # the agents of each component, grouped once (not a pass over all agents per component)
+    order = np.argsort(comp, kind="stable")
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    # a one-agent block L_ii = Σ|A_ik| + δB_i is symmetric: when its λ_min is not positive
+    # no method can prove it (an agent nothing reaches), so it is not tried one by one
+    hopeless = (sizes == 1) & ~comp_dom
+    hopeless[hopeless] = lam[order[starts[:-1][hopeless]], 0] <= 0
+    if hopeless.any():
+        fb.skipped.append(
+            f"{int(hopeless.sum())} one-agent component(s) with λ_min(L_ii) <= 0 (e.g. an agent "
+            "that no edge and no x0 reaches): −L_B is not Hurwitz there"
+        )
+    for c in np.flatnonzero(~comp_dom & ~hopeless).tolist():
+        agents = order[starts[c] : starts[c + 1]]
+        _prove_component(fb, c, *component_matrix(blocks, agents))
+    return fb
+
+
+def _prove_component(fb: _Fallbacks, c: int, lap_c, err_c) -> None:
+    """Component c by its symmetric part, else (small enough) by a Lyapunov P."""
+    try:
+        ok, how = prove_symmetric_part(lap_c, err_c)
+    except DenseRefused as exc:  # too much fill: the dense fallback below decides
+        ok, how = False, str(exc)
+    if ok:
+        fb.methods[c] = "symmetric"
+        fb.details[str(c)] = how
+        return
+    if lap_c.shape[0] > LYAPUNOV_COMPONENT_MAX_ND:
+        fb.skipped.append(
+            f"component {c} (Nd = {lap_c.shape[0]}): no dense Lyapunov fallback above "
+            f"Nd = {LYAPUNOV_COMPONENT_MAX_ND}"
+        )
+        return
+    dense = lap_c.toarray()
+    try:
+        p = hurwitz_by_lyapunov(dense).p
+    except (np.linalg.LinAlgError, ValueError):
+        return
+    if p is None or not np.all(np.isfinite(p)):
+        return
+    p1 = prove_pd_expr(p, None, None, 0.0, None, False)
+    p2 = prove_pd_expr(p, None, dense, 0.0, err_c.toarray(), False)
+    if p1.holds and p2.holds:
+        fb.methods[c] = "lyapunov"
+        fb.extra[str(c)] = {"P": pack(p, "f8")}
+        fb.details[str(c)] = f"{p1.detail}; {p2.detail}"
+

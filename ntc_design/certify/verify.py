@@ -198,26 +198,10 @@ def verify(
     >>> verify(doc).valid                   # makes the certificate invalid
     False
     """
-    if not isinstance(doc, dict):
-        raise InputError(f"{source}: expected a JSON object")
-    if doc.get("format") != FORMAT:
-        raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
-    version = need(doc, "version", int, source)
-    if version not in SUPPORTED_VERSIONS:
-        return _invalid(
-            "none",
-            "format version",
-            f"version {version} is not one this ntc reads "
-            f"({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
-        )
-    name = need(doc, "kind", str, source)
-    kind = KINDS.get(name)
-    if kind is None:
-        return _invalid(
-            "none",
-            "certificate kind",
-            f"unknown kind {name!r} (known: {', '.join(KINDS)}); nothing is proven",
-        )
+    kind_or_refusal = _kind_of(doc, source)
+    if isinstance(kind_or_refusal, Verification):
+        return kind_or_refusal
+    kind = kind_or_refusal
     doc_subject = need(doc, "subject", dict, source)
     stated = need(doc, "digest", str, source)
     listed = need(doc, "claims", list, source)
@@ -247,8 +231,41 @@ def verify(
     audit = ResultsAudit(doc.get("results"), source)
     kind.audit(audit, doc, subject, reading, alpha)
     checks.append(audit.check())
+    about = _about(kind, props, subject, alpha if Property.DECAY_RATE in props else None)
+    return Verification(
+        all(c.ok for c in checks), kind.verification_method(reading), tuple(checks), about
+    )
 
-    about = About(
+
+def _kind_of(doc: Any, source: str) -> CertificateKind | Verification:
+    """The certificate's kind, or an invalid verification for a version or kind this
+    ntc does not know (nothing can be proven about it)."""
+    if not isinstance(doc, dict):
+        raise InputError(f"{source}: expected a JSON object")
+    if doc.get("format") != FORMAT:
+        raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
+    version = need(doc, "version", int, source)
+    if version not in SUPPORTED_VERSIONS:
+        return _invalid(
+            "none",
+            "format version",
+            f"version {version} is not one this ntc reads "
+            f"({', '.join(map(str, SUPPORTED_VERSIONS))}); nothing is proven",
+        )
+    name = need(doc, "kind", str, source)
+    kind = KINDS.get(name)
+    if kind is None:
+        return _invalid(
+            "none",
+            "certificate kind",
+            f"unknown kind {name!r} (known: {', '.join(KINDS)}); nothing is proven",
+        )
+    return kind
+
+
+def _about(kind: CertificateKind, props, subject, alpha: float | None) -> About:
+    """What the certificate is about, from its (re-derived) subject."""
+    return About(
         kind.name,
         kind.description,
         props,
@@ -258,11 +275,8 @@ def verify(
         ),
         subject.scheduled,
         subject.schedule,
-        alpha if Property.DECAY_RATE in props else None,
+        alpha,
         subject.switching_hash,
-    )
-    return Verification(
-        all(c.ok for c in checks), kind.verification_method(reading), tuple(checks), about
     )
 
 
