@@ -451,6 +451,20 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
         raise
 
     h = topology_hash(top)
+    checks += _mode_checks(name, top, h, stated_hash, informed, b, delta, k1, x0, theta)
+    in_range = checks[-1].ok
+    if in_range:
+        lap, err = _lap_b_float(top, b, delta)
+        exact = _lap_b_exact(top, b, delta) if n <= EXACT_MAX_N else None
+    else:
+        lap, err, exact = np.zeros((n, n)), np.zeros((n, n)), None
+    return DenseMode(name, top, theta, delta, b, h, lap, err, exact, in_range)
+
+
+def _mode_checks(name, top, h, stated_hash, informed, b, delta, k1, x0, theta) -> list[Check]:
+    """What a mode's subject must satisfy: its hash, V_I = U, B_i = Σ_Ω|A_ij| exactly,
+    k1 and x0 from δ and θ; the last check is whether every number is within range."""
+    checks = []
     checks.append(
         Check(
             f"{name}: topology hash",
@@ -501,12 +515,7 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
             "every weight, B_i and δ can be bounded" if in_range else f"{RANGE_TEXT}",
         )
     )
-    if in_range:
-        lap, err = _lap_b_float(top, b, delta)
-        exact = _lap_b_exact(top, b, delta) if n <= EXACT_MAX_N else None
-    else:
-        lap, err, exact = np.zeros((n, n)), np.zeros((n, n)), None
-    return DenseMode(name, top, theta, delta, b, h, lap, err, exact, in_range)
+    return checks
 
 
 __all__ = [
