@@ -178,7 +178,7 @@ def read_document(path: str | Path) -> dict[str, Any]:
             raise InputError(f"{p}: an integer with too many digits") from None
         raise InputError(f"{p}: a value that cannot be read ({_one_line(str(exc))})") from None
     if not isinstance(doc, dict):
-        raise InputError(f"{p}: expected a mapping at the top level, got {_kind(doc)}")
+        raise InputError(f"{p}: expected a mapping at the top level, got {type_name(doc)}")
     return doc
 
 
@@ -310,11 +310,13 @@ def _compose(loader: Any, p: Path) -> Any:
             return root
 
 
-def _kind(x: Any) -> str:
+def type_name(x: Any) -> str:
+    """What a value is, for a message ("nothing" for None)."""
     return "nothing" if x is None else type(x).__name__
 
 
-def _err(source: str | None, field: str, msg: str) -> InputError:
+def field_error(source: str | None, field: str, msg: str) -> InputError:
+    """The one-line error naming the file and the field."""
     return InputError(f"{source}: {field}: {msg}" if source else f"{field}: {msg}")
 
 
@@ -357,28 +359,28 @@ def text_field(doc: dict[str, Any], key: str, source: str | None = None) -> str 
     v = doc.get(key)
     if v is None or isinstance(v, str):
         return v
-    raise _err(source, key, f"expected text, got {_kind(v)} {_show(v)}")
+    raise field_error(source, key, f"expected text, got {type_name(v)} {_show(v)}")
 
 
 def _number(x: Any, source: str | None, field: str) -> float:
     if isinstance(x, bool) or not isinstance(x, (int, float)):
-        raise _err(source, field, f"expected a number, got {_show(x)}")
+        raise field_error(source, field, f"expected a number, got {_show(x)}")
     try:
         v = float(x)
     except OverflowError:
-        raise _err(source, field, f"number {_show(x)} is too large") from None
+        raise field_error(source, field, f"number {_show(x)} is too large") from None
     if not math.isfinite(v):
-        raise _err(source, field, f"entry is {_show(x)}; numbers must be finite")
+        raise field_error(source, field, f"entry is {_show(x)}; numbers must be finite")
     return v
 
 
 def _square(rows: Any, dim: int, source: str | None, field: str) -> np.ndarray:
     if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
-        raise _err(source, field, f"expected a {dim}x{dim} list of rows")
+        raise field_error(source, field, f"expected a {dim}x{dim} list of rows")
     if len(rows) != dim or any(len(r) != dim for r in rows):
         cols = sorted({len(r) for r in rows})
         shape = f"{len(rows)}x{'/'.join(str(c) for c in cols[:4]) or 0}"
-        raise _err(source, field, f"expected a {dim}x{dim} matrix, got {shape}")
+        raise field_error(source, field, f"expected a {dim}x{dim} matrix, got {shape}")
     return np.array([[_number(v, source, field) for v in r] for r in rows], dtype=float)
 
 
@@ -424,7 +426,7 @@ def parse_weight(
         if keys == {"diag"}:
             diag = spec["diag"]
             if not isinstance(diag, list) or len(diag) != dim:
-                raise _err(source, field, f"diag must list {dim} numbers")
+                raise field_error(source, field, f"diag must list {dim} numbers")
             return np.diag([_number(v, source, field) for v in diag])
         if keys == {"identity"}:
             return _number(spec["identity"], source, field) * np.eye(dim)
@@ -432,40 +434,41 @@ def parse_weight(
             name = spec["matrix"]
             if not named or not isinstance(name, str) or name not in named:
                 known = ", ".join(_q(k) for k in sorted(named or {})[:10]) or "none defined"
-                raise _err(source, field, f"unknown matrix {_show(name)} (known: {known})")
+                raise field_error(source, field, f"unknown matrix {_show(name)} (known: {known})")
             return _number(spec.get("scale", 1.0), source, field) * named[name]
-        raise _err(
+        raise field_error(
             source,
             field,
             f"unknown weight form {sorted(keys)}; use rows, {{diag: [...]}}, "
             "{identity: s}, {matrix: NAME, scale: s} or a number",
         )
-    raise _err(source, field, f"expected a matrix, got {_kind(spec)}")
+    raise field_error(source, field, f"expected a matrix, got {type_name(spec)}")
 
 
-def _labels(agents: Any, source: str | None) -> tuple[Label, ...]:
+def parse_labels(agents: Any, source: str | None) -> tuple[Label, ...]:
+    """The agent labels of ``agents``: a count (labels 1..N) or a list of distinct labels."""
     if isinstance(agents, int) and not isinstance(agents, bool):
         if agents < 1:
-            raise _err(source, "agents", f"need at least one agent, got {_show(agents)}")
+            raise field_error(source, "agents", f"need at least one agent, got {_show(agents)}")
         if agents > MAX_AGENTS:
-            raise _err(source, "agents", f"{_show(agents)} agents; at most {MAX_AGENTS}")
+            raise field_error(source, "agents", f"{_show(agents)} agents; at most {MAX_AGENTS}")
         return tuple(range(1, agents + 1))
     if isinstance(agents, list) and agents:
         if len(agents) > MAX_AGENTS:
-            raise _err(source, "agents", f"{len(agents)} labels; at most {MAX_AGENTS}")
+            raise field_error(source, "agents", f"{len(agents)} labels; at most {MAX_AGENTS}")
         labels: list[Label] = []
         for a in agents:
             if isinstance(a, bool) or not isinstance(a, (int, str)):
-                raise _err(source, "agents", f"label {_show(a)} is not a name or a number")
+                raise field_error(source, "agents", f"label {_show(a)} is not a name or a number")
             if isinstance(a, int) and a.bit_length() > 63:
-                raise _err(source, "agents", f"label {_show(a)} is too large")
+                raise field_error(source, "agents", f"label {_show(a)} is too large")
             labels.append(a)
         counts = Counter(str(a) for a in labels)
         dup = sorted(k for k, c in counts.items() if c > 1)
         if dup:
-            raise _err(source, "agents", f"duplicated label(s) {', '.join(_q(k) for k in dup[:5])}")
+            raise field_error(source, "agents", f"duplicated label(s) {', '.join(_q(k) for k in dup[:5])}")
         return tuple(labels)
-    raise _err(source, "agents", "expected a positive count or a non-empty list of labels")
+    raise field_error(source, "agents", "expected a positive count or a non-empty list of labels")
 
 
 TOPOLOGY_KEYS = {"name", "description", "dim", "agents", "matrices", "edges"}
@@ -494,56 +497,56 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
     """
     unknown = sorted(set(doc) - TOPOLOGY_KEYS, key=str)
     if unknown:
-        raise _err(
+        raise field_error(
             source,
             _q(unknown[0]),
             f"unknown field (allowed: {', '.join(sorted(TOPOLOGY_KEYS))})",
         )
     for key in ("dim", "agents", "edges"):
         if key not in doc:
-            raise _err(source, key, "missing")
+            raise field_error(source, key, "missing")
     dim = doc["dim"]
     if isinstance(dim, bool) or not isinstance(dim, int) or dim < 1:
-        raise _err(source, "dim", f"expected a positive integer, got {_show(dim)}")
+        raise field_error(source, "dim", f"expected a positive integer, got {_show(dim)}")
     if dim > MAX_DIM:
-        raise _err(source, "dim", f"{_show(dim)} is larger than the limit {MAX_DIM}")
-    labels = _labels(doc["agents"], source)
+        raise field_error(source, "dim", f"{_show(dim)} is larger than the limit {MAX_DIM}")
+    labels = parse_labels(doc["agents"], source)
     by_key = {str(a): a for a in labels}
     named: dict[str, np.ndarray] = {}
     mats = doc.get("matrices") or {}
     if not isinstance(mats, dict):
-        raise _err(source, "matrices", "expected a mapping of name -> matrix")
+        raise field_error(source, "matrices", "expected a mapping of name -> matrix")
     for name, spec in mats.items():
         named[str(name)] = parse_weight(spec, dim, source, f"matrices.{_q(name)}")
     edges_doc = doc["edges"]
     if not isinstance(edges_doc, list):
-        raise _err(source, "edges", "expected a list of {from, to, weight}")
+        raise field_error(source, "edges", "expected a list of {from, to, weight}")
     edges: list[EdgeData] = []
     seen: set[tuple[str, str]] = set()
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict):
-            raise _err(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
+            raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
         missing = sorted(EDGE_KEYS - set(e))
         if missing:
-            raise _err(source, f"edges[{k}]", f"missing {', '.join(missing)}")
+            raise field_error(source, f"edges[{k}]", f"missing {', '.join(missing)}")
         extra = sorted(set(e) - EDGE_KEYS, key=str)
         if extra:
-            raise _err(source, f"edges[{k}]", f"unknown field {_show(extra[0])}")
+            raise field_error(source, f"edges[{k}]", f"unknown field {_show(extra[0])}")
         for end in ("from", "to"):
             lab = e[end]
             if isinstance(lab, bool) or not isinstance(lab, (int, str)):
-                raise _err(
+                raise field_error(
                     source, f"edges[{k}].{end}", f"expected an agent label, got {_show(lab)}"
                 )
         field = f"edge {_q(e['from'])}->{_q(e['to'])}"
         j, i = str(e["from"]), str(e["to"])
         for end, lab in (("from", str(e["from"])), ("to", str(e["to"]))):
             if lab not in by_key:
-                raise _err(source, field, f"unknown agent label {_show(lab)} in '{end}'")
+                raise field_error(source, field, f"unknown agent label {_show(lab)} in '{end}'")
         if i == j:
-            raise _err(source, field, "self-loop (an agent cannot listen to itself)")
+            raise field_error(source, field, "self-loop (an agent cannot listen to itself)")
         if (j, i) in seen:
-            raise _err(source, field, "duplicated edge")
+            raise field_error(source, field, "duplicated edge")
         seen.add((j, i))
         w = parse_weight(e["weight"], dim, source, field, named)
         edges.append(EdgeData(by_key[j], by_key[i], w, field))
@@ -580,10 +583,10 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
     """
     unknown = sorted(set(doc) - {"name", "description", "modes", "schedule"}, key=str)
     if unknown:
-        raise _err(source, _q(unknown[0]), "unknown field (allowed: modes, schedule, name)")
+        raise field_error(source, _q(unknown[0]), "unknown field (allowed: modes, schedule, name)")
     modes_doc = doc.get("modes")
     if not isinstance(modes_doc, dict) or not modes_doc:
-        raise _err(source, "modes", "expected a non-empty mapping name -> file or topology")
+        raise field_error(source, "modes", "expected a non-empty mapping name -> file or topology")
     base = Path(source).parent if source else Path(".")
     modes: dict[str, TopologyData | EdgeListData] = {}
     for name, spec in modes_doc.items():
@@ -595,21 +598,21 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
                     continue
                 mode_doc = read_document(path)
             except InputError as exc:  # say which switching file and mode named it
-                raise _err(source, f"modes.{_q(name)}", str(exc)) from None
+                raise field_error(source, f"modes.{_q(name)}", str(exc)) from None
             modes[str(name)] = parse_topology(mode_doc, str(path))
         elif isinstance(spec, dict):
             inner = f"{source}: modes.{_q(name)}" if source else f"modes.{_q(name)}"
             modes[str(name)] = parse_topology(spec, inner)
         else:
-            raise _err(source, f"modes.{_q(name)}", "expected a file path or an inline topology")
+            raise field_error(source, f"modes.{_q(name)}", "expected a file path or an inline topology")
     sched = doc.get("schedule")
     if not isinstance(sched, list) or not sched:
-        raise _err(source, "schedule", "expected a non-empty list of {mode, duration}")
+        raise field_error(source, "schedule", "expected a non-empty list of {mode, duration}")
     schedule: list[tuple[str, float]] = []
     for k, item in enumerate(sched):
         field = f"schedule[{k}]"
         if not isinstance(item, dict) or set(item) != {"mode", "duration"}:
-            raise _err(source, field, "expected {mode: NAME, duration: T}")
+            raise field_error(source, field, "expected {mode: NAME, duration: T}")
         mode = str(item["mode"])
         # mode names and positive durations are checked by the model (SwitchingTopology)
         dur = _number(item["duration"], source, f"{field}.duration")
@@ -617,13 +620,14 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
     return SwitchingData(modes=modes, schedule=tuple(schedule), source=source)
 
 
-def _has_text(x: Any) -> bool:
+def has_text(x: Any) -> bool:
+    """Whether a weight specification contains a string (an expression of t)."""
     if isinstance(x, str):
         return True
     if isinstance(x, dict):
-        return any(_has_text(v) for k, v in x.items() if k != "matrix")
+        return any(has_text(v) for k, v in x.items() if k != "matrix")
     if isinstance(x, list):
-        return any(_has_text(v) for v in x)
+        return any(has_text(v) for v in x)
     return False
 
 
@@ -645,7 +649,7 @@ def is_time_varying(doc: dict[str, Any]) -> bool:
         return True
     edges = doc.get("edges")
     return isinstance(edges, list) and any(
-        isinstance(e, dict) and _has_text(e.get("weight")) for e in edges
+        isinstance(e, dict) and has_text(e.get("weight")) for e in edges
     )
 
 
@@ -686,13 +690,13 @@ def parse_scenario(path: str | Path) -> ScenarioData:
     for key in ("name", "description"):
         text_field(doc, key, src)
     if "topology" not in doc:
-        raise _err(src, "topology", "missing")
+        raise field_error(src, "topology", "missing")
     topo = doc["topology"]
     if not isinstance(topo, str) or not topo or "\x00" in topo:
-        raise _err(src, "topology", "expected a file path")
+        raise field_error(src, "topology", "expected a file path")
     tpath = Path(src).parent / topo
     if not tpath.is_file():
-        raise _err(src, "topology", f"no such file {str(tpath)!r}")
+        raise field_error(src, "topology", f"no such file {str(tpath)!r}")
     return ScenarioData(src, tpath, doc)
 
 

@@ -24,6 +24,7 @@ import yaml
 
 from .errors import InputError
 from .files import jsonable
+from .model import Topology
 from .outputs import write_atomic
 from .simulate.result import simulation_frame
 
@@ -32,7 +33,6 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     import networkx as nx
 
     from .design import ProtocolDesign
-    from .model import Topology
 
 
 

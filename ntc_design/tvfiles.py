@@ -38,12 +38,12 @@ from .expr import parse_expression, symbol
 from .files import (
     TOPOLOGY_KEYS,
     Label,
-    _err,
-    _has_text,
-    _kind,
-    _labels,
+    field_error,
+    has_text,
     is_time_varying,
+    parse_labels,
     parse_weight,
+    type_name,
 )
 
 TIME_KEYS = {"period", "constant_after"}
@@ -100,12 +100,12 @@ def _entry(x: Any, source: str | None, field: str) -> sp.Expr:
     if isinstance(x, str):
         e = parse_expression(x, f"{source}: {field}" if source else field)
         if e.free_symbols - {symbol("t")}:
-            raise _err(source, field, "only the variable t may appear")
+            raise field_error(source, field, "only the variable t may appear")
         return e
     if isinstance(x, bool) or not isinstance(x, (int, float)):
-        raise _err(source, field, f"expected a number or an expression of t, got {x!r}")
+        raise field_error(source, field, f"expected a number or an expression of t, got {x!r}")
     if not np.isfinite(float(x)):
-        raise _err(source, field, f"entry is {x!r}; weights must be finite")
+        raise field_error(source, field, f"entry is {x!r}; weights must be finite")
     return sp.Float(float(x)) if isinstance(x, float) else sp.Integer(x)
 
 
@@ -144,14 +144,14 @@ def parse_expr_weight(
         A malformed weight, an expression that is not allowed or uses a variable other
         than t, a non-finite constant.
     """
-    if not _has_text(spec):
+    if not has_text(spec):
         m = parse_weight(spec, dim, source, field, named)
         return ExprWeight("rows", _constant_matrix(m), text=spec)
     if isinstance(spec, str):  # a scalar expression: s(t)·I
         spec = {"identity": spec}
     if isinstance(spec, list):
         if len(spec) != dim or any(not isinstance(r, list) or len(r) != dim for r in spec):
-            raise _err(source, field, f"expected a {dim}x{dim} matrix")
+            raise field_error(source, field, f"expected a {dim}x{dim} matrix")
         rows = tuple(
             tuple(_entry(v, source, f"{field}: weight[{k}][{m}]") for m, v in enumerate(r))
             for k, r in enumerate(spec)
@@ -162,7 +162,7 @@ def parse_expr_weight(
         if keys == {"diag"}:
             diag = spec["diag"]
             if not isinstance(diag, list) or len(diag) != dim:
-                raise _err(source, field, f"diag must list {dim} entries")
+                raise field_error(source, field, f"diag must list {dim} entries")
             vals = [_entry(v, source, f"{field}: diag[{k}]") for k, v in enumerate(diag)]
             rows = tuple(
                 tuple(vals[k] if k == m else sp.Integer(0) for m in range(dim)) for k in range(dim)
@@ -177,17 +177,17 @@ def parse_expr_weight(
             name = spec["matrix"]
             if not isinstance(name, str) or name not in named:
                 known = ", ".join(sorted(named)) or "none defined"
-                raise _err(source, field, f"unknown matrix {name!r} (known: {known})")
+                raise field_error(source, field, f"unknown matrix {name!r} (known: {known})")
             s = _entry(spec.get("scale", 1), source, f"{field}: scale")
             base = named[name]
             return ExprWeight("scale", _scaled(base, s), base=base, scale=s, text=spec)
-        raise _err(
+        raise field_error(
             source,
             field,
             f"unknown weight form {sorted(keys)}; use rows, {{diag: [...]}}, "
             "{identity: s}, {matrix: NAME, scale: s} (entries may be expressions of t)",
         )
-    raise _err(source, field, f"expected a matrix, got {_kind(spec)}")
+    raise field_error(source, field, f"expected a matrix, got {type_name(spec)}")
 
 
 def _scaled(base: np.ndarray, s: sp.Expr) -> tuple[tuple[sp.Expr, ...], ...]:
@@ -204,13 +204,13 @@ def _time_constant(x: Any, source: str | None, key: str) -> sp.Expr:
     elif isinstance(x, (int, float)) and not isinstance(x, bool):
         e = sp.Rational(str(x)) if isinstance(x, float) else sp.Integer(x)
     else:
-        raise _err(source, key, f"expected a positive number or expression such as 2*pi, got {x!r}")
+        raise field_error(source, key, f"expected a positive number or expression such as 2*pi, got {x!r}")
     try:
         v = float(e)
     except (TypeError, ValueError):
-        raise _err(source, key, "must be a number (no t)") from None
+        raise field_error(source, key, "must be a number (no t)") from None
     if not np.isfinite(v) or not 0 < v <= MAX_PERIOD:
-        raise _err(source, key, f"must be in (0, {MAX_PERIOD:g}], got {v:g}")
+        raise field_error(source, key, f"must be in (0, {MAX_PERIOD:g}], got {v:g}")
     return e
 
 
@@ -238,38 +238,38 @@ def parse_time_varying(doc: dict[str, Any], source: str | None = None) -> TimeVa
     allowed = TOPOLOGY_KEYS | TIME_KEYS
     unknown = sorted(set(doc) - allowed)
     if unknown:
-        raise _err(source, unknown[0], f"unknown field (allowed: {', '.join(sorted(allowed))})")
+        raise field_error(source, unknown[0], f"unknown field (allowed: {', '.join(sorted(allowed))})")
     if {"period", "constant_after"} <= set(doc):
-        raise _err(source, "period", "declare either period or constant_after, not both")
+        raise field_error(source, "period", "declare either period or constant_after, not both")
     for key in ("dim", "agents", "edges"):
         if key not in doc:
-            raise _err(source, key, "missing")
+            raise field_error(source, key, "missing")
     dim = doc["dim"]
     if isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= 64:
-        raise _err(source, "dim", f"expected an integer in 1..64, got {dim!r}")
-    labels = _labels(doc["agents"], source)
+        raise field_error(source, "dim", f"expected an integer in 1..64, got {dim!r}")
+    labels = parse_labels(doc["agents"], source)
     by_key = {str(a): a for a in labels}
     mats = doc.get("matrices") or {}
     if not isinstance(mats, dict):
-        raise _err(source, "matrices", "expected a mapping of name -> matrix")
+        raise field_error(source, "matrices", "expected a mapping of name -> matrix")
     named = {str(k): parse_weight(v, dim, source, f"matrices.{k}") for k, v in mats.items()}
     edges_doc = doc["edges"]
     if not isinstance(edges_doc, list):
-        raise _err(source, "edges", "expected a list of {from, to, weight}")
+        raise field_error(source, "edges", "expected a list of {from, to, weight}")
     edges: list[ExprEdgeData] = []
     seen: set[tuple[str, str]] = set()
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict) or set(e) != {"from", "to", "weight"}:
-            raise _err(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
+            raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
         j, i = str(e["from"]), str(e["to"])
         field = f"edge {j}->{i}"
         for end, lab in (("from", j), ("to", i)):
             if lab not in by_key:
-                raise _err(source, field, f"unknown agent label {lab!r} in '{end}'")
+                raise field_error(source, field, f"unknown agent label {lab!r} in '{end}'")
         if i == j:
-            raise _err(source, field, "self-loop (an agent cannot listen to itself)")
+            raise field_error(source, field, "self-loop (an agent cannot listen to itself)")
         if (j, i) in seen:
-            raise _err(source, field, "duplicated edge")
+            raise field_error(source, field, "duplicated edge")
         seen.add((j, i))
         w = parse_expr_weight(e["weight"], dim, source, field, named)
         edges.append(ExprEdgeData(by_key[j], by_key[i], w, field))

@@ -40,9 +40,11 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from ..design import design_topology
 from ..errors import InputError
 from ..expr import compile_expression, parse_expression, symbol
 from ..linalg import DEF_RTOL
+from ..model import Topology
 from ..rigorous.exact import gamma
 from ..rigorous.interval import bounds, enclose, t_ball, upper
 from ..timevarying import (
@@ -424,8 +426,6 @@ def refuse_unbounded_horizon(tv: ExpressionTopology, margin: float) -> None:
     fading = [
         e.field for e, lim in zip(tv.edges, limits, strict=True) if e.sign != 0 and not np.any(lim)
     ]
-    from ..design import design_topology
-    from ..model import Topology
 
     w = {(e.i, e.j): lim for e, lim in zip(tv.edges, limits, strict=True) if np.any(lim)}
     lam_inf = None

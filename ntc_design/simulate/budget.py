@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, format_bytes
+from .moments import KAPPA
 from .montecarlo import BATCH, XI_BYTES
 from .system import DENSE_EIG_MAX_ND, DENSE_LB_MAX_ND
 
@@ -219,7 +220,6 @@ def estimate_exact_steps(
     float
         The estimated number of steps (inf when it overflows).
     """
-    from .moments import KAPPA
 
     with np.errstate(all="ignore"):
         y = c * (rho_l + c * rho_q)

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, quote, require_int, require_number, require_positive
+from ..gain import parse_gain
 from .noise import NoiseModel
 
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
@@ -447,7 +448,6 @@ class SimulationSpec:
         if isinstance(self.gain, str):
             if len(self.gain) > MAX_GAIN_TEXT:
                 raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
-            from ..gain import parse_gain
 
             parse_gain(self.gain)  # a whitelisted expression in t, or one line naming gain
         elif not callable(self.gain):
