@@ -154,22 +154,7 @@ def random_network(
     InputError
         For an unknown family or a parameter out of range.
     """
-    require_positive("n", n, integer=True)
-    require_positive("d", d, integer=True)
-    if n < 2:
-        raise InputError("n: a network needs at least 2 agents")
-    if family not in FAMILIES:
-        raise InputError(f"family: unknown {family!r} (known: {', '.join(FAMILIES)})")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed: must be a non-negative integer, got {seed!r}")
-    if not 0.0 <= p_negative <= 1.0:
-        raise InputError(f"p_negative: must be in [0, 1], got {p_negative}")
-    if not 0.0 < v1_fraction <= 1.0:
-        raise InputError(f"v1_fraction: must be in (0, 1], got {v1_fraction}")
-    if not (extra >= 0 and np.isfinite(extra)):
-        raise InputError(f"extra: must be a non-negative number, got {extra}")
-    require_positive("k", k, integer=True)
-    require_positive("chord_scale", chord_scale)
+    _check_parameters(n, d, seed, family, p_negative, v1_fraction, extra, k, chord_scale)
     n, d = int(n), int(d)
     rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
 
@@ -179,44 +164,14 @@ def random_network(
     in_v1 = np.zeros(n, dtype=bool)
     in_v1[v1] = True
 
-    # BFS forest from V1 over the base graph (a virtual root joined to V1); agents the
-    # base graph leaves unreached (disconnected families) hang on a random V1 agent.
-    und = sparse.coo_matrix((np.ones(u.size, dtype=np.int8), (u, v)), shape=(n + 1, n + 1)).tocsr()
-    und = und + und.T
-    root = sparse.csr_matrix(
-        (np.ones(n_v1, dtype=np.int8), (np.full(n_v1, n), v1)), shape=(n + 1, n + 1)
-    )
-    g = (und + root).tocsr()
-    g.sort_indices()
-    order, pred = csgraph.breadth_first_order(g, n, directed=True, return_predecessors=True)
-    parent = pred[:n].astype(np.int64)
-    parent[in_v1] = -1
-    lost = np.flatnonzero((parent < 0) & ~in_v1)
-    parent[lost] = v1[rng.integers(0, n_v1, lost.size)]
-    depth = np.zeros(n, dtype=np.int64)
-    for i in order[1:]:
-        if parent[i] >= 0:
-            depth[i] = depth[parent[i]] + 1
-    for i in lost:  # their parents are V1 agents (depth 0)
-        depth[i] = 1
+    parent, depth = _forest(u, v, n, v1, in_v1, rng)
 
     # tree edges parent -> child (weights set in step 5)
     child = np.flatnonzero(parent >= 0)
     tree_from, tree_to = parent[child], child
-    # chords: base edges not in the tree, random orientation
-    tkey = set((np.minimum(tree_from, tree_to) * n + np.maximum(tree_from, tree_to)).tolist())
-    ckey = u * n + v
-    chord = np.array([x not in tkey for x in ckey.tolist()], dtype=bool)
-    cu, cv = u[chord], v[chord]
-    flip = rng.random(cu.size) < 0.5
-    ch_from, ch_to = np.where(flip, cv, cu), np.where(flip, cu, cv)
-    # V1 antagonistic in-edges from a random other agent (not an existing edge)
-    src = (v1 + 1 + rng.integers(0, n - 1, n_v1)) % n
-    used = set((tree_to * n + tree_from).tolist()) | set((ch_to * n + ch_from).tolist())
-    ok = np.array([x not in used for x in (v1 * n + src).tolist()], dtype=bool)
-    an_from, an_to = src[ok], v1[ok]
-    # a V1 agent whose draw collided gets its ND weight on the colliding edge instead
-    clash_to, clash_from = v1[~ok], src[~ok]
+    cu, cv, ch_from, ch_to, an_from, an_to, clash_to, clash_from = _chords_and_v1_edges(
+        u, v, n, v1, tree_from, tree_to, rng
+    )
 
     neg_ch = rng.random(cu.size) < p_negative
     w_ch = np.where(
@@ -241,7 +196,98 @@ def random_network(
                 neg_ch[m] = True
                 w_ch[m] = _random_pd(rng, 1, d)[0]
 
-    # Step 5: tree weights, deepest level first.
+    w_tree = _tree_weights(
+        n, d, depth, tree_from, tree_to, ch_from, ch_to, w_ch, an_from, an_to, w_an, r_tree
+    )
+
+    rows = np.concatenate([tree_to, ch_to, an_to])
+    cols = np.concatenate([tree_from, ch_from, an_from])
+    sg = np.concatenate([sgn_tree, np.where(neg_ch, -1.0, 1.0), -np.ones(an_to.size)])
+    wts = sg[:, None, None] * np.concatenate([w_tree, w_ch, w_an])
+    order_e = np.lexsort((cols, rows))
+    return Topology.from_arrays(
+        tuple(range(1, n + 1)),
+        d,
+        rows[order_e],
+        cols[order_e],
+        wts[order_e],
+        name=name or f"{family}-{n}-{d}-{seed}",
+    )
+
+
+def _check_parameters(n, d, seed, family, p_negative, v1_fraction, extra, k, chord_scale) -> None:
+    """:func:`random_network`'s parameters, each refused with its name."""
+    require_positive("n", n, integer=True)
+    require_positive("d", d, integer=True)
+    if n < 2:
+        raise InputError("n: a network needs at least 2 agents")
+    if family not in FAMILIES:
+        raise InputError(f"family: unknown {family!r} (known: {', '.join(FAMILIES)})")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed: must be a non-negative integer, got {seed!r}")
+    if not 0.0 <= p_negative <= 1.0:
+        raise InputError(f"p_negative: must be in [0, 1], got {p_negative}")
+    if not 0.0 < v1_fraction <= 1.0:
+        raise InputError(f"v1_fraction: must be in (0, 1], got {v1_fraction}")
+    if not (extra >= 0 and np.isfinite(extra)):
+        raise InputError(f"extra: must be a non-negative number, got {extra}")
+    require_positive("k", k, integer=True)
+    require_positive("chord_scale", chord_scale)
+
+
+def _forest(u, v, n, v1, in_v1, rng) -> tuple[np.ndarray, np.ndarray]:
+    """(parent, depth): a BFS forest from V1 over the base graph (a virtual root joined
+    to V1); agents the base graph leaves unreached (disconnected families) hang on a
+    random V1 agent."""
+    n_v1 = v1.size
+    und = sparse.coo_matrix((np.ones(u.size, dtype=np.int8), (u, v)), shape=(n + 1, n + 1)).tocsr()
+    und = und + und.T
+    root = sparse.csr_matrix(
+        (np.ones(n_v1, dtype=np.int8), (np.full(n_v1, n), v1)), shape=(n + 1, n + 1)
+    )
+    g = (und + root).tocsr()
+    g.sort_indices()
+    order, pred = csgraph.breadth_first_order(g, n, directed=True, return_predecessors=True)
+    parent = pred[:n].astype(np.int64)
+    parent[in_v1] = -1
+    lost = np.flatnonzero((parent < 0) & ~in_v1)
+    parent[lost] = v1[rng.integers(0, n_v1, lost.size)]
+    depth = np.zeros(n, dtype=np.int64)
+    for i in order[1:]:
+        if parent[i] >= 0:
+            depth[i] = depth[parent[i]] + 1
+    for i in lost:  # their parents are V1 agents (depth 0)
+        depth[i] = 1
+    return parent, depth
+
+
+def _chords_and_v1_edges(u, v, n, v1, tree_from, tree_to, rng) -> tuple[np.ndarray, ...]:
+    """The base edges not in the tree (chords, random orientation) and the V1 agents'
+    antagonistic in-edges from a random other agent; a V1 agent whose draw collided with
+    an existing edge is returned apart (clash_to, clash_from)."""
+    n_v1 = v1.size
+    # chords: base edges not in the tree, random orientation
+    tkey = set((np.minimum(tree_from, tree_to) * n + np.maximum(tree_from, tree_to)).tolist())
+    ckey = u * n + v
+    chord = np.array([x not in tkey for x in ckey.tolist()], dtype=bool)
+    cu, cv = u[chord], v[chord]
+    flip = rng.random(cu.size) < 0.5
+    ch_from, ch_to = np.where(flip, cv, cu), np.where(flip, cu, cv)
+    # V1 antagonistic in-edges from a random other agent (not an existing edge)
+    src = (v1 + 1 + rng.integers(0, n - 1, n_v1)) % n
+    used = set((tree_to * n + tree_from).tolist()) | set((ch_to * n + ch_from).tolist())
+    ok = np.array([x not in used for x in (v1 * n + src).tolist()], dtype=bool)
+    an_from, an_to = src[ok], v1[ok]
+    # a V1 agent whose draw collided gets its ND weight on the colliding edge instead
+    clash_to, clash_from = v1[~ok], src[~ok]
+    return cu, cv, ch_from, ch_to, an_from, an_to, clash_to, clash_from
+
+
+def _tree_weights(
+    n, d, depth, tree_from, tree_to, ch_from, ch_to, w_ch, an_from, an_to, w_an, r_tree
+) -> np.ndarray:
+    """Tree weights, deepest level first: each large enough that its child is in-degree
+    dominated (Σ_in|A| ≥ Σ_out|A|) with a random PD surplus."""
     mag_in_other = np.zeros((n, d, d))  # Σ |A_ij| over in-edges other than the tree edge
     out = np.zeros((n, d, d))  # Σ_{N'_i} |A_ji|
     np.add.at(mag_in_other, ch_to, w_ch)
@@ -260,20 +306,7 @@ def random_network(
         w = 0.5 * (w + w.transpose(0, 2, 1))
         w_tree[at] = w
         np.add.at(out, tree_from[at], w)
-
-    rows = np.concatenate([tree_to, ch_to, an_to])
-    cols = np.concatenate([tree_from, ch_from, an_from])
-    sg = np.concatenate([sgn_tree, np.where(neg_ch, -1.0, 1.0), -np.ones(an_to.size)])
-    wts = sg[:, None, None] * np.concatenate([w_tree, w_ch, w_an])
-    order_e = np.lexsort((cols, rows))
-    return Topology.from_arrays(
-        tuple(range(1, n + 1)),
-        d,
-        rows[order_e],
-        cols[order_e],
-        wts[order_e],
-        name=name or f"{family}-{n}-{d}-{seed}",
-    )
+    return w_tree
 
 
 def write_topology(top: Topology, path: str | Path) -> Path:
