@@ -24,6 +24,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import brentq, minimize_scalar
 
+from .linalg import DenseRefused, SPDFamily, require_sparse_factor
+
 KRON_MAX = 40
 REL = 1e-12
 
@@ -400,48 +402,10 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
     CriticalCouplings
         δ_H (None when a component is too large), δ_S and the notes.
     """
-    from .linalg import DenseRefused, SPDFamily, require_sparse_factor
-
     notes: list[str] = []
     ncomp, comp = strong_components(lap, dim)
     sizes = np.bincount(comp, minlength=ncomp)
-    single = sizes[comp] == 1
-    lb = diagonal_blocks(lap, dim)
-    db = diagonal_blocks(d, dim)
-    intervals: list[tuple[float, float]] = [(0.0, math.inf)]
-    idx = np.flatnonzero(single)
-    if idx.size:
-        s = lb[idx] + db[idx]
-        lam = np.linalg.eigvalsh(0.5 * (s + s.transpose(0, 2, 1)))
-        tol = REL * np.maximum(np.abs(lam).max(axis=1), 1e-300)
-        if np.any(lam[:, 0] <= tol):
-            intervals = []
-            bad = idx[np.argmax(lam[:, 0] <= tol)]
-            notes.append(
-                f"agent index {bad}: its diagonal block L_ii + δB_i is singular for every δ "
-                "(nothing reaches it and it is not informed): −L_B is never Hurwitz"
-            )
-    big = np.flatnonzero(sizes > 1)
-    skipped = []
-    lap_c, d_c = lap.tocsr(), d.tocsr()
-    for c in big.tolist():
-        if not intervals:
-            break
-        agents = np.flatnonzero(comp == c)
-        nd_c = agents.size * dim
-        if nd_c > COMPONENT_DENSE_MAX_ND:
-            skipped.append(nd_c)
-            continue
-        ix = (agents[:, None] * dim + np.arange(dim)).ravel()
-        lb_c = lap_c[ix][:, ix].toarray()
-        db_c = d_c[ix][:, ix].toarray()
-        sub_notes: list[str] = []
-        if not np.any(db_c):
-            hur = spectral_abscissa(lb_c, db_c, 1.0) < -REL * max(float(np.linalg.norm(lb_c, 2)), 1e-300)
-            iv = [(0.0, math.inf)] if hur else []
-        else:
-            iv, _, _ = hurwitz_set(lb_c, db_c, sub_notes, kron=False)
-        intervals = _intersect(intervals, iv)
+    intervals, skipped = _component_hurwitz_sets(lap, d, dim, comp, sizes, notes)
     method = (
         f"per strongly connected component ({ncomp} components, largest "
         f"{int(sizes.max())} agents; one-agent blocks exact, others by a dense log-scan of α(δ) "
@@ -461,8 +425,59 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
         else:
             delta_h = None
             notes.append("-L_B is not Hurwitz for large δ: no δ_H exists")
+    delta_s = _delta_s_sparse(lap, d, notes)
+    notes.append("best decay rate not computed at this size (needs the whole spectrum)")
+    return CriticalCouplings(delta_h, intervals_out, delta_s, math.nan, None, method, tuple(notes))
 
-    # δ_S
+
+def _component_hurwitz_sets(lap, d, dim, comp, sizes, notes) -> tuple[list, list[int]]:
+    """The δ for which −(L + δD) is Hurwitz, intersected over the strongly connected
+    components (exact for one-agent blocks, a dense log-scan for components up to
+    COMPONENT_DENSE_MAX_ND), and the Nd of the components too large to scan."""
+    single = sizes[comp] == 1
+    lb = diagonal_blocks(lap, dim)
+    db = diagonal_blocks(d, dim)
+    intervals: list[tuple[float, float]] = [(0.0, math.inf)]
+    idx = np.flatnonzero(single)
+    if idx.size:
+        s = lb[idx] + db[idx]
+        lam = np.linalg.eigvalsh(0.5 * (s + s.transpose(0, 2, 1)))
+        tol = REL * np.maximum(np.abs(lam).max(axis=1), 1e-300)
+        if np.any(lam[:, 0] <= tol):
+            intervals = []
+            bad = idx[np.argmax(lam[:, 0] <= tol)]
+            notes.append(
+                f"agent index {bad}: its diagonal block L_ii + δB_i is singular for every δ "
+                "(nothing reaches it and it is not informed): −L_B is never Hurwitz"
+            )
+    skipped: list[int] = []
+    lap_c, d_c = lap.tocsr(), d.tocsr()
+    for c in np.flatnonzero(sizes > 1).tolist():
+        if not intervals:
+            break
+        agents = np.flatnonzero(comp == c)
+        nd_c = agents.size * dim
+        if nd_c > COMPONENT_DENSE_MAX_ND:
+            skipped.append(nd_c)
+            continue
+        ix = (agents[:, None] * dim + np.arange(dim)).ravel()
+        lb_c = lap_c[ix][:, ix].toarray()
+        db_c = d_c[ix][:, ix].toarray()
+        sub_notes: list[str] = []
+        if not np.any(db_c):
+            hur = spectral_abscissa(lb_c, db_c, 1.0) < -REL * max(
+                float(np.linalg.norm(lb_c, 2)), 1e-300
+            )
+            iv = [(0.0, math.inf)] if hur else []
+        else:
+            iv, _, _ = hurwitz_set(lb_c, db_c, sub_notes, kron=False)
+        intervals = _intersect(intervals, iv)
+    return intervals, skipped
+
+
+def _delta_s_sparse(lap, d, notes: list[str]) -> float | None:
+    """δ_S by bisection on λ_min(L + Lᵀ + 2δD), one sparse Cholesky per step; None (with a
+    note) when it does not exist or would not fit."""
     s0 = (lap + lap.T).tocsr()
     dd = d.tocsr()
     ninf = float(abs(s0).sum(axis=1).max()) if s0.nnz else 0.0
@@ -473,34 +488,26 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
     def pos(x: float) -> bool:
         return fam.factor([1.0, 2.0 * x], tau)[0]
 
-    delta_s: float | None
     try:  # about 50 factorisations: skipped with the reason rather than refusing the design
         require_sparse_factor(fam.fill, "δ_S", factorisations=50)
-        refused = None
     except DenseRefused as exc:
-        refused = str(exc)
-    if refused is not None:
-        delta_s = None
-        notes.append(f"δ_S not computed: the bisection needs about 50 factorisations; {refused}")
-    elif pos(0.0):
-        delta_s = 0.0
-    elif ndn == 0.0:
-        delta_s = None
+        notes.append(f"δ_S not computed: the bisection needs about 50 factorisations; {exc}")
+        return None
+    if pos(0.0):
+        return 0.0
+    if ndn == 0.0:
         notes.append("no informed agent and L + Lᵀ is not positive definite: no δ_S")
-    else:
-        hi = ninf / ndn
-        steps = 0
-        while not pos(hi) and steps < 40:
-            hi *= 4.0
-            steps += 1
-        if steps == 40:
-            delta_s = None
-            notes.append(f"L_B + L_Bᵀ is not positive definite for any δ up to {hi:.3g}")
-        else:
-            lo = hi / 4.0 if steps else 0.0
-            while hi - lo > BISECT_RTOL * hi:
-                mid = 0.5 * (lo + hi)
-                lo, hi = (lo, mid) if pos(mid) else (mid, hi)
-            delta_s = hi
-    notes.append("best decay rate not computed at this size (needs the whole spectrum)")
-    return CriticalCouplings(delta_h, intervals_out, delta_s, math.nan, None, method, tuple(notes))
+        return None
+    hi = ninf / ndn
+    steps = 0
+    while not pos(hi) and steps < 40:
+        hi *= 4.0
+        steps += 1
+    if steps == 40:
+        notes.append(f"L_B + L_Bᵀ is not positive definite for any δ up to {hi:.3g}")
+        return None
+    lo = hi / 4.0 if steps else 0.0
+    while hi - lo > BISECT_RTOL * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if pos(mid) else (mid, hi)
+    return hi
