@@ -228,7 +228,18 @@ def edge_design(top: nd.Topology, margin: float = 0.1) -> ProtocolDesign:
     dec = Decomposition(True, tuple(range(n)), (), coef, (), {})
     b = {i: s_in[i] for i in range(n)}
     return ProtocolDesign(
-        top, th, margin, dec, c, delta, k1, k1 * th, tuple(range(n)), b, float("nan"), None
+        topology=top,
+        theta=th,
+        margin=margin,
+        decomposition=dec,
+        C=c,
+        delta=delta,
+        k1=k1,
+        x0=k1 * th,
+        informed=tuple(range(n)),
+        B=b,
+        identity_residual=float("nan"),
+        thresholds=None,
     )
 
 

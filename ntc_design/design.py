@@ -283,7 +283,7 @@ DESIGN_KEYS = (
 )
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class ProtocolDesign:
     """Lemma 1 parameters for one topology and target θ.
 
@@ -549,20 +549,7 @@ def design_topology(
             "Assumption 2 fails: C is taken over the agents of U whose antagonistic "
             "in-weight is positive definite; certify the design before trusting it"
         )
-    if delta is None:
-        if c is None:
-            dl = float(margin)
-            notes.append("no agent can be in V1: C is undefined, δ = ΔC")
-        elif c + margin <= 0:
-            dl = float(margin)
-            notes.append(f"C = {c:.6g} < 0 but δ must be positive: δ = ΔC")
-        else:
-            dl = float(c + margin)
-    else:
-        require_positive("delta", delta)
-        dl = float(delta)
-        if c is not None and dl <= c:
-            notes.append(f"explicit δ = {dl:.6g} is not above C = {c:.6g}: Lemma 1 does not apply")
+    dl = _choose_delta(c, margin, delta, notes)
     if not dec.holds:
         warnings.warn(
             f"Assumption 2 fails for {top.name or 'the topology'} "
@@ -577,6 +564,47 @@ def design_topology(
     k1 = 1.0 + 2.0 / dl
     x0 = k1 * th
     u = input_vector(top, b, dl, x0)
+    res, crit = _residual_and_thresholds(top, b, dl, u, th, thresholds, notes)
+    return ProtocolDesign(
+        topology=top,
+        theta=th,
+        margin=float(margin),
+        decomposition=dec,
+        C=c,
+        delta=dl,
+        k1=k1,
+        x0=x0,
+        informed=informed,
+        B=b,
+        identity_residual=res,
+        thresholds=crit,
+        notes=tuple(notes),
+    )
+
+
+def _choose_delta(c: float | None, margin: float, delta: float | None, notes: list[str]) -> float:
+    """δ = C + ΔC (Lemma 1), or ΔC when C is undefined or C + ΔC <= 0; an explicit δ as
+    given, with a note when it is not above C."""
+    if delta is None:
+        if c is None:
+            dl = float(margin)
+            notes.append("no agent can be in V1: C is undefined, δ = ΔC")
+        elif c + margin <= 0:
+            dl = float(margin)
+            notes.append(f"C = {c:.6g} < 0 but δ must be positive: δ = ΔC")
+        else:
+            dl = float(c + margin)
+    else:
+        require_positive("delta", delta)
+        dl = float(delta)
+        if c is not None and dl <= c:
+            notes.append(f"explicit δ = {dl:.6g} is not above C = {c:.6g}: Lemma 1 does not apply")
+    return dl
+
+
+def _residual_and_thresholds(top, b, dl, u, th, thresholds, notes):
+    """‖L_B(1⊗θ) − u‖ relative (dense or sparse by size) and the critical couplings when
+    asked for (by default up to THRESHOLDS_DEFAULT_MAX_ND)."""
     if top.nd <= DENSE_DESIGN_MAX_ND:
         lap = top.laplacian()
         dmat = coupling_matrix(top, b)
@@ -602,9 +630,7 @@ def design_topology(
                 else f"by default above Nd = {THRESHOLDS_DEFAULT_MAX_ND} (ask with thresholds=True)"
             )
         )
-    return ProtocolDesign(
-        top, th, float(margin), dec, c, dl, k1, x0, informed, b, res, crit, tuple(notes)
-    )
+    return res, crit
 
 
 def design(

@@ -136,6 +136,13 @@ def read_npz(path: str | Path) -> EdgeListData:
             raise
         except (ValueError, TypeError, KeyError, zipfile.BadZipFile):
             raise InputError(f"{src}: not a readable .npz edge list") from None
+    rows, cols = _check_edges(bad, rows, cols, w, n, dim, labels)
+    return EdgeListData(name, dim, labels, rows, cols, np.asarray(w, dtype=float), src)
+
+
+def _check_edges(bad, rows, cols, w, n: int, dim: int, labels) -> tuple[np.ndarray, np.ndarray]:
+    """The edge arrays of an .npz edge list: shapes, types, agent indices in range, no
+    edge twice; (rows, cols) as int64."""
     for k, a in (("from", cols), ("to", rows)):
         if a.ndim != 1 or a.dtype.kind not in "iu":
             raise bad(k, "must be a 1-d integer array")
@@ -158,7 +165,7 @@ def read_npz(path: str | Path) -> EdgeListData:
     if dup.size:
         k = order[dup[0] + 1]
         raise bad(f"edge {labels[cols[k]]}->{labels[rows[k]]}", "duplicated edge")
-    return EdgeListData(name, dim, labels, rows, cols, np.asarray(w, dtype=float), src)
+    return rows, cols
 
 
 def write_npz(

@@ -183,18 +183,9 @@ def random_network(
     sgn_tree = np.where(rng.random(tree_to.size) < p_negative, -1.0, 1.0)
     r_tree = _random_pd(rng, tree_to.size, d)
 
-    # make colliding V1 antagonistic edges ND: override sign/weight of that edge
-    if clash_to.size:
-        ck = clash_to * n + clash_from
-        tpos = {x: m for m, x in enumerate((tree_to * n + tree_from).tolist())}
-        cpos = {x: m for m, x in enumerate((ch_to * n + ch_from).tolist())}
-        for x in ck.tolist():
-            if x in tpos:
-                sgn_tree[tpos[x]] = -1.0
-            else:
-                m = cpos[x]
-                neg_ch[m] = True
-                w_ch[m] = _random_pd(rng, 1, d)[0]
+    _clashes_antagonistic(
+        n, d, rng, clash_to, clash_from, tree_to, tree_from, ch_to, ch_from, sgn_tree, neg_ch, w_ch
+    )
 
     w_tree = _tree_weights(
         n, d, depth, tree_from, tree_to, ch_from, ch_to, w_ch, an_from, an_to, w_an, r_tree
@@ -281,6 +272,24 @@ def _chords_and_v1_edges(u, v, n, v1, tree_from, tree_to, rng) -> tuple[np.ndarr
     # a V1 agent whose draw collided gets its ND weight on the colliding edge instead
     clash_to, clash_from = v1[~ok], src[~ok]
     return cu, cv, ch_from, ch_to, an_from, an_to, clash_to, clash_from
+
+
+def _clashes_antagonistic(
+    n, d, rng, clash_to, clash_from, tree_to, tree_from, ch_to, ch_from, sgn_tree, neg_ch, w_ch
+) -> None:
+    """A V1 agent whose antagonistic in-edge collided with an existing edge gets that edge
+    made ND instead (signs and chord weights updated in place)."""
+    if clash_to.size:
+        ck = clash_to * n + clash_from
+        tpos = {x: m for m, x in enumerate((tree_to * n + tree_from).tolist())}
+        cpos = {x: m for m, x in enumerate((ch_to * n + ch_from).tolist())}
+        for x in ck.tolist():
+            if x in tpos:
+                sgn_tree[tpos[x]] = -1.0
+            else:
+                m = cpos[x]
+                neg_ch[m] = True
+                w_ch[m] = _random_pd(rng, 1, d)[0]
 
 
 def _tree_weights(
