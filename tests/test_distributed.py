@@ -340,7 +340,7 @@ def test_bad_sweep_options_are_refused_before_any_point(
     def no_point(*args, **kw):
         raise AssertionError("a point ran")
 
-    monkeypatch.setattr("ntc_design.sweep.run_point", no_point)
+    monkeypatch.setattr("ntc_design.sweep.run.run_point", no_point)
     out = tmp_path / "o"
     assert_input_error(
         ["sweep", files / "sw.yaml", "--out", out, *opts], capsys, monkeypatch, *needles

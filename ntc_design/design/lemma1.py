@@ -1,28 +1,26 @@
-"""Assumption 2 and the Lemma 1 protocol design (Niu & Wu, Sec. 3), with the exact critical
-couplings of the same design family (:mod:`ntc_design.thresholds`)."""
+"""The Lemma 1 protocol design (Niu & Wu, Sec. 3): informed agents, B_i, δ, k1, x0 and
+L_B for a topology and θ, with the exact critical couplings of the same design family
+(:mod:`ntc_design.thresholds`) and the table every face shows."""
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sparse
-from scipy.sparse import csgraph
 
-from .errors import require_positive, require_theta
-from .linalg import pd_batch, require_dense
-from .model import (
+from ..errors import require_positive, require_theta
+from ..linalg import require_dense
+from ..model import (
     SwitchingTopology,
     Topology,
-    antagonistic_in_weight,
     block_coo,
-    in_degree_dominated_all,
-    in_out_difference,
 )
-from .thresholds import CriticalCouplings, critical_couplings, critical_couplings_sparse
+from ..rows import Table, matrix, set_text, verdict
+from ..thresholds import CriticalCouplings, critical_couplings, critical_couplings_sparse
+from .assumption import AssumptionWarning, Decomposition, assumption2
 
 #: Up to this Nd the critical couplings are computed densely (exact Kronecker pencil /
 #: eigenvalue scans, :func:`critical_couplings`); above it by the sparse method
@@ -33,240 +31,6 @@ THRESHOLDS_MAX_ND = 200
 THRESHOLDS_DEFAULT_MAX_ND = 30_000
 
 
-class AssumptionWarning(UserWarning):
-    """Assumption 2 fails for a topology being designed: Lemma 1 does not apply and the
-    design must be certified before it is trusted (also flagged by
-    ``ProtocolDesign.assumption_holds``)."""
-
-
-@dataclass(frozen=True)
-class Violation:
-    """An agent that can be in neither V1 nor V2 of Assumption 2, and why."""
-
-    agent: int  # index (internal); labels in to_dict()/structure_report
-    reason: str
-
-
-class _Paths(Mapping):
-    """V2 agent -> one shortest positive-negative path from V1 (agent indices), read
-    lazily from a BFS predecessor array (storing every path would cost O(N·depth))."""
-
-    def __init__(self, keys: Sequence[int], pred: np.ndarray, root: int) -> None:
-        self._keys = tuple(keys)
-        self._set = frozenset(self._keys)
-        self._pred = pred
-        self._root = root
-
-    def __getitem__(self, i: int) -> tuple[int, ...]:
-        if i not in self._set:
-            raise KeyError(i)
-        path = [int(i)]
-        while True:
-            p = int(self._pred[path[-1]])
-            if p == self._root or p < 0:
-                break
-            path.append(p)
-        return tuple(reversed(path))
-
-    def __iter__(self):
-        return iter(self._keys)
-
-    def __len__(self) -> int:
-        return len(self._keys)
-
-
-@dataclass(frozen=True)
-class Decomposition:
-    """Result of the Assumption 2 check (agent indices; labels via
-    :meth:`ProtocolDesign.to_dict` or :meth:`agents`): ``holds`` with the C-minimising V1,
-    or the violations. ``coefficients`` holds C_i for every agent whose
-    Σ_{Ω_i}|A_ij| ≻ 0. When Assumption 2 fails, V1 is every agent that can be in V1 and
-    V2 only the agents that satisfy the V2 conditions; the violating agents are in
-    neither."""
-
-    holds: bool
-    v1: tuple[int, ...]
-    v2: tuple[int, ...]
-    coefficients: Mapping[int, float]
-    violations: tuple[Violation, ...]
-    paths: Mapping[int, tuple[int, ...]]  # V2 agent -> a positive-negative path from V1
-
-    def agents(self, top: Topology) -> dict:
-        """V1, V2 and the violating agents as labels.
-
-        Parameters
-        ----------
-        top : Topology
-            The topology this decomposition is of.
-
-        Returns
-        -------
-        dict
-            ``V1``, ``V2`` and ``violating``, each a list of labels.
-        """
-        lab = top.labels
-        return {
-            "V1": [lab[i] for i in self.v1],
-            "V2": [lab[i] for i in self.v2],
-            "violating": [lab[v.agent] for v in self.violations],
-        }
-
-
-def lemma1_coefficient(top: Topology, i: int) -> float:
-    """Lemma 1: ``C_i = ½ λ_max[(Σ_{Ω_i}|A_ij|)^{-1} (Σ_{N'_i}|A_ji| - Σ_{N_i}|A_ij|)]``.
-
-    Requires ``Σ_{Ω_i}|A_ij| ≻ 0``. The eigenvalues are real: with S = Σ_{Ω_i}|A_ij| ≻ 0
-    the product is similar to ``S^{-1/2} M S^{-1/2}`` (M symmetric), which is what is
-    computed (a symmetric-definite generalised eigenproblem).
-
-    Parameters
-    ----------
-    top : Topology
-        The topology.
-    i : int
-        0-based agent index, with a positive definite antagonistic in-weight.
-
-    Returns
-    -------
-    float
-        C_i.
-    """
-    import scipy.linalg as sla
-
-    s = antagonistic_in_weight(top, i)
-    m = -in_out_difference(top, i)
-    return 0.5 * float(sla.eigh(0.5 * (m + m.T), 0.5 * (s + s.T), eigvals_only=True)[-1])
-
-
-def lemma1_coefficients(top: Topology) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`lemma1_coefficient` for every agent at once: ``(candidate, C)`` arrays of
-    length N, ``candidate[i]`` when Σ_{Ω_i}|A_ij| ≻ 0 (C_i is NaN otherwise). The
-    generalised eigenproblems are solved batched: with S = R Rᵀ (Cholesky),
-    λ(S⁻¹M) = λ(R⁻¹ M R⁻ᵀ)."""
-    inn, out, ant = top.degree_sums
-    cand = pd_batch(ant) if top.n else np.zeros(0, dtype=bool)
-    c = np.full(top.n, np.nan)
-    k = np.flatnonzero(cand)
-    if k.size:
-        s = ant[k]
-        m = out[k] - inn[k]
-        m = 0.5 * (m + m.transpose(0, 2, 1))
-        r = np.linalg.cholesky(0.5 * (s + s.transpose(0, 2, 1)))
-        x = np.linalg.solve(r, m)  # R⁻¹ M
-        y = np.linalg.solve(r, x.transpose(0, 2, 1))  # R⁻¹ (R⁻¹ M)ᵀ = R⁻¹ M R⁻ᵀ
-        c[k] = 0.5 * np.linalg.eigvalsh(0.5 * (y + y.transpose(0, 2, 1)))[:, -1]
-    return cand, c
-
-
-def _reach(top: Topology, graph: sparse.csr_matrix, sources: np.ndarray):
-    """BFS over the definite edges from a virtual root joined to ``sources``: returns
-    (reached mask, predecessor array, root index)."""
-    n = top.n
-    root = n
-    extra = sparse.csr_matrix(
-        (np.ones(sources.size, dtype=np.int8), (np.full(sources.size, root), sources)),
-        shape=(n + 1, n + 1),
-    )
-    g = sparse.bmat([[graph, None], [None, sparse.csr_matrix((1, 1), dtype=np.int8)]]).tocsr()
-    g = (g + extra).tocsr()
-    g.sort_indices()
-    order, pred = csgraph.breadth_first_order(g, root, directed=True, return_predecessors=True)
-    reached = np.zeros(n + 1, dtype=bool)
-    reached[order] = True
-    return reached[:n], pred, root
-
-
-def assumption2(top: Topology) -> Decomposition:
-    """Decide Assumption 2 and return the decomposition V = V1 ∪ V2 minimising C.
-
-    A V2 agent must be in-degree-dominated (Niu & Wu, Definition 4) and reached from V1 by
-    a positive-negative path (Definition 3); a V1 agent needs Σ_{Ω_i}|A_ij| ≻ 0 so that C_i
-    is defined. Validity only improves as V1 grows, so the least C is the least level
-    ``c`` for which V1 = {candidates with C_i <= c} covers the rest; as coverage is
-    monotone in c the level is found by bisection over the sorted C_i (O(E log N)).
-    Everything is vectorised over agents and edges; reachability is a BFS
-    (``scipy.sparse.csgraph``) from a virtual root joined to V1.
-
-    Parameters
-    ----------
-    top : Topology
-        The topology.
-
-    Returns
-    -------
-    Decomposition
-        ``holds`` with V1, V2, C_i and a path to each V2 agent, or the violations.
-    """
-    n = top.n
-    idd = in_degree_dominated_all(top)
-    cand, cvals = lemma1_coefficients(top)
-    cands = {int(i): float(cvals[i]) for i in np.flatnonzero(cand)}
-    ant = set(top.antagonised)
-    violations: list[Violation] = []
-    for i in np.flatnonzero(~idd & ~cand).tolist():
-        why = (
-            "has no antagonistic in-edge"
-            if i not in ant
-            else "its antagonistic in-weight Σ_{Ω_i}|A_ij| is only semidefinite"
-        )
-        violations.append(
-            Violation(i, f"not in-degree-dominated and {why}, so it can be neither in V1 nor in V2")
-        )
-    required = ~idd & cand
-    floor = float(np.max(cvals[required])) if required.any() else -math.inf
-    levels = np.unique(cvals[cand & (cvals >= floor)]) if cand.any() else np.zeros(0)
-    graph = top.definite_graph()
-    if not violations and levels.size:
-
-        def covers(level: float):
-            v1 = np.flatnonzero(cand & (cvals <= level))
-            reached, pred, root = _reach(top, graph, v1)
-            return bool(reached.all()), v1, pred, root
-
-        lo, hi = 0, levels.size - 1
-        ok_hi = covers(levels[hi])
-        if ok_hi[0]:
-            best = ok_hi
-            while lo < hi:
-                mid = (lo + hi) // 2
-                res = covers(levels[mid])
-                if res[0]:
-                    hi, best = mid, res
-                else:
-                    lo = mid + 1
-            _, v1, pred, root = best
-            in_v1 = np.zeros(n, dtype=bool)
-            in_v1[v1] = True
-            v2 = tuple(np.flatnonzero(~in_v1).tolist())
-            return Decomposition(True, tuple(v1.tolist()), v2, cands, (), _Paths(v2, pred, root))
-    # Report who cannot be covered even with every candidate in V1.
-    v1a = np.flatnonzero(cand)
-    reached, pred, root = _reach(top, graph, v1a)
-    bad = np.zeros(n, dtype=bool)
-    bad[[v.agent for v in violations]] = True
-    for i in np.flatnonzero(~reached & ~bad).tolist():
-        violations.append(
-            Violation(
-                i,
-                "not reached by any positive-negative path from an agent that can be in V1"
-                + (
-                    " (no agent has a positive definite antagonistic in-weight)"
-                    if not v1a.size
-                    else ""
-                ),
-            )
-        )
-    violations.sort(key=lambda v: v.agent)
-    for v in violations:
-        bad[v.agent] = True
-    # V2: only agents that meet the V2 conditions (issue 8: violators are in neither set)
-    v2 = tuple(np.flatnonzero(~cand & idd & reached & ~bad).tolist())
-    return Decomposition(
-        False, tuple(v1a.tolist()), v2, cands, tuple(violations), _Paths(v2, pred, root)
-    )
-
-
-#: Keys of the stable ``ntc design --json`` format (per mode for a switching file).
 DESIGN_KEYS = (
     "C",
     "delta",
@@ -400,6 +164,23 @@ class ProtocolDesign:
         """
         return input_vector(self.topology, self.B, self.delta, self.x0)
 
+    def table(self, title: str | None = None) -> Table:
+        """The design as the table every face shows (see :func:`design_table`).
+
+        Parameters
+        ----------
+        title : str, optional
+            The table's title (default: Lemma 1 design with θ and ΔC).
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        return design_table({self.topology.name or "topology": self}, title)
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
+
     def to_dict(self) -> dict:
         """The design as a JSON-ready mapping, agents as labels.
 
@@ -441,6 +222,23 @@ class SwitchingDesign:
     switching: SwitchingTopology
     modes: Mapping[str, ProtocolDesign]
 
+    def table(self, title: str | None = None) -> Table:
+        """The designs as one table, a column per mode (see :func:`design_table`).
+
+        Parameters
+        ----------
+        title : str, optional
+            The table's title.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        return design_table(dict(self.modes), title)
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
+
     def to_dict(self) -> dict:
         """The designs as a JSON-ready mapping.
 
@@ -454,6 +252,94 @@ class SwitchingDesign:
             "period": self.switching.period,
             "modes": {k: v.to_dict() for k, v in self.modes.items()},
         }
+
+
+MAX_VIOLATIONS_SHOWN = 10  # in a table's notes (--json and to_dict() list them all)
+
+
+def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None) -> Table:
+    """Lemma 1's parameters as a table, one value column per design (mode): the labels
+    the terminal, the HTML report and notebooks show.
+
+    Parameters
+    ----------
+    designs : mapping of str to ProtocolDesign
+        The designs, by mode name (one for a fixed topology).
+    title : str, optional
+        The title (default: Lemma 1 design with θ and ΔC).
+
+    Returns
+    -------
+    ntc_design.rows.Table
+        Rows: Assumption 2, V1 / V2, C, δ, k1, θ, x0, the informed agents, B_i per agent,
+        the identity residual and the critical couplings; notes: the violations, the
+        design's notes and the thresholds' notes.
+    """
+    ds = list(designs.values())
+    first = ds[0]
+    lab = first.topology.labels
+    informed = sorted({i for d in ds for i in d.informed})
+
+    def row(label: str, f):
+        return (label, *[f(d) for d in ds])
+
+    def crit(d: ProtocolDesign, key: str):
+        return None if d.thresholds is None else getattr(d.thresholds, key)
+
+    def best_delta(d: ProtocolDesign):
+        if d.thresholds is not None and d.thresholds.best_rate_delta is None:
+            return "none: the rate grows with δ"
+        return crit(d, "best_rate_delta")
+
+    def holds(d: ProtocolDesign):
+        return verdict(d.assumption_holds, word="holds" if d.assumption_holds else "fails")
+
+    rows = [
+        row("Assumption 2", holds),
+        row("V1 / V2", lambda d: f"{set_text(d.v1_agents)} / {set_text(d.v2_agents)}"),
+        row("C", lambda d: d.C),
+        row("δ = C + ΔC", lambda d: d.delta),
+        row("k1 = 1 + 2/δ", lambda d: d.k1),
+        row("θ", lambda d: matrix([d.theta])),
+        row("x0 = k1·θ", lambda d: matrix([d.x0])),
+        row("informed agents V_I = U", lambda d: set_text(d.informed_agents)),
+        *[
+            row(f"B_{lab[i]}", lambda d, i=i: matrix(d.B[i]) if i in d.B else "— (naive)")
+            for i in informed
+        ],
+        row(
+            "identity residual ‖L_B(1⊗θ) − k1(Δ⊗I)Bθ‖ (relative)",
+            lambda d: f"{d.identity_residual:.2e}",
+        ),
+        row("δ_H (−L_B Hurwitz for δ > δ_H)", lambda d: crit(d, "hurwitz")),
+        row("δ_S (L_B + L_Bᵀ ≻ 0 for δ > δ_S)", lambda d: crit(d, "symmetric")),
+        row("best decay rate", lambda d: crit(d, "best_rate")),
+        row("δ of the best rate", best_delta),
+    ]
+    several = len(designs) > 1
+    notes: list[str] = []
+    for name, d in designs.items():
+        notes += _design_notes(d, f"mode {name}: " if several else "")
+    columns = ("quantity", *([f"mode {k}" for k in designs] if several else ["value"]))
+    if title is None:
+        title = f"Lemma 1 design, θ = {first.theta.tolist()}, ΔC = {first.margin:g}"
+    return Table.build(title, columns, rows, notes)
+
+
+def _design_notes(d: ProtocolDesign, at: str) -> list[str]:
+    """The violations (the first few), the design's notes and the thresholds' notes."""
+    lab = d.topology.labels
+    viol = d.decomposition.violations
+    notes = [
+        f"{at}violation, agent {lab[v.agent]}: {v.reason}" for v in viol[:MAX_VIOLATIONS_SHOWN]
+    ]
+    if len(viol) > MAX_VIOLATIONS_SHOWN:
+        more = len(viol) - MAX_VIOLATIONS_SHOWN
+        notes.append(f"{at}… and {more} more violations (--json lists them all)")
+    notes += [f"{at}{n}" for n in d.notes]
+    if d.thresholds is not None:
+        notes += [f"{at}{n}" for n in d.thresholds.notes]
+    return notes
 
 
 def coupling_matrix_sparse(top: Topology, b: Mapping[int, np.ndarray]) -> sparse.csr_matrix:
@@ -678,59 +564,4 @@ def design(
     return design_topology(topology, theta, margin, delta, thresholds)
 
 
-def structure_report(top: Topology) -> dict:
-    """What ``ntc check`` shows about a topology's structure.
-
-    Parameters
-    ----------
-    top : Topology
-        The topology.
-
-    Returns
-    -------
-    dict
-        Edge classes, N_i, N'_i, Ω_i, Γ_i, U, the in-degree-dominated test and C_i per
-        agent, and the Assumption 2 decomposition or its violations (labels, not indices).
-    """
-    lab = top.labels
-    dec = assumption2(top)
-    idd = in_degree_dominated_all(top)
-    agents = {}
-    for i in range(top.n):
-        agents[str(lab[i])] = {
-            "in_neighbours": [lab[j] for j in top.in_neighbours(i)],
-            "out_neighbours": [lab[j] for j in top.out_neighbours(i)],
-            "omega": [lab[j] for j in top.omega(i)],
-            "gamma": [lab[j] for j in top.gamma(i)],
-            "in_degree_dominated": bool(idd[i]),
-            "C_i": dec.coefficients.get(i),
-        }
-    return {
-        "topology": top.name,
-        "dim": top.dim,
-        "agents": list(lab),
-        "edges": [
-            {"from": lab[j], "to": lab[i], "class": c.value}
-            for (i, j), c in sorted(top.classes.items())
-        ],
-        "U": [lab[i] for i in top.antagonised],
-        "per_agent": agents,
-        "assumption_holds": dec.holds,
-        "V1": [lab[i] for i in dec.v1],
-        "V2": [lab[i] for i in dec.v2],
-        "paths": {str(lab[i]): [lab[k] for k in p] for i, p in dec.paths.items()},
-        "violations": [{"agent": lab[v.agent], "reason": v.reason} for v in dec.violations],
-    }
-
-
-__all__ = [
-    "Decomposition",
-    "ProtocolDesign",
-    "SwitchingDesign",
-    "Violation",
-    "assumption2",
-    "design",
-    "design_topology",
-    "lemma1_coefficient",
-    "structure_report",
-]
+__all__ = ["ProtocolDesign", "SwitchingDesign", "design", "design_table", "design_topology"]
