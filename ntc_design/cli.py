@@ -15,6 +15,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from . import __version__
@@ -23,6 +24,8 @@ from .errors import InputError, one_line
 from .files import jsonable
 from .loader import load
 from .model import SwitchingTopology
+from .rows import Cell, fmt, set_text
+from .rows import Table as RowsTable
 from .timevarying import ExpressionTopology
 
 app = typer.Typer(
@@ -81,16 +84,35 @@ def _json(obj) -> str:
     return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
 
 
-def _fmt(x, digits: int = 4) -> str:
-    if x is None:
-        return "—"
-    if isinstance(x, float):
-        return f"{x:.{digits}f}" if abs(x) < 1e6 else f"{x:.4g}"
-    return str(x)
+_VERDICT_STYLE = {True: "green", False: "red", None: "yellow"}
 
 
-def _labels(xs) -> str:
-    return "{" + ", ".join(str(x) for x in xs) + "}"
+def _rich_cell(c: Cell) -> str:
+    """A cell for rich: the verdict word coloured, markup in the text escaped."""
+    text = escape(c.plain().replace("\n", "; "))
+    if c.judged:
+        word = escape(c.verdict_word)
+        return text.replace(word, f"[{_VERDICT_STYLE[c.verdict]}]{word}[/]", 1)
+    return text
+
+
+def _print_table(t: RowsTable) -> None:
+    """One presentation table on the terminal: a grid, or ``label: value`` lines for a
+    list-layout table (the theorem verdicts), then its notes."""
+    if t.layout == "list":
+        if t.title:
+            out.print(f"[bold]{escape(t.title)}[/bold]")
+        for line in t.list_lines():
+            out.print(escape(line))
+    else:
+        g = Table(title=t.title)
+        for c in t.columns:
+            g.add_column(c)
+        for r in t.rows:
+            g.add_row(*[_rich_cell(c) for c in r])
+        out.print(g)
+    for n in t.notes:
+        out.print(f"  note: {escape(n)}")
 
 
 def _print_check(rep: dict, title: str) -> None:
@@ -101,21 +123,21 @@ def _print_check(rep: dict, title: str) -> None:
     for e in rep["edges"]:
         et.add_row(f"{e['from']} -> {e['to']}", e["class"])
     out.print(et)
-    at = Table(title=f"agents (U = {_labels(rep['U'])})")
+    at = Table(title=f"agents (U = {set_text(rep['U'])})")
     for c in ("agent", "N_i", "N'_i", "Ω_i", "in-degree-dominated", "C_i"):
         at.add_column(c)
     for a, info in rep["per_agent"].items():
         at.add_row(
             a,
-            _labels(info["in_neighbours"]),
-            _labels(info["out_neighbours"]),
-            _labels(info["omega"]),
+            set_text(info["in_neighbours"]),
+            set_text(info["out_neighbours"]),
+            set_text(info["omega"]),
             "yes" if info["in_degree_dominated"] else "no",
-            _fmt(info["C_i"]),
+            fmt(info["C_i"]),
         )
     out.print(at)
     if rep["assumption_holds"]:
-        out.print(f"Assumption 2 holds: V1 = {_labels(rep['V1'])}, V2 = {_labels(rep['V2'])}")
+        out.print(f"Assumption 2 holds: V1 = {set_text(rep['V1'])}, V2 = {set_text(rep['V2'])}")
         for a, p in rep["paths"].items():
             out.print(f"  {a} reached by the positive-negative path {' -> '.join(map(str, p))}")
     else:
@@ -130,34 +152,6 @@ def _capped(items: list[dict], line: str, most: int = 10) -> list[str]:
     if len(items) > most:
         lines.append(f"  … and {len(items) - most} more (--json lists them all)")
     return lines
-
-
-def _print_design(d: dict, title: str) -> None:
-    t = Table(title=f"{title}: Lemma 1 design, θ = {d['theta']}, ΔC = {d['margin']}")
-    t.add_column("quantity")
-    t.add_column("value")
-    t.add_row("Assumption 2", "holds" if d["assumption_holds"] else "FAILS")
-    t.add_row("V1 / V2", f"{_labels(d['V1'])} / {_labels(d['V2'])}")
-    t.add_row("C", _fmt(d["C"]))
-    t.add_row("δ = C + ΔC", _fmt(d["delta"]))
-    t.add_row("k1 = 1 + 2/δ", _fmt(d["k1"]))
-    t.add_row("x0 = k1·θ", "[" + ", ".join(_fmt(v) for v in d["x0"]) + "]")
-    t.add_row("informed V_I = U", _labels(d["informed"]))
-    for a, b in d["B"].items():
-        t.add_row(f"B_{a}", str(np.round(np.array(b), 4).tolist()))
-    t.add_row("identity residual", f"{d['identity_residual']:.2e}")
-    th = d["thresholds"]
-    if th is not None:
-        t.add_row("δ_H (−L_B Hurwitz ∀δ>δ_H)", _fmt(th["hurwitz"], 6))
-        t.add_row("δ_S (L_B+L_Bᵀ ≻ 0 ∀δ>δ_S)", _fmt(th["symmetric"], 6))
-        t.add_row("best decay rate", _fmt(th["best_rate"], 6))
-        t.add_row("δ of best rate", _fmt(th["best_rate_delta"], 6))
-    out.print(t)
-    for line in _capped(d["violations"], "  violation, agent {agent}: {reason}"):
-        out.print(line)
-    notes = list(d["notes"]) + (list(th["notes"]) if th else [])
-    for n in notes:
-        out.print(f"  note: {n}")
 
 
 @app.command()
@@ -198,60 +192,24 @@ def design_cmd(
     if isinstance(top, ExpressionTopology):
         from .timevarying import TimeVaryingDesign
 
-        tdoc = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin).to_dict()
+        tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
         if as_json:
-            print(_json(tdoc))
+            print(_json(tv.to_dict()))
         else:
-            _print_tv_design(tdoc, top.name or str(file))
+            _print_table(tv.table(f"{top.name or file}: Lemma 1 at every instant"))
         return
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
         res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
-    doc = res.to_dict()
     if as_json:
-        print(_json(doc))
+        print(_json(res.to_dict()))
     elif isinstance(res, SwitchingDesign):
-        for k, d in doc["modes"].items():
-            _print_design(d, f"mode {k}")
+        for k, d in res.modes.items():
+            _print_table(d.table(f"mode {k}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
     else:
-        _print_design(doc, res.topology.name or str(file))
-
-
-def _print_tv_design(d: dict, title: str) -> None:
-    t = Table(title=f"{title}: Lemma 1 at every instant, θ = {d['theta']}, ΔC = {d['margin']}")
-    t.add_column("quantity")
-    t.add_column("range over the domain")
-    dom = d["domain"]
-    t.add_row(
-        "domain", f"[{dom[0]:.6g}, {dom[1]:.6g}] ({d['samples']} samples)" if dom else "t >= 0"
-    )
-    t.add_row("informed V_I = U", _labels(d["informed"]))
-    if d["C"] is not None:
-        t.add_row("C(t)", f"{d['C']['min']:.4f} .. {d['C']['max']:.4f}")
-    t.add_row("δ(t) = C(t) + ΔC", f"{d['delta']['min']:.4f} .. {d['delta']['max']:.4f}")
-    t.add_row(
-        "x0(t) = k1(t)·θ",
-        "["
-        + ", ".join(
-            f"{a:.4f}..{b:.4f}" for a, b in zip(d["x0"]["min"], d["x0"]["max"], strict=True)
-        )
-        + "]",
-    )
-    t.add_row(
-        "λ_min(L_B + L_Bᵀ)", f"{d['sym_min_eig']['min']:.6g} .. {d['sym_min_eig']['max']:.6g}"
-    )
-    t.add_row("identity residual (max)", f"{d['identity_residual']:.2e}")
-    t.add_row(
-        "Assumption 2", "holds at every sample" if d["assumption_holds"] else "FAILS at some t"
-    )
-    out.print(t)
-    if not d["assumption_holds"]:
-        ts = ", ".join(f"{x:.4g}" for x in d["assumption_fails_at"])
-        out.print(
-            f"  note: Assumption 2 fails at t = {ts}, ...; Lemma 1's design is used as given "
-            "(certify the uniform bound Λ₂ before trusting it)"
-        )
+        name = res.topology.name or str(file)
+        _print_table(res.table(f"{name}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
 
 
 @app.command()
@@ -342,46 +300,6 @@ class Progress:
             self._bar.update(self.tasks[key], completed=done, total=total)
 
 
-def _print_checks(checks) -> None:
-    t = Table(title="certificate checks")
-    for c in ("check", "result", "detail"):
-        t.add_column(c)
-    for c in checks:
-        t.add_row(c["name"], "[green]ok[/green]" if c["ok"] else "[red]FAILS[/red]", c["detail"])
-    out.print(t)
-
-
-def _print_gain(g: dict) -> None:
-    t = Table(title=f"gain c(t) = {g['parsed']}")
-    for c in ("condition", "holds", "reason"):
-        t.add_column(c)
-    from .gain import CONDITION_LABELS
-
-    yn = {True: "yes", False: "[red]no[/red]", None: "undetermined"}
-    for k, label in CONDITION_LABELS.items():
-        t.add_row(label, yn[g[k]["value"]], g[k]["reason"])
-    out.print(t)
-    out.print(
-        f"mean square (Theorems 1, 3): {yn[g['mean_square']]}; almost sure (Theorems 2, 4): {yn[g['almost_sure']]}"
-    )
-
-
-def _print_theorems(ths: list[dict]) -> None:
-    yn = {
-        True: "[green]guaranteed[/green]",
-        False: "[red]not guaranteed[/red]",
-        None: "undetermined",
-    }
-    for th in ths:
-        out.print(f"Theorem {th['theorem']} ({th['sense']}): {yn[th['guaranteed']]}")
-        for p in th["failing"]:
-            out.print(f"  fails: {p['premise']}: {p['detail']}")
-        for p in th["undetermined"]:
-            out.print(f"  undetermined: {p['premise']}: {p['detail']}")
-        for p in th["replaced"]:
-            out.print(f"  replaced: {p['premise']} {p['detail']}; in its place: {p['replaced_by']}")
-
-
 @app.command()
 def gain(
     expr: Annotated[str, typer.Argument(help="c(t), e.g. '1/(1+t)' or '(1+t)^(-1/3)'.")],
@@ -390,8 +308,8 @@ def gain(
     """Decide the gain conditions of Theorems 1-4 for c(t)."""
     from .gain import analyse_gain
 
-    doc = analyse_gain(expr).to_dict()
-    print(_json(doc)) if as_json else _print_gain(doc)
+    analysis = analyse_gain(expr)
+    print(_json(analysis.to_dict())) if as_json else _print_table(analysis.table())
 
 
 @app.command()
@@ -434,7 +352,7 @@ def certify(
     if as_json:
         print(_json(doc))
     else:
-        _print_certify(doc, out_path if written else None)
+        _print_certify(res, out_path if written else None)
     if out_path is not None and not written:
         print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
     if not res.proven:
@@ -443,14 +361,9 @@ def certify(
         raise typer.Exit(1)
 
 
-def _print_certify(doc: dict, written: Path | None) -> None:
-    _print_checks(doc["certificate"]["checks"])
-    for row in doc["certificate"]["rows"]:  # the kind's rows: the HTML report shows the same
-        label = row["label"] + (" estimate" if row["estimate"] else "")
-        out.print(f"  {label}: {row['value']}" if row["label"] == "skipped" else f"{label}: {row['value']}")
-    if doc["gain"] is not None:
-        _print_gain(doc["gain"])
-    _print_theorems(doc["theorems"])
+def _print_certify(res, written: Path | None) -> None:
+    for t in res.tables():  # the HTML report and notebooks show the same tables
+        _print_table(t)
     if written is not None:
         out.print(f"certificate written to {written} (re-check with: ntc verify {written})")
 

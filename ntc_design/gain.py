@@ -50,6 +50,7 @@ import sympy as sp
 
 from .errors import InputError
 from .expr import compile_expression, parse_expression, show, symbol, user_text
+from .rows import Table, verdict
 
 T = symbol("t")
 GAIN_SECONDS = 6.0  # hard limit of one gain analysis (the child process is killed)
@@ -133,6 +134,28 @@ class GainAnalysis:
             Its value and reason.
         """
         return getattr(self, key)
+
+    def table(self) -> Table:
+        """The conditions and the two verdicts as the table every face shows.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+            One row per condition (holds, reason), then the mean-square and almost-sure
+            verdicts.
+        """
+        rows: list[tuple] = [
+            (label, verdict(self.condition(k).value), self.condition(k).reason)
+            for k, label in CONDITION_LABELS.items()
+        ]
+        rows += [
+            ("mean square (Theorems 1, 3)", verdict(self.mean_square), "eqs. (13), (17)"),
+            ("almost sure (Theorems 2, 4)", verdict(self.almost_sure), "eqs. (16), (20)"),
+        ]
+        return Table.build(f"gain c(t) = {show(self.expr)}", ("condition", "holds", "reason"), rows)
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
 
     def to_dict(self) -> dict:
         """The analysis as a JSON-ready mapping (what ``ntc gain --json`` prints).

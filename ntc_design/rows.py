@@ -130,6 +130,8 @@ class Cell:
         str
         """
         if self.matrix is not None:
+            if len(self.matrix) == 1:  # a vector
+                return "[" + ", ".join(self.matrix[0]) + "]"
             return "[" + ", ".join("[" + ", ".join(r) + "]" for r in self.matrix) + "]"
         parts = [p for p in (self.verdict_word, self.text) if p]
         head = " ".join(parts)
@@ -242,12 +244,16 @@ class Table:
         The rows, each as long as ``columns``.
     notes : tuple of str
         Lines shown under the table.
+    layout : str
+        ``"grid"`` (a table on every face) or ``"list"`` (the terminal prints each row as
+        ``label: value`` with the last cell's lines indented under it; for verdicts).
     """
 
     title: str
     columns: tuple[str, ...]
     rows: tuple[tuple[Cell, ...], ...]
     notes: tuple[str, ...] = ()
+    layout: str = "grid"
 
     @classmethod
     def build(
@@ -256,6 +262,7 @@ class Table:
         columns: Sequence[str],
         rows: Iterable[Sequence[Any]],
         notes: Iterable[str] = (),
+        layout: str = "grid",
     ) -> Table:
         """A table from rows of values or cells (values go through :func:`fmt`).
 
@@ -269,6 +276,8 @@ class Table:
             The rows.
         notes : iterable of str, optional
             Lines under the table.
+        layout : str, optional
+            ``"grid"`` or ``"list"`` (see the class).
 
         Returns
         -------
@@ -277,13 +286,15 @@ class Table:
         Raises
         ------
         ValueError
-            A row whose length differs from the columns'.
+            A row whose length differs from the columns', or an unknown layout.
         """
         built = tuple(tuple(cell(x) for x in r) for r in rows)
         for r in built:
             if len(r) != len(columns):
                 raise ValueError(f"row of {len(r)} cells for {len(columns)} columns")
-        return cls(title, tuple(columns), built, tuple(notes))
+        if layout not in ("grid", "list"):
+            raise ValueError(f"layout: {layout!r} is not grid or list")
+        return cls(title, tuple(columns), built, tuple(notes), layout)
 
     @property
     def labels(self) -> tuple[str, ...]:
@@ -295,13 +306,40 @@ class Table:
         """
         return tuple(r[0].plain() for r in self.rows)
 
+    def list_lines(self) -> list[str]:
+        """The rows as ``label: value`` lines, a row's last cell's further lines indented
+        under it (the terminal's list layout).
+
+        Returns
+        -------
+        list of str
+        """
+        out = []
+        for r in self.rows:
+            head = [c.plain().split("\n")[0] for c in r[:-1]] if len(r) > 2 else [r[0].plain()]
+            last = r[-1].plain().split("\n") if len(r) > 1 else []
+            if len(r) > 2:
+                out.append(f"{head[0]}: {' '.join(h for h in head[1:] if h)}")
+                out += [f"  {x}" for x in last if x]
+            else:
+                out.append(f"{head[0]}: {last[0] if last else ''}".rstrip())
+                out += [f"  {x}" for x in last[1:]]
+        return out
+
     def text(self) -> str:
-        """The table as plain text: the title, aligned columns, the notes.
+        """The table as plain text: the title, aligned columns (or ``label: value`` lines
+        in the list layout), the notes.
 
         Returns
         -------
         str
         """
+        if self.layout == "list":
+            return "\n".join(
+                ([self.title] if self.title else [])
+                + self.list_lines()
+                + [f"note: {x}" for x in self.notes]
+            )
         grid = [list(self.columns)] + [
             [c.plain().replace("\n", "; ") for c in r] for r in self.rows
         ]

@@ -16,8 +16,8 @@ from ntc_design.design import (
     assumption2,
     design,
     lemma1_coefficient,
-    lemma1_coefficients,
 )
+from ntc_design.design.assumption import lemma1_coefficients
 from ntc_design.generate import FAMILIES, random_network, write_topology
 from ntc_design.linalg import DEF_CODES, DenseRefused, SPDFamily, classify, require_dense
 from ntc_design.model import (

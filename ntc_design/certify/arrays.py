@@ -17,6 +17,7 @@ from .fields import need, number, vector
 
 _DTYPES = {"f8": "<f8", "i8": "<i8", "u1": "<u1"}
 
+
 def pack(a: np.ndarray, kind: str) -> dict:
     """An array as ``{"dtype", "shape", "base64"}`` (little-endian bytes, exact): a
     100,000-edge certificate stays compact and hashes fast.
@@ -39,6 +40,7 @@ def pack(a: np.ndarray, kind: str) -> dict:
         "shape": list(arr.shape),
         "base64": base64.b64encode(arr.tobytes()).decode("ascii"),
     }
+
 
 def unpack(x: Any, where: str, kind: str, shape: tuple[int, ...]) -> np.ndarray:
     """Inverse of :func:`pack`, checking dtype, shape and length.
@@ -82,6 +84,7 @@ def unpack(x: Any, where: str, kind: str, shape: tuple[int, ...]) -> np.ndarray:
         raise InputError(f"{where}: non-finite entry")
     return arr
 
+
 def mode_subject(des: ProtocolDesign) -> dict:
     """A design as a scale certificate's subject mode: the topology as packed arrays, θ,
     ΔC, δ and the informed agents.
@@ -112,6 +115,7 @@ def mode_subject(des: ProtocolDesign) -> dict:
         "delta": des.delta,
         "informed": list(des.informed_agents),
     }
+
 
 def topology_from_subject(sub: dict, where: str) -> Topology:
     """The topology of a scale certificate's subject (arrays), validated by the model.
@@ -159,6 +163,7 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     if out_of_range(w):  # so no product in a proof overflows or underflows
         raise InputError(f"{where}.weights: {RANGE_TEXT}")
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
+
 
 def read_array_mode(sub: Any, where: str, size: int) -> tuple[Topology, float, np.ndarray, Check]:
     """One mode of a scale certificate's subject: its topology (arrays, validated by the

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..model import SwitchingTopology, Topology
+from ..rows import Table, verdict
 from .claims import PROPERTY_TEXT, Claim, Property
 from .format import DIGEST_NOTE, digest, document_hash, switching_hash, topology_hash
 
@@ -146,6 +147,23 @@ class Verification:
                 return False
             mine = [c for c in mine if c.claim is not None and c.claim.mode in (None, mode)]
         return integrity and bool(mine) and all(c.ok for c in mine)
+
+    def table(self) -> Table:
+        """Every check with its result and detail, as every face shows it.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        rows = [
+            (c.name, verdict(c.ok, word="ok" if c.ok else "FAILS"), c.detail) for c in self.checks
+        ]
+        return Table.build(
+            f"certificate checks ({self.method})", ("check", "result", "detail"), rows
+        )
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
 
     def to_dict(self) -> dict:
         """The verification as a JSON-ready mapping (what ``ntc verify --json`` prints).

@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from ..design import ProtocolDesign, coupling_matrix
+from ..design import ProtocolDesign
+from ..design.lemma1 import coupling_matrix
 from ..errors import InputError
 from ..files import parse_topology
 from ..linalg import DENSE_MAX_BYTES, RANGE_TEXT, DenseRefused, out_of_range

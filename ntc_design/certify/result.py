@@ -11,11 +11,12 @@ from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis, analyse_gain
 from ..model import SwitchingTopology, Topology
+from ..rows import Table
 from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
 from .kinds import KINDS, ResultRow, kind_for
-from .theorems import TheoremVerdict
+from .theorems import TheoremVerdict, theorem_table
 from .verify import verify
 
 
@@ -41,6 +42,38 @@ class CertifyResult:
     def rows(self) -> tuple[ResultRow, ...]:
         """What the certificate reports, as rows (the same on every face)."""
         return KINDS[self.certificate["kind"]].rows(self.certificate["results"])
+
+    def results_table(self) -> Table:
+        """What the certificate reports (its kind's rows), as every face shows it.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        rows = [
+            (row.label + (" (estimate)" if row.estimate else ""), row.value) for row in self.rows
+        ]
+        kind = self.certificate["kind"]
+        return Table.build(f"certificate ({kind})", ("property", "result"), rows, layout="list")
+
+    def tables(self) -> tuple[Table, ...]:
+        """Everything the result shows: the certificate's checks and results, the gain
+        conditions (when a gain was given) and the theorem verdicts.
+
+        Returns
+        -------
+        tuple of ntc_design.rows.Table
+        """
+        gain = (self.gain.table(),) if self.gain is not None else ()
+        return (
+            self.verification.table(),
+            self.results_table(),
+            *gain,
+            theorem_table(self.theorems),
+        )
+
+    def _repr_html_(self) -> str:
+        return "".join(t.html() for t in (self.design.table(), *self.tables()))
 
     def to_dict(self) -> dict:
         """The result as a JSON-ready mapping (what ``ntc certify --json`` prints).

@@ -455,9 +455,7 @@ def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tupl
     return p.holds, p.detail
 
 
-
 # ----------------------------------------------------------------------- certify
-
 
 
 def rate_estimate(blocks: BlockData, comp: np.ndarray, ncomp: int) -> tuple[float, str]:
@@ -739,4 +737,3 @@ def _prove_component(fb: _Fallbacks, c: int, lap_c, err_c) -> None:
         fb.methods[c] = "lyapunov"
         fb.extra[str(c)] = {"P": pack(p, "f8")}
         fb.details[str(c)] = f"{p1.detail}; {p2.detail}"
-

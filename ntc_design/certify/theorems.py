@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from ..design import ProtocolDesign, SwitchingDesign
 from ..gain import CONDITION_LABELS, GainAnalysis
+from ..rows import Table, lines, verdict
 from .checks import Verification
 from .claims import Property
 
@@ -100,6 +101,41 @@ class TheoremVerdict:
             "undetermined": [p.to_dict() for p in self.undetermined],
             "replaced": [p.to_dict() for p in self.replaced],
         }
+
+
+#: How a theorem verdict reads.
+GUARANTEE_WORD = {True: "guaranteed", False: "not guaranteed", None: "undetermined"}
+
+
+def theorem_table(verdicts: tuple[TheoremVerdict, ...] | list[TheoremVerdict]) -> Table:
+    """The theorem verdicts as the table every face shows: each theorem, its sense, the
+    verdict, and every premise that fails, is undetermined or is replaced (with what
+    replaces it).
+
+    Parameters
+    ----------
+    verdicts : sequence of TheoremVerdict
+        The verdicts.
+
+    Returns
+    -------
+    ntc_design.rows.Table
+    """
+    rows = []
+    for th in verdicts:
+        why = [f"fails: {p.name}: {p.detail}" for p in th.failing]
+        why += [f"undetermined: {p.name}: {p.detail}" for p in th.undetermined]
+        why += [
+            f"replaced: {p.name} {p.detail}; in its place: {p.replaced_by}" for p in th.replaced
+        ]
+        rows.append(
+            (
+                f"Theorem {th.theorem} ({th.sense})",
+                verdict(th.guaranteed, word=GUARANTEE_WORD[th.guaranteed]),
+                lines(why or ["every premise holds"]),
+            )
+        )
+    return Table.build("theorems", ("theorem", "verdict", "premises"), rows, layout="list")
 
 
 def violations_text(design, most: int = 5) -> str:

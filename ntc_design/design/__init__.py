@@ -11,23 +11,14 @@ from .assumption import (
     Violation,
     assumption2,
     lemma1_coefficient,
-    lemma1_coefficients,
     structure_report,
 )
 from .lemma1 import (
-    DENSE_DESIGN_MAX_ND,
-    DESIGN_KEYS,
-    THRESHOLDS_DEFAULT_MAX_ND,
-    THRESHOLDS_MAX_ND,
     ProtocolDesign,
     SwitchingDesign,
-    coupling_matrix,
-    coupling_matrix_sparse,
     design,
     design_table,
     design_topology,
-    identity_residual,
-    input_vector,
 )
 
 __all__ = [

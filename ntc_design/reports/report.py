@@ -17,16 +17,19 @@ from pathlib import Path
 
 import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
-from markupsafe import Markup
+from markupsafe import Markup, escape
 
 from ntc_design.certify.format import package_versions
 
 from ..certify import certify, verify_file, write_certificate
+from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError, require_number, require_positive
 from ..files import parse_topology
 from ..model import SwitchingTopology, Topology
 from ..outputs import check_output_file, write_atomic
+from ..rows import Table as RowsTable
+from ..rows import fmt
 from ..simulate.result import MeanSquareBand
 from . import figures
 
@@ -424,19 +427,6 @@ def write_html(path: Path, text: str) -> None:
     write_atomic(path, text, option="report")
 
 
-def fmt(x, digits: int = 4) -> str:
-    if x is None:
-        return "—"
-    if isinstance(x, bool):
-        return "yes" if x else "no"
-    if isinstance(x, (float, np.floating)):
-        x = float(x)
-        return f"{x:.{digits}f}" if 1e-3 <= abs(x) < 1e6 or x == 0 else f"{x:.{digits}g}"
-    if isinstance(x, (list, tuple)):
-        return "[" + ", ".join(fmt(v, digits) for v in x) + "]"
-    return str(x)
-
-
 def matrix(m, digits: int = 4) -> dict:
     """A matrix cell: entries rounded for display (−0 shown as 0)."""
     a = np.atleast_2d(np.asarray(m, dtype=float))
@@ -481,58 +471,34 @@ def _modes(des: ProtocolDesign | SwitchingDesign) -> dict[str, ProtocolDesign]:
     return {des.topology.name or "topology": des}
 
 
-def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[list, dict]:
-    """The Lemma 1 parameters as one table with a column per mode (B_i and x0 as
-    matrices); and the designs' dict forms."""
-    docs = {name: d.to_dict() for name, d in _modes(des).items()}
-    agents = sorted(
-        {a for d in docs.values() for a in d["B"]},
-        key=lambda a: [str(x) for x in next(iter(_modes(des).values())).topology.labels].index(a),
-    )
+def html_table(t: RowsTable, table_id: str | None = None) -> Table:
+    """A presentation table (:mod:`ntc_design.rows`) for the templates: the same labels
+    and cells as the terminal, each cell rendered once by :meth:`ntc_design.rows.Cell.html`.
 
-    def row(label, f):
-        return (label, *[f(d) for d in docs.values()])
+    Parameters
+    ----------
+    t : ntc_design.rows.Table
+        The table.
+    table_id : str, optional
+        An ``id`` for the table element.
 
-    def th(d, k, digits=6):
-        return fmt((d["thresholds"] or {}).get(k), digits)
-
-    rows = [
-        row(
-            "Assumption 2",
-            lambda d: {
-                "verdict": d["assumption_holds"],
-                "text": "; ".join(f"agent {v['agent']}: {v['reason']}" for v in d["violations"]),
-            },
-        ),
-        row("V1 / V2", lambda d: f"{fmt(d['V1'])} / {fmt(d['V2'])}"),
-        row("C", lambda d: fmt(d["C"])),
-        row("δ = C + ΔC", lambda d: fmt(d["delta"])),
-        row("k1 = 1 + 2/δ", lambda d: fmt(d["k1"])),
-        row("θ", lambda d: matrix([d["theta"]])),
-        row("x0 = k1·θ", lambda d: matrix([d["x0"]])),
-        row("informed agents V_I = U", lambda d: fmt(d["informed"])),
-        *[
-            row(f"B_{a}", lambda d, a=a: matrix(d["B"][a]) if a in d["B"] else "— (naive)")
-            for a in agents
-        ],
-        row(
-            "identity residual ‖−L_B(1⊗θ) + k1(Δ⊗I)Bθ‖ (relative)",
-            lambda d: f"{d['identity_residual']:.2e}",
-        ),
-        row("δ_H (−L_B Hurwitz for δ > δ_H)", lambda d: th(d, "hurwitz")),
-        row("δ_S (L_B + L_Bᵀ ≻ 0 for δ > δ_S)", lambda d: th(d, "symmetric")),
-        row("best decay rate", lambda d: th(d, "best_rate")),
-        row(
-            "δ of the best rate",
-            lambda d: (
-                th(d, "best_rate_delta")
-                if (d["thresholds"] or {}).get("best_rate_delta") is not None
-                else "none: the rate grows with δ"
-            ),
-        ),
+    Returns
+    -------
+    Table
+    """
+    rows = [tuple(Markup(c.html()) for c in r) for r in t.rows]
+    rows += [
+        (Markup(f'<span class="note">note: {escape(n)}</span>'), *[""] * (len(t.columns) - 1))
+        for n in t.notes
     ]
-    headers = ("quantity", *[f"mode {k}" if len(docs) > 1 else "value" for k in docs])
-    return [("", Table(headers, rows))], docs
+    return Table(t.columns, rows, table_id)
+
+
+def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[list, dict]:
+    """The Lemma 1 parameters as one table with a column per mode (the design's own
+    table); and the designs' dict forms."""
+    docs = {name: d.to_dict() for name, d in _modes(des).items()}
+    return [("", html_table(des.table()))], docs
 
 
 def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, dict]:
@@ -556,50 +522,9 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
             },
         ),
     ]
-    rows += [(row.label + (" (estimate)" if row.estimate else ""), row.value) for row in res.rows]
-    checks = Table(
-        ("claim", "holds", "proof"),
-        [(c.name, {"verdict": c.ok, "text": ""}, c.detail) for c in ver.checks],
-    )
+    rows += list(html_table(res.results_table()).rows)
+    checks = html_table(ver.table())
     return Table(("property", "result"), rows), checks, {"valid": ver.valid, "results": r}
-
-
-GAIN_CONDITIONS = {
-    "continuous_nonnegative": "c continuous, ≥ 0 on [0, ∞)",
-    "integral_diverges": "∫₀^∞ c dt = ∞",
-    "tends_to_zero": "c(t) → 0",
-    "square_integrable": "∫₀^∞ c² dt < ∞",
-}
-
-
-def gain_table(g: dict | None) -> Table:
-    if g is None:
-        return Table(("condition", "holds", "reason"), [("no gain was given", "—", "")])
-    rows = [
-        (v, {"verdict": g[k]["value"], "text": ""}, g[k]["reason"])
-        for k, v in GAIN_CONDITIONS.items()
-    ]
-    rows += [
-        ("mean square (Theorems 1, 3)", {"verdict": g["mean_square"], "text": ""}, "—"),
-        ("almost sure (Theorems 2, 4)", {"verdict": g["almost_sure"], "text": ""}, "—"),
-    ]
-    return Table(("condition", "holds", "reason"), rows)
-
-
-def theorem_table(ths: list[dict]) -> Table:
-    rows = []
-    for th in ths:
-        why = [f"fails: {p['premise']} — {p['detail']}" for p in th["failing"]]
-        why += [f"undetermined: {p['premise']}" for p in th["undetermined"]]
-        rows.append(
-            (
-                f"Theorem {th['theorem']}",
-                th["sense"],
-                {"verdict": th["guaranteed"], "text": ""},
-                {"lines": why or ["all premises hold"]},
-            )
-        )
-    return Table(("theorem", "sense", "guaranteed", "why"), rows)
 
 
 # ------------------------------------------------------------------------ convergence
@@ -932,9 +857,11 @@ def run_section(
         coupling=coupling,
         certificate=cert_tab,
         checks=checks,
-        gain=gain_table(doc["gain"]),
+        gain=html_table(cert_res.gain.table())
+        if cert_res.gain is not None
+        else Table(("condition", "holds", "reason"), [("no gain was given", "—", "")]),
         gain_figure=gain_fig,
-        theorems=theorem_table(doc["theorems"]),
+        theorems=html_table(theorem_table(cert_res.theorems)),
         ms_figure=ms_fig,
         convergence_note=conv_note,
         convergence=conv,

@@ -16,20 +16,13 @@ from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescap
 
 from ..errors import InputError
 from ..outputs import check_output_file, write_atomic
+from ..rows import fmt
 
 ENV = Environment(
     loader=PackageLoader("ntc_design.reports", "templates"),
     autoescape=select_autoescape(["html"]),
     undefined=StrictUndefined,
 )
-
-
-def _fmt(x, digits: int = 4) -> str:
-    if isinstance(x, bool):
-        return "yes" if x else "no"
-    if isinstance(x, float):
-        return f"{x:.{digits}g}"
-    return str(x)
 
 
 MAX_CURVES = 200  # curves drawn in the overlay (every point is still in curves.parquet)
@@ -192,9 +185,9 @@ def _cell(v) -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return "—"
     if isinstance(v, (np.bool_, bool)):
-        return _fmt(bool(v))
+        return fmt(bool(v))
     if isinstance(v, (np.floating, float)):
-        return _fmt(float(v), 5)
+        return fmt(float(v), 5)
     try:
         import pandas as pd
 

@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from ..design import DESIGN_KEYS, ProtocolDesign
+from ..design import ProtocolDesign
+from ..design.lemma1 import DESIGN_KEYS
 from ..errors import quote
 from .grid import TimeGrid
 from .moments import Moments

@@ -13,6 +13,7 @@ import numpy as np
 from ..errors import require_theta
 from ..linalg import DEF_RTOL, pd
 from ..model import antagonistic_in_weight, positive_negative_reachable
+from ..rows import Table, fmt, set_text, verdict
 from .topology import ExpressionTopology
 
 # ----------------------------------------------------------------- Lemma 1 at every t
@@ -300,6 +301,56 @@ class TimeVaryingDesign:
         """
         a, b = self.topology.domain or (0.0, 10.0)
         return np.linspace(a, b, k)
+
+    def table(self, title: str | None = None) -> Table:
+        """The design's ranges over the domain as the table every face shows.
+
+        Parameters
+        ----------
+        title : str, optional
+            The table's title (default: Lemma 1 at every instant with θ and ΔC).
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        d = self.to_dict()
+        dom = d["domain"]
+
+        def span(r: dict, digits: int = 4) -> str:
+            return f"{fmt(r['min'], digits)} .. {fmt(r['max'], digits)}"
+
+        x0 = zip(d["x0"]["min"], d["x0"]["max"], strict=True)
+        ok = d["assumption_holds"]
+        rows = [
+            (
+                "domain",
+                f"[{dom[0]:.6g}, {dom[1]:.6g}] ({d['samples']} samples)" if dom else "t >= 0",
+            ),
+            ("informed agents V_I = U", set_text(d["informed"])),
+            ("C(t)", span(d["C"]) if d["C"] is not None else None),
+            ("δ(t) = C(t) + ΔC", span(d["delta"])),
+            ("x0(t) = k1(t)·θ", "[" + ", ".join(f"{fmt(a)} .. {fmt(b)}" for a, b in x0) + "]"),
+            ("λ_min(L_B + L_Bᵀ)", span(d["sym_min_eig"], 6)),
+            ("identity residual (max)", f"{d['identity_residual']:.2e}"),
+            (
+                "Assumption 2",
+                verdict(ok, "at every sample" if ok else "at some t", "holds" if ok else "fails"),
+            ),
+        ]
+        notes = []
+        if not ok:
+            ts = ", ".join(f"{x:.4g}" for x in d["assumption_fails_at"])
+            notes.append(
+                f"Assumption 2 fails at t = {ts}, ...; Lemma 1's design is used as given "
+                "(certify the uniform bound Λ₂ before trusting it)"
+            )
+        if title is None:
+            title = f"Lemma 1 at every instant, θ = {d['theta']}, ΔC = {d['margin']:g}"
+        return Table.build(title, ("quantity", "range over the domain"), rows, notes)
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
 
     def to_dict(self) -> dict:
         """The design summarised over a sample of the domain, as a JSON-ready mapping.
