@@ -7,460 +7,34 @@ parameters as a table and a re-run command."""
 
 from __future__ import annotations
 
-import base64
-import csv
-import io
-import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
-from markupsafe import Markup, escape
 
 from ntc_design.certify.format import package_versions
 
-from ..certify import certify, verify_file, write_certificate
+from ..certify import CertifyResult, certify, verify_file, write_certificate
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
-from ..errors import InputError, require_number, require_positive
-from ..files import parse_topology
-from ..model import SwitchingTopology, Topology
-from ..outputs import check_output_file, write_atomic
-from ..rows import Table as RowsTable
+from ..errors import InputError
+from ..model import SwitchingTopology
+from ..outputs import check_output_file
 from ..rows import fmt
 from ..simulate.result import MeanSquareBand
 from . import figures
-
-REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
-
-
-@dataclass
-class RunData:
-    """A simulation run as ``ntc report`` reads it: summary.json, the curves table and the
-    paths, checked against each other once by :func:`load_run`."""
-
-    path: Path
-    summary: dict
-    t: np.ndarray
-    table: dict[str, np.ndarray]
-    npz: dict[str, np.ndarray]
-
-    @property
-    def labels(self) -> list[str]:
-        """The agent labels, as text."""
-        return [str(a) for a in self.npz["labels"]]
-
-    @property
-    def theta(self) -> np.ndarray:
-        """The target θ of the run."""
-        return np.asarray(self.summary["parameters"]["theta"], dtype=float)
-
-    def topology(self) -> Topology | SwitchingTopology:
-        """The run's topology (or switching set), rebuilt from summary.json.
-
-        Returns
-        -------
-        Topology or SwitchingTopology
-
-        Raises
-        ------
-        InputError
-            A malformed topology or schedule, or a run over a time-varying topology.
-        """
-        where = f"{self.path}/summary.json"
-        tops = {}
-        for k, v in self.summary["topologies"].items():
-            if not isinstance(v, dict):
-                raise InputError(
-                    f"{where}: topologies.{k}: expected a topology; {_rerun(self.path)}"
-                )
-            tops[k] = Topology.from_data(parse_topology(v, f"{where}: topologies.{k}"))
-        sched = self.summary["parameters"].get("schedule")
-        if sched is not None:  # a switching run: [{mode, duration}, ...] over the topologies
-            ok = isinstance(sched, list) and all(
-                isinstance(s, dict)
-                and isinstance(s.get("mode"), str)
-                and isinstance(s.get("duration"), (int, float))
-                and not isinstance(s.get("duration"), bool)
-                for s in sched
-            )
-            if not ok:
-                raise InputError(
-                    f"{where}: parameters.schedule: expected a list of {{mode, duration}}; "
-                    f"{_rerun(self.path)}"
-                )
-            return SwitchingTopology(
-                tops,
-                tuple((s["mode"], float(s["duration"])) for s in sched),
-                source=f"{where}: parameters",
-            )
-        if len(tops) != 1:
-            raise InputError(
-                f"{self.path}: a run over a topology given as functions of t has no single topology to certify"
-            )
-        return next(iter(tops.values()))
-
-    def ms(self, kind: str) -> np.ndarray | None:
-        """The per-agent E‖x_i − θ‖² curves of one kind.
-
-        Parameters
-        ----------
-        kind : str
-            ``mc``, ``lo``, ``hi`` or ``exact``: the column prefix in ms_error.csv.
-
-        Returns
-        -------
-        numpy.ndarray or None
-            Shape (save times, N); None when the run has no such curves.
-        """
-        cols = [f"{kind}_{a}" for a in self.labels]
-        if not all(c in self.table for c in cols):
-            return None
-        return np.column_stack([self.table[c] for c in cols])
-
-
-MAX_TEXT_BYTES = 256 * 2**20  # summary.json / ms_error.csv larger than this are refused
-#: A report draws every agent (topology figure, per-agent curves and tables): refused above.
-REPORT_MAX_AGENTS = 200
-NPZ_KEYS = ("t", "paths", "labels", "theta")
-
-
-def _rerun(d: Path) -> str:
-    return f"re-run: ntc simulate SCENARIO --out {d}"
-
-
-def _read_text(path: Path, d: Path) -> str:
-    try:
-        if path.stat().st_size > MAX_TEXT_BYTES:
-            raise InputError(f"{path}: larger than {MAX_TEXT_BYTES // 2**20} MiB; {_rerun(d)}")
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: unreadable ({exc.__class__.__name__}); {_rerun(d)}") from None
-
-
-def _read_npz(path: Path, d: Path) -> dict[str, np.ndarray]:
-    """paths.npz, refusing a corrupt, empty or oversized (decompression bomb) archive."""
-    import zipfile
-
-    from ..errors import format_bytes
-    from ..simulate.budget import MEMORY_FRACTION, available_memory
-
-    try:
-        with zipfile.ZipFile(path) as zf:
-            size = sum(i.file_size for i in zf.infolist())
-        limit = MEMORY_FRACTION * available_memory()
-        if size > limit:
-            raise InputError(
-                f"{path}: unpacks to {format_bytes(size)}, more than {format_bytes(limit)}; {_rerun(d)}"
-            )
-        with np.load(path, allow_pickle=False) as z:
-            missing = [k for k in NPZ_KEYS if k not in z.files]
-            if missing:
-                raise InputError(f"{path}: missing array {missing[0]!r}; {_rerun(d)}")
-            npz = {k: z[k] for k in z.files}
-    except InputError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - BadZipFile, EOFError, zlib.error, ValueError...
-        raise InputError(
-            f"{path}: not a readable .npz archive ({exc.__class__.__name__}); {_rerun(d)}"
-        ) from None
-    if npz["paths"].ndim != 3 or npz["t"].ndim != 1 or npz["labels"].ndim != 1:
-        raise InputError(f"{path}: arrays of the wrong shape; {_rerun(d)}")
-    if npz["labels"].dtype.kind not in "UO" and npz["labels"].size:
-        raise InputError(f"{path}: labels are not text; {_rerun(d)}")
-    for k in ("t", "paths", "theta"):
-        if npz[k].dtype.kind not in "fiu":
-            raise InputError(f"{path}: array {k!r} is not numeric; {_rerun(d)}")
-    return npz
-
-
-def load_run(directory: str | Path) -> RunData:
-    """Read a simulation output directory; name what is missing or malformed and how to
-    make it again.
-
-    Parameters
-    ----------
-    directory : str or Path
-        A folder written by ``ntc simulate --out``.
-
-    Returns
-    -------
-    RunData
-
-    Raises
-    ------
-    InputError
-        One line naming the file and what is wrong.
-    """
-    d = Path(directory)
-    if not d.is_dir():
-        raise InputError(f"{d}: no such directory; make it with: ntc simulate SCENARIO --out {d}")
-    for name in REQUIRED:
-        if not (d / name).is_file():
-            raise InputError(f"{d}: missing {name}; make it with: ntc simulate SCENARIO --out {d}")
-    try:
-        summary = json.loads(_read_text(d / "summary.json", d))
-    except (json.JSONDecodeError, RecursionError, ValueError) as exc:
-        raise InputError(
-            f"{d}/summary.json: not valid JSON ({exc.__class__.__name__}); {_rerun(d)}"
-        ) from None
-    if not isinstance(summary, dict):
-        raise InputError(f"{d}/summary.json: expected a mapping; {_rerun(d)}")
-    for key in ("parameters", "topologies"):
-        if not isinstance(summary.get(key), dict) or not summary[key]:
-            raise InputError(f"{d}/summary.json: missing field '{key}'; {_rerun(d)}")
-    for key in ("theta", "margin", "gain"):
-        if key not in summary["parameters"]:
-            raise InputError(f"{d}/summary.json: missing field 'parameters.{key}'; {_rerun(d)}")
-    rows = list(csv.reader(io.StringIO(_read_text(d / "ms_error.csv", d))))
-    if len(rows) < 2:
-        raise InputError(f"{d}/ms_error.csv: no data rows; {_rerun(d)}")
-    header = rows[0]
-    if not header or header[0] != "t" or len(set(header)) != len(header):
-        raise InputError(
-            f"{d}/ms_error.csv: the header must start with 't' (unique columns); {_rerun(d)}"
-        )
-    for k, r in enumerate(rows[1:], start=2):
-        if len(r) != len(header):
-            raise InputError(
-                f"{d}/ms_error.csv: line {k} has {len(r)} values, the header {len(header)}; {_rerun(d)}"
-            )
-    try:
-        data = np.array([[float(v) for v in r] for r in rows[1:]])
-    except ValueError:
-        raise InputError(f"{d}/ms_error.csv: a value is not a number; {_rerun(d)}") from None
-    if not np.all(np.isfinite(data[:, 0])) or np.any(np.diff(data[:, 0]) <= 0):
-        raise InputError(f"{d}/ms_error.csv: times are not finite and increasing; {_rerun(d)}")
-    npz = _read_npz(d / "paths.npz", d)
-    if npz["t"].shape[0] != data.shape[0]:
-        raise InputError(
-            f"{d}: paths.npz has {npz['t'].shape[0]} save times, ms_error.csv {data.shape[0]} "
-            f"(files from different runs?); {_rerun(d)}"
-        )
-    table = {h: data[:, k] for k, h in enumerate(header)}
-    run = RunData(d, summary, table["t"], table, npz)
-    _check_run(run)
-    return run
-
-
-def _check_run(run: RunData) -> None:
-    """The fields of summary.json and paths.npz that the report reads, checked against each
-    other before anything is written (certificate, figures, report.html): a damaged run, or
-    files from different runs, is one line naming the file and the field rather than a
-    TypeError or a failed reshape halfway through the figures."""
-    d = run.path
-    where = f"{d}/summary.json"
-
-    def bad(field: str, what: str, file: str = where) -> InputError:
-        return InputError(f"{file}: {field}: {what}; {_rerun(d)}")
-
-    p = run.summary["parameters"]
-    theta = p["theta"]
-    if not isinstance(theta, list) or not theta:
-        raise bad("parameters.theta", "expected a list of numbers")
-    try:
-        for k, v in enumerate(theta):
-            require_number(f"parameters.theta[{k}]", v)
-        require_positive("parameters.margin", p["margin"])
-    except InputError as exc:
-        raise InputError(f"{where}: {exc}; {_rerun(d)}") from None
-    if not isinstance(p["gain"], str):
-        raise bad("parameters.gain", "expected an expression in t (text)")
-    from ..gain import parse_gain
-
-    try:
-        parse_gain(p["gain"])
-    except InputError as exc:  # "gain: ..." from the parser
-        raise InputError(f"{where}: parameters.{exc}; {_rerun(d)}") from None
-    for key in ("noise", "time_varying"):
-        if p.get(key) is not None and not isinstance(p[key], dict):
-            raise bad(f"parameters.{key}", "expected a mapping")
-    for key in ("run", "sample_paths"):
-        if not isinstance(run.summary.get(key, {}), dict):
-            raise bad(key, "expected a mapping")
-    if not isinstance(run.summary.get("scenario", ""), str):
-        raise bad("scenario", "expected a file name")
-    sp_ = run.summary.get("sample_paths", {})
-    if sp_.get("stored"):
-        window = sp_.get("late_window")
-        numbers = [sp_.get(k) for k in SPREAD_KEYS] + (window if isinstance(window, list) else [])
-        if not (isinstance(window, list) and len(window) == 2) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in numbers
-        ):
-            raise bad("sample_paths", f"expected numbers {', '.join(SPREAD_KEYS)}, late_window")
-    top = run.topology()
-    labels = [str(a) for a in top.labels]
-    npz_file = f"{d}/paths.npz"
-    if run.labels != labels:
-        raise bad(
-            "labels",
-            f"{len(run.labels)} agents {_few(run.labels)}, summary.json's topology has "
-            f"{len(labels)} {_few(labels)} (files from different runs?)",
-            npz_file,
-        )
-    if len(theta) != top.dim:
-        raise bad("parameters.theta", f"{len(theta)} numbers, the topology has d = {top.dim}")
-    if np.asarray(run.npz["theta"]).shape != (top.dim,):
-        raise bad(
-            "theta", f"shape {np.asarray(run.npz['theta']).shape}, expected ({top.dim},)", npz_file
-        )
-    paths = run.npz["paths"]
-    if paths.size and paths.shape[1:] != (run.t.size, top.n * top.dim):
-        raise bad(
-            "paths",
-            f"shape {paths.shape}, expected (paths, {run.t.size} save times, N·d = "
-            f"{top.n * top.dim})",
-            npz_file,
-        )
-    if run.ms("mc") is None and run.ms("exact") is None:
-        raise bad(
-            "header",
-            f"no mc_<agent> or exact_<agent> column for every agent {_few(labels)}",
-            f"{d}/ms_error.csv",
-        )
-    if run.ms("mc") is not None and not all(
-        f"mc_{a}_{b}" in run.table for a in labels for b in ("lo", "hi")
-    ):
-        raise bad("header", "an mc_<agent> column without its _lo and _hi", f"{d}/ms_error.csv")
-
-
-SPREAD_KEYS = (
-    "late_fluctuation_mean",
-    "late_fluctuation_max",
-    "final_error_norm_mean",
+from .html import (
+    Figure,
+    RunSection,
+    Table,
+    figure_block,
+    html_table,
+    matrix,
+    rel,
+    render,
+    write_html,
 )
-
-
-def _few(labels: list[str]) -> str:
-    shown = ", ".join(labels[:4]) + (", …" if len(labels) > 4 else "")
-    return f"[{shown}]"
-
-
-# ------------------------------------------------------------------------- rendering
-
-
-@dataclass(frozen=True)
-class Table:
-    """A table for the templates: header texts and rows of cells; a cell is text or a
-    mapping ``{"matrix": rows}``, ``{"verdict": bool|None, "text": ...}``, ``{"mark": bool}``,
-    ``{"code": ...}``, ``{"lines": [...]}`` or ``{"href": ..., "text": ...}``."""
-
-    headers: tuple[str, ...]
-    rows: list
-    id: str | None = None
-
-
-@dataclass(frozen=True)
-class Figure:
-    id: str
-    caption: str
-    alt: str
-    png_b64: str
-    width_px: int
-    links: tuple[tuple[str, str], ...]
-    svg: Markup | None = None
-
-
-@dataclass(frozen=True)
-class RunSection:
-    key: str
-    title: str
-    rerun: str
-    designs: list
-    coupling: Figure
-    certificate: Table
-    checks: Table
-    gain: Table
-    gain_figure: Figure | None
-    theorems: Table
-    ms_figure: Figure
-    convergence_note: str
-    convergence: Table
-    topology_figures: list
-    path_figures: list
-    final: Table
-    spread: str
-    data_links: list
-    parameters: Table
-    versions: Table
-    interactive_agents: list
-
-    def toc(self) -> dict:
-        sub = [
-            ("design", "Protocol design"),
-            ("coupling", "Coupling δ"),
-            ("certificate", "Certificate"),
-            ("gain", "Gain"),
-            ("theorems", "Theorems"),
-            ("convergence", "Convergence"),
-            ("figures", "Topology and sample paths"),
-            ("final", "Final errors"),
-            ("data", "Data files"),
-            ("parameters", "Parameters"),
-        ]
-        return {
-            "id": self.key,
-            "title": self.title,
-            "children": [{"id": f"{self.key}-{k}", "title": t} for k, t in sub],
-        }
-
-
-ENV = Environment(
-    loader=PackageLoader("ntc_design.reports", "templates"),
-    autoescape=select_autoescape(["html"]),
-    undefined=StrictUndefined,
-    trim_blocks=True,
-    lstrip_blocks=True,
-)
-
-
-def render(template: str, **context) -> str:
-    """Render one of the package's Jinja2 templates (autoescaped)."""
-    return ENV.get_template(template).render(**context)
-
-
-def write_html(path: Path, text: str) -> None:
-    """Write atomically (:func:`ntc_design.outputs.write_atomic`: no temporary file is left
-    when the write fails)."""
-    write_atomic(path, text, option="report")
-
-
-def matrix(m, digits: int = 4) -> dict:
-    """A matrix cell: entries rounded for display (−0 shown as 0)."""
-    a = np.atleast_2d(np.asarray(m, dtype=float))
-    return {"matrix": [[f"{v + 0.0:.{digits}g}" for v in row] for row in a]}
-
-
-def rel(path: Path, base: Path) -> str:
-    """A link from a report in ``base`` to ``path`` (relative, forward slashes)."""
-    return Path(os.path.relpath(path, base)).as_posix()
-
-
-def _figure(
-    saved: figures.SavedFigure,
-    fid: str,
-    caption: str,
-    base: Path,
-    width_in: float,
-    interactive: bool = False,
-) -> Figure:
-    links = tuple((f.upper(), rel(p, base)) for f, p in saved.files.items())
-    svg = None
-    if interactive and "svg" in saved.files:
-        text = saved.files["svg"].read_text(encoding="utf-8")
-        svg = Markup(text[text.index("<svg") :])  # our own matplotlib output
-    return Figure(
-        fid,
-        caption,
-        caption,
-        base64.b64encode(saved.png).decode(),
-        int(round(width_in * 110)),
-        links,
-        svg,
-    )
-
+from .rundata import REPORT_MAX_AGENTS, RunData, load_run
 
 # --------------------------------------------------------------------------- sections
 
@@ -469,29 +43,6 @@ def _modes(des: ProtocolDesign | SwitchingDesign) -> dict[str, ProtocolDesign]:
     if isinstance(des, SwitchingDesign):
         return dict(des.modes)
     return {des.topology.name or "topology": des}
-
-
-def html_table(t: RowsTable, table_id: str | None = None) -> Table:
-    """A presentation table (:mod:`ntc_design.rows`) for the templates: the same labels
-    and cells as the terminal, each cell rendered once by :meth:`ntc_design.rows.Cell.html`.
-
-    Parameters
-    ----------
-    t : ntc_design.rows.Table
-        The table.
-    table_id : str, optional
-        An ``id`` for the table element.
-
-    Returns
-    -------
-    Table
-    """
-    rows = [tuple(Markup(c.html()) for c in r) for r in t.rows]
-    rows += [
-        (Markup(f'<span class="note">note: {escape(n)}</span>'), *[""] * (len(t.columns) - 1))
-        for n in t.notes
-    ]
-    return Table(t.columns, rows, table_id)
 
 
 def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[list, dict]:
@@ -685,6 +236,91 @@ def _time_varying(run: RunData, p: dict, figdir: Path) -> tuple:
     ]
 
 
+@dataclass(frozen=True)
+class _Certified:
+    """What a run's section shows about its design and certificate, computed before any
+    rendering: the fixed-topology result (designs per mode), the result whose certificate
+    and theorems are shown (the time-varying one for A(t)) and its figures."""
+
+    res: CertifyResult
+    cert_res: CertifyResult
+    tv_figs: list
+    cert_tab: Table
+    checks: Table
+    cert: dict
+
+
+def _certified(run: RunData, figdir: Path, base: Path) -> _Certified:
+    p = run.summary["parameters"]
+    res = certify(run.topology(), p["theta"], p["margin"], p["gain"])
+    # weights as expressions of t: the design tables show t = 0, the certificate and the
+    # theorems are the time-varying ones (uniform Λ₂), with two figures over a period
+    tv_res, tv_figs = _time_varying(run, p, figdir)
+    cert_res = tv_res or res
+    cert_tab, checks, cert = certificate_tables(cert_res, run.path / "certificate.json", base)
+    return _Certified(res, cert_res, tv_figs, cert_tab, checks, cert)
+
+
+def _band(run: RunData) -> MeanSquareBand | None:
+    """The Monte Carlo curves with their band, read back from ms_error.csv."""
+    if run.ms("mc") is None:
+        return None
+    return MeanSquareBand(
+        mean=run.ms("mc"),
+        lo=np.column_stack([run.table[f"mc_{a}_lo"] for a in run.labels]),
+        hi=np.column_stack([run.table[f"mc_{a}_hi"] for a in run.labels]),
+    )
+
+
+def _final_table(run: RunData, mc: MeanSquareBand | None, exact: np.ndarray | None) -> Table:
+    """E‖x_i − θ‖² per agent at T (Monte Carlo with its band, exact) and at t = 0."""
+    rows = []
+    for k, a in enumerate(run.labels):
+        if mc is not None and np.isfinite(mc.lo[-1, k]):
+            band = f"[{fmt(float(mc.lo[-1, k]), 5)}, {fmt(float(mc.hi[-1, k]), 5)}]"
+        else:
+            band = "none (fewer than 2 paths)" if mc is not None else "—"
+        start = exact[0, k] if exact is not None else (mc.mean[0, k] if mc is not None else None)
+        rows.append(
+            (
+                a,
+                fmt(float(mc.mean[-1, k]), 5) if mc is not None else "—",
+                band,
+                fmt(float(exact[-1, k]), 5) if exact is not None else "—",
+                fmt(float(start), 5) if start is not None else "—",
+            )
+        )
+    return Table(
+        ("agent", f"MC E‖x_i − θ‖² at t = {run.t[-1]:g}", "95% band", "exact", "at t = 0"), rows
+    )
+
+
+def _spread_text(run: RunData) -> str:
+    sp_ = run.summary.get("sample_paths", {})
+    if not sp_.get("stored"):
+        return ""
+    return (
+        f"Stored sample paths ({sp_['stored']}): over t ∈ [{sp_['late_window'][0]:g}, "
+        f"{sp_['late_window'][1]:g}] ‖x(t) − 1⊗θ‖ still moves by "
+        f"{sp_['late_fluctuation_mean']:.4f} on average (max {sp_['late_fluctuation_max']:.4f}); "
+        f"at t = {run.t[-1]:g} its mean is {sp_['final_error_norm_mean']:.4f} with spread "
+        f"{fmt(sp_['final_error_norm_spread'])}."
+    )
+
+
+def _data_links(run: RunData, figdir: Path, key: str, base: Path) -> list[tuple[str, str]]:
+    data = [
+        (f.name, rel(f, base))
+        for f in sorted(run.path.iterdir())
+        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.startswith(".")
+    ]
+    return data + [
+        (f.name, rel(f, base))
+        for f in sorted(figdir.glob(f"{key}_*"))
+        if f.suffix in (".png", ".svg", ".pdf")
+    ]
+
+
 def run_section(
     run: RunData,
     figdir: Path,
@@ -696,8 +332,38 @@ def run_section(
     fine: dict | None = None,
 ) -> tuple[RunSection, dict]:
     """One run's section of a report (figures written to ``figdir``, links relative to
-    ``base``), and the facts a summary table needs. ``fine`` optionally holds sample
-    paths at a finer decimation (``{"t", "paths"}``) for the states figure."""
+    ``base``), and the facts a summary table needs. Everything is computed first
+    (certificate, curves, tables), then drawn.
+
+    Parameters
+    ----------
+    run : RunData
+        The run, as :func:`load_run` reads it.
+    figdir : pathlib.Path
+        Where the figures are written.
+    title : str
+        The section's title.
+    key : str
+        A prefix for figure files and element ids.
+    base : pathlib.Path, optional
+        The folder links are relative to (default: the run's).
+    rerun : str, optional
+        The command shown to re-run it.
+    interactive : bool, optional
+        SVG figures with per-agent toggles.
+    fine : dict, optional
+        Sample paths at a finer decimation (``{"t", "paths"}``) for the states figure.
+
+    Returns
+    -------
+    (RunSection, dict)
+        The section and the facts (designs, certificate, verdicts, errors).
+
+    Raises
+    ------
+    InputError
+        More agents than a per-agent report draws.
+    """
     base = base or run.path
     p = run.summary["parameters"]
     top = run.topology()
@@ -707,23 +373,74 @@ def run_section(
             f"up to N = {REPORT_MAX_AGENTS}: use summary.json and ms_error_long.csv, and "
             "ntc certify for the certificate"
         )
-    res = certify(top, p["theta"], p["margin"], p["gain"])
-    designs, des_docs = design_tables(res.design)
-    # weights as expressions of t: the design tables show t = 0, the certificate and the
-    # theorems are the time-varying ones (uniform Λ₂), with two figures over a period
-    tv_res, tv_figs = _time_varying(run, p, figdir)
-    cert_res = tv_res or res
-    cert_tab, checks, cert = certificate_tables(cert_res, run.path / "certificate.json", base)
-    doc = cert_res.to_dict()
+    c = _certified(run, figdir, base)
+    designs, des_docs = design_tables(c.res.design)
+    doc = c.cert_res.to_dict()
+    mc, exact = _band(run), run.ms("exact")
+    conv_note, conv, conv_facts = convergence_table(
+        run, mc, exact, _average_rate(c.res.design, top)
+    )
+    figs = _run_figures(run, key, figdir, base, interactive, c, mc, exact, fine)
+    labels = run.labels
+    section = RunSection(
+        key=key,
+        title=title,
+        rerun=rerun
+        or f"ntc simulate {run.summary.get('scenario', 'SCENARIO')} --out {run.path} && ntc report {run.path}",
+        designs=designs,
+        coupling=figs["coupling"],
+        certificate=c.cert_tab,
+        checks=c.checks,
+        gain=html_table(c.cert_res.gain.table())
+        if c.cert_res.gain is not None
+        else Table(("condition", "holds", "reason"), [("no gain was given", "—", "")]),
+        gain_figure=figs["gain"],
+        theorems=html_table(theorem_table(c.cert_res.theorems)),
+        ms_figure=figs["ms"],
+        convergence_note=conv_note,
+        convergence=conv,
+        topology_figures=figs["topology"],
+        path_figures=figs["paths"],
+        final=_final_table(run, mc, exact),
+        spread=_spread_text(run),
+        data_links=_data_links(run, figdir, key, base),
+        parameters=parameter_table(p, len(labels), run.theta.size, run.summary.get("run", {})),
+        versions=Table(("package", "version"), sorted(package_versions().items())),
+        interactive_agents=[(a, f"{key}-ag{i}") for i, a in enumerate(labels)]
+        if interactive
+        else [],
+    )
+    facts = {
+        "designs": des_docs,
+        "certificate": c.cert,
+        "gain": doc["gain"],
+        "theorems": doc["theorems"],
+        "exact_first": exact[0].sum() if exact is not None else None,
+        "exact_last": exact[-1].sum() if exact is not None else None,
+        "exact_curve": exact.sum(axis=1) if exact is not None else None,
+        "mc_last": mc.mean[-1].sum() if mc is not None else None,
+        "sample_paths": run.summary.get("sample_paths", {}),
+        "T": float(run.t[-1]),
+        "convergence": conv_facts,
+    }
+    return section, facts
+
+
+def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, fine) -> dict:
+    """The section's figures, written to ``figdir``: coupling, topologies (and A(t),
+    schedule), mean-square error, a sample path, the gain."""
+    p = run.summary["parameters"]
+    top = run.topology()
     labels = run.labels
     segs = top.segments(float(run.t[-1])) if isinstance(top, SwitchingTopology) else None
-    modes = _modes(res.design)
+    gid = key if interactive else None
 
     def fig(f, stem: str, caption: str, width: float, fid: str) -> Figure:
-        return _figure(figures.save(f, figdir / stem), fid, caption, base, width, interactive)
+        return figure_block(figures.save(f, figdir / stem), fid, caption, base, width, interactive)
 
-    coupling = fig(
-        figures.coupling_figure([figures.coupling_curve(m) for m in modes.values()]),
+    out: dict = {}
+    out["coupling"] = fig(
+        figures.coupling_figure([figures.coupling_curve(m) for m in _modes(c.res.design).values()]),
         f"{key}_coupling",
         "Decay rate −max Re λ(−L_B(δ)) (left) and λ_min(L_B + L_Bᵀ)(δ) (right) against the "
         "coupling δ, with B_i and the informed agents fixed: Lemma 1's δ (circle) is sufficient, "
@@ -740,9 +457,9 @@ def run_section(
             figures.ONE_COLUMN,
             f"{key}-fig-topology-{name}",
         )
-        for name, m in modes.items()
+        for name, m in _modes(c.res.design).items()
     ]
-    for stem, caption, f in tv_figs:
+    for stem, caption, f in c.tv_figs:
         topo.append(fig(f, f"{key}_{stem}", caption, figures.TWO_COLUMN, f"{key}-fig-{stem}"))
     if isinstance(top, SwitchingTopology):
         topo.append(
@@ -755,30 +472,21 @@ def run_section(
                 f"{key}-fig-schedule",
             )
         )
-    mc = None
-    if run.ms("mc") is not None:
-        mc = MeanSquareBand(
-            mean=run.ms("mc"),
-            lo=np.column_stack([run.table[f"mc_{a}_lo"] for a in labels]),
-            hi=np.column_stack([run.table[f"mc_{a}_hi"] for a in labels]),
-        )
-    exact = run.ms("exact")
+    out["topology"] = topo
     what = " and ".join(
         w
         for w, x in (("Monte Carlo (solid, 95% band)", mc), ("exact moments (dashed)", exact))
         if x is not None
     )
-    ms_fig = fig(
-        figures.ms_error_figure(
-            run.t, mc, exact, labels, segments=segs, gid=key if interactive else None
-        ),
+    out["ms"] = fig(
+        figures.ms_error_figure(run.t, mc, exact, labels, segments=segs, gid=gid),
         f"{key}_ms_error",
         f"E‖x_i − θ‖² per agent, {what}"
         + ("; the strip under the axis shows the active mode." if segs else "."),
         figures.TWO_COLUMN,
         f"{key}-fig-ms",
     )
-    paths_fig = []
+    out["paths"] = []
     if fine is not None and fine["paths"].size:
         t_p, path0, dec = fine["t"], fine["paths"][0], "a finer decimation than the statistics"
     elif run.npz["paths"].size:
@@ -786,11 +494,9 @@ def run_section(
     else:
         t_p = None
     if t_p is not None:
-        paths_fig.append(
+        out["paths"].append(
             fig(
-                figures.states_figure(
-                    t_p, path0, run.theta, labels, segments=segs, gid=key if interactive else None
-                ),
+                figures.states_figure(t_p, path0, run.theta, labels, segments=segs, gid=gid),
                 f"{key}_states",
                 f"One sample path: the states of all agents per dimension, θ dashed; stored at "
                 f"{dec} ({t_p.size} points).",
@@ -798,9 +504,9 @@ def run_section(
                 f"{key}-fig-states",
             )
         )
-    gain_fig = None
+    out["gain"] = None
     try:
-        gain_fig = fig(
+        out["gain"] = fig(
             figures.gain_figure(p["gain"], float(run.t[-1])),
             f"{key}_gain",
             "The gain c(t) and its integrals ∫c (infinite: the cumulative effect needed for "
@@ -810,86 +516,7 @@ def run_section(
         )
     except InputError:
         pass  # a callable gain: nothing to plot
-    conv_note, conv, conv_facts = convergence_table(run, mc, exact, _average_rate(res.design, top))
-    rows = []
-    for k, a in enumerate(labels):
-        rows.append(
-            (
-                a,
-                fmt(float(mc.mean[-1, k]), 5) if mc is not None else "—",
-                f"[{fmt(float(mc.lo[-1, k]), 5)}, {fmt(float(mc.hi[-1, k]), 5)}]"
-                if mc is not None and np.isfinite(mc.lo[-1, k])
-                else ("none (fewer than 2 paths)" if mc is not None else "—"),
-                fmt(float(exact[-1, k]), 5) if exact is not None else "—",
-                fmt(float(exact[0, k]), 5)
-                if exact is not None
-                else (fmt(float(mc.mean[0, k]), 5) if mc is not None else "—"),
-            )
-        )
-    final = Table(
-        ("agent", f"MC E‖x_i − θ‖² at t = {run.t[-1]:g}", "95% band", "exact", "at t = 0"), rows
-    )
-    sp_ = run.summary.get("sample_paths", {})
-    spread = ""
-    if sp_.get("stored"):
-        spread = (
-            f"Stored sample paths ({sp_['stored']}): over t ∈ [{sp_['late_window'][0]:g}, {sp_['late_window'][1]:g}] "
-            f"‖x(t) − 1⊗θ‖ still moves by {sp_['late_fluctuation_mean']:.4f} on average (max {sp_['late_fluctuation_max']:.4f}); "
-            f"at t = {run.t[-1]:g} its mean is {sp_['final_error_norm_mean']:.4f} with spread {fmt(sp_['final_error_norm_spread'])}."
-        )
-    data = [
-        (f.name, rel(f, base))
-        for f in sorted(run.path.iterdir())
-        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.startswith(".")
-    ]
-    data += [
-        (f.name, rel(f, base))
-        for f in sorted(figdir.glob(f"{key}_*"))
-        if f.suffix in (".png", ".svg", ".pdf")
-    ]
-    versions = package_versions()
-    section = RunSection(
-        key=key,
-        title=title,
-        rerun=rerun
-        or f"ntc simulate {run.summary.get('scenario', 'SCENARIO')} --out {run.path} && ntc report {run.path}",
-        designs=designs,
-        coupling=coupling,
-        certificate=cert_tab,
-        checks=checks,
-        gain=html_table(cert_res.gain.table())
-        if cert_res.gain is not None
-        else Table(("condition", "holds", "reason"), [("no gain was given", "—", "")]),
-        gain_figure=gain_fig,
-        theorems=html_table(theorem_table(cert_res.theorems)),
-        ms_figure=ms_fig,
-        convergence_note=conv_note,
-        convergence=conv,
-        topology_figures=topo,
-        path_figures=paths_fig,
-        final=final,
-        spread=spread,
-        data_links=data,
-        parameters=parameter_table(p, len(labels), run.theta.size, run.summary.get("run", {})),
-        versions=Table(("package", "version"), sorted(versions.items())),
-        interactive_agents=[(a, f"{key}-ag{i}") for i, a in enumerate(labels)]
-        if interactive
-        else [],
-    )
-    facts = {
-        "designs": des_docs,
-        "certificate": cert,
-        "gain": doc["gain"],
-        "theorems": doc["theorems"],
-        "exact_first": exact[0].sum() if exact is not None else None,
-        "exact_last": exact[-1].sum() if exact is not None else None,
-        "exact_curve": exact.sum(axis=1) if exact is not None else None,
-        "mc_last": mc.mean[-1].sum() if mc is not None else None,
-        "sample_paths": sp_,
-        "T": float(run.t[-1]),
-        "convergence": conv_facts,
-    }
-    return section, facts
+    return out
 
 
 def write_report(directory: str | Path, interactive: bool = False) -> Path:

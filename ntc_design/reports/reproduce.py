@@ -21,9 +21,12 @@ import numpy as np
 from .. import paper
 from ..files import jsonable
 from ..outputs import write_atomic
+from ..rows import fmt
 from ..simulate import NoiseModel, simulate
 from ..simulate.scenario import write_outputs
-from . import report as rp
+from .html import Table, render, write_html
+from .report import run_section
+from .rundata import load_run
 
 RUNS = (
     ("g1", "G1 (fixed), c = 1/(1+t): mean square and almost sure", "g1", paper.GAIN),
@@ -56,7 +59,7 @@ def summary_rows(facts: dict) -> tuple[list, bool]:
     rows.append(
         ("G1: C", f"{st['G1']['C']:.4f}", f"{g1d['C']:.4f}", _close(g1d["C"], st["G1"]["C"]))
     )
-    rows.append(("G1: V1", rp.fmt(st["G1"]["V1"]), rp.fmt(g1d["V1"]), g1d["V1"] == st["G1"]["V1"]))
+    rows.append(("G1: V1", fmt(st["G1"]["V1"]), fmt(g1d["V1"]), g1d["V1"] == st["G1"]["V1"]))
     for mode in ("G1", "G2", "G3"):
         d = des[mode]
         rows.append(
@@ -70,16 +73,16 @@ def summary_rows(facts: dict) -> tuple[list, bool]:
         rows.append(
             (
                 f"{mode}: x0",
-                rp.fmt(st[mode]["x0"]),
-                rp.fmt([round(v, 4) for v in d["x0"]]),
+                fmt(st[mode]["x0"]),
+                fmt([round(v, 4) for v in d["x0"]]),
                 _close(d["x0"], st[mode]["x0"]),
             )
         )
         rows.append(
             (
                 f"{mode}: informed agents",
-                rp.fmt(st[mode]["informed"]),
-                rp.fmt(d["informed"]),
+                fmt(st[mode]["informed"]),
+                fmt(d["informed"]),
                 d["informed"] == st[mode]["informed"],
             )
         )
@@ -259,8 +262,8 @@ def reproduce_paper(
         fine = fine_paths(tops[topkey], gain, x0, T, dt, stepping, seed)
         np.savez_compressed(out / key / "paths_fine.npz", **fine)
         say(f"{key}: certificate, figures and report section")
-        body, f = rp.run_section(
-            rp.load_run(out / key),
+        body, f = run_section(
+            load_run(out / key),
             out / "figures",
             title,
             key,
@@ -273,7 +276,7 @@ def reproduce_paper(
         facts[key] = f
     rows, all_ok = summary_rows(facts)
     wall = time.perf_counter() - t0
-    summary = rp.Table(
+    summary = Table(
         ("quantity", "paper", "ntc-design", "match"),
         [(a, b, c, {"mark": m}) for a, b, c, m in rows],
     )
@@ -291,7 +294,7 @@ def reproduce_paper(
     ]
     toc = [{"id": "summary", "title": "Summary: the paper beside ntc-design", "children": []}]
     toc += [s.toc() for s in sections]
-    html = rp.render(
+    html = render(
         "reproduce.html",
         title="ntc-design: the paper's numerical section reproduced",
         intro=intro,
@@ -312,7 +315,7 @@ def reproduce_paper(
         out / "paper_summary.json", json.dumps(jsonable(doc), indent=1, ensure_ascii=False) + "\n"
     )
     path = out / "report.html"
-    rp.write_html(path, html)
+    write_html(path, html)
     return path, all_ok, wall
 
 

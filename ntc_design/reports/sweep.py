@@ -12,18 +12,11 @@ import math
 from pathlib import Path
 
 import numpy as np
-from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from ..errors import InputError
 from ..outputs import check_output_file, write_atomic
 from ..rows import fmt
-
-ENV = Environment(
-    loader=PackageLoader("ntc_design.reports", "templates"),
-    autoescape=select_autoescape(["html"]),
-    undefined=StrictUndefined,
-)
-
+from .html import render
 
 MAX_CURVES = 200  # curves drawn in the overlay (every point is still in curves.parquet)
 MAX_ROWS = 2000  # rows of the HTML table (every point is in results.csv)
@@ -248,9 +241,13 @@ def write_sweep_report(directory: str | Path) -> Path:
         ),
     ]
     rows = [[_cell(r[c]) for c in cols] for _, r in res.head(MAX_ROWS).iterrows()]
-    html = ENV.get_template("sweep.html").render(
+    html = render(
+        "sweep.html",
         title=f"ntc-design sweep: {man.get('name', d.name)}",
-        toc=[{"id": "final", "title": "Final mean-square error"}, {"id": "points", "title": "Points"}],
+        toc=[
+            {"id": "final", "title": "Final mean-square error"},
+            {"id": "points", "title": "Points"},
+        ],
         interactive=False,
         n_points=len(res),
         keys=keys,
