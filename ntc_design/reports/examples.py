@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import paper
-from ..design import design
+from ..design import SwitchingDesign, design
 from ..simulate import NoiseModel, simulate
-from . import figures
+from . import figures, graph_figure, style
 from .reproduce import fine_paths
 
 T_END = 100.0
@@ -61,13 +61,14 @@ def regenerate(out: Path, paths: int = paper.PATHS) -> list[Path]:
     written = []
 
     def save(fig, stem: str) -> None:
-        written.append(figures.save(fig, out / stem).files["png"])
+        written.append(style.save(fig, out / stem).files["png"])
 
     x0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3.0, 3.0, size=21)
     sw = paper.switching()
     sd = design(sw, paper.THETA, 0.1)
+    assert isinstance(sd, SwitchingDesign)
     for name, d in sd.modes.items():
-        save(figures.topology_figure(d.topology, d.informed, d.B), f"{name.lower()}_topology")
+        save(graph_figure.topology_figure(d.topology, d.informed, d.B), f"{name.lower()}_topology")
     save(
         figures.coupling_figure([figures.coupling_curve(d) for d in sd.modes.values()]),
         "coupling",

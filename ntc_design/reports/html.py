@@ -15,7 +15,7 @@ from markupsafe import Markup, escape
 
 from ..outputs import write_atomic
 from ..rows import Table as RowsTable
-from . import figures
+from . import style
 
 # ------------------------------------------------------------------------- rendering
 
@@ -118,7 +118,7 @@ def rel(path: Path, base: Path) -> str:
 
 
 def figure_block(
-    saved: figures.SavedFigure,
+    saved: style.SavedFigure,
     fid: str,
     caption: str,
     base: Path,

@@ -22,7 +22,8 @@ from ..model import SwitchingTopology
 from ..outputs import check_output_file
 from ..rows import fmt
 from ..simulate.result import MeanSquareBand
-from . import figures
+from ..timevarying import TimeVaryingDesign
+from . import figures, graph_figure, style
 from .html import (
     Figure,
     RunSection,
@@ -176,7 +177,7 @@ def _flatten(prefix: str, v, out: list) -> None:
 
 
 def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
-    rows = []
+    rows: list[tuple] = []
     for k, v in p.items():
         if k == "initial" and isinstance(v, list) and len(v) == n * d:
             rows.append(("initial x(0) (agents × d)", matrix(np.reshape(v, (n, d)))))
@@ -219,6 +220,7 @@ def _time_varying(run: RunData, p: dict, figdir: Path) -> tuple:
         noise_f=f if isinstance(f, (int, float, list)) else 0.3,
     )
     r = res.certificate["results"]["time_varying"]
+    assert isinstance(res.design, TimeVaryingDesign)  # certify() of an ExpressionTopology
     return res, [
         (
             "lambda_min",
@@ -243,6 +245,7 @@ class _Certified:
     and theorems are shown (the time-varying one for A(t)) and its figures."""
 
     res: CertifyResult
+    design: ProtocolDesign | SwitchingDesign  # res's (a run's topology is never A(t) here)
     cert_res: CertifyResult
     tv_figs: list
     cert_tab: Table
@@ -258,15 +261,18 @@ def _certified(run: RunData, figdir: Path, base: Path) -> _Certified:
     tv_res, tv_figs = _time_varying(run, p, figdir)
     cert_res = tv_res or res
     cert_tab, checks, cert = certificate_tables(cert_res, run.path / "certificate.json", base)
-    return _Certified(res, cert_res, tv_figs, cert_tab, checks, cert)
+    des = res.design
+    assert isinstance(des, (ProtocolDesign, SwitchingDesign))  # RunData.topology() is not A(t)
+    return _Certified(res, des, cert_res, tv_figs, cert_tab, checks, cert)
 
 
 def _band(run: RunData) -> MeanSquareBand | None:
     """The Monte Carlo curves with their band, read back from ms_error.csv."""
-    if run.ms("mc") is None:
+    mean = run.ms("mc")
+    if mean is None:
         return None
     return MeanSquareBand(
-        mean=run.ms("mc"),
+        mean=mean,
         lo=np.column_stack([run.table[f"mc_{a}_lo"] for a in run.labels]),
         hi=np.column_stack([run.table[f"mc_{a}_hi"] for a in run.labels]),
     )
@@ -374,11 +380,11 @@ def run_section(
             "ntc certify for the certificate"
         )
     c = _certified(run, figdir, base)
-    designs, des_docs = design_tables(c.res.design)
+    designs, des_docs = design_tables(c.design)
     doc = c.cert_res.to_dict()
     mc, exact = _band(run), run.ms("exact")
     conv_note, conv, conv_facts = convergence_table(
-        run, mc, exact, _average_rate(c.res.design, top)
+        run, mc, exact, _average_rate(c.design, top)
     )
     figs = _run_figures(run, key, figdir, base, interactive, c, mc, exact, fine)
     labels = run.labels
@@ -436,31 +442,31 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
     gid = key if interactive else None
 
     def fig(f, stem: str, caption: str, width: float, fid: str) -> Figure:
-        return figure_block(figures.save(f, figdir / stem), fid, caption, base, width, interactive)
+        return figure_block(style.save(f, figdir / stem), fid, caption, base, width, interactive)
 
     out: dict = {}
     out["coupling"] = fig(
-        figures.coupling_figure([figures.coupling_curve(m) for m in _modes(c.res.design).values()]),
+        figures.coupling_figure([figures.coupling_curve(m) for m in _modes(c.design).values()]),
         f"{key}_coupling",
         "Decay rate −max Re λ(−L_B(δ)) (left) and λ_min(L_B + L_Bᵀ)(δ) (right) against the "
         "coupling δ, with B_i and the informed agents fixed: Lemma 1's δ (circle) is sufficient, "
         "δ_H and δ_S (triangle, square) are the exact thresholds and the star the best δ.",
-        figures.TWO_COLUMN,
+        style.TWO_COLUMN,
         f"{key}-fig-coupling",
     )
     topo = [
         fig(
-            figures.topology_figure(m.topology, m.informed, m.B),
+            graph_figure.topology_figure(m.topology, m.informed, m.B),
             f"{key}_topology_{name}",
             f"Ĝ of {name}: the agents and, outside their circle, vertex 0 (the external signal "
             "x0) with its edges to the informed agents.",
-            figures.ONE_COLUMN,
+            style.ONE_COLUMN,
             f"{key}-fig-topology-{name}",
         )
-        for name, m in _modes(c.res.design).items()
+        for name, m in _modes(c.design).items()
     ]
     for stem, caption, f in c.tv_figs:
-        topo.append(fig(f, f"{key}_{stem}", caption, figures.TWO_COLUMN, f"{key}-fig-{stem}"))
+        topo.append(fig(f, f"{key}_{stem}", caption, style.TWO_COLUMN, f"{key}-fig-{stem}"))
     if isinstance(top, SwitchingTopology):
         topo.append(
             fig(
@@ -468,7 +474,7 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
                 f"{key}_schedule",
                 f"The switching schedule, one period of {top.period:g}; it repeats up to "
                 f"T = {run.t[-1]:g}.",
-                figures.ONE_COLUMN,
+                style.ONE_COLUMN,
                 f"{key}-fig-schedule",
             )
         )
@@ -483,7 +489,7 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
         f"{key}_ms_error",
         f"E‖x_i − θ‖² per agent, {what}"
         + ("; the strip under the axis shows the active mode." if segs else "."),
-        figures.TWO_COLUMN,
+        style.TWO_COLUMN,
         f"{key}-fig-ms",
     )
     out["paths"] = []
@@ -500,7 +506,7 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
                 f"{key}_states",
                 f"One sample path: the states of all agents per dimension, θ dashed; stored at "
                 f"{dec} ({t_p.size} points).",
-                figures.TWO_COLUMN,
+                style.TWO_COLUMN,
                 f"{key}-fig-states",
             )
         )
@@ -511,7 +517,7 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
             f"{key}_gain",
             "The gain c(t) and its integrals ∫c (infinite: the cumulative effect needed for "
             "consensus) and ∫c² (finite: the noise energy that almost-sure consensus needs).",
-            figures.TWO_COLUMN,
+            style.TWO_COLUMN,
             f"{key}-fig-gain",
         )
     except InputError:

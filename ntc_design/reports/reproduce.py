@@ -14,12 +14,14 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from .. import paper
 from ..files import jsonable
+from ..model import SwitchingTopology, Topology
 from ..outputs import write_atomic
 from ..rows import fmt
 from ..simulate import NoiseModel, simulate
@@ -172,6 +174,7 @@ def fine_paths(top, gain: str, x0: np.ndarray, T: float, dt: float, stepping: st
         block_size=2,
         store_paths=2,
     )
+    assert res.mc is not None  # method="mc"
     return {"t": res.save_times, "paths": res.mc.paths}
 
 
@@ -232,46 +235,19 @@ def reproduce_paper(
     """
     t0 = time.perf_counter()
     out = Path(out_dir)
-    tops = {"g1": paper.g1(), "switching": paper.switching()}
+    tops: dict[str, Topology | SwitchingTopology] = {
+        "g1": paper.g1(),
+        "switching": paper.switching(),
+    }
     x0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3.0, 3.0, size=21)
     rerun = rerun_command(out, T, paths, dt, stepping, workers, seed)
     sections, facts = [], {}
-    say = status or (lambda text: None)
+    say: Callable[[str], None] = status or (lambda text: None)
     for key, title, topkey, gain in RUNS:
-        say(f"{key}: simulating ({paths} paths, T = {T:g})")
-        res = simulate(
-            tops[topkey],
-            paper.THETA,
-            gain=gain,
-            noise=NoiseModel(paper.SIGMA, paper.F_SCALE),
-            initial=x0,
-            T=T,
-            dt=dt,
-            paths=paths,
-            seed=seed,
-            save_every=T / 1000,
-            stepping=stepping,
-            ds=dt,
-            workers=workers,
-            progress=(lambda done, total, key=key: progress(key, done, total))
-            if progress
-            else None,
-        )
-        write_outputs(res, out / key, {"scenario": f"ntc reproduce paper (run {key})"})
-        say(f"{key}: sample paths at {FINE_POINTS} save times")
-        fine = fine_paths(tops[topkey], gain, x0, T, dt, stepping, seed)
-        np.savez_compressed(out / key / "paths_fine.npz", **fine)
-        say(f"{key}: certificate, figures and report section")
-        body, f = run_section(
-            load_run(out / key),
-            out / "figures",
-            title,
-            key,
-            base=out,
-            rerun=rerun,
-            interactive=interactive,
-            fine=fine,
-        )
+        body, f = _run_one(
+            key, title, tops[topkey], gain, out, x0, rerun, say, progress, interactive,
+            T=T, dt=dt, paths=paths, seed=seed, stepping=stepping, workers=workers,
+        )  # fmt: skip
         sections.append(body)
         facts[key] = f
     rows, all_ok = summary_rows(facts)
@@ -280,18 +256,7 @@ def reproduce_paper(
         ("quantity", "paper", "ntc-design", "match"),
         [(a, b, c, {"mark": m}) for a, b, c, m in rows],
     )
-    intro = [
-        f"The paper's Section 5 reproduced: {paths} sample paths, Euler–Maruyama with "
-        + (
-            f"steps uniform in the intrinsic time s = ∫c dt (ds = {dt:g}, the paper's dt at t = 0)"
-            if stepping == "intrinsic"
-            else f"dt = {dt:g}"
-        )
-        + f", T = {T:g}, σ = {paper.SIGMA}, f(x) = {paper.F_SCALE}x, θ = {paper.THETA}, x(0) uniform on [-3, 3] (seed 1), "
-        f"Monte Carlo seed {seed}. Wall time {wall:.0f} s.",
-        "G3 breaks Assumption 2 as stated (agents 4 and 7 are not in-degree-dominated and receive no antagonistic edge); "
-        "the paper's δ = 3.1 is Lemma 1's C taken over U, and the certificate proves what Theorems 3-4 use.",
-    ]
+    intro = _intro(paths, dt, stepping, T, seed, wall)
     toc = [{"id": "summary", "title": "Summary: the paper beside ntc-design", "children": []}]
     toc += [s.toc() for s in sections]
     html = render(
@@ -317,6 +282,61 @@ def reproduce_paper(
     path = out / "report.html"
     write_html(path, html)
     return path, all_ok, wall
+
+
+def _run_one(key, title, top, gain, out, x0, rerun, say, progress, interactive, **o):
+    """One of the paper's runs: simulate, store, sample paths, then its report section."""
+    T, dt, paths, seed, stepping, workers = (
+        o["T"], o["dt"], o["paths"], o["seed"], o["stepping"], o["workers"]
+    )  # fmt: skip
+    say(f"{key}: simulating ({paths} paths, T = {T:g})")
+    res = simulate(
+        top,
+        paper.THETA,
+        gain=gain,
+        noise=NoiseModel(paper.SIGMA, paper.F_SCALE),
+        initial=x0,
+        T=T,
+        dt=dt,
+        paths=paths,
+        seed=seed,
+        save_every=T / 1000,
+        stepping=stepping,
+        ds=dt,
+        workers=workers,
+        progress=partial(progress, key) if progress else None,
+    )
+    write_outputs(res, out / key, {"scenario": f"ntc reproduce paper (run {key})"})
+    say(f"{key}: sample paths at {FINE_POINTS} save times")
+    fine = fine_paths(top, gain, x0, T, dt, stepping, seed)
+    np.savez_compressed(out / key / "paths_fine.npz", **fine)
+    say(f"{key}: certificate, figures and report section")
+    body, f = run_section(
+        load_run(out / key),
+        out / "figures",
+        title,
+        key,
+        base=out,
+        rerun=rerun,
+        interactive=interactive,
+        fine=fine,
+    )
+    return body, f
+
+
+def _intro(paths, dt, stepping, T, seed, wall) -> list[str]:
+    return [
+        f"The paper's Section 5 reproduced: {paths} sample paths, Euler–Maruyama with "
+        + (
+            f"steps uniform in the intrinsic time s = ∫c dt (ds = {dt:g}, the paper's dt at t = 0)"
+            if stepping == "intrinsic"
+            else f"dt = {dt:g}"
+        )
+        + f", T = {T:g}, σ = {paper.SIGMA}, f(x) = {paper.F_SCALE}x, θ = {paper.THETA}, x(0) uniform on [-3, 3] (seed 1), "
+        f"Monte Carlo seed {seed}. Wall time {wall:.0f} s.",
+        "G3 breaks Assumption 2 as stated (agents 4 and 7 are not in-degree-dominated and receive no antagonistic edge); "
+        "the paper's δ = 3.1 is Lemma 1's C taken over U, and the certificate proves what Theorems 3-4 use.",
+    ]
 
 
 __all__ = [

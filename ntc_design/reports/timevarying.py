@@ -8,12 +8,11 @@
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt
 import numpy as np
 
 from ..timevarying import TimeVaryingDesign
-from . import figures
-
-plt = figures.plt
+from . import style
 
 
 def lambda_min_figure(
@@ -47,13 +46,13 @@ def lambda_min_figure(
     lap = batch.lap_b(des.structure)
     lam = np.linalg.eigvalsh(lap + np.swapaxes(lap, 1, 2))[:, 0]
     fig, ax = plt.subplots(figsize=(7.5, 3.6))
-    ax.plot(ts, lam, color=figures.BLUE, lw=1.4, label="λ_min(L_B(t) + L_B(t)ᵀ), sampled")
+    ax.plot(ts, lam, color=style.BLUE, lw=1.4, label="λ_min(L_B(t) + L_B(t)ᵀ), sampled")
     if intervals:
         xs = [q[0] for q in intervals] + [intervals[-1][1]]
         ys = [q[2] for q in intervals] + [intervals[-1][2]]
         ax.step(xs, ys, where="post", color="#888888", lw=0.8, label="certified on each interval")
     if lambda2 is not None:
-        ax.axhline(lambda2, color=figures.RED, ls="--", lw=1.2, label=f"Λ₂ = {lambda2:.4g}")
+        ax.axhline(lambda2, color=style.RED, ls="--", lw=1.2, label=f"Λ₂ = {lambda2:.4g}")
     ax.set_xlabel("t")
     ax.legend(fontsize=8, loc="best")
     ax.grid(alpha=0.3)
@@ -95,7 +94,7 @@ def weights_figure(des: TimeVaryingDesign, samples: int = 1000):
         ax.legend(fontsize=7, ncol=6, loc="upper right")
         ax.grid(alpha=0.3)
     batch = des.at(ts)
-    axes[-1].plot(ts, batch.delta, color=figures.RED, lw=1.2, label="δ(t) = C(t) + ΔC")
+    axes[-1].plot(ts, batch.delta, color=style.RED, lw=1.2, label="δ(t) = C(t) + ΔC")
     axes[-1].set_ylabel("δ(t)")
     axes[-1].set_xlabel("t")
     axes[-1].legend(fontsize=8)
