@@ -325,6 +325,118 @@ def ms_error_figure(
         ax.set_yscale("log")
         ax.set_ylabel(r"$E\,\|x_i - \theta\|^2$")
         (tl if tl is not None else ax).set_xlabel("$t$")
+        handles = _ms_legend(labels, mc is not None, exact is not None)
+        if tl is not None:
+            handles += mode_timeline(tl, segments)
+        if title:
+            fig.suptitle(title)
+        fig.legend(
+            handles=handles, loc="outside lower center", ncol=min(len(handles), 5), frameon=False
+        )
+    return fig
+
+
+def _ms_legend(labels, with_mc: bool, with_exact: bool) -> list[Artist]:
+    """One entry per agent (colour and marker), then what solid, band and dashed mean."""
+    handles: list[Artist] = [
+        Line2D(
+            [],
+            [],
+            color=agent_style(i).colour,
+            marker=agent_style(i).marker,
+            markersize=3,
+            label=f"agent {a}",
+        )
+        for i, a in enumerate(labels)
+    ]
+    if with_mc:
+        handles.append(Line2D([], [], color="0.3", lw=1.0, label="Monte Carlo mean (solid)"))
+        handles.append(Patch(color="0.3", alpha=0.25, label="Monte Carlo 95% band"))
+    if with_exact:
+        handles.append(
+            Line2D([], [], color="0.3", lw=1.1, ls=(0, (4, 2)), label="exact moments (dashed)")
+        )
+    return handles
+
+
+def ms_error_figure(
+    t,
+    mc: MeanSquareBand | None,
+    exact: np.ndarray | None,
+    labels,
+    title: str | None = None,
+    segments=None,
+    width: float = TWO_COLUMN,
+    gid: str | None = None,
+):
+    """E‖x_i − θ‖² per agent on a log scale: Monte Carlo mean (solid) with its 95% band,
+    exact moments (dashed); agents differ by colour and marker.
+
+    Parameters
+    ----------
+    t
+        Save times (S,).
+    mc
+        The Monte Carlo mean and band, arrays (S, N) (a
+        :class:`~ntc_design.simulate.result.MonteCarloCurves` will do), or None.
+    exact
+        Exact E‖x_i − θ‖² (S, N), or None.
+    labels
+        Agent labels.
+    title
+        Optional short title.
+    segments
+        Switching segments for the timeline, or None.
+    width
+        Figure width in inches.
+    gid
+        When given, agent i's artists get SVG ids ``{gid}-ag{i}-…`` (for toggling).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    floor = 1e-12
+    with paper_style():
+        fig, (ax,), tl = _time_axes(1, segments, width, 3.0)
+        for i in range(len(labels)):
+            s = agent_style(i)
+            tag = f"{gid}-ag{i}-" if gid else None
+            if mc is not None:
+                ax.plot(
+                    t,
+                    np.maximum(mc.mean[:, i], floor),
+                    gid=tag and tag + "mc",
+                    color=s.colour,
+                    lw=1.0,
+                    marker=s.marker,
+                    markersize=3,
+                    markevery=markevery(i, t.size),
+                )
+                ax.fill_between(
+                    t,
+                    np.maximum(mc.lo[:, i], floor),
+                    np.maximum(mc.hi[:, i], floor),
+                    color=s.colour,
+                    alpha=0.18,
+                    lw=0,
+                    gid=tag and tag + "band",
+                )
+            if exact is not None:
+                ax.plot(
+                    t,
+                    np.maximum(exact[:, i], floor),
+                    gid=tag and tag + "exact",
+                    color=s.colour,
+                    lw=1.1,
+                    ls=(0, (4, 2)),
+                    marker=None if mc is not None else s.marker,
+                    markersize=3,
+                    markevery=markevery(i, t.size),
+                )
+        ax.set_yscale("log")
+        ax.set_ylabel(r"$E\,\|x_i - \theta\|^2$")
+        (tl if tl is not None else ax).set_xlabel("$t$")
         agent_handles = [
             Line2D(
                 [],
