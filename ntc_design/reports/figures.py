@@ -21,258 +21,31 @@ written as vector PDF and SVG beside a 300-dpi PNG by :func:`save`.
 
 from __future__ import annotations
 
-import io
-import math
 from collections.abc import Sequence
-from contextlib import contextmanager
 from dataclasses import dataclass
-from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.artist import Artist  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.patches import Circle, FancyArrowPatch, Patch  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 
-from ..linalg import Definiteness, classify  # noqa: E402
-from ..model import Topology  # noqa: E402
 from ..simulate.result import MeanSquareBand  # noqa: E402
-
-ONE_COLUMN = 3.5  # inches (IEEE/Elsevier single column)
-TWO_COLUMN = 7.16  # inches (full text width)
-DPI = 300
-FORMATS = ("png", "svg", "pdf")
-BLUE, RED, GREEN = "#1f5fbf", "#c8322d", "#2a7d4f"
-MODE_COLOURS = ["#8ecae6", "#ffb703", "#90be6d", "#f4a3c4", "#bdb2ff", "#cdb4db"]
-_LINESTYLES = ("-", "--", "-.", ":")
-_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">")
-RC = {
-    "font.size": 8,
-    "axes.labelsize": 9,
-    "axes.titlesize": 9,
-    "legend.fontsize": 8,
-    "xtick.labelsize": 8,
-    "ytick.labelsize": 8,
-    "lines.linewidth": 1.0,
-    "svg.fonttype": "none",  # text stays text in the SVG
-    "pdf.fonttype": 42,  # TrueType in the PDF (editable, journal-friendly)
-    "axes.spines.top": False,
-    "axes.spines.right": False,
-}
-
-
-@contextmanager
-def paper_style():
-    """matplotlib rc settings of every figure here."""
-    with plt.rc_context(RC):
-        yield
-
-
-@dataclass(frozen=True)
-class AgentStyle:
-    colour: tuple
-    linestyle: str
-    marker: str
-
-
-def agent_style(k: int) -> AgentStyle:
-    """Agent k's colour, line style and marker: no two of the first 40 agents share all
-    three, and neighbours differ in each."""
-    return AgentStyle(
-        plt.get_cmap("tab10")(k % 10), _LINESTYLES[k % 4], _MARKERS[(k + k // 10) % 10]
-    )
-
-
-def _markevery(k: int, n_points: int, count: int = 8):
-    """Markers spread over the curve, shifted per agent so that they do not pile up."""
-    step = max(n_points // count, 1)
-    return (int((k * step) // 7) % step, step)
-
-
-# ---------------------------------------------------------------------------- topology
-
-
-def _style(cls: Definiteness) -> tuple[str, str]:
-    colour = BLUE if cls.sign > 0 else RED
-    return colour, ("-" if cls.definite else "--")
-
-
-def weight_label(a: np.ndarray) -> str:
-    """A short text for a weight: ``2``, ``−0.5I``, ``diag(1, 1, 0)`` or its entries."""
-    a = np.asarray(a, dtype=float)
-
-    def num(x: float) -> str:
-        return f"{x:.3g}".replace("-", "−")
-
-    if a.shape == (1, 1):
-        return num(a[0, 0])
-    if np.array_equal(a, np.diag(np.diag(a))):
-        dg = np.diag(a)
-        if np.all(dg == dg[0]):
-            return f"{num(dg[0])}I"
-        return "diag(" + ", ".join(num(x) for x in dg) + ")"
-    return "[" + "; ".join(" ".join(num(x) for x in row) for row in a) + "]"
-
-
-def topology_figure(
-    top: Topology,
-    informed: Sequence[int],
-    b: dict,
-    title: str | None = None,
-    weights: bool = False,
-    width: float = ONE_COLUMN,
-):
-    """Ĝ: the topology with the external signal x0 (vertex 0) and its couplings B_i.
-
-    Parameters
-    ----------
-    top
-        The topology.
-    informed
-        Indices of the informed agents (they receive x0).
-    b
-        ``{index: B_i}``.
-    title
-        An optional short title (captions are preferred).
-    weights
-        Label every edge with its weight (:func:`weight_label`).
-    width
-        Figure width in inches.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    n = top.n
-    ang = np.pi / 2 - 2 * np.pi * np.arange(n) / n
-    pos = {i: np.array([np.cos(a), np.sin(a)]) for i, a in enumerate(ang)}
-    # x0 sits outside the circle, in the direction of the informed agents' mean position
-    if informed:
-        v = np.sum([pos[i] for i in informed], axis=0)
-        phi = math.atan2(v[1], v[0]) if np.linalg.norm(v) > 1e-9 else ang[informed[0]]
-    else:
-        phi = -np.pi / 2
-    # keep x0 off the radial line of an agent so that its straight edges do not hide one
-    pos[-1] = 1.62 * np.array([math.cos(phi), math.sin(phi)])
-    r = 0.13
-    with paper_style():
-        fig, ax = plt.subplots(figsize=(width, width * 0.95), layout="constrained")
-        pairs = set(top.edges)
-        for (i, j), cls in top.classes.items():
-            if cls.sign == 0:
-                continue
-            colour, ls = _style(cls)
-            rad = 0.18 if (j, i) in pairs else 0.0
-            ax.add_patch(
-                FancyArrowPatch(
-                    pos[j],
-                    pos[i],
-                    arrowstyle="-|>",
-                    color=colour,
-                    linestyle=ls,
-                    mutation_scale=10,
-                    linewidth=1.1,
-                    shrinkA=12,
-                    shrinkB=12,
-                    connectionstyle=f"arc3,rad={rad}",
-                    zorder=2,
-                )
-            )
-            if weights:
-                # at 30% from the target end, on the (curved) edge
-                nrm = np.array([-(pos[i] - pos[j])[1], (pos[i] - pos[j])[0]])
-                mid = 0.7 * pos[i] + 0.3 * pos[j] - 0.42 * rad * nrm
-                ax.text(
-                    *mid,
-                    weight_label(top.weights[(i, j)]),
-                    fontsize=5.5,
-                    ha="center",
-                    va="center",
-                    color=colour,
-                    zorder=5,
-                    bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85},
-                )
-        p0 = pos[-1]
-        extent = [pos[k] for k in pos]
-        for i in informed:
-            cls = classify(np.asarray(b[i]))
-            # bend the edge away from the centre so that it runs around the agents' circle
-            chord = pos[i] - p0
-            mid = 0.5 * (pos[i] + p0)
-            nrm = np.array([-chord[1], chord[0]])
-            side = 1.0 if np.dot(nrm, mid) > 0 else -1.0
-            sep = abs(math.remainder(ang[i] - phi, 2 * math.pi))
-            rad = -side * min(0.15 + 0.85 * sep / math.pi, 1.0)
-            extent.append(mid + rad * np.array([chord[1], -chord[0]]) / 2)  # arc3's apex
-            ax.add_patch(
-                FancyArrowPatch(
-                    p0,
-                    pos[i],
-                    arrowstyle="-|>",
-                    color=GREEN,
-                    linestyle="-" if cls.definite else "--",
-                    mutation_scale=10,
-                    linewidth=1.1,
-                    shrinkA=12,
-                    shrinkB=12,
-                    connectionstyle=f"arc3,rad={rad}",
-                    zorder=2,
-                )
-            )
-            if weights:
-                ax.text(
-                    *(0.5 * (pos[i] + p0) + 0.25 * side * nrm / max(np.linalg.norm(nrm), 1e-9)),
-                    f"B={weight_label(b[i])}",
-                    fontsize=6,
-                    ha="center",
-                    va="center",
-                    color=GREEN,
-                    zorder=5,
-                    bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85},
-                )
-        for i in range(n):
-            ax.add_patch(
-                Circle(pos[i], r, facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
-            )
-            ax.text(*pos[i], str(top.labels[i]), ha="center", va="center", fontsize=9, zorder=4)
-        ax.add_patch(Circle(p0, r, facecolor="#e3f1e8", edgecolor=GREEN, linewidth=1.2, zorder=3))
-        ax.text(*p0, "0", ha="center", va="center", fontsize=9, zorder=4, color=GREEN)
-        xy = np.array(extent)
-        ax.set_xlim(xy[:, 0].min() - 0.3, xy[:, 0].max() + 0.3)
-        ax.set_ylim(xy[:, 1].min() - 0.3, xy[:, 1].max() + 0.3)
-        ax.set_aspect("equal")
-        ax.axis("off")
-        if title:
-            ax.set_title(title)
-        handles = [
-            Line2D([], [], color=BLUE, label="positive definite"),
-            Line2D([], [], color=RED, label="negative definite"),
-            Line2D([], [], color=BLUE, ls="--", label="positive semidef."),
-            Line2D([], [], color=RED, ls="--", label="negative semidef."),
-            Line2D(
-                [],
-                [],
-                color=GREEN,
-                marker="o",
-                markerfacecolor="#e3f1e8",
-                label=r"$x_0$ (vertex 0) $\to$ informed, $B_i$",
-            ),
-        ]
-        fig.legend(
-            handles=handles,
-            loc="outside lower center",
-            ncol=2,
-            frameon=False,
-            fontsize=8,
-            handlelength=1.8,
-            columnspacing=1.0,
-        )
-    return fig
-
-    return fig
-
+from .style import (  # noqa: E402
+    BLUE,
+    LINESTYLES,
+    MODE_COLOURS,
+    ONE_COLUMN,
+    TWO_COLUMN,
+    SavedFigure,
+    agent_style,
+    markevery,
+    paper_style,
+    save,
+)
 
 # ---------------------------------------------------------------------- mode timelines
 
@@ -437,7 +210,7 @@ def states_figure(
                     ls=s.linestyle,
                     marker=s.marker,
                     markersize=3,
-                    markevery=_markevery(i, t.size),
+                    markevery=markevery(i, t.size),
                 )
             ax.axhline(theta[k], color="black", ls=(0, (5, 2)), lw=1.0)
             ax.set_ylabel(f"$x_i^{{({k + 1})}}$")
@@ -526,7 +299,7 @@ def ms_error_figure(
                     lw=1.0,
                     marker=s.marker,
                     markersize=3,
-                    markevery=_markevery(i, t.size),
+                    markevery=markevery(i, t.size),
                 )
                 ax.fill_between(
                     t,
@@ -547,35 +320,41 @@ def ms_error_figure(
                     ls=(0, (4, 2)),
                     marker=None if mc is not None else s.marker,
                     markersize=3,
-                    markevery=_markevery(i, t.size),
+                    markevery=markevery(i, t.size),
                 )
         ax.set_yscale("log")
         ax.set_ylabel(r"$E\,\|x_i - \theta\|^2$")
         (tl if tl is not None else ax).set_xlabel("$t$")
-        handles = [
-            Line2D(
-                [],
-                [],
-                color=agent_style(i).colour,
-                marker=agent_style(i).marker,
-                markersize=3,
-                label=f"agent {a}",
-            )
-            for i, a in enumerate(labels)
-        ]
-        if mc is not None:
-            handles.append(Line2D([], [], color="0.3", lw=1.0, label="Monte Carlo mean (solid)"))
-            handles.append(Patch(color="0.3", alpha=0.25, label="Monte Carlo 95% band"))
-        if exact is not None:
-            handles.append(
-                Line2D([], [], color="0.3", lw=1.1, ls=(0, (4, 2)), label="exact moments (dashed)")
-            )
+        handles = _ms_legend(labels, mc is not None, exact is not None)
         if tl is not None:
             handles += mode_timeline(tl, segments)
         if title:
             ax.set_title(title)
         fig.legend(handles=handles, loc="outside right center", ncol=1, frameon=False, fontsize=8)
     return fig
+
+
+def _ms_legend(labels, with_mc: bool, with_exact: bool) -> list[Artist]:
+    """One entry per agent (colour and marker), then what solid, band and dashed mean."""
+    handles: list[Artist] = [
+        Line2D(
+            [],
+            [],
+            color=agent_style(i).colour,
+            marker=agent_style(i).marker,
+            markersize=3,
+            label=f"agent {a}",
+        )
+        for i, a in enumerate(labels)
+    ]
+    if with_mc:
+        handles.append(Line2D([], [], color="0.3", lw=1.0, label="Monte Carlo mean (solid)"))
+        handles.append(Patch(color="0.3", alpha=0.25, label="Monte Carlo 95% band"))
+    if with_exact:
+        handles.append(
+            Line2D([], [], color="0.3", lw=1.1, ls=(0, (4, 2)), label="exact moments (dashed)")
+        )
+    return handles
 
 
 # ------------------------------------------------------------------ coupling and gain
@@ -658,7 +437,7 @@ def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
         handles = []
         for k, c in enumerate(curves):
             col = plt.get_cmap("tab10")(k % 10)
-            ls = _LINESTYLES[k % 4]
+            ls = LINESTYLES[k % 4]
             for ax, y in ((a1, c.rate), (a2, c.sym_min)):
                 ax.plot(c.delta, y, color=col, ls=ls, lw=1.2)
 
@@ -797,58 +576,6 @@ def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
 # ----------------------------------------------------------------------------- saving
 
 
-@dataclass(frozen=True)
-class SavedFigure:
-    """A figure written to disk: its stem, the file per format, and the PNG bytes."""
-
-    stem: Path
-    files: dict[str, Path]  # format -> path
-    png: bytes
-
-
-def save(fig, stem: Path, formats: Sequence[str] = FORMATS, dpi: int = DPI) -> SavedFigure:
-    """Write ``stem.png`` (``dpi``), ``stem.svg`` and ``stem.pdf``; return the paths and
-    the PNG bytes (for inlining).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure (closed afterwards).
-    stem : pathlib.Path
-        The path without suffix.
-    formats : sequence of str, optional
-        The formats to write.
-    dpi : int, optional
-        The PNG resolution.
-
-    Returns
-    -------
-    SavedFigure
-    """
-    stem.parent.mkdir(parents=True, exist_ok=True)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    png = buf.getvalue()
-    # the layout is settled: the vector formats reuse it rather than solving it again
-    fig.set_layout_engine("none")
-    files = {}
-    for f in formats:
-        p = stem.with_suffix(f".{f}")
-        if f == "png":
-            p.write_bytes(png)
-        else:
-            # a fixed hash salt: SVG clip-path ids (random by default) repeat run to run
-            with plt.rc_context({"svg.hashsalt": "ntc-design"}):
-                fig.savefig(
-                    p,
-                    format=f,
-                    metadata={"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(f),
-                )
-        files[f] = p
-    plt.close(fig)
-    return SavedFigure(stem, files, png)
-
-
 __all__ = [
     "CouplingCurve",
     "SavedFigure",
@@ -860,5 +587,4 @@ __all__ = [
     "save",
     "schedule_figure",
     "states_figure",
-    "topology_figure",
 ]
