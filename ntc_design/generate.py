@@ -31,12 +31,15 @@ the same network on every machine.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sparse
+import yaml
 from scipy.sparse import csgraph
 
+from .edgelist import write_npz
 from .errors import InputError, require_positive
 from .model import Topology
 from .outputs import write_atomic
@@ -338,12 +341,6 @@ def write_topology(top: Topology, path: str | Path) -> Path:
     ------
     InputError
         For an unknown file type or a missing directory."""
-    import json
-
-    import yaml
-
-    from .edgelist import write_npz
-
     p = Path(path)
     if not p.parent.is_dir():
         raise InputError(f"{p}: directory {p.parent} does not exist")

@@ -73,8 +73,6 @@ def topology_from_networkx(
     """
     import networkx as nx
 
-    from .model import Topology
-
     if not isinstance(graph, nx.DiGraph) or graph.is_multigraph():
         raise InputError(
             f"from_networkx: expected a networkx.DiGraph, got {type(graph).__name__} "

@@ -33,6 +33,8 @@ from matplotlib.artist import Artist  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
+from ..gain import parse_gain  # noqa: E402
+from ..simulate import make_gain  # noqa: E402
 from ..simulate.result import MeanSquareBand  # noqa: E402
 from .style import (  # noqa: E402
     BLUE,
@@ -514,7 +516,6 @@ def gain_latex(text: str) -> str:
     from matplotlib.mathtext import MathTextParser
     from sympy.printing.latex import LatexPrinter
 
-    from ..gain import parse_gain
 
     class Printer(LatexPrinter):
         def _print_Pow(self, expr):  # (1+t)^{-1/3} as the paper writes it, not 1/∛(1+t)
@@ -552,10 +553,14 @@ def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
     Returns
     -------
     matplotlib.figure.Figure
+
+    Raises
+    ------
+    InputError
+        The gain does not parse (or is not an expression).
     """
     from scipy.integrate import cumulative_trapezoid
 
-    from ..simulate import make_gain
 
     c, _ = make_gain(text)
     t = np.linspace(0.0, t_end, 20001)

@@ -18,11 +18,12 @@ from ..certify import CertifyResult, certify, verify_file, write_certificate
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError
+from ..gain import T, limit_at_infinity, parse_gain
 from ..model import SwitchingTopology
 from ..outputs import check_output_file
 from ..rows import fmt
 from ..simulate.result import MeanSquareBand
-from ..timevarying import TimeVaryingDesign
+from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
 from .html import (
     Figure,
@@ -36,6 +37,7 @@ from .html import (
     write_html,
 )
 from .rundata import REPORT_MAX_AGENTS, RunData, load_run
+from .timevarying import lambda_min_figure, weights_figure
 
 # --------------------------------------------------------------------------- sections
 
@@ -100,7 +102,6 @@ def predicted_exponent(gain: str, rate: float) -> tuple[float | None, str]:
     None when c is not a power of t."""
     import sympy as sp
 
-    from ..gain import T, limit_at_infinity, parse_gain
 
     # the power of c at infinity, lim log c / log t (sympy, time-bounded)
     p = limit_at_infinity(sp.log(parse_gain(gain)) / sp.log(T))
@@ -205,8 +206,6 @@ def _time_varying(run: RunData, p: dict, figdir: Path) -> tuple:
     tvp = p.get("time_varying")
     if not isinstance(tvp, dict) or not isinstance(tvp.get("topology"), dict):
         return None, []
-    from ..timevarying import from_document
-    from .timevarying import lambda_min_figure, weights_figure
 
     tv = from_document(tvp["topology"], f"{run.path}/summary.json: time_varying")
     noise = p.get("noise") or {}

@@ -12,9 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, require_number, require_positive
+from ..errors import InputError, format_bytes, require_number, require_positive
 from ..files import parse_topology
+from ..gain import parse_gain
 from ..model import SwitchingTopology, Topology
+from ..simulate.budget import MEMORY_FRACTION, available_memory
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
 
@@ -127,8 +129,6 @@ def _read_npz(path: Path, d: Path) -> dict[str, np.ndarray]:
     """paths.npz, refusing a corrupt, empty or oversized (decompression bomb) archive."""
     import zipfile
 
-    from ..errors import format_bytes
-    from ..simulate.budget import MEMORY_FRACTION, available_memory
 
     try:
         with zipfile.ZipFile(path) as zf:
@@ -251,7 +251,6 @@ def _check_run(run: RunData) -> None:
         raise InputError(f"{where}: {exc}; {_rerun(d)}") from None
     if not isinstance(p["gain"], str):
         raise bad("parameters.gain", "expected an expression in t (text)")
-    from ..gain import parse_gain
 
     try:
         parse_gain(p["gain"])
