@@ -6,7 +6,6 @@ sin² t <= |sin t| <= 1.
 """
 
 import json
-import time
 
 import pytest
 
@@ -94,18 +93,21 @@ def test_negative_gain_is_parsed_then_refused():
     "expr", ["t**(10**10)", "factorial(10**9)", "2**2**2**2**2**2", "9**9**9**9"]
 )
 def test_hostile_gains_refused_fast(expr, capsys, monkeypatch):
-    t0 = time.perf_counter()
+    import ntc_design.gain as gain_mod
+
+    def no_analysis(*a, **kw):
+        raise AssertionError("a hostile gain reached the symbolic analysis")
+
+    monkeypatch.setattr(gain_mod, "_run", no_analysis)  # refused while parsing, before sympy
     assert_input_error(["gain", expr], capsys, monkeypatch, "gain")
-    assert time.perf_counter() - t0 < 2
 
 
 @pytest.mark.hostile
 def test_slow_gain_stops_at_the_hard_limit():
     """A gain sympy cannot finish: the forked analysis is killed; undecided, not hung."""
-    t0 = time.perf_counter()
     g = analyse_gain("sin(t)^1000/(1+t)", seconds=2.0)
-    assert time.perf_counter() - t0 < 5
-    assert None in (g.integral_diverges.value, g.square_integrable.value)
+    undecided = [c for c in (g.integral_diverges, g.square_integrable) if c.value is None]
+    assert undecided and all("2 s time limit" in c.reason for c in undecided), undecided
     assert g.mean_square is not True
 
 

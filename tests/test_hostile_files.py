@@ -12,7 +12,6 @@ arbitrary text.
 import copy
 import json
 import math
-import time
 
 import pytest
 import yaml
@@ -174,9 +173,7 @@ def write(tmp_path, doc, fmt, name="doc"):
 
 def refused(args, capsys, monkeypatch, tmp_path, *needles):
     sentinel = tmp_path / "SENTINEL"
-    t0 = time.perf_counter()
     line = assert_input_error(args, capsys, monkeypatch, *needles)
-    assert time.perf_counter() - t0 < 10
     assert not sentinel.exists()
     return line
 
@@ -401,10 +398,18 @@ def test_limits_in_process():
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "l.yaml"
         p.write_text(_laughs(9))
-        t0 = time.perf_counter()
-        with pytest.raises(InputError, match="expands to more than"):
-            read_document(p)
-        assert time.perf_counter() - t0 < 1
+        constructed = []
+        real = yaml.SafeLoader.construct_document
+
+        def spy(self, node):
+            constructed.append(node)
+            return real(self, node)
+
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(yaml.SafeLoader, "construct_document", spy)
+            with pytest.raises(InputError, match="expands to more than"):
+                read_document(p)
+        assert constructed == []  # refused while composing, before any expansion
         p.write_text("a: &a [1, 2]\nb: [*a, *a, *a]\n")  # modest aliases are fine
         assert read_document(p) == {"a": [1, 2], "b": [[1, 2]] * 3}
         p.write_text("x: " + "[" * 64 + "]" * 64 + "\n")  # exactly the depth limit
@@ -643,12 +648,10 @@ def test_hypothesis_wrong_field(tmp_path_factory, field, data):
     fmt = data.draw(st.sampled_from(["yaml", "json"]), label="format")
     d = tmp_path_factory.mktemp("h")
     p = write(d, _set(TOPOLOGY, _FIELDS[field], value), fmt)
-    t0 = time.perf_counter()
     with pytest.raises(InputError) as info:
         load(p)
     msg = str(info.value)
     assert "\n" not in msg and str(p) in msg
-    assert time.perf_counter() - t0 < 10
 
 
 @settings(max_examples=200, deadline=None, suppress_health_check=list(HealthCheck))
@@ -690,14 +693,12 @@ def _expressions(draw, depth=0):
 @settings(max_examples=300, deadline=None, suppress_health_check=list(HealthCheck))
 @given(text=_expressions())
 def test_hypothesis_expressions(text):
-    t0 = time.perf_counter()
     try:
         expr = parse_expression(text, "gain")
     except InputError as exc:
         assert str(exc).startswith("gain: ") and "\n" not in str(exc)
     else:
         assert expr.free_symbols <= {symbol("t")}
-    assert time.perf_counter() - t0 < 2
 
 
 # -- magnitudes, .npz members, θ of a time-varying file (issue 16) ---------------------

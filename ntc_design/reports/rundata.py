@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -127,9 +128,6 @@ def _read_text(path: Path, d: Path) -> str:
 
 def _read_npz(path: Path, d: Path) -> dict[str, np.ndarray]:
     """paths.npz, refusing a corrupt, empty or oversized (decompression bomb) archive."""
-    import zipfile
-
-
     try:
         with zipfile.ZipFile(path) as zf:
             size = sum(i.file_size for i in zf.infolist())
