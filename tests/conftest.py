@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
-from ntc_design import Topology
+from ntc_design import SwitchingTopology, Topology, paper
 
 # Property tests draw the same examples on every run: results are identical on re-run.
 settings.register_profile("ntc", derandomize=True, print_blob=True)
@@ -38,3 +38,36 @@ def random_topology(
 @pytest.fixture(scope="session")
 def examples() -> Path:
     return EXAMPLES
+
+
+# -- the paper's networks and θ, shared by every module (built once per session) ----------
+
+
+@pytest.fixture(scope="session")
+def theta() -> np.ndarray:
+    """The paper's θ = (1, 2, −1)."""
+    return np.array(paper.THETA, dtype=float)
+
+
+@pytest.fixture(scope="session")
+def g1() -> Topology:
+    """G1 of the paper (Fig. 1), the same as examples/g1.yaml."""
+    return paper.g1()
+
+
+@pytest.fixture(scope="session")
+def g2() -> Topology:
+    """G2 of the paper."""
+    return paper.g2()
+
+
+@pytest.fixture(scope="session")
+def g3() -> Topology:
+    """G3 of the paper (it breaks Assumption 2 as stated)."""
+    return paper.g3()
+
+
+@pytest.fixture(scope="session")
+def switching_set() -> SwitchingTopology:
+    """The paper's switching set G1, G2, G3 with its schedule."""
+    return paper.switching()

@@ -12,7 +12,7 @@ from ntc_design.simulate.moments import em_moments, exact_moments
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run, run_chunk
 from ntc_design.simulate.system import grounded_laplacian_sparse, mode_system
 
-from .conftest import ROOT, random_topology
+from .conftest import random_topology
 
 THETA = [1, 2, -1]
 X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
@@ -37,11 +37,6 @@ def stiff_network(n: int, seed: int, d: int = 3) -> nd.Topology:
         neg = b == (a + 1) % n or rng.random() < 0.5
         edges.append((a + 1, b + 1, -w if neg else w))
     return nd.Topology.from_edges(n, d, edges)
-
-
-@pytest.fixture(scope="module")
-def g1():
-    return nd.load(ROOT / "examples" / "g1.yaml")
 
 
 @pytest.fixture(scope="module")

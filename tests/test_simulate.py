@@ -22,11 +22,6 @@ X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
 
 
 @pytest.fixture(scope="module")
-def g1():
-    return nd.load(ROOT / "examples" / "g1.yaml")
-
-
-@pytest.fixture(scope="module")
 def sw():
     return nd.load(ROOT / "examples" / "switching.yaml")
 

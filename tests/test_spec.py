@@ -32,11 +32,6 @@ from .conftest import ROOT
 THETA = [1, 2, -1]
 
 
-@pytest.fixture(scope="module")
-def g1():
-    return nd.load(ROOT / "examples" / "g1.yaml")
-
-
 def test_scenario_and_keywords_build_the_same_spec(tmp_path):
     doc = {
         "topology": str(ROOT / "examples" / "g1.yaml"),
