@@ -15,6 +15,7 @@ import pytest
 from ntc_design import distributed as dist
 from ntc_design.distributed import DaskEngine, LocalEngine
 from ntc_design.errors import InputError
+from ntc_design.rows import fmt
 from ntc_design.simulate import simulate
 from ntc_design.simulate.scenario import load_scenario
 from ntc_design.sweep import MAX_POINTS, load_sweep, run_sweep
@@ -406,3 +407,29 @@ def test_local_engine_runs_in_process():
     eng = LocalEngine(1)
     got = list(eng.map_unordered(lambda x, progress, remote: (x, remote), [("a", (1,))]))
     assert got == [("a", (1, False), None)]
+
+
+def test_sweep_report_shows_every_point(files, reference, tmp_path):
+    """``ntc report`` on a sweep folder: one table row per point (its hash and its final
+    error as in results.csv), a figure per swept key with two or more values plus the
+    overlay, each also written to figures/."""
+    import shutil
+
+    import pandas as pd
+
+    from ntc_design.reports.sweep import write_sweep_report
+
+    d = tmp_path / "sw"
+    shutil.copytree(reference, d)
+    out = write_sweep_report(d)
+    page = out.read_text(encoding="utf-8")
+    table = pd.read_csv(d / "results.csv")
+    body = page.split('id="points-table"')[1]
+    assert body.count("<tr>") == len(table) + 1  # the header and one row per point
+    for point, ms in zip(table["point"], table["ms_final_mc"], strict=True):
+        assert point in body and fmt(float(ms), 5) in body
+    swept = [
+        k for k in ("noise.sigma", "margin", "seed", "T") if k in table and table[k].nunique() > 1
+    ]
+    assert page.count("<img") == len(swept) + 1
+    assert len(list((d / "figures").glob("sweep_*.png"))) == len(swept) + 1
