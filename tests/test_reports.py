@@ -94,6 +94,7 @@ def test_reproduce_paper_summary_matches(paper_run):
     assert wall < 900  # a gross-regression guard only: speed is measured in benchmarks/
 
 
+@pytest.mark.slow
 def test_reproduce_report_structure(paper_run):
     """The α(δ) figure, the table of contents, data links that resolve, a re-run command that
     runs, parameters as a table, no empty table header."""
