@@ -32,12 +32,15 @@ app = typer.Typer(
     add_completion=True,
     pretty_exceptions_enable=False,
     no_args_is_help=True,
+    rich_markup_mode="markdown",  # paragraphs of a docstring reflow to the terminal
     help="Certify, design and validate non-trivial consensus protocols on signed "
     "matrix-weighted networks with compound measurement noise.",
 )
 # Off a terminal (pipes, CI logs) rich would wrap at 80 columns and split result lines:
 # print each line whole, and let tables use up to 120 columns.
-out = Console(highlight=False, soft_wrap=not sys.stdout.isatty(), width=None if sys.stdout.isatty() else 120)
+out = Console(
+    highlight=False, soft_wrap=not sys.stdout.isatty(), width=None if sys.stdout.isatty() else 120
+)
 
 
 def _version(value: bool) -> None:
@@ -154,7 +157,7 @@ def _capped(items: list[dict], line: str, most: int = 10) -> list[str]:
     return lines
 
 
-@app.command()
+@app.command(epilog="Example: ntc check examples/g1.yaml")
 def check(file: FileArg, as_json: JsonOpt = False) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition."""
     loaded = load(file)
@@ -172,7 +175,7 @@ def check(file: FileArg, as_json: JsonOpt = False) -> None:
     print(_json(rep)) if as_json else _print_check(rep, top.name or str(file))
 
 
-@app.command("design")
+@app.command("design", epilog="Example: ntc design examples/g1.yaml --theta 1,2,-1")
 def design_cmd(
     file: FileArg,
     theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
@@ -212,7 +215,7 @@ def design_cmd(
         _print_table(res.table(f"{name}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
 
 
-@app.command()
+@app.command(epilog="Example: ntc generate --n 1000 --d 3 --out runs/net.npz")
 def generate(
     n: Annotated[int, typer.Option("--n", help="Number of agents N (>= 2).")],
     out_path: Annotated[
@@ -300,19 +303,24 @@ class Progress:
             self._bar.update(self.tasks[key], completed=done, total=total)
 
 
-@app.command()
+@app.command(epilog="Example: ntc gain '1/(1+t)'")
 def gain(
     expr: Annotated[str, typer.Argument(help="c(t), e.g. '1/(1+t)' or '(1+t)^(-1/3)'.")],
     as_json: JsonOpt = False,
 ) -> None:
-    """Decide the gain conditions of Theorems 1-4 for c(t)."""
+    """Decide the gain conditions of Theorems 1-4 for c(t). Exit 0 when the conditions of
+    some theorem hold (mean square at least), 1 when none do or they are undetermined."""
     from .gain import analyse_gain
 
     analysis = analyse_gain(expr)
     print(_json(analysis.to_dict())) if as_json else _print_table(analysis.table())
+    if analysis.mean_square is not True:  # no theorem's conditions on c hold (as certify)
+        raise typer.Exit(1)
 
 
-@app.command()
+@app.command(
+    epilog="Example: ntc certify examples/g1.yaml --theta 1,2,-1 --gain '1/(1+t)' --out runs/g1.json"
+)
 def certify(
     file: FileArg,
     theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
@@ -322,10 +330,18 @@ def certify(
         Path | None, typer.Option("--out", help="Write the certificate (JSON) here.")
     ] = None,
     noise_sigma: Annotated[
-        float, typer.Option(help="σ_ji of the additive noise (time-varying: p̄).")
+        float,
+        typer.Option(
+            help="Additive noise intensity σ_ji on every edge (the time-varying certificate "
+            "uses it as p̄ in Assumption 3)."
+        ),
     ] = 0.4,
     noise_f: Annotated[
-        float, typer.Option(help="f(x) = f·x, σ̄ = |f| (time-varying: t₀ of μ₂).")
+        float,
+        typer.Option(
+            help="State-dependent noise f(x) = f·x, so σ̄ = |f| in Assumption 1 (the "
+            "time-varying certificate uses it for t₀ of μ₂)."
+        ),
     ] = 0.3,
     as_json: JsonOpt = False,
 ) -> None:
@@ -392,7 +408,7 @@ def _print_verification(doc: dict) -> None:
     print(f"note: {doc['digest_note']}")
 
 
-@app.command()
+@app.command(epilog="Example: ntc verify runs/g1.json --topology examples/g1.yaml --theta 1,2,-1")
 def verify(
     cert: Annotated[Path, typer.Argument(help="A certificate file (JSON).")],
     topology: Annotated[
@@ -426,12 +442,29 @@ def verify(
         print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
-@app.command()
+@app.command(
+    epilog="Example: ntc simulate examples/scenarios/g1_fixed.yaml --out runs/g1 --paths 200"
+)
 def simulate(
     scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
+    ] = None,
+    paths: Annotated[
+        int | None, typer.Option(help="Monte Carlo paths (overrides the scenario).")
+    ] = None,
+    horizon: Annotated[
+        float | None, typer.Option("--T", help="Horizon T (overrides the scenario).")
+    ] = None,
+    dt: Annotated[
+        float | None, typer.Option(help="Euler–Maruyama step (overrides the scenario).")
+    ] = None,
+    seed: Annotated[
+        int | None, typer.Option(help="Monte Carlo seed (overrides the scenario).")
+    ] = None,
+    method: Annotated[
+        str | None, typer.Option(help="mc, exact or both (overrides the scenario).")
     ] = None,
     scheduler: SchedulerOpt = None,
     as_json: JsonOpt = False,
@@ -445,7 +478,8 @@ def simulate(
     from .simulate.scenario import check_output, load_scenario, write_outputs
     from .simulate.spec import MonteCarlo, check_workers
 
-    top, spec, sc = load_scenario(scenario)
+    given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method}
+    top, spec, sc = load_scenario(scenario, {k: v for k, v in given.items() if v is not None})
     if workers is not None:
         check_workers(workers, "--workers")
         spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
@@ -543,7 +577,7 @@ def _sweep_progress():
     return bar, prog
 
 
-@app.command()
+@app.command(epilog="Example: ntc sweep examples/sweeps/g1_noise.yaml --out runs/g1_noise")
 def sweep(
     sweep_file: Annotated[Path, typer.Argument(help="A sweep file (YAML/JSON).")],
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
@@ -552,6 +586,7 @@ def sweep(
         int | None,
         typer.Option(help="Local processes per point without --scheduler (default: 2)."),
     ] = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Design, certify and simulate every point of a sweep (a grid or a list of points over
     a base scenario); points already in --out are reused. Writes results.csv,
@@ -562,26 +597,47 @@ def sweep(
     callback, ctx = _sweep_progress()
     with ctx:
         res = run_sweep(sw, out_dir, scheduler=scheduler, workers=workers, progress=callback)
-    out.print(
-        f"{res.points} points in {res.seconds:.1f} s: {res.computed} computed, {res.reused} reused, "
-        f"{res.failed} failed"
-    )
-    if res.failed:
-        import pandas as pd
+    import pandas as pd
 
-        table = pd.read_csv(out_dir / "results.csv")
-        for _, row in table[table["error"].notna()].head(10).iterrows():
+    table = pd.read_csv(out_dir / "results.csv")
+    failed = table[table["error"].notna()]
+    if as_json:
+        print(
+            _json(
+                {
+                    "ok": not res.failed,
+                    "out": str(out_dir),
+                    "points": res.points,
+                    "computed": res.computed,
+                    "reused": res.reused,
+                    "failed": res.failed,
+                    "seconds": res.seconds,
+                    "files": [str(f) for f in res.files],
+                    "failures": [
+                        {"point": r["point"], **{k: r[k] for k in sw.keys}, "error": r["error"]}
+                        for _, r in failed.iterrows()
+                    ],
+                }
+            )
+        )
+    else:
+        out.print(
+            f"{res.points} points in {res.seconds:.1f} s: {res.computed} computed, "
+            f"{res.reused} reused, {res.failed} failed"
+        )
+        for _, row in failed.head(10).iterrows():
             vals = ", ".join(f"{k}={row[k]}" for k in sw.keys)
             out.print(f"  failed: {vals}: {row['error']}", soft_wrap=True)
-    out.print(
-        f"wrote {out_dir}/results.csv, results.parquet, curves.parquet (report: ntc report {out_dir})",
-        soft_wrap=True,
-    )
+        out.print(
+            f"wrote {out_dir}/results.csv, results.parquet, curves.parquet "
+            f"(report: ntc report {out_dir})",
+            soft_wrap=True,
+        )
     if res.failed:
         raise typer.Exit(1)
 
 
-@app.command()
+@app.command(epilog="Example: ntc report runs/g1")
 def report(
     directory: Annotated[
         Path,
@@ -589,7 +645,10 @@ def report(
     ],
     interactive: Annotated[
         bool,
-        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+        typer.Option(
+            help="Embed SVG figures with per-agent toggles, as report_interactive.html "
+            "(the static report.html is kept)."
+        ),
     ] = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -617,7 +676,7 @@ def report(
     out.print(f"wrote {path}", soft_wrap=True)
 
 
-@app.command()
+@app.command(epilog="Example: ntc reproduce paper --out runs/paper")
 def reproduce(
     what: Annotated[str, typer.Argument(help="What to reproduce: 'paper' (its Section 5).")],
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
@@ -633,7 +692,10 @@ def reproduce(
     seed: Annotated[int, typer.Option(help="Monte Carlo seed.")] = 0,
     interactive: Annotated[
         bool,
-        typer.Option(help="Embed SVG figures with per-agent toggles (still one file)."),
+        typer.Option(
+            help="Embed SVG figures with per-agent toggles, as report_interactive.html "
+            "(the static report.html is kept)."
+        ),
     ] = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -717,6 +779,7 @@ def main(argv: list[str] | None = None) -> None:
     args = sys.argv[1:] if argv is None else list(argv)
     warnings.showwarning = _warning_line
     warnings.simplefilter("ignore", RuntimeWarning)  # numerical trouble is checked, not warned
+    warnings.simplefilter("once", AssumptionWarning)  # one line per network, not per mode
     code = 0
     try:
         try:

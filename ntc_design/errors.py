@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
+import sys
+import types
+import warnings
 
 
 class InputError(ValueError):
@@ -224,3 +228,25 @@ __all__ = [
     "require_number",
     "require_positive",
 ]
+
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def warn_user(message: str, category: type[Warning]) -> None:
+    """Warn, attributing the warning to the first caller outside this package (the user's
+    call, however deep inside the toolkit the condition was found).
+
+    Parameters
+    ----------
+    message : str
+        The warning.
+    category : type of Warning
+        Its class.
+    """
+    level = 2  # warnings.warn's level of warn_user's caller
+    frame: types.FrameType | None = sys._getframe(1)
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    warnings.warn(message, category, stacklevel=level)

@@ -25,6 +25,7 @@ Switching file::
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 from collections import Counter
@@ -320,6 +321,14 @@ def field_error(source: str | None, field: str, msg: str) -> InputError:
     return InputError(f"{source}: {field}: {msg}" if source else f"{field}: {msg}")
 
 
+def _close(key: Any, known: Any) -> str:
+    """``; did you mean 'weight'?`` for a key one or two typos from a known one."""
+    if not isinstance(key, str):
+        return ""
+    match = difflib.get_close_matches(key, sorted(known), n=1, cutoff=0.7)
+    return f"; did you mean {match[0]!r}?" if match else ""
+
+
 def _show(x: Any, n: int = 40) -> str:
     """A value for a one-line message: repr, newlines escaped, at most ``n`` characters."""
     if isinstance(x, int) and x.bit_length() >= 200:
@@ -466,7 +475,9 @@ def parse_labels(agents: Any, source: str | None) -> tuple[Label, ...]:
         counts = Counter(str(a) for a in labels)
         dup = sorted(k for k, c in counts.items() if c > 1)
         if dup:
-            raise field_error(source, "agents", f"duplicated label(s) {', '.join(_q(k) for k in dup[:5])}")
+            raise field_error(
+                source, "agents", f"duplicated label(s) {', '.join(_q(k) for k in dup[:5])}"
+            )
         return tuple(labels)
     raise field_error(source, "agents", "expected a positive count or a non-empty list of labels")
 
@@ -500,7 +511,7 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
         raise field_error(
             source,
             _q(unknown[0]),
-            f"unknown field (allowed: {', '.join(sorted(TOPOLOGY_KEYS))})",
+            f"unknown field{_close(unknown[0], TOPOLOGY_KEYS)} (allowed: {', '.join(sorted(TOPOLOGY_KEYS))})",
         )
     for key in ("dim", "agents", "edges"):
         if key not in doc:
@@ -526,12 +537,17 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict):
             raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
+        # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
+        extra = sorted(set(e) - EDGE_KEYS, key=str)
+        if extra:
+            raise field_error(
+                source,
+                f"edges[{k}]",
+                f"unknown field {_show(extra[0])}{_close(extra[0], EDGE_KEYS)}",
+            )
         missing = sorted(EDGE_KEYS - set(e))
         if missing:
             raise field_error(source, f"edges[{k}]", f"missing {', '.join(missing)}")
-        extra = sorted(set(e) - EDGE_KEYS, key=str)
-        if extra:
-            raise field_error(source, f"edges[{k}]", f"unknown field {_show(extra[0])}")
         for end in ("from", "to"):
             lab = e[end]
             if isinstance(lab, bool) or not isinstance(lab, (int, str)):
@@ -604,7 +620,9 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
             inner = f"{source}: modes.{_q(name)}" if source else f"modes.{_q(name)}"
             modes[str(name)] = parse_topology(spec, inner)
         else:
-            raise field_error(source, f"modes.{_q(name)}", "expected a file path or an inline topology")
+            raise field_error(
+                source, f"modes.{_q(name)}", "expected a file path or an inline topology"
+            )
     sched = doc.get("schedule")
     if not isinstance(sched, list) or not sched:
         raise field_error(source, "schedule", "expected a non-empty list of {mode, duration}")

@@ -36,7 +36,10 @@ def write(tmp_path, name, text):
             "  - {from: 1, to: 2, weight: [[1, x], [x, 1]]}\n",
             ["edge 1->2: weight[0][1]", "only the variable t"],
         ),
-        ("  - {from: 1, to: 2, wieght: 1}\n", ["edges[0]", "missing weight"]),
+        (
+            "  - {from: 1, to: 2, wieght: 1}\n",
+            ["edges[0]", "unknown field 'wieght'", "did you mean 'weight'"],
+        ),
     ],
 )
 def test_bad_weights(tmp_path, capsys, monkeypatch, edges, needles):

@@ -193,9 +193,11 @@ def test_ntc_report_on_a_simulation(tmp_path, capsys, monkeypatch):
     code, text, err = run_cli(["report", out, "--json", "--interactive"], capsys, monkeypatch)
     assert code == 0, err
     doc = json.loads(text)
-    assert doc["report"] == str(out / "report.html")
+    assert doc["report"] == str(out / "report_interactive.html")
     assert any(f.endswith("run_coupling.pdf") for f in doc["figures"])
-    html = (out / "report.html").read_text()
+    static = (out / "report.html").read_text()
+    assert static.count("<img ") == 8  # the static report is kept beside it
+    html = (out / "report_interactive.html").read_text()
     assert html.count("<img ") == 0 and html.count("<svg") == 8
     assert 'class="agent-toggle" value="run-ag0"' in html and 'id="run-ag0-mc"' in html
 

@@ -4,14 +4,13 @@ L_B for a topology and θ, with the exact critical couplings of the same design 
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sparse
 
-from ..errors import require_positive, require_theta
+from ..errors import require_positive, require_theta, warn_user
 from ..linalg import require_dense
 from ..model import (
     SwitchingTopology,
@@ -437,12 +436,11 @@ def design_topology(
         )
     dl = _choose_delta(c, margin, delta, notes)
     if not dec.holds:
-        warnings.warn(
+        warn_user(
             f"Assumption 2 fails for {top.name or 'the topology'} "
             f"({len(dec.violations)} violating agent(s), e.g. "
             f"{top.labels[dec.violations[0].agent]}): Lemma 1 does not apply",
             AssumptionWarning,
-            stacklevel=3,
         )
     informed = top.antagonised
     ant = top.degree_sums[2]

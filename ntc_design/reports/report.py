@@ -525,7 +525,8 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
 
 
 def write_report(directory: str | Path, interactive: bool = False) -> Path:
-    """`ntc report DIR`: DIR/report.html for one simulation output directory.
+    """`ntc report DIR`: DIR/report.html (``report_interactive.html`` with
+    ``interactive``) for one simulation output directory.
 
     Parameters
     ----------
@@ -546,13 +547,15 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
         A missing or unreadable output file (named).
     """
     run = load_run(directory)
-    check_output_file(run.path / "report.html", "report")  # before the certificate and figures
+    # the interactive page has its own name: it never replaces the static report
+    name = "report_interactive.html" if interactive else "report.html"
+    check_output_file(run.path / name, "report")  # before the certificate and figures
     scen = run.summary.get("scenario") or str(run.path)
     title = f"Run {Path(scen).stem}"
     section, _ = run_section(
         run, run.path / "figures", title, "run", run.path, interactive=interactive
     )
-    out = run.path / "report.html"
+    out = run.path / name
     write_html(
         out,
         render(

@@ -11,13 +11,12 @@ moments (:func:`.moments.exact_moments`).
 from __future__ import annotations
 
 import os
-import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ..design import ProtocolDesign, design_topology
-from ..errors import InputError, quote
+from ..errors import InputError, quote, warn_user
 from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..timevarying import ExpressionTopology
@@ -223,7 +222,7 @@ def _step_size_guard(
     check = check_step_size(systems, grid, c_grid, scheme)
     if check.warning:
         notes.append(check.warning)
-        warnings.warn(check.warning, stacklevel=3)
+        warn_user(check.warning, UserWarning)
 
 
 def _check_exact_work(

@@ -22,13 +22,18 @@ OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz"
 REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures", "certificate.json", "paths_fine.npz")
 
 
-def load_scenario(path: str | Path) -> tuple[AnyTopology, SimulationSpec, ScenarioData]:
+def load_scenario(
+    path: str | Path, overrides: dict | None = None
+) -> tuple[AnyTopology, SimulationSpec, ScenarioData]:
     """Read a scenario file: (topology, spec, the scenario as read).
 
     Parameters
     ----------
     path : str or Path
         The scenario file (YAML or JSON).
+    overrides : dict, optional
+        Top-level scenario keys that replace the file's (``paths``, ``T``, ``dt``,
+        ``seed``, ``method``, ...), checked exactly as the file's own.
 
     Returns
     -------
@@ -41,7 +46,8 @@ def load_scenario(path: str | Path) -> tuple[AnyTopology, SimulationSpec, Scenar
         ``FILE: FIELD: what is wrong``.
     """
     sc = parse_scenario(path)
-    spec = SimulationSpec.from_document(sc.document, sc.source)
+    doc = {**sc.document, **(overrides or {})}
+    spec = SimulationSpec.from_document(doc, sc.source)
     top = load(sc.topology)
     return top, spec, sc
 
