@@ -32,9 +32,9 @@ from .budget import (
 from .grid import TimeGrid
 from .moments import check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec
-from .result import SimulationResult, finish, mc_summary
+from .result import SimulationResult
 from .spec import SimulationSpec
-from .steps import run_exact, run_monte_carlo, run_parameters, run_stats, spec_grid
+from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters, spec_grid
 from .system import ModeSystem, check_step_size, mode_system
 from .timevarying import simulate_expression
 
@@ -353,19 +353,8 @@ def _simulate_modes(
             systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d
         ),
     )
-    res = SimulationResult(
-        labels=tuple(topology.labels),
-        theta=th,
-        save_times=grid.save_times,
-        designs=designs,
-        mc=mc_summary(part) if part is not None else None,
-        exact=exact,
-        parameters=params,
-        stats=run_stats(grid, spec.mc.paths, mc_stats, exact_stats),
-        notes=tuple(notes),
-        grid=grid,
-    )
-    return finish(res, part)
+    runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
+    return finish_run(tuple(topology.labels), th, grid, designs, params, spec, runs, notes)
 
 
 def _resolve_spec(theta, spec: SimulationSpec | None, options: dict) -> SimulationSpec:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from ..errors import InputError
 from .grid import TimeGrid, build_grid
 from .moments import Moments
 from .montecarlo import PartialStats, run
-from .result import RunStats
+from .result import RunStats, SimulationResult, finish, mc_summary
 from .spec import SimulationSpec
 
 
@@ -195,3 +196,70 @@ def run_exact(
             "strong for this gain and horizon (use method: mc, or a shorter T)"
         )
     return exact, stats
+
+
+@dataclass(frozen=True, eq=False)
+class Runs:
+    """What the two methods produced: the Monte Carlo sums and the moments, with the
+    statistics each measured."""
+
+    part: PartialStats | None
+    exact: Moments | None
+    mc_stats: dict
+    exact_stats: dict
+
+
+def finish_run(
+    labels: tuple,
+    theta: np.ndarray,
+    grid: TimeGrid,
+    designs: dict,
+    params: dict,
+    spec: SimulationSpec,
+    runs: Runs,
+    notes: list[str],
+) -> SimulationResult:
+    """The result of a run, or :class:`~.result.SimulationDiverged` (one path for every
+    kind of topology, :func:`.result.finish`).
+
+    Parameters
+    ----------
+    labels : tuple
+        The agent labels.
+    theta : numpy.ndarray
+        θ.
+    grid : TimeGrid
+        The time grid.
+    designs : dict
+        The designs by mode.
+    params : dict
+        The parameters recorded (:func:`run_parameters`).
+    spec : SimulationSpec
+        The run's options.
+    runs : Runs
+        What the methods produced.
+    notes : list of str
+        The notes.
+
+    Returns
+    -------
+    SimulationResult
+
+    Raises
+    ------
+    SimulationDiverged
+        A path met NaN or overflow (the truncated result attached).
+    """
+    res = SimulationResult(
+        labels=labels,
+        theta=theta,
+        save_times=grid.save_times,
+        designs=designs,
+        mc=mc_summary(runs.part) if runs.part is not None else None,
+        exact=runs.exact,
+        parameters=params,
+        stats=run_stats(grid, spec.mc.paths, runs.mc_stats, runs.exact_stats),
+        notes=tuple(notes),
+        grid=grid,
+    )
+    return finish(res, runs.part)

@@ -28,8 +28,7 @@ from .grid import TimeGrid
 from .moments import KAPPA, MomentRecorder, Moments
 from .montecarlo import BlockStats, PartialStats
 from .noise import NoiseModel
-from .result import SimulationResult, finish, mc_summary
-from .steps import run_exact, run_monte_carlo, run_parameters, run_stats, spec_grid
+from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters, spec_grid
 
 BATCH = 256  # steps whose matrices and normals are made at once (Lemma 1 per batch is ~6 ms)
 MAX_BATCH_BYTES = 32 * 2**20
@@ -518,19 +517,8 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         "constant_after": str(tv.constant_after) if tv.constant_after is not None else None,
         "topology": tv.to_dict(),
     }
-    res = SimulationResult(
-        labels=tuple(tv.labels),
-        theta=th,
-        save_times=grid.save_times,
-        designs=designs,
-        mc=mc_summary(part) if part is not None else None,
-        exact=exact,
-        parameters=params,
-        stats=run_stats(grid, spec.mc.paths, mc_stats, exact_stats),
-        notes=tuple(notes),
-        grid=grid,
-    )
-    return finish(res, part)
+    runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
+    return finish_run(tuple(tv.labels), th, grid, designs, params, spec, runs, notes)
 
 
 __all__ = [
