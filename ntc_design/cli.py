@@ -6,16 +6,12 @@ from __future__ import annotations
 import contextlib
 import json
 import sys
-import threading
-import time
 import warnings
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
 
 from . import __version__
@@ -24,8 +20,8 @@ from .errors import InputError, one_line
 from .files import jsonable
 from .loader import load
 from .model import SwitchingTopology
-from .rows import Cell, fmt, set_text
-from .rows import Table as RowsTable
+from .reports.terminal import Progress, out, print_table, sweep_progress
+from .rows import fmt, set_text
 from .timevarying import ExpressionTopology
 
 app = typer.Typer(
@@ -35,11 +31,6 @@ app = typer.Typer(
     rich_markup_mode="markdown",  # paragraphs of a docstring reflow to the terminal
     help="Certify, design and validate non-trivial consensus protocols on signed "
     "matrix-weighted networks with compound measurement noise.",
-)
-# Off a terminal (pipes, CI logs) rich would wrap at 80 columns and split result lines:
-# print each line whole, and let tables use up to 120 columns.
-out = Console(
-    highlight=False, soft_wrap=not sys.stdout.isatty(), width=None if sys.stdout.isatty() else 120
 )
 
 
@@ -69,7 +60,6 @@ SchedulerOpt = Annotated[
         "(start one with `dask scheduler` and `dask worker ADDRESS`). Default: this machine."
     ),
 ]
-PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
 
 
 def parse_vector(text: str, field: str) -> list[float]:
@@ -85,37 +75,6 @@ def parse_vector(text: str, field: str) -> list[float]:
 
 def _json(obj) -> str:
     return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
-
-
-_VERDICT_STYLE = {True: "green", False: "red", None: "yellow"}
-
-
-def _rich_cell(c: Cell) -> str:
-    """A cell for rich: the verdict word coloured, markup in the text escaped."""
-    text = escape(c.plain().replace("\n", "; "))
-    if c.judged:
-        word = escape(c.verdict_word)
-        return text.replace(word, f"[{_VERDICT_STYLE[c.verdict]}]{word}[/]", 1)
-    return text
-
-
-def _print_table(t: RowsTable) -> None:
-    """One presentation table on the terminal: a grid, or ``label: value`` lines for a
-    list-layout table (the theorem verdicts), then its notes."""
-    if t.layout == "list":
-        if t.title:
-            out.print(f"[bold]{escape(t.title)}[/bold]")
-        for line in t.list_lines():
-            out.print(escape(line))
-    else:
-        g = Table(title=t.title)
-        for c in t.columns:
-            g.add_column(c)
-        for r in t.rows:
-            g.add_row(*[_rich_cell(c) for c in r])
-        out.print(g)
-    for n in t.notes:
-        out.print(f"  note: {escape(n)}")
 
 
 def _print_check(rep: dict, title: str) -> None:
@@ -199,7 +158,7 @@ def design_cmd(
         if as_json:
             print(_json(tv.to_dict()))
         else:
-            _print_table(tv.table(f"{top.name or file}: Lemma 1 at every instant"))
+            print_table(tv.table(f"{top.name or file}: Lemma 1 at every instant"))
         return
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
@@ -209,10 +168,10 @@ def design_cmd(
         print(_json(res.to_dict()))
     elif isinstance(res, SwitchingDesign):
         for k, d in res.modes.items():
-            _print_table(d.table(f"mode {k}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
+            print_table(d.table(f"mode {k}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
     else:
         name = res.topology.name or str(file)
-        _print_table(res.table(f"{name}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
+        print_table(res.table(f"{name}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
 
 
 @app.command(epilog="Example: ntc generate --n 1000 --d 3 --out runs/net.npz")
@@ -237,72 +196,6 @@ def generate(
     out.print(f"wrote {out_path}: {top.name}, N = {top.n}, d = {top.dim}, {len(top.weights)} edges")
 
 
-class Progress:
-    """Progress on stderr: a rich bar on a terminal; otherwise (a batch job, a pipe) a plain
-    line every ``every`` seconds from a heartbeat thread, so that a long run is never
-    silent, and one line when a later stage starts."""
-
-    def __init__(self, what: str, every: float = 5.0, tty: bool | None = None):
-        self.what, self.every = what, every
-        self.tty = sys.stderr.isatty() if tty is None else tty
-        self.t0 = time.monotonic()
-        self.state = "starting"
-        self.tasks: dict[str, int] = {}
-        self._stop = threading.Event()
-        self._bar: Any = None  # a rich progress bar on a terminal
-        self._thread: threading.Thread | None = None
-
-    def __enter__(self) -> Progress:
-        if self.tty:
-            from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
-            from rich.progress import Progress as Bar
-
-            self._bar = Bar(
-                TextColumn("{task.description}"),
-                BarColumn(),
-                TextColumn("{task.percentage:>3.0f}%"),
-                TimeRemainingColumn(),
-                console=Console(stderr=True),
-            )
-            self._bar.__enter__()
-        else:
-            self._thread = threading.Thread(target=self._beat, daemon=True)
-            self._thread.start()
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join()
-        if self._bar is not None:
-            self._bar.__exit__(*exc)
-
-    def _line(self, text: str) -> None:
-        print(
-            f"{self.what}: [{time.monotonic() - self.t0:.0f} s] {text}", file=sys.stderr, flush=True
-        )
-
-    def _beat(self) -> None:
-        while not self._stop.wait(self.every):
-            self._line(self.state)
-
-    def stage(self, text: str) -> None:
-        """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
-        once only after the first ``every`` seconds, so that a quick run, or bad input
-        refused at the start, prints nothing but its result or its one error line."""
-        self.state = text
-        if not self.tty and time.monotonic() - self.t0 >= self.every:
-            self._line(text)
-
-    def tick(self, key: str, done: int, total: int) -> None:
-        """``done`` of ``total`` units of Monte Carlo work (path-steps) of run ``key``."""
-        self.state = f"{key}: Monte Carlo {100 * done / max(total, 1):.0f}% done"
-        if self._bar is not None:
-            if key not in self.tasks:
-                self.tasks[key] = self._bar.add_task(key, total=total)
-            self._bar.update(self.tasks[key], completed=done, total=total)
-
-
 @app.command(epilog="Example: ntc gain '1/(1+t)'")
 def gain(
     expr: Annotated[str, typer.Argument(help="c(t), e.g. '1/(1+t)' or '(1+t)^(-1/3)'.")],
@@ -313,7 +206,7 @@ def gain(
     from .gain import analyse_gain
 
     analysis = analyse_gain(expr)
-    print(_json(analysis.to_dict())) if as_json else _print_table(analysis.table())
+    print(_json(analysis.to_dict())) if as_json else print_table(analysis.table())
     if analysis.mean_square is not True:  # no theorem's conditions on c hold (as certify)
         raise typer.Exit(1)
 
@@ -379,7 +272,7 @@ def certify(
 
 def _print_certify(res, written: Path | None) -> None:
     for t in res.tables():  # the HTML report and notebooks show the same tables
-        _print_table(t)
+        print_table(t)
     if written is not None:
         out.print(f"certificate written to {written} (re-check with: ntc verify {written})")
 
@@ -542,41 +435,6 @@ def simulate(
     out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
-def _sweep_progress():
-    """(callback, context): a bar for points and path-steps on a terminal, otherwise a
-    plain line on stderr every PLAIN_EVERY seconds (and at the end), for batch jobs."""
-    if not sys.stderr.isatty():
-        last = [0.0]
-
-        def plain(st) -> None:
-            now = time.monotonic()
-            if now - last[0] >= PLAIN_EVERY or st.points_done == st.points_total:
-                last[0] = now
-                print(st.line(), file=sys.stderr, flush=True)
-
-        return plain, contextlib.nullcontext()
-    from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
-    from rich.progress import Progress as Bar
-
-    prog = Bar(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.percentage:>3.0f}%"),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-    )
-    ids: dict[str, int] = {}
-
-    def bar(st) -> None:
-        if not ids:
-            ids["p"] = prog.add_task("points", total=st.points_total)
-            ids["s"] = prog.add_task("path-steps", total=max(st.path_steps_total, 1))
-        prog.update(ids["p"], completed=st.points_done, total=st.points_total)
-        prog.update(ids["s"], completed=st.path_steps_done, total=max(st.path_steps_total, 1))
-
-    return bar, prog
-
-
 @app.command(epilog="Example: ntc sweep examples/sweeps/g1_noise.yaml --out runs/g1_noise")
 def sweep(
     sweep_file: Annotated[Path, typer.Argument(help="A sweep file (YAML/JSON).")],
@@ -594,7 +452,7 @@ def sweep(
     from .sweep import load_sweep, run_sweep
 
     sw = load_sweep(sweep_file)
-    callback, ctx = _sweep_progress()
+    callback, ctx = sweep_progress()
     with ctx:
         res = run_sweep(sw, out_dir, scheduler=scheduler, workers=workers, progress=callback)
     import pandas as pd

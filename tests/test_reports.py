@@ -250,7 +250,7 @@ def test_simulate_json_and_plain_progress(tmp_path, capsys, monkeypatch):
 def test_progress_heartbeat_off_a_terminal(capsys):
     import time
 
-    from ntc_design.cli import Progress
+    from ntc_design.reports.terminal import Progress
 
     with Progress("ntc x", every=1.0, tty=False) as p:
         p.stage("g1: simulating")  # not printed at once: quick runs stay quiet

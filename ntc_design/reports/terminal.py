@@ -1,0 +1,187 @@
+"""The terminal face: the console the CLI prints to, presentation tables
+(:mod:`ntc_design.rows`) rendered with rich, and progress on stderr (a bar on a terminal,
+plain lines in a batch job)."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+import threading
+import time
+from typing import Any
+
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from ..rows import Cell
+from ..rows import Table as RowsTable
+
+PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
+
+# Off a terminal (pipes, CI logs) rich would wrap at 80 columns and split result lines:
+# print each line whole, and let tables use up to 120 columns.
+out = Console(
+    highlight=False, soft_wrap=not sys.stdout.isatty(), width=None if sys.stdout.isatty() else 120
+)
+
+
+_VERDICT_STYLE = {True: "green", False: "red", None: "yellow"}
+
+
+def _rich_cell(c: Cell) -> str:
+    """A cell for rich: the verdict word coloured, markup in the text escaped."""
+    text = escape(c.plain().replace("\n", "; "))
+    if c.judged:
+        word = escape(c.verdict_word)
+        return text.replace(word, f"[{_VERDICT_STYLE[c.verdict]}]{word}[/]", 1)
+    return text
+
+
+def print_table(t: RowsTable) -> None:
+    """One presentation table on the terminal: a grid, or ``label: value`` lines for a
+    list-layout table (the theorem verdicts), then its notes.
+
+    Parameters
+    ----------
+    t : ntc_design.rows.Table
+        The table.
+    """
+    if t.layout == "list":
+        if t.title:
+            out.print(f"[bold]{escape(t.title)}[/bold]")
+        for line in t.list_lines():
+            out.print(escape(line))
+    else:
+        g = Table(title=t.title)
+        for c in t.columns:
+            g.add_column(c)
+        for r in t.rows:
+            g.add_row(*[_rich_cell(c) for c in r])
+        out.print(g)
+    for n in t.notes:
+        out.print(f"  note: {escape(n)}")
+
+
+class Progress:
+    """Progress on stderr: a rich bar on a terminal; otherwise (a batch job, a pipe) a plain
+    line every ``every`` seconds from a heartbeat thread, so that a long run is never
+    silent, and one line when a later stage starts."""
+
+    def __init__(self, what: str, every: float = 5.0, tty: bool | None = None):
+        self.what, self.every = what, every
+        self.tty = sys.stderr.isatty() if tty is None else tty
+        self.t0 = time.monotonic()
+        self.state = "starting"
+        self.tasks: dict[str, int] = {}
+        self._stop = threading.Event()
+        self._bar: Any = None  # a rich progress bar on a terminal
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> Progress:
+        if self.tty:
+            from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+            from rich.progress import Progress as Bar
+
+            self._bar = Bar(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                TextColumn("{task.percentage:>3.0f}%"),
+                TimeRemainingColumn(),
+                console=Console(stderr=True),
+            )
+            self._bar.__enter__()
+        else:
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+
+    def _line(self, text: str) -> None:
+        print(
+            f"{self.what}: [{time.monotonic() - self.t0:.0f} s] {text}", file=sys.stderr, flush=True
+        )
+
+    def _beat(self) -> None:
+        while not self._stop.wait(self.every):
+            self._line(self.state)
+
+    def stage(self, text: str) -> None:
+        """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
+        once only after the first ``every`` seconds, so that a quick run, or bad input
+        refused at the start, prints nothing but its result or its one error line.
+
+        Parameters
+        ----------
+        text : str
+            What the run is doing now.
+        """
+        self.state = text
+        if not self.tty and time.monotonic() - self.t0 >= self.every:
+            self._line(text)
+
+    def tick(self, key: str, done: int, total: int) -> None:
+        """``done`` of ``total`` units of Monte Carlo work (path-steps) of run ``key``.
+
+        Parameters
+        ----------
+        key : str
+            The run.
+        done, total : int
+            Path-steps done and in all.
+        """
+        self.state = f"{key}: Monte Carlo {100 * done / max(total, 1):.0f}% done"
+        if self._bar is not None:
+            if key not in self.tasks:
+                self.tasks[key] = self._bar.add_task(key, total=total)
+            self._bar.update(self.tasks[key], completed=done, total=total)
+
+
+def sweep_progress():
+    """A bar for points and path-steps on a terminal, otherwise a plain line on stderr
+    every PLAIN_EVERY seconds (and at the end), for batch jobs.
+
+    Returns
+    -------
+    (callable, context manager)
+        The callback :func:`ntc_design.sweep.run_sweep` calls, and what to enter around it.
+    """
+    if not sys.stderr.isatty():
+        last = [0.0]
+
+        def plain(st) -> None:
+            now = time.monotonic()
+            if now - last[0] >= PLAIN_EVERY or st.points_done == st.points_total:
+                last[0] = now
+                print(st.line(), file=sys.stderr, flush=True)
+
+        return plain, contextlib.nullcontext()
+    from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+    from rich.progress import Progress as Bar
+
+    prog = Bar(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+    )
+    ids: dict[str, int] = {}
+
+    def bar(st) -> None:
+        if not ids:
+            ids["p"] = prog.add_task("points", total=st.points_total)
+            ids["s"] = prog.add_task("path-steps", total=max(st.path_steps_total, 1))
+        prog.update(ids["p"], completed=st.points_done, total=st.points_total)
+        prog.update(ids["s"], completed=st.path_steps_done, total=max(st.path_steps_total, 1))
+
+    return bar, prog
+
+
+__all__ = ["PLAIN_EVERY", "Progress", "out", "print_table", "sweep_progress"]
