@@ -62,19 +62,25 @@ def fmt(x: Any, digits: int = 4) -> str:
     return str(x)
 
 
-def set_text(xs: Iterable[Any]) -> str:
-    """Agent labels as a set, ``{1, 2, 5}``.
+def set_text(xs: Iterable[Any], most: int | None = None) -> str:
+    """Agent labels as a set, ``{1, 2, 5}``; with ``most``, the first ``most`` and how
+    many there are in all (``{1, 2, …; 3000 agents}``).
 
     Parameters
     ----------
     xs : iterable
         The labels.
+    most : int, optional
+        How many to name.
 
     Returns
     -------
     str
     """
-    return "{" + ", ".join(str(x) for x in xs) + "}"
+    items = [str(x) for x in xs]
+    if most is not None and len(items) > most:
+        return "{" + ", ".join(items[:most]) + f", …; {len(items)} agents}}"
+    return "{" + ", ".join(items) + "}"
 
 
 @dataclass(frozen=True)

@@ -302,8 +302,9 @@ def test_save_times_on_switching_instants_keep_their_paths():
 
 @pytest.mark.slow
 def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkeypatch):
-    """Nd = 75 > 60: the certificate is switching-scale, its proven bounds are reported; a
-    report wider than REPORT_MAX_AGENTS is refused in one line."""
+    """Nd = 75 > 60: the certificate is switching-scale, its proven bounds are reported; 25
+    agents (> AGGREGATE_ABOVE) give the aggregate report: quantiles, worst agents, the
+    topology and spectrum pictures, no per-agent legend."""
     from ntc_design.generate import random_network, write_topology
 
     for k, seed in (("a", 3), ("b", 4)):
@@ -330,7 +331,26 @@ def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkey
     for k, lo in cert["proofs"].items():
         assert f"{k}: {lo['lower']:.6g}" in html  # the proven bound, per mode
     assert "Theorem 3" in html and ("λ_min &gt; ℓ" in html or "λ_min > ℓ" in html)
-    import ntc_design.reports.report as rep
+    assert "median agent" in html and "90 % of agents below" in html
+    assert "agent 25" not in html  # no per-agent legend or curve
+    for stem in ("ms_quantiles", "final_hist", "degrees", "sparsity", "spectrum"):
+        for ext in ("png", "svg", "pdf"):
+            assert (out / "figures" / f"run_{stem}.{ext}").is_file(), (stem, ext)
+    table = json.loads((out / "summary.json").read_text())["final_ms_error_mc"]
+    worst = max(table, key=table.get)
+    assert f"<td>{worst}</td>" in html  # the worst agent is named in the final-error table
 
-    monkeypatch.setattr(rep, "REPORT_MAX_AGENTS", 24)
-    assert_input_error(["report", out], capsys, monkeypatch, "N = 25 agents", "up to N = 24")
+
+def test_total_band_is_conservative():
+    """The total's band adds the per-agent half-widths: never narrower than the widest
+    agent's, and it contains the sum of the means."""
+    from ntc_design.reports.aggregate import total_band
+    from ntc_design.simulate.result import MeanSquareBand
+
+    rng = np.random.default_rng(np.random.SeedSequence(3))
+    mean = rng.uniform(1, 2, size=(4, 30))
+    half = rng.uniform(0, 0.5, size=(4, 30))
+    tb = total_band(MeanSquareBand(mean=mean, lo=mean - half, hi=mean + half))
+    np.testing.assert_allclose(tb.mean[:, 0], mean.sum(axis=1))
+    np.testing.assert_allclose(tb.hi[:, 0] - tb.mean[:, 0], half.sum(axis=1))
+    assert np.all(tb.hi[:, 0] - tb.lo[:, 0] >= 2 * half.max(axis=1))

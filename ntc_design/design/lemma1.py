@@ -254,6 +254,7 @@ class SwitchingDesign:
 
 
 MAX_VIOLATIONS_SHOWN = 10  # in a table's notes (--json and to_dict() list them all)
+MAX_AGENTS_SHOWN = 12  # agents named in a set, and B_i rows, in a table (--json has all)
 
 
 def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None) -> Table:
@@ -278,6 +279,8 @@ def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None
     first = ds[0]
     lab = first.topology.labels
     informed = sorted({i for d in ds for i in d.informed})
+    hidden = max(0, len(informed) - MAX_AGENTS_SHOWN)
+    informed = informed[:MAX_AGENTS_SHOWN]
 
     def row(label: str, f):
         return (label, *[f(d) for d in ds])
@@ -295,13 +298,19 @@ def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None
 
     rows = [
         row("Assumption 2", holds),
-        row("V1 / V2", lambda d: f"{set_text(d.v1_agents)} / {set_text(d.v2_agents)}"),
+        row(
+            "V1 / V2",
+            lambda d: (
+                f"{set_text(d.v1_agents, MAX_AGENTS_SHOWN)} / "
+                f"{set_text(d.v2_agents, MAX_AGENTS_SHOWN)}"
+            ),
+        ),
         row("C", lambda d: d.C),
         row("δ = C + ΔC", lambda d: d.delta),
         row("k1 = 1 + 2/δ", lambda d: d.k1),
         row("θ", lambda d: matrix([d.theta])),
         row("x0 = k1·θ", lambda d: matrix([d.x0])),
-        row("informed agents V_I = U", lambda d: set_text(d.informed_agents)),
+        row("informed agents V_I = U", lambda d: set_text(d.informed_agents, MAX_AGENTS_SHOWN)),
         *[
             row(f"B_{lab[i]}", lambda d, i=i: matrix(d.B[i]) if i in d.B else "— (naive)")
             for i in informed
@@ -315,6 +324,15 @@ def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None
         row("best decay rate", lambda d: crit(d, "best_rate")),
         row("δ of the best rate", best_delta),
     ]
+    if hidden:
+        rows.insert(
+            rows.index(
+                next(
+                    r for r in rows if r[0] == "identity residual ‖L_B(1⊗θ) − k1(Δ⊗I)Bθ‖ (relative)"
+                )
+            ),
+            (f"B_i of {hidden} more informed agents", *["in --json / to_dict()" for _ in ds]),
+        )
     several = len(designs) > 1
     notes: list[str] = []
     for name, d in designs.items():

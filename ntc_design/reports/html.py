@@ -48,7 +48,7 @@ class RunSection:
     title: str
     rerun: str
     designs: list
-    coupling: Figure
+    coupling: Figure | None  # None in the aggregate report (dense δ scans do not scale)
     certificate: Table
     checks: Table
     gain: Table
@@ -79,6 +79,8 @@ class RunSection:
             ("data", "Data files"),
             ("parameters", "Parameters"),
         ]
+        if self.coupling is None:
+            sub = [x for x in sub if x[0] != "coupling"]
         return {
             "id": self.key,
             "title": self.title,

@@ -14,7 +14,7 @@ import numpy as np
 
 from ntc_design.certify.format import package_versions
 
-from ..certify import CertifyResult, certify, verify_file, write_certificate
+from ..certify import CertifyResult, certify
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError
@@ -25,18 +25,18 @@ from ..rows import fmt
 from ..simulate.result import MeanSquareBand
 from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
+from .aggregate import AGGREGATE_ABOVE, aggregate_section
 from .html import (
     Figure,
     RunSection,
     Table,
     figure_block,
     html_table,
-    matrix,
-    rel,
     render,
     write_html,
 )
-from .rundata import REPORT_MAX_AGENTS, RunData, load_run
+from .parts import certificate_tables, data_links, fitted_exponent, mc_band, parameter_table
+from .rundata import RunData, load_run
 from .timevarying import lambda_min_figure, weights_figure
 
 # --------------------------------------------------------------------------- sections
@@ -55,42 +55,9 @@ def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[list, dict]:
     return [("", html_table(des.table()))], docs
 
 
-def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, dict]:
-    """Write the certificate, re-verify it from the file; summary and checks tables."""
-    write_certificate(res.certificate, cert_path)
-    ver = verify_file(cert_path)
-    r = res.certificate["results"]
-    rows = [
-        (
-            "certificate",
-            {
-                "href": rel(cert_path, base),
-                "text": f"{cert_path.name} ({res.certificate['kind']}, {res.certificate['digest'][:23]}…)",
-            },
-        ),
-        (
-            "re-verified from the file (no SDP solver)",
-            {
-                "verdict": ver.valid,
-                "text": f"— {ver.method}, {sum(c.ok for c in ver.checks)}/{len(ver.checks)} checks",
-            },
-        ),
-    ]
-    rows += list(html_table(res.results_table()).rows)
-    checks = html_table(ver.table())
-    return Table(("property", "result"), rows), checks, {"valid": ver.valid, "results": r}
 
 
 # ------------------------------------------------------------------------ convergence
-
-
-def fitted_exponent(t: np.ndarray, y: np.ndarray, t_from: float) -> float | None:
-    """p in y ≈ K (1+t)^(−p), least squares of log y on log(1+t) over t >= t_from."""
-    sel = (t >= t_from) & (y > 0) & np.isfinite(y)
-    if sel.sum() < 5:
-        return None
-    slope = np.polyfit(np.log1p(t[sel]), np.log(y[sel]), 1)[0]
-    return float(-slope)
 
 
 def predicted_exponent(gain: str, rate: float) -> tuple[float | None, str]:
@@ -169,36 +136,6 @@ def _average_rate(des: ProtocolDesign | SwitchingDesign, top) -> float:
 # --------------------------------------------------------------------------- one run
 
 
-def _flatten(prefix: str, v, out: list) -> None:
-    if isinstance(v, dict) and v:
-        for k, w in v.items():
-            _flatten(f"{prefix}.{k}" if prefix else str(k), w, out)
-    else:
-        out.append((prefix, v))
-
-
-def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
-    rows: list[tuple] = []
-    for k, v in p.items():
-        if k == "initial" and isinstance(v, list) and len(v) == n * d:
-            rows.append(("initial x(0) (agents × d)", matrix(np.reshape(v, (n, d)))))
-        elif k == "schedule" and isinstance(v, list):
-            rows.append(
-                ("schedule (one period)", ", ".join(f"{s['mode']} {s['duration']:g}" for s in v))
-            )
-        elif isinstance(v, dict):
-            flat: list = []
-            _flatten(k, v, flat)
-            rows += [(a, fmt(b) if b not in ({}, [], None) else "—") for a, b in flat]
-        else:
-            rows.append((k, fmt(v)))
-    for k in ("steps", "path_steps", "mc_seconds", "path_steps_per_second", "exact_seconds"):
-        if k in run_info:
-            v = run_info[k]
-            rows.append((f"run.{k}", f"{v:.4g}" if isinstance(v, float) else str(v)))
-    return Table(("parameter", "value"), rows)
-
-
 def _time_varying(run: RunData, p: dict, figdir: Path) -> tuple:
     """For a run over weights given as expressions of t: its time-varying certificate
     (:mod:`ntc_design.certify.time_varying`) and the figures of
@@ -265,18 +202,6 @@ def _certified(run: RunData, figdir: Path, base: Path) -> _Certified:
     return _Certified(res, des, cert_res, tv_figs, cert_tab, checks, cert)
 
 
-def _band(run: RunData) -> MeanSquareBand | None:
-    """The Monte Carlo curves with their band, read back from ms_error.csv."""
-    mean = run.ms("mc")
-    if mean is None:
-        return None
-    return MeanSquareBand(
-        mean=mean,
-        lo=np.column_stack([run.table[f"mc_{a}_lo"] for a in run.labels]),
-        hi=np.column_stack([run.table[f"mc_{a}_hi"] for a in run.labels]),
-    )
-
-
 def _final_table(run: RunData, mc: MeanSquareBand | None, exact: np.ndarray | None) -> Table:
     """E‖x_i − θ‖² per agent at T (Monte Carlo with its band, exact) and at t = 0."""
     rows = []
@@ -311,19 +236,6 @@ def _spread_text(run: RunData) -> str:
         f"at t = {run.t[-1]:g} its mean is {sp_['final_error_norm_mean']:.4f} with spread "
         f"{fmt(sp_['final_error_norm_spread'])}."
     )
-
-
-def _data_links(run: RunData, figdir: Path, key: str, base: Path) -> list[tuple[str, str]]:
-    data = [
-        (f.name, rel(f, base))
-        for f in sorted(run.path.iterdir())
-        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.startswith(".")
-    ]
-    return data + [
-        (f.name, rel(f, base))
-        for f in sorted(figdir.glob(f"{key}_*"))
-        if f.suffix in (".png", ".svg", ".pdf")
-    ]
 
 
 def run_section(
@@ -367,21 +279,15 @@ def run_section(
     Raises
     ------
     InputError
-        More agents than a per-agent report draws.
+        A malformed run folder.
     """
     base = base or run.path
     p = run.summary["parameters"]
     top = run.topology()
-    if top.n > REPORT_MAX_AGENTS:  # per-agent figures and tables: refused, not half-drawn
-        raise InputError(
-            f"{run.path}: N = {top.n} agents; the report draws every agent (figures, tables) "
-            f"up to N = {REPORT_MAX_AGENTS}: use summary.json and ms_error_long.csv, and "
-            "ntc certify for the certificate"
-        )
     c = _certified(run, figdir, base)
     designs, des_docs = design_tables(c.design)
     doc = c.cert_res.to_dict()
-    mc, exact = _band(run), run.ms("exact")
+    mc, exact = mc_band(run), run.ms("exact")
     conv_note, conv, conv_facts = convergence_table(
         run, mc, exact, _average_rate(c.design, top)
     )
@@ -408,7 +314,7 @@ def run_section(
         path_figures=figs["paths"],
         final=_final_table(run, mc, exact),
         spread=_spread_text(run),
-        data_links=_data_links(run, figdir, key, base),
+        data_links=data_links(run, figdir, key, base),
         parameters=parameter_table(p, len(labels), run.theta.size, run.summary.get("run", {})),
         versions=Table(("package", "version"), sorted(package_versions().items())),
         interactive_agents=[(a, f"{key}-ag{i}") for i, a in enumerate(labels)]
@@ -552,9 +458,12 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
     check_output_file(run.path / name, "report")  # before the certificate and figures
     scen = run.summary.get("scenario") or str(run.path)
     title = f"Run {Path(scen).stem}"
-    section, _ = run_section(
-        run, run.path / "figures", title, "run", run.path, interactive=interactive
-    )
+    if len(run.labels) > AGGREGATE_ABOVE:  # quantiles over the agents, not one curve each
+        section, _ = aggregate_section(run, run.path / "figures", title, "run", run.path)
+    else:
+        section, _ = run_section(
+            run, run.path / "figures", title, "run", run.path, interactive=interactive
+        )
     out = run.path / name
     write_html(
         out,

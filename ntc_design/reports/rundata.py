@@ -109,7 +109,6 @@ class RunData:
 
 MAX_TEXT_BYTES = 256 * 2**20  # summary.json / ms_error.csv larger than this are refused
 #: A report draws every agent (topology figure, per-agent curves and tables): refused above.
-REPORT_MAX_AGENTS = 200
 NPZ_KEYS = ("t", "paths", "labels", "theta")
 
 

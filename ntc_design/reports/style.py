@@ -21,6 +21,7 @@ TWO_COLUMN = 7.16  # inches (full text width)
 DPI = 300
 FORMATS = ("png", "svg", "pdf")
 BLUE, RED, GREEN = "#1f5fbf", "#c8322d", "#2a7d4f"
+GREY = "0.45"
 MODE_COLOURS = ["#8ecae6", "#ffb703", "#90be6d", "#f4a3c4", "#bdb2ff", "#cdb4db"]
 LINESTYLES = ("-", "--", "-.", ":")
 MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">")

@@ -1,0 +1,118 @@
+"""Pieces every run section has, whatever its size: the certificate written and
+re-verified from its file, the parameters, the Monte Carlo band read back, the data links
+and the fitted decay exponent."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..certify import verify_file, write_certificate
+from ..rows import fmt
+from ..simulate.result import MeanSquareBand
+from .html import Table, html_table, matrix, rel
+from .rundata import RunData
+
+
+def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, dict]:
+    """Write the certificate, re-verify it from the file; summary and checks tables."""
+    write_certificate(res.certificate, cert_path)
+    ver = verify_file(cert_path)
+    r = res.certificate["results"]
+    rows = [
+        (
+            "certificate",
+            {
+                "href": rel(cert_path, base),
+                "text": f"{cert_path.name} ({res.certificate['kind']}, {res.certificate['digest'][:23]}…)",
+            },
+        ),
+        (
+            "re-verified from the file (no SDP solver)",
+            {
+                "verdict": ver.valid,
+                "text": f"— {ver.method}, {sum(c.ok for c in ver.checks)}/{len(ver.checks)} checks",
+            },
+        ),
+    ]
+    rows += list(html_table(res.results_table()).rows)
+    checks = html_table(ver.table())
+    return Table(("property", "result"), rows), checks, {"valid": ver.valid, "results": r}
+
+
+def fitted_exponent(t: np.ndarray, y: np.ndarray, t_from: float) -> float | None:
+    """p in y ≈ K (1+t)^(−p), least squares of log y on log(1+t) over t >= t_from."""
+    sel = (t >= t_from) & (y > 0) & np.isfinite(y)
+    if sel.sum() < 5:
+        return None
+    slope = np.polyfit(np.log1p(t[sel]), np.log(y[sel]), 1)[0]
+    return float(-slope)
+
+
+def _flatten(prefix: str, v, out: list) -> None:
+    if isinstance(v, dict) and v:
+        for k, w in v.items():
+            _flatten(f"{prefix}.{k}" if prefix else str(k), w, out)
+    else:
+        out.append((prefix, v))
+
+
+def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
+    """The run's parameters as a table (the initial state as a matrix for a few agents,
+    as its range for many)."""
+    rows: list[tuple] = []
+    for k, v in p.items():
+        if k == "initial" and isinstance(v, list) and len(v) == n * d and n > 20:
+            a = np.asarray(v, dtype=float)
+            rows.append(
+                (
+                    "initial x(0)",
+                    f"{n} × {d} values in summary.json, in [{fmt(a.min())}, {fmt(a.max())}]",
+                )
+            )
+        elif k == "initial" and isinstance(v, list) and len(v) == n * d:
+            rows.append(("initial x(0) (agents × d)", matrix(np.reshape(v, (n, d)))))
+        elif k == "schedule" and isinstance(v, list):
+            rows.append(
+                ("schedule (one period)", ", ".join(f"{s['mode']} {s['duration']:g}" for s in v))
+            )
+        elif isinstance(v, dict):
+            flat: list = []
+            _flatten(k, v, flat)
+            rows += [(a, fmt(b) if b not in ({}, [], None) else "—") for a, b in flat]
+        else:
+            rows.append((k, fmt(v)))
+    for k in ("steps", "path_steps", "mc_seconds", "path_steps_per_second", "exact_seconds"):
+        if k in run_info:
+            v = run_info[k]
+            rows.append((f"run.{k}", f"{v:.4g}" if isinstance(v, float) else str(v)))
+    return Table(("parameter", "value"), rows)
+
+
+def mc_band(run: RunData) -> MeanSquareBand | None:
+    """The Monte Carlo curves with their band, read back from ms_error.csv."""
+    mean = run.ms("mc")
+    if mean is None:
+        return None
+    return MeanSquareBand(
+        mean=mean,
+        lo=np.column_stack([run.table[f"mc_{a}_lo"] for a in run.labels]),
+        hi=np.column_stack([run.table[f"mc_{a}_hi"] for a in run.labels]),
+    )
+
+
+def data_links(run: RunData, figdir: Path, key: str, base: Path) -> list[tuple[str, str]]:
+    data = [
+        (f.name, rel(f, base))
+        for f in sorted(run.path.iterdir())
+        if f.is_file() and f.suffix in (".json", ".csv", ".npz") and not f.name.startswith(".")
+    ]
+    return data + [
+        (f.name, rel(f, base))
+        for f in sorted(figdir.glob(f"{key}_*"))
+        if f.suffix in (".png", ".svg", ".pdf")
+    ]
+
+
+__all__ = ["certificate_tables", "data_links", "fitted_exponent", "mc_band", "parameter_table"]
