@@ -6,17 +6,20 @@ One self-contained HTML file; the figures are also written to DIR/figures."""
 from __future__ import annotations
 
 import base64
-import itertools
 import json
 import math
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from ..errors import InputError
 from ..outputs import check_output_file, write_atomic
 from ..rows import fmt
 from .html import render
+from .style import MARKERS, TWO_COLUMN, agent_style, markevery, paper_style, save
 
 MAX_CURVES = 200  # curves drawn in the overlay (every point is still in curves.parquet)
 MAX_ROWS = 2000  # rows of the HTML table (every point is in results.csv)
@@ -26,18 +29,28 @@ def _figure(png: bytes, alt: str) -> dict:
     return {"alt": alt, "png_b64": base64.b64encode(png).decode()}
 
 
+#: How a swept key reads on an axis (mathtext); other keys are shown as written.
+KEY_LABELS = {
+    "noise.sigma": r"noise $\sigma$",
+    "noise.f": r"$f$ in $f(x) = f\,x$",
+    "margin": r"margin $\Delta C$",
+    "T": r"horizon $T$",
+    "dt": r"step $\Delta t$",
+    "ds": r"step $\Delta s$",
+    "paths": "Monte Carlo paths",
+    "seed": "Monte Carlo seed",
+    "gain": r"gain $c(t)$",
+    "initial.seed": "seed of $x(0)$",
+}
+#: The same keys in a legend entry (``σ = 0.4``).
+KEY_SYMBOLS = {"noise.sigma": "σ", "noise.f": "f", "margin": "ΔC", "dt": "Δt", "ds": "Δs"}
+INTEGER_KEYS = {"seed", "paths", "initial.seed", "workers", "block_size", "store_paths"}
+
+
 def _save(fig, stem: Path) -> bytes:
-    """stem.png in DIR/figures; the PNG bytes for inlining."""
-    import io
-
-    import matplotlib.pyplot as plt
-
-    stem.parent.mkdir(parents=True, exist_ok=True)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    stem.with_suffix(".png").write_bytes(buf.getvalue())
-    return buf.getvalue()
+    """stem.png (300 dpi), .svg and .pdf in DIR/figures, in the one style; the PNG bytes
+    for inlining."""
+    return save(fig, stem).png
 
 
 def is_sweep_dir(directory: str | Path) -> bool:
@@ -94,78 +107,134 @@ def _positions(values) -> tuple[dict, list | None]:
     return {v: float(i) for i, v in enumerate(uniq)}, [str(v) for v in uniq]
 
 
-def ms_against_key(res, keys: list[str], key: str):
-    """Final MS error (MC solid, exact dashed) against ``key``, one line per combination
-    of the other keys' values."""
-    import matplotlib.pyplot as plt
+def _group_label(keys: list[str], vals: tuple) -> str:
+    return ", ".join(f"{KEY_SYMBOLS.get(k, k)} = {v}" for k, v in zip(keys, vals, strict=True))
 
-    others = [k for k in keys if k != key and res[k].nunique(dropna=False) > 1]
+
+def ms_against_key(res, keys: list[str], key: str):
+    """Final Σ_i E‖x_i(T) − θ‖² against ``key``: one colour per combination of the other
+    keys (the seed aside), the exact moments as a line (they do not depend on the seed),
+    Monte Carlo as markers, one marker shape per seed.
+
+    Parameters
+    ----------
+    res : pandas.DataFrame
+        results.csv.
+    keys : list of str
+        The swept keys.
+    key : str
+        The key on the x axis.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    others = [k for k in keys if k not in (key, "seed") and res[k].nunique(dropna=False) > 1]
+    seeds = list(dict.fromkeys(res["seed"])) if "seed" in res and key != "seed" else [None]
     pos, ticks = _positions(list(res[key]))
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
     groups = res.groupby(others, sort=False, dropna=False) if others else [((), res)]
-    colours = itertools.cycle(plt.rcParams["axes.prop_cycle"].by_key()["color"])
     ys: list[float] = []
-    for n_line, (vals, g) in enumerate(groups):
-        if n_line >= 20:
-            break
-        c = next(colours)
-        vals = vals if isinstance(vals, tuple) else (vals,)
-        label = ", ".join(f"{k}={v}" for k, v in zip(others, vals, strict=True)) or "MC"
-        g = g.assign(_x=[pos[v] for v in g[key]]).sort_values("_x")
-        for col, ls, suffix in (("ms_final_mc", "-", ""), ("ms_final_exact", "--", " (exact)")):
-            y = g[col].astype(float).to_numpy()
+    with paper_style():
+        fig, ax = plt.subplots(figsize=(TWO_COLUMN, 2.8), layout="constrained")
+        handles = []
+        for n_line, (vals, g) in enumerate(groups):
+            if n_line >= 12:
+                break
+            st = agent_style(n_line)
+            vals = vals if isinstance(vals, tuple) else (vals,)
+            g = g.assign(_x=[pos[v] for v in g[key]]).sort_values("_x")
+            ex = g.drop_duplicates("_x")
+            y = ex["ms_final_exact"].astype(float).to_numpy()
             ok = np.isfinite(y)
             if ok.any():
                 ys += y[ok].tolist()
-                ax.plot(
-                    g["_x"].to_numpy()[ok],
-                    y[ok],
-                    ls,
-                    marker="o",
-                    ms=4,
-                    color=c,
-                    label=(label + suffix) if (others or suffix) else label,
+                ax.plot(ex["_x"].to_numpy()[ok], y[ok], color=st.colour, ls=st.linestyle, lw=1.2)
+            for k, seed in enumerate(seeds):
+                sg = g if seed is None else g[g["seed"] == seed]
+                y = sg["ms_final_mc"].astype(float).to_numpy()
+                ok = np.isfinite(y)
+                if ok.any():
+                    ys += y[ok].tolist()
+                    ax.plot(sg["_x"].to_numpy()[ok], y[ok], ls="none", marker=MARKERS[k % len(MARKERS)],
+                            ms=4, mfc="none", color=st.colour)  # fmt: skip
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    color=st.colour,
+                    ls=st.linestyle,
+                    label=_group_label(others, vals) or "all points",
                 )
-    if _log_scale(ys):
-        ax.set_yscale("log")
-    if ticks is not None:
-        ax.set_xticks(range(len(ticks)), ticks, rotation=20, fontsize=8)
-    ax.set_xlabel(key)
-    ax.set_ylabel(r"$\sum_i E\|x_i(T)-\theta\|^2$")
-    ax.set_title(f"final mean-square error against {key}", fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, frameon=False)
-    fig.tight_layout()
+            )
+        handles.append(Line2D([], [], color="0.3", lw=1.2, label="exact moments (line)"))
+        for k, seed in enumerate(seeds):
+            name = "Monte Carlo" if seed is None else f"Monte Carlo, seed = {seed}"
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    color="0.3",
+                    ls="none",
+                    marker=MARKERS[k % len(MARKERS)],
+                    mfc="none",
+                    label=name,
+                )
+            )
+        if _log_scale(ys):
+            ax.set_yscale("log")
+        if ticks is not None:
+            ax.set_xticks(range(len(ticks)), ticks, rotation=20)
+        elif key in INTEGER_KEYS:
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_xlabel(KEY_LABELS.get(key, key))
+        ax.set_ylabel(r"$\sum_i E\,\|x_i(T)-\theta\|^2$")
+        fig.legend(handles=handles, loc="outside right center", frameon=False)
     return fig
 
 
 def curves_overlay(curves, res, keys: list[str]):
-    """Σ_i E‖x_i − θ‖² against t for every point (MC), on one axis."""
-    import matplotlib.pyplot as plt
+    """Σ_i E‖x_i(t) − θ‖² (Monte Carlo) for every point on one axis, each point with its
+    own colour, line style and marker (a legend outside the axes up to 16 points).
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    Parameters
+    ----------
+    curves : pandas.DataFrame
+        curves.parquet.
+    res : pandas.DataFrame
+        results.csv.
+    keys : list of str
+        The swept keys.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     total = curves.groupby(["point", "t"], sort=False)["mc"].sum(min_count=1).reset_index()
-    label_of = {r["point"]: ", ".join(f"{k}={r[k]}" for k in keys) for _, r in res.iterrows()}
+    label_of = {
+        r["point"]: _group_label(keys, tuple(r[k] for k in keys)) for _, r in res.iterrows()
+    }
     drawn, ys = 0, []
-    for point, g in total.groupby("point", sort=False):
-        if drawn >= MAX_CURVES:
-            break
-        y = g["mc"].to_numpy(dtype=float)
-        ok = np.isfinite(y)
-        if not ok.any():
-            continue
-        ys += [float(y[ok].min()), float(y[ok].max())]
-        ax.plot(g["t"].to_numpy()[ok], y[ok], lw=1, alpha=0.8, label=label_of.get(point, point))
-        drawn += 1
-    if _log_scale(ys):
-        ax.set_yscale("log")
-    ax.set_xlabel("t")
-    ax.set_ylabel(r"$\sum_i E\|x_i(t)-\theta\|^2$ (MC)")
-    ax.set_title(f"mean-square error of {drawn} points", fontsize=10)
-    ax.grid(alpha=0.3)
-    if drawn <= 16:
-        ax.legend(fontsize=6, frameon=False)
-    fig.tight_layout()
+    with paper_style():
+        fig, ax = plt.subplots(figsize=(TWO_COLUMN, 3.0), layout="constrained")
+        for point, g in total.groupby("point", sort=False):
+            if drawn >= MAX_CURVES:
+                break
+            y = g["mc"].to_numpy(dtype=float)
+            ok = np.isfinite(y)
+            if not ok.any():
+                continue
+            ys += [float(y[ok].min()), float(y[ok].max())]
+            st = agent_style(drawn)
+            t = g["t"].to_numpy()[ok]
+            ax.plot(t, y[ok], color=st.colour, ls=st.linestyle, marker=st.marker, ms=3,
+                    markevery=markevery(drawn, t.size), lw=1.0, label=label_of.get(point, point))  # fmt: skip
+            drawn += 1
+        if _log_scale(ys):
+            ax.set_yscale("log")
+        ax.set_xlabel("$t$")
+        ax.set_ylabel(r"$\sum_i E\,\|x_i(t)-\theta\|^2$ (Monte Carlo)")
+        if drawn <= 16:
+            fig.legend(loc="outside right center", frameon=False, fontsize=7)
     return fig
 
 
