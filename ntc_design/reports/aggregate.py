@@ -192,6 +192,11 @@ def certificate_picture(cert: dict, des: ProtocolDesign):
     -------
     matplotlib.figure.Figure or None
         None when neither is available (L_B too large for dense eigenvalues).
+
+    Raises
+    ------
+    InputError
+        The certificate's μ array is malformed.
     """
     with paper_style():
         if cert["kind"] == "hurwitz-scale":
@@ -234,7 +239,21 @@ def total_band(mc: MeanSquareBand) -> MeanSquareBand:
 
 
 def worst_table(run: RunData, ms: np.ndarray, kind: str) -> Table:
-    """The agents with the largest final error, with the quantiles over all agents."""
+    """The agents with the largest final error, with the quantiles over all agents.
+
+    Parameters
+    ----------
+    run : RunData
+        The run.
+    ms : numpy.ndarray
+        E‖x_i − θ‖² (S, N).
+    kind : str
+        "exact" or "MC", for the header.
+
+    Returns
+    -------
+    Table
+    """
     final = ms[-1]
     worst = np.argsort(final)[::-1][:WORST_ROWS]
     rows: list[tuple] = [

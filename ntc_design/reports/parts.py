@@ -16,7 +16,27 @@ from .rundata import RunData
 
 
 def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, dict]:
-    """Write the certificate, re-verify it from the file; summary and checks tables."""
+    """Write the certificate, re-verify it from the file; the summary and checks tables.
+
+    Parameters
+    ----------
+    res : CertifyResult
+        The result whose certificate is shown.
+    cert_path : pathlib.Path
+        Where the certificate is written.
+    base : pathlib.Path
+        The folder links are relative to.
+
+    Returns
+    -------
+    (Table, Table, dict)
+        The summary, the checks, and ``{"valid", "results"}``.
+
+    Raises
+    ------
+    InputError
+        The certificate cannot be written or read back.
+    """
     write_certificate(res.certificate, cert_path)
     ver = verify_file(cert_path)
     r = res.certificate["results"]
@@ -42,7 +62,22 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
 
 
 def fitted_exponent(t: np.ndarray, y: np.ndarray, t_from: float) -> float | None:
-    """p in y ≈ K (1+t)^(−p), least squares of log y on log(1+t) over t >= t_from."""
+    """p in y ≈ K (1+t)^(−p), least squares of log y on log(1+t) over t >= t_from.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Times.
+    y : numpy.ndarray
+        Positive values at those times.
+    t_from : float
+        The start of the fitted window.
+
+    Returns
+    -------
+    float or None
+        p; None with fewer than three positive points in the window.
+    """
     sel = (t >= t_from) & (y > 0) & np.isfinite(y)
     if sel.sum() < 5:
         return None
@@ -60,7 +95,21 @@ def _flatten(prefix: str, v, out: list) -> None:
 
 def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
     """The run's parameters as a table (the initial state as a matrix for a few agents,
-    as its range for many)."""
+    as its range for many).
+
+    Parameters
+    ----------
+    p : dict
+        summary.json's parameters.
+    n, d : int
+        Agents and state dimension.
+    run_info : dict
+        summary.json's run statistics.
+
+    Returns
+    -------
+    Table
+    """
     rows: list[tuple] = []
     for k, v in p.items():
         if k == "initial" and isinstance(v, list) and len(v) == n * d and n > 20:
@@ -91,7 +140,18 @@ def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
 
 
 def mc_band(run: RunData) -> MeanSquareBand | None:
-    """The Monte Carlo curves with their band, read back from ms_error.csv."""
+    """The Monte Carlo curves with their band, read back from ms_error.csv.
+
+    Parameters
+    ----------
+    run : RunData
+        The run.
+
+    Returns
+    -------
+    MeanSquareBand or None
+        None when the run has no Monte Carlo curves.
+    """
     mean = run.ms("mc")
     if mean is None:
         return None
@@ -103,6 +163,24 @@ def mc_band(run: RunData) -> MeanSquareBand | None:
 
 
 def data_links(run: RunData, figdir: Path, key: str, base: Path) -> list[tuple[str, str]]:
+    """Links to the run's data files and to this section's figures.
+
+    Parameters
+    ----------
+    run : RunData
+        The run.
+    figdir : pathlib.Path
+        The figures' folder.
+    key : str
+        The section's figure prefix.
+    base : pathlib.Path
+        The folder links are relative to.
+
+    Returns
+    -------
+    list of (str, str)
+        (file name, link).
+    """
     data = [
         (f.name, rel(f, base))
         for f in sorted(run.path.iterdir())
