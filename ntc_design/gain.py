@@ -157,6 +157,13 @@ class GainAnalysis:
     def _repr_html_(self) -> str:
         return self.table().html()
 
+    def __repr__(self) -> str:
+        word = {True: "yes", False: "no", None: "undetermined"}
+        return (
+            f"GainAnalysis(c(t) = {show(self.expr)}, mean square {word[self.mean_square]}, "
+            f"almost sure {word[self.almost_sure]})"
+        )
+
     def to_dict(self) -> dict:
         """The analysis as a JSON-ready mapping (what ``ntc gain --json`` prints).
 

@@ -123,3 +123,24 @@ def test_report_tables_carry_the_terminal_labels(tmp_path, capsys, monkeypatch):
         for label in t.labels:
             assert _squash(label) in page, label
     assert "Theorem 1 (mean square) guaranteed" in page
+
+
+def test_notebook_representations_show_the_terminal_numbers(g1, switching_set, theta):
+    """Every object a researcher holds in Jupyter has a short repr and an HTML view whose
+    visible text holds the numbers of its table (the terminal's)."""
+    from ntc_design.simulate import simulate
+
+    res = certify(g1, theta, gain="1/(1+t)")
+    run = simulate(g1, theta, T=0.5, paths=20, seed=1)
+    objects = [g1, switching_set, res.design, res, res.verification, run, analyse_gain("1/(1+t)")]
+    for obj in objects:
+        page = _text(obj._repr_html_())
+        tables = obj.tables() if hasattr(obj, "tables") else (obj.table(),)
+        for t in tables:
+            for label, row in zip(t.labels, t.rows, strict=True):
+                assert _squash(label) in page, (type(obj).__name__, label)
+                if not row[-1].matrix:
+                    assert _squash(row[-1].plain().split("\n")[0]) in page, (label, row[-1].plain())
+        assert len(repr(obj)) < 300 and "array(" not in repr(obj), repr(obj)
+    assert "<svg" in g1._repr_html_() and "<svg" in run._repr_html_()  # the network, the curves
+    assert repr(g1) == "Topology('G1', N=7, d=3, 8 edges (3 antagonistic), U={2, 3})"

@@ -165,6 +165,13 @@ class Verification:
     def _repr_html_(self) -> str:
         return self.table().html()
 
+    def __repr__(self) -> str:
+        failed = [c.name for c in self.failed]
+        what = f"{len(self.checks)} checks" + (
+            f", failing: {'; '.join(failed[:3])}" if failed else ""
+        )
+        return f"Verification({'valid' if self.valid else 'INVALID'}, {self.method}, {what})"
+
     def to_dict(self) -> dict:
         """The verification as a JSON-ready mapping (what ``ntc verify --json`` prints).
 

@@ -16,7 +16,7 @@ from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
 from .kinds import KINDS, ResultRow, kind_for
-from .theorems import TheoremVerdict, theorem_table
+from .theorems import GUARANTEE_WORD, TheoremVerdict, theorem_table
 from .verify import verify
 
 
@@ -74,6 +74,13 @@ class CertifyResult:
 
     def _repr_html_(self) -> str:
         return "".join(t.html() for t in (self.design.table(), *self.tables()))
+
+    def __repr__(self) -> str:
+        ver = "valid" if self.verification.valid else "INVALID"
+        verdicts = ", ".join(
+            f"Theorem {t.theorem}: {GUARANTEE_WORD[t.guaranteed]}" for t in self.theorems
+        )
+        return f"CertifyResult({self.certificate['kind']}, {ver}; {verdicts or 'no gain given'})"
 
     def to_dict(self) -> dict:
         """The result as a JSON-ready mapping (what ``ntc certify --json`` prints).

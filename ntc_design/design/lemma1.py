@@ -180,6 +180,14 @@ class ProtocolDesign:
     def _repr_html_(self) -> str:
         return self.table().html()
 
+    def __repr__(self) -> str:
+        holds = "holds" if self.assumption_holds else "fails"
+        c = "undefined" if self.C is None else f"{self.C:.6g}"
+        return (
+            f"ProtocolDesign({self.topology.name or 'unnamed'!r}, δ={self.delta:.6g}, C={c}, "
+            f"informed={set_text(self.informed_agents, 12)}, Assumption 2 {holds})"
+        )
+
     def to_dict(self) -> dict:
         """The design as a JSON-ready mapping, agents as labels.
 
@@ -237,6 +245,10 @@ class SwitchingDesign:
 
     def _repr_html_(self) -> str:
         return self.table().html()
+
+    def __repr__(self) -> str:
+        deltas = ", ".join(f"{k}: δ={d.delta:.6g}" for k, d in self.modes.items())
+        return f"SwitchingDesign({deltas})"
 
     def to_dict(self) -> dict:
         """The designs as a JSON-ready mapping.

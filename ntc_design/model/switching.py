@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import files
 from ..errors import InputError
+from ..rows import Table
 from .topology import Label, Topology
 
 
@@ -51,7 +52,9 @@ class SwitchingTopology:
         # infinity, or a duration lost in rounding (1e308 + 0.02), would silently drop modes
         ends = np.cumsum([d for _, d in self.schedule])
         if not math.isfinite(float(ends[-1])):
-            raise InputError(f"{where}schedule: the period (sum of durations) overflows to infinity")
+            raise InputError(
+                f"{where}schedule: the period (sum of durations) overflows to infinity"
+            )
         starts = np.concatenate([[0.0], ends[:-1]])
         lost = np.flatnonzero(ends <= starts)
         if lost.size:
@@ -103,6 +106,29 @@ class SwitchingTopology:
     def period(self) -> float:
         """The schedule's period (the sum of its durations)."""
         return float(sum(d for _, d in self.schedule))
+
+    def __repr__(self) -> str:
+        sched = ", ".join(f"{m} {d:g}" for m, d in self.schedule)
+        return (
+            f"SwitchingTopology(modes={list(self.modes)}, N={self.n}, d={self.dim}, "
+            f"schedule=[{sched}], period={self.period:g})"
+        )
+
+    def table(self) -> Table:
+        """The modes and the schedule, as every face shows them.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        rows: list[tuple] = [("agents N", self.n), ("state dimension d", self.dim)]
+        rows += [(f"mode {k}", repr(m)) for k, m in self.modes.items()]
+        rows.append(("schedule (one period)", ", ".join(f"{m} {d:g}" for m, d in self.schedule)))
+        rows.append(("period", f"{self.period:g}"))
+        return Table.build("switching topology", ("quantity", "value"), rows)
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
 
     def segments(self, t_end: float, t_start: float = 0.0) -> list[tuple[float, float, str]]:
         """The schedule unrolled on [t_start, t_end).

@@ -27,6 +27,8 @@ from ..linalg import (
     classify_codes,
     require_dense,
 )
+from ..rows import Table, set_text
+from ..svg import network_svg
 
 Label = files.Label
 _INDEF = 5  # code of Definiteness.INDEFINITE in linalg.DEF_CODES
@@ -566,6 +568,44 @@ class Topology:
             L, Nd×Nd (d×d blocks).
         """
         return signed_laplacian_sparse(self)
+
+    def __repr__(self) -> str:
+        ea = self._arrays
+        neg = int(np.sum(CODE_SIGN[ea.codes] < 0))
+        return (
+            f"Topology({self.name or 'unnamed'!r}, N={self.n}, d={self.dim}, "
+            f"{len(ea.rows)} edges ({neg} antagonistic), U={set_text(self.labels[i] for i in self.antagonised)})"
+        )
+
+    def table(self) -> Table:
+        """What the topology is, as every face shows it: size, edges by class, U.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        ea = self._arrays
+        counts = {c: int(np.sum(ea.codes == k)) for k, c in enumerate(DEF_CODES)}
+        rows = [
+            ("agents N", self.n),
+            ("state dimension d", self.dim),
+            ("edges j → i", len(ea.rows)),
+            *[(f"edges {c.value}", k) for c, k in counts.items() if k],
+            (
+                "antagonised U (informed agents)",
+                set_text((self.labels[i] for i in self.antagonised), 12),
+            ),
+        ]
+        return Table.build(f"topology {self.name or ''}".strip(), ("quantity", "value"), rows)
+
+    def _repr_html_(self) -> str:
+        ea = self._arrays
+        edges = [
+            (int(i), int(j), int(CODE_SIGN[c]), bool(CODE_DEFINITE[c]))
+            for i, j, c in zip(ea.rows, ea.cols, ea.codes, strict=True)
+            if CODE_SIGN[c] != 0
+        ]
+        return network_svg(self.labels, edges, self.antagonised) + self.table().html()
 
     def to_dict(self) -> dict:
         """The topology in the topology-file form.

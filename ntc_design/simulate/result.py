@@ -12,6 +12,8 @@ import numpy as np
 from ..design import ProtocolDesign
 from ..design.lemma1 import DESIGN_KEYS
 from ..errors import quote
+from ..rows import Table, fmt
+from ..svg import curve_svg
 from .grid import TimeGrid
 from .moments import Moments
 from .montecarlo import PartialStats
@@ -220,6 +222,55 @@ class SimulationResult:
             )
             out["min_ms_error_exact"] = float(np.min(self.exact.ms_error.sum(axis=1)))
         return out
+
+    def __repr__(self) -> str:
+        methods = [m for m, x in (("Monte Carlo", self.mc), ("exact", self.exact)) if x is not None]
+        t_end = float(self.save_times[-1]) if self.save_times.size else 0.0
+        failed = f", diverged at t = {self.failure.t:.6g}" if self.failure is not None else ""
+        return (
+            f"SimulationResult(N={len(self.labels)}, T={t_end:g}, {len(self.save_times)} save "
+            f"times, {' and '.join(methods) or 'no curves'}{failed})"
+        )
+
+    def table(self) -> Table:
+        """The run in brief, as every face shows it: the methods and the total error
+        Σ_i E‖x_i − θ‖² at the first and last save times (Monte Carlo with its band, exact).
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        rows: list[tuple] = [("agents N", len(self.labels)), ("save times", self.save_times.size)]
+        if self.save_times.size:
+            rows.append(("horizon T", f"{float(self.save_times[-1]):g}"))
+        if self.mc is not None and self.save_times.size:
+            rows.append(("Monte Carlo paths", self.mc.count))
+            for k, when in ((0, "t = 0"), (-1, "T")):
+                band = (
+                    f" [{fmt(float(np.sum(self.mc.lo[k])))}, {fmt(float(np.sum(self.mc.hi[k])))}]"
+                )
+                rows.append(
+                    (
+                        f"Σ_i E‖x_i − θ‖² at {when} (Monte Carlo)",
+                        fmt(float(self.mc.mean[k].sum())) + band,
+                    )
+                )
+        if self.exact is not None and self.save_times.size:
+            for k, when in ((0, "t = 0"), (-1, "T")):
+                rows.append(
+                    (f"Σ_i E‖x_i − θ‖² at {when} (exact)", float(self.exact.ms_error[k].sum()))
+                )
+        if self.failure is not None:
+            rows.append(("diverged", f"t = {self.failure.t:.6g}, agent {self.failure.agent}"))
+        return Table.build("simulation", ("quantity", "value"), rows, self.notes)
+
+    def _repr_html_(self) -> str:
+        curves = []
+        if self.mc is not None:
+            curves.append(("Monte Carlo Σ_i", self.mc.mean.sum(axis=1), "#1f5fbf"))
+        if self.exact is not None:
+            curves.append(("exact Σ_i", self.exact.ms_error.sum(axis=1), "#c8322d"))
+        return curve_svg(self.save_times, curves) + self.table().html()
 
     def to_pandas(self):
         """The curves as a tidy table; see :func:`simulation_frame`.
