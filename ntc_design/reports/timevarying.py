@@ -45,18 +45,22 @@ def lambda_min_figure(
     batch = des.at(ts)
     lap = batch.lap_b(des.structure)
     lam = np.linalg.eigvalsh(lap + np.swapaxes(lap, 1, 2))[:, 0]
-    fig, ax = plt.subplots(figsize=(7.5, 3.6))
-    ax.plot(ts, lam, color=style.BLUE, lw=1.4, label="λ_min(L_B(t) + L_B(t)ᵀ), sampled")
-    if intervals:
-        xs = [q[0] for q in intervals] + [intervals[-1][1]]
-        ys = [q[2] for q in intervals] + [intervals[-1][2]]
-        ax.step(xs, ys, where="post", color="#888888", lw=0.8, label="certified on each interval")
-    if lambda2 is not None:
-        ax.axhline(lambda2, color=style.RED, ls="--", lw=1.2, label=f"Λ₂ = {lambda2:.4g}")
-    ax.set_xlabel("t")
-    ax.legend(fontsize=8, loc="best")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
+    with style.paper_style():
+        fig, ax = plt.subplots(figsize=(style.TWO_COLUMN, 2.8), layout="constrained")
+        ax.plot(ts, lam, color=style.BLUE, lw=1.2, label="sampled")
+        if intervals:
+            xs = [q[0] for q in intervals] + [intervals[-1][1]]
+            ys = [q[2] for q in intervals] + [intervals[-1][2]]
+            ax.step(
+                xs, ys, where="post", color=style.GREY, lw=0.8, label="certified on each interval"
+            )
+        if lambda2 is not None:
+            ax.axhline(
+                lambda2, color=style.RED, ls="--", lw=1.2, label=rf"$\Lambda_2$ = {lambda2:.4g}"
+            )
+        ax.set_xlabel("$t$")
+        ax.set_ylabel(r"$\lambda_{\min}(L_B(t) + L_B(t)^\top)$")
+        fig.legend(loc="outside right center", frameon=False)
     return fig
 
 
@@ -80,26 +84,30 @@ def weights_figure(des: TimeVaryingDesign, samples: int = 1000):
     w = tv.weights_at(ts)
     var = [k for k, e in enumerate(tv.edges) if not e.weight.constant]
     panels = len(var) + 1
-    fig, axes = plt.subplots(panels, 1, figsize=(7.5, 2.1 * panels), sharex=True)
-    axes = np.atleast_1d(axes)
     d = tv.dim
-    for ax, k in zip(axes, var, strict=False):
-        e = tv.edges[k]
-        for r in range(d):
-            for c in range(r, d):
-                if np.ptp(w[:, k, r, c]) > 0 or np.any(w[:, k, r, c]):
-                    ax.plot(ts, w[:, k, r, c], lw=1.0, label=f"[{r + 1},{c + 1}]")
-        ax.set_ylabel(f"A {tv.labels[e.i]}{tv.labels[e.j]}")
-        ax.set_title(f"{e.field} ({e.cls.value})", fontsize=9)
-        ax.legend(fontsize=7, ncol=6, loc="upper right")
-        ax.grid(alpha=0.3)
-    batch = des.at(ts)
-    axes[-1].plot(ts, batch.delta, color=style.RED, lw=1.2, label="δ(t) = C(t) + ΔC")
-    axes[-1].set_ylabel("δ(t)")
-    axes[-1].set_xlabel("t")
-    axes[-1].legend(fontsize=8)
-    axes[-1].grid(alpha=0.3)
-    fig.tight_layout()
+    with style.paper_style():
+        fig, axes = plt.subplots(
+            panels, 1, figsize=(style.TWO_COLUMN, 1.6 * panels + 0.4), sharex=True,
+            layout="constrained",
+        )  # fmt: skip
+        axes = np.atleast_1d(axes)
+        for ax, k in zip(axes, var, strict=False):
+            e = tv.edges[k]
+            n_line = 0
+            for r in range(d):
+                for c in range(r, d):
+                    if np.ptp(w[:, k, r, c]) > 0 or np.any(w[:, k, r, c]):
+                        st = style.agent_style(n_line)
+                        ax.plot(ts, w[:, k, r, c], color=st.colour, ls=st.linestyle, lw=1.0,
+                                label=f"entry ({r + 1}, {c + 1})")  # fmt: skip
+                        n_line += 1
+            i, j = tv.labels[e.i], tv.labels[e.j]
+            ax.set_ylabel(rf"$A_{{{i}{j}}}(t)$" + f"\n({e.cls.value})")
+            ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False, fontsize=7)
+        batch = des.at(ts)
+        axes[-1].plot(ts, batch.delta, color=style.RED, lw=1.2)
+        axes[-1].set_ylabel(r"$\delta(t) = C(t) + \Delta C$")
+        axes[-1].set_xlabel("$t$")
     return fig
 
 
