@@ -460,7 +460,7 @@ def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
                     )
                     continue
                 if x <= 0:
-                    txt.append(f"{lab} = 0")
+                    txt.append(f"{lab} = 0 (left of the log axis: not drawn)")
                     continue
                 txt.append(f"{lab} = {x:.4g}")
                 for ax, y in ((a1, c.rate), (a2, c.sym_min)):
@@ -483,9 +483,7 @@ def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
             ax.axhline(0.0, color="black", lw=0.6)
             ax.set_xlabel(r"coupling $\delta$")
         a1.set_ylabel(r"$-\max\,\mathrm{Re}\,\lambda(-L_B)$")
-        a1.set_title("decay rate", fontsize=8)
         a2.set_ylabel(r"$\lambda_{\min}(L_B + L_B^{\top})$")
-        a2.set_title("symmetric part", fontsize=8)
         keys = [
             Line2D([], [], marker=m, color="0.6", markeredgecolor="black", ls="none", label=lab)
             for m, lab in (
@@ -495,8 +493,9 @@ def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
                 ("*", r"best $\delta$"),
             )
         ]
-        a2.legend(handles=keys, loc="lower right", ncol=2, frameon=False, fontsize=8)
-        fig.legend(handles=handles, loc="outside lower center", ncol=1, frameon=False)
+        # the curves' legend above and the marker key below the axes, never on a curve
+        fig.legend(handles=handles, loc="outside upper center", ncol=1, frameon=False)
+        fig.legend(handles=keys, loc="outside lower center", ncol=4, frameon=False)
     return fig
 
 
