@@ -159,6 +159,8 @@ def _time_axes(d_panels: int, segments, width: float, height: float):
 
 # ------------------------------------------------------------------------ time series
 
+HIGHLIGHTED = 3  # agents drawn in colour in a sample path; the others in grey
+
 
 def states_figure(
     t,
@@ -198,21 +200,27 @@ def states_figure(
     d = theta.size
     n = len(labels)
     x = path.reshape(t.size, n, d)
+    # a few agents in colour (the farthest from θ at the end), the others in grey behind
+    far = np.linalg.norm(x[-1] - theta, axis=1)
+    shown = set(np.argsort(far)[::-1][:HIGHLIGHTED].tolist()) if n > HIGHLIGHTED else set(range(n))
+    coarse = t.size <= 300  # few stored states: mark each, the lines only join them
     with paper_style():
         fig, axes, tl = _time_axes(d, segments, width, 1.45 * d + 1.0)
         for k, ax in enumerate(axes):
             for i in range(n):
                 s = agent_style(i)
+                hi = i in shown
                 ax.plot(
                     t,
                     x[:, i, k],
                     gid=f"{gid}-ag{i}-{k}" if gid else None,
-                    lw=0.8,
-                    color=s.colour,
-                    ls=s.linestyle,
-                    marker=s.marker,
-                    markersize=3,
-                    markevery=markevery(i, t.size),
+                    lw=0.9 if hi else 0.5,
+                    color=s.colour if hi else "0.75",
+                    ls=s.linestyle if hi else "-",
+                    marker=(s.marker if hi else ".") if coarse else (s.marker if hi else None),
+                    markersize=2.5 if coarse else 3,
+                    markevery=None if coarse else markevery(i, t.size),
+                    zorder=3 if hi else 2,
                 )
             ax.axhline(theta[k], color="black", ls=(0, (5, 2)), lw=1.0)
             ax.set_ylabel(f"$x_i^{{({k + 1})}}$")
@@ -228,8 +236,12 @@ def states_figure(
                 markersize=3,
                 label=f"agent {labels[i]}",
             )
-            for i in range(n)
+            for i in sorted(shown)
         ]
+        if len(shown) < n:
+            handles.append(
+                Line2D([], [], color="0.75", lw=0.5, label=f"the other {n - len(shown)} agents")
+            )
         handles.append(
             Line2D(
                 [],
@@ -515,7 +527,6 @@ def gain_latex(text: str) -> str:
     from matplotlib.mathtext import MathTextParser
     from sympy.printing.latex import LatexPrinter
 
-
     class Printer(LatexPrinter):
         def _print_Pow(self, expr):  # (1+t)^{-1/3} as the paper writes it, not 1/∛(1+t)
             b, e = expr.as_base_exp()
@@ -559,7 +570,6 @@ def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
         The gain does not parse (or is not an expression).
     """
     from scipy.integrate import cumulative_trapezoid
-
 
     c, _ = make_gain(text)
     t = np.linspace(0.0, t_end, 20001)

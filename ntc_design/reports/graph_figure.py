@@ -179,13 +179,40 @@ def _signal_edges(ax, pos, ang, phi, informed, b, weights: bool) -> list[np.ndar
         nrm = np.array([-chord[1], chord[0]])
         side = 1.0 if np.dot(nrm, mid) > 0 else -1.0
         sep = abs(math.remainder(float(ang[i]) - phi, 2 * math.pi))
-        rad = -side * min(0.15 + 0.85 * sep / math.pi, 1.0)
+        rad = _clear_rad(pos, p0, i, -side * min(0.15 + 0.85 * sep / math.pi, 1.0))
         apexes.append(mid + rad * np.array([chord[1], -chord[0]]) / 2)  # arc3's apex
         _arrow(ax, p0, pos[i], GREEN, "-" if cls.definite else "--", rad)
         if weights:
             off = 0.25 * side * nrm / max(float(np.linalg.norm(nrm)), 1e-9)
             _label(ax, 0.5 * (pos[i] + p0) + off, f"B={weight_label(b[i])}", GREEN, 6)
     return apexes
+
+
+def _arc(p0: np.ndarray, p1: np.ndarray, rad: float, k: int = 40) -> np.ndarray:
+    """Points of matplotlib's arc3 connection from p0 to p1 (a quadratic Bézier whose
+    control point is rad·|p1 − p0| off the chord's midpoint)."""
+    chord = p1 - p0
+    ctrl = 0.5 * (p0 + p1) + rad * np.array([chord[1], -chord[0]])
+    s = np.linspace(0.0, 1.0, k)[:, None]
+    return (1 - s) ** 2 * p0 + 2 * (1 - s) * s * ctrl + s**2 * p1
+
+
+def _clear_rad(pos: dict, p0: np.ndarray, i: int, rad: float) -> float:
+    """The bend closest to ``rad`` (same side first) whose arc from x0 to agent i passes
+    no other agent's circle: an edge must never look as if it entered a wrong agent."""
+    others = np.array([p for k, p in pos.items() if k not in (i, -1)])
+    if others.size == 0:
+        return rad
+    sign = 1.0 if rad >= 0 else -1.0
+    for cand in [
+        rad,
+        *[sign * (abs(rad) + 0.1 * k) for k in range(1, 10)],
+        *[-sign * 0.15 * k for k in range(1, 8)],
+    ]:
+        pts = _arc(p0, pos[i], cand)[2:-2]
+        if np.min(np.linalg.norm(pts[:, None, :] - others[None, :, :], axis=2)) > 1.6 * R_VERTEX:
+            return cand
+    return rad
 
 
 def _vertices(ax, top: Topology, pos: dict) -> None:
@@ -214,8 +241,9 @@ def _legend_handles() -> list[Line2D]:
             color=GREEN,
             marker="o",
             markerfacecolor="#e3f1e8",
-            label=r"$x_0$ (vertex 0) $\to$ informed, $B_i$",
+            label=r"$x_0$ (vertex 0) $\to$ informed, $B_i \succ 0$",
         ),
+        Line2D([], [], color=GREEN, ls="--", label=r"$x_0 \to$ informed, $B_i$ semidefinite"),
     ]
 
 

@@ -415,8 +415,9 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
             fig(
                 figures.states_figure(t_p, path0, run.theta, labels, segments=segs, gid=gid),
                 f"{key}_states",
-                f"One sample path: the states of all agents per dimension, θ dashed; stored at "
-                f"{dec} ({t_p.size} points).",
+                f"One sample path, per dimension, θ dashed: the {figures.HIGHLIGHTED} agents "
+                f"farthest from θ at the end in colour, the others grey; stored at {dec} "
+                f"({t_p.size} points{', each marked: lines only join them' if t_p.size <= 300 else ''}).",
                 style.TWO_COLUMN,
                 f"{key}-fig-states",
             )
