@@ -450,7 +450,7 @@ def coupling_figure(curves: Sequence[CouplingCurve], width: float = TWO_COLUMN):
         )
         handles = []
         for k, c in enumerate(curves):
-            col = plt.get_cmap("tab10")(k % 10)
+            col = agent_style(k).colour
             ls = LINESTYLES[k % 4]
             for ax, y in ((a1, c.rate), (a2, c.sym_min)):
                 ax.plot(c.delta, y, color=col, ls=ls, lw=1.2)

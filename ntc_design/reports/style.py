@@ -56,14 +56,18 @@ def paper_style():
 class AgentStyle:
     """How one agent's lines look: colour, line style and marker."""
 
-    colour: tuple
+    colour: str
     linestyle: str
     marker: str
 
 
+#: Okabe & Ito's palette for colour-blind readers (yellow left out: too light on white).
+PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000")
+
+
 def agent_style(k: int) -> AgentStyle:
-    """Agent k's colour, line style and marker: no two of the first 40 agents share all
-    three, and neighbours differ in each.
+    """Agent k's colour (a colour-blind-safe palette), line style and marker: no two of
+    the first 28 agents share all three, and neighbours differ in each.
 
     Parameters
     ----------
@@ -74,9 +78,8 @@ def agent_style(k: int) -> AgentStyle:
     -------
     AgentStyle
     """
-    return AgentStyle(
-        plt.get_cmap("tab10")(k % 10), LINESTYLES[k % 4], MARKERS[(k + k // 10) % 10]
-    )
+    p = len(PALETTE)
+    return AgentStyle(PALETTE[k % p], LINESTYLES[k % 4], MARKERS[(k + k // p) % len(MARKERS)])
 
 
 def markevery(k: int, n_points: int, count: int = 8):
