@@ -44,7 +44,9 @@ def _version(value: bool) -> None:
 def _root(
     version: Annotated[
         bool,
-        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="Print the version.", metavar=""
+        ),
     ] = False,
 ) -> None:
     """Certify, design and validate non-trivial consensus protocols on signed
@@ -52,7 +54,8 @@ def _root(
 
 
 FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
-JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.")]
+# a flag takes no value: no metavar (click would print <bool>)
+JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.", metavar="")]
 SchedulerOpt = Annotated[
     str | None,
     typer.Option(
@@ -144,6 +147,7 @@ def design_cmd(
         typer.Option(
             "--thresholds/--no-thresholds",
             help="Compute the critical couplings (default: up to Nd = 30000).",
+            metavar="",
         ),
     ] = None,
     as_json: JsonOpt = False,
@@ -505,7 +509,8 @@ def report(
         bool,
         typer.Option(
             help="Embed SVG figures with per-agent toggles, as report_interactive.html "
-            "(the static report.html is kept)."
+            "(the static report.html is kept).",
+            metavar="",
         ),
     ] = False,
     as_json: JsonOpt = False,
@@ -552,7 +557,8 @@ def reproduce(
         bool,
         typer.Option(
             help="Embed SVG figures with per-agent toggles, as report_interactive.html "
-            "(the static report.html is kept)."
+            "(the static report.html is kept).",
+            metavar="",
         ),
     ] = False,
     as_json: JsonOpt = False,
