@@ -190,6 +190,7 @@ def generate(
         str, typer.Option(help="random, ring, grid, small-world or scale-free.")
     ] = "random",
     p_negative: Annotated[float, typer.Option(help="Probability of an antagonistic edge.")] = 0.3,
+    as_json: JsonOpt = False,
 ) -> None:
     """Write a random directed signed matrix-weighted network that satisfies Assumption 2
     by construction (seeded; see ntc_design.generate)."""
@@ -197,6 +198,10 @@ def generate(
 
     top = random_network(n, d, seed, family, p_negative=p_negative)
     write_topology(top, out_path)
+    if as_json:
+        doc = {"file": str(out_path), "name": top.name, "N": top.n, "d": top.dim}
+        print(_json({**doc, "edges": len(top.weights), "seed": seed, "family": family}))
+        return
     out.print(f"wrote {out_path}: {top.name}, N = {top.n}, d = {top.dim}, {len(top.weights)} edges")
 
 

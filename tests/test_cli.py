@@ -76,3 +76,39 @@ def test_assumption_warning_points_at_the_users_call():
         nd.design(top, [1, 2, -1], 0.1)
     (w,) = [w for w in caught if issubclass(w.category, nd.AssumptionWarning)]
     assert w.filename == __file__
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        "check",
+        "design",
+        "generate",
+        "gain",
+        "certify",
+        "verify",
+        "simulate",
+        "sweep",
+        "report",
+        "reproduce",
+    ],
+)
+def test_every_command_with_a_result_has_json(command, capsys, monkeypatch):
+    code, out, _ = run_cli([command, "--help"], capsys, monkeypatch)
+    assert code == 0 and "--json" in out
+
+
+def test_generate_json(tmp_path, capsys, monkeypatch):
+    code, out, err = run_cli(
+        ["generate", "--n", "12", "--d", "2", "--out", tmp_path / "g.npz", "--json"],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 0, err
+    doc = json.loads(out)
+    top = nd.load(tmp_path / "g.npz")
+    assert (
+        (doc["N"], doc["d"], doc["edges"])
+        == (top.n, top.dim, len(top.weights))
+        == (12, 2, doc["edges"])
+    )

@@ -135,6 +135,7 @@ def test_no_sympy_spelling_reaches_a_user(gain, capsys, monkeypatch):
 
     for extra in ([], ["--json"]):
         code, out, err = run_cli(["gain", gain, *extra], capsys, monkeypatch)
-        assert code == 0 and out
+        assert code in (0, 1) and out  # 1: no theorem's conditions hold (∫c < ∞, c ↛ 0)
+        assert code == (0 if gain in ("(1+t)^(-1/3)", "1/(1+t)", "(2+t)^(-0.7)") else 1)
         assert "**" not in out and " oo" not in out and "zoo" not in out, out
         assert "oo " not in out.replace("too ", "").replace("goo", "")

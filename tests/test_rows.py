@@ -123,6 +123,8 @@ def test_report_tables_carry_the_terminal_labels(tmp_path, capsys, monkeypatch):
         for label in t.labels:
             assert _squash(label) in page, label
     assert "Theorem 1 (mean square) guaranteed" in page
+    # the sample path is drawn from a companion run at 2000 steps, not the 0.1-s saves
+    assert "companion run of the same scenario and seed" in page and "(2001 points)" in page
 
 
 def test_notebook_representations_show_the_terminal_numbers(g1, switching_set, theta):

@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from ..certify import verify_file, write_certificate
+from ..errors import InputError
 from ..rows import fmt
+from ..simulate import SimulationDiverged, SimulationSpec, simulate
 from ..simulate.result import MeanSquareBand
 from .html import Table, html_table, matrix, rel
 from .rundata import RunData
@@ -193,4 +195,60 @@ def data_links(run: RunData, figdir: Path, key: str, base: Path) -> list[tuple[s
     ]
 
 
-__all__ = ["certificate_tables", "data_links", "fitted_exponent", "mc_band", "parameter_table"]
+FINE_POINTS = 2000  # save times of the companion sample paths drawn in a report
+COMPANION_MAX_STEPS = 2_000_000  # path-steps a report may spend on them
+
+
+def companion_paths(run: RunData, top) -> dict | None:
+    """Two sample paths of the run's own scenario (same noise, gain, initial state, step
+    and seed) saved at FINE_POINTS times, for the states figure: the run's stored paths
+    are kept only at the statistics' save times, too coarse to show a path.
+
+    Parameters
+    ----------
+    run : RunData
+        The run.
+    top : Topology or SwitchingTopology
+        Its topology.
+
+    Returns
+    -------
+    dict or None
+        ``{"t", "paths"}``; None when the run cannot be repeated from its summary (a
+        callable gain or noise) or the paths would cost more than COMPANION_MAX_STEPS.
+    """
+    p = run.summary["parameters"]
+    keys = (
+        "theta",
+        "margin",
+        "gain",
+        "T",
+        "dt",
+        "stepping",
+        "ds",
+        "scheme",
+        "noise",
+        "initial",
+        "seed",
+    )
+    doc = {k: p[k] for k in keys if p.get(k) is not None}
+    steps = float(doc.get("T", 0)) / float(doc.get("dt") or doc.get("ds") or 1.0)
+    if 2 * steps > COMPANION_MAX_STEPS:
+        return None
+    doc.update(paths=2, store_paths=2, block_size=2, method="mc", workers=1)
+    doc["save_every"] = float(doc["T"]) / FINE_POINTS
+    try:
+        res = simulate(top, SimulationSpec.from_document(doc))
+    except (InputError, SimulationDiverged):
+        return None
+    return {"t": res.save_times, "paths": res.mc.paths} if res.mc is not None else None
+
+
+__all__ = [
+    "certificate_tables",
+    "companion_paths",
+    "data_links",
+    "fitted_exponent",
+    "mc_band",
+    "parameter_table",
+]

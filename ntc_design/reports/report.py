@@ -35,7 +35,14 @@ from .html import (
     render,
     write_html,
 )
-from .parts import certificate_tables, data_links, fitted_exponent, mc_band, parameter_table
+from .parts import (
+    certificate_tables,
+    companion_paths,
+    data_links,
+    fitted_exponent,
+    mc_band,
+    parameter_table,
+)
 from .rundata import RunData, load_run
 from .timevarying import lambda_min_figure, weights_figure
 
@@ -55,8 +62,6 @@ def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[list, dict]:
     return [("", html_table(des.table()))], docs
 
 
-
-
 # ------------------------------------------------------------------------ convergence
 
 
@@ -68,7 +73,6 @@ def predicted_exponent(gain: str, rate: float) -> tuple[float | None, str]:
     rate of −L_B), 0 for β > 1 (∫c < ∞: the error stalls) and 0 when c does not tend to 0.
     None when c is not a power of t."""
     import sympy as sp
-
 
     # the power of c at infinity, lim log c / log t (sympy, time-bounded)
     p = limit_at_infinity(sp.log(parse_gain(gain)) / sp.log(T))
@@ -294,9 +298,9 @@ def run_section(
     designs, des_docs = design_tables(c.design)
     doc = c.cert_res.to_dict()
     mc, exact = mc_band(run), run.ms("exact")
-    conv_note, conv, conv_facts = convergence_table(
-        run, mc, exact, _average_rate(c.design, top)
-    )
+    conv_note, conv, conv_facts = convergence_table(run, mc, exact, _average_rate(c.design, top))
+    if fine is None and run.npz["paths"].size:  # the stored paths are too coarse to draw
+        fine = companion_paths(run, top)
     figs = _run_figures(run, key, figdir, base, interactive, c, mc, exact, fine)
     labels = run.labels
     section = RunSection(
@@ -405,7 +409,11 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
     )
     out["paths"] = []
     if fine is not None and fine["paths"].size:
-        t_p, path0, dec = fine["t"], fine["paths"][0], "a finer decimation than the statistics"
+        t_p, path0, dec = (
+            fine["t"],
+            fine["paths"][0],
+            "a finer decimation than the statistics (a companion run of the same scenario and seed)",
+        )
     elif run.npz["paths"].size:
         t_p, path0, dec = run.npz["t"], run.npz["paths"][0], "the statistics' save times"
     else:
