@@ -156,6 +156,14 @@ def random_network(
     ------
     InputError
         For an unknown family or a parameter out of range.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> from ntc_design.generate import random_network
+    >>> top = random_network(100, d=3, seed=0)
+    >>> top.n, top.dim, nd.assumption2(top).holds
+    (100, 3, True)
     """
     _check_parameters(n, d, seed, family, p_negative, v1_fraction, extra, k, chord_scale)
     n, d = int(n), int(d)

@@ -32,6 +32,12 @@ def load(path: str | Path) -> Topology | SwitchingTopology | ExpressionTopology:
     InputError
         The file cannot be read or is not a valid topology (one line naming the file and
         the field or edge).
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> nd.load("examples/g1.yaml")
+    Topology('G1', N=7, d=3, 8 edges (3 antagonistic), U={2, 3})
     """
     data = parse_file(path)
     if isinstance(data, EdgeListData):

@@ -413,6 +413,9 @@ def _doc_files():
     readme = ROOT.parent / "README.md"
     if readme.exists():
         yield readme
+    docs = ROOT.parent / "docs"  # the user guide, the site's pages and the gallery
+    for pattern in ("guide/*.md", "*.rst", "gallery/*.py"):
+        yield from sorted(docs.glob(pattern))
 
 
 @pytest.mark.parametrize("path", list(_doc_files()), ids=lambda p: str(p.relative_to(ROOT.parent)))

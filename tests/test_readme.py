@@ -1,5 +1,5 @@
-"""The README's Python blocks paste and run as they are, each on its own, from a checkout
-(examples/ beside them, runs/ to write into)."""
+"""The Python blocks of the README and of the user guide (docs/guide/*.md) paste and run as
+they are, each on its own, from a checkout (examples/ beside them, runs/ to write into)."""
 
 import re
 import subprocess
@@ -9,11 +9,18 @@ import pytest
 
 from .conftest import ROOT
 
-BLOCKS = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(encoding="utf-8"), re.S)
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md"))]
+BLOCKS = [
+    b
+    for page in PAGES
+    for b in re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), re.S)
+]
 
 
-def test_the_readme_has_python_blocks():
-    assert len(BLOCKS) >= 4
+def test_the_readme_and_the_guide_have_python_blocks():
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert "```python" in readme and len(BLOCKS) >= 5
+    assert len(readme.splitlines()) <= 250  # the README fits on a screen; the guide has the rest
 
 
 @pytest.mark.slow

@@ -159,6 +159,13 @@ def certify(
     ------
     InputError
         For a bad θ, margin, δ or gain.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> from ntc_design.certify import certify
+    >>> certify(nd.load("examples/g1.yaml"), [1, 2, -1], gain="1/(1+t)")
+    CertifyResult(hurwitz, valid; Theorem 1: guaranteed, Theorem 2: guaranteed)
     """
     g = analyse_gain(gain) if gain is not None else None
     if isinstance(topology, ExpressionTopology):

@@ -580,6 +580,13 @@ def design(
     ------
     InputError
         A bad θ, margin or δ.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> d = nd.design(nd.load("examples/g1.yaml"), [1, 2, -1], margin=0.1)
+    >>> round(d.delta, 4), d.informed_agents, d.assumption_holds
+    (7.244, (2, 3), True)
     """
     if isinstance(topology, SwitchingTopology):
         return SwitchingDesign(
