@@ -59,7 +59,7 @@ def _cli_reference(app) -> None:
     names = [c.name or c.callback.__name__ for c in ntc.registered_commands]
     out = []
     for name in ["", *names]:
-        res = runner.invoke(ntc, [*([name] if name else []), "--help"], terminal_width=100)
+        res = runner.invoke(ntc, [*([name] if name else []), "--help"], prog_name="ntc")
         title = f"ntc {name}".strip()
         out += [title, "-" * len(title), "", ".. code-block:: text", ""]
         out += ["   " + line.rstrip() for line in res.output.splitlines()] + [""]
