@@ -150,10 +150,22 @@ def design_cmd(
             metavar="",
         ),
     ] = None,
+    out_path: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            help="Also write the design: .mat (L_B sparse, delta, k1, x0, B, informed "
+            "1-based, labels; for MATLAB/Simulink) or .json.",
+        ),
+    ] = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S."""
     th = parse_vector(theta, "--theta")
+    if out_path is not None and out_path.suffix.lower() not in (".mat", ".json"):
+        raise InputError(f"--out: {out_path}: expected a .mat or .json file")
+    if out_path is not None and not out_path.parent.is_dir():
+        raise InputError(f"--out: directory {out_path.parent} does not exist")
     top = load(file)
     if isinstance(top, ExpressionTopology):
         from .timevarying import TimeVaryingDesign
@@ -168,6 +180,8 @@ def design_cmd(
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
         res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
+    if out_path is not None:
+        _write_design(res, out_path)
     if as_json:
         print(_json(res.to_dict()))
     elif isinstance(res, SwitchingDesign):
@@ -176,6 +190,19 @@ def design_cmd(
     else:
         name = res.topology.name or str(file)
         print_table(res.table(f"{name}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
+
+
+def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> None:
+    """The design as .mat (one file per mode for a switching set: NAME_MODE.mat) or .json."""
+    from .outputs import write_atomic
+
+    if path.suffix.lower() == ".json":
+        write_atomic(path, _json(res.to_dict()) + "\n")
+    elif isinstance(res, SwitchingDesign):
+        for k, d in res.modes.items():
+            d.to_mat(path.with_name(f"{path.stem}_{k}{path.suffix}"))
+    else:
+        res.to_mat(path)
 
 
 @app.command(epilog="Example: ntc generate --n 1000 --d 3 --out runs/net.npz")

@@ -8,6 +8,7 @@ from typing import Any
 
 from .edgelist import read_npz
 from .files import is_time_varying, parse_switching, parse_topology, read_document
+from .tablefiles import read_csv_edges, read_mat
 from .tvfiles import parse_time_varying
 
 
@@ -16,12 +17,13 @@ def parse_file(path: str | Path) -> Any:
 
     Which one is told by its fields: ``modes``/``schedule`` for switching, weights that are
     expressions of t for time-varying (:mod:`ntc_design.tvfiles`). A ``.npz`` file is a
-    compact edge list (:mod:`ntc_design.edgelist`).
+    compact edge list (:mod:`ntc_design.edgelist`); ``.csv`` an edge list and ``.mat`` a
+    MATLAB block matrix (:mod:`ntc_design.tablefiles`).
 
     Parameters
     ----------
     path : str or pathlib.Path
-        A YAML or JSON file, or an ``.npz`` edge list.
+        A YAML or JSON file, an ``.npz`` or ``.csv`` edge list, or a ``.mat`` block matrix.
 
     Returns
     -------
@@ -33,8 +35,13 @@ def parse_file(path: str | Path) -> Any:
     InputError
         The file cannot be read or is not a valid topology of any kind.
     """
-    if str(path).lower().endswith(".npz"):
+    suffix = str(path).lower()
+    if suffix.endswith(".npz"):
         return read_npz(path)
+    if suffix.endswith(".csv"):
+        return read_csv_edges(path)
+    if suffix.endswith(".mat"):
+        return read_mat(path)
     doc = read_document(path)
     src = str(path)
     if "modes" in doc or "schedule" in doc:

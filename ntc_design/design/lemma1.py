@@ -18,6 +18,7 @@ from ..model import (
     block_coo,
 )
 from ..rows import Table, matrix, set_text, verdict
+from ..tablefiles import write_mat
 from ..thresholds import CriticalCouplings, critical_couplings, critical_couplings_sparse
 from .assumption import AssumptionWarning, Decomposition, assumption2
 
@@ -186,6 +187,35 @@ class ProtocolDesign:
         return (
             f"ProtocolDesign({self.topology.name or 'unnamed'!r}, δ={self.delta:.6g}, C={c}, "
             f"informed={set_text(self.informed_agents, 12)}, Assumption 2 {holds})"
+        )
+
+    def to_mat(self, path) -> None:
+        """Write the design for MATLAB/Simulink (atomically): ``L_B`` (sparse, Nd×Nd),
+        ``delta``, ``k1``, ``x0``, ``theta``, ``C``, ``B`` (the B_i of the informed agents
+        stacked, (|V_I|·d)×d), ``informed`` (1-based agent indices, as MATLAB counts) and
+        ``labels`` (a cell array of strings).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The ``.mat`` file.
+        """
+        d = self.topology.dim
+        informed = list(self.informed)
+        b = np.vstack([self.B[i] for i in informed]) if informed else np.zeros((0, d))
+        write_mat(
+            path,
+            {
+                "L_B": self.grounded_laplacian_sparse().tocsc(),
+                "delta": float(self.delta),
+                "k1": float(self.k1),
+                "x0": np.asarray(self.x0, dtype=float),
+                "theta": np.asarray(self.theta, dtype=float),
+                "C": float("nan") if self.C is None else float(self.C),
+                "B": b,
+                "informed": np.asarray(informed, dtype=float) + 1.0,
+                "labels": np.array([str(x) for x in self.topology.labels], dtype=object),
+            },
         )
 
     def to_dict(self) -> dict:
