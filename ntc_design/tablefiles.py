@@ -108,15 +108,21 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
         with warnings.catch_warnings():
             # pandas only warns when a row is longer than the header: that is an error here
             warnings.simplefilter("error", pd.errors.ParserWarning)
-            table = pd.read_csv(
-                p,
-                dtype={"from": str, "to": str, **{c: str for c in want}},
-                keep_default_na=False,
-                index_col=False,  # an extra field is an error, never an index column
-                skipinitialspace=True,
-                nrows=MAX_EDGES + 1,
-                engine="c",
-            )
+            common = {
+                "keep_default_na": False,
+                "index_col": False,  # an extra field is an error, never an index column
+                "skipinitialspace": True,
+                "nrows": MAX_EDGES + 1,
+                "engine": "c",
+            }
+            try:  # numbers parsed in C; only a file with a bad number is read again as text
+                table = pd.read_csv(
+                    p, dtype={"from": str, "to": str, **dict.fromkeys(want, "float64")}, **common
+                )
+            except ValueError:
+                table = pd.read_csv(
+                    p, dtype={"from": str, "to": str, **dict.fromkeys(want, str)}, **common
+                )
     except pd.errors.ParserWarning:
         raise InputError(f"{p}: {_long_row(p, len(header))}") from None
     except pd.errors.ParserError as exc:
@@ -138,12 +144,16 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
         empty = np.flatnonzero(np.char.str_len(np.char.strip(col)) == 0)
         if empty.size:
             raise InputError(f"{p}: row {empty[0] + 2}: '{name}' is empty")
-    vals = table[want].to_numpy(dtype=str)
-    w = pd.to_numeric(pd.Series(vals.ravel()), errors="coerce").to_numpy(dtype=float)
+    if all(table[c].dtype == np.float64 for c in want):
+        w = table[want].to_numpy(dtype=float).ravel()
+        vals = None
+    else:
+        vals = table[want].to_numpy(dtype=str)
+        w = pd.to_numeric(pd.Series(vals.ravel()), errors="coerce").to_numpy(dtype=float)
     bad = np.flatnonzero(~np.isfinite(w))
     if bad.size:
         r, c = divmod(int(bad[0]), k)
-        text = str(vals[r, c]).strip()
+        text = str(vals[r, c]).strip() if vals is not None else str(w[bad[0]])
         what = "is empty (a short row?)" if not text else f"= {text!r} is not a finite number"
         raise InputError(f"{p}: row {r + 2}: {want[c]} {what}")
     labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst))
