@@ -176,8 +176,31 @@ def switching(args, work: Path) -> None:
         prev = (n, c, v, nnz)
 
 
+def read_times(n: int, d: int, seed: int, work: Path) -> None:
+    """Reading one n-agent network from each file format (one child process each, so the
+    reading is timed alone): the cost of bringing your own data."""
+    from ntc_design.generate import random_network, write_topology
+    from ntc_design.tablefiles import write_csv_edges
+
+    top = random_network(n, d, seed=seed)
+    ea = top.edge_arrays
+    files = {"npz": work / f"read{n}.npz", "csv": work / f"read{n}.csv", "yaml": work / f"read{n}.yaml"}
+    write_topology(top, files["npz"])
+    write_csv_edges(files["csv"], top.labels, top.dim, ea.rows, ea.cols, ea.w)
+    write_topology(top, files["yaml"])
+    print(f"# reading {n} agents, {len(ea.rows)} edges (nd.load in a child process)")
+    times = {}
+    for kind, f in files.items():
+        r = run_child(["-c", "import ntc_design as nd, sys; nd.load(sys.argv[1])", str(f)])
+        times[kind] = r["wall"]
+        size = f.stat().st_size / 2**20
+        print(f"  {kind:<5} {size:7.1f} MiB  {r['wall']:6.2f} s  peak {r['rss']:.0f} MiB")
+    print(f"  ratios to npz: csv ×{times['csv'] / times['npz']:.1f}, yaml ×{times['yaml'] / times['npz']:.1f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--read", type=int, default=0, help="only the read times of this many agents")
     ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 10_000, 100_000])
     ap.add_argument("--d", type=int, default=3)
     ap.add_argument("--seed", type=int, default=1)
@@ -185,6 +208,9 @@ def main() -> None:
     ap.add_argument("--no-switching", action="store_true")
     args = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bench_scale_"))
+    if args.read:
+        read_times(args.read, args.d, args.seed, work)
+        return
     if args.switching_only:
         switching(args, work)
         return
@@ -194,6 +220,7 @@ def main() -> None:
         f"# bench_scale: d = {args.d}, seed {args.seed}, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.1f}; import alone: {base['rss']:.0f} MiB"
     )
+    read_times(max(args.sizes), args.d, args.seed, work)
     print("# columns: wall s, CPU s, peak MiB (child process)")
     rows = []
     # the dense path at its largest documented size, for comparison
