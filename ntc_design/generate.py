@@ -184,15 +184,9 @@ def random_network(
         u, v, n, v1, tree_from, tree_to, rng
     )
 
-    neg_ch = rng.random(cu.size) < p_negative
-    w_ch = np.where(
-        (rng.random(cu.size) < 0.5)[:, None, None],
-        _random_pd(rng, cu.size, d, chord_scale),
-        _random_psd(rng, cu.size, d, chord_scale),
+    neg_ch, w_ch, w_an, sgn_tree, r_tree = _draw_weights(
+        rng, cu.size, an_to.size, tree_to.size, d, p_negative, chord_scale
     )
-    w_an = _random_pd(rng, an_to.size, d)
-    sgn_tree = np.where(rng.random(tree_to.size) < p_negative, -1.0, 1.0)
-    r_tree = _random_pd(rng, tree_to.size, d)
 
     _clashes_antagonistic(
         n, d, rng, clash_to, clash_from, tree_to, tree_from, ch_to, ch_from, sgn_tree, neg_ch, w_ch
@@ -215,6 +209,21 @@ def random_network(
         wts[order_e],
         name=name or f"{family}-{n}-{d}-{seed}",
     )
+
+
+def _draw_weights(rng, n_chords: int, n_anta: int, n_tree: int, d: int, p_negative, chord_scale):
+    """The random signs and weights, drawn in this order (the seed fixes them all): chord
+    signs, chord weights (PD or PSD), V1's antagonistic weights, tree signs, tree surplus."""
+    neg_ch = rng.random(n_chords) < p_negative
+    w_ch = np.where(
+        (rng.random(n_chords) < 0.5)[:, None, None],
+        _random_pd(rng, n_chords, d, chord_scale),
+        _random_psd(rng, n_chords, d, chord_scale),
+    )
+    w_an = _random_pd(rng, n_anta, d)
+    sgn_tree = np.where(rng.random(n_tree) < p_negative, -1.0, 1.0)
+    r_tree = _random_pd(rng, n_tree, d)
+    return neg_ch, w_ch, w_an, sgn_tree, r_tree
 
 
 def _check_parameters(n, d, seed, family, p_negative, v1_fraction, extra, k, chord_scale) -> None:

@@ -62,6 +62,24 @@ def _long_row(p: Path, fields: int) -> str:
     return "a row is longer than the header"
 
 
+def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
+    """(header, the weight columns, d) from row 1, refused unless it is from, to, a11 … add."""
+    with open(p, encoding="utf-8", errors="replace") as fh:
+        header = [h.strip() for h in fh.readline().rstrip("\n\r").split(",")]
+    if len(header) < 3 or header[:2] != ["from", "to"]:
+        raise InputError(f"{p}: row 1: the header must start with from, to (then a11 … add)")
+    k = len(header) - 2
+    d = int(round(k**0.5))
+    if d * d != k or not 1 <= d <= MAX_DIM:
+        raise InputError(f"{p}: row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)")
+    want = [f"a{r}{c}" if d < 10 else f"a{r}_{c}" for r in range(1, d + 1) for c in range(1, d + 1)]
+    if header[2:] != want:
+        raise InputError(
+            f"{p}: row 1: weight columns must be {', '.join(want[:4])}{' …' if k > 4 else ''}"
+        )
+    return header, want, d
+
+
 def read_csv_edges(path: str | Path) -> EdgeListData:
     """Read a CSV edge list (see the module docstring).
 
@@ -91,19 +109,8 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
         raise InputError(f"{p}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
     if size > MAX_CSV_BYTES:
         raise InputError(f"{p}: {size / 2**30:.1f} GiB; at most {MAX_CSV_BYTES / 2**30:.0f} GiB")
-    with open(p, encoding="utf-8", errors="replace") as fh:
-        header = [h.strip() for h in fh.readline().rstrip("\n\r").split(",")]
-    if len(header) < 3 or header[:2] != ["from", "to"]:
-        raise InputError(f"{p}: row 1: the header must start with from, to (then a11 … add)")
-    k = len(header) - 2
-    d = int(round(k**0.5))
-    if d * d != k or not 1 <= d <= MAX_DIM:
-        raise InputError(f"{p}: row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)")
-    want = [f"a{r}{c}" if d < 10 else f"a{r}_{c}" for r in range(1, d + 1) for c in range(1, d + 1)]
-    if header[2:] != want:
-        raise InputError(
-            f"{p}: row 1: weight columns must be {', '.join(want[:4])}{' …' if k > 4 else ''}"
-        )
+    header, want, d = _csv_header(p)
+    k = d * d
     try:
         with warnings.catch_warnings():
             # pandas only warns when a row is longer than the header: that is an error here

@@ -311,14 +311,7 @@ def aggregate_section(
     top = run.topology()
     res = certify(top, p["theta"], p["margin"], p["gain"])
     cert_tab, checks, cert = certificate_tables(res, run.path / "certificate.json", base)
-    mc_mean, exact = run.ms("mc"), run.ms("exact")
-    mc = mc_band(run)
-    ms = exact if exact is not None else mc_mean
-    assert ms is not None  # load_run refuses a run without curves
-    kind = "exact" if exact is not None else "MC"
-    total = total_band(mc) if mc is not None else MeanSquareBand(
-        mean=ms.sum(axis=1, keepdims=True), lo=ms.sum(axis=1, keepdims=True), hi=ms.sum(axis=1, keepdims=True)
-    )  # fmt: skip
+    ms, kind, total = _curves(run)
     modes = (
         res.design.modes
         if isinstance(res.design, SwitchingDesign)
@@ -332,26 +325,7 @@ def aggregate_section(
             save(f, figdir / f"{key}_{stem}"), f"{key}-fig-{stem}", caption, base, width
         )
 
-    figs = [
-        fig(
-            degree_figure(first.topology),
-            "degrees",
-            "In- and out-degree distributions.",
-            ONE_COLUMN,
-        ),
-        fig(
-            sparsity_figure(first.topology, first.grounded_laplacian_sparse()),
-            "sparsity",
-            "Non-zero blocks of L_B, agents in the order of the strongly connected components "
-            "(sources first: block lower triangular); darker is denser.",
-            ONE_COLUMN,
-        ),  # fmt: skip
-    ]
-    picture = certificate_picture(res.certificate, first)
-    if picture is not None:
-        figs.append(fig(picture, "spectrum", "What the certificate relies on: the certified "
-                        "per-agent bounds μ_i (component-wise certificate) or the eigenvalues of −L_B.",
-                        ONE_COLUMN))  # fmt: skip
+    figs = _aggregate_figures(fig, first, res.certificate)
     ms_fig = fig(
         quantile_figure(run.t, ms, run.labels, total),
         "ms_quantiles",
@@ -376,9 +350,7 @@ def aggregate_section(
         coupling=None,
         certificate=cert_tab,
         checks=checks,
-        gain=html_table(res.gain.table())
-        if res.gain is not None
-        else Table(("condition", "holds", "reason"), [("no gain was given", "—", "")]),
+        gain=_gain_table(res),
         gain_figure=None,
         theorems=html_table(theorem_table(res.theorems)),
         ms_figure=ms_fig,
@@ -399,6 +371,55 @@ def aggregate_section(
         "total_final": float(total.mean[-1, 0]),
     }
     return section, facts
+
+
+def _aggregate_figures(fig, first: ProtocolDesign, certificate: dict) -> list:
+    """The topology pictures that scale, and what the certificate relies on."""
+    figs = [
+        fig(
+            degree_figure(first.topology),
+            "degrees",
+            "In- and out-degree distributions.",
+            ONE_COLUMN,
+        ),
+        fig(
+            sparsity_figure(first.topology, first.grounded_laplacian_sparse()),
+            "sparsity",
+            "Non-zero blocks of L_B, agents in the order of the strongly connected components "
+            "(sources first: block lower triangular); darker is denser.",
+            ONE_COLUMN,
+        ),
+    ]
+    picture = certificate_picture(certificate, first)
+    if picture is not None:
+        figs.append(
+            fig(
+                picture,
+                "spectrum",
+                "What the certificate relies on: the certified per-agent bounds μ_i "
+                "(component-wise certificate) or the eigenvalues of −L_B.",
+                ONE_COLUMN,
+            )
+        )
+    return figs
+
+
+def _curves(run: RunData) -> tuple[np.ndarray, str, MeanSquareBand]:
+    """(per-agent curves, "exact" or "MC", the total with its band): the exact moments
+    when the run has them, else the Monte Carlo means."""
+    mc_mean, exact = run.ms("mc"), run.ms("exact")
+    mc = mc_band(run)
+    ms = exact if exact is not None else mc_mean
+    assert ms is not None  # load_run refuses a run without curves
+    flat = ms.sum(axis=1, keepdims=True)
+    total = total_band(mc) if mc is not None else MeanSquareBand(mean=flat, lo=flat, hi=flat)
+    return ms, "exact" if exact is not None else "MC", total
+
+
+def _gain_table(res) -> Table:
+    if res.gain is None:
+        return Table(("condition", "holds", "reason"), [("no gain was given", "—", "")])
+    return html_table(res.gain.table())
 
 
 def _total_fit(t: np.ndarray, y: np.ndarray) -> float | None:
