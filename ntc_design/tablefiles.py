@@ -34,6 +34,17 @@ MAX_MAT_BYTES = 2 * 2**30
 _INT = re.compile(r"[+-]?\d{1,18}")
 
 
+def _bounded(p: Path, limit: float) -> Path:
+    """The file, refused in one line when it cannot be read or is larger than ``limit``."""
+    try:
+        size = os.path.getsize(p)
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
+    if size > limit:
+        raise InputError(f"{p}: {size / 2**30:.1f} GiB; at most {limit / 2**30:.0f} GiB")
+    return p
+
+
 def _label(text: str) -> int | str:
     """An integer label when the text is one, else the text."""
     return int(text) if _INT.fullmatch(text) else text
@@ -102,13 +113,7 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     """
     import pandas as pd
 
-    p = Path(path)
-    try:
-        size = os.path.getsize(p)
-    except OSError as exc:
-        raise InputError(f"{p}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
-    if size > MAX_CSV_BYTES:
-        raise InputError(f"{p}: {size / 2**30:.1f} GiB; at most {MAX_CSV_BYTES / 2**30:.0f} GiB")
+    p = _bounded(Path(path), MAX_CSV_BYTES)
     header, want, d = _csv_header(p)
     k = d * d
     try:
@@ -253,13 +258,7 @@ def read_mat(path: str | Path) -> EdgeListData:
     """
     from scipy.io import loadmat
 
-    p = Path(path)
-    try:
-        size = os.path.getsize(p)
-    except OSError as exc:
-        raise InputError(f"{p}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
-    if size > MAX_MAT_BYTES:
-        raise InputError(f"{p}: {size / 2**30:.1f} GiB; at most {MAX_MAT_BYTES / 2**30:.0f} GiB")
+    p = _bounded(Path(path), MAX_MAT_BYTES)
     try:
         doc = loadmat(p, variable_names=["A", "dim", "labels"], mat_dtype=False)
     except Exception as exc:  # noqa: BLE001 - whatever a malformed file raises inside scipy
