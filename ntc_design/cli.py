@@ -471,6 +471,110 @@ def simulate(
     out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
+TUNE_FILES = ("tuned.yaml", "tune.json", "certificate.json", "tune.html", "figures")
+
+
+@app.command(
+    epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --horizon 10 --eps 1.5 --out runs/g1-tuned"
+)
+def tune(
+    scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
+    horizon: Annotated[float, typer.Option(help="The deadline T: minimise E Σ‖x_i(T) − θ‖².")],
+    family: Annotated[str, typer.Option(help="The gain family: power, a·(b + t)^(−γ).")] = "power",
+    require: Annotated[
+        str,
+        typer.Option(
+            help="Theorems the gain must satisfy: both (γ in [0.51, 1]) or mean-square "
+            "(γ in [0.05, 1])."
+        ),
+    ] = "both",
+    tune_delta: Annotated[
+        bool, typer.Option("--tune-delta", help="Also tune a common coupling δ (certified).")
+    ] = False,
+    eps: Annotated[
+        float | None, typer.Option(help="Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.")
+    ] = None,
+    method: Annotated[
+        str, typer.Option(help="auto (exact moments where they apply), exact or mc.")
+    ] = "auto",
+    evaluations: Annotated[int, typer.Option(help="Search budget (objective evaluations).")] = 160,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            help="Write tuned.yaml (the scenario with the tuned gain), tune.json, "
+            "certificate.json, tune.html and its figures here.",
+        ),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Tune the gain c(t) = a·(b + t)^(−γ) (and with --tune-delta the coupling δ) to bring
+    the agents closest to θ by the deadline T under the scenario's noise, initial state and
+    topology, by the exact moment equations (Monte Carlo with common random numbers where
+    they do not apply). Prints the tuned gain beside 1/(1 + t). Exit 0 when the tuned gain
+    satisfies the required theorems and its design's certificate verifies, 1 otherwise."""
+    from .outputs import check_output_folder, output_folder
+    from .reports.tune import write_tune_report
+    from .simulate.scenario import load_scenario
+    from .tune import tune as run
+    from .tune import tuned_scenario
+
+    if family != "power":
+        raise InputError(f"--family: only 'power' (a·(b + t)^(−γ)) is available, got {family!r}")
+    top, spec, sc = load_scenario(scenario)
+    if out_dir is not None:
+        check_output_folder(out_dir, TUNE_FILES)  # before the run, not after it
+    with warnings.catch_warnings(), Progress("ntc tune") as prog:
+        warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
+        prog.stage(f"tuning {scenario}")
+        try:
+            res = run(
+                top,
+                spec,
+                horizon,
+                require=require,
+                tune_delta=tune_delta,
+                eps=eps,
+                method=method,
+                max_evaluations=evaluations,
+            )
+        except InputError as exc:
+            raise InputError(f"{sc.source}: {exc}") from None
+    doc = res.to_dict()
+    if out_dir is not None:
+        import yaml
+
+        from .certify import write_certificate
+
+        files = ["tuned.yaml", "tune.json"] + (["certificate.json"] if res.certificate else [])
+        with output_folder(out_dir, TUNE_FILES) as tmp:
+            new = tuned_scenario(sc.document, sc.source, out_dir, res)
+            (tmp / "tuned.yaml").write_text(
+                f"# {new.pop('description')}\n" + yaml.safe_dump(new, sort_keys=False),
+                encoding="utf-8",
+            )
+            (tmp / "tune.json").write_text(_json(doc) + "\n", encoding="utf-8")
+            if res.certificate is not None:
+                write_certificate(res.certificate.certificate, tmp / "certificate.json")
+            write_tune_report(res, tmp, str(scenario), files)
+        doc["out"] = str(out_dir)
+    if as_json:
+        print(_json(doc))
+    else:
+        print_table(res.table())
+        if out_dir is not None:
+            out.print(
+                f"written to {out_dir}: tuned.yaml (check it by Monte Carlo: ntc simulate "
+                f"{out_dir / 'tuned.yaml'} --out {out_dir}-mc), tune.html, tune.json"
+            )
+    if not res.certified:
+        print(
+            "not proven: the tuned design is not certified for the required theorems",
+            file=sys.stderr,
+        )
+        raise typer.Exit(1)
+
+
 @app.command(epilog="Example: ntc sweep examples/sweeps/g1_noise.yaml --out runs/g1_noise")
 def sweep(
     sweep_file: Annotated[Path, typer.Argument(help="A sweep file (YAML/JSON).")],

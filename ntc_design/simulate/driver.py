@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -30,7 +31,7 @@ from .budget import (
     gain_samples,
 )
 from .grid import TimeGrid
-from .moments import check_moments_size, exact_moments, generator_radius
+from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec
 from .result import SimulationResult
 from .spec import SimulationSpec
@@ -128,7 +129,8 @@ def _modes(
         return (
             names,
             lambda: {
-                k: design_topology(topology.modes[k], th, margin, thresholds=False) for k in names
+                k: design_topology(topology.modes[k], th, margin, spec.delta, thresholds=False)
+                for k in names
             },
             segments,
             [],
@@ -152,7 +154,7 @@ def _modes(
         return (
             names,
             lambda: {
-                k: design_topology(topology.at(float(t)), th, margin, thresholds=False)
+                k: design_topology(topology.at(float(t)), th, margin, spec.delta, thresholds=False)
                 for k, t in zip(names, ts, strict=True)
             },
             segments,
@@ -163,7 +165,7 @@ def _modes(
     name = topology.name or "topology"
     return (
         [name],
-        lambda: {name: design_topology(topology, th, margin, thresholds=False)},
+        lambda: {name: design_topology(topology, th, margin, spec.delta, thresholds=False)},
         [(0.0, t_end, 0)],
         [],
     )
@@ -295,22 +297,103 @@ def simulate(
     cfun, gain_text = make_gain(spec.gain)
     workers = min(spec.mc.workers, os.cpu_count() or 1)
     if isinstance(topology, ExpressionTopology):  # A(t)
+        if spec.delta is not None:
+            raise InputError(
+                "delta: a topology given as expressions of t takes Lemma 1's δ(t) at every t; "
+                "an explicit δ does not apply"
+            )
         _check_size(topology, spec, cfun, 1, 1, workers)
         return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
     return _simulate_modes(topology, spec, cfun, gain_text, workers, progress, engine)
 
 
-def _simulate_modes(
+@dataclass(frozen=True, eq=False)
+class PreparedModes:
+    """What every run over one topology, a switching set or a sampled A(t) shares before
+    any time grid: the designs and linear systems per mode, the segments on [0, T), x(0),
+    θ and the notes so far (:func:`prepare_modes`)."""
+
+    names: list[str]
+    designs: dict[str, ProtocolDesign]
+    systems: list[ModeSystem]
+    segments: list[tuple[float, float, int]]
+    x_init: np.ndarray
+    theta: np.ndarray
+    n: int
+    d: int
+    notes: list[str]
+
+    @property
+    def eps0(self) -> np.ndarray:
+        """ε(0) = x(0) − 1⊗θ."""
+        return self.x_init - np.tile(self.theta, self.n)
+
+    def moments(
+        self,
+        gain: Callable,
+        save_times: np.ndarray,
+        kappa: float | None = None,
+        abort_above: float | None = None,
+    ) -> Moments:
+        """The exact moments of these modes under the gain ``gain`` (linear f).
+
+        Parameters
+        ----------
+        gain : callable
+            Vectorised c(t).
+        save_times : numpy.ndarray
+            Where to record them.
+        kappa : float, optional
+            RK4's c·h·ρ (default :data:`.moments.KAPPA`).
+        abort_above : float, optional
+            Stop once tr S exceeds it (the rest +∞; :func:`.moments.exact_moments`).
+
+        Returns
+        -------
+        Moments
+        """
+        return exact_moments(
+            self.systems,
+            self.segments,
+            gain,
+            self.eps0,
+            save_times,
+            self.n,
+            self.d,
+            kappa=KAPPA if kappa is None else kappa,
+            abort_above=abort_above,
+        )
+
+
+def prepare_modes(
     topology: Topology | SwitchingTopology | TimeVaryingTopology,
     spec: SimulationSpec,
     cfun: Callable,
-    gain_text: str,
-    workers: int,
-    progress,
-    engine,
-) -> SimulationResult:
-    """:func:`simulate` for one topology, a switching set or a sampled A(t): one design
-    per mode, checks, the grid, the runs."""
+    workers: int = 1,
+) -> PreparedModes:
+    """The designs (Lemma 1, or the spec's δ), the systems, the segments and x(0) of a
+    run, after the size checks and before any time grid.
+
+    Parameters
+    ----------
+    topology : Topology, SwitchingTopology or TimeVaryingTopology
+        The network.
+    spec : SimulationSpec
+        The run's options.
+    cfun : callable
+        Vectorised c(t) (the work estimate follows it).
+    workers : int, optional
+        Processes the Monte Carlo will use (memory estimate).
+
+    Returns
+    -------
+    PreparedModes
+
+    Raises
+    ------
+    InputError
+        A run too big for the machine, a bad initial state, exact moments too large.
+    """
     names, make_designs, segments, notes = _modes(topology, spec)
     if workers < spec.mc.workers:
         notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")
@@ -328,6 +411,22 @@ def _simulate_modes(
     systems = [mode_system(designs[k], spec.noise, k) for k in names]
     x_init, ini_notes = spec.initial_state(n, d)
     notes.extend(ini_notes)
+    return PreparedModes(names, designs, systems, segments, x_init, th, n, d, notes)
+
+
+def _simulate_modes(
+    topology: Topology | SwitchingTopology | TimeVaryingTopology,
+    spec: SimulationSpec,
+    cfun: Callable,
+    gain_text: str,
+    workers: int,
+    progress,
+    engine,
+) -> SimulationResult:
+    """:func:`simulate` for one topology, a switching set or a sampled A(t): one design
+    per mode, checks, the grid, the runs."""
+    pm = prepare_modes(topology, spec, cfun, workers)
+    systems, segments, notes, n, d = pm.systems, pm.segments, pm.notes, pm.n, pm.d
     if spec.method != "mc" and spec.noise.linear:
         _check_exact_work(systems, spec, cfun, gain_text, len(segments))
     grid = spec_grid(spec, cfun, segments)
@@ -335,15 +434,15 @@ def _simulate_modes(
     if spec.method != "exact":
         _step_size_guard(systems, grid, c_grid, notes, spec.stepping.scheme)
     spec.noise.term.check(d, systems[0].n_edges)
-    params = run_parameters(spec, th, gain_text, x_init, workers, grid, names)
+    params = run_parameters(spec, pm.theta, gain_text, pm.x_init, workers, grid, pm.names)
     if isinstance(topology, SwitchingTopology):
         params["schedule"] = [{"mode": m, "duration": t} for m, t in topology.schedule]
     mspec = MonteCarloSpec(
         systems=tuple(systems),
         grid=grid,
         gain=cfun,
-        theta=th,
-        x_init=x_init,
+        theta=pm.theta,
+        x_init=pm.x_init,
         n_agents=n,
         dim=d,
         paths=spec.mc.paths,
@@ -354,15 +453,9 @@ def _simulate_modes(
         scheme=spec.stepping.scheme,
     )
     part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, engine, notes)
-    exact, exact_stats = run_exact(
-        spec,
-        notes,
-        lambda: exact_moments(
-            systems, segments, cfun, x_init - np.tile(th, n), grid.save_times, n, d
-        ),
-    )
+    exact, exact_stats = run_exact(spec, notes, lambda: pm.moments(cfun, grid.save_times))
     runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
-    return finish_run(tuple(topology.labels), th, grid, designs, params, spec, runs, notes)
+    return finish_run(tuple(topology.labels), pm.theta, grid, pm.designs, params, spec, runs, notes)
 
 
 def _resolve_spec(theta, spec: SimulationSpec | None, options: dict) -> SimulationSpec:

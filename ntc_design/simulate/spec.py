@@ -374,6 +374,7 @@ SCENARIO_KEYS = (
     "topology",
     "theta",
     "margin",
+    "delta",
     "gain",
     "noise",
     "initial",
@@ -409,6 +410,9 @@ class SimulationSpec:
         Horizon.
     margin : float
         ΔC > 0 of the Lemma 1 design (δ = C + ΔC).
+    delta : float or None
+        An explicit common coupling δ > 0 for every mode instead of C + ΔC (what
+        ``ntc tune --tune-delta`` writes); None: Lemma 1's.
     gain : str or callable
         c(t): an expression in t, or a vectorised callable.
     noise : NoiseModel
@@ -427,6 +431,7 @@ class SimulationSpec:
     T: float = 10.0  # noqa: N815 - the paper's name
     margin: float = 0.1
     gain: str | Callable = "1/(1+t)"
+    delta: float | None = None
     noise: NoiseModel = field(default_factory=NoiseModel)
     initial: np.ndarray | UniformInitial | None = None
     save: SaveAt = field(default_factory=lambda: SaveAt(every=0.1))
@@ -445,6 +450,9 @@ class SimulationSpec:
         require_positive("T", self.T)
         object.__setattr__(self, "T", float(self.T))
         require_positive("margin", self.margin)
+        if self.delta is not None:
+            require_positive("delta", self.delta)
+            object.__setattr__(self, "delta", float(self.delta))
         if isinstance(self.gain, str):
             if len(self.gain) > MAX_GAIN_TEXT:
                 raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
@@ -474,7 +482,7 @@ class SimulationSpec:
     def build(cls, theta, **options: Any) -> SimulationSpec:
         """A spec from the flat keyword options of :func:`simulate` (the keys of a
         scenario file: T, dt, paths, seed, save_every or save_times, method, stepping,
-        ds, workers, block_size, store_paths, resample, margin, gain, noise, initial).
+        ds, workers, block_size, store_paths, resample, margin, delta, gain, noise, initial).
 
         Parameters
         ----------
@@ -572,7 +580,7 @@ class SimulationSpec:
         for key in ("method", "stepping", "scheme"):
             if key in o and not isinstance(o[key], str):
                 raise InputError(f"{key}: expected a string, got {o[key]!r}")
-        for key in ("T", "dt", "ds", "margin", "save_every", "resample"):
+        for key in ("T", "dt", "ds", "margin", "delta", "save_every", "resample"):
             if key in o and o[key] is not None:
                 require_number(key, o[key])
         if o.get("save_times") is not None and o.get("save_every") is not None:
@@ -648,6 +656,7 @@ class SimulationSpec:
         out: dict[str, Any] = {
             "theta": self.theta.tolist(),
             "margin": self.margin,
+            "delta": self.delta,
             "gain": self.gain if isinstance(self.gain, str) else "callable",
             "T": self.T,
             "dt": self.stepping.dt,

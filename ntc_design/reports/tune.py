@@ -1,0 +1,185 @@
+"""The report of a tuning run (:func:`ntc_design.tune.tune`): E Σ‖x_i − θ‖² over time for
+the tuned and the baseline gain, the objective over (a, γ) as a contour map with the
+optimum marked, and the tables every face shows (the tuned gain, its theorem conditions,
+the certificate), written as ``tune.html`` with the figures in the one style."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.colors import LogNorm
+
+from ..rows import fmt
+from ..tune import TuneResult
+from . import style
+from .html import figure_block, html_table, render, write_html
+
+CURVE_CAPTION = (
+    "E Σ_i ‖x_i − θ‖² over time under the tuned gain (solid) and the baseline 1/(1 + t) "
+    "(dashed); the dotted line is ε, the deadline T is the right edge."
+)
+LANDSCAPE_CAPTION = (
+    "E Σ_i ‖x_i(T) − θ‖² over the scale a (log) and the exponent γ at the tuned offset b; "
+    "the cross marks the optimum, the circle the baseline's (a, γ) = (1, 1); blank where a "
+    "candidate is too stiff to integrate or its moments grow without bound."
+)
+
+
+def curves_figure(result: TuneResult):
+    """The tuned and the baseline curves (log scale), with their bands for Monte Carlo.
+
+    Parameters
+    ----------
+    result : TuneResult
+        The tuning.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    floor = 1e-12
+    with style.paper_style():
+        fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.4), layout="constrained")
+        for key, colour, ls in (
+            ("tuned", style.PALETTE[0], "-"),
+            ("baseline", style.PALETTE[1], "--"),
+        ):
+            c = result.curves[key]
+            gain = result.tuned.text if key == "tuned" else result.baseline.text
+            ax.plot(c.t, np.maximum(c.total, floor), color=colour, ls=ls, label=f"{key}: {gain}")
+            if c.lo is not None and c.hi is not None:
+                ax.fill_between(
+                    c.t,
+                    np.maximum(c.lo, floor),
+                    np.maximum(c.hi, floor),
+                    color=colour,
+                    alpha=0.2,
+                    lw=0,
+                )
+        if result.eps is not None:
+            ax.axhline(result.eps, color=style.GREY, ls=":", lw=0.8, label=f"ε = {fmt(result.eps)}")
+        ax.set_yscale("log")
+        ax.set_xlabel("t")
+        ax.set_ylabel(r"$E\,\sum_i \|x_i - \theta\|^2$")
+        ax.set_xlim(0, result.horizon)
+        fig.legend(loc="outside upper center", ncols=1, frameon=False)
+    return fig
+
+
+def landscape_figure(result: TuneResult):
+    """The objective over (a, γ) at the tuned b as filled log-spaced contours.
+
+    Parameters
+    ----------
+    result : TuneResult
+        A tuning with a landscape.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ValueError
+        The result has no landscape.
+    """
+    land = result.landscape
+    if land is None:
+        raise ValueError("the result has no landscape (tune(..., landscape=True))")
+    z = np.where(np.isfinite(land.values), land.values, np.nan)
+    with style.paper_style():
+        fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.8), layout="constrained")
+        ok = z[np.isfinite(z)]
+        if ok.size >= 4 and ok.min() > 0 and ok.max() > ok.min():
+            levels = np.geomspace(ok.min(), ok.max(), 14)
+            cs = ax.contourf(land.a, land.gamma, z, levels=levels, norm=LogNorm(), cmap="viridis")
+            fig.colorbar(cs, ax=ax, label=r"$E\,\sum_i \|x_i(T) - \theta\|^2$", format="%.3g")
+        ax.plot(
+            [result.tuned.a],
+            [result.tuned.gamma],
+            marker="X",
+            color="white",
+            mec="black",
+            ms=8,
+            ls="none",
+            label="tuned",
+        )
+        ax.plot(
+            [1.0], [1.0], marker="o", color="none", mec="red", ms=7, ls="none", label="baseline"
+        )
+        ax.set_xscale("log")
+        ax.set_xlabel(f"a  (b = {fmt(land.b)})")
+        ax.set_ylabel(r"$\gamma$")
+        fig.legend(loc="outside lower center", ncols=2, frameon=False)
+    return fig
+
+
+def write_tune_report(
+    result: TuneResult, out_dir: str | Path, scenario: str, files: list[str]
+) -> Path:
+    """Write ``tune.html`` and its figures (``figures/tune_*.png|svg|pdf``) into ``out_dir``.
+
+    Parameters
+    ----------
+    result : TuneResult
+        The tuning.
+    out_dir : str or Path
+        The folder (it exists).
+    scenario : str
+        The scenario's name, shown in the page.
+    files : list of str
+        The other files written there, linked from the page.
+
+    Returns
+    -------
+    Path
+        The HTML page.
+    """
+    base = Path(out_dir)
+    figdir = base / "figures"
+    curves = figure_block(
+        style.save(curves_figure(result), figdir / "tune_curves"),
+        "fig-curves",
+        CURVE_CAPTION,
+        base,
+        style.ONE_COLUMN,
+    )
+    land = None
+    if result.landscape is not None:
+        land = figure_block(
+            style.save(landscape_figure(result), figdir / "tune_landscape"),
+            "fig-landscape",
+            LANDSCAPE_CAPTION,
+            base,
+            style.ONE_COLUMN,
+        )
+    cert = [html_table(t) for t in result.certificate.tables()] if result.certificate else []
+    toc = [
+        {"id": "tuned", "title": "Tuned gain"},
+        {"id": "curves", "title": "Mean-square error over time"},
+    ]
+    if land is not None:
+        toc.append({"id": "landscape", "title": "Objective over (a, γ)"})
+    toc.append({"id": "theorems", "title": "Theorem conditions"})
+    if cert:
+        toc.append({"id": "certificate", "title": "Certificate"})
+    page = render(
+        "tune.html",
+        title=f"Gain tuned for T = {fmt(result.horizon)}",
+        scenario=scenario,
+        horizon=fmt(result.horizon),
+        method=result.method,
+        files=files,
+        summary=html_table(result.table()),
+        curves=curves,
+        landscape=land,
+        gain=html_table(result.gain_analysis.table()),
+        certificate=cert,
+        toc=toc,
+        interactive=False,
+    )
+    path = base / "tune.html"
+    write_html(path, page)
+    return path

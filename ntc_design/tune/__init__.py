@@ -1,0 +1,35 @@
+"""Tune the gain c(t) (and δ) of a scenario for a deadline: :func:`tune`."""
+
+from .family import BASELINE, PowerGain
+from .objective import (
+    OBJECTIVES,
+    Curve,
+    ExactObjective,
+    ExpressionObjective,
+    MonteCarloObjective,
+    Objective,
+    objective_for,
+)
+from .result import Landscape, TuneResult
+from .run import delta_range, tune, tuned_scenario
+from .search import Dimension, Trace, search
+
+__all__ = [
+    "BASELINE",
+    "OBJECTIVES",
+    "Curve",
+    "Dimension",
+    "ExactObjective",
+    "ExpressionObjective",
+    "Landscape",
+    "MonteCarloObjective",
+    "Objective",
+    "PowerGain",
+    "Trace",
+    "TuneResult",
+    "delta_range",
+    "objective_for",
+    "search",
+    "tune",
+    "tuned_scenario",
+]

@@ -1,0 +1,207 @@
+"""The typed result of a tuning run, its table (every face renders it) and its JSON."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..certify import CertifyResult
+from ..gain import GainAnalysis
+from ..rows import Table, fmt, verdict
+from .family import BASELINE, PowerGain
+from .objective import Curve
+
+
+@dataclass(frozen=True, eq=False)
+class Landscape:
+    """The objective over (a, γ) at the optimum's b (and δ): what the contour map shows.
+    ``values[i, j]`` is at ``gamma[i]``, ``a[j]``; +∞ where a candidate was out of reach."""
+
+    a: np.ndarray
+    gamma: np.ndarray
+    b: float
+    values: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class TuneResult:
+    """A tuned gain c(t) = a·(b + t)^(−γ) (and δ) for a scenario and horizon T.
+
+    Attributes
+    ----------
+    tuned, baseline : PowerGain
+        The optimum (rounded to the digits it is written with) and 1/(1 + t).
+    delta : float or None
+        The tuned common δ (``tune_delta``), else None (the scenario's δ).
+    horizon : float
+        T.
+    require : str
+        ``both`` or ``mean-square``.
+    method : str
+        How the objective was computed (exact moments, or Monte Carlo: statistical).
+    statistical : bool
+        Monte Carlo: the optimum and the numbers carry sampling error (bands).
+    curves : dict of str to Curve
+        ``tuned`` and ``baseline``: E Σ‖x_i − θ‖² over [0, T] (RK4 κ = 0.2 for exact).
+    eps : float or None
+        The tolerance ε of ``time_to_eps``.
+    gain_analysis : GainAnalysis
+        The theorem conditions of the tuned gain.
+    certificate : CertifyResult or None
+        The certificate of the tuned design (None when none could be issued; see notes).
+    evaluations : int
+        Objective evaluations of the search.
+    seconds : float
+        Wall time of the search and the final curves.
+    landscape : Landscape or None
+        The objective over (a, γ) for the contour map.
+    notes : tuple of str
+        What the run says besides its numbers.
+    """
+
+    tuned: PowerGain
+    baseline: PowerGain
+    delta: float | None
+    horizon: float
+    require: str
+    method: str
+    statistical: bool
+    curves: dict[str, Curve]
+    eps: float | None
+    gain_analysis: GainAnalysis
+    certificate: CertifyResult | None
+    evaluations: int
+    seconds: float
+    landscape: Landscape | None = None
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def ms_error_T(self) -> dict[str, float]:  # noqa: N802 - T is the paper's horizon
+        """E Σ‖x_i(T) − θ‖² of the tuned and the baseline gain."""
+        return {k: c.final for k, c in self.curves.items()}
+
+    @property
+    def time_to_eps(self) -> dict[str, float | None]:
+        """The first time each gain's curve reaches ε (None: not by T, or no ε)."""
+        if self.eps is None:
+            return {k: None for k in self.curves}
+        return {k: c.first_below(self.eps) for k, c in self.curves.items()}
+
+    @property
+    def required_holds(self) -> bool | None:
+        """Whether the tuned gain satisfies the theorems required (``ntc gain``'s verdict)."""
+        g = self.gain_analysis
+        return g.mean_square if self.require == "mean-square" else g.almost_sure
+
+    @property
+    def certified(self) -> bool:
+        """The tuned design's certificate verifies and a required theorem is guaranteed."""
+        c = self.certificate
+        return bool(c is not None and c.verification.valid and self.required_holds)
+
+    def _band(self, key: str) -> str:
+        c = self.curves[key]
+        if c.lo is None or c.hi is None:
+            return ""
+        return f" (95 % band {fmt(float(c.lo[-1]))} to {fmt(float(c.hi[-1]))})"
+
+    def table(self) -> Table:
+        """The tuned gain beside the baseline: the table every face shows.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        t, b, ms, te = self.tuned, self.baseline, self.ms_error_T, self.time_to_eps
+        rows: list[tuple[Any, ...]] = [
+            ("gain c(t)", t.text, b.text),
+            ("a", t.a, b.a),
+            ("b", t.b, b.b),
+            ("γ", t.gamma, b.gamma),
+        ]
+        if self.delta is not None:
+            rows.append(("δ (tuned)", self.delta, "scenario's"))
+        rows.append(
+            (
+                f"E Σ‖x_i(T) − θ‖², T = {fmt(self.horizon)}",
+                fmt(ms["tuned"]) + self._band("tuned"),
+                fmt(ms["baseline"]) + self._band("baseline"),
+            )
+        )
+        if self.eps is not None:
+            rows.append((f"first time ≤ ε = {fmt(self.eps)}", te["tuned"], te["baseline"]))
+        req = "mean square" if self.require == "mean-square" else "mean square and almost sure"
+        rows.append(("theorems required: " + req, verdict(self.required_holds), ""))
+        cert = self.certificate
+        rows.append(
+            (
+                "certificate of the tuned design",
+                verdict(cert.verification.valid if cert is not None else None),
+                "",
+            )
+        )
+        notes = (
+            f"objective: {self.method}; {self.evaluations} evaluations in {self.seconds:.1f} s",
+            *self.notes,
+        )
+        return Table.build(
+            f"gain tuned for T = {fmt(self.horizon)}: a·(b + t)^(−γ)",
+            ("", "tuned", "baseline"),
+            rows,
+            notes,
+        )
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
+
+    def __repr__(self) -> str:
+        ms = self.ms_error_T
+        return (
+            f"TuneResult(c(t) = {self.tuned.text}, E Σ‖x_i(T) − θ‖² = {fmt(ms['tuned'])} "
+            f"(baseline {fmt(ms['baseline'])}), T = {fmt(self.horizon)})"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The result as a JSON-ready mapping (what ``ntc tune --json`` prints).
+
+        Returns
+        -------
+        dict
+            ``gain`` (text), ``a``, ``b``, ``gamma``, ``delta``, ``horizon``, ``require``,
+            ``method``, ``statistical``, ``ms_error_T`` and ``time_to_eps`` (``tuned``,
+            ``baseline``), ``eps``, ``theorems`` (the tuned gain's analysis),
+            ``certificate_valid``, ``evaluations``, ``seconds``, ``notes``.
+        """
+        bands = {
+            k: [float(c.lo[-1]), float(c.hi[-1])]
+            for k, c in self.curves.items()
+            if c.lo is not None and c.hi is not None
+        }
+        out: dict[str, Any] = {
+            "gain": self.tuned.text,
+            "a": self.tuned.a,
+            "b": self.tuned.b,
+            "gamma": self.tuned.gamma,
+            "delta": self.delta,
+            "baseline_gain": BASELINE.text,
+            "horizon": self.horizon,
+            "require": self.require,
+            "method": self.method,
+            "statistical": self.statistical,
+            "ms_error_T": self.ms_error_T,
+            "eps": self.eps,
+            "time_to_eps": self.time_to_eps,
+            "theorems": self.gain_analysis.to_dict(),
+            "required_holds": self.required_holds,
+            "certificate_valid": (
+                self.certificate.verification.valid if self.certificate is not None else None
+            ),
+            "evaluations": self.evaluations,
+            "seconds": self.seconds,
+            "notes": list(self.notes),
+        }
+        if bands:
+            out["ms_error_T_band"] = bands
+        return out

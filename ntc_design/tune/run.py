@@ -1,0 +1,317 @@
+"""Tune the gain c(t) = a·(b + t)^(−γ) (and optionally δ) of a scenario for a deadline T.
+
+The question: which admissible gain brings the agents closest to θ by time T, measured by
+E Σ_i ‖x_i(T) − θ‖², under the scenario's own noise, initial state and topology (fixed,
+switching or A(t))? The objective comes from :mod:`.objective` (exact moments, or Monte
+Carlo with common random numbers), the search from :mod:`.search`. The optimum is written
+with 4 significant digits and its numbers are recomputed for the written gain at the
+reported accuracy; its theorem conditions are analysed (:func:`ntc_design.gain.analyse_gain`)
+and the tuned design is certified (:func:`ntc_design.certify.certify`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..certify import certify
+from ..design import design_topology
+from ..errors import InputError, require_positive
+from ..gain import analyse_gain
+from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..simulate import SimulationSpec
+from ..simulate.driver import AnyTopology
+from ..timevarying import ExpressionTopology
+from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
+from .objective import Objective, objective_for
+from .result import Landscape, TuneResult
+from .search import Dimension, search
+
+#: δ is searched in [max(1.05·δ_crit, 0.05·δ_Lemma1), 4·δ_Lemma1] (δ_crit: δ_H for one
+#: topology, the largest δ_S of the modes for a switching set).
+DELTA_UPPER = 4.0
+DELTA_LOWER_FRACTION = 0.05
+DELTA_CRIT_FACTOR = 1.05
+#: Default search budget (objective evaluations, the grid included).
+MAX_EVALUATIONS = 160
+#: The contour map's grid (a × γ), and its size when each point is a Monte Carlo run.
+LANDSCAPE_SHAPE = (13, 9)
+LANDSCAPE_SHAPE_MC = (5, 4)
+
+
+def delta_range(topology: AnyTopology, theta) -> tuple[float, float, float]:
+    """The δ range searched by ``tune_delta`` and Lemma 1's δ: −L_B Hurwitz (one
+    topology) or L_B + L_Bᵀ ≻ 0 in every mode (switching) holds on all of it.
+
+    Parameters
+    ----------
+    topology : Topology or SwitchingTopology
+        The network.
+    theta : sequence of float
+        θ.
+
+    Returns
+    -------
+    (float, float, float)
+        Lower limit, upper limit, Lemma 1's δ (the largest over the modes).
+
+    Raises
+    ------
+    InputError
+        A topology given as functions of t, or no δ with the property.
+    """
+    if isinstance(topology, SwitchingTopology):
+        designs = [design_topology(m, theta, thresholds=True) for m in topology.modes.values()]
+        crits = [d.thresholds.symmetric if d.thresholds else None for d in designs]
+        what = "L_B + L_Bᵀ ≻ 0 in every mode"
+    elif isinstance(topology, Topology):
+        designs = [design_topology(topology, theta, thresholds=True)]
+        crits = [designs[0].thresholds.hurwitz if designs[0].thresholds else None]
+        what = "−L_B Hurwitz"
+    else:
+        raise InputError(
+            "--tune-delta: a topology given as functions of t takes Lemma 1's δ(t) at every t"
+        )
+    if any(c is None for c in crits):
+        raise InputError(f"--tune-delta: no δ gives {what} for every larger δ")
+    lemma = max(d.delta for d in designs)
+    crit = max(float(c) for c in crits if c is not None)
+    lo = max(DELTA_CRIT_FACTOR * crit, DELTA_LOWER_FRACTION * lemma)
+    hi = DELTA_UPPER * lemma
+    if not lo < hi:
+        raise InputError(
+            f"--tune-delta: the critical δ {crit:.4g} leaves no room below {hi:.4g} "
+            f"({DELTA_UPPER:g} × Lemma 1's δ)"
+        )
+    return lo, hi, lemma
+
+
+def _dimensions(require: str, delta: tuple[float, float] | None) -> list[Dimension]:
+    g_lo, g_hi = gamma_range(require)
+    dims = [
+        Dimension("a", *A_RANGE, log=True, points=5),
+        Dimension("b", *B_RANGE, log=True, points=3),
+        Dimension("gamma", g_lo, g_hi, points=4),
+    ]
+    if delta is not None:
+        dims.append(Dimension("delta", *delta, log=True, points=3))
+    return dims
+
+
+def tune(
+    topology: AnyTopology,
+    spec: SimulationSpec,
+    horizon: float,
+    *,
+    require: str = "both",
+    tune_delta: bool = False,
+    eps: float | None = None,
+    method: str = "auto",
+    max_evaluations: int = MAX_EVALUATIONS,
+    landscape: bool = True,
+    certificate: bool = True,
+) -> TuneResult:
+    """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖².
+
+    Parameters
+    ----------
+    topology : Topology, SwitchingTopology, TimeVaryingTopology or ExpressionTopology
+        The network.
+    spec : SimulationSpec
+        The scenario: θ, noise, x(0), δ or ΔC, and for Monte Carlo the paths, seed, dt.
+    horizon : float
+        The deadline T.
+    require : {"both", "mean-square"}, optional
+        The theorems the gain must satisfy: γ ∈ [0.51, 1] for both (mean square and
+        almost sure), γ ∈ [0.05, 1] for mean square only.
+    tune_delta : bool, optional
+        Also search a common δ in :func:`delta_range`.
+    eps : float, optional
+        Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.
+    method : {"auto", "exact", "mc"}, optional
+        The objective (auto: exact moments where they apply).
+    max_evaluations : int, optional
+        The search's budget.
+    landscape : bool, optional
+        Evaluate the objective over (a, γ) for the contour map.
+    certificate : bool, optional
+        Certify the tuned design.
+
+    Returns
+    -------
+    TuneResult
+
+    Raises
+    ------
+    InputError
+        A bad horizon, requirement, ε, method or δ range; a scenario the objective
+        refuses.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> from ntc_design.tune import tune
+    >>> from ntc_design.simulate import SimulationSpec
+    >>> spec = SimulationSpec.build([1, 2, -1], noise={"sigma": 0.4, "f": 0.3})
+    >>> r = tune(nd.load("examples/g1.yaml"), spec, 2.0, max_evaluations=30,
+    ...          landscape=False, certificate=False)
+    >>> r.ms_error_T["tuned"] <= r.ms_error_T["baseline"]
+    True
+    """
+    require_positive("horizon", horizon)
+    gamma_range(require)
+    if eps is not None:
+        require_positive("eps", eps)
+    if not isinstance(max_evaluations, int) or not 10 <= max_evaluations <= 10_000:
+        raise InputError(
+            f"max_evaluations: expected an integer in [10, 10000], got {max_evaluations!r}"
+        )
+    t0 = time.perf_counter()
+    notes: list[str] = []
+    drange = delta_range(topology, spec.theta) if tune_delta else None
+    obj = objective_for(topology, spec, horizon, method)
+    dims = _dimensions(require, drange[:2] if drange else None)
+
+    def fun(p: Mapping[str, float]) -> float:
+        return obj.value(PowerGain(p["a"], p["b"], p["gamma"]), p.get("delta"))
+
+    base = {"a": BASELINE.a, "b": BASELINE.b, "gamma": BASELINE.gamma}
+    if drange:
+        base["delta"] = min(max(drange[2], drange[0]), drange[1])
+    inside = all(d.lo <= base[d.name] <= d.hi for d in dims)
+    trace = search(fun, dims, [base] if inside else [], max_evaluations=max_evaluations)
+    (best, value) = trace.best
+    if not math.isfinite(value):
+        raise InputError(
+            f"tune: no candidate could be evaluated ({next(iter(obj.skipped.values()), '')})"
+        )
+    p = dict(zip(trace.names, best, strict=True))
+    for d in dims:
+        if d.hi > d.lo and min(d.to_unit(p[d.name]), 1 - d.to_unit(p[d.name])) < 1e-3:
+            why = (
+                "the limit the required theorems allow"
+                if d.name == "gamma"
+                else "a wider range may do better"
+            )
+            notes.append(
+                f"{d.name} = {p[d.name]:.4g} is at the edge of the searched range "
+                f"[{d.lo:.4g}, {d.hi:.4g}]: {why}"
+            )
+    tuned = PowerGain(p["a"], p["b"], p["gamma"]).rounded()
+    delta = float(f"{p['delta']:.4g}") if "delta" in p else None
+    curves = {
+        "tuned": obj.curve(tuned, delta),
+        "baseline": obj.curve(BASELINE, None),
+    }
+    if curves["tuned"].final > curves["baseline"].final:
+        notes.append(
+            "the baseline is better than every candidate found at T (a flat or noisy objective)"
+        )
+    if obj.skipped:
+        notes.append(f"{len(obj.skipped)} candidate(s) scored +∞ (too stiff or overflowing)")
+    land = _landscape(obj, tuned, delta, require) if landscape else None
+    analysis = analyse_gain(tuned.text)
+    cert = _certify(topology, spec, tuned, delta, notes) if certificate else None
+    return TuneResult(
+        tuned=tuned,
+        baseline=BASELINE,
+        delta=delta,
+        horizon=float(horizon),
+        require=require,
+        method=obj.describe(),
+        statistical=obj.statistical,
+        curves=curves,
+        eps=eps,
+        gain_analysis=analysis,
+        certificate=cert,
+        evaluations=len(trace.values),
+        seconds=time.perf_counter() - t0,
+        landscape=land,
+        notes=tuple(notes),
+    )
+
+
+def _landscape(obj: Objective, best: PowerGain, delta: float | None, require: str) -> Landscape:
+    """The objective over (a, γ) at the optimum's b and δ (search accuracy)."""
+    na, ng = LANDSCAPE_SHAPE_MC if obj.statistical else LANDSCAPE_SHAPE
+    a = Dimension("a", *A_RANGE, log=True, points=na).grid()
+    g_lo, g_hi = gamma_range(require)
+    gam = np.linspace(g_lo, g_hi, ng)
+    vals = np.array([[obj.value(PowerGain(x, best.b, y), delta) for x in a] for y in gam])
+    return Landscape(a, gam, best.b, vals)
+
+
+def _certify(
+    topology: AnyTopology,
+    spec: SimulationSpec,
+    tuned: PowerGain,
+    delta: float | None,
+    notes: list[str],
+):
+    """The certificate of the tuned design, or None with a note when none applies."""
+    if isinstance(topology, TimeVaryingTopology):
+        notes.append("no certificate: a topology given as Python functions of t has none")
+        return None
+    f = spec.noise.f
+    if callable(f):
+        if isinstance(topology, ExpressionTopology):
+            notes.append("no certificate: a time-varying certificate needs a linear f's bound")
+            return None
+        f = 0.0  # only the time-varying certificate uses the noise
+    f_bound = float(np.linalg.norm(np.atleast_2d(np.asarray(f, dtype=float)), 2))
+    try:
+        return certify(
+            topology,
+            spec.theta,
+            spec.margin,
+            gain=tuned.text,
+            delta=delta if delta is not None else spec.delta,
+            noise_sigma=spec.noise.sigma,
+            noise_f=f_bound,
+        )
+    except InputError as exc:
+        notes.append(f"no certificate: {exc}")
+        return None
+
+
+def tuned_scenario(
+    document: Mapping[str, Any], source: str | Path, out: str | Path, result: TuneResult
+) -> dict[str, Any]:
+    """The scenario document with the tuned gain (and δ) and T = the horizon, its
+    topology path made relative to the folder it will be written in.
+
+    Parameters
+    ----------
+    document : mapping
+        The scenario as read.
+    source : str or Path
+        The scenario file (its topology path is relative to it).
+    out : str or Path
+        The folder the new scenario goes to.
+    result : TuneResult
+        The tuning.
+
+    Returns
+    -------
+    dict
+    """
+    doc = dict(document)
+    topo = (Path(source).parent / str(doc["topology"])).resolve()
+    doc["topology"] = os.path.relpath(topo, Path(out).resolve())
+    doc["gain"] = result.tuned.text
+    doc["T"] = result.horizon
+    if result.delta is not None:
+        doc["delta"] = result.delta
+        doc.pop("margin", None)
+    doc["description"] = (
+        f"{document.get('description', document.get('name', 'scenario'))} — gain tuned by "
+        f"ntc tune for T = {result.horizon:g}: E Σ‖x_i(T) − θ‖² = {result.ms_error_T['tuned']:.6g} "
+        f"({result.method})"
+    )
+    return doc
