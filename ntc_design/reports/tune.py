@@ -92,6 +92,25 @@ def landscape_figure(result: TuneResult):
     with style.paper_style():
         fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.8), layout="constrained")
         ok = z[np.isfinite(z)]
+        if z.shape[0] == 1 or z.shape[1] == 1:  # one of a, γ fixed: the objective as a curve
+            fig.clear()
+            ax = fig.subplots()
+            x, xl = (land.a, "a") if z.shape[1] > 1 else (land.gamma, r"$\gamma$")
+            ax.plot(x, z.ravel(), color=style.PALETTE[0])
+            ax.plot(
+                [result.tuned.a if xl == "a" else result.tuned.gamma],
+                [result.ms_error_T["tuned"]],
+                marker="X",
+                color=style.PALETTE[1],
+                ls="none",
+                label="tuned",
+            )
+            ax.set_yscale("log")
+            ax.set_xscale("log" if xl == "a" else "linear")
+            ax.set_xlabel(xl)
+            ax.set_ylabel(r"$E\,\sum_i \|x_i(T) - \theta\|^2$")
+            fig.legend(loc="outside lower center", frameon=False)
+            return fig
         if ok.size >= 4 and ok.min() > 0 and ok.max() > ok.min():
             levels = np.geomspace(ok.min(), ok.max(), 14)
             cs = ax.contourf(land.a, land.gamma, z, levels=levels, norm=LogNorm(), cmap="viridis")

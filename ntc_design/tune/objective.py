@@ -98,6 +98,10 @@ class Objective:
         -------
         bool
         """
+        return cls._accepts(topology, spec)
+
+    @classmethod
+    def _accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:
         raise NotImplementedError
 
     def __init__(self, topology: AnyTopology, spec: SimulationSpec, horizon: float) -> None:
@@ -131,7 +135,8 @@ class Objective:
         return v
 
     def _value(self, gain: PowerGain, delta: float | None) -> float:
-        return self.curve(gain, delta, points=2, accurate=False).final
+        # save times every T/40 also bound the step where c·ρ is small (c varies in t)
+        return self.curve(gain, delta, points=41, accurate=False).final
 
     def curve(
         self, gain: PowerGain, delta: float | None = None, points: int = 401, accurate: bool = True
@@ -153,10 +158,18 @@ class Objective:
         -------
         Curve
         """
+        return self._curve(gain, delta, points, accurate)
+
+    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
         raise NotImplementedError
 
     def describe(self) -> str:
-        """What the objective computes, for the result's ``method``."""
+        """What the objective computes, for the result's ``method``.
+
+        Returns
+        -------
+        str
+        """
         return self.name
 
 
@@ -167,7 +180,7 @@ class ExactObjective(Objective):
     name = "exact moments"
 
     @classmethod
-    def accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:  # noqa: D102
+    def _accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:
         return (
             not isinstance(topology, ExpressionTopology)
             and spec.noise.linear
@@ -221,9 +234,7 @@ class ExactObjective(Objective):
         i1, i2 = gain.integrals(self.horizon)
         return (rho_l * i1 + rho_q * i2) / kappa
 
-    def curve(
-        self, gain: PowerGain, delta: float | None = None, points: int = 401, accurate: bool = True
-    ) -> Curve:  # noqa: D102
+    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
         kappa = KAPPA if accurate else SEARCH_KAPPA
         steps = self.steps(gain, delta, kappa)
         if steps > MAX_STEPS * (KAPPA / kappa if accurate else 1.0):
@@ -250,16 +261,14 @@ class ExpressionObjective(Objective):
     name = "exact moments (A(t))"
 
     @classmethod
-    def accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:  # noqa: D102
+    def _accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:
         return (
             isinstance(topology, ExpressionTopology)
             and spec.noise.linear
             and topology.n * topology.dim <= MOMENTS_MAX_ND
         )
 
-    def curve(
-        self, gain: PowerGain, delta: float | None = None, points: int = 401, accurate: bool = True
-    ) -> Curve:  # noqa: D102
+    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
         if delta is not None:
             raise InputError("--tune-delta: a topology given as expressions of t takes δ(t)")
         t = np.linspace(0.0, self.horizon, points)
@@ -279,18 +288,22 @@ class MonteCarloObjective(Objective):
     statistical = True
 
     @classmethod
-    def accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:  # noqa: D102
+    def _accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:
         return True
 
-    def describe(self) -> str:  # noqa: D102
+    def describe(self) -> str:
+        """What the objective computes: Monte Carlo, its paths and seed, statistical.
+
+        Returns
+        -------
+        str
+        """
         return (
             f"Monte Carlo ({self.spec.mc.paths} paths, seed {self.spec.mc.seed}, common random "
             "numbers): the optimum is statistical"
         )
 
-    def curve(
-        self, gain: PowerGain, delta: float | None = None, points: int = 401, accurate: bool = True
-    ) -> Curve:  # noqa: D102
+    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
         t = np.linspace(0.0, self.horizon, points if accurate else 2)
         spec = self.spec.replace(
             T=self.horizon, gain=gain, method="mc", save=_save_at(t), delta=delta

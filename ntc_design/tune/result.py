@@ -59,6 +59,9 @@ class TuneResult:
         The objective over (a, γ) for the contour map.
     notes : tuple of str
         What the run says besides its numbers.
+    stepping : dict of str to str
+        Scenario keys the written scenario needs for a stable Monte Carlo check (empty:
+        the scenario's own stepping is stable under the tuned gain).
     """
 
     tuned: PowerGain
@@ -76,6 +79,7 @@ class TuneResult:
     seconds: float
     landscape: Landscape | None = None
     notes: tuple[str, ...] = field(default=())
+    stepping: dict[str, str] = field(default_factory=dict)
 
     @property
     def ms_error_T(self) -> dict[str, float]:  # noqa: N802 - T is the paper's horizon
@@ -201,6 +205,7 @@ class TuneResult:
             "evaluations": self.evaluations,
             "seconds": self.seconds,
             "notes": list(self.notes),
+            "stepping": dict(self.stepping),
         }
         if bands:
             out["ms_error_T_band"] = bands

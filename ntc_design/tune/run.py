@@ -25,8 +25,9 @@ from ..design import design_topology
 from ..errors import InputError, require_positive
 from ..gain import analyse_gain
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
-from ..simulate import SimulationSpec
+from ..simulate import SimulationSpec, simulate
 from ..simulate.driver import AnyTopology
+from ..simulate.spec import MonteCarlo, SaveAt, Stepping
 from ..timevarying import ExpressionTopology
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Objective, objective_for
@@ -43,6 +44,7 @@ MAX_EVALUATIONS = 160
 #: The contour map's grid (a × γ), and its size when each point is a Monte Carlo run.
 LANDSCAPE_SHAPE = (13, 9)
 LANDSCAPE_SHAPE_MC = (5, 4)
+LANDSCAPE_SPAN = 8.0
 
 
 def delta_range(topology: AnyTopology, theta) -> tuple[float, float, float]:
@@ -92,16 +94,32 @@ def delta_range(topology: AnyTopology, theta) -> tuple[float, float, float]:
     return lo, hi, lemma
 
 
-def _dimensions(require: str, delta: tuple[float, float] | None) -> list[Dimension]:
+def _dimensions(
+    require: str,
+    delta: tuple[float, float] | None,
+    bounds: Mapping[str, tuple[float, float]] | None,
+) -> list[Dimension]:
+    """The searched box: the defaults, narrowed by ``bounds`` (lo = hi fixes a parameter)."""
     g_lo, g_hi = gamma_range(require)
-    dims = [
-        Dimension("a", *A_RANGE, log=True, points=5),
-        Dimension("b", *B_RANGE, log=True, points=3),
-        Dimension("gamma", g_lo, g_hi, points=4),
-    ]
+    box = {"a": A_RANGE, "b": B_RANGE, "gamma": (g_lo, g_hi)}
     if delta is not None:
-        dims.append(Dimension("delta", *delta, log=True, points=3))
-    return dims
+        box["delta"] = delta
+    for name, rng in (bounds or {}).items():
+        if name not in box:
+            raise InputError(f"bounds: unknown parameter {name!r} (known: {', '.join(box)})")
+        lo, hi = (float(v) for v in rng)
+        allowed = box[name] if name in ("gamma", "delta") else (0.0, math.inf)
+        if not (math.isfinite(lo) and math.isfinite(hi) and allowed[0] <= lo <= hi <= allowed[1]):
+            raise InputError(
+                f"bounds: {name} range [{lo:g}, {hi:g}] is not inside [{allowed[0]:g}, "
+                f"{allowed[1]:g}]" + (" (the required theorems)" if name == "gamma" else "")
+            )
+        if name in ("a", "b") and lo <= 0:
+            raise InputError(f"bounds: {name} must be > 0")
+        box[name] = (lo, hi)
+    points = {"a": 5, "b": 3, "gamma": 4, "delta": 3}
+    logs = {"a", "b", "delta"}
+    return [Dimension(k, lo, hi, log=k in logs, points=points[k]) for k, (lo, hi) in box.items()]
 
 
 def tune(
@@ -116,6 +134,7 @@ def tune(
     max_evaluations: int = MAX_EVALUATIONS,
     landscape: bool = True,
     certificate: bool = True,
+    bounds: Mapping[str, tuple[float, float]] | None = None,
 ) -> TuneResult:
     """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖².
 
@@ -142,6 +161,9 @@ def tune(
         Evaluate the objective over (a, γ) for the contour map.
     certificate : bool, optional
         Certify the tuned design.
+    bounds : mapping of str to (float, float), optional
+        Narrower ranges for ``a``, ``b``, ``gamma`` (inside the required theorems' range)
+        or ``delta``; lo = hi fixes the parameter.
 
     Returns
     -------
@@ -176,7 +198,7 @@ def tune(
     notes: list[str] = []
     drange = delta_range(topology, spec.theta) if tune_delta else None
     obj = objective_for(topology, spec, horizon, method)
-    dims = _dimensions(require, drange[:2] if drange else None)
+    dims = _dimensions(require, drange[:2] if drange else None, bounds)
 
     def fun(p: Mapping[str, float]) -> float:
         return obj.value(PowerGain(p["a"], p["b"], p["gamma"]), p.get("delta"))
@@ -215,7 +237,8 @@ def tune(
         )
     if obj.skipped:
         notes.append(f"{len(obj.skipped)} candidate(s) scored +∞ (too stiff or overflowing)")
-    land = _landscape(obj, tuned, delta, require) if landscape else None
+    stepping = _stable_stepping(topology, spec, tuned, delta, horizon, notes)
+    land = _landscape(obj, tuned, delta, dims) if landscape else None
     analysis = analyse_gain(tuned.text)
     cert = _certify(topology, spec, tuned, delta, notes) if certificate else None
     return TuneResult(
@@ -234,15 +257,71 @@ def tune(
         seconds=time.perf_counter() - t0,
         landscape=land,
         notes=tuple(notes),
+        stepping=stepping,
     )
 
 
-def _landscape(obj: Objective, best: PowerGain, delta: float | None, require: str) -> Landscape:
-    """The objective over (a, γ) at the optimum's b and δ (search accuracy)."""
+#: What the written scenario switches to when its own Euler–Maruyama grid is unstable
+#: under the tuned gain (a large c(0) can break the explicit scheme's mean-square limit).
+IMPLICIT = {"stepping": "intrinsic", "scheme": "implicit"}
+
+
+def _stable_stepping(
+    topology: AnyTopology,
+    spec: SimulationSpec,
+    tuned: PowerGain,
+    delta: float | None,
+    horizon: float,
+    notes: list[str],
+) -> dict[str, str]:
+    """The stepping the written scenario needs for a Monte Carlo check of the tuned gain:
+    the scenario's own when its step-size guard passes, else the drift-implicit scheme
+    (one two-path run each: the guard refuses before any path is drawn)."""
+    base = spec.replace(
+        T=horizon,
+        gain=tuned,
+        delta=delta if delta is not None else spec.delta,
+        method="mc",
+        save=SaveAt(times=np.array([0.0, horizon])),
+        mc=MonteCarlo(paths=2, seed=0, workers=1),
+    )
+    try:
+        simulate(topology, spec=base)
+        return {}
+    except InputError as exc:
+        if "unstable" not in str(exc):
+            notes.append(f"the tuned scenario cannot be simulated as written: {exc}")
+            return {}
+        first = str(exc)
+    try:
+        simulate(
+            topology,
+            spec=base.replace(
+                stepping=Stepping(kind="intrinsic", dt=spec.stepping.dt, scheme="implicit")
+            ),
+        )
+    except InputError as exc:
+        notes.append(f"the tuned scenario cannot be simulated as written: {exc}")
+        return {}
+    notes.append(
+        "the scenario's explicit Euler–Maruyama step is unstable under the tuned gain "
+        f"({first.split(';')[0].removeprefix('dt: ')}); tuned.yaml uses the drift-implicit scheme"
+    )
+    return dict(IMPLICIT)
+
+
+def _landscape(
+    obj: Objective, best: PowerGain, delta: float | None, dims: list[Dimension]
+) -> Landscape:
+    """The objective over (a, γ) at the optimum's b and δ (search accuracy): a within a
+    factor ``LANDSCAPE_SPAN`` of the optimum (inside the searched range), all of γ's."""
     na, ng = LANDSCAPE_SHAPE_MC if obj.statistical else LANDSCAPE_SHAPE
-    a = Dimension("a", *A_RANGE, log=True, points=na).grid()
-    g_lo, g_hi = gamma_range(require)
-    gam = np.linspace(g_lo, g_hi, ng)
+    box = {d.name: d for d in dims}
+    a_lo = max(box["a"].lo, best.a / LANDSCAPE_SPAN)
+    a_hi = min(box["a"].hi, best.a * LANDSCAPE_SPAN)
+    a = np.geomspace(a_lo, a_hi, na) if a_hi > a_lo else np.array([best.a])
+    g = box["gamma"]
+    gam = np.linspace(g.lo, g.hi, ng) if g.hi > g.lo else np.array([g.lo])
     vals = np.array([[obj.value(PowerGain(x, best.b, y), delta) for x in a] for y in gam])
     return Landscape(a, gam, best.b, vals)
 
@@ -306,6 +385,8 @@ def tuned_scenario(
     doc["topology"] = os.path.relpath(topo, Path(out).resolve())
     doc["gain"] = result.tuned.text
     doc["T"] = result.horizon
+    if result.stepping:
+        doc.update(result.stepping)
     if result.delta is not None:
         doc["delta"] = result.delta
         doc.pop("margin", None)

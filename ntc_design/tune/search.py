@@ -30,7 +30,17 @@ class Dimension:
     points: int = 4  # on the coarse grid
 
     def to_unit(self, x: float) -> float:
-        """x in [lo, hi] to [0, 1]."""
+        """x in [lo, hi] to [0, 1] (log or linear).
+
+        Parameters
+        ----------
+        x : float
+            A value in [lo, hi].
+
+        Returns
+        -------
+        float
+        """
         if self.hi == self.lo:
             return 0.0
         if self.log:
@@ -38,14 +48,30 @@ class Dimension:
         return (x - self.lo) / (self.hi - self.lo)
 
     def from_unit(self, u: float) -> float:
-        """[0, 1] to [lo, hi] (clipped)."""
+        """[0, 1] to [lo, hi] (clipped).
+
+        Parameters
+        ----------
+        u : float
+            A unit coordinate.
+
+        Returns
+        -------
+        float
+        """
         u = min(1.0, max(0.0, float(u)))
         if self.log:
             return float(self.lo * (self.hi / self.lo) ** u)
         return float(self.lo + u * (self.hi - self.lo))
 
     def grid(self) -> np.ndarray:
-        """The coarse grid's values."""
+        """The coarse grid's values: ``points`` equally spaced (in log for a log
+        dimension), or the one value of a fixed dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
         if self.hi == self.lo or self.points < 2:
             return (
                 np.array([0.5 * (self.lo + self.hi)]) if self.hi != self.lo else np.array([self.lo])
