@@ -164,7 +164,10 @@ def generator_radius(s: ModeSystem) -> tuple[float, float]:
     return 2 * s.spectral_radius, rho_q
 
 
-class _Rhs:
+class MomentRhs:
+    """The right-hand side of one mode's moment equations, with what it precomputes
+    (L_B dense or sparse, G Gᵀ, the edges' K_e blocks and the generator's radius)."""
+
     def __init__(self, s: ModeSystem, n: int, d: int):
         # sparse products cost O(nnz·Nd); at small Nd a dense product is cheaper than
         # SciPy's call overhead (and gives the numbers of the earlier dense code)
@@ -179,7 +182,17 @@ class _Rhs:
         self.ar = np.arange(n)
 
     def noise(self, s: np.ndarray) -> np.ndarray:
-        """``Σ_k (g_k g_kᵀ + G_k S G_kᵀ)``."""
+        """The noise term ``Σ_k (g_k g_kᵀ + G_k S G_kᵀ)``.
+
+        Parameters
+        ----------
+        s : numpy.ndarray
+            E[εεᵀ], Nd × Nd.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
         n, d = self.n, self.d
         out = self.q.copy()
         if self.k.size:
@@ -244,7 +257,7 @@ def exact_moments(
     InputError
         Nd is above ``MOMENTS_MAX_ND``."""
     check_moments_size(n * d)
-    rhs = [_Rhs(s, n, d) for s in systems]
+    rhs = [MomentRhs(s, n, d) for s in systems]
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
     rec = MomentRecorder(save_times, n, d)
@@ -327,7 +340,7 @@ def em_moments(
     InputError
         Nd is above ``MOMENTS_MAX_ND``."""
     check_moments_size(n * d)
-    rhs = [_Rhs(s, n, d) for s in systems]
+    rhs = [MomentRhs(s, n, d) for s in systems]
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
     c_all = np.asarray(gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..simulate import SimulationSpec, simulate
+from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
 from ..simulate.driver import AnyTopology, PreparedModes, prepare_modes
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
 from ..simulate.spec import SaveAt
@@ -35,6 +36,12 @@ from .family import PowerGain
 SEARCH_KAPPA = 1.0
 #: RK4 steps above which a candidate scores +∞ instead of being integrated.
 MAX_STEPS = 20_000
+#: Crank–Nicolson's c·h per step while searching and for the reported numbers (second
+#: order: about 1e-4 and 1e-5 relative on the paper's networks), and how much dearer its
+#: step is than RK4's (a sparse LU and four solves against four products).
+CAYLEY_DS = 0.01
+CAYLEY_DS_ACCURATE = 0.002
+CAYLEY_COST = 3.0
 #: A candidate whose E‖ε‖² exceeds this many times max(E‖ε(0)‖², 1) is stopped and
 #: scores +∞ (mean-square unstable: its moments grow without bound).
 GROWTH_LIMIT = 1e6
@@ -190,10 +197,13 @@ class ExactObjective(Objective):
     def __init__(self, topology: AnyTopology, spec: SimulationSpec, horizon: float) -> None:
         super().__init__(topology, spec, horizon)
         self.spec = spec.replace(T=self.horizon, method="exact")
-        self._prepared: dict[float | None, tuple[PreparedModes, float, float]] = {}
+        self._prepared: dict[float | None, tuple[PreparedModes, float, float, float]] = {}
+        self.schemes: set[str] = set()
 
-    def prepared(self, delta: float | None) -> tuple[PreparedModes, float, float]:
-        """The designs and systems at δ, with the generator's radius bounds (ρ_L, ρ_Q).
+    def prepared(self, delta: float | None) -> tuple[PreparedModes, float, float, float]:
+        """The designs and systems at δ, with the radius bounds ρ_L, ρ_Q (RK4's step,
+        :func:`.simulate.moments.generator_radius`) and ρ_G (the Crank–Nicolson step's
+        noise bound, :func:`.simulate.cayley.noise_radius`), each the largest over modes.
 
         Parameters
         ----------
@@ -202,7 +212,7 @@ class ExactObjective(Objective):
 
         Returns
         -------
-        (PreparedModes, float, float)
+        (PreparedModes, float, float, float)
         """
         if delta not in self._prepared:
             if len(self._prepared) > 64:  # a δ search visits few values; bound the cache
@@ -211,11 +221,15 @@ class ExactObjective(Objective):
             assert not isinstance(self.topology, ExpressionTopology)  # see accepts
             pm = prepare_modes(self.topology, spec, spec.gain if callable(spec.gain) else _one)
             rho = np.array([generator_radius(s) for s in pm.systems])
-            self._prepared[delta] = (pm, float(rho[:, 0].max()), float(rho[:, 1].max()))
+            rho_g = max(noise_radius(s) for s in pm.systems)
+            self._prepared[delta] = (pm, float(rho[:, 0].max()), float(rho[:, 1].max()), rho_g)
         return self._prepared[delta]
 
-    def steps(self, gain: PowerGain, delta: float | None, kappa: float) -> float:
-        """RK4 steps the candidate needs: ∫ c (ρ_L + c ρ_Q) dt / κ (closed form).
+    def plan(self, gain: PowerGain, delta: float | None, accurate: bool) -> tuple[str, float]:
+        """The cheaper integrator for a candidate and its step count: classical RK4
+        (c·h·ρ <= κ: ∫ c (ρ_L + c ρ_Q) dt / κ steps) or Crank–Nicolson (∫ c dt / ds +
+        ρ_G ∫ c² dt / κ_G steps, each a few times dearer), from the gain's closed-form
+        integrals.
 
         Parameters
         ----------
@@ -223,31 +237,52 @@ class ExactObjective(Objective):
             The candidate.
         delta : float or None
             The δ.
-        kappa : float
-            RK4's c·h·ρ.
+        accurate : bool
+            The reported accuracy rather than the search's.
 
         Returns
         -------
-        float
+        (str, float)
+            ``"rk4"`` or ``"cayley"``, and the estimated steps.
         """
-        _, rho_l, rho_q = self.prepared(delta)
+        _, rho_l, rho_q, rho_g = self.prepared(delta)
         i1, i2 = gain.integrals(self.horizon)
-        return (rho_l * i1 + rho_q * i2) / kappa
+        rk4 = (rho_l * i1 + rho_q * i2) / (KAPPA if accurate else SEARCH_KAPPA)
+        cay = i1 / (CAYLEY_DS_ACCURATE if accurate else CAYLEY_DS) + rho_g * i2 / KAPPA_NOISE
+        return ("cayley", cay) if rk4 > CAYLEY_COST * cay else ("rk4", rk4)
 
     def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
-        kappa = KAPPA if accurate else SEARCH_KAPPA
-        steps = self.steps(gain, delta, kappa)
-        if steps > MAX_STEPS * (KAPPA / kappa if accurate else 1.0):
+        scheme, steps = self.plan(gain, delta, accurate)
+        if steps > MAX_STEPS * (5 if accurate else 1):
             raise InputError(
-                f"{gain.text}: about {steps:.3g} RK4 steps (c(0)·ρ = "
-                f"{gain.a * gain.b**-gain.gamma * self.prepared(delta)[1]:.3g}); too stiff"
+                f"{gain.text}: about {steps:.3g} steps of the moment equations (c(0) = "
+                f"{gain.a * gain.b**-gain.gamma:.3g}); too stiff"
             )
         pm = self.prepared(delta)[0]
         t = np.linspace(0.0, self.horizon, points)
-        limit = GROWTH_LIMIT * max(float(pm.eps0 @ pm.eps0), 1.0)
+        limit = None if accurate else GROWTH_LIMIT * max(float(pm.eps0 @ pm.eps0), 1.0)
+        self.schemes.add(scheme)
         with np.errstate(all="ignore"):
-            m = pm.moments(gain, t, kappa=kappa, abort_above=None if accurate else limit)
+            if scheme == "cayley":
+                ds = CAYLEY_DS_ACCURATE if accurate else CAYLEY_DS
+                m = cayley_moments(
+                    pm.systems, pm.segments, gain, pm.eps0, t, pm.n, pm.d, ds, abort_above=limit
+                )
+            else:
+                kappa = KAPPA if accurate else SEARCH_KAPPA
+                m = pm.moments(gain, t, kappa=kappa, abort_above=limit)
         return Curve(t, m.ms_error.sum(axis=1))
+
+    def describe(self) -> str:
+        """What the objective computes: exact moments, and by which integrators.
+
+        Returns
+        -------
+        str
+        """
+        names = {"rk4": "RK4", "cayley": "Crank–Nicolson"}
+        used = " and ".join(names[k] for k in sorted(self.schemes)) or "RK4"
+        return f"exact moments ({used})"
 
 
 def _one(t):
