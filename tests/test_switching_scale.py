@@ -548,3 +548,21 @@ def test_a_bound_below_the_number_range_is_issued_as_zero():
     c = switching_scale_certificate(design(sw, [1.0, -2.0], thresholds=False))
     assert c["proofs"]["A"]["lower"] == 0.0 and c["results"]["symmetric_part_min_eig"]["A"] > 0
     assert verify(json.loads(json.dumps(c))).valid
+
+
+def test_vectorised_topology_hash_text_is_float_hex_exactly():
+    """Issue 20: the edge text is built from fixed-width byte fields (no float.hex per
+    entry); it must be byte for byte the reference text, subnormals and zeros included."""
+    from ntc_design.certify import format as cc
+
+    rng = np.random.default_rng(4)
+    k, d = 500, 3
+    w = rng.standard_normal((k, d, d)) * 10.0 ** rng.integers(-320, 300, (k, d, d))
+    w.ravel()[:6] = [0.0, 5e-324, -2.0**-1022, 1.0, -1.7976931348623157e308, 1e-310]
+    labels = ["a", 'q"', 7, "ü"] + [f"n{i}" for i in range(20)]
+    lab = cc.label_json(labels)
+    padded = np.array(lab, dtype="S").view(np.uint8).reshape(len(lab), -1)
+    cols, rows = rng.integers(0, len(lab), k), rng.integers(0, len(lab), k)
+    want = cc._edges_text(lab, cols, rows, w)
+    assert cc._edges_text_fast(padded, cols, rows, w).decode() == want
+    assert lab[:3] == [json.dumps("a"), json.dumps('q"'), "7"] and lab[3] == json.dumps("ü")
