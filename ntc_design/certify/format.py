@@ -209,7 +209,8 @@ def _edges_text(lab, cols, rows, w) -> str:
     rws = [",".join(f'"{x}"' for x in hexes[k : k + d]) for k in range(0, len(hexes), d)]
     mats = ["[[" + "],[".join(rws[k : k + d]) + "]]" for k in range(0, len(rws), d)]
     return ",".join(
-        f"[{lab[j]},{lab[i]},{m}]" for j, i, m in zip(cols.tolist(), rows.tolist(), mats, strict=True)
+        f"[{lab[j]},{lab[i]},{m}]"
+        for j, i, m in zip(cols.tolist(), rows.tolist(), mats, strict=True)
     )
 
 
@@ -229,7 +230,7 @@ def _hex_fields(x: np.ndarray) -> np.ndarray:
     out[:, 0] = np.where(neg, ord("-"), 0)
     out[:, 1], out[:, 2], out[:, 4] = ord("0"), ord("x"), ord(".")
     out[:, 3] = np.where(ex > 0, ord("1"), ord("0"))
-    nib = ((man[:, None] >> (np.uint64(4) * np.arange(12, -1, -1, dtype=np.uint64))) & np.uint64(15))
+    nib = (man[:, None] >> (np.uint64(4) * np.arange(12, -1, -1, dtype=np.uint64))) & np.uint64(15)
     nib = nib.astype(np.int64)
     # all 13 digits, but 0.0 is written 0x0.0p+0
     zero = (ex == 0) & (man == 0)

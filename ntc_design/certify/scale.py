@@ -47,7 +47,6 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sparse
-from scipy.sparse.linalg import splu
 
 from ..design import ProtocolDesign
 from ..linalg import (
@@ -61,6 +60,7 @@ from ..model import Topology, block_coo
 from ..rigorous.exact import U, gamma, rump_shift_value
 from ..thresholds import strong_components
 from .arrays import mode_subject, pack
+from .comparison import comparison_solve
 from .dense import prove_pd_expr
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov
@@ -395,7 +395,9 @@ def symmetric_part_bound(
 ) -> SymmetricPartProof:
     """Rigorous ``λ_min(L + Lᵀ) > shift`` for the exact matrix within ``err`` of the float
     ``lap``: one sparse Cholesky factorisation (CHOLMOD) of ``A − cI`` succeeds, with A
-    and E from :func:`shifted_symmetric_part` and c = :func:`rump_shift` (A, E).
+    and E from :func:`shifted_symmetric_part` and c = :func:`rump_shift` (A, E). A
+    success on the bit-identical A − cI earlier in the process is not factorised again
+    (:meth:`~ntc_design.linalg.SPDFamily.factor`, ``reuse``).
 
     Parameters
     ----------
@@ -416,19 +418,43 @@ def symmetric_part_bound(
     InputError
         The factorisation would not fit (:func:`~ntc_design.linalg.require_sparse_factor`).
     """
+    return symmetric_part_factor(lap, err, shift, reuse=True)[0]
+
+
+def symmetric_part_factor(
+    lap: sparse.csr_matrix, err: sparse.csr_matrix, shift: float = 0.0, reuse: bool = False
+) -> tuple[SymmetricPartProof, SPDFamily | None]:
+    """:func:`symmetric_part_bound`, also returning the factorised family (its factor of
+    ``A − cI`` solves with ``L + Lᵀ − (shift + c)·I`` up to rounding; None when nothing
+    was factorised).
+
+    Parameters
+    ----------
+    lap, err : scipy.sparse.csr_matrix
+        The float matrix L and an entrywise bound on |L_exact − L|.
+    shift : float, optional
+        The lower bound to prove.
+    reuse : bool, optional
+        Reuse an earlier success on the identical matrix (no factor is then kept).
+
+    Returns
+    -------
+    tuple of (SymmetricPartProof, SPDFamily or None)
+    """
     a, e = shifted_symmetric_part(lap, err, shift)
     c = rump_shift(a, e)
     what = "L + Lᵀ" if not shift else f"L + Lᵀ − {shift:.6g}·I"
     if not (np.isfinite(c) and np.all(np.isfinite(a.data)) and np.all(np.isfinite(e.data))):
         return SymmetricPartProof(
             False, shift, c, f"{what} or its rounding bound overflows: nothing is proven"
-        )
-    ok, _ = SPDFamily([a]).factor([1.0], c)
+        ), None
+    fam = SPDFamily([a])
+    ok, _ = fam.factor([1.0], c, reuse=reuse)
     if not ok:
-        return SymmetricPartProof(False, shift, c, f"sparse Cholesky of {what} − {c:.3g}·I fails")
-    return SymmetricPartProof(
-        True, shift, c, f"sparse Cholesky of {what} − {c:.3g}·I succeeds (shift covers rounding)"
-    )
+        why = f"sparse Cholesky of {what} − {c:.3g}·I fails"
+        return SymmetricPartProof(False, shift, c, why), fam
+    how = f"sparse Cholesky of {what} − {c:.3g}·I succeeds (shift covers rounding)"
+    return SymmetricPartProof(True, shift, c, how), fam
 
 
 def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tuple[bool, str]:
@@ -669,61 +695,6 @@ def _comparison_vector(n, comp, sizes, ea, same, nu, mu) -> np.ndarray:
         multi = np.flatnonzero(sizes[comp] > 1)
         v[multi] = comparison_solve(mm[multi][:, multi].tocsr())
     return v
-
-
-#: Jacobi sweeps :func:`comparison_solve` makes before it gives up on convergence.
-COMPARISON_JACOBI_MAX_ITER = 5000
-#: ... and the relative change of v that counts as converged.
-COMPARISON_JACOBI_RTOL = 1e-13
-#: Largest comparison matrix (agents) solved by a sparse LU when Jacobi does not converge
-#: (an LU of a random graph fills in superlinearly: 0.2 s at 15,000 agents, minutes at
-#: 150,000).
-COMPARISON_LU_MAX_AGENTS = 20_000
-
-
-def comparison_solve(m: sparse.csr_matrix) -> np.ndarray:
-    """Solve ``M v = 1`` for a comparison matrix M = D − N (D its diagonal, N >= 0 off it)
-    by Jacobi sweeps ``v ← D⁻¹(1 + N v)`` from v = D⁻¹1: one sparse product per sweep, so
-    the cost grows with the edges. When M is a non-singular M-matrix (exactly when
-    dominance can hold, ρ(D⁻¹N) < 1) the sweeps increase monotonically to M⁻¹1 > 0, each
-    iterate with M v > 0 once the change is small. When they do not converge, a sparse LU
-    solves small matrices (up to ``COMPARISON_LU_MAX_AGENTS``); larger ones keep the last
-    sweep. Nothing here needs to be exact: ``dominance_holds`` proves M v > 0 rigorously
-    for whatever v is returned.
-
-    Parameters
-    ----------
-    m : scipy.sparse.csr_matrix
-        The comparison matrix (square).
-
-    Returns
-    -------
-    numpy.ndarray
-        v, with −1 where it is not finite (dominance then fails there).
-    """
-    k = m.shape[0]
-    dg = m.diagonal()
-    off = (sparse.diags(dg) - m).tocsr()
-    d = np.where(dg > 0, dg, 1.0)  # rows with μ <= 0 cannot be dominant anyway
-    one = np.ones(k)
-    v = one / d
-    converged = False
-    with np.errstate(over="ignore", invalid="ignore"):
-        for _ in range(COMPARISON_JACOBI_MAX_ITER):
-            new = (one + off @ v) / d
-            if not np.all(np.isfinite(new)):
-                break
-            change = np.max(np.abs(new - v) / np.abs(new), initial=0.0)
-            v = new
-            if change <= COMPARISON_JACOBI_RTOL:
-                converged = True
-                break
-    if not converged and k <= COMPARISON_LU_MAX_AGENTS:
-        try:
-            v = splu(m.tocsc()).solve(one)
-        except RuntimeError:  # singular comparison matrix
-            return np.full(k, -1.0)
-    return np.where(np.isfinite(v), v, -1.0)
 
 
 @dataclass
