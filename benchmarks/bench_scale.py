@@ -89,6 +89,10 @@ DENSE = (
     "    print('refused: ' + str(e), file=sys.stderr); sys.exit(3)"
 )
 IMPORT = "import ntc_design, ntc_design.certify"
+WARM_NUMBA = (
+    "import scipy.sparse as sp; from ntc_design.linalg import cholesky_fill; "
+    "cholesky_fill(sp.csr_matrix([[2.0, 1.0], [1.0, 2.0]]))"
+)
 DENSE_SWITCHING = (
     "import sys, warnings; import ntc_design as nd; "
     "from ntc_design.certify import switching_certificate, verify; "
@@ -204,23 +208,31 @@ def switching(args, work: Path) -> None:
             )
 
 
+WRITE_READ_FILES = (
+    "import sys; from pathlib import Path; "
+    "from ntc_design.generate import random_network, write_topology; "
+    "from ntc_design.tablefiles import write_csv_edges; "
+    "n, d, seed, work = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3]), Path(sys.argv[4]); "
+    "top = random_network(n, d, seed=seed); ea = top.edge_arrays; "
+    "write_topology(top, work / f'read{n}.npz'); "
+    "write_csv_edges(work / f'read{n}.csv', top.labels, top.dim, ea.rows, ea.cols, ea.w); "
+    "write_topology(top, work / f'read{n}.yaml'); print(len(ea.rows))"
+)
+
+
 def read_times(n: int, d: int, seed: int, work: Path) -> None:
     """Reading one n-agent network from each file format (one child process each, so the
-    reading is timed alone): the cost of bringing your own data."""
-    from ntc_design.generate import random_network, write_topology
-    from ntc_design.tablefiles import write_csv_edges
-
-    top = random_network(n, d, seed=seed)
-    ea = top.edge_arrays
-    files = {
-        "npz": work / f"read{n}.npz",
-        "csv": work / f"read{n}.csv",
-        "yaml": work / f"read{n}.yaml",
-    }
-    write_topology(top, files["npz"])
-    write_csv_edges(files["csv"], top.labels, top.dim, ea.rows, ea.cols, ea.w)
-    write_topology(top, files["yaml"])
-    print(f"# reading {n} agents, {len(ea.rows)} edges (nd.load in a child process)")
+    reading is timed alone): the cost of bringing your own data. The files are written by
+    a child too: a big parent would lend its pages to every child's peak memory (fork)."""
+    out = subprocess.run(
+        [sys.executable, "-c", WRITE_READ_FILES, str(n), str(d), str(seed), str(work)],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    ).stdout.split()
+    files = {kind: work / f"read{n}.{kind}" for kind in ("npz", "csv", "yaml")}
+    print(f"# reading {n} agents, {out[-1]} edges (nd.load in a child process)")
     times = {}
     for kind, f in files.items():
         r = run_child(["-c", "import ntc_design as nd, sys; nd.load(sys.argv[1])", str(f)])
@@ -228,7 +240,8 @@ def read_times(n: int, d: int, seed: int, work: Path) -> None:
         size = f.stat().st_size / 2**20
         print(f"  {kind:<5} {size:7.1f} MiB  {r['wall']:6.2f} s  peak {r['rss']:.0f} MiB")
     print(
-        f"  ratios to npz: csv ×{times['csv'] / times['npz']:.1f}, yaml ×{times['yaml'] / times['npz']:.1f}"
+        f"  ratios to npz: csv ×{times['csv'] / times['npz']:.1f}, "
+        f"yaml ×{times['yaml'] / times['npz']:.1f}"
     )
 
 
@@ -356,6 +369,9 @@ def main() -> None:
             str(f_dense),
         ]
     )
+    # warm-up (not timed): byte-compiles the package and the numba kernels once
+    run_child(["-m", "ntc_design", "certify", str(f_dense), "--theta", THETA])
+    run_child(["-c", WARM_NUMBA])
     dense_small = run_child(["-c", DENSE, str(f_dense)])
     if dense_small["rc"] != 0:
         print(f"dense path at N = {n_dense} failed: {dense_small['err']}")
