@@ -13,6 +13,7 @@ Tolerances (documented once, used everywhere):
 from __future__ import annotations
 
 import functools
+import hashlib
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -46,7 +47,9 @@ def out_of_range(a: np.ndarray | float) -> bool:
     )
 
 
-RANGE_TEXT = f"a nonzero |entry| outside [2^-{MAGNITUDE_EXP}, 2^{MAGNITUDE_EXP}] (cannot be bounded)"
+RANGE_TEXT = (
+    f"a nonzero |entry| outside [2^-{MAGNITUDE_EXP}, 2^{MAGNITUDE_EXP}] (cannot be bounded)"
+)
 
 
 SYM_RTOL = 1e-12
@@ -397,6 +400,20 @@ def require_sparse_factor(fill: CholeskyFill, what: str, factorisations: int = 1
         )
 
 
+#: SHA-256 keys of the exact matrices (pattern, values and shift, as factorised) whose
+#: sparse Cholesky succeeded in this process, newest last (at most ``PROVEN_KEEP``).
+_PROVEN: dict[str, None] = {}
+PROVEN_KEEP = 32
+
+
+def _matrix_key(n: int, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray) -> str:
+    """SHA-256 of a lower-triangle matrix exactly as it is handed to CHOLMOD."""
+    h = hashlib.sha256(np.array([n, rows.size], dtype=np.int64).tobytes())
+    for a in (rows.astype(np.int64), cols.astype(np.int64), vals.astype(np.float64)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
 class SPDFamily:
     """Sparse Cholesky (CHOLMOD via cvxopt, fill-reducing ordering, supernodal) of the
     symmetric matrices ``Σ_k c_k·M_k − shift·I`` over one fixed sparsity pattern (the union
@@ -432,7 +449,7 @@ class SPDFamily:
             self._fill = cholesky_fill(pat)
         return self._fill
 
-    def factor(self, coeffs, shift: float = 0.0, row_counts: bool = False):
+    def factor(self, coeffs, shift: float = 0.0, row_counts: bool = False, reuse: bool = False):
         """Factorise ``Σ c_k M_k − shift·I``.
 
         Parameters
@@ -443,6 +460,13 @@ class SPDFamily:
             The diagonal shift.
         row_counts : bool, optional
             Also count the factor's non-zeros per row.
+        reuse : bool, optional
+            When a factorisation of the bit-identical matrix (same pattern, same float
+            values after the shift) succeeded earlier in this process, answer True
+            without factorising again and keep no factor (:meth:`solve` then refuses).
+            The same float matrix gives the same CHOLMOD run, so nothing weaker is
+            proven; ``ntc certify`` re-verifies its own certificate this way. The size
+            limits are checked first either way.
 
         Returns
         -------
@@ -464,6 +488,10 @@ class SPDFamily:
         if not np.all(np.isfinite(v)):  # CHOLMOD would take a NaN pivot for a positive one
             self._ok = False
             return False, 0
+        key = _matrix_key(self.n, self.rows, self.cols, v)
+        if reuse and not row_counts and key in _PROVEN:
+            self._ok, self._symbolic = False, None
+            return True, 0
         sm = spmatrix(matrix(v), matrix(self.rows), matrix(self.cols), (self.n, self.n))
         old = dict(cholmod.options)
         cholmod.options["supernodal"] = 2
@@ -485,6 +513,10 @@ class SPDFamily:
             self._ok = False
             return False, 0
         self._ok = True
+        _PROVEN.pop(key, None)
+        _PROVEN[key] = None
+        while len(_PROVEN) > PROVEN_KEEP:
+            del _PROVEN[next(iter(_PROVEN))]
         if not row_counts:
             return True, 0
         fac = cholmod.getfactor(self._symbolic)

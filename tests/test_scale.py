@@ -467,3 +467,49 @@ def test_unreached_agents_are_refused_in_bulk_not_one_by_one(tmp_path, capsys, m
     detail = a2["detail"]
     assert "… 19994 more agents" in detail and len(detail) < 2000
     assert a2["holds"] is False and a2["replaced_by"] is None
+
+
+def _comparison(seed, n=400, scale=1.0):
+    """A random comparison matrix M = D − N (N >= 0) on a strongly connected graph."""
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(seed)
+    ring = np.arange(n)
+    rows = np.concatenate([ring, rng.integers(0, n, 2 * n)])
+    cols = np.concatenate([(ring + 1) % n, rng.integers(0, n, 2 * n)])
+    keep = rows != cols
+    off = sp.csr_matrix((rng.uniform(0.1, 1.0, keep.sum()), (rows[keep], cols[keep])), (n, n))
+    dg = scale * np.asarray(off.sum(axis=1)).ravel() + 0.05
+    return (sp.diags(dg) - off).tocsr()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_comparison_solve_by_jacobi_matches_the_lu(seed):
+    """Issue 20: M v = 1 by Jacobi sweeps (linear in the edges) instead of a sparse LU
+    (superlinear fill on random graphs); on an M-matrix the same v as the LU."""
+    from scipy.sparse.linalg import splu
+
+    from ntc_design.certify import comparison as sc
+
+    m = _comparison(seed)
+    v = sc.comparison_solve(m)
+    exact = splu(m.tocsc()).solve(np.ones(m.shape[0]))
+    assert np.all(v > 0)
+    np.testing.assert_allclose(v, exact, rtol=1e-10)
+    assert np.all(m @ v > 0)
+
+
+def test_comparison_solve_falls_back_to_the_lu_when_jacobi_diverges(monkeypatch):
+    """Not an M-matrix (ρ(D⁻¹N) > 1): the sweeps diverge; small matrices get the LU's v
+    (dominance then fails on it), large ones the last finite sweep, never a crash."""
+    from scipy.sparse.linalg import splu
+
+    from ntc_design.certify import comparison as sc
+
+    m = _comparison(3, n=200, scale=0.5)
+    exact = splu(m.tocsc()).solve(np.ones(m.shape[0]))
+    np.testing.assert_allclose(sc.comparison_solve(m), exact, rtol=1e-12)
+    assert not np.all(exact > 0)  # no positive v with M v > 0: dominance must fail
+    monkeypatch.setattr(sc, "COMPARISON_LU_MAX_AGENTS", 10)
+    v = sc.comparison_solve(m)
+    assert v.shape == (200,) and not (np.all(v > 0) and np.all(m @ v > 0))

@@ -548,3 +548,78 @@ def test_a_bound_below_the_number_range_is_issued_as_zero():
     c = switching_scale_certificate(design(sw, [1.0, -2.0], thresholds=False))
     assert c["proofs"]["A"]["lower"] == 0.0 and c["results"]["symmetric_part_min_eig"]["A"] > 0
     assert verify(json.loads(json.dumps(c))).valid
+
+
+def test_vectorised_topology_hash_text_is_float_hex_exactly():
+    """Issue 20: the edge text is built from fixed-width byte fields (no float.hex per
+    entry); it must be byte for byte the reference text, subnormals and zeros included."""
+    from ntc_design.certify import format as cc
+
+    rng = np.random.default_rng(4)
+    k, d = 500, 3
+    w = rng.standard_normal((k, d, d)) * 10.0 ** rng.integers(-320, 300, (k, d, d))
+    w.ravel()[:6] = [0.0, 5e-324, -2.0**-1022, 1.0, -1.7976931348623157e308, 1e-310]
+    labels = ["a", 'q"', 7, "ü"] + [f"n{i}" for i in range(20)]
+    lab = cc.label_json(labels)
+    padded = np.array(lab, dtype="S").view(np.uint8).reshape(len(lab), -1)
+    cols, rows = rng.integers(0, len(lab), k), rng.integers(0, len(lab), k)
+    want = cc._edges_text(lab, cols, rows, w)
+    assert cc._edges_text_fast(padded, cols, rows, w).decode() == want
+    assert lab[:3] == [json.dumps("a"), json.dumps('q"'), "7"] and lab[3] == json.dumps("ü")
+
+
+def _count_numeric(monkeypatch):
+    """A spy on CHOLMOD's numeric factorisation: the list of calls grows by one each."""
+    from cvxopt import cholmod
+
+    calls = []
+    real = cholmod.numeric
+
+    def spy(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(cholmod, "numeric", spy)
+    return calls
+
+
+def test_factorisations_per_mode(sw, monkeypatch):
+    """Issue 20: the issuer factorises twice per mode (the ℓ = 0 proof, which is also the
+    eigensolver's inverse, then ℓ), ``certify`` re-verifies without factorising the same
+    matrices again, and a fresh verify factorises once per mode."""
+    import ntc_design.linalg as la
+
+    la._PROVEN.clear()
+    calls = _count_numeric(monkeypatch)
+    res = certify(sw, THETA)
+    assert res.certificate["kind"] == "switching-scale" and res.verification.valid
+    assert all(lo > 0 for lo in res.certificate["results"]["symmetric_part_lower_bound"].values())
+    assert len(calls) == 4
+    la._PROVEN.clear()
+    assert verify(json.loads(json.dumps(res.certificate))).valid
+    assert len(calls) == 6
+
+
+def test_reuse_needs_the_bit_identical_matrix(monkeypatch):
+    """A remembered success answers only for the same float values and shift: one ulp
+    off, or another shift, is factorised (and a shift past λ_min fails)."""
+    import scipy.sparse as sp
+
+    import ntc_design.linalg as la
+
+    a = sp.csr_matrix(np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 2]]))
+    calls = _count_numeric(monkeypatch)
+    assert SPDFamily([a]).factor([1.0], 0.5, reuse=True)[0]
+    assert SPDFamily([a]).factor([1.0], 0.5, reuse=True)[0] and len(calls) == 1
+    b = a.copy()
+    b.data[0] = np.nextafter(b.data[0], 3.0)
+    assert SPDFamily([b]).factor([1.0], 0.5, reuse=True)[0] and len(calls) == 2
+    lam = 2 - np.sqrt(2)
+    assert not SPDFamily([a]).factor([1.0], lam * (1 + 1e-9), reuse=True)[0]
+    assert not SPDFamily([a]).factor([1.0], lam * (1 + 1e-9), reuse=True)[0]
+    assert len(calls) == 4  # failures are never remembered
+    fam = SPDFamily([a])
+    assert fam.factor([1.0], 0.5, reuse=True)[0]
+    with pytest.raises(ValueError, match="no successful factorisation"):
+        fam.solve(np.ones(3))  # a reused answer keeps no factor
+    assert len(la._PROVEN) <= la.PROVEN_KEEP

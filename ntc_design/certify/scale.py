@@ -47,7 +47,6 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sparse
-from scipy.sparse.linalg import splu
 
 from ..design import ProtocolDesign
 from ..linalg import (
@@ -61,6 +60,7 @@ from ..model import Topology, block_coo
 from ..rigorous.exact import U, gamma, rump_shift_value
 from ..thresholds import strong_components
 from .arrays import mode_subject, pack
+from .comparison import comparison_solve
 from .dense import prove_pd_expr
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov
@@ -395,7 +395,9 @@ def symmetric_part_bound(
 ) -> SymmetricPartProof:
     """Rigorous ``λ_min(L + Lᵀ) > shift`` for the exact matrix within ``err`` of the float
     ``lap``: one sparse Cholesky factorisation (CHOLMOD) of ``A − cI`` succeeds, with A
-    and E from :func:`shifted_symmetric_part` and c = :func:`rump_shift` (A, E).
+    and E from :func:`shifted_symmetric_part` and c = :func:`rump_shift` (A, E). A
+    success on the bit-identical A − cI earlier in the process is not factorised again
+    (:meth:`~ntc_design.linalg.SPDFamily.factor`, ``reuse``).
 
     Parameters
     ----------
@@ -416,19 +418,43 @@ def symmetric_part_bound(
     InputError
         The factorisation would not fit (:func:`~ntc_design.linalg.require_sparse_factor`).
     """
+    return symmetric_part_factor(lap, err, shift, reuse=True)[0]
+
+
+def symmetric_part_factor(
+    lap: sparse.csr_matrix, err: sparse.csr_matrix, shift: float = 0.0, reuse: bool = False
+) -> tuple[SymmetricPartProof, SPDFamily | None]:
+    """:func:`symmetric_part_bound`, also returning the factorised family (its factor of
+    ``A − cI`` solves with ``L + Lᵀ − (shift + c)·I`` up to rounding; None when nothing
+    was factorised).
+
+    Parameters
+    ----------
+    lap, err : scipy.sparse.csr_matrix
+        The float matrix L and an entrywise bound on |L_exact − L|.
+    shift : float, optional
+        The lower bound to prove.
+    reuse : bool, optional
+        Reuse an earlier success on the identical matrix (no factor is then kept).
+
+    Returns
+    -------
+    tuple of (SymmetricPartProof, SPDFamily or None)
+    """
     a, e = shifted_symmetric_part(lap, err, shift)
     c = rump_shift(a, e)
     what = "L + Lᵀ" if not shift else f"L + Lᵀ − {shift:.6g}·I"
     if not (np.isfinite(c) and np.all(np.isfinite(a.data)) and np.all(np.isfinite(e.data))):
         return SymmetricPartProof(
             False, shift, c, f"{what} or its rounding bound overflows: nothing is proven"
-        )
-    ok, _ = SPDFamily([a]).factor([1.0], c)
+        ), None
+    fam = SPDFamily([a])
+    ok, _ = fam.factor([1.0], c, reuse=reuse)
     if not ok:
-        return SymmetricPartProof(False, shift, c, f"sparse Cholesky of {what} − {c:.3g}·I fails")
-    return SymmetricPartProof(
-        True, shift, c, f"sparse Cholesky of {what} − {c:.3g}·I succeeds (shift covers rounding)"
-    )
+        why = f"sparse Cholesky of {what} − {c:.3g}·I fails"
+        return SymmetricPartProof(False, shift, c, why), fam
+    how = f"sparse Cholesky of {what} − {c:.3g}·I succeeds (shift covers rounding)"
+    return SymmetricPartProof(True, shift, c, how), fam
 
 
 def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tuple[bool, str]:
@@ -667,12 +693,7 @@ def _comparison_vector(n, comp, sizes, ea, same, nu, mu) -> np.ndarray:
             (-nu[same], (ea.rows[same], ea.cols[same])), shape=(n, n)
         ) + sparse.diags(mu)
         multi = np.flatnonzero(sizes[comp] > 1)
-        sub = mm[multi][:, multi].tocsc()
-        try:
-            sol = splu(sub).solve(np.ones(multi.size))
-            v[multi] = np.where(np.isfinite(sol), sol, -1.0)
-        except RuntimeError:  # singular comparison matrix
-            v[multi] = -1.0
+        v[multi] = comparison_solve(mm[multi][:, multi].tocsr())
     return v
 
 

@@ -18,11 +18,15 @@ common Lyapunov matrix. The dense path's search for other common P (block-diagon
 dense LMIs) and its exact rational arithmetic are not run at this size (their memory
 grows as (Nd)² to (Nd)⁴); the certificate says so.
 
-**Cost.** One structural analysis (:func:`~ntc_design.linalg.cholesky_fill`, which
-refuses a factor above the memory or work limits before it is computed), two numeric
-factorisations and a few dozen triangular solves per mode for the issuer, one
-factorisation per mode for ``verify``. Fill grows with the symmetrised graph: on random
-networks (d = 3) a factorisation takes 0.05 s at N = 10⁴ and 20 s at N = 10⁵.
+**Cost.** Per mode, the issuer factorises twice: ``L + Lᵀ − c₀I`` (the proof of ℓ = 0,
+whose factor is also ARPACK's shift-invert operator for the estimate) and
+``L + Lᵀ − (ℓ + c)I`` (the proof of ℓ; when it fails, ℓ = 0 stands with no third
+factorisation). ``verify`` factorises once per mode; ``ntc certify`` re-verifies its own
+certificate without factorising a bit-identical matrix again (``SPDFamily.factor``,
+``reuse``). Each factorisation is preceded by a structural analysis
+(:func:`~ntc_design.linalg.cholesky_fill`) that refuses a factor above the memory or
+work limits before it is computed. Fill grows with the symmetrised graph: on random
+networks (d = 3) a factorisation takes 0.05 s at N = 10⁴ and 16-20 s at N = 10⁵.
 """
 
 from __future__ import annotations
@@ -53,9 +57,8 @@ from .format import (
 from .scale import (
     component_matrix,
     lap_b_blocks,
-    rump_shift,
-    shifted_symmetric_part,
     symmetric_part_bound,
+    symmetric_part_factor,
 )
 
 KIND = "switching-scale"
@@ -85,10 +88,17 @@ def sym_matrices(top: Topology, delta: float):
     return component_matrix(blocks, np.arange(top.n))
 
 
-def _min_eig_estimate(s, fam: SPDFamily | None) -> tuple[float, str]:
+#: ARPACK's tolerance for the shift-invert estimate: each solve with a 10⁵-agent factor
+#: takes about 0.15 s; 1e-6 needed 71 of them on a 10⁵-agent mode (1e-10: 101) and was
+#: accurate to 1e-12 there, far inside the room ℓ leaves (LOWER_RTOL).
+ARPACK_TOL = 1e-6
+
+
+def _min_eig_estimate(s, fam: SPDFamily | None, sigma: float = 0.0) -> tuple[float, str]:
     """λ_min(S), S = L + Lᵀ, estimated: dense up to EIG_DENSE_MAX_ND, else ARPACK
-    shift-invert at 0 with the Cholesky factor (``fam``, when S factorised), else ARPACK's
-    smallest algebraic eigenvalue (bounded iterations; NaN when it does not converge)."""
+    shift-invert at ``sigma`` with the Cholesky factor of S − sigma·I (``fam``, when it
+    factorised), else ARPACK's smallest algebraic eigenvalue (bounded iterations; NaN when
+    it does not converge)."""
     from scipy.sparse.linalg import ArpackError, LinearOperator, eigsh
 
     n = s.shape[0]
@@ -100,14 +110,14 @@ def _min_eig_estimate(s, fam: SPDFamily | None) -> tuple[float, str]:
             w = eigsh(
                 s,
                 k=1,
-                sigma=0.0,
+                sigma=sigma,
                 OPinv=op,
                 which="LM",
-                tol=1e-10,
+                tol=ARPACK_TOL,
                 maxiter=200,
                 return_eigenvectors=False,
             )
-            return float(np.min(w)), "ARPACK shift-invert at 0 (CHOLMOD factor)"
+            return float(np.min(w)), "ARPACK shift-invert (CHOLMOD factor of the ℓ = 0 proof)"
         w = eigsh(s, k=1, which="SA", ncv=40, tol=1e-6, maxiter=2000, return_eigenvectors=False)
         return float(np.min(w)), "ARPACK smallest algebraic"
     except (ArpackError, ValueError, ArithmeticError):  # no convergence: no estimate
@@ -143,29 +153,24 @@ def prove_mode(top: Topology, delta: float) -> ModeProof:
         Whether it is proven, ℓ, the estimate and how.
     """
     lap, err = sym_matrices(top, delta)
-    s, e0 = shifted_symmetric_part(lap, err)
-    fam = SPDFamily([s])
-    try:  # L + Lᵀ itself: the eigensolver's inverse (and a failure says "indefinite")
-        pd = fam.factor([1.0], 0.0)[0]
+    try:  # the proof of ℓ = 0, whose factor is also the eigensolver's inverse
+        p0, fam = symmetric_part_factor(lap, err, 0.0)
     except DenseRefused as exc:
         return ModeProof(False, None, math.nan, "not estimated", str(exc))
-    est, how = _min_eig_estimate(s, fam if pd else None)
+    s = (lap + lap.T).tocsr()
+    est, how = _min_eig_estimate(s, fam if p0.holds else None, p0.c)
     del fam  # free the factor before the proof's own: one factor in memory at a time
-    if not pd:
-        return ModeProof(
-            False, None, est, how, "sparse Cholesky of L + Lᵀ fails (not positive definite)"
-        )
-    tries = [0.0]
-    c0 = rump_shift(s, e0)
-    if math.isfinite(est) and est > 4 * c0:
-        tries.insert(0, float(np.nextafter((est - 2 * c0) * (1 - LOWER_RTOL), 0.0)))
-    for lower in tries:
-        if lower and not 2.0**-NUMBER_EXP <= lower <= 2.0**NUMBER_EXP:
+    if not p0.holds:
+        return ModeProof(False, None, est, how, p0.detail)
+    if math.isfinite(est) and est > 4 * p0.c:
+        lower = float(np.nextafter((est - 2 * p0.c) * (1 - LOWER_RTOL), 0.0))
+        if not 2.0**-NUMBER_EXP <= lower <= 2.0**NUMBER_EXP:
             lower = min(lower, 2.0**NUMBER_EXP) if lower > 2.0**-NUMBER_EXP else 0.0
-        p = symmetric_part_bound(lap, err, lower)
-        if p.holds:
-            return ModeProof(True, p.shift, est, how, p.detail)
-    return ModeProof(False, None, est, how, p.detail)
+        if lower:
+            p = symmetric_part_bound(lap, err, lower)
+            if p.holds:
+                return ModeProof(True, p.shift, est, how, p.detail)
+    return ModeProof(True, 0.0, est, how, p0.detail)  # ℓ = 0: proven by the first factor
 
 
 def switching_scale_certificate(sd: SwitchingDesign) -> dict:
