@@ -38,6 +38,7 @@ import yaml
 
 from .edgelist import MAX_AGENTS, MAX_DIM, EdgeListData, read_npz
 from .errors import InputError
+from .yamlfast import load_fast
 
 Label = int | str
 
@@ -205,8 +206,13 @@ def _load_yaml(text: str, p: Path) -> Any:
 
     Composing here (rather than in libyaml's composer) bounds the work before any node is
     built: libyaml's recursive composer crashes the interpreter at ~10⁵ levels of nesting,
-    and is also slower than this loop on large files.
+    and is also slower than this loop on large files. A text in the plain subset that
+    machine-written files use is read by :func:`ntc_design.yamlfast.load_fast` instead
+    (the same document, several times faster).
     """
+    doc = load_fast(text, MAX_DEPTH, MAX_EXPANDED_NODES)
+    if doc is not None:
+        return doc
     loader = _Loader(text)
     try:
         loader.get_event()  # StreamStart
