@@ -30,6 +30,7 @@ import json
 import math
 from collections import Counter
 from dataclasses import dataclass
+from itertools import chain
 from pathlib import Path
 from typing import Any
 
@@ -389,6 +390,10 @@ def _number(x: Any, source: str | None, field: str) -> float:
     return v
 
 
+_NUMBERS = {int, float}
+_PLAIN = {int, float, bool, type(None)}  # scalars that are not text
+
+
 def _square(rows: Any, dim: int, source: str | None, field: str) -> np.ndarray:
     if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
         raise field_error(source, field, f"expected a {dim}x{dim} list of rows")
@@ -396,6 +401,13 @@ def _square(rows: Any, dim: int, source: str | None, field: str) -> np.ndarray:
         cols = sorted({len(r) for r in rows})
         shape = f"{len(rows)}x{'/'.join(str(c) for c in cols[:4]) or 0}"
         raise field_error(source, field, f"expected a {dim}x{dim} matrix, got {shape}")
+    if set(map(type, chain.from_iterable(rows))) <= _NUMBERS:  # no bool: types exact
+        try:  # float(v) for each entry, in C; a huge or non-finite one: named below
+            a = np.array(rows, dtype=float)
+        except OverflowError:
+            a = None
+        if a is not None and np.isfinite(a).all():
+            return a
     return np.array([[_number(v, source, field) for v in r] for r in rows], dtype=float)
 
 
@@ -651,6 +663,9 @@ def has_text(x: Any) -> bool:
     if isinstance(x, dict):
         return any(has_text(v) for k, v in x.items() if k != "matrix")
     if isinstance(x, list):
+        if all(type(r) is list for r in x):  # rows: their entries' types at once, in C
+            if set(map(type, chain.from_iterable(x))) <= _PLAIN:
+                return False
         return any(has_text(v) for v in x)
     return False
 

@@ -149,12 +149,18 @@ def _to_json(lines: list[str], max_depth: int) -> str:
     stack: list[tuple[int, bool]] = []
     want = -1  # indent of the mapping whose last key waits for a value on the next lines
     k, nlines = 0, len(lines)
+    row, flow = "", _FLOW.fullmatch
     while k < nlines:
         line = lines[k]
         k += 1
+        if row and line.startswith(row) and flow(line, len(row) - 1):
+            app(",")  # the commonest line: "  - [1.5, 2.5]" after another such
+            app(line[len(row) - 1 :])
+            continue
         s = line.lstrip(" ")
         if not s:
             continue
+        row = ""
         n = len(line) - len(s)
         dash = s[0] == "-"
         if dash:
@@ -205,6 +211,8 @@ def _to_json(lines: list[str], max_depth: int) -> str:
             s = s[1:]
         elif not dash:
             raise _Decline  # a bare scalar where a key belongs
+        elif s[0] == "[" or s[0] == "{":
+            row = line[: n + 3]  # the same prefix on the next line: an item like this one
         k = _value(s, n, lines, k, app)
     if want >= 0:
         app("null")

@@ -250,3 +250,39 @@ def test_random_documents(doc, style, width, data):
     pos = data.draw(st.integers(0, len(text)))
     junk = data.draw(st.sampled_from([" ", "\n", "- ", ": ", ",", "]", "[", "e", "-", "  "]))
     check(text[:pos] + junk + text[pos:])  # layouts and tokens the dumper never writes
+
+
+@pytest.mark.parametrize(
+    "rows,expect",
+    [
+        ([[1, 2], [2, 5.5]], [[1.0, 2.0], [2.0, 5.5]]),
+        ([[2**53 + 1, 0], [0, 1]], [[float(2**53 + 1), 0.0], [0.0, 1.0]]),
+        ([[True, 0], [0, 1]], "expected a number, got True"),
+        ([[10**400, 0], [0, 1]], "is too large"),
+        ([[float("inf"), 0], [0, 1]], "numbers must be finite"),
+        ([[1, "t"], [0, 1]], "expected a number, got 't'"),
+    ],
+)
+def test_weight_rows_read_in_c_give_the_same_values_and_errors(rows, expect):
+    """The rows of numbers are converted at once; anything else gets the entry's message."""
+    if isinstance(expect, str):
+        with pytest.raises(InputError, match=expect.replace("(", r"\(")):
+            files.parse_weight(rows, 2, "f.yaml", "edge 1->2")
+    else:
+        w = files.parse_weight(rows, 2, "f.yaml", "edge 1->2")
+        assert w.dtype == float and w.tolist() == expect
+
+
+@pytest.mark.parametrize(
+    "weight,expect",
+    [
+        ([[1, 2.5], [None, True]], False),
+        ([[1, "t"], [0, 1]], True),
+        ([[1, [2, "t"]]], True),
+        ([[1, {"diag": [1]}]], False),
+        ({"matrix": "A", "scale": "2*t"}, True),
+        ([], False),
+    ],
+)
+def test_has_text(weight, expect):
+    assert files.has_text(weight) is expect
