@@ -149,7 +149,7 @@ def _to_json(lines: list[str], max_depth: int) -> str:
     stack: list[tuple[int, bool]] = []
     want = -1  # indent of the mapping whose last key waits for a value on the next lines
     k, nlines = 0, len(lines)
-    row, flow = "", _FLOW.fullmatch
+    row, flow, scalar = "", _FLOW.fullmatch, _SCALAR.fullmatch
     while k < nlines:
         line = lines[k]
         k += 1
@@ -191,7 +191,8 @@ def _to_json(lines: list[str], max_depth: int) -> str:
                 raise _Decline  # bad indentation or a dash in a mapping: the full reader says where
             else:
                 app(",")
-        key = s[0] == '"' and s[s.find('"', 1) + 1 : s.find('"', 1) + 2] == ":"
+        end = s.find('"', 1) + 1 if s[0] == '"' else 0
+        key = end > 0 and s[end : end + 1] == ":"
         if dash and key:  # "- key: value": a mapping item, its keys two columns further in
             n += 2
             if len(stack) + 2 > max_depth:
@@ -199,16 +200,17 @@ def _to_json(lines: list[str], max_depth: int) -> str:
             stack.append((n, False))
             app("{")
         if key:
-            end = s.find('"', 1) + 1
-            app(s[:end])
-            app(":")
-            s = s[end + 1 :]
-            if not s:
+            if len(s) == end + 1:  # "key:", its value on the next lines
+                app(s)
                 want = n
                 continue
-            if s[0] != " " or len(s) == 1:
-                raise _Decline  # "key: " with a trailing space: keep the rules few
-            s = s[1:]
+            if s[end + 1] != " " or len(s) == end + 2:
+                raise _Decline  # "key:x" or "key: " with a trailing space: keep the rules few
+            if s[end + 2] not in "[{" and scalar(s, end + 2):
+                app(s)  # '"key": 1.5' is JSON as it is
+                continue
+            app(s[: end + 1])
+            s = s[end + 2 :]
         elif not dash:
             raise _Decline  # a bare scalar where a key belongs
         elif s[0] == "[" or s[0] == "{":
