@@ -346,6 +346,8 @@ def _show(x: Any, n: int = 40) -> str:
 
 def _q(key: Any) -> str:
     """A label or key as it appears in a field name: plain if short and printable."""
+    if type(key) is int and key.bit_length() < 100:  # the common case: at most 31 digits
+        return str(key)
     s = str(key) if not isinstance(key, int) or key.bit_length() < 200 else _show(key)
     return s if s.isprintable() and len(s) <= 40 and s.strip() == s else _show(s)
 
@@ -391,23 +393,30 @@ def _number(x: Any, source: str | None, field: str) -> float:
 
 
 _NUMBERS = {int, float}
+_LIST = {list}
 _PLAIN = {int, float, bool, type(None)}  # scalars that are not text
 
 
 def _square(rows: Any, dim: int, source: str | None, field: str) -> np.ndarray:
+    if (  # the common case, every check in C: dim lists of dim ints and floats (no bool)
+        type(rows) is list
+        and len(rows) == dim
+        and set(map(type, rows)) == _LIST
+        and set(map(len, rows)) == {dim}
+        and set(map(type, chain.from_iterable(rows))) <= _NUMBERS
+    ):
+        try:  # float(v) for each entry; a huge or non-finite one is named below
+            a = np.array(rows, dtype=float)
+        except OverflowError:
+            a = None
+        if a is not None and np.isfinite(a).all():
+            return a
     if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
         raise field_error(source, field, f"expected a {dim}x{dim} list of rows")
     if len(rows) != dim or any(len(r) != dim for r in rows):
         cols = sorted({len(r) for r in rows})
         shape = f"{len(rows)}x{'/'.join(str(c) for c in cols[:4]) or 0}"
         raise field_error(source, field, f"expected a {dim}x{dim} matrix, got {shape}")
-    if set(map(type, chain.from_iterable(rows))) <= _NUMBERS:  # no bool: types exact
-        try:  # float(v) for each entry, in C; a huge or non-finite one: named below
-            a = np.array(rows, dtype=float)
-        except OverflowError:
-            a = None
-        if a is not None and np.isfinite(a).all():
-            return a
     return np.array([[_number(v, source, field) for v in r] for r in rows], dtype=float)
 
 
