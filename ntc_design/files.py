@@ -564,16 +564,16 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict):
             raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
-        # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
-        extra = sorted(set(e) - EDGE_KEYS, key=str)
-        if extra:
-            raise field_error(
-                source,
-                f"edges[{k}]",
-                f"unknown field {_show(extra[0])}{_close(extra[0], EDGE_KEYS)}",
-            )
-        missing = sorted(EDGE_KEYS - set(e))
-        if missing:
+        if e.keys() != EDGE_KEYS:
+            # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
+            extra = sorted(set(e) - EDGE_KEYS, key=str)
+            if extra:
+                raise field_error(
+                    source,
+                    f"edges[{k}]",
+                    f"unknown field {_show(extra[0])}{_close(extra[0], EDGE_KEYS)}",
+                )
+            missing = sorted(EDGE_KEYS - set(e))
             raise field_error(source, f"edges[{k}]", f"missing {', '.join(missing)}")
         for end in ("from", "to"):
             lab = e[end]
@@ -583,7 +583,7 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
                 )
         field = f"edge {_q(e['from'])}->{_q(e['to'])}"
         j, i = str(e["from"]), str(e["to"])
-        for end, lab in (("from", str(e["from"])), ("to", str(e["to"]))):
+        for end, lab in (("from", j), ("to", i)):
             if lab not in by_key:
                 raise field_error(source, field, f"unknown agent label {_show(lab)} in '{end}'")
         if i == j:
