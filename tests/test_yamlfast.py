@@ -286,3 +286,19 @@ def test_weight_rows_read_in_c_give_the_same_values_and_errors(rows, expect):
 )
 def test_has_text(weight, expect):
     assert files.has_text(weight) is expect
+
+
+@pytest.mark.parametrize(
+    "edge,message",
+    [
+        ({"from": 1, "to": 2}, "f.yaml: edges[0]: missing weight"),
+        ({"to": 2}, "f.yaml: edges[0]: missing from, weight"),
+        ({"from": 1, "to": 2, "wieght": 1}, "f.yaml: edges[0]: unknown field 'wieght'; did you mean 'weight'?"),
+        ({"from": 1, "to": 2, "weight": 1, "x": 0}, "f.yaml: edges[0]: unknown field 'x'"),
+    ],
+)
+def test_edge_field_messages(edge, message):
+    doc = {"dim": 1, "agents": 2, "edges": [edge]}
+    with pytest.raises(InputError) as err:
+        files.parse_topology(doc, "f.yaml")
+    assert str(err.value) == message
