@@ -26,16 +26,16 @@ from typing import Any
 
 #: Characters a text in the subset may hold (no quotes, comments, anchors, aliases, tags,
 #: block scalars, tabs, carriage returns or non-ASCII text).
-_OUTSIDE = re.compile(r"[^A-Za-z0-9_ \n.,:\[\]{}+-]")
+_ALLOWED = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_ \n.,:[]{}+-"
 #: A colon must end a key (be followed by a space or the end of the line).
 _BAD_COLON = re.compile(r":(?![ \n])")
 #: JSON reads ``1e5``, ``1.5e5`` and ``1E+5`` as floats, YAML 1.1 as text: an exponent
 #: must follow a decimal point and carry a sign. (Every other token that is neither an
 #: identifier nor a JSON number fails to parse as JSON, and is declined then.)
-_EXP_SITE = re.compile(r"[eE](?<=[0-9][eE])")
-_EXP_UNSIGNED = re.compile(r"[eE](?<=[0-9][eE])(?![-+][0-9])")
+#: One pattern per letter: a literal first character is searched for fast.
+_EXP_UNSIGNED = [re.compile(c + r"(?<=[0-9]" + c + r")(?![-+][0-9])") for c in "eE"]
 #: (searched in the reversed text: an exponent whose digits before it follow no dot)
-_EXP_NO_DOT = re.compile(r"[eE][0-9]+(?![0-9.])")
+_EXP_NO_DOT = [re.compile(c + r"[0-9]+(?![0-9.])") for c in "eE"]
 #: Words PyYAML's safe loader reads as booleans or null, not as strings.
 _WORDS_11 = frozenset(
     "yes Yes YES no No NO true True TRUE false False FALSE on On ON off Off OFF "
@@ -67,12 +67,14 @@ def quote_words(text: str) -> str | None:
         quotes; None when a character, a colon, an exponent or a YAML 1.1 boolean or null
         word is outside the subset.
     """
-    if _OUTSIDE.search(text) or _BAD_COLON.search(text):
+    if not text.isascii() or text.encode("ascii").translate(None, _ALLOWED):
+        return None  # a character outside the subset's
+    if _BAD_COLON.search(text):
         return None
     text = "\n" + text
-    if _EXP_SITE.search(text) and (
-        _EXP_UNSIGNED.search(text) or _EXP_NO_DOT.search(text[::-1])
-    ):
+    if any(p.search(text) for p in _EXP_UNSIGNED):
+        return None
+    if ("e" in text or "E" in text) and any(p.search(text[::-1]) for p in _EXP_NO_DOT):
         return None
     parts = _WORD.split(text)
     if not _WORDS_11.isdisjoint(parts[1::2]):
