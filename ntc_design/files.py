@@ -509,6 +509,29 @@ def parse_labels(agents: Any, source: str | None) -> tuple[Label, ...]:
     raise field_error(source, "agents", "expected a positive count or a non-empty list of labels")
 
 
+def _weights_at_once(edges_doc: Any, dim: int) -> list[np.ndarray] | None:
+    """Every edge's weight, when all are written as dim rows of dim finite numbers (no
+    bool), converted in one call; None otherwise (each is then read by ``parse_weight``,
+    which names the bad entry)."""
+    if type(edges_doc) is not list or set(map(type, edges_doc)) != {dict}:
+        return None
+    ws = [e.get("weight") for e in edges_doc]
+    rows = list(chain.from_iterable(ws)) if set(map(type, ws)) == _LIST else None
+    if (
+        rows is None
+        or set(map(len, ws)) != {dim}
+        or set(map(type, rows)) != _LIST
+        or set(map(len, rows)) != {dim}
+        or not set(map(type, chain.from_iterable(rows))) <= _NUMBERS
+    ):
+        return None
+    try:
+        a = np.array(ws, dtype=float)  # float(v) of every entry
+    except OverflowError:
+        return None
+    return [w.copy() for w in a] if np.isfinite(a).all() else None
+
+
 TOPOLOGY_KEYS = {"name", "description", "dim", "agents", "matrices", "edges"}
 EDGE_KEYS = {"from", "to", "weight"}
 
@@ -561,6 +584,7 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
         raise field_error(source, "edges", "expected a list of {from, to, weight}")
     edges: list[EdgeData] = []
     seen: set[tuple[str, str]] = set()
+    batch = _weights_at_once(edges_doc, dim)
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict):
             raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
@@ -591,7 +615,7 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
         if (j, i) in seen:
             raise field_error(source, field, "duplicated edge")
         seen.add((j, i))
-        w = parse_weight(e["weight"], dim, source, field, named)
+        w = batch[k] if batch is not None else parse_weight(e["weight"], dim, source, field, named)
         edges.append(EdgeData(by_key[j], by_key[i], w, field))
     name = doc.get("name")
     return TopologyData(

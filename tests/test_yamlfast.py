@@ -293,7 +293,10 @@ def test_has_text(weight, expect):
     [
         ({"from": 1, "to": 2}, "f.yaml: edges[0]: missing weight"),
         ({"to": 2}, "f.yaml: edges[0]: missing from, weight"),
-        ({"from": 1, "to": 2, "wieght": 1}, "f.yaml: edges[0]: unknown field 'wieght'; did you mean 'weight'?"),
+        (
+            {"from": 1, "to": 2, "wieght": 1},
+            "f.yaml: edges[0]: unknown field 'wieght'; did you mean 'weight'?",
+        ),
         ({"from": 1, "to": 2, "weight": 1, "x": 0}, "f.yaml: edges[0]: unknown field 'x'"),
     ],
 )
@@ -302,3 +305,30 @@ def test_edge_field_messages(edge, message):
     with pytest.raises(InputError) as err:
         files.parse_topology(doc, "f.yaml")
     assert str(err.value) == message
+
+
+@pytest.mark.parametrize(
+    "weights,message",
+    [
+        ([[[1, 0], [0, 1]], [[2, 0.5], [0.5, 2]]], None),
+        ([[[1, 0], [0, 1]], [[True, 0], [0, 1]]], "f.yaml: edge 2->3: expected a number, got True"),
+        ([[[1, 0], [0, 1]], [[1, 0], [0]]], "f.yaml: edge 2->3: expected a 2x2 matrix, got 2x1/2"),
+        ([[[1, 0], [0, 1]], [[10**400, 0], [0, 1]]], "is too large"),
+        ([[[1, 0], [0, 1]], 2.5], None),
+    ],
+)
+def test_weights_read_at_once_or_one_by_one(weights, message):
+    """All-rows weights are converted in one call; the same arrays and messages as one by one."""
+    doc = {"dim": 2, "agents": 3, "edges": [{"from": 1, "to": 2, "weight": weights[0]}]}
+    doc["edges"].append({"from": 2, "to": 3, "weight": weights[1]})
+    if message is not None:
+        with pytest.raises(InputError, match=message.replace("(", r"\(")):
+            files.parse_topology(doc, "f.yaml")
+        return
+    got = [e.weight for e in files.parse_topology(doc, "f.yaml").edges]
+    one = [files.parse_weight(w, 2, "f.yaml", "w") for w in weights]
+    assert all(
+        a.dtype == b.dtype and a.shape == b.shape and (a == b).all()
+        for a, b in zip(got, one, strict=True)
+    )
+    assert got[0].base is None  # each weight owns its numbers
