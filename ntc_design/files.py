@@ -30,6 +30,7 @@ import json
 import math
 from collections import Counter
 from dataclasses import dataclass
+from itertools import chain
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,7 @@ import yaml
 
 from .edgelist import MAX_AGENTS, MAX_DIM, EdgeListData, read_npz
 from .errors import InputError
+from .yamlfast import load_fast
 
 Label = int | str
 
@@ -205,8 +207,13 @@ def _load_yaml(text: str, p: Path) -> Any:
 
     Composing here (rather than in libyaml's composer) bounds the work before any node is
     built: libyaml's recursive composer crashes the interpreter at ~10⁵ levels of nesting,
-    and is also slower than this loop on large files.
+    and is also slower than this loop on large files. A text in the plain subset that
+    machine-written files use is read by :func:`ntc_design.yamlfast.load_fast` instead
+    (the same document, several times faster).
     """
+    doc = load_fast(text, MAX_DEPTH, MAX_EXPANDED_NODES)
+    if doc is not None:
+        return doc
     loader = _Loader(text)
     try:
         loader.get_event()  # StreamStart
@@ -339,6 +346,8 @@ def _show(x: Any, n: int = 40) -> str:
 
 def _q(key: Any) -> str:
     """A label or key as it appears in a field name: plain if short and printable."""
+    if type(key) is int and key.bit_length() < 100:  # the common case: at most 31 digits
+        return str(key)
     s = str(key) if not isinstance(key, int) or key.bit_length() < 200 else _show(key)
     return s if s.isprintable() and len(s) <= 40 and s.strip() == s else _show(s)
 
@@ -383,7 +392,25 @@ def _number(x: Any, source: str | None, field: str) -> float:
     return v
 
 
+_NUMBERS = {int, float}
+_LIST = {list}
+_PLAIN = {int, float, bool, type(None)}  # scalars that are not text
+
+
 def _square(rows: Any, dim: int, source: str | None, field: str) -> np.ndarray:
+    if (  # the common case, every check in C: dim lists of dim ints and floats (no bool)
+        type(rows) is list
+        and len(rows) == dim
+        and set(map(type, rows)) == _LIST
+        and set(map(len, rows)) == {dim}
+        and set(map(type, chain.from_iterable(rows))) <= _NUMBERS
+    ):
+        try:  # float(v) for each entry; a huge or non-finite one is named below
+            a = np.array(rows, dtype=float)
+        except OverflowError:
+            a = None
+        if a is not None and np.isfinite(a).all():
+            return a
     if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
         raise field_error(source, field, f"expected a {dim}x{dim} list of rows")
     if len(rows) != dim or any(len(r) != dim for r in rows):
@@ -482,6 +509,29 @@ def parse_labels(agents: Any, source: str | None) -> tuple[Label, ...]:
     raise field_error(source, "agents", "expected a positive count or a non-empty list of labels")
 
 
+def _weights_at_once(edges_doc: Any, dim: int) -> list[np.ndarray] | None:
+    """Every edge's weight, when all are written as dim rows of dim finite numbers (no
+    bool), converted in one call; None otherwise (each is then read by ``parse_weight``,
+    which names the bad entry)."""
+    if type(edges_doc) is not list or set(map(type, edges_doc)) != {dict}:
+        return None
+    ws = [e.get("weight") for e in edges_doc]
+    rows = list(chain.from_iterable(ws)) if set(map(type, ws)) == _LIST else None
+    if (
+        rows is None
+        or set(map(len, ws)) != {dim}
+        or set(map(type, rows)) != _LIST
+        or set(map(len, rows)) != {dim}
+        or not set(map(type, chain.from_iterable(rows))) <= _NUMBERS
+    ):
+        return None
+    try:
+        a = np.array(ws, dtype=float)  # float(v) of every entry
+    except OverflowError:
+        return None
+    return [w.copy() for w in a] if np.isfinite(a).all() else None
+
+
 TOPOLOGY_KEYS = {"name", "description", "dim", "agents", "matrices", "edges"}
 EDGE_KEYS = {"from", "to", "weight"}
 
@@ -534,19 +584,20 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
         raise field_error(source, "edges", "expected a list of {from, to, weight}")
     edges: list[EdgeData] = []
     seen: set[tuple[str, str]] = set()
+    batch = _weights_at_once(edges_doc, dim)
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict):
             raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
-        # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
-        extra = sorted(set(e) - EDGE_KEYS, key=str)
-        if extra:
-            raise field_error(
-                source,
-                f"edges[{k}]",
-                f"unknown field {_show(extra[0])}{_close(extra[0], EDGE_KEYS)}",
-            )
-        missing = sorted(EDGE_KEYS - set(e))
-        if missing:
+        if e.keys() != EDGE_KEYS:
+            # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
+            extra = sorted(set(e) - EDGE_KEYS, key=str)
+            if extra:
+                raise field_error(
+                    source,
+                    f"edges[{k}]",
+                    f"unknown field {_show(extra[0])}{_close(extra[0], EDGE_KEYS)}",
+                )
+            missing = sorted(EDGE_KEYS - set(e))
             raise field_error(source, f"edges[{k}]", f"missing {', '.join(missing)}")
         for end in ("from", "to"):
             lab = e[end]
@@ -556,7 +607,7 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
                 )
         field = f"edge {_q(e['from'])}->{_q(e['to'])}"
         j, i = str(e["from"]), str(e["to"])
-        for end, lab in (("from", str(e["from"])), ("to", str(e["to"]))):
+        for end, lab in (("from", j), ("to", i)):
             if lab not in by_key:
                 raise field_error(source, field, f"unknown agent label {_show(lab)} in '{end}'")
         if i == j:
@@ -564,7 +615,7 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
         if (j, i) in seen:
             raise field_error(source, field, "duplicated edge")
         seen.add((j, i))
-        w = parse_weight(e["weight"], dim, source, field, named)
+        w = batch[k] if batch is not None else parse_weight(e["weight"], dim, source, field, named)
         edges.append(EdgeData(by_key[j], by_key[i], w, field))
     name = doc.get("name")
     return TopologyData(
@@ -645,6 +696,9 @@ def has_text(x: Any) -> bool:
     if isinstance(x, dict):
         return any(has_text(v) for k, v in x.items() if k != "matrix")
     if isinstance(x, list):
+        if all(type(r) is list for r in x):  # rows: their entries' types at once, in C
+            if set(map(type, chain.from_iterable(x))) <= _PLAIN:
+                return False
         return any(has_text(v) for v in x)
     return False
 
