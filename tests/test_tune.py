@@ -363,3 +363,14 @@ def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch):
     assert code == 0, err
     for label in ("gain c(t)", "E Σ‖x_i(T) − θ‖², T = 2.0000", "certificate of the tuned design"):
         assert label in out
+
+
+def test_a_topology_given_as_expressions_of_t_is_tuned_by_its_exact_moments(examples):
+    top, spec, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = tune(top, spec, 1.0, max_evaluations=10, landscape=False, certificate=False)
+        again = simulate(top, spec=spec.replace(T=1.0, gain=res.tuned.text, method="exact"))
+    assert res.method == "exact moments (A(t))" and not res.statistical
+    assert res.ms_error_T["tuned"] <= res.ms_error_T["baseline"]
+    assert res.ms_error_T["tuned"] == pytest.approx(again.exact.ms_error[-1].sum(), rel=1e-9)

@@ -22,12 +22,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..design import design_topology
 from ..errors import InputError
 from ..simulate import SimulationSpec, simulate
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
 from ..simulate.driver import AnyTopology, PreparedModes, prepare_modes
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
 from ..simulate.spec import SaveAt
+from ..simulate.system import mode_system
 from ..timevarying import ExpressionTopology
 from .family import PowerGain
 
@@ -294,6 +296,7 @@ class ExpressionObjective(Objective):
     :func:`~ntc_design.simulate.simulate` per candidate (δ(t) is Lemma 1's)."""
 
     name = "exact moments (A(t))"
+    _radius: tuple[float, float] | None = None
 
     @classmethod
     def _accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:
@@ -303,9 +306,29 @@ class ExpressionObjective(Objective):
             and topology.n * topology.dim <= MOMENTS_MAX_ND
         )
 
+    def radius(self) -> tuple[float, float]:
+        """(ρ_L, ρ_Q) of the design at t = 0 (:func:`.simulate.moments.generator_radius`):
+        the step-count estimate that keeps a stiff candidate from being integrated.
+
+        Returns
+        -------
+        (float, float)
+        """
+        if self._radius is None:
+            assert isinstance(self.topology, ExpressionTopology)  # see accepts
+            at0 = self.topology.at(0.0)
+            des = design_topology(at0, self.spec.theta, self.spec.margin, thresholds=False)
+            self._radius = generator_radius(mode_system(des, self.spec.noise, "t=0"))
+        return self._radius
+
     def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
         if delta is not None:
             raise InputError("--tune-delta: a topology given as expressions of t takes δ(t)")
+        rho_l, rho_q = self.radius()
+        i1, i2 = gain.integrals(self.horizon)
+        steps = (rho_l * i1 + rho_q * i2) / KAPPA
+        if steps > MAX_STEPS * 5:
+            raise InputError(f"{gain.text}: about {steps:.3g} steps at t = 0's radius; too stiff")
         t = np.linspace(0.0, self.horizon, points)
         spec = self.spec.replace(T=self.horizon, gain=gain, method="exact", save=_save_at(t))
         run = simulate(self.topology, spec=spec)
