@@ -314,6 +314,11 @@ class ExpressionObjective(Objective):
         Returns
         -------
         (float, float)
+
+        Raises
+        ------
+        InputError
+            The design or the noise does not fit the topology at t = 0.
         """
         if self._radius is None:
             assert isinstance(self.topology, ExpressionTopology)  # see accepts
