@@ -29,13 +29,14 @@ References
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sps
 from scipy.linalg import lu_factor, lu_solve
 
-from .moments import MomentRecorder, MomentRhs, Moments, check_moments_size
+from .moments import MomentRecorder, MomentRhs, Moments, check_moments_size, march
 from .system import ModeSystem
 
 DS = 0.01  # c·h per step (steps uniform in s = ∫c dt)
@@ -125,39 +126,28 @@ def cayley_moments(
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
     rec = MomentRecorder(save_times, n, d)
-    saves = rec.saves
     rec.at(0.0, m, s)
     steps = 0
-    for a, b, mode in segments:
-        lap, f = laps[mode], rhs[mode]
-        stops = np.concatenate([saves[(saves > a) & (saves < b)], [b]])
-        t = a
-        for stop in stops:
-            while stop - t > 1e-14 * max(1.0, stop):
-                c0 = float(gain(np.array([t]))[0])
-                h = stop - t
-                if c0 > 0:
-                    h = min(h, ds / c0)
-                    if rho_g[mode] > 0:
-                        h = min(h, KAPPA_NOISE / (c0 * c0 * rho_g[mode]))
-                if stop - t - h < 0.25 * h:
-                    h = stop - t
-                cm, c1 = (float(v) for v in gain(np.array([t + h / 2, t + h])))
-                half = 0.5 * h * cm * lap
-                lu = lu_factor((eye + half).toarray(), check_finite=False)
-                p = (eye - half).tocsr()
 
-                ps = p @ (p @ s).T
-                n0 = c0 * c0 * f.noise(s)
-                pred = _sandwich(lu, ps + h * n0)
-                s = _sandwich(lu, ps + 0.5 * h * (n0 + c1 * c1 * f.noise(pred)))
-                s = 0.5 * (s + s.T)
-                m = lu_solve(lu, p @ m, check_finite=False)
-                t = stop if h == stop - t else t + h
-                steps += 1
-                if abort_above is not None and steps % 8 == 0 and not np.trace(s) <= abort_above:
-                    rec.ms[rec.k :] = np.inf
-                    rec.means[rec.k :] = np.nan
-                    return rec.result(s, steps)
-            rec.at(t, m, s)
+    def cap(t: float, mode: int) -> float:
+        c0 = float(gain(np.array([t]))[0])
+        if c0 <= 0:
+            return math.inf
+        return min(ds / c0, KAPPA_NOISE / (c0 * c0 * rho_g[mode]) if rho_g[mode] > 0 else math.inf)
+
+    for t, h, mode in march(segments, rec.saves, cap):
+        f = rhs[mode]
+        c0, cm, c1 = (float(v) for v in gain(np.array([t, t + h / 2, t + h])))
+        half = 0.5 * h * cm * laps[mode]
+        lu = lu_factor((eye + half).toarray(), check_finite=False)
+        p = (eye - half).tocsr()
+        ps = p @ (p @ s).T
+        n0 = c0 * c0 * f.noise(s)
+        pred = _sandwich(lu, ps + h * n0)
+        s = _sandwich(lu, ps + 0.5 * h * (n0 + c1 * c1 * f.noise(pred)))
+        s = 0.5 * (s + s.T)
+        m = lu_solve(lu, p @ m, check_finite=False)
+        steps += 1
+        if rec.stop(t + h, m, s, steps, abort_above):
+            break
     return rec.result(s, steps)

@@ -23,7 +23,8 @@ estimate, before anything is allocated.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import math
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,6 +125,37 @@ class MomentRecorder:
         while self.k < self.saves.size and abs(self.saves[self.k] - t) <= 1e-12 * max(1.0, t):
             self.put(self.k, m, s)
             self.k += 1
+
+    def stop(
+        self, t: float, m: np.ndarray, s: np.ndarray, steps: int, abort_above: float | None
+    ) -> bool:
+        """Record at t if it is a save time; with ``abort_above``, every 8 steps, end the
+        run once E‖ε‖² = tr S exceeds it (the remaining saves +∞).
+
+        Parameters
+        ----------
+        t : float
+            The time reached.
+        m : numpy.ndarray
+            E[ε], length Nd.
+        s : numpy.ndarray
+            E[εεᵀ], Nd × Nd.
+        steps : int
+            Steps taken so far.
+        abort_above : float or None
+            The bound on tr S.
+
+        Returns
+        -------
+        bool
+            Whether to stop.
+        """
+        if abort_above is not None and steps % 8 == 0 and not np.trace(s) <= abort_above:
+            self.ms[self.k :] = np.inf
+            self.means[self.k :] = np.nan
+            return True
+        self.at(t, m, s)
+        return False
 
     def result(self, s: np.ndarray, steps: int) -> Moments:
         """The recorded curves.
@@ -261,36 +293,67 @@ def exact_moments(
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
     rec = MomentRecorder(save_times, n, d)
-    saves = rec.saves
     rec.at(0.0, m, s)
     steps = 0
-    for a, b, mode in segments:
+
+    for t, h, mode in march(
+        segments, rec.saves, lambda t, mode: _rk4_cap(rhs[mode], gain, t, kappa)
+    ):
         f = rhs[mode]
+        ch = np.asarray(gain(np.array([t, t + h / 2, t + h])), dtype=float) * np.ones(3)
+        k1m, k1s = f(ch[0], m, s)
+        k2m, k2s = f(ch[1], m + h / 2 * k1m, s + h / 2 * k1s)
+        k3m, k3s = f(ch[1], m + h / 2 * k2m, s + h / 2 * k2s)
+        k4m, k4s = f(ch[2], m + h * k3m, s + h * k3s)
+        m = m + h / 6 * (k1m + 2 * k2m + 2 * k3m + k4m)
+        s = s + h / 6 * (k1s + 2 * k2s + 2 * k3s + k4s)
+        s = 0.5 * (s + s.T)
+        steps += 1
+        if rec.stop(t + h, m, s, steps, abort_above):
+            break
+    return rec.result(s, steps)
+
+
+def _rk4_cap(f: MomentRhs, gain: Callable, t: float, kappa: float) -> float:
+    """RK4's step bound κ / (c ρ) at t (∞ where c·ρ = 0)."""
+    c0 = float(gain(np.array([t]))[0])
+    rho = f.rho_l + c0 * f.rho_q
+    return kappa / (c0 * rho) if c0 * rho > 0 else math.inf
+
+
+def march(
+    segments: Sequence[tuple[float, float, int]],
+    saves: np.ndarray,
+    cap: Callable[[float, int], float],
+) -> Iterator[tuple[float, float, int]]:
+    """The steps (t, h, mode) of a one-step integrator over the segments: every save time
+    inside a segment and every segment's end is a step's end, a step is at most
+    ``cap(t, mode)``, and a remainder under a quarter step is joined to the step before.
+
+    Parameters
+    ----------
+    segments : sequence of (float, float, int)
+        (start, stop, mode index) covering the horizon.
+    saves : numpy.ndarray
+        The save times, sorted.
+    cap : callable(t, mode) -> float
+        The largest step at t.
+
+    Yields
+    ------
+    (float, float, int)
+        The step's start, its length and the mode.
+    """
+    for a, b, mode in segments:
         stops = np.concatenate([saves[(saves > a) & (saves < b)], [b]])
         t = a
         for stop in stops:
             while stop - t > 1e-14 * max(1.0, stop):
-                c0 = float(gain(np.array([t]))[0])
-                rho = f.rho_l + c0 * f.rho_q
-                h = min(stop - t, kappa / (c0 * rho)) if c0 * rho > 0 else stop - t
+                h = min(stop - t, cap(t, mode))
                 if stop - t - h < 0.25 * h:
                     h = stop - t
-                ch = np.asarray(gain(np.array([t, t + h / 2, t + h])), dtype=float) * np.ones(3)
-                k1m, k1s = f(ch[0], m, s)
-                k2m, k2s = f(ch[1], m + h / 2 * k1m, s + h / 2 * k1s)
-                k3m, k3s = f(ch[1], m + h / 2 * k2m, s + h / 2 * k2s)
-                k4m, k4s = f(ch[2], m + h * k3m, s + h * k3s)
-                m = m + h / 6 * (k1m + 2 * k2m + 2 * k3m + k4m)
-                s = s + h / 6 * (k1s + 2 * k2s + 2 * k3s + k4s)
-                s = 0.5 * (s + s.T)
+                yield t, h, mode
                 t = stop if h == stop - t else t + h
-                steps += 1
-                if abort_above is not None and steps % 32 == 0 and not np.trace(s) <= abort_above:
-                    rec.ms[rec.k :] = np.inf
-                    rec.means[rec.k :] = np.nan
-                    return rec.result(s, steps)
-            rec.at(t, m, s)
-    return rec.result(s, steps)
 
 
 def em_moments(
