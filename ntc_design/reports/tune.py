@@ -10,6 +10,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LogNorm
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ..rows import fmt
 from ..tune import TuneResult
@@ -106,7 +107,9 @@ def landscape_figure(result: TuneResult):
                 label="tuned",
             )
             ax.set_yscale("log")
-            ax.set_xscale("log" if xl == "a" else "linear")
+            if xl == "a":
+                ax.set_xscale("log")
+                _plain_log_ticks(ax)
             ax.set_xlabel(xl)
             ax.set_ylabel(r"$E\,\sum_i \|x_i(T) - \theta\|^2$")
             fig.legend(loc="outside lower center", frameon=False)
@@ -129,10 +132,19 @@ def landscape_figure(result: TuneResult):
             [1.0], [1.0], marker="o", color="none", mec="red", ms=7, ls="none", label="baseline"
         )
         ax.set_xscale("log")
+        _plain_log_ticks(ax)
         ax.set_xlabel(f"a  (b = {fmt(land.b)})")
         ax.set_ylabel(r"$\gamma$")
         fig.legend(loc="outside lower center", ncols=2, frameon=False)
     return fig
+
+
+def _plain_log_ticks(ax) -> None:
+    """Ticks at 1, 2, 5 per decade written as plain numbers (a span under two decades
+    would otherwise get crowded minor labels such as 2×10⁻¹)."""
+    ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
 
 
 def write_tune_report(
