@@ -8,7 +8,7 @@ import json
 import sys
 import warnings
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -471,9 +471,6 @@ def simulate(
     out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 
-TUNE_FILES = ("tuned.yaml", "tune.json", "certificate.json", "tune.html", "figures")
-
-
 @app.command(
     epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --horizon 10 --eps 1.5 --out runs/g1-tuned"
 )
@@ -513,50 +510,25 @@ def tune(
     topology, by the exact moment equations (Monte Carlo with common random numbers where
     they do not apply). Prints the tuned gain beside 1/(1 + t). Exit 0 when the tuned gain
     satisfies the required theorems and its design's certificate verifies, 1 otherwise."""
-    from .outputs import check_output_folder, output_folder
-    from .reports.tune import write_tune_report
+    from .outputs import check_output_folder
+    from .reports.tune import TUNE_FILES, write_tune_outputs
     from .simulate.scenario import load_scenario
     from .tune import tune as run
-    from .tune import tuned_scenario
 
-    if family != "power":
-        raise InputError(f"--family: only 'power' (a·(b + t)^(−γ)) is available, got {family!r}")
     top, spec, sc = load_scenario(scenario)
     if out_dir is not None:
         check_output_folder(out_dir, TUNE_FILES)  # before the run, not after it
     with warnings.catch_warnings(), Progress("ntc tune") as prog:
         warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
         prog.stage(f"tuning {scenario}")
+        opts: dict[str, Any] = dict(require=require, tune_delta=tune_delta, eps=eps, method=method)
         try:
-            res = run(
-                top,
-                spec,
-                horizon,
-                require=require,
-                tune_delta=tune_delta,
-                eps=eps,
-                method=method,
-                max_evaluations=evaluations,
-            )
+            res = run(top, spec, horizon, family=family, max_evaluations=evaluations, **opts)
         except InputError as exc:
             raise InputError(f"{sc.source}: {exc}") from None
     doc = res.to_dict()
     if out_dir is not None:
-        import yaml
-
-        from .certify import write_certificate
-
-        files = ["tuned.yaml", "tune.json"] + (["certificate.json"] if res.certificate else [])
-        with output_folder(out_dir, TUNE_FILES) as tmp:
-            new = tuned_scenario(sc.document, sc.source, out_dir, res)
-            (tmp / "tuned.yaml").write_text(
-                f"# {new.pop('description')}\n" + yaml.safe_dump(new, sort_keys=False),
-                encoding="utf-8",
-            )
-            (tmp / "tune.json").write_text(_json(doc) + "\n", encoding="utf-8")
-            if res.certificate is not None:
-                write_certificate(res.certificate.certificate, tmp / "certificate.json")
-            write_tune_report(res, tmp, str(scenario), files)
+        write_tune_outputs(res, sc, out_dir)
         doc["out"] = str(out_dir)
     if as_json:
         print(_json(doc))
@@ -568,10 +540,8 @@ def tune(
                 f"{out_dir / 'tuned.yaml'} --out {out_dir}-mc), tune.html, tune.json"
             )
     if not res.certified:
-        print(
-            "not proven: the tuned design is not certified for the required theorems",
-            file=sys.stderr,
-        )
+        msg = "not proven: the tuned design is not certified for the required theorems"
+        print(msg, file=sys.stderr)
         raise typer.Exit(1)
 
 

@@ -5,15 +5,20 @@ the certificate), written as ``tune.html`` with the figures in the one style."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+import yaml
 from matplotlib.colors import LogNorm
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from ..certify import write_certificate
+from ..files import ScenarioData, jsonable
+from ..outputs import output_folder
 from ..rows import fmt
-from ..tune import TuneResult
+from ..tune import TuneResult, tuned_scenario
 from . import style
 from .html import figure_block, html_table, render, write_html
 
@@ -145,6 +150,44 @@ def _plain_log_ticks(ax) -> None:
     ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
     ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+#: What ``ntc tune --out`` writes (an earlier tuning's folder may be replaced).
+TUNE_FILES = ("tuned.yaml", "tune.json", "certificate.json", "tune.html", "figures")
+
+
+def write_tune_outputs(result: TuneResult, scenario: ScenarioData, out_dir: str | Path) -> None:
+    """Write a tuning's folder, all or nothing (:func:`ntc_design.outputs.output_folder`):
+    ``tuned.yaml`` (the scenario with the tuned gain, T and any stepping it needs, its
+    topology path relative to the folder), ``tune.json``, ``certificate.json`` and
+    ``tune.html`` with its figures.
+
+    Parameters
+    ----------
+    result : TuneResult
+        The tuning.
+    scenario : ScenarioData
+        The scenario as read (its document and source).
+    out_dir : str or Path
+        The folder.
+
+    Raises
+    ------
+    InputError
+        The folder cannot receive the files (see :func:`ntc_design.outputs.output_folder`).
+    """
+    files = ["tuned.yaml", "tune.json"] + (["certificate.json"] if result.certificate else [])
+    with output_folder(out_dir, TUNE_FILES) as tmp:
+        new = tuned_scenario(scenario.document, scenario.source, out_dir, result)
+        header = f"# {new.pop('description')}\n"
+        (tmp / "tuned.yaml").write_text(
+            header + yaml.safe_dump(new, sort_keys=False, allow_unicode=True), encoding="utf-8"
+        )
+        text = json.dumps(jsonable(result.to_dict()), indent=2, ensure_ascii=False)
+        (tmp / "tune.json").write_text(text + "\n", encoding="utf-8")
+        if result.certificate is not None:
+            write_certificate(result.certificate.certificate, tmp / "certificate.json")
+        write_tune_report(result, tmp, scenario.source, files)
 
 
 def write_tune_report(

@@ -135,6 +135,7 @@ def tune(
     landscape: bool = True,
     certificate: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
+    family: str = "power",
 ) -> TuneResult:
     """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖².
 
@@ -164,6 +165,8 @@ def tune(
     bounds : mapping of str to (float, float), optional
         Narrower ranges for ``a``, ``b``, ``gamma`` (inside the required theorems' range)
         or ``delta``; lo = hi fixes the parameter.
+    family : {"power"}, optional
+        The gain family: a·(b + t)^(−γ) (the only one).
 
     Returns
     -------
@@ -186,6 +189,8 @@ def tune(
     >>> r.ms_error_T["tuned"] <= r.ms_error_T["baseline"]
     True
     """
+    if family != "power":
+        raise InputError(f"--family: only 'power' (a·(b + t)^(−γ)) is available, got {family!r}")
     require_positive("horizon", horizon)
     gamma_range(require)
     if eps is not None:
