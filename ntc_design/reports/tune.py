@@ -212,23 +212,15 @@ def write_tune_report(
         The HTML page.
     """
     base = Path(out_dir)
-    figdir = base / "figures"
-    curves = figure_block(
-        style.save(curves_figure(result), figdir / "tune_curves"),
-        "fig-curves",
-        CURVE_CAPTION,
-        base,
-        style.ONE_COLUMN,
-    )
+
+    def block(fig, key: str, caption: str):
+        saved = style.save(fig, base / "figures" / f"tune_{key}")
+        return figure_block(saved, f"fig-{key}", caption, base, style.ONE_COLUMN)
+
+    curves = block(curves_figure(result), "curves", CURVE_CAPTION)
     land = None
     if result.landscape is not None:
-        land = figure_block(
-            style.save(landscape_figure(result), figdir / "tune_landscape"),
-            "fig-landscape",
-            LANDSCAPE_CAPTION,
-            base,
-            style.ONE_COLUMN,
-        )
+        land = block(landscape_figure(result), "landscape", LANDSCAPE_CAPTION)
     cert = [html_table(t) for t in result.certificate.tables()] if result.certificate else []
     toc = [
         {"id": "tuned", "title": "Tuned gain"},

@@ -332,7 +332,7 @@ class PreparedModes:
         self,
         gain: Callable,
         save_times: np.ndarray,
-        kappa: float | None = None,
+        kappa: float = KAPPA,
         abort_above: float | None = None,
     ) -> Moments:
         """The exact moments of these modes under the gain ``gain`` (linear f).
@@ -360,7 +360,7 @@ class PreparedModes:
             save_times,
             self.n,
             self.d,
-            kappa=KAPPA if kappa is None else kappa,
+            kappa=kappa,
             abort_above=abort_above,
         )
 

@@ -275,7 +275,7 @@ def exact_moments(
         The RK4 steps' c·h·ρ (default ``KAPPA`` = 0.2; RK4 is stable to 2.78, and a
         coarser κ only loses accuracy in modes that have decayed).
     abort_above : float, optional
-        Stop as soon as E‖ε‖² = tr S exceeds this (checked every 32 steps): the moments
+        Stop as soon as E‖ε‖² = tr S exceeds this (checked every 8 steps): the moments
         at the remaining save times are then +∞ (a search discards such a candidate
         without integrating its growth to the end).
 

@@ -116,7 +116,6 @@ class Objective:
 
     def __init__(self, topology: AnyTopology, spec: SimulationSpec, horizon: float) -> None:
         self.topology, self.spec, self.horizon = topology, spec, float(horizon)
-        self.evaluations = 0
         self.skipped: dict[str, str] = {}  # gain text -> why it scored +∞
 
     def value(self, gain: PowerGain, delta: float | None = None) -> float:
@@ -133,9 +132,9 @@ class Objective:
         -------
         float
         """
-        self.evaluations += 1
         try:
-            v = self._value(gain, delta)
+            # save times every T/40 also bound the step where c·ρ is small (c varies in t)
+            v = self.curve(gain, delta, points=41, accurate=False).final
         except (InputError, FloatingPointError, OverflowError) as exc:
             self.skipped[gain.text] = str(exc)
             return math.inf
@@ -143,10 +142,6 @@ class Objective:
             self.skipped[gain.text] = "the moments overflow on [0, T]"
             return math.inf
         return v
-
-    def _value(self, gain: PowerGain, delta: float | None) -> float:
-        # save times every T/40 also bound the step where c·ρ is small (c varies in t)
-        return self.curve(gain, delta, points=41, accurate=False).final
 
     def curve(
         self, gain: PowerGain, delta: float | None = None, points: int = 401, accurate: bool = True

@@ -73,9 +73,7 @@ class Dimension:
         numpy.ndarray
         """
         if self.hi == self.lo or self.points < 2:
-            return (
-                np.array([0.5 * (self.lo + self.hi)]) if self.hi != self.lo else np.array([self.lo])
-            )
+            return np.array([self.from_unit(0.5)])  # lo when the dimension is fixed
         return np.array([self.from_unit(u) for u in np.linspace(0.0, 1.0, self.points)])
 
 
