@@ -48,6 +48,13 @@ ROOT = Path(__file__).resolve().parents[1]
 THETA = "1,2,3"
 
 
+def dense_result(dn: dict) -> str:
+    """The dense peer's cell: its wall time, its one-line refusal (exit 3) or its exit code."""
+    if dn["rc"] == 0:
+        return f"{dn['wall']:.1f} s"
+    return dn["err"][:90] if dn["rc"] == 3 else f"rc={dn['rc']} {dn['err'][:60]}"
+
+
 def run_child(args: list[str]) -> dict:
     """Run ``python args...`` and return wall/CPU seconds, peak RSS (MiB), exit code and
     the last line of stderr."""
@@ -180,12 +187,7 @@ def switching(args, work: Path) -> None:
             env={**os.environ, "PYTHONPATH": str(ROOT)},
         ).stdout.split()
         nnz, flops = (int(out[0]), float(out[2])) if len(out) == 3 else (0, float("nan"))
-        dn = run_child(["-c", DENSE_SWITCHING, str(sw)])
-        dense = (
-            f"{dn['wall']:.1f} s"
-            if dn["rc"] == 0
-            else (dn["err"][:90] if dn["rc"] == 3 else f"rc={dn['rc']} {dn['err'][:60]}")
-        )
+        dense = dense_result(run_child(["-c", DENSE_SWITCHING, str(sw)]))
         size_mb = cert.stat().st_size / 1e6 if cert.exists() else float("nan")
         print(
             f"{n:>7} {edges:>10} | {fmt(c):>24} | {fmt(v) if v else '—':>23} | {size_mb:7.1f} "
@@ -283,12 +285,7 @@ def fixed_sizes(args, work: Path) -> list:
         c = run_child(["-m", "ntc_design", "certify", str(f), "--theta", THETA, "--out", str(cert)])
         v = run_child(["-m", "ntc_design", "verify", str(cert)]) if cert.exists() else None
         des = run_child(["-c", DESIGN, str(f)])
-        dn = run_child(["-c", DENSE, str(f)])
-        dense = (
-            f"{dn['wall']:.1f} s"
-            if dn["rc"] == 0
-            else (dn["err"][:90] if dn["rc"] == 3 else f"rc={dn['rc']} {dn['err'][:60]}")
-        )
+        dense = dense_result(run_child(["-c", DENSE, str(f)]))
         size_mb = cert.stat().st_size / 1e6 if cert.exists() else float("nan")
         print(
             f"{n:>7} {edges:>7} | {fmt(c):>24} | {fmt(v) if v else '—':>23} | {size_mb:7.1f} "
