@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -318,10 +319,39 @@ def _row_counts_py(indptr, indices, n):  # pragma: no cover - compiled by _row_c
     return rows, cols
 
 
+def numba_cache_dir() -> str | None:
+    """Point Numba's on-disk cache at the user's cache folder (``$NUMBA_CACHE_DIR`` if set,
+    else ``$XDG_CACHE_HOME/ntc-design/numba`` or ``~/.cache/ntc-design/numba``) before Numba
+    is imported. By default Numba writes ``__pycache__`` beside the installed sources: a
+    ``pip install .`` then leaves cache files in site-packages that ``pip uninstall`` does
+    not remove, and the left-over ``ntc_design/simulate/`` folder shadows a later editable
+    install as a namespace package. A folder that cannot be created or written is not used
+    (Numba's default applies).
+
+    Returns
+    -------
+    str or None
+        The cache folder in force, or None for Numba's default.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return os.environ["NUMBA_CACHE_DIR"]
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    path = os.path.join(base, "ntc-design", "numba")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError:
+        return None
+    if not os.access(path, os.W_OK):
+        return None
+    os.environ["NUMBA_CACHE_DIR"] = path
+    return path
+
+
 @functools.cache
 def _row_counts():
     """The compiled kernel (numba is imported on first use: ``import ntc_design`` stays
     light)."""
+    numba_cache_dir()
     import numba
 
     return numba.njit(cache=True, nogil=True)(_row_counts_py)

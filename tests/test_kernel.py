@@ -1,10 +1,15 @@
 """The edge-list Monte Carlo kernel, the drift-implicit scheme, the step-size guard at
 every size and the sparse moment equations."""
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
 import ntc_design as nd
+from ntc_design.linalg import numba_cache_dir
 from ntc_design.simulate import NoiseModel, kernels, moments, montecarlo, simulate, system
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.kernels import em_steps, numpy_step, tile_width
@@ -290,3 +295,33 @@ def test_moments_above_the_limit_are_refused_before_running(g1, monkeypatch):
     monkeypatch.setattr(moments, "MOMENTS_MAX_ND", 20)
     with pytest.raises(nd.InputError, match=r"exact moments at Nd = 21 need about .* GB"):
         simulate(g1, THETA, T=0.1, paths=4, method="both")
+
+
+def test_numba_caches_in_the_users_cache_folder_not_beside_the_sources(tmp_path):
+    # a cache beside installed sources outlives `pip uninstall` and turns the left-over
+    # folder into a namespace package that shadows a later editable install
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")
+    code = (
+        "import ntc_design as nd; from ntc_design.simulate import simulate; "
+        "simulate(nd.load('examples/g1.yaml'), [1, 2, -1], T=0.01, paths=2, method='mc', workers=1)"
+    )
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run(
+        [sys.executable, "-c", code], cwd=root, env=env, capture_output=True, text=True, timeout=300
+    )
+    assert r.returncode == 0, r.stderr[-2000:]
+    cached = list((tmp_path / "cache" / "ntc-design" / "numba").rglob("*.nbi"))
+    assert any("em_steps" in p.name for p in cached), cached
+
+
+def test_numba_cache_folder_that_cannot_be_created_is_not_used(tmp_path, monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder", encoding="utf-8")
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
+    assert numba_cache_dir() is None
+    assert "NUMBA_CACHE_DIR" not in os.environ
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "ok"))
+    assert numba_cache_dir() == str(tmp_path / "ok" / "ntc-design" / "numba")
+    assert os.environ["NUMBA_CACHE_DIR"] == str(tmp_path / "ok" / "ntc-design" / "numba")

@@ -12,8 +12,12 @@ parallelism (and the results do not depend on their number).
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..linalg import numba_cache_dir
+
+numba_cache_dir()  # before Numba reads its configuration: not into site-packages
+import numba  # noqa: E402
 
 TILE_BYTES = 3 * 2**19  # a tile's state and increments (2·Nd·tile doubles) within this
 TILE_MIN, TILE_MAX = 16, 64  # paths per tile: wide enough for SIMD, small enough for L1/L2
