@@ -7,7 +7,9 @@ small certificate: Lyapunov + decay-rate LMI) with its time or its one-line refu
 Then how the cost grows with size (ratios against the edge ratio). Then the same for a
 switching set of two such networks (seeds s and s + 1, ``.npz`` modes): the sparse
 certificate per mode (``switching-scale``), the Cholesky factor's fill that drives its
-cost, and the dense switching certificate beside it.
+cost, and the dense switching certificate beside it. Then ``ntc simulate`` with the
+implicit scheme at 10⁴ and 10⁵ agents, on the local process pool and on a local Dask
+cluster, with one implicit solve by SciPy's SuperLU beside the toolkit's solver.
 
 Every figure is measured in a child process (``os.wait4`` gives its own CPU time and
 peak resident memory), so one run cannot skew the next. The networks come from
@@ -23,12 +25,14 @@ Usage::
     python benchmarks/bench_scale.py --quick         # the same without N = 1e6
     python benchmarks/bench_scale.py --sizes 1000 10000 --switching-sizes 1000
     python benchmarks/bench_scale.py --switching-only --switching-sizes 1000 10000
+    python benchmarks/bench_scale.py --simulate-only --simulate-sizes 10000 100000
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -57,19 +61,20 @@ def dense_result(dn: dict) -> str:
 
 def run_child(args: list[str]) -> dict:
     """Run ``python args...`` and return wall/CPU seconds, peak RSS (MiB), exit code and
-    the last line of stderr."""
-    with tempfile.TemporaryFile() as err:
+    the last line of stderr (and stdout, as ``out``)."""
+    with tempfile.TemporaryFile() as err, tempfile.TemporaryFile() as out:
         t0 = time.perf_counter()
         env = {**os.environ, "PYTHONPATH": str(ROOT)}
-        p = subprocess.Popen(
-            [sys.executable, *args], stdout=subprocess.DEVNULL, stderr=err, env=env
-        )
+        p = subprocess.Popen([sys.executable, *args], stdout=out, stderr=err, env=env)
         _, status, ru = os.wait4(p.pid, 0)
         wall = time.perf_counter() - t0
         p.returncode = os.waitstatus_to_exitcode(status)
         err.seek(0)
         lines = [ln for ln in err.read().decode(errors="replace").splitlines() if ln.strip()]
+        out.seek(0)
+        text = out.read().decode(errors="replace")
     return {
+        "out": text,
         "wall": wall,
         "cpu": ru.ru_utime + ru.ru_stime,
         "rss": ru.ru_maxrss / 1024.0,
@@ -145,6 +150,175 @@ def generate(work: Path, n: int, d: int, seed: int) -> tuple[Path, dict]:
         ]
     )
     return f, gen
+
+
+SIM_SCENARIO = """topology: {net}
+theta: [1, 2, 3]
+gain: "1/(1+t)"
+noise: {{sigma: 0.4, f: 0.05}}
+initial: {{uniform: [-3, 3], seed: 1}}
+T: {t}
+stepping: intrinsic
+scheme: implicit
+ds: 0.01
+paths: {paths}
+seed: 0
+save_every: {t}
+method: mc
+"""
+#: One implicit step's solve, (I + c h L_B) y = b with c h = 0.01 and 4 right-hand sides:
+#: SciPy's SuperLU (the peer, and what the toolkit did before) or the toolkit's solver.
+IMPLICIT_SOLVE = (
+    "import sys, time, warnings, numpy as np, scipy.sparse as sp; import ntc_design as nd; "
+    "from scipy.sparse.linalg import splu; "
+    "from ntc_design.simulate.implicit import ImplicitSolver; "
+    "warnings.simplefilter('ignore'); "
+    "l = nd.design(nd.load(sys.argv[1]), [1, 2, 3], thresholds=False)"
+    ".grounded_laplacian_sparse().tocsr(); "
+    "b = np.ones((l.shape[0], 4)); t0 = time.perf_counter()\n"
+    "if sys.argv[2] == 'splu':\n"
+    "    s = splu((sp.identity(l.shape[0], format='csc') + 0.01 * l).tocsc()); how = 'superlu'\n"
+    "else:\n"
+    "    s = ImplicitSolver(l, 0.01, 3); how = s.method\n"
+    "t1 = time.perf_counter(); y = s.solve(b); t2 = time.perf_counter()\n"
+    "print(how, t1 - t0, t2 - t1)"
+)
+#: path-steps per second as ``ntc simulate`` prints it
+RATE = re.compile(r"([0-9]+) path-steps in ([0-9.]+) s")
+
+
+def dask_cluster(work: Path, workers: int) -> tuple[str, list]:
+    """A local Dask cluster started as a user would (``dask scheduler``, ``dask worker``),
+    running this checkout; returns its address and the processes (terminate them)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    sfile = work / "scheduler.json"
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env}
+    sched = subprocess.Popen(
+        [sys.executable, "-m", "dask", "scheduler", "--host", "127.0.0.1", "--port", "0",
+         "--no-dashboard", "--scheduler-file", str(sfile)], **quiet,
+    )  # fmt: skip
+    procs = [sched]
+    for _ in range(600):
+        if sfile.exists() and sfile.stat().st_size:
+            break
+        time.sleep(0.1)
+    import json
+
+    address = json.loads(sfile.read_text())["address"]
+    procs.append(
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "dask",
+                "worker",
+                address,
+                "--nworkers",
+                str(workers),
+                "--nthreads",
+                "1",
+                "--no-dashboard",
+            ],
+            **quiet,
+        )  # fmt: skip
+    )
+    from distributed import Client
+
+    with Client(address, timeout=60) as c:
+        c.wait_for_workers(workers, timeout=120)
+    return address, procs
+
+
+def simulate_large(args, work: Path) -> None:
+    """``ntc simulate`` with the implicit scheme at 10⁴ … 10⁵ agents: on this machine's
+    process pool and on a local Dask cluster (2 workers), and one implicit solve by
+    SuperLU (the peer) against the toolkit's solver."""
+    print()
+    print(
+        f"# ntc simulate, implicit scheme (intrinsic ds = 0.01, T = {args.sim_t}, "
+        f"{args.sim_paths} paths, f = 0.05): local pool and a local Dask cluster, 2 workers each"
+    )
+    header = (
+        f"{'N':>7} {'edges':>7} | {'one solve: SuperLU':>22} | {'toolkit (method)':>26} | "
+        f"{'ratio':>6} | {'local (wall MiB, steps/s)':>26} | {'Dask (wall, steps/s)':>21}"
+    )
+    print(header)
+    print("-" * len(header))
+    address, procs = dask_cluster(work, 2)
+    rows = []
+    try:
+        for n in args.simulate_sizes:
+            f, gen = generate(work, n, args.d, args.seed)
+            if gen["rc"] != 0:
+                print(f"{n:>7} generate failed: {gen['err']}")
+                continue
+            import numpy as np
+
+            with np.load(f) as z:
+                edges = int(z["from"].shape[0])
+            sc = work / f"sim{n}.yaml"
+            sc.write_text(SIM_SCENARIO.format(net=f, t=args.sim_t, paths=args.sim_paths))
+            lu = run_child(["-c", IMPLICIT_SOLVE, str(f), "splu"])
+            ours = run_child(["-c", IMPLICIT_SOLVE, str(f), "toolkit"])
+            loc = run_child(
+                [
+                    "-m",
+                    "ntc_design",
+                    "simulate",
+                    str(sc),
+                    "--out",
+                    str(work / f"loc{n}"),
+                    "--workers",
+                    "2",
+                ]
+            )
+            dsk = run_child(
+                [
+                    "-m",
+                    "ntc_design",
+                    "simulate",
+                    str(sc),
+                    "--out",
+                    str(work / f"dask{n}"),
+                    "--scheduler",
+                    address,
+                ]
+            )
+
+            def solve_cell(r: dict) -> str:
+                if r["rc"] != 0:
+                    return f"rc={r['rc']}"
+                how, setup, one = r["out"].split()
+                return f"{how} {float(setup):.2f}+{float(one):.3f} s {r['rss']:.0f} MiB"
+
+            def sim_cell(r: dict, mem: bool) -> str:
+                m = RATE.search(r["out"])
+                if r["rc"] != 0 or m is None:
+                    return f"rc={r['rc']} {r['err'][:40]}"
+                rate = int(m.group(1)) / float(m.group(2))
+                return f"{r['wall']:.1f} s" + (f" {r['rss']:.0f}" if mem else "") + f", {rate:.1f}"
+
+            ratio = lu["wall"] / ours["wall"] if lu["rc"] == ours["rc"] == 0 else float("nan")
+            print(
+                f"{n:>7} {edges:>7} | {solve_cell(lu):>22} | {solve_cell(ours):>26} | "
+                f"×{ratio:5.1f} | {sim_cell(loc, True):>26} | {sim_cell(dsk, False):>21}"
+            )
+            rows.append((n, edges, loc))
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+            p.wait(timeout=30)
+    for (n0, e0, r0), (n1, e1, r1) in zip(rows, rows[1:], strict=False):
+        m0, m1 = RATE.search(r0["out"]), RATE.search(r1["out"])
+        if m0 and m1:
+            per0, per1 = (
+                float(m0.group(2)) / int(m0.group(1)),
+                float(m1.group(2)) / int(m1.group(1)),
+            )
+            print(
+                f"{n0:>7} -> {n1:<7}: edges ×{e1 / e0:.1f} | seconds per path-step ×{per1 / per0:.1f}"
+                f" ({1e6 * per0 / e0:.2f} -> {1e6 * per1 / e1:.2f} µs per edge)"
+            )
 
 
 def switching(args, work: Path) -> None:
@@ -258,22 +432,7 @@ def fixed_sizes(args, work: Path) -> list:
     print(header)
     print("-" * len(header))
     for n in args.sizes:
-        f = work / f"net{n}.npz"
-        gen = run_child(
-            [
-                "-m",
-                "ntc_design",
-                "generate",
-                "--n",
-                str(n),
-                "--d",
-                str(args.d),
-                "--seed",
-                str(args.seed),
-                "--out",
-                str(f),
-            ]
-        )
+        f, gen = generate(work, n, args.d, args.seed)
         if gen["rc"] != 0:
             print(f"{n:>7} generate failed: {gen['err']}")
             continue
@@ -330,6 +489,11 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--switching-only", action="store_true")
     ap.add_argument("--no-switching", action="store_true")
+    ap.add_argument("--simulate-sizes", type=int, nargs="+", default=[10_000, 100_000])
+    ap.add_argument("--sim-t", type=float, default=0.5, help="horizon of the simulate runs")
+    ap.add_argument("--sim-paths", type=int, default=4)
+    ap.add_argument("--simulate-only", action="store_true")
+    ap.add_argument("--no-simulate", action="store_true")
     args = ap.parse_args()
     if args.quick:
         args.sizes = [n for n in args.sizes if n < 1_000_000]
@@ -339,6 +503,9 @@ def main() -> None:
         return
     if args.switching_only:
         switching(args, work)
+        return
+    if args.simulate_only:
+        simulate_large(args, work)
         return
     base = run_child(["-c", IMPORT])
     base_design = run_child(["-c", "import ntc_design"])
@@ -397,6 +564,8 @@ def main() -> None:
     growth(rows, base_design)
     if not args.no_switching:
         switching(args, work)
+    if not args.no_simulate:
+        simulate_large(args, work)
 
 
 if __name__ == "__main__":

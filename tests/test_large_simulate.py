@@ -14,7 +14,8 @@ def test_guard_arpack_matches_dense_eigenvalues():
     top = random_network(300, 3, seed=4)  # Nd = 900 > DENSE_EIG_MAX_ND: ARPACK
     lap = design(top, [1, 2, -1], thresholds=False).grounded_laplacian_sparse()
     assert lap.shape[0] > DENSE_EIG_MAX_ND
-    rho, bound, min_re, method = _eig_bounds(sp.csr_matrix(lap))
+    spec = _eig_bounds(sp.csr_matrix(lap))
+    rho, bound, min_re, method = spec.rho, spec.bound, spec.min_real, spec.method
     lam = np.linalg.eigvals(lap.toarray())
     assert "ARPACK" in method
     assert rho == np.float64(rho) and abs(rho - np.max(np.abs(lam))) <= 1e-6 * rho

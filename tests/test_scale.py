@@ -489,7 +489,7 @@ def test_comparison_solve_by_jacobi_matches_the_lu(seed):
     (superlinear fill on random graphs); on an M-matrix the same v as the LU."""
     from scipy.sparse.linalg import splu
 
-    from ntc_design.certify import comparison as sc
+    from ntc_design import linalg as sc
 
     m = _comparison(seed)
     v = sc.comparison_solve(m)
@@ -504,7 +504,7 @@ def test_comparison_solve_falls_back_to_the_lu_when_jacobi_diverges(monkeypatch)
     (dominance then fails on it), large ones the last finite sweep, never a crash."""
     from scipy.sparse.linalg import splu
 
-    from ntc_design.certify import comparison as sc
+    from ntc_design import linalg as sc
 
     m = _comparison(3, n=200, scale=0.5)
     exact = splu(m.tocsc()).solve(np.ones(m.shape[0]))

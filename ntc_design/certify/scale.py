@@ -55,12 +55,12 @@ from ..linalg import (
     DenseRefused,
     SPDFamily,
     cholesky_fill,
+    comparison_solve,
 )
 from ..model import Topology, block_coo
 from ..rigorous.exact import U, gamma, rump_shift_value
 from ..thresholds import strong_components
 from .arrays import mode_subject, pack
-from .comparison import comparison_solve
 from .dense import prove_pd_expr
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov

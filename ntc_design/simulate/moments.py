@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from .implicit import SolverCache
 from .system import ModeSystem
 
 KAPPA = 0.2
@@ -410,7 +411,7 @@ def em_moments(
     h_all = np.diff(grid.t)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     rec = MomentRecorder(grid.save_times, n, d)
-    lus: dict = {}
+    solvers = [SolverCache(sy.lap_b, d) for sy in systems] if scheme == "implicit" else []
     if 0 in save_at:
         rec.put(save_at[0], m, s)
     for k in range(grid.n_steps):
@@ -418,14 +419,7 @@ def em_moments(
         f = rhs[mode]
         c, h = c_all[k], h_all[k]
         if scheme == "implicit":
-            key = (mode, c * h)
-            lu = lus.get(key)
-            if lu is None:
-                from scipy.sparse import csc_matrix, identity
-                from scipy.sparse.linalg import splu
-
-                a = identity(n * d, format="csc") + c * h * csc_matrix(f.l)
-                lu = lus[key] = splu(a.tocsc())
+            lu = solvers[mode](c * h)
             s = lu.solve(np.asfortranarray(s + c * c * h * f.noise(s)))
             s = lu.solve(np.asfortranarray(s.T))
             m = lu.solve(m)

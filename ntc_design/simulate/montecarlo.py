@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from .grid import TimeGrid
+from .implicit import SolverCache
 from .system import ModeSystem
 
 BATCH = 64  # steps whose normals are drawn at once (fewer when they would pass XI_BYTES)
@@ -107,8 +108,9 @@ def _run_ends(grid: TimeGrid) -> np.ndarray:
 
 
 class _Stepper:
-    """One mode's arrays for the kernels, and the implicit solver's factorisations
-    (one per distinct c·h: with intrinsic stepping c·h = ds except next to events)."""
+    """One mode's arrays for the kernels, and the implicit scheme's solvers (one per
+    distinct c·h: with intrinsic stepping c·h = ds except next to events), kept for every
+    block of a chunk."""
 
     def __init__(self, s: ModeSystem, implicit: bool):
         self.s = s
@@ -126,36 +128,26 @@ class _Stepper:
                 s.k_blocks,
                 s.g_edge.reshape(s.n_edges, s.dim),
             )
-        self.implicit = implicit
-        self._lu: dict[float, object] = {}
+        self.solver = SolverCache(s.lap_b, s.dim) if implicit else None
 
     def advance(self, x, xi, k_from, k_to, ch, cs) -> None:
         from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
 
         tile = tile_width(x.shape[0], x.shape[1])
-        if not self.implicit:
+        if self.solver is None:
             if self.compiled:
                 em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile)
             else:
                 for k in range(k_from, k_to):
                     numpy_step(x, xi[k], ch[k], cs[k], self.s)
             return
+        solver = self.solver
         for k in range(k_from, k_to):
             if self.compiled:
                 em_steps(x, xi, k, k + 1, ch, cs, *self.args, False, tile)
             else:
                 numpy_step(x, xi[k], ch[k], cs[k], self.s, drift=False)
-            x[...] = self.solver(ch[k]).solve(x.T).T
-
-    def solver(self, ch: float):
-        lu = self._lu.get(ch)
-        if lu is None:
-            from scipy.sparse import identity
-            from scipy.sparse.linalg import splu
-
-            a = identity(self.s.nd, format="csc") + ch * self.s.lap_b.tocsc()
-            lu = self._lu[ch] = splu(a.tocsc())
-        return lu
+            x[...] = solver(ch[k]).solve(x.T).T
 
 
 def prepare(spec: MonteCarloSpec) -> None:
@@ -270,7 +262,13 @@ class BlockStats:
         )  # fmt: skip
 
 
-def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
+def _steppers(spec: MonteCarloSpec) -> list[_Stepper]:
+    """One stepper per mode, shared by the blocks of a chunk (the implicit solvers are
+    built once)."""
+    return [_Stepper(s, spec.scheme == "implicit") for s in spec.systems]
+
+
+def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> PartialStats:
     grid = spec.grid
     bp = spec.block_paths
     p0 = b * bp
@@ -279,7 +277,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None) -> PartialStats:
     stats = BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     e_max = max(s.n_edges for s in spec.systems)
-    steppers = [_Stepper(s, spec.scheme == "implicit") for s in spec.systems]
+    steppers = steppers if steppers is not None else _steppers(spec)
     c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
     h_all = np.diff(grid.t)
     ch_all = c_all * h_all
@@ -336,7 +334,8 @@ def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> lis
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         if block is not None:
             return [block(b, progress) for b in blocks]
-        return [_run_block(spec, b, progress) for b in blocks]
+        steppers = _steppers(spec)
+        return [_run_block(spec, b, progress, steppers) for b in blocks]
 
 
 def merge(parts: Sequence[PartialStats]) -> PartialStats:

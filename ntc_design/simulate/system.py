@@ -33,11 +33,37 @@ import scipy.sparse as sp
 
 from ..design import ProtocolDesign
 from ..errors import InputError
+from ..linalg import comparison_solve
+from .implicit import diagonal_blocks
 from .noise import NoiseModel
 
 DENSE_EIG_MAX_ND = 600  # every eigenvalue of L_B (dense) up to this Nd; ARPACK above
 DENSE_LB_MAX_ND = 2000  # below this the design's own dense L_B is used (same numbers)
 N_EIGS = 6  # eigenvalues ARPACK computes at each end of the spectrum
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """What the step-size guard uses of L_B's eigenvalues."""
+
+    rho: float  # spectral radius
+    bound: float  # min over eigenvalues of 2·Re λ/|λ|²
+    min_real: float  # min Re λ
+    method: str  # how they were obtained
+
+
+def _dominance_floor(s: ModeSystem) -> float:
+    """min_i (M v)_i / v_i for the comparison matrix of L_B (see
+    :attr:`ModeSystem.implicit_floor`), or −inf when dominance fails."""
+    n = s.n_agents
+    blocks = diagonal_blocks(s.lap_b, s.dim)
+    mu = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, 0]
+    nu = np.linalg.norm(s.abs_w, ord=2, axis=(1, 2)) if s.n_edges else np.zeros(0)
+    m = (sp.diags(mu) - sp.csr_matrix((nu, (s.dst, s.src)), shape=(n, n))).tocsr()
+    v = comparison_solve(m)
+    if not np.all(v > 0):
+        return -np.inf
+    return float(np.min((m @ v) / v))
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,12 +82,49 @@ class ModeSystem:
     g_edge: np.ndarray  # (E, d) σ_ji |A_ij| 1_d
     fmat: np.ndarray  # d×d F (identity when f is a callable: f is applied separately)
     f: Callable[[np.ndarray], np.ndarray] | None  # None when f is linear
-    spectral_radius: float
-    stability_bound: float  # explicit Euler on ε' = −c L_B ε is stable for c·h < this
-    min_real: float  # smallest real part of an eigenvalue of L_B (computed or estimated)
     agent_rate: np.ndarray  # (N,) λ_i = λ_max of the symmetric part of the block L_B,ii
     agent_noise: np.ndarray  # (N,) μ_i² = Σ_{e -> i} ‖K_e‖² (K_e = |A_ij| F)
-    eig_method: str  # how the eigenvalues were obtained
+
+    @cached_property
+    def spectrum(self) -> Spectrum:
+        """ρ(L_B), the explicit step bound and min Re λ, computed on first use (ARPACK
+        with a shift-invert LU above ``DENSE_EIG_MAX_ND``: 25 s at Nd = 3·10⁵, which the
+        implicit scheme does not need; see :attr:`implicit_floor`)."""
+        return _eig_bounds(self.lap_b)
+
+    @property
+    def spectral_radius(self) -> float:
+        """ρ(L_B)."""
+        return self.spectrum.rho
+
+    @property
+    def stability_bound(self) -> float:
+        """Explicit Euler on ε' = −c L_B ε is stable for c·h below this."""
+        return self.spectrum.bound
+
+    @property
+    def min_real(self) -> float:
+        """The smallest real part of an eigenvalue of L_B (computed or estimated)."""
+        return self.spectrum.min_real
+
+    @property
+    def eig_method(self) -> str:
+        """How the eigenvalues were obtained."""
+        return self.spectrum.method
+
+    @cached_property
+    def implicit_floor(self) -> tuple[float, str]:
+        """(a floor on min Re λ(L_B), how it was found), what the implicit scheme's guard
+        needs. Above ``DENSE_EIG_MAX_ND``, first by block diagonal dominance in time linear
+        in the edges (Feingold & Varga, 1962; see :mod:`ntc_design.certify.scale`): with
+        μ_i = λ_min(sym L_B,ii), ν_ij = ‖A_ij‖₂ and a comparison vector v > 0 (Jacobi),
+        every eigenvalue has Re λ >= min_i (M v)_i / v_i. An estimate in floating point
+        (``ntc certify`` proves it); the eigenvalues are used when it is not positive."""
+        if self.nd > DENSE_EIG_MAX_ND:
+            lo = _dominance_floor(self)
+            if lo > 0:
+                return lo, "block diagonal dominance with a Jacobi comparison vector"
+        return self.min_real, self.eig_method
 
     @property
     def n_edges(self) -> int:
@@ -167,21 +230,11 @@ def grounded_laplacian_sparse(des: ProtocolDesign) -> sp.csr_matrix:
     return out
 
 
-def _diag_blocks(lap_b: sp.csr_matrix, n: int, d: int) -> np.ndarray:
-    """(N, d, d) diagonal blocks of L_B."""
-    coo = lap_b.tocoo()
-    keep = coo.row // d == coo.col // d
-    out = np.zeros((n, d, d))
-    r, c = coo.row[keep], coo.col[keep]
-    out[r // d, r % d, c % d] = coo.data[keep]
-    return out
-
-
-def _eig_bounds(lap_b: sp.csr_matrix) -> tuple[float, float, float, str]:
-    """(ρ(L_B), min over eigenvalues of 2·Re λ/|λ|², min Re λ, method)."""
+def _eig_bounds(lap_b: sp.csr_matrix) -> Spectrum:
+    """ρ(L_B), min over eigenvalues of 2·Re λ/|λ|², min Re λ, and the method."""
     nd_ = lap_b.shape[0]
     if nd_ == 0:
-        return 0.0, np.inf, np.inf, "empty"
+        return Spectrum(0.0, np.inf, np.inf, "empty")
     if nd_ <= DENSE_EIG_MAX_ND:
         lam = np.linalg.eigvals(lap_b.toarray())
         method = "all eigenvalues"
@@ -214,12 +267,12 @@ def _eig_bounds(lap_b: sp.csr_matrix) -> tuple[float, float, float, str]:
             dg = lap_b.diagonal()
             lo = float(np.min(2 * dg - np.asarray(absl.sum(axis=1)).ravel()))
             bound = 2 * lo / rho**2 if lo > 0 else 0.0
-            return rho, bound, lo, "Gershgorin discs (ARPACK did not converge)"
+            return Spectrum(rho, bound, lo, "Gershgorin discs (ARPACK did not converge)")
     rho = float(np.max(np.abs(lam)))
     # |1 − c h λ| < 1 for every eigenvalue λ of L_B  <=>  c h < 2 Re λ / |λ|²
     with np.errstate(divide="ignore", invalid="ignore"):
         bounds = np.where(lam.real > 0, 2 * lam.real / np.abs(lam) ** 2, 0.0)
-    return rho, float(np.min(bounds)), float(np.min(lam.real)), method
+    return Spectrum(rho, float(np.min(bounds)), float(np.min(lam.real)), method)
 
 
 def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeSystem:
@@ -271,9 +324,8 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
     if term.linear:  # a callable f has no matrix: no mean-square estimate for it
         np.add.at(mu2, dst, knorm2)
     lap_b = grounded_laplacian_sparse(des)
-    blocks = _diag_blocks(lap_b, top.n, d)
+    blocks = diagonal_blocks(lap_b, d)
     rate = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, -1]
-    rho, bound, min_re, method = _eig_bounds(lap_b)
     return ModeSystem(
         name=name,
         n_agents=top.n,
@@ -287,12 +339,8 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
         g_edge=np.ascontiguousarray(g_edge),
         fmat=fmat,
         f=term.function,
-        spectral_radius=rho,
-        stability_bound=bound,
-        min_real=min_re,
         agent_rate=rate,
         agent_noise=mu2,
-        eig_method=method,
     )
 
 
@@ -376,10 +424,11 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
         return StepCheck(0.0, None)
     if scheme == "implicit":
         for s in systems:
-            if not s.min_real > 0:
+            floor, how = s.implicit_floor
+            if not floor > 0:
                 raise InputError(
                     f"scheme: implicit needs every eigenvalue of L_B with Re λ > 0; mode {s.name or 0} has "
-                    f"Re λ = {s.min_real:.4g} ({s.eig_method})"
+                    f"Re λ = {floor:.4g} ({how})"
                 )
         return StepCheck(0.0, None)
     modes = grid.mode
