@@ -433,3 +433,19 @@ def test_sweep_report_shows_every_point(files, reference, tmp_path):
     ]
     assert page.count("<img") == len(swept) + 1
     assert len(list((d / "figures").glob("sweep_*.png"))) == len(swept) + 1
+
+
+def test_worker_tasks_take_large_allocations_from_the_heap():
+    """Dask's nanny pins glibc's mmap threshold at 128 KiB (MALLOC_TRIM_THRESHOLD_); a
+    task raises it once per process: mallopt accepts it on glibc, and the call is cached."""
+    import ctypes
+    import platform
+
+    from ntc_design import distributed as dist
+
+    dist._heap_set = None
+    got = dist.heap_allocations()
+    if platform.system() == "Linux" and platform.libc_ver()[0] == "glibc":
+        assert got is True
+        assert ctypes.CDLL(None).mallopt(-3, dist.MMAP_THRESHOLD) == 1  # a value glibc takes
+    assert dist.heap_allocations() is got and dist._heap_set is got
