@@ -659,3 +659,87 @@ def comparison_solve(m) -> np.ndarray:
             return np.full(k, -1.0)
     return np.where(np.isfinite(v), v, -1.0)
 
+
+
+# -- independent proofs on the machine's cores (forked: the inputs are inherited) --------
+
+#: Calls that :func:`fork_map`'s children run, set in the parent just before the fork.
+_FORK_CALLS: list = []
+
+
+def _forked(i: int) -> tuple:
+    fn, args = _FORK_CALLS[i]
+    return fn(*args), list(_PROVEN)
+
+
+def fork_map(calls: list, workers: int) -> list:
+    """``[fn(*args) for fn, args in calls]`` in up to ``workers`` forked processes, in
+    order. CHOLMOD here is single-threaded (cvxopt's BLAS), so two modes' factorisations
+    on two cores take the time of one. The children inherit the calls (nothing large is
+    pickled on the way in) and send back results and the factorisations they proved
+    (:class:`SPDFamily`'s ``reuse`` works in the parent afterwards). Runs in this process
+    with one worker, one call, or no ``fork``.
+
+    Parameters
+    ----------
+    calls : list of (callable, tuple)
+        Functions and their arguments.
+    workers : int
+        Processes at most (each holds its own factor: memory adds up).
+
+    Returns
+    -------
+    list
+        The results, in the order of ``calls``.
+
+    Raises
+    ------
+    InputError
+        A child died (e.g. killed for memory); exceptions raised in a child are re-raised.
+    """
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    global _FORK_CALLS
+    if workers <= 1 or len(calls) <= 1 or "fork" not in mp.get_all_start_methods():
+        return [fn(*args) for fn, args in calls]
+    _FORK_CALLS = list(calls)
+    try:
+        ctx = mp.get_context("fork")
+        with ProcessPoolExecutor(max_workers=min(workers, len(calls)), mp_context=ctx) as ex:
+            got = list(ex.map(_forked, range(len(calls))))
+    except BrokenProcessPool:
+        raise InputError(
+            f"a process proving one of {len(calls)} parts in parallel died (out of memory?); "
+            "nothing is proven"
+        ) from None
+    finally:
+        _FORK_CALLS = []
+    for _, keys in got:
+        for key in keys:
+            _PROVEN.pop(key, None)
+            _PROVEN[key] = None
+    while len(_PROVEN) > PROVEN_KEEP:
+        del _PROVEN[next(iter(_PROVEN))]
+    return [r for r, _ in got]
+
+
+def proof_workers(n_parts: int) -> int:
+    """Processes for ``n_parts`` independent proofs: this machine's CPUs (affinity), at
+    most ``n_parts``.
+
+    Parameters
+    ----------
+    n_parts : int
+        Independent proofs.
+
+    Returns
+    -------
+    int
+    """
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, n_parts))

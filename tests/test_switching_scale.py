@@ -260,7 +260,9 @@ def test_npz_modes_in_a_switching_file(tmp_path, sw, capsys, monkeypatch):
         monkeypatch,
     )
     assert code == 0, err
-    assert "proven lower bound ℓ: λ_min > ℓ" in text and "Theorem 3 (mean square): guaranteed" in text
+    assert (
+        "proven lower bound ℓ: λ_min > ℓ" in text and "Theorem 3 (mean square): guaranteed" in text
+    )
     mode = stat.S_IMODE(os.stat(out).st_mode)
     umask = os.umask(0)
     os.umask(umask)
@@ -558,7 +560,7 @@ def test_vectorised_topology_hash_text_is_float_hex_exactly():
     rng = np.random.default_rng(4)
     k, d = 500, 3
     w = rng.standard_normal((k, d, d)) * 10.0 ** rng.integers(-320, 300, (k, d, d))
-    w.ravel()[:6] = [0.0, 5e-324, -2.0**-1022, 1.0, -1.7976931348623157e308, 1e-310]
+    w.ravel()[:6] = [0.0, 5e-324, -(2.0**-1022), 1.0, -1.7976931348623157e308, 1e-310]
     labels = ["a", 'q"', 7, "ü"] + [f"n{i}" for i in range(20)]
     lab = cc.label_json(labels)
     padded = np.array(lab, dtype="S").view(np.uint8).reshape(len(lab), -1)
@@ -623,3 +625,101 @@ def test_reuse_needs_the_bit_identical_matrix(monkeypatch):
     with pytest.raises(ValueError, match="no successful factorisation"):
         fam.solve(np.ones(3))  # a reused answer keeps no factor
     assert len(la._PROVEN) <= la.PROVEN_KEEP
+
+
+def test_a_mode_above_the_rate_proof_size_keeps_one_factorisation(sw, monkeypatch):
+    """Issue 20: above RATE_PROOF_MAX_FLOPS the second factorisation (ℓ > 0) is not made:
+    ℓ = 0 is proven by the factor that serves the estimate, the estimate is still the
+    dense eigenvalue, and the certificate verifies."""
+    from ntc_design import linalg
+    from ntc_design.certify import switching_scale as ss
+
+    calls = []
+    real = linalg.SPDFamily.factor
+
+    def counting(self, *a, **k):
+        calls.append(1)
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(linalg.SPDFamily, "factor", counting)
+    des = design(sw, THETA, thresholds=False)
+    full = switching_scale_certificate(des)
+    n_full = len(calls)
+    monkeypatch.setattr(ss, "RATE_PROOF_MAX_FLOPS", 0.0)
+    calls.clear()
+    one = switching_scale_certificate(des)
+    assert n_full == 4 and len(calls) == 2  # two modes: two factorisations each, then one
+    for k, d in des.modes.items():
+        assert full["proofs"][k]["lower"] > 0 and one["proofs"][k]["lower"] == 0.0
+        assert one["results"]["symmetric_part_min_eig"][k] == pytest.approx(
+            _dense_sym_min(d), rel=1e-9
+        )
+        assert "ℓ > 0 not attempted" in one["results"]["details"][k]
+    assert verify(one).valid
+
+
+def test_big_modes_are_proven_in_parallel_with_the_same_certificate(sw, monkeypatch):
+    """Modes above PARALLEL_MIN_ND are proven in forked processes (certify and verify):
+    the same proofs and numbers as in one process, and certify's own re-verification
+    still reuses the children's factorisations (none repeated in the parent)."""
+    from ntc_design import linalg
+    from ntc_design.certify import switching_scale as ss
+
+    des = design(sw, THETA, thresholds=False)
+    serial = switching_scale_certificate(des)
+    monkeypatch.setattr(ss, "PARALLEL_MIN_ND", 0)
+    monkeypatch.setattr(linalg, "proof_workers", lambda n: 2)
+    monkeypatch.setattr(ss, "proof_workers", lambda n: 2)
+    linalg._PROVEN.clear()
+    par = switching_scale_certificate(des)
+    assert par["proofs"] == serial["proofs"]
+    assert par["results"]["symmetric_part_min_eig"] == serial["results"]["symmetric_part_min_eig"]
+    assert len(linalg._PROVEN) == 4  # the children's successes, known to the parent
+    calls = []
+    real = linalg.SPDFamily.factor
+
+    def counting(self, *a, **k):
+        ok = real(self, *a, **k)
+        calls.append(self._symbolic is not None)  # a numeric factorisation happened here
+        return ok
+
+    monkeypatch.setattr(linalg.SPDFamily, "factor", counting)
+    ver = verify(par)  # in the parent: every mode's matrix was proven by a child
+    assert ver.valid and calls and not any(calls)
+    # verify's own parallel path, from scratch: the same checks as in one process
+    from ntc_design.certify.kinds import switching_scale as kind
+
+    monkeypatch.setattr(linalg.SPDFamily, "factor", real)
+    linalg._PROVEN.clear()
+    one = verify(par)
+    monkeypatch.setattr(kind, "PARALLEL_MIN_ND", 0)
+    used = []
+    monkeypatch.setattr(kind, "fork_map", lambda c, w: used.append(w) or linalg.fork_map(c, w))
+    linalg._PROVEN.clear()
+    two = verify(par)
+    assert used == [2]
+    assert one.valid and two.valid
+    assert [(c.name, c.ok, c.detail) for c in one.checks] == [
+        (c.name, c.ok, c.detail) for c in two.checks
+    ]
+    assert len(linalg._PROVEN) == 2  # the children's proofs reached the parent
+
+
+def _dies():
+    os._exit(3)
+
+
+def _fails(x):
+    raise InputError(f"bad part {x}")
+
+
+def test_fork_map_keeps_order_and_reports_failures_in_one_line():
+    from ntc_design.linalg import fork_map
+
+    assert fork_map([(pow, (2, k)) for k in range(5)], 2) == [1, 2, 4, 8, 16]
+    assert fork_map([(pow, (3, 2))], 2) == [9]  # one call: in this process
+    with pytest.raises(InputError, match="bad part 7"):
+        fork_map([(pow, (2, 1)), (_fails, (7,))], 2)
+    with pytest.raises(InputError, match=r"died \(out of memory\?\); nothing is proven") as e:
+        fork_map([(pow, (2, 1)), (_dies, ())], 2)
+    assert "\n" not in str(e.value)
