@@ -20,6 +20,7 @@ and the path.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import shutil
 import tempfile
@@ -261,3 +262,46 @@ __all__ = [
     "output_folder",
     "write_atomic",
 ]
+
+
+#: A top-level value whose compact JSON is longer than this (characters) is written on one
+#: line by :func:`json_text`.
+JSON_INDENT_MAX_CHARS = 200_000
+
+
+def json_text(doc: dict) -> str:
+    """``doc`` as JSON text for people: one top-level key per line, each value indented
+    (as ``json.dumps(doc, indent=1)``) unless its compact form is longer than
+    ``JSON_INDENT_MAX_CHARS``, then on one line. ``json``'s indenting encoder is pure
+    Python; its compact one is C: a 10⁵-agent run's 72 MB summary took 3.4 s, 1.4 s so.
+
+    Parameters
+    ----------
+    doc : dict
+        A JSON-ready mapping (see :func:`ntc_design.files.jsonable`).
+
+    Returns
+    -------
+    str
+        The text, with a final newline.
+
+    Examples
+    --------
+    >>> print(json_text({"a": [1, 2], "b": {"c": None}}), end="")
+    {
+     "a": [
+      1,
+      2
+     ],
+     "b": {
+      "c": null
+     }
+    }
+    """
+    parts = []
+    for key, value in doc.items():
+        text = json.dumps(value, ensure_ascii=False)
+        if len(text) <= JSON_INDENT_MAX_CHARS:
+            text = json.dumps(value, indent=1, ensure_ascii=False).replace("\n", "\n ")
+        parts.append(f" {json.dumps(str(key), ensure_ascii=False)}: {text}")
+    return "{\n" + ",\n".join(parts) + "\n}\n" if parts else "{}\n"

@@ -426,3 +426,20 @@ def test_any_scenario_document_gives_a_spec_or_one_line(doc, theta):
         return
     assert isinstance(spec, SimulationSpec) and np.all(np.isfinite(spec.theta))
     assert spec.mc.paths >= 1 and spec.T > 0
+
+
+def test_json_text_is_indented_json_with_long_values_on_one_line(monkeypatch):
+    """summary.json at 10⁵ agents: long values go through json's C encoder on one line;
+    short documents are byte for byte json.dumps(indent=1)."""
+    import json
+
+    from ntc_design import outputs
+
+    small = {"a": [1, 2.5], "b": {"c": None, "d": []}, "e": {}, "f": "ü", "g": [{"x": 1}]}
+    assert outputs.json_text(small) == json.dumps(small, indent=1, ensure_ascii=False) + "\n"
+    assert outputs.json_text({}) == "{}\n"
+    monkeypatch.setattr(outputs, "JSON_INDENT_MAX_CHARS", 12)
+    text = outputs.json_text(small)
+    assert json.loads(text) == small
+    lines = text.splitlines()
+    assert ' "b": {"c": null, "d": []},' in lines and ' "a": [' in lines  # 22 chars vs 8

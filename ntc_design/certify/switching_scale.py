@@ -213,6 +213,11 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
         The certificate, digest included; it certifies ``symmetric_part`` (a mode that is
         not proven makes it fail to verify). Re-check it with
         :func:`ntc_design.certify.verify` or ``ntc verify``.
+
+    Raises
+    ------
+    InputError
+        A process proving a mode in parallel died (e.g. killed for memory).
     """
 
     t0 = time.perf_counter()

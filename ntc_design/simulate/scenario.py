@@ -5,14 +5,13 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 from pathlib import Path
 
 import numpy as np
 
 from ..files import ScenarioData, jsonable, parse_scenario
 from ..loader import load
-from ..outputs import check_output_folder, output_folder
+from ..outputs import check_output_folder, json_text, output_folder
 from .driver import AnyTopology
 from .result import simulation_frame
 from .spec import SimulationSpec
@@ -135,7 +134,7 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
         w.writerow([repr(float(v)) for v in row])
     with output_folder(out, REPLACEABLE) as tmp:
         (tmp / "summary.json").write_text(
-            json.dumps(jsonable(summary), indent=1, ensure_ascii=False) + "\n", encoding="utf-8"
+            json_text(jsonable(summary)), encoding="utf-8"
         )
         (tmp / "ms_error.csv").write_text(buf.getvalue(), encoding="utf-8")
         # the same numbers in tidy long form (t, agent, mc, lo, hi, exact), as to_pandas()
