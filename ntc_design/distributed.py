@@ -42,7 +42,8 @@ def heap_allocations() -> bool:
     Dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_`` set, which also pins
     glibc's mmap threshold at 128 KiB: every temporary vector of a big network (2.4 MB
     at Nd = 3·10⁵) is then a fresh ``mmap`` that page-faults on first touch, and an
-    implicit run at 10⁵ agents took 2.3× as long as on the local process pool.
+    implicit run at 10⁵ agents took 2.3× as long as on the local process pool. The
+    setting stays for the worker's later tasks (it only changes where glibc takes memory).
 
     Returns
     -------
@@ -56,7 +57,7 @@ def heap_allocations() -> bool:
         try:
             libc = ctypes.CDLL(None)
             _heap_set = bool(libc.mallopt(ctypes.c_int(-3), ctypes.c_int(MMAP_THRESHOLD)))
-        except (OSError, AttributeError):  # no mallopt: not glibc
+        except (OSError, AttributeError, TypeError):  # no mallopt (not glibc); CDLL(None) on Windows
             _heap_set = False
     return _heap_set
 

@@ -702,13 +702,19 @@ def fork_map(calls: list, workers: int) -> list:
     from concurrent.futures.process import BrokenProcessPool
 
     global _FORK_CALLS
-    if workers <= 1 or len(calls) <= 1 or "fork" not in mp.get_all_start_methods():
+    if (
+        workers <= 1
+        or len(calls) <= 1
+        or "fork" not in mp.get_all_start_methods()
+        or mp.current_process().daemon  # e.g. a Dask worker (a sweep's certify): no children
+    ):
         return [fn(*args) for fn, args in calls]
     _FORK_CALLS = list(calls)
+    ex = None
     try:
         ctx = mp.get_context("fork")
-        with ProcessPoolExecutor(max_workers=min(workers, len(calls)), mp_context=ctx) as ex:
-            got = list(ex.map(_forked, range(len(calls))))
+        ex = ProcessPoolExecutor(max_workers=min(workers, len(calls)), mp_context=ctx)
+        got = list(ex.map(_forked, range(len(calls))))
     except BrokenProcessPool:
         raise InputError(
             f"a process proving one of {len(calls)} parts in parallel died (out of memory?); "
@@ -716,6 +722,8 @@ def fork_map(calls: list, workers: int) -> list:
         ) from None
     finally:
         _FORK_CALLS = []
+        if ex is not None:  # on a failure, do not wait for the proofs still queued
+            ex.shutdown(wait=True, cancel_futures=True)
     for _, keys in got:
         for key in keys:
             _PROVEN.pop(key, None)
@@ -725,14 +733,40 @@ def fork_map(calls: list, workers: int) -> list:
     return [r for r, _ in got]
 
 
-def proof_workers(n_parts: int) -> int:
+def available_memory() -> float:
+    """Memory available now.
+
+    Returns
+    -------
+    float
+        Bytes: MemAvailable from /proc/meminfo, else the physical memory from
+        os.sysconf, else 4 GiB.
+    """
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 4.0 * 2**30
+
+
+def proof_workers(n_parts: int, bytes_each: float | None = None) -> int:
     """Processes for ``n_parts`` independent proofs: this machine's CPUs (affinity), at
-    most ``n_parts``.
+    most ``n_parts``, and no more than the available memory holds at ``bytes_each`` per
+    process (default: the largest factor a proof may make, ``SPARSE_FACTOR_MAX_BYTES``,
+    so that the parallel proofs fit wherever one proof did).
 
     Parameters
     ----------
     n_parts : int
         Independent proofs.
+    bytes_each : float, optional
+        Memory one proof may take.
 
     Returns
     -------
@@ -742,4 +776,6 @@ def proof_workers(n_parts: int) -> int:
         cpus = len(os.sched_getaffinity(0))
     except AttributeError:  # not Linux
         cpus = os.cpu_count() or 1
-    return max(1, min(cpus, n_parts))
+    each = SPARSE_FACTOR_MAX_BYTES if bytes_each is None else bytes_each
+    fit = int(available_memory() // max(each, 1.0))
+    return max(1, min(cpus, n_parts, fit))

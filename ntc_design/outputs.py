@@ -259,6 +259,7 @@ __all__ = [
     "atomic_path",
     "check_output_file",
     "check_output_folder",
+    "json_text",
     "output_folder",
     "write_atomic",
 ]

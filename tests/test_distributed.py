@@ -449,3 +449,21 @@ def test_worker_tasks_take_large_allocations_from_the_heap():
         assert got is True
         assert ctypes.CDLL(None).mallopt(-3, dist.MMAP_THRESHOLD) == 1  # a value glibc takes
     assert dist.heap_allocations() is got and dist._heap_set is got
+
+
+def test_heap_allocations_without_glibc_is_a_no_op(monkeypatch):
+    """Windows: ctypes.CDLL(None) raises TypeError; elsewhere no mallopt: AttributeError.
+    Either way a task goes on (False), never fails."""
+    import ctypes
+
+    from ntc_design import distributed as dist
+
+    for exc in (TypeError, AttributeError, OSError):
+
+        def cdll(_name, exc=exc):
+            raise exc("no libc here")
+
+        monkeypatch.setattr(ctypes, "CDLL", cdll)
+        dist._heap_set = None
+        assert dist.heap_allocations() is False
+    dist._heap_set = None

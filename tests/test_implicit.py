@@ -128,3 +128,27 @@ def test_monte_carlo_by_jacobi_equals_the_lu(monkeypatch):
     jac2 = simulate(top, THETA, workers=2, **kw)
     np.testing.assert_allclose(jac.mc.mean, lu.mc.mean, rtol=1e-9)
     assert np.array_equal(jac.mc.mean, jac2.mc.mean)
+
+
+def test_solver_cache_keeps_the_most_recent_few(net):
+    """A decaying gain under h_max gives a new c·h at every capped step: the cache keeps
+    the CACHE_SOLVERS most recent, so memory does not grow with the horizon."""
+    _, s = net
+    cache = SolverCache(s.lap_b, 3)
+    made = [cache(1e-3 * (k + 1)) for k in range(implicit.CACHE_SOLVERS + 2)]
+    assert len(cache._by_ch) == implicit.CACHE_SOLVERS
+    assert cache(made[-1].ch) is made[-1]  # recent: kept
+    assert cache(made[0].ch) is not made[0]  # oldest: rebuilt
+    assert cache(made[0].ch).ch == made[0].ch
+
+
+def test_a_floor_within_rounding_of_zero_is_not_trusted(monkeypatch, net):
+    """The dominance floor must clear FLOOR_RTOL·max|μ_i|; below it the eigenvalues decide."""
+    des, s0 = net
+    floor, _ = s0.implicit_floor
+    blocks = implicit.diagonal_blocks(s0.lap_b, 3)
+    mu_max = np.max(np.abs(np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, 0]))
+    monkeypatch.setattr(sysmod, "FLOOR_RTOL", 1.01 * floor / mu_max)
+    s = mode_system(des, NoiseModel())
+    got, how = s.implicit_floor
+    assert "ARPACK" in how and got == s.min_real

@@ -693,6 +693,7 @@ def test_big_modes_are_proven_in_parallel_with_the_same_certificate(sw, monkeypa
     linalg._PROVEN.clear()
     one = verify(par)
     monkeypatch.setattr(kind, "PARALLEL_MIN_ND", 0)
+    monkeypatch.setattr(kind, "proof_workers", lambda n: 2)
     used = []
     monkeypatch.setattr(kind, "fork_map", lambda c, w: used.append(w) or linalg.fork_map(c, w))
     linalg._PROVEN.clear()
@@ -723,3 +724,35 @@ def test_fork_map_keeps_order_and_reports_failures_in_one_line():
     with pytest.raises(InputError, match=r"died \(out of memory\?\); nothing is proven") as e:
         fork_map([(pow, (2, 1)), (_dies, ())], 2)
     assert "\n" not in str(e.value)
+
+
+def _fork_map_in_a_daemon(conn):
+    from ntc_design.linalg import fork_map
+
+    try:
+        conn.send(("ok", fork_map([(pow, (2, k)) for k in range(4)], 2)))
+    except BaseException as exc:  # noqa: BLE001 - reported to the test
+        conn.send(("error", repr(exc)))
+
+
+def test_fork_map_runs_in_place_inside_a_daemon_process():
+    """A Dask worker is a daemon (a sweep certifies there): no children allowed, so the
+    proofs run one after the other in it instead of failing."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    here, there = ctx.Pipe()
+    p = ctx.Process(target=_fork_map_in_a_daemon, args=(there,), daemon=True)
+    p.start()
+    got = here.recv()
+    p.join(30)
+    assert got == ("ok", [1, 2, 4, 8])
+
+
+def test_proof_workers_fit_the_memory(monkeypatch):
+    from ntc_design import linalg
+
+    monkeypatch.setattr(linalg, "available_memory", lambda: 3.5 * 2**30)
+    assert linalg.proof_workers(16, bytes_each=2**30) == min(3, len(os.sched_getaffinity(0)))
+    assert linalg.proof_workers(16, bytes_each=2**40) == 1  # one proof always runs
+    assert linalg.proof_workers(16) == 1  # 3.5 GiB < one factor at the 4 GiB limit

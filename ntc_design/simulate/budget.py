@@ -24,13 +24,13 @@ memory).
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputError, format_bytes
+from ..linalg import available_memory
 from .moments import KAPPA
 from .montecarlo import BATCH, XI_BYTES
 from .system import DENSE_EIG_MAX_ND, DENSE_LB_MAX_ND
@@ -42,28 +42,6 @@ MAX_PATH_STEPS = 1e13  # paths × steps: ~ weeks of computation at 10⁷ path-st
 MAX_EXACT_SECONDS = 300.0
 GAIN_SAMPLES = 2049  # linear and as many logarithmic samples of [0, T]
 F8 = 8.0
-
-
-def available_memory() -> float:
-    """Memory available now.
-
-    Returns
-    -------
-    float
-        Bytes: MemAvailable from /proc/meminfo, else the physical memory from
-        os.sysconf, else 4 GiB.
-    """
-    try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
-    except OSError:
-        pass
-    try:
-        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
-    except (ValueError, OSError, AttributeError):
-        return 4.0 * 2**30
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ Three methods, chosen by :func:`implicit_solver`:
   contract, and after m sweeps ``‖y_m − y‖_∞ <= q^(m+1) ‖y‖_∞`` (as y₀ − y = J y). m is
   fixed in advance from q for a relative bound ``IMPLICIT_RTOL``, so every path takes
   the same sweeps whichever block or worker it runs in. Used when q <= ``JACOBI_MAX_Q``
-  (at most ~47 sweeps); small steps make q small (q ≈ c h ρ of the off-diagonal part).
+  (at most 43 sweeps); small steps make q small (q ≈ c h ρ of the off-diagonal part).
 * ``"gmres"``: restarted GMRES preconditioned by D⁻¹, one column at a time, from
   ``D⁻¹b``, when neither applies, to a relative residual ``GMRES_RTOL``; a system it
   cannot solve is refused in one line (a smaller ``ds`` makes q smaller).
@@ -192,9 +192,14 @@ class ImplicitSolver:
         return out.reshape(b.shape)
 
 
+#: Solvers a :class:`SolverCache` keeps (the most recently used): steps come in time order,
+#: and a decaying gain under the ``h_max`` cap gives a new c·h at every capped step.
+CACHE_SOLVERS = 4
+
+
 class SolverCache:
     """One :class:`ImplicitSolver` per distinct c·h (keyed by :func:`ch_key`), built on
-    first use.
+    first use; the ``CACHE_SOLVERS`` most recently used are kept.
 
     Parameters
     ----------
@@ -223,9 +228,12 @@ class SolverCache:
         ImplicitSolver
         """
         key = ch_key(ch)
-        s = self._by_ch.get(key)
+        s = self._by_ch.pop(key, None)
         if s is None:
-            s = self._by_ch[key] = ImplicitSolver(self.lap_b, key, self.d, self.method)
+            s = ImplicitSolver(self.lap_b, key, self.d, self.method)
+        self._by_ch[key] = s  # newest last
+        while len(self._by_ch) > CACHE_SOLVERS:
+            del self._by_ch[next(iter(self._by_ch))]
         return s
 
 

@@ -40,6 +40,7 @@ from .noise import NoiseModel
 DENSE_EIG_MAX_ND = 600  # every eigenvalue of L_B (dense) up to this Nd; ARPACK above
 DENSE_LB_MAX_ND = 2000  # below this the design's own dense L_B is used (same numbers)
 N_EIGS = 6  # eigenvalues ARPACK computes at each end of the spectrum
+FLOOR_RTOL = 1e-12  # a dominance floor must exceed this times max_i |μ_i| to count
 
 
 @dataclass(frozen=True)
@@ -63,7 +64,9 @@ def _dominance_floor(s: ModeSystem) -> float:
     v = comparison_solve(m)
     if not np.all(v > 0):
         return -np.inf
-    return float(np.min((m @ v) / v))
+    lo = float(np.min((m @ v) / v))
+    # a floor within rounding of zero says nothing: the eigenvalues decide then
+    return lo if lo > FLOOR_RTOL * float(np.max(np.abs(mu), initial=0.0)) else -np.inf
 
 
 @dataclass(frozen=True, eq=False)
