@@ -2,6 +2,7 @@
 
 from .driver import make_gain, simulate
 from .grid import TimeGrid, build_grid
+from .implicit import ImplicitSolver, SolverCache
 from .moments import Moments, exact_moments
 from .montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
 from .noise import NoiseModel
@@ -19,6 +20,7 @@ from .system import ModeSystem, mode_system
 
 __all__ = [
     "SCENARIO_KEYS",
+    "ImplicitSolver",
     "ModeSystem",
     "MonteCarlo",
     "MonteCarloSpec",
@@ -30,6 +32,7 @@ __all__ = [
     "SimulationDiverged",
     "SimulationResult",
     "SimulationSpec",
+    "SolverCache",
     "Stepping",
     "TimeGrid",
     "UniformInitial",
