@@ -252,14 +252,10 @@ def simulate_large(args, work: Path) -> None:
     rows = []
     try:
         for n in args.simulate_sizes:
-            f, gen = generate(work, n, args.d, args.seed)
-            if gen["rc"] != 0:
-                print(f"{n:>7} generate failed: {gen['err']}")
+            got = network(work, n, args)
+            if got is None:
                 continue
-            import numpy as np
-
-            with np.load(f) as z:
-                edges = int(z["from"].shape[0])
+            f, edges = got
             sc = work / f"sim{n}.yaml"
             sc.write_text(SIM_SCENARIO.format(net=f, t=args.sim_t, paths=args.sim_paths))
             lu = run_child(["-c", IMPLICIT_SOLVE, str(f), "splu"])
@@ -329,6 +325,19 @@ def simulate_large(args, work: Path) -> None:
                 f"{n0:>7} -> {n1:<7}: edges ×{e1 / e0:.1f} | seconds per path-step ×{per1 / per0:.1f}"
                 f" ({1e6 * per0 / e0:.2f} -> {1e6 * per1 / e1:.2f} µs per edge)"
             )
+
+
+def network(work: Path, n: int, args) -> tuple[Path, int] | None:
+    """``ntc generate``'s n-agent network (``args.d``, ``args.seed``) and its edge count, or
+    None after a line saying that generating it failed."""
+    f, gen = generate(work, n, args.d, args.seed)
+    if gen["rc"] != 0:
+        print(f"{n:>7} generate failed: {gen['err']}")
+        return None
+    import numpy as np
+
+    with np.load(f) as z:
+        return f, int(z["from"].shape[0])
 
 
 def switching(args, work: Path) -> None:
@@ -442,14 +451,10 @@ def fixed_sizes(args, work: Path) -> list:
     print(header)
     print("-" * len(header))
     for n in args.sizes:
-        f, gen = generate(work, n, args.d, args.seed)
-        if gen["rc"] != 0:
-            print(f"{n:>7} generate failed: {gen['err']}")
+        got = network(work, n, args)
+        if got is None:
             continue
-        import numpy as np
-
-        with np.load(f) as z:
-            edges = int(z["from"].shape[0])
+        f, edges = got
         cert = work / f"cert{n}.json"
         c = run_child(["-m", "ntc_design", "certify", str(f), "--theta", THETA, "--out", str(cert)])
         v = run_child(["-m", "ntc_design", "verify", str(cert)]) if cert.exists() else None
@@ -460,7 +465,7 @@ def fixed_sizes(args, work: Path) -> list:
             f"{n:>7} {edges:>7} | {fmt(c):>24} | {fmt(v) if v else '—':>23} | {size_mb:7.1f} "
             f"| {fmt(des):>23} | {dense}"
         )
-        rows.append((n, edges, c, v, des, gen))
+        rows.append((n, edges, c, v, des))
     return rows
 
 
@@ -470,7 +475,7 @@ def growth(rows, base_design: dict) -> None:
     linear in the edges)."""
     print("# growth (ratio to the previous size) against the edge ratio; memory ratios above")
     print("# the bare import; µs = CPU microseconds per edge (the same at every size if linear)")
-    for (n0, e0, c0, v0, d0, _), (n1, e1, c1, v1, d1, _) in zip(rows, rows[1:], strict=False):
+    for (n0, e0, c0, v0, d0), (n1, e1, c1, v1, d1) in zip(rows, rows[1:], strict=False):
         ok = c0["rc"] == c1["rc"] == 0 and v0 is not None and v1 is not None
         if not ok:
             print(f"{n0:>7} -> {n1:<7}: a run failed, no ratio")
@@ -558,7 +563,7 @@ def main() -> None:
     print()
     print("# targets: certify N=1e3 <= 5 s; 1e4 <= 10 s & 4 GB; 1e5 <= 120 s & 8 GB (issue 9);")
     print("# 1e6 <= 60 s & 8 GB (issue 20); verify within the same times")
-    for n, _, c, v, _, _ in rows:
+    for n, _, c, v, _ in rows:
         t, m = TARGETS.get(n, (None, None))
         if t is None:
             continue
