@@ -436,6 +436,15 @@ _PROVEN: dict[str, None] = {}
 PROVEN_KEEP = 32
 
 
+def _remember_proven(keys) -> None:
+    """Record matrices whose factorisation succeeded (newest last, ``PROVEN_KEEP`` kept)."""
+    for key in keys:
+        _PROVEN.pop(key, None)
+        _PROVEN[key] = None
+    while len(_PROVEN) > PROVEN_KEEP:
+        del _PROVEN[next(iter(_PROVEN))]
+
+
 def _matrix_key(n: int, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray) -> str:
     """SHA-256 of a lower-triangle matrix exactly as it is handed to CHOLMOD."""
     h = hashlib.sha256(np.array([n, rows.size], dtype=np.int64).tobytes())
@@ -543,10 +552,7 @@ class SPDFamily:
             self._ok = False
             return False, 0
         self._ok = True
-        _PROVEN.pop(key, None)
-        _PROVEN[key] = None
-        while len(_PROVEN) > PROVEN_KEEP:
-            del _PROVEN[next(iter(_PROVEN))]
+        _remember_proven([key])
         if not row_counts:
             return True, 0
         fac = cholmod.getfactor(self._symbolic)
@@ -725,11 +731,7 @@ def fork_map(calls: list, workers: int) -> list:
         if ex is not None:  # on a failure, do not wait for the proofs still queued
             ex.shutdown(wait=True, cancel_futures=True)
     for _, keys in got:
-        for key in keys:
-            _PROVEN.pop(key, None)
-            _PROVEN[key] = None
-    while len(_PROVEN) > PROVEN_KEEP:
-        del _PROVEN[next(iter(_PROVEN))]
+        _remember_proven(keys)
     return [r for r, _ in got]
 
 

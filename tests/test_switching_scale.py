@@ -667,6 +667,7 @@ def test_big_modes_are_proven_in_parallel_with_the_same_certificate(sw, monkeypa
 
     des = design(sw, THETA, thresholds=False)
     serial = switching_scale_certificate(des)
+    big_nd = ss.PARALLEL_MIN_ND
     monkeypatch.setattr(ss, "PARALLEL_MIN_ND", 0)
     monkeypatch.setattr(linalg, "proof_workers", lambda n: 2)
     monkeypatch.setattr(ss, "proof_workers", lambda n: 2)
@@ -684,6 +685,7 @@ def test_big_modes_are_proven_in_parallel_with_the_same_certificate(sw, monkeypa
         return ok
 
     monkeypatch.setattr(linalg.SPDFamily, "factor", counting)
+    monkeypatch.setattr(ss, "PARALLEL_MIN_ND", big_nd)  # verify in this process
     ver = verify(par)  # in the parent: every mode's matrix was proven by a child
     assert ver.valid and calls and not any(calls)
     # verify's own parallel path, from scratch: the same checks as in one process
@@ -692,8 +694,7 @@ def test_big_modes_are_proven_in_parallel_with_the_same_certificate(sw, monkeypa
     monkeypatch.setattr(linalg.SPDFamily, "factor", real)
     linalg._PROVEN.clear()
     one = verify(par)
-    monkeypatch.setattr(kind, "PARALLEL_MIN_ND", 0)
-    monkeypatch.setattr(kind, "proof_workers", lambda n: 2)
+    monkeypatch.setattr(ss, "PARALLEL_MIN_ND", 0)
     used = []
     monkeypatch.setattr(kind, "fork_map", lambda c, w: used.append(w) or linalg.fork_map(c, w))
     linalg._PROVEN.clear()

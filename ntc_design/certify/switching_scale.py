@@ -140,6 +140,23 @@ def _min_eig_estimate(
         return math.nan, "ARPACK did not converge"
 
 
+def mode_processes(tops: list[Topology]) -> int:
+    """Processes to prove these modes in (:func:`~ntc_design.linalg.fork_map`): one per
+    CPU, within memory, when one of them has Nd >= ``PARALLEL_MIN_ND``; else this one.
+
+    Parameters
+    ----------
+    tops : list of Topology
+        The modes to prove.
+
+    Returns
+    -------
+    int
+    """
+    big = any(t.nd >= PARALLEL_MIN_ND for t in tops)
+    return proof_workers(len(tops)) if big else 1
+
+
 @dataclass(frozen=True)
 class ModeProof:
     """One mode's outcome: whether ``λ_min(L_B + L_Bᵀ) > lower`` is proven, the
@@ -224,11 +241,10 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
     sched = sd.switching.schedule
     used = scheduled_modes(sched)
     proofs, est, lower, details = {}, {}, {}, {}
-    # the schedule's modes only (a mode it never uses needs no proof), on several cores
-    # when they are big
-    big = any(sd.modes[k].topology.nd >= PARALLEL_MIN_ND for k in used)
+    # the schedule's modes only (a mode it never uses needs no proof)
+    tops = [sd.modes[k].topology for k in used]
     calls = [(prove_mode, (sd.modes[k].topology, sd.modes[k].delta)) for k in used]
-    for k, r in zip(used, fork_map(calls, proof_workers(len(used)) if big else 1), strict=True):
+    for k, r in zip(used, fork_map(calls, mode_processes(tops)), strict=True):
         est[k] = r.estimate if math.isfinite(r.estimate) else None
         details[k] = f"{r.detail}; λ_min estimate: {r.estimate_method}"
         if r.holds:
@@ -304,6 +320,7 @@ def proof_fields(x: Any, where: str) -> float:
 __all__ = [
     "KIND",
     "ModeProof",
+    "mode_processes",
     "prove_mode",
     "switching_scale_certificate",
     "proof_fields",

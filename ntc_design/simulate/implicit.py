@@ -1,7 +1,7 @@
 """The drift-implicit step's linear system ``(I + c h L_B) y = b``, solved in time linear
 in the edges at any size (issue 20).
 
-Three methods, chosen by :func:`implicit_solver`:
+Three methods, chosen by :class:`ImplicitSolver` (``method="auto"``):
 
 * ``"lu"``: SuperLU, exact up to rounding, for Nd <= ``IMPLICIT_LU_MAX_ND`` (a random
   graph's LU fills in superlinearly: 8 s per factorisation at Nd = 3·10⁵).

@@ -57,8 +57,7 @@ def _dominance_floor(s: ModeSystem) -> float:
     """min_i (M v)_i / v_i for the comparison matrix of L_B (see
     :attr:`ModeSystem.implicit_floor`), or −inf when dominance fails."""
     n = s.n_agents
-    blocks = diagonal_blocks(s.lap_b, s.dim)
-    mu = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, 0]
+    mu = s.block_eigenvalues[:, 0]
     nu = np.linalg.norm(s.abs_w, ord=2, axis=(1, 2)) if s.n_edges else np.zeros(0)
     m = (sp.diags(mu) - sp.csr_matrix((nu, (s.dst, s.src)), shape=(n, n))).tocsr()
     v = comparison_solve(m)
@@ -85,8 +84,19 @@ class ModeSystem:
     g_edge: np.ndarray  # (E, d) σ_ji |A_ij| 1_d
     fmat: np.ndarray  # d×d F (identity when f is a callable: f is applied separately)
     f: Callable[[np.ndarray], np.ndarray] | None  # None when f is linear
-    agent_rate: np.ndarray  # (N,) λ_i = λ_max of the symmetric part of the block L_B,ii
     agent_noise: np.ndarray  # (N,) μ_i² = Σ_{e -> i} ‖K_e‖² (K_e = |A_ij| F)
+
+    @cached_property
+    def block_eigenvalues(self) -> np.ndarray:
+        """(N, d) eigenvalues, ascending, of the symmetric parts of L_B's diagonal blocks:
+        λ_max per agent for the explicit guard, λ_min (μ_i) for the implicit one."""
+        blocks = diagonal_blocks(self.lap_b, self.dim)
+        return np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))
+
+    @property
+    def agent_rate(self) -> np.ndarray:
+        """(N,) λ_i = λ_max of the symmetric part of the block L_B,ii."""
+        return self.block_eigenvalues[:, -1]
 
     @cached_property
     def spectrum(self) -> Spectrum:
@@ -327,8 +337,6 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
     if term.linear:  # a callable f has no matrix: no mean-square estimate for it
         np.add.at(mu2, dst, knorm2)
     lap_b = grounded_laplacian_sparse(des)
-    blocks = diagonal_blocks(lap_b, d)
-    rate = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, -1]
     return ModeSystem(
         name=name,
         n_agents=top.n,
@@ -342,7 +350,6 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
         g_edge=np.ascontiguousarray(g_edge),
         fmat=fmat,
         f=term.function,
-        agent_rate=rate,
         agent_noise=mu2,
     )
 

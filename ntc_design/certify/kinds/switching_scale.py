@@ -11,7 +11,7 @@ import numpy as np
 
 from ...design import SwitchingDesign
 from ...errors import InputError
-from ...linalg import fork_map, proof_workers
+from ...linalg import fork_map
 from ..arrays import read_array_mode
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
@@ -21,7 +21,7 @@ from ..format import MAX_MODES, topology_hash
 from ..scale import symmetric_part_bound
 from ..switching_scale import (
     EIG_DENSE_MAX_ND,
-    PARALLEL_MIN_ND,
+    mode_processes,
     proof_fields,
     switching_scale_certificate,
     sym_matrices,
@@ -121,9 +121,8 @@ class SwitchingScaleKind(CertificateKind):
         if k not in st.checked:  # every stated mode at once: in parallel when they are big
             todo = [m for m in subject.scheduled if m in st.proofs and m in st.tops]
             los = {m: proof_fields(st.proofs[m], f"{st.source}: proofs.{m}") for m in todo}
-            big = any(st.tops[m].nd >= PARALLEL_MIN_ND for m in todo)
             calls = [(_check_mode, (st.tops[m], st.deltas[m], los[m])) for m in todo]
-            workers = proof_workers(len(todo)) if big else 1
+            workers = mode_processes([st.tops[m] for m in todo])
             st.checked.update(zip(todo, fork_map(calls, workers), strict=True))
         p = st.checked[k]
         bound = f"λ_min > {lo:.6g}: " if lo else ""
