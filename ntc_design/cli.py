@@ -254,7 +254,13 @@ def certify(
     file: FileArg,
     theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
     margin: Annotated[float, typer.Option(help="ΔC > 0: δ = C + ΔC.")] = 0.1,
-    gain: Annotated[str | None, typer.Option(help="Control gain c(t), e.g. '1/(1+t)'.")] = None,
+    gain: Annotated[
+        str | None,
+        typer.Option(
+            help="Control gain c(t), e.g. '1/(1+t)', or a schedule CSV (t,c rows with a "
+            "'# tail:' line, as ntc tune --schedule optimal writes)."
+        ),
+    ] = None,
     out_path: Annotated[
         Path | None, typer.Option("--out", help="Write the certificate (JSON) here.")
     ] = None,
@@ -289,7 +295,7 @@ def certify(
             raise InputError(f"--out: {out_path} is a directory")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
-        res = run(load(file), th, margin, gain, noise_sigma=noise_sigma, noise_f=noise_f)
+        res = run(load(file), th, margin, _gain_option(gain), noise_sigma=noise_sigma, noise_f=noise_f)
     doc = res.to_dict()  # every step that can fail runs before anything is written
     written = out_path is not None and res.verification.valid
     if out_path is not None and written:
@@ -304,6 +310,15 @@ def certify(
         if out_path is None or written:
             print("not proven: no theorem is guaranteed", file=sys.stderr)
         raise typer.Exit(1)
+
+
+def _gain_option(gain: str | None):
+    """--gain: an expression, or a schedule CSV file (``*.csv``)."""
+    if gain is not None and gain.strip().lower().endswith(".csv"):
+        from .schedule import read_schedule
+
+        return read_schedule(gain, field="--gain")
+    return gain
 
 
 def _print_certify(res, written: Path | None) -> None:

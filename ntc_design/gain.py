@@ -104,6 +104,7 @@ class GainAnalysis:
     integral_diverges: Condition  # ∫ c = ∞
     tends_to_zero: Condition  # c → 0
     square_integrable: Condition  # ∫ c² < ∞
+    label: str | None = None  # what the table names instead of expr (a schedule)
 
     @property
     def mean_square(self) -> bool | None:
@@ -152,7 +153,8 @@ class GainAnalysis:
             ("mean square (Theorems 1, 3)", verdict(self.mean_square), "eqs. (13), (17)"),
             ("almost sure (Theorems 2, 4)", verdict(self.almost_sure), "eqs. (16), (20)"),
         ]
-        return Table.build(f"gain c(t) = {show(self.expr)}", ("condition", "holds", "reason"), rows)
+        name = self.label or show(self.expr)
+        return Table.build(f"gain c(t) = {name}", ("condition", "holds", "reason"), rows)
 
     def _repr_html_(self) -> str:
         return self.table().html()
@@ -160,7 +162,7 @@ class GainAnalysis:
     def __repr__(self) -> str:
         word = {True: "yes", False: "no", None: "undetermined"}
         return (
-            f"GainAnalysis(c(t) = {show(self.expr)}, mean square {word[self.mean_square]}, "
+            f"GainAnalysis(c(t) = {self.label or show(self.expr)}, mean square {word[self.mean_square]}, "
             f"almost sure {word[self.almost_sure]})"
         )
 

@@ -9,12 +9,14 @@ import numpy as np
 
 from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
-from ..gain import GainAnalysis, analyse_gain
+from ..gain import GainAnalysis
+from ..schedule import ScheduleGain, analyse_any_gain
 from ..model import SwitchingTopology, Topology
 from ..rows import Table
 from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
+from .format import digest
 from .kinds import KINDS, ResultRow, kind_for
 from .theorems import GUARANTEE_WORD, TheoremVerdict, theorem_table
 from .verify import verify
@@ -119,11 +121,31 @@ def _verify_own(cert: dict) -> Verification:
         return Verification(False, "none", (Check("certificate well-formed", False, str(exc)),))
 
 
+def with_schedule(cert: dict, gain: ScheduleGain) -> dict:
+    """The certificate with the gain schedule in its ``gain`` field, digest re-sealed.
+
+    Parameters
+    ----------
+    cert : dict
+        A certificate of a fixed or switching kind.
+    gain : ScheduleGain
+        The schedule.
+
+    Returns
+    -------
+    dict
+    """
+    out = dict(cert)
+    out["gain"] = gain.to_document()
+    out["digest"] = digest(out)
+    return out
+
+
 def certify(
     topology: Topology | SwitchingTopology | ExpressionTopology,
     theta,
     margin: float = 0.1,
-    gain: str | None = None,
+    gain: str | ScheduleGain | None = None,
     delta: float | None = None,
     noise_sigma: float = 0.4,
     noise_f=0.3,
@@ -142,8 +164,9 @@ def certify(
         The target consensus state θ ≠ 0.
     margin : float
         ΔC > 0: δ = C + ΔC.
-    gain : str, optional
-        c(t), e.g. ``"1/(1+t)"``.
+    gain : str or ScheduleGain, optional
+        c(t), e.g. ``"1/(1+t)"``, or a tabulated schedule with an analytic tail (stored
+        in the certificate's ``gain`` field, re-checked by ``verify``).
     delta : float, optional
         An explicit δ instead of C + ΔC.
     noise_sigma, noise_f : float
@@ -167,8 +190,13 @@ def certify(
     >>> certify(nd.load("examples/g1.yaml"), [1, 2, -1], gain="1/(1+t)")
     CertifyResult(hurwitz, valid; Theorem 1: guaranteed, Theorem 2: guaranteed)
     """
-    g = analyse_gain(gain) if gain is not None else None
+    g = analyse_any_gain(gain) if gain is not None else None
     if isinstance(topology, ExpressionTopology):
+        if isinstance(gain, ScheduleGain):
+            raise InputError(
+                "gain: a schedule with a topology given as expressions of t: the time-varying "
+                "certificate needs c(t) as one expression (its t₀ of μ₂ is symbolic)"
+            )
         if delta is not None:
             raise InputError("delta: a time-varying topology uses δ(t) = C(t) + ΔC (Lemma 1)")
         des: Any = TimeVaryingDesign(topology, np.asarray(theta, dtype=float), margin)
@@ -178,6 +206,8 @@ def certify(
         des = design(topology, theta, margin, delta, thresholds=False if big else None)
     kind = kind_for(des)
     cert = kind.issue(des, gain=gain, noise_sigma=noise_sigma, noise_f=noise_f)
+    if isinstance(gain, ScheduleGain):
+        cert = with_schedule(cert, gain)
     ver = _verify_own(cert)
     return CertifyResult(des, cert, ver, g, kind.verdicts(des, cert, ver, g))
 

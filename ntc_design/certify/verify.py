@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..model import SwitchingTopology, Topology
+from ..schedule import schedule_checks
 from ..timevarying import ExpressionTopology
 from .checks import (
     About,
@@ -228,6 +229,8 @@ def verify(
         proof = kind.prove(c, subject, reading)
         checks += proof if isinstance(proof, list) else [proof]
 
+    if "gain" in doc:  # a tabulated schedule: its conditions derived here, never read
+        checks += [Check(name, ok, detail) for name, ok, detail in schedule_checks(doc["gain"], source)]
     audit = ResultsAudit(doc.get("results"), source)
     kind.audit(audit, doc, subject, reading, alpha)
     checks.append(audit.check())

@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
@@ -33,6 +34,7 @@ import numpy as np
 
 from ..errors import InputError, quote, require_int, require_number, require_positive
 from ..gain import parse_gain
+from ..schedule import ScheduleGain, read_schedule, schedule_from_document
 from .noise import NoiseModel
 
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
@@ -398,6 +400,21 @@ METHODS = ("mc", "exact", "both")
 MAX_GAIN_TEXT = 10_000
 
 
+def _schedule_from_document(doc: Mapping[str, Any], source: str | None) -> ScheduleGain:
+    """A scenario's ``gain: {schedule: FILE.csv, tail: EXPRESSION, interpolation: linear}``
+    (the file relative to the scenario), or an inline ``{t: [...], c: [...], tail}``."""
+    if "schedule" not in doc:
+        return schedule_from_document(dict(doc), "gain")
+    unknown = sorted(str(k) for k in set(doc) - {"schedule", "tail", "interpolation"})
+    if unknown:
+        raise InputError(f"gain.{unknown[0]}: unknown field (known: schedule, tail, interpolation)")
+    for key in ("schedule", "tail", "interpolation"):
+        if key in doc and not isinstance(doc[key], str):
+            raise InputError(f"gain.{key}: expected a string, got {doc[key]!r}")
+    base = Path(source).parent if source else Path(".")
+    return read_schedule(base / doc["schedule"], doc.get("tail"), doc.get("interpolation"))
+
+
 @dataclass(frozen=True, eq=False)
 class SimulationSpec:
     """Everything a simulation needs besides the topology (see the module docstring).
@@ -556,14 +573,14 @@ class SimulationSpec:
             ``SOURCE: FIELD: what is wrong``.
         """
         try:
-            return cls._from_document(doc)
+            return cls._from_document(doc, source)
         except InputError as exc:
             if source:
                 raise InputError(f"{source}: {exc}") from None
             raise
 
     @classmethod
-    def _from_document(cls, doc: Mapping[str, Any]) -> SimulationSpec:
+    def _from_document(cls, doc: Mapping[str, Any], source: str | None = None) -> SimulationSpec:
         unknown = sorted(str(k) for k in set(doc) - set(SCENARIO_KEYS))
         if unknown:
             raise InputError(
@@ -575,8 +592,13 @@ class SimulationSpec:
         o["noise"] = _noise_from_document(doc.get("noise"))
         if "initial" in o:
             o["initial"] = _initial_from_document(o["initial"])
-        if "gain" in o and not isinstance(o["gain"], str):
-            raise InputError(f"gain: expected an expression in t (a string), got {o['gain']!r}")
+        if "gain" in o and isinstance(o["gain"], Mapping):
+            o["gain"] = _schedule_from_document(o["gain"], source)
+        elif "gain" in o and not isinstance(o["gain"], str):
+            raise InputError(
+                "gain: expected an expression in t (a string) or {schedule: FILE.csv, tail: "
+                f"EXPRESSION}}, got {o['gain']!r}"
+            )
         for key in ("method", "stepping", "scheme"):
             if key in o and not isinstance(o[key], str):
                 raise InputError(f"{key}: expected a string, got {o[key]!r}")
@@ -657,7 +679,13 @@ class SimulationSpec:
             "theta": self.theta.tolist(),
             "margin": self.margin,
             "delta": self.delta,
-            "gain": self.gain if isinstance(self.gain, str) else "callable",
+            "gain": (
+                self.gain
+                if isinstance(self.gain, str)
+                else self.gain.to_document()
+                if isinstance(self.gain, ScheduleGain)
+                else "callable"
+            ),
             "T": self.T,
             "dt": self.stepping.dt,
             "stepping": self.stepping.kind,

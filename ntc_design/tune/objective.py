@@ -64,6 +64,12 @@ class Curve:
         """The value at the horizon."""
         return float(self.total[-1])
 
+    @property
+    def peak(self) -> dict[str, float]:
+        """sup_t of the curve over its save times and where: ``{value, t}``."""
+        k = int(np.argmax(self.total))
+        return {"value": float(self.total[k]), "t": float(self.t[k])}
+
     def first_below(self, eps: float) -> float | None:
         """The first time the curve reaches ``eps`` (linear between save times), or None.
 
@@ -254,7 +260,7 @@ class ExactObjective(Objective):
         if steps > MAX_STEPS * (5 if accurate else 1):
             raise InputError(
                 f"{gain.text}: about {steps:.3g} steps of the moment equations (c(0) = "
-                f"{gain.a * gain.b**-gain.gamma:.3g}); too stiff"
+                f"{float(gain(np.array([0.0]))[0]):.3g}); too stiff"
             )
         pm = self.prepared(delta)[0]
         t = np.linspace(0.0, self.horizon, points)

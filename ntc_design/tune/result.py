@@ -87,6 +87,12 @@ class TuneResult:
         return {k: c.final for k, c in self.curves.items()}
 
     @property
+    def ms_error_peak(self) -> dict[str, dict[str, float]]:
+        """sup_t E Σ‖x_i(t) − θ‖² on [0, T] of the tuned and the baseline gain, and where
+        (``{value, t}`` each, over the curves' save times)."""
+        return {k: c.peak for k, c in self.curves.items()}
+
+    @property
     def time_to_eps(self) -> dict[str, float | None]:
         """The first time each gain's curve reaches ε (None: not by T, or no ε)."""
         if self.eps is None:
@@ -134,6 +140,13 @@ class TuneResult:
                 fmt(ms["baseline"]) + self._band("baseline"),
             )
         )
+        pk = self.ms_error_peak
+        rows.append(
+            (
+                "peak sup_t E Σ‖x_i(t) − θ‖² (at t)",
+                *(f"{fmt(pk[k]['value'])} (t = {fmt(pk[k]['t'])})" for k in ("tuned", "baseline")),
+            )
+        )
         if self.eps is not None:
             rows.append((f"first time ≤ ε = {fmt(self.eps)}", te["tuned"], te["baseline"]))
         req = "mean square" if self.require == "mean-square" else "mean square and almost sure"
@@ -174,8 +187,8 @@ class TuneResult:
         -------
         dict
             ``gain`` (text), ``a``, ``b``, ``gamma``, ``delta``, ``horizon``, ``require``,
-            ``method``, ``statistical``, ``ms_error_T`` and ``time_to_eps`` (``tuned``,
-            ``baseline``), ``eps``, ``theorems`` (the tuned gain's analysis),
+            ``method``, ``statistical``, ``ms_error_T``, ``ms_error_peak`` (``{value, t}``)
+            and ``time_to_eps`` (``tuned``, ``baseline``), ``eps``, ``theorems`` (the tuned gain's analysis),
             ``certificate_valid``, ``evaluations``, ``seconds``, ``notes``.
         """
         bands = {
@@ -195,6 +208,7 @@ class TuneResult:
             "method": self.method,
             "statistical": self.statistical,
             "ms_error_T": self.ms_error_T,
+            "ms_error_peak": self.ms_error_peak,
             "eps": self.eps,
             "time_to_eps": self.time_to_eps,
             "theorems": self.gain_analysis.to_dict(),

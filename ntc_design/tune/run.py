@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -25,10 +25,13 @@ from ..design import design_topology
 from ..errors import InputError, require_positive
 from ..gain import analyse_gain
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..schedule import ScheduleGain
 from ..simulate import SimulationSpec, simulate
 from ..simulate.driver import AnyTopology
 from ..simulate.spec import MonteCarlo, SaveAt, Stepping
 from ..timevarying import ExpressionTopology
+from .deadline import CHECK_PATHS, tune_schedule
+from .optimal import DEFAULT_MAX_GAIN
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Objective, objective_for
 from .result import Landscape, TuneResult
@@ -136,8 +139,15 @@ def tune(
     certificate: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
     family: str = "power",
-) -> TuneResult:
-    """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖².
+    schedule: str = "power",
+    max_gain: float = DEFAULT_MAX_GAIN,
+    max_peak: float | None = None,
+    check_paths: int = CHECK_PATHS,
+    progress: Callable[[str], None] | None = None,
+) -> Any:
+    """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖², or with
+    ``schedule="optimal"`` the best schedule c(t) on [0, T] by optimal control
+    (:func:`.deadline.tune_schedule`).
 
     Parameters
     ----------
@@ -167,10 +177,21 @@ def tune(
         or ``delta``; lo = hi fixes the parameter.
     family : {"power"}, optional
         The gain family: a·(b + t)^(−γ) (the only one).
+    schedule : {"power", "optimal"}, optional
+        ``optimal``: the schedule c(t) on [0, T] that minimises the exact error at T, with
+        an admissible tail (exact moments only; see :mod:`.optimal`).
+    max_gain : float, optional
+        ``optimal``: the upper bound on c.
+    max_peak : float, optional
+        ``optimal``: the bound M on sup_t E Σ‖x_i(t) − θ‖².
+    check_paths : int, optional
+        ``optimal``: Monte Carlo paths of the evidence (0: none).
+    progress : callable, optional
+        ``optimal``: called with a line per stage.
 
     Returns
     -------
-    TuneResult
+    TuneResult or ScheduleTuneResult
 
     Raises
     ------
@@ -191,6 +212,28 @@ def tune(
     """
     if family != "power":
         raise InputError(f"--family: only 'power' (a·(b + t)^(−γ)) is available, got {family!r}")
+    if schedule == "optimal":
+        if method not in ("auto", "exact"):
+            raise InputError(
+                "--schedule optimal: uses exact moments (--method mc is for --schedule power)"
+            )
+        return tune_schedule(
+            topology,
+            spec,
+            horizon,
+            require=require,
+            tune_delta=tune_delta,
+            eps=eps,
+            max_gain=max_gain,
+            max_peak=max_peak,
+            certificate=certificate,
+            check_paths=check_paths,
+            progress=progress,
+        )
+    if schedule != "power":
+        raise InputError(f"--schedule: expected power or optimal, got {schedule!r}")
+    if max_peak is not None:
+        raise InputError("--max-peak: applies to --schedule optimal")
     require_positive("horizon", horizon)
     gamma_range(require)
     if eps is not None:
@@ -274,7 +317,7 @@ IMPLICIT = {"stepping": "intrinsic", "scheme": "implicit"}
 def _stable_stepping(
     topology: AnyTopology,
     spec: SimulationSpec,
-    tuned: PowerGain,
+    tuned: PowerGain | ScheduleGain,
     delta: float | None,
     horizon: float,
     notes: list[str],
@@ -334,7 +377,7 @@ def _landscape(
 def _certify(
     topology: AnyTopology,
     spec: SimulationSpec,
-    tuned: PowerGain,
+    tuned: PowerGain | ScheduleGain,
     delta: float | None,
     notes: list[str],
 ):
@@ -354,7 +397,7 @@ def _certify(
             topology,
             spec.theta,
             spec.margin,
-            gain=tuned.text,
+            gain=tuned.text if isinstance(tuned, PowerGain) else tuned,
             delta=delta if delta is not None else spec.delta,
             noise_sigma=spec.noise.sigma,
             noise_f=f_bound,
@@ -378,8 +421,8 @@ def tuned_scenario(
         The scenario file (its topology path is relative to it).
     out : str or Path
         The folder the new scenario goes to.
-    result : TuneResult
-        The tuning.
+    result : TuneResult or ScheduleTuneResult
+        The tuning (a schedule is written as ``gain: {schedule: schedule.csv, tail}``).
 
     Returns
     -------
@@ -388,7 +431,13 @@ def tuned_scenario(
     doc = dict(document)
     topo = (Path(source).parent / str(doc["topology"])).resolve()
     doc["topology"] = os.path.relpath(topo, Path(out).resolve())
-    doc["gain"] = result.tuned.text
+    sched = getattr(result, "schedule", None)
+    if isinstance(sched, ScheduleGain):
+        doc["gain"] = {"schedule": "schedule.csv", "tail": sched.tail, "interpolation": "linear"}
+        value, how = result.ms_error_T["optimal"], "optimal schedule, exact moments"
+    else:
+        doc["gain"] = result.tuned.text
+        value, how = result.ms_error_T["tuned"], result.method
     doc["T"] = result.horizon
     if result.stepping:
         doc.update(result.stepping)
@@ -397,7 +446,6 @@ def tuned_scenario(
         doc.pop("margin", None)
     doc["description"] = (
         f"{document.get('description', document.get('name', 'scenario'))} — gain tuned by "
-        f"ntc tune for T = {result.horizon:g}: E Σ‖x_i(T) − θ‖² = {result.ms_error_T['tuned']:.6g} "
-        f"({result.method})"
+        f"ntc tune for T = {result.horizon:g}: E Σ‖x_i(T) − θ‖² = {value:.6g} ({how})"
     )
     return doc
