@@ -510,12 +510,32 @@ def tune(
         str, typer.Option(help="auto (exact moments where they apply), exact or mc.")
     ] = "auto",
     evaluations: Annotated[int, typer.Option(help="Search budget (objective evaluations).")] = 160,
+    schedule: Annotated[
+        str,
+        typer.Option(
+            help="power: the family a·(b + t)^(−γ); optimal: the best schedule c(t) on "
+            "[0, T] by optimal control of the exact moments, with an admissible tail after T."
+        ),
+    ] = "power",
+    max_gain: Annotated[
+        float, typer.Option(help="--schedule optimal: the upper bound on c(t).")
+    ] = 50.0,
+    max_peak: Annotated[
+        float | None,
+        typer.Option(help="--schedule optimal: keep sup_t E Σ‖x_i(t) − θ‖² <= this."),
+    ] = None,
+    check_paths: Annotated[
+        int,
+        typer.Option(
+            help="--schedule optimal: Monte Carlo paths of the evidence (0: none)."
+        ),
+    ] = 200,
     out_dir: Annotated[
         Path | None,
         typer.Option(
             "--out",
             help="Write tuned.yaml (the scenario with the tuned gain), tune.json, "
-            "certificate.json, tune.html and its figures here.",
+            "certificate.json, tune.html and its figures here (and schedule.csv).",
         ),
     ] = None,
     as_json: JsonOpt = False,
@@ -537,8 +557,22 @@ def tune(
         warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
         prog.stage(f"tuning {scenario}")
         opts: dict[str, Any] = dict(require=require, tune_delta=tune_delta, eps=eps, method=method)
+        if schedule == "optimal":
+            opts.update(
+                max_gain=max_gain, max_peak=max_peak, check_paths=check_paths, progress=prog.stage
+            )
+        elif max_peak is not None:
+            raise InputError("--max-peak: applies to --schedule optimal")
         try:
-            res = run(top, spec, horizon, family=family, max_evaluations=evaluations, **opts)
+            res = run(
+                top,
+                spec,
+                horizon,
+                family=family,
+                max_evaluations=evaluations,
+                schedule=schedule,
+                **opts,
+            )
         except InputError as exc:
             raise InputError(f"{sc.source}: {exc}") from None
     doc = res.to_dict()
@@ -548,7 +582,8 @@ def tune(
     if as_json:
         print(_json(doc))
     else:
-        print_table(res.table())
+        for t in getattr(res, "tables", lambda: [res.table()])():
+            print_table(t)
         if out_dir is not None:
             out.print(
                 f"written to {out_dir}: tuned.yaml (check it by Monte Carlo: ntc simulate "

@@ -77,8 +77,8 @@ class ScheduleGain:
     [1.5, 0.5, 0.25]
     """
 
-    t: np.ndarray
-    c: np.ndarray
+    t: Any
+    c: Any
     interpolation: str = "linear"
     tail: str = "1/(1+t)"
     field: str = "gain"
@@ -124,7 +124,10 @@ class ScheduleGain:
         c.setflags(write=False)
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "c", c)
-        object.__setattr__(self, "_tail_fn", gain_function(self.tail, f"{f}.tail"))
+        object.__setattr__(self, "_fn", gain_function(self.tail, f"{f}.tail"))
+
+    def _tail(self, t: np.ndarray) -> np.ndarray:
+        return self._fn(t)  # type: ignore[attr-defined]
 
     @property
     def end(self) -> float:
@@ -153,9 +156,8 @@ class ScheduleGain:
             out[inside] = self.c[k]
         if np.any(~inside):
             with np.errstate(all="ignore"):
-                out[~inside] = np.asarray(self._tail_fn(flat[~inside]), dtype=float) * np.ones(
-                    int(np.sum(~inside))
-                )
+                tail = np.asarray(self._tail(flat[~inside]), dtype=float)
+                out[~inside] = tail * np.ones(int(np.sum(~inside)))
         return out.reshape(t.shape)
 
     def integrals(self, t_end: float) -> tuple[float, float]:
@@ -316,8 +318,10 @@ def read_schedule(
     if not header:
         raise InputError(f"{p}: no header 't,c'")
     for key, given in (("tail", tail), ("interpolation", interpolation)):
-        if given is not None and key in meta and meta[key].replace(" ", "") != given.replace(
-            " ", ""
+        if (
+            given is not None
+            and key in meta
+            and meta[key].replace(" ", "") != given.replace(" ", "")
         ):
             raise InputError(
                 f"{field}.{key}: {given!r} differs from the file's {meta[key]!r} ({p})"
@@ -381,13 +385,12 @@ def _table_condition(g: ScheduleGain) -> Condition:
         )
     return Condition(
         True,
-        f"the table: {g.t.size} finite values >= 0 at increasing times from 0, linear "
-        "between them",
+        f"the table: {g.t.size} finite values >= 0 at increasing times from 0, linear between them",
     )
 
 
 def _join(g: ScheduleGain) -> tuple[bool, str]:
-    at_end = float(g._tail_fn(np.array([g.end]))[0])  # type: ignore[attr-defined]
+    at_end = float(g._tail(np.array([g.end]))[0])
     last = float(g.c[-1])
     gap = abs(at_end - last)
     ok = math.isfinite(at_end) and gap <= JOIN_RTOL * max(abs(last), 1e-300)
@@ -423,12 +426,15 @@ def analyse_schedule(g: ScheduleGain, seconds: float | None = None) -> GainAnaly
     ok, why = _join(g)
     cont = tail.continuous_nonnegative
     value = (
-        False if table.value is False or not ok or cont.value is False else
-        (None if cont.value is None else True)
+        False
+        if table.value is False or not ok or cont.value is False
+        else (None if cont.value is None else True)
     )
     reason = f"{table.reason}; {why}; the tail: {cont.reason}"
+
     def after(c: Condition) -> Condition:
         return Condition(c.value, f"the tail {g.tail} decides it: {c.reason}")
+
     return GainAnalysis(
         g.text,
         parse_gain(g.tail, "gain.tail"),
@@ -510,8 +516,13 @@ def schedule_checks(doc: Any, source: str = "certificate") -> list[tuple[str, bo
         a = analyse_schedule(g)
     except InputError as exc:
         return [*out, ("gain schedule: tail", False, str(exc))]
-    out.append(("gain schedule: continuous and >= 0", a.continuous_nonnegative.value is True,
-                a.continuous_nonnegative.reason))
+    out.append(
+        (
+            "gain schedule: continuous and >= 0",
+            a.continuous_nonnegative.value is True,
+            a.continuous_nonnegative.reason,
+        )
+    )
     conds = (a.integral_diverges.value, a.tends_to_zero.value, a.square_integrable.value)
     adm = all(v is True for v in conds)
     out.append(

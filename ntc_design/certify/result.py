@@ -10,9 +10,9 @@ import numpy as np
 from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis
-from ..schedule import ScheduleGain, analyse_any_gain
 from ..model import SwitchingTopology, Topology
 from ..rows import Table
+from ..schedule import ScheduleGain, analyse_any_gain
 from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND

@@ -18,19 +18,100 @@ from ..certify import write_certificate
 from ..files import ScenarioData, jsonable
 from ..outputs import output_folder
 from ..rows import fmt
-from ..tune import TuneResult, tuned_scenario
+from ..schedule import ScheduleGain
+from ..tune import PowerGain, ScheduleTuneResult, TuneResult, tuned_scenario
 from . import style
 from .html import figure_block, html_table, render, write_html
 
 CURVE_CAPTION = (
     "E Σ_i ‖x_i − θ‖² over time under the tuned gain (solid) and the baseline 1/(1 + t) "
-    "(dashed); the dotted line is ε, the deadline T is the right edge."
+    "(dashed), a marker at each curve's peak; the dotted line is ε, the deadline T is the "
+    "right edge."
 )
 LANDSCAPE_CAPTION = (
     "E Σ_i ‖x_i(T) − θ‖² over the scale a (log) and the exponent γ at the tuned offset b; "
     "the cross marks the optimum, the circle the baseline's (a, γ) = (1, 1); blank where a "
     "candidate is too stiff to integrate or its moments grow without bound."
 )
+
+
+SCHEDULE_GAINS_CAPTION = (
+    "The gains: the optimal schedule on [0, T] (solid; its tail after T dotted), the best "
+    "power law a·(b + t)^(−γ) (dashed) and 1/(1 + t) (dash-dot)."
+)
+SCHEDULE_CURVES_CAPTION = (
+    "E Σ_i ‖x_i − θ‖² over [0, T] under the three gains (exact moments, computed "
+    "independently of the optimiser); a marker at each curve's peak, the dotted line the "
+    "peak bound when one was asked."
+)
+_STYLES = {
+    "optimal": (0, "-", "optimal schedule"),
+    "power": (1, "--", "best power law"),
+    "baseline": (2, "-.", "1/(1 + t)"),
+}
+
+
+def schedule_gains_figure(result: ScheduleTuneResult):
+    """c(t) of the three gains on [0, 1.3 T] (the schedule's tail shown after T).
+
+    Parameters
+    ----------
+    result : ScheduleTuneResult
+        The tuning.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    t_end = result.horizon
+    t = np.linspace(0.0, t_end, 801)
+    tail = np.linspace(t_end, 1.3 * t_end, 120)
+    with style.paper_style():
+        fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.4), layout="constrained")
+        for key, g in result.gains.items():
+            assert isinstance(g, (PowerGain, ScheduleGain))
+            i, ls, label = _STYLES[key]
+            colour = style.PALETTE[i]
+            name = f"{label}: {g.text}" if key == "power" else label
+            ax.plot(t, g(t), color=colour, ls=ls, label=name)
+            ax.plot(tail, g(tail), color=colour, ls=":" if key == "optimal" else ls, lw=0.9)
+        ax.axvline(t_end, color=style.GREY, lw=0.6)
+        ax.set_yscale("log")
+        ax.set_xlabel("t")
+        ax.set_ylabel("c(t)")
+        ax.set_xlim(0, 1.3 * t_end)
+        fig.legend(loc="outside upper center", ncols=1, frameon=False)
+    return fig
+
+
+def schedule_curves_figure(result: ScheduleTuneResult):
+    """E Σ‖x_i − θ‖² of the three gains on [0, T], peaks marked.
+
+    Parameters
+    ----------
+    result : ScheduleTuneResult
+        The tuning.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with style.paper_style():
+        fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.4), layout="constrained")
+        for key, c in result.curves.items():
+            i, ls, label = _STYLES[key]
+            colour = style.PALETTE[i]
+            ax.plot(c.t, np.maximum(c.total, 1e-12), color=colour, ls=ls, label=label)
+            pk = c.peak
+            ax.plot([pk["t"]], [pk["value"]], marker="v", color=colour, ls="none", ms=5)
+        if result.max_peak is not None:
+            ax.axhline(result.max_peak, color=style.GREY, ls=":", lw=0.8, label="peak bound")
+        ax.set_yscale("log")
+        ax.set_xlabel("t")
+        ax.set_ylabel(r"$E\,\sum_i \|x_i - \theta\|^2$")
+        ax.set_xlim(0, result.horizon)
+        fig.legend(loc="outside upper center", ncols=2, frameon=False)
+    return fig
 
 
 def curves_figure(result: TuneResult):
@@ -55,6 +136,8 @@ def curves_figure(result: TuneResult):
             c = result.curves[key]
             gain = result.tuned.text if key == "tuned" else result.baseline.text
             ax.plot(c.t, np.maximum(c.total, floor), color=colour, ls=ls, label=f"{key}: {gain}")
+            pk = c.peak
+            ax.plot([pk["t"]], [pk["value"]], marker="v", color=colour, ls="none", ms=5)
             if c.lo is not None and c.hi is not None:
                 ax.fill_between(
                     c.t,
@@ -153,10 +236,19 @@ def _plain_log_ticks(ax) -> None:
 
 
 #: What ``ntc tune --out`` writes (an earlier tuning's folder may be replaced).
-TUNE_FILES = ("tuned.yaml", "tune.json", "certificate.json", "tune.html", "figures")
+TUNE_FILES = (
+    "tuned.yaml",
+    "schedule.csv",
+    "tune.json",
+    "certificate.json",
+    "tune.html",
+    "figures",
+)
 
 
-def write_tune_outputs(result: TuneResult, scenario: ScenarioData, out_dir: str | Path) -> None:
+def write_tune_outputs(
+    result: TuneResult | ScheduleTuneResult, scenario: ScenarioData, out_dir: str | Path
+) -> None:
     """Write a tuning's folder, all or nothing (:func:`ntc_design.outputs.output_folder`):
     ``tuned.yaml`` (the scenario with the tuned gain, T and any stepping it needs, its
     topology path relative to the folder), ``tune.json``, ``certificate.json`` and
@@ -164,8 +256,8 @@ def write_tune_outputs(result: TuneResult, scenario: ScenarioData, out_dir: str 
 
     Parameters
     ----------
-    result : TuneResult
-        The tuning.
+    result : TuneResult or ScheduleTuneResult
+        The tuning (a schedule adds ``schedule.csv``, which ``tuned.yaml`` names).
     scenario : ScenarioData
         The scenario as read (its document and source).
     out_dir : str or Path
@@ -176,8 +268,16 @@ def write_tune_outputs(result: TuneResult, scenario: ScenarioData, out_dir: str 
     InputError
         The folder cannot receive the files (see :func:`ntc_design.outputs.output_folder`).
     """
-    files = ["tuned.yaml", "tune.json"] + (["certificate.json"] if result.certificate else [])
+    sched = isinstance(result, ScheduleTuneResult)
+    files = (
+        ["tuned.yaml"]
+        + (["schedule.csv"] if sched else [])
+        + ["tune.json"]
+        + (["certificate.json"] if result.certificate else [])
+    )
     with output_folder(out_dir, TUNE_FILES) as tmp:
+        if isinstance(result, ScheduleTuneResult):
+            (tmp / "schedule.csv").write_text(result.schedule.csv_text(), encoding="utf-8")
         new = tuned_scenario(scenario.document, scenario.source, out_dir, result)
         header = f"# {new.pop('description')}\n"
         (tmp / "tuned.yaml").write_text(
@@ -187,7 +287,70 @@ def write_tune_outputs(result: TuneResult, scenario: ScenarioData, out_dir: str 
         (tmp / "tune.json").write_text(text + "\n", encoding="utf-8")
         if result.certificate is not None:
             write_certificate(result.certificate.certificate, tmp / "certificate.json")
-        write_tune_report(result, tmp, scenario.source, files)
+        if isinstance(result, ScheduleTuneResult):
+            write_schedule_report(result, tmp, scenario.source, files)
+        else:
+            write_tune_report(result, tmp, scenario.source, files)
+
+
+def write_schedule_report(
+    result: ScheduleTuneResult, out_dir: str | Path, scenario: str, files: list[str]
+) -> Path:
+    """Write ``tune.html`` of an optimal schedule: the evidence table, c(t) of the three
+    gains, their error curves with the peaks, the refinement table, the theorem conditions
+    and the certificate.
+
+    Parameters
+    ----------
+    result : ScheduleTuneResult
+        The tuning.
+    out_dir : str or Path
+        The folder (it exists).
+    scenario : str
+        The scenario's name, shown in the page.
+    files : list of str
+        The other files written there, linked from the page.
+
+    Returns
+    -------
+    Path
+        The HTML page.
+    """
+    base = Path(out_dir)
+
+    def block(fig, key: str, caption: str):
+        saved = style.save(fig, base / "figures" / f"tune_{key}")
+        return figure_block(saved, f"fig-{key}", caption, base, style.ONE_COLUMN)
+
+    cert = [html_table(t) for t in result.certificate.tables()] if result.certificate else []
+    toc = [
+        {"id": "evidence", "title": "Three gains at the deadline"},
+        {"id": "gains", "title": "The gains c(t)"},
+        {"id": "curves", "title": "Mean-square error over time"},
+        {"id": "refinement", "title": "Refinement"},
+        {"id": "theorems", "title": "Theorem conditions"},
+    ]
+    if cert:
+        toc.append({"id": "certificate", "title": "Certificate"})
+    page = render(
+        "tune_schedule.html",
+        title=f"Best gain schedule for T = {fmt(result.horizon)}",
+        scenario=scenario,
+        horizon=fmt(result.horizon),
+        method=result.method,
+        files=files,
+        summary=html_table(result.table()),
+        gains=block(schedule_gains_figure(result), "gains", SCHEDULE_GAINS_CAPTION),
+        curves=block(schedule_curves_figure(result), "curves", SCHEDULE_CURVES_CAPTION),
+        refinement=html_table(result.refinement_table()),
+        gain=html_table(result.gain_analysis.table()),
+        certificate=cert,
+        toc=toc,
+        interactive=False,
+    )
+    path = base / "tune.html"
+    write_html(path, page)
+    return path
 
 
 def write_tune_report(

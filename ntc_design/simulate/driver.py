@@ -75,7 +75,7 @@ def make_gain(
         with np.errstate(all="ignore"):  # overflow shows up as a non-finite value, checked
             return np.asarray(gain(np.asarray(t, dtype=float)), dtype=float) * np.ones(np.shape(t))
 
-    return c, getattr(gain, "text", None) or getattr(gain, "__name__", "callable")
+    return c, str(getattr(gain, "text", None) or getattr(gain, "__name__", "callable"))
 
 
 class ExpressionGain:

@@ -1,5 +1,6 @@
 """Tune the gain c(t) (and δ) of a scenario for a deadline: :func:`tune`."""
 
+from .deadline import MonteCarloCheck, ScheduleTuneResult, tune_schedule
 from .family import BASELINE, PowerGain
 from .objective import (
     OBJECTIVES,
@@ -22,14 +23,17 @@ __all__ = [
     "ExactObjective",
     "ExpressionObjective",
     "Landscape",
+    "MonteCarloCheck",
     "MonteCarloObjective",
     "Objective",
     "PowerGain",
+    "ScheduleTuneResult",
     "Trace",
     "TuneResult",
     "delta_range",
     "objective_for",
     "search",
     "tune",
+    "tune_schedule",
     "tuned_scenario",
 ]

@@ -28,6 +28,7 @@ from ..schedule import ScheduleGain, analyse_schedule, join_tail
 from ..simulate import SimulationSpec, simulate
 from ..simulate.driver import AnyTopology, prepare_modes
 from ..simulate.spec import SaveAt, Stepping
+from ..timevarying import ExpressionTopology
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Curve, ExactObjective
 from .optimal import (
@@ -200,7 +201,12 @@ class ScheduleTuneResult:
         )
         sol = self.solution
         rows += [
-            ("c(0) … c(T)", f"{fmt(float(self.schedule.c[0]))} … {fmt(float(self.schedule.c[-1]))}", "", ""),
+            (
+                "c(0) … c(T)",
+                f"{fmt(float(self.schedule.c[0]))} … {fmt(float(self.schedule.c[-1]))}",
+                "",
+                "",
+            ),
             ("tail after T", self.schedule.tail, "", ""),
             (
                 "first-order optimality (projected gradient / J)",
@@ -216,8 +222,11 @@ class ScheduleTuneResult:
             ),
             (
                 f"--max-gain {fmt(sol.max_gain)}",
-                ("binds at t = " + ", ".join(fmt(t) for t in sol.binds[:6])
-                 + (" …" if len(sol.binds) > 6 else ""))
+                (
+                    "binds at t = "
+                    + ", ".join(fmt(t) for t in sol.binds[:6])
+                    + (" …" if len(sol.binds) > 6 else "")
+                )
                 if sol.binds
                 else "does not bind",
                 "",
@@ -260,7 +269,9 @@ class ScheduleTuneResult:
         prev = None
         for lv in self.solution.levels:
             change = "" if prev is None else f"{abs(lv.value - prev) / lv.value:.2e}"
-            rows.append((lv.pieces, fmt(lv.value), change, lv.evaluations, lv.steps, f"{lv.seconds:.1f}"))
+            rows.append(
+                (lv.pieces, fmt(lv.value), change, lv.evaluations, lv.steps, f"{lv.seconds:.1f}")
+            )
             prev = lv.value
         word = "settled" if self.solution.converged else "did not settle"
         return Table.build(
@@ -314,8 +325,13 @@ class ScheduleTuneResult:
             "require": self.require,
             "method": self.method,
             "refinement": [
-                {"pieces": lv.pieces, "value": lv.value, "evaluations": lv.evaluations,
-                 "rk4_steps": lv.steps, "seconds": lv.seconds}
+                {
+                    "pieces": lv.pieces,
+                    "value": lv.value,
+                    "evaluations": lv.evaluations,
+                    "rk4_steps": lv.steps,
+                    "seconds": lv.seconds,
+                }
                 for lv in sol.levels
             ],
             "refinement_settled": sol.converged,
@@ -324,8 +340,13 @@ class ScheduleTuneResult:
             "max_gain_binds_at": list(sol.binds),
             "max_peak": self.max_peak,
             "monte_carlo": {
-                k: {"mean": m.mean, "band99": [m.lo, m.hi], "exact": m.exact,
-                    "inside": m.inside, "paths": m.paths}
+                k: {
+                    "mean": m.mean,
+                    "band99": [m.lo, m.hi],
+                    "exact": m.exact,
+                    "inside": m.inside,
+                    "paths": m.paths,
+                }
                 for k, m in self.monte_carlo.items()
             },
             "theorems": self.gain_analysis.to_dict(),
@@ -493,6 +514,7 @@ def tune_schedule(
     if not isinstance(check_paths, int) or not 0 <= check_paths <= 100_000:
         raise InputError(f"check_paths: expected an integer in [0, 100000], got {check_paths!r}")
     check_schedule_scenario(topology, spec)
+    assert not isinstance(topology, ExpressionTopology)  # refused just above
     notes: list[str] = []
     say = progress or (lambda _m: None)
 

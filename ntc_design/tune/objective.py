@@ -24,6 +24,7 @@ import numpy as np
 
 from ..design import design_topology
 from ..errors import InputError
+from ..schedule import ScheduleGain
 from ..simulate import SimulationSpec, simulate
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
 from ..simulate.driver import AnyTopology, PreparedModes, prepare_modes
@@ -32,6 +33,10 @@ from ..simulate.spec import SaveAt
 from ..simulate.system import mode_system
 from ..timevarying import ExpressionTopology
 from .family import PowerGain
+
+#: A gain the objectives evaluate: a power law or a tabulated schedule (both give c(t),
+#: ``text`` and ``integrals``).
+AnyGain = PowerGain | ScheduleGain
 
 #: RK4's c·h·ρ while searching (accuracy about 1e-6 relative on the paper's networks,
 #: against 0.2 for the reported numbers).
@@ -124,7 +129,7 @@ class Objective:
         self.topology, self.spec, self.horizon = topology, spec, float(horizon)
         self.skipped: dict[str, str] = {}  # gain text -> why it scored +∞
 
-    def value(self, gain: PowerGain, delta: float | None = None) -> float:
+    def value(self, gain: AnyGain, delta: float | None = None) -> float:
         """E Σ‖x_i(T) − θ‖² under ``gain`` (and δ), +∞ for a candidate out of reach.
 
         Parameters
@@ -150,7 +155,7 @@ class Objective:
         return v
 
     def curve(
-        self, gain: PowerGain, delta: float | None = None, points: int = 401, accurate: bool = True
+        self, gain: AnyGain, delta: float | None = None, points: int = 401, accurate: bool = True
     ) -> Curve:
         """E Σ‖x_i − θ‖² at ``points`` equally spaced times of [0, T].
 
@@ -171,7 +176,7 @@ class Objective:
         """
         return self._curve(gain, delta, points, accurate)
 
-    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
+    def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         raise NotImplementedError
 
     def describe(self) -> str:
@@ -229,7 +234,7 @@ class ExactObjective(Objective):
             self._prepared[delta] = (pm, float(rho[:, 0].max()), float(rho[:, 1].max()), rho_g)
         return self._prepared[delta]
 
-    def plan(self, gain: PowerGain, delta: float | None, accurate: bool) -> tuple[str, float]:
+    def plan(self, gain: AnyGain, delta: float | None, accurate: bool) -> tuple[str, float]:
         """The cheaper integrator for a candidate and its step count: classical RK4
         (c·h·ρ <= κ: ∫ c (ρ_L + c ρ_Q) dt / κ steps) or Crank–Nicolson (∫ c dt / ds +
         ρ_G ∫ c² dt / κ_G steps, each a few times dearer), from the gain's closed-form
@@ -255,7 +260,7 @@ class ExactObjective(Objective):
         cay = i1 / (CAYLEY_DS_ACCURATE if accurate else CAYLEY_DS) + rho_g * i2 / KAPPA_NOISE
         return ("cayley", cay) if rk4 > CAYLEY_COST * cay else ("rk4", rk4)
 
-    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
+    def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         scheme, steps = self.plan(gain, delta, accurate)
         if steps > MAX_STEPS * (5 if accurate else 1):
             raise InputError(
@@ -328,7 +333,7 @@ class ExpressionObjective(Objective):
             self._radius = generator_radius(mode_system(des, self.spec.noise, "t=0"))
         return self._radius
 
-    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
+    def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         if delta is not None:
             raise InputError("--tune-delta: a topology given as expressions of t takes δ(t)")
         rho_l, rho_q = self.radius()
@@ -368,7 +373,7 @@ class MonteCarloObjective(Objective):
             "numbers): the optimum is statistical"
         )
 
-    def _curve(self, gain: PowerGain, delta: float | None, points: int, accurate: bool) -> Curve:
+    def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         t = np.linspace(0.0, self.horizon, points if accurate else 2)
         spec = self.spec.replace(
             T=self.horizon, gain=gain, method="mc", save=_save_at(t), delta=delta

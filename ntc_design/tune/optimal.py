@@ -130,7 +130,9 @@ class MomentOperators:
             e[i, j] = e[j, i] = 0.0
         ab = np.vstack([a1, a2])
         rho2 = _radius(a2)
-        return cls(ab, np.ascontiguousarray(ab.T), rhs.q[iu].copy(), 2 * system.spectral_radius, rho2)
+        return cls(
+            ab, np.ascontiguousarray(ab.T), rhs.q[iu].copy(), 2 * system.spectral_radius, rho2
+        )
 
     def radius(self, c: np.ndarray | float) -> np.ndarray | float:
         """A bound on ρ(c𝓐₁ + c²𝓐₂) (the step plan's)."""
@@ -267,9 +269,7 @@ class ScheduleProblem:
                 modes.append(np.full(m, mode))
                 ks.append(np.full(m, k))
                 hs.append(h)
-                th.append(
-                    np.stack([starts, starts + h / 2, starts + h], axis=1).__sub__(a) / width
-                )
+                th.append(np.stack([starts, starts + h / 2, starts + h], axis=1).__sub__(a) / width)
                 ends.append(edges[1:])
                 lo = hi
                 j += 1
@@ -314,9 +314,10 @@ class ScheduleProblem:
         """
         self.evaluations += 1
         cs = self._stage_gains(c, plan)
-        rad = np.array([op.rho1 for op in self.ops])[plan.mode] * cs.max(axis=1) + np.array(
-            [op.rho2 for op in self.ops]
-        )[plan.mode] * cs.max(axis=1) ** 2
+        rad = (
+            np.array([op.rho1 for op in self.ops])[plan.mode] * cs.max(axis=1)
+            + np.array([op.rho2 for op in self.ops])[plan.mode] * cs.max(axis=1) ** 2
+        )
         if np.any(plan.h * rad > STABLE):
             return None
         ns = self.ns
@@ -550,7 +551,9 @@ def _solve_level(
         plan = new
     st = prob.forward(np.exp(u), plan)
     if st is None:
-        raise InputError("--schedule optimal: the optimum left RK4's stable range (lower --max-gain)")
+        raise InputError(
+            "--schedule optimal: the optimum left RK4's stable range (lower --max-gain)"
+        )
     cval = np.exp(u)
     grad = prob.adjoint(cval, plan, st) * cval
     return u, st[0], grad, plan, message
@@ -607,6 +610,7 @@ def optimise_schedule(
         if u is None:
             c0 = np.asarray(start(nodes), dtype=float)
         else:
+            assert prev_t is not None
             c0 = np.interp(nodes, prev_t, np.exp(u))
         ev0 = prob.evaluations
         u, value, grad, plan, message = _solve_level(
@@ -715,11 +719,21 @@ def fit_power(
         return st[0] / scale, dc @ g / scale
 
     x0 = np.array([math.log(start.a), math.log(start.b), start.gamma])
-    box = [(math.log(a_range[0]), math.log(a_range[1])), (math.log(b_range[0]), math.log(b_range[1])), gamma]
+    box = [
+        (math.log(a_range[0]), math.log(a_range[1])),
+        (math.log(b_range[0]), math.log(b_range[1])),
+        gamma,
+    ]
     best = x0
     for _ in range(3):  # re-plan once the optimum moved
-        r = minimize(fun, best, jac=True, method="L-BFGS-B", bounds=box,
-                     options={"maxiter": 200, "ftol": 1e-12, "gtol": 1e-9})
+        r = minimize(
+            fun,
+            best,
+            jac=True,
+            method="L-BFGS-B",
+            bounds=box,
+            options={"maxiter": 200, "ftol": 1e-12, "gtol": 1e-9},
+        )
         if r.fun < fun(best)[0]:
             best = r.x
         new = prob.plan(gain(best))

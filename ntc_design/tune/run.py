@@ -31,9 +31,9 @@ from ..simulate.driver import AnyTopology
 from ..simulate.spec import MonteCarlo, SaveAt, Stepping
 from ..timevarying import ExpressionTopology
 from .deadline import CHECK_PATHS, tune_schedule
-from .optimal import DEFAULT_MAX_GAIN
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Objective, objective_for
+from .optimal import DEFAULT_MAX_GAIN
 from .result import Landscape, TuneResult
 from .search import Dimension, search
 
@@ -408,7 +408,7 @@ def _certify(
 
 
 def tuned_scenario(
-    document: Mapping[str, Any], source: str | Path, out: str | Path, result: TuneResult
+    document: Mapping[str, Any], source: str | Path, out: str | Path, result: Any
 ) -> dict[str, Any]:
     """The scenario document with the tuned gain (and δ) and T = the horizon, its
     topology path made relative to the folder it will be written in.
