@@ -61,7 +61,9 @@ def test_schedule_values_between_and_after_the_table():
     step = ScheduleGain([0, 1, 3], [2.0, 1.0, 0.5], "previous", tail="2/(1 + t)")
     assert step(np.array([0.5, 1.0, 2.9])).tolist() == [2.0, 1.0, 1.0]
     i1, i2 = g.integrals(3.0)  # trapezoids of a linear table, exact
-    assert i1 == pytest.approx(1.5 + 1.5) and i2 == pytest.approx((4 + 2 + 1) / 3 + 2 * (1 + 0.5 + 0.25) / 3)
+    assert i1 == pytest.approx(1.5 + 1.5) and i2 == pytest.approx(
+        (4 + 2 + 1) / 3 + 2 * (1 + 0.5 + 0.25) / 3
+    )
 
 
 @pytest.mark.hostile
@@ -291,7 +293,11 @@ def test_certificate_with_a_schedule_verifies_and_forgeries_fail(g1):
     doc = json.loads(json.dumps(res.certificate))
     assert doc["gain"]["c"] == [1.5, 1.6, 0.05]
     assert verify(doc).valid
-    for field, value in [("c", [1.5, -1.6, 0.05]), ("t", [0, 10, 2.5]), ("tail", "0.7*(1+t)^(-0.4)")]:
+    for field, value in [
+        ("c", [1.5, -1.6, 0.05]),
+        ("t", [0, 10, 2.5]),
+        ("tail", "0.7*(1+t)^(-0.4)"),
+    ]:
         forged = json.loads(json.dumps(doc))
         forged["gain"][field] = value
         if field == "tail":
@@ -329,8 +335,11 @@ def test_schedule_checks_refuse_a_malformed_field():
 def test_cli_bad_schedule_options_give_one_line(extra, needle, tmp_path, capsys, monkeypatch):
     sc = tmp_path / "sc.yaml"
     sc.write_text(
-        "topology: " + str(nd.__file__ and __import__("pathlib").Path("examples/g1.yaml").resolve())
-        + "\ntheta: [1, 2, -1]\nnoise: {sigma: 0.4, f: 0.3}\ninitial: [" + ", ".join(map(str, X0)) + "]\n",
+        "topology: "
+        + str(nd.__file__ and __import__("pathlib").Path("examples/g1.yaml").resolve())
+        + "\ntheta: [1, 2, -1]\nnoise: {sigma: 0.4, f: 0.3}\ninitial: ["
+        + ", ".join(map(str, X0))
+        + "]\n",
         encoding="utf-8",
     )
     out = tmp_path / "out"
@@ -371,14 +380,27 @@ def test_cli_schedule_end_to_end_writes_a_runnable_folder(tmp_path, capsys, monk
     )
     out = tmp_path / "out"
     code, text, err = run_cli(
-        ["tune", sc, "--horizon", "1.5", "--schedule", "optimal", "--check-paths", "0",
-         "--out", out, "--json"],
+        [
+            "tune",
+            sc,
+            "--horizon",
+            "1.5",
+            "--schedule",
+            "optimal",
+            "--check-paths",
+            "0",
+            "--out",
+            out,
+            "--json",
+        ],
         capsys,
         monkeypatch,
     )
     assert code == 0, err
     doc = json.loads(text)
-    assert doc["ms_error_T"]["optimal"] < doc["ms_error_T"]["power"] <= doc["ms_error_T"]["baseline"]
+    assert (
+        doc["ms_error_T"]["optimal"] < doc["ms_error_T"]["power"] <= doc["ms_error_T"]["baseline"]
+    )
     assert {"tuned.yaml", "schedule.csv", "tune.json", "certificate.json", "tune.html"} <= {
         p.name for p in out.iterdir()
     }
@@ -410,7 +432,10 @@ def test_power_tune_reports_its_peak(g1, spec):
     assert pk["tuned"]["value"] == pytest.approx(float(r.curves["tuned"].total.max()))
     assert 0 <= pk["tuned"]["t"] <= 2.0
     assert "ms_error_peak" in r.to_dict()
-    assert any("peak" in str(row[0].value if hasattr(row[0], "value") else row[0]) for row in r.table().rows)
+    assert any(
+        "peak" in str(row[0].value if hasattr(row[0], "value") else row[0])
+        for row in r.table().rows
+    )
 
 
 def test_power_law_polish_improves_the_coarse_search(problem):
