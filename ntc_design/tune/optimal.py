@@ -135,7 +135,17 @@ class MomentOperators:
         )
 
     def radius(self, c: np.ndarray | float) -> np.ndarray | float:
-        """A bound on ρ(c𝓐₁ + c²𝓐₂) (the step plan's)."""
+        """A bound on ρ(c𝓐₁ + c²𝓐₂) (the step plan's).
+
+        Parameters
+        ----------
+        c : float or numpy.ndarray
+            The gain.
+
+        Returns
+        -------
+        float or numpy.ndarray
+        """
         return self.rho1 * c + self.rho2 * c * c
 
 
@@ -595,6 +605,12 @@ def optimise_schedule(
     Returns
     -------
     ScheduleSolution
+
+    Raises
+    ------
+    InputError
+        A plan too large for the adjoint's memory, or an optimum outside RK4's stable
+        range.
     """
     lo, hi = math.log(C_MIN), math.log(max_gain)
     t_end = prob.horizon
