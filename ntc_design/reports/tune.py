@@ -6,7 +6,10 @@ the certificate), written as ``tune.html`` with the figures in the one style."""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -17,9 +20,8 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from ..certify import write_certificate
 from ..files import ScenarioData, jsonable
 from ..outputs import output_folder
-from ..rows import fmt
-from ..schedule import ScheduleGain
-from ..tune import PowerGain, ScheduleTuneResult, TuneResult, tuned_scenario
+from ..rows import Table, fmt
+from ..tune import ScheduleTuneResult, TuneResult, tuned_scenario
 from . import style
 from .html import figure_block, html_table, render, write_html
 
@@ -69,7 +71,6 @@ def schedule_gains_figure(result: ScheduleTuneResult):
     with style.paper_style():
         fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.4), layout="constrained")
         for key, g in result.gains.items():
-            assert isinstance(g, (PowerGain, ScheduleGain))
             i, ls, label = _STYLES[key]
             colour = style.PALETTE[i]
             name = f"{label}: {g.text}" if key == "power" else label
@@ -271,13 +272,13 @@ def write_tune_outputs(
     sched = isinstance(result, ScheduleTuneResult)
     files = (
         ["tuned.yaml"]
-        + (["schedule.csv"] if sched else [])
+        + ([ScheduleTuneResult.SCHEDULE_FILE] if sched else [])
         + ["tune.json"]
         + (["certificate.json"] if result.certificate else [])
     )
     with output_folder(out_dir, TUNE_FILES) as tmp:
         if isinstance(result, ScheduleTuneResult):
-            (tmp / "schedule.csv").write_text(result.schedule.csv_text(), encoding="utf-8")
+            (tmp / result.SCHEDULE_FILE).write_text(result.schedule.csv_text(), encoding="utf-8")
         new = tuned_scenario(scenario.document, scenario.source, out_dir, result)
         header = f"# {new.pop('description')}\n"
         (tmp / "tuned.yaml").write_text(
@@ -287,80 +288,63 @@ def write_tune_outputs(
         (tmp / "tune.json").write_text(text + "\n", encoding="utf-8")
         if result.certificate is not None:
             write_certificate(result.certificate.certificate, tmp / "certificate.json")
-        if isinstance(result, ScheduleTuneResult):
-            write_schedule_report(result, tmp, scenario.source, files)
-        else:
-            write_tune_report(result, tmp, scenario.source, files)
+        write_tune_report(result, tmp, scenario.source, files)
 
 
-def write_schedule_report(
-    result: ScheduleTuneResult, out_dir: str | Path, scenario: str, files: list[str]
-) -> Path:
-    """Write ``tune.html`` of an optimal schedule: the evidence table, c(t) of the three
-    gains, their error curves with the peaks, the refinement table, the theorem conditions
-    and the certificate.
+@dataclass(frozen=True)
+class Section:
+    """One heading of ``tune.html``: a figure (made by ``figure`` from the result, with its
+    caption) or tables."""
 
-    Parameters
-    ----------
-    result : ScheduleTuneResult
-        The tuning.
-    out_dir : str or Path
-        The folder (it exists).
-    scenario : str
-        The scenario's name, shown in the page.
-    files : list of str
-        The other files written there, linked from the page.
+    id: str
+    title: str
+    figure: Callable | None = None
+    caption: str = ""
+    tables: Callable[[Any], list[Table]] | None = None
 
-    Returns
-    -------
-    Path
-        The HTML page.
-    """
-    base = Path(out_dir)
 
-    def block(fig, key: str, caption: str):
-        saved = style.save(fig, base / "figures" / f"tune_{key}")
-        return figure_block(saved, f"fig-{key}", caption, base, style.ONE_COLUMN)
-
-    cert = [html_table(t) for t in result.certificate.tables()] if result.certificate else []
-    toc = [
-        {"id": "evidence", "title": "Three gains at the deadline"},
-        {"id": "gains", "title": "The gains c(t)"},
-        {"id": "curves", "title": "Mean-square error over time"},
-        {"id": "refinement", "title": "Refinement"},
-        {"id": "theorems", "title": "Theorem conditions"},
-    ]
-    if cert:
-        toc.append({"id": "certificate", "title": "Certificate"})
-    page = render(
-        "tune_schedule.html",
-        title=f"Best gain schedule for T = {fmt(result.horizon)}",
-        scenario=scenario,
-        horizon=fmt(result.horizon),
-        method=result.method,
-        files=files,
-        summary=html_table(result.table()),
-        gains=block(schedule_gains_figure(result), "gains", SCHEDULE_GAINS_CAPTION),
-        curves=block(schedule_curves_figure(result), "curves", SCHEDULE_CURVES_CAPTION),
-        refinement=html_table(result.refinement_table()),
-        gain=html_table(result.gain_analysis.table()),
-        certificate=cert,
-        toc=toc,
-        interactive=False,
-    )
-    path = base / "tune.html"
-    write_html(path, page)
-    return path
+#: The page of each result, in order: adding a figure is one entry here.
+POWER_SECTIONS = (
+    Section("tuned", "Tuned gain", tables=lambda r: [r.table()]),
+    Section("curves", "Mean-square error over time", curves_figure, CURVE_CAPTION),
+    Section("landscape", "Objective over (a, γ)", landscape_figure, LANDSCAPE_CAPTION),
+    Section(
+        "theorems",
+        "Theorem conditions of the tuned gain",
+        tables=lambda r: [r.gain_analysis.table()],
+    ),
+    Section(
+        "certificate", "Certificate of the tuned design", tables=lambda r: r.certificate.tables()
+    ),
+)
+SCHEDULE_SECTIONS = (
+    Section("evidence", "Three gains at the deadline", tables=lambda r: [r.table()]),
+    Section("gains", "The gains c(t)", schedule_gains_figure, SCHEDULE_GAINS_CAPTION),
+    Section(
+        "curves", "Mean-square error over time", schedule_curves_figure, SCHEDULE_CURVES_CAPTION
+    ),
+    Section("refinement", "Refinement of the schedule", tables=lambda r: [r.refinement_table()]),
+    Section(
+        "theorems", "Theorem conditions of the schedule", tables=lambda r: [r.gain_analysis.table()]
+    ),
+    Section(
+        "certificate",
+        "Certificate of the design with the schedule",
+        tables=lambda r: r.certificate.tables(),
+    ),
+)
 
 
 def write_tune_report(
-    result: TuneResult, out_dir: str | Path, scenario: str, files: list[str]
+    result: TuneResult | ScheduleTuneResult, out_dir: str | Path, scenario: str, files: list[str]
 ) -> Path:
-    """Write ``tune.html`` and its figures (``figures/tune_*.png|svg|pdf``) into ``out_dir``.
+    """Write ``tune.html`` and its figures (``figures/tune_*.png|svg|pdf``) into ``out_dir``:
+    the result's sections (:data:`POWER_SECTIONS` or :data:`SCHEDULE_SECTIONS`), those
+    with nothing to show left out (no contour map, no certificate).
 
     Parameters
     ----------
-    result : TuneResult
+    result : TuneResult or ScheduleTuneResult
         The tuning.
     out_dir : str or Path
         The folder (it exists).
@@ -375,38 +359,39 @@ def write_tune_report(
         The HTML page.
     """
     base = Path(out_dir)
-
-    def block(fig, key: str, caption: str):
-        saved = style.save(fig, base / "figures" / f"tune_{key}")
-        return figure_block(saved, f"fig-{key}", caption, base, style.ONE_COLUMN)
-
-    curves = block(curves_figure(result), "curves", CURVE_CAPTION)
-    land = None
-    if result.landscape is not None:
-        land = block(landscape_figure(result), "landscape", LANDSCAPE_CAPTION)
-    cert = [html_table(t) for t in result.certificate.tables()] if result.certificate else []
-    toc = [
-        {"id": "tuned", "title": "Tuned gain"},
-        {"id": "curves", "title": "Mean-square error over time"},
-    ]
-    if land is not None:
-        toc.append({"id": "landscape", "title": "Objective over (a, γ)"})
-    toc.append({"id": "theorems", "title": "Theorem conditions"})
-    if cert:
-        toc.append({"id": "certificate", "title": "Certificate"})
+    optimal = isinstance(result, ScheduleTuneResult)
+    shown = []
+    for sec in SCHEDULE_SECTIONS if optimal else POWER_SECTIONS:
+        if sec.id == "certificate" and result.certificate is None:
+            continue
+        if sec.id == "landscape" and getattr(result, "landscape", None) is None:
+            continue
+        block = None
+        if sec.figure is not None:
+            saved = style.save(sec.figure(result), base / "figures" / f"tune_{sec.id}")
+            block = figure_block(saved, f"fig-{sec.id}", sec.caption, base, style.ONE_COLUMN)
+        tables = [html_table(t) for t in sec.tables(result)] if sec.tables else []
+        shown.append({"id": sec.id, "title": sec.title, "figure": block, "tables": tables})
+    intro = (
+        "the gain schedule c(t) on [0, T] that minimises E Σ_i ‖x_i(T) − θ‖² at T = "
+        f"{fmt(result.horizon)} ({result.method}), continued after T by an admissible tail, "
+        "beside the best power law a·(b + t)^(−γ) and 1/(1 + t)."
+        if optimal
+        else "the gain family a·(b + t)^(−γ), tuned to minimise E Σ_i ‖x_i(T) − θ‖² at T = "
+        f"{fmt(result.horizon)} ({result.method})."
+    )
     page = render(
         "tune.html",
-        title=f"Gain tuned for T = {fmt(result.horizon)}",
+        title=(
+            f"Best gain schedule for T = {fmt(result.horizon)}"
+            if optimal
+            else f"Gain tuned for T = {fmt(result.horizon)}"
+        ),
         scenario=scenario,
-        horizon=fmt(result.horizon),
-        method=result.method,
+        intro=intro,
         files=files,
-        summary=html_table(result.table()),
-        curves=curves,
-        landscape=land,
-        gain=html_table(result.gain_analysis.table()),
-        certificate=cert,
-        toc=toc,
+        sections=shown,
+        toc=[{"id": s["id"], "title": s["title"]} for s in shown],
         interactive=False,
     )
     path = base / "tune.html"

@@ -1,6 +1,7 @@
 """Tune the gain c(t) (and δ) of a scenario for a deadline: :func:`tune`."""
 
 from .deadline import MonteCarloCheck, ScheduleTuneResult, tune_schedule
+from .entry import tune, tuned_scenario
 from .family import BASELINE, PowerGain
 from .objective import (
     OBJECTIVES,
@@ -12,7 +13,7 @@ from .objective import (
     objective_for,
 )
 from .result import Landscape, TuneResult
-from .run import delta_range, tune, tuned_scenario
+from .run import delta_range, tune_power
 from .search import Dimension, Trace, search
 
 __all__ = [
@@ -34,6 +35,7 @@ __all__ = [
     "objective_for",
     "search",
     "tune",
+    "tune_power",
     "tune_schedule",
     "tuned_scenario",
 ]

@@ -1,7 +1,7 @@
 """``tune(..., schedule="optimal")``: the best gain schedule for a deadline, with the
 evidence a user needs to trust it.
 
-Steps: the best power law a·(b + t)^(−γ) (:func:`.run.tune`, which the schedule starts
+Steps: the best power law a·(b + t)^(−γ) (:func:`.run.tune_power`, polished by exact gradients; the schedule starts
 from and is compared with); the optimal schedule (:mod:`.optimal`); the schedule written
 as a :class:`~ntc_design.schedule.ScheduleGain` whose tail a·(1 + t)^(−1) meets it at T,
 so Theorems 1 and 2 hold; every number re-evaluated independently by the tuner's exact
@@ -26,11 +26,12 @@ from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..rows import Table, fmt, verdict
 from ..schedule import ScheduleGain, analyse_schedule, join_tail
 from ..simulate import SimulationSpec, simulate
-from ..simulate.driver import AnyTopology, prepare_modes
-from ..simulate.spec import SaveAt, Stepping
-from ..timevarying import ExpressionTopology
+from ..simulate.driver import AnyTopology
+from ..simulate.result import Z95
+from ..simulate.spec import SaveAt
+from .evidence import certify_tuned, checked_spec, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
-from .objective import Curve, ExactObjective
+from .objective import AnyGain, Curve, ExactObjective
 from .optimal import (
     DEFAULT_MAX_GAIN,
     LEVELS,
@@ -39,14 +40,15 @@ from .optimal import (
     fit_power,
     optimise_schedule,
 )
+from .run import delta_range, tune_power
 
 #: The coarse power-law search's budget before the gradient polish.
 POWER_EVALUATIONS = 40
-
+#: Pieces of the schedule that scores each δ of the δ search (``tune_delta``).
+DELTA_PIECES = 10
 #: Monte Carlo paths of the evidence (0: none); z of the 99 % band.
 CHECK_PATHS = 200
 Z99 = 2.5758293035489004
-Z95 = 1.959963984540054
 #: Relative gap between the optimiser's value and the independent re-evaluation above
 #: which the result says so.
 AGREE_RTOL = 1e-3
@@ -80,7 +82,9 @@ class ScheduleTuneResult:
     power, baseline : PowerGain
         The best a·(b + t)^(−γ) and 1/(1 + t).
     delta : float or None
-        The common δ (``tune_delta``), else None (the scenario's).
+        The schedule's common δ (``tune_delta``), else None (the scenario's).
+    power_delta : float or None
+        The power law's common δ (``tune_delta``), else None.
     horizon : float
         T.
     require : str
@@ -112,6 +116,7 @@ class ScheduleTuneResult:
     power: PowerGain
     baseline: PowerGain
     delta: float | None
+    power_delta: float | None
     horizon: float
     require: str
     method: str
@@ -126,7 +131,8 @@ class ScheduleTuneResult:
     stepping: dict[str, str] = field(default_factory=dict)
     eps: float | None = None
 
-    statistical = False
+    #: The file the written scenario reads the schedule from.
+    SCHEDULE_FILE = "schedule.csv"
 
     @property
     def ms_error_T(self) -> dict[str, float]:  # noqa: N802 - T is the paper's horizon
@@ -139,7 +145,33 @@ class ScheduleTuneResult:
         return {k: c.peak for k, c in self.curves.items()}
 
     @property
-    def gains(self) -> dict[str, Callable]:
+    def time_to_eps(self) -> dict[str, float | None]:
+        """The first time each gain's curve reaches ε (None: not by T, or no ε)."""
+        return {
+            k: None if self.eps is None else c.first_below(self.eps) for k, c in self.curves.items()
+        }
+
+    @property
+    def headline(self) -> tuple[float, str]:
+        """E Σ‖x_i(T) − θ‖² of the schedule and how it was computed (the written
+        scenario's description)."""
+        return self.ms_error_T["optimal"], "optimal schedule, exact moments"
+
+    def scenario_gain(self) -> dict[str, str]:
+        """The written scenario's ``gain``: the schedule file and its tail.
+
+        Returns
+        -------
+        dict
+        """
+        return {
+            "schedule": self.SCHEDULE_FILE,
+            "tail": self.schedule.tail,
+            "interpolation": self.schedule.interpolation,
+        }
+
+    @property
+    def gains(self) -> dict[str, AnyGain]:
         """The three gains, by key."""
         return {"optimal": self.schedule, "power": self.power, "baseline": self.baseline}
 
@@ -199,6 +231,11 @@ class ScheduleTuneResult:
                 *(f"{fmt(pk[k]['value'])} (t = {fmt(pk[k]['t'])})" for k in keys),
             )
         )
+        if self.eps is not None:
+            te = self.time_to_eps
+            rows.append((f"first time ≤ ε = {fmt(self.eps)}", *(te[k] for k in keys)))
+        if self.delta is not None or self.power_delta is not None:
+            rows.append(("δ (tuned)", self.delta, self.power_delta, "scenario's"))
         sol = self.solution
         rows += [
             (
@@ -308,7 +345,8 @@ class ScheduleTuneResult:
         dict
             ``schedule`` ({t, c, interpolation, tail}), ``ms_error_T`` and
             ``ms_error_peak`` (optimal, power, baseline), ``power_gain``,
-            ``baseline_gain``, ``delta``, ``horizon``, ``refinement``, ``optimality``,
+            ``baseline_gain``, ``delta`` and ``power_delta``, ``horizon``, ``eps`` and
+            ``time_to_eps``, ``refinement``, ``optimality``,
             ``max_gain`` (and where it binds), ``max_peak``, ``monte_carlo``,
             ``theorems``, ``certificate_valid``, ``seconds``, ``notes``.
         """
@@ -321,7 +359,10 @@ class ScheduleTuneResult:
             "power_gain": self.power.text,
             "baseline_gain": self.baseline.text,
             "delta": self.delta,
+            "power_delta": self.power_delta,
             "horizon": self.horizon,
+            "eps": self.eps,
+            "time_to_eps": self.time_to_eps,
             "require": self.require,
             "method": self.method,
             "refinement": [
@@ -392,40 +433,32 @@ def _monte_carlo(
     topology: AnyTopology,
     spec: SimulationSpec,
     horizon: float,
-    gains: dict[str, Callable],
-    delta: float | None,
+    gains: dict[str, tuple[AnyGain, float | None]],
     exact: dict[str, float],
     paths: int,
     notes: list[str],
 ) -> dict[str, MonteCarloCheck]:
-    """The three gains by Monte Carlo, the same seed (so the same Brownian increments)
-    for each."""
+    """The gains (each with its δ) by Monte Carlo, the scenario's seed for each, so the
+    same Brownian increments (common random numbers); the drift-implicit scheme where the
+    explicit one is unstable (:func:`.evidence.checked_spec`)."""
     out: dict[str, MonteCarloCheck] = {}
     base = spec.replace(
         T=horizon,
         method="mc",
-        delta=delta if delta is not None else spec.delta,
         save=SaveAt(times=np.array([0.0, horizon])),
         mc=replace(spec.mc, paths=paths, store_paths=0),
     )
-    for key, g in gains.items():
-        run_spec = base.replace(gain=g)
-        try:
-            res = simulate(topology, spec=run_spec)
-        except InputError as exc:
-            if "unstable" not in str(exc):
-                raise
-            res = simulate(
-                topology,
-                spec=run_spec.replace(
-                    stepping=Stepping(kind="intrinsic", dt=spec.stepping.dt, scheme="implicit")
-                ),
-            )
+    for key, (g, delta) in gains.items():
+        run_spec, why = checked_spec(
+            topology, base.replace(gain=g, delta=delta if delta is not None else spec.delta)
+        )
+        if why is not None:
             notes.append(f"Monte Carlo of {key}: the drift-implicit scheme (explicit unstable)")
-        mc = res.mc
+        mc = simulate(topology, spec=run_spec).mc
         assert mc is not None
         mean = float(mc.mean[-1].sum())
-        half = float(np.sum(mc.hi[-1] - mc.lo[-1]) / 2) * Z99 / Z95
+        # the sum's standard error is at most the agents' added: a conservative band
+        half = float(np.sum(mc.hi[-1] - mc.mean[-1])) * Z99 / Z95
         out[key] = MonteCarloCheck(mean, mean - half, mean + half, exact[key], mc.count)
     return out
 
@@ -439,11 +472,38 @@ def _polish(
 ) -> PowerGain:
     """The coarse search's power law polished by exact gradients (:func:`.optimal.fit_power`),
     rounded as written; the better of the two by the independent objective."""
-    g_lo, g_hi = gamma_range(require)
-    polished = fit_power(prob, found, (g_lo, g_hi), A_RANGE, B_RANGE).rounded()
+    polished = fit_power(prob, found, gamma_range(require), A_RANGE, B_RANGE).rounded()
     if obj.value(polished, delta) <= obj.value(found, delta):
         return polished
     return found
+
+
+def _schedule_delta(
+    obj: ExactObjective,
+    topology: AnyTopology,
+    theta,
+    start: PowerGain,
+    max_gain: float,
+    max_peak: float | None,
+) -> float:
+    """The common δ for the schedule: bounded Brent search of log δ over
+    :func:`.run.delta_range`, each δ scored by the optimal schedule on ``DELTA_PIECES``
+    pieces; δ written to 4 significant digits."""
+    from scipy.optimize import minimize_scalar
+
+    lo, hi, _ = delta_range(topology, theta)
+
+    def score(log_delta: float) -> float:
+        prob = ScheduleProblem(obj.prepared(math.exp(log_delta))[0], obj.horizon)
+        sol = optimise_schedule(
+            prob, start, max_gain=max_gain, max_peak=max_peak, levels=(DELTA_PIECES,)
+        )
+        return sol.value
+
+    r = minimize_scalar(
+        score, bounds=(math.log(lo), math.log(hi)), method="bounded", options={"xatol": 1e-3}
+    )
+    return float(f"{math.exp(r.x):.4g}")
 
 
 def tune_schedule(
@@ -475,9 +535,10 @@ def tune_schedule(
     require : {"both", "mean-square"}, optional
         The theorems the power law must satisfy (the schedule's tail satisfies both).
     tune_delta : bool, optional
-        Also choose δ (the power law's tuned δ is used for the schedule).
+        Also choose δ: the power law's with its search, the schedule's by a bounded
+        search of log δ scored by the schedule optimised on ``DELTA_PIECES`` pieces.
     eps : float, optional
-        Kept for the report (the first time each curve reaches ε).
+        Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.
     max_gain : float, optional
         Upper bound on c(t).
     max_peak : float, optional
@@ -500,8 +561,6 @@ def tune_schedule(
     InputError
         A bad horizon, bound or scenario (see :func:`check_schedule_scenario`).
     """
-    from .run import _certify, _stable_stepping, tune
-
     t0 = time.perf_counter()
     require_positive("horizon", horizon)
     if not math.isfinite(float(horizon)):
@@ -511,25 +570,24 @@ def tune_schedule(
         raise InputError(f"--max-gain: expected a number in (0, 1e6], got {max_gain!r}")
     if max_peak is not None:
         require_positive("--max-peak", max_peak)
+    if eps is not None:
+        require_positive("eps", eps)
     if not isinstance(check_paths, int) or not 0 <= check_paths <= 100_000:
         raise InputError(f"check_paths: expected an integer in [0, 100000], got {check_paths!r}")
     check_schedule_scenario(topology, spec)
-    assert not isinstance(topology, ExpressionTopology)  # refused just above
+    ScheduleProblem.check_size(topology.n * topology.dim)
     notes: list[str] = []
     say = progress or (lambda _m: None)
-
-    exact_spec = spec.replace(T=float(horizon), method="exact")
-    pm = prepare_modes(topology, exact_spec, lambda t: np.ones(np.shape(t)))
-    initial = float(pm.eps0 @ pm.eps0)
+    obj = ExactObjective(topology, spec, horizon)
+    initial = float(obj.prepared(None)[0].eps0 @ obj.prepared(None)[0].eps0)
     if max_peak is not None and not max_peak > initial:
         raise InputError(
             f"--max-peak: {max_peak:g} is not above the initial error E Σ‖x_i(0) − θ‖² = "
             f"{initial:.6g}; no gain can keep below it"
         )
-    ScheduleProblem.check_size(pm.n * pm.d)
 
     say("the best power law a·(b + t)^(−γ)")
-    pw = tune(
+    pw = tune_power(
         topology,
         spec,
         horizon,
@@ -539,13 +597,14 @@ def tune_schedule(
         landscape=False,
         certificate=False,
     )
+    power = _polish(
+        ScheduleProblem(obj.prepared(pw.delta)[0], horizon), pw.tuned, require, obj, pw.delta
+    )
     delta = pw.delta
-    if delta is not None:
-        pm = prepare_modes(
-            topology, exact_spec.replace(delta=delta), lambda t: np.ones(np.shape(t))
-        )
-    prob = ScheduleProblem(pm, horizon)
-    power = _polish(prob, pw.tuned, require, obj := ExactObjective(topology, spec, horizon), delta)
+    if tune_delta:
+        say("δ for the schedule")
+        delta = _schedule_delta(obj, topology, spec.theta, power, max_gain, max_peak)
+    prob = ScheduleProblem(obj.prepared(delta)[0], horizon)
     say("the optimal schedule")
     sol = optimise_schedule(
         prob, power, max_gain=max_gain, max_peak=max_peak, levels=levels, progress=say
@@ -564,11 +623,12 @@ def tune_schedule(
     schedule = ScheduleGain(sol.t, sol.c, "linear", join_tail(float(horizon), float(sol.c[-1])))
 
     say("independent re-evaluation of the three gains")
-    curves = {
-        "optimal": obj.curve(schedule, delta, points=401),
-        "power": obj.curve(power, delta, points=401),
-        "baseline": obj.curve(BASELINE, None, points=401),
+    gains: dict[str, tuple[AnyGain, float | None]] = {
+        "optimal": (schedule, delta),
+        "power": (power, pw.delta),
+        "baseline": (BASELINE, None),
     }
+    curves = {k: obj.curve(g, d, points=401) for k, (g, d) in gains.items()}
     gap = abs(sol.value - curves["optimal"].final) / curves["optimal"].final
     if gap > AGREE_RTOL:
         notes.append(
@@ -578,26 +638,15 @@ def tune_schedule(
     mc: dict[str, MonteCarloCheck] = {}
     if check_paths:
         say(f"Monte Carlo of the three gains ({check_paths} paths, common random numbers)")
-        gains: dict[str, Callable] = {"optimal": schedule, "power": power, "baseline": BASELINE}
-        mc = _monte_carlo(
-            topology,
-            spec,
-            horizon,
-            gains,
-            delta,
-            {k: c.final for k, c in curves.items()},
-            check_paths,
-            notes,
-        )
+        exact = {k: c.final for k, c in curves.items()}
+        mc = _monte_carlo(topology, spec, horizon, gains, exact, check_paths, notes)
         missed = [k for k, m in mc.items() if not m.inside]
         if missed:
             notes.append(
                 "Monte Carlo misses the exact value for " + ", ".join(missed) + " (Euler–"
                 "Maruyama bias at the scenario's dt, or a 1 % chance per gain)"
             )
-    analysis = analyse_schedule(schedule)
-    cert = _certify(topology, spec, schedule, delta, notes) if certificate else None
-    stepping = _stable_stepping(topology, spec, schedule, delta, horizon, [])
+    cert = certify_tuned(topology, spec, schedule, delta, notes) if certificate else None
     method = (
         "optimal control: piecewise-linear c on K pieces, exact second-moment equations "
         "by RK4 with their exact discrete adjoint, "
@@ -609,18 +658,19 @@ def tune_schedule(
         power=power,
         baseline=BASELINE,
         delta=delta,
+        power_delta=pw.delta,
         horizon=float(horizon),
         require=require,
         method=method,
         curves=curves,
         solution=sol,
         max_peak=max_peak,
-        gain_analysis=analysis,
+        gain_analysis=analyse_schedule(schedule),
         certificate=cert,
         monte_carlo=mc,
         seconds=time.perf_counter() - t0,
         notes=tuple(notes),
-        stepping=stepping,
+        stepping=stable_stepping(topology, spec, schedule, delta, horizon, []),
         eps=eps,
     )
 

@@ -55,6 +55,8 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
+from typing import Any
 
 import numpy as np
 
@@ -174,6 +176,7 @@ class Plan:
     theta: np.ndarray  # (steps, 3)
     t_end: np.ndarray  # step ends
     pieces: np.ndarray  # steps planned per node interval (the largest over its segments)
+    nodes: int  # K + 1
 
     @property
     def steps(self) -> int:
@@ -205,7 +208,22 @@ class ScheduleProblem:
         self.ns = self.s0.size
         self.segments = [(float(a), float(b), int(m)) for a, b, m in prepared.segments]
         self.initial = float(eps0 @ eps0)
+        self.rho = np.array([[op.rho1, op.rho2] for op in self.ops])  # (modes, 2)
         self.evaluations = 0
+
+    def node_times(self, pieces: int) -> np.ndarray:
+        """The K + 1 node times of K equal pieces of [0, T].
+
+        Parameters
+        ----------
+        pieces : int
+            K.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        return np.linspace(0.0, self.horizon, pieces + 1)
 
     @staticmethod
     def check_size(nd_: int) -> None:
@@ -251,7 +269,7 @@ class ScheduleProblem:
             More steps than the adjoint's memory allows.
         """
         kk = c.size - 1
-        nodes = np.linspace(0.0, self.horizon, kk + 1)
+        nodes = self.node_times(kk)
         modes, ks, hs, th, ends = [], [], [], [], []
         per = np.zeros(kk, dtype=np.int64)
         seg = self.segments
@@ -279,7 +297,7 @@ class ScheduleProblem:
                 modes.append(np.full(m, mode))
                 ks.append(np.full(m, k))
                 hs.append(h)
-                th.append(np.stack([starts, starts + h / 2, starts + h], axis=1).__sub__(a) / width)
+                th.append((np.stack([starts, starts + h / 2, starts + h], axis=1) - a) / width)
                 ends.append(edges[1:])
                 lo = hi
                 j += 1
@@ -290,6 +308,7 @@ class ScheduleProblem:
             np.clip(np.concatenate(th), 0.0, 1.0),
             np.concatenate(ends),
             per,
+            c.size,
         )
         need = plan.steps * 4 * self.ns * 8
         if need > MAX_STORE:
@@ -304,10 +323,9 @@ class ScheduleProblem:
         ck, ck1 = c[plan.k], c[plan.k + 1]
         return ck[:, None] * (1 - plan.theta) + ck1[:, None] * plan.theta
 
-    def forward(self, c: np.ndarray, plan: Plan, store: bool = True):
-        """Integrate; return (tr S(T), tr S at every step end, stored stage derivatives,
-        stage gains), or None when a step leaves RK4's stable range (h·ρ > ``STABLE``)
-        or the moments overflow.
+    def forward(self, c: np.ndarray, plan: Plan, store: bool = True) -> Forward | None:
+        """Integrate from S(0) = ε(0)ε(0)ᵀ; None when a step leaves RK4's stable range
+        (h·ρ > ``STABLE``: a trial point far from the plan) or the moments overflow.
 
         Parameters
         ----------
@@ -320,57 +338,49 @@ class ScheduleProblem:
 
         Returns
         -------
-        tuple or None
+        Forward or None
         """
         self.evaluations += 1
         cs = self._stage_gains(c, plan)
-        rad = (
-            np.array([op.rho1 for op in self.ops])[plan.mode] * cs.max(axis=1)
-            + np.array([op.rho2 for op in self.ops])[plan.mode] * cs.max(axis=1) ** 2
-        )
-        if np.any(plan.h * rad > STABLE):
+        top = cs.max(axis=1)
+        rho = self.rho[plan.mode]
+        if np.any(plan.h * (rho[:, 0] * top + rho[:, 1] * top * top) > STABLE):
             return None
         ns = self.ns
         s = self.s0.copy()
         traces = np.empty(plan.steps)
         g = np.empty((plan.steps, 4, ns)) if store else None
-        idx = (0, 1, 1, 2)
         with np.errstate(all="ignore"):
             for j in range(plan.steps):
                 op = self.ops[plan.mode[j]]
                 h = plan.h[j]
                 ks = []
                 y = s
-                for st in range(4):
-                    cc = cs[j, idx[st]]
+                for st, (col, frac) in enumerate(_STAGES):
+                    cc = cs[j, col]
                     z = op.ab @ y
                     zq = z[ns:] + op.q
                     ks.append(cc * z[:ns] + cc * cc * zq)
                     if g is not None:
                         g[j, st] = z[:ns] + 2 * cc * zq
-                    if st < 3:
-                        y = s + (h if st == 2 else h / 2) * ks[-1]
+                    y = s + (frac * h) * ks[-1]
                 s = s + (h / 6) * (ks[0] + 2 * ks[1] + 2 * ks[2] + ks[3])
                 traces[j] = s[self.diag].sum()
             if not np.all(np.isfinite(traces)) or traces.max() > BIG * max(self.initial, 1.0):
                 return None
-        return float(traces[-1]), traces, g, cs
+        return Forward(float(traces[-1]), traces, g, cs)
 
-    def adjoint(
-        self, c: np.ndarray, plan: Plan, stored, sources: np.ndarray | None = None
-    ) -> np.ndarray:
+    def adjoint(self, plan: Plan, fwd: Forward, sources: np.ndarray | None = None) -> np.ndarray:
         """The gradient, with respect to the node values, of Σ_j sources_j·tr S(t_j) over
         the step ends (default: tr S(T) alone), by the discrete adjoint of the forward
-        RK4 recursion.
+        RK4 recursion [1]_.
 
         Parameters
         ----------
-        c : numpy.ndarray
-            Node values.
         plan : Plan
             The steps.
-        stored : tuple
-            What :meth:`forward` returned.
+        fwd : Forward
+            What :meth:`forward` returned (with ``store=True``).
         sources : numpy.ndarray, optional
             Weights on the step-end traces.
 
@@ -379,7 +389,8 @@ class ScheduleProblem:
         numpy.ndarray
             ∂/∂c_k, k = 0 … K.
         """
-        _, _, g, cs = stored
+        g, cs = fwd.stages, fwd.gains
+        assert g is not None, "forward(..., store=True) keeps what the adjoint needs"
         ns = self.ns
         if sources is None:
             sources = np.zeros(plan.steps)
@@ -389,14 +400,14 @@ class ScheduleProblem:
         buf = np.empty(2 * ns)
         for j in range(plan.steps - 1, -1, -1):
             lam[self.diag] += sources[j]
-            op = self.ops[plan.mode[j]]
+            abt = self.ops[plan.mode[j]].abt
             h = plan.h[j]
             c1, c2, c4 = cs[j]
 
-            def bt(mu: np.ndarray, cc: float, op=op) -> np.ndarray:
+            def bt(mu: np.ndarray, cc: float, abt=abt) -> np.ndarray:  # Bᵀμ, B = c𝓐₁ + c²𝓐₂
                 buf[:ns] = cc * mu
                 buf[ns:] = cc * cc * mu
-                return op.abt @ buf
+                return abt @ buf
 
             mu4 = (h / 6) * lam
             a4 = bt(mu4, c4)
@@ -406,21 +417,34 @@ class ScheduleProblem:
             a2 = bt(mu2, c2)
             mu1 = (h / 6) * lam + (h / 2) * a2
             a1 = bt(mu1, c1)
-            grad_stage[j] = (
-                mu1 @ g[j, 0],
-                mu2 @ g[j, 1] + mu3 @ g[j, 2],
-                mu4 @ g[j, 3],
-            )
+            grad_stage[j] = (mu1 @ g[j, 0], mu2 @ g[j, 1] + mu3 @ g[j, 2], mu4 @ g[j, 3])
             lam = lam + a1 + a2 + a3 + a4
-        out = np.zeros(c.size)
+        out = np.zeros(plan.nodes)
         np.add.at(out, plan.k, np.sum(grad_stage * (1 - plan.theta), axis=1))
         np.add.at(out, plan.k + 1, np.sum(grad_stage * plan.theta, axis=1))
         return out
 
 
+#: RK4's stages: which of the step's three gains (t, t + h/2, t + h) each uses, and the
+#: fraction of h at which the next stage's input is taken.
+_STAGES = ((0, 0.5), (1, 0.5), (1, 1.0), (2, 0.0))
+
+
+@dataclass(frozen=True, eq=False)
+class Forward:
+    """One integration: tr S(T), tr S at every step end, ∂k/∂c of every RK4 stage (None
+    unless stored) and the stages' gains."""
+
+    value: float
+    traces: np.ndarray
+    stages: np.ndarray | None
+    gains: np.ndarray
+
+
 def ks_aggregate(traces: np.ndarray, bound: float) -> tuple[float, np.ndarray]:
-    """The Kreisselmeier–Steinhauser aggregate of tr S(t_j)/M over the step ends (and
-    t = 0's value is fixed, so not included) and its weights: KS >= max_j tr S(t_j)/M.
+    """The Kreisselmeier–Steinhauser aggregate of tr S(t_j)/M over the step ends (t = 0's
+    value is fixed, so not included) and its weights: KS >= max_j tr S(t_j)/M, and at
+    most log(steps)/``KS_RHO`` above it.
 
     Parameters
     ----------
@@ -439,6 +463,54 @@ def ks_aggregate(traces: np.ndarray, bound: float) -> tuple[float, np.ndarray]:
     e = np.exp(KS_RHO * (v - top))
     tot = float(e.sum())
     return top + math.log(tot) / KS_RHO, e / tot / bound
+
+
+class NodeLogs:
+    """The schedule's parameters: x_k = log c_k at the K + 1 nodes (bounds on c become
+    bounds on x; the chain rule is ∂J/∂x_k = c_k ∂J/∂c_k)."""
+
+    def nodes(self, x: np.ndarray) -> np.ndarray:
+        """The node values c for parameters x.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            log c.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        return np.exp(x)
+
+    def pullback(self, x: np.ndarray, c: np.ndarray, grad: np.ndarray) -> np.ndarray:
+        """∂J/∂x from ∂J/∂c.
+
+        Parameters
+        ----------
+        x, c, grad : numpy.ndarray
+            Parameters, node values and ∂J/∂c.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        return c * grad
+
+
+class PowerNodes(NodeLogs):
+    """A power law a·(b + t)^(−γ) sampled at the nodes ``t``: parameters (log a, log b, γ)."""
+
+    def __init__(self, t: np.ndarray) -> None:
+        self.t = t
+
+    def nodes(self, x: np.ndarray) -> np.ndarray:  # noqa: D102 - as the base
+        return np.exp(x[0]) * (np.exp(x[1]) + self.t) ** (-x[2])
+
+    def pullback(self, x: np.ndarray, c: np.ndarray, grad: np.ndarray) -> np.ndarray:  # noqa: D102
+        b = np.exp(x[1])
+        dc = np.stack([c, -x[2] * c * b / (b + self.t), -c * np.log(b + self.t)])
+        return dc @ grad
 
 
 @dataclass(frozen=True)
@@ -471,102 +543,129 @@ class ScheduleSolution:
     notes: tuple[str, ...] = field(default=())
 
 
-def _projected(u: np.ndarray, grad: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    pg = grad.copy()
-    tol = 1e-9
-    pg[(u <= lo + tol) & (grad > 0)] = 0.0
-    pg[(u >= hi - tol) & (grad < 0)] = 0.0
-    return pg
+@dataclass(frozen=True, eq=False)
+class Solved:
+    """What :func:`solve` found: parameters, node values, the plan and the integration at
+    the optimum, ∂J/∂x there and the optimiser's message."""
+
+    x: np.ndarray
+    c: np.ndarray
+    plan: Plan
+    fwd: Forward
+    grad: np.ndarray
+    message: str
 
 
-def _solve_level(
+def solve(
     prob: ScheduleProblem,
-    u0: np.ndarray,
-    lo: float,
-    hi: float,
-    max_peak: float | None,
-    kappa: float,
-) -> tuple[np.ndarray, float, np.ndarray, Plan, str]:
-    """Optimise the node log-gains on one level: L-BFGS-B (or SLSQP with a peak bound),
-    re-planned until the plan holds at the optimum."""
+    param: NodeLogs,
+    x0: np.ndarray,
+    bounds: Sequence[tuple[float, float]],
+    *,
+    max_peak: float | None = None,
+    kappa: float = KAPPA,
+) -> Solved:
+    """Minimise J over the parameters of ``param`` from ``x0``: L-BFGS-B (or SLSQP with
+    the peak bound M ≥ the KS aggregate), with the exact adjoint gradient; the step plan
+    is made from the start, kept while the optimiser runs (so J is smooth), and remade
+    and the run repeated until it holds at the optimum.
+
+    Parameters
+    ----------
+    prob : ScheduleProblem
+        The moment equations.
+    param : NodeLogs
+        How parameters map to node values.
+    x0 : numpy.ndarray
+        The start.
+    bounds : sequence of (float, float)
+        Per parameter.
+    max_peak : float, optional
+        M.
+    kappa : float, optional
+        RK4's h·ρ.
+
+    Returns
+    -------
+    Solved
+
+    Raises
+    ------
+    InputError
+        The optimum leaves RK4's stable range, or a plan too large for memory.
+    """
     from scipy.optimize import minimize
 
-    u = np.clip(u0, lo, hi)
+    lo = np.array([b[0] for b in bounds])
+    hi = np.array([b[1] for b in bounds])
+    x = np.clip(np.asarray(x0, dtype=float), lo, hi)
     scale = max(prob.initial, 1e-300)
+    plan = prob.plan(param.nodes(x), kappa)
+    peak = float(max_peak) if max_peak is not None else math.inf
     message = ""
-    plan = prob.plan(np.exp(u), kappa)
     for _ in range(4):
-        cache: dict[bytes, tuple] = {}
+        memo: dict[bytes, Forward | None] = {}
 
-        def run(x: np.ndarray, plan=plan, cache=cache):
-            key = x.tobytes()
-            if key not in cache:
-                if len(cache) > 8:
-                    cache.clear()
-                cache[key] = (prob.forward(np.exp(x), plan),)
-            return cache[key][0]
+        def run(z: np.ndarray, plan: Plan = plan, memo=memo) -> Forward | None:
+            key = z.tobytes()
+            if key not in memo:
+                if len(memo) > 8:
+                    memo.clear()
+                memo[key] = prob.forward(param.nodes(z), plan)
+            return memo[key]
 
-        def fun(x: np.ndarray, plan=plan) -> tuple[float, np.ndarray]:
-            st = run(x)
-            if st is None:
-                return BIG, np.zeros_like(x)
-            cval = np.exp(x)
-            return st[0] / scale, prob.adjoint(cval, plan, st) * cval / scale
+        def grad(z: np.ndarray, fwd: Forward, sources=None, plan: Plan = plan) -> np.ndarray:
+            return param.pullback(z, param.nodes(z), prob.adjoint(plan, fwd, sources))
+
+        def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
+            fwd = run(z)
+            if fwd is None:
+                return BIG, np.zeros_like(z)
+            return fwd.value / scale, grad(z, fwd) / scale
 
         if max_peak is None:
             r = minimize(
-                fun,
-                u,
+                objective,
+                x,
                 jac=True,
                 method="L-BFGS-B",
-                bounds=[(lo, hi)] * u.size,
+                bounds=list(zip(lo, hi, strict=True)),
                 options={"maxiter": 2000, "ftol": 1e-13, "gtol": 1e-10, "maxcor": 20},
             )
         else:
 
-            def f(x: np.ndarray) -> float:
-                return fun(x)[0]
+            def con(z: np.ndarray) -> float:
+                fwd = run(z)
+                return -BIG if fwd is None else 1.0 - ks_aggregate(fwd.traces, peak)[0]
 
-            def fjac(x: np.ndarray) -> np.ndarray:
-                return fun(x)[1]
-
-            def con(x: np.ndarray, plan=plan) -> float:
-                st = run(x)
-                if st is None:
-                    return -BIG
-                return 1.0 - ks_aggregate(st[1], max_peak)[0]
-
-            def conjac(x: np.ndarray, plan=plan) -> np.ndarray:
-                st = run(x)
-                if st is None:
-                    return np.zeros_like(x)
-                _, wts = ks_aggregate(st[1], max_peak)
-                cval = np.exp(x)
-                return -prob.adjoint(cval, plan, st, sources=wts) * cval
+            def con_jac(z: np.ndarray) -> np.ndarray:
+                fwd = run(z)
+                if fwd is None:
+                    return np.zeros_like(z)
+                return -grad(z, fwd, ks_aggregate(fwd.traces, peak)[1])
 
             r = minimize(
-                f,
-                u,
-                jac=fjac,
+                lambda z: objective(z)[0],
+                x,
+                jac=lambda z: objective(z)[1],
                 method="SLSQP",
-                bounds=[(lo, hi)] * u.size,
-                constraints=[{"type": "ineq", "fun": con, "jac": conjac}],
+                bounds=list(zip(lo, hi, strict=True)),
+                constraints=[{"type": "ineq", "fun": con, "jac": con_jac}],
                 options={"maxiter": 500, "ftol": 1e-12},
             )
-        u = np.clip(r.x, lo, hi)
+        x = np.clip(r.x, lo, hi)
         message = str(r.message)
-        new = prob.plan(np.exp(u), kappa)
+        new = prob.plan(param.nodes(x), kappa)
         if np.all(new.pieces <= plan.pieces):
             break
         plan = new
-    st = prob.forward(np.exp(u), plan)
-    if st is None:
+    fwd = prob.forward(param.nodes(x), plan)
+    if fwd is None:
         raise InputError(
             "--schedule optimal: the optimum left RK4's stable range (lower --max-gain)"
         )
-    cval = np.exp(u)
-    grad = prob.adjoint(cval, plan, st) * cval
-    return u, st[0], grad, plan, message
+    c = param.nodes(x)
+    return Solved(x, c, plan, fwd, param.pullback(x, c, prob.adjoint(plan, fwd)), message)
 
 
 def optimise_schedule(
@@ -581,7 +680,8 @@ def optimise_schedule(
     progress: Callable[[str], None] | None = None,
 ) -> ScheduleSolution:
     """Refine the optimal piecewise-linear schedule over ``levels`` until it changes by
-    less than ``rtol`` (see the module).
+    less than ``rtol`` (see the module); each level starts from the last one's schedule
+    (exactly: a piecewise-linear c on K pieces is one on 2K).
 
     Parameters
     ----------
@@ -613,78 +713,57 @@ def optimise_schedule(
         range.
     """
     lo, hi = math.log(C_MIN), math.log(max_gain)
-    t_end = prob.horizon
     rows: list[Level] = []
-    u = None
-    prev_t = None
-    prev_value = None
+    c_prev: Callable[..., Any] = start
+    best: Solved | None = None
     converged = False
-    result = None
     for kk in levels:
         t0 = time.perf_counter()
-        nodes = np.linspace(0.0, t_end, kk + 1)
-        if u is None:
-            c0 = np.asarray(start(nodes), dtype=float)
-        else:
-            assert prev_t is not None
-            c0 = np.interp(nodes, prev_t, np.exp(u))
+        nodes = prob.node_times(kk)
+        x0 = np.log(np.clip(np.asarray(c_prev(nodes), dtype=float), C_MIN, max_gain))
         ev0 = prob.evaluations
-        u, value, grad, plan, message = _solve_level(
-            prob, np.log(np.clip(c0, C_MIN, max_gain)), lo, hi, max_peak, kappa
+        sol = solve(prob, NodeLogs(), x0, [(lo, hi)] * x0.size, max_peak=max_peak, kappa=kappa)
+        rows.append(
+            Level(
+                kk, sol.fwd.value, prob.evaluations - ev0, time.perf_counter() - t0, sol.plan.steps
+            )
         )
-        rows.append(Level(kk, value, prob.evaluations - ev0, time.perf_counter() - t0, plan.steps))
         if progress is not None:
-            progress(f"{kk} pieces: E Σ‖x_i(T) − θ‖² = {value:.6g} ({plan.steps} RK4 steps)")
-        result = (nodes, u, value, grad, plan, message)
-        prev_t = nodes
-        if prev_value is not None and abs(value - prev_value) <= rtol * abs(value):
+            progress(
+                f"{kk} pieces: E Σ‖x_i(T) − θ‖² = {sol.fwd.value:.6g} ({sol.plan.steps} RK4 steps)"
+            )
+        previous, best = best, sol
+        c_prev = partial(np.interp, xp=nodes, fp=sol.c)
+        if previous is not None and abs(sol.fwd.value - previous.fwd.value) <= rtol * sol.fwd.value:
             converged = True
             break
-        prev_value = value
-    assert result is not None
-    nodes, u, value, grad, plan, message = result
-    pg = _projected(u, grad, lo, hi)
-    c = np.exp(u)
-    st = prob.forward(c, plan, store=False)
-    assert st is not None
-    traces = np.concatenate([[prob.initial], st[1]])
-    times = np.concatenate([[0.0], plan.t_end])
+    assert best is not None
+    pg = best.grad.copy()
+    pg[(best.x <= lo + 1e-9) & (pg > 0)] = 0.0  # the projected gradient: zero where a
+    pg[(best.x >= hi - 1e-9) & (pg < 0)] = 0.0  # bound holds the descent back
+    traces = np.concatenate([[prob.initial], best.fwd.traces])
+    times = np.concatenate([[0.0], best.plan.t_end])
     k = int(np.argmax(traces))
-    binds = tuple(float(x) for x in nodes[u >= hi - 1e-6])
     notes = []
     if not converged:
         notes.append(
             f"the refinement did not settle to {rtol:.1%} by {levels[-1]} pieces; the last "
             "level is reported"
         )
+    nodes = prob.node_times(best.c.size - 1)
     return ScheduleSolution(
         nodes,
-        c,
-        value,
+        best.c,
+        best.fwd.value,
         tuple(rows),
-        float(np.max(np.abs(pg)) / max(value, 1e-300)),
+        float(np.max(np.abs(pg)) / max(best.fwd.value, 1e-300)),
         max_gain,
-        binds,
+        tuple(float(x) for x in nodes[best.x >= hi - 1e-6]),
         (float(traces[k]), float(times[k])),
         converged,
-        message,
+        best.message,
         tuple(notes),
     )
-
-
-__all__ = [
-    "C_MIN",
-    "DEFAULT_MAX_GAIN",
-    "Level",
-    "MomentOperators",
-    "OPTIMAL_MAX_ND",
-    "Plan",
-    "ScheduleProblem",
-    "ScheduleSolution",
-    "fit_power",
-    "ks_aggregate",
-    "optimise_schedule",
-]
 
 
 def fit_power(
@@ -693,11 +772,11 @@ def fit_power(
     gamma: tuple[float, float],
     a_range: tuple[float, float],
     b_range: tuple[float, float],
-    nodes: int = 800,
+    pieces: int = 800,
 ) -> PowerGain:
     """Polish a power law a·(b + t)^(−γ) by L-BFGS-B on (log a, log b, γ) with the exact
-    gradient of the same discretised problem (c sampled at ``nodes`` + 1 points, linear
-    between; the chain rule through the node values).
+    gradient of the same discretised problem (c sampled at ``pieces`` + 1 nodes, linear
+    between; :class:`PowerNodes`).
 
     Parameters
     ----------
@@ -707,53 +786,43 @@ def fit_power(
         Where to start (e.g. the coarse search's optimum).
     gamma, a_range, b_range : (float, float)
         The admissible box.
-    nodes : int, optional
+    pieces : int, optional
         Pieces of the sampled gain.
 
     Returns
     -------
     PowerGain
+
+    Raises
+    ------
+    InputError
+        A plan too large for the adjoint's memory.
     """
-    from scipy.optimize import minimize
-
-    t = np.linspace(0.0, prob.horizon, nodes + 1)
-    scale = max(prob.initial, 1e-300)
-
-    def gain(x: np.ndarray) -> np.ndarray:
-        return np.exp(x[0]) * (np.exp(x[1]) + t) ** (-x[2])
-
-    plan = prob.plan(gain(np.array([math.log(start.a), math.log(start.b), start.gamma])))
-
-    def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
-        c = gain(x)
-        st = prob.forward(c, plan)
-        if st is None:
-            return BIG, np.zeros(3)
-        g = prob.adjoint(c, plan, st)
-        b = np.exp(x[1])
-        dc = np.stack([c, -x[2] * c * b / (b + t), -c * np.log(b + t)])
-        return st[0] / scale, dc @ g / scale
-
-    x0 = np.array([math.log(start.a), math.log(start.b), start.gamma])
     box = [
         (math.log(a_range[0]), math.log(a_range[1])),
         (math.log(b_range[0]), math.log(b_range[1])),
         gamma,
     ]
-    best = x0
-    for _ in range(3):  # re-plan once the optimum moved
-        r = minimize(
-            fun,
-            best,
-            jac=True,
-            method="L-BFGS-B",
-            bounds=box,
-            options={"maxiter": 200, "ftol": 1e-12, "gtol": 1e-9},
-        )
-        if r.fun < fun(best)[0]:
-            best = r.x
-        new = prob.plan(gain(best))
-        if np.all(new.pieces <= plan.pieces):
-            break
-        plan = new
-    return PowerGain(float(np.exp(best[0])), float(np.exp(best[1])), float(best[2]))
+    x0 = np.array([math.log(start.a), math.log(start.b), start.gamma])
+    sol = solve(prob, PowerNodes(prob.node_times(pieces)), x0, box)
+    return PowerGain(float(np.exp(sol.x[0])), float(np.exp(sol.x[1])), float(sol.x[2]))
+
+
+__all__ = [
+    "C_MIN",
+    "DEFAULT_MAX_GAIN",
+    "Forward",
+    "Level",
+    "MomentOperators",
+    "NodeLogs",
+    "OPTIMAL_MAX_ND",
+    "Plan",
+    "PowerNodes",
+    "ScheduleProblem",
+    "ScheduleSolution",
+    "Solved",
+    "fit_power",
+    "ks_aggregate",
+    "optimise_schedule",
+    "solve",
+]

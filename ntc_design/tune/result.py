@@ -87,6 +87,21 @@ class TuneResult:
         return {k: c.final for k, c in self.curves.items()}
 
     @property
+    def headline(self) -> tuple[float, str]:
+        """E Σ‖x_i(T) − θ‖² of the tuned gain and how it was computed (the written
+        scenario's description)."""
+        return self.ms_error_T["tuned"], self.method
+
+    def scenario_gain(self) -> str:
+        """The written scenario's ``gain``: the tuned expression.
+
+        Returns
+        -------
+        str
+        """
+        return self.tuned.text
+
+    @property
     def ms_error_peak(self) -> dict[str, dict[str, float]]:
         """sup_t E Σ‖x_i(t) − θ‖² on [0, T] of the tuned and the baseline gain, and where
         (``{value, t}`` each, over the curves' save times)."""

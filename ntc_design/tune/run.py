@@ -12,28 +12,20 @@ and the tuned design is certified (:func:`ntc_design.certify.certify`).
 from __future__ import annotations
 
 import math
-import os
 import time
-from collections.abc import Callable, Mapping
-from pathlib import Path
-from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
-from ..certify import certify
 from ..design import design_topology
 from ..errors import InputError, require_positive
 from ..gain import analyse_gain
-from ..model import SwitchingTopology, TimeVaryingTopology, Topology
-from ..schedule import ScheduleGain
-from ..simulate import SimulationSpec, simulate
+from ..model import SwitchingTopology, Topology
+from ..simulate import SimulationSpec
 from ..simulate.driver import AnyTopology
-from ..simulate.spec import MonteCarlo, SaveAt, Stepping
-from ..timevarying import ExpressionTopology
-from .deadline import CHECK_PATHS, tune_schedule
+from .evidence import certify_tuned, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Objective, objective_for
-from .optimal import DEFAULT_MAX_GAIN
 from .result import Landscape, TuneResult
 from .search import Dimension, search
 
@@ -125,7 +117,7 @@ def _dimensions(
     return [Dimension(k, lo, hi, log=k in logs, points=points[k]) for k, (lo, hi) in box.items()]
 
 
-def tune(
+def tune_power(
     topology: AnyTopology,
     spec: SimulationSpec,
     horizon: float,
@@ -138,16 +130,9 @@ def tune(
     landscape: bool = True,
     certificate: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
-    family: str = "power",
-    schedule: str = "power",
-    max_gain: float = DEFAULT_MAX_GAIN,
-    max_peak: float | None = None,
-    check_paths: int = CHECK_PATHS,
-    progress: Callable[[str], None] | None = None,
-) -> Any:
-    """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖², or with
-    ``schedule="optimal"`` the best schedule c(t) on [0, T] by optimal control
-    (:func:`.deadline.tune_schedule`).
+) -> TuneResult:
+    """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖² (what
+    :func:`ntc_design.tune.tune` runs for ``schedule="power"``).
 
     Parameters
     ----------
@@ -175,65 +160,17 @@ def tune(
     bounds : mapping of str to (float, float), optional
         Narrower ranges for ``a``, ``b``, ``gamma`` (inside the required theorems' range)
         or ``delta``; lo = hi fixes the parameter.
-    family : {"power"}, optional
-        The gain family: a·(b + t)^(−γ) (the only one).
-    schedule : {"power", "optimal"}, optional
-        ``optimal``: the schedule c(t) on [0, T] that minimises the exact error at T, with
-        an admissible tail (exact moments only; see :mod:`.optimal`).
-    max_gain : float, optional
-        ``optimal``: the upper bound on c.
-    max_peak : float, optional
-        ``optimal``: the bound M on sup_t E Σ‖x_i(t) − θ‖².
-    check_paths : int, optional
-        ``optimal``: Monte Carlo paths of the evidence (0: none).
-    progress : callable, optional
-        ``optimal``: called with a line per stage.
 
     Returns
     -------
-    TuneResult or ScheduleTuneResult
+    TuneResult
 
     Raises
     ------
     InputError
         A bad horizon, requirement, ε, method or δ range; a scenario the objective
         refuses.
-
-    Examples
-    --------
-    >>> import ntc_design as nd
-    >>> from ntc_design.tune import tune
-    >>> from ntc_design.simulate import SimulationSpec
-    >>> spec = SimulationSpec.build([1, 2, -1], noise={"sigma": 0.4, "f": 0.3})
-    >>> r = tune(nd.load("examples/g1.yaml"), spec, 2.0, max_evaluations=30,
-    ...          landscape=False, certificate=False)
-    >>> r.ms_error_T["tuned"] <= r.ms_error_T["baseline"]
-    True
     """
-    if family != "power":
-        raise InputError(f"--family: only 'power' (a·(b + t)^(−γ)) is available, got {family!r}")
-    if schedule == "optimal":
-        if method not in ("auto", "exact"):
-            raise InputError(
-                "--schedule optimal: uses exact moments (--method mc is for --schedule power)"
-            )
-        return tune_schedule(
-            topology,
-            spec,
-            horizon,
-            require=require,
-            tune_delta=tune_delta,
-            eps=eps,
-            max_gain=max_gain,
-            max_peak=max_peak,
-            certificate=certificate,
-            check_paths=check_paths,
-            progress=progress,
-        )
-    if schedule != "power":
-        raise InputError(f"--schedule: expected power or optimal, got {schedule!r}")
-    if max_peak is not None:
-        raise InputError("--max-peak: applies to --schedule optimal")
     require_positive("horizon", horizon)
     gamma_range(require)
     if eps is not None:
@@ -285,10 +222,10 @@ def tune(
         )
     if obj.skipped:
         notes.append(f"{len(obj.skipped)} candidate(s) scored +∞ (too stiff or overflowing)")
-    stepping = _stable_stepping(topology, spec, tuned, delta, horizon, notes)
+    stepping = stable_stepping(topology, spec, tuned, delta, horizon, notes)
     land = _landscape(obj, tuned, delta, dims) if landscape else None
     analysis = analyse_gain(tuned.text)
-    cert = _certify(topology, spec, tuned, delta, notes) if certificate else None
+    cert = certify_tuned(topology, spec, tuned, delta, notes) if certificate else None
     return TuneResult(
         tuned=tuned,
         baseline=BASELINE,
@@ -309,55 +246,6 @@ def tune(
     )
 
 
-#: What the written scenario switches to when its own Euler–Maruyama grid is unstable
-#: under the tuned gain (a large c(0) can break the explicit scheme's mean-square limit).
-IMPLICIT = {"stepping": "intrinsic", "scheme": "implicit"}
-
-
-def _stable_stepping(
-    topology: AnyTopology,
-    spec: SimulationSpec,
-    tuned: PowerGain | ScheduleGain,
-    delta: float | None,
-    horizon: float,
-    notes: list[str],
-) -> dict[str, str]:
-    """The stepping the written scenario needs for a Monte Carlo check of the tuned gain:
-    the scenario's own when its step-size guard passes, else the drift-implicit scheme
-    (one two-path run each: the guard refuses before any path is drawn)."""
-    base = spec.replace(
-        T=horizon,
-        gain=tuned,
-        delta=delta if delta is not None else spec.delta,
-        method="mc",
-        save=SaveAt(times=np.array([0.0, horizon])),
-        mc=MonteCarlo(paths=2, seed=0, workers=1),
-    )
-    try:
-        simulate(topology, spec=base)
-        return {}
-    except InputError as exc:
-        if "unstable" not in str(exc):
-            notes.append(f"the tuned scenario cannot be simulated as written: {exc}")
-            return {}
-        first = str(exc)
-    try:
-        simulate(
-            topology,
-            spec=base.replace(
-                stepping=Stepping(kind="intrinsic", dt=spec.stepping.dt, scheme="implicit")
-            ),
-        )
-    except InputError as exc:
-        notes.append(f"the tuned scenario cannot be simulated as written: {exc}")
-        return {}
-    notes.append(
-        "the scenario's explicit Euler–Maruyama step is unstable under the tuned gain "
-        f"({first.split(';')[0].removeprefix('dt: ')}); tuned.yaml uses the drift-implicit scheme"
-    )
-    return dict(IMPLICIT)
-
-
 def _landscape(
     obj: Objective, best: PowerGain, delta: float | None, dims: list[Dimension]
 ) -> Landscape:
@@ -372,80 +260,3 @@ def _landscape(
     gam = np.linspace(g.lo, g.hi, ng) if g.hi > g.lo else np.array([g.lo])
     vals = np.array([[obj.value(PowerGain(x, best.b, y), delta) for x in a] for y in gam])
     return Landscape(a, gam, best.b, vals)
-
-
-def _certify(
-    topology: AnyTopology,
-    spec: SimulationSpec,
-    tuned: PowerGain | ScheduleGain,
-    delta: float | None,
-    notes: list[str],
-):
-    """The certificate of the tuned design, or None with a note when none applies."""
-    if isinstance(topology, TimeVaryingTopology):
-        notes.append("no certificate: a topology given as Python functions of t has none")
-        return None
-    f = spec.noise.f
-    if callable(f):
-        if isinstance(topology, ExpressionTopology):
-            notes.append("no certificate: a time-varying certificate needs a linear f's bound")
-            return None
-        f = 0.0  # only the time-varying certificate uses the noise
-    f_bound = float(np.linalg.norm(np.atleast_2d(np.asarray(f, dtype=float)), 2))
-    try:
-        return certify(
-            topology,
-            spec.theta,
-            spec.margin,
-            gain=tuned.text if isinstance(tuned, PowerGain) else tuned,
-            delta=delta if delta is not None else spec.delta,
-            noise_sigma=spec.noise.sigma,
-            noise_f=f_bound,
-        )
-    except InputError as exc:
-        notes.append(f"no certificate: {exc}")
-        return None
-
-
-def tuned_scenario(
-    document: Mapping[str, Any], source: str | Path, out: str | Path, result: Any
-) -> dict[str, Any]:
-    """The scenario document with the tuned gain (and δ) and T = the horizon, its
-    topology path made relative to the folder it will be written in.
-
-    Parameters
-    ----------
-    document : mapping
-        The scenario as read.
-    source : str or Path
-        The scenario file (its topology path is relative to it).
-    out : str or Path
-        The folder the new scenario goes to.
-    result : TuneResult or ScheduleTuneResult
-        The tuning (a schedule is written as ``gain: {schedule: schedule.csv, tail}``).
-
-    Returns
-    -------
-    dict
-    """
-    doc = dict(document)
-    topo = (Path(source).parent / str(doc["topology"])).resolve()
-    doc["topology"] = os.path.relpath(topo, Path(out).resolve())
-    sched = getattr(result, "schedule", None)
-    if isinstance(sched, ScheduleGain):
-        doc["gain"] = {"schedule": "schedule.csv", "tail": sched.tail, "interpolation": "linear"}
-        value, how = result.ms_error_T["optimal"], "optimal schedule, exact moments"
-    else:
-        doc["gain"] = result.tuned.text
-        value, how = result.ms_error_T["tuned"], result.method
-    doc["T"] = result.horizon
-    if result.stepping:
-        doc.update(result.stepping)
-    if result.delta is not None:
-        doc["delta"] = result.delta
-        doc.pop("margin", None)
-    doc["description"] = (
-        f"{document.get('description', document.get('name', 'scenario'))} — gain tuned by "
-        f"ntc tune for T = {result.horizon:g}: E Σ‖x_i(T) − θ‖² = {value:.6g} ({how})"
-    )
-    return doc
