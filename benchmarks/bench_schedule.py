@@ -41,7 +41,7 @@ def case(name: str, top, theta, x0, horizon: float, paths: int) -> None:
     one = time.perf_counter() - t0
     t0 = time.perf_counter()
     st = prob.forward(c, plan)
-    prob.adjoint(c, plan, st)
+    prob.adjoint(plan, st)
     grad = time.perf_counter() - t0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

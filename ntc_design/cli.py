@@ -12,7 +12,6 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
-from rich.table import Table
 
 from . import __version__
 from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, design, structure_report
@@ -20,8 +19,14 @@ from .errors import InputError, one_line
 from .files import jsonable
 from .loader import load
 from .model import SwitchingTopology
-from .reports.terminal import Progress, out, print_table, sweep_progress
-from .rows import fmt, set_text
+from .reports.terminal import (
+    Progress,
+    out,
+    print_structure,
+    print_table,
+    print_verification,
+    sweep_progress,
+)
 from .timevarying import ExpressionTopology
 
 app = typer.Typer(
@@ -80,45 +85,6 @@ def _json(obj) -> str:
     return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
 
 
-def _print_check(rep: dict, title: str) -> None:
-    out.print(f"[bold]{title}[/bold]  d = {rep['dim']}, N = {len(rep['agents'])}")
-    et = Table(title="edges (j -> i carries A_ij)")
-    for c in ("edge", "class"):
-        et.add_column(c)
-    for e in rep["edges"]:
-        et.add_row(f"{e['from']} -> {e['to']}", e["class"])
-    out.print(et)
-    at = Table(title=f"agents (U = {set_text(rep['U'])})")
-    for c in ("agent", "N_i", "N'_i", "Ω_i", "in-degree-dominated", "C_i"):
-        at.add_column(c)
-    for a, info in rep["per_agent"].items():
-        at.add_row(
-            a,
-            set_text(info["in_neighbours"]),
-            set_text(info["out_neighbours"]),
-            set_text(info["omega"]),
-            "yes" if info["in_degree_dominated"] else "no",
-            fmt(info["C_i"]),
-        )
-    out.print(at)
-    if rep["assumption_holds"]:
-        out.print(f"Assumption 2 holds: V1 = {set_text(rep['V1'])}, V2 = {set_text(rep['V2'])}")
-        for a, p in rep["paths"].items():
-            out.print(f"  {a} reached by the positive-negative path {' -> '.join(map(str, p))}")
-    else:
-        out.print("[bold red]Assumption 2 fails:[/bold red]")
-        for line in _capped(rep["violations"], "  agent {agent}: {reason}"):
-            out.print(line)
-
-
-def _capped(items: list[dict], line: str, most: int = 10) -> list[str]:
-    """The first ``most`` items as lines, then how many more (--json has them all)."""
-    lines = [line.format(**v) for v in items[:most]]
-    if len(items) > most:
-        lines.append(f"  … and {len(items) - most} more (--json lists them all)")
-    return lines
-
-
 @app.command(epilog="Example: ntc check examples/g1.yaml")
 def check(file: FileArg, as_json: JsonOpt = False) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition."""
@@ -131,10 +97,10 @@ def check(file: FileArg, as_json: JsonOpt = False) -> None:
             print(_json(rep))
         else:
             for k, r in rep["modes"].items():
-                _print_check(r, f"mode {k}")
+                print_structure(r, f"mode {k}")
         return
     rep = structure_report(top)
-    print(_json(rep)) if as_json else _print_check(rep, top.name or str(file))
+    print(_json(rep)) if as_json else print_structure(rep, top.name or str(file))
 
 
 @app.command("design", epilog="Example: ntc design examples/g1.yaml --theta 1,2,-1")
@@ -286,6 +252,7 @@ def certify(
     --out is written only when the certificate is valid."""
     from .certify import certify as run
     from .certify import write_certificate
+    from .schedule import gain_from_option
 
     th = parse_vector(theta, "--theta")
     if out_path is not None:
@@ -295,7 +262,14 @@ def certify(
             raise InputError(f"--out: {out_path} is a directory")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
-        res = run(load(file), th, margin, _gain_option(gain), noise_sigma=noise_sigma, noise_f=noise_f)
+        res = run(
+            load(file),
+            th,
+            margin,
+            gain_from_option(gain, "--gain"),
+            noise_sigma=noise_sigma,
+            noise_f=noise_f,
+        )
     doc = res.to_dict()  # every step that can fail runs before anything is written
     written = out_path is not None and res.verification.valid
     if out_path is not None and written:
@@ -312,44 +286,11 @@ def certify(
         raise typer.Exit(1)
 
 
-def _gain_option(gain: str | None):
-    """--gain: an expression, or a schedule CSV file (``*.csv``)."""
-    if gain is not None and gain.strip().lower().endswith(".csv"):
-        from .schedule import read_schedule
-
-        return read_schedule(gain, field="--gain")
-    return gain
-
-
 def _print_certify(res, written: Path | None) -> None:
     for t in res.tables():  # the HTML report and notebooks show the same tables
         print_table(t)
     if written is not None:
         out.print(f"certificate written to {written} (re-check with: ntc verify {written})")
-
-
-def _print_verification(doc: dict) -> None:
-    ab = doc["certifies"]
-    if ab is not None:
-        print(f"kind: {ab['kind']} ({ab['description']})")
-        for m in ab["modes"]:
-            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
-            print(
-                f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
-                f"d = {m['d']}, {m['topology_hash']}, "
-                + (f"δ = {m['delta']:.6g}" if m["delta"] is not None else "δ(t) = C(t) + ΔC")
-                + f", θ = {m['theta']}{used}"
-            )
-        if ab["schedule"] is not None:
-            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
-            print(f"schedule: {sched} ({ab['switching_hash']})")
-        for p in ab["properties"]:
-            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
-            print(f"certifies: {p['meaning']}{alpha}")
-    for c in doc["checks"]:
-        mark = "ok   " if c["ok"] else "FAILS"
-        print(f"{mark} {c['name']}: {c['detail']}")
-    print(f"note: {doc['digest_note']}")
 
 
 @app.command(epilog="Example: ntc verify runs/g1.json --topology examples/g1.yaml --theta 1,2,-1")
@@ -377,7 +318,7 @@ def verify(
     if as_json:
         print(_json(doc))
     else:
-        _print_verification(doc)
+        print_verification(doc)
     if not ver.valid:
         names = "; ".join(c.name for c in ver.failed)
         print(f"INVALID ({ver.method}): {names}", file=sys.stderr)
@@ -526,9 +467,7 @@ def tune(
     ] = None,
     check_paths: Annotated[
         int,
-        typer.Option(
-            help="--schedule optimal: Monte Carlo paths of the evidence (0: none)."
-        ),
+        typer.Option(help="--schedule optimal: Monte Carlo paths of the evidence (0: none)."),
     ] = 200,
     out_dir: Annotated[
         Path | None,

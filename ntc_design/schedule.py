@@ -339,6 +339,31 @@ def read_schedule(
         raise InputError(f"{p}: {exc}") from None
 
 
+def gain_from_option(text: str | None, field: str = "gain") -> str | ScheduleGain | None:
+    """A gain as a user gives it on a command line: an expression in t, or a schedule CSV
+    file (a name ending in ``.csv``, read by :func:`read_schedule`).
+
+    Parameters
+    ----------
+    text : str or None
+        The option's value.
+    field : str, optional
+        Named in messages.
+
+    Returns
+    -------
+    str, ScheduleGain or None
+
+    Raises
+    ------
+    InputError
+        A schedule file that is missing or malformed.
+    """
+    if text is not None and text.strip().lower().endswith(".csv"):
+        return read_schedule(text, field=field)
+    return text
+
+
 def join_tail(t_end: float, c_end: float, gamma: float = 1.0, b: float = 1.0) -> str:
     """The admissible tail a·(b + t)^(−γ) that meets c_end at t_end (a written to 12
     significant digits, well inside :data:`JOIN_RTOL`).
@@ -542,6 +567,7 @@ __all__ = [
     "ScheduleGain",
     "analyse_any_gain",
     "analyse_schedule",
+    "gain_from_option",
     "join_tail",
     "read_schedule",
     "schedule_checks",

@@ -25,7 +25,8 @@ from ntc_design.simulate import NoiseModel, SimulationSpec, simulate
 from ntc_design.simulate.driver import prepare_modes
 from ntc_design.simulate.spec import SaveAt
 from ntc_design.tune import BASELINE, ExactObjective, PowerGain, tune
-from ntc_design.tune.optimal import MomentOperators, ScheduleProblem, optimise_schedule
+from ntc_design.tune.operators import MomentOperators
+from ntc_design.tune.optimal import ScheduleProblem, optimise_schedule
 
 from .cli_helpers import assert_input_error, run_cli
 
@@ -172,12 +173,28 @@ def test_operators_reproduce_the_moment_right_hand_side(g1, spec):
     rng = np.random.default_rng(np.random.SeedSequence(7))
     a = rng.normal(size=(21, 21))
     s = a @ a.T
-    iu = np.triu_indices(21)
-    ns = iu[0].size
-    z = ops.ab @ s[iu]
+    a1, a2 = ops.products(ops.pack(s))
     for c in (0.3, 2.0):
         _, ds = rhs(c, np.zeros(21), s)
-        assert np.allclose(c * z[:ns] + c * c * (z[ns:] + ops.q), ds[iu], rtol=1e-12, atol=1e-10)
+        assert np.allclose(c * a1 + c * c * (a2 + ops.q), ds.ravel(), rtol=1e-12, atol=1e-10)
+    # the transposed map is the adjoint of the products on every matrix, symmetric or not
+    y, mu = rng.normal(size=441), rng.normal(size=441)
+    p1, p2 = ops.products(y)
+    lhs = mu @ (0.7 * p1 + 0.49 * p2)
+    assert lhs == pytest.approx(ops.transpose(mu, 0.7) @ y, rel=1e-12)
+
+
+def test_a_stable_constant_gain_decays_to_the_steady_state(problem):
+    """c = 1.5 on G1 is mean-square stable: tr S(T) converges as the steps shrink (RK4,
+    fourth order) and settles at its stationary level; no rounding mode grows (the
+    shortcut (L S)ᵀ for S Lᵀ made one grow)."""
+    prob = problem(3.0)
+    c = np.full(31, 1.5)
+    runs = [prob.forward(c, prob.plan(c, k), False) for k in (1.5, 0.75, 0.3)]
+    vals = [r.value for r in runs]
+    assert abs(vals[0] - vals[2]) <= 1e-9 * vals[2]
+    tr = runs[2].traces  # it settles at the noise's stationary level, nothing grows
+    assert abs(tr[-1] - tr[-50]) < 1e-3 * tr[-1] and tr.max() < 1.01 * tr[-1]
 
 
 def _independent_value(pm, horizon, cs):

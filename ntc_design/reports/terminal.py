@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from ..rows import Cell
+from ..rows import Cell, fmt, set_text
 from ..rows import Table as RowsTable
 
 PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
@@ -184,4 +184,108 @@ def sweep_progress():
     return bar, prog
 
 
-__all__ = ["PLAIN_EVERY", "Progress", "out", "print_table", "sweep_progress"]
+def print_structure(rep: dict, title: str) -> None:
+    """Print ``ntc check``'s structure report of one topology (edge classes, the agents'
+    sets, the Assumption 2 decomposition or why it fails).
+
+    Parameters
+    ----------
+    rep : dict
+        :func:`ntc_design.design.structure_report`'s mapping.
+    title : str
+        The topology's name.
+    """
+    out.print(f"[bold]{title}[/bold]  d = {rep['dim']}, N = {len(rep['agents'])}")
+    et = Table(title="edges (j -> i carries A_ij)")
+    for c in ("edge", "class"):
+        et.add_column(c)
+    for e in rep["edges"]:
+        et.add_row(f"{e['from']} -> {e['to']}", e["class"])
+    out.print(et)
+    at = Table(title=f"agents (U = {set_text(rep['U'])})")
+    for c in ("agent", "N_i", "N'_i", "Ω_i", "in-degree-dominated", "C_i"):
+        at.add_column(c)
+    for a, info in rep["per_agent"].items():
+        at.add_row(
+            a,
+            set_text(info["in_neighbours"]),
+            set_text(info["out_neighbours"]),
+            set_text(info["omega"]),
+            "yes" if info["in_degree_dominated"] else "no",
+            fmt(info["C_i"]),
+        )
+    out.print(at)
+    if rep["assumption_holds"]:
+        out.print(f"Assumption 2 holds: V1 = {set_text(rep['V1'])}, V2 = {set_text(rep['V2'])}")
+        for a, p in rep["paths"].items():
+            out.print(f"  {a} reached by the positive-negative path {' -> '.join(map(str, p))}")
+    else:
+        out.print("[bold red]Assumption 2 fails:[/bold red]")
+        for line in capped(rep["violations"], "  agent {agent}: {reason}"):
+            out.print(line)
+
+
+def capped(items: list[dict], line: str, most: int = 10) -> list[str]:
+    """The first ``most`` items as lines, then how many more (--json has them all).
+
+    Parameters
+    ----------
+    items : list of dict
+        The items.
+    line : str
+        A format string over an item's keys.
+    most : int, optional
+        Lines at most.
+
+    Returns
+    -------
+    list of str
+    """
+    lines = [line.format(**v) for v in items[:most]]
+    if len(items) > most:
+        lines.append(f"  … and {len(items) - most} more (--json lists them all)")
+    return lines
+
+
+def print_verification(doc: dict) -> None:
+    """Print ``ntc verify``'s account of a certificate: what it is about, every check, the
+    digest note.
+
+    Parameters
+    ----------
+    doc : dict
+        :meth:`ntc_design.certify.Verification.to_dict`'s mapping.
+    """
+    ab = doc["certifies"]
+    if ab is not None:
+        print(f"kind: {ab['kind']} ({ab['description']})")
+        for m in ab["modes"]:
+            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
+            print(
+                f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
+                f"d = {m['d']}, {m['topology_hash']}, "
+                + (f"δ = {m['delta']:.6g}" if m["delta"] is not None else "δ(t) = C(t) + ΔC")
+                + f", θ = {m['theta']}{used}"
+            )
+        if ab["schedule"] is not None:
+            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
+            print(f"schedule: {sched} ({ab['switching_hash']})")
+        for p in ab["properties"]:
+            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
+            print(f"certifies: {p['meaning']}{alpha}")
+    for c in doc["checks"]:
+        mark = "ok   " if c["ok"] else "FAILS"
+        print(f"{mark} {c['name']}: {c['detail']}")
+    print(f"note: {doc['digest_note']}")
+
+
+__all__ = [
+    "PLAIN_EVERY",
+    "Progress",
+    "capped",
+    "out",
+    "print_structure",
+    "print_table",
+    "print_verification",
+    "sweep_progress",
+]

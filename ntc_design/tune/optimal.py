@@ -11,8 +11,8 @@ optionally subject to sup_{t <= T} tr S(t) <= M (a peak constraint).
 
 **Transcription** (direct single shooting, a control parametrisation): c is piecewise
 linear on K equal pieces of [0, T] (node values c_0 … c_K, so the schedule is continuous
-as the theorems ask), S is written on the Nd(Nd+1)/2 entries of its upper triangle, and
-the equation is integrated by classical RK4 on a grid through every node and every
+as the theorems ask), S is flattened (:mod:`.operators`: L_B products and a sparse noise
+map), and the equation is integrated by classical RK4 on a grid through every node and every
 switching instant, with h·ρ(c𝓐₁ + c²𝓐₂) <= ``KAPPA`` on each step (the step count of a
 piece is planned from its node values and kept while the optimiser runs, so J is a
 smooth function of the nodes; after each run the plan is remade and the run repeated
@@ -34,9 +34,10 @@ large constrained problems, is not what is left after elimination.
 schedule on K pieces is exactly one on 2K), until the optimum changes by less than
 ``REFINE_RTOL`` (0.1 %), at most ``MAX_PIECES``.
 
-Cost: one evaluation is 8 products of an (Nd(Nd+1)) × Nd(Nd+1)/2 matrix with a vector per
-RK4 step, so it grows as (Nd)⁴ × steps (steps as ∫ c ρ dt); above ``OPTIMAL_MAX_ND`` it
-is refused.
+Cost: an evaluation with its gradient is 8 stages of 2–3 products with L_B and one sparse
+product per RK4 step, O((Nd)³ + E·d⁴) each, and the steps grow as ∫ c ρ(L_B) dt (a large
+Lemma 1 δ makes L_B stiff); the adjoint stores 4 (Nd)² numbers per step. Above
+``OPTIMAL_MAX_ND`` it is refused.
 
 References
 ----------
@@ -62,9 +63,8 @@ import numpy as np
 
 from ..errors import InputError, format_bytes
 from ..simulate.driver import PreparedModes
-from ..simulate.moments import MomentRhs
-from ..simulate.system import ModeSystem
 from .family import PowerGain
+from .operators import MomentOperators
 
 #: The largest N·d optimised (dense operators of (Nd(Nd+1)/2)² entries; 60 → 1830).
 OPTIMAL_MAX_ND = 60
@@ -86,83 +86,6 @@ MAX_STORE = 2 * 2**30
 #: maximum by at most log(steps) / KS_RHO.
 KS_RHO = 2000.0
 BIG = 1e10
-
-
-@dataclass(frozen=True, eq=False)
-class MomentOperators:
-    """One mode's second-moment operators on the upper triangle of S: ``ab`` stacks 𝓐₁
-    over 𝓐₂ (so one product gives both), ``abt`` is its transpose, ``q`` is Q's triangle,
-    ``rho1`` and ``rho2`` bound the spectral radii of 𝓐₁ and 𝓐₂."""
-
-    ab: np.ndarray
-    abt: np.ndarray
-    q: np.ndarray
-    rho1: float
-    rho2: float
-
-    @classmethod
-    def build(cls, system: ModeSystem, n: int, d: int) -> MomentOperators:
-        """The operators of one mode, column by column from the moment right-hand side
-        that :func:`~ntc_design.simulate.moments.exact_moments` integrates.
-
-        Parameters
-        ----------
-        system : ModeSystem
-            The mode.
-        n, d : int
-            Agents and state dimension.
-
-        Returns
-        -------
-        MomentOperators
-        """
-        rhs = MomentRhs(system, n, d)
-        nd_ = n * d
-        iu = np.triu_indices(nd_)
-        ns = iu[0].size
-        lap = rhs.l if isinstance(rhs.l, np.ndarray) else rhs.l.toarray()
-        a1 = np.empty((ns, ns))
-        a2 = np.empty((ns, ns))
-        e = np.zeros((nd_, nd_))
-        for col, (i, j) in enumerate(zip(*iu, strict=True)):
-            e[i, j] = e[j, i] = 1.0
-            le = lap @ e
-            a1[:, col] = -(le + le.T)[iu]
-            a2[:, col] = (rhs.noise(e) - rhs.q)[iu]
-            e[i, j] = e[j, i] = 0.0
-        ab = np.vstack([a1, a2])
-        rho2 = _radius(a2)
-        return cls(
-            ab, np.ascontiguousarray(ab.T), rhs.q[iu].copy(), 2 * system.spectral_radius, rho2
-        )
-
-    def radius(self, c: np.ndarray | float) -> np.ndarray | float:
-        """A bound on ρ(c𝓐₁ + c²𝓐₂) (the step plan's).
-
-        Parameters
-        ----------
-        c : float or numpy.ndarray
-            The gain.
-
-        Returns
-        -------
-        float or numpy.ndarray
-        """
-        return self.rho1 * c + self.rho2 * c * c
-
-
-def _radius(a: np.ndarray) -> float:
-    if a.shape[0] <= 800:
-        return float(np.max(np.abs(np.linalg.eigvals(a)), initial=0.0))
-    x = np.ones(a.shape[0])  # power iteration: 𝓐₂ maps the PSD cone into itself
-    lam = 0.0
-    for _ in range(60):
-        y = a @ x
-        lam = float(np.linalg.norm(y))
-        if lam == 0:
-            return 0.0
-        x = y / lam
-    return 1.1 * lam
 
 
 @dataclass(frozen=True, eq=False)
@@ -196,15 +119,18 @@ class ScheduleProblem:
         T.
     """
 
-    def __init__(self, prepared: PreparedModes, horizon: float) -> None:
+    def __init__(
+        self,
+        prepared: PreparedModes,
+        horizon: float,
+    ) -> None:
         n, d = prepared.n, prepared.d
         self.check_size(n * d)
         self.horizon = float(horizon)
         self.ops = [MomentOperators.build(s, n, d) for s in prepared.systems]
-        iu = np.triu_indices(n * d)
-        self.diag = np.flatnonzero(iu[0] == iu[1])
+        self.diag = MomentOperators.diagonal(n * d)
         eps0 = prepared.eps0
-        self.s0 = np.outer(eps0, eps0)[iu]
+        self.s0 = MomentOperators.pack(np.outer(eps0, eps0))
         self.ns = self.s0.size
         self.segments = [(float(a), float(b), int(m)) for a, b, m in prepared.segments]
         self.initial = float(eps0 @ eps0)
@@ -240,11 +166,10 @@ class ScheduleProblem:
             Above the limit.
         """
         if nd_ > OPTIMAL_MAX_ND:
-            ns = nd_ * (nd_ + 1) // 2
             raise InputError(
-                f"--schedule optimal: N·d = {nd_} is above {OPTIMAL_MAX_ND} (each RK4 step "
-                f"costs 8 products with a dense {2 * ns}×{ns} matrix, growing as (Nd)⁴); "
-                "use --schedule power"
+                f"--schedule optimal: N·d = {nd_} is above {OPTIMAL_MAX_ND} (an evaluation "
+                "grows as (Nd)³ per RK4 step and the steps with ρ(L_B); a search takes "
+                "hundreds); use --schedule power"
             )
 
     # ------------------------------------------------------------------ the step plan
@@ -358,11 +283,11 @@ class ScheduleProblem:
                 y = s
                 for st, (col, frac) in enumerate(_STAGES):
                     cc = cs[j, col]
-                    z = op.ab @ y
-                    zq = z[ns:] + op.q
-                    ks.append(cc * z[:ns] + cc * cc * zq)
+                    a1y, a2y = op.products(y)
+                    zq = a2y + op.q
+                    ks.append(cc * a1y + cc * cc * zq)
                     if g is not None:
-                        g[j, st] = z[:ns] + 2 * cc * zq
+                        g[j, st] = a1y + 2 * cc * zq
                     y = s + (frac * h) * ks[-1]
                 s = s + (h / 6) * (ks[0] + 2 * ks[1] + 2 * ks[2] + ks[3])
                 traces[j] = s[self.diag].sum()
@@ -397,17 +322,11 @@ class ScheduleProblem:
             sources[-1] = 1.0
         lam = np.zeros(ns)
         grad_stage = np.zeros((plan.steps, 3))
-        buf = np.empty(2 * ns)
         for j in range(plan.steps - 1, -1, -1):
             lam[self.diag] += sources[j]
-            abt = self.ops[plan.mode[j]].abt
+            bt = self.ops[plan.mode[j]].transpose  # Bᵀμ, B = c𝓐₁ + c²𝓐₂
             h = plan.h[j]
             c1, c2, c4 = cs[j]
-
-            def bt(mu: np.ndarray, cc: float, abt=abt) -> np.ndarray:  # Bᵀμ, B = c𝓐₁ + c²𝓐₂
-                buf[:ns] = cc * mu
-                buf[ns:] = cc * cc * mu
-                return abt @ buf
 
             mu4 = (h / 6) * lam
             a4 = bt(mu4, c4)
@@ -813,7 +732,6 @@ __all__ = [
     "DEFAULT_MAX_GAIN",
     "Forward",
     "Level",
-    "MomentOperators",
     "NodeLogs",
     "OPTIMAL_MAX_ND",
     "Plan",
