@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 from scipy.linalg import expm
+from scipy.optimize import minimize
 
 import ntc_design as nd
 from ntc_design.certify import certify, verify
@@ -197,31 +198,55 @@ def test_a_stable_constant_gain_decays_to_the_steady_state(problem):
     assert abs(tr[-1] - tr[-50]) < 1e-3 * tr[-1] and tr.max() < 1.01 * tr[-1]
 
 
-def _independent_value(pm, horizon, cs):
-    """tr S(T) for piecewise-constant c (values ``cs`` on equal pieces), each piece
-    propagated by the matrix exponential of the full (vec) moment equation."""
+def _independent_problem(pm, horizon, pieces):
+    """tr S(T) for piecewise-constant c on ``pieces`` equal pieces, each propagated by the
+    matrix exponential of the moment equation on S's upper triangle (built here from
+    MomentRhs, not from the optimiser's operators)."""
     from ntc_design.simulate.moments import MomentRhs
 
     rhs = MomentRhs(pm.systems[0], pm.n, pm.d)
     nd_ = pm.n * pm.d
-    n2 = nd_ * nd_
-    a1 = np.empty((n2, n2))
-    a2 = np.empty((n2, n2))
-    for k in range(n2):
-        e = np.zeros(n2)
-        e[k] = 1.0
-        e = e.reshape(nd_, nd_)
+    iu = np.triu_indices(nd_)
+    ns = iu[0].size
+    a1 = np.empty((ns, ns))
+    a2 = np.empty((ns, ns))
+    for k, (i, j) in enumerate(zip(*iu, strict=True)):
+        e = np.zeros((nd_, nd_))
+        e[i, j] = e[j, i] = 1.0
         le = rhs.l @ e
-        a1[:, k] = -(le + le.T).ravel()
-        a2[:, k] = (rhs.noise(e) - rhs.q).ravel()
-    s = np.append(np.outer(pm.eps0, pm.eps0).ravel(), 1.0)
-    h = horizon / len(cs)
-    for c in cs:
-        m = np.zeros((n2 + 1, n2 + 1))
-        m[:n2, :n2] = c * a1 + c * c * a2
-        m[:n2, n2] = c * c * rhs.q.ravel()
-        s = expm(h * m) @ s
-    return float(np.eye(nd_).ravel() @ s[:n2])
+        a1[:, k] = -(le + le.T)[iu]
+        a2[:, k] = (rhs.noise(e) - rhs.q)[iu]
+    s0 = np.append(np.outer(pm.eps0, pm.eps0)[iu], 1.0)
+    diag = iu[0] == iu[1]
+    h = horizon / pieces
+
+    def value(x):
+        s = s0
+        for c in np.exp(x):
+            m = np.zeros((ns + 1, ns + 1))
+            m[:ns, :ns] = c * a1 + c * c * a2
+            m[:ns, ns] = c * c * rhs.q[iu]
+            s = expm(h * m) @ s
+        v = float(s[:ns][diag].sum())
+        return v if np.isfinite(v) else 1e30
+
+    return value
+
+
+@pytest.mark.slow
+def test_optimum_is_within_3_percent_of_an_independent_optimum(problem, g1, spec):
+    """The independent optimum: 8 constant pieces propagated by matrix exponentials,
+    L-BFGS-B with finite differences from c = 1. The continuous schedule on finer pieces
+    is at least as good, and within 3 %."""
+    horizon = 2.0
+    sol = optimise_schedule(problem(horizon), BASELINE, levels=(10, 20, 40))
+    pm = prepare_modes(g1, spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
+    value = _independent_problem(pm, horizon, 8)
+    r = minimize(
+        value, np.zeros(8), method="L-BFGS-B", bounds=[(-6, 1.5)] * 8, options={"eps": 1e-6}
+    )
+    assert sol.value <= r.fun * (1 + 1e-4)
+    assert sol.value >= 0.97 * r.fun
 
 
 def test_optimum_is_below_an_independent_piecewise_constant_evaluation(problem, g1, spec):
@@ -229,13 +254,14 @@ def test_optimum_is_below_an_independent_piecewise_constant_evaluation(problem, 
     prob = problem(horizon)
     sol = optimise_schedule(prob, BASELINE, levels=(10, 20, 40))
     pm = prepare_modes(g1, spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
+    value = _independent_problem(pm, horizon, 8)
     mid = np.linspace(0, horizon, 17)[1::2]
-    near = _independent_value(pm, horizon, np.interp(mid, sol.t, sol.c))
+    near = value(np.log(np.interp(mid, sol.t, sol.c)))
     # 8 constant pieces near the optimum, by matrix exponentials: no better, within 3 %
     assert sol.value <= near * (1 + 1e-6)
     assert sol.value >= near * 0.97
     # 1/(1 + t) sampled the same way is far worse
-    assert _independent_value(pm, horizon, 1 / (1 + mid)) > 1.5 * sol.value
+    assert value(np.log(1 / (1 + mid))) > 1.5 * sol.value
     # and re-evaluated independently, the returned schedule gives the reported value
     sched = ScheduleGain(sol.t, sol.c, tail=join_tail(horizon, float(sol.c[-1])))
     again = ExactObjective(g1, spec, horizon).curve(sched, None).final

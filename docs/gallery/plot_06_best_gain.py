@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import ntc_design as nd
-from ntc_design.reports.tune import schedule_curves_figure, schedule_gains_figure
+from ntc_design.reports.tune import curves_figure, schedule_gains_figure
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.tune import tune
 
@@ -30,4 +30,4 @@ print(best.refinement_table().text())
 # %%
 # The three gains (the schedule's tail after T dotted) and their errors over [0, T].
 schedule_gains_figure(best)
-schedule_curves_figure(best)
+curves_figure(best)

@@ -21,13 +21,14 @@ from ..certify import write_certificate
 from ..files import ScenarioData, jsonable
 from ..outputs import output_folder
 from ..rows import Table, fmt
+from ..schedule import ScheduleGain
 from ..tune import ScheduleTuneResult, TuneResult, tuned_scenario
 from . import style
 from .html import figure_block, html_table, render, write_html
 
 CURVE_CAPTION = (
     "E Σ_i ‖x_i − θ‖² over time under the tuned gain (solid) and the baseline 1/(1 + t) "
-    "(dashed), a marker at each curve's peak; the dotted line is ε, the deadline T is the "
+    "(dash-dot), a marker at each curve's peak; the dotted line is ε, the deadline T is the "
     "right edge."
 )
 LANDSCAPE_CAPTION = (
@@ -46,11 +47,20 @@ SCHEDULE_CURVES_CAPTION = (
     "independently of the optimiser); a marker at each curve's peak, the dotted line the "
     "peak bound when one was asked."
 )
+#: Palette index, line style and name of each gain a result holds.
 _STYLES = {
+    "tuned": (0, "-", "tuned"),
     "optimal": (0, "-", "optimal schedule"),
     "power": (1, "--", "best power law"),
-    "baseline": (2, "-.", "1/(1 + t)"),
+    "baseline": (2, "-.", "baseline"),
 }
+
+
+def _label(key: str, result: TuneResult | ScheduleTuneResult) -> str:
+    """The legend of a gain: its name, and its expression unless a table."""
+    gain = result.gains[key]
+    name = _STYLES[key][2]
+    return name if isinstance(gain, ScheduleGain) else f"{name}: {gain.text}"
 
 
 def schedule_gains_figure(result: ScheduleTuneResult):
@@ -71,10 +81,9 @@ def schedule_gains_figure(result: ScheduleTuneResult):
     with style.paper_style():
         fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.4), layout="constrained")
         for key, g in result.gains.items():
-            i, ls, label = _STYLES[key]
+            i, ls, _ = _STYLES[key]
             colour = style.PALETTE[i]
-            name = f"{label}: {g.text}" if key == "power" else label
-            ax.plot(t, g(t), color=colour, ls=ls, label=name)
+            ax.plot(t, g(t), color=colour, ls=ls, label=_label(key, result))
             ax.plot(tail, g(tail), color=colour, ls=":" if key == "optimal" else ls, lw=0.9)
         ax.axvline(t_end, color=style.GREY, lw=0.6)
         ax.set_yscale("log")
@@ -85,42 +94,14 @@ def schedule_gains_figure(result: ScheduleTuneResult):
     return fig
 
 
-def schedule_curves_figure(result: ScheduleTuneResult):
-    """E Σ‖x_i − θ‖² of the three gains on [0, T], peaks marked.
+def curves_figure(result: TuneResult | ScheduleTuneResult):
+    """E Σ‖x_i − θ‖² of every gain of the result over [0, T] (log scale), with the Monte
+    Carlo bands where there are some, a marker at each peak, ε and the peak bound when
+    asked.
 
     Parameters
     ----------
-    result : ScheduleTuneResult
-        The tuning.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    with style.paper_style():
-        fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.4), layout="constrained")
-        for key, c in result.curves.items():
-            i, ls, label = _STYLES[key]
-            colour = style.PALETTE[i]
-            ax.plot(c.t, np.maximum(c.total, 1e-12), color=colour, ls=ls, label=label)
-            pk = c.peak
-            ax.plot([pk["t"]], [pk["value"]], marker="v", color=colour, ls="none", ms=5)
-        if result.max_peak is not None:
-            ax.axhline(result.max_peak, color=style.GREY, ls=":", lw=0.8, label="peak bound")
-        ax.set_yscale("log")
-        ax.set_xlabel("t")
-        ax.set_ylabel(r"$E\,\sum_i \|x_i - \theta\|^2$")
-        ax.set_xlim(0, result.horizon)
-        fig.legend(loc="outside upper center", ncols=2, frameon=False)
-    return fig
-
-
-def curves_figure(result: TuneResult):
-    """The tuned and the baseline curves (log scale), with their bands for Monte Carlo.
-
-    Parameters
-    ----------
-    result : TuneResult
+    result : TuneResult or ScheduleTuneResult
         The tuning.
 
     Returns
@@ -130,26 +111,20 @@ def curves_figure(result: TuneResult):
     floor = 1e-12
     with style.paper_style():
         fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.4), layout="constrained")
-        for key, colour, ls in (
-            ("tuned", style.PALETTE[0], "-"),
-            ("baseline", style.PALETTE[1], "--"),
-        ):
-            c = result.curves[key]
-            gain = result.tuned.text if key == "tuned" else result.baseline.text
-            ax.plot(c.t, np.maximum(c.total, floor), color=colour, ls=ls, label=f"{key}: {gain}")
+        for key, c in result.curves.items():
+            i, ls, _ = _STYLES[key]
+            colour = style.PALETTE[i]
+            ax.plot(c.t, np.maximum(c.total, floor), color=colour, ls=ls, label=_label(key, result))
             pk = c.peak
             ax.plot([pk["t"]], [pk["value"]], marker="v", color=colour, ls="none", ms=5)
             if c.lo is not None and c.hi is not None:
-                ax.fill_between(
-                    c.t,
-                    np.maximum(c.lo, floor),
-                    np.maximum(c.hi, floor),
-                    color=colour,
-                    alpha=0.2,
-                    lw=0,
-                )
+                lo, hi = np.maximum(c.lo, floor), np.maximum(c.hi, floor)
+                ax.fill_between(c.t, lo, hi, color=colour, alpha=0.2, lw=0)
         if result.eps is not None:
             ax.axhline(result.eps, color=style.GREY, ls=":", lw=0.8, label=f"ε = {fmt(result.eps)}")
+        bound = getattr(result, "max_peak", None)
+        if bound is not None:
+            ax.axhline(bound, color=style.GREY, ls=":", lw=0.8, label="peak bound")
         ax.set_yscale("log")
         ax.set_xlabel("t")
         ax.set_ylabel(r"$E\,\sum_i \|x_i - \theta\|^2$")
@@ -320,9 +295,7 @@ POWER_SECTIONS = (
 SCHEDULE_SECTIONS = (
     Section("evidence", "Three gains at the deadline", tables=lambda r: [r.table()]),
     Section("gains", "The gains c(t)", schedule_gains_figure, SCHEDULE_GAINS_CAPTION),
-    Section(
-        "curves", "Mean-square error over time", schedule_curves_figure, SCHEDULE_CURVES_CAPTION
-    ),
+    Section("curves", "Mean-square error over time", curves_figure, SCHEDULE_CURVES_CAPTION),
     Section("refinement", "Refinement of the schedule", tables=lambda r: [r.refinement_table()]),
     Section(
         "theorems", "Theorem conditions of the schedule", tables=lambda r: [r.gain_analysis.table()]

@@ -487,7 +487,8 @@ def solve(
     """Minimise J over the parameters of ``param`` from ``x0``: L-BFGS-B (or SLSQP with
     the peak bound M ≥ the KS aggregate), with the exact adjoint gradient; the step plan
     is made from the start, kept while the optimiser runs (so J is smooth), and remade
-    and the run repeated until it holds at the optimum.
+    for the larger of every gain seen and the run repeated until the optimum needs no
+    more steps (so the plan only grows and the loop ends).
 
     Parameters
     ----------
@@ -519,7 +520,8 @@ def solve(
     hi = np.array([b[1] for b in bounds])
     x = np.clip(np.asarray(x0, dtype=float), lo, hi)
     scale = max(prob.initial, 1e-300)
-    plan = prob.plan(param.nodes(x), kappa)
+    basis = param.nodes(x)  # the plan is made for gains up to these; it only grows
+    plan = prob.plan(basis, kappa)
     peak = float(max_peak) if max_peak is not None else math.inf
     message = ""
     for _ in range(4):
@@ -574,8 +576,9 @@ def solve(
             )
         x = np.clip(r.x, lo, hi)
         message = str(r.message)
-        new = prob.plan(param.nodes(x), kappa)
-        if np.all(new.pieces <= plan.pieces):
+        basis = np.maximum(basis, param.nodes(x))
+        new = prob.plan(basis, kappa)
+        if np.array_equal(new.pieces, plan.pieces):
             break
         plan = new
     fwd = prob.forward(param.nodes(x), plan)

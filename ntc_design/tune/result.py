@@ -87,6 +87,11 @@ class TuneResult:
         return {k: c.final for k, c in self.curves.items()}
 
     @property
+    def gains(self) -> dict[str, PowerGain]:
+        """The two gains, by key."""
+        return {"tuned": self.tuned, "baseline": self.baseline}
+
+    @property
     def headline(self) -> tuple[float, str]:
         """E Σ‖x_i(T) − θ‖² of the tuned gain and how it was computed (the written
         scenario's description)."""
