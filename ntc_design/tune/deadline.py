@@ -16,22 +16,24 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError, require_positive
 from ..gain import GainAnalysis
-from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..model import TimeVaryingTopology
 from ..rows import Table, fmt, verdict
 from ..schedule import ScheduleGain, analyse_schedule, join_tail
 from ..simulate import SimulationSpec, simulate
 from ..simulate.driver import AnyTopology
 from ..simulate.result import Z95
 from ..simulate.spec import SaveAt
+from ..timevarying import ExpressionTopology
 from .evidence import certify_tuned, checked_spec, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
-from .objective import AnyGain, Curve, ExactObjective
+from .objective import AnyGain, Curve, ExactObjective, objective_for
 from .optimal import (
     DEFAULT_MAX_GAIN,
     LEVELS,
@@ -403,7 +405,7 @@ class ScheduleTuneResult:
 
 def check_schedule_scenario(topology: AnyTopology, spec: SimulationSpec) -> None:
     """Refuse, in one line, what the optimal schedule cannot do: a non-linear f (no exact
-    moments), a topology given as expressions of t, N·d above the limit.
+    moments) or N·d above the limit.
 
     Parameters
     ----------
@@ -422,11 +424,34 @@ def check_schedule_scenario(topology: AnyTopology, spec: SimulationSpec) -> None
             "--schedule optimal: exact moments exist only for a linear f(x) = F·x; use "
             "--schedule power --method mc (Monte Carlo with common random numbers)"
         )
-    if not isinstance(topology, (Topology, SwitchingTopology, TimeVaryingTopology)):
-        raise InputError(
-            "--schedule optimal: a topology given as expressions of t has no sampled exact "
-            "moment operators here; use --schedule power (it tunes A(t) by exact moments)"
-        )
+    ScheduleProblem.check_size(topology.n * topology.dim)
+
+
+def sampled_topology(topology: ExpressionTopology) -> TimeVaryingTopology:
+    """A(t) given as expressions of t, as functions of t: what the schedule optimises on,
+    re-designed (Lemma 1) every ``spec.resample`` (default 0.1) time units as the
+    simulator does for functions of t; the numbers reported are re-evaluated on the
+    continuous A(t).
+
+    Parameters
+    ----------
+    topology : ExpressionTopology
+        The network.
+
+    Returns
+    -------
+    TimeVaryingTopology
+    """
+    labels = topology.labels
+    weights = {
+        (labels[e.j], labels[e.i]): partial(_edge_weight, topology, k)
+        for k, e in enumerate(topology.edges)
+    }
+    return TimeVaryingTopology(labels, topology.dim, weights, topology.name)
+
+
+def _edge_weight(topology: ExpressionTopology, k: int, t: float) -> np.ndarray:
+    return topology.weights_at([t])[0, k]
 
 
 def _monte_carlo(
@@ -485,25 +510,40 @@ def _schedule_delta(
     start: PowerGain,
     max_gain: float,
     max_peak: float | None,
+    notes: list[str],
 ) -> float:
     """The common δ for the schedule: bounded Brent search of log δ over
     :func:`.run.delta_range`, each δ scored by the optimal schedule on ``DELTA_PIECES``
-    pieces; δ written to 4 significant digits."""
+    pieces (started from the schedule of the nearest δ scored so far); δ written to 4
+    significant digits."""
     from scipy.optimize import minimize_scalar
 
     lo, hi, _ = delta_range(topology, theta)
+    seen: dict[float, Callable] = {}
 
     def score(log_delta: float) -> float:
+        near = min(seen, key=lambda v: abs(v - log_delta)) if seen else None
         prob = ScheduleProblem(obj.prepared(math.exp(log_delta))[0], obj.horizon)
         sol = optimise_schedule(
-            prob, start, max_gain=max_gain, max_peak=max_peak, levels=(DELTA_PIECES,)
+            prob,
+            seen[near] if near is not None else start,
+            max_gain=max_gain,
+            max_peak=max_peak,
+            levels=(DELTA_PIECES,),
         )
+        seen[log_delta] = partial(np.interp, xp=sol.t, fp=sol.c)
         return sol.value
 
     r = minimize_scalar(
         score, bounds=(math.log(lo), math.log(hi)), method="bounded", options={"xatol": 1e-3}
     )
-    return float(f"{math.exp(r.x):.4g}")
+    delta = float(f"{math.exp(r.x):.4g}")
+    if min(r.x - math.log(lo), math.log(hi) - r.x) < 1e-2:
+        notes.append(
+            f"δ = {delta:.4g} is at the edge of the searched range [{lo:.4g}, {hi:.4g}]: a "
+            "wider range may do better"
+        )
+    return delta
 
 
 def tune_schedule(
@@ -575,10 +615,13 @@ def tune_schedule(
     if not isinstance(check_paths, int) or not 0 <= check_paths <= 100_000:
         raise InputError(f"check_paths: expected an integer in [0, 100000], got {check_paths!r}")
     check_schedule_scenario(topology, spec)
-    ScheduleProblem.check_size(topology.n * topology.dim)
     notes: list[str] = []
     say = progress or (lambda _m: None)
-    obj = ExactObjective(topology, spec, horizon)
+    # the optimiser's model (A(t) expressions sampled) and the independent judge of every
+    # reported number (the continuous A(t) for expressions)
+    model = sampled_topology(topology) if isinstance(topology, ExpressionTopology) else topology
+    obj = ExactObjective(model, spec, horizon)
+    judge = objective_for(topology, spec, horizon, "exact")
     initial = float(obj.prepared(None)[0].eps0 @ obj.prepared(None)[0].eps0)
     if max_peak is not None and not max_peak > initial:
         raise InputError(
@@ -588,7 +631,7 @@ def tune_schedule(
 
     say("the best power law a·(b + t)^(−γ)")
     pw = tune_power(
-        topology,
+        model,
         spec,
         horizon,
         require=require,
@@ -603,7 +646,7 @@ def tune_schedule(
     delta = pw.delta
     if tune_delta:
         say("δ for the schedule")
-        delta = _schedule_delta(obj, topology, spec.theta, power, max_gain, max_peak)
+        delta = _schedule_delta(obj, topology, spec.theta, power, max_gain, max_peak, notes)
     prob = ScheduleProblem(obj.prepared(delta)[0], horizon)
     say("the optimal schedule")
     sol = optimise_schedule(
@@ -628,7 +671,7 @@ def tune_schedule(
         "power": (power, pw.delta),
         "baseline": (BASELINE, None),
     }
-    curves = {k: obj.curve(g, d, points=401) for k, (g, d) in gains.items()}
+    curves = {k: judge.curve(g, d, points=401) for k, (g, d) in gains.items()}
     gap = abs(sol.value - curves["optimal"].final) / curves["optimal"].final
     if gap > AGREE_RTOL:
         notes.append(
@@ -651,7 +694,8 @@ def tune_schedule(
         "optimal control: piecewise-linear c on K pieces, exact second-moment equations "
         "by RK4 with their exact discrete adjoint, "
         + ("SLSQP with the peak bound" if max_peak is not None else "L-BFGS-B")
-        + f"; re-evaluated by {obj.describe()}"
+        + ("; A(t) sampled every 0.1 for the optimiser" if model is not topology else "")
+        + f"; re-evaluated by {judge.describe()}"
     )
     return ScheduleTuneResult(
         schedule=schedule,
