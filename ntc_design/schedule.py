@@ -30,6 +30,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -425,6 +426,13 @@ def _join(g: ScheduleGain) -> tuple[bool, str]:
     )
 
 
+@lru_cache(maxsize=32)
+def _tail_analysis(tail: str, seconds: float | None) -> GainAnalysis:
+    # certify, its own verification and the tune result analyse one tail three times; the
+    # symbolic analysis is deterministic in its text and takes seconds
+    return analyse_gain(tail) if seconds is None else analyse_gain(tail, seconds)
+
+
 def analyse_schedule(g: ScheduleGain, seconds: float | None = None) -> GainAnalysis:
     """The Theorem 1-4 conditions for a schedule: the table's (finite, >= 0, continuous)
     and the join decide continuity; the tail's symbolic analysis decides the rest.
@@ -446,7 +454,7 @@ def analyse_schedule(g: ScheduleGain, seconds: float | None = None) -> GainAnaly
     InputError
         The tail is negative or not finite on [0, ∞).
     """
-    tail = analyse_gain(g.tail) if seconds is None else analyse_gain(g.tail, seconds)
+    tail = _tail_analysis(g.tail, seconds)
     table = _table_condition(g)
     ok, why = _join(g)
     cont = tail.continuous_nonnegative

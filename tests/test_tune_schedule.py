@@ -280,6 +280,13 @@ def test_peak_bound_is_kept(problem):
     assert held.value >= free.value * (1 - 1e-6)  # a constraint cannot help
 
 
+@pytest.mark.hostile
+def test_a_plan_too_large_is_refused_before_it_is_made(problem):
+    prob = problem(10.0)
+    with pytest.raises(InputError, match="RK4 steps would store"):
+        prob.plan(np.full(11, 1e6))  # about 1e14 steps: refused from the count alone
+
+
 def test_max_gain_binds_and_says_so(problem):
     prob = problem(2.0)
     sol = optimise_schedule(prob, BASELINE, max_gain=0.5, levels=(10, 20))

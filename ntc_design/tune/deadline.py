@@ -622,7 +622,8 @@ def tune_schedule(
     model = sampled_topology(topology) if isinstance(topology, ExpressionTopology) else topology
     obj = ExactObjective(model, spec, horizon)
     judge = objective_for(topology, spec, horizon, "exact")
-    initial = float(obj.prepared(None)[0].eps0 @ obj.prepared(None)[0].eps0)
+    eps0 = obj.prepared(None)[0].eps0
+    initial = float(eps0 @ eps0)
     if max_peak is not None and not max_peak > initial:
         raise InputError(
             f"--max-peak: {max_peak:g} is not above the initial error E Σ‖x_i(0) − θ‖² = "
@@ -640,14 +641,13 @@ def tune_schedule(
         landscape=False,
         certificate=False,
     )
-    power = _polish(
-        ScheduleProblem(obj.prepared(pw.delta)[0], horizon), pw.tuned, require, obj, pw.delta
-    )
+    prob = ScheduleProblem(obj.prepared(pw.delta)[0], horizon)
+    power = _polish(prob, pw.tuned, require, obj, pw.delta)
     delta = pw.delta
     if tune_delta:
         say("δ for the schedule")
         delta = _schedule_delta(obj, topology, spec.theta, power, max_gain, max_peak, notes)
-    prob = ScheduleProblem(obj.prepared(delta)[0], horizon)
+        prob = ScheduleProblem(obj.prepared(delta)[0], horizon)
     say("the optimal schedule")
     sol = optimise_schedule(
         prob, power, max_gain=max_gain, max_peak=max_peak, levels=levels, progress=say

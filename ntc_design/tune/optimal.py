@@ -195,13 +195,11 @@ class ScheduleProblem:
         """
         kk = c.size - 1
         nodes = self.node_times(kk)
-        modes, ks, hs, th, ends = [], [], [], [], []
-        per = np.zeros(kk, dtype=np.int64)
+        parts: list[tuple[float, float, int, int, int]] = []  # (lo, hi, mode, k, steps)
         seg = self.segments
         si = 0
         for k in range(kk):
             a, b = nodes[k], nodes[k + 1]
-            width = b - a
             cbar = PLAN_MARGIN * max(c[k], c[k + 1])
             while si < len(seg) - 1 and seg[si][1] <= a + 1e-14 * max(1.0, a):
                 si += 1
@@ -210,22 +208,31 @@ class ScheduleProblem:
             while lo < b - 1e-14 * max(1.0, b):
                 mode = seg[j][2] if j < len(seg) else seg[-1][2]
                 hi = min(b, seg[j][1]) if j < len(seg) else b
-                if hi <= lo:
-                    j += 1
-                    continue
-                rho = float(max(self.ops[mode].radius(cbar), 1e-12))
-                m = max(1, math.ceil((hi - lo) * rho / kappa))
-                per[k] = max(per[k], m)
-                edges = np.linspace(lo, hi, m + 1)
-                h = np.diff(edges)
-                starts = edges[:-1]
-                modes.append(np.full(m, mode))
-                ks.append(np.full(m, k))
-                hs.append(h)
-                th.append((np.stack([starts, starts + h / 2, starts + h], axis=1) - a) / width)
-                ends.append(edges[1:])
-                lo = hi
+                if hi > lo:
+                    rho = float(max(self.ops[mode].radius(cbar), 1e-12))
+                    parts.append((lo, hi, mode, k, max(1, math.ceil((hi - lo) * rho / kappa))))
+                    lo = hi
                 j += 1
+        steps = sum(p[4] for p in parts)
+        need = steps * 4 * self.ns * 8  # refused before any array of that many steps exists
+        if need > MAX_STORE:
+            raise InputError(
+                f"--schedule optimal: {steps:.3g} RK4 steps would store {format_bytes(need)} "
+                f"for the adjoint (limit {format_bytes(MAX_STORE)}); lower --max-gain or T"
+            )
+        per = np.zeros(kk, dtype=np.int64)
+        modes, ks, hs, th, ends = [], [], [], [], []
+        for lo, hi, mode, k, m in parts:
+            per[k] = max(per[k], m)
+            edges = np.linspace(lo, hi, m + 1)
+            h = np.diff(edges)
+            starts = edges[:-1]
+            modes.append(np.full(m, mode))
+            ks.append(np.full(m, k))
+            hs.append(h)
+            width = nodes[k + 1] - nodes[k]
+            th.append((np.stack([starts, starts + h / 2, starts + h], axis=1) - nodes[k]) / width)
+            ends.append(edges[1:])
         plan = Plan(
             np.concatenate(modes),
             np.concatenate(ks),
@@ -235,12 +242,6 @@ class ScheduleProblem:
             per,
             c.size,
         )
-        need = plan.steps * 4 * self.ns * 8
-        if need > MAX_STORE:
-            raise InputError(
-                f"--schedule optimal: {plan.steps} RK4 steps would store {format_bytes(need)} "
-                f"for the adjoint (limit {format_bytes(MAX_STORE)}); lower --max-gain or T"
-            )
         return plan
 
     # ------------------------------------------------------------ forward and adjoint
