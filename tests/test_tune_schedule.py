@@ -490,8 +490,14 @@ def test_cli_schedule_end_to_end_writes_a_runnable_folder(tmp_path, capsys, monk
     )
     assert code == 0, err
     summary = json.loads((tmp_path / "mc" / "summary.json").read_text(encoding="utf-8"))
-    final = summary["ms_error_T"] if "ms_error_T" in summary else None
-    assert final is None or final
+    assert summary["parameters"]["gain"]["c"] == doc["schedule"]["c"]  # recorded whole
+    final = sum(summary["final_ms_error_exact"].values())
+    assert final == pytest.approx(doc["ms_error_T"]["optimal"], rel=1e-3)
+    # and its report shows the schedule (its label, its gain figure, its certificate)
+    code, _, err = run_cli(["report", tmp_path / "mc"], capsys, monkeypatch)
+    assert code == 0, err
+    page = (tmp_path / "mc" / "report.html").read_text(encoding="utf-8")
+    assert f"schedule ({len(doc['schedule']['t'])} points on [0, 1.5], linear)" in page
 
 
 def test_power_tune_reports_its_peak(g1, spec):

@@ -309,7 +309,7 @@ def aggregate_section(
     base = base or run.path
     p = run.summary["parameters"]
     top = run.topology()
-    res = certify(top, p["theta"], p["margin"], p["gain"])
+    res = certify(top, p["theta"], p["margin"], run.gain)
     cert_tab, checks, cert = certificate_tables(res, run.path / "certificate.json", base)
     ms, kind, total = _curves(run)
     modes = (

@@ -21,7 +21,7 @@ written as vector PDF and SVG beside a 300-dpi PNG by :func:`save`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import matplotlib
@@ -548,13 +548,13 @@ def gain_latex(text: str) -> str:
     return out
 
 
-def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
+def gain_figure(text: str | Callable, t_end: float, width: float = TWO_COLUMN):
     """c(t), ∫₀ᵗ c and ∫₀ᵗ c² on [0, T] (cumulative trapezoid on a fine grid).
 
     Parameters
     ----------
-    text : str
-        The gain c(t).
+    text : str or callable
+        The gain c(t): an expression, or a callable such as a schedule.
     t_end : float
         T.
     width : float, optional
@@ -583,7 +583,8 @@ def gain_figure(text: str, t_end: float, width: float = TWO_COLUMN):
             ax.set_ylabel(lab)
             ax.set_xlabel("$t$")
             ax.set_ylim(bottom=0)
-        fig.suptitle(gain_latex(text), fontsize=9)
+        title = gain_latex(text) if isinstance(text, str) else getattr(text, "text", "c(t)")
+        fig.suptitle(title, fontsize=9)
     return fig
 
 

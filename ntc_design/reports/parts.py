@@ -11,6 +11,7 @@ import numpy as np
 from ..certify import verify_file, write_certificate
 from ..errors import InputError
 from ..rows import fmt
+from ..schedule import schedule_from_document
 from ..simulate import SimulationDiverged, SimulationSpec, simulate
 from ..simulate.result import MeanSquareBand
 from .html import Table, html_table, matrix, rel
@@ -124,6 +125,8 @@ def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
             )
         elif k == "initial" and isinstance(v, list) and len(v) == n * d:
             rows.append(("initial x(0) (agents × d)", matrix(np.reshape(v, (n, d)))))
+        elif k == "gain" and isinstance(v, dict):  # a schedule: its label, not its table
+            rows.append(("gain", schedule_from_document(v, "parameters.gain").text))
         elif k == "schedule" and isinstance(v, list):
             rows.append(
                 ("schedule (one period)", ", ".join(f"{s['mode']} {s['duration']:g}" for s in v))

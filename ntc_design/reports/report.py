@@ -22,6 +22,7 @@ from ..gain import T, limit_at_infinity, parse_gain
 from ..model import SwitchingTopology
 from ..outputs import check_output_file
 from ..rows import fmt
+from ..schedule import ScheduleGain
 from ..simulate.result import MeanSquareBand
 from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
@@ -97,11 +98,14 @@ def convergence_table(run: RunData, mc, exact, rate: float) -> tuple[str, Table,
     t = run.t
     t_end = float(t[-1])
     t_from = t_end / 10
-    gain = run.summary["parameters"]["gain"]
-    try:
-        pred, why = predicted_exponent(gain, rate)
-    except InputError:
-        pred, why = None, "the gain is a callable: no prediction"
+    gain = run.gain
+    if isinstance(gain, ScheduleGain):
+        pred, why = None, "a tabulated schedule on [0, T]: no closed-form prediction"
+    else:
+        try:
+            pred, why = predicted_exponent(gain, rate)
+        except InputError:
+            pred, why = None, "the gain is a callable: no prediction"
     rows = []
     fits = {}
     series = [(a, k) for k, a in enumerate(run.labels)] + [("all (Σ_i)", None)]
@@ -161,7 +165,7 @@ def _time_varying(run: RunData, p: dict, figdir: Path) -> tuple:
         tv,
         p["theta"],
         p["margin"],
-        p["gain"],
+        run.gain,
         noise_sigma=float(noise.get("sigma", 0.4)),
         noise_f=f if isinstance(f, (int, float, list)) else 0.3,
     )
@@ -201,7 +205,7 @@ class _Certified:
 
 def _certified(run: RunData, figdir: Path, base: Path) -> _Certified:
     p = run.summary["parameters"]
-    res = certify(run.topology(), p["theta"], p["margin"], p["gain"])
+    res = certify(run.topology(), p["theta"], p["margin"], run.gain)
     # weights as expressions of t: the design tables show t = 0, the certificate and the
     # theorems are the time-varying ones (uniform Λ₂), with two figures over a period
     tv_res, tv_figs = _time_varying(run, p, figdir)
@@ -350,7 +354,6 @@ def run_section(
 def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, fine) -> dict:
     """The section's figures, written to ``figdir``: coupling, topologies (and A(t),
     schedule), mean-square error, a sample path, the gain."""
-    p = run.summary["parameters"]
     top = run.topology()
     labels = run.labels
     segs = top.segments(float(run.t[-1])) if isinstance(top, SwitchingTopology) else None
@@ -433,7 +436,7 @@ def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, 
     out["gain"] = None
     try:
         out["gain"] = fig(
-            figures.gain_figure(p["gain"], float(run.t[-1])),
+            figures.gain_figure(run.gain, float(run.t[-1])),
             f"{key}_gain",
             "The gain c(t) and its integrals ∫c (infinite: the cumulative effect needed for "
             "consensus) and ∫c² (finite: the noise energy that almost-sure consensus needs).",

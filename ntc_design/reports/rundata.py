@@ -17,6 +17,7 @@ from ..errors import InputError, format_bytes, require_number, require_positive
 from ..files import parse_topology
 from ..gain import parse_gain
 from ..model import SwitchingTopology, Topology
+from ..schedule import ScheduleGain, schedule_from_document
 from ..simulate.budget import MEMORY_FRACTION, available_memory
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
@@ -37,6 +38,13 @@ class RunData:
     def labels(self) -> list[str]:
         """The agent labels, as text."""
         return [str(a) for a in self.npz["labels"]]
+
+    @property
+    def gain(self) -> str | ScheduleGain:
+        """The run's gain: its expression, or the schedule it recorded (checked by
+        :func:`load_run`)."""
+        g = self.summary["parameters"]["gain"]
+        return schedule_from_document(g, "parameters.gain") if isinstance(g, dict) else g
 
     @property
     def theta(self) -> np.ndarray:
@@ -246,13 +254,18 @@ def _check_run(run: RunData) -> None:
         require_positive("parameters.margin", p["margin"])
     except InputError as exc:
         raise InputError(f"{where}: {exc}; {_rerun(d)}") from None
-    if not isinstance(p["gain"], str):
-        raise bad("parameters.gain", "expected an expression in t (text)")
-
-    try:
-        parse_gain(p["gain"])
-    except InputError as exc:  # "gain: ..." from the parser
-        raise InputError(f"{where}: parameters.{exc}; {_rerun(d)}") from None
+    if isinstance(p["gain"], dict):  # a tabulated schedule, checked whole
+        try:
+            schedule_from_document(p["gain"], "parameters.gain")
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}; {_rerun(d)}") from None
+    elif not isinstance(p["gain"], str):
+        raise bad("parameters.gain", "expected an expression in t (text) or a schedule")
+    else:
+        try:
+            parse_gain(p["gain"])
+        except InputError as exc:  # "gain: ..." from the parser
+            raise InputError(f"{where}: parameters.{exc}; {_rerun(d)}") from None
     for key in ("noise", "time_varying"):
         if p.get(key) is not None and not isinstance(p[key], dict):
             raise bad(f"parameters.{key}", "expected a mapping")

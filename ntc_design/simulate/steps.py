@@ -83,7 +83,8 @@ def run_parameters(
     params.update(
         {
             "theta": theta.tolist(),
-            "gain": gain_text,
+            # a schedule is recorded whole (spec.options), an expression as written
+            "gain": params["gain"] if isinstance(params["gain"], dict) else gain_text,
             "initial": x_init.tolist(),
             "workers": workers,
             "save_times": int(grid.save_times.size),
