@@ -112,6 +112,11 @@ def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
     Returns
     -------
     Table
+
+    Raises
+    ------
+    InputError
+        A recorded schedule gain that is malformed (``load_run`` checks it first).
     """
     rows: list[tuple] = []
     for k, v in p.items():
