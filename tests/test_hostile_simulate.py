@@ -724,6 +724,9 @@ def test_ctrl_c_with_two_workers_stops_promptly(tmp_path):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # a suite started in the background by a non-interactive shell ignores SIGINT, and
+        # its children inherit that: the run must get Ctrl-C as a user's terminal gives it
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     # interrupt once the Monte Carlo is running: its 2 worker processes exist (a loaded
     # machine may need several seconds for the imports alone)
