@@ -235,15 +235,15 @@ def _independent_problem(pm, horizon, pieces):
 
 @pytest.mark.slow
 def test_optimum_is_within_3_percent_of_an_independent_optimum(problem, g1, spec):
-    """The independent optimum: 8 constant pieces propagated by matrix exponentials,
+    """The independent optimum: 6 constant pieces propagated by matrix exponentials,
     L-BFGS-B with finite differences from c = 1. The continuous schedule on finer pieces
     is at least as good, and within 3 %."""
     horizon = 2.0
     sol = optimise_schedule(problem(horizon), BASELINE, levels=(10, 20, 40))
     pm = prepare_modes(g1, spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
-    value = _independent_problem(pm, horizon, 8)
+    value = _independent_problem(pm, horizon, 6)
     r = minimize(
-        value, np.zeros(8), method="L-BFGS-B", bounds=[(-6, 1.5)] * 8, options={"eps": 1e-6}
+        value, np.zeros(6), method="L-BFGS-B", bounds=[(-6, 1.5)] * 6, options={"eps": 1e-6}
     )
     assert sol.value <= r.fun * (1 + 1e-4)
     assert sol.value >= 0.97 * r.fun
@@ -271,11 +271,11 @@ def test_optimum_is_below_an_independent_piecewise_constant_evaluation(problem, 
 
 
 def test_peak_bound_is_kept(problem):
-    prob = problem(2.0)
-    free = optimise_schedule(prob, BASELINE, levels=(10, 20))
+    prob = problem(1.5)
+    free = optimise_schedule(prob, BASELINE, levels=(10,))
     bound = 0.5 * (free.peak[0] + prob.initial)
     assert free.peak[0] > bound  # the bound binds
-    held = optimise_schedule(prob, BASELINE, max_peak=bound, levels=(10, 20))
+    held = optimise_schedule(prob, BASELINE, max_peak=bound, levels=(10,))
     assert held.peak[0] <= bound * (1 + 1e-6)
     assert held.value >= free.value * (1 - 1e-6)  # a constraint cannot help
 
