@@ -81,26 +81,51 @@ def parse_vector(text: str, field: str) -> list[float]:
     return vals
 
 
+def _command_line() -> str:
+    """This invocation as a shell command (``ntc`` and its arguments, quoted)."""
+    import shlex
+
+    return shlex.join(["ntc", *sys.argv[1:]])
+
+
 def _json(obj) -> str:
     return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
 
 
 @app.command(epilog="Example: ntc check examples/g1.yaml")
-def check(file: FileArg, as_json: JsonOpt = False) -> None:
-    """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition."""
+def check(
+    file: FileArg,
+    full: Annotated[
+        bool,
+        typer.Option(
+            "--full",
+            help="Every edge and agent even above 50 agents (default there: a summary).",
+            metavar="",
+        ),
+    ] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition
+    (above 50 agents a summary, unless --full)."""
+    from .design import SUMMARY_ABOVE, structure_summary, summary_table
+
     loaded = load(file)
     # a time-varying topology's classes are fixed: its structure at any t
     top = loaded.structure if isinstance(loaded, ExpressionTopology) else loaded
-    if isinstance(top, SwitchingTopology):
-        rep = {"modes": {k: structure_report(m) for k, m in top.modes.items()}}
-        if as_json:
-            print(_json(rep))
+    modes = top.modes if isinstance(top, SwitchingTopology) else {None: top}
+    reports = {}
+    for k, m in modes.items():
+        title = f"mode {k}" if k is not None else m.name or str(file)
+        if full or m.n <= SUMMARY_ABOVE:
+            reports[k] = structure_report(m)
+            if not as_json:
+                print_structure(reports[k], title)
         else:
-            for k, r in rep["modes"].items():
-                print_structure(r, f"mode {k}")
-        return
-    rep = structure_report(top)
-    print(_json(rep)) if as_json else print_structure(rep, top.name or str(file))
+            reports[k] = structure_summary(m)
+            if not as_json:
+                print_table(summary_table(reports[k], title))
+    if as_json:
+        print(_json({"modes": reports} if None not in reports else reports[None]))
 
 
 @app.command("design", epilog="Example: ntc design examples/g1.yaml --theta 1,2,-1")
@@ -127,11 +152,11 @@ def design_cmd(
     as_json: JsonOpt = False,
 ) -> None:
     """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S."""
+    from .outputs import check_output_file
+
     th = parse_vector(theta, "--theta")
-    if out_path is not None and out_path.suffix.lower() not in (".mat", ".json"):
-        raise InputError(f"--out: {out_path}: expected a .mat or .json file")
-    if out_path is not None and not out_path.parent.is_dir():
-        raise InputError(f"--out: directory {out_path.parent} does not exist")
+    if out_path is not None:
+        check_output_file(out_path, "--out", (".mat", ".json"))
     top = load(file)
     if isinstance(top, ExpressionTopology):
         from .timevarying import TimeVaryingDesign
@@ -146,8 +171,7 @@ def design_cmd(
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
         res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
-    if out_path is not None:
-        _write_design(res, out_path)
+    written = _write_design(res, out_path) if out_path is not None else []
     if as_json:
         print(_json(res.to_dict()))
     elif isinstance(res, SwitchingDesign):
@@ -156,19 +180,25 @@ def design_cmd(
     else:
         name = res.topology.name or str(file)
         print_table(res.table(f"{name}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
+    if written and not as_json:
+        out.print(f"wrote {', '.join(one_line(str(p)) for p in written)}", soft_wrap=True)
 
 
-def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> None:
-    """The design as .mat (one file per mode for a switching set: NAME_MODE.mat) or .json."""
+def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Path]:
+    """The design as .mat (one file per mode for a switching set: NAME_MODE.mat) or .json;
+    the files written."""
     from .outputs import write_atomic
 
     if path.suffix.lower() == ".json":
-        write_atomic(path, _json(res.to_dict()) + "\n")
-    elif isinstance(res, SwitchingDesign):
+        return [write_atomic(path, _json(res.to_dict()) + "\n")]
+    if isinstance(res, SwitchingDesign):
+        paths = []
         for k, d in res.modes.items():
-            d.to_mat(path.with_name(f"{path.stem}_{k}{path.suffix}"))
-    else:
-        res.to_mat(path)
+            paths.append(path.with_name(f"{path.stem}_{k}{path.suffix}"))
+            d.to_mat(paths[-1])
+        return paths
+    res.to_mat(path)
+    return [path]
 
 
 @app.command(epilog="Example: ntc generate --n 1000 --d 3 --out runs/net.npz")
@@ -187,10 +217,15 @@ def generate(
 ) -> None:
     """Write a random directed signed matrix-weighted network that satisfies Assumption 2
     by construction (seeded; see ntc_design.generate)."""
-    from .generate import random_network, write_topology
+    from .generate import TOPOLOGY_SUFFIXES, random_network, write_topology
+    from .outputs import check_output_file
 
-    top = random_network(n, d, seed, family, p_negative=p_negative)
-    write_topology(top, out_path)
+    check_output_file(out_path, "--out", TOPOLOGY_SUFFIXES)  # before the work
+    with Progress("ntc generate") as prog:
+        prog.stage(f"drawing {n} agents ({family})")
+        top = random_network(n, d, seed, family, p_negative=p_negative)
+        prog.stage(f"writing {len(top.weights)} edges to {one_line(str(out_path))}")
+        write_topology(top, out_path)
     if as_json:
         doc = {"file": str(out_path), "name": top.name, "N": top.n, "d": top.dim}
         print(_json({**doc, "edges": len(top.weights), "seed": seed, "family": family}))
@@ -252,14 +287,12 @@ def certify(
     --out is written only when the certificate is valid."""
     from .certify import certify as run
     from .certify import write_certificate
+    from .outputs import check_output_file
     from .schedule import gain_from_option
 
     th = parse_vector(theta, "--theta")
     if out_path is not None:
-        if not out_path.parent.is_dir():
-            raise InputError(f"--out: directory {out_path.parent} does not exist")
-        if out_path.is_dir():
-            raise InputError(f"--out: {out_path} is a directory")
+        check_output_file(out_path, "--out")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
@@ -340,7 +373,7 @@ def simulate(
         int | None, typer.Option(help="Monte Carlo paths (overrides the scenario).")
     ] = None,
     horizon: Annotated[
-        float | None, typer.Option("--T", help="Horizon T (overrides the scenario).")
+        float | None, typer.Option("--horizon", "--T", help="Horizon T (overrides the scenario).")
     ] = None,
     dt: Annotated[
         float | None, typer.Option(help="Euler–Maruyama step (overrides the scenario).")
@@ -364,7 +397,10 @@ def simulate(
     from .simulate.spec import MonteCarlo, check_workers
 
     given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method}
-    top, spec, sc = load_scenario(scenario, {k: v for k, v in given.items() if v is not None})
+    overrides = {k: v for k, v in given.items() if v is not None}
+    top, spec, sc = load_scenario(scenario, overrides)
+    # summary.json records the command as typed: the report's re-run line keeps the overrides
+    recorded = {"scenario": str(scenario), "command": _command_line(), "overrides": overrides}
     if workers is not None:
         check_workers(workers, "--workers")
         spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
@@ -385,12 +421,12 @@ def simulate(
         except InputError as exc:  # a field of the scenario: name the file
             raise InputError(f"{sc.source}: {exc}") from None
         except SimulationDiverged as exc:
-            written = write_outputs(exc.result, out_dir, {"scenario": str(scenario)})
+            written = write_outputs(exc.result, out_dir, recorded)
             if as_json:
                 print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
             print(f"error: {one_line(str(exc))}", file=sys.stderr)
             raise typer.Exit(1) from None
-    written = write_outputs(res, out_dir, {"scenario": str(scenario)})
+    written = write_outputs(res, out_dir, recorded)
     st = res.stats
     if as_json:
         summary = res.summary()
@@ -432,7 +468,10 @@ def simulate(
 )
 def tune(
     scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
-    horizon: Annotated[float, typer.Option(help="The deadline T: minimise E Σ‖x_i(T) − θ‖².")],
+    horizon: Annotated[
+        float,
+        typer.Option("--horizon", "--T", help="The deadline T: minimise E Σ‖x_i(T) − θ‖²."),
+    ],
     family: Annotated[str, typer.Option(help="The gain family: power, a·(b + t)^(−γ).")] = "power",
     require: Annotated[
         str,
@@ -495,11 +534,11 @@ def tune(
     with warnings.catch_warnings(), Progress("ntc tune") as prog:
         warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
         prog.stage(f"tuning {scenario}")
-        opts: dict[str, Any] = dict(require=require, tune_delta=tune_delta, eps=eps, method=method)
+        opts: dict[str, Any] = dict(
+            require=require, tune_delta=tune_delta, eps=eps, method=method, progress=prog.stage
+        )
         if schedule == "optimal":
-            opts.update(
-                max_gain=max_gain, max_peak=max_peak, check_paths=check_paths, progress=prog.stage
-            )
+            opts.update(max_gain=max_gain, max_peak=max_peak, check_paths=check_paths)
         elif max_peak is not None:
             raise InputError("--max-peak: applies to --schedule optimal")
         try:
@@ -638,7 +677,7 @@ def report(
 def reproduce(
     what: Annotated[str, typer.Argument(help="What to reproduce: 'paper' (its Section 5).")],
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
-    t_end: Annotated[float, typer.Option("--T", help="Horizon.")] = 100.0,
+    t_end: Annotated[float, typer.Option("--horizon", "--T", help="Horizon T.")] = 100.0,
     paths: Annotated[int, typer.Option(help="Sample paths per run.")] = 1000,
     dt: Annotated[
         float, typer.Option(help="Euler–Maruyama step (ds for intrinsic stepping).")
@@ -718,6 +757,15 @@ def _argv(args: list[str]) -> list[str]:
 _FLAGS = {"--json", "--help", "--version"}  # options that take no value
 
 
+def _input_error(message: str, args: list[str]) -> int:
+    """Bad input: ``error: ...`` on stderr, and with --json ``{"error": ...}`` on stdout
+    too (a script reading stdout gets JSON whatever happened). Returns exit code 2."""
+    print(f"error: {message}", file=sys.stderr)
+    if "--json" in args[: args.index("--")] if "--" in args else "--json" in args:
+        print(json.dumps({"ok": False, "error": message, "exit_code": 2}, ensure_ascii=False))
+    return 2
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the CLI: one line ``error: ...`` on stderr for every user error (exit 2), for
     an interrupt (exit 130); warnings as ``warning: ...`` lines.
@@ -751,15 +799,12 @@ def main(argv: list[str] | None = None) -> None:
             if code == 130:  # typer turns KeyboardInterrupt into Exit(130)
                 print("error: interrupted", file=sys.stderr)
     except InputError as exc:
-        print(f"error: {one_line(str(exc))}", file=sys.stderr)
-        code = 2
+        code = _input_error(one_line(str(exc)), args)
     except click.UsageError as exc:
         where = f" (see: {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
-        print(f"error: {one_line(exc.format_message())}{where}", file=sys.stderr)
-        code = 2
+        code = _input_error(f"{one_line(exc.format_message())}{where}", args)
     except click.ClickException as exc:  # e.g. an unreadable file argument
-        print(f"error: {one_line(exc.format_message())}", file=sys.stderr)
-        code = 2
+        code = _input_error(one_line(exc.format_message()), args)
     except (KeyboardInterrupt, typer.Abort):
         print("error: interrupted", file=sys.stderr)
         code = 130

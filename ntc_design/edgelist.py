@@ -21,6 +21,7 @@ the array.
 
 from __future__ import annotations
 
+import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,61 @@ MAX_EDGES = 50_000_000
 #: Declared uncompressed size of all arrays (zip headers; zipfile checks them on read).
 MAX_NPZ_BYTES = 2 * 2**30
 KEYS = {"format", "version", "dim", "labels", "from", "to", "weights", "name"}
+
+
+_CANONICAL_INT = re.compile(r"0|-?[1-9][0-9]{0,17}")  # ASCII, no sign +, no leading zero
+_NUMBER_LIKE = re.compile(r"\s*[+-]?\d+\s*")  # \d: any script's digits, as int() reads
+
+
+def label_from_text(text: str) -> int | str:
+    """An agent label read from text (a CSV cell, a MATLAB string): an integer when the
+    text is one in canonical ASCII form (``7``, ``-3``, ``0``), else the text as written
+    (``"01"``, ``"+1"``, ``"١"`` stay strings: no two spellings become one number).
+
+    Parameters
+    ----------
+    text : str
+        The label as written.
+
+    Returns
+    -------
+    int or str
+    """
+    return int(text) if _CANONICAL_INT.fullmatch(text) else text
+
+
+def check_label_spellings(texts, what: str) -> None:
+    """Refuse two spellings of one number among agent labels (``1`` and ``01``, ``+1``,
+    ``-0``/``0``, ``١``): read as integers they would be the same agent; as written they
+    are two. A user who meant two agents renames one; either way it is bad input.
+
+    Parameters
+    ----------
+    texts : iterable of str
+        The distinct labels as written.
+    what : str
+        The file and field, for the message.
+
+    Raises
+    ------
+    InputError
+        Naming both spellings.
+    """
+    seen: dict[int, str] = {}
+    for t in texts:
+        t = str(t)
+        if len(t) > 40 or not _NUMBER_LIKE.fullmatch(t):
+            continue
+        try:
+            v = int(t)
+        except ValueError:
+            continue
+        if v in seen and seen[v] != t:
+            raise InputError(
+                f"{what}: labels {seen[v]!r} and {t!r} are two spellings of the number {v}; "
+                "write each agent's label one way (or use names that are not numbers)"
+            )
+        seen.setdefault(v, t)
 
 
 @dataclass(frozen=True)
@@ -125,6 +181,8 @@ def read_npz(path: str | Path) -> EdgeListData:
             labels = tuple(labels_a.tolist())
             if len({str(x) for x in labels}) != n:
                 raise bad("labels", "agent labels must be unique")
+            if labels_a.dtype.kind == "U":
+                check_label_spellings(labels, f"{src}: labels")
             cols, rows, w = arrs["from"], arrs["to"], arrs["weights"]
             name = None
             if "name" in keys:

@@ -218,10 +218,34 @@ def format_bytes(n: float) -> str:
     return f"{n:.1f} PiB"  # pragma: no cover
 
 
+def format_seconds(s: float) -> str:
+    """A duration for people: ``'45 s'``, ``'12 min'``, ``'3.2 h'``, ``'4.1 days'``.
+
+    Parameters
+    ----------
+    s : float
+        Seconds.
+
+    Returns
+    -------
+    str
+    """
+    if not math.isfinite(s):
+        return "forever"
+    if s < 90:
+        return f"{s:.0f} s"
+    if s < 5400:
+        return f"{s / 60:.0f} min"
+    if s < 2 * 86400:
+        return f"{s / 3600:.1f} h"
+    return f"{s / 86400:.1f} days"
+
+
 __all__ = [
     "require_theta",
     "InputError",
     "format_bytes",
+    "format_seconds",
     "one_line",
     "quote",
     "require_int",

@@ -37,8 +37,9 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .edgelist import MAX_AGENTS, MAX_DIM, EdgeListData, read_npz
+from .edgelist import MAX_AGENTS, MAX_DIM, EdgeListData, check_label_spellings, read_npz
 from .errors import InputError
+from .tablefiles import read_csv_edges, read_mat
 from .yamlfast import load_fast
 
 Label = int | str
@@ -142,7 +143,9 @@ def read_document(path: str | Path) -> dict[str, Any]:
     except (OSError, ValueError) as exc:  # a name with a NUL byte, a loop of links
         raise InputError(f"{p}: cannot read the file ({exc.__class__.__name__})") from None
     if not exists:
-        kind = "no such file (not a regular file)" if p.exists() else "no such file"
+        if p.is_dir():
+            raise InputError(f"{p}: is a folder, expected a file (e.g. {p / 'g1.yaml'})")
+        kind = "not a regular file (a device, pipe or socket)" if p.exists() else "no such file"
         raise InputError(f"{p}: {kind}")
     if size > MAX_FILE_BYTES:
         raise InputError(
@@ -505,6 +508,7 @@ def parse_labels(agents: Any, source: str | None) -> tuple[Label, ...]:
             raise field_error(
                 source, "agents", f"duplicated label(s) {', '.join(_q(k) for k in dup[:5])}"
             )
+        check_label_spellings(counts, f"{source or 'topology'}: agents")
         return tuple(labels)
     raise field_error(source, "agents", "expected a positive count or a non-empty list of labels")
 
@@ -627,6 +631,9 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
     )
 
 
+_EDGE_READERS = {".npz": read_npz, ".csv": read_csv_edges, ".mat": read_mat}
+
+
 def parse_switching(doc: dict[str, Any], source: str | None = None) -> SwitchingData:
     """Validate a switching mapping: named modes and a periodic schedule.
 
@@ -660,8 +667,9 @@ def parse_switching(doc: dict[str, Any], source: str | None = None) -> Switching
         if isinstance(spec, str):
             path = base / spec
             try:
-                if spec.lower().endswith(".npz"):  # a compact edge list (big networks)
-                    modes[str(name)] = read_npz(path)
+                reader = _EDGE_READERS.get(Path(spec).suffix.lower())
+                if reader is not None:  # an .npz/.csv edge list or a MATLAB block matrix
+                    modes[str(name)] = reader(path)
                     continue
                 mode_doc = read_document(path)
             except InputError as exc:  # say which switching file and mode named it
@@ -762,7 +770,14 @@ def parse_scenario(path: str | Path) -> ScenarioData:
     for key in ("name", "description"):
         text_field(doc, key, src)
     if "topology" not in doc:
-        raise field_error(src, "topology", "missing")
+        if "edges" in doc or "agents" in doc or "modes" in doc:
+            raise InputError(
+                f"{src}: this is a topology file; simulate and tune need a scenario whose "
+                f"'topology:' names it, e.g. a YAML file with 'topology: {Path(src).name}', "
+                "'theta: [1, 2, -1]', 'gain: 1/(1+t)', 'T: 10' "
+                "(see examples/scenarios/g1_fixed.yaml)"
+            )
+        raise field_error(src, "topology", "missing (the topology file this scenario runs on)")
     topo = doc["topology"]
     if not isinstance(topo, str) or not topo or "\x00" in topo:
         raise field_error(src, "topology", "expected a file path")

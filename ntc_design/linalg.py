@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import math
 import os
+import re
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -666,7 +668,6 @@ def comparison_solve(m) -> np.ndarray:
     return np.where(np.isfinite(v), v, -1.0)
 
 
-
 # -- independent proofs on the machine's cores (forked: the inputs are inherited) --------
 
 #: Calls that :func:`fork_map`'s children run, set in the parent just before the fork.
@@ -735,15 +736,37 @@ def fork_map(calls: list, workers: int) -> list:
     return [r for r, _ in got]
 
 
+MEMORY_ENV = "NTC_AVAILABLE_MEMORY"  # set: the memory every size check assumes (bytes)
+_UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+
+
 def available_memory() -> float:
-    """Memory available now.
+    """Memory available now: the value of the environment variable ``NTC_AVAILABLE_MEMORY``
+    when it is set (bytes, or with a binary suffix: ``8G``, ``512M``), so that the size
+    checks give the same answer on every machine (the test suite sets it: an 8 GB laptop
+    and a 64 GB server refuse the same runs); else MemAvailable from /proc/meminfo.
 
     Returns
     -------
     float
-        Bytes: MemAvailable from /proc/meminfo, else the physical memory from
-        os.sysconf, else 4 GiB.
+        Bytes: the environment's value, else MemAvailable, else the physical memory
+        from os.sysconf, else 4 GiB.
+
+    Raises
+    ------
+    InputError
+        ``NTC_AVAILABLE_MEMORY`` is not a positive size.
     """
+    pinned = os.environ.get(MEMORY_ENV)
+    if pinned is not None:
+        m = re.fullmatch(r"\s*([0-9]+(?:\.[0-9]+)?)\s*([KMGT]?)(?:i?B)?\s*", pinned, re.I)
+        value = float(m.group(1)) * _UNITS[m.group(2).upper()] if m else 0.0
+        if not value > 0 or not math.isfinite(value):
+            raise InputError(
+                f"{MEMORY_ENV}: expected a positive size such as 8G or 8589934592, "
+                f"got {pinned[:40]!r}"
+            )
+        return value
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:
@@ -773,6 +796,11 @@ def proof_workers(n_parts: int, bytes_each: float | None = None) -> int:
     Returns
     -------
     int
+
+    Raises
+    ------
+    InputError
+        ``NTC_AVAILABLE_MEMORY`` is set to something that is not a size.
     """
     try:
         cpus = len(os.sched_getaffinity(0))

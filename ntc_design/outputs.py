@@ -35,8 +35,13 @@ def _oserror(option: str, path: Path, exc: OSError) -> InputError:
     return InputError(f"{option}: cannot write {one_line(str(path))!r} ({why})")
 
 
-def check_output_file(path: str | Path, option: str = "--out") -> Path:
-    """Refuse, before any work, a file target that is a folder.
+def check_output_file(
+    path: str | Path, option: str = "--out", suffixes: tuple[str, ...] = ()
+) -> Path:
+    """Refuse, before any work, a file target that cannot be written as a regular file: a
+    folder, an existing device, FIFO or socket (``/dev/full``, a named pipe: the rename
+    that writes the file would replace the node), a missing or read-only folder, or a
+    suffix other than ``suffixes``.
 
     Parameters
     ----------
@@ -44,6 +49,8 @@ def check_output_file(path: str | Path, option: str = "--out") -> Path:
         The file to be written.
     option : str
         Named in the message.
+    suffixes : tuple of str
+        The suffixes accepted (lower case, with the dot); empty: any.
 
     Returns
     -------
@@ -52,12 +59,43 @@ def check_output_file(path: str | Path, option: str = "--out") -> Path:
     Raises
     ------
     InputError
-        ``path`` is a folder.
+        ``path`` is a folder or not a regular file, its folder is missing or not
+        writable, or its suffix is not one of ``suffixes``.
     """
     p = Path(path)
+    shown = repr(one_line(str(p)))
+    if suffixes and p.suffix.lower() not in suffixes:
+        listed = (
+            ", ".join(suffixes[:-1]) + " or " + suffixes[-1] if len(suffixes) > 1 else suffixes[0]
+        )
+        raise InputError(f"{option}: {shown}: expected a {listed} file")
     if p.is_dir():
-        raise InputError(f"{option}: {one_line(str(p))!r} is a folder, expected a file name")
+        raise InputError(f"{option}: {shown} is a folder, expected a file name")
+    if os.path.lexists(p) and not p.is_file():
+        raise InputError(
+            f"{option}: {shown} exists and is not a regular file (a device, pipe, socket or "
+            "broken link); choose a file name"
+        )
+    parent = p.parent
+    if not parent.is_dir():
+        raise InputError(f"{option}: the folder {one_line(str(parent))!r} does not exist")
+    _probe(parent, option)
     return p
+
+
+def _probe(folder: Path, option: str) -> None:
+    """Refuse a folder nothing can be created in, by creating (and removing) an empty
+    temporary folder there: permission bits do not say it for root, a read-only mount or
+    /proc, and a long run must not find out only at its end."""
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"{option}: the folder {one_line(str(folder))!r} is not writable")
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".ntc-probe.", dir=folder))
+    except OSError as exc:
+        why = exc.strerror or exc.__class__.__name__
+        raise InputError(
+            f"{option}: cannot write in the folder {one_line(str(folder))!r} ({why})"
+        ) from None
 
 
 @contextlib.contextmanager
@@ -164,15 +202,15 @@ def check_output_folder(
     """
     p = Path(path)
     shown = repr(one_line(str(p)))
-    if p.exists() and not p.is_dir():
-        raise InputError(f"{option}: {shown} is an existing file, expected a folder")
+    if os.path.lexists(p) and not p.is_dir():
+        what = "an existing file" if p.is_file() else "not a folder (a device, pipe or link)"
+        raise InputError(f"{option}: {shown} is {what}, expected a folder")
     parent = p.resolve().parent
     while not parent.exists() and parent != parent.parent:
         parent = parent.parent  # missing folders are made
     if not parent.is_dir():
         raise InputError(f"{option}: {one_line(str(parent))!r} in {shown} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{option}: the folder {one_line(str(parent))!r} is not writable")
+    _probe(parent, option)
     if p.is_dir() and replaceable is not None:
         allowed = set(replaceable)
         try:

@@ -18,39 +18,107 @@ from __future__ import annotations
 import csv
 import os
 import re
+import stat
+import struct
 import warnings
+import zlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sparse
 
-from .edgelist import MAX_AGENTS, MAX_DIM, MAX_EDGES, EdgeListData
-from .errors import InputError
+from .edgelist import (
+    MAX_AGENTS,
+    MAX_DIM,
+    MAX_EDGES,
+    EdgeListData,
+    check_label_spellings,
+    label_from_text,
+)
+from .errors import InputError, format_bytes
+from .linalg import available_memory
 from .outputs import atomic_path
 
 MAX_CSV_BYTES = 2 * 2**30  # a 10⁶-agent edge list with d = 3 is about 120 MB
-MAX_MAT_BYTES = 2 * 2**30
-_INT = re.compile(r"[+-]?\d{1,18}")
+MAX_MAT_BYTES = 2 * 2**30  # the file, and what its variables inflate to
+CSV_MAX_DIM = 100  # 10⁴ weight columns; larger weights belong in .npz or .mat
+MAX_HEADER_CHARS = 2**20
 
 
 def _bounded(p: Path, limit: float) -> Path:
-    """The file, refused in one line when it cannot be read or is larger than ``limit``."""
+    """The file, refused in one line when it cannot be read, is not a regular file (a
+    folder, ``/dev/zero``, a FIFO: no end, or no size to bound) or is larger than
+    ``limit``."""
     try:
-        size = os.path.getsize(p)
+        st = os.stat(p)
     except OSError as exc:
         raise InputError(f"{p}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
-    if size > limit:
-        raise InputError(f"{p}: {size / 2**30:.1f} GiB; at most {limit / 2**30:.0f} GiB")
+    if stat.S_ISDIR(st.st_mode):
+        raise InputError(f"{p}: is a folder, expected a topology file")
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(f"{p}: not a regular file (a device, pipe or socket)")
+    if st.st_size > limit:
+        raise InputError(f"{p}: {st.st_size / 2**30:.1f} GiB; at most {limit / 2**30:.0f} GiB")
     return p
 
 
-def _label(text: str) -> int | str:
-    """An integer label when the text is one, else the text."""
-    return int(text) if _INT.fullmatch(text) else text
+def _no_nul(p: Path) -> None:
+    """Refuse a NUL byte (the CSV parser ends a field at one: ``1\\0`` would read as 1),
+    naming its row."""
+    rows, chunk_size = 1, 2**24
+    with open(p, "rb") as fh:
+        while chunk := fh.read(chunk_size):
+            k = chunk.find(b"\0")
+            if k >= 0:
+                row = rows + chunk.count(b"\n", 0, k)
+                raise InputError(f"{p}: row {row}: a NUL byte")
+            rows += chunk.count(b"\n")
 
 
-def _labels_in_order(src: np.ndarray, dst: np.ndarray) -> tuple[tuple, np.ndarray, np.ndarray]:
+def _mat_inflated_bytes(p: Path, limit: float) -> None:
+    """Refuse a MATLAB 5 file whose compressed variables inflate to more than ``limit``
+    bytes (a 3 MB file of zeros can hold a 3 GB matrix), counted by inflating in bounded
+    chunks and keeping nothing."""
+    with open(p, "rb") as fh:
+        head = fh.read(128)
+        if len(head) < 128 or head[126:128] not in (b"IM", b"MI"):
+            return  # not MATLAB 5 (v4 is never compressed; loadmat refuses the rest)
+        order = "<" if head[126:128] == b"IM" else ">"
+        total = 0.0
+        while tag := fh.read(8):
+            if len(tag) < 8:
+                return
+            kind, nbytes = struct.unpack(order + "II", tag)
+            if kind != 15:  # miCOMPRESSED; anything else is stored as it is
+                total += nbytes
+                fh.seek(nbytes + (-nbytes % 8), os.SEEK_CUR)
+            else:
+                z, left = zlib.decompressobj(), nbytes
+                while left > 0 and not z.eof:
+                    data = fh.read(min(left, 2**20))
+                    if not data:
+                        break
+                    left -= len(data)
+                    while data:
+                        total += len(z.decompress(data, 2**24))
+                        data = z.unconsumed_tail
+                        if total > limit:
+                            break
+                    if total > limit:
+                        break
+                fh.seek(left, os.SEEK_CUR)
+            if total > limit:
+                raise InputError(
+                    f"{p}: its variables inflate to more than {format_bytes(limit)} (from a "
+                    f"{format_bytes(os.path.getsize(p))} file), the limit here; store a large "
+                    "network as a sparse A or as .npz"
+                )
+
+
+def _labels_in_order(
+    src: np.ndarray, dst: np.ndarray, where: Path
+) -> tuple[tuple, np.ndarray, np.ndarray]:
     """Labels in order of first appearance (row by row, from before to) and the 0-based
     index of each end."""
     both = np.empty(2 * src.size, dtype=object)
@@ -60,7 +128,8 @@ def _labels_in_order(src: np.ndarray, dst: np.ndarray) -> tuple[tuple, np.ndarra
     rank = np.empty(order.size, dtype=np.int64)
     rank[order] = np.arange(order.size)
     idx = rank[inv]
-    labels = tuple(_label(str(uniq[k])) for k in order)
+    check_label_spellings((str(u) for u in uniq), f"{where}: from/to")
+    labels = tuple(label_from_text(str(uniq[k])) for k in order)
     return labels, idx[1::2], idx[0::2]
 
 
@@ -76,13 +145,24 @@ def _long_row(p: Path, fields: int) -> str:
 def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
     """(header, the weight columns, d) from row 1, refused unless it is from, to, a11 … add."""
     with open(p, encoding="utf-8", errors="replace") as fh:
-        header = [h.strip() for h in fh.readline().rstrip("\n\r").split(",")]
+        line = fh.readline(MAX_HEADER_CHARS + 1)
+    if len(line) > MAX_HEADER_CHARS:
+        raise InputError(
+            f"{p}: row 1: the header is longer than {MAX_HEADER_CHARS} characters "
+            f"(at most d = {CSV_MAX_DIM} in a CSV file; use .npz or .mat for larger weights)"
+        )
+    header = [h.strip() for h in line.rstrip("\n\r").split(",")]
     if len(header) < 3 or header[:2] != ["from", "to"]:
         raise InputError(f"{p}: row 1: the header must start with from, to (then a11 … add)")
     k = len(header) - 2
     d = int(round(k**0.5))
-    if d * d != k or not 1 <= d <= MAX_DIM:
+    if d * d != k:
         raise InputError(f"{p}: row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)")
+    if d > CSV_MAX_DIM:
+        raise InputError(
+            f"{p}: row 1: d = {d}; a CSV file holds at most d = {CSV_MAX_DIM} "
+            "(use .npz or .mat for larger weights)"
+        )
     want = [f"a{r}{c}" if d < 10 else f"a{r}_{c}" for r in range(1, d + 1) for c in range(1, d + 1)]
     if header[2:] != want:
         raise InputError(
@@ -115,6 +195,7 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
 
     p = _bounded(Path(path), MAX_CSV_BYTES)
     header, want, d = _csv_header(p)
+    _no_nul(p)
     k = d * d
     try:
         with warnings.catch_warnings():
@@ -123,6 +204,8 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
             common = {
                 "keep_default_na": False,
                 "index_col": False,  # an extra field is an error, never an index column
+                "header": 0,
+                "names": header,  # stripped: "from , to , a11" names the columns from, to, a11
                 "skipinitialspace": True,
                 "nrows": MAX_EDGES + 1,
                 "engine": "c",
@@ -168,7 +251,7 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
         text = str(vals[r, c]).strip() if vals is not None else str(w[bad[0]])
         what = "is empty (a short row?)" if not text else f"= {text!r} is not a finite number"
         raise InputError(f"{p}: row {r + 2}: {want[c]} {what}")
-    labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst))
+    labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst), p)
     if len(labels) > MAX_AGENTS:
         raise InputError(f"{p}: {len(labels)} agents; at most {MAX_AGENTS}")
     key = rows.astype(np.int64) * len(labels) + cols
@@ -233,7 +316,14 @@ def _mat_labels(raw: Any, n: int, p: Path) -> tuple:
         raise InputError(f"{p}: labels: {len(out)} labels for {n} agents")
     if len(set(out)) != n:
         raise InputError(f"{p}: labels: agent labels must be unique")
-    return tuple(_label(x) for x in out)
+    check_label_spellings(out, f"{p}: labels")
+    return tuple(label_from_text(x) for x in out)
+
+
+def _scalar_text(a: np.ndarray) -> str:
+    return (
+        repr(a.ravel()[0].item()) if a.size == 1 and a.dtype.kind in "fiu" else f"shape {a.shape}"
+    )
 
 
 def read_mat(path: str | Path) -> EdgeListData:
@@ -259,6 +349,9 @@ def read_mat(path: str | Path) -> EdgeListData:
     from scipy.io import loadmat
 
     p = _bounded(Path(path), MAX_MAT_BYTES)
+    # loadmat holds the inflated variables, then A is copied to triplets: a third of the
+    # memory share every size check allows
+    _mat_inflated_bytes(p, min(MAX_MAT_BYTES, available_memory() / 6))
     try:
         doc = loadmat(p, variable_names=["A", "dim", "labels"], mat_dtype=False)
     except Exception as exc:  # noqa: BLE001 - whatever a malformed file raises inside scipy
@@ -277,9 +370,10 @@ def read_mat(path: str | Path) -> EdgeListData:
     if (
         dim_a.dtype.kind not in "fiu"
         or dim_a.size != 1
+        or not np.isfinite(dim_a.ravel()[0])
         or float(dim_a.ravel()[0]) != int(dim_a.ravel()[0])
     ):
-        raise InputError(f"{p}: dim: expected one integer")
+        raise InputError(f"{p}: dim: expected one integer, got {_scalar_text(dim_a)}")
     d = int(dim_a.ravel()[0])
     if not 1 <= d <= MAX_DIM:
         raise InputError(f"{p}: dim: must be in 1..{MAX_DIM}, got {d}")

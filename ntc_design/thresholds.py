@@ -201,7 +201,11 @@ def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
     if ndn == 0.0:
         a0 = spectral_abscissa(lap, d, 1.0)
         hur = a0 < -REL * nl
-        notes.append("no informed agent: L_B = L does not depend on δ")
+        notes.append(
+            "no informed agent: L_B = L does not depend on δ, so no δ changes the decay "
+            "rate; an antagonistic edge (A_ij negative definite) into an agent makes it "
+            "informed"
+        )
         return CriticalCouplings(
             0.0 if hur else None,
             ((0.0, math.inf),) if hur else (),

@@ -605,7 +605,7 @@ def test_certify_exits_1_and_writes_nothing_when_nothing_is_proven(
     "args, needle",
     [
         (["verify", "no-such.json"], "no such file"),
-        (["verify", "."], "no such file"),
+        (["verify", "."], "is a folder"),
         (["verify", CERTS / "g1.json", "--topology", "no-such.yaml"], "no such file"),
         (["verify", CERTS / "g1.json", "--theta", "1,x"], "--theta"),
         (["verify", CERTS / "g1.json", "--theta", ""], "--theta"),

@@ -165,7 +165,35 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
 
 
-def read_array_mode(sub: Any, where: str, size: int) -> tuple[Topology, float, np.ndarray, Check]:
+def margin_check(name: str, sub: dict, where: str) -> Check:
+    """Lemma 1's subject: δ = C + ΔC with a margin ΔC > 0 (read, never trusted: a
+    certificate whose subject states ΔC <= 0 is not about a Lemma 1 design).
+
+    Parameters
+    ----------
+    name : str
+        The mode's name.
+    sub : dict
+        The mode's subject entry.
+    where : str
+        The field, for messages.
+
+    Returns
+    -------
+    Check
+
+    Raises
+    ------
+    InputError
+        ``margin`` is missing or not a finite number.
+    """
+    m = number(need(sub, "margin", (int, float), where), f"{where}.margin")
+    return Check(f"{name}: margin ΔC > 0", m > 0, f"ΔC = {m:g}")
+
+
+def read_array_mode(
+    sub: Any, where: str, size: int
+) -> tuple[Topology, float, np.ndarray, tuple[Check, ...]]:
     """One mode of a scale certificate's subject: its topology (arrays, validated by the
     model), δ, θ, and the check that its informed agents are U.
 
@@ -181,7 +209,7 @@ def read_array_mode(sub: Any, where: str, size: int) -> tuple[Topology, float, n
     Returns
     -------
     tuple
-        (topology, δ, θ, the informed-agents check).
+        (topology, δ, θ, the checks: informed agents = U and ΔC > 0).
 
     Raises
     ------
@@ -205,7 +233,14 @@ def read_array_mode(sub: Any, where: str, size: int) -> tuple[Topology, float, n
     ok_u = inf_idx == sorted(top.antagonised)
     name = where.rsplit("subject.modes.", 1)[-1]
     check = Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
-    return top, float(delta), theta, check
+    return top, float(delta), theta, (check, margin_check(name, sub, where))
 
 
-__all__ = ["mode_subject", "pack", "read_array_mode", "topology_from_subject", "unpack"]
+__all__ = [
+    "margin_check",
+    "mode_subject",
+    "pack",
+    "read_array_mode",
+    "topology_from_subject",
+    "unpack",
+]

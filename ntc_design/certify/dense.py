@@ -33,6 +33,7 @@ from ..rigorous.exact import (
     gamma,
     verified_float_pd,
 )
+from .arrays import margin_check
 from .checks import Check
 from .claims import Claim, ClaimKind
 from .fields import matrix, need, number, vector
@@ -436,7 +437,7 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
         raise InputError(f"{where}.delta: must be positive")
     k1 = number(need(sub, "k1", (int, float), where), f"{where}.k1")
     x0 = vector(need(sub, "x0", list, where), d, f"{where}.x0")
-    number(need(sub, "margin", (int, float), where), f"{where}.margin")
+    margin = margin_check(name, sub, where)
     stated_hash = need(sub, "topology_hash", str, where)
     informed_l = need(sub, "informed", list, where)
     try:
@@ -452,6 +453,7 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
         raise
 
     h = topology_hash(top)
+    checks.append(margin)
     checks += _mode_checks(name, top, h, stated_hash, informed, b, delta, k1, x0, theta)
     in_range = checks[-1].ok
     if in_range:

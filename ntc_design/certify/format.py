@@ -329,7 +329,7 @@ def finish(doc: dict, method: str | None = None) -> dict:
     return doc
 
 
-def write_certificate(doc: dict, path: str | Path) -> None:
+def write_certificate(doc: dict, path: str | Path, option: str = "--out") -> None:
     """Write a certificate atomically (:func:`ntc_design.outputs.write_atomic`): a reader
     never sees a half-written file.
 
@@ -340,6 +340,8 @@ def write_certificate(doc: dict, path: str | Path) -> None:
         :func:`switching_certificate`.
     path : str or pathlib.Path
         The JSON file to write.
+    option : str, optional
+        The command or option named in an error (``report`` when a report writes it).
 
     Raises
     ------
@@ -353,7 +355,7 @@ def write_certificate(doc: dict, path: str | Path) -> None:
         raise InputError(
             f"{path}: the certificate holds non-finite numbers (nothing is proven); not written"
         ) from None
-    write_atomic(path, text)
+    write_atomic(path, text, option)
 
 
 __all__ = [

@@ -56,7 +56,12 @@ class CertifyResult:
             (row.label + (" (estimate)" if row.estimate else ""), row.value) for row in self.rows
         ]
         kind = self.certificate["kind"]
-        return Table.build(f"certificate ({kind})", ("property", "result"), rows, layout="list")
+        title = (
+            f"certificate ({kind})"
+            if self.verification.valid
+            else f"attempted certificate ({kind}): not valid, nothing below is proven"
+        )
+        return Table.build(title, ("property", "result"), rows, layout="list")
 
     def tables(self) -> tuple[Table, ...]:
         """Everything the result shows: the certificate's checks and results, the gain

@@ -230,7 +230,9 @@ def verify(
         checks += proof if isinstance(proof, list) else [proof]
 
     if "gain" in doc:  # a tabulated schedule: its conditions derived here, never read
-        checks += [Check(name, ok, detail) for name, ok, detail in schedule_checks(doc["gain"], source)]
+        checks += [
+            Check(name, ok, detail) for name, ok, detail in schedule_checks(doc["gain"], source)
+        ]
     audit = ResultsAudit(doc.get("results"), source)
     kind.audit(audit, doc, subject, reading, alpha)
     checks.append(audit.check())
@@ -308,13 +310,32 @@ def verify_file(
     """
     p = Path(path)
     if not p.is_file():
-        raise InputError(f"{p}: no such file")
+        what = (
+            "is a folder"
+            if p.is_dir()
+            else "no such file"
+            if not p.exists()
+            else "not a regular file"
+        )
+        raise InputError(
+            f"{p}: {what}; expected a certificate (the JSON file ntc certify --out writes)"
+        )
     if p.stat().st_size > MAX_CERT_BYTES:
         raise InputError(f"{p}: larger than {MAX_CERT_BYTES // 2**20} MB")
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{p}: not valid JSON ({exc.__class__.__name__})") from None
+        kind = (
+            "a YAML file"
+            if p.suffix.lower() in (".yaml", ".yml")
+            else f"a {p.suffix} file"
+            if p.suffix.lower() in (".csv", ".mat", ".npz")
+            else f"not valid JSON ({exc.__class__.__name__})"
+        )
+        raise InputError(
+            f"{p}: {kind}; expected a certificate (the JSON file ntc certify --out writes; "
+            "a topology file goes to ntc verify CERT --topology FILE)"
+        ) from None
     except RecursionError:
         raise InputError(f"{p}: nested too deeply") from None
     except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits

@@ -6,12 +6,15 @@ table and the critical couplings).
 """
 
 from .assumption import (
+    SUMMARY_ABOVE,
     AssumptionWarning,
     Decomposition,
     Violation,
     assumption2,
     lemma1_coefficient,
     structure_report,
+    structure_summary,
+    summary_table,
 )
 from .lemma1 import (
     ProtocolDesign,
@@ -22,6 +25,7 @@ from .lemma1 import (
 )
 
 __all__ = [
+    "SUMMARY_ABOVE",
     "AssumptionWarning",
     "Decomposition",
     "ProtocolDesign",
@@ -33,4 +37,6 @@ __all__ = [
     "design_topology",
     "lemma1_coefficient",
     "structure_report",
+    "structure_summary",
+    "summary_table",
 ]

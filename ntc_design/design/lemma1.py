@@ -192,17 +192,28 @@ class ProtocolDesign:
     def to_mat(self, path) -> None:
         """Write the design for MATLAB/Simulink (atomically): ``L_B`` (sparse, Nd×Nd),
         ``delta``, ``k1``, ``x0``, ``theta``, ``C``, ``B`` (the B_i of the informed agents
-        stacked, (|V_I|·d)×d), ``informed`` (1-based agent indices, as MATLAB counts) and
-        ``labels`` (a cell array of strings).
+        stacked, (|V_I|·d)×d), ``informed`` (1-based agent indices, as MATLAB counts),
+        ``labels`` (a cell array of strings), ``delta_i`` (N×1: δ on the informed agents,
+        0 elsewhere), ``Delta`` (sparse Nd×Nd, Δ⊗I_d = diag(δ_i)⊗I_d) and ``B_all`` (Nd×d:
+        every agent's B_i stacked, zero blocks for the uninformed), so that Lemma 1's
+        identity reads in MATLAB or Octave::
+
+            e = kron(ones(N, 1), theta(:));
+            norm(L_B*e - k1*Delta*B_all*theta(:)) / norm(L_B*e)   % ~1e-16
 
         Parameters
         ----------
         path : str or pathlib.Path
             The ``.mat`` file.
         """
-        d = self.topology.dim
+        d, n = self.topology.dim, self.topology.n
         informed = list(self.informed)
         b = np.vstack([self.B[i] for i in informed]) if informed else np.zeros((0, d))
+        delta_i = np.zeros(n)
+        delta_i[informed] = float(self.delta)
+        b_all = np.zeros((n, d, d))
+        for i in informed:
+            b_all[i] = self.B[i]
         write_mat(
             path,
             {
@@ -215,6 +226,9 @@ class ProtocolDesign:
                 "B": b,
                 "informed": np.asarray(informed, dtype=float) + 1.0,
                 "labels": np.array([str(x) for x in self.topology.labels], dtype=object),
+                "delta_i": delta_i.reshape(n, 1),
+                "Delta": sparse.kron(sparse.diags(delta_i), sparse.identity(d)).tocsc(),
+                "B_all": b_all.reshape(n * d, d),
             },
         )
 
@@ -332,6 +346,8 @@ def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None
 
     def best_delta(d: ProtocolDesign):
         if d.thresholds is not None and d.thresholds.best_rate_delta is None:
+            if d.thresholds.method == "constant":
+                return "none: L_B does not depend on δ (no informed agent)"
             return "none: the rate grows with δ"
         return crit(d, "best_rate_delta")
 

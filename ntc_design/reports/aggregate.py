@@ -344,8 +344,7 @@ def aggregate_section(
     section = RunSection(
         key=key,
         title=title,
-        rerun=rerun
-        or f"ntc simulate {run.summary.get('scenario', 'SCENARIO')} --out {run.path} && ntc report {run.path}",
+        rerun=rerun or run.rerun,
         designs=[(name, html_table(d.table())) for name, d in modes.items()],
         coupling=None,
         certificate=cert_tab,

@@ -40,7 +40,7 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
     InputError
         The certificate cannot be written or read back.
     """
-    write_certificate(res.certificate, cert_path)
+    write_certificate(res.certificate, cert_path, "report")
     ver = verify_file(cert_path)
     r = res.certificate["results"]
     rows = [

@@ -310,8 +310,7 @@ def run_section(
     section = RunSection(
         key=key,
         title=title,
-        rerun=rerun
-        or f"ntc simulate {run.summary.get('scenario', 'SCENARIO')} --out {run.path} && ntc report {run.path}",
+        rerun=rerun or run.rerun,
         designs=designs,
         coupling=figs["coupling"],
         certificate=c.cert_tab,

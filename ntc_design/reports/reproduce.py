@@ -184,7 +184,7 @@ def rerun_command(
     """The ``ntc reproduce paper`` command line that re-makes this report."""
     cmd = f"ntc reproduce paper --out {out}"
     for flag, v, default in (
-        ("--T", T, 100.0),
+        ("--horizon", T, 100.0),
         ("--paths", paths, paper.PATHS),
         ("--dt", dt, paper.DT),
         ("--stepping", stepping, "intrinsic"),

@@ -7,13 +7,14 @@ from __future__ import annotations
 import csv
 import io
 import json
+import shlex
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, format_bytes, require_number, require_positive
+from ..errors import InputError, format_bytes, one_line, require_number, require_positive
 from ..files import parse_topology
 from ..gain import parse_gain
 from ..model import SwitchingTopology, Topology
@@ -45,6 +46,16 @@ class RunData:
         :func:`load_run`)."""
         g = self.summary["parameters"]["gain"]
         return schedule_from_document(g, "parameters.gain") if isinstance(g, dict) else g
+
+    @property
+    def rerun(self) -> str:
+        """The command that makes this run and its report again: the command line the run
+        recorded (its overrides included: ``--paths 200`` stays 200), else the scenario."""
+        cmd = self.summary.get("command")
+        if not isinstance(cmd, str) or not cmd.strip():
+            scen = self.summary.get("scenario", "SCENARIO")
+            cmd = shlex.join(["ntc", "simulate", str(scen), "--out", str(self.path)])
+        return f"{one_line(cmd)} && {shlex.join(['ntc', 'report', str(self.path)])}"
 
     @property
     def theta(self) -> np.ndarray:

@@ -70,7 +70,7 @@ def is_sweep_dir(directory: str | Path) -> bool:
         return False
     try:
         return json.loads(p.read_text(encoding="utf-8")).get("kind") == "sweep"
-    except (OSError, ValueError, AttributeError):
+    except (OSError, ValueError, AttributeError, RecursionError):
         return False
 
 
@@ -84,8 +84,14 @@ def _load(d: Path):
         man = json.loads((d / "sweep.json").read_text(encoding="utf-8"))
         res = pd.read_parquet(d / "results.parquet")
         curves = pd.read_parquet(d / "curves.parquet")
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, RecursionError) as exc:
         raise InputError(f"{d}: cannot read the sweep tables ({exc.__class__.__name__})") from None
+    if not isinstance(man, dict):
+        raise InputError(f"{d}: sweep.json: expected a mapping")
+    if len(res) == 0:
+        raise InputError(
+            f"{d}: results.parquet: no points (the sweep has not run; run ntc sweep ... --out {d})"
+        )
     keys = man.get("keys")
     if not isinstance(keys, list) or any(k not in res.columns for k in keys):
         raise InputError(f"{d}: sweep.json: keys do not match results.parquet")

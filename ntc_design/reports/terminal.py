@@ -14,16 +14,53 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from ..errors import format_seconds, one_line
 from ..rows import Cell, fmt, set_text
 from ..rows import Table as RowsTable
 
 PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
 
+_CONTROL = {c: c.encode("unicode_escape").decode("ascii") for c in map(chr, range(32)) if c != "\n"}
+_CONTROL.update({"\x7f": "\\x7f"})
+_CONTROL_TABLE = str.maketrans(_CONTROL)
+
+
+def safe(text: Any) -> str:
+    """``text`` for the terminal: every control character but the newline escaped (an ESC
+    sequence in a label is shown, never obeyed). Values that come from files (labels,
+    names) go through :func:`ntc_design.errors.one_line` as well, which escapes the
+    newline too, so that no label can print a line of its own.
+
+    Parameters
+    ----------
+    text : Any
+        Converted with ``str``.
+
+    Returns
+    -------
+    str
+    """
+    return str(text).translate(_CONTROL_TABLE)
+
+
+class SafeConsole(Console):
+    """A rich console that escapes control characters in every string it is given (its
+    own colour codes, added when rendering, are untouched)."""
+
+    def print(self, *objects: Any, **kwargs: Any) -> None:  # noqa: D102 - rich's print
+        super().print(*(safe(o) if isinstance(o, str) else o for o in objects), **kwargs)
+
+
 # Off a terminal (pipes, CI logs) rich would wrap at 80 columns and split result lines:
 # print each line whole, and let tables use up to 120 columns.
-out = Console(
+out = SafeConsole(
     highlight=False, soft_wrap=not sys.stdout.isatty(), width=None if sys.stdout.isatty() else 120
 )
+
+
+def _v(x: Any) -> str:
+    """A value from a file (a label, a name) for a rich string: one line, markup escaped."""
+    return escape(one_line(str(x)))
 
 
 _VERDICT_STYLE = {True: "green", False: "red", None: "yellow"}
@@ -31,7 +68,7 @@ _VERDICT_STYLE = {True: "green", False: "red", None: "yellow"}
 
 def _rich_cell(c: Cell) -> str:
     """A cell for rich: the verdict word coloured, markup in the text escaped."""
-    text = escape(c.plain().replace("\n", "; "))
+    text = escape(one_line(c.plain().replace("\n", "; ")))
     if c.judged:
         word = escape(c.verdict_word)
         return text.replace(word, f"[{_VERDICT_STYLE[c.verdict]}]{word}[/]", 1)
@@ -49,18 +86,18 @@ def print_table(t: RowsTable) -> None:
     """
     if t.layout == "list":
         if t.title:
-            out.print(f"[bold]{escape(t.title)}[/bold]")
+            out.print(f"[bold]{_v(t.title)}[/bold]")
         for line in t.list_lines():
-            out.print(escape(line))
+            out.print(escape(safe(line)))
     else:
-        g = Table(title=t.title)
+        g = Table(title=escape(one_line(t.title)) if t.title else t.title)
         for c in t.columns:
             g.add_column(c)
         for r in t.rows:
             g.add_row(*[_rich_cell(c) for c in r])
         out.print(g)
     for n in t.notes:
-        out.print(f"  note: {escape(n)}")
+        out.print(f"  note: {escape(safe(n))}")
 
 
 class Progress:
@@ -77,6 +114,7 @@ class Progress:
         self._stop = threading.Event()
         self._bar: Any = None  # a rich progress bar on a terminal
         self._thread: threading.Thread | None = None
+        self._printed = 0.0  # when the last plain line was printed
 
     def __enter__(self) -> Progress:
         if self.tty:
@@ -104,13 +142,15 @@ class Progress:
             self._bar.__exit__(*exc)
 
     def _line(self, text: str) -> None:
+        self._printed = time.monotonic()
         print(
             f"{self.what}: [{time.monotonic() - self.t0:.0f} s] {text}", file=sys.stderr, flush=True
         )
 
     def _beat(self) -> None:
         while not self._stop.wait(self.every):
-            self._line(self.state)
+            if time.monotonic() - self._printed >= 0.5 * self.every:
+                self._line(self.state)
 
     def stage(self, text: str) -> None:
         """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
@@ -123,8 +163,12 @@ class Progress:
             What the run is doing now.
         """
         self.state = text
-        if not self.tty and time.monotonic() - self.t0 >= self.every:
-            self._line(text)
+        if self._bar is not None:  # a terminal: the stage on its own line, pulsing
+            if "stage" not in self.tasks:
+                self.tasks["stage"] = self._bar.add_task(text, total=None)
+            self._bar.update(self.tasks["stage"], description=text)
+        elif time.monotonic() - max(self.t0, self._printed) >= self.every:
+            self._line(text)  # at most one line per `every` seconds however often it changes
 
     def tick(self, key: str, done: int, total: int) -> None:
         """``done`` of ``total`` units of Monte Carlo work (path-steps) of run ``key``.
@@ -136,7 +180,10 @@ class Progress:
         done, total : int
             Path-steps done and in all.
         """
-        self.state = f"{key}: Monte Carlo {100 * done / max(total, 1):.0f}% done"
+        frac = done / max(total, 1)
+        left = (time.monotonic() - self.t0) * (1 - frac) / frac if frac > 0 else None
+        eta = f", about {format_seconds(left)} left" if left is not None else ""
+        self.state = f"{key}: Monte Carlo {100 * frac:.{0 if frac >= 0.1 else 2}f}% done{eta}"
         if self._bar is not None:
             if key not in self.tasks:
                 self.tasks[key] = self._bar.add_task(key, total=total)
@@ -195,34 +242,38 @@ def print_structure(rep: dict, title: str) -> None:
     title : str
         The topology's name.
     """
-    out.print(f"[bold]{title}[/bold]  d = {rep['dim']}, N = {len(rep['agents'])}")
+    out.print(f"[bold]{_v(title)}[/bold]  d = {rep['dim']}, N = {len(rep['agents'])}")
     et = Table(title="edges (j -> i carries A_ij)")
     for c in ("edge", "class"):
         et.add_column(c)
     for e in rep["edges"]:
-        et.add_row(f"{e['from']} -> {e['to']}", e["class"])
+        et.add_row(f"{_v(e['from'])} -> {_v(e['to'])}", e["class"])
     out.print(et)
-    at = Table(title=f"agents (U = {set_text(rep['U'])})")
+    at = Table(title=f"agents (U = {_v(set_text(rep['U']))})")
     for c in ("agent", "N_i", "N'_i", "Ω_i", "in-degree-dominated", "C_i"):
         at.add_column(c)
     for a, info in rep["per_agent"].items():
         at.add_row(
-            a,
-            set_text(info["in_neighbours"]),
-            set_text(info["out_neighbours"]),
-            set_text(info["omega"]),
+            _v(a),
+            _v(set_text(info["in_neighbours"])),
+            _v(set_text(info["out_neighbours"])),
+            _v(set_text(info["omega"])),
             "yes" if info["in_degree_dominated"] else "no",
             fmt(info["C_i"]),
         )
     out.print(at)
     if rep["assumption_holds"]:
-        out.print(f"Assumption 2 holds: V1 = {set_text(rep['V1'])}, V2 = {set_text(rep['V2'])}")
+        out.print(
+            f"Assumption 2 holds: V1 = {_v(set_text(rep['V1']))}, V2 = {_v(set_text(rep['V2']))}"
+        )
         for a, p in rep["paths"].items():
-            out.print(f"  {a} reached by the positive-negative path {' -> '.join(map(str, p))}")
+            out.print(
+                f"  {_v(a)} reached by the positive-negative path {_v(' -> '.join(map(str, p)))}"
+            )
     else:
         out.print("[bold red]Assumption 2 fails:[/bold red]")
         for line in capped(rep["violations"], "  agent {agent}: {reason}"):
-            out.print(line)
+            out.print(escape(line))
 
 
 def capped(items: list[dict], line: str, most: int = 10) -> list[str]:
@@ -241,10 +292,16 @@ def capped(items: list[dict], line: str, most: int = 10) -> list[str]:
     -------
     list of str
     """
-    lines = [line.format(**v) for v in items[:most]]
+    lines = [line.format(**{k: one_line(str(x)) for k, x in v.items()}) for v in items[:most]]
     if len(items) > most:
         lines.append(f"  … and {len(items) - most} more (--json lists them all)")
     return lines
+
+
+def _safe_print(text: str) -> None:
+    """One line of plain output (no rich markup: a certificate's text is shown as
+    written), control characters escaped, newlines too: one line per call."""
+    sys.stdout.write(one_line(text) + "\n")
 
 
 def print_verification(doc: dict) -> None:
@@ -257,6 +314,7 @@ def print_verification(doc: dict) -> None:
         :meth:`ntc_design.certify.Verification.to_dict`'s mapping.
     """
     ab = doc["certifies"]
+    print = _safe_print  # noqa: A001 - every line of a certificate's account, escaped
     if ab is not None:
         print(f"kind: {ab['kind']} ({ab['description']})")
         for m in ab["modes"]:
@@ -287,5 +345,6 @@ __all__ = [
     "print_structure",
     "print_table",
     "print_verification",
+    "safe",
     "sweep_progress",
 ]

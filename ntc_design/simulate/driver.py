@@ -17,11 +17,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..design import ProtocolDesign, design_topology
-from ..errors import InputError, quote, warn_user
+from ..errors import InputError, format_seconds, quote, warn_user
 from ..gain import gain_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..timevarying import ExpressionTopology
 from .budget import (
+    LONG_RUN_SECONDS,
     check_budget,
     check_exact_work,
     check_gain,
@@ -29,6 +30,7 @@ from .budget import (
     estimate_exact_steps,
     estimate_steps,
     gain_samples,
+    mc_seconds,
 )
 from .grid import TimeGrid
 from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
@@ -210,6 +212,18 @@ def _check_size(
         mode_field="resample" if isinstance(topology, TimeVaryingTopology) else "topology",
     )
     check_budget(est)
+    nd = topology.n * topology.dim
+    secs = mc_seconds(
+        est, nd, _edge_count(topology) * topology.dim**2, workers, st.scheme == "implicit"
+    )
+    if spec.method != "exact" and secs > LONG_RUN_SECONDS:
+        warn_user(
+            f"paths: {est.path_steps:.3g} path-steps ({spec.mc.paths} paths × "
+            f"{est.steps:.3g} steps) on N·d = {nd}: roughly {format_seconds(secs)} with "
+            f"{workers} worker(s); fewer paths, a shorter T or a larger dt shorten it "
+            "(Ctrl-C stops cleanly, writing nothing)",
+            UserWarning,
+        )
 
 
 def _step_size_guard(

@@ -4,6 +4,7 @@ manifest, and the tables rebuilt from the point files."""
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +15,9 @@ from ..files import jsonable
 from ..outputs import atomic_path, write_atomic
 from .point import ROW_FIELDS, PointResult, PointRow
 from .spec import FORMAT, Sweep
+
+POINT_ARRAYS = ("t", "labels", "mc", "lo", "hi", "exact")
+MAX_POINT_BYTES = 2**30  # a stored point larger than this is not one this package wrote
 
 
 def save_point(out_dir: Path, res: PointResult) -> Path:
@@ -66,19 +70,29 @@ def load_point(out_dir: Path, point: str) -> PointResult | None:
     """
     pdir = out_dir / "points"
     try:
-        doc = json.loads((pdir / f"{point}.json").read_text(encoding="utf-8"))
-        with np.load(pdir / f"{point}.npz") as z:
+        jpath, npath = pdir / f"{point}.json", pdir / f"{point}.npz"
+        if jpath.stat().st_size > MAX_POINT_BYTES or npath.stat().st_size > MAX_POINT_BYTES:
+            return None
+        doc = json.loads(jpath.read_text(encoding="utf-8"))
+        with np.load(npath, allow_pickle=False) as z:
+            if not set(z.files) <= set(POINT_ARRAYS) or not {"t", "labels"} <= set(z.files):
+                return None
+            if sum(i.file_size for i in z.zip.infolist()) > MAX_POINT_BYTES:
+                return None  # the sizes zipfile enforces while inflating
             arr = {k: z[k] for k in z.files}
-    except (OSError, ValueError, KeyError, EOFError):
+    # a damaged or foreign file (garbage, a zip bomb's member, JSON nested 10⁵ deep) is
+    # a point to compute again, never an internal error
+    except (OSError, ValueError, KeyError, EOFError, RecursionError, zipfile.BadZipFile):
         return None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT or doc.get("point") != point:
         return None
     row = PointRow.from_dict(doc["row"]) if isinstance(doc.get("row"), dict) else None
-    if row is None:
+    params = doc.get("params", {})
+    if row is None or not isinstance(params, dict) or not _arrays_agree(arr):
         return None
     return PointResult(
         point,
-        doc.get("params", {}),
+        params,
         row,
         arr["t"],
         [str(a) for a in arr["labels"]],
@@ -86,6 +100,21 @@ def load_point(out_dir: Path, point: str) -> PointResult | None:
         arr.get("lo"),
         arr.get("hi"),
         arr.get("exact"),
+    )
+
+
+def _arrays_agree(arr: dict[str, np.ndarray]) -> bool:
+    """t is 1-d, finite and increasing; labels 1-d text; each curve (t, agents), real."""
+    t, labels = arr["t"], arr["labels"]
+    if t.ndim != 1 or t.dtype.kind != "f" or labels.ndim != 1 or labels.dtype.kind != "U":
+        return False
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        return False
+    shape = (t.size, labels.size)
+    return all(
+        arr[k].shape == shape and arr[k].dtype.kind == "f"
+        for k in ("mc", "lo", "hi", "exact")
+        if k in arr
     )
 
 

@@ -124,6 +124,7 @@ def tune(
             landscape=landscape,
             certificate=certificate,
             bounds=bounds,
+            progress=progress,
         )
     if method not in ("auto", "exact"):
         raise InputError(

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from ..design import design_topology
-from ..errors import InputError, require_positive
+from ..errors import InputError, format_seconds, require_positive
 from ..gain import analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..simulate import SimulationSpec
@@ -130,6 +130,7 @@ def tune_power(
     landscape: bool = True,
     certificate: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> TuneResult:
     """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖² (what
     :func:`ntc_design.tune.tune` runs for ``schedule="power"``).
@@ -160,6 +161,8 @@ def tune_power(
     bounds : mapping of str to (float, float), optional
         Narrower ranges for ``a``, ``b``, ``gamma`` (inside the required theorems' range)
         or ``delta``; lo = hi fixes the parameter.
+    progress : callable, optional
+        Called with a line of text as the search goes (evaluations done, the time left).
 
     Returns
     -------
@@ -185,7 +188,17 @@ def tune_power(
     obj = objective_for(topology, spec, horizon, method)
     dims = _dimensions(require, drange[:2] if drange else None, bounds)
 
+    done = [0]
+
     def fun(p: Mapping[str, float]) -> float:
+        done[0] += 1
+        if progress is not None:
+            el = time.perf_counter() - t0
+            left = el * (max_evaluations - done[0]) / done[0]
+            progress(
+                f"evaluation {done[0]} of at most {max_evaluations} "
+                f"(about {format_seconds(left)} left in the search)"
+            )
         return obj.value(PowerGain(p["a"], p["b"], p["gamma"]), p.get("delta"))
 
     base = {"a": BASELINE.a, "b": BASELINE.b, "gamma": BASELINE.gamma}
@@ -212,6 +225,8 @@ def tune_power(
             )
     tuned = PowerGain(p["a"], p["b"], p["gamma"]).rounded()
     delta = float(f"{p['delta']:.4g}") if "delta" in p else None
+    say = progress or (lambda text: None)
+    say("the tuned and baseline curves at the reported accuracy")
     curves = {
         "tuned": obj.curve(tuned, delta),
         "baseline": obj.curve(BASELINE, None),
@@ -222,8 +237,12 @@ def tune_power(
         )
     if obj.skipped:
         notes.append(f"{len(obj.skipped)} candidate(s) scored +∞ (too stiff or overflowing)")
+    say("a stable Euler–Maruyama step for the tuned gain")
     stepping = stable_stepping(topology, spec, tuned, delta, horizon, notes)
+    if landscape:
+        say("the landscape around the optimum (the contour map)")
     land = _landscape(obj, tuned, delta, dims) if landscape else None
+    say("the theorem conditions and the certificate of the tuned design")
     analysis = analyse_gain(tuned.text)
     cert = certify_tuned(topology, spec, tuned, delta, notes) if certificate else None
     return TuneResult(

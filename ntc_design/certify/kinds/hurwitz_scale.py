@@ -130,7 +130,7 @@ class HurwitzScaleKind(CertificateKind):
         ((mname, sub),) = modes.items()
         where = f"{source}: subject.modes.{mname}"
         top, delta, theta, informed = read_array_mode(sub, where, need(doc, "size", int, source))
-        checks = [informed]
+        checks = list(informed)
         n = top.n
         cw = f"{source}: components"
         comps = need(doc, "components", dict, source)

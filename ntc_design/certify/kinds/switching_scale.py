@@ -87,7 +87,7 @@ class SwitchingScaleKind(CertificateKind):
         for name, sub in modes_doc.items():
             where = f"{source}: subject.modes.{name}"
             top, delta, theta, informed = read_array_mode(sub, where, size)
-            checks.append(informed)
+            checks.extend(informed)
             k = str(name)
             tops[k], deltas[k] = top, float(delta)
             modes[k] = ModeReading(
