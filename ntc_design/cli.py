@@ -81,6 +81,13 @@ def parse_vector(text: str, field: str) -> list[float]:
     return vals
 
 
+def modes_of(top) -> list:
+    """The topologies a run's summary holds: the modes of a switching set, or the one."""
+    if isinstance(top, SwitchingTopology):
+        return list(top.modes.values())
+    return [top.structure if isinstance(top, ExpressionTopology) else top]
+
+
 def _command_line() -> str:
     """This invocation as a shell command (``ntc`` and its arguments, quoted)."""
     import shlex
@@ -391,9 +398,10 @@ def simulate(
     summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
     or nothing)."""
     from .distributed import DaskEngine
+    from .errors import format_bytes
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
-    from .simulate.scenario import check_output, load_scenario, write_outputs
+    from .simulate.scenario import check_output, load_scenario, output_bytes, write_outputs
     from .simulate.spec import MonteCarlo, check_workers
 
     given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method}
@@ -426,6 +434,19 @@ def simulate(
                 print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
             print(f"error: {one_line(str(exc))}", file=sys.stderr)
             raise typer.Exit(1) from None
+    size = output_bytes(
+        top.n,
+        top.dim,
+        int(min(spec.save.count(spec.T), 1e12)),
+        min(spec.mc.store_paths, spec.mc.paths),
+        spec.method != "exact",
+        spec.method != "mc",
+        max((len(m.weights) for m in modes_of(top)), default=0),
+    )
+    if size > OUTPUT_NOTE_BYTES and not as_json:
+        print(
+            f"note: writing about {format_bytes(size)} to {one_line(str(out_dir))}", file=sys.stderr
+        )
     written = write_outputs(res, out_dir, recorded)
     st = res.stats
     if as_json:
@@ -753,6 +774,8 @@ def _argv(args: list[str]) -> list[str]:
         (negative if looks_negative and not takes_value else rest).append(tok)
     return rest + ["--", *negative] if negative else rest
 
+
+OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
 
 _FLAGS = {"--json", "--help", "--version"}  # options that take no value
 

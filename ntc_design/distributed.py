@@ -57,7 +57,11 @@ def heap_allocations() -> bool:
         try:
             libc = ctypes.CDLL(None)
             _heap_set = bool(libc.mallopt(ctypes.c_int(-3), ctypes.c_int(MMAP_THRESHOLD)))
-        except (OSError, AttributeError, TypeError):  # no mallopt (not glibc); CDLL(None) on Windows
+        except (
+            OSError,
+            AttributeError,
+            TypeError,
+        ):  # no mallopt (not glibc); CDLL(None) on Windows
             _heap_set = False
     return _heap_set
 

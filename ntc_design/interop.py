@@ -35,7 +35,6 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from .design import ProtocolDesign
 
 
-
 # ---------------------------------------------------------------------------- networkx
 
 

@@ -204,7 +204,9 @@ def _time_constant(x: Any, source: str | None, key: str) -> sp.Expr:
     elif isinstance(x, (int, float)) and not isinstance(x, bool):
         e = sp.Rational(str(x)) if isinstance(x, float) else sp.Integer(x)
     else:
-        raise field_error(source, key, f"expected a positive number or expression such as 2*pi, got {x!r}")
+        raise field_error(
+            source, key, f"expected a positive number or expression such as 2*pi, got {x!r}"
+        )
     try:
         v = float(e)
     except (TypeError, ValueError):
@@ -238,7 +240,9 @@ def parse_time_varying(doc: dict[str, Any], source: str | None = None) -> TimeVa
     allowed = TOPOLOGY_KEYS | TIME_KEYS
     unknown = sorted(set(doc) - allowed)
     if unknown:
-        raise field_error(source, unknown[0], f"unknown field (allowed: {', '.join(sorted(allowed))})")
+        raise field_error(
+            source, unknown[0], f"unknown field (allowed: {', '.join(sorted(allowed))})"
+        )
     if {"period", "constant_after"} <= set(doc):
         raise field_error(source, "period", "declare either period or constant_after, not both")
     for key in ("dim", "agents", "edges"):

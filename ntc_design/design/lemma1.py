@@ -585,10 +585,11 @@ def _residual_and_thresholds(top, b, dl, u, th, thresholds, notes):
         notes.append(
             "critical couplings δ_H, δ_S not computed "
             + (
-                "(thresholds=False)"
+                "(not asked for here"
                 if thresholds is False
-                else f"by default above Nd = {THRESHOLDS_DEFAULT_MAX_ND} (ask with thresholds=True)"
+                else f"by default above Nd = {THRESHOLDS_DEFAULT_MAX_ND} ("
             )
+            + "ntc design --thresholds, or thresholds=True in Python, computes them)"
         )
     return res, crit
 

@@ -24,8 +24,16 @@ from ..model import Topology
 from ..rows import fmt
 from ..simulate.result import MeanSquareBand
 from ..thresholds import strong_components
+from .figures import states_figure
 from .html import Figure, RunSection, Table, figure_block, html_table
-from .parts import certificate_tables, data_links, fitted_exponent, mc_band, parameter_table
+from .parts import (
+    certificate_tables,
+    data_links,
+    fitted_exponent,
+    mc_band,
+    parameter_table,
+    window_warning,
+)
 from .rundata import RunData
 from .style import BLUE, GREY, ONE_COLUMN, RED, TWO_COLUMN, paper_style, save
 
@@ -201,11 +209,37 @@ def certificate_picture(cert: dict, des: ProtocolDesign):
     with paper_style():
         if cert["kind"] == "hurwitz-scale":
             mu = unpack(cert["components"]["mu"], "components.mu", "f8", (des.topology.n,))
+            # sorted against the fraction of agents (a quantile function): every agent is
+            # visible however wide the spread, on a log axis when every μ_i > 0
             fig, ax = plt.subplots(figsize=(ONE_COLUMN, 2.4), layout="constrained")
-            ax.hist(mu, bins=40, color=BLUE, alpha=0.8)
-            ax.axvline(0.0, color=RED, lw=1.0, ls="--")
-            ax.set_xlabel(r"certified $\mu_i$ ($\lambda_{\min}$ of agent $i$'s block)")
-            ax.set_ylabel("agents")
+            mu_s = np.sort(mu)
+            q = (np.arange(mu_s.size) + 0.5) / max(mu_s.size, 1)
+            ax.plot(q, mu_s, color=BLUE, lw=1.2, marker="." if mu_s.size <= 200 else None)
+            if mu_s.size and mu_s[0] > 0:
+                ax.set_yscale("log")
+                ax.axhline(mu_s[0], color=RED, lw=1.0, ls="--")
+                ax.annotate(
+                    f"smallest μ_i = {mu_s[0]:.3g} (> 0 needed)",
+                    (0.98, mu_s[0]),
+                    xycoords=("axes fraction", "data"),
+                    ha="right",
+                    va="bottom",
+                    color=RED,
+                    fontsize=7,
+                )
+            else:
+                ax.axhline(0.0, color=RED, lw=1.0, ls="--")
+                ax.annotate(
+                    "μ_i > 0 needed",
+                    (0.98, 0.0),
+                    xycoords=("axes fraction", "data"),
+                    ha="right",
+                    va="bottom",
+                    color=RED,
+                    fontsize=7,
+                )
+            ax.set_xlabel("fraction of agents (sorted by μ_i)")
+            ax.set_ylabel(r"certified $\mu_i$")
             return fig
         if des.topology.nd > 3000:
             return None
@@ -341,6 +375,22 @@ def aggregate_section(
         ONE_COLUMN,
     )
     fitted = _total_fit(run.t, total.mean[:, 0])
+    path_figs = [hist]
+    if run.npz["paths"].size:
+        agents = run.path_agents
+        lab = [run.labels[i] for i in agents]
+        path_figs.insert(
+            0,
+            fig(
+                states_figure(run.npz["t"], run.npz["paths"][0], run.theta, lab),
+                "states",
+                f"One sample path, per dimension, θ dashed, of the {len(lab)} agents with the "
+                f"largest final error ({', '.join(lab)}): on a network of {top.n} agents "
+                "the run keeps these agents' paths (paths.npz), stored at the statistics' "
+                f"save times ({run.npz['t'].size} points).",
+                TWO_COLUMN,
+            ),
+        )
     section = RunSection(
         key=key,
         title=title,
@@ -353,10 +403,13 @@ def aggregate_section(
         gain_figure=None,
         theorems=html_table(theorem_table(res.theorems)),
         ms_figure=ms_fig,
-        convergence_note=f"The total error's decay exponent, fitted over t ∈ [T/10, T]: {fmt(fitted, 3)}.",
+        convergence_note=(
+            f"The total error's decay exponent, fitted over t ∈ [T/10, T]: {fmt(fitted, 3)}."
+            + window_warning(float(run.t[-1]) / 10, float(run.t[-1]))
+        ),
         convergence=Table(("quantity", "value"), [("fitted p of Σ_i E‖x_i − θ‖²", fmt(fitted, 3))]),
         topology_figures=figs,
-        path_figures=[hist],
+        path_figures=path_figs,
         final=worst_table(run, ms, kind),
         spread="",
         data_links=data_links(run, figdir, key, base),
@@ -395,8 +448,11 @@ def _aggregate_figures(fig, first: ProtocolDesign, certificate: dict) -> list:
             fig(
                 picture,
                 "spectrum",
-                "What the certificate relies on: the certified per-agent bounds μ_i "
-                "(component-wise certificate) or the eigenvalues of −L_B.",
+                "What the certificate relies on. Component-wise certificate: the certified "
+                "per-agent bounds μ_i (λ_min of agent i's symmetric diagonal block, lowered "
+                "for rounding), sorted, against the fraction of agents; the proof needs every "
+                "μ_i > 0, and the red dashed line marks the smallest. Otherwise the "
+                "eigenvalues of −L_B, which must lie left of the red dashed line Re λ = 0.",
                 ONE_COLUMN,
             )
         )

@@ -64,6 +64,29 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
     return Table(("property", "result"), rows), checks, {"valid": ver.valid, "results": r}
 
 
+def window_warning(t_from: float, t_end: float) -> str:
+    """The caution a fitted decay exponent needs when its window is short: the predicted
+    exponent describes t → ∞, and under one decade of 1 + t the fit sees the transient.
+
+    Parameters
+    ----------
+    t_from, t_end : float
+        The fitted window.
+
+    Returns
+    -------
+    str
+        The warning (with a leading space), or "" for a window of a decade or more.
+    """
+    decades = float(np.log10((1 + t_end) / (1 + t_from)))
+    if decades >= 1.0:
+        return ""
+    return (
+        f" The window spans only {decades:.2f} decades of 1 + t: too short for the fitted "
+        "exponent to test a prediction (which describes t → ∞); take it as indicative."
+    )
+
+
 def fitted_exponent(t: np.ndarray, y: np.ndarray, t_from: float) -> float | None:
     """p in y ≈ K (1+t)^(−p), least squares of log y on log(1+t) over t >= t_from.
 
@@ -257,6 +280,7 @@ __all__ = [
     "companion_paths",
     "data_links",
     "fitted_exponent",
+    "window_warning",
     "mc_band",
     "parameter_table",
 ]

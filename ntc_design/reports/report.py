@@ -43,6 +43,7 @@ from .parts import (
     fitted_exponent,
     mc_band,
     parameter_table,
+    window_warning,
 )
 from .rundata import RunData, load_run
 from .timevarying import lambda_min_figure, weights_figure
@@ -124,12 +125,7 @@ def convergence_table(run: RunData, mc, exact, rate: float) -> tuple[str, Table,
         f"Decay exponent p of E‖x_i − θ‖² ≈ K(1+t)^(−p), fitted by least squares in log–log "
         f"over t ∈ [{t_from:g}, {t_end:g}], against the prediction for c(t) = {gain}: {why}."
     )
-    decades = float(np.log10((1 + t_end) / (1 + t_from)))
-    if decades < 1.0:  # the prediction is asymptotic: a short window fits the transient
-        note += (
-            f" The window spans only {decades:.2f} decades of 1 + t: too short for the fitted "
-            "exponent to test the prediction (it describes t → ∞); take it as indicative."
-        )
+    note += window_warning(t_from, t_end)
     return (
         note,
         Table(("agent", "fitted p (exact moments)", "fitted p (Monte Carlo)", "predicted p"), rows),

@@ -48,6 +48,13 @@ class RunData:
         return schedule_from_document(g, "parameters.gain") if isinstance(g, dict) else g
 
     @property
+    def path_agents(self) -> np.ndarray:
+        """The 0-based agents whose sample paths paths.npz holds (all of them, or on a large
+        network the few with the largest final error)."""
+        agents = self.npz.get("path_agents")
+        return np.arange(len(self.labels)) if agents is None else agents
+
+    @property
     def rerun(self) -> str:
         """The command that makes this run and its report again: the command line the run
         recorded (its overrides included: ``--paths 200`` stays 200), else the scenario."""
@@ -310,11 +317,19 @@ def _check_run(run: RunData) -> None:
             "theta", f"shape {np.asarray(run.npz['theta']).shape}, expected ({top.dim},)", npz_file
         )
     paths = run.npz["paths"]
-    if paths.size and paths.shape[1:] != (run.t.size, top.n * top.dim):
+    agents = run.npz.get("path_agents")
+    if agents is not None and (
+        agents.ndim != 1
+        or agents.dtype.kind not in "iu"
+        or (agents.size and (agents.min() < 0 or agents.max() >= top.n))
+        or np.any(np.diff(agents) <= 0)
+    ):
+        raise bad("path_agents", f"expected increasing agent indices in 0..{top.n - 1}", npz_file)
+    width = top.n * top.dim if agents is None else agents.size * top.dim
+    if paths.size and paths.shape[1:] != (run.t.size, width):
         raise bad(
             "paths",
-            f"shape {paths.shape}, expected (paths, {run.t.size} save times, N·d = "
-            f"{top.n * top.dim})",
+            f"shape {paths.shape}, expected (paths, {run.t.size} save times, {width})",
             npz_file,
         )
     if run.ms("mc") is None and run.ms("exact") is None:

@@ -106,8 +106,6 @@ def markevery(k: int, n_points: int, count: int = 8):
 # ---------------------------------------------------------------------------- topology
 
 
-
-
 @dataclass(frozen=True)
 class SavedFigure:
     """A figure written to disk: its stem, the file per format, and the PNG bytes."""
@@ -158,8 +156,6 @@ def save(fig, stem: Path, formats: Sequence[str] = FORMATS, dpi: int = DPI) -> S
         files[f] = p
     plt.close(fig)
     return SavedFigure(stem, files, png)
-
-
 
 
 __all__ = [

@@ -6,6 +6,7 @@ the certificate), written as ``tune.html`` with the figures in the one style."""
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +24,7 @@ from ..outputs import output_folder
 from ..rows import Table, fmt
 from ..schedule import ScheduleGain
 from ..tune import ScheduleTuneResult, TuneResult, tuned_scenario
+from ..tune.family import BASELINE
 from . import style
 from .html import figure_block, html_table, render, write_html
 
@@ -182,6 +184,18 @@ def landscape_figure(result: TuneResult):
             levels = np.geomspace(ok.min(), ok.max(), 14)
             cs = ax.contourf(land.a, land.gamma, z, levels=levels, norm=LogNorm(), cmap="viridis")
             fig.colorbar(cs, ax=ax, label=r"$E\,\sum_i \|x_i(T) - \theta\|^2$", format="%.3g")
+        blank = ~np.isfinite(z)
+        if blank.any():  # candidates that scored +∞: hatched and named, not left white
+            ax.contourf(
+                land.a,
+                land.gamma,
+                blank.astype(float),
+                levels=[0.5, 1.5],
+                colors="none",
+                hatches=["////"],
+            )
+            ax.fill([], [], fc="none", hatch="////", ec="0.2", label="+∞: too stiff or unstable")
+        # markers on the γ = 1 edge are drawn whole (not clipped by the axes)
         ax.plot(
             [result.tuned.a],
             [result.tuned.gamma],
@@ -191,10 +205,27 @@ def landscape_figure(result: TuneResult):
             ms=8,
             ls="none",
             label="tuned",
+            clip_on=False,
+            zorder=5,
         )
-        ax.plot(
-            [1.0], [1.0], marker="o", color="none", mec="red", ms=7, ls="none", label="baseline"
-        )
+        if math.isclose(land.b, BASELINE.b, rel_tol=1e-9):
+            ax.plot(
+                [BASELINE.a],
+                [BASELINE.gamma],
+                marker="o",
+                color="none",
+                mec="red",
+                ms=7,
+                ls="none",
+                label="baseline 1/(1 + t)",
+                clip_on=False,
+                zorder=5,
+            )
+        else:  # 1/(1 + t) has b = 1: it is not on this slice
+            ax.set_title(
+                f"slice at the tuned b = {fmt(land.b)}; 1/(1 + t) (b = 1) is not on it",
+                fontsize=7,
+            )
         ax.set_xscale("log")
         _plain_log_ticks(ax)
         ax.set_xlabel(f"a  (b = {fmt(land.b)})")

@@ -17,6 +17,13 @@ from .result import simulation_frame
 from .spec import SimulationSpec
 
 OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz")
+#: Above this many agents paths.npz keeps the sample paths of :data:`PATH_AGENTS` agents
+#: (those with the largest final error: what a large network's report draws), and
+#: ms_error_long.csv is left out above :data:`LONG_ROWS` rows (ms_error.csv holds the
+#: same numbers; ``SimulationResult.to_pandas()`` gives the tidy form in Python).
+PATHS_ALL_AGENTS_MAX = 20
+PATH_AGENTS = 8
+LONG_ROWS = 10**6
 # what an earlier run's folder may hold besides its outputs (ntc report writes these)
 REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures", "certificate.json", "paths_fine.npz")
 
@@ -132,27 +139,102 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
     w.writerow(cols)
     for row in table:
         w.writerow([repr(float(v)) for v in row])
+    agents, paths = stored_paths(res)
+    long_form = res.save_times.size * len(res.labels) <= LONG_ROWS
+    summary["files"] = {
+        "path_agents": None if agents is None else [str(res.labels[i]) for i in agents],
+        "ms_error_long": long_form,
+    }
     with output_folder(out, REPLACEABLE) as tmp:
-        (tmp / "summary.json").write_text(
-            json_text(jsonable(summary)), encoding="utf-8"
-        )
+        (tmp / "summary.json").write_text(json_text(jsonable(summary)), encoding="utf-8")
         (tmp / "ms_error.csv").write_text(buf.getvalue(), encoding="utf-8")
-        # the same numbers in tidy long form (t, agent, mc, lo, hi, exact), as to_pandas()
-        (tmp / "ms_error_long.csv").write_text(
-            simulation_frame(res).to_csv(index=False), encoding="utf-8"
-        )
-        np.savez_compressed(
-            tmp / "paths.npz",
-            t=res.save_times,
-            paths=res.mc.paths if res.mc is not None else np.zeros((0, res.save_times.size, 0)),
-            mean_state=res.mc.mean_state if res.mc is not None else np.zeros((0, 0)),
-            exact_mean=(res.exact.mean + np.tile(res.theta, len(res.labels)))
+        if long_form:
+            # the same numbers in tidy long form (t, agent, mc, lo, hi, exact), as to_pandas()
+            (tmp / "ms_error_long.csv").write_text(
+                simulation_frame(res).to_csv(index=False), encoding="utf-8"
+            )
+        arrays: dict[str, np.ndarray] = {
+            "t": res.save_times,
+            "paths": paths,
+            "mean_state": res.mc.mean_state if res.mc is not None else np.zeros((0, 0)),
+            "exact_mean": (res.exact.mean + np.tile(res.theta, len(res.labels)))
             if res.exact is not None
             else np.zeros((0, 0)),
-            labels=np.array([str(a) for a in res.labels]),
-            theta=res.theta,
-        )
-    return [out / name for name in OUTPUT_FILES]
+            "labels": np.array([str(a) for a in res.labels]),
+            "theta": res.theta,
+        }
+        if agents is not None:
+            arrays["path_agents"] = agents
+        np.savez_compressed(tmp / "paths.npz", **arrays)  # type: ignore[arg-type]
+    return [out / name for name in OUTPUT_FILES if long_form or name != "ms_error_long.csv"]
 
 
-__all__ = ["OUTPUT_FILES", "check_output", "load_scenario", "ms_error_table", "write_outputs"]
+def stored_paths(res) -> tuple[np.ndarray | None, np.ndarray]:
+    """The sample paths paths.npz keeps: every agent's up to :data:`PATHS_ALL_AGENTS_MAX`
+    agents, else those of the :data:`PATH_AGENTS` agents with the largest final error
+    (their 0-based indices, ascending, and the paths, (paths, saves, agents·d)).
+
+    Parameters
+    ----------
+    res : SimulationResult
+        The result.
+
+    Returns
+    -------
+    (numpy.ndarray or None, numpy.ndarray)
+        The agents (None: all of them) and their paths.
+    """
+    if res.mc is None:
+        return None, np.zeros((0, res.save_times.size, 0))
+    n, paths = len(res.labels), res.mc.paths
+    if n <= PATHS_ALL_AGENTS_MAX or paths.size == 0:
+        return None, paths
+    final = res.exact.ms_error[-1] if res.exact is not None else res.mc.mean[-1]
+    agents = np.sort(np.argsort(-np.asarray(final), kind="stable")[:PATH_AGENTS])
+    d = paths.shape[2] // n
+    cols = (agents[:, None] * d + np.arange(d)).ravel()
+    return agents.astype(np.int64), paths[:, :, cols]
+
+
+def output_bytes(
+    n: int, d: int, saves: int, stored: int, mc: bool, exact: bool, edges: int = 0
+) -> float:
+    """About how many bytes a run's folder will take (text at ~20 bytes a number,
+    arrays at 8), from its size alone, to say before the run starts.
+
+    Parameters
+    ----------
+    n, d : int
+        Agents and dimension.
+    saves : int
+        Save times.
+    stored : int
+        Stored sample paths.
+    mc, exact : bool
+        Which methods run.
+    edges : int, optional
+        Edges of the topology (summary.json holds it, for the report).
+
+    Returns
+    -------
+    float
+        Bytes.
+    """
+    per_agent = 3 * mc + exact
+    wide = 20.0 * saves * n * per_agent
+    long_rows = saves * n
+    long = 40.0 * long_rows if long_rows <= LONG_ROWS else 0.0
+    agents = n if n <= PATHS_ALL_AGENTS_MAX else min(n, PATH_AGENTS)
+    arrays = 8.0 * saves * d * (stored * agents * mc + n * (mc + exact))
+    return wide + long + arrays + 22.0 * edges * d * d
+
+
+__all__ = [
+    "OUTPUT_FILES",
+    "check_output",
+    "load_scenario",
+    "ms_error_table",
+    "output_bytes",
+    "stored_paths",
+    "write_outputs",
+]

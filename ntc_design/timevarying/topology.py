@@ -291,7 +291,9 @@ def _check_periodic(w: ExprWeight, period: sp.Expr, where: Callable[[str], str])
     """A(t + P) = A(t) symbolically (sympy), else the file is refused."""
     t = symbol("t")
     exprs: list[sp.Expr] = (
-        [w.scale] if w.form == "scale" and w.scale is not None else [e for r in w.entries for e in r]
+        [w.scale]
+        if w.form == "scale" and w.scale is not None
+        else [e for r in w.entries for e in r]
     )
     for e in exprs:
         if not e.has(t):

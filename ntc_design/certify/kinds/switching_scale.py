@@ -83,7 +83,8 @@ class SwitchingScaleKind(CertificateKind):
         modes_doc = need(subject, "modes", dict, f"{source}: subject")
         if not modes_doc or len(modes_doc) > MAX_MODES:
             raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
-        checks, modes, tops, deltas = [], {}, {}, {}
+        checks: list = []
+        modes, tops, deltas = {}, {}, {}
         for name, sub in modes_doc.items():
             where = f"{source}: subject.modes.{name}"
             top, delta, theta, informed = read_array_mode(sub, where, size)
