@@ -36,6 +36,8 @@ exclude_patterns = ["_build", "gallery/README.rst"]
 html_theme = "pydata_sphinx_theme"
 html_title = "ntc-design"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]
 
 sphinx_gallery_conf = {
     "examples_dirs": str(HERE / "gallery"),

@@ -18,6 +18,7 @@ from .errors import InputError
 from .generate import random_network
 from .loader import load
 from .model import SwitchingTopology, TimeVaryingTopology, Topology
+from .paper import example_path
 
 __version__ = "0.1.0"
 
@@ -31,6 +32,7 @@ __all__ = [
     "Topology",
     "assumption2",
     "design",
+    "example_path",
     "load",
     "random_network",
 ]

@@ -29,6 +29,23 @@ from .reports.terminal import (
 )
 from .timevarying import ExpressionTopology
 
+def _flag_type(original):
+    """A flag (``--json``, ``--help``, ``--tune-delta``) takes no value: its help line
+    shows no type (this typer prints ``<bool>`` for it)."""
+
+    def display_type_rich(self, ctx):
+        if getattr(self, "is_flag", False) and not getattr(self, "count", False):
+            return None
+        return original(self, ctx)
+
+    return display_type_rich
+
+
+with contextlib.suppress(AttributeError):  # another typer: its own rendering stays
+    typer.core.TyperOption.display_type_rich = _flag_type(  # type: ignore[method-assign]
+        typer.core.TyperOption.display_type_rich
+    )
+
 app = typer.Typer(
     add_completion=True,
     pretty_exceptions_enable=False,
@@ -58,7 +75,13 @@ def _root(
     matrix-weighted networks with compound measurement noise."""
 
 
-FileArg = Annotated[Path, typer.Argument(help="A topology or switching file (YAML/JSON).")]
+FileArg = Annotated[
+    Path,
+    typer.Argument(
+        help="A topology, switching or time-varying topology file (YAML or JSON), an edge "
+        "list (.csv, .npz) or a MATLAB block matrix (.mat)."
+    ),
+]
 # a flag takes no value: no metavar (click would print <bool>)
 JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.", metavar="")]
 SchedulerOpt = Annotated[
@@ -807,6 +830,9 @@ def main(argv: list[str] | None = None) -> None:
         from click import exceptions as click  # type: ignore[no-redef]
 
     args = sys.argv[1:] if argv is None else list(argv)
+    # figures are written to files: no display, whatever the machine has (a GUI backend
+    # would open windows or fail without one); set before matplotlib is ever imported
+    os.environ.setdefault("MPLBACKEND", "Agg")
     warnings.showwarning = _warning_line
     warnings.simplefilter("ignore", RuntimeWarning)  # numerical trouble is checked, not warned
     warnings.simplefilter("once", AssumptionWarning)  # one line per network, not per mode

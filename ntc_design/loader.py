@@ -14,7 +14,8 @@ from .timevarying import ExpressionTopology
 
 def load(path: str | Path) -> Topology | SwitchingTopology | ExpressionTopology:
     """Load a topology file, a switching file or a time-varying topology file (YAML or
-    JSON), or a compact ``.npz`` edge list (:mod:`ntc_design.edgelist`).
+    JSON), an edge list (``.csv`` or the compact ``.npz``, :mod:`ntc_design.edgelist`) or a
+    MATLAB block matrix (``.mat``, :mod:`ntc_design.tablefiles`).
 
     Parameters
     ----------

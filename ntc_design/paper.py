@@ -4,8 +4,11 @@ the simulation settings and the numbers the paper states (for `ntc reproduce pap
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
+from .errors import InputError
 from .model import SwitchingTopology, Topology
 
 THETA = [1.0, 2.0, -1.0]
@@ -127,3 +130,54 @@ STATED = {
     "G2": {"delta": 7.0495, "x0": [1.2837, 2.5674, -1.2837], "informed": [1, 2, 3, 4, 6]},
     "G3": {"delta": 3.1000, "x0": [1.6452, 3.2903, -1.6452], "informed": [1, 2, 3, 6]},
 }
+
+
+def example_path(name: str = "") -> Path:
+    """A bundled example file (the checkout's ``examples/``, shipped in the wheel as
+    ``ntc_design.examples``): where it is however the package was installed, so a script
+    or a downloaded notebook runs outside a checkout.
+
+    Parameters
+    ----------
+    name : str, optional
+        A file inside the examples, e.g. ``"g1.yaml"`` or ``"scenarios/g1_fixed.yaml"``;
+        empty: the folder itself.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    InputError
+        No such example, or a name that leaves the examples folder.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> nd.load(nd.example_path("g1.yaml")).n
+    7
+    """
+    root = _examples_root()
+    target = (root / name).resolve()
+    if root.resolve() not in (target, *target.parents):
+        raise InputError(f"example_path: {name!r} is outside the bundled examples")
+    if not target.exists():
+        known = sorted(p.name for p in root.glob("*.yaml"))
+        raise InputError(f"example_path: no example {name!r} (there are {', '.join(known)}, …)")
+    return target
+
+
+def _examples_root() -> Path:
+    try:  # an installed wheel: the package data
+        from importlib.resources import files
+
+        root = Path(str(files("ntc_design.examples")))
+        if (root / "g1.yaml").is_file():
+            return root
+    except (ModuleNotFoundError, TypeError):
+        pass
+    checkout = Path(__file__).resolve().parent.parent / "examples"  # a checkout (editable)
+    if (checkout / "g1.yaml").is_file():
+        return checkout
+    raise InputError("example_path: the bundled examples are not installed with this package")

@@ -1,5 +1,5 @@
 """One dispatcher for topology files: a topology, a switching set, a time-varying
-topology (YAML or JSON), or a compact ``.npz`` edge list."""
+topology (YAML or JSON), an ``.npz`` or ``.csv`` edge list, or a ``.mat`` block matrix."""
 
 from __future__ import annotations
 

@@ -6,8 +6,7 @@ Load the paper's first network, design the protocol (Lemma 1), certify it, and s
 noisy network: Monte Carlo beside the exact mean-square curves.
 """
 
-from pathlib import Path
-
+import matplotlib.pyplot as plt
 import numpy as np
 
 import ntc_design as nd
@@ -15,8 +14,8 @@ from ntc_design.certify import certify
 from ntc_design.reports.figures import ms_error_figure
 from ntc_design.simulate import NoiseModel, simulate
 
-# the checkout's examples/, from the checkout or from docs/gallery (where the build runs it)
-EXAMPLES = next(p / "examples" for p in (Path.cwd(), *Path.cwd().parents) if (p / "examples").is_dir())
+# the bundled examples, wherever the package is installed (no checkout needed)
+EXAMPLES = nd.example_path()
 
 top = nd.load(EXAMPLES / "g1.yaml")
 des = nd.design(top, [1, 2, -1], margin=0.1)
@@ -29,3 +28,5 @@ run = simulate(
 )  # fmt: skip
 print(run.table())
 fig = ms_error_figure(run.save_times, run.mc, run.exact.ms_error, run.labels)
+
+plt.show()  # in a notebook or a script: display the figures

@@ -7,14 +7,15 @@ L_B(k) + L_B(k)ᵀ ≻ 0 in every mode with a common P, and the schedule.
 """
 
 import warnings
-from pathlib import Path
+
+import matplotlib.pyplot as plt
 
 import ntc_design as nd
 from ntc_design.certify import certify
 from ntc_design.reports.figures import schedule_figure
 
-# the checkout's examples/, from the checkout or from docs/gallery (where the build runs it)
-EXAMPLES = next(p / "examples" for p in (Path.cwd(), *Path.cwd().parents) if (p / "examples").is_dir())
+# the bundled examples, wherever the package is installed (no checkout needed)
+EXAMPLES = nd.example_path()
 
 sw = nd.load(EXAMPLES / "switching.yaml")
 print(sw)
@@ -24,3 +25,5 @@ with warnings.catch_warnings():
 for t in res.tables():
     print(t.text(), end="\n\n")
 fig = schedule_figure(sw.schedule)
+
+plt.show()  # in a notebook or a script: display the figures

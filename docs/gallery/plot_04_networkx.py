@@ -6,6 +6,7 @@ A ``networkx.DiGraph`` whose edge u → v carries A_vu (v listens to u). Scalars
 for d = 1; the topology is validated like a file.
 """
 
+import matplotlib.pyplot as plt
 import networkx as nx
 
 import ntc_design as nd
@@ -28,3 +29,5 @@ print(top)
 des = nd.design(top, [2.0], margin=0.1)
 print(des.table().text())
 fig = topology_figure(des.topology, des.informed, des.B)
+
+plt.show()  # in a notebook or a script: display the figures

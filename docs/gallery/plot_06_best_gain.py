@@ -8,8 +8,7 @@ gallery quick; ``ntc tune examples/scenarios/g1_deadline.yaml --horizon 10 --sch
 optimal`` is the full study.
 """
 
-from pathlib import Path
-
+import matplotlib.pyplot as plt
 import numpy as np
 
 import ntc_design as nd
@@ -17,10 +16,8 @@ from ntc_design.reports.tune import curves_figure, schedule_gains_figure
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.tune import tune
 
-# the checkout's examples/, from the checkout or from docs/gallery (where the build runs it)
-EXAMPLES = next(
-    p / "examples" for p in (Path.cwd(), *Path.cwd().parents) if (p / "examples").is_dir()
-)
+# the bundled examples, wherever the package is installed (no checkout needed)
+EXAMPLES = nd.example_path()
 g1 = nd.load(EXAMPLES / "g1.yaml")
 spec = SimulationSpec.build([1, 2, -1], noise=NoiseModel(0.4, 0.3), initial=np.linspace(-3, 3, 21))
 best = tune(g1, spec, 4.0, schedule="optimal", check_paths=0, certificate=False)
@@ -31,3 +28,5 @@ print(best.refinement_table().text())
 # The three gains (the schedule's tail after T dotted) and their errors over [0, T].
 schedule_gains_figure(best)
 curves_figure(best)
+
+plt.show()  # in a notebook or a script: display the figures

@@ -6,8 +6,6 @@ How the final mean-square error grows with the noise σ, by the exact moment equ
 (no Monte Carlo noise). ``ntc sweep`` does the same from a file, here or on a Dask cluster.
 """
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -15,8 +13,8 @@ import ntc_design as nd
 from ntc_design.reports.style import ONE_COLUMN, paper_style
 from ntc_design.simulate import NoiseModel, simulate
 
-# the checkout's examples/, from the checkout or from docs/gallery (where the build runs it)
-EXAMPLES = next(p / "examples" for p in (Path.cwd(), *Path.cwd().parents) if (p / "examples").is_dir())
+# the bundled examples, wherever the package is installed (no checkout needed)
+EXAMPLES = nd.example_path()
 
 top = nd.load(EXAMPLES / "g1.yaml")
 sigmas = np.array([0.1, 0.2, 0.4, 0.8])
@@ -33,3 +31,5 @@ with paper_style():
     ax.plot(sigmas, final, marker="o")
     ax.set_xlabel(r"noise $\sigma$")
     ax.set_ylabel(r"$E\sum_i\|x_i(T)-\theta\|^2$")
+
+plt.show()  # in a notebook or a script: display the figures

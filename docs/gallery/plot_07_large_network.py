@@ -6,6 +6,8 @@ A random network that satisfies Assumption 2 by construction, certified componen
 component (nothing dense), then simulated with the implicit scheme for a few paths.
 """
 
+import matplotlib.pyplot as plt
+
 from ntc_design.certify import certify
 from ntc_design.generate import random_network
 from ntc_design.reports.aggregate import degree_figure
@@ -21,3 +23,5 @@ run = simulate(
 )  # fmt: skip
 print(run)
 fig = degree_figure(top)
+
+plt.show()  # in a notebook or a script: display the figures

@@ -15,8 +15,8 @@ from pathlib import Path
 import ntc_design as nd
 from ntc_design.certify import certify, verify, verify_file, write_certificate
 
-# the checkout's examples/, from the checkout or from docs/gallery (where the build runs it)
-EXAMPLES = next(p / "examples" for p in (Path.cwd(), *Path.cwd().parents) if (p / "examples").is_dir())
+# the bundled examples, wherever the package is installed (no checkout needed)
+EXAMPLES = nd.example_path()
 
 res = certify(nd.load(EXAMPLES / "g1.yaml"), [1, 2, -1], gain="1/(1+t)")
 path = Path(tempfile.mkdtemp()) / "g1.json"

@@ -104,6 +104,10 @@ def main(argv: list[str] | None = None) -> None:
     argv : list of str, optional
         The command line (default: ``sys.argv``).
     """
+    import matplotlib.pyplot as plt
+
+    plt.switch_backend("Agg")  # files only, never a window
+
     ap = argparse.ArgumentParser(
         prog="python -m ntc_design.reports.examples", description=__doc__.split("\n")[0]
     )

@@ -24,19 +24,17 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-import matplotlib
+# no matplotlib.use() here: a notebook keeps its inline backend (the CLI sets MPLBACKEND)
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.artist import Artist
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.artist import Artist  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.patches import Patch  # noqa: E402
-
-from ..gain import parse_gain  # noqa: E402
-from ..simulate import make_gain  # noqa: E402
-from ..simulate.result import MeanSquareBand  # noqa: E402
-from .style import (  # noqa: E402
+from ..gain import parse_gain
+from ..simulate import make_gain
+from ..simulate.result import MeanSquareBand
+from .style import (
     BLUE,
     LINESTYLES,
     MODE_COLOURS,

@@ -11,10 +11,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+# no matplotlib.use() here: a notebook keeps its inline backend (the CLI sets MPLBACKEND)
+import matplotlib.pyplot as plt
 
 ONE_COLUMN = 3.5  # inches (IEEE/Elsevier single column)
 TWO_COLUMN = 7.16  # inches (full text width)
