@@ -3,7 +3,6 @@ docs/_build/html``): the user guide, the API reference from the numpydoc docstri
 reference from the commands themselves and a gallery of executed examples."""
 
 import os
-import sys
 from pathlib import Path
 
 import matplotlib

@@ -29,6 +29,7 @@ from .reports.terminal import (
 )
 from .timevarying import ExpressionTopology
 
+
 def _flag_type(original):
     """A flag (``--json``, ``--help``, ``--tune-delta``) takes no value: its help line
     shows no type (this typer prints ``<bool>`` for it)."""

@@ -24,7 +24,12 @@ def assert_input_error(args, capsys, monkeypatch, *needles):
     assert code == 2, (code, out, err)
     assert len(lines) == 1, err
     assert "Traceback" not in err
-    assert out == ""
+    if "--json" in map(str, args):  # the same error as JSON on stdout, for scripts
+        import json
+
+        assert json.loads(out) == {"ok": False, "error": lines[0][7:], "exit_code": 2}
+    else:
+        assert out == ""
     for n in needles:
         assert n in lines[0], (n, lines[0])
     return lines[0]

@@ -674,7 +674,7 @@ ARGS = [
     (["reproduce", "paper", "--out", "o", "--T", "x"], ["'--T'"]),
     (["reproduce", "cake", "--out", "o"], ["reproduce", "unknown target"]),
     (["frobnicate"], ["No such command"]),
-    (["check", "/"], ["no such file"]),
+    (["check", "/"], ["is a folder"]),
     (["gain", "-1/(1+t)"], ["gain", "negative"]),
     (["gain", "-1"], ["gain", "negative"]),
     (["gain", "-1", "--json"], ["gain", "negative"]),

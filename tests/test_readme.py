@@ -32,3 +32,48 @@ def test_readme_python_block_runs_on_its_own(k, tmp_path):
         [sys.executable, "-c", BLOCKS[k]], cwd=tmp_path, capture_output=True, text=True, timeout=600
     )
     assert r.returncode == 0, r.stderr[-2000:]
+
+
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+
+
+def _said(pattern: str) -> str:
+    m = re.search(pattern, README, re.S)
+    assert m, pattern
+    return m.group(1)
+
+
+def test_readme_numbers_of_the_first_command(g1, theta):
+    # every figure the Quickstart states about G1, recomputed
+    import ntc_design as nd
+    from ntc_design.certify import certify
+
+    res = certify(g1, theta, gain="1/(1+t)")
+    assert res.proven
+    assert int(_said(r"table of the (\d+) certificate checks")) == len(res.verification.checks)
+    alpha = res.certificate["results"]["lmi"]["alpha"]
+    assert _said(r"LMI α = ([\d.]+)") == f"{alpha:.6f}"
+    des = nd.design(g1, theta, margin=0.1)
+    assert _said(r"C = ([\d.]+),\nδ") == f"{des.C:.4f}"
+    assert _said(r"δ_S = ([\d.]+):") == f"{des.thresholds.symmetric:.4f}"
+    x0 = ", ".join(f"{v:.3f}" for v in des.x0)
+    assert f"x0 = [{x0}]" in README
+    minors = int(_said(r"all (\d+) leading minors"))
+    assert minors == g1.n * g1.dim
+
+
+def test_readme_test_counts_are_those_collected():
+    def collected(*extra):
+        out = subprocess.run(
+            [sys.executable, "-m", "pytest", "--collect-only", "-q", *extra],
+            cwd=ROOT, capture_output=True, text=True,
+        ).stdout  # fmt: skip
+        m = re.search(r"(\d+)(?:/\d+)? tests? collected", out)
+        assert m, out[-500:]
+        return int(m.group(1))
+
+    total = int(_said(r"([\d,]+) tests, \d+ min").replace(",", ""))
+    fast = int(_said(r"slow ones out\n?\s*\(([\d,]+) tests").replace(",", ""))
+    # within 5 %: the README is re-measured when the suite grows by more
+    assert abs(collected() - total) <= 0.05 * total
+    assert abs(collected("-m", "not slow") - fast) <= 0.05 * fast

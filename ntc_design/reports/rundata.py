@@ -329,7 +329,12 @@ def _check_run(run: RunData) -> None:
     if paths.size and paths.shape[1:] != (run.t.size, width):
         raise bad(
             "paths",
-            f"shape {paths.shape}, expected (paths, {run.t.size} save times, {width})",
+            f"shape {paths.shape}, expected (paths, {run.t.size} save times, "
+            + (
+                f"N·d = {width})"
+                if agents is None
+                else f"{agents.size} stored agents × d = {width})"
+            ),
             npz_file,
         )
     if run.ms("mc") is None and run.ms("exact") is None:

@@ -152,7 +152,7 @@ class Progress:
             if time.monotonic() - self._printed >= 0.5 * self.every:
                 self._line(self.state)
 
-    def stage(self, text: str) -> None:
+    def stage(self, text: str, transient: bool = False) -> None:
         """A new stage (e.g. 'g1: figures and report'); off a terminal it is printed at
         once only after the first ``every`` seconds, so that a quick run, or bad input
         refused at the start, prints nothing but its result or its one error line.
@@ -161,14 +161,17 @@ class Progress:
         ----------
         text : str
             What the run is doing now.
+        transient : bool, optional
+            A frequent update within a stage (an evaluation count): off a terminal only
+            the heartbeat prints it, so a fast loop does not print a line per call.
         """
         self.state = text
         if self._bar is not None:  # a terminal: the stage on its own line, pulsing
             if "stage" not in self.tasks:
                 self.tasks["stage"] = self._bar.add_task(text, total=None)
             self._bar.update(self.tasks["stage"], description=text)
-        elif time.monotonic() - max(self.t0, self._printed) >= self.every:
-            self._line(text)  # at most one line per `every` seconds however often it changes
+        elif not transient and time.monotonic() - self.t0 >= self.every:
+            self._line(text)
 
     def tick(self, key: str, done: int, total: int) -> None:
         """``done`` of ``total`` units of Monte Carlo work (path-steps) of run ``key``.

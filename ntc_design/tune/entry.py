@@ -39,7 +39,7 @@ def tune(
     max_gain: float = DEFAULT_MAX_GAIN,
     max_peak: float | None = None,
     check_paths: int = CHECK_PATHS,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[..., None] | None = None,
 ) -> TuneResult | ScheduleTuneResult:
     """Tune the gain for a deadline T: minimise E Σ_i ‖x_i(T) − θ‖² over the family
     c(t) = a·(b + t)^(−γ) (and δ), or with ``schedule="optimal"`` over every schedule

@@ -130,7 +130,7 @@ def tune_power(
     landscape: bool = True,
     certificate: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[..., None] | None = None,
 ) -> TuneResult:
     """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖² (what
     :func:`ntc_design.tune.tune` runs for ``schedule="power"``).
@@ -162,7 +162,8 @@ def tune_power(
         Narrower ranges for ``a``, ``b``, ``gamma`` (inside the required theorems' range)
         or ``delta``; lo = hi fixes the parameter.
     progress : callable, optional
-        Called with a line of text as the search goes (evaluations done, the time left).
+        Called with a line of text at each stage, and with ``transient=True`` for each
+        evaluation (done, the time left in the search).
 
     Returns
     -------
@@ -197,7 +198,8 @@ def tune_power(
             left = el * (max_evaluations - done[0]) / done[0]
             progress(
                 f"evaluation {done[0]} of at most {max_evaluations} "
-                f"(about {format_seconds(left)} left in the search)"
+                f"(about {format_seconds(left)} left in the search)",
+                transient=True,
             )
         return obj.value(PowerGain(p["a"], p["b"], p["gamma"]), p.get("delta"))
 
@@ -225,7 +227,7 @@ def tune_power(
             )
     tuned = PowerGain(p["a"], p["b"], p["gamma"]).rounded()
     delta = float(f"{p['delta']:.4g}") if "delta" in p else None
-    say = progress or (lambda text: None)
+    say = progress or (lambda text, transient=False: None)
     say("the tuned and baseline curves at the reported accuracy")
     curves = {
         "tuned": obj.curve(tuned, delta),
