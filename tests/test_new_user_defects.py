@@ -619,3 +619,17 @@ def test_stored_npz_members_are_bounded(tmp_path):
             _read_npz(p, tmp_path)
     finally:
         os.environ["NTC_AVAILABLE_MEMORY"] = "6G"
+
+
+# -- 10: the docs site ---------------------------------------------------------------------
+
+
+def test_every_guide_page_is_in_the_guide_section():
+    index = (ROOT / "docs" / "guide" / "index.md").read_text()
+    toc = index.split("```{toctree}")[1].split("```")[0].split()
+    pages = {p.stem for p in (ROOT / "docs" / "guide").glob("*.md")} - {"index"}
+    assert pages == {t for t in toc if not t.startswith(":")}
+    assert "guide/index" in (ROOT / "docs" / "index.rst").read_text()
+    css = (ROOT / "docs" / "_static" / "custom.css").read_text()
+    assert "table.autosummary" in css and "white-space: normal" in css
+    assert "custom.css" in (ROOT / "docs" / "conf.py").read_text()
