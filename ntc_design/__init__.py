@@ -13,14 +13,38 @@ Its Lemma 1 (the protocol design) comes from the authors' earlier, noise-free pa
 T. Niu, B. Mao, X. Wu, T. Huang, arXiv:2602.11822.
 """
 
-from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, assumption2, design
-from .errors import InputError
-from .generate import random_network
-from .loader import load
-from .model import SwitchingTopology, TimeVaryingTopology, Topology
-from .paper import example_path
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
+
+# Re-exports, loaded on first use (PEP 562): `import ntc_design` costs a few milliseconds,
+# and a command loads SciPy, SymPy and the layers only when it needs them.
+_EXPORTS = {
+    "AssumptionWarning": "errors",
+    "InputError": "errors",
+    "ProtocolDesign": "design",
+    "SwitchingDesign": "design",
+    "SwitchingTopology": "model",
+    "TimeVaryingTopology": "model",
+    "Topology": "model",
+    "assumption2": "design",
+    "example_path": "paper",
+    "load": "loader",
+    "random_network": "generate",
+}
+
+if TYPE_CHECKING:
+    from .design import ProtocolDesign, SwitchingDesign, assumption2, design
+    from .errors import AssumptionWarning, InputError
+    from .generate import random_network
+    from .loader import load
+    from .model import SwitchingTopology, TimeVaryingTopology, Topology
+    from .paper import example_path
 
 __all__ = [
     "AssumptionWarning",
@@ -36,3 +60,34 @@ __all__ = [
     "load",
     "random_network",
 ]
+
+
+class _Package(types.ModuleType):
+    """The package module: ``ntc_design.design`` is Lemma 1's :func:`~ntc_design.design.design`
+    (as it always was), although the subpackage of the same name binds itself here when
+    it is first imported."""
+
+    @property
+    def design(self):
+        from .design.lemma1 import design
+
+        return design
+
+    @design.setter
+    def design(self, value) -> None:  # the import system binding the subpackage: kept aside
+        pass
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value  # once: later lookups are plain attribute reads
+        return value
+    raise AttributeError(f"module 'ntc_design' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

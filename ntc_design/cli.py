@@ -8,26 +8,18 @@ import json
 import sys
 import warnings
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 
 from . import __version__
-from .design import AssumptionWarning, ProtocolDesign, SwitchingDesign, design, structure_report
-from .errors import InputError, one_line
-from .files import jsonable
-from .loader import load
-from .model import SwitchingTopology
-from .reports.terminal import (
-    Progress,
-    out,
-    print_structure,
-    print_table,
-    print_verification,
-    sweep_progress,
-)
-from .timevarying import ExpressionTopology
+from .errors import AssumptionWarning, InputError, one_line
+
+if TYPE_CHECKING:
+    from .design import ProtocolDesign, SwitchingDesign
+
+# Everything else loads in the command that needs it: `ntc --help` and a mistyped option
+# answer without importing NumPy, SciPy, SymPy or the library's layers.
 
 
 def _flag_type(original):
@@ -107,6 +99,9 @@ def parse_vector(text: str, field: str) -> list[float]:
 
 def modes_of(top) -> list:
     """The topologies a run's summary holds: the modes of a switching set, or the one."""
+    from .model import SwitchingTopology
+    from .timevarying import ExpressionTopology
+
     if isinstance(top, SwitchingTopology):
         return list(top.modes.values())
     return [top.structure if isinstance(top, ExpressionTopology) else top]
@@ -120,6 +115,8 @@ def _command_line() -> str:
 
 
 def _json(obj) -> str:
+    from .files import jsonable
+
     return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
 
 
@@ -138,11 +135,15 @@ def check(
 ) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition
     (above 50 agents a summary, unless --full)."""
-    from .design import SUMMARY_ABOVE, structure_summary, summary_table
+    from .design import SUMMARY_ABOVE, structure_report, structure_summary, summary_table
+    from .loader import load
+    from .model import SwitchingTopology, Topology
+    from .reports.terminal import print_structure, print_table
 
     loaded = load(file)
-    # a time-varying topology's classes are fixed: its structure at any t
-    top = loaded.structure if isinstance(loaded, ExpressionTopology) else loaded
+    # a time-varying topology's classes are fixed: its structure at any t (no SymPy import
+    # for the other kinds)
+    top = loaded if isinstance(loaded, (Topology, SwitchingTopology)) else loaded.structure
     modes = top.modes if isinstance(top, SwitchingTopology) else {None: top}
     reports = {}
     for k, m in modes.items():
@@ -183,7 +184,13 @@ def design_cmd(
     as_json: JsonOpt = False,
 ) -> None:
     """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S."""
+    import numpy as np
+
+    from .design import SwitchingDesign, design
+    from .loader import load
     from .outputs import check_output_file
+    from .reports.terminal import out, print_table
+    from .timevarying import ExpressionTopology
 
     th = parse_vector(theta, "--theta")
     if out_path is not None:
@@ -218,6 +225,7 @@ def design_cmd(
 def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Path]:
     """The design as .mat (one file per mode for a switching set: NAME_MODE.mat) or .json;
     the files written."""
+    from .design import SwitchingDesign
     from .outputs import write_atomic
 
     if path.suffix.lower() == ".json":
@@ -250,6 +258,7 @@ def generate(
     by construction (seeded; see ntc_design.generate)."""
     from .generate import TOPOLOGY_SUFFIXES, random_network, write_topology
     from .outputs import check_output_file
+    from .reports.terminal import Progress, out
 
     check_output_file(out_path, "--out", TOPOLOGY_SUFFIXES)  # before the work
     with Progress("ntc generate") as prog:
@@ -272,6 +281,7 @@ def gain(
     """Decide the gain conditions of Theorems 1-4 for c(t). Exit 0 when the conditions of
     some theorem hold (mean square at least), 1 when none do or they are undetermined."""
     from .gain import analyse_gain
+    from .reports.terminal import print_table
 
     analysis = analyse_gain(expr)
     print(_json(analysis.to_dict())) if as_json else print_table(analysis.table())
@@ -318,6 +328,7 @@ def certify(
     --out is written only when the certificate is valid."""
     from .certify import certify as run
     from .certify import write_certificate
+    from .loader import load
     from .outputs import check_output_file
     from .schedule import gain_from_option
 
@@ -351,6 +362,8 @@ def certify(
 
 
 def _print_certify(res, written: Path | None) -> None:
+    from .reports.terminal import out, print_table
+
     for t in res.tables():  # the HTML report and notebooks show the same tables
         print_table(t)
     if written is not None:
@@ -374,6 +387,8 @@ def verify(
     """Re-check a certificate without an SDP solver, deriving what must be proven from its
     kind. Exit 0 valid, 1 invalid (names what fails), 2 malformed."""
     from .certify import verify_file
+    from .loader import load
+    from .reports.terminal import print_verification
 
     top = load(topology) if topology is not None else None
     th = parse_vector(theta, "--theta") if theta is not None else None
@@ -423,6 +438,7 @@ def simulate(
     or nothing)."""
     from .distributed import DaskEngine
     from .errors import format_bytes
+    from .reports.terminal import Progress, out
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
     from .simulate.scenario import check_output, load_scenario, output_bytes, write_outputs
@@ -569,6 +585,7 @@ def tune(
     they do not apply). Prints the tuned gain beside 1/(1 + t). Exit 0 when the tuned gain
     satisfies the required theorems and its design's certificate verifies, 1 otherwise."""
     from .outputs import check_output_folder
+    from .reports.terminal import Progress, out, print_table
     from .reports.tune import TUNE_FILES, write_tune_outputs
     from .simulate.scenario import load_scenario
     from .tune import tune as run
@@ -632,6 +649,7 @@ def sweep(
     """Design, certify and simulate every point of a sweep (a grid or a list of points over
     a base scenario); points already in --out are reused. Writes results.csv,
     results.parquet, curves.parquet and points/. Exit 1 when some point failed."""
+    from .reports.terminal import out, sweep_progress
     from .sweep import load_sweep, run_sweep
 
     sw = load_sweep(sweep_file)
@@ -698,6 +716,7 @@ def report(
     (figures also in DIR/figures)."""
     from .reports.report import write_report
     from .reports.sweep import is_sweep_dir, write_sweep_report
+    from .reports.terminal import out
 
     if is_sweep_dir(directory):
         out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
@@ -744,6 +763,7 @@ def reproduce(
 ) -> None:
     """Run the paper's Section 5 end to end and write one report beside its numbers."""
     from .reports.reproduce import reproduce_paper
+    from .reports.terminal import Progress, out
 
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")

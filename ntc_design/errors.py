@@ -198,6 +198,13 @@ def require_number(
     return v
 
 
+class AssumptionWarning(UserWarning):
+    """Assumption 2 fails for a topology being designed: Lemma 1 does not apply and the
+    design must be certified before it is trusted (also flagged by
+    ``ProtocolDesign.assumption_holds``). Defined here, with the errors, so that the
+    command line can filter it without importing the design layer."""
+
+
 def format_bytes(n: float) -> str:
     """A byte count in binary units, e.g. ``1.5e9`` -> ``'1.4 GiB'``.
 
@@ -242,6 +249,7 @@ def format_seconds(s: float) -> str:
 
 
 __all__ = [
+    "AssumptionWarning",
     "require_theta",
     "InputError",
     "format_bytes",

@@ -4,12 +4,15 @@ topology: fixed, switching, time-varying)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .edgelist import EdgeListData
 from .files import SwitchingData, TopologyData
 from .model import SwitchingTopology, Topology
 from .readers import parse_file
-from .timevarying import ExpressionTopology
+
+if TYPE_CHECKING:
+    from .timevarying import ExpressionTopology
 
 
 def load(path: str | Path) -> Topology | SwitchingTopology | ExpressionTopology:
@@ -47,6 +50,8 @@ def load(path: str | Path) -> Topology | SwitchingTopology | ExpressionTopology:
         return SwitchingTopology.from_data(data)
     if isinstance(data, TopologyData):
         return Topology.from_data(data)
+    from .timevarying import ExpressionTopology  # SymPy: only for weights that are expressions
+
     tv = ExpressionTopology.from_data(data)
     return tv.fixed() if tv.constant else tv
 

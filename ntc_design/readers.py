@@ -9,7 +9,6 @@ from typing import Any
 from .edgelist import read_npz
 from .files import is_time_varying, parse_switching, parse_topology, read_document
 from .tablefiles import read_csv_edges, read_mat
-from .tvfiles import parse_time_varying
 
 
 def parse_file(path: str | Path) -> Any:
@@ -47,6 +46,8 @@ def parse_file(path: str | Path) -> Any:
     if "modes" in doc or "schedule" in doc:
         return parse_switching(doc, src)
     if is_time_varying(doc):
+        from .tvfiles import parse_time_varying  # SymPy, loaded only for expressions of t
+
         return parse_time_varying(doc, src)
     return parse_topology(doc, src)
 

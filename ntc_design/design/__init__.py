@@ -5,30 +5,54 @@ Modules: :mod:`.assumption` (Assumption 2, the C_i), :mod:`.lemma1` (the design,
 table and the critical couplings).
 """
 
-from .assumption import (
-    SUMMARY_ABOVE,
-    AssumptionWarning,
-    Decomposition,
-    Violation,
-    assumption2,
-    lemma1_coefficient,
-    structure_report,
-    structure_summary,
-    summary_table,
-)
-from .lemma1 import (
-    ProtocolDesign,
-    SwitchingDesign,
-    design,
-    design_table,
-    design_topology,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+# loaded on first use (PEP 562): `ntc check` needs Assumption 2, not Lemma 1's thresholds
+_EXPORTS = {
+    "SUMMARY_ABOVE": "assumption",
+    "AssumptionWarning": "assumption",
+    "Decomposition": "assumption",
+    "Violation": "assumption",
+    "assumption2": "assumption",
+    "lemma1_coefficient": "assumption",
+    "structure_report": "assumption",
+    "structure_summary": "assumption",
+    "summary_table": "assumption",
+    "ProtocolDesign": "lemma1",
+    "SwitchingDesign": "lemma1",
+    "design": "lemma1",
+    "design_table": "lemma1",
+    "design_topology": "lemma1",
+}
+
+if TYPE_CHECKING:
+    from .assumption import (
+        SUMMARY_ABOVE,
+        AssumptionWarning,
+        Decomposition,
+        Violation,
+        assumption2,
+        lemma1_coefficient,
+        structure_report,
+        structure_summary,
+        summary_table,
+    )
+    from .lemma1 import (
+        ProtocolDesign,
+        SwitchingDesign,
+        design,
+        design_table,
+        design_topology,
+    )
 
 __all__ = [
-    "SUMMARY_ABOVE",
     "AssumptionWarning",
     "Decomposition",
     "ProtocolDesign",
+    "SUMMARY_ABOVE",
     "SwitchingDesign",
     "Violation",
     "assumption2",
@@ -40,3 +64,15 @@ __all__ = [
     "structure_summary",
     "summary_table",
 ]
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'ntc_design.design' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse import csgraph
 
+from ..errors import AssumptionWarning
 from ..linalg import pd_batch
 from ..model import (
     Topology,
@@ -19,12 +20,6 @@ from ..model import (
     in_out_difference,
 )
 from ..rows import Table, set_text, verdict
-
-
-class AssumptionWarning(UserWarning):
-    """Assumption 2 fails for a topology being designed: Lemma 1 does not apply and the
-    design must be certified before it is trusted (also flagged by
-    ``ProtocolDesign.assumption_holds``)."""
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,71 @@
+"""Start-up cost (issue 30): what `import ntc_design` and the light commands load. Times
+are measured in benchmarks/bench_inputs.py; here the modules loaded are asserted, which
+is what the time follows and what does not depend on the machine."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from .conftest import ROOT
+
+HEAVY = ("sympy", "cvxpy", "scipy.sparse", "scipy.stats", "matplotlib", "dask", "numba", "pandas")
+
+
+def loaded_after(code: str) -> set[str]:
+    probe = f"import sys\n{code}\nimport json; print(json.dumps(sorted(sys.modules)))"
+    out = subprocess.run(
+        [sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True
+    )
+    return set(json.loads(out.stdout.strip().splitlines()[-1]))
+
+
+def heavy_in(mods: set[str]) -> list[str]:
+    return sorted(h for h in HEAVY if h in mods)
+
+
+def test_import_ntc_design_loads_no_heavy_library():
+    mods = loaded_after("import ntc_design")
+    assert heavy_in(mods) == []
+    assert "numpy" not in mods  # the package namespace itself is free
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["check", "--help"], ["nope"]])
+def test_help_version_and_typos_load_no_library(argv):
+    code = (
+        "import contextlib, io\n"
+        f"sys.argv = ['ntc', *{argv!r}]\n"
+        "from ntc_design.cli import main\n"
+        "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()), "
+        "contextlib.redirect_stderr(io.StringIO()):\n    main()"
+    )
+    mods = loaded_after(code)
+    assert heavy_in(mods) == [] and "numpy" not in mods
+
+
+def test_check_of_a_fixed_topology_loads_no_sympy_or_optimiser():
+    code = (
+        "import contextlib, io\n"
+        "sys.argv = ['ntc', 'check', 'examples/g1.yaml']\n"
+        "from ntc_design.cli import main\n"
+        "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main()"
+    )
+    mods = loaded_after(code)
+    assert heavy_in(mods) == ["scipy.sparse"]  # the graph's reachability needs csgraph
+    assert "scipy.optimize" not in mods and "ntc_design.thresholds" not in mods
+
+
+def test_the_lazy_names_are_the_same_objects():
+    import ntc_design as nd
+    from ntc_design.design import lemma1
+    from ntc_design.errors import AssumptionWarning
+    from ntc_design.model import Topology
+
+    assert nd.design is lemma1.design and nd.Topology is Topology
+    assert nd.AssumptionWarning is AssumptionWarning
+    assert sorted(dir(nd)) == sorted(set(dir(nd)))
+    assert set(nd.__all__) <= set(dir(nd))
+    with pytest.raises(AttributeError):
+        nd.no_such_name  # noqa: B018
