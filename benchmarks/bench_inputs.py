@@ -8,7 +8,12 @@
 3. ``parse_expression`` on typical and hostile gains, and ``analyse_gain`` wall time
    (forked, with a hard limit) on a few gains.
 
-Run: python benchmarks/bench_inputs.py [EDGES]   (default 20000)
+4. Three styles of a generated N-agent topology (issue 30: flow mappings with nested flow
+   lists, PyYAML's block style, JSON text) read by :func:`read_document` (which hands a
+   text of 1 MiB or more to yaml-rs), beside the compiled peers yaml-rs, ryaml (serde_yaml)
+   and libyaml's CSafeLoader (no limits), and the guarded PyYAML path it replaced.
+
+Run: python benchmarks/bench_inputs.py [EDGES] [--styles N]   (default 20000; N = 100000)
 """
 
 from __future__ import annotations
@@ -94,5 +99,69 @@ def main(edges: int) -> None:
         )
 
 
+def styles(n: int) -> None:
+    """Three machine-written styles of an n-agent topology, each read five ways."""
+    import json
+
+    from ntc_design import files
+    from ntc_design.generate import random_network
+
+    doc = random_network(n, 3, seed=0).to_dict()
+    dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+    texts = {
+        "flow": yaml.dump(doc, Dumper=dumper, sort_keys=False, default_flow_style=None),
+        "block": yaml.dump(doc, Dumper=dumper, sort_keys=False, default_flow_style=False),
+        "json": json.dumps(doc),
+    }
+    peers = {"read_document": None, "yaml-rs": None, "ryaml": None, "CSafeLoader": None}
+    try:
+        import yaml_rs
+
+        peers["yaml-rs"] = yaml_rs.loads
+    except ImportError:
+        pass
+    try:
+        import ryaml  # type: ignore[import-not-found]
+
+        peers["ryaml"] = ryaml.loads
+    except ImportError:
+        pass
+    peers["CSafeLoader"] = lambda t: yaml.load(t, Loader=yaml.CSafeLoader)  # noqa: S506
+    print(f"\n{n} agents, {len(doc['edges'])} edges: seconds (ratio to read_document)")
+    print(f"{'style':<7} {'MB':>6} " + " ".join(f"{k:>18}" for k in peers) + " guarded PyYAML")
+    with tempfile.TemporaryDirectory() as d:
+        for style, text in texts.items():
+            p = Path(d) / f"{style}.yaml"
+            p.write_text(text)
+            t_ours, got = timed(lambda p=p: read_document(p))
+            assert got == doc, style
+            cells = [f"{t_ours:>18.2f}"]
+            for fn in list(peers.values())[1:]:
+                if fn is None:
+                    cells.append(f"{'not installed':>18}")
+                    continue
+                t, _ = timed(lambda fn=fn, text=text: fn(text))
+                cells.append(f"{t:>11.2f} ({t / t_ours:4.2f})")
+            # what a file took before yaml-rs: the guarded composer (first 10 % only: ~linear)
+            part = text if style == "json" else text[: len(text) // 10]
+            if style != "json":
+                part = part[: part.rfind("\n  - ")] + "\n"
+            old = files.COMPILED_YAML_MIN_CHARS
+            files.COMPILED_YAML_MIN_CHARS = 1 << 62
+            try:
+                t_py, _ = timed(lambda part=part, p=p: files._load_yaml(part, p))
+            finally:
+                files.COMPILED_YAML_MIN_CHARS = old
+            scale = len(text) / len(part)
+            print(
+                f"{style:<7} {len(text) / 1e6:>6.1f} " + " ".join(cells) + f" ~{t_py * scale:.0f}"
+            )
+
+
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 20_000)
+    args = sys.argv[1:]
+    if "--styles" in args:
+        k = args.index("--styles")
+        styles(int(args[k + 1]) if len(args) > k + 1 else 100_000)
+    else:
+        main(int(args[0]) if args else 20_000)

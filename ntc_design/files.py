@@ -110,6 +110,9 @@ def jsonable(x: Any) -> Any:
 MAX_FILE_BYTES = 64 * 2**20
 MAX_DEPTH = 64
 MAX_EXPANDED_NODES = 20_000_000
+#: YAML texts from this size on (machine-written, in practice) are parsed by yaml-rs, YAML
+#: 1.2's core schema (``yes`` is text, ``1e3`` a number); smaller ones by PyYAML's rules.
+COMPILED_YAML_MIN_CHARS = 1 << 20
 
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser where present
 
@@ -217,6 +220,8 @@ def _load_yaml(text: str, p: Path) -> Any:
     doc = load_fast(text, MAX_DEPTH, MAX_EXPANDED_NODES)
     if doc is not None:
         return doc
+    if len(text) >= COMPILED_YAML_MIN_CHARS:
+        return _load_compiled(text, p)
     loader = _Loader(text)
     try:
         loader.get_event()  # StreamStart
@@ -234,6 +239,34 @@ def _load_yaml(text: str, p: Path) -> Any:
         return loader.construct_document(root)
     finally:
         loader.dispose()
+
+
+def _load_compiled(text: str, p: Path) -> Any:
+    """A large YAML text by yaml-rs (Rust, YAML 1.2 core schema): any style a machine
+    writes (flow mappings, block style, JSON text) at 10⁵ agents in about a second, where
+    the iterative composer above takes 30-150 s. Its own limits bound the work before any
+    object is built: nesting (a few hundred levels; then :data:`MAX_DEPTH` on the result),
+    alias replays (:data:`MAX_EXPANDED_NODES` events) and duplicate keys (refused).
+
+    Chosen over ryaml (serde_yaml, unmaintained upstream, 1.5-2x slower on the same files)
+    and rapidyaml (a tree API that needs a Python loop per node), side by side in
+    ``benchmarks/bench_inputs.py``.
+    """
+    import yaml_rs
+
+    limits = yaml_rs.AliasLimits(max_total_replayed_events=MAX_EXPANDED_NODES)
+    try:
+        doc = yaml_rs.loads(
+            text,
+            parse_datetime=False,
+            alias_limits=limits,
+            duplicate_key_policy=yaml_rs.DuplicateKeyPolicy.Error,
+        )
+    except (yaml_rs.YAMLDecodeError, ValueError, RecursionError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else "malformed YAML"
+        raise InputError(f"{p}: not valid YAML ({_one_line(first, 120)})") from None
+    _check_depth(doc, p)
+    return doc
 
 
 def _compose(loader: Any, p: Path) -> Any:

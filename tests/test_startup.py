@@ -69,3 +69,61 @@ def test_the_lazy_names_are_the_same_objects():
     assert set(nd.__all__) <= set(dir(nd))
     with pytest.raises(AttributeError):
         nd.no_such_name  # noqa: B018
+
+
+# -- large YAML: any machine-written style through yaml-rs, under the same guards ----------
+
+
+@pytest.fixture
+def compiled(monkeypatch):
+    from ntc_design import files
+
+    monkeypatch.setattr(files, "COMPILED_YAML_MIN_CHARS", 200)  # small texts take the path
+    return files
+
+
+@pytest.mark.parametrize("style", ["flow", "block", "json"])
+def test_every_style_reads_as_pyyaml_reads_it(compiled, tmp_path, style):
+    import json as js
+
+    import yaml
+
+    from ntc_design.generate import random_network
+
+    doc = random_network(60, 2, seed=1).to_dict()
+    text = {
+        "flow": yaml.safe_dump(doc, sort_keys=False, default_flow_style=None),
+        "block": yaml.safe_dump(doc, sort_keys=False, default_flow_style=False),
+        "json": js.dumps(doc),
+    }[style]
+    assert len(text) > 200
+    p = tmp_path / "net.yaml"
+    p.write_text(text)
+    assert compiled.read_document(p) == yaml.safe_load(text) == doc
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("x: " + "[" * 1000 + "]" * 1000 + "\n", "YAML"),
+        ("x: " + "[" * 70 + "]" * 70 + "\n" + "# pad\n" * 40, "nested deeper than 64"),
+        (
+            'a0: &a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]\n'
+            + "".join(
+                f"a{k}: &a{k} [" + ", ".join([f"*a{k - 1}"] * 9) + "]\n" for k in range(1, 10)
+            ),
+            "alias",
+        ),
+        ("dim: 3\ndim: 4\n" + "# pad\n" * 50, "duplicate"),
+        ("dim: [1, 2\n" + "# pad\n" * 50, "not valid YAML"),
+    ],
+    ids=["nesting-1000", "nesting-70", "billion-laughs", "duplicate-key", "unclosed"],
+)
+def test_the_compiled_path_keeps_the_guards(compiled, tmp_path, text, needle):
+    p = tmp_path / "bad.yaml"
+    p.write_text(text)
+    with pytest.raises(compiled.InputError) as exc:
+        compiled.read_document(p)
+    assert needle.lower() in str(exc.value).lower() and str(p) in str(exc.value)
+    assert "\n" not in str(exc.value)
