@@ -320,6 +320,13 @@ def certify(
             "time-varying certificate uses it for t₀ of μ₂)."
         ),
     ] = 0.3,
+    rate_method: Annotated[
+        str,
+        typer.Option(
+            help="One topology's decay rate: lyapunov (the shifted Lyapunov equation, no SDP "
+            "solver) or lmi (the LMI bisection with Clarabel)."
+        ),
+    ] = "lyapunov",
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
@@ -344,6 +351,7 @@ def certify(
             gain_from_option(gain, "--gain"),
             noise_sigma=noise_sigma,
             noise_f=noise_f,
+            rate_method=rate_method,
         )
     doc = res.to_dict()  # every step that can fail runs before anything is written
     written = out_path is not None and res.verification.valid

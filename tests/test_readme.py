@@ -52,7 +52,7 @@ def test_readme_numbers_of_the_first_command(g1, theta):
     assert res.proven
     assert int(_said(r"table of the (\d+) certificate checks")) == len(res.verification.checks)
     alpha = res.certificate["results"]["lmi"]["alpha"]
-    assert _said(r"LMI α = ([\d.]+)") == f"{alpha:.6f}"
+    assert _said(r"decay rate: α = ([\d.]+)") == f"{alpha:.6f}"
     des = nd.design(g1, theta, margin=0.1)
     assert _said(r"C = ([\d.]+),\nδ") == f"{des.C:.4f}"
     assert _said(r"δ_S = ([\d.]+):") == f"{des.thresholds.symmetric:.4f}"

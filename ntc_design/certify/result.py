@@ -154,6 +154,7 @@ def certify(
     delta: float | None = None,
     noise_sigma: float = 0.4,
     noise_f=0.3,
+    rate_method: str = "lyapunov",
 ) -> CertifyResult:
     """Design (Lemma 1), certify (Lyapunov + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a common
     P), re-verify the certificate exactly, analyse the gain and give the theorem verdict.
@@ -176,6 +177,9 @@ def certify(
         An explicit δ instead of C + ΔC.
     noise_sigma, noise_f : float
         σ_ji and f(x) = f·x: only the time-varying certificate uses them (p̄, σ̄, t₀).
+    rate_method : {"lyapunov", "lmi"}
+        How one topology's decay rate is found: the shifted Lyapunov equation (no SDP
+        solver) or the LMI bisection (Clarabel). The certificate is checked the same way.
 
     Returns
     -------
@@ -210,7 +214,9 @@ def certify(
         # at scale the critical couplings are not needed by the certificate (design notes it)
         des = design(topology, theta, margin, delta, thresholds=False if big else None)
     kind = kind_for(des)
-    cert = kind.issue(des, gain=gain, noise_sigma=noise_sigma, noise_f=noise_f)
+    cert = kind.issue(
+        des, gain=gain, noise_sigma=noise_sigma, noise_f=noise_f, rate_method=rate_method
+    )
     if isinstance(gain, ScheduleGain):
         cert = with_schedule(cert, gain)
     ver = _verify_own(cert)

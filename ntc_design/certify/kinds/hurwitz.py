@@ -9,19 +9,28 @@ from typing import Any
 import numpy as np
 
 from ...design import ProtocolDesign
+from ...errors import InputError
 from ..claims import Property, derive_claims
 from ..dense import DENSE_CERT_MAX_ND, eig_bound, min_eig, mode_subject, require_lmi
 from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
-from ..lyapunov import decay_rate_lmi, hurwitz_by_lyapunov
+from ..lyapunov import decay_rate_lmi, decay_rate_lyapunov, hurwitz_by_lyapunov
 from ..theorems import TheoremVerdict, fixed_verdicts
 from .base import Reading, ResultRow, ResultsAudit, Subject
 from .dense import DenseKind
 
 
-def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool = True) -> dict:
+RATE_METHODS = ("lyapunov", "lmi")
+
+
+def hurwitz_certificate(
+    d: ProtocolDesign, name: str | None = None, rate: bool = True, rate_method: str = "lyapunov"
+) -> dict:
     """Certify −L_B Hurwitz for one design in two independent ways: (a) the Lyapunov
-    equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) the LMI maximising the decay rate α.
+    equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) a decay rate α with
+    P L_B + L_Bᵀ P − 2αP ≻ 0: by the shifted Lyapunov equation (default, no SDP solver,
+    :func:`~ntc_design.certify.lyapunov.decay_rate_lyapunov`) or by the LMI bisection
+    (``rate_method="lmi"``, Clarabel through cvxpy).
 
     Parameters
     ----------
@@ -30,17 +39,26 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
     name : str, optional
         The mode's name (default: the topology's name, or ``"topology"``).
     rate : bool
-        Also look for a decay rate with the LMI (needs an SDP solver).
+        Also certify a decay rate α.
+    rate_method : {"lyapunov", "lmi"}
+        How α is found (the certificate's content and its verification are the same).
 
     Returns
     -------
     dict
         The certificate (kind ``hurwitz``); it certifies ``hurwitz`` always and
-        ``decay_rate`` when the LMI found a P. Check it with :func:`verify`: a
+        ``decay_rate`` when a P for α > 0 was found. Check it with :func:`verify`: a
         non-Hurwitz −L_B gives a certificate that does not verify.
+
+    Raises
+    ------
+    InputError
+        An unknown ``rate_method``, or an LMI too large for the machine.
     """
     name = name or d.topology.name or "topology"
-    if rate:  # estimated before any dense step: refused in one line, never an OOM kill
+    if rate_method not in RATE_METHODS:
+        raise InputError(f"rate_method: expected lyapunov or lmi, got {rate_method!r}")
+    if rate and rate_method == "lmi":  # estimated before any dense step: never an OOM kill
         require_lmi(d.topology.nd, "decay-rate LMI")
     lap_b = d.grounded_laplacian()
     lya = hurwitz_by_lyapunov(lap_b)
@@ -58,7 +76,8 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
     alpha = 0.0
     solver: dict[str, Any] = {"name": None, "status": None}
     if rate:
-        r = decay_rate_lmi(lap_b, eig_bound=eig)
+        find = decay_rate_lmi if rate_method == "lmi" else decay_rate_lyapunov
+        r = find(lap_b, eig_bound=eig)
         if r.p is not None:
             props.append(Property.DECAY_RATE)
             alpha = r.alpha
@@ -70,7 +89,10 @@ def hurwitz_certificate(d: ProtocolDesign, name: str | None = None, rate: bool =
             "status": r.status,
             "bisection_steps": r.iterations,
         }
-        solver = {"name": "Clarabel (via cvxpy)", "status": r.status}
+        solver = {
+            "name": "Clarabel (via cvxpy)" if rate_method == "lmi" else "Bartels–Stewart (SciPy)",
+            "status": r.status,
+        }
     doc = {
         "format": FORMAT,
         "version": VERSION,
@@ -100,7 +122,7 @@ class HurwitzKind(DenseKind):
         return isinstance(design, ProtocolDesign) and design.topology.nd <= DENSE_CERT_MAX_ND
 
     def issue(self, design: Any, **options: Any) -> dict:
-        return hurwitz_certificate(design)
+        return hurwitz_certificate(design, rate_method=options.get("rate_method", "lyapunov"))
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         return fixed_verdicts(design, verification, gain)
@@ -118,7 +140,7 @@ class HurwitzKind(DenseKind):
         return (
             ResultRow(
                 "decay rate",
-                f"LMI α = {lmi['alpha']:.6g}, eigenvalue bound = {lmi['eig_bound']:.6g} "
+                f"α = {lmi['alpha']:.6g}, eigenvalue bound = {lmi['eig_bound']:.6g} "
                 f"(gap {lmi['gap']:.2e}); {resid}",
             ),
         )
