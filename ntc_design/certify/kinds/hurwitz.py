@@ -122,6 +122,24 @@ class HurwitzKind(DenseKind):
         return isinstance(design, ProtocolDesign) and design.topology.nd <= DENSE_CERT_MAX_ND
 
     def issue(self, design: Any, **options: Any) -> dict:
+        """The certificate of one design (:func:`hurwitz_certificate`).
+
+        Parameters
+        ----------
+        design : ProtocolDesign
+            The design.
+        **options
+            ``rate_method`` (``"lyapunov"`` or ``"lmi"``); the others are ignored.
+
+        Returns
+        -------
+        dict
+
+        Raises
+        ------
+        InputError
+            An unknown ``rate_method``, or an LMI too large for the machine.
+        """
         return hurwitz_certificate(design, rate_method=options.get("rate_method", "lyapunov"))
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
