@@ -438,6 +438,13 @@ def simulate(
     method: Annotated[
         str | None, typer.Option(help="mc, exact or both (overrides the scenario).")
     ] = None,
+    rng: Annotated[
+        str | None,
+        typer.Option(
+            help="Normals: xoshiro (one xoshiro256** stream per path, drawn in the compiled "
+            "kernel; default) or numpy (NumPy's PCG64 per block). Overrides the scenario."
+        ),
+    ] = None,
     scheduler: SchedulerOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -452,7 +459,7 @@ def simulate(
     from .simulate.scenario import check_output, load_scenario, output_bytes, write_outputs
     from .simulate.spec import MonteCarlo, check_workers
 
-    given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method}
+    given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method, "rng": rng}
     overrides = {k: v for k, v in given.items() if v is not None}
     top, spec, sc = load_scenario(scenario, overrides)
     # summary.json records the command as typed: the report's re-run line keeps the overrides

@@ -465,6 +465,7 @@ def _simulate_modes(
         store_paths=spec.mc.store_paths,
         agent_labels=tuple(topology.labels),
         scheme=spec.stepping.scheme,
+        rng=spec.mc.rng,
     )
     part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, engine, notes)
     exact, exact_stats = run_exact(spec, notes, lambda: pm.moments(cfun, grid.save_times))

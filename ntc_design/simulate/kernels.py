@@ -2,8 +2,10 @@
 for a callable f.
 
 A path-step costs O(nnz(L_B) + E·d²): the drift is a CSR product with L_B, the noise a
-loop over the edges (gather x_j − x_i, one d×d product with K_e, scatter into agent i). The normals come from NumPy's Generator (drawn by the caller), so
-the random streams are those documented in :mod:`.montecarlo` whatever the kernel.
+loop over the edges (gather x_j − x_i, one d×d product with K_e, scatter into agent i).
+:func:`em_steps_rng` draws the normals itself from each path's xoshiro256** stream
+(:mod:`.rng`, the default); :func:`em_steps` takes them as an array (NumPy's generator,
+``rng: numpy``). Either way a path's normals depend only on its stream, whatever the kernel.
 Paths are independent: a tile of paths is transposed to (Nd, tile) and run through all
 steps of a run, so every inner loop runs over the tile's paths (SIMD) and the tile's
 state stays in the cache. One thread: the worker processes are the
@@ -18,6 +20,10 @@ from ..linalg import numba_cache_dir
 
 numba_cache_dir()  # before Numba reads its configuration: not into site-packages
 import numba  # noqa: E402
+
+from .rng import ziggurat_slow  # noqa: E402
+
+TO_UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³
 
 TILE_BYTES = 3 * 2**19  # a tile's state and increments (2·Nd·tile doubles) within this
 TILE_MIN, TILE_MAX = 16, 64  # paths per tile: wide enough for SIMD, small enough for L1/L2
@@ -73,6 +79,112 @@ def em_steps(
             for q in range(w):
                 for e in range(2 * ne):
                     zt[e, q] = c2 * xi[k, q0 + q, e]
+            for r in range(nd):
+                ur = c1 * u[r]
+                for q in range(w):
+                    dx[r, q] = ur
+                if drift:
+                    for b in range(indptr[r], indptr[r + 1]):
+                        a = c1 * data[b]
+                        jc = indices[b]
+                        for q in range(w):
+                            dx[r, q] -= a * xt[jc, q]
+            for e in range(ne):
+                io = dst[e] * d
+                jo = src[e] * d
+                for c in range(d):
+                    for q in range(w):
+                        df[c, q] = xt[jo + c, q] - xt[io + c, q]
+                for a in range(d):
+                    for q in range(w):
+                        mb[q] = 0.0
+                    for c in range(d):
+                        kc = kmat[e, a, c]
+                        for q in range(w):
+                            mb[q] += kc * df[c, q]
+                    ga = gvec[e, a]
+                    for q in range(w):
+                        dx[io + a, q] += ga * zt[e, q] + mb[q] * zt[ne + e, q]
+            for r in range(nd):
+                for q in range(w):
+                    xt[r, q] += dx[r, q]
+        for q in range(w):
+            for r in range(nd):
+                x[q0 + q, r] = xt[r, q]
+
+
+@numba.njit(cache=True, nogil=True)
+def em_steps_rng(
+    x,
+    states,
+    zx,
+    zr,
+    m_draw,
+    k_from,
+    k_to,
+    ch,
+    cs,
+    indptr,
+    indices,
+    data,
+    u,
+    src,
+    dst,
+    kmat,
+    gvec,
+    drift,
+    tile,
+):
+    """:func:`em_steps` with the normals drawn here, path by path from its xoshiro256**
+    state ``states[path]`` (:mod:`.rng`: the same numbers as ``fill_normals`` gives the
+    array kernel), so no array of normals is written or read.
+
+    Advance every row of ``x`` (p, Nd) in place over the steps ``k_from .. k_to − 1``
+    of the batch: ``x += ch[k]·(u − L_B x) + cs[k]·Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e)``
+    with ξ1_e = ``xi[k, path, e]``, ξ2_e = ``xi[k, path, E + e]`` (E = len(src)), L_B in
+    CSR form (indptr, indices, data), K_e = ``kmat[e]`` and g_e = ``gvec[e]`` (agent
+    ``dst[e]``'s rows). With ``drift`` False the L_B term is left out (the implicit
+    scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
+    innermost loop runs over the tile (no array views inside: they cost per nonzero)."""
+    p, nd = x.shape
+    ne = src.size
+    d = gvec.shape[1]
+    for q0 in range(0, p, tile):
+        w = min(tile, p - q0)
+        xt = np.empty((nd, w))
+        for q in range(w):
+            for r in range(nd):
+                xt[r, q] = x[q0 + q, r]
+        dx = np.empty((nd, w))
+        zt = np.empty((2 * ne, w))
+        df = np.empty((d, w))
+        mb = np.empty(w)
+        for k in range(k_from, k_to):
+            c1 = ch[k]
+            c2 = cs[k]
+            for q in range(w):
+                qq = q0 + q
+                s0, s1, s2, s3 = states[qq, 0], states[qq, 1], states[qq, 2], states[qq, 3]
+                for e in range(m_draw):  # m_draw >= 2·E: a narrower mode skips the rest
+                    # xoshiro256** and the ziggurat's fast test, as in rng.fill_normals
+                    s5 = s1 * np.uint64(5)
+                    wd = ((s5 << np.uint64(7)) | (s5 >> np.uint64(57))) * np.uint64(9)
+                    t = s1 << np.uint64(17)
+                    s2 ^= s0
+                    s3 ^= s1
+                    s1 ^= s2
+                    s0 ^= s3
+                    s2 ^= t
+                    s3 = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
+                    li = np.int64(wd & np.uint64(127))
+                    uu = 2.0 * (np.int64(wd >> np.uint64(11)) * TO_UNIT) - 1.0
+                    if abs(uu) < zr[li]:
+                        z = uu * zx[li]
+                    else:
+                        z, s0, s1, s2, s3 = ziggurat_slow(li, uu, s0, s1, s2, s3, zx, zr)
+                    if e < 2 * ne:
+                        zt[e, q] = c2 * z
+                states[qq, 0], states[qq, 1], states[qq, 2], states[qq, 3] = s0, s1, s2, s3
             for r in range(nd):
                 ur = c1 * u[r]
                 for q in range(w):

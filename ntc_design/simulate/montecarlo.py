@@ -2,10 +2,12 @@
 
 Paths are integrated in fixed *blocks* of ``block_paths = min(block_size, ⌈paths/2⌉)``
 paths (at least two blocks, so that two workers both have work however few the paths;
-the split depends on ``paths`` only); block b draws its normals from
-``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of the run's SeedSequence), step
-by step, rows (paths) of 2·E normals (E additive, then E multiplicative), so a path's
-noise depends only on (seed, block_paths, its index). The per-block kernel is the
+the split depends on ``paths`` only); block b seeds its paths from
+``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of the run's SeedSequence): by
+default one xoshiro256** stream per path, drawn inside the compiled kernel (:mod:`.rng`),
+or with ``rng="numpy"`` NumPy's PCG64 for the block, step by step, rows (paths) of 2·E
+normals (E additive, then E multiplicative). Either way a path's noise depends only on
+(seed, block_paths, its index). The per-block kernel is the
 compiled edge-list step of :mod:`.kernels` (a SciPy-sparse step for a callable f); with
 ``scheme="implicit"`` the drift is taken at the new point,
 ``x_{k+1} = (I + c h L_B)^{-1}(x_k + c h u + noise(x_k))``, with one sparse LU per mode
@@ -55,6 +57,7 @@ class MonteCarloSpec:
     store_paths: int = 10
     agent_labels: tuple = ()
     scheme: str = "explicit"  # or "implicit": x_{k+1} = (I + c h L_B)^{-1}(x_k + …)
+    rng: str = "xoshiro"  # per-path streams drawn in the kernel (.rng), or "numpy"
 
     @property
     def block_paths(self) -> int:
@@ -129,6 +132,20 @@ class _Stepper:
                 s.g_edge.reshape(s.n_edges, s.dim),
             )
         self.solver = SolverCache(s.lap_b, s.dim) if implicit else None
+
+    @property
+    def fused(self) -> bool:
+        """Whether the kernel draws its own normals (compiled and explicit)."""
+        return self.compiled and self.solver is None
+
+    def advance_drawing(self, x, states, m_draw, k_from, k_to, ch, cs) -> None:
+        """:meth:`advance` with the normals drawn in the kernel from ``states`` (``m_draw``
+        per path and step, the widest mode's 2·E, so every mode consumes the same)."""
+        from .kernels import em_steps_rng, tile_width
+        from .rng import ZIG_R, ZIG_X
+
+        tile = tile_width(x.shape[0], x.shape[1])
+        em_steps_rng(x, states, ZIG_X, ZIG_R, m_draw, k_from, k_to, ch, cs, *self.args, True, tile)
 
     def advance(self, x, xi, k_from, k_to, ch, cs) -> None:
         from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
@@ -273,7 +290,9 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     bp = spec.block_paths
     p0 = b * bp
     p = min(bp, spec.paths - p0)
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
+    from .rng import NormalSource
+
+    src = NormalSource(getattr(spec, "rng", "xoshiro"), spec.seed, b, p)
     stats = BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     e_max = max(s.n_edges for s in spec.systems)
@@ -289,16 +308,24 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     # the normals of step k are rows (p, 2·e_max) drawn in step order: the batch size
     # changes how many are drawn per call, not which (Generator fills sequentially)
     batch = int(np.clip(XI_BYTES // (8 * p * max(2 * e_max, 1)), 1, BATCH))
-    xi = np.empty((batch, p, 2 * e_max))
+    # xoshiro with compiled explicit steps: the kernel draws, no array of normals at all
+    fused = src.states is not None and all(st.fused for st in steppers)
+    xi = np.empty((0 if fused else batch, p, 2 * e_max))
     k_total = grid.n_steps
     for k0 in range(0, k_total, batch):
         kb = min(batch, k_total - k0)
-        rng.standard_normal(out=xi[:kb])
+        if not fused:
+            src.fill(xi[:kb])
         ch, cs = ch_all[k0 : k0 + kb], cs_all[k0 : k0 + kb]
         k = k0
         while k < k0 + kb:
             stop = min(int(ends[k]), k0 + kb)
-            steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs)
+            if fused:
+                steppers[grid.mode[k]].advance_drawing(
+                    x, src.states, 2 * e_max, k - k0, stop - k0, ch, cs
+                )
+            else:
+                steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs)
             k = stop
             if k in save_at and not stats.record(x, save_at[k]):
                 return stats.result()

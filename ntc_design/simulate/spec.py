@@ -9,7 +9,8 @@ of diffrax's ``SaveAt``):
 - :class:`SaveAt` -- ``every`` (a period) or ``times`` (a list);
 - :class:`Stepping` -- ``uniform`` steps ``dt`` or ``intrinsic`` steps ``ds`` in
   s = ∫c dt, capped at ``h_max``;
-- :class:`MonteCarlo` -- ``paths``, ``seed``, ``block_size``, ``store_paths``, ``workers``;
+- :class:`MonteCarlo` -- ``paths``, ``seed``, ``block_size``, ``store_paths``, ``workers``,
+  ``rng`` (``xoshiro``: per-path streams drawn in the kernel, :mod:`.rng`; ``numpy``);
 - :class:`UniformInitial` -- x(0) drawn uniformly from [lo, hi] with its own seed;
 - the noise (:class:`~ntc_design.simulate.system.NoiseModel`), checked by
   :func:`check_noise`.
@@ -267,6 +268,7 @@ class MonteCarlo:
     block_size: int = 500
     store_paths: int = 10
     workers: int = 2
+    rng: str = "xoshiro"  # xoshiro256** per path, drawn in the kernel; or numpy (PCG64)
 
     def __post_init__(self) -> None:
         require_int("paths", self.paths, minimum=1)
@@ -274,8 +276,11 @@ class MonteCarlo:
         require_int("block_size", self.block_size, minimum=1)
         require_int("store_paths", self.store_paths, minimum=0)
         check_workers(self.workers)
+        if self.rng not in ("xoshiro", "numpy"):
+            raise InputError(f"rng: expected xoshiro or numpy, got {self.rng!r}")
         for f in fields(self):
-            object.__setattr__(self, f.name, int(getattr(self, f.name)))
+            if f.name != "rng":
+                object.__setattr__(self, f.name, int(getattr(self, f.name)))
 
 
 @dataclass(frozen=True)
@@ -393,6 +398,7 @@ SCENARIO_KEYS = (
     "workers",
     "block_size",
     "store_paths",
+    "rng",
     "resample",
 )
 OPTION_KEYS = tuple(k for k in SCENARIO_KEYS if k not in ("name", "description", "topology"))
@@ -541,7 +547,7 @@ class SimulationSpec:
         mc = MonteCarlo(
             **{
                 k: o.pop(k)
-                for k in ("paths", "seed", "block_size", "store_paths", "workers")
+                for k in ("paths", "seed", "block_size", "store_paths", "workers", "rng")
                 if k in o
             }
         )

@@ -28,6 +28,7 @@ from .grid import TimeGrid
 from .moments import KAPPA, MomentRecorder, Moments
 from .montecarlo import BlockStats, PartialStats
 from .noise import NoiseModel
+from .rng import NormalSource
 from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters, spec_grid
 
 BATCH = 256  # steps whose matrices and normals are made at once (Lemma 1 per batch is ~6 ms)
@@ -158,6 +159,7 @@ class TimeVaryingMonteCarloSpec:
     seed: int
     block_size: int = 500
     store_paths: int = 10
+    rng: str = "xoshiro"  # the generator of :mod:`.rng` (or "numpy")
 
     @property
     def n_blocks(self) -> int:
@@ -187,7 +189,7 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
     nd_, d = spec.x_init.size, spec.dim
     p0 = b * spec.block_size
     p = min(spec.block_size, spec.paths - p0)
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(b,))))
+    normals = NormalSource(spec.rng, spec.seed, b, p)
     stats = BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     ne = sys_.n_edges
@@ -213,7 +215,7 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
         tile = tile_width(p, nd_)
     for k0 in range(0, grid.n_steps, batch):
         kb = min(batch, grid.n_steps - k0)
-        rng.standard_normal(out=xi[:kb])
+        normals.fill(xi[:kb])
         if compiled:
             b_t = sys_.design.at(grid.t[k0 : k0 + kb])
             lap = np.ascontiguousarray(b_t.lap_b(st).reshape(kb, -1))
@@ -500,6 +502,7 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         dim=tv.dim,
         paths=spec.mc.paths,
         seed=spec.mc.seed,
+        rng=spec.mc.rng,
         block_size=spec.mc.block_size,
         store_paths=spec.mc.store_paths,
     )

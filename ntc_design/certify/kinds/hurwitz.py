@@ -19,7 +19,6 @@ from ..theorems import TheoremVerdict, fixed_verdicts
 from .base import Reading, ResultRow, ResultsAudit, Subject
 from .dense import DenseKind
 
-
 RATE_METHODS = ("lyapunov", "lmi")
 
 

@@ -1,0 +1,136 @@
+"""The normals drawn in the kernel (issue 30): xoshiro256** per path and the ziggurat,
+tested as a generator (moments, distribution, tails, independence between paths and
+between steps) and as the Monte Carlo's source (the fused kernel gives the numbers of the
+array kernel; results identical for any workers and tile width; Monte Carlo inside the
+exact moments' bands). The seeds are fixed: every test's outcome is the same everywhere."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import ntc_design as nd
+from ntc_design.simulate import NoiseModel, simulate
+from ntc_design.simulate.rng import ZIG_R, ZIG_X, NormalSource, normals, path_states
+
+N = 1_000_000
+
+
+@pytest.fixture(scope="module")
+def draws() -> np.ndarray:
+    return normals(path_states(12345, 0, 10), N // 10).ravel()
+
+
+def test_ziggurat_tables_are_doorniks():
+    # 128 layers of equal area V, the first edge at R, decreasing to 0
+    f = np.exp(-0.5 * ZIG_X**2)
+    assert ZIG_X[1] == 3.442619855899 and ZIG_X[-1] == 0.0
+    assert np.all(np.diff(ZIG_X[1:]) < 0)
+    areas = ZIG_X[1:-1] * (f[2:] - f[1:-1])  # layer i: x_i · (f(x_{i+1}) − f(x_i))
+    np.testing.assert_allclose(areas, 9.91256303526217e-3, rtol=1e-8)  # R has 13 digits
+    np.testing.assert_allclose(ZIG_R, ZIG_X[1:] / ZIG_X[:-1])
+
+
+def test_moments(draws):
+    se = 1 / math.sqrt(draws.size)
+    assert abs(draws.mean()) < 5 * se
+    assert abs(draws.var() - 1) < 5 * math.sqrt(2) * se
+    assert abs(stats.skew(draws)) < 5 * math.sqrt(6) * se
+    assert abs(stats.kurtosis(draws)) < 5 * math.sqrt(24) * se
+
+
+def test_distribution_and_tails(draws):
+    ks = stats.kstest(draws, "norm")
+    assert ks.statistic < 1.63 / math.sqrt(draws.size)  # the 1 % critical value
+    # chi-square over 50 equiprobable bins
+    edges = stats.norm.ppf(np.linspace(0, 1, 51))
+    counts = np.histogram(draws, edges)[0]
+    chi2 = ((counts - draws.size / 50) ** 2 / (draws.size / 50)).sum()
+    assert stats.chi2.sf(chi2, 49) > 1e-3
+    # the tail beyond R (the ziggurat's separate branch) and beyond 4.5
+    for x in (ZIG_X[1], 4.5):
+        p = 2 * stats.norm.sf(x)
+        got = np.mean(np.abs(draws) > x)
+        assert abs(got - p) < 5 * math.sqrt(p / draws.size)
+
+
+def test_independence_between_paths_and_steps():
+    z = normals(path_states(7, 3, 2000), 500)  # 2000 paths × 500 draws
+    se = 1 / math.sqrt(z.size)
+    # neighbouring paths (consecutive seeds words) and consecutive draws of one path
+    assert abs(np.mean(z[:-1] * z[1:])) < 5 * se
+    assert abs(np.mean(z[:, :-1] * z[:, 1:])) < 5 * se
+    # the same path index in two blocks
+    w = normals(path_states(7, 4, 2000), 500)
+    assert abs(np.mean(z * w)) < 5 * se
+
+
+def test_a_paths_stream_does_not_depend_on_the_block_width():
+    a = normals(path_states(3, 1, 10), 50)
+    b = normals(path_states(3, 1, 25), 50)
+    np.testing.assert_array_equal(a, b[:10])
+    assert not np.array_equal(a, normals(path_states(3, 2, 10), 50))
+
+
+def test_fill_continues_the_stream():
+    src = NormalSource("xoshiro", 5, 0, 4)
+    one = np.empty((6, 4, 3))
+    src.fill(one[:2])
+    src.fill(one[2:])
+    ref = normals(path_states(5, 0, 4), 18).reshape(4, 6, 3).transpose(1, 0, 2)
+    np.testing.assert_array_equal(one, ref)
+
+
+def test_fused_kernel_draws_the_array_kernels_numbers(g1, theta):
+    from ntc_design.simulate.kernels import em_steps, em_steps_rng
+    from ntc_design.simulate.montecarlo import _Stepper
+    from ntc_design.simulate.noise import NoiseModel
+    from ntc_design.simulate.system import mode_system
+
+    s = mode_system(nd.design(g1, theta), NoiseModel(0.4, 0.3), "G1")
+    st = _Stepper(s, False)
+    p, k = 37, 20
+    ch, cs = np.full(k, 1e-3), np.full(k, math.sqrt(1e-3))
+    x0 = np.random.default_rng(0).uniform(-3, 3, (p, s.nd))
+    xa, xb = x0.copy(), x0.copy()
+    states = path_states(11, 0, p)
+    xi = np.empty((k, p, 2 * s.n_edges))
+    NormalSource("xoshiro", 11, 0, p).fill(xi)
+    em_steps(xa, xi, 0, k, ch, cs, *st.args, True, 8)
+    em_steps_rng(xb, states, ZIG_X, ZIG_R, 2 * s.n_edges, 0, k, ch, cs, *st.args, True, 16)
+    np.testing.assert_array_equal(xa, xb)  # tile widths 8 and 16: the same bits
+
+
+def _run(g1, **kw):
+    return simulate(
+        g1, [1, 2, -1], gain="1/(1+t)", noise=NoiseModel(0.4, 0.3), T=1.0, dt=1e-3,
+        paths=400, seed=3, save_every=0.5, method="both", **kw,
+    )  # fmt: skip
+
+
+def test_results_do_not_depend_on_workers(g1):
+    a, b = _run(g1, workers=1), _run(g1, workers=2)
+    np.testing.assert_array_equal(a.mc.mean, b.mc.mean)
+    assert a.parameters["rng"] == "xoshiro"
+
+
+@pytest.mark.parametrize("rng", ["xoshiro", "numpy"])
+def test_monte_carlo_agrees_with_the_exact_moments(g1, rng):
+    r = _run(g1, rng=rng)
+    mc, ex = r.mc.mean[-1].sum(), r.exact.ms_error[-1].sum()
+    half = (r.mc.hi[-1] - r.mc.mean[-1]).sum()  # per-agent half-widths added: conservative
+    assert abs(mc - ex) <= half
+
+
+def test_the_two_generators_differ_and_numpy_keeps_its_streams(g1):
+    a, b = _run(g1, rng="numpy"), _run(g1, rng="numpy")
+    np.testing.assert_array_equal(a.mc.mean, b.mc.mean)
+    assert not np.array_equal(a.mc.mean, _run(g1).mc.mean)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("bad", ["mt19937", "", 3, None])
+def test_an_unknown_generator_is_refused(g1, bad):
+    with pytest.raises(nd.InputError, match="rng"):
+        simulate(g1, [1, 2, -1], T=0.1, paths=4, rng=bad)
