@@ -69,13 +69,24 @@ class _Package(types.ModuleType):
 
     @property
     def design(self):
+        override = self.__dict__.get("_design_override")
+        if override is not None:
+            return override
         from .design.lemma1 import design
 
         return design
 
     @design.setter
-    def design(self, value) -> None:  # the import system binding the subpackage: kept aside
-        pass
+    def design(self, value) -> None:
+        # the import system binds the subpackage here when it is first imported: kept
+        # aside; anything else (a test's patch) replaces the function until deleted
+        if isinstance(value, types.ModuleType) and value.__name__ == f"{__name__}.design":
+            return
+        self.__dict__["_design_override"] = value
+
+    @design.deleter
+    def design(self) -> None:
+        self.__dict__.pop("_design_override", None)
 
 
 sys.modules[__name__].__class__ = _Package

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -107,11 +108,15 @@ def modes_of(top) -> list:
     return [top.structure if isinstance(top, ExpressionTopology) else top]
 
 
+_ARGS: list[str] = []  # this invocation's arguments (set by main)
+
+
 def _command_line() -> str:
-    """This invocation as a shell command (``ntc`` and its arguments, quoted)."""
+    """This invocation as a shell command (``ntc`` and its arguments, quoted), whether
+    ``main`` read them from ``sys.argv`` or was given them."""
     import shlex
 
-    return shlex.join(["ntc", *sys.argv[1:]])
+    return shlex.join(["ntc", *_ARGS])
 
 
 def _json(obj) -> str:
@@ -231,10 +236,19 @@ def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Pat
     if path.suffix.lower() == ".json":
         return [write_atomic(path, _json(res.to_dict()) + "\n")]
     if isinstance(res, SwitchingDesign):
-        paths = []
-        for k, d in res.modes.items():
-            paths.append(path.with_name(f"{path.stem}_{k}{path.suffix}"))
-            d.to_mat(paths[-1])
+        from .outputs import check_output_file
+
+        # one file per mode, the mode's name made a safe file name; all checked first
+        paths = [
+            path.with_name(f"{path.stem}_{re.sub(r'[^A-Za-z0-9._-]', '_', str(k))}{path.suffix}")
+            for k in res.modes
+        ]
+        if len(set(paths)) != len(paths):
+            raise InputError(f"--out: two modes give the same file name beside {path.name}")
+        for q in paths:
+            check_output_file(q, "--out")
+        for q, d in zip(paths, res.modes.values(), strict=True):
+            d.to_mat(q)
         return paths
     res.to_mat(path)
     return [path]
@@ -340,6 +354,8 @@ def certify(
     from .schedule import gain_from_option
 
     th = parse_vector(theta, "--theta")
+    if rate_method not in ("lyapunov", "lmi"):  # before any work
+        raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
     if out_path is not None:
         check_output_file(out_path, "--out")
     with warnings.catch_warnings():
@@ -841,7 +857,7 @@ _FLAGS = {"--json", "--help", "--version"}  # options that take no value
 
 def _input_error(message: str, args: list[str]) -> int:
     """Bad input: ``error: ...`` on stderr, and with --json ``{"error": ...}`` on stdout
-    too (a script reading stdout gets JSON whatever happened). Returns exit code 2."""
+    too (a script reading stdout gets JSON for every bad-input exit). Returns exit code 2."""
     print(f"error: {message}", file=sys.stderr)
     if "--json" in args[: args.index("--")] if "--" in args else "--json" in args:
         print(json.dumps({"ok": False, "error": message, "exit_code": 2}, ensure_ascii=False))
@@ -866,6 +882,7 @@ def main(argv: list[str] | None = None) -> None:
         from click import exceptions as click  # type: ignore[no-redef]
 
     args = sys.argv[1:] if argv is None else list(argv)
+    _ARGS[:] = args
     # figures are written to files: no display, whatever the machine has (a GUI backend
     # would open windows or fail without one); set before matplotlib is ever imported
     os.environ.setdefault("MPLBACKEND", "Agg")

@@ -90,7 +90,9 @@ def _mat_inflated_bytes(p: Path, limit: float) -> None:
             if len(tag) < 8:
                 return
             kind, nbytes = struct.unpack(order + "II", tag)
-            if kind != 15:  # miCOMPRESSED; anything else is stored as it is
+            if kind not in (14, 15):  # not a top-level variable: loadmat refuses the file
+                return
+            if kind == 14:  # miMATRIX, stored as it is
                 total += nbytes
                 fh.seek(nbytes + (-nbytes % 8), os.SEEK_CUR)
             else:
@@ -101,7 +103,12 @@ def _mat_inflated_bytes(p: Path, limit: float) -> None:
                         break
                     left -= len(data)
                     while data:
-                        total += len(z.decompress(data, 2**24))
+                        try:
+                            total += len(z.decompress(data, 2**24))
+                        except zlib.error as exc:
+                            raise InputError(
+                                f"{p}: not a readable MATLAB file (a compressed variable: {exc})"
+                            ) from None
                         data = z.unconsumed_tail
                         if total > limit:
                             break

@@ -184,7 +184,7 @@ def parse_expr_weight(
         raise field_error(
             source,
             field,
-            f"unknown weight form {sorted(keys)}; use rows, {{diag: [...]}}, "
+            f"unknown weight form {sorted(keys, key=str)}; use rows, {{diag: [...]}}, "
             "{identity: s}, {matrix: NAME, scale: s} (entries may be expressions of t)",
         )
     raise field_error(source, field, f"expected a matrix, got {type_name(spec)}")

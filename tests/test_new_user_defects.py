@@ -634,3 +634,118 @@ def test_every_guide_page_is_in_the_guide_section():
     css = (ROOT / "docs" / "_static" / "custom.css").read_text()
     assert "table.autosummary" in css and "white-space: normal" in css
     assert "custom.css" in (ROOT / "docs" / "conf.py").read_text()
+
+
+# -- the review of this work -------------------------------------------------------------
+
+
+def test_an_explicit_delta_states_no_margin(g1, theta):
+    from ntc_design.certify import certify
+
+    des = nd.design(g1, theta)
+    res = certify(g1, theta, delta=0.5 * des.C)  # δ < C: not Lemma 1's design
+    sub = res.certificate["subject"]["modes"]["G1"]
+    assert sub["margin"] is None and res.verification.valid
+    check = next(c for c in res.verification.checks if "margin" in c.name)
+    assert check.ok and "given directly" in check.detail
+    assert certify(g1, theta).certificate["subject"]["modes"]["G1"]["margin"] == 0.1
+
+
+@hostile
+def test_a_corrupt_compressed_mat_variable_is_bad_input(tmp_path, capsys, monkeypatch):
+    import struct
+
+    p = tmp_path / "bad.mat"
+    head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + b"\0" * 8 + struct.pack("<H", 0x0100) + b"IM"
+    p.write_bytes(head + struct.pack("<II", 15, 16) + b"x\x9c" + b"\xff" * 14)
+    assert_input_error(["check", p], capsys, monkeypatch, "not a readable MATLAB file")
+
+
+@hostile
+def test_a_mat_of_junk_tags_is_left_to_loadmat_at_once(tmp_path, capsys, monkeypatch):
+    import struct
+
+    p = tmp_path / "junk.mat"
+    head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + b"\0" * 8 + struct.pack("<H", 0x0100) + b"IM"
+    p.write_bytes(head + b"\0" * 5_000_000)  # 625,000 zero tags: not one is a variable
+    from ntc_design.tablefiles import _mat_inflated_bytes
+
+    _mat_inflated_bytes(p, 2**30)  # returns at the first tag (no loop over the file)
+    assert_input_error(["check", p], capsys, monkeypatch, str(p))
+
+
+@hostile
+def test_progress_shows_file_text_as_text_on_a_terminal(capsys):
+    from ntc_design.reports.terminal import Progress
+
+    # the old bar read its descriptions as rich markup: "[/]" raised MarkupError and
+    # "[draft]" vanished; now each is the text, on one line, control characters escaped
+    with Progress("ntc x", tty=True) as prog:
+        prog.stage("simulating runs/[draft]/s.yaml [/] \x1b[31m")
+        prog.tick("mode [bold]", 1, 2)
+        shown = [t.description for t in prog._bar.tasks]
+    assert shown == ["simulating runs/[draft]/s.yaml [/] \\x1b[31m", "mode [bold]"]
+    column = prog._bar.columns[0]
+    assert column.markup is False
+
+
+def test_the_package_design_can_be_patched(monkeypatch):
+    import ntc_design as pkg
+    from ntc_design.design import lemma1
+
+    def fake(*a, **k):
+        return "fake"
+
+    monkeypatch.setattr(pkg, "design", fake)
+    assert pkg.design is fake
+    monkeypatch.undo()
+    assert pkg.design is lemma1.design
+    import ntc_design.design  # noqa: F401 - binding the subpackage keeps the function
+
+    assert pkg.design is lemma1.design
+
+
+def test_switching_design_mat_files_have_safe_names(tmp_path, capsys, monkeypatch):
+    sw = tmp_path / "sw.yaml"
+    sw.write_text(
+        f"modes: {{'a/b': {G1}, 'c d': {G1}}}\n"
+        "schedule: [{mode: 'a/b', duration: 1}, {mode: 'c d', duration: 1}]\n"
+    )
+    code, out, err = run_cli(
+        ["design", sw, "--theta", "1,2,-1", "--out", tmp_path / "d.mat"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert sorted(p.name for p in tmp_path.glob("d_*.mat")) == ["d_a_b.mat", "d_c_d.mat"]
+
+
+@hostile
+def test_an_unknown_rate_method_is_refused_before_the_work(capsys, monkeypatch):
+    from ntc_design import certify as cert_pkg
+
+    monkeypatch.setattr(cert_pkg, "certify", lambda *a, **k: pytest.fail("it ran"))
+    assert_input_error(
+        ["certify", G1, "--theta", "1,2,-1", "--rate-method", "sdp"],
+        capsys,
+        monkeypatch,
+        "--rate-method",
+    )
+
+
+def test_safe_escapes_c1_and_bidi_controls():
+    from ntc_design.reports.terminal import safe
+
+    shown = safe("a\x9b31mb\u202ec\nd")
+    assert "\x9b" not in shown and "\u202e" not in shown and "\n" in shown
+    assert "\\x9b" in shown and "\\u202e" in shown
+
+
+def test_the_recorded_command_is_the_one_given_to_main(tmp_path, monkeypatch):
+    from ntc_design.cli import main
+
+    out = tmp_path / "run"
+    monkeypatch.setattr(sys, "argv", ["something", "else"])
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", str(scenario(tmp_path)), "--out", str(out), "--paths", "5"])
+    assert exc.value.code == 0
+    cmd = json.loads((out / "summary.json").read_text())["command"]
+    assert cmd.startswith("ntc simulate ") and cmd.endswith("--paths 5")

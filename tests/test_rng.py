@@ -134,3 +134,11 @@ def test_the_two_generators_differ_and_numpy_keeps_its_streams(g1):
 def test_an_unknown_generator_is_refused(g1, bad):
     with pytest.raises(nd.InputError, match="rng"):
         simulate(g1, [1, 2, -1], T=0.1, paths=4, rng=bad)
+
+
+def test_the_written_tables_are_the_computed_ones():
+    from ntc_design.simulate.rng import _tables
+
+    x, r = _tables()
+    np.testing.assert_allclose(ZIG_X, x, rtol=4 * np.finfo(float).eps, atol=0)
+    np.testing.assert_allclose(ZIG_R, r, rtol=8 * np.finfo(float).eps, atol=0)

@@ -127,3 +127,24 @@ def test_the_compiled_path_keeps_the_guards(compiled, tmp_path, text, needle):
         compiled.read_document(p)
     assert needle.lower() in str(exc.value).lower() and str(p) in str(exc.value)
     assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize(
+    "scalar",
+    ["010", "0o17", "1e3", "-2E+5", "yes", "Off", "n", "1:20", "007", "1.5e-05", "0.5", "10"],
+)
+def test_a_file_means_the_same_at_every_size(compiled, tmp_path, scalar):
+    import yaml
+
+    text = f"dim: 3\nvalue: {scalar}\nitems: [{scalar}, 1.0e-05, 0.25]\n" + "# pad\n" * 40
+    p = tmp_path / "v.yaml"
+    p.write_text(text)
+    assert compiled.read_document(p) == yaml.safe_load(text)  # PyYAML's reading, big or small
+
+
+def test_a_json_text_is_read_as_json_at_every_size(compiled, tmp_path, monkeypatch):
+    p = tmp_path / "j.yaml"
+    p.write_text('{"dim": 3, "w": [1e-05, 2.5E+3, 10]}' + " " * 300)
+    assert compiled.read_document(p) == {"dim": 3, "w": [1e-05, 2500.0, 10]}
+    monkeypatch.setattr(compiled, "COMPILED_YAML_MIN_CHARS", 1 << 40)
+    assert compiled.read_document(p) == {"dim": 3, "w": [1e-05, 2500.0, 10]}

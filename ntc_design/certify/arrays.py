@@ -111,7 +111,7 @@ def mode_subject(des: ProtocolDesign) -> dict:
             "weights": pack(ea.w, "f8"),
         },
         "theta": des.theta.tolist(),
-        "margin": des.margin,
+        "margin": des.lemma1_margin,
         "delta": des.delta,
         "informed": list(des.informed_agents),
     }
@@ -185,8 +185,12 @@ def margin_check(name: str, sub: dict, where: str) -> Check:
     Raises
     ------
     InputError
-        ``margin`` is missing or not a finite number.
+        ``margin`` is missing, or neither null (δ given directly) nor a finite number.
     """
+    if "margin" not in sub:
+        raise InputError(f"{where}.margin: missing")
+    if sub["margin"] is None:  # δ given directly: the subject makes no Lemma 1 claim
+        return Check(f"{name}: margin ΔC > 0", True, "none stated: δ was given directly")
     m = number(need(sub, "margin", (int, float), where), f"{where}.margin")
     return Check(f"{name}: margin ΔC > 0", m > 0, f"ΔC = {m:g}")
 

@@ -129,7 +129,7 @@ def mode_subject(d: ProtocolDesign) -> dict:
         "topology": d.topology.to_dict(),
         "topology_hash": topology_hash(d.topology),
         "theta": d.theta.tolist(),
-        "margin": d.margin,
+        "margin": d.lemma1_margin,
         "delta": d.delta,
         "k1": d.k1,
         "x0": d.x0.tolist(),

@@ -187,7 +187,7 @@ def decay_rate_lyapunov(lap_b: np.ndarray, eig_bound: float | None = None) -> Ra
     t0 = time.perf_counter()
     n = lap_b.shape[0]
     bound = float(np.min(np.linalg.eigvals(lap_b).real)) if eig_bound is None else eig_bound
-    if bound <= 0:
+    if not bound > 0:  # NaN included
         return RateResult(0.0, bound, None, "not Hurwitz: eigenvalue bound <= 0", 0, 0.0)
     for k, eta in enumerate(RATE_BACKOFFS, start=1):
         alpha = (1.0 - eta) * bound

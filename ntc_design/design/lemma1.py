@@ -69,6 +69,13 @@ class ProtocolDesign:
     identity_residual: float
     thresholds: CriticalCouplings | None
     notes: tuple[str, ...] = field(default=())
+    explicit_delta: bool = False  # δ was given, not Lemma 1's C + ΔC
+
+    @property
+    def lemma1_margin(self) -> float | None:
+        """ΔC when δ is Lemma 1's C + ΔC; None when δ was given directly (a certificate
+        then states no margin: it is about that δ, not about Lemma 1's)."""
+        return None if self.explicit_delta else self.margin
 
     @property
     def assumption_holds(self) -> bool:
@@ -539,6 +546,7 @@ def design_topology(
         identity_residual=res,
         thresholds=crit,
         notes=tuple(notes),
+        explicit_delta=delta is not None,
     )
 
 

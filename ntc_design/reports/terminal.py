@@ -40,7 +40,14 @@ def safe(text: Any) -> str:
     -------
     str
     """
-    return str(text).translate(_CONTROL_TABLE)
+    t = str(text).translate(_CONTROL_TABLE)
+    if t.isascii():
+        return t
+    # C1 controls (U+009B is a CSI), bidi overrides and the like: escaped like one_line
+    return "".join(
+        ch if ch.isprintable() or ch in "\n " else ch.encode("unicode_escape").decode("ascii")
+        for ch in t
+    )
 
 
 class SafeConsole(Console):
@@ -122,7 +129,7 @@ class Progress:
             from rich.progress import Progress as Bar
 
             self._bar = Bar(
-                TextColumn("{task.description}"),
+                TextColumn("{task.description}", markup=False),  # text, never markup
                 BarColumn(),
                 TextColumn("{task.percentage:>3.0f}%"),
                 TimeRemainingColumn(),
@@ -167,9 +174,10 @@ class Progress:
         """
         self.state = text
         if self._bar is not None:  # a terminal: the stage on its own line, pulsing
+            shown = one_line(text)  # a path or a label from a file: one line, escaped
             if "stage" not in self.tasks:
-                self.tasks["stage"] = self._bar.add_task(text, total=None)
-            self._bar.update(self.tasks["stage"], description=text)
+                self.tasks["stage"] = self._bar.add_task(shown, total=None)
+            self._bar.update(self.tasks["stage"], description=shown)
         elif not transient and time.monotonic() - self.t0 >= self.every:
             self._line(text)
 
@@ -189,7 +197,7 @@ class Progress:
         self.state = f"{key}: Monte Carlo {100 * frac:.{0 if frac >= 0.1 else 2}f}% done{eta}"
         if self._bar is not None:
             if key not in self.tasks:
-                self.tasks[key] = self._bar.add_task(key, total=total)
+                self.tasks[key] = self._bar.add_task(one_line(key), total=total)
             self._bar.update(self.tasks[key], completed=done, total=total)
 
 

@@ -19,11 +19,119 @@ import numpy as np
 from ..linalg import numba_cache_dir
 
 numba_cache_dir()  # before Numba reads its configuration: not into site-packages
+import math  # noqa: E402
+
 import numba  # noqa: E402
 
-from .rng import ziggurat_slow  # noqa: E402
+# -- the generator of .rng: xoshiro256** and Doornik's ziggurat -------------------------
+
+
+@numba.njit
+def _rotl(x, k):
+    return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
+
+
+@numba.njit
+def _next(s0, s1, s2, s3):
+    """xoshiro256**: (word, new state), the state in four locals (registers)."""
+    result = _rotl(s1 * np.uint64(5), 7) * np.uint64(9)
+    t = s1 << np.uint64(17)
+    s2 ^= s0
+    s3 ^= s1
+    s1 ^= s2
+    s0 ^= s3
+    s2 ^= t
+    s3 = _rotl(s3, 45)
+    return result, s0, s1, s2, s3
+
 
 TO_UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³
+
+
+@numba.njit
+def _unit(w):
+    """The top 53 bits of ``w`` as a double in [0, 1): converted through int64, which is
+    one instruction (uint64 to double is several, and was 5x slower here)."""
+    return np.int64(w >> np.uint64(11)) * TO_UNIT
+
+
+@numba.njit
+def _slow(i, u, s0, s1, s2, s3, zx):
+    """The ziggurat's rare branches (about 1 % of draws), kept out of the hot loop: the
+    base layer's tail beyond R, or the wedge test of layer i. Returns (done, z, state)."""
+    if i == 0:
+        while True:
+            w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+            a = math.log(_unit(w) + 0.5 * TO_UNIT) / zx[1]
+            w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+            b = math.log(_unit(w) + 0.5 * TO_UNIT)
+            if -2.0 * b >= a * a:
+                return True, (a - zx[1] if u < 0 else zx[1] - a), s0, s1, s2, s3
+    x = u * zx[i]
+    f0 = math.exp(-0.5 * (zx[i] * zx[i] - x * x))
+    f1 = math.exp(-0.5 * (zx[i + 1] * zx[i + 1] - x * x))
+    w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+    return f1 + _unit(w) * (f0 - f1) < 1.0, x, s0, s1, s2, s3
+
+
+@numba.njit
+def ziggurat_slow(i, u, s0, s1, s2, s3, zx, zr):
+    """The draw after the fast test failed for word (layer ``i``, uniform ``u``): the tail
+    or the wedge, then new words until one is accepted. Returns (z, state)."""
+    while True:
+        done, z, s0, s1, s2, s3 = _slow(i, u, s0, s1, s2, s3, zx)
+        if done:
+            return z, s0, s1, s2, s3
+        w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
+        i = np.int64(w & np.uint64(127))
+        u = 2.0 * _unit(w) - 1.0
+        if abs(u) < zr[i]:
+            return u * zx[i], s0, s1, s2, s3
+
+
+# The hot path (xoshiro256** step, layer, fast acceptance) is written out in the two loops
+# that draw (fill_normals and em_steps_rng): as a called function returning its state
+# Numba ran it 4x slower. tests/test_rng.py checks both give the same numbers.
+
+
+@numba.njit(cache=True, nogil=True)
+def fill_normals(states, out, zx, zr):
+    """``out[k, q, e]``: path q's normals in its stream order (step k, then e), for the
+    kernels that take the normals as an array (the callable-f step, the implicit scheme,
+    the time-varying path). The same numbers as the fused kernel
+    :func:`em_steps_rng` draws.
+
+    Parameters
+    ----------
+    states : numpy.ndarray
+        (p, 4) uint64, updated in place.
+    out : numpy.ndarray
+        (K, p, m) float64, filled.
+    zx, zr : numpy.ndarray
+        :data:`ZIG_X`, :data:`ZIG_R`.
+    """
+    kk, p, m = out.shape
+    for q in range(p):
+        s0, s1, s2, s3 = states[q, 0], states[q, 1], states[q, 2], states[q, 3]
+        for k in range(kk):
+            for e in range(m):
+                s5 = s1 * np.uint64(5)
+                w = ((s5 << np.uint64(7)) | (s5 >> np.uint64(57))) * np.uint64(9)
+                t = s1 << np.uint64(17)
+                s2 ^= s0
+                s3 ^= s1
+                s1 ^= s2
+                s0 ^= s3
+                s2 ^= t
+                s3 = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
+                i = np.int64(w & np.uint64(127))
+                u = 2.0 * (np.int64(w >> np.uint64(11)) * TO_UNIT) - 1.0
+                if abs(u) < zr[i]:
+                    out[k, q, e] = u * zx[i]
+                else:
+                    out[k, q, e], s0, s1, s2, s3 = ziggurat_slow(i, u, s0, s1, s2, s3, zx, zr)
+        states[q, 0], states[q, 1], states[q, 2], states[q, 3] = s0, s1, s2, s3
+
 
 TILE_BYTES = 3 * 2**19  # a tile's state and increments (2·Nd·tile doubles) within this
 TILE_MIN, TILE_MAX = 16, 64  # paths per tile: wide enough for SIMD, small enough for L1/L2

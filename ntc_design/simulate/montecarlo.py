@@ -176,8 +176,10 @@ def prepare(spec: MonteCarloSpec) -> None:
     spec : MonteCarloSpec
         The run (a spec with its own ``run_block`` needs nothing).
     """
-    from .kernels import em_steps
+    from .kernels import em_steps, em_steps_rng, fill_normals
+    from .rng import ZIG_R, ZIG_X
 
+    fill_normals(np.zeros((0, 4), np.uint64), np.zeros((1, 0, 1)), ZIG_X, ZIG_R)
     for s in getattr(spec, "systems", ()):  # a spec with its own run_block has none
         if s.f is None:
             st = _Stepper(s, False)
@@ -185,6 +187,8 @@ def prepare(spec: MonteCarloSpec) -> None:
             xi = np.zeros((1, 0, 2 * s.n_edges))
             one = np.ones(1)
             em_steps(x, xi, 0, 1, one, one, *st.args, True, 1)
+            states = np.zeros((0, 4), np.uint64)
+            em_steps_rng(x, states, ZIG_X, ZIG_R, 2, 0, 1, one, one, *st.args, True, 1)
             return
 
 
