@@ -272,7 +272,9 @@ def _numbers_read_differently(text: str) -> bool:
     """A number in ``text`` that YAML 1.1 and 1.2 read differently (see above): byte masks
     over the text, then a window before each exponent (a regex scan of a 30 MB file takes
     seconds)."""
-    if "0o" in text or "!" in text or "<<" in text or "? " in text:
+    # anchors and aliases too: the guarded composer bounds their expansion as it goes
+    # (yaml-rs replays aliases up to its own limit first, 10⁷ events: seconds)
+    if "0o" in text or "!" in text or "<<" in text or "? " in text or "&" in text:
         return True
     b = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
     n = b.size
