@@ -158,16 +158,12 @@ def tile_width(p: int, nd: int) -> int:
 
 
 @numba.njit(cache=True, nogil=True)
-def em_steps(
-    x, xi, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst, kmat, gvec, drift, tile
-):
-    """Advance every row of ``x`` (p, Nd) in place over the steps ``k_from .. k_to − 1``
-    of the batch: ``x += ch[k]·(u − L_B x) + cs[k]·Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e)``
-    with ξ1_e = ``xi[k, path, e]``, ξ2_e = ``xi[k, path, E + e]`` (E = len(src)), L_B in
-    CSR form (indptr, indices, data), K_e = ``kmat[e]`` and g_e = ``gvec[e]`` (agent
-    ``dst[e]``'s rows). With ``drift`` False the L_B term is left out (the implicit
-    scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
-    innermost loop runs over the tile (no array views inside: they cost per nonzero)."""
+def _em_core(
+    x, xi, states, zx, zr, m_draw, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst,
+    kmat, gvec, drift, tile,
+):  # fmt: skip
+    """:func:`em_steps` and :func:`em_steps_rng` in one body: the normals are read from
+    ``xi`` when ``states`` is empty, else drawn here from the paths' xoshiro streams."""
     p, nd = x.shape
     ne = src.size
     d = gvec.shape[1]
@@ -184,93 +180,11 @@ def em_steps(
         for k in range(k_from, k_to):
             c1 = ch[k]
             c2 = cs[k]
-            for q in range(w):
-                for e in range(2 * ne):
-                    zt[e, q] = c2 * xi[k, q0 + q, e]
-            for r in range(nd):
-                ur = c1 * u[r]
+            if states.shape[0] == 0:
                 for q in range(w):
-                    dx[r, q] = ur
-                if drift:
-                    for b in range(indptr[r], indptr[r + 1]):
-                        a = c1 * data[b]
-                        jc = indices[b]
-                        for q in range(w):
-                            dx[r, q] -= a * xt[jc, q]
-            for e in range(ne):
-                io = dst[e] * d
-                jo = src[e] * d
-                for c in range(d):
-                    for q in range(w):
-                        df[c, q] = xt[jo + c, q] - xt[io + c, q]
-                for a in range(d):
-                    for q in range(w):
-                        mb[q] = 0.0
-                    for c in range(d):
-                        kc = kmat[e, a, c]
-                        for q in range(w):
-                            mb[q] += kc * df[c, q]
-                    ga = gvec[e, a]
-                    for q in range(w):
-                        dx[io + a, q] += ga * zt[e, q] + mb[q] * zt[ne + e, q]
-            for r in range(nd):
-                for q in range(w):
-                    xt[r, q] += dx[r, q]
-        for q in range(w):
-            for r in range(nd):
-                x[q0 + q, r] = xt[r, q]
-
-
-@numba.njit(cache=True, nogil=True)
-def em_steps_rng(
-    x,
-    states,
-    zx,
-    zr,
-    m_draw,
-    k_from,
-    k_to,
-    ch,
-    cs,
-    indptr,
-    indices,
-    data,
-    u,
-    src,
-    dst,
-    kmat,
-    gvec,
-    drift,
-    tile,
-):
-    """:func:`em_steps` with the normals drawn here, path by path from its xoshiro256**
-    state ``states[path]`` (:mod:`.rng`: the same numbers as ``fill_normals`` gives the
-    array kernel), so no array of normals is written or read.
-
-    Advance every row of ``x`` (p, Nd) in place over the steps ``k_from .. k_to − 1``
-    of the batch: ``x += ch[k]·(u − L_B x) + cs[k]·Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e)``
-    with ξ1_e = ``xi[k, path, e]``, ξ2_e = ``xi[k, path, E + e]`` (E = len(src)), L_B in
-    CSR form (indptr, indices, data), K_e = ``kmat[e]`` and g_e = ``gvec[e]`` (agent
-    ``dst[e]``'s rows). With ``drift`` False the L_B term is left out (the implicit
-    scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
-    innermost loop runs over the tile (no array views inside: they cost per nonzero)."""
-    p, nd = x.shape
-    ne = src.size
-    d = gvec.shape[1]
-    for q0 in range(0, p, tile):
-        w = min(tile, p - q0)
-        xt = np.empty((nd, w))
-        for q in range(w):
-            for r in range(nd):
-                xt[r, q] = x[q0 + q, r]
-        dx = np.empty((nd, w))
-        zt = np.empty((2 * ne, w))
-        df = np.empty((d, w))
-        mb = np.empty(w)
-        for k in range(k_from, k_to):
-            c1 = ch[k]
-            c2 = cs[k]
-            for q in range(w):
+                    for e in range(2 * ne):
+                        zt[e, q] = c2 * xi[k, q0 + q, e]
+            for q in range(w if states.shape[0] else 0):
                 qq = q0 + q
                 s0, s1, s2, s3 = states[qq, 0], states[qq, 1], states[qq, 2], states[qq, 3]
                 for e in range(m_draw):  # m_draw >= 2·E: a narrower mode skips the rest
@@ -325,6 +239,39 @@ def em_steps_rng(
         for q in range(w):
             for r in range(nd):
                 x[q0 + q, r] = xt[r, q]
+
+
+@numba.njit(cache=True, nogil=True)
+def em_steps(
+    x, xi, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst, kmat, gvec, drift, tile
+):
+    """Advance every row of ``x`` (p, Nd) in place over the steps ``k_from .. k_to − 1``
+    of the batch: ``x += ch[k]·(u − L_B x) + cs[k]·Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e)``
+    with ξ1_e = ``xi[k, path, e]``, ξ2_e = ``xi[k, path, E + e]`` (E = len(src)), L_B in
+    CSR form (indptr, indices, data), K_e = ``kmat[e]`` and g_e = ``gvec[e]`` (agent
+    ``dst[e]``'s rows). With ``drift`` False the L_B term is left out (the implicit
+    scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
+    innermost loop runs over the tile (no array views inside: they cost per nonzero)."""
+    table = np.zeros(1)
+    _em_core(
+        x, xi, np.zeros((0, 4), dtype=np.uint64), table, table, 0, k_from, k_to, ch, cs,
+        indptr, indices, data, u, src, dst, kmat, gvec, drift, tile,
+    )  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True)
+def em_steps_rng(
+    x, states, zx, zr, m_draw, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst, kmat,
+    gvec, drift, tile,
+):  # fmt: skip
+    """:func:`em_steps` with the normals drawn in the kernel, path by path from its
+    xoshiro256** state ``states[path]`` (the same numbers as :func:`fill_normals` gives
+    the array kernel; ``m_draw`` >= 2·E per step, the rest skipped), so no array of
+    normals is written or read."""
+    _em_core(
+        x, np.zeros((1, 1, 1)), states, zx, zr, m_draw, k_from, k_to, ch, cs, indptr,
+        indices, data, u, src, dst, kmat, gvec, drift, tile,
+    )  # fmt: skip
 
 
 def numpy_step(x, xi_k, ch, cs, s, drift=True):
