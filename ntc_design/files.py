@@ -28,7 +28,6 @@ from __future__ import annotations
 import difflib
 import json
 import math
-import re
 from collections import Counter
 from dataclasses import dataclass
 from itertools import chain
@@ -41,7 +40,7 @@ import yaml
 from .edgelist import MAX_AGENTS, MAX_DIM, EdgeListData, check_label_spellings, read_npz
 from .errors import InputError
 from .tablefiles import read_csv_edges, read_mat
-from .yamlfast import load_fast
+from .yamlfast import load_compiled, load_fast, numbers_read_differently, values_read_differently
 
 Label = int | str
 
@@ -228,9 +227,9 @@ def _load_yaml(text: str, p: Path) -> Any:
             _check_depth(doc, p)
             return doc
     if len(text) >= COMPILED_YAML_MIN_CHARS:
-        if not _numbers_read_differently(text):
-            doc = _load_compiled(text, p)
-            if not _walk_compiled(doc, p):
+        if not numbers_read_differently(text):
+            doc = load_compiled(text, str(p), MAX_EXPANDED_NODES)
+            if not values_read_differently(doc, MAX_DEPTH, str(p)):
                 return doc
         # a scalar that YAML 1.1 (PyYAML, every smaller file) and 1.2 (yaml-rs) read
         # differently, or a tag: the one set of rules, at the slower pace
@@ -254,125 +253,6 @@ def _load_yaml(text: str, p: Path) -> Any:
         return loader.construct_document(root)
     finally:
         loader.dispose()
-
-
-# YAML 1.1 (PyYAML) and 1.2's core schema (yaml-rs) read some plain scalars differently:
-# leading-zero (octal in 1.1) and 0o integers, exponents without a dot (text in 1.1),
-# yes/no/on/off/y/n (booleans in 1.1), sexagesimal 1:20 (a number in 1.1); and tags,
-# complex keys and merge keys. The text is screened for the numbers, the parsed values for
-# the words (a walk that also bounds the depth).
-_WORDS_1_1 = frozenset({"yes", "no", "on", "off", "y", "n"})
-_SEXAGESIMAL = re.compile(r"[-+]?[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?")
-
-
-_WINDOW = 32  # characters looked back from an exponent for the number's start and dot
-
-
-def _numbers_read_differently(text: str) -> bool:
-    """A number in ``text`` that YAML 1.1 and 1.2 read differently (see above): byte masks
-    over the text, then a window before each exponent (a regex scan of a 30 MB file takes
-    seconds)."""
-    # anchors and aliases too: the guarded composer bounds their expansion as it goes
-    # (yaml-rs replays aliases up to its own limit first, 10⁷ events: seconds)
-    if "0o" in text or "!" in text or "<<" in text or "? " in text or "&" in text:
-        return True
-    b = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
-    n = b.size
-    if n < 2:
-        return False
-    digit = (b >= 48) & (b <= 57)
-    low = b | 32
-    word = digit | (low >= 97) & (low <= 122) | (b == 95) | (b >= 128)
-    sign = (b == 43) | (b == 45)
-    # an integer with a leading zero (0 then a digit) at the start of a number: after a
-    # character that is no part of a number or word, or after a sign that is not an
-    # exponent's (1.0e-05 is a float in both)
-    lead = np.flatnonzero((b[:-1] == 48) & digit[1:])
-    if lead.size:
-        p1 = np.where(lead >= 1, b[np.maximum(lead - 1, 0)], 32)
-        p2 = np.where(lead >= 2, b[np.maximum(lead - 2, 0)], 32)
-        free1 = ~(word[np.maximum(lead - 1, 0)] | (p1 == 46) | (p1 == 43) | (p1 == 45)) | (
-            lead == 0
-        )
-        signed = ((p1 == 43) | (p1 == 45)) & ((p2 | 32) != 101)
-        signed &= ~(word[np.maximum(lead - 2, 0)] | (p2 == 46)) | (lead < 2)
-        if np.any(free1 | signed):
-            return True
-    # an exponent (d e [+-]? d) whose mantissa has no dot since the number began
-    e_at = np.flatnonzero((low[1:-1] == 101) & digit[:-2] & (digit[2:] | sign[2:])) + 1
-    if e_at.size:
-        back = e_at[:, None] - np.arange(1, _WINDOW + 1)[None, :]  # (k, W): k-1, k-2, …
-        ch = b[np.maximum(back, 0)]
-        inside = (back >= 0) & (
-            ((ch >= 48) & (ch <= 57)) | (ch == 46) | (ch == 95) | (ch == 43) | (ch == 45)
-        )
-        run = np.cumprod(inside, axis=1).astype(bool)  # still within the number
-        dot = np.any(run & (ch == 46), axis=1)
-        length = run.sum(axis=1)
-        before = np.where(
-            length < _WINDOW, ch[np.arange(e_at.size), np.minimum(length, _WINDOW - 1)], 32
-        )
-        led = (length < back.shape[1]) & (e_at - length - 1 >= 0)
-        led_by_word = led & word[np.maximum(e_at - length - 1, 0)]
-        if np.any(~dot & ~led_by_word & (length < _WINDOW)):
-            return True
-        del before
-    return False
-
-
-def _walk_compiled(doc: Any, p: Path) -> bool:
-    """Bound the depth (:data:`MAX_DEPTH`) and say whether a parsed value reads
-    differently under YAML 1.1: a word of 1.1's booleans, a sexagesimal text, a key that
-    is not text or a number."""
-    stack = [(doc, 1)] if isinstance(doc, (dict, list)) else []
-    while stack:
-        x, d = stack.pop()
-        if d > MAX_DEPTH:
-            raise InputError(f"{p}: nested deeper than {MAX_DEPTH} levels")
-        if isinstance(x, dict):
-            for k in x:
-                if (
-                    not isinstance(k, (str, int, float))
-                    or isinstance(k, str)
-                    and (k.lower() in _WORDS_1_1 or _SEXAGESIMAL.fullmatch(k))
-                ):
-                    return True
-            items: Any = x.values()
-        else:
-            items = x
-        for v in items:
-            if isinstance(v, (dict, list)):
-                stack.append((v, d + 1))
-            elif isinstance(v, str) and (v.lower() in _WORDS_1_1 or _SEXAGESIMAL.fullmatch(v)):
-                return True
-    return False
-
-
-def _load_compiled(text: str, p: Path) -> Any:
-    """A large YAML text by yaml-rs (Rust, YAML 1.2 core schema): any style a machine
-    writes (flow mappings, block style, JSON text) at 10⁵ agents in about a second, where
-    the iterative composer above takes 30-150 s. Its own limits bound the work before any
-    object is built: nesting (a few hundred levels; then :data:`MAX_DEPTH` on the result),
-    alias replays (:data:`MAX_EXPANDED_NODES` events) and duplicate keys (refused).
-
-    Chosen over ryaml (serde_yaml, unmaintained upstream, 1.5-2x slower on the same files)
-    and rapidyaml (a tree API that needs a Python loop per node), side by side in
-    ``benchmarks/bench_inputs.py``.
-    """
-    import yaml_rs
-
-    limits = yaml_rs.AliasLimits(max_total_replayed_events=MAX_EXPANDED_NODES)
-    try:
-        doc = yaml_rs.loads(
-            text,
-            parse_datetime=False,
-            alias_limits=limits,
-            duplicate_key_policy=yaml_rs.DuplicateKeyPolicy.Error,
-        )
-    except (yaml_rs.YAMLDecodeError, ValueError, RecursionError) as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else "malformed YAML"
-        raise InputError(f"{p}: not valid YAML ({_one_line(first, 120)})") from None
-    return doc
 
 
 def _compose(loader: Any, p: Path) -> Any:
