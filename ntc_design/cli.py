@@ -98,16 +98,6 @@ def parse_vector(text: str, field: str) -> list[float]:
     return vals
 
 
-def modes_of(top) -> list:
-    """The topologies a run's summary holds: the modes of a switching set, or the one."""
-    from .model import SwitchingTopology
-    from .timevarying import ExpressionTopology
-
-    if isinstance(top, SwitchingTopology):
-        return list(top.modes.values())
-    return [top.structure if isinstance(top, ExpressionTopology) else top]
-
-
 _ARGS: list[str] = []  # this invocation's arguments (set by main)
 
 
@@ -472,7 +462,12 @@ def simulate(
     from .reports.terminal import Progress, out
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
-    from .simulate.scenario import check_output, load_scenario, output_bytes, write_outputs
+    from .simulate.scenario import (
+        check_output,
+        load_scenario,
+        result_output_bytes,
+        write_outputs,
+    )
     from .simulate.spec import MonteCarlo, check_workers
 
     given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method, "rng": rng}
@@ -505,15 +500,7 @@ def simulate(
                 print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
             print(f"error: {one_line(str(exc))}", file=sys.stderr)
             raise typer.Exit(1) from None
-    size = output_bytes(
-        top.n,
-        top.dim,
-        int(min(spec.save.count(spec.T), 1e12)),
-        min(spec.mc.store_paths, spec.mc.paths),
-        spec.method != "exact",
-        spec.method != "mc",
-        max((len(m.weights) for m in modes_of(top)), default=0),
-    )
+    size = result_output_bytes(res, top)
     if size > OUTPUT_NOTE_BYTES and not as_json:
         print(
             f"note: writing about {format_bytes(size)} to {one_line(str(out_dir))}", file=sys.stderr

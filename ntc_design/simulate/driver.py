@@ -173,7 +173,8 @@ def _modes(
     )
 
 
-def _edge_count(topology: AnyTopology) -> int:
+def edge_count(topology: AnyTopology) -> int:
+    """The edges of the topology, or of its largest mode."""
     if isinstance(topology, SwitchingTopology):
         return max(len(m.edges) for m in topology.modes.values())
     if isinstance(topology, TimeVaryingTopology):
@@ -198,7 +199,7 @@ def _check_size(
     est = estimate(
         n=topology.n,
         d=topology.dim,
-        edges=_edge_count(topology),
+        edges=edge_count(topology),
         modes=n_modes,
         segments=n_segments,
         saves=saves,
@@ -214,7 +215,7 @@ def _check_size(
     check_budget(est)
     nd = topology.n * topology.dim
     secs = mc_seconds(
-        est, nd, _edge_count(topology) * topology.dim**2, workers, st.scheme == "implicit"
+        est, nd, edge_count(topology) * topology.dim**2, workers, st.scheme == "implicit"
     )
     if spec.method != "exact" and secs > LONG_RUN_SECONDS:
         warn_user(

@@ -196,6 +196,34 @@ def stored_paths(res) -> tuple[np.ndarray | None, np.ndarray]:
     return agents.astype(np.int64), paths[:, :, cols]
 
 
+def result_output_bytes(res, topology) -> float:
+    """:func:`output_bytes` of a finished run, said before :func:`write_outputs` writes it.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        The result.
+    topology : Topology, SwitchingTopology, TimeVaryingTopology or ExpressionTopology
+        The run's topology (summary.json holds its edges).
+
+    Returns
+    -------
+    float
+        Bytes.
+    """
+    from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+    from .driver import edge_count
+
+    known = (Topology, SwitchingTopology, TimeVaryingTopology)
+    structure = topology if isinstance(topology, known) else topology.structure  # A(t) as text
+    n, nd = len(res.labels), res.theta.size * len(res.labels)
+    stored = res.mc.paths.shape[0] if res.mc is not None else 0
+    return output_bytes(
+        n, nd // n, res.save_times.size, stored, res.mc is not None, res.exact is not None,
+        edge_count(structure),
+    )  # fmt: skip
+
+
 def output_bytes(
     n: int, d: int, saves: int, stored: int, mc: bool, exact: bool, edges: int = 0
 ) -> float:
@@ -235,6 +263,7 @@ __all__ = [
     "load_scenario",
     "ms_error_table",
     "output_bytes",
+    "result_output_bytes",
     "stored_paths",
     "write_outputs",
 ]
