@@ -174,7 +174,17 @@ def _modes(
 
 
 def edge_count(topology: AnyTopology) -> int:
-    """The edges of the topology, or of its largest mode."""
+    """The edges of the topology, or of its largest mode.
+
+    Parameters
+    ----------
+    topology : Topology, SwitchingTopology or TimeVaryingTopology
+        The network.
+
+    Returns
+    -------
+    int
+    """
     if isinstance(topology, SwitchingTopology):
         return max(len(m.edges) for m in topology.modes.values())
     if isinstance(topology, TimeVaryingTopology):
