@@ -22,7 +22,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.optimize import brentq, minimize_scalar
 
 from .linalg import DenseRefused, SPDFamily, require_sparse_factor
 
@@ -151,6 +150,8 @@ def hurwitz_set(
         fa, fb = alpha(a), alpha(b)
         if fa * fb > 0:
             return b
+        from scipy.optimize import brentq  # lazy: a design without a threshold search skips it
+
         return brentq(alpha, a, b, xtol=1e-15 * b, rtol=4 * np.finfo(float).eps, maxiter=200)
 
     intervals: list[tuple[float, float]] = []
@@ -235,6 +236,8 @@ def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
             hi = scale
             while g(hi) <= 0 and hi < 1e300:
                 hi *= 2
+            from scipy.optimize import brentq  # lazy: a design without a threshold search skips it
+
             delta_s = brentq(g, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
 
     best_rate, best_delta = _best_rate(alpha, scale, notes)
@@ -272,6 +275,8 @@ def _best_rate(alpha, scale: float, notes: list[str]) -> tuple[float, float | No
         return rmax, math.exp(hi)
     if k == 0:
         return rmax, float(grid[0])
+    from scipy.optimize import minimize_scalar
+
     res = minimize_scalar(
         lambda u: alpha(math.exp(u)),
         bounds=(math.log(grid[k - 1]), math.log(grid[k + 1])),

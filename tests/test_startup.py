@@ -148,3 +148,33 @@ def test_a_json_text_is_read_as_json_at_every_size(compiled, tmp_path, monkeypat
     assert compiled.read_document(p) == {"dim": 3, "w": [1e-05, 2500.0, 10]}
     monkeypatch.setattr(compiled, "COMPILED_YAML_MIN_CHARS", 1 << 40)
     assert compiled.read_document(p) == {"dim": 3, "w": [1e-05, 2500.0, 10]}
+
+
+def test_simulate_writes_its_outputs_without_pandas_or_an_optimiser(tmp_path):
+    code = (
+        "import contextlib, io\n"
+        f"sys.argv = ['ntc', 'simulate', 'examples/scenarios/g1_fixed.yaml', '--out', "
+        f"{str(tmp_path / 'o')!r}, '--paths', '20', '--horizon', '0.5', '--method', 'mc', "
+        "'--workers', '1']\n"
+        "from ntc_design.cli import main\n"
+        "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main()"
+    )
+    mods = loaded_after(code)
+    assert (tmp_path / "o" / "ms_error_long.csv").is_file()
+    assert "pandas" not in mods and "scipy.optimize" not in mods and "cvxpy" not in mods
+
+
+@pytest.mark.parametrize("method", ["mc", "exact", "both"])
+def test_the_tidy_csv_is_what_pandas_writes(method):
+    from ntc_design.simulate import simulate
+    from ntc_design.simulate.scenario import load_scenario, tidy_csv
+
+    top, spec, _ = load_scenario(
+        ROOT / "examples" / "scenarios" / "g1_fixed.yaml",
+        {"paths": 30, "method": method, "T": 1.0},
+    )
+    res = simulate(top, spec)
+    text = tidy_csv(res)
+    assert text == res.to_pandas().to_csv(index=False)  # the independent writer
+    assert text.count("\n") == 1 + res.save_times.size * len(res.labels)

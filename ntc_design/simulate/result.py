@@ -283,6 +283,34 @@ class SimulationResult:
         return simulation_frame(self)
 
 
+def tidy_columns(res: SimulationResult) -> dict[str, np.ndarray]:
+    """The tidy table's columns (see :func:`simulation_frame`), as NumPy arrays.
+
+    Parameters
+    ----------
+    res
+        A :class:`ntc_design.simulate.SimulationResult`.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        :data:`TIDY_COLUMNS`, in order, one entry per (save time, agent).
+    """
+    t = np.asarray(res.save_times, dtype=float)
+    labels = [str(a) for a in res.labels]
+    s, n = t.size, len(labels)
+    nan = np.full((s, n), math.nan)
+    mc = res.mc
+    return {
+        "t": np.repeat(t, n),
+        "agent": np.tile(np.array(labels, dtype=object), s),
+        "mc": (mc.mean if mc is not None else nan).reshape(-1),
+        "lo": (mc.lo if mc is not None else nan).reshape(-1),
+        "hi": (mc.hi if mc is not None else nan).reshape(-1),
+        "exact": (res.exact.ms_error if res.exact is not None else nan).reshape(-1),
+    }
+
+
 def simulation_frame(res: SimulationResult):
     """A simulation result as a tidy DataFrame, one row per (save time, agent).
 
@@ -300,20 +328,7 @@ def simulation_frame(res: SimulationResult):
     """
     import pandas as pd
 
-    t = np.asarray(res.save_times, dtype=float)
-    labels = [str(a) for a in res.labels]
-    s, n = t.size, len(labels)
-    nan = np.full((s, n), math.nan)
-    mc = res.mc
-    cols = {
-        "t": np.repeat(t, n),
-        "agent": np.tile(np.array(labels, dtype=object), s),
-        "mc": (mc.mean if mc is not None else nan).reshape(-1),
-        "lo": (mc.lo if mc is not None else nan).reshape(-1),
-        "hi": (mc.hi if mc is not None else nan).reshape(-1),
-        "exact": (res.exact.ms_error if res.exact is not None else nan).reshape(-1),
-    }
-    return pd.DataFrame(cols, columns=list(TIDY_COLUMNS))
+    return pd.DataFrame(tidy_columns(res), columns=list(TIDY_COLUMNS))
 
 
 def _design_brief(d: ProtocolDesign) -> dict:

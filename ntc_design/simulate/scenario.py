@@ -13,7 +13,7 @@ from ..files import ScenarioData, jsonable, parse_scenario
 from ..loader import load
 from ..outputs import check_output_folder, json_text, output_folder
 from .driver import AnyTopology
-from .result import simulation_frame
+from .result import TIDY_COLUMNS, tidy_columns
 from .spec import SimulationSpec
 
 OUTPUT_FILES = ("summary.json", "ms_error.csv", "ms_error_long.csv", "paths.npz")
@@ -150,9 +150,7 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
         (tmp / "ms_error.csv").write_text(buf.getvalue(), encoding="utf-8")
         if long_form:
             # the same numbers in tidy long form (t, agent, mc, lo, hi, exact), as to_pandas()
-            (tmp / "ms_error_long.csv").write_text(
-                simulation_frame(res).to_csv(index=False), encoding="utf-8"
-            )
+            (tmp / "ms_error_long.csv").write_text(tidy_csv(res), encoding="utf-8")
         arrays: dict[str, np.ndarray] = {
             "t": res.save_times,
             "paths": paths,
@@ -167,6 +165,34 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
             arrays["path_agents"] = agents
         np.savez_compressed(tmp / "paths.npz", **arrays)  # type: ignore[arg-type]
     return [out / name for name in OUTPUT_FILES if long_form or name != "ms_error_long.csv"]
+
+
+def tidy_csv(res) -> str:
+    """The tidy table as CSV text, as ``simulation_frame(res).to_csv(index=False)`` writes
+    it (shortest round-trip floats, NaN as an empty field) without importing pandas.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        The result.
+
+    Returns
+    -------
+    str
+        The header :data:`TIDY_COLUMNS` and one line per (save time, agent).
+    """
+    cols = tidy_columns(res)
+    text = {k: [_csv_float(v) for v in cols[k].tolist()] for k in TIDY_COLUMNS if k != "agent"}
+    text["agent"] = [str(v) for v in cols["agent"]]
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(TIDY_COLUMNS)
+    w.writerows(zip(*(text[k] for k in TIDY_COLUMNS), strict=True))
+    return buf.getvalue()
+
+
+def _csv_float(v: float) -> str:
+    return "" if v != v else repr(v)
 
 
 def stored_paths(res) -> tuple[np.ndarray | None, np.ndarray]:
