@@ -420,6 +420,62 @@ def verify(
         print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
+@app.command(epilog="Example: ntc robust examples/g1.yaml --theta 1,2,-1 --radius 0.05")
+def robust(
+    file: FileArg,
+    theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
+    radius: Annotated[
+        float,
+        typer.Option(help="Relative radius ρ of every weight's Loewner interval, 0 <= ρ < 1."),
+    ] = 0.05,
+    margin: Annotated[float, typer.Option(help="ΔC > 0: δ = C + ΔC.")] = 0.1,
+    out_path: Annotated[
+        Path | None, typer.Option("--out", help="Write the robust certificate (JSON) here.")
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Decay, consensus-offset and margin brackets when every weight is known only within
+    (1−ρ)|A| ⪯ |A'| ⪯ (1+ρ)|A|: a proven end and a realisation attaining the other. Exit 0
+    when the certificate verifies, 1 when not."""
+    from .certify import verify, write_certificate
+    from .certify.kinds.robust import robust_certificate
+    from .certify.robust import check_radius
+    from .certify.robust import robust as run
+    from .design import ProtocolDesign, design
+    from .loader import load
+    from .model import Topology
+    from .outputs import check_output_file
+    from .reports.terminal import print_table
+
+    th = parse_vector(theta, "--theta")
+    rho = check_radius(radius)
+    if out_path is not None:
+        check_output_file(out_path, "--out")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # solver chatter; the verification decides
+        top = load(file)
+        if not isinstance(top, Topology):
+            raise InputError(
+                f"{file}: robust needs one fixed topology (not a switching or time-varying one)"
+            )
+        des = design(top, th, margin, thresholds=False)
+        assert isinstance(des, ProtocolDesign)  # a fixed topology's design
+        rep = run(des, rho)
+        doc = robust_certificate(rep)
+        ver = verify(json.loads(json.dumps(doc)), "the robust certificate")
+    if out_path is not None and ver.valid:
+        write_certificate(doc, out_path)
+    if as_json:
+        print(_json({**rep.to_dict(), "valid": ver.valid}))
+    else:
+        print_table(rep.table())
+        print(f"certificate: {'valid' if ver.valid else 'NOT valid'} ({ver.method})")
+        if out_path is not None and ver.valid:
+            print(f"wrote {out_path}")
+    if not ver.valid:
+        raise typer.Exit(1)
+
+
 @app.command(
     epilog="Example: ntc simulate examples/scenarios/g1_fixed.yaml --out runs/g1 --paths 200"
 )

@@ -23,6 +23,9 @@ class Property(StrEnum):
     SYMMETRIC_PART = "symmetric_part"  # L_B(k) + L_B(k)ᵀ ≻ 0 for every mode (Theorems 3-4)
     COMMON_LYAPUNOV = "common_lyapunov"  # one P for every mode: stable under any switching
     UNIFORM_SYMMETRIC_PART = "uniform_symmetric_part"  # λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0, all t
+    ROBUST_MARGIN = "robust_margin"  # −L_B(A') Hurwitz for every A' within radius ρ_lower
+    ROBUST_DECAY = "robust_decay"  # min Re λ(L_B(A')) > α_lower for every A' within ρ
+    ROBUST_OFFSET = "robust_offset"  # ‖x*(A') − 1⊗θ‖² <= γ for every A' within ρ
 
 
 PROPERTY_TEXT = {
@@ -32,6 +35,10 @@ PROPERTY_TEXT = {
     Property.COMMON_LYAPUNOV: "a common Lyapunov matrix P for every scheduled mode",
     Property.UNIFORM_SYMMETRIC_PART: "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for every t, with "
     "Assumption 3's bound D, Λ₁, p̄ and t₀ of μ₂ (Theorems 3-4)",
+    Property.ROBUST_MARGIN: "−L_B(A') Hurwitz for every weight realisation A' within the "
+    "margin radius",
+    Property.ROBUST_DECAY: "min Re λ(L_B(A')) > α for every weight realisation within ρ",
+    Property.ROBUST_OFFSET: "‖x*(A') − 1⊗θ‖ bounded for every weight realisation within ρ",
 }
 
 
@@ -47,6 +54,8 @@ class ClaimKind(StrEnum):
     WEIGHT_BOUND = "D"  # |a_kl(t)| <= D for every t (Assumption 3)
     LAMBDA1 = "lambda1"  # λ_max²(|A_ij(t)|) <= Λ₁ and the noise bound p̄
     T0 = "t0"  # μ₂(t) > 0 for t >= t₀ (the gain is small enough from t₀ on)
+    ROBUST_LMI = "robust_lmi"  # the S-procedure matrix Ψ(P, τ; α, ρ) ≻ 0 (robust kind)
+    ROBUST_OFFSET = "robust_offset"  # the S-procedure matrix Γ(γ, λ, Y; ρ) ≻ 0 (robust kind)
 
 
 #: The statements of the time-varying kind's claims (their certificates list exactly these).
@@ -67,6 +76,7 @@ class Claim:
     mode: str | None = None
     p: str | None = None
     alpha: float = 0.0
+    radius: float | None = None  # the uncertainty radius ρ (robust kind)
 
     @property
     def id(self) -> str:
@@ -82,6 +92,10 @@ class Claim:
             return f"−L_B({m}) Hurwitz: every component block certified"
         if self.kind in TV_CLAIM_TEXT:
             return TV_CLAIM_TEXT[self.kind]
+        if self.kind is ClaimKind.ROBUST_LMI:
+            return f"Ψ(P_{p}, τ_{p}; α, ρ) ≻ 0 for L_B({m}): every realisation within ρ"
+        if self.kind is ClaimKind.ROBUST_OFFSET:
+            return f"Γ(γ, λ, Y; ρ) ≻ 0 for L_B({m}), with every L_B(A') invertible within ρ"
         rate = f" − 2α·P_{p}" if self.prop is Property.DECAY_RATE else ""
         return f"P_{p}·L_B({m}) + L_B({m})ᵀ·P_{p}{rate} ≻ 0"
 
@@ -98,8 +112,10 @@ class Claim:
             doc["mode"] = self.mode
         if self.p is not None:
             doc["P"] = self.p
-        if self.kind in (ClaimKind.LYAPUNOV, ClaimKind.POSITIVE_RATE):
+        if self.kind in (ClaimKind.LYAPUNOV, ClaimKind.POSITIVE_RATE, ClaimKind.ROBUST_LMI):
             doc["alpha"] = self.alpha
+        if self.radius is not None:
+            doc["radius"] = self.radius
         return doc
 
 

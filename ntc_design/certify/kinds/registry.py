@@ -8,6 +8,7 @@ from __future__ import annotations
 from .base import CertificateKind
 from .hurwitz import HurwitzKind
 from .hurwitz_scale import HurwitzScaleKind
+from .robust import RobustKind
 from .switching import SwitchingKind
 from .switching_scale import SwitchingScaleKind
 from .time_varying import TimeVaryingKind
@@ -21,6 +22,7 @@ KINDS: dict[str, CertificateKind] = {
         SwitchingKind(),
         SwitchingScaleKind(),
         TimeVaryingKind(),
+        RobustKind(),
     )
 }
 

@@ -1,0 +1,617 @@
+"""Kind ``robust``: one topology whose weights are known within a relative Loewner radius ρ
+(:mod:`ntc_design.certify.robust`). It certifies the margin (−L_B(A') Hurwitz for every
+realisation within ρ_lower), and where proven the decay bound α_lower and the consensus
+offset bound √γ at ρ. ``ntc verify`` rebuilds every S-procedure matrix exactly (dyadic
+rationals: P, the multipliers, ρ and α are doubles, the channel bases are the weights' own
+pivot columns) and tests it by Sylvester's criterion, or by Rump's verified Cholesky when
+the exact test is too large; the realisations reported as the other ends are re-checked
+(inside the set, and attaining their figures) in floating point."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...design import ProtocolDesign
+from ...design.lemma1 import coupling_matrix
+from ...errors import InputError
+from ...model import Topology
+from ...rigorous.exact import Dyadic, PDProof, exact_affordable, exact_pd, verified_float_pd
+from ..checks import Check
+from ..claims import Claim, ClaimKind, Property
+from ..dense import PROVERS, DenseContext, DenseMode, mode_subject
+from ..fields import need, number
+from ..format import FORMAT, VERSION, finish
+from ..robust import (
+    RobustReport,
+    abscissa,
+    check_radius,
+    robust,
+    uncertain_edges,
+)
+from ..theorems import TheoremVerdict
+from .base import CertificateKind, Reading, ResultRow, ResultsAudit, Subject, number_text
+from .dense import read_dense
+
+REALISATION_RTOL = 1e-9  # a realisation may sit this far (relative) outside the set
+
+
+def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
+    """The ``robust`` certificate of a report of :func:`ntc_design.certify.robust.robust`.
+
+    Parameters
+    ----------
+    rep : RobustReport
+        The brackets and their proofs.
+    name : str, optional
+        The mode's name (default: the topology's name, or ``"topology"``).
+
+    Returns
+    -------
+    dict
+        The certificate: it certifies ``robust_margin`` when a margin radius was proven
+        (ρ_lower, possibly 0), ``robust_decay`` with α_lower at ρ, ``robust_offset`` with
+        γ at ρ when those were proven.
+    """
+    d = rep.design
+    name = name or d.topology.name or "topology"
+    pr = rep.proofs
+    props: list[Property] = []
+    mats: dict[str, Any] = {"L_B": {name: d.grounded_laplacian().tolist()}, "P": {}}
+    mult: dict[str, Any] = {}
+    results: dict[str, Any] = {
+        "radius": rep.radius,
+        "nominal_decay": rep.nominal_decay,
+        "seconds": rep.seconds,
+    }
+    reals: dict[str, Any] = {}
+    top = d.topology
+    ed = uncertain_edges(top)
+    if pr["margin"] is not None:
+        props.append(Property.ROBUST_MARGIN)
+        mats["P"]["robust_margin"] = pr["margin"][0].tolist()
+        mult["robust_margin"] = pr["margin"][1].tolist()
+        results["margin"] = {"lower": pr["margin_radius"]}
+        if rep.margin.realisation is not None:
+            results["margin"]["upper"] = rep.margin.upper
+            reals["margin"] = {
+                "radius": rep.margin.realisation.radius,
+                "edges": rep.margin.realisation.edges(top, ed),
+            }
+    if pr["decay"] is not None:
+        props.append(Property.ROBUST_DECAY)
+        mats["P"]["robust_decay"] = pr["decay"][0].tolist()
+        mult["robust_decay"] = pr["decay"][1].tolist()
+        results["decay"] = {"lower": pr["alpha"]}
+        if rep.decay.realisation is not None:
+            results["decay"]["upper"] = rep.decay.upper
+            reals["decay"] = {"radius": rep.radius, "edges": rep.decay.realisation.edges(top, ed)}
+    if pr["offset"] is not None and Property.ROBUST_MARGIN in props:
+        gam, lam, y = pr["offset"]
+        props.append(Property.ROBUST_OFFSET)
+        mult["robust_offset"] = lam.tolist()
+        mats["Y"] = y.tolist()
+        results["offset"] = {"gamma": gam, "upper": math.sqrt(gam)}
+        if rep.offset.realisation is not None:
+            results["offset"]["lower"] = rep.offset.lower
+            reals["offset"] = {
+                "radius": rep.radius,
+                "edges": rep.offset.realisation.edges(top, ed),
+            }
+    mats["multipliers"] = mult
+    subject_mode = mode_subject(d)
+    doc = {
+        "format": FORMAT,
+        "version": VERSION,
+        "kind": "robust",
+        "certifies": [p.value for p in props],
+        "size": int(top.nd),
+        "subject": {"modes": {name: subject_mode}, "radius": rep.radius},
+        "matrices": mats,
+        "claims": [c.to_dict() for c in _claims(tuple(props), name, _stated(results, rep.radius))],
+        "results": results,
+        "realizations": reals,
+        "solver": {"name": "Clarabel (via cvxpy)", "status": "optimal"},
+    }
+    return finish(doc)
+
+
+@dataclass(frozen=True)
+class _Stated:
+    radius: float
+    margin: float | None
+    alpha: float | None
+
+
+def _stated(results: dict, radius: float) -> _Stated:
+    m = results.get("margin") or {}
+    dc = results.get("decay") or {}
+    return _Stated(radius, m.get("lower"), dc.get("lower"))
+
+
+def _claims(props: tuple[Property, ...], mode: str, st: _Stated) -> tuple[Claim, ...]:
+    out: list[Claim] = []
+    if Property.ROBUST_MARGIN in props:
+        out += [
+            Claim(ClaimKind.PD, Property.ROBUST_MARGIN, p="robust_margin"),
+            Claim(
+                ClaimKind.ROBUST_LMI, Property.ROBUST_MARGIN, mode, "robust_margin", 0.0, st.margin
+            ),
+        ]
+    if Property.ROBUST_DECAY in props:
+        out += [
+            Claim(ClaimKind.PD, Property.ROBUST_DECAY, p="robust_decay"),
+            Claim(
+                ClaimKind.ROBUST_LMI,
+                Property.ROBUST_DECAY,
+                mode,
+                "robust_decay",
+                float(st.alpha or 0.0),
+                st.radius,
+            ),
+        ]
+    if Property.ROBUST_OFFSET in props:
+        out.append(
+            Claim(ClaimKind.ROBUST_OFFSET, Property.ROBUST_OFFSET, mode, None, 0.0, st.radius)
+        )
+    return tuple(out)
+
+
+# -- exact assembly ------------------------------------------------------------------------
+
+
+def _dy(x: float) -> Dyadic:
+    return Dyadic.of(float(x))
+
+
+def _blocks(rows: list[list[Dyadic]]) -> Dyadic:
+    """A block matrix of Dyadics, exactly (over the largest exponent)."""
+    e = max(b.exp for r in rows for b in r)
+    return Dyadic(np.vstack([np.hstack([b.num * (1 << (e - b.exp)) for b in r]) for r in rows]), e)
+
+
+@dataclass(frozen=True, eq=False)
+class _Channel:
+    ewv: Dyadic  # E_i W V (Nd × r)
+    dwd: Dyadic  # D W Dᵀ (Nd × Nd)
+    vwv: Dyadic  # Vᵀ W V (r × r)
+
+
+def _exact_channels(top: Topology) -> list[_Channel]:
+    ed = uncertain_edges(top)
+    n, d = top.nd, top.dim
+    out = []
+    for e in range(ed.m):
+        i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
+        w = Dyadic.of(ed.w[e])
+        v = Dyadic.of(ed.basis(e))
+        sel = np.zeros((n, d), dtype=object)
+        sel[i : i + d] = np.eye(d, dtype=np.int64).astype(object)
+        dm = sel.copy()
+        dm[j : j + d] -= int(ed.s[e]) * np.eye(d, dtype=np.int64).astype(object)
+        sel_d, dm_d = Dyadic(sel, 0), Dyadic(dm, 0)
+        wv = w @ v
+        out.append(_Channel(sel_d @ wv, dm_d @ w @ dm_d.T, v.T @ wv))
+    return out
+
+
+def _pd(m: Dyadic) -> PDProof:
+    """Sylvester's criterion when affordable, else Rump's test on the correctly rounded
+    floats (each entry within u·|x| + 2⁻¹⁰⁷⁴ of the exact one)."""
+    if exact_affordable(m.num.shape[0], m.bits):
+        return exact_pd(m)
+    f = m.to_float()
+    return verified_float_pd(f, np.abs(f) * 2.0**-53 + 2.0**-1074)
+
+
+def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float, radius: float):
+    """Ψ of the decay S-procedure, exactly (see :func:`ntc_design.certify.robust.decay_matrix`).
+
+    Parameters
+    ----------
+    lap : Dyadic
+        L_B exactly.
+    ch : list
+        The exact channels of the topology's edges.
+    p : numpy.ndarray
+        P.
+    tau : sequence of float
+        τ_e.
+    alpha, radius : float
+        α and ρ.
+
+    Returns
+    -------
+    Dyadic
+    """
+    pd_ = Dyadic.of(p)
+    top = (
+        pd_ @ lap + lap.T @ pd_ - pd_.scale(_dy(2.0 * alpha)) if alpha else pd_ @ lap + lap.T @ pd_
+    )
+    r2 = _dy(radius) @ _dy(radius)
+    offs, diag = [], []
+    for t, c in zip(tau, ch, strict=True):
+        top = top - c.dwd.scale(_dy(t) @ r2)
+        offs.append(pd_ @ c.ewv)
+        diag.append(c.vwv.scale(_dy(t)))
+    if not offs:
+        return top
+    sizes = [o.num.shape[1] for o in offs]
+    rows = [[top] + offs]
+    for k, dk in enumerate(diag):
+        row = [offs[k].T]
+        for m, sz in enumerate(sizes):
+            row.append(dk if m == k else Dyadic(np.zeros((sizes[k], sz), dtype=object), 0))
+        rows.append(row)
+    return _blocks(rows)
+
+
+def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
+    """Γ of the offset S-procedure, exactly (see
+    :func:`ntc_design.certify.robust.offset_matrix`).
+
+    Parameters
+    ----------
+    lap : Dyadic
+        L_B exactly.
+    ch : list
+        The exact channels.
+    target : numpy.ndarray
+        1⊗θ.
+    r0 : Dyadic
+        u − L_B(1⊗θ) exactly (a column).
+    gamma : float
+        γ.
+    lam : sequence of float
+        λ_e.
+    y : numpy.ndarray
+        Finsler's multiplier.
+    radius : float
+        ρ.
+
+    Returns
+    -------
+    Dyadic
+
+    Raises
+    ------
+    InputError
+        Y is not Nd × (Nd + Σ rank W_e + 1).
+    """
+    n = lap.num.shape[0]
+    sizes = [c.vwv.num.shape[0] for c in ch]
+    k = n + sum(sizes) + 1
+    c_ = Dyadic.of(np.asarray(target, dtype=float).reshape(n, 1))
+    r2 = _dy(radius) @ _dy(radius)
+    zz = Dyadic(np.zeros((n, n), dtype=object), 0)
+    zc = Dyadic(np.zeros((n, 1), dtype=object), 0)
+    cc = _dy(gamma)
+    eye = Dyadic(np.eye(n, dtype=np.int64).astype(object), 0)
+    zz = zz - eye
+    diag = []
+    for le, c in zip(lam, ch, strict=True):
+        q = c.dwd.scale(r2 @ _dy(le))
+        qc = q @ c_
+        zz = zz - q
+        zc = zc - qc
+        cc = cc - c_.T @ qc
+        diag.append(c.vwv.scale(_dy(le)))
+    rows: list[list[Dyadic]] = []
+
+    def zeros(a: int, b: int) -> Dyadic:
+        return Dyadic(np.zeros((a, b), dtype=object), 0)
+
+    rows.append([zz] + [zeros(n, s) for s in sizes] + [zc])
+    for kk, dk in enumerate(diag):
+        rows.append(
+            [zeros(sizes[kk], n)]
+            + [dk if m == kk else zeros(sizes[kk], s) for m, s in enumerate(sizes)]
+            + [zeros(sizes[kk], 1)]
+        )
+    rows.append([zc.T] + [zeros(1, s) for s in sizes] + [cc])
+    g = _blocks(rows)
+    a = _blocks([[lap] + [c.ewv for c in ch] + [zeros(n, 1) - r0]])
+    yd = Dyadic.of(y)
+    if yd.num.shape != (n, k):
+        raise InputError(f"matrices.Y: expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}")
+    ay = a.T @ yd
+    return g + ay + ay.T
+
+
+# -- the kind ------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class _State:
+    dense: DenseContext
+    mode: DenseMode
+    radius: float
+    margin: float | None
+    alpha: float | None
+    multipliers: dict
+    y: Any
+    gamma: float | None
+    doc: dict
+
+
+def _floats(x: Any, n: int, where: str) -> np.ndarray:
+    if not isinstance(x, list) or len(x) != n:
+        raise InputError(f"{where}: expected a list of {n} numbers")
+    out = np.array([number(v, where) for v in x], dtype=float)
+    if np.any(out < 0):
+        raise InputError(f"{where}: multipliers must be >= 0")
+    return out
+
+
+class RobustKind(CertificateKind):
+    """Weights within a relative Loewner radius: margin, decay and offset bounds."""
+
+    name = "robust"
+    description = "weights known within a relative radius ρ: robust margin, decay and offset"
+    properties = (Property.ROBUST_MARGIN, Property.ROBUST_DECAY, Property.ROBUST_OFFSET)
+    required = frozenset({Property.ROBUST_MARGIN})
+    switching = False
+    method = "exact-rational"
+
+    def accepts(self, design: Any) -> bool:
+        return False  # issued on request (ntc robust), never in place of a nominal kind
+
+    def issue(self, design: Any, **options: Any) -> dict:
+        """The certificate of :func:`ntc_design.certify.robust.robust` at ``radius``.
+
+        Parameters
+        ----------
+        design : ProtocolDesign
+            The nominal design.
+        **options
+            ``radius`` (default 0.05), ``starts``, ``seed``.
+
+        Returns
+        -------
+        dict
+
+        Raises
+        ------
+        InputError
+            A bad radius, a network too large, or a nominal −L_B that is not Hurwitz.
+        """
+        if not isinstance(design, ProtocolDesign):
+            raise InputError("robust: expected the design of one fixed topology")
+        keep = {k: options[k] for k in ("radius", "starts", "seed") if k in options}
+        return robust_certificate(robust(design, **keep))
+
+    def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
+        return ()
+
+    def read(self, doc: dict, source: str) -> Reading:
+        base = read_dense(doc, source)
+        ctx: DenseContext = base.state
+        (mode,) = ctx.modes.values()
+        sub = need(doc, "subject", dict, source)
+        radius = check_radius(sub.get("radius"), f"{source}: subject.radius")
+        res = need(doc, "results", dict, source)
+        mats = need(doc, "matrices", dict, source)
+        mult = need(mats, "multipliers", dict, f"{source}: matrices")
+        m_lo = (res.get("margin") or {}).get("lower")
+        a_lo = (res.get("decay") or {}).get("lower")
+        margin = (
+            None if m_lo is None else check_radius(m_lo, f"{source}: results.margin.lower", False)
+        )
+        if margin is not None and margin > 1:
+            raise InputError(f"{source}: results.margin.lower: above 1")
+        alpha = None if a_lo is None else number(a_lo, f"{source}: results.decay.lower")
+        gam = (res.get("offset") or {}).get("gamma")
+        gamma = None if gam is None else number(gam, f"{source}: results.offset.gamma")
+        state = _State(ctx, mode, radius, margin, alpha, mult, mats.get("Y"), gamma, doc)
+        return Reading(base.modes, base.checks, state)
+
+    def claims(
+        self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
+    ) -> tuple[Claim, ...]:
+        st: _State = reading.state
+        (mode,) = subject.scheduled
+        return _claims(properties, mode, _Stated(st.radius, st.margin, st.alpha))
+
+    def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
+        st: _State = reading.state
+        src = st.dense.source
+        if claim.kind is ClaimKind.PD:
+            proof = PROVERS[ClaimKind.PD](claim, st.dense)
+            return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail}", claim)
+        mode = st.mode
+        if not mode.in_range or mode.exact is None:
+            return Check(claim.id, False, "L_B is out of range or too large for the exact test")
+        ch = _exact_channels(mode.top)
+        if claim.kind is ClaimKind.ROBUST_LMI:
+            p = st.dense.p(claim.p or "")
+            if p is None:
+                return Check(claim.id, False, f"matrices.P.{claim.p} is out of range", claim)
+            tau = _floats(
+                st.multipliers.get(claim.p), len(ch), f"{src}: matrices.multipliers.{claim.p}"
+            )
+            radius = float(claim.radius or 0.0)
+            proof = _pd(psi_exact(mode.exact, ch, p, tau, claim.alpha, radius))
+            return Check(
+                claim.id,
+                proof.holds,
+                f"{proof.method}: {proof.detail} (α = {claim.alpha!r}, ρ = {radius!r})",
+                claim,
+            )
+        # the offset: its premise (every L_B(A') within ρ invertible) is the margin's claim
+        premise = st.margin is not None and st.radius <= st.margin
+        if not premise:
+            return Check(
+                claim.id, False, "ρ is above the proven margin radius: x* may not exist", claim
+            )
+        if st.gamma is None or st.y is None:
+            return Check(claim.id, False, "results.offset.gamma or matrices.Y is missing", claim)
+        lam = _floats(
+            st.multipliers.get("robust_offset"),
+            len(ch),
+            f"{src}: matrices.multipliers.robust_offset",
+        )
+        y = np.asarray(st.y, dtype=float) if isinstance(st.y, list) else None
+        if y is None or y.ndim != 2 or not np.all(np.isfinite(y)):
+            raise InputError(f"{src}: matrices.Y: expected a matrix of finite numbers")
+        n = mode.top.nd
+        target = np.tile(mode.theta, mode.top.n)
+        u = _input_exact(mode)
+        r0 = u - mode.exact @ Dyadic.of(target.reshape(n, 1))
+        proof = _pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radius))
+        return Check(
+            claim.id, proof.holds, f"{proof.method}: {proof.detail} (ρ = {st.radius!r})", claim
+        )
+
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        rows = []
+        for key, label in (("decay", "robust decay rate"), ("offset", "consensus offset")):
+            b = results.get(key)
+            if b:
+                rows.append(
+                    ResultRow(
+                        label, f"[{number_text(b.get('lower'))}, {number_text(b.get('upper'))}]"
+                    )
+                )
+        m = results.get("margin")
+        if m:
+            rows.append(
+                ResultRow(
+                    "margin radius",
+                    f"[{number_text(m.get('lower'))}, {number_text(m.get('upper'))}]",
+                )
+            )
+        return tuple(rows)
+
+    def audit(
+        self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float
+    ) -> None:
+        st: _State = reading.state
+        mode = st.mode
+        audit.exact(("radius",), st.radius)
+        scale = float(np.max(np.abs(mode.lap))) if mode.in_range else 1.0
+        audit.recomputed(("nominal_decay",), abscissa(mode.lap), scale)
+        audit.informational(("seconds",))
+        if audit.has("margin", "lower"):
+            audit.exact(("margin", "lower"), float(st.margin or 0.0))
+        if audit.has("decay", "lower"):
+            audit.exact(("decay", "lower"), float(st.alpha or 0.0))
+        if audit.has("offset", "gamma"):
+            audit.exact(("offset", "gamma"), float(st.gamma or 0.0))
+            audit.recomputed(("offset", "upper"), math.sqrt(max(st.gamma or 0.0, 0.0)), 0.0)
+        reals = doc.get("realizations") or {}
+        if not isinstance(reals, dict):
+            audit.fail("realizations: expected an object")
+            return
+        for key, path in (("decay", ("decay", "upper")), ("offset", ("offset", "lower"))):
+            if audit.has(*path):
+                got = _attained(reals.get(key), mode, st.radius, key)
+                if isinstance(got, str):
+                    audit.fail(f"realizations.{key}: {got}")
+                    audit.informational(path)
+                else:
+                    audit.recomputed(path, got, scale if key == "decay" else 0.0)
+        if audit.has("margin", "upper"):
+            r = reals.get("margin")
+            rad = r.get("radius") if isinstance(r, dict) else None
+            try:
+                rho = check_radius(rad, "realizations.margin.radius", below_one=False)
+            except InputError as exc:
+                audit.fail(str(exc))
+                audit.informational(("margin", "upper"))
+                return
+            got = _attained(r, mode, rho, "decay")
+            if isinstance(got, str):
+                audit.fail(f"realizations.margin: {got}")
+            elif got > 1e-12 * scale:
+                audit.fail(
+                    f"realizations.margin: min Re λ = {got:.3g} > 0, it is not destabilising"
+                )
+            audit.recomputed(("margin", "upper"), rho, 0.0)
+
+
+def _input_exact(mode: DenseMode) -> Dyadic:
+    """u = δ·blockdiag(B_i)·(1⊗x0) exactly, x0 = k1·θ as the design rounds it."""
+    top, d = mode.top, mode.top.dim
+    k1 = 1.0 + 2.0 / mode.delta
+    x0 = k1 * mode.theta
+    col = np.zeros((top.nd, 1), dtype=object)
+    dl = Dyadic.of(mode.delta)
+    parts = []
+    for i, b in mode.b.items():
+        v = Dyadic.of(np.asarray(b, dtype=float)).scale(dl) @ Dyadic.of(x0.reshape(d, 1))
+        parts.append((i, v))
+    e = max([v.exp for _, v in parts] + [0])
+    for i, v in parts:
+        col[i * d : (i + 1) * d] += v.num * (1 << (e - v.exp))
+    return Dyadic(col, e)
+
+
+def _attained(real: Any, mode: DenseMode, radius: float, what: str) -> float | str:
+    """What a stored realisation attains (min Re λ, or the offset), after checking that it
+    lists every uncertain edge once, in the set of this radius; or why it is refused."""
+    if not isinstance(real, dict) or not isinstance(real.get("edges"), list):
+        return "missing, or not an object with edges"
+    top = mode.top
+    ed = uncertain_edges(top)
+    if len(real["edges"]) != ed.m:
+        return f"expected {ed.m} edges"
+    w = dict(top.weights)
+    d = top.dim
+    for k, e in enumerate(real["edges"]):
+        if not isinstance(e, dict):
+            return f"edge {k}: expected an object"
+        to, fr = e.get("to"), e.get("from")
+        if not isinstance(to, (int, str)) or not isinstance(fr, (int, str)):
+            return f"edge {k}: from and to must be agent labels"
+        try:
+            i, j = top.index(to), top.index(fr)
+        except InputError:
+            return f"edge {k}: unknown agent"
+        if (i, j) != (int(ed.dst[k]), int(ed.src[k])):
+            return f"edge {k}: expected the edge {top.labels[int(ed.src[k])]}->{top.labels[int(ed.dst[k])]}"
+        a = np.asarray(e.get("weight"), dtype=object)
+        if a.shape != (d, d):
+            return f"edge {k}: weight is not {d}×{d}"
+        try:
+            a = a.astype(float)
+        except (TypeError, ValueError):
+            return f"edge {k}: weight is not numeric"
+        if not np.all(np.isfinite(a)) or not np.array_equal(a, a.T):
+            return f"edge {k}: weight is not finite and symmetric"
+        wa = ed.s[k] * a
+        tol = REALISATION_RTOL * max(float(np.max(np.abs(ed.w[k]))), 1e-300)
+        if (
+            np.linalg.eigvalsh(wa - (1 - radius) * ed.w[k])[0] < -tol
+            or np.linalg.eigvalsh((1 + radius) * ed.w[k] - wa)[0] < -tol
+        ):
+            return f"edge {k}: weight outside the set of radius {radius!r}"
+        w[(i, j)] = a
+    dmat = coupling_matrix(top, mode.b)
+    lap_r = _laplacian(top, w) + mode.delta * dmat
+    if what == "decay":
+        return abscissa(lap_r)
+    x0 = (1.0 + 2.0 / mode.delta) * mode.theta
+    u = mode.delta * dmat @ np.tile(x0, top.n)
+    try:
+        xs = np.linalg.solve(lap_r, u)
+    except np.linalg.LinAlgError:
+        return "L_B of the realisation is singular"
+    return float(np.linalg.norm(xs - np.tile(mode.theta, top.n)))
+
+
+def _laplacian(top: Topology, w: dict) -> np.ndarray:
+    """The signed Laplacian of the weights ``w`` on the topology's agents (dense)."""
+    d, n = top.dim, top.nd
+    lap = np.zeros((n, n))
+    for (i, j), a in w.items():
+        lam = np.linalg.eigvalsh(a)
+        s = 1.0 if lam[-1] > 0 else (-1.0 if lam[0] < 0 else 0.0)
+        lap[i * d : (i + 1) * d, j * d : (j + 1) * d] -= a
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += s * a
+    return lap
+
+
+__all__ = ["RobustKind", "gamma_exact", "psi_exact", "robust_certificate"]

@@ -1,0 +1,942 @@
+"""Robust certification: Lemma 1's protocol when every weight is known only within a
+relative Loewner interval.
+
+**The set.** For a radius ρ ∈ [0, 1], a realisation A' keeps each weight's sign and lies in
+
+    (1 − ρ)|A_ij| ⪯ |A'_ij| ⪯ (1 + ρ)|A_ij|,
+
+equivalently ``|A'_ij| = F(I + E)F`` with ``F = |A_ij|^{1/2}``, E symmetric, ‖E‖₂ <= ρ (so
+each weight keeps its sign and its kernel). The protocol (informed agents, B_i, δ, x0) stays
+at its nominal design; only L changes, ``L_B(A') = L_B + Σ_e E_i Δ_e D_eᵀ`` with
+``Δ_e = |A'_e| − |A_e|``, ``E_i = e_i ⊗ I_d`` and ``D_e = E_i − s_e E_j`` for the edge
+e = (j → i) of sign s_e.
+
+**Three brackets**, each a certified end and a realisation attaining the other:
+
+* *decay* α: every realisation has ``min Re λ(L_B(A')) >= α_lower`` (quadratic stability
+  with one S-procedure multiplier per edge, below); a hill-climbed realisation attains
+  ``α_upper``;
+* *consensus offset* ``‖x*(A') − 1⊗θ‖₂``: at most ``offset_upper`` for every realisation
+  (an S-procedure bound on the equilibrium equation, below); a hill-climbed realisation
+  attains ``offset_lower``. Only antagonistic weights move x*: ``D_eᵀ(1⊗θ) = (1 − s_e)θ``;
+* *margin*: −L_B(A') Hurwitz for every realisation of radius ρ_lower (the decay LMI at
+  α = 0); a realisation of radius ρ_upper is not Hurwitz (hill-climbed, or every weight
+  vanishing at ρ = 1).
+
+**Channels without square roots** (so that ``ntc verify`` re-checks them exactly). For an
+edge with ``W = |A_e|``, ``w = Δ_e v`` lies in range(W) and ``w = W y`` with
+``yᵀ W y = wᵀ W⁺ w <= ρ² vᵀ W v`` (as ``E² ⪯ ρ² I``). ``y`` is written ``V η`` with V the
+pivot columns of W (an exact basis of its range). Then
+
+* decay: ``Ψ = [[M − Σ τ_e ρ² D_e W_e D_eᵀ, P E_i W_e V_e], [·ᵀ, τ_e V_eᵀ W_e V_e]] ≻ 0``
+  with ``M = P(L_B − αI) + (L_B − αI)ᵀP`` and P ≻ 0 proves ``min Re λ(L_B(A')) > α``
+  for every realisation (S-procedure; Boyd, El Ghaoui, Feron & Balakrishnan, *Linear
+  Matrix Inequalities in System and Control Theory*, SIAM 1994, §2.6.3 and §5.1);
+* offset: with ``ξ = (z, η, 1)`` and z = x* − 1⊗θ, every realisation gives
+  ``L_B z + Σ_e E_i W_e V_e η_e = 0`` and ``η_eᵀ V_eᵀ W_e V_e η_e <= ρ² ‖D_eᵀ(z + 1⊗θ)‖²_{W_e}``;
+  ``Γ = γ·e eᵀ − zzᵀ-form − Σ λ_e g_e + sym(Aᵀ Y) ≻ 0`` (Finsler's lemma for the equation,
+  λ_e >= 0) proves ``‖z‖² <= γ``, given that every L_B(A') is invertible (the decay
+  bracket's certified end at the same ρ).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from ..design import ProtocolDesign
+from ..errors import InputError
+from ..linalg import require_dense
+from ..model import Topology
+from ..rows import Table
+
+#: Robust LMIs are solved up to this Nd (dense P; the S-procedure adds Σ rank(W_e) rows).
+ROBUST_MAX_ND = 80  # = rigorous.exact.EXACT_MAX_N: ntc verify re-checks exactly
+DEFAULT_RADIUS = 0.05
+SHRINK = 1.0 - 1e-9  # realisations are drawn this far inside the set (rounding)
+
+
+# -- the uncertain edges ---------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class UncertainEdges:
+    """The listed non-zero weights as the robust bounds use them: edge e = (src → dst),
+    sign ``s``, ``W = |A_e|`` and ``V`` (the pivot columns of W, a basis of its range)."""
+
+    dst: np.ndarray
+    src: np.ndarray
+    s: np.ndarray
+    w: np.ndarray  # (m, d, d)
+    pivots: tuple[tuple[int, ...], ...]
+
+    @property
+    def m(self) -> int:
+        """The number of uncertain edges."""
+        return int(self.dst.size)
+
+    def basis(self, e: int) -> np.ndarray:
+        """V_e: the pivot columns of W_e (d × rank).
+
+        Parameters
+        ----------
+        e : int
+            The edge.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        return self.w[e][:, list(self.pivots[e])]
+
+
+def pivot_columns(w: np.ndarray) -> tuple[int, ...]:
+    """The pivot columns of a matrix of doubles, found in exact rational arithmetic: a
+    basis of its column space chosen among its own columns (so the basis is exact).
+
+    Parameters
+    ----------
+    w : numpy.ndarray
+        A d×d matrix of doubles.
+
+    Returns
+    -------
+    tuple of int
+        Column indices, ascending.
+
+    Examples
+    --------
+    >>> pivot_columns(np.diag([1.0, 0.0, 2.0]))
+    (0, 2)
+    """
+    rows = [[Fraction(float(x)) for x in r] for r in np.asarray(w, dtype=float)]
+    n_rows, n_cols = len(rows), len(rows[0]) if rows else 0
+    piv: list[int] = []
+    r = 0
+    for c in range(n_cols):
+        k = next((i for i in range(r, n_rows) if rows[i][c] != 0), None)
+        if k is None:
+            continue
+        rows[r], rows[k] = rows[k], rows[r]
+        for i in range(r + 1, n_rows):
+            f = rows[i][c] / rows[r][c]
+            if f:
+                rows[i] = [a - f * b for a, b in zip(rows[i], rows[r], strict=True)]
+        piv.append(c)
+        r += 1
+    return tuple(piv)
+
+
+def uncertain_edges(top: Topology) -> UncertainEdges:
+    """The topology's non-zero weights as :class:`UncertainEdges` (zero weights carry no
+    uncertainty: their interval is {0}), ordered by (receiving agent, sending agent): the
+    order of a certificate's multipliers and realisations.
+
+    Parameters
+    ----------
+    top : Topology
+        The nominal topology.
+
+    Returns
+    -------
+    UncertainEdges
+    """
+    ea = top._arrays
+    keep = np.flatnonzero(ea.sign != 0)
+    keep = keep[np.lexsort((ea.cols[keep], ea.rows[keep]))]  # canonical: by (to, from)
+    w = ea.abs_w[keep]
+    return UncertainEdges(
+        ea.rows[keep].astype(np.int64),
+        ea.cols[keep].astype(np.int64),
+        ea.sign[keep].astype(float),
+        w,
+        tuple(pivot_columns(x) for x in w),
+    )
+
+
+def check_radius(radius: Any, field_name: str = "--radius", below_one: bool = True) -> float:
+    """A radius ρ: finite, >= 0, and below 1 for the decay and offset questions (at ρ = 1
+    a weight may vanish and the set holds disconnected networks).
+
+    Parameters
+    ----------
+    radius : Any
+        The value given.
+    field_name : str, optional
+        Its name in messages.
+    below_one : bool, optional
+        Refuse ρ >= 1.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        One line naming the field.
+    """
+    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.floating, np.integer)):
+        raise InputError(f"{field_name}: expected a number, got {radius!r}")
+    r = float(radius)
+    if not math.isfinite(r) or r < 0:
+        raise InputError(f"{field_name}: the radius must be a finite number >= 0, got {radius!r}")
+    if below_one and r >= 1:
+        raise InputError(
+            f"{field_name}: the radius must be below 1 for the decay and offset brackets "
+            f"(at 1 a weight may vanish), got {r:g}"
+        )
+    return r
+
+
+# -- realisations ----------------------------------------------------------------------
+
+
+def _sqrtm_psd(w: np.ndarray) -> np.ndarray:
+    lam, q = np.linalg.eigh(0.5 * (w + w.T))
+    return (q * np.sqrt(np.clip(lam, 0, None))) @ q.T
+
+
+def _project(e: np.ndarray, radius: float) -> np.ndarray:
+    """The nearest symmetric matrix with spectral norm <= radius (eigenvalues clipped)."""
+    lam, q = np.linalg.eigh(0.5 * (e + e.T))
+    return (q * np.clip(lam, -radius, radius)) @ q.T
+
+
+@dataclass(frozen=True, eq=False)
+class _Problem:
+    """The nominal data every bound and search uses (dense)."""
+
+    design: ProtocolDesign
+    edges: UncertainEdges
+    lap_b: np.ndarray
+    u: np.ndarray
+    target: np.ndarray  # 1⊗θ
+    f: np.ndarray  # (m, d, d): W_e^{1/2}
+
+    @property
+    def r0(self) -> np.ndarray:
+        """u − L_B(1⊗θ): zero in exact arithmetic up to the rounding of x0 = k1·θ."""
+        return self.u - self.lap_b @ self.target
+
+    @property
+    def n(self) -> int:
+        return int(self.lap_b.shape[0])
+
+    @property
+    def d(self) -> int:
+        return int(self.design.topology.dim)
+
+    def delta_l(self, deltas: np.ndarray) -> np.ndarray:
+        """Σ_e E_i Δ_e D_eᵀ for the weight changes Δ_e (m, d, d)."""
+        d, out = self.d, np.zeros((self.n, self.n))
+        ed = self.edges
+        for k in range(ed.m):
+            i, j = int(ed.dst[k]) * d, int(ed.src[k]) * d
+            out[i : i + d, i : i + d] += deltas[k]
+            out[i : i + d, j : j + d] -= ed.s[k] * deltas[k]
+        return out
+
+    def deltas(self, es: np.ndarray) -> np.ndarray:
+        return np.einsum("kab,kbc,kcd->kad", self.f, es, self.f)
+
+    def lap(self, es: np.ndarray) -> np.ndarray:
+        return self.lap_b + self.delta_l(self.deltas(es))
+
+    def weights(self, es: np.ndarray) -> np.ndarray:
+        """The realised A'_e = s_e (W_e + F E F), symmetrised."""
+        a = self.edges.w + self.deltas(es)
+        a = 0.5 * (a + np.transpose(a, (0, 2, 1)))
+        return self.edges.s[:, None, None] * a
+
+
+def _problem(des: ProtocolDesign) -> _Problem:
+    top = des.topology
+    require_dense(top.nd, "robust brackets")
+    ed = uncertain_edges(top)
+    lap_b = des.grounded_laplacian()
+    return _Problem(
+        des,
+        ed,
+        lap_b,
+        des.input_vector(),
+        np.tile(des.theta, top.n),
+        np.array([_sqrtm_psd(w) for w in ed.w]).reshape(ed.w.shape),
+    )
+
+
+def abscissa(lap: np.ndarray) -> float:
+    """min Re λ(L_B(A')): the decay rate of ε̇ = −L_B(A')ε (> 0 iff −L_B(A') is Hurwitz).
+
+    Parameters
+    ----------
+    lap : numpy.ndarray
+        L_B(A').
+
+    Returns
+    -------
+    float
+    """
+    return float(np.min(np.linalg.eigvals(lap).real))
+
+
+def _offset(p: _Problem, lap: np.ndarray) -> float:
+    try:
+        x = np.linalg.solve(lap, p.u)
+    except np.linalg.LinAlgError:
+        return math.inf
+    return float(np.linalg.norm(x - p.target))
+
+
+def _grad_decay(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
+    """min Re λ and its gradient in each E_e (symmetric), from the eigenvector pair."""
+    import scipy.linalg as sla
+
+    lap = p.lap(es)
+    lam, vl, vr = sla.eig(lap, left=True, right=True)
+    k = int(np.argmin(lam.real))
+    x, y = vr[:, k], vl[:, k]
+    s = np.vdot(y, x)  # yᴴ x
+    d, ed, g = p.d, p.edges, np.zeros_like(es)
+    for e in range(ed.m):
+        i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
+        dx = x[i : i + d] - ed.s[e] * x[j : j + d]
+        kk = p.f[e] @ np.outer(dx, np.conj(y[i : i + d])) @ p.f[e] / s
+        kk = np.real(kk).T  # d Re λ = tr(dE · Re K) -> gradient Re Kᵀ
+        g[e] = 0.5 * (kk + kk.T)
+    return float(lam[k].real), g
+
+
+def _grad_offset(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
+    """½‖x* − 1⊗θ‖² and its gradient in each E_e."""
+    lap = p.lap(es)
+    xs = np.linalg.solve(lap, p.u)
+    z = xs - p.target
+    mu = np.linalg.solve(lap.T, z)
+    d, ed, g = p.d, p.edges, np.zeros_like(es)
+    for e in range(ed.m):
+        i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
+        dx = xs[i : i + d] - ed.s[e] * xs[j : j + d]
+        kk = -(p.f[e] @ np.outer(dx, mu[i : i + d]) @ p.f[e]).T
+        g[e] = 0.5 * (kk + kk.T)
+    return 0.5 * float(z @ z), g
+
+
+def _climb(p: _Problem, radius: float, objective: str, starts: int, seed: int) -> np.ndarray:
+    """Projected gradient search for the worst E (decay: lowest abscissa; offset: largest
+    offset), from the nominal point, ± vertices and random starts; the best E found."""
+    m, d = p.edges.m, p.d
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    sign = -1.0 if objective == "decay" else 1.0  # maximise sign·value
+    fn = _grad_decay if objective == "decay" else _grad_offset
+
+    def value(es: np.ndarray) -> float:
+        lap = p.lap(es)
+        return -abscissa(lap) if objective == "decay" else 0.5 * _offset(p, lap) ** 2
+
+    inits = [np.zeros((m, d, d))]
+    for k in range(starts):
+        if k < 2:
+            inits.append(((-1) ** k) * radius * np.broadcast_to(np.eye(d), (m, d, d)).copy())
+        else:
+            r = rng.normal(size=(m, d, d))
+            inits.append(np.array([_project(radius * (x + x.T), radius) for x in r]))
+    best, best_v = inits[0], -math.inf
+    for es in inits:
+        v = value(es)
+        step = radius
+        for _ in range(60):
+            try:
+                _, g = fn(p, es)
+            except (np.linalg.LinAlgError, ValueError):
+                break
+            gn = float(np.sqrt(np.sum(g * g)))
+            if not math.isfinite(gn) or gn == 0:
+                break
+            moved = False
+            while step > 1e-6 * max(radius, 1e-12):
+                trial = np.array([_project(x, radius) for x in es + sign * step * g / gn])
+                tv = value(trial)
+                if tv > v + 1e-13 * max(1.0, abs(v)):
+                    es, v, moved = trial, tv, True
+                    step *= 1.5
+                    break
+                step *= 0.5
+            if not moved:
+                break
+        if v > best_v:
+            best, best_v = es, v
+    return best * SHRINK
+
+
+@dataclass(frozen=True)
+class Realisation:
+    """A point of the uncertainty set: its radius, the realised weights (edge order of
+    :class:`UncertainEdges`) and what it attains."""
+
+    radius: float
+    weights: np.ndarray
+    value: float
+
+    def edges(self, top: Topology, edges: UncertainEdges) -> list[dict]:
+        """The realisation as topology-file edges ``{from, to, weight}``.
+
+        Parameters
+        ----------
+        top : Topology
+            The nominal topology (labels).
+        edges : UncertainEdges
+            Its uncertain edges.
+
+        Returns
+        -------
+        list of dict
+        """
+        lab = top.labels
+        return [
+            {"from": lab[int(j)], "to": lab[int(i)], "weight": a.tolist()}
+            for i, j, a in zip(edges.dst, edges.src, self.weights, strict=True)
+        ]
+
+
+def realised_topology(top: Topology, edges: UncertainEdges, weights: np.ndarray) -> Topology:
+    """The nominal topology with the uncertain edges' weights replaced.
+
+    Parameters
+    ----------
+    top : Topology
+        The nominal topology.
+    edges : UncertainEdges
+        Its uncertain edges.
+    weights : numpy.ndarray
+        (m, d, d) realised weights.
+
+    Returns
+    -------
+    Topology
+    """
+    w = dict(top.weights)
+    for i, j, a in zip(edges.dst, edges.src, weights, strict=True):
+        w[(int(i), int(j))] = np.asarray(a, dtype=float)
+    return Topology(top.labels, top.dim, w, name=top.name)
+
+
+# -- the LMIs ------------------------------------------------------------------------------
+
+
+def _cvx():
+    import cvxpy as cp  # heavy: only the robust LMIs need it here
+
+    return cp
+
+
+def _solve(prob) -> bool:
+    cp = _cvx()
+    try:
+        prob.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError:
+        return False
+    return prob.status in ("optimal", "optimal_inaccurate")
+
+
+def _channels(p: _Problem) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per edge: (E_i W V as Nd×r, D W Dᵀ as Nd×Nd, Vᵀ W V as r×r)."""
+    d, n, ed = p.d, p.n, p.edges
+    out = []
+    for e in range(ed.m):
+        i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
+        w, v = ed.w[e], ed.basis(e)
+        ewv = np.zeros((n, v.shape[1]))
+        ewv[i : i + d] = w @ v
+        dm = np.zeros((n, d))
+        dm[i : i + d] += np.eye(d)
+        dm[j : j + d] -= ed.s[e] * np.eye(d)
+        out.append((ewv, dm @ w @ dm.T, v.T @ w @ v))
+    return out
+
+
+def decay_matrix(
+    lap_b: np.ndarray,
+    channels: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+    p: np.ndarray,
+    tau: np.ndarray,
+    alpha: float,
+    radius: float,
+) -> np.ndarray:
+    """Ψ of the decay S-procedure (module docstring) in floating point.
+
+    Parameters
+    ----------
+    lap_b : numpy.ndarray
+        Nominal L_B.
+    channels : list
+        Per edge (E_i W V, D W Dᵀ, Vᵀ W V).
+    p : numpy.ndarray
+        P.
+    tau : numpy.ndarray
+        The multipliers τ_e.
+    alpha : float
+        The rate α.
+    radius : float
+        ρ.
+
+    Returns
+    -------
+    numpy.ndarray
+        Ψ, symmetric.
+    """
+    n = lap_b.shape[0]
+    sh = lap_b - alpha * np.eye(n)
+    top = p @ sh + sh.T @ p
+    cols, diag = [], []
+    for t, (ewv, dwd, vwv) in zip(tau, channels, strict=True):
+        top = top - t * radius**2 * dwd
+        cols.append(p @ ewv)
+        diag.append(t * vwv)
+    import scipy.linalg as sla
+
+    off = np.hstack(cols) if cols else np.zeros((n, 0))
+    return np.block([[top, off], [off.T, sla.block_diag(*diag) if diag else np.zeros((0, 0))]])
+
+
+class _DecayLMI:
+    """The decay LMI built once with α and ρ² as parameters (cvxpy DPP): each bisection
+    step only re-solves."""
+
+    def __init__(self, p: _Problem, ch) -> None:
+        cp = _cvx()
+        self.p, self.ch = p, ch
+        n = p.n
+        self.pv = cp.Variable((n, n), symmetric=True)
+        self.tv = cp.Variable(len(ch), nonneg=True)
+        self.alpha = cp.Parameter(nonneg=True)
+        self.rho2 = cp.Parameter(nonneg=True)
+        top = self.pv @ p.lap_b + p.lap_b.T @ self.pv - 2 * self.alpha * self.pv
+        rows_off, diag = [], []
+        r = sum(c[0].shape[1] for c in ch)
+        col = 0
+        for k, (ewv, dwd, vwv) in enumerate(ch):
+            top = top - self.rho2 * (self.tv[k] * dwd)
+            rows_off.append(self.pv @ ewv)
+            m = vwv.shape[0]
+            row = [np.zeros((m, col))] if col else []
+            row.append(self.tv[k] * vwv)
+            if r - col - m:
+                row.append(np.zeros((m, r - col - m)))
+            diag.append(cp.hstack(row) if len(row) > 1 else row[0])
+            col += m
+        if r:
+            off = cp.hstack(rows_off)
+            psi = cp.bmat([[top, off], [off.T, cp.vstack(diag)]])
+        else:
+            psi = top
+        self.prob = cp.Problem(
+            cp.Minimize(0),
+            [self.pv >> np.eye(n), 0.5 * (psi + psi.T) >> 1e-7 * np.eye(n + r)],
+        )
+
+    def __call__(self, alpha: float, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """P, τ with Ψ ≻ 0 (checked in floats with a strict margin), or None."""
+        self.alpha.value, self.rho2.value = alpha, radius**2
+        if not _solve(self.prob) or self.pv.value is None:
+            return None
+        pm = 0.5 * (self.pv.value + self.pv.value.T)
+        tau = np.maximum(np.asarray(self.tv.value, dtype=float).reshape(-1), 0.0)
+        psi_f = decay_matrix(self.p.lap_b, self.ch, pm, tau, alpha, radius)
+        if np.linalg.eigvalsh(0.5 * (psi_f + psi_f.T))[0] <= 1e-10 * np.linalg.norm(psi_f, 2):
+            return None
+        return pm, tau
+
+
+def offset_matrix(
+    lap_b: np.ndarray,
+    channels: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+    target: np.ndarray,
+    r0: np.ndarray,
+    gamma: float,
+    lam: np.ndarray,
+    y: np.ndarray,
+    radius: float,
+) -> np.ndarray:
+    """Γ of the offset S-procedure (module docstring), floating point, on ξ = (z, η, 1).
+
+    Parameters
+    ----------
+    lap_b : numpy.ndarray
+        Nominal L_B.
+    channels : list
+        Per edge (E_i W V, D W Dᵀ, Vᵀ W V).
+    target : numpy.ndarray
+        1⊗θ.
+    r0 : numpy.ndarray
+        u − L_B(1⊗θ) (the equation is L_B z + Σ E_i W_e V_e η_e = r0).
+    gamma : float
+        The bound γ on ‖z‖².
+    lam : numpy.ndarray
+        The multipliers λ_e.
+    y : numpy.ndarray
+        Finsler's multiplier (Nd × dim ξ).
+    radius : float
+        ρ.
+
+    Returns
+    -------
+    numpy.ndarray
+        Γ, symmetric.
+    """
+    n = lap_b.shape[0]
+    r = sum(c[0].shape[1] for c in channels)
+    k = n + r + 1
+    g = np.zeros((k, k))
+    g[-1, -1] = gamma
+    g[:n, :n] -= np.eye(n)
+    col = n
+    for le, (_ewv, dwd, vwv) in zip(lam, channels, strict=True):
+        # −λ(ρ² (z+c)ᵀ DWDᵀ (z+c) − ηᵀ VᵀWV η)
+        q = radius**2 * dwd
+        qc = q @ target
+        g[:n, :n] -= le * q
+        g[:n, -1] -= le * qc
+        g[-1, :n] -= le * qc
+        g[-1, -1] -= le * float(target @ qc)
+        m = vwv.shape[0]
+        g[col : col + m, col : col + m] += le * vwv
+        col += m
+    a = np.hstack([lap_b] + [c[0] for c in channels] + [-r0.reshape(n, 1)])
+    g += a.T @ y + y.T @ a
+    return g
+
+
+def _offset_sdp(p: _Problem, ch, radius: float) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """γ, λ, Y with Γ ≻ 0 (floats, a strict margin), or None."""
+    cp = _cvx()
+    n = p.n
+    r = sum(c[0].shape[1] for c in ch)
+    k = n + r + 1
+    gam = cp.Variable()
+    lam = cp.Variable(len(ch), nonneg=True)
+    y = cp.Variable((n, k))
+    a = np.hstack([p.lap_b] + [c[0] for c in ch] + [-p.r0.reshape(n, 1)])
+    e_last = np.zeros((k, 1))
+    e_last[-1, 0] = 1.0
+    sel_z = np.zeros((n, k))
+    sel_z[:, :n] = np.eye(n)
+    expr = gam * (e_last @ e_last.T) - sel_z.T @ sel_z
+    col = n
+    for kk, (_ewv, dwd, vwv) in enumerate(ch):
+        q = radius**2 * dwd
+        # the quadratic form of ρ²(z+c)ᵀDWDᵀ(z+c) on ξ = (z, η, 1)
+        qa = np.zeros((k, k))
+        qa[:n, :n] = q
+        qc = q @ p.target
+        qa[:n, -1] = qc
+        qa[-1, :n] = qc
+        qa[-1, -1] = float(p.target @ qc)
+        m = vwv.shape[0]
+        qa[col : col + m, col : col + m] = -vwv
+        expr = expr - lam[kk] * qa
+        col += m
+    expr = expr + a.T @ y + y.T @ a
+    scale = 1.0 + float(np.linalg.norm(p.target)) ** 2
+    prob = cp.Problem(cp.Minimize(gam), [0.5 * (expr + expr.T) >> 1e-9 * scale * np.eye(k)])
+    if not _solve(prob) or gam.value is None:
+        return None
+    lam_v = np.maximum(np.asarray(lam.value, dtype=float).reshape(-1), 0.0)
+    y_v = np.asarray(y.value, dtype=float)
+    g0 = float(gam.value)
+    for bump in (1e-7, 1e-5, 1e-3, 1e-2):  # back off until the float test is strict
+        gv = g0 * (1 + bump) + bump * 1e-6 * scale
+        gm = offset_matrix(p.lap_b, ch, p.target, p.r0, gv, lam_v, y_v, radius)
+        if np.linalg.eigvalsh(0.5 * (gm + gm.T))[0] > 1e-12 * np.linalg.norm(gm, 2):
+            return gv, lam_v, y_v
+    return None
+
+
+# -- the brackets ----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Bracket:
+    """A certified end and a realisation attaining the other end (``lower <= upper``)."""
+
+    lower: float | None
+    upper: float | None
+    realisation: Realisation | None
+    certified: str  # "lower" or "upper": which end is proven
+    method: str
+
+
+@dataclass(frozen=True)
+class RobustReport:
+    """The three brackets at one radius, with the matrices that prove the certified ends
+    (``lmi``: P, τ for the decay and margin LMIs; γ, λ, Y for the offset)."""
+
+    design: ProtocolDesign
+    radius: float
+    nominal_decay: float
+    decay: Bracket
+    offset: Bracket
+    margin: Bracket
+    proofs: dict = field(repr=False)
+    seconds: float = 0.0
+
+    def table(self, title: str | None = None) -> Table:
+        """The three brackets as the table every face shows.
+
+        Parameters
+        ----------
+        title : str, optional
+            The table's title.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+
+        def num(x: float | None) -> str:
+            return "—" if x is None else f"{x:.6g}"
+
+        top = self.design.topology
+        rows = [
+            ("decay rate min Re λ(L_B(A'))", num(self.decay.lower), num(self.decay.upper),
+             "lower proven (LMI); upper attained by a realisation"),
+            ("consensus offset ‖x* − 1⊗θ‖₂", num(self.offset.lower), num(self.offset.upper),
+             "upper proven (S-procedure); lower attained by a realisation"),
+            ("margin radius ρ", num(self.margin.lower), num(self.margin.upper),
+             "lower proven (LMI at α = 0); upper: a destabilising realisation"),
+        ]  # fmt: skip
+        antag = int(np.sum(uncertain_edges(top).s < 0))
+        notes = (
+            f"nominal decay rate {self.nominal_decay:.6g}; the protocol (informed agents, B_i, "
+            f"δ = {self.design.delta:.6g}, x0) is kept at its nominal design",
+            f"only the {antag} antagonistic weight(s) move the consensus point "
+            "(D_eᵀ(1⊗θ) = 0 on cooperative edges)",
+        )
+        return Table.build(
+            title or f"{top.name or 'topology'}: robust brackets at ρ = {self.radius:g}",
+            ("bracket", "lower", "upper", "which end is proven"),
+            rows,
+            notes,
+        )
+
+    def to_dict(self) -> dict:
+        """The report in the ``--json`` form: radius, decay, offset and margin, each
+        realisation as topology-file edges.
+
+        Returns
+        -------
+        dict
+        """
+        top = self.design.topology
+        ed = uncertain_edges(top)
+
+        def real(b: Bracket) -> list[dict] | None:
+            return None if b.realisation is None else b.realisation.edges(top, ed)
+
+        return {
+            "radius": self.radius,
+            "nominal_decay": self.nominal_decay,
+            "decay": {
+                "lower": self.decay.lower,
+                "upper": self.decay.upper,
+                "realization": real(self.decay),
+                "method": self.decay.method,
+            },
+            "offset": {
+                "lower": self.offset.lower,
+                "upper": self.offset.upper,
+                "realization": real(self.offset),
+                "method": self.offset.method,
+            },
+            "margin": {
+                "lower": self.margin.lower,
+                "upper": self.margin.upper,
+                "destabilizing": real(self.margin),
+                "realization_radius": None
+                if self.margin.realisation is None
+                else self.margin.realisation.radius,
+                "method": self.margin.method,
+            },
+        }
+
+
+#: Tried from the top: the first fraction of the attained end whose LMI verifies, then a
+#: few bisection steps between it and the last fraction that failed (few solves when the
+#: bracket is tight, as it usually is).
+FRACTIONS = (0.995, 0.97, 0.9, 0.75, 0.5, 0.25, 0.0)
+
+
+def _descend(test, top: float, steps: int, floor: float = 0.0):
+    """The largest value in [floor, top] found to pass ``test`` (None: not even floor)."""
+    hi = top
+    for f in FRACTIONS:
+        v = floor + f * (top - floor)
+        got = test(v)
+        if got is not None:
+            lo, best = v, got
+            break
+        hi = v
+    else:
+        return floor, None
+    for _ in range(steps if hi > lo else 0):
+        mid = 0.5 * (lo + hi)
+        got = test(mid)
+        if got is None:
+            hi = mid
+        else:
+            lo, best = mid, got
+    return lo, best
+
+
+def robust(
+    design: ProtocolDesign,
+    radius: float = DEFAULT_RADIUS,
+    starts: int = 6,
+    seed: int = 0,
+    bisection_steps: int = 3,
+) -> RobustReport:
+    """The decay, offset and margin brackets of a Lemma 1 design under relative weight
+    uncertainty of radius ρ (see the module docstring for the set and the methods).
+
+    Parameters
+    ----------
+    design : ProtocolDesign
+        The nominal design (its protocol is kept for every realisation).
+    radius : float, optional
+        ρ in [0, 1).
+    starts : int, optional
+        Random starts of the realisation searches (besides the nominal point and ±ρI).
+    seed : int, optional
+        Their seed (SeedSequence).
+    bisection_steps : int, optional
+        Bisection steps on α and on ρ after the first fraction of the attained end that
+        verifies (:data:`FRACTIONS`).
+
+    Returns
+    -------
+    RobustReport
+
+    Raises
+    ------
+    InputError
+        A bad radius, a network above :data:`ROBUST_MAX_ND`, or a nominal −L_B that is
+        not Hurwitz.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> d = nd.design(nd.load(nd.example_path("g1.yaml")), [1, 2, -1], thresholds=False)
+    >>> rep = robust(d, 0.05, starts=0, bisection_steps=6)
+    >>> rep.decay.lower <= rep.decay.upper <= rep.nominal_decay + 1e-9
+    True
+    """
+    t0 = time.perf_counter()
+    rho = check_radius(radius)
+    nd_ = design.topology.nd
+    if nd_ > ROBUST_MAX_ND:
+        raise InputError(
+            f"robust: Nd = {nd_} is above {ROBUST_MAX_ND}, the size of the dense robust LMIs "
+            "(a sparse robust bound is not implemented yet)"
+        )
+    p = _problem(design)
+    alpha0 = abscissa(p.lap_b)
+    if not alpha0 > 0:
+        raise InputError(
+            f"robust: the nominal −L_B is not Hurwitz (min Re λ(L_B) = {alpha0:.6g}); "
+            "certify the nominal design first"
+        )
+    ch = _channels(p)
+    lmi = _DecayLMI(p, ch)
+    # decay: the realisation first, so that the bisection runs below what it attains
+    es = _climb(p, rho, "decay", starts, seed)
+    wd = Realisation(rho, p.weights(es), abscissa(p.lap(es)))
+    a_lo, dec = _descend(lambda a: lmi(a, rho), max(wd.value, 0.0), bisection_steps)
+    decay = Bracket(
+        a_lo if dec is not None else None,
+        wd.value,
+        wd,
+        "lower",
+        "quadratic stability, one S-procedure multiplier per edge (Clarabel); realisation "
+        "by projected gradient on the eigenvalue",
+    )
+    # offset
+    off = _offset_sdp(p, ch, rho) if dec is not None else None
+    es_o = _climb(p, rho, "offset", starts, seed + 1)
+    wo = Realisation(rho, p.weights(es_o), _offset(p, p.lap(es_o)))
+    offset = Bracket(
+        wo.value,
+        None if off is None else math.sqrt(off[0]),
+        wo,
+        "upper",
+        "S-procedure on the equilibrium equation with Finsler's multiplier (Clarabel); "
+        "realisation by projected gradient",
+    )
+    # margin
+    destab = _destabilising(p, rho, starts, seed + 2)
+    r_top = 1.0 if destab is None else destab.radius
+    r_lo, mar = _descend(lambda r: lmi(0.0, r), r_top, bisection_steps, floor=rho)
+    if mar is None:
+        r_lo, mar = (rho, dec) if dec is not None else (0.0, None)
+    margin = Bracket(
+        r_lo if mar is not None else None,
+        None if destab is None else destab.radius,
+        destab,
+        "lower",
+        "the decay LMI at α = 0, bisection on ρ; destabilising realisation by bisection on "
+        "ρ with the eigenvalue search, else every weight vanishing at ρ = 1",
+    )
+    proofs = {"decay": dec, "alpha": a_lo, "offset": off, "margin": mar, "margin_radius": r_lo}
+    return RobustReport(
+        design, rho, alpha0, decay, offset, margin, proofs, time.perf_counter() - t0
+    )
+
+
+def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisation | None:
+    """The smallest radius (bisection in [r_lo, 1)) at which the eigenvalue search finds a
+    realisation with min Re λ <= 0; else the all-vanishing realisation at ρ = 1 when it is
+    not Hurwitz; None when neither."""
+    m, d = p.edges.m, p.d
+
+    def found(r: float) -> np.ndarray | None:
+        es = _climb(p, r, "decay", starts, seed)
+        return es if abscissa(p.lap(es)) <= 0 else None
+
+    top = found(1.0 - 1e-6)
+    if top is None:
+        es1 = -np.broadcast_to(np.eye(d), (m, d, d)).copy()
+        lap1 = p.lap(es1)
+        if abscissa(lap1) <= 1e-12 * max(1.0, float(np.max(np.abs(p.lap_b)))):
+            return Realisation(1.0, p.weights(es1) * 0.0, abscissa(lap1))
+        return None
+    lo, hi, best = r_lo, 1.0 - 1e-6, top
+    for _ in range(10):
+        mid = 0.5 * (lo + hi)
+        got = found(mid)
+        if got is None:
+            lo = mid
+        else:
+            hi, best = mid, got
+    return Realisation(hi, p.weights(best), abscissa(p.lap(best)))
+
+
+__all__ = [
+    "DEFAULT_RADIUS",
+    "ROBUST_MAX_ND",
+    "Bracket",
+    "Realisation",
+    "RobustReport",
+    "UncertainEdges",
+    "abscissa",
+    "check_radius",
+    "decay_matrix",
+    "offset_matrix",
+    "pivot_columns",
+    "realised_topology",
+    "robust",
+    "uncertain_edges",
+]

@@ -1,0 +1,222 @@
+"""Robust certification (issue 31): the brackets on G1 and a random network against an
+independent rebuild of L_B(A'), the realisations, the certificate kind and its forgeries,
+and the command's bad input."""
+
+import copy
+import json
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+import ntc_design as nd
+from ntc_design.certify import verify
+from ntc_design.certify.format import finish
+from ntc_design.certify.kinds.robust import robust_certificate
+from ntc_design.certify.robust import robust
+
+from .conftest import ROOT
+
+THETA = [1.0, 2.0, -1.0]
+
+
+def independent_lap_b(des, weights: dict) -> np.ndarray:
+    """L_B(A') from scratch: L_ii = Σ_j |A'_ij| (|A| by eigen-decomposition), L_ij = −A'_ij,
+    plus δ·blockdiag(B_i) (the nominal protocol)."""
+    top = des.topology
+    n, d = top.n, top.dim
+    lap = np.zeros((n * d, n * d))
+    for (i, j), a in weights.items():
+        lam, q = np.linalg.eigh(a)
+        absa = (q * np.abs(lam)) @ q.T
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += absa
+        lap[i * d : (i + 1) * d, j * d : (j + 1) * d] -= a
+    for i, b in des.B.items():
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += des.delta * b
+    return lap
+
+
+def sample(des, radius, rng, kind):
+    """A random realisation: per weight |A'| = F(I + E)F with E symmetric, ‖E‖ <= ρ."""
+    out = {}
+    for key, a in des.topology.weights.items():
+        lam, q = np.linalg.eigh(a)
+        s = 1.0 if lam[-1] > 0 else -1.0 if lam[0] < 0 else 0.0
+        absa = s * a
+        lw, qw = np.linalg.eigh(absa)
+        f = (qw * np.sqrt(np.clip(lw, 0, None))) @ qw.T
+        d = a.shape[0]
+        if kind == "vertex":
+            e = radius * np.diag(rng.choice([-1.0, 1.0], size=d))
+            r = np.linalg.qr(rng.normal(size=(d, d)))[0]
+            e = r @ e @ r.T
+        else:
+            x = rng.normal(size=(d, d))
+            lam_e, qe = np.linalg.eigh(x + x.T)
+            e = (qe * np.clip(lam_e, -radius, radius)) @ qe.T
+        out[key] = s * (f @ (np.eye(d) + e) @ f)
+        out[key] = 0.5 * (out[key] + out[key].T)
+    return out
+
+
+def features(des, weights):
+    lap = independent_lap_b(des, weights)
+    alpha = float(np.min(np.linalg.eigvals(lap).real))
+    x = np.linalg.solve(lap, des.input_vector())
+    return alpha, float(np.linalg.norm(x - np.tile(des.theta, des.topology.n)))
+
+
+@pytest.fixture(scope="module")
+def g1():
+    des = nd.design(nd.load(ROOT / "examples" / "g1.yaml"), THETA, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = robust(des, 0.05)
+    return des, rep
+
+
+def test_g1_brackets_meet_the_targets_and_the_independent_figures(g1):
+    des, rep = g1
+    d, o, m = rep.decay, rep.offset, rep.margin
+    assert 0 < d.lower <= d.upper and d.upper / d.lower <= 1.5
+    assert 0 < o.lower <= o.upper and o.upper / o.lower <= 1.5
+    assert 0 < m.lower <= m.upper <= 1.0 and m.upper / m.lower <= 2.0
+    # the issue's independent search at ρ = 0.05: worst decay 0.819, worst offset 0.077
+    assert d.upper == pytest.approx(0.819, abs=2e-3) and o.lower >= 0.077
+    assert rep.nominal_decay == pytest.approx(0.8244, abs=1e-4)
+
+
+def test_no_sampled_realisation_beats_a_certified_end(g1):
+    des, rep = g1
+    rng = np.random.default_rng(np.random.SeedSequence(31))
+    worst_a, worst_o = np.inf, 0.0
+    for k in range(300):
+        w = sample(des, 0.05, rng, "vertex" if k % 2 else "random")
+        a, o = features(des, w)
+        worst_a, worst_o = min(worst_a, a), max(worst_o, o)
+    assert worst_a >= rep.decay.lower and worst_o <= rep.offset.upper
+    # and the searched realisations are at least as bad as what sampling finds
+    assert rep.decay.upper <= worst_a + 1e-9 and rep.offset.lower >= worst_o - 1e-9
+    # within the margin radius every sample is Hurwitz
+    for _ in range(100):
+        a, _ = features(des, sample(des, rep.margin.lower, rng, "vertex"))
+        assert a > 0
+
+
+def realised(des, edges):
+    top = des.topology
+    w = dict(top.weights)
+    for e in edges:
+        w[(top.index(e["to"]), top.index(e["from"]))] = np.asarray(e["weight"], dtype=float)
+    return w
+
+
+def in_set(des, w, radius):
+    for key, a in des.topology.weights.items():
+        lam = np.linalg.eigvalsh(a)
+        s = 1.0 if lam[-1] > 0 else -1.0
+        lo = np.linalg.eigvalsh(s * w[key] - (1 - radius) * s * a)[0]
+        hi = np.linalg.eigvalsh((1 + radius) * s * a - s * w[key])[0]
+        if min(lo, hi) < -1e-9 * np.max(np.abs(a)):
+            return False
+    return True
+
+
+def test_realisations_lie_in_the_set_and_attain_their_figures(g1):
+    des, rep = g1
+    doc = rep.to_dict()
+    wd = realised(des, doc["decay"]["realization"])
+    wo = realised(des, doc["offset"]["realization"])
+    assert in_set(des, wd, 0.05) and in_set(des, wo, 0.05)
+    assert features(des, wd)[0] == pytest.approx(doc["decay"]["upper"], rel=1e-9)
+    assert features(des, wo)[1] == pytest.approx(doc["offset"]["lower"], rel=1e-9)
+    dm = realised(des, doc["margin"]["destabilizing"])
+    lap = independent_lap_b(des, dm)
+    assert np.min(np.linalg.eigvals(lap).real) <= 1e-12  # not Hurwitz
+    assert set(doc) >= {"radius", "decay", "offset", "margin"}
+
+
+def test_only_antagonistic_weights_move_the_consensus_point(g1):
+    des, _ = g1
+    rng = np.random.default_rng(np.random.SeedSequence(5))
+    w = sample(des, 0.3, rng, "random")
+    coop = {
+        k: (w[k] if np.linalg.eigvalsh(a)[-1] > 0 else a) for k, a in des.topology.weights.items()
+    }
+    assert features(des, coop)[1] < 1e-9  # cooperative changes alone keep x* = 1⊗θ
+
+
+def test_the_certificate_verifies_and_forgeries_do_not(g1):
+    _, rep = g1
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    ver = verify(doc)
+    assert ver.valid and ver.about.kind == "robust"
+
+    def forged(edit):
+        bad = copy.deepcopy(doc)
+        edit(bad)
+        for k in ("digest", "subject_digest", "versions"):
+            bad.pop(k, None)
+        return verify(finish(bad)).valid
+
+    def raise_alpha(d):
+        d["results"]["decay"]["lower"] = rep.decay.upper * 1.01
+        for c in d["claims"]:
+            if c["property"] == "robust_decay" and "alpha" in c:
+                c["alpha"] = d["results"]["decay"]["lower"]
+
+    def raise_radius(d):
+        d["subject"]["radius"] = 0.5
+        d["results"]["radius"] = 0.5
+        for c in d["claims"]:
+            if c.get("radius") == rep.radius:
+                c["radius"] = 0.5
+
+    def shrink_gamma(d):
+        d["results"]["offset"]["gamma"] *= 0.5
+        d["results"]["offset"]["upper"] = d["results"]["offset"]["gamma"] ** 0.5
+
+    def zero_tau(d):
+        d["matrices"]["multipliers"]["robust_decay"] = [0.0] * len(
+            d["matrices"]["multipliers"]["robust_decay"]
+        )
+
+    def outside(d):
+        e = d["realizations"]["decay"]["edges"][0]
+        e["weight"] = (2.0 * np.asarray(e["weight"])).tolist()
+
+    for edit in (raise_alpha, raise_radius, shrink_gamma, zero_tau, outside):
+        assert not forged(edit), edit.__name__
+
+
+def test_a_random_network_within_twice(tmp_path):
+    from ntc_design.generate import random_network
+
+    top = random_network(6, 2, seed=3)
+    des = nd.design(top, [1.0, -1.0], thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = robust(des, 0.05, starts=3)
+    assert rep.decay.upper / rep.decay.lower <= 2.0
+    assert rep.offset.lower > 0 and rep.offset.upper / rep.offset.lower <= 2.0
+    rng = np.random.default_rng(np.random.SeedSequence(9))
+    for _ in range(100):
+        a, o = features(des, sample(des, 0.05, rng, "vertex"))
+        assert a >= rep.decay.lower and o <= rep.offset.upper
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "radius, needle",
+    [("1.5", "below 1"), ("-0.1", ">= 0"), ("nan", "finite"), ("1", "below 1")],
+)
+def test_a_bad_radius_is_one_line_exit_2(radius, needle):
+    r = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "robust", "examples/g1.yaml", "--theta", "1,2,-1",
+         "--radius", radius],
+        cwd=ROOT, capture_output=True, text=True,
+    )  # fmt: skip
+    assert r.returncode == 2 and needle in r.stderr and "--radius" in r.stderr
+    assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
