@@ -109,6 +109,7 @@ class EdgeListData:
     cols: np.ndarray
     w: np.ndarray
     source: str | None
+    uncertainty: np.ndarray | None = None  # per edge ρ_e (NaN: none), from a CSV column or MAT
 
 
 def read_npz(path: str | Path) -> EdgeListData:

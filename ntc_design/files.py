@@ -53,6 +53,7 @@ class EdgeData:
     target: Label  # i
     weight: np.ndarray
     field: str  # e.g. "edge 2->1", for error messages
+    uncertainty: float | None = None  # this edge's relative radius ρ_e, when given
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,7 @@ class TopologyData:
     labels: tuple[Label, ...]
     edges: tuple[EdgeData, ...]
     source: str | None
+    uncertainty: float | None = None  # the file-wide default radius, when given
 
 
 @dataclass(frozen=True)
@@ -555,8 +557,40 @@ def _weights_at_once(edges_doc: Any, dim: int) -> list[np.ndarray] | None:
     return [w.copy() for w in a] if np.isfinite(a).all() else None
 
 
-TOPOLOGY_KEYS = {"name", "description", "dim", "agents", "matrices", "edges"}
+TOPOLOGY_KEYS = {"name", "description", "dim", "agents", "matrices", "edges", "uncertainty"}
 EDGE_KEYS = {"from", "to", "weight"}
+EDGE_OPTIONAL = {"uncertainty"}
+
+
+def parse_uncertainty(value: Any, source: str | None, field: str) -> float:
+    """A relative radius ρ of a weight's Loewner interval: a number in [0, 1).
+
+    Parameters
+    ----------
+    value : Any
+        The value as read.
+    source : str or None
+        The file, for messages.
+    field : str
+        The field, for messages.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Not a finite number in [0, 1).
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise field_error(source, field, f"expected a number in [0, 1), got {_show(value)}")
+    v = float(value)
+    if not (math.isfinite(v) and 0 <= v < 1):
+        raise field_error(
+            source, field, f"the radius must be a finite number in [0, 1), got {_show(value)}"
+        )
+    return v
 
 
 def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyData:
@@ -611,9 +645,9 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict):
             raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
-        if e.keys() != EDGE_KEYS:
+        if e.keys() - EDGE_OPTIONAL != EDGE_KEYS:
             # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
-            extra = sorted(set(e) - EDGE_KEYS, key=str)
+            extra = sorted(set(e) - EDGE_KEYS - EDGE_OPTIONAL, key=str)
             if extra:
                 raise field_error(
                     source,
@@ -639,14 +673,18 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
             raise field_error(source, field, "duplicated edge")
         seen.add((j, i))
         w = batch[k] if batch is not None else parse_weight(e["weight"], dim, source, field, named)
-        edges.append(EdgeData(by_key[j], by_key[i], w, field))
+        unc = e.get("uncertainty")
+        rho = None if unc is None else parse_uncertainty(unc, source, f"{field}: uncertainty")
+        edges.append(EdgeData(by_key[j], by_key[i], w, field, rho))
     name = doc.get("name")
+    default = doc.get("uncertainty")
     return TopologyData(
         name=str(name) if name is not None else None,
         dim=dim,
         labels=labels,
         edges=tuple(edges),
         source=source,
+        uncertainty=None if default is None else parse_uncertainty(default, source, "uncertainty"),
     )
 
 

@@ -16,6 +16,7 @@ arrays for MATLAB (what ``ProtocolDesign.to_mat`` uses).
 from __future__ import annotations
 
 import csv
+import math
 import os
 import re
 import stat
@@ -161,7 +162,7 @@ def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
     header = [h.strip() for h in line.rstrip("\n\r").split(",")]
     if len(header) < 3 or header[:2] != ["from", "to"]:
         raise InputError(f"{p}: row 1: the header must start with from, to (then a11 … add)")
-    k = len(header) - 2
+    k = len(header) - 2 - (header[-1] == "uncertainty")
     d = int(round(k**0.5))
     if d * d != k:
         raise InputError(f"{p}: row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)")
@@ -171,7 +172,7 @@ def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
             "(use .npz or .mat for larger weights)"
         )
     want = [f"a{r}{c}" if d < 10 else f"a{r}_{c}" for r in range(1, d + 1) for c in range(1, d + 1)]
-    if header[2:] != want:
+    if header[2 : 2 + k] != want:
         raise InputError(
             f"{p}: row 1: weight columns must be {', '.join(want[:4])}{' …' if k > 4 else ''}"
         )
@@ -204,6 +205,9 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     header, want, d = _csv_header(p)
     _no_nul(p)
     k = d * d
+    as_text: dict[str, Any] = dict.fromkeys(
+        ["from", "to"] + (["uncertainty"] if header[-1] == "uncertainty" else []), str
+    )
     try:
         with warnings.catch_warnings():
             # pandas only warns when a row is longer than the header: that is an error here
@@ -219,12 +223,10 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
             }
             try:  # numbers parsed in C; only a file with a bad number is read again as text
                 table = pd.read_csv(
-                    p, dtype={"from": str, "to": str, **dict.fromkeys(want, "float64")}, **common
+                    p, dtype={**as_text, **dict.fromkeys(want, "float64")}, **common
                 )
             except ValueError:
-                table = pd.read_csv(
-                    p, dtype={"from": str, "to": str, **dict.fromkeys(want, str)}, **common
-                )
+                table = pd.read_csv(p, dtype={**as_text, **dict.fromkeys(want, str)}, **common)
     except pd.errors.ParserWarning:
         raise InputError(f"{p}: {_long_row(p, len(header))}") from None
     except pd.errors.ParserError as exc:
@@ -267,7 +269,26 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     if dup.size:
         r = int(order[dup[0] + 1])
         raise InputError(f"{p}: row {r + 2}: edge {src[r]}->{dst[r]} is listed twice")
-    return EdgeListData(p.stem, d, labels, rows, cols, w.reshape(e, d, d), str(p))
+    unc = _csv_uncertainty(table, p) if "uncertainty" in as_text else None
+    return EdgeListData(p.stem, d, labels, rows, cols, w.reshape(e, d, d), str(p), unc)
+
+
+def _csv_uncertainty(table, p: Path) -> np.ndarray:
+    """The optional ``uncertainty`` column: per row a radius in [0, 1), or empty (none)."""
+    vals = np.char.strip(table["uncertainty"].to_numpy(dtype=str))
+    out = np.full(vals.size, np.nan)
+    for r in np.flatnonzero(np.char.str_len(vals) > 0).tolist():
+        try:
+            v = float(vals[r])
+        except ValueError:
+            v = math.nan
+        if not (math.isfinite(v) and 0 <= v < 1):
+            raise InputError(
+                f"{p}: row {r + 2}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "
+                "number in [0, 1) (or empty)"
+            )
+        out[r] = v
+    return out
 
 
 def write_csv_edges(path: str | Path, labels, dim: int, rows, cols, w) -> None:
@@ -360,7 +381,7 @@ def read_mat(path: str | Path) -> EdgeListData:
     # memory share every size check allows
     _mat_inflated_bytes(p, min(MAX_MAT_BYTES, available_memory() / 6))
     try:
-        doc = loadmat(p, variable_names=["A", "dim", "labels"], mat_dtype=False)
+        doc = loadmat(p, variable_names=["A", "dim", "labels", "uncertainty"], mat_dtype=False)
     except Exception as exc:  # noqa: BLE001 - whatever a malformed file raises inside scipy
         raise InputError(f"{p}: not a readable MATLAB file ({exc.__class__.__name__})") from None
     for key in ("A", "dim"):
@@ -409,7 +430,37 @@ def read_mat(path: str | Path) -> EdgeListData:
     w = np.zeros((pairs.size, d, d))
     at = np.searchsorted(pairs, bi.astype(np.int64) * n + bj)  # each entry's edge
     np.add.at(w, (at, coo.row[nz] % d, coo.col[nz] % d), coo.data[nz])
-    return EdgeListData(p.stem, d, labels, rows, cols, w, str(p))
+    unc = _mat_uncertainty(doc.get("uncertainty"), n, rows, cols, p)
+    return EdgeListData(p.stem, d, labels, rows, cols, w, str(p), unc)
+
+
+def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
+    """The ``uncertainty`` variable: an N×N matrix whose (i, j) entry is edge j -> i's
+    radius ρ (0 or NaN: none given); a value where there is no edge is refused."""
+    if u is None:
+        return None
+    a = np.asarray(u.toarray() if hasattr(u, "toarray") else u)
+    if a.dtype.kind not in "fiu" or a.shape != (n, n):
+        raise InputError(
+            f"{p}: uncertainty: expected a numeric {n}×{n} matrix (one radius per edge)"
+        )
+    a = a.astype(float)
+    has = ~np.isnan(a) & (a != 0)
+    edge = np.zeros((n, n), dtype=bool)
+    edge[rows, cols] = True
+    stray = np.argwhere(has & ~edge)
+    if stray.size:
+        i, j = (int(x) + 1 for x in stray[0])
+        raise InputError(f"{p}: uncertainty({i}, {j}): uncertainty on a missing edge")
+    vals = a[rows, cols]
+    bad = np.flatnonzero(has[rows, cols] & ~((vals >= 0) & (vals < 1)))
+    if bad.size:
+        k = int(bad[0])
+        raise InputError(
+            f"{p}: uncertainty({rows[k] + 1}, {cols[k] + 1}): the radius must be in [0, 1), "
+            f"got {vals[k]:g}"
+        )
+    return np.where(has[rows, cols], vals, np.nan)
 
 
 def write_mat(path: str | Path, arrays: dict[str, Any]) -> None:

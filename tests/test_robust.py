@@ -220,3 +220,162 @@ def test_a_bad_radius_is_one_line_exit_2(radius, needle):
     )  # fmt: skip
     assert r.returncode == 2 and needle in r.stderr and "--radius" in r.stderr
     assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
+
+
+# -- per-edge uncertainty in topology files ---------------------------------------------
+
+
+def test_per_edge_radii_from_a_file_are_certified_and_respected(tmp_path):
+    text = (ROOT / "examples" / "g1.yaml").read_text()
+    text = text.replace(
+        "weight: {diag: [-1, -1, 0]}}", "weight: {diag: [-1, -1, 0]}, uncertainty: 0.2}"
+    )
+    text = text.replace("name: G1\n", "name: G1\nuncertainty: 0.02\n")
+    p = tmp_path / "g1u.yaml"
+    p.write_text(text)
+    top = nd.load(p)
+    assert top.uncertainty[(1, 0)] == 0.2 and top.uncertainty[(0, 1)] == 0.02
+    des = nd.design(top, THETA, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = robust(des, 0.3, starts=2)  # --radius is only the default: the file sets all
+    assert max(rep.radii) == 0.2 and min(rep.radii) == 0.02 and rep.radius == 0.2
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    assert isinstance(doc["subject"]["radius"], list)
+    assert verify(doc).valid
+    rng = np.random.default_rng(np.random.SeedSequence(2))
+    for _ in range(100):
+        w = {}
+        for key, a in des.topology.weights.items():
+            one = sample_one(a, top.uncertainty[key], rng)
+            w[key] = one
+        a_, o_ = features(des, w)
+        assert a_ >= rep.decay.lower and o_ <= rep.offset.upper
+    wd = realised(des, rep.to_dict()["decay"]["realization"])
+    assert in_set_per_edge(des, wd, top.uncertainty)
+
+
+def sample_one(a, radius, rng):
+    lam = np.linalg.eigvalsh(a)
+    s = 1.0 if lam[-1] > 0 else -1.0
+    lw, qw = np.linalg.eigh(s * a)
+    f = (qw * np.sqrt(np.clip(lw, 0, None))) @ qw.T
+    d = a.shape[0]
+    r = np.linalg.qr(rng.normal(size=(d, d)))[0]
+    e = r @ np.diag(radius * rng.choice([-1.0, 1.0], size=d)) @ r.T
+    out = s * (f @ (np.eye(d) + e) @ f)
+    return 0.5 * (out + out.T)
+
+
+def in_set_per_edge(des, w, radii):
+    return all(in_set_edge(a, w[k], radii[k]) for k, a in des.topology.weights.items())
+
+
+def in_set_edge(a, b, radius):
+    s = 1.0 if np.linalg.eigvalsh(a)[-1] > 0 else -1.0
+    tol = 1e-9 * np.max(np.abs(a))
+    return (
+        np.linalg.eigvalsh(s * b - (1 - radius) * s * a)[0] >= -tol
+        and np.linalg.eigvalsh((1 + radius) * s * a - s * b)[0] >= -tol
+    )
+
+
+def test_csv_and_mat_carry_the_radii(tmp_path):
+    from scipy.io import savemat
+
+    (tmp_path / "t.csv").write_text("from,to,a11,uncertainty\n2,1,-1,0.02\n3,2,2,\n")
+    assert nd.load(tmp_path / "t.csv").uncertainty == {(1, 0): 0.02}
+    a = np.zeros((3, 3))
+    a[0, 1], a[1, 2] = -1.0, 2.0
+    u = np.zeros((3, 3))
+    u[0, 1] = 0.03
+    savemat(tmp_path / "m.mat", {"A": a, "dim": 1, "uncertainty": u})
+    assert nd.load(tmp_path / "m.mat").uncertainty == {(0, 1): 0.03}
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "name, content, needle",
+    [
+        ("zero.yaml", "dim: 1\nagents: [1, 2]\nedges:\n  - {from: 2, to: 1, weight: [[0]], uncertainty: 0.1}\n", "edge 2->1: uncertainty on a zero weight"),
+        ("big.yaml", "dim: 1\nagents: [1, 2]\nedges:\n  - {from: 2, to: 1, weight: [[1]], uncertainty: 1.5}\n", "edge 2->1: uncertainty: the radius must be"),
+        ("text.yaml", "dim: 1\nagents: [1, 2]\nuncertainty: lots\nedges:\n  - {from: 2, to: 1, weight: [[1]]}\n", "uncertainty: expected a number"),
+        ("neg.csv", "from,to,a11,uncertainty\n2,1,-1,-0.1\n", "row 2: uncertainty"),
+        ("nan.csv", "from,to,a11,uncertainty\n2,1,-1,nan\n", "row 2: uncertainty"),
+    ],
+)  # fmt: skip
+def test_a_bad_uncertainty_is_one_line_exit_2(tmp_path, name, content, needle):
+    p = tmp_path / name
+    p.write_text(content)
+    r = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "check", str(p)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 2 and needle in r.stderr and str(p) in r.stderr
+    assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
+
+
+@pytest.mark.hostile
+def test_mat_uncertainty_on_a_missing_edge_is_refused(tmp_path):
+    from scipy.io import savemat
+
+    a = np.zeros((3, 3))
+    a[0, 1] = -1.0
+    u = np.zeros((3, 3))
+    u[2, 0] = 0.1
+    savemat(tmp_path / "m.mat", {"A": a, "dim": 1, "uncertainty": u})
+    with pytest.raises(nd.InputError, match=r"uncertainty\(3, 1\): uncertainty on a missing edge"):
+        nd.load(tmp_path / "m.mat")
+
+
+# -- above the dense size: sparse dominance bounds ------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def mid_network():
+    from ntc_design.generate import random_network
+
+    top = random_network(60, 3, seed=4)  # Nd = 180: the sparse path
+    des = nd.design(top, THETA, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = robust(des, 0.1)
+    return des, rep
+
+
+def test_the_sparse_brackets_are_sound_against_dense_eigenvalues(mid_network):
+    des, rep = mid_network
+    assert des.topology.nd > 80 and rep.proofs == {}
+    assert rep.decay.lower is not None and 0 < rep.decay.lower <= rep.decay.upper
+    assert rep.offset.lower is None and rep.offset.upper is None
+    rng = np.random.default_rng(np.random.SeedSequence(11))
+    for k in range(30):
+        a, _ = features(des, sample(des, 0.1, rng, "vertex" if k % 2 else "random"))
+        assert a >= rep.decay.lower
+    # the attained end: every weight scaled by 1 ∓ ρ, recomputed with dense eigenvalues
+    w = realised(des, rep.to_dict()["decay"]["realization"])
+    assert in_set(des, w, 0.1)
+    assert features(des, w)[0] == pytest.approx(rep.decay.upper, rel=1e-6)
+    assert 0 < rep.margin.lower <= 1.0
+    for _ in range(20):
+        a, _ = features(des, sample(des, rep.margin.lower, rng, "vertex"))
+        assert a > 0
+
+
+@pytest.mark.hostile
+def test_out_above_the_dense_size_is_refused_before_work(tmp_path):
+    from ntc_design.generate import random_network
+
+    p = tmp_path / "big.yaml"
+    import yaml
+
+    p.write_text(yaml.safe_dump(random_network(40, 3, seed=1).to_dict()))
+    r = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "robust", str(p), "--theta", "1,2,-1",
+         "--out", str(tmp_path / "c.json")],
+        cwd=ROOT, capture_output=True, text=True,
+    )  # fmt: skip
+    assert r.returncode == 2 and "--out: a robust certificate is issued up to Nd = 80" in r.stderr
+    assert not (tmp_path / "c.json").exists()

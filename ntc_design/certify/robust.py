@@ -327,10 +327,11 @@ def _grad_offset(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
     return 0.5 * float(z @ z), g
 
 
-def _climb(p: _Problem, radius: float, objective: str, starts: int, seed: int) -> np.ndarray:
+def _climb(p: _Problem, radii, objective: str, starts: int, seed: int) -> np.ndarray:
     """Projected gradient search for the worst E (decay: lowest abscissa; offset: largest
     offset), from the nominal point, ± vertices and random starts; the best E found."""
     m, d = p.edges.m, p.d
+    radii = np.broadcast_to(np.asarray(radii, dtype=float), (m,))
     rng = np.random.default_rng(np.random.SeedSequence(seed))
     sign = -1.0 if objective == "decay" else 1.0  # maximise sign·value
     fn = _grad_decay if objective == "decay" else _grad_offset
@@ -342,14 +343,17 @@ def _climb(p: _Problem, radius: float, objective: str, starts: int, seed: int) -
     inits = [np.zeros((m, d, d))]
     for k in range(starts):
         if k < 2:
-            inits.append(((-1) ** k) * radius * np.broadcast_to(np.eye(d), (m, d, d)).copy())
+            inits.append(((-1) ** k) * radii[:, None, None] * np.broadcast_to(np.eye(d), (m, d, d)))
         else:
             r = rng.normal(size=(m, d, d))
-            inits.append(np.array([_project(radius * (x + x.T), radius) for x in r]))
+            inits.append(
+                np.array([_project(q * (x + x.T), q) for x, q in zip(r, radii, strict=True)])
+            )
     best, best_v = inits[0], -math.inf
     for es in inits:
         v = value(es)
-        step = radius
+        top = float(np.max(radii, initial=0.0))
+        step = top
         for _ in range(60):
             try:
                 _, g = fn(p, es)
@@ -359,8 +363,9 @@ def _climb(p: _Problem, radius: float, objective: str, starts: int, seed: int) -
             if not math.isfinite(gn) or gn == 0:
                 break
             moved = False
-            while step > 1e-6 * max(radius, 1e-12):
-                trial = np.array([_project(x, radius) for x in es + sign * step * g / gn])
+            while step > 1e-6 * max(top, 1e-12):
+                moved_es = es + sign * step * g / gn
+                trial = np.array([_project(x, q) for x, q in zip(moved_es, radii, strict=True)])
                 tv = value(trial)
                 if tv > v + 1e-13 * max(1.0, abs(v)):
                     es, v, moved = trial, tv, True
@@ -466,7 +471,7 @@ def decay_matrix(
     p: np.ndarray,
     tau: np.ndarray,
     alpha: float,
-    radius: float,
+    radius: float | np.ndarray,
 ) -> np.ndarray:
     """Ψ of the decay S-procedure (module docstring) in floating point.
 
@@ -482,8 +487,8 @@ def decay_matrix(
         The multipliers τ_e.
     alpha : float
         The rate α.
-    radius : float
-        ρ.
+    radius : float or numpy.ndarray
+        ρ, or ρ_e per edge.
 
     Returns
     -------
@@ -494,8 +499,9 @@ def decay_matrix(
     sh = lap_b - alpha * np.eye(n)
     top = p @ sh + sh.T @ p
     cols, diag = [], []
-    for t, (ewv, dwd, vwv) in zip(tau, channels, strict=True):
-        top = top - t * radius**2 * dwd
+    r2 = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, (len(channels),))
+    for t, q, (ewv, dwd, vwv) in zip(tau, r2, channels, strict=True):
+        top = top - t * q * dwd
         cols.append(p @ ewv)
         diag.append(t * vwv)
     import scipy.linalg as sla
@@ -515,13 +521,13 @@ class _DecayLMI:
         self.pv = cp.Variable((n, n), symmetric=True)
         self.tv = cp.Variable(len(ch), nonneg=True)
         self.alpha = cp.Parameter(nonneg=True)
-        self.rho2 = cp.Parameter(nonneg=True)
+        self.rho2 = cp.Parameter(max(len(ch), 1), nonneg=True)
         top = self.pv @ p.lap_b + p.lap_b.T @ self.pv - 2 * self.alpha * self.pv
         rows_off, diag = [], []
         r = sum(c[0].shape[1] for c in ch)
         col = 0
         for k, (ewv, dwd, vwv) in enumerate(ch):
-            top = top - self.rho2 * (self.tv[k] * dwd)
+            top = top - self.rho2[k] * (self.tv[k] * dwd)
             rows_off.append(self.pv @ ewv)
             m = vwv.shape[0]
             row = [np.zeros((m, col))] if col else []
@@ -540,9 +546,13 @@ class _DecayLMI:
             [self.pv >> np.eye(n), 0.5 * (psi + psi.T) >> 1e-7 * np.eye(n + r)],
         )
 
-    def __call__(self, alpha: float, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
-        """P, τ with Ψ ≻ 0 (checked in floats with a strict margin), or None."""
-        self.alpha.value, self.rho2.value = alpha, radius**2
+    def __call__(
+        self, alpha: float, radius: float | np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """P, τ with Ψ ≻ 0 at ρ (or ρ_e per edge), checked in floats with a strict margin;
+        or None."""
+        self.alpha.value = alpha
+        self.rho2.value = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, self.rho2.shape)
         if not _solve(self.prob) or self.pv.value is None:
             return None
         pm = 0.5 * (self.pv.value + self.pv.value.T)
@@ -561,7 +571,7 @@ def offset_matrix(
     gamma: float,
     lam: np.ndarray,
     y: np.ndarray,
-    radius: float,
+    radius: float | np.ndarray,
 ) -> np.ndarray:
     """Γ of the offset S-procedure (module docstring), floating point, on ξ = (z, η, 1).
 
@@ -581,8 +591,8 @@ def offset_matrix(
         The multipliers λ_e.
     y : numpy.ndarray
         Finsler's multiplier (Nd × dim ξ).
-    radius : float
-        ρ.
+    radius : float or numpy.ndarray
+        ρ, or ρ_e per edge.
 
     Returns
     -------
@@ -596,9 +606,10 @@ def offset_matrix(
     g[-1, -1] = gamma
     g[:n, :n] -= np.eye(n)
     col = n
-    for le, (_ewv, dwd, vwv) in zip(lam, channels, strict=True):
+    r2 = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, (len(channels),))
+    for le, q2, (_ewv, dwd, vwv) in zip(lam, r2, channels, strict=True):
         # −λ(ρ² (z+c)ᵀ DWDᵀ (z+c) − ηᵀ VᵀWV η)
-        q = radius**2 * dwd
+        q = q2 * dwd
         qc = q @ target
         g[:n, :n] -= le * q
         g[:n, -1] -= le * qc
@@ -612,7 +623,7 @@ def offset_matrix(
     return g
 
 
-def _offset_sdp(p: _Problem, ch, radius: float) -> tuple[float, np.ndarray, np.ndarray] | None:
+def _offset_sdp(p: _Problem, ch, radius) -> tuple[float, np.ndarray, np.ndarray] | None:
     """γ, λ, Y with Γ ≻ 0 (floats, a strict margin), or None."""
     cp = _cvx()
     n = p.n
@@ -628,8 +639,9 @@ def _offset_sdp(p: _Problem, ch, radius: float) -> tuple[float, np.ndarray, np.n
     sel_z[:, :n] = np.eye(n)
     expr = gam * (e_last @ e_last.T) - sel_z.T @ sel_z
     col = n
+    r2 = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, (len(ch),))
     for kk, (_ewv, dwd, vwv) in enumerate(ch):
-        q = radius**2 * dwd
+        q = r2[kk] * dwd
         # the quadratic form of ρ²(z+c)ᵀDWDᵀ(z+c) on ξ = (z, η, 1)
         qa = np.zeros((k, k))
         qa[:n, :n] = q
@@ -677,7 +689,8 @@ class RobustReport:
     (``lmi``: P, τ for the decay and margin LMIs; γ, λ, Y for the offset)."""
 
     design: ProtocolDesign
-    radius: float
+    radius: float  # the largest ρ_e (ρ itself when every edge has the same)
+    radii: tuple[float, ...]  # ρ_e per uncertain edge (UncertainEdges order)
     nominal_decay: float
     decay: Bracket
     offset: Bracket
@@ -738,8 +751,9 @@ class RobustReport:
         def real(b: Bracket) -> list[dict] | None:
             return None if b.realisation is None else b.realisation.edges(top, ed)
 
+        uniform = len(set(self.radii)) <= 1
         return {
-            "radius": self.radius,
+            "radius": self.radius if uniform else list(self.radii),
             "nominal_decay": self.nominal_decay,
             "decay": {
                 "lower": self.decay.lower,
@@ -808,7 +822,8 @@ def robust(
     design : ProtocolDesign
         The nominal design (its protocol is kept for every realisation).
     radius : float, optional
-        ρ in [0, 1).
+        ρ in [0, 1) for every edge whose file gives no ``uncertainty:`` of its own
+        (:attr:`ntc_design.model.Topology.uncertainty`).
     starts : int, optional
         Random starts of the realisation searches (besides the nominal point and ±ρI).
     seed : int, optional
@@ -820,12 +835,14 @@ def robust(
     Returns
     -------
     RobustReport
+        Above :data:`ROBUST_MAX_ND`, the sparse decay and margin brackets of
+        :func:`ntc_design.certify.robust_scale.robust_scale` (no offset, nothing to
+        re-check from a file).
 
     Raises
     ------
     InputError
-        A bad radius, a network above :data:`ROBUST_MAX_ND`, or a nominal −L_B that is
-        not Hurwitz.
+        A bad radius, or a nominal −L_B that is not Hurwitz.
 
     Examples
     --------
@@ -837,13 +854,16 @@ def robust(
     """
     t0 = time.perf_counter()
     rho = check_radius(radius)
-    nd_ = design.topology.nd
-    if nd_ > ROBUST_MAX_ND:
-        raise InputError(
-            f"robust: Nd = {nd_} is above {ROBUST_MAX_ND}, the size of the dense robust LMIs "
-            "(a sparse robust bound is not implemented yet)"
-        )
+    if design.topology.nd > ROBUST_MAX_ND:  # sparse: decay and margin only
+        from .robust_scale import robust_scale
+
+        return robust_scale(design, rho)
     p = _problem(design)
+    unc = design.topology.uncertainty
+    rad = np.array(
+        [unc.get((int(i), int(j)), rho) for i, j in zip(p.edges.dst, p.edges.src, strict=True)]
+    )
+    rmax = float(np.max(rad, initial=0.0))
     alpha0 = abscissa(p.lap_b)
     if not alpha0 > 0:
         raise InputError(
@@ -853,9 +873,9 @@ def robust(
     ch = _channels(p)
     lmi = _DecayLMI(p, ch)
     # decay: the realisation first, so that the bisection runs below what it attains
-    es = _climb(p, rho, "decay", starts, seed)
-    wd = Realisation(rho, p.weights(es), abscissa(p.lap(es)))
-    a_lo, dec = _descend(lambda a: lmi(a, rho), max(wd.value, 0.0), bisection_steps)
+    es = _climb(p, rad, "decay", starts, seed)
+    wd = Realisation(rmax, p.weights(es), abscissa(p.lap(es)))
+    a_lo, dec = _descend(lambda a: lmi(a, rad), max(wd.value, 0.0), bisection_steps)
     decay = Bracket(
         a_lo if dec is not None else None,
         wd.value,
@@ -865,9 +885,9 @@ def robust(
         "by projected gradient on the eigenvalue",
     )
     # offset
-    off = _offset_sdp(p, ch, rho) if dec is not None else None
-    es_o = _climb(p, rho, "offset", starts, seed + 1)
-    wo = Realisation(rho, p.weights(es_o), _offset(p, p.lap(es_o)))
+    off = _offset_sdp(p, ch, rad) if dec is not None else None  # x* exists: decay proven
+    es_o = _climb(p, rad, "offset", starts, seed + 1)
+    wo = Realisation(rmax, p.weights(es_o), _offset(p, p.lap(es_o)))
     offset = Bracket(
         wo.value,
         None if off is None else math.sqrt(off[0]),
@@ -877,11 +897,9 @@ def robust(
         "realisation by projected gradient",
     )
     # margin
-    destab = _destabilising(p, rho, starts, seed + 2)
+    destab = _destabilising(p, rmax, starts, seed + 2)
     r_top = 1.0 if destab is None else destab.radius
-    r_lo, mar = _descend(lambda r: lmi(0.0, r), r_top, bisection_steps, floor=rho)
-    if mar is None:
-        r_lo, mar = (rho, dec) if dec is not None else (0.0, None)
+    r_lo, mar = _descend(lambda r: lmi(0.0, r), r_top, bisection_steps)
     margin = Bracket(
         r_lo if mar is not None else None,
         None if destab is None else destab.radius,
@@ -892,7 +910,15 @@ def robust(
     )
     proofs = {"decay": dec, "alpha": a_lo, "offset": off, "margin": mar, "margin_radius": r_lo}
     return RobustReport(
-        design, rho, alpha0, decay, offset, margin, proofs, time.perf_counter() - t0
+        design,
+        rmax,
+        tuple(rad.tolist()),
+        alpha0,
+        decay,
+        offset,
+        margin,
+        proofs,
+        time.perf_counter() - t0,
     )
 
 

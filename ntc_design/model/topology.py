@@ -69,6 +69,12 @@ class Topology:
     name: str | None = None
     source: str | None = None
     fields: Mapping[tuple[int, int], str] = field(default_factory=dict, repr=False)
+    #: Relative radius ρ_e of an edge's Loewner interval, where the file gives one (an
+    #: ``uncertainty:`` value; :mod:`ntc_design.certify.robust`). Not part of the nominal
+    #: network: left out of :meth:`to_dict` and of the topology hash.
+    uncertainty: Mapping[tuple[int, int], float] = field(
+        default_factory=dict, repr=False, compare=False
+    )
     _arrays: EdgeArrays = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -129,6 +135,19 @@ class Topology:
                 )
             )
         w.setflags(write=False)
+        pos = {k: m for m, k in enumerate(keys)} if self.uncertainty else {}
+        for key in self.uncertainty:
+            if key not in pos:
+                raise InputError(
+                    self._where(self.edge_field(*key), "uncertainty on a missing edge")
+                )
+            if not np.any(w[pos[key]]):
+                raise InputError(
+                    self._where(
+                        self.edge_field(*key),
+                        "uncertainty on a zero weight (its interval is {0}; remove the value)",
+                    )
+                )
         object.__setattr__(self, "weights", {k: w[m] for m, k in enumerate(keys)})
         object.__setattr__(self, "_arrays", EdgeArrays(rows, cols, w, codes))
 
@@ -218,6 +237,7 @@ class Topology:
         weights: np.ndarray,
         name: str | None = None,
         source: str | None = None,
+        uncertainty: np.ndarray | None = None,
     ) -> Topology:
         """Build from arrays: edge k is ``cols[k] -> rows[k]`` (0-based agent indices)
         with weight ``weights[k] = A_{rows[k], cols[k]}``.
@@ -236,6 +256,8 @@ class Topology:
             The topology's name.
         source : str, optional
             The file it came from, for messages.
+        uncertainty : numpy.ndarray, optional
+            Per edge, the relative radius ρ_e of its weight (NaN: none given).
 
         Returns
         -------
@@ -245,7 +267,8 @@ class Topology:
         Raises
         ------
         InputError
-            A duplicated edge, or a weight that is not symmetric and of one sign.
+            A duplicated edge, a weight that is not symmetric and of one sign, or an
+            uncertainty on a zero weight.
         """
         rows = np.asarray(rows, dtype=np.int64)
         cols = np.asarray(cols, dtype=np.int64)
@@ -254,7 +277,11 @@ class Topology:
         mapping = dict(zip(keys, w, strict=True))
         if len(mapping) != len(keys):
             raise InputError(f"{source + ': ' if source else ''}edges: duplicated edge")
-        return cls(tuple(labels), dim, mapping, name=name, source=source)
+        unc: dict[tuple[int, int], float] = {}
+        if uncertainty is not None:
+            u = np.asarray(uncertainty, dtype=float)
+            unc = {keys[k]: float(u[k]) for k in np.flatnonzero(~np.isnan(u)).tolist()}
+        return cls(tuple(labels), dim, mapping, name=name, source=source, uncertainty=unc)
 
     @classmethod
     def from_data(cls, data) -> Topology:
@@ -273,15 +300,25 @@ class Topology:
         """
         if isinstance(data, EdgeListData):
             return cls.from_arrays(
-                data.labels, data.dim, data.rows, data.cols, data.w, data.name, data.source
+                data.labels,
+                data.dim,
+                data.rows,
+                data.cols,
+                data.w,
+                data.name,
+                data.source,
+                data.uncertainty,
             )
         index = {str(a): k for k, a in enumerate(data.labels)}
-        weights, fields = {}, {}
+        weights, fields, unc = {}, {}, {}
         for e in data.edges:
             key = (index[str(e.target)], index[str(e.source)])
             weights[key] = e.weight
             fields[key] = e.field
-        return cls(data.labels, data.dim, weights, data.name, data.source, fields)
+            rho = e.uncertainty if e.uncertainty is not None else data.uncertainty
+            if rho is not None and (e.uncertainty is not None or np.any(e.weight)):
+                unc[key] = rho  # a file-wide default skips zero weights
+        return cls(data.labels, data.dim, weights, data.name, data.source, fields, unc)
 
     # -- basic accessors ----------------------------------------------------------
     @property

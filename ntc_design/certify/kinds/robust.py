@@ -39,6 +39,15 @@ from .dense import read_dense
 REALISATION_RTOL = 1e-9  # a realisation may sit this far (relative) outside the set
 
 
+def _radii(x: Any, m: int, where: str) -> np.ndarray:
+    """The subject's radius: one number for every uncertain edge, or a list of m."""
+    if isinstance(x, list):
+        if len(x) != m:
+            raise InputError(f"{where}: expected {m} radii, one per uncertain edge")
+        return np.array([check_radius(v, where) for v in x], dtype=float)
+    return np.full(m, check_radius(x, where))
+
+
 def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
     """The ``robust`` certificate of a report of :func:`ntc_design.certify.robust.robust`.
 
@@ -62,8 +71,10 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
     props: list[Property] = []
     mats: dict[str, Any] = {"L_B": {name: d.grounded_laplacian().tolist()}, "P": {}}
     mult: dict[str, Any] = {}
+    uniform = len(set(rep.radii)) <= 1
+    stated_radius: Any = rep.radius if uniform else list(rep.radii)
     results: dict[str, Any] = {
-        "radius": rep.radius,
+        "radius": stated_radius,
         "nominal_decay": rep.nominal_decay,
         "seconds": rep.seconds,
     }
@@ -88,8 +99,8 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
         results["decay"] = {"lower": pr["alpha"]}
         if rep.decay.realisation is not None:
             results["decay"]["upper"] = rep.decay.upper
-            reals["decay"] = {"radius": rep.radius, "edges": rep.decay.realisation.edges(top, ed)}
-    if pr["offset"] is not None and Property.ROBUST_MARGIN in props:
+            reals["decay"] = {"edges": rep.decay.realisation.edges(top, ed)}
+    if pr["offset"] is not None and Property.ROBUST_DECAY in props:
         gam, lam, y = pr["offset"]
         props.append(Property.ROBUST_OFFSET)
         mult["robust_offset"] = lam.tolist()
@@ -97,10 +108,7 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
         results["offset"] = {"gamma": gam, "upper": math.sqrt(gam)}
         if rep.offset.realisation is not None:
             results["offset"]["lower"] = rep.offset.lower
-            reals["offset"] = {
-                "radius": rep.radius,
-                "edges": rep.offset.realisation.edges(top, ed),
-            }
+            reals["offset"] = {"edges": rep.offset.realisation.edges(top, ed)}
     mats["multipliers"] = mult
     subject_mode = mode_subject(d)
     doc = {
@@ -109,7 +117,7 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
         "kind": "robust",
         "certifies": [p.value for p in props],
         "size": int(top.nd),
-        "subject": {"modes": {name: subject_mode}, "radius": rep.radius},
+        "subject": {"modes": {name: subject_mode}, "radius": stated_radius},
         "matrices": mats,
         "claims": [c.to_dict() for c in _claims(tuple(props), name, _stated(results, rep.radius))],
         "results": results,
@@ -141,7 +149,8 @@ def _claims(props: tuple[Property, ...], mode: str, st: _Stated) -> tuple[Claim,
                 ClaimKind.ROBUST_LMI, Property.ROBUST_MARGIN, mode, "robust_margin", 0.0, st.margin
             ),
         ]
-    if Property.ROBUST_DECAY in props:
+    if Property.ROBUST_DECAY in props or Property.ROBUST_OFFSET in props:
+        # the offset's premise (every L_B(A') invertible) is the decay LMI at the same radii
         out += [
             Claim(ClaimKind.PD, Property.ROBUST_DECAY, p="robust_decay"),
             Claim(
@@ -207,7 +216,7 @@ def _pd(m: Dyadic) -> PDProof:
     return verified_float_pd(f, np.abs(f) * 2.0**-53 + 2.0**-1074)
 
 
-def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float, radius: float):
+def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float, radius):
     """Ψ of the decay S-procedure, exactly (see :func:`ntc_design.certify.robust.decay_matrix`).
 
     Parameters
@@ -220,8 +229,10 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
         P.
     tau : sequence of float
         τ_e.
-    alpha, radius : float
-        α and ρ.
+    alpha : float
+        α.
+    radius : sequence of float
+        ρ_e per edge.
 
     Returns
     -------
@@ -231,10 +242,9 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
     top = (
         pd_ @ lap + lap.T @ pd_ - pd_.scale(_dy(2.0 * alpha)) if alpha else pd_ @ lap + lap.T @ pd_
     )
-    r2 = _dy(radius) @ _dy(radius)
     offs, diag = [], []
-    for t, c in zip(tau, ch, strict=True):
-        top = top - c.dwd.scale(_dy(t) @ r2)
+    for t, q, c in zip(tau, radius, ch, strict=True):
+        top = top - c.dwd.scale(_dy(t) @ _dy(q) @ _dy(q))
         offs.append(pd_ @ c.ewv)
         diag.append(c.vwv.scale(_dy(t)))
     if not offs:
@@ -269,8 +279,8 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
         λ_e.
     y : numpy.ndarray
         Finsler's multiplier.
-    radius : float
-        ρ.
+    radius : sequence of float
+        ρ_e per edge.
 
     Returns
     -------
@@ -285,15 +295,14 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     sizes = [c.vwv.num.shape[0] for c in ch]
     k = n + sum(sizes) + 1
     c_ = Dyadic.of(np.asarray(target, dtype=float).reshape(n, 1))
-    r2 = _dy(radius) @ _dy(radius)
     zz = Dyadic(np.zeros((n, n), dtype=object), 0)
     zc = Dyadic(np.zeros((n, 1), dtype=object), 0)
     cc = _dy(gamma)
     eye = Dyadic(np.eye(n, dtype=np.int64).astype(object), 0)
     zz = zz - eye
     diag = []
-    for le, c in zip(lam, ch, strict=True):
-        q = c.dwd.scale(r2 @ _dy(le))
+    for le, rho, c in zip(lam, radius, ch, strict=True):
+        q = c.dwd.scale(_dy(rho) @ _dy(rho) @ _dy(le))
         qc = q @ c_
         zz = zz - q
         zc = zc - qc
@@ -328,7 +337,8 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
 class _State:
     dense: DenseContext
     mode: DenseMode
-    radius: float
+    radius: float  # the largest ρ_e
+    radii: np.ndarray  # ρ_e per uncertain edge (UncertainEdges order)
     margin: float | None
     alpha: float | None
     multipliers: dict
@@ -391,7 +401,9 @@ class RobustKind(CertificateKind):
         ctx: DenseContext = base.state
         (mode,) = ctx.modes.values()
         sub = need(doc, "subject", dict, source)
-        radius = check_radius(sub.get("radius"), f"{source}: subject.radius")
+        m_edges = uncertain_edges(mode.top).m if mode.in_range else 0
+        radii = _radii(sub.get("radius"), m_edges, f"{source}: subject.radius")
+        radius = float(np.max(radii, initial=0.0))
         res = need(doc, "results", dict, source)
         mats = need(doc, "matrices", dict, source)
         mult = need(mats, "multipliers", dict, f"{source}: matrices")
@@ -405,7 +417,7 @@ class RobustKind(CertificateKind):
         alpha = None if a_lo is None else number(a_lo, f"{source}: results.decay.lower")
         gam = (res.get("offset") or {}).get("gamma")
         gamma = None if gam is None else number(gam, f"{source}: results.offset.gamma")
-        state = _State(ctx, mode, radius, margin, alpha, mult, mats.get("Y"), gamma, doc)
+        state = _State(ctx, mode, radius, radii, margin, alpha, mult, mats.get("Y"), gamma, doc)
         return Reading(base.modes, base.checks, state)
 
     def claims(
@@ -433,19 +445,15 @@ class RobustKind(CertificateKind):
                 st.multipliers.get(claim.p), len(ch), f"{src}: matrices.multipliers.{claim.p}"
             )
             radius = float(claim.radius or 0.0)
-            proof = _pd(psi_exact(mode.exact, ch, p, tau, claim.alpha, radius))
+            rad = st.radii if claim.prop is Property.ROBUST_DECAY else [radius] * len(ch)
+            proof = _pd(psi_exact(mode.exact, ch, p, tau, claim.alpha, rad))
             return Check(
                 claim.id,
                 proof.holds,
                 f"{proof.method}: {proof.detail} (α = {claim.alpha!r}, ρ = {radius!r})",
                 claim,
             )
-        # the offset: its premise (every L_B(A') within ρ invertible) is the margin's claim
-        premise = st.margin is not None and st.radius <= st.margin
-        if not premise:
-            return Check(
-                claim.id, False, "ρ is above the proven margin radius: x* may not exist", claim
-            )
+        # the offset's premise (every L_B(A') invertible) is the decay claim, derived with it
         if st.gamma is None or st.y is None:
             return Check(claim.id, False, "results.offset.gamma or matrices.Y is missing", claim)
         lam = _floats(
@@ -460,7 +468,7 @@ class RobustKind(CertificateKind):
         target = np.tile(mode.theta, mode.top.n)
         u = _input_exact(mode)
         r0 = u - mode.exact @ Dyadic.of(target.reshape(n, 1))
-        proof = _pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radius))
+        proof = _pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radii))
         return Check(
             claim.id, proof.holds, f"{proof.method}: {proof.detail} (ρ = {st.radius!r})", claim
         )
@@ -490,7 +498,16 @@ class RobustKind(CertificateKind):
     ) -> None:
         st: _State = reading.state
         mode = st.mode
-        audit.exact(("radius",), st.radius)
+        stated = doc.get("subject", {}).get("radius")
+        if isinstance(stated, list):
+            for k, v in enumerate(st.radii.tolist()):
+                audit.exact(("radius", k), v)
+            if not isinstance(audit.get("radius"), list) or len(audit.get("radius")) != len(
+                st.radii
+            ):
+                audit.fail("radius: not the subject's per-edge radii")
+        else:
+            audit.exact(("radius",), st.radius)
         scale = float(np.max(np.abs(mode.lap))) if mode.in_range else 1.0
         audit.recomputed(("nominal_decay",), abscissa(mode.lap), scale)
         audit.informational(("seconds",))
@@ -507,7 +524,7 @@ class RobustKind(CertificateKind):
             return
         for key, path in (("decay", ("decay", "upper")), ("offset", ("offset", "lower"))):
             if audit.has(*path):
-                got = _attained(reals.get(key), mode, st.radius, key)
+                got = _attained(reals.get(key), mode, st.radii, key)
                 if isinstance(got, str):
                     audit.fail(f"realizations.{key}: {got}")
                     audit.informational(path)
@@ -522,7 +539,7 @@ class RobustKind(CertificateKind):
                 audit.fail(str(exc))
                 audit.informational(("margin", "upper"))
                 return
-            got = _attained(r, mode, rho, "decay")
+            got = _attained(r, mode, np.full(len(st.radii), rho), "decay")
             if isinstance(got, str):
                 audit.fail(f"realizations.margin: {got}")
             elif got > 1e-12 * scale:
@@ -549,7 +566,7 @@ def _input_exact(mode: DenseMode) -> Dyadic:
     return Dyadic(col, e)
 
 
-def _attained(real: Any, mode: DenseMode, radius: float, what: str) -> float | str:
+def _attained(real: Any, mode: DenseMode, radii: np.ndarray, what: str) -> float | str:
     """What a stored realisation attains (min Re λ, or the offset), after checking that it
     lists every uncertain edge once, in the set of this radius; or why it is refused."""
     if not isinstance(real, dict) or not isinstance(real.get("edges"), list):
@@ -582,12 +599,13 @@ def _attained(real: Any, mode: DenseMode, radius: float, what: str) -> float | s
         if not np.all(np.isfinite(a)) or not np.array_equal(a, a.T):
             return f"edge {k}: weight is not finite and symmetric"
         wa = ed.s[k] * a
+        radius = float(radii[k])
         tol = REALISATION_RTOL * max(float(np.max(np.abs(ed.w[k]))), 1e-300)
         if (
             np.linalg.eigvalsh(wa - (1 - radius) * ed.w[k])[0] < -tol
             or np.linalg.eigvalsh((1 + radius) * ed.w[k] - wa)[0] < -tol
         ):
-            return f"edge {k}: weight outside the set of radius {radius!r}"
+            return f"edge {k}: weight outside its interval (radius {radius!r})"
         w[(i, j)] = a
     dmat = coupling_matrix(top, mode.b)
     lap_r = _laplacian(top, w) + mode.delta * dmat
