@@ -1,4 +1,4 @@
-"""Forgery property test over all five certificate kinds.
+"""Forgery property test over all six certificate kinds.
 
 Every field of an honest certificate of each kind is mutated (numbers scaled, negated,
 zeroed; strings and nulls replaced; list entries dropped; keys deleted and added), the
@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import warnings
 
 import networkx as nx
 import numpy as np
@@ -69,7 +70,15 @@ def honest() -> dict[str, dict]:
     tvc = KINDS["time_varying"].issue(
         TimeVaryingDesign(tv, np.array([1.0, 2.0]), 0.1), gain="1/(1+t)"
     )
+    from ntc_design.certify.kinds.robust import robust_certificate
+    from ntc_design.certify.robust import robust
+
+    rdes = design(random_network(4, 2, seed=1), [1.0, -1.0], 0.1, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
     out = {
+        "robust": rob,
         "hurwitz": g1,
         "switching": sw,
         "hurwitz-scale": scale_rand,
@@ -308,8 +317,159 @@ def _truth_time_varying(doc: dict) -> list[str]:
     return bad
 
 
+def _abs(a: np.ndarray) -> np.ndarray:
+    lam, q = np.linalg.eigh(a)
+    return (q * np.abs(lam)) @ q.T
+
+
+def _robust_channels(top: Topology):
+    """Per edge, ordered by (to, from): (E_i W V, D W Dᵀ, Vᵀ W V) with V an orthonormal
+    basis of range(W) from eigh (any basis gives a congruent Ψ, so PD-ness is the same)."""
+    n, d = top.n, top.dim
+    out = []
+    for (i, j), a in sorted(top.weights.items()):
+        if not np.any(a):
+            continue
+        s = _sign(a)
+        w = s * a
+        lam, q = np.linalg.eigh(w)
+        v = q[:, lam > 1e-12 * max(lam.max(), 1e-300)]
+        e_i = np.zeros((n * d, d))
+        e_i[i * d : (i + 1) * d] = np.eye(d)
+        dm = e_i.copy()
+        dm[j * d : (j + 1) * d] -= s * np.eye(d)
+        out.append((e_i @ w @ v, dm @ w @ dm.T, v.T @ w @ v))
+    return out
+
+
+def _psi(lap, ch, p, tau, alpha, radii):
+    n = lap.shape[0]
+    top_left = p @ (lap - alpha * np.eye(n)) + (lap - alpha * np.eye(n)).T @ p
+    cols, blocks = [], []
+    for t, r, (ewv, dwd, vwv) in zip(tau, radii, ch, strict=True):
+        top_left = top_left - t * r * r * dwd
+        cols.append(p @ ewv)
+        blocks.append(t * vwv)
+    k = sum(b.shape[0] for b in blocks)
+    out = np.zeros((n + k, n + k))
+    out[:n, :n] = top_left
+    c = n
+    for col, b in zip(cols, blocks, strict=True):
+        m = b.shape[0]
+        out[:n, c : c + m] = col
+        out[c : c + m, :n] = col.T
+        out[c : c + m, c : c + m] = b
+        c += m
+    return out
+
+
+def _sample_realisations(top: Topology, radii, rng, count):
+    keys = [k for k, a in sorted(top.weights.items()) if np.any(a)]
+    for _ in range(count):
+        w = dict(top.weights)
+        for key, r in zip(keys, radii, strict=True):
+            a = top.weights[key]
+            s = _sign(a)
+            lw, qw = np.linalg.eigh(s * a)
+            f = (qw * np.sqrt(np.clip(lw, 0, None))) @ qw.T
+            d = a.shape[0]
+            qr = np.linalg.qr(rng.normal(size=(d, d)))[0]
+            e = qr @ np.diag(r * rng.choice([-1.0, 1.0], size=d)) @ qr.T
+            b = s * (f @ (np.eye(d) + e) @ f)
+            w[key] = 0.5 * (b + b.T)
+        yield w
+
+
+def _lap_with(top: Topology, w: dict, delta: float, b: dict) -> np.ndarray:
+    d = top.dim
+    lap = np.zeros((top.n * d, top.n * d))
+    for (i, j), a in w.items():
+        lap[i * d : (i + 1) * d, j * d : (j + 1) * d] -= a
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += _abs(a)
+    for i, bi in b.items():
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += delta * bi
+    return lap
+
+
+def _truth_robust(doc: dict) -> list[str]:
+    """Robust certificates: the S-procedure matrices rebuilt here (independent channels),
+    sampled realisations against every proven end, and the reported realisations."""
+    bad: list[str] = []
+    ((name, m),) = doc["subject"]["modes"].items()
+    top = Topology.from_data(parse_topology(m["topology"], name))
+    theta, delta = np.array(m["theta"]), m["delta"]
+    if {str(x) for x in m["informed"]} != _antagonised(top) or not np.any(theta):
+        bad.append("subject")
+    if m["x0"] != ((1 + 2 / delta) * theta).tolist():
+        bad.append("x0")
+    b = {
+        i: sum(-a for (ii, _j), a in top.weights.items() if ii == i and _sign(a) < 0)
+        for i in range(top.n)
+    }
+    b = {i: v for i, v in b.items() if np.any(v)}
+    lap = _lap_with(top, dict(top.weights), delta, b)
+    ch = _robust_channels(top)
+    r = doc["subject"]["radius"]
+    radii = list(r) if isinstance(r, list) else [r] * len(ch)
+    res, mats = doc["results"], doc["matrices"]
+    props = doc["certifies"]
+    rng = np.random.default_rng(7)
+    samples = list(_sample_realisations(top, radii, rng, 200))
+    u = delta * np.concatenate(
+        [b.get(i, np.zeros((top.dim, top.dim))) @ m["x0"] for i in range(top.n)]
+    )
+    target = np.tile(theta, top.n)
+    if "robust_margin" in props:
+        rm = res["margin"]["lower"]
+        p = np.array(mats["P"]["robust_margin"])
+        tau = mats["multipliers"]["robust_margin"]
+        if not (_pos(p) and _pos(_psi(lap, ch, p, tau, 0.0, [rm] * len(ch)))):
+            bad.append("margin LMI")
+        for w in _sample_realisations(top, [rm] * len(ch), rng, 100):
+            if not np.min(np.linalg.eigvals(_lap_with(top, w, delta, b)).real) > 0:
+                bad.append("a realisation within the margin is not Hurwitz")
+                break
+    if "robust_decay" in props or "robust_offset" in props:
+        al = res["decay"]["lower"]
+        p = np.array(mats["P"]["robust_decay"])
+        tau = mats["multipliers"]["robust_decay"]
+        if not (_pos(p) and _pos(_psi(lap, ch, p, tau, al, radii))):
+            bad.append("decay LMI")
+        worst = min(np.min(np.linalg.eigvals(_lap_with(top, w, delta, b)).real) for w in samples)
+        if not worst > al:
+            bad.append("a sampled realisation decays slower than α_lower")
+    if "robust_offset" in props:
+        gam = res["offset"]["gamma"]
+        worst = max(
+            np.linalg.norm(np.linalg.solve(_lap_with(top, w, delta, b), u) - target)
+            for w in samples
+        )
+        if not worst**2 <= gam or not _close(res["offset"]["upper"], math.sqrt(gam)):
+            bad.append("offset bound")
+    eig = float(np.min(np.linalg.eigvals(lap).real))
+    if not _close(res["nominal_decay"], eig):
+        bad.append("nominal decay")
+    reals = doc.get("realizations", {})
+    for key, path in (("decay", ("decay", "upper")), ("offset", ("offset", "lower"))):
+        if path[0] in res and path[1] in res[path[0]]:
+            w = dict(top.weights)
+            for e in reals[key]["edges"]:
+                w[(top.index(e["to"]), top.index(e["from"]))] = np.array(e["weight"])
+            lw = _lap_with(top, w, delta, b)
+            got = (
+                float(np.min(np.linalg.eigvals(lw).real))
+                if key == "decay"
+                else float(np.linalg.norm(np.linalg.solve(lw, u) - target))
+            )
+            if not _close(res[path[0]][path[1]], got, 1e-6):
+                bad.append(f"{key} realisation")
+    return bad
+
+
 def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
     """What is false in ``doc`` (empty: every claim and reported number is true)."""
+    if kind == "robust":
+        return _truth_robust(doc)
     if doc.get("certifies") != honest_doc["certifies"] and kind not in ("hurwitz", "switching"):
         return ["certifies"]
     if kind in ("hurwitz", "switching"):
@@ -399,6 +559,7 @@ def _careful(doc):
 
 
 KIND_OF = {
+    "robust": "robust",
     "hurwitz": "hurwitz",
     "switching": "switching",
     "hurwitz-scale": "hurwitz-scale",

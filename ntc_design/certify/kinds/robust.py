@@ -347,6 +347,20 @@ class _State:
     doc: dict
 
 
+def _rect(x: Any, rows: int, cols: int, where: str) -> np.ndarray:
+    """A rows×cols matrix of finite numbers (shape checked before anything is built)."""
+    if (
+        not isinstance(x, list)
+        or len(x) != rows
+        or any(not isinstance(r, list) or len(r) != cols for r in x)
+    ):
+        raise InputError(f"{where}: expected a {rows}×{cols} matrix")
+    out = np.array([[number(v, where) for v in r] for r in x], dtype=float)
+    if not np.all(np.isfinite(out)):
+        raise InputError(f"{where}: expected finite numbers")
+    return out
+
+
 def _floats(x: Any, n: int, where: str) -> np.ndarray:
     if not isinstance(x, list) or len(x) != n:
         raise InputError(f"{where}: expected a list of {n} numbers")
@@ -407,15 +421,18 @@ class RobustKind(CertificateKind):
         res = need(doc, "results", dict, source)
         mats = need(doc, "matrices", dict, source)
         mult = need(mats, "multipliers", dict, f"{source}: matrices")
-        m_lo = (res.get("margin") or {}).get("lower")
-        a_lo = (res.get("decay") or {}).get("lower")
+        for key in ("margin", "decay", "offset"):
+            if key in res and not isinstance(res[key], dict):
+                raise InputError(f"{source}: results.{key}: expected an object")
+        m_lo = res.get("margin", {}).get("lower")
+        a_lo = res.get("decay", {}).get("lower")
         margin = (
             None if m_lo is None else check_radius(m_lo, f"{source}: results.margin.lower", False)
         )
         if margin is not None and margin > 1:
             raise InputError(f"{source}: results.margin.lower: above 1")
         alpha = None if a_lo is None else number(a_lo, f"{source}: results.decay.lower")
-        gam = (res.get("offset") or {}).get("gamma")
+        gam = res.get("offset", {}).get("gamma")
         gamma = None if gam is None else number(gam, f"{source}: results.offset.gamma")
         state = _State(ctx, mode, radius, radii, margin, alpha, mult, mats.get("Y"), gamma, doc)
         return Reading(base.modes, base.checks, state)
@@ -438,6 +455,10 @@ class RobustKind(CertificateKind):
             return Check(claim.id, False, "L_B is out of range or too large for the exact test")
         ch = _exact_channels(mode.top)
         if claim.kind is ClaimKind.ROBUST_LMI:
+            stated = st.margin if claim.prop is Property.ROBUST_MARGIN else st.alpha
+            if stated is None:  # a property needs its number: ρ_lower, or α_lower
+                what = "margin.lower" if claim.prop is Property.ROBUST_MARGIN else "decay.lower"
+                return Check(claim.id, False, f"results.{what} is missing", claim)
             p = st.dense.p(claim.p or "")
             if p is None:
                 return Check(claim.id, False, f"matrices.P.{claim.p} is out of range", claim)
@@ -461,10 +482,8 @@ class RobustKind(CertificateKind):
             len(ch),
             f"{src}: matrices.multipliers.robust_offset",
         )
-        y = np.asarray(st.y, dtype=float) if isinstance(st.y, list) else None
-        if y is None or y.ndim != 2 or not np.all(np.isfinite(y)):
-            raise InputError(f"{src}: matrices.Y: expected a matrix of finite numbers")
         n = mode.top.nd
+        y = _rect(st.y, n, n + sum(c.vwv.num.shape[0] for c in ch) + 1, f"{src}: matrices.Y")
         target = np.tile(mode.theta, mode.top.n)
         u = _input_exact(mode)
         r0 = u - mode.exact @ Dyadic.of(target.reshape(n, 1))
