@@ -813,6 +813,7 @@ def robust(
     starts: int = 6,
     seed: int = 0,
     bisection_steps: int = 3,
+    margin: bool = True,
 ) -> RobustReport:
     """The decay, offset and margin brackets of a Lemma 1 design under relative weight
     uncertainty of radius ρ (see the module docstring for the set and the methods).
@@ -831,6 +832,8 @@ def robust(
     bisection_steps : int, optional
         Bisection steps on α and on ρ after the first fraction of the attained end that
         verifies (:data:`FRACTIONS`).
+    margin : bool, optional
+        Also the margin bracket (the most expensive; a sweep over ρ needs it once).
 
     Returns
     -------
@@ -897,9 +900,9 @@ def robust(
         "realisation by projected gradient",
     )
     # margin
-    destab = _destabilising(p, rmax, starts, seed + 2)
+    destab = _destabilising(p, rmax, starts, seed + 2) if margin else None
     r_top = 1.0 if destab is None else destab.radius
-    r_lo, mar = _descend(lambda r: lmi(0.0, r), r_top, bisection_steps)
+    r_lo, mar = _descend(lambda r: lmi(0.0, r), r_top, bisection_steps) if margin else (0.0, None)
     margin = Bracket(
         r_lo if mar is not None else None,
         None if destab is None else destab.radius,
@@ -920,6 +923,31 @@ def robust(
         proofs,
         time.perf_counter() - t0,
     )
+
+
+def robust_sweep(design: ProtocolDesign, radii, **options: Any) -> list[RobustReport]:
+    """The decay and offset brackets at each radius (one :func:`robust` each, without the
+    margin), for a figure of the brackets against ρ.
+
+    Parameters
+    ----------
+    design : ProtocolDesign
+        The nominal design.
+    radii : sequence of float
+        The radii ρ, each in [0, 1).
+    **options
+        ``starts``, ``seed``, ``bisection_steps`` of :func:`robust`.
+
+    Returns
+    -------
+    list of RobustReport
+
+    Raises
+    ------
+    InputError
+        A bad radius, or a nominal −L_B that is not Hurwitz.
+    """
+    return [robust(design, float(r), margin=False, **options) for r in radii]
 
 
 def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisation | None:
@@ -964,5 +992,6 @@ __all__ = [
     "pivot_columns",
     "realised_topology",
     "robust",
+    "robust_sweep",
     "uncertain_edges",
 ]
