@@ -568,12 +568,23 @@ def simulate(
                 print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
             print(f"error: {one_line(str(exc))}", file=sys.stderr)
             raise typer.Exit(1) from None
+    study = None
+    if spec.robust is not None:  # weight realisations with the nominal protocol
+        from .sweep.robust import robust_study
+
+        with Progress("ntc simulate") as prog, warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the brackets' solver notes; every end is proven
+            prog.stage(f"simulating {spec.robust.realizations} weight realisations")
+            study = robust_study(top, spec, progress=lambda k, n: prog.tick("realisations", k, n))
+        recorded["robust"] = study.to_dict()
     size = result_output_bytes(res, top)
     if size > OUTPUT_NOTE_BYTES and not as_json:
         print(
             f"note: writing about {format_bytes(size)} to {one_line(str(out_dir))}", file=sys.stderr
         )
-    written = write_outputs(res, out_dir, recorded)
+    written = write_outputs(
+        res, out_dir, recorded, {"robust.csv": study.csv()} if study is not None else None
+    )
     st = res.stats
     if as_json:
         summary = res.summary()
@@ -607,6 +618,10 @@ def simulate(
     out.print("; ".join(parts))
     for n in res.notes:
         out.print(f"note: {n}")
+    if study is not None:
+        from .sweep.robust import study_sentence
+
+        out.print(study_sentence(study.to_dict()))
     out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
 
 

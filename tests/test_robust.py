@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -379,3 +380,84 @@ def test_out_above_the_dense_size_is_refused_before_work(tmp_path):
     )  # fmt: skip
     assert r.returncode == 2 and "--out: a robust certificate is issued up to Nd = 80" in r.stderr
     assert not (tmp_path / "c.json").exists()
+
+
+# -- simulating weight realisations (scenario key robust:) ---------------------------------
+
+
+def _scenario(tmp_path, robust_block: str, paths: int = 60) -> Path:
+    p = tmp_path / "sc.yaml"
+    p.write_text(
+        f"topology: {ROOT / 'examples' / 'g1.yaml'}\ntheta: [1, 2, -1]\ngain: '1/(1+t)'\n"
+        "noise: {sigma: 0.4, f: 0.3}\ninitial: {uniform: [-3, 3], seed: 1}\n"
+        f"T: 2\ndt: 0.002\npaths: {paths}\nworkers: 1\n{robust_block}\n"
+    )
+    return p
+
+
+def test_the_study_draws_in_the_set_and_respects_the_brackets(tmp_path):
+    from ntc_design.simulate.scenario import load_scenario
+    from ntc_design.sweep.robust import draw_realisation, robust_study, within_brackets
+
+    sc = _scenario(tmp_path, "robust: {realizations: 4, radius: 0.1, seed: 3}")
+    top, spec, _ = load_scenario(sc)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        st = robust_study(top, spec)
+    assert len(st.rows) == 4 and within_brackets(st) == {"decay": True, "offset": True}
+    des = nd.design(top, THETA, thresholds=False)
+    for r in st.rows:
+        real = draw_realisation(top, np.full(8, 0.1), 3, r["realization"])
+        assert in_set(des, dict(real.weights), 0.1)
+        a, o = features(des, dict(real.weights))  # the independent rebuild
+        assert r["decay_rate"] == pytest.approx(a, rel=1e-9)
+        assert r["offset"] == pytest.approx(o, rel=1e-9)
+    # the draws depend on (seed, index) only: the same realisation 2 on its own
+    again = draw_realisation(top, np.full(8, 0.1), 3, 2)
+    assert all(
+        np.array_equal(again.weights[k], draw_realisation(top, np.full(8, 0.1), 3, 2).weights[k])
+        for k in again.weights
+    )
+    assert st.csv().count("\n") == 5 and st.csv().startswith("realization,decay_rate,offset")
+
+
+def test_simulate_writes_robust_csv_and_the_report_shows_it(tmp_path):
+    sc = _scenario(tmp_path, "robust: {realizations: 2, radius: 0.05, seed: 1}")
+    out = tmp_path / "run"
+    r = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "simulate", str(sc), "--out", str(out)],
+        cwd=ROOT, capture_output=True, text=True,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "both proven bounds hold" in r.stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["robust"]["realizations"] == 2 and (out / "robust.csv").is_file()
+    r = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "report", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 0, r.stderr
+    html = (out / "report.html").read_text()
+    assert "Weights within ρ" in html and "both proven bounds hold" in html
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "block, needle",
+    [
+        ("robust: {realizations: 0}", "robust.realizations"),
+        ("robust: {radius: 1.5}", "robust.radius"),
+        ("robust: {realisations: 3}", "robust.realisations: unknown field"),
+        ("robust: 7", "robust: expected"),
+    ],
+)
+def test_a_bad_robust_block_is_one_line_exit_2(tmp_path, block, needle):
+    sc = _scenario(tmp_path, block)
+    r = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "simulate", str(sc), "--out", str(tmp_path / "o")],
+        cwd=ROOT, capture_output=True, text=True,
+    )  # fmt: skip
+    assert r.returncode == 2 and needle in r.stderr and str(sc) in r.stderr
+    assert r.stderr.count("\n") == 1 and not (tmp_path / "o").exists()

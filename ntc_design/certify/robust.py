@@ -903,7 +903,7 @@ def robust(
     destab = _destabilising(p, rmax, starts, seed + 2) if margin else None
     r_top = 1.0 if destab is None else destab.radius
     r_lo, mar = _descend(lambda r: lmi(0.0, r), r_top, bisection_steps) if margin else (0.0, None)
-    margin = Bracket(
+    margin_b = Bracket(
         r_lo if mar is not None else None,
         None if destab is None else destab.radius,
         destab,
@@ -919,7 +919,7 @@ def robust(
         alpha0,
         decay,
         offset,
-        margin,
+        margin_b,
         proofs,
         time.perf_counter() - t0,
     )

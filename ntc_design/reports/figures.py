@@ -647,3 +647,42 @@ def robust_figure(reports: Sequence, margin: tuple[float | None, float | None] |
             ax.set_xlim(0, max(float(rho.max(initial=0.0)), margin[1] or 0.0) if margin else None)
         axes[0].legend(fontsize=7, loc="lower left")
     return fig
+
+
+def realisations_figure(study: dict):
+    """Simulated weight realisations against the proven brackets: each realisation's
+    exact decay rate and consensus offset as a point, the proven lower bound on the decay
+    rate and upper bound on the offset as lines (a point beyond a line would be a false
+    proof).
+
+    Parameters
+    ----------
+    study : dict
+        ``summary.json``'s ``robust`` (:meth:`ntc_design.sweep.robust.RobustStudy.to_dict`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    rows = study["rows"]
+    x = np.array([r["decay_rate"] for r in rows], dtype=float)
+    y = np.array([r["offset"] for r in rows], dtype=float)
+    b = study.get("brackets") or {}
+    lo = (b.get("decay") or {}).get("lower")
+    hi = (b.get("offset") or {}).get("upper")
+    with paper_style():
+        fig, ax = plt.subplots(figsize=(ONE_COLUMN, 2.6), layout="constrained")
+        ax.plot(x, y, "o", color="C0", ms=4, label=f"{len(rows)} realisations")
+        if lo is not None:
+            ax.axvline(lo, color="C3", lw=1.2, label="proven lower bound on the decay rate")
+        if hi is not None:
+            ax.axhline(hi, color="C1", lw=1.2, ls="--", label="proven upper bound on the offset")
+        nom = b.get("nominal_decay")
+        if nom is not None:
+            ax.plot([nom], [0.0], "k*", ms=7, label="nominal network")
+        ax.set_xlabel("decay rate min Re λ(L_B(A'))")
+        ax.set_ylabel("consensus offset ‖x* − 1⊗θ‖₂")
+        r = study["radius"]
+        ax.set_title(f"weights within ρ = {r:g}", fontsize=8)
+        ax.legend(fontsize=6.5, loc="best")
+    return fig

@@ -65,6 +65,9 @@ class RunSection:
     parameters: Table
     versions: Table
     interactive_agents: list
+    robust: Table | None = None  # weight realisations against the proven brackets
+    robust_figure: Figure | None = None
+    robust_note: str = ""
 
     def toc(self) -> dict:
         sub = [
@@ -76,11 +79,14 @@ class RunSection:
             ("convergence", "Convergence"),
             ("figures", "Topology and sample paths"),
             ("final", "Final errors"),
+            ("robust", "Weights within ρ"),
             ("data", "Data files"),
             ("parameters", "Parameters"),
         ]
         if self.coupling is None:
             sub = [x for x in sub if x[0] != "coupling"]
+        if self.robust is None:
+            sub = [x for x in sub if x[0] != "robust"]
         return {
             "id": self.key,
             "title": self.title,

@@ -24,6 +24,7 @@ from ..outputs import check_output_file
 from ..rows import fmt
 from ..schedule import ScheduleGain
 from ..simulate.result import MeanSquareBand
+from ..sweep.robust import study_sentence
 from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
 from .aggregate import AGGREGATE_ABOVE, aggregate_section
@@ -235,6 +236,45 @@ def _final_table(run: RunData, mc: MeanSquareBand | None, exact: np.ndarray | No
     )
 
 
+def _robust_part(run: RunData, fig) -> tuple[Table | None, Figure | None, str]:
+    """The weight realisations of summary.json's ``robust`` (a scenario's ``robust:``)
+    against the proven brackets: a table, a figure and a sentence; nothing without it."""
+    st = run.summary.get("robust")
+    if not isinstance(st, dict) or not st.get("rows"):
+        return None, None, ""
+
+    def num(x) -> str:
+        return "—" if x is None else fmt(float(x), 5)
+
+    rows = [
+        (
+            str(r["realization"]),
+            num(r["decay_rate"]),
+            num(r["offset"]),
+            num(r["mc_offset_T"]),
+            num(r["final_ms_error"]),
+        )
+        for r in st["rows"]
+    ]
+    note = study_sentence(st) + "."
+    table = Table(
+        (
+            "realisation",
+            "decay rate (exact)",
+            "offset ‖x* − 1⊗θ‖ (exact)",
+            f"MC ‖mean x(T) − 1⊗θ‖ at T = {run.t[-1]:g}",
+            "Σ E‖x_i − θ‖² at T",
+        ),
+        rows,
+    )
+    caption = (
+        "Each simulated weight realisation's exact decay rate and consensus offset (points) "
+        "against the proven bounds (lines): no point may lie left of the solid line or above "
+        "the dashed one."
+    )
+    return table, fig(figures.realisations_figure(st), caption), note
+
+
 def _spread_text(run: RunData) -> str:
     sp_ = run.summary.get("sample_paths", {})
     if not sp_.get("stored"):
@@ -303,6 +343,12 @@ def run_section(
         fine = companion_paths(run, top)
     figs = _run_figures(run, key, figdir, base, interactive, c, mc, exact, fine)
     labels = run.labels
+
+    def robust_fig(f, caption: str) -> Figure:
+        saved = style.save(f, figdir / f"{key}_robust")
+        return figure_block(saved, f"{key}-fig-robust", caption, base, style.ONE_COLUMN, False)
+
+    rob, rob_fig, rob_note = _robust_part(run, robust_fig)
     section = RunSection(
         key=key,
         title=title,
@@ -329,6 +375,9 @@ def run_section(
         interactive_agents=[(a, f"{key}-ag{i}") for i, a in enumerate(labels)]
         if interactive
         else [],
+        robust=rob,
+        robust_figure=rob_fig,
+        robust_note=rob_note,
     )
     facts = {
         "designs": des_docs,

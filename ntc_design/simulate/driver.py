@@ -99,7 +99,7 @@ class ExpressionGain:
 
 
 def _modes(
-    topology: AnyTopology, spec: SimulationSpec
+    topology: AnyTopology, spec: SimulationSpec, protocol: ProtocolDesign | None = None
 ) -> tuple[
     list[str], Callable[[], dict[str, ProtocolDesign]], list[tuple[float, float, int]], list[str]
 ]:
@@ -165,6 +165,10 @@ def _modes(
     if not isinstance(topology, Topology):
         raise InputError(f"topology: expected a Topology, got {type(topology).__name__}")
     name = topology.name or "topology"
+    if protocol is not None:  # a kept protocol (B_i, δ, x0) on these weights
+        if protocol.topology is not topology:
+            raise InputError("protocol: its topology must be the topology simulated")
+        return [name], lambda: {name: protocol}, [(0.0, t_end, 0)], []
     return (
         [name],
         lambda: {name: design_topology(topology, th, margin, spec.delta, thresholds=False)},
@@ -273,6 +277,7 @@ def simulate(
     *,
     progress: Callable[[int, int], None] | None = None,
     engine=None,
+    protocol: ProtocolDesign | None = None,
     **options,
 ) -> SimulationResult:
     """Simulate the SAN with compound noise under the Lemma 1 protocol by Monte Carlo
@@ -292,6 +297,10 @@ def simulate(
         Runs the Monte Carlo blocks elsewhere: an object with ``run_mc(spec, progress)``
         and ``describe()``, e.g. :class:`ntc_design.distributed.DaskEngine`. None: on
         ``workers`` local processes. The result is the same either way.
+    protocol : ProtocolDesign, optional
+        For one fixed topology: the protocol (informed agents, B_i, δ, x0) to run instead
+        of Lemma 1's design of ``topology`` (its ``topology`` must be ``topology``), e.g.
+        a nominal design kept on realised weights.
     **options
         The flat options of :meth:`SimulationSpec.build` (T, dt, paths, seed, ...).
 
@@ -329,7 +338,7 @@ def simulate(
             )
         _check_size(topology, spec, cfun, 1, 1, workers)
         return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
-    return _simulate_modes(topology, spec, cfun, gain_text, workers, progress, engine)
+    return _simulate_modes(topology, spec, cfun, gain_text, workers, progress, engine, protocol)
 
 
 @dataclass(frozen=True, eq=False)
@@ -395,6 +404,7 @@ def prepare_modes(
     spec: SimulationSpec,
     cfun: Callable,
     workers: int = 1,
+    protocol: ProtocolDesign | None = None,
 ) -> PreparedModes:
     """The designs (Lemma 1, or the spec's δ), the systems, the segments and x(0) of a
     run, after the size checks and before any time grid.
@@ -409,6 +419,8 @@ def prepare_modes(
         Vectorised c(t) (the work estimate follows it).
     workers : int, optional
         Processes the Monte Carlo will use (memory estimate).
+    protocol : ProtocolDesign, optional
+        A fixed topology's protocol instead of Lemma 1's design (:func:`simulate`).
 
     Returns
     -------
@@ -419,7 +431,7 @@ def prepare_modes(
     InputError
         A run too big for the machine, a bad initial state, exact moments too large.
     """
-    names, make_designs, segments, notes = _modes(topology, spec)
+    names, make_designs, segments, notes = _modes(topology, spec, protocol)
     if workers < spec.mc.workers:
         notes.append(f"workers: {spec.mc.workers} asked, {workers} used (the machine's CPUs)")
     _check_size(topology, spec, cfun, len(names), len(segments), workers)
@@ -447,10 +459,11 @@ def _simulate_modes(
     workers: int,
     progress,
     engine,
+    protocol: ProtocolDesign | None = None,
 ) -> SimulationResult:
     """:func:`simulate` for one topology, a switching set or a sampled A(t): one design
     per mode, checks, the grid, the runs."""
-    pm = prepare_modes(topology, spec, cfun, workers)
+    pm = prepare_modes(topology, spec, cfun, workers, protocol)
     systems, segments, notes, n, d = pm.systems, pm.segments, pm.notes, pm.n, pm.d
     if spec.method != "mc" and spec.noise.linear:
         _check_exact_work(systems, spec, cfun, gain_text, len(segments))

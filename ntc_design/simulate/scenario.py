@@ -25,7 +25,14 @@ PATHS_ALL_AGENTS_MAX = 20
 PATH_AGENTS = 8
 LONG_ROWS = 10**6
 # what an earlier run's folder may hold besides its outputs (ntc report writes these)
-REPLACEABLE = (*OUTPUT_FILES, "report.html", "figures", "certificate.json", "paths_fine.npz")
+REPLACEABLE = (
+    *OUTPUT_FILES,
+    "robust.csv",
+    "report.html",
+    "figures",
+    "certificate.json",
+    "paths_fine.npz",
+)
 
 
 def load_scenario(
@@ -106,7 +113,9 @@ def ms_error_table(res) -> tuple[list[str], np.ndarray]:
     return cols, np.column_stack(data)
 
 
-def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[Path]:
+def write_outputs(
+    res, out_dir: str | Path, extra: dict | None = None, files: dict[str, str] | None = None
+) -> list[Path]:
     """Write summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz into
     ``out_dir``, all or nothing (see :func:`ntc_design.outputs.output_folder`).
 
@@ -118,6 +127,8 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
         The output folder (created, or an earlier run's replaced).
     extra : dict, optional
         Added to the summary.
+    files : dict of str to str, optional
+        More text files to write into the folder (name -> text), e.g. ``robust.csv``.
 
     Returns
     -------
@@ -164,7 +175,10 @@ def write_outputs(res, out_dir: str | Path, extra: dict | None = None) -> list[P
         if agents is not None:
             arrays["path_agents"] = agents
         np.savez_compressed(tmp / "paths.npz", **arrays)  # type: ignore[arg-type]
-    return [out / name for name in OUTPUT_FILES if long_form or name != "ms_error_long.csv"]
+        for name, text in (files or {}).items():
+            (tmp / name).write_text(text, encoding="utf-8")
+    written = [out / name for name in OUTPUT_FILES if long_form or name != "ms_error_long.csv"]
+    return written + [out / name for name in files or {}]
 
 
 def tidy_csv(res) -> str:

@@ -283,6 +283,58 @@ class MonteCarlo:
                 object.__setattr__(self, f.name, int(getattr(self, f.name)))
 
 
+MAX_REALISATIONS = 1000
+
+
+@dataclass(frozen=True)
+class RobustSampling:
+    """Weight realisations to simulate besides the nominal network (scenario key
+    ``robust: {realizations: K, radius: ρ, seed: S}``): K draws from the Loewner set of
+    :mod:`ntc_design.certify.robust` (every edge's radius is its file's ``uncertainty:``,
+    else ``radius``), each run with the nominal protocol."""
+
+    realizations: int = 10
+    radius: float = 0.05
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        require_int("robust.realizations", self.realizations, minimum=1, maximum=MAX_REALISATIONS)
+        r = require_number("robust.radius", self.radius)
+        if not 0 <= r < 1:
+            raise InputError(f"robust.radius: must be in [0, 1), got {r:g}")
+        require_int("robust.seed", self.seed, minimum=0, maximum=MAX_SEED)
+        object.__setattr__(self, "realizations", int(self.realizations))
+        object.__setattr__(self, "radius", float(r))
+        object.__setattr__(self, "seed", int(self.seed))
+
+    @classmethod
+    def from_document(cls, doc: Any) -> RobustSampling:
+        """From the scenario's ``robust`` mapping.
+
+        Parameters
+        ----------
+        doc : Any
+            ``{realizations, radius, seed}`` (each optional).
+
+        Returns
+        -------
+        RobustSampling
+
+        Raises
+        ------
+        InputError
+            Not a mapping, an unknown key or a bad value.
+        """
+        if not isinstance(doc, Mapping):
+            raise InputError(f"robust: expected {{realizations, radius, seed}}, got {doc!r}")
+        unknown = sorted(str(k) for k in set(doc) - {"realizations", "radius", "seed"})
+        if unknown:
+            raise InputError(
+                f"robust.{unknown[0]}: unknown field (known: realizations, radius, seed)"
+            )
+        return cls(**dict(doc))
+
+
 @dataclass(frozen=True)
 class UniformInitial:
     """x(0) with every entry uniform on [lo, hi], drawn from SeedSequence(seed)."""
@@ -400,6 +452,7 @@ SCENARIO_KEYS = (
     "store_paths",
     "rng",
     "resample",
+    "robust",
 )
 OPTION_KEYS = tuple(k for k in SCENARIO_KEYS if k not in ("name", "description", "topology"))
 METHODS = ("mc", "exact", "both")
@@ -448,6 +501,9 @@ class SimulationSpec:
         ``mc``, ``exact`` or ``both``.
     resample : float or None
         Re-design period of a topology given as functions of t.
+    robust : RobustSampling or None
+        Weight realisations to simulate too (``ntc simulate`` runs them after the nominal
+        network; :func:`ntc_design.sweep.robust.robust_study`).
     """
 
     theta: np.ndarray
@@ -462,6 +518,7 @@ class SimulationSpec:
     mc: MonteCarlo = field(default_factory=MonteCarlo)
     method: str = "both"
     resample: float | None = None
+    robust: RobustSampling | None = None
 
     def __post_init__(self) -> None:
         th = _check_vector("theta", self.theta, bound=MAX_MAGNITUDE)
@@ -596,6 +653,8 @@ class SimulationSpec:
             raise InputError("theta: missing")
         o = {k: v for k, v in doc.items() if k in OPTION_KEYS}
         o["noise"] = _noise_from_document(doc.get("noise"))
+        if o.get("robust") is not None:
+            o["robust"] = RobustSampling.from_document(o["robust"])
         if "initial" in o:
             o["initial"] = _initial_from_document(o["initial"])
         if "gain" in o and isinstance(o["gain"], Mapping):
@@ -777,6 +836,7 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
 __all__ = [
     "METHODS",
     "OPTION_KEYS",
+    "RobustSampling",
     "SCENARIO_KEYS",
     "MonteCarlo",
     "Noise",
