@@ -378,7 +378,10 @@ def test_out_above_the_dense_size_is_refused_before_work(tmp_path):
          "--out", str(tmp_path / "c.json")],
         cwd=ROOT, capture_output=True, text=True,
     )  # fmt: skip
-    assert r.returncode == 2 and "--out: a robust certificate is issued up to Nd = 80" in r.stderr
+    from ntc_design.certify.robust import ROBUST_MAX_ND
+
+    assert r.returncode == 2
+    assert f"--out: a robust certificate is issued up to Nd = {ROBUST_MAX_ND}" in r.stderr
     assert not (tmp_path / "c.json").exists()
 
 
@@ -461,3 +464,24 @@ def test_a_bad_robust_block_is_one_line_exit_2(tmp_path, block, needle):
     )  # fmt: skip
     assert r.returncode == 2 and needle in r.stderr and str(sc) in r.stderr
     assert r.stderr.count("\n") == 1 and not (tmp_path / "o").exists()
+
+
+def test_the_readme_states_the_g1_brackets(g1):
+    import re
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    m = re.search(
+        r"they are \[([\d.]+), ([\d.]+)\], \[([\d.]+), ([\d.]+)\] and \[([\d.]+), ([\d.]+)\]",
+        readme,
+    )
+    assert m, "the README's G1 brackets"
+    _, rep = g1
+    got = (
+        rep.decay.lower,
+        rep.decay.upper,
+        rep.offset.lower,
+        rep.offset.upper,
+        rep.margin.lower,
+        rep.margin.upper,
+    )
+    assert list(m.groups()) == [f"{x:.3g}" for x in got]
