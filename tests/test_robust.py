@@ -350,11 +350,14 @@ def test_the_sparse_brackets_are_sound_against_dense_eigenvalues(mid_network):
     des, rep = mid_network
     assert des.topology.nd > 80 and rep.proofs == {}
     assert rep.decay.lower is not None and 0 < rep.decay.lower <= rep.decay.upper
-    assert rep.offset.lower is None and rep.offset.upper is None
+    assert 0 < rep.offset.lower <= rep.offset.upper  # comparison bound: sound, not tight
     rng = np.random.default_rng(np.random.SeedSequence(11))
     for k in range(30):
-        a, _ = features(des, sample(des, 0.1, rng, "vertex" if k % 2 else "random"))
-        assert a >= rep.decay.lower
+        a, o = features(des, sample(des, 0.1, rng, "vertex" if k % 2 else "random"))
+        assert a >= rep.decay.lower and o <= rep.offset.upper
+    wo = realised(des, rep.to_dict()["offset"]["realization"])
+    assert in_set(des, wo, 0.1)
+    assert features(des, wo)[1] == pytest.approx(rep.offset.lower, rel=1e-9)
     # the attained end: every weight scaled by 1 ∓ ρ, recomputed with dense eigenvalues
     w = realised(des, rep.to_dict()["decay"]["realization"])
     assert in_set(des, w, 0.1)

@@ -17,7 +17,9 @@ and the realisation (1 − ρ_e)|A_ij| attains μ_i^ρ.
 
 The other ends are estimates on two realisations (every weight scaled by 1 − ρ_e, or by
 1 + ρ_e) with :func:`.scale.rate_estimate`; the destabilising end is every weight vanishing
-at ρ = 1 when an agent is not informed. The offset bracket is not computed at this size.
+at ρ = 1 when an agent is not informed. The offset's upper end is the comparison bound of
+:func:`proven_offset` (sound, loose); its lower end the larger offset of the antagonistic
+weights scaled by 1 ∓ ρ_e (a sparse solve).
 """
 
 from __future__ import annotations
@@ -152,6 +154,99 @@ def proven_rate(des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray) -> float
     return alpha if bool(np.all(held)) else None
 
 
+def proven_offset(des: ProtocolDesign, rad: np.ndarray) -> float | None:
+    """An upper bound on ‖x*(A') − 1⊗θ‖₂ for every realisation within ρ_e, or None when
+    the comparison argument does not apply.
+
+    With z = x* − 1⊗θ, L_B(A')z = r where r_i = −2Σ_{antagonistic e into i} Δ_e θ (plus
+    the rounding residue u − L_B(1⊗θ)), so ‖r_i‖ <= b_i = 2Σ ρ_e ‖|A_e|‖^{1/2}·(θᵀ|A_e|θ)^{1/2}.
+    Each block row gives μ_i‖z_i‖ <= b_i + Σ_j ν_ij‖z_j‖ (μ_i, ν_ij as for the decay, over
+    every edge), i.e. M ζ <= b for ζ_i = ‖z_i‖ and the comparison matrix M. When M is a
+    non-singular M-matrix (M⁻¹ >= 0), any x >= 0 with M x >= b bounds ζ <= x, so
+    ‖z‖₂ <= ‖x‖₂; M x >= b is checked with its rounding bounded.
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The nominal design.
+    rad : numpy.ndarray
+        ρ_e per listed edge (edge-array order).
+
+    Returns
+    -------
+    float or None
+    """
+    import scipy.sparse as sparse
+
+    top = des.topology
+    ea = top.edge_arrays
+    n, d = top.n, top.dim
+    low = _diag_blocks(des, np.maximum(1.0 - rad, 0.0) * (1 - 2 * U))
+    lam = np.linalg.eigvalsh(0.5 * (low.diag + low.diag.transpose(0, 2, 1)))[:, 0]
+    mu = lam - (1e-9 * np.abs(lam) + 1e-12 * np.max(np.abs(lam), initial=1.0))
+    if not (np.all(mu > 0) and np.all(prove_mu(low, np.arange(n), mu))):
+        return None
+    nu, proven = edge_norm_bounds(ea.w)
+    if not np.all(proven):
+        return None
+    nu_r = (1.0 + rad) * nu * (1 + 2 * U)
+    off = sparse.csr_matrix((nu_r, (ea.rows, ea.cols)), shape=(n, n)).tocsr()
+    # b_i: the antagonistic in-weights' reach, bounded with eigenvalues ×(1 + 1e-9)
+    absw = ea.sign[:, None, None] * ea.w
+    lmax = np.linalg.eigvalsh(absw)[:, -1].clip(min=0.0) * (1 + 1e-9)
+    th = des.theta
+    quad = np.einsum("a,kab,b->k", th, absw, th).clip(min=0.0) * (1 + 1e-9) + 1e-300
+    term = np.where(ea.sign < 0, 2.0 * rad * np.sqrt(lmax) * np.sqrt(quad), 0.0) * (1 + 8 * U)
+    b = np.zeros(n)
+    np.add.at(b, ea.rows, term)
+    r0 = des.input_vector() - des.grounded_laplacian_sparse() @ np.tile(th, n)
+    b += np.linalg.norm(r0.reshape(n, d), axis=1) * (1 + 1e-6) + 1e-300
+    from scipy.sparse.linalg import spsolve
+
+    m = (sparse.diags(mu) - off).tocsc()
+    with np.errstate(over="ignore", invalid="ignore"):
+        # M⁻¹(b + η) by sparse LU, checked below (not trusted): η leaves room for rounding
+        x = spsolve(m, b + 1e-9 * float(np.max(b)) + 1e-300)
+    if not np.all(np.isfinite(x)):
+        return None
+    cnt = np.bincount(ea.rows, minlength=n)
+    gam = np.array([gamma(int(k) + 2) for k in range(int(cnt.max(initial=0)) + 1)])[cnt]
+    lhs = mu * x * (1 - 2 * U) - (off @ x) * (1 + gam)
+    if not np.all(lhs >= b) or not np.all(x >= 0):
+        return None
+    # the M-matrix property of M: the decay's dominance (every component) at α = 0
+    return float(np.sqrt(np.sum(x * x)) * (1 + 4 * n * U))
+
+
+def _offset_realisation(des: ProtocolDesign, rad: np.ndarray) -> tuple[float, np.ndarray] | None:
+    """The larger offset of two realisations (antagonistic weights scaled by 1 − ρ_e, or by
+    1 + ρ_e; cooperative ones do not move x*), by a sparse solve; with their factors."""
+    from scipy.sparse.linalg import splu
+
+    top = des.topology
+    ea = top.edge_arrays
+    n = top.n
+    u = des.input_vector()
+    target = np.tile(des.theta, n)
+    best = None
+    for sgn in (-1.0, 1.0):
+        fac = np.where(ea.sign < 0, 1.0 + sgn * rad, 1.0)
+        real = top.__class__.from_arrays(
+            top.labels, top.dim, ea.rows, ea.cols, ea.w * fac[:, None, None]
+        )
+        from dataclasses import replace
+
+        lap = replace(des, topology=real).grounded_laplacian_sparse().tocsc()
+        try:
+            z = splu(lap).solve(u) - target
+        except RuntimeError:
+            continue
+        val = float(np.linalg.norm(z))
+        if best is None or val > best[0]:
+            best = (val, fac)
+    return best
+
+
 def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.0) -> RobustReport:
     """The decay and margin brackets of a big design (module docstring), sparse.
 
@@ -167,8 +262,7 @@ def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.
     Returns
     -------
     RobustReport
-        With ``proofs`` empty (nothing to re-check from a file at this size) and no offset
-        bracket.
+        With ``proofs`` empty (nothing to re-check from a file at this size).
     """
     t0 = time.perf_counter()
     top = des.topology
@@ -228,7 +322,26 @@ def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.
         "block diagonal dominance at α = 0, bisection on ρ; upper: every weight vanishing "
         "at ρ = 1 (an uninformed agent then has a zero block)",
     )
-    offset = Bracket(None, None, None, "upper", "not computed above the dense size")
+    off_hi = proven_offset(des, rad) if a_lo is not None else None
+    got = _offset_realisation(des, rad)
+    off_real = None
+    if got is not None:
+        val, fac = got
+        w = np.array(
+            [
+                fac[order[(int(i), int(j))]] * ea.w[order[(int(i), int(j))]]
+                for i, j in zip(ed.dst, ed.src, strict=True)
+            ]
+        ).reshape(ed.w.shape)
+        off_real = Realisation(float(np.max(rad, initial=0.0)), w, val)
+    offset = Bracket(
+        None if off_real is None else off_real.value,
+        off_hi,
+        off_real,
+        "upper",
+        "comparison with the block dominance matrix (M⁻¹ >= 0) on the equilibrium "
+        "equation; lower: antagonistic weights scaled by 1 ∓ ρ, sparse LU",
+    )
     return RobustReport(
         des,
         float(np.max(rad, initial=0.0)),
