@@ -2,7 +2,7 @@
 Weights known to a few percent
 ==============================
 
-G1 with every weight anywhere in (1 − ρ)|A| ⪯ |A'| ⪯ (1 + ρ)|A|, the protocol kept at its
+G1 with every weight anywhere in ``(1 − ρ)|A| ⪯ |A'| ⪯ (1 + ρ)|A|``, the protocol kept at its
 nominal design. For each ρ: a proven lower bound on the decay rate and a proven upper
 bound on the consensus offset, each with a realisation that attains the other end. The
 margin bracket says up to which ρ stability is proven.
