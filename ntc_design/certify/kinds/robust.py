@@ -217,7 +217,7 @@ def _pd(m: Dyadic) -> PDProof:
 
 
 def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float, radius):
-    """Ψ of the decay S-procedure, exactly (see :func:`ntc_design.certify.robust.decay_matrix`).
+    """Ψ of the decay S-procedure, exactly (see :func:`ntc_design.certify.robust_lmi.decay_matrix`).
 
     Parameters
     ----------
@@ -261,7 +261,7 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
 
 def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     """Γ of the offset S-procedure, exactly (see
-    :func:`ntc_design.certify.robust.offset_matrix`).
+    :func:`ntc_design.certify.robust_lmi.offset_matrix`).
 
     Parameters
     ----------
