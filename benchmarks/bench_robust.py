@@ -1,5 +1,5 @@
 """Robust certification (issue 31): the brackets' width and cost on G1 and random
-networks, dense (LMIs, Nd <= 80) and sparse (block dominance, above), in one run.
+networks, dense (LMIs, Nd <= ROBUST_MAX_ND = 40) and sparse (block dominance, above), in one run.
 
     python benchmarks/bench_robust.py [--skip-large]
 
@@ -23,7 +23,7 @@ from pathlib import Path
 import ntc_design as nd
 from ntc_design.certify import verify
 from ntc_design.certify.kinds.robust import robust_certificate
-from ntc_design.certify.robust import robust
+from ntc_design.certify.robust import ROBUST_MAX_ND, robust
 from ntc_design.generate import random_network
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -59,13 +59,15 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--skip-large", action="store_true", help="skip N = 3,000 and 10,000")
     args = ap.parse_args()
-    print(f"{'network':<34} {'Nd':>7} {'time s':>8} {'decay':>8} {'offset':>8} {'margin':>8} {'verify s':>9}")
+    print(
+        f"{'network':<34} {'Nd':>7} {'time s':>8} {'decay':>8} {'offset':>8} {'margin':>8} {'verify s':>9}"
+    )
     g1 = nd.design(nd.load(ROOT / "examples" / "g1.yaml"), [1, 2, -1], thresholds=False)
     for rho in (0.05, 0.2, 0.5):
         row(f"G1, ρ = {rho:g}", g1, rho, True)
     for n, d in ((6, 2), (12, 3), (25, 3)):
         des = nd.design(random_network(n, d, seed=1), [1.0] * d, thresholds=False)
-        row(f"random N = {n}, d = {d}, ρ = 0.05", des, 0.05, des.topology.nd <= 80)
+        row(f"random N = {n}, d = {d}, ρ = 0.05", des, 0.05, des.topology.nd <= ROBUST_MAX_ND)
     sizes = (1000,) if args.skip_large else (1000, 3000, 10_000)
     for n in sizes:
         des = nd.design(random_network(n, 3, seed=0), [1.0, 2.0, -1.0], thresholds=False)

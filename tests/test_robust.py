@@ -349,6 +349,8 @@ def mid_network():
 def test_the_sparse_brackets_are_sound_against_dense_eigenvalues(mid_network):
     des, rep = mid_network
     assert des.topology.nd > 80 and rep.proofs == {}
+    with pytest.raises(nd.InputError, match="a certificate is issued up to Nd"):
+        robust_certificate(rep)  # nothing stored to re-check: refused, not a KeyError
     assert rep.decay.lower is not None and 0 < rep.decay.lower <= rep.decay.upper
     assert 0 < rep.offset.lower <= rep.offset.upper  # comparison bound: sound, not tight
     rng = np.random.default_rng(np.random.SeedSequence(11))

@@ -26,6 +26,7 @@ from ..dense import PROVERS, DenseContext, DenseMode, mode_subject
 from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
 from ..robust import (
+    ROBUST_MAX_ND,
     RobustReport,
     abscissa,
     check_radius,
@@ -64,10 +65,20 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
         The certificate: it certifies ``robust_margin`` when a margin radius was proven
         (ρ_lower, possibly 0), ``robust_decay`` with α_lower at ρ, ``robust_offset`` with
         γ at ρ when those were proven.
+
+    Raises
+    ------
+    InputError
+        A report of the sparse path (above :data:`ntc_design.certify.robust.ROBUST_MAX_ND`).
     """
     d = rep.design
     name = name or d.topology.name or "topology"
     pr = rep.proofs
+    if not pr:  # the sparse path proves in the process; there is nothing to re-check
+        raise InputError(
+            f"robust: a certificate is issued up to Nd = {ROBUST_MAX_ND} (this network: "
+            f"Nd = {d.topology.nd}); above, the sparse bounds are proven but not stored"
+        )
     props: list[Property] = []
     mats: dict[str, Any] = {"L_B": {name: d.grounded_laplacian().tolist()}, "P": {}}
     mult: dict[str, Any] = {}
