@@ -24,8 +24,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from ntc_design.paper import THETA  # the paper's θ, defined once
+
 ROOT = Path(__file__).resolve().parent.parent
-THETA = [1.0, 2.0, -1.0]
 
 CASES = {
     "G1 (T=2, 1000 paths, 21 saves)": dict(top="g1", T=2.0, paths=1000, save_every=0.1),

@@ -32,6 +32,7 @@ import numpy as np
 
 import ntc_design as nd
 from ntc_design.design import Decomposition, ProtocolDesign
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import NoiseModel, mode_system, simulate
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.kernels import em_steps, numpy_step, tile_width
@@ -39,7 +40,7 @@ from ntc_design.simulate.montecarlo import MonteCarloSpec, run
 from ntc_design.simulate.system import check_step_size
 
 ROOT = Path(__file__).resolve().parent.parent
-THETA = [1.0, 2.0, -1.0]
+
 CORES = min(2, os.cpu_count() or 1)
 
 

@@ -16,13 +16,13 @@ from ntc_design.certify import certify, hurwitz_certificate, switching_certifica
 from ntc_design.certify.dense import prove_hurwitz
 from ntc_design.certify.format import digest
 from ntc_design.certify.lyapunov import common_lyapunov, decay_rate_lmi, lyapunov_solve
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.rigorous.exact import Dyadic, exact_pd, verified_float_pd
 
 from .cli_helpers import assert_input_error, run_cli
 from .conftest import ROOT
 
 CERTS = ROOT / "certificates"
-THETA = [1, 2, -1]
 
 
 @pytest.fixture(scope="module")

@@ -10,12 +10,11 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
 import ntc_design as nd
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import NoiseModel, implicit, simulate
 from ntc_design.simulate import system as sysmod
 from ntc_design.simulate.implicit import ImplicitSolver, SolverCache, ch_key
 from ntc_design.simulate.system import mode_system
-
-THETA = [1, 2, -1]
 
 
 @pytest.fixture(scope="module")

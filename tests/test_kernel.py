@@ -10,6 +10,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.linalg import numba_cache_dir
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import NoiseModel, kernels, moments, montecarlo, simulate, system
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.kernels import em_steps, numpy_step, tile_width
@@ -19,7 +20,6 @@ from ntc_design.simulate.system import grounded_laplacian_sparse, mode_system
 
 from .conftest import random_topology
 
-THETA = [1, 2, -1]
 X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
 
 

@@ -5,8 +5,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.design import SwitchingDesign
-
-THETA = [1, 2, -1]
+from ntc_design.paper import THETA  # the paper's θ, defined once
 
 
 def test_g1_design_matches_paper(examples):

@@ -17,10 +17,9 @@ from ntc_design.certify import verify
 from ntc_design.certify.format import finish
 from ntc_design.certify.kinds.robust import robust_certificate
 from ntc_design.certify.robust import robust
+from ntc_design.paper import THETA  # the paper's θ, defined once
 
 from .conftest import ROOT
-
-THETA = [1.0, 2.0, -1.0]
 
 
 def independent_lap_b(des, weights: dict) -> np.ndarray:

@@ -8,6 +8,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import ntc_design as nd
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import NoiseModel, SimulationDiverged, simulate
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.moments import em_moments
@@ -17,7 +18,6 @@ from ntc_design.simulate.system import mode_system
 from .cli_helpers import assert_input_error, run_cli
 from .conftest import ROOT
 
-THETA = [1, 2, -1]
 X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
 
 

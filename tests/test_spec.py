@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 import ntc_design as nd
 from ntc_design.errors import InputError, one_line, quote
 from ntc_design.outputs import atomic_path, output_folder, write_atomic
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import (
     MonteCarlo,
     NoiseModel,
@@ -28,8 +29,6 @@ from ntc_design.simulate.scenario import load_scenario, write_outputs
 from ntc_design.simulate.spec import OPTION_KEYS, SCENARIO_KEYS
 
 from .conftest import ROOT
-
-THETA = [1, 2, -1]
 
 
 def test_scenario_and_keywords_build_the_same_spec(tmp_path):

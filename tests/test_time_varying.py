@@ -15,6 +15,7 @@ from ntc_design.certify.format import digest
 from ntc_design.certify.time_varying import CertificationRefused, certify_lambda2
 from ntc_design.design import design, design_topology
 from ntc_design.errors import InputError
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.moments import exact_moments
 from ntc_design.simulate.system import mode_system
@@ -24,7 +25,6 @@ from ntc_design.timevarying import ExpressionTopology, TimeVaryingDesign, from_d
 from .cli_helpers import assert_input_error, run_cli
 from .conftest import ROOT
 
-THETA = [1, 2, -1]
 X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
 
 

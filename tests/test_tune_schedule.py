@@ -15,6 +15,7 @@ import ntc_design as nd
 from ntc_design.certify import certify, verify
 from ntc_design.certify.format import digest
 from ntc_design.errors import InputError
+from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.schedule import (
     ScheduleGain,
     analyse_schedule,
@@ -31,7 +32,6 @@ from ntc_design.tune.optimal import ScheduleProblem, optimise_schedule
 
 from .cli_helpers import assert_input_error, run_cli
 
-THETA = [1, 2, -1]
 X0 = np.linspace(-3, 3, 21)
 
 
