@@ -225,6 +225,7 @@ def test_a_bad_radius_is_one_line_exit_2(radius, needle):
 # -- per-edge uncertainty in topology files ---------------------------------------------
 
 
+@pytest.mark.slow  # the full suite runs it; the fast lane stays under 3 min
 def test_per_edge_radii_from_a_file_are_certified_and_respected(tmp_path):
     text = (ROOT / "examples" / "g1.yaml").read_text()
     text = text.replace(
@@ -402,6 +403,7 @@ def _scenario(tmp_path, robust_block: str, paths: int = 60) -> Path:
     return p
 
 
+@pytest.mark.slow  # the full suite runs it; the fast lane stays under 3 min
 def test_the_study_draws_in_the_set_and_respects_the_brackets(tmp_path):
     from ntc_design.simulate.scenario import load_scenario
     from ntc_design.sweep.robust import draw_realisation, robust_study, within_brackets
@@ -428,6 +430,7 @@ def test_the_study_draws_in_the_set_and_respects_the_brackets(tmp_path):
     assert st.csv().count("\n") == 5 and st.csv().startswith("realization,decay_rate,offset")
 
 
+@pytest.mark.slow  # the full suite runs it; the fast lane stays under 3 min
 def test_simulate_writes_robust_csv_and_the_report_shows_it(tmp_path):
     sc = _scenario(tmp_path, "robust: {realizations: 2, radius: 0.05, seed: 1}")
     out = tmp_path / "run"
