@@ -248,7 +248,45 @@ def format_seconds(s: float) -> str:
     return f"{s / 86400:.1f} days"
 
 
+#: The largest seed accepted (numpy's SeedSequence takes any non-negative int).
+MAX_SEED = 2**128
+
+
+def require_radius(value, name: str = "--radius", below_one: bool = True) -> float:
+    """A relative radius ρ of a weight's Loewner interval (1−ρ)|A| ⪯ |A'| ⪯ (1+ρ)|A|:
+    a finite number >= 0, and below 1 where asked (at 1 a weight may vanish).
+
+    Parameters
+    ----------
+    value : object
+        The value given.
+    name : str, optional
+        The field named in the message (the file first, where there is one).
+    below_one : bool, optional
+        Refuse ρ >= 1.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        One line naming the field.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InputError(f"{name}: expected a number, got {_show(value)}")
+    r = float(value)
+    if not (math.isfinite(r) and r >= 0 and (r < 1 or not below_one)):
+        limit = " and below 1 (at 1 a weight may vanish)" if below_one else ""
+        raise InputError(
+            f"{name}: the radius must be a finite number >= 0{limit}, got {_show(value)}"
+        )
+    return r
+
+
 __all__ = [
+    "MAX_SEED",
     "AssumptionWarning",
     "require_theta",
     "InputError",
@@ -259,6 +297,7 @@ __all__ = [
     "require_int",
     "require_number",
     "require_positive",
+    "require_radius",
 ]
 
 

@@ -38,7 +38,7 @@ import numpy as np
 import yaml
 
 from .edgelist import MAX_AGENTS, MAX_DIM, EdgeListData, check_label_spellings, read_npz
-from .errors import InputError
+from .errors import InputError, require_radius
 from .tablefiles import read_csv_edges, read_mat
 from .yamlfast import load_compiled, load_fast, numbers_read_differently, values_read_differently
 
@@ -583,14 +583,7 @@ def parse_uncertainty(value: Any, source: str | None, field: str) -> float:
     InputError
         Not a finite number in [0, 1).
     """
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise field_error(source, field, f"expected a number in [0, 1), got {_show(value)}")
-    v = float(value)
-    if not (math.isfinite(v) and 0 <= v < 1):
-        raise field_error(
-            source, field, f"the radius must be a finite number in [0, 1), got {_show(value)}"
-        )
-    return v
+    return require_radius(value, f"{source}: {field}" if source else field)
 
 
 def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyData:

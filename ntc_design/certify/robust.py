@@ -41,6 +41,7 @@ pivot columns of W (an exact basis of its range). Then
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -50,10 +51,10 @@ from typing import Any
 import numpy as np
 
 from ..design import ProtocolDesign
-from ..errors import InputError
+from ..errors import InputError, require_radius
 from ..linalg import require_dense
 from ..model import Topology
-from ..rows import Table
+from ..rows import Table, fmt
 from .robust_lmi import _channels, _DecayLMI, _descend, _offset_sdp
 
 #: Robust LMIs are solved up to this Nd (dense P; the S-procedure adds Σ rank(W_e) rows).
@@ -80,6 +81,25 @@ class UncertainEdges:
     def m(self) -> int:
         """The number of uncertain edges."""
         return int(self.dst.size)
+
+    def radii(self, top: Topology, default: float) -> np.ndarray:
+        """ρ_e per edge: the topology file's ``uncertainty:``, else ``default``.
+
+        Parameters
+        ----------
+        top : Topology
+            The topology these edges are of.
+        default : float
+            ρ for an edge without a value of its own.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        unc = top.uncertainty
+        return np.array(
+            [unc.get((int(i), int(j)), default) for i, j in zip(self.dst, self.src, strict=True)]
+        )
 
     def basis(self, e: int) -> np.ndarray:
         """V_e: the pivot columns of W_e (d × rank).
@@ -160,39 +180,7 @@ def uncertain_edges(top: Topology) -> UncertainEdges:
     )
 
 
-def check_radius(radius: Any, field_name: str = "--radius", below_one: bool = True) -> float:
-    """A radius ρ: finite, >= 0, and below 1 for the decay and offset questions (at ρ = 1
-    a weight may vanish and the set holds disconnected networks).
-
-    Parameters
-    ----------
-    radius : Any
-        The value given.
-    field_name : str, optional
-        Its name in messages.
-    below_one : bool, optional
-        Refuse ρ >= 1.
-
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    InputError
-        One line naming the field.
-    """
-    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.floating, np.integer)):
-        raise InputError(f"{field_name}: expected a number, got {radius!r}")
-    r = float(radius)
-    if not math.isfinite(r) or r < 0:
-        raise InputError(f"{field_name}: the radius must be a finite number >= 0, got {radius!r}")
-    if below_one and r >= 1:
-        raise InputError(
-            f"{field_name}: the radius must be below 1 for the decay and offset brackets "
-            f"(at 1 a weight may vanish), got {r:g}"
-        )
-    return r
+check_radius = require_radius  # the one radius check (errors.require_radius)
 
 
 # -- realisations ----------------------------------------------------------------------
@@ -474,9 +462,7 @@ class RobustReport:
         ntc_design.rows.Table
         """
 
-        def num(x: float | None) -> str:
-            return "—" if x is None else f"{x:.6g}"
-
+        num = functools.partial(fmt, digits=6)  # None shows as "—"
         top = self.design.topology
         rows = [
             ("decay rate min Re λ(L_B(A'))", num(self.decay.lower), num(self.decay.upper),
@@ -597,10 +583,7 @@ def robust(
 
         return robust_scale(design, rho)
     p = _problem(design)
-    unc = design.topology.uncertainty
-    rad = np.array(
-        [unc.get((int(i), int(j)), rho) for i, j in zip(p.edges.dst, p.edges.src, strict=True)]
-    )
+    rad = p.edges.radii(design.topology, rho)
     rmax = float(np.max(rad, initial=0.0))
     alpha0 = abscissa(p.lap_b)
     if not alpha0 > 0:

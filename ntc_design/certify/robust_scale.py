@@ -105,7 +105,35 @@ def _perron(mu: np.ndarray, off, v: np.ndarray, outer: int = 8, sweeps: int = 20
     return best
 
 
-def proven_rate(des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray) -> float | None:
+def _agent_bounds(
+    des: ProtocolDesign, rad: np.ndarray, nu: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """(μ, ν^ρ): μ_i <= λ_min(Σ_j (1 − ρ_e)|A_ij| + δB_i) proven per agent, and
+    ν^ρ_e = (1 + ρ_e)·ν_e >= ‖A'_e‖₂ per edge (``nu``: the proven ν_e, when the caller
+    has them); None when a bound is not proven."""
+    top = des.topology
+    ea = top.edge_arrays
+    low = _diag_blocks(des, np.maximum(1.0 - rad, 0.0) * (1 - 2 * U))
+    lam = np.linalg.eigvalsh(0.5 * (low.diag + low.diag.transpose(0, 2, 1)))[:, 0]
+    mu = lam - (1e-9 * np.abs(lam) + 1e-12 * np.max(np.abs(lam), initial=1.0))
+    if not np.all(prove_mu(low, np.arange(top.n), mu)):
+        return None
+    if nu is None:
+        nu, proven = edge_norm_bounds(ea.w)
+        if not np.all(proven):
+            return None
+    return mu, (1.0 + rad) * nu * (1 + 2 * U)
+
+
+def _norm_bounds(des: ProtocolDesign) -> np.ndarray | None:
+    """The proven ν_e >= ‖A_e‖₂ of every listed edge (one batch, shared by every radius)."""
+    nu, proven = edge_norm_bounds(des.topology.edge_arrays.w)
+    return nu if np.all(proven) else None
+
+
+def proven_rate(
+    des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray, nu: np.ndarray | None = None
+) -> float | None:
     """A proven α with Re λ(L_B(A')) > α for every realisation within ρ_e (per edge), or
     None when dominance does not hold with α >= 0.
 
@@ -117,6 +145,8 @@ def proven_rate(des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray) -> float
         ρ_e per listed edge (edge-array order).
     comp : numpy.ndarray
         The strongly connected component of each agent.
+    nu : numpy.ndarray, optional
+        Proven ν_e >= ‖A_e‖₂ per edge, when the caller has them.
 
     Returns
     -------
@@ -127,16 +157,10 @@ def proven_rate(des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray) -> float
     top = des.topology
     ea = top.edge_arrays
     n = top.n
-    low = _diag_blocks(des, np.maximum(1.0 - rad, 0.0) * (1 - 2 * U))
-    lam = np.linalg.eigvalsh(0.5 * (low.diag + low.diag.transpose(0, 2, 1)))[:, 0]
-    mu = lam - (1e-9 * np.abs(lam) + 1e-12 * np.max(np.abs(lam), initial=1.0))
-    ok = prove_mu(low, np.arange(n), mu)
-    if not np.all(ok):
+    bounds = _agent_bounds(des, rad, nu)
+    if bounds is None:
         return None
-    nu, proven = edge_norm_bounds(ea.w)
-    if not np.all(proven):
-        return None
-    nu_r = (1.0 + rad) * nu * (1 + 2 * U)
+    mu, nu_r = bounds
     same = comp[ea.rows] == comp[ea.cols]
     off = sparse.csr_matrix((nu_r[same], (ea.rows[same], ea.cols[same])), shape=(n, n)).tocsr()
     m = (sparse.diags(mu) - off).tocsr()
@@ -154,7 +178,9 @@ def proven_rate(des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray) -> float
     return alpha if bool(np.all(held)) else None
 
 
-def proven_offset(des: ProtocolDesign, rad: np.ndarray) -> float | None:
+def proven_offset(
+    des: ProtocolDesign, rad: np.ndarray, nu: np.ndarray | None = None
+) -> float | None:
     """An upper bound on ‖x*(A') − 1⊗θ‖₂ for every realisation within ρ_e, or None when
     the comparison argument does not apply.
 
@@ -171,6 +197,8 @@ def proven_offset(des: ProtocolDesign, rad: np.ndarray) -> float | None:
         The nominal design.
     rad : numpy.ndarray
         ρ_e per listed edge (edge-array order).
+    nu : numpy.ndarray, optional
+        Proven ν_e >= ‖A_e‖₂ per edge, when the caller has them.
 
     Returns
     -------
@@ -181,15 +209,10 @@ def proven_offset(des: ProtocolDesign, rad: np.ndarray) -> float | None:
     top = des.topology
     ea = top.edge_arrays
     n, d = top.n, top.dim
-    low = _diag_blocks(des, np.maximum(1.0 - rad, 0.0) * (1 - 2 * U))
-    lam = np.linalg.eigvalsh(0.5 * (low.diag + low.diag.transpose(0, 2, 1)))[:, 0]
-    mu = lam - (1e-9 * np.abs(lam) + 1e-12 * np.max(np.abs(lam), initial=1.0))
-    if not (np.all(mu > 0) and np.all(prove_mu(low, np.arange(n), mu))):
+    bounds = _agent_bounds(des, rad, nu)
+    if bounds is None or not np.all(bounds[0] > 0):
         return None
-    nu, proven = edge_norm_bounds(ea.w)
-    if not np.all(proven):
-        return None
-    nu_r = (1.0 + rad) * nu * (1 + 2 * U)
+    mu, nu_r = bounds
     off = sparse.csr_matrix((nu_r, (ea.rows, ea.cols)), shape=(n, n)).tocsr()
     # b_i: the antagonistic in-weights' reach, bounded with eigenvalues ×(1 + 1e-9)
     absw = ea.sign[:, None, None] * ea.w
@@ -270,7 +293,8 @@ def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.
     rad = _edge_radii(des, radius)
     ea = top.edge_arrays
     nominal = rate_estimate(_diag_blocks(des, np.ones(rad.size)), comp, ncomp)[0]
-    a_lo = proven_rate(des, rad, comp)
+    nu = _norm_bounds(des)  # ν_e do not depend on ρ: proven once for every radius below
+    a_lo = proven_rate(des, rad, comp, nu)
     best: tuple[float, np.ndarray | None] = (math.inf, None)
     for sgn in (-1.0, 1.0):
         fac = 1.0 + sgn * rad
@@ -300,13 +324,13 @@ def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.
     )
     # margin: the largest uniform ρ with a proven α >= 0
     lo, hi = 0.0, 1.0
-    proven0 = proven_rate(des, np.zeros_like(rad), comp) is not None
+    proven0 = proven_rate(des, np.zeros_like(rad), comp, nu) is not None
     if proven0:
         for _ in range(MARGIN_STEPS):
             if time.perf_counter() - t0 > seconds_budget:
                 break
             mid = 0.5 * (lo + hi)
-            if proven_rate(des, np.where(ea.sign != 0, mid, 0.0), comp) is not None:
+            if proven_rate(des, np.where(ea.sign != 0, mid, 0.0), comp, nu) is not None:
                 lo = mid
             else:
                 hi = mid
@@ -322,7 +346,7 @@ def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.
         "block diagonal dominance at α = 0, bisection on ρ; upper: every weight vanishing "
         "at ρ = 1 (an uninformed agent then has a zero block)",
     )
-    off_hi = proven_offset(des, rad) if a_lo is not None else None
+    off_hi = proven_offset(des, rad, nu) if a_lo is not None else None
     got = _offset_realisation(des, rad)
     off_real = None
     if got is not None:

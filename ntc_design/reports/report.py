@@ -7,6 +7,7 @@ parameters as a table and a re-run command."""
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -243,9 +244,7 @@ def _robust_part(run: RunData, fig) -> tuple[Table | None, Figure | None, str]:
     if not isinstance(st, dict) or not st.get("rows"):
         return None, None, ""
 
-    def num(x) -> str:
-        return "—" if x is None else fmt(float(x), 5)
-
+    num = functools.partial(fmt, digits=5)  # None shows as "—"
     rows = [
         (
             str(r["realization"]),

@@ -33,13 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, quote, require_int, require_number, require_positive
+from ..errors import MAX_SEED, InputError, quote, require_int, require_number, require_positive
 from ..gain import parse_gain
 from ..schedule import ScheduleGain, read_schedule, schedule_from_document
 from .noise import NoiseModel
+from .robust_sampling import RobustSampling
 
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
-MAX_SEED = 2**128
 MAX_WORKERS = 4096
 # States and noise intensities (θ, x(0), σ, f) are squared and summed over agents, edges
 # and paths (mean-square errors, noise covariances, f² in the moment equations): at most
@@ -281,58 +281,6 @@ class MonteCarlo:
         for f in fields(self):
             if f.name != "rng":
                 object.__setattr__(self, f.name, int(getattr(self, f.name)))
-
-
-MAX_REALISATIONS = 1000
-
-
-@dataclass(frozen=True)
-class RobustSampling:
-    """Weight realisations to simulate besides the nominal network (scenario key
-    ``robust: {realizations: K, radius: ρ, seed: S}``): K draws from the Loewner set of
-    :mod:`ntc_design.certify.robust` (every edge's radius is its file's ``uncertainty:``,
-    else ``radius``), each run with the nominal protocol."""
-
-    realizations: int = 10
-    radius: float = 0.05
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        require_int("robust.realizations", self.realizations, minimum=1, maximum=MAX_REALISATIONS)
-        r = require_number("robust.radius", self.radius)
-        if not 0 <= r < 1:
-            raise InputError(f"robust.radius: must be in [0, 1), got {r:g}")
-        require_int("robust.seed", self.seed, minimum=0, maximum=MAX_SEED)
-        object.__setattr__(self, "realizations", int(self.realizations))
-        object.__setattr__(self, "radius", float(r))
-        object.__setattr__(self, "seed", int(self.seed))
-
-    @classmethod
-    def from_document(cls, doc: Any) -> RobustSampling:
-        """From the scenario's ``robust`` mapping.
-
-        Parameters
-        ----------
-        doc : Any
-            ``{realizations, radius, seed}`` (each optional).
-
-        Returns
-        -------
-        RobustSampling
-
-        Raises
-        ------
-        InputError
-            Not a mapping, an unknown key or a bad value.
-        """
-        if not isinstance(doc, Mapping):
-            raise InputError(f"robust: expected {{realizations, radius, seed}}, got {doc!r}")
-        unknown = sorted(str(k) for k in set(doc) - {"realizations", "radius", "seed"})
-        if unknown:
-            raise InputError(
-                f"robust.{unknown[0]}: unknown field (known: realizations, radius, seed)"
-            )
-        return cls(**dict(doc))
 
 
 @dataclass(frozen=True)

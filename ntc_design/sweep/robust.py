@@ -16,6 +16,7 @@ error Σ_i E‖x_i(T) − θ‖².
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -26,6 +27,7 @@ from ..certify.robust import abscissa, realised_topology, robust, uncertain_edge
 from ..design import ProtocolDesign, design_topology
 from ..errors import InputError
 from ..model import Topology
+from ..rows import fmt
 from ..simulate import SimulationSpec, simulate
 
 #: Each realisation's exact decay rate and offset need dense L_B(A') up to this Nd.
@@ -152,12 +154,7 @@ def robust_study(
     nominal = design_topology(top, spec.theta, spec.margin, spec.delta, thresholds=False)
     assert isinstance(nominal, ProtocolDesign)
     ed = uncertain_edges(top)
-    radii = np.array(
-        [
-            top.uncertainty.get((int(i), int(j)), rs.radius)
-            for i, j in zip(ed.dst, ed.src, strict=True)
-        ]
-    )
+    radii = ed.radii(top, rs.radius)
     rep = robust(nominal, rs.radius, starts=2)  # sparse decay and margin above the dense size
     doc = rep.to_dict()
     brackets = {
@@ -209,21 +206,30 @@ def study_sentence(study: dict) -> str:
     str
     """
     rows, b = study["rows"], study.get("brackets") or {}
-    lo = (b.get("decay") or {}).get("lower")
-    hi = (b.get("offset") or {}).get("upper")
-
-    def num(x) -> str:
-        return "—" if x is None else f"{x:.5g}"
-
+    lo, hi = _proven_ends(b)
     dec = [r["decay_rate"] for r in rows]
     off = [r["offset"] for r in rows]
-    ok_d = lo is None or min(dec) >= lo
-    ok_o = hi is None or max(off) <= hi * (1 + 1e-12)
+    ok_d, ok_o = _respected(rows, b)
+    num = functools.partial(fmt, digits=5)
     return (
         f"{len(rows)} weight realisations within ρ = {study['radius']:g}, nominal protocol: "
         f"decay rate {num(min(dec))}–{num(max(dec))} (proven >= {num(lo)}), consensus offset "
         f"{num(min(off))}–{num(max(off))} (proven <= {num(hi)}); "
         + ("both proven bounds hold" if ok_d and ok_o else "a proven bound is VIOLATED (a bug)")
+    )
+
+
+def _proven_ends(brackets: dict) -> tuple[float | None, float | None]:
+    """The proven lower bound on the decay rate and upper bound on the offset."""
+    return (brackets.get("decay") or {}).get("lower"), (brackets.get("offset") or {}).get("upper")
+
+
+def _respected(rows, brackets: dict) -> tuple[bool, bool]:
+    """Whether every row's decay rate and offset respect the proven ends."""
+    lo, hi = _proven_ends(brackets)
+    return (
+        lo is None or all(r["decay_rate"] >= lo for r in rows),
+        hi is None or all(r["offset"] <= hi * (1 + 1e-12) for r in rows),
     )
 
 
@@ -241,13 +247,8 @@ def within_brackets(study: RobustStudy) -> dict[str, bool]:
     dict of str to bool
         ``decay`` and ``offset`` (True where no bound was proven).
     """
-    b = study.brackets
-    lo = (b.get("decay") or {}).get("lower")
-    hi = (b.get("offset") or {}).get("upper")
-    return {
-        "decay": lo is None or all(r["decay_rate"] >= lo for r in study.rows),
-        "offset": hi is None or all(r["offset"] <= hi * (1 + 1e-12) for r in study.rows),
-    }
+    ok_d, ok_o = _respected(study.rows, study.brackets)
+    return {"decay": ok_d, "offset": ok_o}
 
 
 __all__ = [
