@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 
 import ntc_design as nd
-from ntc_design.simulate import NoiseModel, simulate
+from ntc_design.simulate import NoiseModel, rng, simulate
 from ntc_design.simulate.rng import ZIG_R, ZIG_X, NormalSource, normals, path_states
 
 N = 1_000_000
@@ -22,14 +22,22 @@ def draws() -> np.ndarray:
     return normals(path_states(12345, 0, 10), N // 10).ravel()
 
 
-def test_ziggurat_tables_are_doorniks():
-    # 128 layers of equal area V, the first edge at R, decreasing to 0
+def test_ziggurat_tables_are_equal_area_layers():
+    # 1024 layers of equal area V from the base edge R down to 0, independently of _tables:
+    # layer i (1 ≤ i < 1024) is the strip x_i · (f(x_{i+1}) − f(x_i)), the base layer the
+    # rectangle R·f(R) plus the tail beyond R, and x_0 = V / f(R)
     f = np.exp(-0.5 * ZIG_X**2)
-    assert ZIG_X[1] == 3.442619855899 and ZIG_X[-1] == 0.0
+    r, v = float(rng._R), float(rng._V)
+    assert ZIG_X.size == rng.LAYERS + 1 == 1025 and ZIG_X[1] == r and ZIG_X[-1] == 0.0
     assert np.all(np.diff(ZIG_X[1:]) < 0)
-    areas = ZIG_X[1:-1] * (f[2:] - f[1:-1])  # layer i: x_i · (f(x_{i+1}) − f(x_i))
-    np.testing.assert_allclose(areas, 9.91256303526217e-3, rtol=1e-8)  # R has 13 digits
+    areas = ZIG_X[1:-1] * (f[2:] - f[1:-1])
+    np.testing.assert_allclose(areas, v, rtol=1e-9)
+    base = r * math.exp(-r * r / 2) + math.sqrt(math.pi / 2) * math.erfc(r / math.sqrt(2))
+    assert base == pytest.approx(v, rel=1e-14)
+    assert ZIG_X[0] == pytest.approx(v / math.exp(-r * r / 2), rel=1e-14)
     np.testing.assert_allclose(ZIG_R, ZIG_X[1:] / ZIG_X[:-1])
+    # the fast test's failure rate the docstring states: 0.43 %
+    assert 1 - ZIG_R.mean() == pytest.approx(0.0043, abs=5e-5)
 
 
 def test_moments(draws):
@@ -98,7 +106,7 @@ def test_fused_kernel_draws_the_array_kernels_numbers(g1, theta):
     xi = np.empty((k, p, 2 * s.n_edges))
     NormalSource("xoshiro", 11, 0, p).fill(xi)
     em_steps(xa, xi, 0, k, ch, cs, *st.args, True, 8)
-    em_steps_rng(xb, states, ZIG_X, ZIG_R, 2 * s.n_edges, 0, k, ch, cs, *st.args, True, 16)
+    em_steps_rng(xb, states, 2 * s.n_edges, 0, k, ch, cs, *st.args, True, 16)
     np.testing.assert_array_equal(xa, xb)  # tile widths 8 and 16: the same bits
 
 
@@ -136,9 +144,7 @@ def test_an_unknown_generator_is_refused(g1, bad):
         simulate(g1, [1, 2, -1], T=0.1, paths=4, rng=bad)
 
 
-def test_the_written_tables_are_the_computed_ones():
-    from ntc_design.simulate.rng import _tables
-
-    x, r = _tables()
-    np.testing.assert_allclose(ZIG_X, x, rtol=4 * np.finfo(float).eps, atol=0)
-    np.testing.assert_allclose(ZIG_R, r, rtol=8 * np.finfo(float).eps, atol=0)
+def test_the_written_tables_are_the_nearest_doubles_to_the_exact_ones():
+    *x, residual = rng._tables(40)
+    assert [float(v) for v in x] == ZIG_X.tolist()  # bit for bit
+    assert abs(float(residual)) < 1e-20  # R and V close the top layer at f(0) = 1

@@ -205,7 +205,10 @@ def test_monte_carlo_matches_exact_moments_with_a_of_t(g1tv):
         g1tv, THETA, T=2.0, dt=1e-3, paths=2000, seed=3, initial=X0, save_every=0.1, workers=1
     )
     assert res.mc.count == 2000 and res.exact is not None
-    assert_mc_matches_exact(res)
+    # over seeds 0-5 the fraction of (time, agent) pairs outside the 95 % band ranged
+    # 0.03-0.12 with NumPy's normals and 0.01-0.17 with the kernel's (save times share
+    # their paths); the median and worst standardised errors are the sharper checks
+    assert_mc_matches_exact(res, max_outside=0.2)
     # the moments really depend on t: frozen at t = 0 they differ
     frozen = simulate(
         g1tv.at(0.0), THETA, T=2.0, paths=1, seed=3, initial=X0, save_every=0.1, method="exact"

@@ -19,11 +19,26 @@ import numpy as np
 from ..linalg import numba_cache_dir
 
 numba_cache_dir()  # before Numba reads its configuration: not into site-packages
+import hashlib  # noqa: E402
 import math  # noqa: E402
 
 import numba  # noqa: E402
 
+from .rng import LAYERS, ZIG_R, ZIG_X  # noqa: E402
+
 # -- the generator of .rng: xoshiro256** and Doornik's ziggurat -------------------------
+
+# The tables as module globals: Numba freezes a global array into the compiled code as a
+# constant, and only then does LLVM vectorise the table lookups across paths (with an
+# argument array it cannot rule out that the stores alias the table, and keeps the loop
+# scalar: 4-6x slower). Numba's cache does not see a change to a frozen global, so the
+# import below checks the tables against the digest written here (a changed table fails
+# loudly instead of running a stale kernel).
+_ZX = ZIG_X.copy()
+_ZR = ZIG_R.copy()
+_MASK = np.uint64(LAYERS - 1)  # the word's low bits: the layer
+if hashlib.sha256(_ZX.tobytes()).hexdigest()[:16] != "9a7bfc00fed5c342":  # pragma: no cover
+    raise RuntimeError("rng.ZIG_X changed: update the digest in kernels.py")
 
 
 @numba.njit
@@ -56,46 +71,81 @@ def _unit(w):
 
 
 @numba.njit
-def _slow(i, u, s0, s1, s2, s3, zx):
+def _slow(i, u, s0, s1, s2, s3):
     """The ziggurat's rare branches (about 1 % of draws), kept out of the hot loop: the
     base layer's tail beyond R, or the wedge test of layer i. Returns (done, z, state)."""
     if i == 0:
         while True:
             w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-            a = math.log(_unit(w) + 0.5 * TO_UNIT) / zx[1]
+            a = math.log(_unit(w) + 0.5 * TO_UNIT) / _ZX[1]
             w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
             b = math.log(_unit(w) + 0.5 * TO_UNIT)
             if -2.0 * b >= a * a:
-                return True, (a - zx[1] if u < 0 else zx[1] - a), s0, s1, s2, s3
-    x = u * zx[i]
-    f0 = math.exp(-0.5 * (zx[i] * zx[i] - x * x))
-    f1 = math.exp(-0.5 * (zx[i + 1] * zx[i + 1] - x * x))
+                return True, (a - _ZX[1] if u < 0 else _ZX[1] - a), s0, s1, s2, s3
+    x = u * _ZX[i]
+    f0 = math.exp(-0.5 * (_ZX[i] * _ZX[i] - x * x))
+    f1 = math.exp(-0.5 * (_ZX[i + 1] * _ZX[i + 1] - x * x))
     w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
     return f1 + _unit(w) * (f0 - f1) < 1.0, x, s0, s1, s2, s3
 
 
 @numba.njit
-def ziggurat_slow(i, u, s0, s1, s2, s3, zx, zr):
+def ziggurat_slow(i, u, s0, s1, s2, s3):
     """The draw after the fast test failed for word (layer ``i``, uniform ``u``): the tail
     or the wedge, then new words until one is accepted. Returns (z, state)."""
     while True:
-        done, z, s0, s1, s2, s3 = _slow(i, u, s0, s1, s2, s3, zx)
+        done, z, s0, s1, s2, s3 = _slow(i, u, s0, s1, s2, s3)
         if done:
             return z, s0, s1, s2, s3
         w, s0, s1, s2, s3 = _next(s0, s1, s2, s3)
-        i = np.int64(w & np.uint64(127))
+        i = np.int64(w & _MASK)
         u = 2.0 * _unit(w) - 1.0
-        if abs(u) < zr[i]:
-            return u * zx[i], s0, s1, s2, s3
+        if abs(u) < _ZR[i]:
+            return u * _ZX[i], s0, s1, s2, s3
 
 
-# The hot path (xoshiro256** step, layer, fast acceptance) is written out in the two loops
-# that draw (fill_normals and em_steps_rng): as a called function returning its state
-# Numba ran it 4x slower. tests/test_rng.py checks both give the same numbers.
+@numba.njit(nogil=True)
+def _draw_lanes(s0, s1, s2, s3, zt, wl, c2):
+    """The next ``len(zt)`` normals of each lane's stream (lane q's state in s0[q] … s3[q]),
+    scaled: ``zt[e, q] = c2 · z``. One pass
+    over the lanes per normal, xoshiro256** and the ziggurat's fast test with no branch
+    (it vectorises across lanes); then, if any lane failed the fast test (for 64 lanes
+    a quarter of the time), that lane's tail or wedge from the same stream, at once: each
+    lane's words are consumed in the same order as :func:`fill_normals` consumes them."""
+    w = s0.size
+    for e in range(zt.shape[0]):
+        nb = 0
+        for q in range(w):
+            a0, a1, a2, a3 = s0[q], s1[q], s2[q], s3[q]
+            a5 = a1 * np.uint64(5)
+            wd = ((a5 << np.uint64(7)) | (a5 >> np.uint64(57))) * np.uint64(9)
+            t = a1 << np.uint64(17)
+            a2 ^= a0
+            a3 ^= a1
+            a1 ^= a2
+            a0 ^= a3
+            a2 ^= t
+            s0[q], s1[q], s2[q] = a0, a1, a2
+            s3[q] = (a3 << np.uint64(45)) | (a3 >> np.uint64(19))
+            li = np.int64(wd & _MASK)
+            uu = 2.0 * (np.int64(wd >> np.uint64(11)) * TO_UNIT) - 1.0
+            wl[q] = wd
+            nb += np.int64(abs(uu) >= _ZR[li])
+            zt[e, q] = c2 * (uu * _ZX[li])
+        if nb:
+            for q in range(w):
+                wd = wl[q]
+                li = np.int64(wd & _MASK)
+                uu = 2.0 * (np.int64(wd >> np.uint64(11)) * TO_UNIT) - 1.0
+                if abs(uu) >= _ZR[li]:
+                    z, s0[q], s1[q], s2[q], s3[q] = ziggurat_slow(
+                        li, uu, s0[q], s1[q], s2[q], s3[q]
+                    )
+                    zt[e, q] = c2 * z
 
 
 @numba.njit(cache=True, nogil=True)
-def fill_normals(states, out, zx, zr):
+def fill_normals(states, out):
     """``out[k, q, e]``: path q's normals in its stream order (step k, then e), for the
     kernels that take the normals as an array (the callable-f step, the implicit scheme,
     the time-varying path). The same numbers as the fused kernel
@@ -107,30 +157,25 @@ def fill_normals(states, out, zx, zr):
         (p, 4) uint64, updated in place.
     out : numpy.ndarray
         (K, p, m) float64, filled.
-    zx, zr : numpy.ndarray
-        :data:`ZIG_X`, :data:`ZIG_R`.
     """
     kk, p, m = out.shape
-    for q in range(p):
-        s0, s1, s2, s3 = states[q, 0], states[q, 1], states[q, 2], states[q, 3]
+    lanes = 64
+    for q0 in range(0, p, lanes):
+        w = min(lanes, p - q0)
+        st = np.empty((4, w), dtype=np.uint64)
+        for q in range(w):
+            for c in range(4):
+                st[c, q] = states[q0 + q, c]
+        zt = np.empty((m, w))
+        wl = np.empty(w, dtype=np.uint64)
         for k in range(kk):
-            for e in range(m):
-                s5 = s1 * np.uint64(5)
-                w = ((s5 << np.uint64(7)) | (s5 >> np.uint64(57))) * np.uint64(9)
-                t = s1 << np.uint64(17)
-                s2 ^= s0
-                s3 ^= s1
-                s1 ^= s2
-                s0 ^= s3
-                s2 ^= t
-                s3 = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
-                i = np.int64(w & np.uint64(127))
-                u = 2.0 * (np.int64(w >> np.uint64(11)) * TO_UNIT) - 1.0
-                if abs(u) < zr[i]:
-                    out[k, q, e] = u * zx[i]
-                else:
-                    out[k, q, e], s0, s1, s2, s3 = ziggurat_slow(i, u, s0, s1, s2, s3, zx, zr)
-        states[q, 0], states[q, 1], states[q, 2], states[q, 3] = s0, s1, s2, s3
+            _draw_lanes(st[0], st[1], st[2], st[3], zt, wl, 1.0)
+            for q in range(w):
+                for e in range(m):
+                    out[k, q0 + q, e] = zt[e, q]
+        for q in range(w):
+            for c in range(4):
+                states[q0 + q, c] = st[c, q]
 
 
 TILE_BYTES = 3 * 2**19  # a tile's state and increments (2·Nd·tile doubles) within this
@@ -159,7 +204,7 @@ def tile_width(p: int, nd: int) -> int:
 
 @numba.njit(cache=True, nogil=True)
 def _em_core(
-    x, xi, states, zx, zr, m_draw, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst,
+    x, xi, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst,
     kmat, gvec, drift, tile,
 ):  # fmt: skip
     """:func:`em_steps` and :func:`em_steps_rng` in one body: the normals are read from
@@ -174,9 +219,14 @@ def _em_core(
             for r in range(nd):
                 xt[r, q] = x[q0 + q, r]
         dx = np.empty((nd, w))
-        zt = np.empty((2 * ne, w))
+        zt = np.empty((max(2 * ne, m_draw), w))  # rows past 2·E: drawn, not used
         df = np.empty((d, w))
         mb = np.empty(w)
+        st = np.empty((4, w if states.shape[0] else 0), dtype=np.uint64)
+        for q in range(st.shape[1]):
+            for c in range(4):
+                st[c, q] = states[q0 + q, c]
+        wl = np.empty(w, dtype=np.uint64)
         for k in range(k_from, k_to):
             c1 = ch[k]
             c2 = cs[k]
@@ -184,29 +234,8 @@ def _em_core(
                 for q in range(w):
                     for e in range(2 * ne):
                         zt[e, q] = c2 * xi[k, q0 + q, e]
-            for q in range(w if states.shape[0] else 0):
-                qq = q0 + q
-                s0, s1, s2, s3 = states[qq, 0], states[qq, 1], states[qq, 2], states[qq, 3]
-                for e in range(m_draw):  # m_draw >= 2·E: a narrower mode skips the rest
-                    # xoshiro256** and the ziggurat's fast test, as in rng.fill_normals
-                    s5 = s1 * np.uint64(5)
-                    wd = ((s5 << np.uint64(7)) | (s5 >> np.uint64(57))) * np.uint64(9)
-                    t = s1 << np.uint64(17)
-                    s2 ^= s0
-                    s3 ^= s1
-                    s1 ^= s2
-                    s0 ^= s3
-                    s2 ^= t
-                    s3 = (s3 << np.uint64(45)) | (s3 >> np.uint64(19))
-                    li = np.int64(wd & np.uint64(127))
-                    uu = 2.0 * (np.int64(wd >> np.uint64(11)) * TO_UNIT) - 1.0
-                    if abs(uu) < zr[li]:
-                        z = uu * zx[li]
-                    else:
-                        z, s0, s1, s2, s3 = ziggurat_slow(li, uu, s0, s1, s2, s3, zx, zr)
-                    if e < 2 * ne:
-                        zt[e, q] = c2 * z
-                states[qq, 0], states[qq, 1], states[qq, 2], states[qq, 3] = s0, s1, s2, s3
+            if states.shape[0]:
+                _draw_lanes(st[0], st[1], st[2], st[3], zt, wl, c2)
             for r in range(nd):
                 ur = c1 * u[r]
                 for q in range(w):
@@ -239,6 +268,9 @@ def _em_core(
         for q in range(w):
             for r in range(nd):
                 x[q0 + q, r] = xt[r, q]
+        for q in range(st.shape[1]):
+            for c in range(4):
+                states[q0 + q, c] = st[c, q]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -252,24 +284,23 @@ def em_steps(
     ``dst[e]``'s rows). With ``drift`` False the L_B term is left out (the implicit
     scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
     innermost loop runs over the tile (no array views inside: they cost per nonzero)."""
-    table = np.zeros(1)
     _em_core(
-        x, xi, np.zeros((0, 4), dtype=np.uint64), table, table, 0, k_from, k_to, ch, cs,
+        x, xi, np.zeros((0, 4), dtype=np.uint64), 0, k_from, k_to, ch, cs,
         indptr, indices, data, u, src, dst, kmat, gvec, drift, tile,
     )  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
 def em_steps_rng(
-    x, states, zx, zr, m_draw, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst, kmat,
+    x, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, u, src, dst, kmat,
     gvec, drift, tile,
 ):  # fmt: skip
     """:func:`em_steps` with the normals drawn in the kernel, path by path from its
     xoshiro256** state ``states[path]`` (the same numbers as :func:`fill_normals` gives
-    the array kernel; ``m_draw`` >= 2·E per step, the rest skipped), so no array of
+    the array kernel; ``m_draw`` >= 2·E per step, the rest drawn and dropped), so no array of
     normals is written or read."""
     _em_core(
-        x, np.zeros((1, 1, 1)), states, zx, zr, m_draw, k_from, k_to, ch, cs, indptr,
+        x, np.zeros((1, 1, 1)), states, m_draw, k_from, k_to, ch, cs, indptr,
         indices, data, u, src, dst, kmat, gvec, drift, tile,
     )  # fmt: skip
 

@@ -142,10 +142,9 @@ class _Stepper:
         """:meth:`advance` with the normals drawn in the kernel from ``states`` (``m_draw``
         per path and step, the widest mode's 2·E, so every mode consumes the same)."""
         from .kernels import em_steps_rng, tile_width
-        from .rng import ZIG_R, ZIG_X
 
         tile = tile_width(x.shape[0], x.shape[1])
-        em_steps_rng(x, states, ZIG_X, ZIG_R, m_draw, k_from, k_to, ch, cs, *self.args, True, tile)
+        em_steps_rng(x, states, m_draw, k_from, k_to, ch, cs, *self.args, True, tile)
 
     def advance(self, x, xi, k_from, k_to, ch, cs) -> None:
         from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
@@ -177,18 +176,25 @@ def prepare(spec: MonteCarloSpec) -> None:
         The run (a spec with its own ``run_block`` needs nothing).
     """
     from .kernels import em_steps, em_steps_rng, fill_normals
-    from .rng import ZIG_R, ZIG_X
 
-    fill_normals(np.zeros((0, 4), np.uint64), np.zeros((1, 0, 1)), ZIG_X, ZIG_R)
-    for s in getattr(spec, "systems", ()):  # a spec with its own run_block has none
+    # only what the run calls: each kernel loaded from the cache costs about 0.1 s
+    systems = getattr(spec, "systems", ())  # a spec with its own run_block has none
+    xoshiro = getattr(spec, "rng", "xoshiro") == "xoshiro"
+    explicit = getattr(spec, "scheme", "explicit") == "explicit"
+    fused = xoshiro and explicit and bool(systems) and all(s.f is None for s in systems)
+    if xoshiro and not fused:
+        fill_normals(np.zeros((0, 4), np.uint64), np.zeros((1, 0, 1)))
+    for s in systems:
         if s.f is None:
             st = _Stepper(s, False)
             x = np.zeros((0, s.nd))
-            xi = np.zeros((1, 0, 2 * s.n_edges))
             one = np.ones(1)
-            em_steps(x, xi, 0, 1, one, one, *st.args, True, 1)
-            states = np.zeros((0, 4), np.uint64)
-            em_steps_rng(x, states, ZIG_X, ZIG_R, 2, 0, 1, one, one, *st.args, True, 1)
+            if fused:
+                states = np.zeros((0, 4), np.uint64)
+                em_steps_rng(x, states, 2, 0, 1, one, one, *st.args, True, 1)
+            else:
+                xi = np.zeros((1, 0, 2 * s.n_edges))
+                em_steps(x, xi, 0, 1, one, one, *st.args, True, 1)
             return
 
 
