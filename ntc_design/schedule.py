@@ -32,12 +32,15 @@ from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .errors import InputError
-from .gain import Condition, GainAnalysis, analyse_gain, gain_function, parse_gain
+from .exprtree import numeric_function
+
+if TYPE_CHECKING:  # SymPy (through .gain) loads only for an analysis, not to simulate
+    from .gain import Condition, GainAnalysis
 
 #: Interpolation between the table's points: linear (continuous) or previous (a step
 #: at every time; not continuous).
@@ -125,7 +128,7 @@ class ScheduleGain:
         c.setflags(write=False)
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "c", c)
-        object.__setattr__(self, "_fn", gain_function(self.tail, f"{f}.tail"))
+        object.__setattr__(self, "_fn", numeric_function(self.tail, f"{f}.tail"))
 
     def _tail(self, t: np.ndarray) -> np.ndarray:
         return self._fn(t)  # type: ignore[attr-defined]
@@ -403,6 +406,8 @@ def join_tail(t_end: float, c_end: float, gamma: float = 1.0, b: float = 1.0) ->
 
 
 def _table_condition(g: ScheduleGain) -> Condition:
+    from .gain import Condition
+
     if g.interpolation != "linear":
         return Condition(
             False,
@@ -430,6 +435,8 @@ def _join(g: ScheduleGain) -> tuple[bool, str]:
 def _tail_analysis(tail: str, seconds: float | None) -> GainAnalysis:
     # certify, its own verification and the tune result analyse one tail three times; the
     # symbolic analysis is deterministic in its text and takes seconds
+    from .gain import analyse_gain
+
     return analyse_gain(tail) if seconds is None else analyse_gain(tail, seconds)
 
 
@@ -454,6 +461,8 @@ def analyse_schedule(g: ScheduleGain, seconds: float | None = None) -> GainAnaly
     InputError
         The tail is negative or not finite on [0, ∞).
     """
+    from .gain import Condition, GainAnalysis, parse_gain
+
     tail = _tail_analysis(g.tail, seconds)
     table = _table_condition(g)
     ok, why = _join(g)
@@ -496,6 +505,8 @@ def analyse_any_gain(gain: Any) -> GainAnalysis:
     InputError
         As the analysis it calls; a gain of another type.
     """
+    from .gain import analyse_gain
+
     if isinstance(gain, ScheduleGain):
         return analyse_schedule(gain)
     if isinstance(gain, str):

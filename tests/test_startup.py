@@ -57,6 +57,34 @@ def test_check_of_a_fixed_topology_loads_no_sympy_or_optimiser():
     assert "scipy.optimize" not in mods and "ntc_design.thresholds" not in mods
 
 
+def test_a_monte_carlo_simulation_loads_no_sympy_and_one_kernel(tmp_path):
+    # the gain is read by the NumPy backend of the expression parser; only the fused
+    # kernel is loaded from Numba's cache
+    code = (
+        "import contextlib, io\n"
+        "sys.argv = ['ntc', 'simulate', 'examples/scenarios/g1_fixed.yaml', '--out', "
+        f"{str(tmp_path / 'o')!r}, '--paths', '4', '--horizon', '0.01', '--method', 'mc']\n"
+        "from ntc_design.cli import main\n"
+        "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main()\n"
+        "from ntc_design.simulate import kernels\n"
+        "print(json.dumps([len(f.overloads) for f in "
+        "(kernels.em_steps_rng, kernels.em_steps, kernels.fill_normals)]))"
+    )
+    probe = f"import sys, json\n{code}\nprint(json.dumps(sorted(sys.modules)))"
+    out = (
+        subprocess.run(
+            [sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True
+        )
+        .stdout.strip()
+        .splitlines()
+    )
+    mods = set(json.loads(out[-1]))
+    assert (tmp_path / "o" / "summary.json").is_file()
+    assert "sympy" not in mods and "cvxpy" not in mods and "numba" in mods
+    assert json.loads(out[-2]) == [1, 0, 0]  # em_steps_rng only
+
+
 def test_the_lazy_names_are_the_same_objects():
     import ntc_design as nd
     from ntc_design.design import lemma1

@@ -11,16 +11,17 @@ moments (:func:`.moments.exact_moments`).
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, TypeAlias, TypeGuard, cast
 
 import numpy as np
 
 from ..design import ProtocolDesign, design_topology
 from ..errors import InputError, format_seconds, quote, warn_user
-from ..gain import gain_function
+from ..exprtree import numeric_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
-from ..timevarying import ExpressionTopology
 from .budget import (
     LONG_RUN_SECONDS,
     check_budget,
@@ -39,9 +40,31 @@ from .result import SimulationResult
 from .spec import SimulationSpec
 from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters, spec_grid
 from .system import ModeSystem, check_step_size, mode_system
-from .timevarying import simulate_expression
 
-AnyTopology = Topology | SwitchingTopology | TimeVaryingTopology | ExpressionTopology
+if TYPE_CHECKING:
+    from ..timevarying import ExpressionTopology
+
+# A string: ExpressionTopology's module loads SymPy, which a fixed topology does not need.
+AnyTopology: TypeAlias = "Topology | SwitchingTopology | TimeVaryingTopology | ExpressionTopology"
+
+
+def is_expression_topology(topology: object) -> TypeGuard[ExpressionTopology]:
+    """Whether ``topology`` is an :class:`~ntc_design.timevarying.ExpressionTopology`,
+    without importing its module (and SymPy) when no such topology was ever made.
+
+    Parameters
+    ----------
+    topology : object
+        Any topology.
+
+    Returns
+    -------
+    bool
+    """
+    mod = sys.modules.get("ntc_design.timevarying.topology")
+    return mod is not None and isinstance(topology, mod.ExpressionTopology)
+
+
 MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]
 MAX_REDESIGNS = 100_000  # re-designs of a topology given as functions of t
 
@@ -86,7 +109,7 @@ class ExpressionGain:
 
     def __init__(self, text: str, field_name: str = "gain"):
         self.text, self.field_name = text, field_name
-        self._fn = gain_function(text, field_name)
+        self._fn = numeric_function(text, field_name)  # NumPy only: no SymPy to simulate
 
     def __reduce__(self):
         return (ExpressionGain, (self.text, self.field_name))
@@ -330,7 +353,9 @@ def simulate(
         )
     cfun, gain_text = make_gain(spec.gain)
     workers = min(spec.mc.workers, os.cpu_count() or 1)
-    if isinstance(topology, ExpressionTopology):  # A(t)
+    if is_expression_topology(topology):  # A(t)
+        from .timevarying import simulate_expression
+
         if spec.delta is not None:
             raise InputError(
                 "delta: a topology given as expressions of t takes Lemma 1's δ(t) at every t; "
@@ -338,7 +363,8 @@ def simulate(
             )
         _check_size(topology, spec, cfun, 1, 1, workers)
         return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
-    return _simulate_modes(topology, spec, cfun, gain_text, workers, progress, engine, protocol)
+    fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)  # not A(t)
+    return _simulate_modes(fixed, spec, cfun, gain_text, workers, progress, engine, protocol)
 
 
 @dataclass(frozen=True, eq=False)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import MAX_SEED, InputError, quote, require_int, require_number, require_positive
-from ..gain import parse_gain
+from ..exprtree import numeric_function
 from ..schedule import ScheduleGain, read_schedule, schedule_from_document
 from .noise import NoiseModel
 from .robust_sampling import RobustSampling
@@ -485,7 +485,7 @@ class SimulationSpec:
             if len(self.gain) > MAX_GAIN_TEXT:
                 raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
 
-            parse_gain(self.gain)  # a whitelisted expression in t, or one line naming gain
+            numeric_function(self.gain, "gain")  # whitelisted, in t; or one line naming gain
         elif not callable(self.gain):
             raise InputError(
                 f"gain: expected an expression in t or a callable, got {type(self.gain).__name__}"
