@@ -35,7 +35,7 @@ from ntc_design.design import Decomposition, ProtocolDesign
 from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import NoiseModel, mode_system, simulate
 from ntc_design.simulate.grid import build_grid
-from ntc_design.simulate.kernels import em_steps, numpy_step, tile_width
+from ntc_design.simulate.kernels import em_steps, kernel_arrays, numpy_step, tile_width
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run
 from ntc_design.simulate.system import check_step_size
 
@@ -336,8 +336,7 @@ def step_variants(s, p: int = 500, k_n: int = 8) -> dict:
     ch = np.full(k_n, 1e-5)
     cs = np.sqrt(ch)
     lap = s.lap_b.tocsr()
-    args = (lap.indptr.astype(np.int64), lap.indices.astype(np.int64), lap.data, s.u)
-    args += (s.src, s.dst, s.k_blocks, s.g_edge)
+    args = kernel_arrays(s)
     tile = tile_width(p, s.nd)
     ne, d = s.n_edges, s.dim
 

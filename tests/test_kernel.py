@@ -13,7 +13,7 @@ from ntc_design.linalg import numba_cache_dir
 from ntc_design.paper import THETA  # the paper's θ, defined once
 from ntc_design.simulate import NoiseModel, kernels, moments, montecarlo, simulate, system
 from ntc_design.simulate.grid import build_grid
-from ntc_design.simulate.kernels import em_steps, numpy_step, tile_width
+from ntc_design.simulate.kernels import em_steps, kernel_arrays, numpy_step, tile_width
 from ntc_design.simulate.moments import em_moments, exact_moments
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run, run_chunk
 from ntc_design.simulate.system import grounded_laplacian_sparse, mode_system
@@ -42,6 +42,27 @@ def stiff_network(n: int, seed: int, d: int = 3) -> nd.Topology:
         neg = b == (a + 1) % n or rng.random() < 0.5
         edges.append((a + 1, b + 1, -w if neg else w))
     return nd.Topology.from_edges(n, d, edges)
+
+
+@pytest.mark.parametrize("d", [1, 2, 3, 4])
+def test_the_block_and_general_loops_equal_the_dense_step(d):
+    # d = 3 takes the 3×3-block loops, other d the general ones; both against dense algebra
+    top = stiff_network(12, seed=d, d=d)
+    s = mode_system(nd.design(top, np.arange(1.0, d + 1), thresholds=False), NoiseModel())
+    rng = np.random.default_rng(d)
+    p, k_n = 19, 15
+    x0 = rng.normal(size=(p, s.nd))
+    xi = rng.normal(size=(k_n, p, 2 * s.n_edges))
+    ch = 1e-4 * (1 + rng.random(k_n))
+    ref = x0.copy()
+    for k in range(k_n):
+        ref = dense_step(ref, xi[k], ch[k], np.sqrt(ch[k]), s)
+    args = kernel_arrays(s)
+    assert (args[3].size > 1) == (d == 3)  # the block form only for d = 3
+    for tile in (1, 7, p):
+        x = x0.copy()
+        em_steps(x, xi, 0, k_n, ch, np.sqrt(ch), *args, True, tile)
+        np.testing.assert_allclose(x, ref, rtol=1e-12, atol=1e-12)
 
 
 @pytest.fixture(scope="module")
@@ -81,9 +102,7 @@ def test_compiled_and_sparse_steps_equal_the_dense_kernel(g1, noise):
     ref = x0.copy()
     for k in range(k_n):
         ref = dense_step(ref, xi[k], ch[k], cs[k], s)
-    lap = s.lap_b.tocsr()
-    args = (lap.indptr.astype(np.int64), lap.indices.astype(np.int64), lap.data, s.u)
-    args += (s.src, s.dst, s.k_blocks, s.g_edge)
+    args = kernel_arrays(s)
     for tile in (1, 8, p):  # the tile of paths changes nothing
         x = x0.copy()
         em_steps(x, xi, 0, k_n, ch, cs, *args, True, tile)

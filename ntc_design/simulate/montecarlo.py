@@ -119,18 +119,9 @@ class _Stepper:
         self.s = s
         self.compiled = s.f is None
         if self.compiled:
-            lap = s.lap_b.tocsr()
-            lap.sort_indices()
-            self.args = (
-                lap.indptr.astype(np.int64),
-                lap.indices.astype(np.int64),
-                lap.data,
-                s.u,
-                s.src,
-                s.dst,
-                s.k_blocks,
-                s.g_edge.reshape(s.n_edges, s.dim),
-            )
+            from .kernels import kernel_arrays
+
+            self.args = kernel_arrays(s)
         self.solver = SolverCache(s.lap_b, s.dim) if implicit else None
 
     @property
