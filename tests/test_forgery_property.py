@@ -24,8 +24,8 @@ import ntc_design as nd
 from ntc_design.certify import KINDS, verify
 from ntc_design.certify.arrays import topology_from_subject
 from ntc_design.certify.format import digest, document_hash, topology_hash
-from ntc_design.certify.scale import scale_certificate
-from ntc_design.certify.switching_scale import switching_scale_certificate
+from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
+from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
 from ntc_design.design import design
 from ntc_design.errors import InputError
 from ntc_design.files import parse_topology

@@ -721,10 +721,11 @@ def test_negative_theta_and_version(capsys, monkeypatch):
 
 
 def test_ctrl_c_with_two_workers_stops_promptly(tmp_path):
-    """A ~20 s run on 2 workers, SIGINT a second after the workers start: exit 130 within
-    3 s, one line, the old output folder untouched and no temporary folder left."""
+    """A run of 4e8 path-steps (10-20 s) on 2 workers, SIGINT a second after the workers
+    start: exit 130 within 3 s, one line, the old output folder untouched and no temporary
+    folder left."""
     sc = scenario(
-        tmp_path, T=10.0, paths=2000, block_size=100, method="mc", workers=2, save_every=0.1
+        tmp_path, T=100.0, paths=4000, block_size=100, method="mc", workers=2, save_every=1.0
     )
     out = tmp_path / "o"
     out.mkdir()

@@ -15,10 +15,8 @@ import scipy.sparse as sp
 from ntc_design.certify import certify, verify
 from ntc_design.certify.format import digest, document_hash, topology_hash
 from ntc_design.certify.kinds.switching import switching_certificate
+from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
 from ntc_design.certify.scale import component_matrix, lap_b_blocks, symmetric_part_bound
-from ntc_design.certify.switching_scale import (
-    switching_scale_certificate,
-)
 from ntc_design.design import design
 from ntc_design.errors import InputError
 from ntc_design.generate import random_network, write_topology
@@ -487,7 +485,7 @@ def test_topology_hash_in_chunks_is_the_same(monkeypatch):
 def test_rate_lower_bound_only_when_every_component_is_dominance():
     """Second review: a bound over the dominance components only is not a bound on the
     decay rate when a 'symmetric' component decays slower."""
-    from ntc_design.certify.scale import scale_certificate
+    from ntc_design.certify import scale_certificate
 
     i2, s2 = np.eye(2), np.diag([1.0, 1e-3])
     top = Topology.from_edges(4, 2, [(1, 2, -i2), (2, 1, -i2), (3, 4, -s2), (4, 3, -s2)])

@@ -9,9 +9,9 @@ from .claims import Claim, ClaimKind, Property
 from .format import DIGEST_NOTE, topology_hash, write_certificate
 from .kinds import KINDS, CertificateKind, kind_for
 from .kinds.hurwitz import hurwitz_certificate
+from .kinds.hurwitz_scale import scale_certificate
 from .kinds.switching import switching_certificate
 from .result import CertifyResult, certify
-from .scale import scale_certificate
 from .theorems import Premise, TheoremVerdict
 from .verify import verify, verify_file
 

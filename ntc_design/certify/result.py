@@ -11,6 +11,7 @@ from ..design import ProtocolDesign, SwitchingDesign, design
 from ..errors import InputError
 from ..gain import GainAnalysis
 from ..model import SwitchingTopology, Topology
+from ..paper import F_SCALE, SIGMA
 from ..rows import Table
 from ..schedule import ScheduleGain, analyse_any_gain
 from ..timevarying import ExpressionTopology, TimeVaryingDesign
@@ -152,8 +153,8 @@ def certify(
     margin: float = 0.1,
     gain: str | ScheduleGain | None = None,
     delta: float | None = None,
-    noise_sigma: float = 0.4,
-    noise_f=0.3,
+    noise_sigma: float = SIGMA,
+    noise_f=F_SCALE,
     rate_method: str = "lyapunov",
 ) -> CertifyResult:
     """Design (Lemma 1), certify (Lyapunov + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a common

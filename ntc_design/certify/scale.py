@@ -65,7 +65,6 @@ from .dense import prove_pd_expr
 from .format import FORMAT, VERSION, finish
 from .lyapunov import hurwitz_by_lyapunov
 
-KIND = "hurwitz-scale"
 #: Largest component (Nd) that may fall back to a dense Lyapunov equation.
 LYAPUNOV_COMPONENT_MAX_ND = 600
 #: Largest component (Nd) whose eigenvalues are computed densely for the rate estimate.
@@ -576,7 +575,7 @@ def dominance_rate_bound(mu: np.ndarray, v: np.ndarray, rhs: np.ndarray) -> np.n
     return mu - rhs / v
 
 
-def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
+def scale_document(des: ProtocolDesign, kind: str, name: str | None = None) -> dict:
     """Certify −L_B Hurwitz for a big network component by component (module docstring)
     and return the certificate document (compact: the topology as arrays, v and μ per
     agent, a dense P only for small fallback components).
@@ -585,13 +584,16 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
     ----------
     des : ProtocolDesign
         The design whose L_B is certified.
+    kind : str
+        The kind's name, written into the document by the kind that issues it
+        (:class:`ntc_design.certify.kinds.hurwitz_scale.HurwitzScaleKind`).
     name : str, optional
         Mode name used in claim ids (default: the topology's name).
 
     Returns
     -------
     dict
-        The certificate (``kind = "hurwitz-scale"``), digest included; re-check it with
+        The certificate, digest included; re-check it with
         :func:`ntc_design.certify.verify` / ``ntc verify``.
     """
     t0 = time.perf_counter()
@@ -630,7 +632,7 @@ def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
     doc = {
         "format": FORMAT,
         "version": VERSION,
-        "kind": KIND,
+        "kind": kind,
         "certifies": ["hurwitz"],
         "size": int(top.nd),
         "subject": {"modes": {name: mode_subject(des)}},

@@ -64,7 +64,6 @@ from .scale import (
     symmetric_part_factor,
 )
 
-KIND = "switching-scale"
 DESCRIPTION = "a switching topology at scale: every mode its schedule uses"
 #: ℓ is the eigenvalue estimate minus twice the rounding shift, times (1 − LOWER_RTOL).
 LOWER_RTOL = 1e-4
@@ -214,7 +213,7 @@ def prove_mode(top: Topology, delta: float) -> ModeProof:
     return ModeProof(True, 0.0, est, how, p0.detail)  # ℓ = 0: proven by the first factor
 
 
-def switching_scale_certificate(sd: SwitchingDesign) -> dict:
+def switching_scale_document(sd: SwitchingDesign, kind: str) -> dict:
     """Certify a big switching set (kind ``switching-scale``): per mode a proven lower
     bound ``λ_min(L_B(k) + L_B(k)ᵀ) > ℓ_k`` (module docstring), the topology as compact
     arrays.
@@ -223,6 +222,9 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
     ----------
     sd : SwitchingDesign
         One Lemma 1 design per mode.
+    kind : str
+        The kind's name, written into the document by the kind that issues it
+        (:class:`ntc_design.certify.kinds.switching_scale.SwitchingScaleKind`).
 
     Returns
     -------
@@ -255,7 +257,7 @@ def switching_scale_certificate(sd: SwitchingDesign) -> dict:
     doc = {
         "format": FORMAT,
         "version": VERSION,
-        "kind": KIND,
+        "kind": kind,
         "certifies": [Property.SYMMETRIC_PART.value],
         "size": int(next(iter(sd.modes.values())).topology.nd),
         "subject": {
@@ -318,11 +320,10 @@ def proof_fields(x: Any, where: str) -> float:
 
 
 __all__ = [
-    "KIND",
     "ModeProof",
     "mode_processes",
     "prove_mode",
-    "switching_scale_certificate",
+    "switching_scale_document",
     "proof_fields",
     "sym_matrices",
 ]

@@ -45,6 +45,7 @@ from ..errors import InputError
 from ..expr import compile_expression, parse_expression, symbol
 from ..linalg import DEF_RTOL
 from ..model import Topology
+from ..paper import F_SCALE, SIGMA
 from ..rigorous.exact import gamma
 from ..rigorous.interval import bounds, enclose, t_ball, upper
 from ..timevarying import (
@@ -61,6 +62,7 @@ from .format import FORMAT, VERSION, finish
 _T = symbol("t")
 RTOL = 0.008  # bisect until the certified Λ₂ is within 0.8 % of the sampled infimum
 MAX_INTERVALS = 4000
+RESULTS_KEY = "time_varying"  # where the document keeps its results
 FIRST_PIECES = 32
 
 
@@ -473,7 +475,7 @@ class TimeVaryingBound:
 def certify_lambda2(
     tv: ExpressionTopology,
     margin: float = 0.1,
-    sigma: float = 0.4,
+    sigma: float = SIGMA,
     rtol: float = RTOL,
     max_intervals: int = MAX_INTERVALS,
 ) -> TimeVaryingBound:
@@ -698,13 +700,14 @@ def noise_sigma_bar(f: Any) -> float:
     return float(abs(arr)) if arr.ndim == 0 else float(np.linalg.norm(arr, 2))
 
 
-def time_varying_certificate(
+def time_varying_document(
     tv: ExpressionTopology,
     theta,
+    kind: str,
     margin: float = 0.1,
     gain: str | None = None,
-    sigma: float = 0.4,
-    f: Any = 0.3,
+    sigma: float = SIGMA,
+    f: Any = F_SCALE,
 ) -> dict:
     """Certify the uniform bound of Theorems 3-4 and write it as a certificate mapping.
 
@@ -714,6 +717,9 @@ def time_varying_certificate(
         The topology, with ``period`` or ``constant_after``.
     theta : sequence of float
         The target θ (recorded in the subject).
+    kind : str
+        The kind's name, written into the document by the kind that issues it
+        (:class:`ntc_design.certify.kinds.time_varying.TimeVaryingKind`).
     margin : float, optional
         ΔC of Lemma 1.
     gain : str, optional
@@ -726,7 +732,7 @@ def time_varying_certificate(
     Returns
     -------
     dict
-        A ``time_varying`` certificate with its digest.
+        The certificate with its digest; its results under :data:`RESULTS_KEY`.
 
     Raises
     ------
@@ -758,7 +764,7 @@ def time_varying_certificate(
     doc = {
         "format": FORMAT,
         "version": VERSION,
-        "kind": "time_varying",
+        "kind": kind,
         "certifies": ["uniform_symmetric_part"],
         "size": int(tv.nd),
         "subject": {
@@ -775,7 +781,7 @@ def time_varying_certificate(
             {"id": "λ_max²(|A_ij(t)|) <= Λ₁ and Σσ²Σ_l(Σ_k|a_lk|)² <= p̄", "kind": "lambda1"},
             {"id": "μ₂(t) > 0 for t >= t₀", "kind": "t0"},
         ],
-        "results": {"time_varying": results},
+        "results": {RESULTS_KEY: results},
         "solver": {"name": "branch and bound, Arb ball arithmetic", "status": "ok"},
     }
     return finish(doc, "interval")
@@ -789,7 +795,7 @@ __all__ = [
     "mu2_t0",
     "mu2_threshold",
     "refuse_unbounded_horizon",
-    "time_varying_certificate",
+    "time_varying_document",
     "Enclosures",
     "domain_of",
     "noise_sigma_bar",

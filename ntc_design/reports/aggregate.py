@@ -15,8 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from ..certify import certify
-from ..certify.arrays import unpack
+from ..certify import KINDS, certify
 from ..certify.format import package_versions
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
@@ -207,8 +206,9 @@ def certificate_picture(cert: dict, des: ProtocolDesign):
         The certificate's μ array is malformed.
     """
     with paper_style():
-        if cert["kind"] == "hurwitz-scale":
-            mu = unpack(cert["components"]["mu"], "components.mu", "f8", (des.topology.n,))
+        kind = KINDS.get(str(cert.get("kind")))
+        mu = kind.agent_margins(cert, des.topology.n) if kind is not None else None
+        if mu is not None:
             # sorted against the fraction of agents (a quantile function): every agent is
             # visible however wide the spread, on a log axis when every μ_i > 0
             fig, ax = plt.subplots(figsize=(ONE_COLUMN, 2.4), layout="constrained")

@@ -16,15 +16,18 @@ import numpy as np
 from ntc_design.certify.format import package_versions
 
 from ..certify import CertifyResult, certify
+from ..certify.kinds.time_varying import time_varying_results
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError
 from ..gain import T, limit_at_infinity, parse_gain
 from ..model import SwitchingTopology
 from ..outputs import check_output_file
+from ..paper import F_SCALE
 from ..rows import fmt
 from ..schedule import ScheduleGain
 from ..simulate.result import MeanSquareBand
+from ..simulate.spec import noise_from_document
 from ..sweep.robust import study_sentence
 from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
@@ -157,17 +160,10 @@ def _time_varying(run: RunData, p: dict, figdir: Path) -> tuple:
         return None, []
 
     tv = from_document(tvp["topology"], f"{run.path}/summary.json: time_varying")
-    noise = p.get("noise") or {}
-    f = noise.get("f", 0.3)
-    res = certify(
-        tv,
-        p["theta"],
-        p["margin"],
-        run.gain,
-        noise_sigma=float(noise.get("sigma", 0.4)),
-        noise_f=f if isinstance(f, (int, float, list)) else 0.3,
-    )
-    r = res.certificate["results"]["time_varying"]
+    noise = noise_from_document(p.get("noise"))  # the simulation's own reading and defaults
+    f = noise.f if isinstance(noise.f, (int, float, np.ndarray)) else F_SCALE
+    res = certify(tv, p["theta"], p["margin"], run.gain, noise_sigma=noise.sigma, noise_f=f)
+    r = time_varying_results(res.certificate)
     assert isinstance(res.design, TimeVaryingDesign)  # certify() of an ExpressionTopology
     return res, [
         (

@@ -306,11 +306,11 @@ def estimate(
     return Estimate(parts, float(steps), float(steps) * paths if mc else 0.0)
 
 
-# Monte Carlo throughput per worker, state entries × steps per second: ~2·10⁸ explicit
-# (G1: 2.3·10⁶ path-steps/s of 21 + 10·9 entries per core of a 2-core reference machine),
-# about 5x less with the drift-implicit scheme's sparse solves (10³ agents: 4·10⁷). Only for the estimate a
-# long run prints before it starts (:func:`mc_seconds`).
-MC_ENTRIES_PER_SECOND = 2e8
+# Monte Carlo throughput per worker, state entries × steps per second: ~8·10⁸ explicit
+# (G1: 1.3·10⁷ path-steps/s of 21 + 8·9 entries per worker of a 2-core reference machine,
+# normals drawn in the kernel), about 5x less with the drift-implicit scheme's sparse
+# solves. Only for the estimate a long run prints before it starts (:func:`mc_seconds`).
+MC_ENTRIES_PER_SECOND = 8e8
 IMPLICIT_SLOWDOWN = 5.0
 LONG_RUN_SECONDS = 60.0  # a run estimated longer than this says so before it starts
 

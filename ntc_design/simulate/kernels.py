@@ -355,7 +355,14 @@ def em_steps_rng(
     )  # fmt: skip
 
 
-def kernel_arrays(s) -> tuple:
+# (indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec)
+KernelArrays = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+]  # fmt: skip
+
+
+def kernel_arrays(s) -> KernelArrays:
     """The arrays :func:`em_steps` and :func:`em_steps_rng` take after ``ch, cs``, for one
     mode: L_B in CSR (sorted, int64 indices), L_B in 3×3 blocks when d = 3 (else empty),
     u, the edges' source and destination agents, K_e and g_e.

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..paper import F_SCALE, SIGMA
 
 
 class StateNoise:
@@ -210,8 +211,8 @@ class NoiseModel:
     scalar s (f(x) = s·x), a d×d matrix F (f(x) = F x) or a callable acting on arrays of
     differences of shape (..., d) (it must satisfy Assumption 1: ‖f(x)‖ <= σ̄‖x‖)."""
 
-    sigma: float = 0.4
-    f: float | np.ndarray | Callable[[np.ndarray], np.ndarray] = 0.3
+    sigma: float = SIGMA  # the paper's σ and f(x) = 0.3x, defined once in ntc_design.paper
+    f: float | np.ndarray | Callable[[np.ndarray], np.ndarray] = F_SCALE
     sigma_edges: Mapping[tuple, float] = field(default_factory=dict)
 
     @property

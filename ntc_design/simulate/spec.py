@@ -35,6 +35,7 @@ import numpy as np
 
 from ..errors import MAX_SEED, InputError, quote, require_int, require_number, require_positive
 from ..exprtree import numeric_function
+from ..paper import F_SCALE, SIGMA
 from ..schedule import ScheduleGain, read_schedule, schedule_from_document
 from .noise import NoiseModel
 from .robust_sampling import RobustSampling
@@ -600,7 +601,7 @@ class SimulationSpec:
         if "theta" not in doc:
             raise InputError("theta: missing")
         o = {k: v for k, v in doc.items() if k in OPTION_KEYS}
-        o["noise"] = _noise_from_document(doc.get("noise"))
+        o["noise"] = noise_from_document(doc.get("noise"))
         if o.get("robust") is not None:
             o["robust"] = RobustSampling.from_document(o["robust"])
         if "initial" in o:
@@ -720,7 +721,24 @@ class SimulationSpec:
         return out
 
 
-def _noise_from_document(doc: Any) -> NoiseModel:
+def noise_from_document(doc: Any) -> NoiseModel:
+    """A scenario's (or a run summary's) ``noise`` mapping as a :class:`NoiseModel`: the one
+    reading of it, with the defaults of :class:`NoiseModel` (the paper's σ and f).
+
+    Parameters
+    ----------
+    doc : Any
+        ``{sigma, f, sigma_edges}`` (each optional), or None for the defaults.
+
+    Returns
+    -------
+    NoiseModel
+
+    Raises
+    ------
+    InputError
+        One line naming the field that is wrong.
+    """
     if doc is None:
         return NoiseModel()
     if not isinstance(doc, Mapping):
@@ -728,8 +746,8 @@ def _noise_from_document(doc: Any) -> NoiseModel:
     extra = sorted(str(k) for k in set(doc) - {"sigma", "f", "sigma_edges"})
     if extra:
         raise InputError(f"noise.{extra[0]}: unknown field (allowed: sigma, f, sigma_edges)")
-    sigma = require_number("noise.sigma", doc.get("sigma", 0.4), minimum=0.0, bound=MAX_MAGNITUDE)
-    f = doc.get("f", 0.3)
+    sigma = require_number("noise.sigma", doc.get("sigma", SIGMA), minimum=0.0, bound=MAX_MAGNITUDE)
+    f = doc.get("f", F_SCALE)
     if isinstance(f, list):
         for r, row in enumerate(f):
             if not isinstance(row, list):
@@ -782,6 +800,7 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
 
 
 __all__ = [
+    "noise_from_document",
     "METHODS",
     "OPTION_KEYS",
     "RobustSampling",

@@ -212,6 +212,14 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
         # L_B(t) as a dense CSR pattern: its nonzeros move with t, Nd is small here
         indptr = np.arange(0, nd_ * nd_ + 1, nd_, dtype=np.int64)
         indices = np.tile(np.arange(nd_, dtype=np.int64), nd_)
+        # and, for d = 3, as dense 3×3 blocks (the kernel's block loops)
+        n_ag, dd = nd_ // d, d
+        bptr = (
+            np.arange(0, n_ag * n_ag + 1, n_ag, dtype=np.int64)
+            if dd == 3
+            else np.zeros(1, np.int64)
+        )
+        bind = np.tile(np.arange(n_ag, dtype=np.int64), n_ag) if dd == 3 else np.zeros(0, np.int64)
         tile = tile_width(p, nd_)
     for k0 in range(0, grid.n_steps, batch):
         kb = min(batch, grid.n_steps - k0)
@@ -225,9 +233,16 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
             gvec = np.ascontiguousarray(sys_.sigma[None, :, None] * absw.sum(axis=3))  # σ|A|1
             ch_b, cs_b = ch_all[k0 : k0 + kb], cs_all[k0 : k0 + kb]
             for kk in range(kb):
+                blocks = (
+                    np.ascontiguousarray(
+                        lap[kk].reshape(n_ag, 3, n_ag, 3).transpose(0, 2, 1, 3).reshape(-1, 3, 3)
+                    )
+                    if dd == 3
+                    else np.zeros((0, 3, 3))
+                )
                 em_steps(
-                    x, xi, kk, kk + 1, ch_b, cs_b, indptr, indices, lap[kk], u[kk], src, dst,
-                    kmat[kk], gvec[kk], True, tile,
+                    x, xi, kk, kk + 1, ch_b, cs_b, indptr, indices, lap[kk], bptr, bind, blocks,
+                    u[kk], src, dst, kmat[kk], gvec[kk], True, tile,
                 )  # fmt: skip
                 if k0 + kk + 1 in save_at and not stats.record(x, save_at[k0 + kk + 1]):
                     return stats.result()

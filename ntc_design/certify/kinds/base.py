@@ -444,6 +444,29 @@ class CertificateKind(ABC):
         tuple of TheoremVerdict
         """
 
+    def agent_margins(self, certificate: dict, n: int) -> np.ndarray | None:
+        """Per-agent margins the certificate records (μ_i of a component-wise proof), for
+        a report's figure; None when the kind records none.
+
+        Parameters
+        ----------
+        certificate : dict
+            A certificate of this kind.
+        n : int
+            The number of agents.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (n,) margins.
+
+        Raises
+        ------
+        InputError
+            The recorded array is malformed.
+        """
+        return None
+
     # ------------------------------------------------------------ verifying
     @abstractmethod
     def read(self, doc: dict, source: str) -> Reading:

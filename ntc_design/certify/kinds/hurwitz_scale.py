@@ -30,7 +30,7 @@ from ..scale import (
     prove_mu,
     prove_symmetric_part,
     rate_estimate,
-    scale_certificate,
+    scale_document,
 )
 from ..theorems import TheoremVerdict, fixed_verdicts
 from .base import (
@@ -116,7 +116,10 @@ class HurwitzScaleKind(CertificateKind):
         return isinstance(design, ProtocolDesign) and design.topology.nd > DENSE_CERT_MAX_ND
 
     def issue(self, design: Any, **options: Any) -> dict:
-        return scale_certificate(design)
+        return scale_document(design, self.name)
+
+    def agent_margins(self, certificate: dict, n: int) -> np.ndarray | None:
+        return unpack(certificate["components"]["mu"], "components.mu", "f8", (n,))
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         return fixed_verdicts(design, verification, gain)
@@ -355,3 +358,23 @@ class HurwitzScaleKind(CertificateKind):
 
 
 __all__ = ["HurwitzScaleKind", "rate_upper_bound"]
+
+
+def scale_certificate(des: ProtocolDesign, name: str | None = None) -> dict:
+    """Certify −L_B Hurwitz for a big network component by component
+    (:mod:`ntc_design.certify.scale`) as a ``hurwitz-scale`` certificate.
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The design whose L_B is certified.
+    name : str, optional
+        Mode name used in claim ids (default: the topology's name).
+
+    Returns
+    -------
+    dict
+        The certificate, digest included; re-check it with
+        :func:`ntc_design.certify.verify` / ``ntc verify``.
+    """
+    return scale_document(des, HurwitzScaleKind.name, name)

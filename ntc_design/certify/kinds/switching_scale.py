@@ -23,7 +23,7 @@ from ..switching_scale import (
     EIG_DENSE_MAX_ND,
     mode_processes,
     proof_fields,
-    switching_scale_certificate,
+    switching_scale_document,
     sym_matrices,
 )
 from ..theorems import TheoremVerdict, switching_verdicts
@@ -70,7 +70,7 @@ class SwitchingScaleKind(CertificateKind):
         return isinstance(design, SwitchingDesign) and switching_nd(design) > DENSE_CERT_MAX_ND
 
     def issue(self, design: Any, **options: Any) -> dict:
-        return switching_scale_certificate(design)
+        return switching_scale_document(design, self.name)
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         est = certificate["results"]["symmetric_part_min_eig"]
@@ -193,3 +193,20 @@ class SwitchingScaleKind(CertificateKind):
 
 
 __all__ = ["SwitchingScaleKind"]
+
+
+def switching_scale_certificate(sd: SwitchingDesign) -> dict:
+    """A ``switching-scale`` certificate for a switching set above the dense sizes
+    (:func:`ntc_design.certify.switching_scale.switching_scale_document`).
+
+    Parameters
+    ----------
+    sd : SwitchingDesign
+        One Lemma 1 design per mode.
+
+    Returns
+    -------
+    dict
+        The certificate, digest included.
+    """
+    return switching_scale_document(sd, SwitchingScaleKind.name)

@@ -14,6 +14,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ...errors import InputError
+from ...paper import F_SCALE, SIGMA
 from ...timevarying import ExpressionTopology, TimeVaryingDesign, from_document, lemma1_structure
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
@@ -21,13 +22,14 @@ from ..fields import matrix, need, number, vector
 from ..format import document_hash
 from ..theorems import TheoremVerdict, time_varying_verdicts
 from ..time_varying import (
+    RESULTS_KEY,
     Enclosures,
     LeafBound,
     domain_of,
     mu2_t0,
     mu2_threshold,
     noise_sigma_bar,
-    time_varying_certificate,
+    time_varying_document,
 )
 from .base import (
     CertificateKind,
@@ -115,17 +117,18 @@ class TimeVaryingKind(CertificateKind):
         return isinstance(design, TimeVaryingDesign)
 
     def issue(self, design: Any, **options: Any) -> dict:
-        return time_varying_certificate(
+        return time_varying_document(
             design.topology,
             design.theta,
+            self.name,
             design.margin,
             options.get("gain"),
-            options.get("noise_sigma", 0.4),
-            options.get("noise_f", 0.3),
+            options.get("noise_sigma", SIGMA),
+            options.get("noise_f", F_SCALE),
         )
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
-        return time_varying_verdicts(certificate["results"]["time_varying"], verification, gain)
+        return time_varying_verdicts(time_varying_results(certificate), verification, gain)
 
     def read(self, doc: dict, source: str) -> Reading:
         # The topology (its sign classes re-proven), θ (length d), ΔC > 0, the noise
@@ -155,7 +158,7 @@ class TimeVaryingKind(CertificateKind):
         gain = subj.get("gain")
         if gain is not None and not isinstance(gain, str):
             raise InputError(f"{w}.gain: expected an expression of t or null")
-        res = need(need(doc, "results", dict, source), "time_varying", dict, f"{source}: results")
+        res = need(need(doc, "results", dict, source), RESULTS_KEY, dict, f"{source}: results")
         ivs = need(doc, "intervals", list, source)
         if (
             not ivs
@@ -274,7 +277,7 @@ class TimeVaryingKind(CertificateKind):
         return checks
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
-        r = results["time_varying"]
+        r = results[RESULTS_KEY]
         return (
             ResultRow(
                 "uniform bound",
@@ -298,8 +301,8 @@ class TimeVaryingKind(CertificateKind):
         # its time and lies above Λ₂; the gap, σ̄, κ, t₀ and the domain are recomputed;
         # the run time is informational.
         st: TimeVaryingState = reading.state
-        tv = ("time_varying",)
-        if set(audit.results) != {"time_varying"}:
+        tv = (RESULTS_KEY,)
+        if set(audit.results) != {RESULTS_KEY}:
             audit.fail("results: expected only 'time_varying'")
         leaves = st.leaves
         enclosed = {
@@ -350,3 +353,18 @@ class TimeVaryingKind(CertificateKind):
 
 
 __all__ = ["TimeVaryingKind"]
+
+
+def time_varying_results(certificate: dict) -> dict:
+    """A time-varying certificate's results (Λ₂, D, Λ₁, p̄, t₀, the domain), as issued.
+
+    Parameters
+    ----------
+    certificate : dict
+        A certificate of this kind.
+
+    Returns
+    -------
+    dict
+    """
+    return certificate["results"][RESULTS_KEY]
