@@ -24,6 +24,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from .linalg import DenseRefused, SPDFamily, require_sparse_factor
+from .roots import brent_root
 
 KRON_MAX = 40
 REL = 1e-12
@@ -150,9 +151,7 @@ def hurwitz_set(
         fa, fb = alpha(a), alpha(b)
         if fa * fb > 0:
             return b
-        from scipy.optimize import brentq  # lazy: a design without a threshold search skips it
-
-        return brentq(alpha, a, b, xtol=1e-15 * b, rtol=4 * np.finfo(float).eps, maxiter=200)
+        return brent_root(alpha, a, b, xtol=1e-15 * b, rtol=4 * np.finfo(float).eps, maxiter=200)
 
     intervals: list[tuple[float, float]] = []
     k = 0
@@ -236,9 +235,9 @@ def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
             hi = scale
             while g(hi) <= 0 and hi < 1e300:
                 hi *= 2
-            from scipy.optimize import brentq  # lazy: a design without a threshold search skips it
-
-            delta_s = brentq(g, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
+            delta_s = brent_root(
+                g, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps, maxiter=100
+            )
 
     best_rate, best_delta = _best_rate(alpha, scale, notes)
     return CriticalCouplings(

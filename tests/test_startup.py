@@ -85,6 +85,21 @@ def test_a_monte_carlo_simulation_loads_no_sympy_and_one_kernel(tmp_path):
     assert json.loads(out[-2]) == [1, 0, 0]  # em_steps_rng only
 
 
+def test_certify_of_a_fixed_topology_loads_no_optimiser():
+    # the critical couplings' roots by brent_root (ntc_design.roots), not scipy.optimize
+    code = (
+        "import contextlib, io\n"
+        "sys.argv = ['ntc', 'certify', 'examples/g1.yaml', '--theta', '1,2,-1', '--gain', "
+        "'1/(1+t)']\n"
+        "from ntc_design.cli import main\n"
+        "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main()"
+    )
+    mods = loaded_after(code)
+    assert "ntc_design.roots" in mods and "ntc_design.thresholds" in mods
+    assert "scipy.optimize" not in mods and "cvxpy" not in mods
+
+
 def test_the_lazy_names_are_the_same_objects():
     import ntc_design as nd
     from ntc_design.design import lemma1
