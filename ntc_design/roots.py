@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from .errors import InputError
 
 
 def brent_root(
@@ -45,8 +44,9 @@ def brent_root(
 
     Raises
     ------
-    InputError
-        f(a) and f(b) have the same sign, or the bracket is not finite.
+    ValueError
+        f(a) and f(b) have the same sign, or the bracket is not finite (a caller's
+        error: the bracket is not user input).
     RuntimeError
         No convergence within ``maxiter`` steps.
 
@@ -56,7 +56,7 @@ def brent_root(
     1.414213562373
     """
     if not (math.isfinite(a) and math.isfinite(b)):
-        raise InputError(f"brent_root: the bracket [{a}, {b}] is not finite")
+        raise ValueError(f"brent_root: the bracket [{a}, {b}] is not finite")
     xpre, xcur = float(a), float(b)
     fpre, fcur = float(f(xpre)), float(f(xcur))
     if fpre == 0.0:
@@ -64,7 +64,7 @@ def brent_root(
     if fcur == 0.0:
         return xcur
     if math.copysign(1.0, fpre) == math.copysign(1.0, fcur):
-        raise InputError(f"brent_root: f({a:g}) and f({b:g}) have the same sign")
+        raise ValueError(f"brent_root: f({a:g}) and f({b:g}) have the same sign")
     xblk = fblk = spre = scur = 0.0
     for _ in range(maxiter):
         if fpre != 0.0 and fcur != 0.0 and math.copysign(1.0, fpre) != math.copysign(1.0, fcur):
