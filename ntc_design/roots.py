@@ -15,7 +15,6 @@ import math
 from collections.abc import Callable
 
 
-
 def brent_root(
     f: Callable[[float], float],
     a: float,
