@@ -688,6 +688,7 @@ def _run(expr: sp.Expr, text: str, seconds: float) -> tuple[dict[str, Any], str]
                 why = "the symbolic analysis stopped unexpectedly"
                 break
             if key == "done":
+                proc.join(timeout=1.0)  # it is exiting: let it finish (and flush) first
                 break
             if key == "failed":
                 why = f"the symbolic analysis failed ({val})"

@@ -10,6 +10,9 @@ from ntc_design import SwitchingTopology, Topology, paper
 # Every size check assumes the same memory on every machine (an 8 GB laptop's share), so a
 # refusal's wording and order never depend on what the machine has free.
 os.environ["NTC_AVAILABLE_MEMORY"] = "6G"
+# under coverage, the CLI subprocesses write their data beside the suite's, not into the
+# temporary folders the tests check for stray files
+os.environ.setdefault("COVERAGE_FILE", str(Path(__file__).resolve().parent.parent / ".coverage"))
 
 # Property tests draw the same examples on every run: results are identical on re-run.
 settings.register_profile("ntc", derandomize=True, print_blob=True)

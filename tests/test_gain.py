@@ -6,6 +6,7 @@ sin² t <= |sin t| <= 1.
 """
 
 import json
+import warnings
 
 import pytest
 
@@ -139,3 +140,45 @@ def test_no_sympy_spelling_reaches_a_user(gain, capsys, monkeypatch):
         assert code == (0 if gain in ("(1+t)^(-1/3)", "1/(1+t)", "(2+t)^(-0.7)") else 1)
         assert "**" not in out and " oo" not in out and "zoo" not in out, out
         assert "oo " not in out.replace("too ", "").replace("goo", "")
+
+
+# -- the analysis in this process (the branch taken where fork is unavailable) ------------
+
+_IN_PROCESS = [
+    # (gain, ∫c = ∞, c → 0, ∫c² < ∞): the textbook answers
+    ("1/(1+t)", True, True, True),
+    ("(1+t)^-2", False, True, True),
+    ("(1+t)^(-1/3)", True, True, False),
+    ("exp(-t)", False, True, True),
+    ("2 + cos(t)", True, False, False),
+    ("1/(2+t)^0.75", True, True, True),
+    ("(1 + sin(t)^2)/(1+t)", True, True, True),
+    ("t/(1+t^2)", True, True, True),
+    ("3", True, False, False),
+    ("1/(1+t) + sin(t)/(1+t)", True, True, True),  # an oscillating part
+    ("exp(-t)*(2+sin(t))", False, True, True),
+    ("1/((1+t)*log(2+t))", True, True, True),  # ∫c diverges like log log t
+    ("(2+cos(t))/(1+t)^0.6", True, True, True),
+    ("1/sqrt(1+t)", True, True, False),
+    ("1/(1+t)^0.5 + cos(t)/(1+t)^2", True, True, False),
+    ("min(1, 2/(1+t))", True, True, True),
+    ("max(1/(1+t), exp(-t))", True, True, True),
+    ("abs(sin(t))/(1+t)", True, True, True),  # mean 2/π over a period
+    ("atan(t)/(1+t)", True, True, True),
+    ("tanh(1+t)/(1+t)", True, True, True),
+    ("log(2+t)/(1+t)^2", False, True, True),
+]
+
+
+@pytest.mark.parametrize("text, diverges, to_zero, square", _IN_PROCESS)
+def test_the_analysis_in_process_gives_the_textbook_answers(text, diverges, to_zero, square):
+    from ntc_design import gain
+
+    got: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gain._decide(gain.parse_gain(text), text, got.__setitem__)
+    assert got["continuous_nonnegative"].value is True
+    assert got["integral_diverges"].value is diverges, got["integral_diverges"].reason
+    assert got["tends_to_zero"].value is to_zero, got["tends_to_zero"].reason
+    assert got["square_integrable"].value is square, got["square_integrable"].reason

@@ -1,6 +1,7 @@
 """The Python blocks of the README and of the user guide (docs/guide/*.md) paste and run as
 they are, each on its own, from a checkout (examples/ beside them, runs/ to write into)."""
 
+import os
 import re
 import subprocess
 import sys
@@ -67,6 +68,7 @@ def test_readme_test_counts_are_those_collected():
     out = subprocess.run(
         [sys.executable, "-m", "pytest", "--collect-only", "-q", "-m", "not slow"],
         cwd=ROOT, capture_output=True, text=True,
+        env={k: v for k, v in os.environ.items() if k != "PYTEST_ADDOPTS"},  # CI's coverage
     ).stdout  # fmt: skip
     m = re.search(r"(\d+)/(\d+) tests collected", out)
     assert m, out[-500:]

@@ -341,6 +341,36 @@ def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkey
     assert f"<td>{worst}</td>" in html  # the worst agent is named in the final-error table
 
 
+def test_report_above_the_aggregate_size_in_the_fast_lane(tmp_path, capsys, monkeypatch):
+    """22 agents (> AGGREGATE_ABOVE): quantile curves, the final-error histogram, the
+    topology and spectrum pictures, the worst agents named, no per-agent legend; the
+    quantiles agree with the run's own per-agent table."""
+    from ntc_design.generate import random_network, write_topology
+    from ntc_design.reports.aggregate import AGGREGATE_ABOVE
+
+    top = random_network(AGGREGATE_ABOVE + 2, 2, seed=11)
+    write_topology(top, tmp_path / "net.yaml")
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        "topology: net.yaml\ntheta: [1, -1]\ngain: '1/(1+t)'\nnoise: {sigma: 0.4, f: 0.3}\n"
+        "initial: {uniform: [-3, 3], seed: 1}\nT: 0.1\ndt: 0.0005\npaths: 12\n"
+        "save_every: 0.05\nworkers: 1\nmethod: mc\n"
+    )
+    out = tmp_path / "run"
+    code, _, err = run_cli(["simulate", sc, "--out", out], capsys, monkeypatch)
+    assert code == 0, err
+    code, _, err = run_cli(["report", out], capsys, monkeypatch)
+    assert code == 0, err
+    html = (out / "report.html").read_text()
+    assert "median agent" in html and "90 % of agents below" in html
+    assert f"agent {AGGREGATE_ABOVE + 2}" not in html  # no per-agent legend or curve
+    for stem in ("ms_quantiles", "final_hist", "degrees", "sparsity", "spectrum"):
+        assert (out / "figures" / f"run_{stem}.png").is_file(), stem
+    table = json.loads((out / "summary.json").read_text())["final_ms_error_mc"]
+    worst = max(table, key=table.get)
+    assert f"<td>{worst}</td>" in html
+
+
 def test_total_band_is_conservative():
     """The total's band adds the per-agent half-widths: never narrower than the widest
     agent's, and it contains the sum of the means."""
