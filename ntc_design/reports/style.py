@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, cast
 
 # no matplotlib.use() here: a notebook keeps its inline backend (the CLI sets MPLBACKEND)
 import matplotlib.pyplot as plt
@@ -23,7 +24,7 @@ GREY = "0.45"
 MODE_COLOURS = ["#8ecae6", "#ffb703", "#90be6d", "#f4a3c4", "#bdb2ff", "#cdb4db"]
 LINESTYLES = ("-", "--", "-.", ":")
 MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">")
-RC = {
+RC: dict[str, Any] = {
     "font.size": 8,
     "axes.labelsize": 9,
     "axes.titlesize": 9,
@@ -46,7 +47,7 @@ def paper_style():
     ------
     None
     """
-    with plt.rc_context(RC):
+    with plt.rc_context(cast(Any, RC)):  # matplotlib types its keys as literals
         yield
 
 

@@ -220,7 +220,7 @@ def sweep_progress():
                 print(st.line(), file=sys.stderr, flush=True)
 
         return plain, contextlib.nullcontext()
-    from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+    from rich.progress import BarColumn, TaskID, TextColumn, TimeRemainingColumn
     from rich.progress import Progress as Bar
 
     prog = Bar(
@@ -230,7 +230,7 @@ def sweep_progress():
         TimeRemainingColumn(),
         console=Console(stderr=True),
     )
-    ids: dict[str, int] = {}
+    ids: dict[str, TaskID] = {}
 
     def bar(st) -> None:
         if not ids:

@@ -114,7 +114,7 @@ def _draw_lanes(s0, s1, s2, s3, zt, wl, c2):
     lane's words are consumed in the same order as :func:`fill_normals` consumes them."""
     w = s0.size
     for e in range(zt.shape[0]):
-        nb = 0
+        nb = np.int64(0)
         for q in range(w):
             a0, a1, a2, a3 = s0[q], s1[q], s2[q], s3[q]
             a5 = a1 * np.uint64(5)
