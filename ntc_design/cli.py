@@ -130,10 +130,16 @@ def check(
 ) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition
     (above 50 agents a summary, unless --full)."""
-    from .design import SUMMARY_ABOVE, structure_report, structure_summary, summary_table
+    from .design import (
+        SUMMARY_ABOVE,
+        structure_report,
+        structure_summary,
+        structure_tables,
+        summary_table,
+    )
     from .loader import load
     from .model import SwitchingTopology, Topology
-    from .reports.terminal import print_structure, print_table
+    from .reports.terminal import print_table
 
     loaded = load(file)
     # a time-varying topology's classes are fixed: its structure at any t (no SymPy import
@@ -146,7 +152,8 @@ def check(
         if full or m.n <= SUMMARY_ABOVE:
             reports[k] = structure_report(m)
             if not as_json:
-                print_structure(reports[k], title)
+                for t in structure_tables(reports[k], title):
+                    print_table(t)
         else:
             reports[k] = structure_summary(m)
             if not as_json:

@@ -186,3 +186,19 @@ def test_assumption2_violation_reasons():
     assert not dec.holds
     reasons = {top.labels[v.agent]: v.reason for v in dec.violations}
     assert "not in-degree-dominated and has no antagonistic in-edge" in reasons[2]
+
+
+def test_check_tables_are_typed_rows_every_face_renders(g1, g3):
+    from ntc_design.design import structure_report, structure_tables
+
+    edges, agents, a2 = structure_tables(structure_report(g1), "G1")
+    assert len(edges.rows) == len(g1.classes) == 8 and edges.columns == ("edge", "class")
+    assert [r[0].plain() for r in agents.rows] == [str(x) for x in g1.labels]
+    c2 = agents.rows[list(g1.labels).index(2)][-1].plain()
+    assert c2 == "7.1440"  # C_2, the paper's C for G1
+    assert a2.layout == "list" and a2.rows[0][1].verdict_word == "holds"
+    assert a2.list_lines()[0] == "Assumption 2: holds (V1 = {2, 3}, V2 = {1, 4, 5, 6, 7})"
+    assert "<table" in edges.html() and "PD" in edges.text()  # the HTML and terminal faces
+    *_, bad = structure_tables(structure_report(g3), "G3", most=1)
+    assert bad.rows[0][1].verdict_word == "fails" and len(bad.rows) == 2
+    assert bad.notes == ("1 more (--json lists them all)",)

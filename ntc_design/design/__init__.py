@@ -20,6 +20,7 @@ _EXPORTS = {
     "lemma1_coefficient": "assumption",
     "structure_report": "assumption",
     "structure_summary": "assumption",
+    "structure_tables": "assumption",
     "summary_table": "assumption",
     "ProtocolDesign": "lemma1",
     "SwitchingDesign": "lemma1",
@@ -38,6 +39,7 @@ if TYPE_CHECKING:
         lemma1_coefficient,
         structure_report,
         structure_summary,
+        structure_tables,
         summary_table,
     )
     from .lemma1 import (
@@ -62,6 +64,7 @@ __all__ = [
     "lemma1_coefficient",
     "structure_report",
     "structure_summary",
+    "structure_tables",
     "summary_table",
 ]
 

@@ -6,12 +6,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse import csgraph
 
-from ..errors import AssumptionWarning
+from ..errors import AssumptionWarning, one_line
 from ..linalg import pd_batch
 from ..model import (
     Topology,
@@ -297,6 +298,74 @@ def structure_report(top: Topology) -> dict:
     }
 
 
+def structure_tables(rep: dict, title: str, most: int = 10) -> list[Table]:
+    """:func:`structure_report` as the tables every face shows (the terminal's ``ntc
+    check``): the edges and their classes, the agents' sets and C_i, and Assumption 2's
+    decomposition with the positive-negative paths, or its first violations.
+
+    Parameters
+    ----------
+    rep : dict
+        :func:`structure_report`'s mapping.
+    title : str
+        The topology's name.
+    most : int, optional
+        Violations listed (``--json`` has them all).
+
+    Returns
+    -------
+    list of ntc_design.rows.Table
+    """
+
+    # labels and names come from files: each on one line, control characters escaped
+    def lab(x: Any) -> str:
+        return one_line(str(x))
+
+    def labs(xs: Sequence[Any]) -> str:
+        return set_text([lab(x) for x in xs])
+
+    name = lab(title)
+    edges = Table.build(
+        f"{name}: d = {rep['dim']}, N = {len(rep['agents'])}; edges (j -> i carries A_ij)",
+        ("edge", "class"),
+        [(f"{lab(e['from'])} -> {lab(e['to'])}", e["class"]) for e in rep["edges"]],
+    )
+    agents = Table.build(
+        f"agents (U = {labs(rep['U'])})",
+        ("agent", "N_i", "N'_i", "Ω_i", "in-degree-dominated", "C_i"),
+        [
+            (
+                lab(a),
+                labs(info["in_neighbours"]),
+                labs(info["out_neighbours"]),
+                labs(info["omega"]),
+                "yes" if info["in_degree_dominated"] else "no",
+                info["C_i"],
+            )
+            for a, info in rep["per_agent"].items()
+        ],
+    )
+    rows: list[tuple[str, Any]]
+    if rep["assumption_holds"]:
+        v = f"(V1 = {labs(rep['V1'])}, V2 = {labs(rep['V2'])})"
+        rows = [("Assumption 2", verdict(True, v, word="holds"))]
+        rows += [
+            (f"agent {lab(a)}", "reached by the positive-negative path " + " -> ".join(map(lab, p)))
+            for a, p in rep["paths"].items()
+        ]
+        notes: list[str] = []
+    else:
+        vs = rep["violations"]
+        rows = [("Assumption 2", verdict(False, f"({len(vs)} agents violate it)", word="fails"))]
+        rows += [(f"agent {lab(v['agent'])}", lab(v["reason"])) for v in vs[:most]]
+        notes = [f"{len(vs) - most} more (--json lists them all)"] if len(vs) > most else []
+    return [
+        edges,
+        agents,
+        Table.build(f"{name}: Assumption 2", ("", ""), rows, notes, layout="list"),
+    ]
+
+
 #: ``ntc check`` prints every edge and agent up to this many agents, a summary above
 #: (``--full`` asks for the whole table).
 SUMMARY_ABOVE = 50
@@ -395,5 +464,6 @@ __all__ = [
     "lemma1_coefficient",
     "structure_report",
     "structure_summary",
+    "structure_tables",
     "summary_table",
 ]

@@ -15,7 +15,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..errors import format_seconds, one_line
-from ..rows import Cell, fmt, set_text
+from ..rows import Cell
 from ..rows import Table as RowsTable
 
 PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
@@ -242,73 +242,6 @@ def sweep_progress():
     return bar, prog
 
 
-def print_structure(rep: dict, title: str) -> None:
-    """Print ``ntc check``'s structure report of one topology (edge classes, the agents'
-    sets, the Assumption 2 decomposition or why it fails).
-
-    Parameters
-    ----------
-    rep : dict
-        :func:`ntc_design.design.structure_report`'s mapping.
-    title : str
-        The topology's name.
-    """
-    out.print(f"[bold]{_v(title)}[/bold]  d = {rep['dim']}, N = {len(rep['agents'])}")
-    et = Table(title="edges (j -> i carries A_ij)")
-    for c in ("edge", "class"):
-        et.add_column(c)
-    for e in rep["edges"]:
-        et.add_row(f"{_v(e['from'])} -> {_v(e['to'])}", e["class"])
-    out.print(et)
-    at = Table(title=f"agents (U = {_v(set_text(rep['U']))})")
-    for c in ("agent", "N_i", "N'_i", "Ω_i", "in-degree-dominated", "C_i"):
-        at.add_column(c)
-    for a, info in rep["per_agent"].items():
-        at.add_row(
-            _v(a),
-            _v(set_text(info["in_neighbours"])),
-            _v(set_text(info["out_neighbours"])),
-            _v(set_text(info["omega"])),
-            "yes" if info["in_degree_dominated"] else "no",
-            fmt(info["C_i"]),
-        )
-    out.print(at)
-    if rep["assumption_holds"]:
-        out.print(
-            f"Assumption 2 holds: V1 = {_v(set_text(rep['V1']))}, V2 = {_v(set_text(rep['V2']))}"
-        )
-        for a, p in rep["paths"].items():
-            out.print(
-                f"  {_v(a)} reached by the positive-negative path {_v(' -> '.join(map(str, p)))}"
-            )
-    else:
-        out.print("[bold red]Assumption 2 fails:[/bold red]")
-        for line in capped(rep["violations"], "  agent {agent}: {reason}"):
-            out.print(escape(line))
-
-
-def capped(items: list[dict], line: str, most: int = 10) -> list[str]:
-    """The first ``most`` items as lines, then how many more (--json has them all).
-
-    Parameters
-    ----------
-    items : list of dict
-        The items.
-    line : str
-        A format string over an item's keys.
-    most : int, optional
-        Lines at most.
-
-    Returns
-    -------
-    list of str
-    """
-    lines = [line.format(**{k: one_line(str(x)) for k, x in v.items()}) for v in items[:most]]
-    if len(items) > most:
-        lines.append(f"  … and {len(items) - most} more (--json lists them all)")
-    return lines
-
-
 def _safe_print(text: str) -> None:
     """One line of plain output (no rich markup: a certificate's text is shown as
     written), control characters escaped, newlines too: one line per call."""
@@ -351,9 +284,7 @@ def print_verification(doc: dict) -> None:
 __all__ = [
     "PLAIN_EVERY",
     "Progress",
-    "capped",
     "out",
-    "print_structure",
     "print_table",
     "print_verification",
     "safe",
