@@ -478,3 +478,23 @@ def test_terminal_and_html_show_the_kinds_rows(file, tmp_path, capsys, monkeypat
     for row in res.rows:
         assert f"{row.label}: {row.value}" in out
         assert (row.label, row.value) in html
+
+
+def test_verify_account_is_typed_rows_and_one_line_per_check():
+    import copy as _copy
+
+    from ntc_design.certify import verify as _verify
+    from ntc_design.certify.checks import verification_tables
+
+    doc = json.loads((CERTS / "g1.json").read_text())
+    ver = _verify(doc).to_dict()
+    about, checks = verification_tables(ver)
+    assert about.labels[0] == "kind" and about.labels.count("certifies") == 2
+    assert len(checks.rows) == len(ver["checks"]) and all(
+        r[0].verdict_word == "ok   " for r in checks.rows
+    )
+    forged = _copy.deepcopy(doc)
+    forged["subject"]["modes"]["G1\nerror: forged"] = forged["subject"]["modes"].pop("G1")
+    lines = [ln for t in verification_tables(_verify(forged).to_dict()) for ln in t.list_lines()]
+    assert not any(ln.startswith("error:") for ln in lines)
+    assert any(ln.startswith("FAILS") for ln in lines)

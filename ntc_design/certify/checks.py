@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import one_line
 from ..model import SwitchingTopology, Topology
 from ..rows import Table, verdict
 from .claims import PROPERTY_TEXT, Claim, Property
@@ -334,7 +335,57 @@ def same_topology(
     )
 
 
+def verification_tables(doc: dict) -> list[Table]:
+    """``ntc verify``'s account as the tables every face renders: what the certificate is
+    about (kind, modes, schedule, the properties it certifies) and every check, then the
+    digest note. Text from the certificate is put on one line here (control characters
+    escaped): a forged name cannot print a line of its own.
+
+    Parameters
+    ----------
+    doc : dict
+        :meth:`Verification.to_dict`'s mapping.
+
+    Returns
+    -------
+    list of ntc_design.rows.Table
+    """
+    tables = []
+    ab = doc["certifies"]
+    if ab is not None:
+        rows: list[tuple[Any, Any]] = [("kind", one_line(f"{ab['kind']} ({ab['description']})"))]
+        for m in ab["modes"]:
+            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
+            delta = f"δ = {m['delta']:.6g}" if m["delta"] is not None else "δ(t) = C(t) + ΔC"
+            rows.append(
+                (
+                    one_line(f"mode {m['name']}"),
+                    one_line(
+                        f"topology {m['topology'] or '(unnamed)'}, N = {m['N']}, d = {m['d']}, "
+                        f"{m['topology_hash']}, {delta}, θ = {m['theta']}{used}"
+                    ),
+                )
+            )
+        if ab["schedule"] is not None:
+            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
+            rows.append(("schedule", one_line(f"{sched} ({ab['switching_hash']})")))
+        for p in ab["properties"]:
+            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
+            rows.append(("certifies", one_line(f"{p['meaning']}{alpha}")))
+        tables.append(Table.build("certificate", ("", ""), rows, layout="list"))
+    checks = [
+        (
+            verdict(c["ok"], one_line(c["name"]), word="ok   " if c["ok"] else "FAILS"),
+            one_line(c["detail"]),
+        )
+        for c in doc["checks"]
+    ]
+    tables.append(Table.build("checks", ("", ""), checks, [doc["digest_note"]], layout="list"))
+    return tables
+
+
 __all__ = [
+    "verification_tables",
     "About",
     "Check",
     "ModeAbout",

@@ -249,36 +249,18 @@ def _safe_print(text: str) -> None:
 
 
 def print_verification(doc: dict) -> None:
-    """Print ``ntc verify``'s account of a certificate: what it is about, every check, the
-    digest note.
+    """Print ``ntc verify``'s account of a certificate
+    (:func:`ntc_design.certify.checks.verification_tables`, as every face shows it).
 
     Parameters
     ----------
     doc : dict
         :meth:`ntc_design.certify.Verification.to_dict`'s mapping.
     """
-    ab = doc["certifies"]
-    print = _safe_print  # noqa: A001 - every line of a certificate's account, escaped
-    if ab is not None:
-        print(f"kind: {ab['kind']} ({ab['description']})")
-        for m in ab["modes"]:
-            used = "" if m["name"] in ab["scheduled_modes"] else " (not scheduled)"
-            print(
-                f"mode {m['name']}: topology {m['topology'] or '(unnamed)'}, N = {m['N']}, "
-                f"d = {m['d']}, {m['topology_hash']}, "
-                + (f"δ = {m['delta']:.6g}" if m["delta"] is not None else "δ(t) = C(t) + ΔC")
-                + f", θ = {m['theta']}{used}"
-            )
-        if ab["schedule"] is not None:
-            sched = ", ".join(f"{s['mode']} {s['duration']:g}" for s in ab["schedule"])
-            print(f"schedule: {sched} ({ab['switching_hash']})")
-        for p in ab["properties"]:
-            alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
-            print(f"certifies: {p['meaning']}{alpha}")
-    for c in doc["checks"]:
-        mark = "ok   " if c["ok"] else "FAILS"
-        print(f"{mark} {c['name']}: {c['detail']}")
-    print(f"note: {doc['digest_note']}")
+    from ..certify.checks import verification_tables
+
+    for t in verification_tables(doc):
+        print_table(t)
 
 
 __all__ = [
