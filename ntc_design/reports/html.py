@@ -9,7 +9,6 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 from markupsafe import Markup, escape
 
@@ -22,9 +21,8 @@ from . import style
 
 @dataclass(frozen=True)
 class Table:
-    """A table for the templates: header texts and rows of cells; a cell is text or a
-    mapping ``{"matrix": rows}``, ``{"verdict": bool|None, "text": ...}``, ``{"mark": bool}``,
-    ``{"code": ...}``, ``{"lines": [...]}`` or ``{"href": ..., "text": ...}``."""
+    """A table for the templates: header texts and rows of cells; a cell is text (escaped by
+    the template) or the Markup of :meth:`ntc_design.rows.Cell.html` (:func:`html_table`)."""
 
     headers: tuple[str, ...]
     rows: list
@@ -112,12 +110,6 @@ def write_html(path: Path, text: str) -> None:
     """Write atomically (:func:`ntc_design.outputs.write_atomic`: no temporary file is left
     when the write fails)."""
     write_atomic(path, text, option="report")
-
-
-def matrix(m, digits: int = 4) -> dict:
-    """A matrix cell: entries rounded for display (−0 shown as 0)."""
-    a = np.atleast_2d(np.asarray(m, dtype=float))
-    return {"matrix": [[f"{v + 0.0:.{digits}g}" for v in row] for row in a]}
 
 
 def rel(path: Path, base: Path) -> str:

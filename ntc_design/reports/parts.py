@@ -10,11 +10,13 @@ import numpy as np
 
 from ..certify import verify_file, write_certificate
 from ..errors import InputError
+from ..rows import Table as RowsTable
 from ..rows import fmt
+from ..rows import matrix as rows_matrix
 from ..schedule import schedule_from_document
 from ..simulate import SimulationDiverged, SimulationSpec, simulate
 from ..simulate.result import MeanSquareBand
-from .html import Table, html_table, matrix, rel
+from .html import Table, html_table, rel
 from .rundata import RunData
 
 
@@ -152,7 +154,7 @@ def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
                 )
             )
         elif k == "initial" and isinstance(v, list) and len(v) == n * d:
-            rows.append(("initial x(0) (agents × d)", matrix(np.reshape(v, (n, d)))))
+            rows.append(("initial x(0) (agents × d)", rows_matrix(np.reshape(v, (n, d)))))
         elif k == "gain" and isinstance(v, dict):  # a schedule: its label, not its table
             rows.append(("gain", schedule_from_document(v, "parameters.gain").text))
         elif k == "schedule" and isinstance(v, list):
@@ -168,8 +170,8 @@ def parameter_table(p: dict, n: int, d: int, run_info: dict) -> Table:
     for k in ("steps", "path_steps", "mc_seconds", "path_steps_per_second", "exact_seconds"):
         if k in run_info:
             v = run_info[k]
-            rows.append((f"run.{k}", f"{v:.4g}" if isinstance(v, float) else str(v)))
-    return Table(("parameter", "value"), rows)
+            rows.append((f"run.{k}", v))
+    return html_table(RowsTable.build("parameters", ("parameter", "value"), rows))
 
 
 def mc_band(run: RunData) -> MeanSquareBand | None:

@@ -23,10 +23,11 @@ from .. import paper
 from ..files import jsonable
 from ..model import SwitchingTopology, Topology
 from ..outputs import write_atomic
-from ..rows import fmt
+from ..rows import Table as RowsTable
+from ..rows import fmt, verdict
 from ..simulate import NoiseModel, simulate
 from ..simulate.scenario import write_outputs
-from .html import Table, render, write_html
+from .html import html_table, render, write_html
 from .report import run_section
 from .rundata import load_run
 
@@ -252,9 +253,12 @@ def reproduce_paper(
         facts[key] = f
     rows, all_ok = summary_rows(facts)
     wall = time.perf_counter() - t0
-    summary = Table(
-        ("quantity", "paper", "ntc-design", "match"),
-        [(a, b, c, {"mark": m}) for a, b, c, m in rows],
+    summary = html_table(
+        RowsTable.build(
+            "the paper beside ntc-design",
+            ("quantity", "paper", "ntc-design", "match"),
+            [(a, b, c, verdict(bool(m), word="✓" if m else "✗")) for a, b, c, m in rows],
+        )
     )
     intro = _intro(paths, dt, stepping, T, seed, wall)
     toc = [{"id": "summary", "title": "Summary: the paper beside ntc-design", "children": []}]
