@@ -941,25 +941,6 @@ def _input_error(message: str, args: list[str]) -> int:
     return 2
 
 
-def _start_simulation_workers(args: list[str]) -> None:
-    """For ``ntc simulate``: fork the Monte Carlo workers now, before the command's imports
-    and design, so that their loading of the compiled kernel overlaps the parent's work
-    (:mod:`ntc_design.warmup`). Only a guess from the raw arguments: a run that cannot use
-    them (the exact method, one worker, Dask, other numbers of workers) leaves them to be
-    stopped at exit."""
-    flags = dict(zip(args, [*args[1:], ""], strict=True))
-    if flags.get("--method") == "exact" or "--scheduler" in flags:
-        return
-    try:
-        workers = int(flags["--workers"]) if "--workers" in flags else None
-    except ValueError:
-        return  # typer will say what is wrong
-    if workers is None or workers > 1:
-        from .warmup import start_workers
-
-        start_workers(workers)
-
-
 def main(argv: list[str] | None = None) -> None:
     """Run the CLI: one line ``error: ...`` on stderr for every user error (exit 2), for
     an interrupt (exit 130); warnings as ``warning: ...`` lines.
@@ -986,8 +967,6 @@ def main(argv: list[str] | None = None) -> None:
     warnings.simplefilter("ignore", RuntimeWarning)  # numerical trouble is checked, not warned
     warnings.simplefilter("once", AssumptionWarning)  # one line per network, not per mode
     code = 0
-    if args[:1] == ["simulate"] and "--help" not in args:
-        _start_simulation_workers(args)
     try:
         try:
             rv = app(args=_argv(args), prog_name="ntc", standalone_mode=False)
@@ -1029,8 +1008,4 @@ def main(argv: list[str] | None = None) -> None:
             file=sys.stderr,
         )
         code = 1
-    finally:
-        from . import pools
-
-        pools.close()  # workers started ahead of a run that did not take them
     sys.exit(code)

@@ -57,22 +57,19 @@ def test_check_of_a_fixed_topology_loads_no_sympy_or_optimiser():
     assert "scipy.optimize" not in mods and "ntc_design.thresholds" not in mods
 
 
-@pytest.mark.parametrize("workers", [1, 2])
-def test_a_monte_carlo_simulation_loads_no_sympy_and_one_kernel(tmp_path, workers):
-    # the gain is read by the NumPy backend of the expression parser; with one worker only
-    # the fused kernel is loaded from Numba's cache, with two the workers started ahead
-    # (ntc_design.warmup) load it and the parent does not load Numba at all
+def test_a_monte_carlo_simulation_loads_no_sympy_and_one_kernel(tmp_path):
+    # the gain is read by the NumPy backend of the expression parser; only the fused
+    # kernel is loaded from Numba's cache
     code = (
         "import contextlib, io\n"
         "sys.argv = ['ntc', 'simulate', 'examples/scenarios/g1_fixed.yaml', '--out', "
-        f"{str(tmp_path / 'o')!r}, '--paths', '4', '--horizon', '0.01', '--method', 'mc', "
-        f"'--workers', '{workers}']\n"
+        f"{str(tmp_path / 'o')!r}, '--paths', '4', '--horizon', '0.01', '--method', 'mc']\n"
         "from ntc_design.cli import main\n"
         "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
         "    main()\n"
-        "k = sys.modules.get('ntc_design.simulate.kernels')\n"
-        "print(json.dumps(None if k is None else [len(f.overloads) for f in "
-        "(k.em_steps_rng, k.em_steps, k.fill_normals)]))"
+        "from ntc_design.simulate import kernels\n"
+        "print(json.dumps([len(f.overloads) for f in "
+        "(kernels.em_steps_rng, kernels.em_steps, kernels.fill_normals)]))"
     )
     probe = f"import sys, json\n{code}\nprint(json.dumps(sorted(sys.modules)))"
     out = (
@@ -84,27 +81,8 @@ def test_a_monte_carlo_simulation_loads_no_sympy_and_one_kernel(tmp_path, worker
     )
     mods = set(json.loads(out[-1]))
     assert (tmp_path / "o" / "summary.json").is_file()
-    assert "sympy" not in mods and "cvxpy" not in mods
-    if workers == 1:
-        assert "numba" in mods and json.loads(out[-2]) == [1, 0, 0]  # em_steps_rng only
-    else:
-        assert "numba" not in mods and json.loads(out[-2]) is None
-
-
-def test_workers_started_ahead_give_the_same_numbers(tmp_path):
-    # the run sent pickled to workers forked before it was designed, against the same run
-    # in this process: identical bits, whatever the route
-    outs = []
-    for workers in (2, 1):
-        o = tmp_path / f"w{workers}"
-        subprocess.run(
-            [sys.executable, "-m", "ntc_design", "simulate", "examples/scenarios/g1_fixed.yaml",
-             "--out", str(o), "--paths", "300", "--horizon", "0.2", "--method", "mc",
-             "--workers", str(workers)],
-            cwd=ROOT, capture_output=True, text=True, check=True,
-        )  # fmt: skip
-        outs.append((o / "ms_error.csv").read_text())
-    assert outs[0] == outs[1] and outs[0].count("\n") > 2
+    assert "sympy" not in mods and "cvxpy" not in mods and "numba" in mods
+    assert json.loads(out[-2]) == [1, 0, 0]  # em_steps_rng only
 
 
 def test_certify_of_a_fixed_topology_loads_no_optimiser():

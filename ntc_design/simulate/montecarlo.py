@@ -21,9 +21,7 @@ number of blocks per chunk. The chunk interface (:func:`run_chunk`: block indice
 
 from __future__ import annotations
 
-import hashlib
 import multiprocessing as mp
-import pickle
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
@@ -31,7 +29,6 @@ from typing import Any
 
 import numpy as np
 
-from .. import pools
 from .grid import TimeGrid
 from .implicit import SolverCache
 from .system import ModeSystem
@@ -39,7 +36,6 @@ from .system import ModeSystem
 BATCH = 64  # steps whose normals are drawn at once (fewer when they would pass XI_BYTES)
 XI_BYTES = 16 * 2**20  # bound on the buffer of normals of one batch
 MIN_BLOCKS = 2  # paths are split into at least this many blocks (both cores busy)
-PICKLED_MAX_BYTES = 8 * 2**20  # a run sent to workers started ahead: else fork after it
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -426,51 +422,6 @@ def _init_worker() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def warm_worker(counter: Any) -> None:
-    """In a worker started ahead of its run (:mod:`ntc_design.warmup`): keep the progress
-    counter, load the fused kernel from Numba's cache and import what unpickling a run
-    needs, while the parent is still designing.
-
-    Parameters
-    ----------
-    counter : multiprocessing.Value
-        The shared progress counter.
-    """
-    global _COUNTER
-    _COUNTER = counter
-    import scipy.sparse  # noqa: F401 - a pickled spec's L_B
-
-    from .kernels import em_steps_rng
-
-    i8, f8 = np.zeros(0, np.int64), np.zeros(0)
-    one = np.ones(1)
-    em_steps_rng(
-        np.zeros((0, 3)), np.zeros((0, 4), np.uint64), 2, 0, 1, one, one, np.zeros(1, np.int64),
-        i8, f8, np.zeros(1, np.int64), i8, np.zeros((0, 3, 3)), f8, i8, i8, np.zeros((0, 3, 3)),
-        np.zeros((0, 3)), True, 1,
-    )  # fmt: skip
-
-
-_RECEIVED: dict[str, Any] = {}
-
-
-def _worker_pickled(payload: bytes, blocks: list[int]) -> list[PartialStats]:
-    """:func:`_worker` for a pool started before the run: the spec comes pickled (unpickled
-    once per worker and run)."""
-    from threadpoolctl import threadpool_limits
-
-    key = hashlib.sha256(payload).hexdigest()
-    if _RECEIVED.get("key") != key:
-        _RECEIVED.update(key=key, spec=pickle.loads(payload))  # noqa: S301 - our own run
-
-    def tick(n: int) -> None:
-        with _COUNTER.get_lock():
-            _COUNTER.value += n
-
-    with threadpool_limits(limits=1):
-        return run_chunk(_RECEIVED["spec"], blocks, tick)
-
-
 def _worker(blocks: list[int]) -> list[PartialStats]:
     from threadpoolctl import threadpool_limits
 
@@ -549,27 +500,14 @@ def run(
         Re-raised after the workers are stopped.
     """
     global _SPEC, _COUNTER
+    prepare(spec)
     n_chunks = -(-spec.n_blocks // blocks_per_chunk)
-    parallel = workers > 1 and n_chunks > 1 and "fork" in mp.get_all_start_methods()
-    warm = pools.take(workers) if parallel else None
-    payload = None
-    if warm is not None:
-        try:  # a run with a Python callable (not an expression) cannot travel: fork instead
-            payload = pickle.dumps(spec)
-        except (pickle.PicklingError, TypeError, AttributeError):
-            payload = None
-        if payload is None or len(payload) > PICKLED_MAX_BYTES:  # big runs: fork, no copy
-            pools.offer(warm[0], workers, warm[1])  # then stopped by close()
-            pools.close()
-            warm = None
-    if warm is None:
-        prepare(spec)
 
     def chunk(i: int) -> list[int]:
         return list(range(i * blocks_per_chunk, min((i + 1) * blocks_per_chunk, spec.n_blocks)))
 
     total = spec.paths * spec.grid.n_steps
-    if not parallel:
+    if workers <= 1 or n_chunks == 1 or "fork" not in mp.get_all_start_methods():
         done = 0
 
         def tick(n: int) -> None:
@@ -582,34 +520,22 @@ def run(
         for i in range(n_chunks):
             fold.add(i, run_chunk(spec, chunk(i), tick))
         return fold.result()
-    if warm is not None:  # started before the run, the kernel already loaded there
-        ex, counter = warm
-        counter.value = 0
-
-        def submit(i: int):
-            return ex.submit(_worker_pickled, payload, chunk(i))
-    else:
-        ctx = mp.get_context("fork")
-        _SPEC, _COUNTER = spec, ctx.Value("q", 0)  # inherited by the workers forked below
-        counter = _COUNTER
-        ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
-
-        def submit(i: int):
-            return ex.submit(_worker, chunk(i))
-
+    ctx = mp.get_context("fork")
+    _SPEC, _COUNTER = spec, ctx.Value("q", 0)
+    ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
     fold = _InOrder()
     try:
         pending: dict = {}
         submitted = 0
         while submitted < n_chunks or pending:
             while submitted < n_chunks and len(pending) < 2 * workers:
-                pending[submit(submitted)] = submitted
+                pending[ex.submit(_worker, chunk(submitted))] = submitted
                 submitted += 1
             finished, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
             for f in finished:
                 fold.add(pending.pop(f), f.result())
             if progress is not None:
-                progress(counter.value, total)
+                progress(_COUNTER.value, total)
         ex.shutdown(wait=True)
         if progress:
             progress(total, total)
