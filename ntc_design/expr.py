@@ -33,7 +33,6 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from .errors import InputError
 from .exprtree import (
     CALLS,
     MAX_BITS,
@@ -45,6 +44,7 @@ from .exprtree import (
     MAX_NODES,
     MAX_VALUE,
     TreeBuilder,
+    broadcasting,
     syntax_tree,
 )
 
@@ -214,12 +214,7 @@ def parse_expression(
     )
     src, tree = syntax_tree(text, field)
     builder = _Builder(src, field, names)
-    try:
-        expr, _ = builder.build(tree)
-    except InputError:
-        raise
-    except (ArithmeticError, ValueError, TypeError, RecursionError, MemoryError):
-        raise builder.fail("cannot build") from None
+    expr, _ = builder.build_tree(tree)
     if not isinstance(expr, sp.Expr):
         raise builder.fail("not an expression")
     if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
@@ -271,15 +266,7 @@ def compile_expression(
     namespace = {"ntc_minimum": np.minimum, "ntc_maximum": np.maximum}
     fn = sp.lambdify(syms, _numpy_ready(expr), modules=[namespace, "numpy"])
 
-    def evaluate(*args):
-        arrays = [np.asarray(a, dtype=float) for a in args]
-        shape = np.broadcast_shapes(*(a.shape for a in arrays)) if arrays else ()
-        with np.errstate(all="ignore"):
-            out = np.asarray(fn(*arrays), dtype=float)
-        return np.broadcast_to(out, shape).copy() if out.shape != shape else out
-
-    evaluate.__doc__ = f"NumPy evaluation of {expr}"
-    return evaluate
+    return broadcasting(lambda arrays: fn(*arrays), str(expr))
 
 
 __all__ = [

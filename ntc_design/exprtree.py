@@ -201,6 +201,15 @@ class TreeBuilder:
             ) from None
         return float(v) if isinstance(v, (int, float)) else v  # complex is refused later
 
+    def build_tree(self, tree: ast.Expression) -> tuple[Any, float | None]:
+        """The value of a checked tree (:func:`syntax_tree`), any failure as one line."""
+        try:
+            return self.build(tree)
+        except InputError:
+            raise
+        except (ArithmeticError, ValueError, TypeError, RecursionError, MemoryError):
+            raise self.fail("cannot build") from None
+
     def build(self, node: ast.AST) -> tuple[Any, float | None]:
         if isinstance(node, ast.Expression):
             return self.build(node.body)
@@ -433,15 +442,27 @@ def numeric_function(
     """
     src, tree = syntax_tree(text, field)
     builder = _NumericBuilder(src, field, list(variables))
-    try:
-        value, approx = builder.build(tree)
-    except InputError:
-        raise
-    except (ArithmeticError, ValueError, TypeError, RecursionError, MemoryError):
-        raise builder.fail("cannot build") from None
+    value, approx = builder.build_tree(tree)
     if isinstance(approx, complex):
         raise builder.fail("a non-real value")
-    fn = builder._fn(value)
+    return broadcasting(builder._fn(value), src)
+
+
+def broadcasting(fn: Callable[[list], Any], what: str) -> Callable[..., np.ndarray]:
+    """``fn`` (list of arrays in) as ``f(*arrays)``: float64 out with the arguments'
+    broadcast shape (a constant broadcasts too), floating-point warnings silenced.
+
+    Parameters
+    ----------
+    fn : callable
+        Takes the list of float arrays.
+    what : str
+        The expression, for the docstring.
+
+    Returns
+    -------
+    callable
+    """
 
     def evaluate(*args):
         arrays = [np.asarray(a, dtype=float) for a in args]
@@ -450,7 +471,7 @@ def numeric_function(
             out = np.asarray(fn(arrays), dtype=float)
         return np.broadcast_to(out, shape).copy() if out.shape != shape else out
 
-    evaluate.__doc__ = f"NumPy evaluation of {src}"
+    evaluate.__doc__ = f"NumPy evaluation of {what}"
     return evaluate
 
 
@@ -465,6 +486,7 @@ __all__ = [
     "MAX_EXPONENT",
     "MAX_NODES",
     "MAX_VALUE",
+    "broadcasting",
     "numeric_function",
     "short",
     "syntax_tree",

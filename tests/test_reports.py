@@ -300,6 +300,26 @@ def test_save_times_on_switching_instants_keep_their_paths():
     assert np.all(res.mc.mean[1:].sum(axis=1) > 0)
 
 
+def _aggregate_report(tmp_path, sc, n_agents, capsys, monkeypatch, exts=("png",)):
+    """Simulate and report ``sc``; check the aggregate report's parts (quantiles, no
+    per-agent legend, the pictures, the worst agent named); return (out, html)."""
+    out = tmp_path / "run"
+    code, _, err = run_cli(["simulate", sc, "--out", out], capsys, monkeypatch)
+    assert code == 0, err
+    code, _, err = run_cli(["report", out], capsys, monkeypatch)
+    assert code == 0, err
+    html = (out / "report.html").read_text()
+    assert "median agent" in html and "90 % of agents below" in html
+    assert f"agent {n_agents}" not in html  # no per-agent legend or curve
+    for stem in ("ms_quantiles", "final_hist", "degrees", "sparsity", "spectrum"):
+        for ext in exts:
+            assert (out / "figures" / f"run_{stem}.{ext}").is_file(), (stem, ext)
+    table = json.loads((out / "summary.json").read_text())["final_ms_error_mc"]
+    worst = max(table, key=table.get)
+    assert f"<td>{worst}</td>" in html  # the worst agent is named in the final-error table
+    return out, html
+
+
 @pytest.mark.slow
 def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkeypatch):
     """Nd = 75 > 60: the certificate is switching-scale, its proven bounds are reported; 25
@@ -320,25 +340,12 @@ def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkey
         "initial: {uniform: [-3, 3], seed: 1}\nT: 0.2\ndt: 0.0002\npaths: 20\n"
         "save_every: 0.05\nworkers: 1\nmethod: mc\n"
     )
-    out = tmp_path / "run"
-    code, _, err = run_cli(["simulate", sc, "--out", out], capsys, monkeypatch)
-    assert code == 0, err
-    code, _, err = run_cli(["report", out], capsys, monkeypatch)
-    assert code == 0, err
-    html = (out / "report.html").read_text()
+    out, html = _aggregate_report(tmp_path, sc, 25, capsys, monkeypatch, ("png", "svg", "pdf"))
     cert = json.loads((out / "certificate.json").read_text())
     assert cert["kind"] == "switching-scale"
     for k, lo in cert["proofs"].items():
         assert f"{k}: {lo['lower']:.6g}" in html  # the proven bound, per mode
     assert "Theorem 3" in html and ("λ_min &gt; ℓ" in html or "λ_min > ℓ" in html)
-    assert "median agent" in html and "90 % of agents below" in html
-    assert "agent 25" not in html  # no per-agent legend or curve
-    for stem in ("ms_quantiles", "final_hist", "degrees", "sparsity", "spectrum"):
-        for ext in ("png", "svg", "pdf"):
-            assert (out / "figures" / f"run_{stem}.{ext}").is_file(), (stem, ext)
-    table = json.loads((out / "summary.json").read_text())["final_ms_error_mc"]
-    worst = max(table, key=table.get)
-    assert f"<td>{worst}</td>" in html  # the worst agent is named in the final-error table
 
 
 def test_report_above_the_aggregate_size_in_the_fast_lane(tmp_path, capsys, monkeypatch):
@@ -356,19 +363,7 @@ def test_report_above_the_aggregate_size_in_the_fast_lane(tmp_path, capsys, monk
         "initial: {uniform: [-3, 3], seed: 1}\nT: 0.1\ndt: 0.0005\npaths: 12\n"
         "save_every: 0.05\nworkers: 1\nmethod: mc\n"
     )
-    out = tmp_path / "run"
-    code, _, err = run_cli(["simulate", sc, "--out", out], capsys, monkeypatch)
-    assert code == 0, err
-    code, _, err = run_cli(["report", out], capsys, monkeypatch)
-    assert code == 0, err
-    html = (out / "report.html").read_text()
-    assert "median agent" in html and "90 % of agents below" in html
-    assert f"agent {AGGREGATE_ABOVE + 2}" not in html  # no per-agent legend or curve
-    for stem in ("ms_quantiles", "final_hist", "degrees", "sparsity", "spectrum"):
-        assert (out / "figures" / f"run_{stem}.png").is_file(), stem
-    table = json.loads((out / "summary.json").read_text())["final_ms_error_mc"]
-    worst = max(table, key=table.get)
-    assert f"<td>{worst}</td>" in html
+    _aggregate_report(tmp_path, sc, AGGREGATE_ABOVE + 2, capsys, monkeypatch)
 
 
 def test_total_band_is_conservative():

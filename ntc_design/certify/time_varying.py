@@ -718,8 +718,7 @@ def time_varying_document(
     theta : sequence of float
         The target θ (recorded in the subject).
     kind : str
-        The kind's name, written into the document by the kind that issues it
-        (:class:`ntc_design.certify.kinds.time_varying.TimeVaryingKind`).
+        The issuing kind's name (written into the document).
     margin : float, optional
         ΔC of Lemma 1.
     gain : str, optional
@@ -739,7 +738,6 @@ def time_varying_document(
     CertificationRefused
         The uniform bound cannot be certified (see :func:`certify_lambda2`).
     """
-
     bound = certify_lambda2(tv, margin, sigma)
     sigma_bar = noise_sigma_bar(f)
     kappa = mu2_threshold(bound.lambda2, bound.lambda1, sigma_bar, tv.n)

@@ -26,8 +26,8 @@ from ..outputs import check_output_file
 from ..paper import F_SCALE
 from ..rows import fmt
 from ..schedule import ScheduleGain
+from ..simulate.noise import noise_from_document
 from ..simulate.result import MeanSquareBand
-from ..simulate.spec import noise_from_document
 from ..sweep.robust import study_sentence
 from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style

@@ -14,10 +14,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, quote, require_number
 from ..paper import F_SCALE, SIGMA
 
 
@@ -205,6 +206,13 @@ def state_noise(f: float | np.ndarray | Callable[[np.ndarray], np.ndarray]) -> S
     return ScalarNoise(float(arr)) if arr.ndim == 0 else MatrixNoise(arr)
 
 
+# States and noise intensities (θ, x(0), σ, f) are squared and summed over agents, edges
+# and paths (mean-square errors, noise covariances, f² in the moment equations): at most
+# 1e100 in magnitude keeps every such sum far inside the float range (1.8e308), so a value
+# like 1e300 is refused naming its field instead of overflowing deep inside a run.
+MAX_MAGNITUDE = 1e100
+
+
 @dataclass(frozen=True)
 class NoiseModel:
     """σ_ji (a default and per-edge overrides keyed by (from, to) labels) and f_ji: a
@@ -260,7 +268,72 @@ class NoiseModel:
         return self.term.matrix(d)
 
 
+def noise_from_document(doc: Any) -> NoiseModel:
+    """A scenario's (or a run summary's) ``noise`` mapping as a :class:`NoiseModel`: the one
+    reading of it, with the defaults of :class:`NoiseModel` (the paper's σ and f).
+
+    Parameters
+    ----------
+    doc : Any
+        ``{sigma, f, sigma_edges}`` (each optional), or None for the defaults.
+
+    Returns
+    -------
+    NoiseModel
+
+    Raises
+    ------
+    InputError
+        One line naming the field that is wrong.
+    """
+    if doc is None:
+        return NoiseModel()
+    if not isinstance(doc, Mapping):
+        raise InputError("noise: expected {sigma, f, sigma_edges}")
+    extra = sorted(str(k) for k in set(doc) - {"sigma", "f", "sigma_edges"})
+    if extra:
+        raise InputError(f"noise.{extra[0]}: unknown field (allowed: sigma, f, sigma_edges)")
+    sigma = require_number("noise.sigma", doc.get("sigma", SIGMA), minimum=0.0, bound=MAX_MAGNITUDE)
+    f = doc.get("f", F_SCALE)
+    if isinstance(f, list):
+        for r, row in enumerate(f):
+            if not isinstance(row, list):
+                raise InputError(f"noise.f[{r}]: expected a row (a list of numbers)")
+            if len(row) != len(f):
+                raise InputError(
+                    f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
+                )
+            for c, v in enumerate(row):
+                require_number(f"noise.f[{r}][{c}]", v, bound=MAX_MAGNITUDE)
+        f = np.asarray(f, dtype=float) if f else f
+    elif isinstance(f, bool) or not isinstance(f, (int, float)):
+        raise InputError(f"noise.f: expected a number or a d×d matrix, got {f!r}"[:200])
+    else:
+        require_number("noise.f", f, bound=MAX_MAGNITUDE)
+    edges = doc.get("sigma_edges") or []
+    if not isinstance(edges, list):
+        raise InputError("noise.sigma_edges: expected a list of {from, to, sigma}")
+    sig: dict[tuple, float] = {}
+    for k, e in enumerate(edges):
+        if not isinstance(e, Mapping) or set(e) != {"from", "to", "sigma"}:
+            raise InputError(f"noise.sigma_edges[{k}]: expected {{from, to, sigma}}")
+        for end in ("from", "to"):
+            if isinstance(e[end], bool) or not isinstance(e[end], (int, str)):
+                raise InputError(f"noise.sigma_edges[{k}].{end}: expected an agent label")
+        key = (e["from"], e["to"])
+        if key in sig:
+            raise InputError(
+                f"noise.sigma_edges[{k}]: edge {quote(key[0])}->{quote(key[1])} listed twice"
+            )
+        sig[key] = require_number(
+            f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0, bound=MAX_MAGNITUDE
+        )
+    return NoiseModel(sigma=sigma, f=f, sigma_edges=sig)
+
+
 __all__ = [
+    "MAX_MAGNITUDE",
+    "noise_from_document",
     "CallableNoise",
     "MatrixNoise",
     "NoiseModel",

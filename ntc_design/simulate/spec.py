@@ -35,19 +35,12 @@ import numpy as np
 
 from ..errors import MAX_SEED, InputError, quote, require_int, require_number, require_positive
 from ..exprtree import numeric_function
-from ..paper import F_SCALE, SIGMA
 from ..schedule import ScheduleGain, read_schedule, schedule_from_document
-from .noise import NoiseModel
+from .noise import MAX_MAGNITUDE, NoiseModel, noise_from_document
 from .robust_sampling import RobustSampling
 
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
 MAX_WORKERS = 4096
-# States and noise intensities (θ, x(0), σ, f) are squared and summed over agents, edges
-# and paths (mean-square errors, noise covariances, f² in the moment equations): at most
-# 1e100 in magnitude keeps every such sum far inside the float range (1.8e308), so a value
-# like 1e300 is refused naming its field instead of overflowing deep inside a run.
-MAX_MAGNITUDE = 1e100
-
 Noise = NoiseModel
 
 
@@ -721,69 +714,6 @@ class SimulationSpec:
         return out
 
 
-def noise_from_document(doc: Any) -> NoiseModel:
-    """A scenario's (or a run summary's) ``noise`` mapping as a :class:`NoiseModel`: the one
-    reading of it, with the defaults of :class:`NoiseModel` (the paper's σ and f).
-
-    Parameters
-    ----------
-    doc : Any
-        ``{sigma, f, sigma_edges}`` (each optional), or None for the defaults.
-
-    Returns
-    -------
-    NoiseModel
-
-    Raises
-    ------
-    InputError
-        One line naming the field that is wrong.
-    """
-    if doc is None:
-        return NoiseModel()
-    if not isinstance(doc, Mapping):
-        raise InputError("noise: expected {sigma, f, sigma_edges}")
-    extra = sorted(str(k) for k in set(doc) - {"sigma", "f", "sigma_edges"})
-    if extra:
-        raise InputError(f"noise.{extra[0]}: unknown field (allowed: sigma, f, sigma_edges)")
-    sigma = require_number("noise.sigma", doc.get("sigma", SIGMA), minimum=0.0, bound=MAX_MAGNITUDE)
-    f = doc.get("f", F_SCALE)
-    if isinstance(f, list):
-        for r, row in enumerate(f):
-            if not isinstance(row, list):
-                raise InputError(f"noise.f[{r}]: expected a row (a list of numbers)")
-            if len(row) != len(f):
-                raise InputError(
-                    f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
-                )
-            for c, v in enumerate(row):
-                require_number(f"noise.f[{r}][{c}]", v, bound=MAX_MAGNITUDE)
-        f = np.asarray(f, dtype=float) if f else f
-    elif isinstance(f, bool) or not isinstance(f, (int, float)):
-        raise InputError(f"noise.f: expected a number or a d×d matrix, got {f!r}"[:200])
-    else:
-        require_number("noise.f", f, bound=MAX_MAGNITUDE)
-    edges = doc.get("sigma_edges") or []
-    if not isinstance(edges, list):
-        raise InputError("noise.sigma_edges: expected a list of {from, to, sigma}")
-    sig: dict[tuple, float] = {}
-    for k, e in enumerate(edges):
-        if not isinstance(e, Mapping) or set(e) != {"from", "to", "sigma"}:
-            raise InputError(f"noise.sigma_edges[{k}]: expected {{from, to, sigma}}")
-        for end in ("from", "to"):
-            if isinstance(e[end], bool) or not isinstance(e[end], (int, str)):
-                raise InputError(f"noise.sigma_edges[{k}].{end}: expected an agent label")
-        key = (e["from"], e["to"])
-        if key in sig:
-            raise InputError(
-                f"noise.sigma_edges[{k}]: edge {quote(key[0])}->{quote(key[1])} listed twice"
-            )
-        sig[key] = require_number(
-            f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0, bound=MAX_MAGNITUDE
-        )
-    return NoiseModel(sigma=sigma, f=f, sigma_edges=sig)
-
-
 def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
     if doc is None:
         return None
@@ -800,7 +730,6 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
 
 
 __all__ = [
-    "noise_from_document",
     "METHODS",
     "OPTION_KEYS",
     "RobustSampling",
