@@ -221,3 +221,47 @@ def test_the_tidy_csv_is_what_pandas_writes(method):
     text = tidy_csv(res)
     assert text == res.to_pandas().to_csv(index=False)  # the independent writer
     assert text.count("\n") == 1 + res.save_times.size * len(res.labels)
+
+
+def test_the_program_exits_with_its_code_and_every_line_written(tmp_path):
+    # ntc's exit skips the interpreter's teardown: nothing printed may be lost, the code
+    # must be main()'s, and exit handlers (here one that writes a file) still run
+    probe = tmp_path / "probe.py"
+    probe.write_text(
+        "import atexit, pathlib, sys\n"
+        f"atexit.register(lambda: pathlib.Path({str(tmp_path / 'ran')!r}).write_text('yes'))\n"
+        "sys.argv = ['ntc', *sys.argv[1:]]\n"
+        "from ntc_design.cli import run\nrun()\n"
+    )
+    ok = subprocess.run(
+        [sys.executable, str(probe), "check", "examples/g1.yaml", "--json"],
+        cwd=ROOT, capture_output=True, text=True,
+    )  # fmt: skip
+    assert ok.returncode == 0
+    assert json.loads(ok.stdout)["assumption_holds"] is True  # the whole text arrived
+    assert (tmp_path / "ran").read_text() == "yes"
+    bad = subprocess.run(
+        [sys.executable, "-m", "ntc_design", "check", "examples/nope.yaml"],
+        cwd=ROOT, capture_output=True, text=True,
+    )  # fmt: skip
+    assert bad.returncode == 2 and bad.stderr.startswith("error: ") and bad.stderr.count("\n") == 1
+
+
+def test_the_ordinary_exit_is_kept_while_a_thread_lives():
+    import threading
+
+    from ntc_design import cli
+
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait)
+    t.start()
+    try:
+        with pytest.raises(SystemExit) as exc:
+            cli._exit(3)
+        assert exc.value.code == 3
+    finally:
+        stop.set()
+        t.join()
+    with pytest.raises(SystemExit) as exc:
+        cli._exit("a message")  # not a number: the interpreter's own handling
+    assert exc.value.code == "a message"
