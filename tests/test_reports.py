@@ -132,6 +132,23 @@ def test_reproduce_report_structure(paper_run):
     assert fine["t"].size > 4 * coarse["t"].size
 
 
+def test_a_short_reproduction_in_the_fast_lane(tmp_path):
+    """The paper's Section 5 at T = 2 with 40 paths: every design and certification row
+    matches at any horizon; only the three rows about the limit t → ∞ need the full T."""
+    path, ok, _ = reproduce_paper(tmp_path, T=2.0, paths=40, workers=2)
+    doc = json.loads((tmp_path / "paper_summary.json").read_text())
+    missed = [r["quantity"] for r in doc["rows"] if not r["match"]]
+    assert len(doc["rows"]) == 17 and not ok
+    assert len(missed) == 3 and all("→" in q or "no consensus" in q for q in missed), missed
+    html = path.read_text()
+    for s in ("7.1440", "7.2440", "[1.2761, 2.5522, -1.2761]"):
+        assert s in html
+    assert _assert_links_resolve(path) > 80
+    assert html.count("ntc reproduce paper --out " + str(tmp_path)) >= 5
+    assert (tmp_path / "figures" / "switching_schedule.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow  # it opens the full-size paper report (the module's paper_run, ~40 s)
 @pytest.mark.skipif(
     CHROMIUM is None, reason="Debian's chromium is not installed (.ci/run installs it where it can)"
 )

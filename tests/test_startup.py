@@ -265,3 +265,14 @@ def test_the_ordinary_exit_is_kept_while_a_thread_lives():
     with pytest.raises(SystemExit) as exc:
         cli._exit("a message")  # not a number: the interpreter's own handling
     assert exc.value.code == "a message"
+
+
+def test_python_dash_m_runs_the_program(monkeypatch):
+    import runpy
+
+    from ntc_design import cli
+
+    calls = []
+    monkeypatch.setattr(cli, "run", lambda: calls.append("run"))
+    runpy.run_module("ntc_design", run_name="__main__")
+    assert calls == ["run"]  # python -m ntc_design is the ntc program, with its exit
