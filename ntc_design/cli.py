@@ -1015,7 +1015,7 @@ def run() -> None:
     """The ``ntc`` program: :func:`main`, then an exit that skips the interpreter's
     teardown of its modules (about 0.3 s once Numba and SciPy are loaded). The exit
     handlers still run and the streams are flushed first; with another thread or a child
-    process still alive, the ordinary exit is taken.
+    process still alive, or under a profiler or tracer, the ordinary exit is taken.
     """
     try:
         main()
@@ -1033,6 +1033,8 @@ def _exit(code: str | int | None) -> None:
     mp = sys.modules.get("multiprocessing")
     if (
         not isinstance(code, int)
+        or sys.getprofile() is not None  # a profiler (python -m cProfile) writes at exit
+        or sys.gettrace() is not None  # so does a coverage tracer
         or threading.active_count() > 1
         or (mp is not None and mp.active_children())
     ):
