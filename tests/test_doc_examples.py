@@ -35,3 +35,37 @@ def test_entry_point_examples_run(fn, monkeypatch):
     res = runner.summarize(verbose=False)
     assert res.failed == 0 and res.attempted >= 2
     assert os.getcwd() == str(ROOT)
+
+
+def test_every_public_example_in_the_package_runs(monkeypatch):
+    """Every Examples section of a public name (a module's ``__all__``, or its names without
+    a leading underscore) anywhere in the package runs as written, not only the entry
+    points above."""
+    import pkgutil
+    import warnings
+
+    import ntc_design
+
+    monkeypatch.chdir(ROOT)
+    found, failed = [], []
+    for info in pkgutil.walk_packages(ntc_design.__path__, "ntc_design."):
+        if info.name.endswith("__main__"):
+            continue
+        mod = importlib.import_module(info.name)
+        public = getattr(mod, "__all__", None) or [n for n in vars(mod) if n[0] != "_"]
+        for name in public:
+            obj = getattr(mod, name, None)
+            if getattr(obj, "__module__", None) != info.name:
+                continue  # re-exported: run where it is defined
+            finder = doctest.DocTestFinder()
+            found += [t for t in finder.find(obj, f"{info.name}.{name}", module=mod) if t.examples]
+    for t in found:
+        runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # e.g. a solver's accuracy note
+            runner.run(t, out=lambda _: None)
+        if runner.summarize(verbose=False).failed:
+            failed.append(t.name)
+    names = {t.name.rsplit(".", 1)[1] for t in found}
+    assert len(found) >= 17 and {fn.__name__ for fn in ENTRY_POINTS} <= names
+    assert failed == []
