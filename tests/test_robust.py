@@ -338,7 +338,7 @@ def test_mat_uncertainty_on_a_missing_edge_is_refused(tmp_path):
 def mid_network():
     from ntc_design.generate import random_network
 
-    top = random_network(60, 3, seed=4)  # Nd = 180: the sparse path
+    top = random_network(70, 3, seed=4)  # Nd = 210: the sparse path alone
     des = nd.design(top, THETA, thresholds=False)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -578,10 +578,14 @@ def robust(
     """
     t0 = time.perf_counter()
     rho = check_radius(radius)
-    if design.topology.nd > ROBUST_MAX_ND:  # sparse: decay and margin only
+    if design.topology.nd > ROBUST_MAX_ND:  # sparse bounds, tightened by Riccati if dense
+        from .robust_are import RICCATI_MAX_ND
         from .robust_scale import robust_scale
 
-        return robust_scale(design, rho)
+        rep = robust_scale(design, rho)
+        if design.topology.nd <= RICCATI_MAX_ND:
+            rep = _riccati_brackets(rep, rho, starts, seed, bisection_steps, margin, t0)
+        return rep
     p = _problem(design)
     rad = p.edges.radii(design.topology, rho)
     rmax = float(np.max(rad, initial=0.0))
@@ -666,6 +670,52 @@ def robust_sweep(design: ProtocolDesign, radii, **options: Any) -> list[RobustRe
         A bad radius, or a nominal −L_B that is not Hurwitz.
     """
     return [robust(design, float(r), margin=False, **options) for r in radii]
+
+
+def _riccati_brackets(
+    rep: RobustReport, rho: float, starts: int, seed: int, steps: int, margin: bool, t0: float
+) -> RobustReport:
+    """The sparse report ``rep`` of a design of at most RICCATI_MAX_ND, tightened: decay
+    and margin lower ends by the Riccati search (:mod:`.robust_are`, proven in the
+    process), the attained ends by the dense searches; each end keeps the better of the
+    two methods, and says which."""
+    from .robust_are import RiccatiSearch
+
+    des = rep.design
+    p = _problem(des)
+    rad = p.edges.radii(des.topology, rho)
+    rmax = float(np.max(rad, initial=0.0))
+    search = RiccatiSearch(p)
+    riccati = "quadratic stability with one multiplier per edge, P by a Riccati equation "
+    riccati += "alternating with the multipliers (proven by verified Cholesky)"
+    es = _climb(p, rad, "decay", starts, seed)
+    wd = Realisation(rmax, p.weights(es), abscissa(p.lap(es)))
+    dec = rep.decay
+    if dec.upper is None or wd.value < dec.upper:
+        dec = Bracket(dec.lower, wd.value, wd, "lower", dec.method)
+    a_lo, got = _descend(lambda a: search(a, rad), max(float(dec.upper or 0.0), 0.0), steps)
+    if got is not None and (dec.lower is None or a_lo > dec.lower):
+        dec = Bracket(a_lo, dec.upper, dec.realisation, "lower", riccati + "; upper: a "
+                      "realisation by projected gradient on the eigenvalue")  # fmt: skip
+    off = rep.offset
+    es_o = _climb(p, rad, "offset", starts, seed + 1)
+    wo = Realisation(rmax, p.weights(es_o), _offset(p, p.lap(es_o)))
+    if off.lower is None or wo.value > off.lower:
+        off = Bracket(wo.value, off.upper, wo, "upper", off.method.split("; lower")[0]
+                      + "; lower: a realisation by projected gradient")  # fmt: skip
+    mar = rep.margin
+    if margin:
+        destab = _destabilising(p, rmax, starts, seed + 2)
+        if destab is not None and (mar.upper is None or destab.radius < mar.upper):
+            mar = Bracket(mar.lower, destab.radius, destab, "lower", mar.method)
+        r_lo, got_m = _descend(lambda r: search(0.0, r), float(mar.upper or 1.0), steps)
+        if got_m is not None and (mar.lower is None or r_lo > mar.lower):
+            mar = Bracket(r_lo, mar.upper, mar.realisation, "lower", "the Riccati search at "
+                          "α = 0, bisection on ρ; upper: " + mar.method.split("upper: ")[-1])  # fmt: skip
+    return RobustReport(
+        des, rep.radius, rep.radii, rep.nominal_decay, dec, off, mar, {},
+        time.perf_counter() - t0,
+    )  # fmt: skip
 
 
 def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisation | None:
