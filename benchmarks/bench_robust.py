@@ -1,5 +1,6 @@
 """Robust certification (issue 31): the brackets' width and cost on G1 and random
-networks, dense (LMIs, Nd <= ROBUST_MAX_ND = 40) and sparse (block dominance, above), in one run.
+networks, dense (LMIs, Nd <= ROBUST_MAX_ND = 40), the Riccati search (40 < Nd <= 200) and
+sparse (block dominance, above), in one run.
 
     python benchmarks/bench_robust.py [--skip-large]
 
@@ -9,7 +10,8 @@ certificate's exact re-check time. The peer the issue names, MATLAB's Robust Con
 Toolbox (robstab, wcgain), is not installable here (no MATLAB licence); its brackets are
 of the same kind (a certified bound and a worst-case perturbation) and are not compared.
 Cost growth: the sparse path is O(E) per evaluation (a few dozen evaluations for the
-margin bisection); the dense path is one SDP of size Nd + Σ rank(A_ij) per step.
+margin bisection); the dense path is one SDP of size Nd + Σ rank(A_ij) per step; the
+Riccati search is a few 2Nd-dimensional Schur decompositions per step (O(Nd³)).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import ntc_design as nd
 from ntc_design.certify import verify
 from ntc_design.certify.kinds.robust import robust_certificate
 from ntc_design.certify.robust import ROBUST_MAX_ND, robust
+from ntc_design.certify.robust_scale import robust_scale
 from ntc_design.generate import random_network
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -35,11 +38,11 @@ def ratio(lo, hi) -> str:
     return f"{hi / lo:.3f}"
 
 
-def row(name: str, des, radius: float, certificate: bool) -> None:
+def row(name: str, des, radius: float, certificate: bool, fn=robust) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         t0 = time.perf_counter()
-        rep = robust(des, radius)
+        rep = fn(des, radius)
         t = time.perf_counter() - t0
         tv = None
         if certificate:
@@ -68,6 +71,11 @@ def main() -> None:
     for n, d in ((6, 2), (12, 3), (25, 3)):
         des = nd.design(random_network(n, d, seed=1), [1.0] * d, thresholds=False)
         row(f"random N = {n}, d = {d}, ρ = 0.05", des, 0.05, des.topology.nd <= ROBUST_MAX_ND)
+    # past the LMI's size: block dominance alone, then tightened by the Riccati search
+    for n, d, seed in ((14, 3, 4), (30, 3, 4), (50, 3, 4)):
+        des = nd.design(random_network(n, d, seed=seed), [1.0, 2.0, -1.0], thresholds=False)
+        row(f"random N = {n}, d = {d}, dominance alone", des, 0.05, False, robust_scale)
+        row(f"random N = {n}, d = {d}, + Riccati", des, 0.05, False)
     sizes = (1000,) if args.skip_large else (1000, 3000, 10_000)
     for n in sizes:
         des = nd.design(random_network(n, 3, seed=0), [1.0, 2.0, -1.0], thresholds=False)

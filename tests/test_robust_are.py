@@ -66,3 +66,11 @@ def test_a_proof_is_refused_when_any_premise_fails(mid):
     assert not search.proven(pm, tau, rep.nominal_decay * 1.01, rad)  # above the nominal
     assert search(rep.nominal_decay * 1.01, rad) is None
     assert search(rep.decay.upper * 1.001, rad) is None  # a realisation decays slower
+
+
+def test_the_table_names_the_method_of_each_proven_end(mid):
+    _, rep, sparse = mid
+    said = [r[-1].text for r in rep.table().rows]
+    assert "Riccati search" in said[0] and "comparison bound" in said[1]
+    assert "Riccati search at α = 0" in said[2]
+    assert "block dominance" in [r[-1].text for r in sparse.table().rows][0]
