@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from . import __version__
-from .errors import AssumptionWarning, InputError, one_line
+from .errors import AssumptionWarning, InputError, interrupt_seen, note_interrupt, one_line
 
 if TYPE_CHECKING:
     from .design import ProtocolDesign, SwitchingDesign
@@ -951,6 +951,8 @@ def main(argv: list[str] | None = None) -> None:
         Arguments (default: ``sys.argv[1:]``).
     """
     import os
+    import signal
+    import threading
     import warnings
 
     try:  # typer >= 0.20 vendors click; its exceptions are what the commands raise
@@ -967,6 +969,8 @@ def main(argv: list[str] | None = None) -> None:
     warnings.simplefilter("ignore", RuntimeWarning)  # numerical trouble is checked, not warned
     warnings.simplefilter("once", AssumptionWarning)  # one line per network, not per mode
     code = 0
+    if argv is None and threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, note_interrupt)  # the program only, not main([...])
     try:
         try:
             rv = app(args=_argv(args), prog_name="ntc", standalone_mode=False)
@@ -975,6 +979,8 @@ def main(argv: list[str] | None = None) -> None:
             code = 2
         else:
             code = rv if isinstance(rv, int) else 0
+            if code == 0 and interrupt_seen():  # Ctrl-C came, its exception was lost
+                code = 130
             if code == 130:  # typer turns KeyboardInterrupt into Exit(130)
                 print("error: interrupted", file=sys.stderr)
     except InputError as exc:

@@ -292,6 +292,8 @@ __all__ = [
     "InputError",
     "format_bytes",
     "format_seconds",
+    "interrupt_seen",
+    "note_interrupt",
     "one_line",
     "quote",
     "require_int",
@@ -321,3 +323,41 @@ def warn_user(message: str, category: type[Warning]) -> None:
         frame = frame.f_back
         level += 1
     warnings.warn(message, category, stacklevel=level)
+
+
+# -- interrupts that Python may lose ---------------------------------------------------------
+#
+# A KeyboardInterrupt raised while a finaliser (__del__, a weakref callback) runs is
+# printed as "Exception ignored" and dropped: Ctrl-C at such an instant would be lost. The
+# CLI's SIGINT handler also notes the signal here, and long loops check the note.
+
+_SIGINT_SEEN: list[bool] = []
+
+
+def note_interrupt(signum: int = 2, frame: object = None) -> None:
+    """A SIGINT handler: note the signal, then raise KeyboardInterrupt as Python's own does.
+
+    Parameters
+    ----------
+    signum : int
+        The signal.
+    frame : frame, optional
+        The interrupted frame.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Always.
+    """
+    _SIGINT_SEEN.append(True)
+    raise KeyboardInterrupt
+
+
+def interrupt_seen() -> bool:
+    """Whether :func:`note_interrupt` ran in this process (its exception may have been lost).
+
+    Returns
+    -------
+    bool
+    """
+    return bool(_SIGINT_SEEN)

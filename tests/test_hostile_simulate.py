@@ -763,6 +763,45 @@ def test_ctrl_c_with_two_workers_stops_promptly(tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["o", "sc.json"]
 
 
+def test_a_ctrl_c_whose_exception_was_lost_still_stops_the_run(tmp_path):
+    """Python drops a KeyboardInterrupt raised inside a finaliser ("Exception ignored"): the
+    CLI's handler notes the signal too, the Monte Carlo loop checks the note. Simulated by a
+    SIGINT handled inside a try/except that swallows it, while the workers run."""
+    sc = scenario(
+        tmp_path, T=100.0, paths=4000, block_size=100, method="mc", workers=2, save_every=1.0
+    )
+    probe = tmp_path / "probe.py"
+    probe.write_text(
+        "import os, signal, sys\n"
+        "from ntc_design import cli\n"
+        "import ntc_design.simulate.montecarlo as mc\n"
+        "real = mc.run_chunk\n"
+        "def swallow():\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        for _ in range(10**6): pass  # the handler runs here and raises\n"
+        "    except KeyboardInterrupt:\n"
+        "        pass  # lost, as in a __del__\n"
+        f"sys.argv = ['ntc', 'simulate', {str(sc)!r}, '--out', {str(tmp_path / 'o')!r}]\n"
+        "orig = mc.wait\n"
+        "calls = []\n"
+        "def wait(*a, **k):\n"
+        "    calls.append(1)\n"
+        "    if len(calls) == 3: swallow()\n"
+        "    return orig(*a, **k)\n"
+        "mc.wait = wait\n"
+        "cli.run()\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, str(probe)], cwd=ROOT, capture_output=True, text=True, timeout=120,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+    assert proc.returncode == 130, proc.stderr[-500:]
+    assert proc.stderr.strip().splitlines()[-1] == "error: interrupted"
+    assert not (tmp_path / "o").exists()  # nothing half-written
+
+
 @pytest.mark.hostile
 def test_reproduce_out_checked_before_the_run(tmp_path, capsys, monkeypatch):
     import ntc_design.reports.reproduce as rp

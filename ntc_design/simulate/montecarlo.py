@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import interrupt_seen
 from .grid import TimeGrid
 from .implicit import SolverCache
 from .system import ModeSystem
@@ -532,6 +533,8 @@ def run(
                 pending[ex.submit(_worker, chunk(submitted))] = submitted
                 submitted += 1
             finished, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            if interrupt_seen():  # a Ctrl-C whose exception a finaliser swallowed
+                raise KeyboardInterrupt
             for f in finished:
                 fold.add(pending.pop(f), f.result())
             if progress is not None:
