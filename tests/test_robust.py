@@ -377,16 +377,16 @@ def test_out_above_the_dense_size_is_refused_before_work(tmp_path):
     p = tmp_path / "big.yaml"
     import yaml
 
-    p.write_text(yaml.safe_dump(random_network(40, 3, seed=1).to_dict()))
+    p.write_text(yaml.safe_dump(random_network(70, 3, seed=1).to_dict()))  # Nd = 210
     r = subprocess.run(
         [sys.executable, "-m", "ntc_design", "robust", str(p), "--theta", "1,2,-1",
          "--out", str(tmp_path / "c.json")],
         cwd=ROOT, capture_output=True, text=True,
     )  # fmt: skip
-    from ntc_design.certify.robust import ROBUST_MAX_ND
+    from ntc_design.certify.robust_are import RICCATI_MAX_ND
 
     assert r.returncode == 2
-    assert f"--out: a robust certificate is issued up to Nd = {ROBUST_MAX_ND}" in r.stderr
+    assert f"--out: a robust certificate is issued up to Nd = {RICCATI_MAX_ND}" in r.stderr
     assert not (tmp_path / "c.json").exists()
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
+from ntc_design.certify.dense import lap_b_float
 from ntc_design.certify.robust import ROBUST_MAX_ND, _problem, robust
 from ntc_design.certify.robust_are import RICCATI_MAX_ND, RiccatiSearch
 from ntc_design.certify.robust_scale import robust_scale
@@ -28,7 +29,8 @@ def mid():
 
 def test_the_riccati_ends_are_sound_and_within_the_targets(mid):
     des, rep, sparse = mid
-    assert ROBUST_MAX_ND < des.topology.nd <= RICCATI_MAX_ND and rep.proofs == {}
+    assert ROBUST_MAX_ND < des.topology.nd <= RICCATI_MAX_ND
+    assert rep.proofs["method"] == "riccati" and rep.proofs["offset"] is None
     # tighter than block dominance, and within 2× of what a realisation attains
     assert rep.decay.lower > 1.2 * sparse.decay.lower
     assert rep.decay.upper / rep.decay.lower < 1.5
@@ -52,7 +54,8 @@ def test_the_riccati_ends_are_sound_and_within_the_targets(mid):
 
 def test_a_proof_is_refused_when_any_premise_fails(mid):
     des, rep, _ = mid
-    search = RiccatiSearch(_problem(des))
+    p = _problem(des)
+    search = RiccatiSearch(*lap_b_float(des.topology, des.B, des.delta), p.edges, p.d)
     rad = np.full(search.m, 0.05)
     got = search(0.5 * rep.decay.lower, rad)
     assert got is not None
@@ -74,3 +77,48 @@ def test_the_table_names_the_method_of_each_proven_end(mid):
     assert "Riccati search" in said[0] and "comparison bound" in said[1]
     assert "Riccati search at α = 0" in said[2]
     assert "block dominance" in [r[-1].text for r in sparse.table().rows][0]
+
+
+def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid):
+    import copy
+    import json
+
+    from ntc_design.certify import verify
+    from ntc_design.certify.format import finish
+    from ntc_design.certify.kinds.robust import robust_certificate
+
+    des, rep, _ = mid
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    ver = verify(doc)
+    assert ver.valid and doc["certifies"] == ["robust_margin", "robust_decay"]
+    assert doc["results"]["decay"]["lower"] == rep.proofs["alpha"] <= rep.decay.lower
+    assert "Riccati" in doc["solver"]["name"]
+
+    def forged(edit):
+        bad = copy.deepcopy(doc)
+        edit(bad)
+        for k in ("digest", "subject_digest", "versions"):
+            bad.pop(k, None)
+        return verify(finish(bad)).valid
+
+    def raise_alpha(d):
+        d["results"]["decay"]["lower"] = rep.decay.upper * 1.01
+        for c in d["claims"]:
+            if c["property"] == "robust_decay" and "alpha" in c:
+                c["alpha"] = d["results"]["decay"]["lower"]
+
+    def raise_margin(d):
+        d["results"]["margin"]["lower"] = 0.99
+        for c in d["claims"]:
+            if c["property"] == "robust_margin" and "radius" in c:
+                c["radius"] = 0.99
+
+    def zero_tau(d):
+        t = d["matrices"]["multipliers"]["robust_decay"]
+        d["matrices"]["multipliers"]["robust_decay"] = [0.0] + t[1:]
+
+    def bend_p(d):
+        d["matrices"]["P"]["robust_decay"][0][1] *= 1.0 + 1e-6
+
+    for edit in (raise_alpha, raise_margin, zero_tau, bend_p):
+        assert not forged(edit), edit.__name__

@@ -160,12 +160,27 @@ def _lap_b_exact(top: Topology, b: Mapping[int, np.ndarray], delta: float) -> Dy
     return Dyadic(num, e)
 
 
-def _lap_b_float(
+def lap_b_float(
     top: Topology, b: Mapping[int, np.ndarray], delta: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``L_B`` in floating point and an entrywise bound on its distance from the exact
     L_B: each entry is a sum of at most N+1 products of doubles, so the error is at most
-    γ_{N+2} times the same sum taken in absolute values."""
+    γ_{N+2} times the same sum taken in absolute values.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    b : mapping of int to numpy.ndarray
+        B_i of the informed agents.
+    delta : float
+        δ.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The float L_B and the entrywise bound on its error.
+    """
     d, n = top.dim, top.nd
     mag = np.zeros((n, n))
     for (i, j), a in top.weights.items():
@@ -457,7 +472,7 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
     checks += _mode_checks(name, top, h, stated_hash, informed, b, delta, k1, x0, theta)
     in_range = checks[-1].ok
     if in_range:
-        lap, err = _lap_b_float(top, b, delta)
+        lap, err = lap_b_float(top, b, delta)
         exact = _lap_b_exact(top, b, delta) if n <= EXACT_MAX_N else None
     else:
         lap, err, exact = np.zeros((n, n)), np.zeros((n, n)), None
@@ -528,6 +543,7 @@ __all__ = [
     "HurwitzProof",
     "PROVERS",
     "eig_bound",
+    "lap_b_float",
     "min_eig",
     "mode_subject",
     "parse_mode",

@@ -576,8 +576,8 @@ def robust(
         Above :data:`ROBUST_MAX_ND`, the sparse brackets of
         :func:`ntc_design.certify.robust_scale.robust_scale`, up to
         :data:`ntc_design.certify.robust_are.RICCATI_MAX_ND` tightened by the Riccati
-        search and the dense realisation searches (proven in the process, nothing to
-        re-check from a file).
+        search and the dense realisation searches; the Riccati proofs are kept for
+        the certificate (:func:`ntc_design.certify.kinds.robust.robust_certificate`).
 
     Raises
     ------
@@ -695,13 +695,16 @@ def _riccati_brackets(
     and margin lower ends by the Riccati search (:mod:`.robust_are`, proven in the
     process), the attained ends by the dense searches; each end keeps the better of the
     two methods, and says which."""
+    from .dense import lap_b_float
     from .robust_are import RiccatiSearch
 
     des = rep.design
     p = _problem(des)
     rad = p.edges.radii(des.topology, rho)
     rmax = float(np.max(rad, initial=0.0))
-    search = RiccatiSearch(p)
+    search = RiccatiSearch(*lap_b_float(des.topology, des.B, des.delta), p.edges, p.d)
+    proofs: dict[str, Any] = dict.fromkeys(("decay", "alpha", "offset", "margin"))
+    proofs["margin_radius"] = 0.0
     riccati = "quadratic stability with one multiplier per edge, P by a Riccati equation "
     riccati += "alternating with the multipliers (proven by verified Cholesky)"
     es = _climb(p, rad, "decay", starts, seed)
@@ -710,6 +713,8 @@ def _riccati_brackets(
     if dec.upper is None or wd.value < dec.upper:
         dec = Bracket(dec.lower, wd.value, wd, "lower", dec.method)
     a_lo, got = _descend(lambda a: search(a, rad), max(float(dec.upper or 0.0), 0.0), steps)
+    if got is not None:  # kept for the certificate even when dominance proves more
+        proofs.update(decay=got, alpha=a_lo)
     if got is not None and (dec.lower is None or a_lo > dec.lower):
         dec = Bracket(a_lo, dec.upper, dec.realisation, "lower", riccati + "; upper: a "
                       "realisation by projected gradient on the eigenvalue")  # fmt: skip
@@ -725,11 +730,14 @@ def _riccati_brackets(
         if destab is not None and (mar.upper is None or destab.radius < mar.upper):
             mar = Bracket(mar.lower, destab.radius, destab, "lower", mar.method)
         r_lo, got_m = _descend(lambda r: search(0.0, r), float(mar.upper or 1.0), steps)
+        if got_m is not None:
+            proofs.update(margin=got_m, margin_radius=r_lo)
         if got_m is not None and (mar.lower is None or r_lo > mar.lower):
             mar = Bracket(r_lo, mar.upper, mar.realisation, "lower", "the Riccati search at "
                           "α = 0, bisection on ρ; upper: " + mar.method.split("upper: ")[-1])  # fmt: skip
+    proofs["method"] = "riccati"  # the certificate's claims are checked in the Schur form
     return RobustReport(
-        des, rep.radius, rep.radii, rep.nominal_decay, dec, off, mar, {},
+        des, rep.radius, rep.radii, rep.nominal_decay, dec, off, mar, proofs,
         time.perf_counter() - t0,
     )  # fmt: skip
 

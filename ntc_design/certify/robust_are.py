@@ -19,7 +19,8 @@ eigenvectors of M's smallest eigenvalues each τ_e equalises its two terms), and
 steps alternate, as in D–K iteration, until M ≻ 0 is found or the equation has no
 solution. The proof is checked rigorously in the process: P ≻ 0 and M ≻ 0 by Rump's
 verified Cholesky on the floating-point M with an entrywise bound on its rounding error
-(Higham, *Accuracy and Stability of Numerical Algorithms*, 2002, §3.5).
+(Higham, *Accuracy and Stability of Numerical Algorithms*, 2002, §3.5), L_B's own
+rounding included; ``ntc verify`` re-checks a certificate's (P, τ) the same way.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import numpy as np
 from ..rigorous.exact import verified_float_pd
 
 if TYPE_CHECKING:
-    from .robust import _Problem
+    from .robust import UncertainEdges
 
 #: Past the robust LMI's size and up to here, decay and margin are proven by the Riccati
 #: search (each equation is a 2Nd-dimensional Schur decomposition: 0.6 s at Nd = 150).
@@ -47,21 +48,33 @@ def _gamma(k: int) -> float:
 
 
 class RiccatiSearch:
-    """The data of one design for the Riccati search (dense, Nd <= RICCATI_MAX_ND)."""
+    """The Riccati search and its rigorous check for one network (dense).
 
-    def __init__(self, p: _Problem) -> None:
-        self.p, ed, d = p, p.edges, p.d
-        self.n, self.m = p.n, ed.m
-        self.i = ed.dst.astype(int) * d
-        self.j = ed.src.astype(int) * d
-        self.s = ed.s.astype(float)
-        self.w = ed.w
-        self.wabs = np.abs(ed.w)
+    Parameters
+    ----------
+    lap : numpy.ndarray
+        L_B in floating point (:func:`ntc_design.certify.dense.lap_b_float`).
+    lap_err : numpy.ndarray
+        An entrywise bound on |L_B exact − lap|.
+    edges : UncertainEdges
+        The uncertain edges (|A_e|, signs, ends).
+    dim : int
+        d.
+    """
+
+    def __init__(self, lap: np.ndarray, lap_err: np.ndarray, edges: UncertainEdges, dim: int):
+        self.lap, self.lap_err, self.d = lap, lap_err, dim
+        self.n, self.m = lap.shape[0], edges.m
+        self.i = edges.dst.astype(int) * dim
+        self.j = edges.src.astype(int) * dim
+        self.s = edges.s.astype(float)
+        self.w = edges.w
+        self.wabs = np.abs(edges.w)
 
     def _q(self, tau: np.ndarray, rad2: np.ndarray, absolute: bool = False) -> np.ndarray:
         """Σ τ_e ρ_e² D_e W_e D_eᵀ; with ``absolute``, Σ τ_e ρ_e² |D_e W_e D_eᵀ| (for the
         error bound)."""
-        n, d = self.n, self.p.d
+        n, d = self.n, self.d
         q = np.zeros((n, n))
         for e in range(self.m):
             c = tau[e] * rad2[e] * (self.wabs[e] if absolute else self.w[e])
@@ -75,7 +88,7 @@ class RiccatiSearch:
 
     def _r(self, tau: np.ndarray, w: np.ndarray) -> np.ndarray:
         """Σ E_i W_e E_iᵀ / τ_e (block diagonal), with W replaced by ``w``."""
-        n, d = self.n, self.p.d
+        n, d = self.n, self.d
         r = np.zeros((n, n))
         for e in range(self.m):
             i = self.i[e]
@@ -100,7 +113,7 @@ class RiccatiSearch:
         -------
         numpy.ndarray
         """
-        sh = self.p.lap_b - alpha * np.eye(self.n)
+        sh = self.lap - alpha * np.eye(self.n)
         ps = pm @ sh
         m = ps + ps.T - self._q(tau, rad**2) - pm @ self._r(tau, self.w) @ pm
         return 0.5 * (m + m.T)
@@ -129,12 +142,13 @@ class RiccatiSearch:
             return False
         if not verified_float_pd(pm, np.zeros_like(pm)).holds:
             return False
-        sh = self.p.lap_b - alpha * np.eye(n)
+        sh = self.lap - alpha * np.eye(n)
         ash = np.abs(sh) * (1.0 + _U)  # the diagonal's subtraction rounded
         ap = np.abs(pm)
         ps = pm @ sh
         t1 = ps + ps.T
-        e_t1 = 2.0 * _gamma(n + 2) * (ap @ ash) + _U * np.abs(t1)
+        e_l = ap @ self.lap_err  # L_B's own rounding (the exact L_B is the subject)
+        e_t1 = 2.0 * _gamma(n + 2) * (ap @ ash) + e_l + e_l.T + _U * np.abs(t1)
         rad2 = rad**2  # its rounding is inside e_q's γ
         q = self._q(tau, rad2)
         e_q = _gamma(self.m + 6) * self._q(tau, rad2, absolute=True)
@@ -149,7 +163,7 @@ class RiccatiSearch:
     def _rebalance(self, pm, tau, alpha, rad, iters: int = 10):
         """τ for this P: on the eigenvectors of M's two smallest eigenvalues, each τ_e
         equalises τ ρ² ‖D_eᵀv‖²_W and ‖E_iᵀPv‖²_W / τ (damped, in logarithms)."""
-        d = self.p.d
+        d = self.d
         best, best_tau = -np.inf, tau
         rad2 = rad**2
         for _ in range(iters):
@@ -175,7 +189,7 @@ class RiccatiSearch:
         import scipy.linalg as sla
 
         n = self.n
-        a = -(self.p.lap_b - alpha * np.eye(n))
+        a = -(self.lap - alpha * np.eye(n))
         q = self._q(tau, rad**2)
         r = self._r(tau, self.w)
         lam, u = np.linalg.eigh(r)
@@ -207,7 +221,7 @@ class RiccatiSearch:
 
         rad = np.broadcast_to(np.asarray(radius, dtype=float), (self.m,)).copy()
         n = self.n
-        sh = self.p.lap_b - alpha * np.eye(n)
+        sh = self.lap - alpha * np.eye(n)
         if float(np.min(np.linalg.eigvals(sh).real)) <= 0:
             return None  # not even the nominal network decays at α
         pm = sla.solve_continuous_lyapunov(sh.T, np.eye(n))

@@ -33,6 +33,7 @@ from ..robust import (
     robust,
     uncertain_edges,
 )
+from ..robust_are import RICCATI_MAX_ND, RiccatiSearch
 from ..theorems import TheoremVerdict
 from .base import CertificateKind, Reading, ResultRow, ResultsAudit, Subject, number_text
 from .dense import read_dense
@@ -69,14 +70,15 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
     Raises
     ------
     InputError
-        A report of the sparse path (above :data:`ntc_design.certify.robust.ROBUST_MAX_ND`).
+        A report of the sparse path alone (above
+        :data:`ntc_design.certify.robust_are.RICCATI_MAX_ND`).
     """
     d = rep.design
     name = name or d.topology.name or "topology"
     pr = rep.proofs
     if not pr:  # the sparse path proves in the process; there is nothing to re-check
         raise InputError(
-            f"robust: a certificate is issued up to Nd = {ROBUST_MAX_ND} (this network: "
+            f"robust: a certificate is issued up to Nd = {RICCATI_MAX_ND} (this network: "
             f"Nd = {d.topology.nd}); above, the sparse bounds are proven but not stored"
         )
     props: list[Property] = []
@@ -133,7 +135,12 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
         "claims": [c.to_dict() for c in _claims(tuple(props), name, _stated(results, rep.radius))],
         "results": results,
         "realizations": reals,
-        "solver": {"name": "Clarabel (via cvxpy)", "status": "optimal"},
+        "solver": {
+            "name": "Riccati search (SciPy)"
+            if pr.get("method") == "riccati"
+            else "CVXOPT or Clarabel (via cvxpy)",
+            "status": "optimal",
+        },
     }
     return finish(doc)
 
@@ -389,7 +396,7 @@ class RobustKind(CertificateKind):
     properties = (Property.ROBUST_MARGIN, Property.ROBUST_DECAY, Property.ROBUST_OFFSET)
     required = frozenset({Property.ROBUST_MARGIN})
     switching = False
-    method = "exact-rational"
+    method = "exact-rational, or verified-float past the LMI size"
 
     def accepts(self, design: Any) -> bool:
         return False  # issued on request (ntc robust), never in place of a nominal kind
@@ -462,6 +469,8 @@ class RobustKind(CertificateKind):
             proof = PROVERS[ClaimKind.PD](claim, st.dense)
             return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail}", claim)
         mode = st.mode
+        if claim.kind is ClaimKind.ROBUST_LMI and mode.in_range and mode.top.nd > ROBUST_MAX_ND:
+            return _prove_riccati(claim, st)
         if not mode.in_range or mode.exact is None:
             return Check(claim.id, False, "L_B is out of range or too large for the exact test")
         ch = _exact_channels(mode.top)
@@ -577,6 +586,33 @@ class RobustKind(CertificateKind):
                     f"realizations.margin: min Re λ = {got:.3g} > 0, it is not destabilising"
                 )
             audit.recomputed(("margin", "upper"), rho, 0.0)
+
+
+def _prove_riccati(claim: Claim, st: _State) -> Check:
+    """A decay or margin claim past the LMI's size: P ≻ 0, τ > 0 and the Schur form
+    M(P, τ) ≻ 0 of :mod:`ntc_design.certify.robust_are`, by verified Cholesky with every
+    rounding bounded, L_B's own included."""
+    mode, src = st.mode, st.dense.source
+    stated = st.margin if claim.prop is Property.ROBUST_MARGIN else st.alpha
+    if stated is None:
+        what = "margin.lower" if claim.prop is Property.ROBUST_MARGIN else "decay.lower"
+        return Check(claim.id, False, f"results.{what} is missing", claim)
+    p = st.dense.p(claim.p or "")
+    if p is None:
+        return Check(claim.id, False, f"matrices.P.{claim.p} is out of range", claim)
+    ed = uncertain_edges(mode.top)
+    tau = _floats(st.multipliers.get(claim.p), ed.m, f"{src}: matrices.multipliers.{claim.p}")
+    radius = float(claim.radius or 0.0)
+    rad = st.radii if claim.prop is Property.ROBUST_DECAY else np.full(ed.m, radius)
+    search = RiccatiSearch(mode.lap, mode.err, ed, mode.top.dim)
+    ok = search.proven(p, tau, claim.alpha, np.asarray(rad, dtype=float))  # p symmetric too
+    return Check(
+        claim.id,
+        ok,
+        f"verified-float: P ≻ 0, τ > 0 and P S + SᵀP − Q(τ) − P R(τ) P ≻ 0 "
+        f"{'hold' if ok else 'not proven'} (α = {claim.alpha!r}, ρ = {radius!r})",
+        claim,
+    )
 
 
 def _input_exact(mode: DenseMode) -> Dyadic:
