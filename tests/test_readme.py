@@ -63,6 +63,7 @@ def test_readme_numbers_of_the_first_command(g1, theta):
     assert minors == g1.n * g1.dim
 
 
+@pytest.mark.slow  # ~11 s: it collects the whole suite in a second pytest
 def test_readme_test_counts_are_those_collected():
     # one collection gives both: "2845/2872 tests collected (27 deselected)"
     out = subprocess.run(

@@ -234,6 +234,7 @@ def test_g1_written_scenario_agrees_with_monte_carlo(g1_tuned):
     assert (out / "figures" / "tune_curves.pdf").stat().st_size > 1000
 
 
+@pytest.mark.slow  # ~9 s: a switching set's tuning with δ and its certificate
 def test_switching_set_tuned_with_delta_is_certified(examples):
     top, spec, _ = load_scenario(examples / "scenarios" / "switching.yaml")
     with warnings.catch_warnings():
@@ -365,6 +366,7 @@ def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch):
         assert label in out
 
 
+@pytest.mark.slow  # ~14 s: exact moments of a time-varying topology at every evaluation
 def test_a_topology_given_as_expressions_of_t_is_tuned_by_its_exact_moments(examples):
     top, spec, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
     with warnings.catch_warnings():

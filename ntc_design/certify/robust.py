@@ -588,7 +588,7 @@ def robust(
     --------
     >>> import ntc_design as nd
     >>> d = nd.design(nd.load(nd.example_path("g1.yaml")), [1, 2, -1], thresholds=False)
-    >>> rep = robust(d, 0.05, starts=0, bisection_steps=6)
+    >>> rep = robust(d, 0.05, starts=0, bisection_steps=2)
     >>> rep.decay.lower <= rep.decay.upper <= rep.nominal_decay + 1e-9
     True
     """
