@@ -8,14 +8,8 @@ matplotlib.use("Agg")
 import numpy as np
 import pytest
 
-import ntc_design as nd
 from ntc_design.paper import THETA
 from ntc_design.reports import figures
-
-
-@pytest.fixture(scope="module")
-def g1_design():
-    return nd.design(nd.load(nd.example_path("g1.yaml")), THETA, thresholds=False)
 
 
 def test_the_mode_timeline_colours_every_segment_and_aggregates_short_ones():
@@ -55,18 +49,29 @@ def test_states_and_mean_square_figures_with_a_switching_timeline():
     assert len(fig.axes) == 4 and len(fig2.axes) == 2  # panels + the mode timeline
 
 
-def test_robust_figure_draws_each_bracket_end_it_is_given(g1_design):
-    from ntc_design.certify.robust import robust_sweep
+def test_robust_figure_draws_each_bracket_end_it_is_given():
+    from types import SimpleNamespace
 
-    reps = robust_sweep(g1_design, [0.02, 0.05], starts=0, bisection_steps=1)
+    from ntc_design.certify.robust import Bracket
+
+    def rep(rho, a_lo, a_hi, o_lo, o_hi):
+        return SimpleNamespace(
+            radius=rho,
+            decay=Bracket(a_lo, a_hi, None, "lower", "LMI"),
+            offset=Bracket(o_lo, o_hi, None, "upper", "S-procedure"),
+        )
+
+    reps = [rep(0.02, 0.81, 0.82, 0.03, 0.031), rep(0.05, 0.80, 0.815, 0.07, 0.08)]
     fig = figures.robust_figure(reps, margin=(0.5, 0.9))
     dec, off = fig.axes[:2]
-    proven = dec.lines[0].get_ydata()
-    assert np.allclose(proven, [r.decay.lower for r in reps])
-    assert np.allclose(dec.lines[1].get_ydata(), [r.decay.upper for r in reps])
-    assert np.allclose(off.lines[0].get_ydata(), [r.offset.upper for r in reps])
-    assert np.all(proven <= dec.lines[1].get_ydata())  # a proven end never passes the seen one
+    assert np.allclose(dec.lines[0].get_xdata(), [0.02, 0.05])
+    assert np.allclose(dec.lines[0].get_ydata(), [0.81, 0.80])  # the proven lower ends
+    assert np.allclose(dec.lines[1].get_ydata(), [0.82, 0.815])  # the attained ones
+    assert np.allclose(off.lines[0].get_ydata(), [0.031, 0.08])  # the proven upper ends
+    assert np.allclose(off.lines[1].get_ydata(), [0.03, 0.07])
     assert dec.get_xlim()[1] == pytest.approx(0.9)  # the axis reaches the margin's far end
+    gap = figures.robust_figure([rep(0.1, None, 0.7, 0.1, None)])  # an end not proven
+    assert np.isnan(gap.axes[0].lines[0].get_ydata()[0])
 
 
 def test_realisations_figure_puts_each_realisation_and_the_proven_lines():
