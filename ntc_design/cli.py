@@ -962,8 +962,6 @@ def main(argv: list[str] | None = None) -> None:
         Arguments (default: ``sys.argv[1:]``).
     """
     import os
-    import signal
-    import threading
     import warnings
 
     try:  # typer >= 0.20 vendors click; its exceptions are what the commands raise
@@ -980,8 +978,6 @@ def main(argv: list[str] | None = None) -> None:
     warnings.simplefilter("ignore", RuntimeWarning)  # numerical trouble is checked, not warned
     warnings.simplefilter("once", AssumptionWarning)  # one line per network, not per mode
     code = 0
-    if argv is None and threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, note_interrupt)  # the program only, not main([...])
     try:
         try:
             rv = app(args=_argv(args), prog_name="ntc", standalone_mode=False)
@@ -1034,6 +1030,13 @@ def run() -> None:
     handlers still run and the streams are flushed first; with another thread or a child
     process still alive, or under a profiler or tracer, the ordinary exit is taken.
     """
+    import signal
+
+    # Ctrl-C raises KeyboardInterrupt as always, and is noted (errors.note_interrupt): one
+    # raised inside a finaliser is dropped by Python, the note is not. An ignored SIGINT
+    # (a background job) stays ignored, as Python leaves it.
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, note_interrupt)
     try:
         main()
         code: str | int | None = 0

@@ -276,3 +276,20 @@ def test_python_dash_m_runs_the_program(monkeypatch):
     monkeypatch.setattr(cli, "run", lambda: calls.append("run"))
     runpy.run_module("ntc_design", run_name="__main__")
     assert calls == ["run"]  # python -m ntc_design is the ntc program, with its exit
+
+
+@pytest.mark.parametrize("ignored", [False, True])
+def test_the_program_notes_ctrl_c_and_keeps_an_ignored_one_ignored(ignored):
+    # a background job starts with SIGINT ignored: ntc leaves it so, as Python does
+    code = (
+        "import signal, sys\n"
+        + ("signal.signal(signal.SIGINT, signal.SIG_IGN)\n" if ignored else "")
+        + "from ntc_design import cli, errors\n"
+        "cli.main = lambda: print(signal.getsignal(signal.SIGINT) is errors.note_interrupt,"
+        " signal.getsignal(signal.SIGINT) is signal.SIG_IGN)\n"
+        "cli.run()\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert out == (["False", "True"] if ignored else ["True", "False"])
