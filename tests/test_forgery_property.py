@@ -24,11 +24,13 @@ import ntc_design as nd
 from ntc_design.certify import KINDS, verify
 from ntc_design.certify.arrays import topology_from_subject
 from ntc_design.certify.format import digest, document_hash, topology_hash
+from ntc_design.certify.kinds import IssueOptions
 from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
 from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
 from ntc_design.design import design
 from ntc_design.errors import InputError
 from ntc_design.files import parse_topology
+from ntc_design.gain import analyse_gain
 from ntc_design.generate import random_network
 from ntc_design.model import Topology
 from ntc_design.timevarying import TimeVaryingDesign, from_document
@@ -68,7 +70,8 @@ def honest() -> dict[str, dict]:
     sws = switching_scale_certificate(sd)
     tv = from_document(_tv_topology(), "tv")
     tvc = KINDS["time_varying"].issue(
-        TimeVaryingDesign(tv, np.array([1.0, 2.0]), 0.1), gain="1/(1+t)"
+        TimeVaryingDesign(tv, np.array([1.0, 2.0]), 0.1),
+        IssueOptions(gain=analyse_gain("1/(1+t)")),
     )
     from ntc_design.certify.kinds.robust import robust_certificate
     from ntc_design.certify.robust import robust

@@ -18,7 +18,7 @@ from ..timevarying import ExpressionTopology, TimeVaryingDesign
 from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
 from .format import digest
-from .kinds import KINDS, ResultRow, kind_for
+from .kinds import KINDS, IssueOptions, ResultRow, kind_for
 from .theorems import GUARANTEE_WORD, TheoremVerdict, theorem_table
 from .verify import verify
 
@@ -215,9 +215,10 @@ def certify(
         # at scale the critical couplings are not needed by the certificate (design notes it)
         des = design(topology, theta, margin, delta, thresholds=False if big else None)
     kind = kind_for(des)
-    cert = kind.issue(
-        des, gain=gain, noise_sigma=noise_sigma, noise_f=noise_f, rate_method=rate_method
+    options = IssueOptions(
+        gain=g, noise_sigma=noise_sigma, noise_f=noise_f, rate_method=rate_method
     )
+    cert = kind.issue(des, options)
     if isinstance(gain, ScheduleGain):
         cert = with_schedule(cert, gain)
     ver = _verify_own(cert)

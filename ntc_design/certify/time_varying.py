@@ -43,6 +43,7 @@ import sympy as sp
 from ..design import design_topology
 from ..errors import InputError
 from ..expr import compile_expression, parse_expression, symbol
+from ..gain import GainAnalysis
 from ..linalg import DEF_RTOL
 from ..model import Topology
 from ..paper import F_SCALE, SIGMA
@@ -610,13 +611,14 @@ def mu2_threshold(lambda2: float, lambda1: float, sigma_bar: float, n: int) -> f
     return math.inf if den == 0 else lambda2 / den
 
 
-def mu2_t0(gain: str, kappa: float) -> tuple[float | None, str]:
+def mu2_t0(gain: Any, kappa: float) -> tuple[float | None, str]:
     """The time t₀ after which c(t) < κ, and how it was proven.
 
     Parameters
     ----------
-    gain : str
-        The gain c(t) as text (parsed safely, :mod:`ntc_design.expr`).
+    gain : str or sympy.Expr
+        The gain c(t): text (parsed safely, :mod:`ntc_design.expr`), or the expression a
+        :class:`ntc_design.gain.GainAnalysis` holds (not parsed again).
     kappa : float
         The level from :func:`mu2_threshold`.
 
@@ -632,7 +634,7 @@ def mu2_t0(gain: str, kappa: float) -> tuple[float | None, str]:
     InputError
         The gain is not an allowed expression of t.
     """
-    c = parse_expression(gain, "gain")
+    c = parse_expression(gain, "gain") if isinstance(gain, str) else gain
     t = symbol("t")
     if not c.has(t):
         v = float(c)
@@ -705,7 +707,7 @@ def time_varying_document(
     theta,
     kind: str,
     margin: float = 0.1,
-    gain: str | None = None,
+    gain: GainAnalysis | None = None,
     sigma: float = SIGMA,
     f: Any = F_SCALE,
 ) -> dict:
@@ -721,8 +723,9 @@ def time_varying_document(
         The issuing kind's name (written into the document).
     margin : float, optional
         ΔC of Lemma 1.
-    gain : str, optional
-        c(t), for t₀.
+    gain : GainAnalysis, optional
+        c(t), analysed once by :func:`ntc_design.certify.certify` (its expression is
+        used as it is, not parsed again).
     sigma : float, optional
         The additive noise intensity σ_ji.
     f : float or array_like, optional
@@ -741,7 +744,7 @@ def time_varying_document(
     bound = certify_lambda2(tv, margin, sigma)
     sigma_bar = noise_sigma_bar(f)
     kappa = mu2_threshold(bound.lambda2, bound.lambda1, sigma_bar, tv.n)
-    t0, t0_how = mu2_t0(gain, kappa) if gain is not None else (None, "no gain given")
+    t0, t0_how = mu2_t0(gain.expr, kappa) if gain is not None else (None, "no gain given")
     results = {
         "lambda2": bound.lambda2,
         "sampled_inf": bound.sampled_inf,
@@ -770,7 +773,7 @@ def time_varying_document(
             "theta": [float(x) for x in np.asarray(theta, dtype=float)],
             "margin": float(margin),
             "noise": {"sigma": float(sigma), "f": np.asarray(f, dtype=float).tolist()},
-            "gain": gain,
+            "gain": None if gain is None else gain.expression,
         },
         "intervals": [[q.a, q.b, q.lower] for q in bound.leaves],
         "claims": [

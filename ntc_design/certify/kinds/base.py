@@ -15,16 +15,20 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from ...errors import InputError
+from ...paper import F_SCALE, SIGMA
 from ..checks import Check
 from ..claims import Claim, Property
 from ..fields import finite_number
 from ..format import RESULT_RTOL
 from ..theorems import TheoremVerdict
+
+if TYPE_CHECKING:  # the gain layer loads SymPy: only certify() builds an analysis
+    from ...gain import GainAnalysis
 
 _MISSING = object()
 
@@ -354,6 +358,40 @@ class ResultsAudit:
         )
 
 
+@dataclass(frozen=True, kw_only=True)
+class IssueOptions:
+    """What a kind may use when it issues a certificate, typed and built once by
+    :func:`ntc_design.certify.certify`: the gain analysed once (its expression and its
+    conditions, never parsed again), the noise, how the rate is found, and the robust
+    kind's radius and searches. A kind reads the fields it needs and ignores the others.
+
+    Attributes
+    ----------
+    gain : GainAnalysis or None
+        c(t), analysed (:func:`ntc_design.schedule.analyse_any_gain`).
+    noise_sigma : float
+        σ of the additive noise.
+    noise_f : float or array_like
+        f of the state-dependent noise (a scale, or a d×d matrix).
+    rate_method : str
+        ``"lyapunov"`` or ``"lmi"`` (the fixed kind's decay rate).
+    radius : float or None
+        The robust kind's ρ (None: its default).
+    starts : int
+        The robust kind's random starts of the realisation searches.
+    seed : int
+        Their seed.
+    """
+
+    gain: GainAnalysis | None = None
+    noise_sigma: float = SIGMA
+    noise_f: Any = F_SCALE
+    rate_method: str = "lyapunov"
+    radius: float | None = None
+    starts: int = 6
+    seed: int = 0
+
+
 class CertificateKind(ABC):
     """A kind of certificate. Subclass it in one module, give it the class attributes,
     implement the abstract methods and add an instance to
@@ -406,15 +444,15 @@ class CertificateKind(ABC):
         """
 
     @abstractmethod
-    def issue(self, design: Any, **options: Any) -> dict:
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
         """Certify ``design`` and return the certificate mapping (digest included).
 
         Parameters
         ----------
         design : ProtocolDesign, SwitchingDesign or TimeVaryingDesign
             A design this kind accepts.
-        **options
-            ``gain``, ``noise_sigma``, ``noise_f`` (used by the kinds that need them).
+        options : IssueOptions, optional
+            The gain, noise, rate method and robust settings (default: none given).
 
         Returns
         -------
@@ -627,6 +665,7 @@ class CertificateKind(ABC):
 
 __all__ = [
     "CertificateKind",
+    "IssueOptions",
     "ResultRow",
     "number_text",
     "ModeReading",

@@ -16,7 +16,7 @@ from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
 from ..lyapunov import decay_rate_lmi, decay_rate_lyapunov, hurwitz_by_lyapunov
 from ..theorems import TheoremVerdict, fixed_verdicts
-from .base import Reading, ResultRow, ResultsAudit, Subject
+from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject
 from .dense import DenseKind
 
 RATE_METHODS = ("lyapunov", "lmi")
@@ -120,15 +120,15 @@ class HurwitzKind(DenseKind):
     def accepts(self, design: Any) -> bool:
         return isinstance(design, ProtocolDesign) and design.topology.nd <= DENSE_CERT_MAX_ND
 
-    def issue(self, design: Any, **options: Any) -> dict:
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
         """The certificate of one design (:func:`hurwitz_certificate`).
 
         Parameters
         ----------
         design : ProtocolDesign
             The design.
-        **options
-            ``rate_method`` (``"lyapunov"`` or ``"lmi"``); the others are ignored.
+        options : IssueOptions, optional
+            Its ``rate_method`` (``"lyapunov"`` or ``"lmi"``) is used.
 
         Returns
         -------
@@ -139,7 +139,7 @@ class HurwitzKind(DenseKind):
         InputError
             An unknown ``rate_method``, or an LMI too large for the machine.
         """
-        return hurwitz_certificate(design, rate_method=options.get("rate_method", "lyapunov"))
+        return hurwitz_certificate(design, rate_method=(options or IssueOptions()).rate_method)
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         return fixed_verdicts(design, verification, gain)

@@ -35,6 +35,7 @@ from ..scale import (
 from ..theorems import TheoremVerdict, fixed_verdicts
 from .base import (
     CertificateKind,
+    IssueOptions,
     ModeReading,
     Reading,
     ResultRow,
@@ -115,7 +116,7 @@ class HurwitzScaleKind(CertificateKind):
     def accepts(self, design: Any) -> bool:
         return isinstance(design, ProtocolDesign) and design.topology.nd > DENSE_CERT_MAX_ND
 
-    def issue(self, design: Any, **options: Any) -> dict:
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
         return scale_document(design, self.name)
 
     def agent_margins(self, certificate: dict, n: int) -> np.ndarray | None:

@@ -26,6 +26,7 @@ from ..dense import PROVERS, DenseContext, DenseMode, mode_subject
 from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
 from ..robust import (
+    DEFAULT_RADIUS,
     ROBUST_MAX_ND,
     RobustReport,
     abscissa,
@@ -35,7 +36,15 @@ from ..robust import (
 )
 from ..robust_are import RICCATI_MAX_ND, RiccatiSearch
 from ..theorems import TheoremVerdict
-from .base import CertificateKind, Reading, ResultRow, ResultsAudit, Subject, number_text
+from .base import (
+    CertificateKind,
+    IssueOptions,
+    Reading,
+    ResultRow,
+    ResultsAudit,
+    Subject,
+    number_text,
+)
 from .dense import read_dense
 
 REALISATION_RTOL = 1e-9  # a realisation may sit this far (relative) outside the set
@@ -401,15 +410,16 @@ class RobustKind(CertificateKind):
     def accepts(self, design: Any) -> bool:
         return False  # issued on request (ntc robust), never in place of a nominal kind
 
-    def issue(self, design: Any, **options: Any) -> dict:
-        """The certificate of :func:`ntc_design.certify.robust.robust` at ``radius``.
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
+        """The certificate of :func:`ntc_design.certify.robust.robust` at the options'
+        radius.
 
         Parameters
         ----------
         design : ProtocolDesign
             The nominal design.
-        **options
-            ``radius`` (default 0.05), ``starts``, ``seed``.
+        options : IssueOptions, optional
+            Its ``radius`` (None: 0.05), ``starts`` and ``seed`` are used.
 
         Returns
         -------
@@ -422,8 +432,9 @@ class RobustKind(CertificateKind):
         """
         if not isinstance(design, ProtocolDesign):
             raise InputError("robust: expected the design of one fixed topology")
-        keep = {k: options[k] for k in ("radius", "starts", "seed") if k in options}
-        return robust_certificate(robust(design, **keep))
+        o = options or IssueOptions()
+        radius = DEFAULT_RADIUS if o.radius is None else o.radius
+        return robust_certificate(robust(design, radius, starts=o.starts, seed=o.seed))
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         return ()

@@ -13,7 +13,7 @@ from ..dense import DENSE_CERT_MAX_ND, min_eig, mode_subject
 from ..format import FORMAT, VERSION, finish, scheduled_modes, switching_hash, topology_hash
 from ..lyapunov import common_lyapunov, verified_margin
 from ..theorems import TheoremVerdict, switching_verdicts
-from .base import Reading, ResultRow, ResultsAudit, Subject, number_text
+from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, number_text
 from .dense import DenseKind
 
 
@@ -126,7 +126,7 @@ class SwitchingKind(DenseKind):
     def accepts(self, design: Any) -> bool:
         return isinstance(design, SwitchingDesign) and switching_nd(design) <= DENSE_CERT_MAX_ND
 
-    def issue(self, design: Any, **options: Any) -> dict:
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
         return switching_certificate(design)
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:

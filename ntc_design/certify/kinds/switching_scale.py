@@ -29,6 +29,7 @@ from ..switching_scale import (
 from ..theorems import TheoremVerdict, switching_verdicts
 from .base import (
     CertificateKind,
+    IssueOptions,
     ModeReading,
     Reading,
     ResultRow,
@@ -69,7 +70,7 @@ class SwitchingScaleKind(CertificateKind):
     def accepts(self, design: Any) -> bool:
         return isinstance(design, SwitchingDesign) and switching_nd(design) > DENSE_CERT_MAX_ND
 
-    def issue(self, design: Any, **options: Any) -> dict:
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
         return switching_scale_document(design, self.name)
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:

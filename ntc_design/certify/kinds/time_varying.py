@@ -14,7 +14,6 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ...errors import InputError
-from ...paper import F_SCALE, SIGMA
 from ...timevarying import ExpressionTopology, TimeVaryingDesign, from_document, lemma1_structure
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
@@ -33,6 +32,7 @@ from ..time_varying import (
 )
 from .base import (
     CertificateKind,
+    IssueOptions,
     ModeReading,
     Reading,
     ResultRow,
@@ -116,16 +116,12 @@ class TimeVaryingKind(CertificateKind):
     def accepts(self, design: Any) -> bool:
         return isinstance(design, TimeVaryingDesign)
 
-    def issue(self, design: Any, **options: Any) -> dict:
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
+        o = options or IssueOptions()
         return time_varying_document(
-            design.topology,
-            design.theta,
-            self.name,
-            design.margin,
-            options.get("gain"),
-            options.get("noise_sigma", SIGMA),
-            options.get("noise_f", F_SCALE),
-        )
+            design.topology, design.theta, self.name, design.margin, o.gain, o.noise_sigma,
+            o.noise_f,
+        )  # fmt: skip
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         return time_varying_verdicts(time_varying_results(certificate), verification, gain)
