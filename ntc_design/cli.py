@@ -735,8 +735,9 @@ def tune(
         except InputError as exc:
             raise InputError(f"{sc.source}: {exc}") from None
     doc = res.to_dict()
+    written: list[str] = []
     if out_dir is not None:
-        write_tune_outputs(res, sc, out_dir)
+        written = write_tune_outputs(res, sc, out_dir)
         doc["out"] = str(out_dir)
     if as_json:
         print(_json(doc))
@@ -744,9 +745,10 @@ def tune(
         for t in getattr(res, "tables", lambda: [res.table()])():
             print_table(t)
         if out_dir is not None:
+            rest = ", ".join(f for f in written if f != "tuned.yaml")
             out.print(
                 f"written to {out_dir}: tuned.yaml (check it by Monte Carlo: ntc simulate "
-                f"{out_dir / 'tuned.yaml'} --out {out_dir}-mc), tune.html, tune.json"
+                f"{out_dir / 'tuned.yaml'} --out {out_dir}-mc), {rest}"
             )
     if not res.certified:
         msg = "not proven: the tuned design is not certified for the required theorems"

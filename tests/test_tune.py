@@ -348,7 +348,7 @@ def test_bad_bounds_are_refused(g1, theta, bounds, needle):
         tune(g1, spec, 1.0, bounds=bounds)
 
 
-def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch):
+def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch, tmp_path):
     code, out, err = run_cli(
         [
             "tune",
@@ -357,6 +357,8 @@ def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch):
             "2",
             "--evaluations",
             "30",
+            "--out",
+            tmp_path / "t",
         ],
         capsys,
         monkeypatch,
@@ -364,6 +366,9 @@ def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch):
     assert code == 0, err
     for label in ("gain c(t)", "E Σ‖x_i(T) − θ‖², T = 2.0000", "certificate of the tuned design"):
         assert label in out
+    said = " ".join(out.split("written to", 1)[1].split())  # the line, unwrapped
+    files = sorted(p.name for p in (tmp_path / "t").iterdir() if p.is_file())
+    assert files and all(f in said for f in files), (files, said)  # every file is named
 
 
 @pytest.mark.slow  # ~14 s: exact moments of a time-varying topology at every evaluation

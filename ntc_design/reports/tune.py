@@ -255,7 +255,7 @@ TUNE_FILES = (
 
 def write_tune_outputs(
     result: TuneResult | ScheduleTuneResult, scenario: ScenarioData, out_dir: str | Path
-) -> None:
+) -> list[str]:
     """Write a tuning's folder, all or nothing (:func:`ntc_design.outputs.output_folder`):
     ``tuned.yaml`` (the scenario with the tuned gain, T and any stepping it needs, its
     topology path relative to the folder), ``tune.json``, ``certificate.json`` and
@@ -269,6 +269,11 @@ def write_tune_outputs(
         The scenario as read (its document and source).
     out_dir : str or Path
         The folder.
+
+    Returns
+    -------
+    list of str
+        The files written, in the order the command names them.
 
     Raises
     ------
@@ -295,6 +300,7 @@ def write_tune_outputs(
         if result.certificate is not None:
             write_certificate(result.certificate.certificate, tmp / "certificate.json")
         write_tune_report(result, tmp, scenario.source, files)
+    return [*files, "tune.html"]
 
 
 @dataclass(frozen=True)
