@@ -480,6 +480,8 @@ def robust(
             doc = robust_certificate(rep)
             ver = verify(json.loads(json.dumps(doc)), "the robust certificate")
     ok = ver.valid if ver is not None else rep.margin.lower is not None
+    if out_path is not None and doc is None:
+        ok = False  # asked for a certificate; none to write (the reason is printed below)
     if out_path is not None and doc is not None and ok:
         write_certificate(doc, out_path)
     if as_json:
@@ -498,6 +500,9 @@ def robust(
             if kept:
                 print(f"the certificate carries {', '.join(kept)} (what it re-proves); the "
                       "printed lower ends are proven here by block dominance")  # fmt: skip
+        elif dense:
+            print("no certificate: the search for one proved no margin radius (a bound "
+                  "above, if any, is proven in this process only)")  # fmt: skip
         else:
             print(f"proven here (sparse dominance); no certificate above Nd = {RICCATI_MAX_ND}")
         if out_path is not None and ok:
@@ -1061,10 +1066,26 @@ def _exit(code: str | int | None) -> None:
         or (mp is not None and mp.active_children())
     ):
         sys.exit(code)
-    atexit._run_exitfuncs()
-    for stream in (sys.stdout, sys.stderr):
+    try:
+        atexit._run_exitfuncs()
+    except KeyboardInterrupt:
+        code = 130
+    # what is still buffered is written now: a failure is the command's failure, as main()
+    # reports one during the command (1 for a closed pipe, 2 and one line otherwise)
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if stream is None:  # started with the stream closed
+            continue
         try:
             stream.flush()
-        except (OSError, ValueError):  # a closed pipe: the code already says so
-            pass
+        except BrokenPipeError:
+            code = code or 1
+        except (OSError, ValueError) as exc:
+            code = code or 2
+            if name == "stdout" and sys.stderr is not None:
+                try:
+                    print(f"error: standard output: {exc.__class__.__name__}: {exc}",
+                          file=sys.stderr, flush=True)  # fmt: skip
+                except (OSError, ValueError):
+                    pass
     os._exit(code)

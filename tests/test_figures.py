@@ -12,6 +12,14 @@ from ntc_design.paper import THETA
 from ntc_design.reports import figures
 
 
+@pytest.fixture(autouse=True)
+def _close_figures():
+    import matplotlib.pyplot as plt
+
+    yield
+    plt.close("all")
+
+
 def test_the_mode_timeline_colours_every_segment_and_aggregates_short_ones():
     import matplotlib.pyplot as plt
 

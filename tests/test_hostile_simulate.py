@@ -775,7 +775,6 @@ def test_a_ctrl_c_whose_exception_was_lost_still_stops_the_run(tmp_path):
         "import os, signal, sys\n"
         "from ntc_design import cli\n"
         "import ntc_design.simulate.montecarlo as mc\n"
-        "real = mc.run_chunk\n"
         "def swallow():\n"
         "    try:\n"
         "        os.kill(os.getpid(), signal.SIGINT)\n"
@@ -783,13 +782,13 @@ def test_a_ctrl_c_whose_exception_was_lost_still_stops_the_run(tmp_path):
         "    except KeyboardInterrupt:\n"
         "        pass  # lost, as in a __del__\n"
         f"sys.argv = ['ntc', 'simulate', {str(sc)!r}, '--out', {str(tmp_path / 'o')!r}]\n"
-        "orig = mc.wait\n"
+        "orig = mc.merge\n"  # called in this process per finished chunk, one worker or two
         "calls = []\n"
-        "def wait(*a, **k):\n"
+        "def merge(*a, **k):\n"
         "    calls.append(1)\n"
         "    if len(calls) == 3: swallow()\n"
         "    return orig(*a, **k)\n"
-        "mc.wait = wait\n"
+        "mc.merge = merge\n"
         "cli.run()\n"
     )
     proc = subprocess.run(

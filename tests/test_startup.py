@@ -3,6 +3,7 @@ are measured in benchmarks/bench_inputs.py; here the modules loaded are asserted
 is what the time follows and what does not depend on the machine."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -223,6 +224,15 @@ def test_the_tidy_csv_is_what_pandas_writes(method):
     assert text.count("\n") == 1 + res.save_times.size * len(res.labels)
 
 
+# buffered streams (a user's shell does not set PYTHONUNBUFFERED) and no coverage tracer,
+# under which the ordinary exit is taken: the quick exit itself is what runs
+_PLAIN_ENV = {
+    k: v
+    for k, v in os.environ.items()
+    if k != "PYTHONUNBUFFERED" and not k.startswith("COVERAGE_PROCESS")
+}
+
+
 def test_the_program_exits_with_its_code_and_every_line_written(tmp_path):
     # ntc's exit skips the interpreter's teardown: nothing printed may be lost, the code
     # must be main()'s, and exit handlers (here one that writes a file) still run
@@ -235,7 +245,7 @@ def test_the_program_exits_with_its_code_and_every_line_written(tmp_path):
     )
     ok = subprocess.run(
         [sys.executable, str(probe), "check", "examples/g1.yaml", "--json"],
-        cwd=ROOT, capture_output=True, text=True,
+        cwd=ROOT, capture_output=True, text=True, env=_PLAIN_ENV,
     )  # fmt: skip
     assert ok.returncode == 0
     assert json.loads(ok.stdout)["assumption_holds"] is True  # the whole text arrived
@@ -293,3 +303,16 @@ def test_the_program_notes_ctrl_c_and_keeps_an_ignored_one_ignored(ignored):
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True
     ).stdout.split()
     assert out == (["False", "True"] if ignored else ["True", "False"])
+
+
+def test_output_lost_at_exit_is_a_failure_not_a_success():
+    # the reader closes the pipe before the (buffered) JSON is written: the final flush
+    # fails, and the exit code says so (1, as for a broken pipe during the command)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ntc_design", "check", "examples/g1.yaml", "--json"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_PLAIN_ENV,
+    )  # fmt: skip
+    proc.stdout.close()
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 1, err
+    assert b"Traceback" not in err

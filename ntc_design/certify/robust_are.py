@@ -47,6 +47,20 @@ def _gamma(k: int) -> float:
     return k * _U / (1.0 - k * _U)
 
 
+#: Every nonzero number entering M is within [2⁻²⁰⁰, 2²⁰⁰] in magnitude: a product of four
+#: stays normal and a sum of Nd·m of them finite, so γ_k bounds every rounding error.
+_SPAN = 2.0**200
+
+
+def _in_range(*arrays: np.ndarray) -> bool:
+    for a in arrays:
+        v = np.abs(np.asarray(a, dtype=float))
+        v = v[v != 0]
+        if v.size and not (np.all(np.isfinite(v)) and v.min() >= 1 / _SPAN and v.max() <= _SPAN):
+            return False
+    return True
+
+
 class RiccatiSearch:
     """The Riccati search and its rigorous check for one network (dense).
 
@@ -140,6 +154,8 @@ class RiccatiSearch:
         n = self.n
         if not (np.all(tau > 0) and np.all(np.isfinite(tau)) and np.array_equal(pm, pm.T)):
             return False
+        if not _in_range(pm, tau, rad, np.array([alpha]), self.w, self.lap, self.lap_err):
+            return False  # the relative rounding bounds below assume no underflow/overflow
         if not verified_float_pd(pm, np.zeros_like(pm)).holds:
             return False
         sh = self.lap - alpha * np.eye(n)
@@ -148,7 +164,8 @@ class RiccatiSearch:
         ps = pm @ sh
         t1 = ps + ps.T
         e_l = ap @ self.lap_err  # L_B's own rounding (the exact L_B is the subject)
-        e_t1 = 2.0 * _gamma(n + 2) * (ap @ ash) + e_l + e_l.T + _U * np.abs(t1)
+        x = ap @ ash  # not symmetric: the error of ps + psᵀ is bounded by x + xᵀ
+        e_t1 = _gamma(n + 2) * (x + x.T) + e_l + e_l.T + _U * np.abs(t1)
         rad2 = rad**2  # its rounding is inside e_q's γ
         q = self._q(tau, rad2)
         e_q = _gamma(self.m + 6) * self._q(tau, rad2, absolute=True)

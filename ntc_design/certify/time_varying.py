@@ -43,7 +43,7 @@ import sympy as sp
 from ..design import design_topology
 from ..errors import InputError
 from ..expr import compile_expression, parse_expression, symbol
-from ..gain import GainAnalysis
+from ..gain import GainAnalysis, analyse_gain
 from ..linalg import DEF_RTOL
 from ..model import Topology
 from ..paper import F_SCALE, SIGMA
@@ -707,7 +707,7 @@ def time_varying_document(
     theta,
     kind: str,
     margin: float = 0.1,
-    gain: GainAnalysis | None = None,
+    gain: GainAnalysis | str | None = None,
     sigma: float = SIGMA,
     f: Any = F_SCALE,
 ) -> dict:
@@ -723,9 +723,9 @@ def time_varying_document(
         The issuing kind's name (written into the document).
     margin : float, optional
         ΔC of Lemma 1.
-    gain : GainAnalysis, optional
+    gain : GainAnalysis or str, optional
         c(t), analysed once by :func:`ntc_design.certify.certify` (its expression is
-        used as it is, not parsed again).
+        used as it is, not parsed again), or its text (analysed here).
     sigma : float, optional
         The additive noise intensity σ_ji.
     f : float or array_like, optional
@@ -740,10 +740,16 @@ def time_varying_document(
     ------
     CertificationRefused
         The uniform bound cannot be certified (see :func:`certify_lambda2`).
+    InputError
+        A gain that is not an allowed expression of t, or a schedule.
     """
     bound = certify_lambda2(tv, margin, sigma)
     sigma_bar = noise_sigma_bar(f)
     kappa = mu2_threshold(bound.lambda2, bound.lambda1, sigma_bar, tv.n)
+    if isinstance(gain, str):
+        gain = analyse_gain(gain)
+    if gain is not None and gain.label is not None:
+        raise InputError("gain: a schedule's t₀ of μ₂ is not derived: give c(t) as one expression")
     t0, t0_how = mu2_t0(gain.expr, kappa) if gain is not None else (None, "no gain given")
     results = {
         "lambda2": bound.lambda2,

@@ -520,6 +520,8 @@ def run(
         fold = _InOrder()
         for i in range(n_chunks):
             fold.add(i, run_chunk(spec, chunk(i), tick))
+            if interrupt_seen():  # a Ctrl-C whose exception a finaliser swallowed
+                raise KeyboardInterrupt
         return fold.result()
     ctx = mp.get_context("fork")
     _SPEC, _COUNTER = spec, ctx.Value("q", 0)
