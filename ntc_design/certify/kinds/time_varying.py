@@ -117,6 +117,24 @@ class TimeVaryingKind(CertificateKind):
         return isinstance(design, TimeVaryingDesign)
 
     def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
+        """The certificate of a time-varying design (:func:`time_varying_document`).
+
+        Parameters
+        ----------
+        design : TimeVaryingDesign
+            The design.
+        options : IssueOptions, optional
+            Its ``gain`` (for t₀ of μ₂), ``noise_sigma`` and ``noise_f`` are used.
+
+        Returns
+        -------
+        dict
+
+        Raises
+        ------
+        InputError
+            The uniform bound cannot be certified, or the gain is a schedule.
+        """
         o = options or IssueOptions()
         return time_varying_document(
             design.topology, design.theta, self.name, design.margin, o.gain, o.noise_sigma,
