@@ -15,6 +15,7 @@ import typer
 
 from . import __version__
 from .errors import AssumptionWarning, InputError, interrupt_seen, note_interrupt, one_line
+from .outputs import exit_process
 
 if TYPE_CHECKING:
     from .design import ProtocolDesign, SwitchingDesign
@@ -1049,43 +1050,4 @@ def run() -> None:
         code: str | int | None = 0
     except SystemExit as exc:
         code = exc.code
-    _exit(code)
-
-
-def _exit(code: str | int | None) -> None:
-    import atexit
-    import os
-    import threading
-
-    mp = sys.modules.get("multiprocessing")
-    if (
-        not isinstance(code, int)
-        or sys.getprofile() is not None  # a profiler (python -m cProfile) writes at exit
-        or sys.gettrace() is not None  # so does a coverage tracer
-        or threading.active_count() > 1
-        or (mp is not None and mp.active_children())
-    ):
-        sys.exit(code)
-    try:
-        atexit._run_exitfuncs()
-    except KeyboardInterrupt:
-        code = 130
-    # what is still buffered is written now: a failure is the command's failure, as main()
-    # reports one during the command (1 for a closed pipe, 2 and one line otherwise)
-    for name in ("stdout", "stderr"):
-        stream = getattr(sys, name)
-        if stream is None:  # started with the stream closed
-            continue
-        try:
-            stream.flush()
-        except BrokenPipeError:
-            code = code or 1
-        except (OSError, ValueError) as exc:
-            code = code or 2
-            if name == "stdout" and sys.stderr is not None:
-                try:
-                    print(f"error: standard output: {exc.__class__.__name__}: {exc}",
-                          file=sys.stderr, flush=True)  # fmt: skip
-                except (OSError, ValueError):
-                    pass
-    os._exit(code)
+    exit_process(code)

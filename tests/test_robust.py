@@ -148,6 +148,27 @@ def test_only_antagonistic_weights_move_the_consensus_point(g1):
     assert features(des, coop)[1] < 1e-9  # cooperative changes alone keep x* = 1⊗θ
 
 
+def forged_valid(doc: dict, edit) -> bool:
+    """Whether ``doc`` still verifies after ``edit`` (its digests recomputed)."""
+    bad = copy.deepcopy(doc)
+    edit(bad)
+    for k in ("digest", "subject_digest", "versions"):
+        bad.pop(k, None)
+    return verify(finish(bad)).valid
+
+
+def raise_alpha_to(value: float):
+    """An edit stating decay rate ``value``, in the results and in the claims."""
+
+    def raise_alpha(d):
+        d["results"]["decay"]["lower"] = value
+        for c in d["claims"]:
+            if c["property"] == "robust_decay" and "alpha" in c:
+                c["alpha"] = d["results"]["decay"]["lower"]
+
+    return raise_alpha
+
+
 def test_the_certificate_verifies_and_forgeries_do_not(g1):
     _, rep = g1
     doc = json.loads(json.dumps(robust_certificate(rep)))
@@ -155,17 +176,9 @@ def test_the_certificate_verifies_and_forgeries_do_not(g1):
     assert ver.valid and ver.about.kind == "robust"
 
     def forged(edit):
-        bad = copy.deepcopy(doc)
-        edit(bad)
-        for k in ("digest", "subject_digest", "versions"):
-            bad.pop(k, None)
-        return verify(finish(bad)).valid
+        return forged_valid(doc, edit)
 
-    def raise_alpha(d):
-        d["results"]["decay"]["lower"] = rep.decay.upper * 1.01
-        for c in d["claims"]:
-            if c["property"] == "robust_decay" and "alpha" in c:
-                c["alpha"] = d["results"]["decay"]["lower"]
+    raise_alpha = raise_alpha_to(rep.decay.upper * 1.01)
 
     def raise_radius(d):
         d["subject"]["radius"] = 0.5

@@ -15,7 +15,7 @@ from ntc_design.certify.robust_scale import robust_scale
 from ntc_design.generate import random_network
 from ntc_design.paper import THETA
 
-from .test_robust import features, in_set, realised, sample
+from .test_robust import features, forged_valid, in_set, raise_alpha_to, realised, sample
 
 
 @pytest.fixture(scope="module")
@@ -80,11 +80,9 @@ def test_the_table_names_the_method_of_each_proven_end(mid):
 
 
 def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid):
-    import copy
     import json
 
     from ntc_design.certify import verify
-    from ntc_design.certify.format import finish
     from ntc_design.certify.kinds.robust import robust_certificate
 
     des, rep, _ = mid
@@ -95,17 +93,9 @@ def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid):
     assert "Riccati" in doc["solver"]["name"]
 
     def forged(edit):
-        bad = copy.deepcopy(doc)
-        edit(bad)
-        for k in ("digest", "subject_digest", "versions"):
-            bad.pop(k, None)
-        return verify(finish(bad)).valid
+        return forged_valid(doc, edit)
 
-    def raise_alpha(d):
-        d["results"]["decay"]["lower"] = rep.decay.upper * 1.01
-        for c in d["claims"]:
-            if c["property"] == "robust_decay" and "alpha" in c:
-                c["alpha"] = d["results"]["decay"]["lower"]
+    raise_alpha = raise_alpha_to(rep.decay.upper * 1.01)
 
     def raise_margin(d):
         d["results"]["margin"]["lower"] = 0.99

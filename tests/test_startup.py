@@ -260,20 +260,20 @@ def test_the_program_exits_with_its_code_and_every_line_written(tmp_path):
 def test_the_ordinary_exit_is_kept_while_a_thread_lives():
     import threading
 
-    from ntc_design import cli
+    from ntc_design.outputs import exit_process
 
     stop = threading.Event()
     t = threading.Thread(target=stop.wait)
     t.start()
     try:
         with pytest.raises(SystemExit) as exc:
-            cli._exit(3)
+            exit_process(3)
         assert exc.value.code == 3
     finally:
         stop.set()
         t.join()
     with pytest.raises(SystemExit) as exc:
-        cli._exit("a message")  # not a number: the interpreter's own handling
+        exit_process("a message")  # not a number: the interpreter's own handling
     assert exc.value.code == "a message"
 
 

@@ -479,32 +479,12 @@ class RobustKind(CertificateKind):
         if claim.kind is ClaimKind.PD:
             proof = PROVERS[ClaimKind.PD](claim, st.dense)
             return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail}", claim)
+        if claim.kind is ClaimKind.ROBUST_LMI:
+            return _prove_lmi(claim, st)
         mode = st.mode
-        if claim.kind is ClaimKind.ROBUST_LMI and mode.in_range and mode.top.nd > ROBUST_MAX_ND:
-            return _prove_riccati(claim, st)
         if not mode.in_range or mode.exact is None:
             return Check(claim.id, False, "L_B is out of range or too large for the exact test")
         ch = _exact_channels(mode.top)
-        if claim.kind is ClaimKind.ROBUST_LMI:
-            stated = st.margin if claim.prop is Property.ROBUST_MARGIN else st.alpha
-            if stated is None:  # a property needs its number: ρ_lower, or α_lower
-                what = "margin.lower" if claim.prop is Property.ROBUST_MARGIN else "decay.lower"
-                return Check(claim.id, False, f"results.{what} is missing", claim)
-            p = st.dense.p(claim.p or "")
-            if p is None:
-                return Check(claim.id, False, f"matrices.P.{claim.p} is out of range", claim)
-            tau = _floats(
-                st.multipliers.get(claim.p), len(ch), f"{src}: matrices.multipliers.{claim.p}"
-            )
-            radius = float(claim.radius or 0.0)
-            rad = st.radii if claim.prop is Property.ROBUST_DECAY else [radius] * len(ch)
-            proof = _pd(psi_exact(mode.exact, ch, p, tau, claim.alpha, rad))
-            return Check(
-                claim.id,
-                proof.holds,
-                f"{proof.method}: {proof.detail} (α = {claim.alpha!r}, ρ = {radius!r})",
-                claim,
-            )
         # the offset's premise (every L_B(A') invertible) is the decay claim, derived with it
         if st.gamma is None or st.y is None:
             return Check(claim.id, False, "results.offset.gamma or matrices.Y is missing", claim)
@@ -599,13 +579,16 @@ class RobustKind(CertificateKind):
             audit.recomputed(("margin", "upper"), rho, 0.0)
 
 
-def _prove_riccati(claim: Claim, st: _State) -> Check:
-    """A decay or margin claim past the LMI's size: P ≻ 0, τ > 0 and the Schur form
-    M(P, τ) ≻ 0 of :mod:`ntc_design.certify.robust_are`, by verified Cholesky with every
-    rounding bounded, L_B's own included."""
+def _prove_lmi(claim: Claim, st: _State) -> Check:
+    """A decay or margin claim: Ψ(P, τ) ≻ 0 exactly up to the LMI's size; past it, P ≻ 0,
+    τ > 0 and the Schur form M(P, τ) ≻ 0 of :mod:`ntc_design.certify.robust_are` by
+    verified Cholesky with every rounding bounded, L_B's own included."""
     mode, src = st.mode, st.dense.source
+    small = mode.top.nd <= ROBUST_MAX_ND
+    if not mode.in_range or (small and mode.exact is None):
+        return Check(claim.id, False, "L_B is out of range or too large for the exact test")
     stated = st.margin if claim.prop is Property.ROBUST_MARGIN else st.alpha
-    if stated is None:
+    if stated is None:  # a property needs its number: ρ_lower, or α_lower
         what = "margin.lower" if claim.prop is Property.ROBUST_MARGIN else "decay.lower"
         return Check(claim.id, False, f"results.{what} is missing", claim)
     p = st.dense.p(claim.p or "")
@@ -615,15 +598,17 @@ def _prove_riccati(claim: Claim, st: _State) -> Check:
     tau = _floats(st.multipliers.get(claim.p), ed.m, f"{src}: matrices.multipliers.{claim.p}")
     radius = float(claim.radius or 0.0)
     rad = st.radii if claim.prop is Property.ROBUST_DECAY else np.full(ed.m, radius)
-    search = RiccatiSearch(mode.lap, mode.err, ed, mode.top.dim)
-    ok = search.proven(p, tau, claim.alpha, np.asarray(rad, dtype=float))  # p symmetric too
-    return Check(
-        claim.id,
-        ok,
-        f"verified-float: P ≻ 0, τ > 0 and P S + SᵀP − Q(τ) − P R(τ) P ≻ 0 "
-        f"{'hold' if ok else 'not proven'} (α = {claim.alpha!r}, ρ = {radius!r})",
-        claim,
-    )
+    if small:
+        assert mode.exact is not None  # checked above
+        proof = _pd(psi_exact(mode.exact, _exact_channels(mode.top), p, tau, claim.alpha, rad))
+        ok, how = proof.holds, f"{proof.method}: {proof.detail}"
+    else:
+        search = RiccatiSearch(mode.lap, mode.err, ed, mode.top.dim)
+        ok = search.proven(p, tau, claim.alpha, np.asarray(rad, dtype=float))  # P symmetric too
+        how = "verified-float: P ≻ 0, τ > 0 and P S + SᵀP − Q(τ) − P R(τ) P ≻ 0 " + (
+            "hold" if ok else "not proven"
+        )
+    return Check(claim.id, ok, f"{how} (α = {claim.alpha!r}, ρ = {radius!r})", claim)
 
 
 def _input_exact(mode: DenseMode) -> Dyadic:

@@ -19,17 +19,9 @@ from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..fields import matrix, need, number, vector
 from ..format import document_hash
+from ..mu2 import mu2_t0, mu2_threshold, noise_sigma_bar
 from ..theorems import TheoremVerdict, time_varying_verdicts
-from ..time_varying import (
-    RESULTS_KEY,
-    Enclosures,
-    LeafBound,
-    domain_of,
-    mu2_t0,
-    mu2_threshold,
-    noise_sigma_bar,
-    time_varying_document,
-)
+from ..time_varying import RESULTS_KEY, Enclosures, LeafBound, domain_of, time_varying_document
 from .base import (
     CertificateKind,
     IssueOptions,
