@@ -1,5 +1,6 @@
 """Run the ``ntc`` CLI in-process and capture its exit code and output."""
 
+import re
 import sys
 
 import pytest
@@ -36,3 +37,13 @@ def assert_input_error(args, capsys, monkeypatch, *needles):
 
 
 __all__ = ["assert_input_error", "pytest", "run_cli"]
+
+
+# a slow machine makes a command print its heartbeat (reports.terminal.Progress) on stderr
+_PROGRESS = re.compile(r"^ntc \w+: \[\d+ s\] ")
+
+
+def without_progress(err: str) -> str:
+    """stderr without the heartbeat lines a run prints every 5 s (how many depends on the
+    machine's speed, not on the command's outcome)."""
+    return "\n".join(ln for ln in err.splitlines() if not _PROGRESS.match(ln))
