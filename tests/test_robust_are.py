@@ -30,12 +30,16 @@ def mid():
 def test_the_riccati_ends_are_sound_and_within_the_targets(mid):
     des, rep, sparse = mid
     assert ROBUST_MAX_ND < des.topology.nd <= RICCATI_MAX_ND
-    assert rep.proofs["method"] == "riccati" and rep.proofs["offset"] is None
+    assert rep.proofs["method"] == "riccati" and rep.proofs["offset"] is not None
     # tighter than block dominance, and within 2× of what a realisation attains
     assert rep.decay.lower > 1.2 * sparse.decay.lower
     assert rep.decay.upper / rep.decay.lower < 1.5
     assert rep.margin.lower > 4 * sparse.margin.lower
     assert (rep.margin.upper or 1.0) / rep.margin.lower < 2.0
+    # the reduced S-procedure: 5× tighter than the comparison bound, within 1.5× (target)
+    assert rep.offset.upper < 0.2 * sparse.offset.upper
+    assert rep.offset.upper / rep.offset.lower < 1.5
+    assert "eliminated" in rep.offset.method
     assert "Riccati" in rep.decay.method and "Riccati" in rep.margin.method
     rng = np.random.default_rng(np.random.SeedSequence(42))
     for k in range(40):
@@ -74,7 +78,7 @@ def test_a_proof_is_refused_when_any_premise_fails(mid):
 def test_the_table_names_the_method_of_each_proven_end(mid):
     _, rep, sparse = mid
     said = [r[-1].text for r in rep.table().rows]
-    assert "Riccati search" in said[0] and "comparison bound" in said[1]
+    assert "Riccati search" in said[0] and "S-procedure, reduced" in said[1]
     assert "Riccati search at α = 0" in said[2]
     assert "block dominance" in [r[-1].text for r in sparse.table().rows][0]
 
@@ -88,7 +92,10 @@ def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid):
     des, rep, _ = mid
     doc = json.loads(json.dumps(robust_certificate(rep)))
     ver = verify(doc)
-    assert ver.valid and doc["certifies"] == ["robust_margin", "robust_decay"]
+    assert ver.valid
+    assert doc["certifies"] == ["robust_margin", "robust_decay", "robust_offset"]
+    assert "Y" not in doc["matrices"]  # a witness the verifier rebuilds
+    assert doc["results"]["offset"]["upper"] == pytest.approx(rep.offset.upper, rel=1e-15)
     assert doc["results"]["decay"]["lower"] == rep.proofs["alpha"] <= rep.decay.lower
     assert "Riccati" in doc["solver"]["name"]
 
@@ -110,5 +117,21 @@ def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid):
     def bend_p(d):
         d["matrices"]["P"]["robust_decay"][0][1] *= 1.0 + 1e-6
 
-    for edit in (raise_alpha, raise_margin, zero_tau, bend_p):
+    def lower_gamma(d):  # below what a realisation attains: it must not verify
+        d["results"]["offset"]["gamma"] = 0.99 * rep.offset.lower**2
+        d["results"]["offset"]["upper"] = d["results"]["offset"]["gamma"] ** 0.5
+
+    def zero_lambda(d):
+        d["matrices"]["multipliers"]["robust_offset"] = [0.0] * len(
+            d["matrices"]["multipliers"]["robust_offset"]
+        )
+
+    def widen_radius_of_offset(d):  # the offset claim's radius is the subject's
+        for c in d["claims"]:
+            if c["property"] == "robust_offset":
+                c["radius"] = 0.2
+
+    edits = (raise_alpha, raise_margin, zero_tau, bend_p, lower_gamma, zero_lambda,
+             widen_radius_of_offset)  # fmt: skip
+    for edit in edits:
         assert not forged(edit), edit.__name__

@@ -37,6 +37,10 @@ pivot columns of W (an exact basis of its range). Then
   ``Γ = γ·e eᵀ − zzᵀ-form − Σ λ_e g_e + sym(Aᵀ Y) ≻ 0`` (Finsler's lemma for the equation,
   λ_e >= 0) proves ``‖z‖² <= γ``, given that every L_B(A') is invertible (the decay
   bracket's certified end at the same ρ).
+
+Past ROBUST_MAX_ND the sparse bounds of :mod:`.robust_scale` are tightened up to
+RICCATI_MAX_ND: decay and margin by the Riccati search (:mod:`.robust_are`), the offset by
+the same S-procedure with the equation eliminated (:mod:`.robust_offset`).
 """
 
 from __future__ import annotations
@@ -536,6 +540,7 @@ def _proven_by(method: str) -> str:
         ("comparison", "comparison bound"),
         ("dominance", "block dominance"),
         ("Finsler", "S-procedure"),
+        ("eliminated", "S-procedure, reduced"),
     ):
         if key in method:
             return name
@@ -724,6 +729,15 @@ def _riccati_brackets(
     if off.lower is None or wo.value > off.lower:
         off = Bracket(wo.value, off.upper, wo, "upper", off.method.split("; lower")[0]
                       + "; lower: a realisation by projected gradient")  # fmt: skip
+    # the S-procedure offset, when every L_B(A') is proven invertible (decay, any method)
+    got_o = offset_search(des)(rad) if dec.lower is not None else None
+    if got_o is not None and proofs["decay"] is not None:  # the certificate needs both
+        proofs["offset"] = (got_o[0], got_o[1], None)
+    if got_o is not None and (off.upper is None or math.sqrt(got_o[0]) < off.upper):
+        off = Bracket(off.lower, math.sqrt(got_o[0]), off.realisation, "upper",
+                      "S-procedure on the equilibrium equation with the equation eliminated "
+                      "(one multiplier per edge, CVXOPT; proven by verified Cholesky); "
+                      "lower: a realisation by projected gradient")  # fmt: skip
     mar = rep.margin
     if margin:
         destab = _destabilising(p, rmax, starts, seed + 2)
@@ -740,6 +754,28 @@ def _riccati_brackets(
         des, rep.radius, rep.radii, rep.nominal_decay, dec, off, mar, proofs,
         time.perf_counter() - t0,
     )  # fmt: skip
+
+
+def offset_search(des: ProtocolDesign):
+    """The offset search of :mod:`.robust_offset` for a design (L_B and u with their
+    rounding bounds).
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The nominal design.
+
+    Returns
+    -------
+    ntc_design.certify.robust_offset.OffsetSearch
+    """
+    from .dense import lap_b_float
+    from .robust_offset import OffsetSearch, input_float
+
+    top = des.topology
+    lap = lap_b_float(top, des.B, des.delta)
+    return OffsetSearch(*lap, *input_float(top, des.B, des.delta, des.theta),
+                        uncertain_edges(top), top.dim)  # fmt: skip
 
 
 def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisation | None:
@@ -779,6 +815,7 @@ __all__ = [
     "UncertainEdges",
     "abscissa",
     "check_radius",
+    "offset_search",
     "pivot_columns",
     "realised_topology",
     "robust",

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..rigorous.exact import verified_float_pd
+from ..rigorous.exact import gamma, verified_float_pd, within_span
 
 if TYPE_CHECKING:
     from .robust import UncertainEdges
@@ -43,22 +43,47 @@ EPS = 1e-4  # Q + ε·tr(Q)/n·I in the equation: a margin that survives the rou
 _U = 2.0**-53
 
 
-def _gamma(k: int) -> float:
-    return k * _U / (1.0 - k * _U)
+def edge_sum(
+    n: int,
+    d: int,
+    ends: tuple[np.ndarray, np.ndarray, np.ndarray],
+    w: np.ndarray,
+    coef: np.ndarray,
+    absolute: bool = False,
+) -> np.ndarray:
+    """Σ_e coef_e D_e W_e D_eᵀ (D_e = E_i − s_e E_j); with ``absolute``, the same sum of
+    |coef_e|·|D_e| |W_e| |D_e|ᵀ, the magnitude its rounding bound needs.
 
+    Parameters
+    ----------
+    n : int
+        Nd.
+    d : int
+        d.
+    ends : (numpy.ndarray, numpy.ndarray, numpy.ndarray)
+        Row offsets i·d and j·d of each edge's ends, and its sign s_e.
+    w : numpy.ndarray
+        W_e, (m, d, d).
+    coef : numpy.ndarray
+        The coefficients.
+    absolute : bool, optional
+        The magnitude instead.
 
-#: Every nonzero number entering M is within [2⁻²⁰⁰, 2²⁰⁰] in magnitude: a product of four
-#: stays normal and a sum of Nd·m of them finite, so γ_k bounds every rounding error.
-_SPAN = 2.0**200
-
-
-def _in_range(*arrays: np.ndarray) -> bool:
-    for a in arrays:
-        v = np.abs(np.asarray(a, dtype=float))
-        v = v[v != 0]
-        if v.size and not (np.all(np.isfinite(v)) and v.min() >= 1 / _SPAN and v.max() <= _SPAN):
-            return False
-    return True
+    Returns
+    -------
+    numpy.ndarray
+    """
+    i_, j_, s_ = ends
+    q = np.zeros((n, n))
+    for e in range(w.shape[0]):
+        c = abs(coef[e]) * np.abs(w[e]) if absolute else coef[e] * w[e]
+        i, j = i_[e], j_[e]
+        off = c if absolute else -s_[e] * c
+        q[i : i + d, i : i + d] += c
+        q[j : j + d, j : j + d] += c
+        q[i : i + d, j : j + d] += off
+        q[j : j + d, i : i + d] += off
+    return q
 
 
 class RiccatiSearch:
@@ -86,19 +111,9 @@ class RiccatiSearch:
         self.wabs = np.abs(edges.w)
 
     def _q(self, tau: np.ndarray, rad2: np.ndarray, absolute: bool = False) -> np.ndarray:
-        """Σ τ_e ρ_e² D_e W_e D_eᵀ; with ``absolute``, Σ τ_e ρ_e² |D_e W_e D_eᵀ| (for the
-        error bound)."""
-        n, d = self.n, self.d
-        q = np.zeros((n, n))
-        for e in range(self.m):
-            c = tau[e] * rad2[e] * (self.wabs[e] if absolute else self.w[e])
-            i, j = self.i[e], self.j[e]
-            off = c if absolute else -self.s[e] * c
-            q[i : i + d, i : i + d] += c
-            q[j : j + d, j : j + d] += c
-            q[i : i + d, j : j + d] += off
-            q[j : j + d, i : i + d] += off
-        return q
+        """Σ τ_e ρ_e² D_e W_e D_eᵀ; with ``absolute``, its magnitude (for the error bound)."""
+        ends = (self.i, self.j, self.s)
+        return edge_sum(self.n, self.d, ends, self.w, tau * rad2, absolute)
 
     def _r(self, tau: np.ndarray, w: np.ndarray) -> np.ndarray:
         """Σ E_i W_e E_iᵀ / τ_e (block diagonal), with W replaced by ``w``."""
@@ -154,7 +169,7 @@ class RiccatiSearch:
         n = self.n
         if not (np.all(tau > 0) and np.all(np.isfinite(tau)) and np.array_equal(pm, pm.T)):
             return False
-        if not _in_range(pm, tau, rad, np.array([alpha]), self.w, self.lap, self.lap_err):
+        if not within_span(pm, tau, rad, np.array([alpha]), self.w, self.lap, self.lap_err):
             return False  # the relative rounding bounds below assume no underflow/overflow
         if not verified_float_pd(pm, np.zeros_like(pm)).holds:
             return False
@@ -165,14 +180,14 @@ class RiccatiSearch:
         t1 = ps + ps.T
         e_l = ap @ self.lap_err  # L_B's own rounding (the exact L_B is the subject)
         x = ap @ ash  # not symmetric: the error of ps + psᵀ is bounded by x + xᵀ
-        e_t1 = _gamma(n + 2) * (x + x.T) + e_l + e_l.T + _U * np.abs(t1)
+        e_t1 = gamma(n + 2) * (x + x.T) + e_l + e_l.T + _U * np.abs(t1)
         rad2 = rad**2  # its rounding is inside e_q's γ
         q = self._q(tau, rad2)
-        e_q = _gamma(self.m + 6) * self._q(tau, rad2, absolute=True)
+        e_q = gamma(self.m + 6) * self._q(tau, rad2, absolute=True)
         r = self._r(tau, self.w)
-        e_r = _gamma(self.m + 2) * self._r(tau, self.wabs)
+        e_r = gamma(self.m + 2) * self._r(tau, self.wabs)
         prp = pm @ r @ pm
-        e_prp = _gamma(2 * n + 2) * (ap @ np.abs(r) @ ap) + ap @ e_r @ ap
+        e_prp = gamma(2 * n + 2) * (ap @ np.abs(r) @ ap) + ap @ e_r @ ap
         m = t1 - q - prp
         err = e_t1 + e_q + e_prp + 2.0 * _U * (np.abs(t1) + np.abs(q) + np.abs(prp))
         return bool(verified_float_pd(m, err).holds)
@@ -257,4 +272,4 @@ class RiccatiSearch:
         return (pm, tau) if score > 0 and self.proven(pm, tau, alpha, rad) else None
 
 
-__all__ = ["RICCATI_MAX_ND", "RiccatiSearch"]
+__all__ = ["RICCATI_MAX_ND", "RiccatiSearch", "edge_sum"]

@@ -48,6 +48,32 @@ def gamma(k: int) -> float:
     return k * U / (1 - k * U)
 
 
+#: Inputs of a verified-float bound are refused outside [2⁻²⁰⁰, 2²⁰⁰] in magnitude: then
+#: a product of four stays normal and a sum of many finite, so γ_k bounds every rounding.
+SPAN = 2.0**200
+
+
+def within_span(*arrays: np.ndarray) -> bool:
+    """Whether every nonzero entry is finite and within [1/SPAN, SPAN] in magnitude (the
+    premise of the relative rounding bounds: no underflow or overflow on the way).
+
+    Parameters
+    ----------
+    *arrays : numpy.ndarray
+        The inputs.
+
+    Returns
+    -------
+    bool
+    """
+    for a in arrays:
+        v = np.abs(np.asarray(a, dtype=float))
+        v = v[v != 0]
+        if v.size and not (np.all(np.isfinite(v)) and v.min() >= 1 / SPAN and v.max() <= SPAN):
+            return False
+    return True
+
+
 @dataclass(frozen=True)
 class Dyadic:
     """An exact matrix ``num / 2**exp`` with ``num`` an object array of Python ints."""
@@ -295,6 +321,7 @@ def verified_float_pd(m: np.ndarray, err: np.ndarray) -> PDProof:
 
 
 __all__ = [
+    "SPAN",
     "Dyadic",
     "PDProof",
     "exact_affordable",
@@ -303,4 +330,5 @@ __all__ = [
     "gamma",
     "rump_shift_value",
     "verified_float_pd",
+    "within_span",
 ]

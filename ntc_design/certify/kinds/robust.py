@@ -35,6 +35,7 @@ from ..robust import (
     uncertain_edges,
 )
 from ..robust_are import RICCATI_MAX_ND, RiccatiSearch
+from ..robust_offset import OffsetSearch, input_float
 from ..theorems import TheoremVerdict
 from .base import (
     CertificateKind,
@@ -126,7 +127,8 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
         gam, lam, y = pr["offset"]
         props.append(Property.ROBUST_OFFSET)
         mult["robust_offset"] = lam.tolist()
-        mats["Y"] = y.tolist()
+        if y is not None:  # past the LMI's size Y is a witness ntc verify rebuilds
+            mats["Y"] = y.tolist()
         results["offset"] = {"gamma": gam, "upper": math.sqrt(gam)}
         if rep.offset.realisation is not None:
             results["offset"]["lower"] = rep.offset.lower
@@ -482,6 +484,8 @@ class RobustKind(CertificateKind):
         if claim.kind is ClaimKind.ROBUST_LMI:
             return _prove_lmi(claim, st)
         mode = st.mode
+        if mode.in_range and mode.top.nd > ROBUST_MAX_ND:
+            return _prove_offset_float(claim, st)
         if not mode.in_range or mode.exact is None:
             return Check(claim.id, False, "L_B is out of range or too large for the exact test")
         ch = _exact_channels(mode.top)
@@ -609,6 +613,28 @@ def _prove_lmi(claim: Claim, st: _State) -> Check:
             "hold" if ok else "not proven"
         )
     return Check(claim.id, ok, f"{how} (α = {claim.alpha!r}, ρ = {radius!r})", claim)
+
+
+def _prove_offset_float(claim: Claim, st: _State) -> Check:
+    """An offset claim past the LMI's size: G_e G_eᵀ ≻ W_e and Γ(γ, λ) ≻ 0 with the
+    witnesses G and Y rebuilt from the subject (:mod:`ntc_design.certify.robust_offset`),
+    every rounding bounded; the premise (every L_B(A') invertible) is the decay claim."""
+    mode, src = st.mode, st.dense.source
+    if st.gamma is None:
+        return Check(claim.id, False, "results.offset.gamma is missing", claim)
+    ed = uncertain_edges(mode.top)
+    lam = _floats(
+        st.multipliers.get("robust_offset"), ed.m, f"{src}: matrices.multipliers.robust_offset"
+    )
+    search = OffsetSearch(
+        mode.lap, mode.err, *input_float(mode.top, mode.b, mode.delta, mode.theta), ed,
+        mode.top.dim,
+    )  # fmt: skip
+    ok = search.proven(st.gamma, lam, np.asarray(st.radii, dtype=float))
+    how = "verified-float: G_e G_eᵀ ≻ W_e and Γ(γ, λ) ≻ 0 with Y rebuilt " + (
+        "hold" if ok else "not proven"
+    )
+    return Check(claim.id, ok, f"{how} (ρ = {st.radius!r})", claim)
 
 
 def _input_exact(mode: DenseMode) -> Dyadic:
