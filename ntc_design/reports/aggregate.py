@@ -9,13 +9,14 @@ their square."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from ..certify import KINDS, certify
+from ..certify import KINDS, CertifyResult, certify
 from ..certify.format import package_versions
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
@@ -23,8 +24,9 @@ from ..model import Topology
 from ..rows import fmt
 from ..simulate.result import MeanSquareBand
 from ..thresholds import strong_components
+from .figlist import Drawn, FigureSpec, render_figures
 from .figures import states_figure
-from .html import Figure, RunSection, Table, figure_block, html_table
+from .html import RunSection, Table, html_table
 from .parts import (
     certificate_tables,
     data_links,
@@ -34,7 +36,7 @@ from .parts import (
     window_warning,
 )
 from .rundata import RunData
-from .style import BLUE, GREY, ONE_COLUMN, RED, TWO_COLUMN, paper_style, save
+from .style import BLUE, GREY, ONE_COLUMN, RED, TWO_COLUMN, paper_style
 
 #: Above this many agents a run's report shows quantiles over the agents instead of a
 #: curve, a table row and a legend entry per agent.
@@ -304,6 +306,148 @@ def worst_table(run: RunData, ms: np.ndarray, kind: str) -> Table:
     return Table(("agent", f"{kind} E‖x_i − θ‖² at t = {run.t[-1]:g}", "at t = 0"), rows)
 
 
+@dataclass(frozen=True)
+class AggregateFacts:
+    """What a large run's section shows, computed before anything is drawn."""
+
+    run: RunData
+    res: CertifyResult
+    cert_tab: Table
+    checks: Table
+    cert: dict
+    modes: dict  # name -> ProtocolDesign
+    ms: np.ndarray  # per-agent curves (exact when the run has them)
+    kind: str  # "exact" or "MC"
+    total: MeanSquareBand
+    fitted: float | None
+
+    @property
+    def first(self) -> ProtocolDesign:
+        """The first mode's design (the topology pictures are of it)."""
+        return next(iter(self.modes.values()))
+
+
+def aggregate_facts(run: RunData, base: Path) -> AggregateFacts:
+    """Certify a large run (writing certificate.json beside it) and reduce its curves to
+    quantiles over the agents and a total with its band.
+
+    Parameters
+    ----------
+    run : RunData
+        The run.
+    base : pathlib.Path
+        The folder links are relative to.
+
+    Returns
+    -------
+    AggregateFacts
+
+    Raises
+    ------
+    InputError
+        A malformed run folder or certificate input.
+    """
+    p = run.summary["parameters"]
+    top = run.topology()
+    res = certify(top, p["theta"], p["margin"], run.gain)
+    cert_tab, checks, cert = certificate_tables(res, run.path / "certificate.json", base)
+    ms, kind, total = _curves(run)
+    modes = (
+        dict(res.design.modes)
+        if isinstance(res.design, SwitchingDesign)
+        else {getattr(top, "name", None) or "topology": res.design}
+    )
+    assert all(isinstance(m, ProtocolDesign) for m in modes.values())
+    fitted = _total_fit(run.t, total.mean[:, 0])
+    return AggregateFacts(run, res, cert_tab, checks, cert, modes, ms, kind, total, fitted)
+
+
+# ---------------------------------------------------------- the large run's figure list
+
+
+def _degrees(f: AggregateFacts, gid: str | None) -> list[Drawn]:
+    return [Drawn("degrees", "degrees", "In- and out-degree distributions.",
+                  degree_figure(f.first.topology))]  # fmt: skip
+
+
+def _sparsity(f: AggregateFacts, gid: str | None) -> list[Drawn]:
+    return [
+        Drawn(
+            "sparsity",
+            "sparsity",
+            "Non-zero blocks of L_B, agents in the order of the strongly connected components "
+            "(sources first: block lower triangular); darker is denser.",
+            sparsity_figure(f.first.topology, f.first.grounded_laplacian_sparse()),
+        )
+    ]
+
+
+def _spectrum(f: AggregateFacts, gid: str | None) -> list[Drawn]:
+    picture = certificate_picture(f.res.certificate, f.first)
+    if picture is None:
+        return []
+    return [
+        Drawn(
+            "spectrum",
+            "spectrum",
+            "What the certificate relies on. Component-wise certificate: the certified "
+            "per-agent bounds μ_i (λ_min of agent i's symmetric diagonal block, lowered "
+            "for rounding), sorted, against the fraction of agents; the proof needs every "
+            "μ_i > 0, and the red dashed line marks the smallest. Otherwise the "
+            "eigenvalues of −L_B, which must lie left of the red dashed line Re λ = 0.",
+            picture,
+        )
+    ]
+
+
+def _quantiles(f: AggregateFacts, gid: str | None) -> list[Drawn]:
+    return [
+        Drawn(
+            "ms_quantiles",
+            "ms_quantiles",
+            f"Left: E‖x_i − θ‖² ({f.kind}) over the {len(f.run.labels)} agents: median, "
+            f"10–90 % band, maximum, and the {WORST} agents with the largest final error. "
+            "Right: the total with its Monte Carlo band (per-agent half-widths added: "
+            "conservative).",
+            quantile_figure(f.run.t, f.ms, f.run.labels, f.total),
+        )
+    ]
+
+
+def _worst_paths(f: AggregateFacts, gid: str | None) -> list[Drawn]:
+    run = f.run
+    if not run.npz["paths"].size:
+        return []
+    lab = [run.labels[i] for i in run.path_agents]
+    return [
+        Drawn(
+            "states",
+            "states",
+            f"One sample path, per dimension, θ dashed, of the {len(lab)} agents with the "
+            f"largest final error ({', '.join(lab)}): on a network of {len(run.labels)} "
+            "agents the run keeps these agents' paths (paths.npz), stored at the "
+            f"statistics' save times ({run.npz['t'].size} points).",
+            states_figure(run.npz["t"], run.npz["paths"][0], run.theta, lab),
+        )
+    ]
+
+
+def _histogram(f: AggregateFacts, gid: str | None) -> list[Drawn]:
+    return [Drawn("final_hist", "final_hist", f"E‖x_i(T) − θ‖² over the agents ({f.kind}).",
+                  final_histogram(f.ms[-1]))]  # fmt: skip
+
+
+#: The large run's figures, in order: one function each, drawing from AggregateFacts.
+AGGREGATE_FIGURES = (
+    FigureSpec("topology", ONE_COLUMN, _degrees, interactive=False),
+    FigureSpec("topology", ONE_COLUMN, _sparsity, interactive=False),
+    FigureSpec("topology", ONE_COLUMN, _spectrum, interactive=False),
+    FigureSpec("ms", TWO_COLUMN, _quantiles, interactive=False),
+    FigureSpec("paths", TWO_COLUMN, _worst_paths, interactive=False),
+    FigureSpec("paths", ONE_COLUMN, _histogram, interactive=False),
+)
+
+
 def aggregate_section(
     run: RunData,
     figdir: Path,
@@ -313,7 +457,8 @@ def aggregate_section(
     rerun: str | None = None,
 ) -> tuple[RunSection, dict]:
     """A large run's section of a report: quantiles over the agents instead of a curve
-    per agent; everything computed first, then drawn.
+    per agent; :func:`aggregate_facts` first, then the tables and
+    :data:`AGGREGATE_FIGURES`.
 
     Parameters
     ----------
@@ -341,76 +486,33 @@ def aggregate_section(
         A malformed run folder or certificate input.
     """
     base = base or run.path
+    f = aggregate_facts(run, base)
+    figs = render_figures(AGGREGATE_FIGURES, f, figdir, key, base)
     p = run.summary["parameters"]
-    top = run.topology()
-    res = certify(top, p["theta"], p["margin"], run.gain)
-    cert_tab, checks, cert = certificate_tables(res, run.path / "certificate.json", base)
-    ms, kind, total = _curves(run)
-    modes = (
-        res.design.modes
-        if isinstance(res.design, SwitchingDesign)
-        else {getattr(top, "name", None) or "topology": res.design}
-    )
-    first = next(iter(modes.values()))
-    assert isinstance(first, ProtocolDesign)
-
-    def fig(f, stem: str, caption: str, width: float) -> Figure:
-        return figure_block(
-            save(f, figdir / f"{key}_{stem}"), f"{key}-fig-{stem}", caption, base, width
-        )
-
-    figs = _aggregate_figures(fig, first, res.certificate)
-    ms_fig = fig(
-        quantile_figure(run.t, ms, run.labels, total),
-        "ms_quantiles",
-        f"Left: E‖x_i − θ‖² ({kind}) over the {top.n} agents: median, 10–90 % band, maximum, "
-        f"and the {WORST} agents with the largest final error. Right: the total with its "
-        "Monte Carlo band (per-agent half-widths added: conservative).",
-        TWO_COLUMN,
-    )
-    hist = fig(
-        final_histogram(ms[-1]),
-        "final_hist",
-        f"E‖x_i(T) − θ‖² over the agents ({kind}).",
-        ONE_COLUMN,
-    )
-    fitted = _total_fit(run.t, total.mean[:, 0])
-    path_figs = [hist]
-    if run.npz["paths"].size:
-        agents = run.path_agents
-        lab = [run.labels[i] for i in agents]
-        path_figs.insert(
-            0,
-            fig(
-                states_figure(run.npz["t"], run.npz["paths"][0], run.theta, lab),
-                "states",
-                f"One sample path, per dimension, θ dashed, of the {len(lab)} agents with the "
-                f"largest final error ({', '.join(lab)}): on a network of {top.n} agents "
-                "the run keeps these agents' paths (paths.npz), stored at the statistics' "
-                f"save times ({run.npz['t'].size} points).",
-                TWO_COLUMN,
-            ),
-        )
+    top = f.first.topology
+    t_end = float(run.t[-1])
     section = RunSection(
         key=key,
         title=title,
         rerun=rerun or run.rerun,
-        designs=[(name, html_table(d.table())) for name, d in modes.items()],
+        designs=[(name, html_table(d.table())) for name, d in f.modes.items()],
         coupling=None,
-        certificate=cert_tab,
-        checks=checks,
-        gain=_gain_table(res),
+        certificate=f.cert_tab,
+        checks=f.checks,
+        gain=_gain_table(f.res),
         gain_figure=None,
-        theorems=html_table(theorem_table(res.theorems)),
-        ms_figure=ms_fig,
+        theorems=html_table(theorem_table(f.res.theorems)),
+        ms_figure=figs["ms"][0],
         convergence_note=(
-            f"The total error's decay exponent, fitted over t ∈ [T/10, T]: {fmt(fitted, 3)}."
-            + window_warning(float(run.t[-1]) / 10, float(run.t[-1]))
+            f"The total error's decay exponent, fitted over t ∈ [T/10, T]: {fmt(f.fitted, 3)}."
+            + window_warning(t_end / 10, t_end)
         ),
-        convergence=Table(("quantity", "value"), [("fitted p of Σ_i E‖x_i − θ‖²", fmt(fitted, 3))]),
-        topology_figures=figs,
-        path_figures=path_figs,
-        final=worst_table(run, ms, kind),
+        convergence=Table(
+            ("quantity", "value"), [("fitted p of Σ_i E‖x_i − θ‖²", fmt(f.fitted, 3))]
+        ),
+        topology_figures=figs["topology"],
+        path_figures=figs["paths"],
+        final=worst_table(run, f.ms, f.kind),
         spread="",
         data_links=data_links(run, figdir, key, base),
         parameters=parameter_table(p, top.n, top.dim, run.summary.get("run", {})),
@@ -418,45 +520,11 @@ def aggregate_section(
         interactive_agents=[],
     )
     facts = {
-        "certificate": cert,
-        "theorems": [t.to_dict() for t in res.theorems],
-        "total_final": float(total.mean[-1, 0]),
+        "certificate": f.cert,
+        "theorems": [t.to_dict() for t in f.res.theorems],
+        "total_final": float(f.total.mean[-1, 0]),
     }
     return section, facts
-
-
-def _aggregate_figures(fig, first: ProtocolDesign, certificate: dict) -> list:
-    """The topology pictures that scale, and what the certificate relies on."""
-    figs = [
-        fig(
-            degree_figure(first.topology),
-            "degrees",
-            "In- and out-degree distributions.",
-            ONE_COLUMN,
-        ),
-        fig(
-            sparsity_figure(first.topology, first.grounded_laplacian_sparse()),
-            "sparsity",
-            "Non-zero blocks of L_B, agents in the order of the strongly connected components "
-            "(sources first: block lower triangular); darker is denser.",
-            ONE_COLUMN,
-        ),
-    ]
-    picture = certificate_picture(certificate, first)
-    if picture is not None:
-        figs.append(
-            fig(
-                picture,
-                "spectrum",
-                "What the certificate relies on. Component-wise certificate: the certified "
-                "per-agent bounds μ_i (λ_min of agent i's symmetric diagonal block, lowered "
-                "for rounding), sorted, against the fraction of agents; the proof needs every "
-                "μ_i > 0, and the red dashed line marks the smallest. Otherwise the "
-                "eigenvalues of −L_B, which must lie left of the red dashed line Re λ = 0.",
-                ONE_COLUMN,
-            )
-        )
-    return figs
 
 
 def _curves(run: RunData) -> tuple[np.ndarray, str, MeanSquareBand]:
@@ -483,6 +551,9 @@ def _total_fit(t: np.ndarray, y: np.ndarray) -> float | None:
 
 __all__ = [
     "AGGREGATE_ABOVE",
+    "AGGREGATE_FIGURES",
+    "AggregateFacts",
+    "aggregate_facts",
     "aggregate_section",
     "certificate_picture",
     "degree_figure",

@@ -32,11 +32,10 @@ from ..sweep.robust import study_sentence
 from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
 from .aggregate import AGGREGATE_ABOVE, aggregate_section
+from .figlist import Drawn, FigureSpec, first, render_figures
 from .html import (
-    Figure,
     RunSection,
     Table,
-    figure_block,
     html_table,
     render,
     write_html,
@@ -151,63 +150,101 @@ def _average_rate(des: ProtocolDesign | SwitchingDesign, top) -> float:
 # --------------------------------------------------------------------------- one run
 
 
-def _time_varying(run: RunData, p: dict, figdir: Path) -> tuple:
-    """For a run over weights given as expressions of t: its time-varying certificate
-    (:mod:`ntc_design.certify.time_varying`) and the figures of
-    :mod:`ntc_design.reports.timevarying`; (None, []) otherwise."""
+@dataclass(frozen=True)
+class TimeVaryingFacts:
+    """A run over weights given as expressions of t: its time-varying certificate
+    (:mod:`ntc_design.certify.time_varying`) and what its figures show."""
+
+    res: CertifyResult
+    design: TimeVaryingDesign
+    lambda2: float
+    domain: str
+    intervals: list
+
+
+def _time_varying(run: RunData, p: dict) -> TimeVaryingFacts | None:
     tvp = p.get("time_varying")
     if not isinstance(tvp, dict) or not isinstance(tvp.get("topology"), dict):
-        return None, []
-
+        return None
     tv = from_document(tvp["topology"], f"{run.path}/summary.json: time_varying")
     noise = noise_from_document(p.get("noise"))  # the simulation's own reading and defaults
     f = noise.f if isinstance(noise.f, (int, float, np.ndarray)) else F_SCALE
     res = certify(tv, p["theta"], p["margin"], run.gain, noise_sigma=noise.sigma, noise_f=f)
     r = time_varying_results(res.certificate)
     assert isinstance(res.design, TimeVaryingDesign)  # certify() of an ExpressionTopology
-    return res, [
-        (
-            "lambda_min",
-            f"λ_min(L_B(t) + L_B(t)ᵀ) over {r['domain_text']} for Lemma 1 at each t, with the "
-            f"certified uniform bound Λ₂ = {r['lambda2']:.6g} (dashed) and the bound proven on "
-            "each t-interval (grey).",
-            lambda_min_figure(res.design, r["lambda2"], res.certificate["intervals"]),
-        ),
-        (
-            "weights",
-            "The time-varying weights (every entry) and δ(t) = C(t) + ΔC; the design tables "
-            "above show t = 0.",
-            weights_figure(res.design),
-        ),
-    ]
+    return TimeVaryingFacts(
+        res, res.design, r["lambda2"], r["domain_text"], res.certificate["intervals"]
+    )
 
 
 @dataclass(frozen=True)
-class _Certified:
-    """What a run's section shows about its design and certificate, computed before any
-    rendering: the fixed-topology result (designs per mode), the result whose certificate
-    and theorems are shown (the time-varying one for A(t)) and its figures."""
+class RunFacts:
+    """Everything a run's section shows, computed before anything is drawn: the
+    fixed-topology result (designs per mode), the result whose certificate and theorems
+    are shown (the time-varying one for A(t)), the curves, the tables and the sample
+    paths the figures use."""
 
+    run: RunData
     res: CertifyResult
     design: ProtocolDesign | SwitchingDesign  # res's (a run's topology is never A(t) here)
-    cert_res: CertifyResult
-    tv_figs: list
+    tv: TimeVaryingFacts | None
     cert_tab: Table
     checks: Table
     cert: dict
+    mc: MeanSquareBand | None
+    exact: np.ndarray | None
+    convergence: tuple[str, Table, dict]
+    fine: dict | None
+    robust: Table | None
+    robust_note: str
+
+    @property
+    def cert_res(self) -> CertifyResult:
+        """The result whose certificate and theorems the section shows."""
+        return self.tv.res if self.tv is not None else self.res
 
 
-def _certified(run: RunData, figdir: Path, base: Path) -> _Certified:
+def run_facts(run: RunData, base: Path, fine: dict | None = None) -> RunFacts:
+    """Compute what a run's section shows: certify (writing certificate.json beside the
+    run), the Monte Carlo band and exact moments, the convergence fits, the robust study's
+    table and the finer sample paths.
+
+    Parameters
+    ----------
+    run : RunData
+        The run, as :func:`load_run` reads it.
+    base : pathlib.Path
+        The folder links are relative to.
+    fine : dict, optional
+        Sample paths at a finer decimation (``{"t", "paths"}``); by default a companion
+        run's when the stored paths are too coarse to draw.
+
+    Returns
+    -------
+    RunFacts
+
+    Raises
+    ------
+    InputError
+        A malformed run folder or certificate input.
+    """
     p = run.summary["parameters"]
-    res = certify(run.topology(), p["theta"], p["margin"], run.gain)
+    top = run.topology()
+    res = certify(top, p["theta"], p["margin"], run.gain)
     # weights as expressions of t: the design tables show t = 0, the certificate and the
     # theorems are the time-varying ones (uniform Λ₂), with two figures over a period
-    tv_res, tv_figs = _time_varying(run, p, figdir)
-    cert_res = tv_res or res
-    cert_tab, checks, cert = certificate_tables(cert_res, run.path / "certificate.json", base)
+    tv = _time_varying(run, p)
+    cert_tab, checks, cert = certificate_tables(
+        tv.res if tv else res, run.path / "certificate.json", base
+    )
     des = res.design
     assert isinstance(des, (ProtocolDesign, SwitchingDesign))  # RunData.topology() is not A(t)
-    return _Certified(res, des, cert_res, tv_figs, cert_tab, checks, cert)
+    mc, exact = mc_band(run), run.ms("exact")
+    conv = convergence_table(run, mc, exact, _average_rate(des, top))
+    if fine is None and run.npz["paths"].size:  # the stored paths are too coarse to draw
+        fine = companion_paths(run, top)
+    rob, rob_note = _robust_table(run)
+    return RunFacts(run, res, des, tv, cert_tab, checks, cert, mc, exact, conv, fine, rob, rob_note)
 
 
 def _final_table(run: RunData, mc: MeanSquareBand | None, exact: np.ndarray | None) -> Table:
@@ -233,13 +270,12 @@ def _final_table(run: RunData, mc: MeanSquareBand | None, exact: np.ndarray | No
     )
 
 
-def _robust_part(run: RunData, fig) -> tuple[Table | None, Figure | None, str]:
-    """The weight realisations of summary.json's ``robust`` (a scenario's ``robust:``)
-    against the proven brackets: a table, a figure and a sentence; nothing without it."""
+def _robust_table(run: RunData) -> tuple[Table | None, str]:
+    """The weight realisations of summary.json's ``robust`` (a scenario's ``robust:``):
+    a table and a sentence; nothing without it."""
     st = run.summary.get("robust")
     if not isinstance(st, dict) or not st.get("rows"):
-        return None, None, ""
-
+        return None, ""
     num = functools.partial(fmt, digits=5)  # None shows as "—"
     rows = [
         (
@@ -251,7 +287,6 @@ def _robust_part(run: RunData, fig) -> tuple[Table | None, Figure | None, str]:
         )
         for r in st["rows"]
     ]
-    note = study_sentence(st) + "."
     table = Table(
         (
             "realisation",
@@ -262,12 +297,7 @@ def _robust_part(run: RunData, fig) -> tuple[Table | None, Figure | None, str]:
         ),
         rows,
     )
-    caption = (
-        "Each simulated weight realisation's exact decay rate and consensus offset (points) "
-        "against the proven bounds (lines): no point may lie left of the solid line or above "
-        "the dashed one."
-    )
-    return table, fig(figures.realisations_figure(st), caption), note
+    return table, study_sentence(st) + "."
 
 
 def _spread_text(run: RunData) -> str:
@@ -283,6 +313,240 @@ def _spread_text(run: RunData) -> str:
     )
 
 
+# ---------------------------------------------------------------- the run's figure list
+
+
+def _segments(f: RunFacts):
+    top = f.run.topology()
+    return top.segments(float(f.run.t[-1])) if isinstance(top, SwitchingTopology) else None
+
+
+def _coupling(f: RunFacts, gid: str | None) -> list[Drawn]:
+    curves = [figures.coupling_curve(m) for m in _modes(f.design).values()]
+    return [
+        Drawn(
+            "coupling",
+            "coupling",
+            "Decay rate −max Re λ(−L_B(δ)) (left) and λ_min(L_B + L_Bᵀ)(δ) (right) against "
+            "the coupling δ, with B_i and the informed agents fixed: Lemma 1's δ (circle) is "
+            "sufficient, δ_H and δ_S (triangle, square) are the exact thresholds and the star "
+            "the best δ.",
+            figures.coupling_figure(curves),
+        )
+    ]
+
+
+def _topologies(f: RunFacts, gid: str | None) -> list[Drawn]:
+    return [
+        Drawn(
+            f"topology_{name}",
+            f"topology-{name}",
+            f"Ĝ of {name}: the agents and, outside their circle, vertex 0 (the external "
+            "signal x0) with its edges to the informed agents.",
+            graph_figure.topology_figure(m.topology, m.informed, m.B),
+        )
+        for name, m in _modes(f.design).items()
+    ]
+
+
+def _time_varying_figures(f: RunFacts, gid: str | None) -> list[Drawn]:
+    if f.tv is None:
+        return []
+    tv = f.tv
+    return [
+        Drawn(
+            "lambda_min",
+            "lambda_min",
+            f"λ_min(L_B(t) + L_B(t)ᵀ) over {tv.domain} for Lemma 1 at each t, with the "
+            f"certified uniform bound Λ₂ = {tv.lambda2:.6g} (dashed) and the bound proven on "
+            "each t-interval (grey).",
+            lambda_min_figure(tv.design, tv.lambda2, tv.intervals),
+        ),
+        Drawn(
+            "weights",
+            "weights",
+            "The time-varying weights (every entry) and δ(t) = C(t) + ΔC; the design tables "
+            "above show t = 0.",
+            weights_figure(tv.design),
+        ),
+    ]
+
+
+def _schedule(f: RunFacts, gid: str | None) -> list[Drawn]:
+    top = f.run.topology()
+    if not isinstance(top, SwitchingTopology):
+        return []
+    return [
+        Drawn(
+            "schedule",
+            "schedule",
+            f"The switching schedule, one period of {top.period:g}; it repeats up to "
+            f"T = {f.run.t[-1]:g}.",
+            figures.schedule_figure(top.schedule),
+        )
+    ]
+
+
+def _ms(f: RunFacts, gid: str | None) -> list[Drawn]:
+    segs = _segments(f)
+    what = " and ".join(
+        w
+        for w, x in (("Monte Carlo (solid, 95% band)", f.mc), ("exact moments (dashed)", f.exact))
+        if x is not None
+    )
+    return [
+        Drawn(
+            "ms_error",
+            "ms",
+            f"E‖x_i − θ‖² per agent, {what}"
+            + ("; the strip under the axis shows the active mode." if segs else "."),
+            figures.ms_error_figure(f.run.t, f.mc, f.exact, f.run.labels, segments=segs, gid=gid),
+        )
+    ]
+
+
+def _states(f: RunFacts, gid: str | None) -> list[Drawn]:
+    run = f.run
+    if f.fine is not None and f.fine["paths"].size:
+        t_p, path0 = f.fine["t"], f.fine["paths"][0]
+        dec = (
+            "a finer decimation than the statistics (a companion run of the same scenario and seed)"
+        )
+    elif run.npz["paths"].size:
+        t_p, path0, dec = run.npz["t"], run.npz["paths"][0], "the statistics' save times"
+    else:
+        return []
+    marked = ", each marked: lines only join them" if t_p.size <= 300 else ""
+    return [
+        Drawn(
+            "states",
+            "states",
+            f"One sample path, per dimension, θ dashed: the {figures.HIGHLIGHTED} agents "
+            f"farthest from θ at the end in colour, the others grey; stored at {dec} "
+            f"({t_p.size} points{marked}).",
+            figures.states_figure(
+                t_p, path0, run.theta, run.labels, segments=_segments(f), gid=gid
+            ),
+        )
+    ]
+
+
+def _gain(f: RunFacts, gid: str | None) -> list[Drawn]:
+    try:
+        fig = figures.gain_figure(f.run.gain, float(f.run.t[-1]))
+    except InputError:
+        return []  # a callable gain: nothing to plot
+    return [
+        Drawn(
+            "gain",
+            "gain",
+            "The gain c(t) and its integrals ∫c (infinite: the cumulative effect needed for "
+            "consensus) and ∫c² (finite: the noise energy that almost-sure consensus needs).",
+            fig,
+        )
+    ]
+
+
+def _robust(f: RunFacts, gid: str | None) -> list[Drawn]:
+    if f.robust is None:
+        return []
+    return [
+        Drawn(
+            "robust",
+            "robust",
+            "Each simulated weight realisation's exact decay rate and consensus offset "
+            "(points) against the proven bounds (lines): no point may lie left of the solid "
+            "line or above the dashed one.",
+            figures.realisations_figure(f.run.summary["robust"]),
+        )
+    ]
+
+
+#: The run report's figures, in order: one function each, drawing from :class:`RunFacts`.
+RUN_FIGURES = (
+    FigureSpec("coupling", style.TWO_COLUMN, _coupling),
+    FigureSpec("topology", style.ONE_COLUMN, _topologies),
+    FigureSpec("topology", style.TWO_COLUMN, _time_varying_figures),
+    FigureSpec("topology", style.ONE_COLUMN, _schedule),
+    FigureSpec("ms", style.TWO_COLUMN, _ms),
+    FigureSpec("paths", style.TWO_COLUMN, _states),
+    FigureSpec("gain", style.TWO_COLUMN, _gain),
+    FigureSpec("robust", style.ONE_COLUMN, _robust, interactive=False),
+)
+
+
+def render_run(
+    facts: RunFacts,
+    figdir: Path,
+    title: str,
+    key: str,
+    base: Path,
+    rerun: str | None = None,
+    interactive: bool = False,
+) -> RunSection:
+    """A run's section from its computed facts: the tables, and the figures of
+    :data:`RUN_FIGURES` written to ``figdir``. Nothing is certified or simulated here.
+
+    Parameters
+    ----------
+    facts : RunFacts
+        What :func:`run_facts` computed.
+    figdir : pathlib.Path
+        Where the figures are written.
+    title : str
+        The section's title.
+    key : str
+        A prefix for figure files and element ids.
+    base : pathlib.Path
+        The folder links are relative to.
+    rerun : str, optional
+        The command shown to re-run it.
+    interactive : bool, optional
+        SVG figures with per-agent toggles.
+
+    Returns
+    -------
+    RunSection
+    """
+    run = facts.run
+    p = run.summary["parameters"]
+    figs = render_figures(RUN_FIGURES, facts, figdir, key, base, interactive)
+    designs, _ = design_tables(facts.design)
+    conv_note, conv, _ = facts.convergence
+    cert_res = facts.cert_res
+    labels = run.labels
+    return RunSection(
+        key=key,
+        title=title,
+        rerun=rerun or run.rerun,
+        designs=designs,
+        coupling=first(figs["coupling"]),
+        certificate=facts.cert_tab,
+        checks=facts.checks,
+        gain=html_table(cert_res.gain.table())
+        if cert_res.gain is not None
+        else Table(("condition", "holds", "reason"), [("no gain was given", "—", "")]),
+        gain_figure=first(figs["gain"]),
+        theorems=html_table(theorem_table(cert_res.theorems)),
+        ms_figure=figs["ms"][0],
+        convergence_note=conv_note,
+        convergence=conv,
+        topology_figures=figs["topology"],
+        path_figures=figs["paths"],
+        final=_final_table(run, facts.mc, facts.exact),
+        spread=_spread_text(run),
+        data_links=data_links(run, figdir, key, base),
+        parameters=parameter_table(p, len(labels), run.theta.size, run.summary.get("run", {})),
+        versions=Table(("package", "version"), sorted(package_versions().items())),
+        interactive_agents=[(a, f"{key}-ag{i}") for i, a in enumerate(labels)]
+        if interactive
+        else [],
+        robust=facts.robust,
+        robust_figure=first(figs["robust"]),
+        robust_note=facts.robust_note,
+    )
+
+
 def run_section(
     run: RunData,
     figdir: Path,
@@ -294,8 +558,8 @@ def run_section(
     fine: dict | None = None,
 ) -> tuple[RunSection, dict]:
     """One run's section of a report (figures written to ``figdir``, links relative to
-    ``base``), and the facts a summary table needs. Everything is computed first
-    (certificate, curves, tables), then drawn.
+    ``base``), and the facts a summary table needs: :func:`run_facts`, then
+    :func:`render_run`.
 
     Parameters
     ----------
@@ -327,56 +591,14 @@ def run_section(
         A malformed run folder.
     """
     base = base or run.path
-    p = run.summary["parameters"]
-    top = run.topology()
-    c = _certified(run, figdir, base)
-    designs, des_docs = design_tables(c.design)
-    doc = c.cert_res.to_dict()
-    mc, exact = mc_band(run), run.ms("exact")
-    conv_note, conv, conv_facts = convergence_table(run, mc, exact, _average_rate(c.design, top))
-    if fine is None and run.npz["paths"].size:  # the stored paths are too coarse to draw
-        fine = companion_paths(run, top)
-    figs = _run_figures(run, key, figdir, base, interactive, c, mc, exact, fine)
-    labels = run.labels
-
-    def robust_fig(f, caption: str) -> Figure:
-        saved = style.save(f, figdir / f"{key}_robust")
-        return figure_block(saved, f"{key}-fig-robust", caption, base, style.ONE_COLUMN, False)
-
-    rob, rob_fig, rob_note = _robust_part(run, robust_fig)
-    section = RunSection(
-        key=key,
-        title=title,
-        rerun=rerun or run.rerun,
-        designs=designs,
-        coupling=figs["coupling"],
-        certificate=c.cert_tab,
-        checks=c.checks,
-        gain=html_table(c.cert_res.gain.table())
-        if c.cert_res.gain is not None
-        else Table(("condition", "holds", "reason"), [("no gain was given", "—", "")]),
-        gain_figure=figs["gain"],
-        theorems=html_table(theorem_table(c.cert_res.theorems)),
-        ms_figure=figs["ms"],
-        convergence_note=conv_note,
-        convergence=conv,
-        topology_figures=figs["topology"],
-        path_figures=figs["paths"],
-        final=_final_table(run, mc, exact),
-        spread=_spread_text(run),
-        data_links=data_links(run, figdir, key, base),
-        parameters=parameter_table(p, len(labels), run.theta.size, run.summary.get("run", {})),
-        versions=Table(("package", "version"), sorted(package_versions().items())),
-        interactive_agents=[(a, f"{key}-ag{i}") for i, a in enumerate(labels)]
-        if interactive
-        else [],
-        robust=rob,
-        robust_figure=rob_fig,
-        robust_note=rob_note,
-    )
-    facts = {
+    facts = run_facts(run, base, fine)
+    section = render_run(facts, figdir, title, key, base, rerun, interactive)
+    _, des_docs = design_tables(facts.design)
+    doc = facts.cert_res.to_dict()
+    exact, mc = facts.exact, facts.mc
+    summary = {
         "designs": des_docs,
-        "certificate": c.cert,
+        "certificate": facts.cert,
         "gain": doc["gain"],
         "theorems": doc["theorems"],
         "exact_first": exact[0].sum() if exact is not None else None,
@@ -385,106 +607,9 @@ def run_section(
         "mc_last": mc.mean[-1].sum() if mc is not None else None,
         "sample_paths": run.summary.get("sample_paths", {}),
         "T": float(run.t[-1]),
-        "convergence": conv_facts,
+        "convergence": facts.convergence[2],
     }
-    return section, facts
-
-
-def _run_figures(run, key, figdir, base, interactive, c: _Certified, mc, exact, fine) -> dict:
-    """The section's figures, written to ``figdir``: coupling, topologies (and A(t),
-    schedule), mean-square error, a sample path, the gain."""
-    top = run.topology()
-    labels = run.labels
-    segs = top.segments(float(run.t[-1])) if isinstance(top, SwitchingTopology) else None
-    gid = key if interactive else None
-
-    def fig(f, stem: str, caption: str, width: float, fid: str) -> Figure:
-        return figure_block(style.save(f, figdir / stem), fid, caption, base, width, interactive)
-
-    out: dict = {}
-    out["coupling"] = fig(
-        figures.coupling_figure([figures.coupling_curve(m) for m in _modes(c.design).values()]),
-        f"{key}_coupling",
-        "Decay rate −max Re λ(−L_B(δ)) (left) and λ_min(L_B + L_Bᵀ)(δ) (right) against the "
-        "coupling δ, with B_i and the informed agents fixed: Lemma 1's δ (circle) is sufficient, "
-        "δ_H and δ_S (triangle, square) are the exact thresholds and the star the best δ.",
-        style.TWO_COLUMN,
-        f"{key}-fig-coupling",
-    )
-    topo = [
-        fig(
-            graph_figure.topology_figure(m.topology, m.informed, m.B),
-            f"{key}_topology_{name}",
-            f"Ĝ of {name}: the agents and, outside their circle, vertex 0 (the external signal "
-            "x0) with its edges to the informed agents.",
-            style.ONE_COLUMN,
-            f"{key}-fig-topology-{name}",
-        )
-        for name, m in _modes(c.design).items()
-    ]
-    for stem, caption, f in c.tv_figs:
-        topo.append(fig(f, f"{key}_{stem}", caption, style.TWO_COLUMN, f"{key}-fig-{stem}"))
-    if isinstance(top, SwitchingTopology):
-        topo.append(
-            fig(
-                figures.schedule_figure(top.schedule),
-                f"{key}_schedule",
-                f"The switching schedule, one period of {top.period:g}; it repeats up to "
-                f"T = {run.t[-1]:g}.",
-                style.ONE_COLUMN,
-                f"{key}-fig-schedule",
-            )
-        )
-    out["topology"] = topo
-    what = " and ".join(
-        w
-        for w, x in (("Monte Carlo (solid, 95% band)", mc), ("exact moments (dashed)", exact))
-        if x is not None
-    )
-    out["ms"] = fig(
-        figures.ms_error_figure(run.t, mc, exact, labels, segments=segs, gid=gid),
-        f"{key}_ms_error",
-        f"E‖x_i − θ‖² per agent, {what}"
-        + ("; the strip under the axis shows the active mode." if segs else "."),
-        style.TWO_COLUMN,
-        f"{key}-fig-ms",
-    )
-    out["paths"] = []
-    if fine is not None and fine["paths"].size:
-        t_p, path0, dec = (
-            fine["t"],
-            fine["paths"][0],
-            "a finer decimation than the statistics (a companion run of the same scenario and seed)",
-        )
-    elif run.npz["paths"].size:
-        t_p, path0, dec = run.npz["t"], run.npz["paths"][0], "the statistics' save times"
-    else:
-        t_p = None
-    if t_p is not None:
-        out["paths"].append(
-            fig(
-                figures.states_figure(t_p, path0, run.theta, labels, segments=segs, gid=gid),
-                f"{key}_states",
-                f"One sample path, per dimension, θ dashed: the {figures.HIGHLIGHTED} agents "
-                f"farthest from θ at the end in colour, the others grey; stored at {dec} "
-                f"({t_p.size} points{', each marked: lines only join them' if t_p.size <= 300 else ''}).",
-                style.TWO_COLUMN,
-                f"{key}-fig-states",
-            )
-        )
-    out["gain"] = None
-    try:
-        out["gain"] = fig(
-            figures.gain_figure(run.gain, float(run.t[-1])),
-            f"{key}_gain",
-            "The gain c(t) and its integrals ∫c (infinite: the cumulative effect needed for "
-            "consensus) and ∫c² (finite: the noise energy that almost-sure consensus needs).",
-            style.TWO_COLUMN,
-            f"{key}-fig-gain",
-        )
-    except InputError:
-        pass  # a callable gain: nothing to plot
-    return out
+    return section, summary
 
 
 def write_report(directory: str | Path, interactive: bool = False) -> Path:
@@ -536,7 +661,11 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
 
 
 __all__ = [
+    "RUN_FIGURES",
     "RunData",
+    "RunFacts",
     "load_run",
+    "render_run",
+    "run_facts",
     "write_report",
 ]
