@@ -37,13 +37,18 @@ def g1_run(tmp_path_factory):
     return load_run(tmp / "run")
 
 
+@pytest.fixture(scope="module")
+def g1_facts(g1_run, tmp_path_factory):
+    return report.run_facts(g1_run, tmp_path_factory.mktemp("facts"))
+
+
 def _no_certify(*a, **k):
     raise AssertionError("rendering certified")
 
 
-def test_rendering_certifies_nothing_and_draws_the_whole_list(g1_run, tmp_path, monkeypatch):
+def test_rendering_certifies_nothing_and_draws_the_whole_list(g1_facts, tmp_path, monkeypatch):
     monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",)))
-    facts = report.run_facts(g1_run, tmp_path)
+    facts = g1_facts
     assert facts.cert["valid"] and facts.res.certificate["kind"] == "hurwitz"  # computed first
     monkeypatch.setattr(report, "certify", _no_certify)
     section = report.render_run(facts, tmp_path, "G1", "k", tmp_path)
@@ -59,11 +64,11 @@ def test_rendering_certifies_nothing_and_draws_the_whole_list(g1_run, tmp_path, 
     assert section.robust_figure is None and section.robust is None  # no robust study
 
 
-def test_a_new_figure_is_one_function_in_the_list(g1_run, tmp_path, monkeypatch):
+def test_a_new_figure_is_one_function_in_the_list(g1_facts, tmp_path, monkeypatch):
     import matplotlib.pyplot as plt
 
     monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",)))
-    facts = report.run_facts(g1_run, tmp_path)
+    facts = g1_facts
 
     def final_bars(f, gid):
         fig, ax = plt.subplots()

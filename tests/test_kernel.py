@@ -316,6 +316,7 @@ def test_moments_above_the_limit_are_refused_before_running(g1, monkeypatch):
         simulate(g1, THETA, T=0.1, paths=4, method="both")
 
 
+@pytest.mark.slow  # a fresh interpreter compiles the kernels into an empty cache (~6 s)
 def test_numba_caches_in_the_users_cache_folder_not_beside_the_sources(tmp_path):
     # a cache beside installed sources outlives `pip uninstall` and turns the left-over
     # folder into a namespace package that shadows a later editable install
