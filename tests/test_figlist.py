@@ -6,7 +6,7 @@ import functools
 
 import pytest
 
-from ntc_design.reports import aggregate, report, style
+from ntc_design.reports import aggregate, parts, report, style
 from ntc_design.reports.figlist import Drawn, FigureSpec, first, render_figures
 from ntc_design.reports.rundata import load_run
 
@@ -50,7 +50,8 @@ def test_rendering_certifies_nothing_and_draws_the_whole_list(g1_facts, tmp_path
     monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",)))
     facts = g1_facts
     assert facts.cert["valid"] and facts.res.certificate["kind"] == "hurwitz"  # computed first
-    monkeypatch.setattr(report, "certify", _no_certify)
+    monkeypatch.setattr(report, "certify", _no_certify)  # A(t)'s certificate
+    monkeypatch.setattr(parts, "certify", _no_certify)  # the run's
     section = report.render_run(facts, tmp_path, "G1", "k", tmp_path)
     # coupling, G1's topology, the error curves, the states, the gain: five figures
     drawn = [section.coupling, *section.topology_figures, section.ms_figure,
@@ -113,7 +114,7 @@ def test_the_aggregate_report_renders_from_its_facts_alone(tmp_path, capsys, mon
     run = load_run(tmp_path / "run")
     f = aggregate.aggregate_facts(run, tmp_path)
     assert f.kind == "MC" and f.ms.shape[1] == top.n and f.first.topology.n == top.n
-    monkeypatch.setattr(aggregate, "certify", _no_certify)
+    monkeypatch.setattr(parts, "certify", _no_certify)
     figs = render_figures(aggregate.AGGREGATE_FIGURES, f, tmp_path, "a", tmp_path)
     assert [d.id for d in figs["topology"]][:2] == ["a-fig-degrees", "a-fig-sparsity"]
     assert [d.id for d in figs["ms"]] == ["a-fig-ms_quantiles"]

@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from ..certify import KINDS, CertifyResult, certify
+from ..certify import KINDS, CertifyResult
 from ..certify.format import package_versions
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
@@ -29,6 +29,7 @@ from .figures import states_figure
 from .html import RunSection, Table, html_table
 from .parts import (
     certificate_tables,
+    certify_run,
     data_links,
     fitted_exponent,
     mc_band,
@@ -347,9 +348,8 @@ def aggregate_facts(run: RunData, base: Path) -> AggregateFacts:
     InputError
         A malformed run folder or certificate input.
     """
-    p = run.summary["parameters"]
     top = run.topology()
-    res = certify(top, p["theta"], p["margin"], run.gain)
+    res = certify_run(run)
     cert_tab, checks, cert = certificate_tables(res, run.path / "certificate.json", base)
     ms, kind, total = _curves(run)
     modes = (

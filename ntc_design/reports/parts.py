@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..certify import verify_file, write_certificate
+from ..certify import CertifyResult, certify, verify_file, write_certificate
 from ..errors import InputError
 from ..rows import Table as RowsTable
 from ..rows import fmt
@@ -18,6 +18,27 @@ from ..simulate import SimulationDiverged, SimulationSpec, simulate
 from ..simulate.result import MeanSquareBand
 from .html import Table, html_table, rel
 from .rundata import RunData
+
+
+def certify_run(run: RunData) -> CertifyResult:
+    """Certify a run's own topology, θ, margin and gain (summary.json's parameters).
+
+    Parameters
+    ----------
+    run : RunData
+        The run.
+
+    Returns
+    -------
+    CertifyResult
+
+    Raises
+    ------
+    InputError
+        A malformed topology, θ or gain in the run.
+    """
+    p = run.summary["parameters"]
+    return certify(run.topology(), p["theta"], p["margin"], run.gain)
 
 
 def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, dict]:

@@ -42,6 +42,7 @@ from .html import (
 )
 from .parts import (
     certificate_tables,
+    certify_run,
     companion_paths,
     data_links,
     fitted_exponent,
@@ -230,7 +231,7 @@ def run_facts(run: RunData, base: Path, fine: dict | None = None) -> RunFacts:
     """
     p = run.summary["parameters"]
     top = run.topology()
-    res = certify(top, p["theta"], p["margin"], run.gain)
+    res = certify_run(run)
     # weights as expressions of t: the design tables show t = 0, the certificate and the
     # theorems are the time-varying ones (uniform Λ₂), with two figures over a period
     tv = _time_varying(run, p)
