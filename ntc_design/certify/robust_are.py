@@ -61,7 +61,8 @@ def edge_sum(
     d : int
         d.
     ends : (numpy.ndarray, numpy.ndarray, numpy.ndarray)
-        Row offsets i·d and j·d of each edge's ends, and its sign s_e.
+        Row offsets i·d and j·d of each edge's ends, and its sign s_e (0 for an edge
+        whose source lies outside the matrix: D_e = E_i).
     w : numpy.ndarray
         W_e, (m, d, d).
     coef : numpy.ndarray
@@ -77,12 +78,13 @@ def edge_sum(
     q = np.zeros((n, n))
     for e in range(w.shape[0]):
         c = abs(coef[e]) * np.abs(w[e]) if absolute else coef[e] * w[e]
-        i, j = i_[e], j_[e]
-        off = c if absolute else -s_[e] * c
+        i, j, se = i_[e], j_[e], float(s_[e])
+        off = abs(se) * c if absolute else -se * c
         q[i : i + d, i : i + d] += c
-        q[j : j + d, j : j + d] += c
-        q[i : i + d, j : j + d] += off
-        q[j : j + d, i : i + d] += off
+        if se:  # s_e = 0: an edge from outside a block (D_e = E_i)
+            q[j : j + d, j : j + d] += c
+            q[i : i + d, j : j + d] += off
+            q[j : j + d, i : i + d] += off
     return q
 
 
@@ -115,13 +117,15 @@ class RiccatiSearch:
         ends = (self.i, self.j, self.s)
         return edge_sum(self.n, self.d, ends, self.w, tau * rad2, absolute)
 
-    def _r(self, tau: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """Σ E_i W_e E_iᵀ / τ_e (block diagonal), with W replaced by ``w``."""
+    def _r(self, tau: np.ndarray, w: np.ndarray, rad: np.ndarray) -> np.ndarray:
+        """Σ E_i W_e E_iᵀ / τ_e (block diagonal) over the edges with ρ_e > 0, with W
+        replaced by ``w`` (an edge of radius 0 is not perturbed: it needs no Young term)."""
         n, d = self.n, self.d
         r = np.zeros((n, n))
         for e in range(self.m):
-            i = self.i[e]
-            r[i : i + d, i : i + d] += w[e] / tau[e]
+            if rad[e] > 0:
+                i = self.i[e]
+                r[i : i + d, i : i + d] += w[e] / tau[e]
         return r
 
     def schur(self, pm: np.ndarray, tau: np.ndarray, alpha: float, rad: np.ndarray) -> np.ndarray:
@@ -144,7 +148,7 @@ class RiccatiSearch:
         """
         sh = self.lap - alpha * np.eye(self.n)
         ps = pm @ sh
-        m = ps + ps.T - self._q(tau, rad**2) - pm @ self._r(tau, self.w) @ pm
+        m = ps + ps.T - self._q(tau, rad**2) - pm @ self._r(tau, self.w, rad) @ pm
         return 0.5 * (m + m.T)
 
     def proven(self, pm: np.ndarray, tau: np.ndarray, alpha: float, rad: np.ndarray) -> bool:
@@ -184,8 +188,8 @@ class RiccatiSearch:
         rad2 = rad**2  # its rounding is inside e_q's γ
         q = self._q(tau, rad2)
         e_q = gamma(self.m + 6) * self._q(tau, rad2, absolute=True)
-        r = self._r(tau, self.w)
-        e_r = gamma(self.m + 2) * self._r(tau, self.wabs)
+        r = self._r(tau, self.w, rad)
+        e_r = gamma(self.m + 2) * self._r(tau, self.wabs, rad)
         prp = pm @ r @ pm
         e_prp = gamma(2 * n + 2) * (ap @ np.abs(r) @ ap) + ap @ e_r @ ap
         m = t1 - q - prp
@@ -214,6 +218,7 @@ class RiccatiSearch:
                 va[e] = rad2[e] * np.sum(wt * np.einsum("ak,ab,bk->k", dv, w, dv))
                 vb[e] = np.sum(wt * np.einsum("ak,ab,bk->k", a, w, a))
             new = np.sqrt(np.maximum(vb, 1e-300) / np.maximum(va, 1e-300))
+            new = np.where(rad2 > 0, new, tau)  # an unperturbed edge keeps its τ: unused
             tau = np.exp(0.5 * np.log(tau) + 0.5 * np.log(new))
         return best, best_tau
 
@@ -223,7 +228,7 @@ class RiccatiSearch:
         n = self.n
         a = -(self.lap - alpha * np.eye(n))
         q = self._q(tau, rad**2)
-        r = self._r(tau, self.w)
+        r = self._r(tau, self.w, rad)
         lam, u = np.linalg.eigh(r)
         keep = lam > 1e-12 * max(float(lam.max(initial=0.0)), 1e-300)
         b = u[:, keep] * np.sqrt(lam[keep])

@@ -10,10 +10,17 @@ those of the component blocks. Inside a component, block generalised diagonal do
 * ``ν_ij^ρ = (1 + ρ_e)·ν_ij`` >= ‖A'_ij‖₂ (ν_ij >= ‖A_ij‖₂ proven),
 
 and v > 0 with ``(μ_i^ρ − α)v_i > Σ_j ν_ij^ρ v_j`` proves Re λ(L_B(A')) > α for every
-realisation. α is the Collatz–Wielandt minimum of ``μ_i^ρ − (N^ρ v)_i / v_i`` for the v
+realisation (the rows of a component involve only its own v, so the test also says which
+components it proves). α is the Collatz–Wielandt minimum of ``μ_i^ρ − (N^ρ v)_i / v_i`` for the v
 that solves the comparison system; the margin radius is the largest uniform ρ for which
 some α >= 0 is proven (bisection). A one-agent component is exact: its block is symmetric
 and the realisation (1 − ρ_e)|A_ij| attains μ_i^ρ.
+
+Where dominance proves a margin below 1/2 and Nd > RICCATI_MAX_ND, each component it
+does not prove is given to the Riccati search of :mod:`.robust_are` on its own diagonal
+block (up to COMPONENT_RICCATI_MAX_ND rows), the edges from other components perturbing
+only that diagonal (D_e = E_i): the margin is then the largest ρ tried at which every
+component is proven one way or the other.
 
 The other ends are estimates on two realisations (every weight scaled by 1 − ρ_e, or by
 1 + ρ_e) with :func:`.scale.rate_estimate`; the destabilising end is every weight vanishing
@@ -33,9 +40,13 @@ from ..design import ProtocolDesign
 from ..linalg import comparison_solve
 from ..rigorous.exact import U, gamma
 from .robust import Bracket, Realisation, RobustReport, uncertain_edges
+from .robust_are import RICCATI_MAX_ND
 from .scale import BlockData, dominance_holds, edge_norm_bounds, prove_mu, rate_estimate
 
 MARGIN_STEPS = 12
+#: A component that dominance does not prove is given to the Riccati search on its own
+#: block up to this many rows (each solve is a 2·Nd Hamiltonian: 9 s at Nd = 534).
+COMPONENT_RICCATI_MAX_ND = 600
 
 
 def _components(top) -> tuple[int, np.ndarray]:
@@ -111,18 +122,28 @@ def _agent_bounds(
     """(μ, ν^ρ): μ_i <= λ_min(Σ_j (1 − ρ_e)|A_ij| + δB_i) proven per agent, and
     ν^ρ_e = (1 + ρ_e)·ν_e >= ‖A'_e‖₂ per edge (``nu``: the proven ν_e, when the caller
     has them); None when a bound is not proven."""
+    got = _agent_bounds_per_agent(des, rad, nu)
+    if got is None or not np.all(got[2]):
+        return None
+    return got[0], got[1]
+
+
+def _agent_bounds_per_agent(
+    des: ProtocolDesign, rad: np.ndarray, nu: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """As :func:`_agent_bounds`, with the agents whose μ_i is proven (a mask) instead of
+    all or nothing; None when a ν_e is not proven."""
     top = des.topology
     ea = top.edge_arrays
     low = _diag_blocks(des, np.maximum(1.0 - rad, 0.0) * (1 - 2 * U))
     lam = np.linalg.eigvalsh(0.5 * (low.diag + low.diag.transpose(0, 2, 1)))[:, 0]
     mu = lam - (1e-9 * np.abs(lam) + 1e-12 * np.max(np.abs(lam), initial=1.0))
-    if not np.all(prove_mu(low, np.arange(top.n), mu)):
-        return None
+    ok = prove_mu(low, np.arange(top.n), mu)
     if nu is None:
         nu, proven = edge_norm_bounds(ea.w)
         if not np.all(proven):
             return None
-    return mu, (1.0 + rad) * nu * (1 + 2 * U)
+    return mu, (1.0 + rad) * nu * (1 + 2 * U), ok
 
 
 def _norm_bounds(des: ProtocolDesign) -> np.ndarray | None:
@@ -270,6 +291,147 @@ def _offset_realisation(des: ProtocolDesign, rad: np.ndarray) -> tuple[float, np
     return best
 
 
+def dominance_failures(des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray, nu) -> set | None:
+    """The strongly connected components whose rows block dominance does not prove at
+    α = 0 for the radii ``rad`` (rigorously, per agent; a component's rows involve only its
+    own v), or None when the μ bounds themselves are not proven.
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The nominal design.
+    rad : numpy.ndarray
+        ρ_e per listed edge (edge-array order).
+    comp : numpy.ndarray
+        The strongly connected component of each agent.
+    nu : numpy.ndarray or None
+        Proven ν_e >= ‖A_e‖₂ per edge, when the caller has them.
+
+    Returns
+    -------
+    set of int, or None
+    """
+    import scipy.sparse as sparse
+
+    top = des.topology
+    ea, n = top.edge_arrays, top.n
+    bounds = _agent_bounds_per_agent(des, rad, nu)
+    if bounds is None:
+        return None
+    mu, nu_r, ok = bounds
+    mu = np.where(ok, mu, 1.0)  # an agent without a proven μ_i fails below in any case
+    same = comp[ea.rows] == comp[ea.cols]
+    off = sparse.csr_matrix((nu_r[same], (ea.rows[same], ea.cols[same])), shape=(n, n)).tocsr()
+    v = comparison_solve((sparse.diags(mu) - off).tocsr())
+    if np.all(v > 0):
+        v = _perron(mu, off, v)
+    held = dominance_holds(top, comp, mu - 4 * U * np.abs(mu), v, nu_r, np.ones(n, dtype=bool))
+    return {int(c) for c in np.unique(comp[~(held & ok)])}
+
+
+def component_riccati(des: ProtocolDesign, comp: np.ndarray, c: int):
+    """The Riccati search (:mod:`.robust_are`) on one strongly connected component's
+    block of L_B: its own edges, and the edges into it from other components as diagonal
+    terms (D_e = E_i). Every realisation's L_B(A') is block triangular in the components'
+    order, so the block's robust stability is the component's.
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The nominal design.
+    comp : numpy.ndarray
+        The strongly connected component of each agent.
+    c : int
+        The component.
+
+    Returns
+    -------
+    (RiccatiSearch, int)
+        The search on the block (L_B's block and its rounding bound built from the
+        weights), and the number of uncertain edges into it.
+    """
+    from .robust import UncertainEdges
+    from .robust_are import RiccatiSearch
+
+    top = des.topology
+    ea, d = top.edge_arrays, top.dim
+    agents = np.flatnonzero(comp == c)
+    loc = np.full(top.n, -1)
+    loc[agents] = np.arange(agents.size)
+    k = agents.size * d
+    lap = np.zeros((k, k))
+    mag = np.zeros((k, k))
+    into = (loc[ea.rows] >= 0) & (ea.sign != 0)
+    for e in np.flatnonzero(into):
+        i = int(loc[ea.rows[e]]) * d
+        absw = ea.sign[e] * ea.w[e]
+        lap[i : i + d, i : i + d] += absw
+        mag[i : i + d, i : i + d] += np.abs(absw)
+        j = int(loc[ea.cols[e]])
+        if j >= 0:
+            lap[i : i + d, j * d : j * d + d] -= ea.w[e]
+            mag[i : i + d, j * d : j * d + d] += np.abs(ea.w[e])
+    for a, b in des.B.items():
+        if loc[a] >= 0:
+            i = int(loc[a]) * d
+            db = des.delta * np.asarray(b, dtype=float)
+            lap[i : i + d, i : i + d] += db
+            mag[i : i + d, i : i + d] += np.abs(db)
+    err = gamma(top.n + 3) * mag  # each entry: at most N + 1 terms, and δ·B_i's product
+    dst = loc[ea.rows[into]]
+    src = loc[ea.cols[into]]
+    inside = src >= 0
+    edges = UncertainEdges(
+        dst,
+        np.where(inside, src, dst),
+        np.where(inside, ea.sign[into], 0).astype(float),
+        ea.sign[into][:, None, None] * ea.w[into],
+        tuple(() for _ in range(int(into.sum()))),
+    )
+    return RiccatiSearch(lap, err, edges, d), int(into.sum())
+
+
+def _riccati_margin(
+    des, comp, nu, lo: float, hi: float, deadline: float, prove_lo: bool = False
+) -> float | None:
+    """A margin above ``lo`` (dominance's): the largest ρ in [lo, hi) tried (bisection,
+    three steps) at which every component that dominance does not prove has at most
+    COMPONENT_RICCATI_MAX_ND rows and a Riccati proof at α = 0; ``lo`` if none (with
+    ``prove_lo``, ``lo`` itself is proven first, and None returned when it is not)."""
+    top = des.topology
+    sign = top.edge_arrays.sign
+    searches: dict = {}
+
+    def proven(r: float) -> bool:
+        fails = dominance_failures(des, np.where(sign != 0, r, 0.0), comp, nu)
+        if fails is None:
+            return False
+        if any(np.count_nonzero(comp == c) * top.dim > COMPONENT_RICCATI_MAX_ND for c in fails):
+            return False
+        for c in sorted(fails):
+            if time.perf_counter() > deadline:
+                return False
+            if c not in searches:
+                searches[c] = component_riccati(des, comp, c)
+            search, m = searches[c]
+            if search(0.0, np.full(m, r)) is None:
+                return False
+        return True
+
+    if prove_lo and not proven(lo):
+        return None
+    a, b = lo, hi
+    for _ in range(3):
+        if time.perf_counter() > deadline:
+            break
+        mid = 0.5 * (a + b)
+        if proven(mid):
+            a = mid
+        else:
+            b = mid
+    return a
+
+
 def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.0) -> RobustReport:
     """The decay and margin brackets of a big design (module docstring), sparse.
 
@@ -338,13 +500,24 @@ def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.
     destab = None
     if not informed_all:
         destab = Realisation(1.0, np.zeros_like(ed.w), 0.0)
+    how = "block diagonal dominance at α = 0, bisection on ρ"
+    if lo < 0.5 and top.nd > RICCATI_MAX_ND:  # more than 2× below ρ = 1, or none
+        # the components dominance cannot prove, by the Riccati search on their own blocks
+        better = _riccati_margin(des, comp, nu, lo, 1.0, t0 + seconds_budget, not proven0)
+        if better is not None and (better > lo or not proven0):
+            lo, proven0 = better, True
+            how = (
+                "block diagonal dominance at α = 0, and the Riccati search on the strongly "
+                f"connected components it does not prove (up to Nd = {COMPONENT_RICCATI_MAX_ND} "
+                "each; proven by verified Cholesky), bisection on ρ"
+            )
     margin = Bracket(
         lo if proven0 else None,
         None if destab is None else 1.0,
         destab,
         "lower",
-        "block diagonal dominance at α = 0, bisection on ρ; upper: every weight vanishing "
-        "at ρ = 1 (an uninformed agent then has a zero block)",
+        how + "; upper: every weight vanishing at ρ = 1 (an uninformed agent then has a "
+        "zero block)",
     )
     off_hi = proven_offset(des, rad, nu) if a_lo is not None else None
     got = _offset_realisation(des, rad)
@@ -379,4 +552,10 @@ def robust_scale(des: ProtocolDesign, radius: float, seconds_budget: float = 60.
     )
 
 
-__all__ = ["proven_rate", "robust_scale"]
+__all__ = [
+    "COMPONENT_RICCATI_MAX_ND",
+    "component_riccati",
+    "dominance_failures",
+    "proven_rate",
+    "robust_scale",
+]
