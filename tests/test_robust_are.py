@@ -71,6 +71,7 @@ def test_a_proof_is_refused_when_any_premise_fails(mid):
     bent[0, 1] += 1e-9 * abs(bent[0, 1]) + 1e-300
     assert not search.proven(bent, tau, 0.5 * rep.decay.lower, rad)  # P exactly symmetric
     assert not search.proven(pm, tau, rep.nominal_decay * 1.01, rad)  # above the nominal
+    assert not search.proven(pm, tau, 0.5 * rep.decay.lower, -rad)  # a negative radius
     assert search(rep.nominal_decay * 1.01, rad) is None
     assert search(rep.decay.upper * 1.001, rad) is None  # a realisation decays slower
 

@@ -173,6 +173,8 @@ class RiccatiSearch:
         n = self.n
         if not (np.all(tau > 0) and np.all(np.isfinite(tau)) and np.array_equal(pm, pm.T)):
             return False
+        if not np.all(np.asarray(rad) >= 0):
+            return False
         if not within_span(pm, tau, rad, np.array([alpha]), self.w, self.lap, self.lap_err):
             return False  # the relative rounding bounds below assume no underflow/overflow
         if not verified_float_pd(pm, np.zeros_like(pm)).holds:
@@ -194,6 +196,7 @@ class RiccatiSearch:
         e_prp = gamma(2 * n + 2) * (ap @ np.abs(r) @ ap) + ap @ e_r @ ap
         m = t1 - q - prp
         err = e_t1 + e_q + e_prp + 2.0 * _U * (np.abs(t1) + np.abs(q) + np.abs(prp))
+        err = err * (1.0 + 4.0 * gamma(2 * n + 8))  # the bound's own rounding
         return bool(verified_float_pd(m, err).holds)
 
     def _rebalance(self, pm, tau, alpha, rad, iters: int = 10):

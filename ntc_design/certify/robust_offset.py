@@ -200,7 +200,8 @@ class OffsetSearch:
         phi[:n, -1] = phi[-1, :n] = -qc
         err[:n, -1] = err[-1, :n] = e_qc
         phi[-1, -1] = gamma - cqc
-        err[-1, -1] = e_cqc + _U * (abs(gamma) + abs(cqc))
+        # cᵀQc multiplies six in-span factors: it may underflow (each term by <= 2⁻¹⁰⁷⁴)
+        err[-1, -1] = e_cqc + _U * (abs(gamma) + abs(cqc)) + (n + 2) * _TINY
         idx = np.arange(n, n + m * d)
         phi[idx, idx] = np.repeat(lam, d)
         return phi, err
@@ -268,7 +269,8 @@ class OffsetSearch:
         sym = ay + ay.T
         g = phi + sym
         err = e_phi + x + x.T + _U * np.abs(sym) + _U * np.abs(g)
-        return g, err
+        # the bound is itself computed in floating point: inflate it past its own rounding
+        return g, err * (1.0 + 4.0 * gamma_k(g.shape[0] + 8))
 
     def proven(self, gamma: float, lam: np.ndarray, rad: np.ndarray) -> bool:
         """Whether γ and λ prove ``‖x*(A') − 1⊗θ‖² <= γ`` for every realisation with an
@@ -315,8 +317,9 @@ class OffsetSearch:
                 continue
             # Γ ≻ 0 iff DΓD ≻ 0: D of powers of two equilibrates exactly (no rounding)
             dsc = np.exp2(-np.round(0.5 * np.log2(dg)))
-            gs = g * dsc[:, None] * dsc[None, :]
-            es = err * dsc[:, None] * dsc[None, :] + 2.0 * _TINY
+            scale = np.outer(dsc, dsc)  # a product of powers of two: exact
+            gs = g * scale  # one rounding each, only where the result is subnormal
+            es = err * scale + 2.0 * _TINY
             if (
                 np.all(np.isfinite(gs))
                 and np.all(np.isfinite(es))

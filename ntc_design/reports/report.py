@@ -21,7 +21,7 @@ from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError
 from ..gain import T, limit_at_infinity, parse_gain
-from ..model import SwitchingTopology
+from ..model import SwitchingTopology, Topology
 from ..outputs import check_output_file
 from ..paper import F_SCALE
 from ..rows import fmt
@@ -186,6 +186,7 @@ class RunFacts:
     paths the figures use."""
 
     run: RunData
+    top: Topology | SwitchingTopology  # the run's, parsed once
     res: CertifyResult
     design: ProtocolDesign | SwitchingDesign  # res's (a run's topology is never A(t) here)
     tv: TimeVaryingFacts | None
@@ -245,7 +246,9 @@ def run_facts(run: RunData, base: Path, fine: dict | None = None) -> RunFacts:
     if fine is None and run.npz["paths"].size:  # the stored paths are too coarse to draw
         fine = companion_paths(run, top)
     rob, rob_note = _robust_table(run)
-    return RunFacts(run, res, des, tv, cert_tab, checks, cert, mc, exact, conv, fine, rob, rob_note)
+    return RunFacts(
+        run, top, res, des, tv, cert_tab, checks, cert, mc, exact, conv, fine, rob, rob_note
+    )
 
 
 def _final_table(run: RunData, mc: MeanSquareBand | None, exact: np.ndarray | None) -> Table:
@@ -318,7 +321,7 @@ def _spread_text(run: RunData) -> str:
 
 
 def _segments(f: RunFacts):
-    top = f.run.topology()
+    top = f.top
     return top.segments(float(f.run.t[-1])) if isinstance(top, SwitchingTopology) else None
 
 
@@ -374,7 +377,7 @@ def _time_varying_figures(f: RunFacts, gid: str | None) -> list[Drawn]:
 
 
 def _schedule(f: RunFacts, gid: str | None) -> list[Drawn]:
-    top = f.run.topology()
+    top = f.top
     if not isinstance(top, SwitchingTopology):
         return []
     return [

@@ -606,6 +606,8 @@ def _prove_lmi(claim: Claim, st: _State) -> Check:
         assert mode.exact is not None  # checked above
         proof = _pd(psi_exact(mode.exact, _exact_channels(mode.top), p, tau, claim.alpha, rad))
         ok, how = proof.holds, f"{proof.method}: {proof.detail}"
+    elif mode.top.nd > RICCATI_MAX_ND:  # certificates are issued up to this size
+        ok, how = False, f"Nd = {mode.top.nd} is past {RICCATI_MAX_ND}"
     else:
         search = RiccatiSearch(mode.lap, mode.err, ed, mode.top.dim)
         ok = search.proven(p, tau, claim.alpha, np.asarray(rad, dtype=float))  # P symmetric too
@@ -620,6 +622,8 @@ def _prove_offset_float(claim: Claim, st: _State) -> Check:
     witnesses G and Y rebuilt from the subject (:mod:`ntc_design.certify.robust_offset`),
     every rounding bounded; the premise (every L_B(A') invertible) is the decay claim."""
     mode, src = st.mode, st.dense.source
+    if mode.top.nd > RICCATI_MAX_ND:  # certificates are issued up to this size
+        return Check(claim.id, False, f"Nd = {mode.top.nd} is past {RICCATI_MAX_ND}", claim)
     if st.gamma is None:
         return Check(claim.id, False, "results.offset.gamma is missing", claim)
     ed = uncertain_edges(mode.top)
