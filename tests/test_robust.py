@@ -464,6 +464,7 @@ def test_simulate_writes_robust_csv_and_the_report_shows_it(tmp_path):
     assert r.returncode == 0, r.stderr
     html = (out / "report.html").read_text()
     assert "Weights within ρ" in html and "both proven bounds hold" in html
+    assert 'id="run-fig-robust"' in html and (out / "figures" / "run_robust.png").is_file()
 
 
 @pytest.mark.hostile
