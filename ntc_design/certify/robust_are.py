@@ -243,7 +243,9 @@ class RiccatiSearch:
         pm = 0.5 * (pm + pm.T)
         return pm if np.all(np.isfinite(pm)) else None
 
-    def __call__(self, alpha: float, radius) -> tuple[np.ndarray, np.ndarray] | None:
+    def __call__(
+        self, alpha: float, radius, deadline: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray] | None:
         """P, τ proving decay rate α at the radii (rigorously checked), or None.
 
         Parameters
@@ -252,11 +254,16 @@ class RiccatiSearch:
             α (0 for Hurwitz alone).
         radius : float or numpy.ndarray
             ρ, or ρ_e per edge.
+        deadline : float, optional
+            A ``time.perf_counter()`` value: no new Riccati solve starts after it (None:
+            the ROUNDS solves at most).
 
         Returns
         -------
         (numpy.ndarray, numpy.ndarray) or None
         """
+        import time
+
         import scipy.linalg as sla
 
         rad = np.broadcast_to(np.asarray(radius, dtype=float), (self.m,)).copy()
@@ -272,6 +279,8 @@ class RiccatiSearch:
         for _ in range(ROUNDS):
             if score > 0 and self.proven(pm, tau, alpha, rad):
                 return pm, tau
+            if deadline is not None and time.perf_counter() > deadline:
+                return None
             nxt = self._riccati(tau, alpha, rad)
             if nxt is None:
                 return None

@@ -414,7 +414,7 @@ def _riccati_margin(
             if c not in searches:
                 searches[c] = component_riccati(des, comp, c)
             search, m = searches[c]
-            if search(0.0, np.full(m, r)) is None:
+            if search(0.0, np.full(m, r), deadline) is None:
                 return False
         return True
 
