@@ -96,6 +96,12 @@ def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid):
     assert ver.valid
     assert doc["certifies"] == ["robust_margin", "robust_decay", "robust_offset"]
     assert "Y" not in doc["matrices"]  # a witness the verifier rebuilds
+    # ntc verify says the numbers each property states, beside the property
+    said = {p["property"]: p.get("stated") for p in ver.about.to_dict()["properties"]}
+    alpha, gamma = doc["results"]["decay"]["lower"], doc["results"]["offset"]["gamma"]
+    assert said["robust_decay"] == f"α = {alpha:.6g} at ρ = 0.05"
+    assert said["robust_margin"] == f"margin radius {doc['results']['margin']['lower']:.6g}"
+    assert said["robust_offset"] == f"<= {gamma**0.5:.6g} at ρ = 0.05"
     assert doc["results"]["offset"]["upper"] == pytest.approx(rep.offset.upper, rel=1e-15)
     assert doc["results"]["decay"]["lower"] == rep.proofs["alpha"] <= rep.decay.lower
     assert "Riccati" in doc["solver"]["name"]

@@ -83,6 +83,7 @@ class About:
     schedule: tuple[tuple[str, float], ...] | None
     alpha: float | None
     switching_hash: str | None
+    stated: tuple[tuple[Property, str], ...] = ()  # the numbers each property states
 
     def to_dict(self) -> dict:
         """What is certified, as a JSON-ready mapping.
@@ -90,14 +91,18 @@ class About:
         Returns
         -------
         dict
-            The kind, its description, each property with its meaning, the modes, the
-            schedule, α and the switching hash.
+            The kind, its description, each property with its meaning (and the numbers it
+            states, where the kind has them), the modes, the schedule, α and the switching
+            hash.
         """
+        said = dict(self.stated)
         return {
             "kind": self.kind,
             "description": self.description,
             "properties": [
-                {"property": p.value, "meaning": PROPERTY_TEXT[p]} for p in self.properties
+                {"property": p.value, "meaning": PROPERTY_TEXT[p]}
+                | ({"stated": said[p]} if p in said else {})
+                for p in self.properties
             ],
             "modes": [m.to_dict() for m in self.modes],
             "scheduled_modes": list(self.scheduled),
@@ -371,6 +376,7 @@ def verification_tables(doc: dict) -> list[Table]:
             rows.append(("schedule", one_line(f"{sched} ({ab['switching_hash']})")))
         for p in ab["properties"]:
             alpha = f" (α = {ab['alpha']:.10g})" if p["property"] == "decay_rate" else ""
+            alpha += f" ({p['stated']})" if p.get("stated") else ""
             rows.append(("certifies", one_line(f"{p['meaning']}{alpha}")))
         tables.append(Table.build("certificate", ("", ""), rows, layout="list"))
     checks = [

@@ -13,6 +13,7 @@ derives its claims, proves each one and audits its results.
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -237,6 +238,7 @@ def verify(
     kind.audit(audit, doc, subject, reading, alpha)
     checks.append(audit.check())
     about = _about(kind, props, subject, alpha if Property.DECAY_RATE in props else None)
+    about = replace(about, stated=kind.stated(props, reading))
     return Verification(
         all(c.ok for c in checks), kind.verification_method(reading), tuple(checks), about
     )

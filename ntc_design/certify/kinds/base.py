@@ -623,6 +623,25 @@ class CertificateKind(ABC):
             A malformed field read only by this proof.
         """
 
+    def stated(
+        self, properties: tuple[Property, ...], reading: Reading
+    ) -> tuple[tuple[Property, str], ...]:
+        """The numbers each certified property states (``ntc verify`` shows them beside
+        the property), e.g. a robust decay rate and its radius; none by default.
+
+        Parameters
+        ----------
+        properties : tuple of Property
+            What the certificate certifies.
+        reading : Reading
+            From :meth:`read`.
+
+        Returns
+        -------
+        tuple of (Property, str)
+        """
+        return ()
+
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
         """What a certificate of this kind reports, as rows for every face.
 

@@ -507,6 +507,34 @@ class RobustKind(CertificateKind):
             claim.id, proof.holds, f"{proof.method}: {proof.detail} (ρ = {st.radius!r})", claim
         )
 
+    def stated(
+        self, properties: tuple[Property, ...], reading: Reading
+    ) -> tuple[tuple[Property, str], ...]:
+        """ρ_lower, α_lower at ρ and the offset bound √γ at ρ, as the file states them
+        (each proven by its claim's check).
+
+        Parameters
+        ----------
+        properties : tuple of Property
+            What the certificate certifies.
+        reading : Reading
+            From :meth:`read`.
+
+        Returns
+        -------
+        tuple of (Property, str)
+        """
+        st: _State = reading.state
+        out: list[tuple[Property, str]] = []
+        if Property.ROBUST_MARGIN in properties and st.margin is not None:
+            out.append((Property.ROBUST_MARGIN, f"margin radius {st.margin:.6g}"))
+        if Property.ROBUST_DECAY in properties and st.alpha is not None:
+            out.append((Property.ROBUST_DECAY, f"α = {st.alpha:.6g} at ρ = {st.radius:.6g}"))
+        if Property.ROBUST_OFFSET in properties and st.gamma is not None and st.gamma >= 0:
+            bound = math.sqrt(st.gamma)
+            out.append((Property.ROBUST_OFFSET, f"<= {bound:.6g} at ρ = {st.radius:.6g}"))
+        return tuple(out)
+
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
         rows = []
         for key, label in (("decay", "robust decay rate"), ("offset", "consensus offset")):
