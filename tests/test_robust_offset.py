@@ -10,8 +10,16 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.certify.robust import _climb, _offset, _problem, offset_search
-from ntc_design.certify.robust_offset import OFFSET_MAX_ROWS, gains, gains_proven, input_float
+from ntc_design.certify.robust import _problem
+from ntc_design.certify.robust_offset import (
+    OFFSET_MAX_ROWS,
+    gains,
+    gains_proven,
+    input_float,
+    offset_search,
+)
+from ntc_design.certify.robust_search import climb as _climb
+from ntc_design.certify.robust_search import offset_of as _offset
 from ntc_design.design.lemma1 import coupling_matrix
 from ntc_design.generate import random_network
 from ntc_design.paper import THETA

@@ -60,11 +60,11 @@ from ..linalg import require_dense
 from ..model import Topology
 from ..rows import Table, fmt
 from .robust_lmi import _channels, _DecayLMI, _descend, _offset_sdp
+from .robust_search import abscissa, climb, offset_of
 
 #: Robust LMIs are solved up to this Nd (dense P; the S-procedure adds Σ rank(W_e) rows).
 ROBUST_MAX_ND = 40  # dense LMIs up to here (one solve took 2.4 s at Nd = 36, 92 s at 75)
 DEFAULT_RADIUS = 0.05
-SHRINK = 1.0 - 1e-9  # realisations are drawn this far inside the set (rounding)
 
 
 # -- the uncertain edges ---------------------------------------------------------------
@@ -195,12 +195,6 @@ def _sqrtm_psd(w: np.ndarray) -> np.ndarray:
     return (q * np.sqrt(np.clip(lam, 0, None))) @ q.T
 
 
-def _project(e: np.ndarray, radius: float) -> np.ndarray:
-    """The nearest symmetric matrix with spectral norm <= radius (eigenvalues clipped)."""
-    lam, q = np.linalg.eigh(0.5 * (e + e.T))
-    return (q * np.clip(lam, -radius, radius)) @ q.T
-
-
 @dataclass(frozen=True, eq=False)
 class _Problem:
     """The nominal data every bound and search uses (dense)."""
@@ -263,115 +257,6 @@ def _problem(des: ProtocolDesign) -> _Problem:
     )
 
 
-def abscissa(lap: np.ndarray) -> float:
-    """min Re λ(L_B(A')): the decay rate of ε̇ = −L_B(A')ε (> 0 iff −L_B(A') is Hurwitz).
-
-    Parameters
-    ----------
-    lap : numpy.ndarray
-        L_B(A').
-
-    Returns
-    -------
-    float
-    """
-    return float(np.min(np.linalg.eigvals(lap).real))
-
-
-def _offset(p: _Problem, lap: np.ndarray) -> float:
-    try:
-        x = np.linalg.solve(lap, p.u)
-    except np.linalg.LinAlgError:
-        return math.inf
-    return float(np.linalg.norm(x - p.target))
-
-
-def _grad_decay(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
-    """min Re λ and its gradient in each E_e (symmetric), from the eigenvector pair."""
-    import scipy.linalg as sla
-
-    lap = p.lap(es)
-    lam, vl, vr = sla.eig(lap, left=True, right=True)
-    k = int(np.argmin(lam.real))
-    x, y = vr[:, k], vl[:, k]
-    s = np.vdot(y, x)  # yᴴ x
-    d, ed, g = p.d, p.edges, np.zeros_like(es)
-    for e in range(ed.m):
-        i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
-        dx = x[i : i + d] - ed.s[e] * x[j : j + d]
-        kk = p.f[e] @ np.outer(dx, np.conj(y[i : i + d])) @ p.f[e] / s
-        kk = np.real(kk).T  # d Re λ = tr(dE · Re K) -> gradient Re Kᵀ
-        g[e] = 0.5 * (kk + kk.T)
-    return float(lam[k].real), g
-
-
-def _grad_offset(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
-    """½‖x* − 1⊗θ‖² and its gradient in each E_e."""
-    lap = p.lap(es)
-    xs = np.linalg.solve(lap, p.u)
-    z = xs - p.target
-    mu = np.linalg.solve(lap.T, z)
-    d, ed, g = p.d, p.edges, np.zeros_like(es)
-    for e in range(ed.m):
-        i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
-        dx = xs[i : i + d] - ed.s[e] * xs[j : j + d]
-        kk = -(p.f[e] @ np.outer(dx, mu[i : i + d]) @ p.f[e]).T
-        g[e] = 0.5 * (kk + kk.T)
-    return 0.5 * float(z @ z), g
-
-
-def _climb(p: _Problem, radii, objective: str, starts: int, seed: int) -> np.ndarray:
-    """Projected gradient search for the worst E (decay: lowest abscissa; offset: largest
-    offset), from the nominal point, ± vertices and random starts; the best E found."""
-    m, d = p.edges.m, p.d
-    radii = np.broadcast_to(np.asarray(radii, dtype=float), (m,))
-    rng = np.random.default_rng(np.random.SeedSequence(seed))
-    sign = -1.0 if objective == "decay" else 1.0  # maximise sign·value
-    fn = _grad_decay if objective == "decay" else _grad_offset
-
-    def value(es: np.ndarray) -> float:
-        lap = p.lap(es)
-        return -abscissa(lap) if objective == "decay" else 0.5 * _offset(p, lap) ** 2
-
-    inits = [np.zeros((m, d, d))]
-    for k in range(starts):
-        if k < 2:
-            inits.append(((-1) ** k) * radii[:, None, None] * np.broadcast_to(np.eye(d), (m, d, d)))
-        else:
-            r = rng.normal(size=(m, d, d))
-            inits.append(
-                np.array([_project(q * (x + x.T), q) for x, q in zip(r, radii, strict=True)])
-            )
-    best, best_v = inits[0], -math.inf
-    for es in inits:
-        v = value(es)
-        top = float(np.max(radii, initial=0.0))
-        step = top
-        for _ in range(60):
-            try:
-                _, g = fn(p, es)
-            except (np.linalg.LinAlgError, ValueError):
-                break
-            gn = float(np.sqrt(np.sum(g * g)))
-            if not math.isfinite(gn) or gn == 0:
-                break
-            moved = False
-            while step > 1e-6 * max(top, 1e-12):
-                moved_es = es + sign * step * g / gn
-                trial = np.array([_project(x, q) for x, q in zip(moved_es, radii, strict=True)])
-                tv = value(trial)
-                if tv > v + 1e-13 * max(1.0, abs(v)):
-                    es, v, moved = trial, tv, True
-                    step *= 1.5
-                    break
-                step *= 0.5
-            if not moved:
-                break
-        if v > best_v:
-            best, best_v = es, v
-    return best * SHRINK
-
-
 @dataclass(frozen=True)
 class Realisation:
     """A point of the uncertainty set: its radius, the realised weights (edge order of
@@ -425,6 +310,14 @@ def realised_topology(top: Topology, edges: UncertainEdges, weights: np.ndarray)
 
 
 # -- the brackets ----------------------------------------------------------------------------
+
+
+def _worst(p: _Problem, rad: np.ndarray, objective: str, starts: int, seed: int) -> Realisation:
+    """The realisation :func:`.robust_search.climb` finds, with what it attains (min Re λ, or the offset)."""
+    es = climb(p, rad, objective, starts, seed)
+    lap = p.lap(es)
+    value = abscissa(lap) if objective == "decay" else offset_of(p, lap)
+    return Realisation(float(np.max(rad, initial=0.0)), p.weights(es), value)
 
 
 @dataclass(frozen=True)
@@ -619,8 +512,7 @@ def robust(
     ch = _channels(p)
     lmi = _DecayLMI(p, ch)
     # decay: the realisation first, so that the bisection runs below what it attains
-    es = _climb(p, rad, "decay", starts, seed)
-    wd = Realisation(rmax, p.weights(es), abscissa(p.lap(es)))
+    wd = _worst(p, rad, "decay", starts, seed)
     a_lo, dec = _descend(lambda a: lmi(a, rad), max(wd.value, 0.0), bisection_steps)
     decay = Bracket(
         a_lo if dec is not None else None,
@@ -632,8 +524,7 @@ def robust(
     )
     # offset
     off = _offset_sdp(p, ch, rad) if dec is not None else None  # x* exists: decay proven
-    es_o = _climb(p, rad, "offset", starts, seed + 1)
-    wo = Realisation(rmax, p.weights(es_o), _offset(p, p.lap(es_o)))
+    wo = _worst(p, rad, "offset", starts, seed + 1)
     offset = Bracket(
         wo.value,
         None if off is None else math.sqrt(off[0]),
@@ -702,18 +593,19 @@ def _riccati_brackets(
     two methods, and says which."""
     from .dense import lap_b_float
     from .robust_are import RiccatiSearch
+    from .robust_offset import offset_search
 
     des = rep.design
     p = _problem(des)
     rad = p.edges.radii(des.topology, rho)
     rmax = float(np.max(rad, initial=0.0))
-    search = RiccatiSearch(*lap_b_float(des.topology, des.B, des.delta), p.edges, p.d)
+    lap = lap_b_float(des.topology, des.B, des.delta)
+    search = RiccatiSearch(*lap, p.edges, p.d)
     proofs: dict[str, Any] = dict.fromkeys(("decay", "alpha", "offset", "margin"))
     proofs["margin_radius"] = 0.0
     riccati = "quadratic stability with one multiplier per edge, P by a Riccati equation "
     riccati += "alternating with the multipliers (proven by verified Cholesky)"
-    es = _climb(p, rad, "decay", starts, seed)
-    wd = Realisation(rmax, p.weights(es), abscissa(p.lap(es)))
+    wd = _worst(p, rad, "decay", starts, seed)
     dec = rep.decay
     if dec.upper is None or wd.value < dec.upper:
         dec = Bracket(dec.lower, wd.value, wd, "lower", dec.method)
@@ -724,13 +616,12 @@ def _riccati_brackets(
         dec = Bracket(a_lo, dec.upper, dec.realisation, "lower", riccati + "; upper: a "
                       "realisation by projected gradient on the eigenvalue")  # fmt: skip
     off = rep.offset
-    es_o = _climb(p, rad, "offset", starts, seed + 1)
-    wo = Realisation(rmax, p.weights(es_o), _offset(p, p.lap(es_o)))
+    wo = _worst(p, rad, "offset", starts, seed + 1)
     if off.lower is None or wo.value > off.lower:
         off = Bracket(wo.value, off.upper, wo, "upper", off.method.split("; lower")[0]
                       + "; lower: a realisation by projected gradient")  # fmt: skip
     # the S-procedure offset, when every L_B(A') is proven invertible (decay, any method)
-    got_o = offset_search(des)(rad) if dec.lower is not None else None
+    got_o = offset_search(des, lap)(rad) if dec.lower is not None else None
     if got_o is not None and proofs["decay"] is not None:  # the certificate needs both
         proofs["offset"] = (got_o[0], got_o[1], None)
     if got_o is not None and (off.upper is None or math.sqrt(got_o[0]) < off.upper):
@@ -756,28 +647,6 @@ def _riccati_brackets(
     )  # fmt: skip
 
 
-def offset_search(des: ProtocolDesign):
-    """The offset search of :mod:`.robust_offset` for a design (L_B and u with their
-    rounding bounds).
-
-    Parameters
-    ----------
-    des : ProtocolDesign
-        The nominal design.
-
-    Returns
-    -------
-    ntc_design.certify.robust_offset.OffsetSearch
-    """
-    from .dense import lap_b_float
-    from .robust_offset import OffsetSearch, input_float
-
-    top = des.topology
-    lap = lap_b_float(top, des.B, des.delta)
-    return OffsetSearch(*lap, *input_float(top, des.B, des.delta, des.theta),
-                        uncertain_edges(top), top.dim)  # fmt: skip
-
-
 def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisation | None:
     """The smallest radius (bisection in [r_lo, 1)) at which the eigenvalue search finds a
     realisation with min Re λ <= 0; else the all-vanishing realisation at ρ = 1 when it is
@@ -785,7 +654,7 @@ def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisat
     m, d = p.edges.m, p.d
 
     def found(r: float) -> np.ndarray | None:
-        es = _climb(p, r, "decay", starts, seed)
+        es = climb(p, r, "decay", starts, seed)
         return es if abscissa(p.lap(es)) <= 0 else None
 
     top = found(1.0 - 1e-6)
@@ -815,7 +684,6 @@ __all__ = [
     "UncertainEdges",
     "abscissa",
     "check_radius",
-    "offset_search",
     "pivot_columns",
     "realised_topology",
     "robust",

@@ -25,6 +25,7 @@ rounding included; ``ntc verify`` re-checks a certificate's (P, τ) the same way
 
 from __future__ import annotations
 
+import time
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -262,8 +263,6 @@ class RiccatiSearch:
         -------
         (numpy.ndarray, numpy.ndarray) or None
         """
-        import time
-
         import scipy.linalg as sla
 
         rad = np.broadcast_to(np.asarray(radius, dtype=float), (self.m,)).copy()

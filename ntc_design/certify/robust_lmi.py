@@ -14,8 +14,14 @@ if TYPE_CHECKING:  # the problem data is built by .robust, which imports this mo
     from .robust import _Problem
 
 
-def _cvx():
-    import cvxpy as cp  # heavy: only the robust LMIs need it here
+def load_cvxpy():
+    """cvxpy, imported on first use (heavy: only the robust SDPs need it).
+
+    Returns
+    -------
+    module
+    """
+    import cvxpy as cp
 
     return cp
 
@@ -25,8 +31,20 @@ def _cvx():
 SOLVERS = ("CVXOPT", "CLARABEL")
 
 
-def _solve(prob) -> bool:
-    cp = _cvx()
+def solve_sdp(prob) -> bool:
+    """Solve with CVXOPT, then Clarabel (:data:`SOLVERS`) until one reports optimal.
+
+    Parameters
+    ----------
+    prob : cvxpy.Problem
+        The problem.
+
+    Returns
+    -------
+    bool
+        Whether a solver reached an optimal (possibly inaccurate) point.
+    """
+    cp = load_cvxpy()
     for name in SOLVERS:
         try:
             prob.solve(solver=getattr(cp, name))
@@ -112,7 +130,7 @@ class _DecayLMI:
     step only re-solves."""
 
     def __init__(self, p: _Problem, ch) -> None:
-        cp = _cvx()
+        cp = load_cvxpy()
         self.p, self.ch = p, ch
         n = p.n
         # solved on (L_B, W)/s with s = max|L_B|: the same P, τ prove the unscaled LMI
@@ -154,7 +172,7 @@ class _DecayLMI:
         or None."""
         self.alpha.value = alpha / self.scale
         self.rho2.value = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, self.rho2.shape)
-        if not _solve(self.prob) or self.pv.value is None:
+        if not solve_sdp(self.prob) or self.pv.value is None:
             return None
         pm = 0.5 * (self.pv.value + self.pv.value.T)
         tau = np.maximum(np.asarray(self.tv.value, dtype=float).reshape(-1), 0.0)
@@ -226,7 +244,7 @@ def offset_matrix(
 
 def _offset_sdp(p: _Problem, ch, radius) -> tuple[float, np.ndarray, np.ndarray] | None:
     """γ, λ, Y with Γ ≻ 0 (floats, a strict margin), or None."""
-    cp = _cvx()
+    cp = load_cvxpy()
     n = p.n
     r = sum(c[0].shape[1] for c in ch)
     k = n + r + 1
@@ -257,7 +275,7 @@ def _offset_sdp(p: _Problem, ch, radius) -> tuple[float, np.ndarray, np.ndarray]
     expr = expr + a.T @ y + y.T @ a
     scale = 1.0 + float(np.linalg.norm(p.target)) ** 2
     prob = cp.Problem(cp.Minimize(gam), [0.5 * (expr + expr.T) >> 1e-9 * scale * np.eye(k)])
-    if not _solve(prob) or gam.value is None:
+    if not solve_sdp(prob) or gam.value is None:
         return None
     lam_v = np.maximum(np.asarray(lam.value, dtype=float).reshape(-1), 0.0)
     y_v = np.asarray(y.value, dtype=float)
@@ -298,4 +316,4 @@ def _descend(test, top: float, steps: int, floor: float = 0.0):
     return lo, best
 
 
-__all__ = ["FRACTIONS", "SOLVERS", "decay_matrix", "offset_matrix"]
+__all__ = ["FRACTIONS", "SOLVERS", "decay_matrix", "load_cvxpy", "offset_matrix", "solve_sdp"]

@@ -29,6 +29,7 @@ verify`` rebuilds them from γ, λ and the subject, and proves Γ ≻ 0 again.
 
 from __future__ import annotations
 
+import functools
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -131,6 +132,30 @@ def input_float(
     return u.reshape(-1), err.reshape(-1), np.tile(np.asarray(theta, dtype=float), n)
 
 
+def offset_search(des, lap: tuple[np.ndarray, np.ndarray] | None = None) -> OffsetSearch:
+    """The offset search for a design: L_B and u with their rounding bounds.
+
+    Parameters
+    ----------
+    des : ProtocolDesign
+        The nominal design.
+    lap : (numpy.ndarray, numpy.ndarray), optional
+        L_B and its bound (:func:`ntc_design.certify.dense.lap_b_float`), when the caller
+        has them.
+
+    Returns
+    -------
+    OffsetSearch
+    """
+    from .dense import lap_b_float
+    from .robust import uncertain_edges
+
+    top = des.topology
+    lap = lap or lap_b_float(top, des.B, des.delta)
+    u = input_float(top, des.B, des.delta, des.theta)
+    return OffsetSearch(*lap, *u, uncertain_edges(top), top.dim)
+
+
 class OffsetSearch:
     """The reduced offset SDP and its rigorous check for one network (dense).
 
@@ -163,6 +188,7 @@ class OffsetSearch:
         self.g = gains(edges.w) if edges.m else np.zeros((0, dim, dim))
         self.r0 = u - lap @ target
         ac = np.abs(target)
+        self._memo: tuple | None = None
         self.r0_err = u_err + lap_err @ ac + gamma_k(self.n + 2) * (np.abs(lap) @ ac + np.abs(u))
 
     @property
@@ -170,6 +196,7 @@ class OffsetSearch:
         """Σ d + 1: the reduced SDP's size."""
         return self.m * self.d + 1
 
+    @functools.cached_property
     def _a(self) -> np.ndarray:
         """A = [L_B, E_i G_e, −r0] (floats; only L_B and r0 carry rounding)."""
         n, d = self.n, self.d
@@ -177,6 +204,14 @@ class OffsetSearch:
         for e in range(self.m):
             f[self.i[e] : self.i[e] + d, e * d : (e + 1) * d] = self.g[e]
         return np.hstack([self.lap, f, -self.r0.reshape(n, 1)])
+
+    @functools.cached_property
+    def _lu(self):
+        """L_B's LU factors, and L_B⁻¹[G, −r0] (the elimination), computed once."""
+        import scipy.linalg as sla
+
+        lu = sla.lu_factor(self.lap)
+        return lu, sla.lu_solve(lu, self._a[:, self.n :])
 
     def _q(self, lam: np.ndarray, rad: np.ndarray, absolute: bool = False) -> np.ndarray:
         """Σ λ_e ρ_e² D_e W_e D_eᵀ (or its magnitude, for the error bound)."""
@@ -228,11 +263,9 @@ class OffsetSearch:
         import scipy.linalg as sla
 
         n = self.n
-        a = self._a()
         phi, _ = self._phi(gamma, lam, rad)
-        lu = sla.lu_factor(self.lap)
-        gm = a[:, n:]
-        m1 = sla.lu_solve(lu, gm)  # L⁻¹[G, −r0]
+        lu, m1 = self._lu  # m1 = L⁻¹[G, −r0]
+        gm = self._a[:, n:]
         pzz = phi[:n, :n]
         pzw = phi[:n, n:]
         y2 = -sla.lu_solve(lu, pzw - pzz @ m1, trans=1)
@@ -259,7 +292,7 @@ class OffsetSearch:
         (numpy.ndarray, numpy.ndarray)
         """
         n = self.n
-        a = self._a()
+        a = self._a
         a_err = np.zeros_like(a)
         a_err[:, :n] = self.lap_err
         a_err[:, -1] = self.r0_err
@@ -354,12 +387,13 @@ class OffsetSearch:
         return float(h[-1, -1] + h[:-1, -1] @ y)
 
     def _pieces(self, rad: np.ndarray):
-        """The reduced quadratic forms on ζ = (s, t): ZᵀZ, and per edge ρ²(DᵀX)ᵀW(DᵀX)."""
-        import scipy.linalg as sla
-
-        n, d = self.n, self.d
-        a = self._a()
-        x = -sla.solve(self.lap, a[:, n:])  # z = Zζ with Z = −L⁻¹[G, −r0]
+        """The reduced quadratic forms on ζ = (s, t): ZᵀZ, and per edge ρ²(DᵀX)ᵀW(DᵀX)
+        (kept for the last radii: the bumps of one search reuse them)."""
+        key = np.asarray(rad, dtype=float).tobytes()
+        if self._memo is not None and self._memo[0] == key:
+            return self._memo[1]
+        d = self.d
+        x = -self._lu[1]  # z = Zζ with Z = −L⁻¹[G, −r0]
         z = x.copy()
         x[:, -1] += self.target  # x = z + t c
         q = []
@@ -367,7 +401,8 @@ class OffsetSearch:
             i, j = self.i[e], self.j[e]
             dx = x[i : i + d] - self.s[e] * x[j : j + d]
             q.append(rad[e] ** 2 * (dx.T @ self.w[e] @ dx))
-        return z.T @ z, q
+        self._memo = (key, (z.T @ z, q))
+        return self._memo[1]
 
     def _h(self, lam: np.ndarray, rad: np.ndarray) -> np.ndarray:
         zz, q = self._pieces(rad)
@@ -390,12 +425,12 @@ class OffsetSearch:
         -------
         (float, numpy.ndarray) or None
         """
-        from .robust_lmi import _cvx, _solve
+        from .robust_lmi import load_cvxpy, solve_sdp
 
         rad = np.broadcast_to(np.asarray(radius, dtype=float), (self.m,)).copy()
         if self.rows > OFFSET_MAX_ROWS or self.m == 0:
             return None
-        cp = _cvx()
+        cp = load_cvxpy()
         zz, q = self._pieces(rad)
         k, d = self.rows, self.d
         scale = max(float(np.max(np.abs(zz))), 1e-300)
@@ -410,7 +445,7 @@ class OffsetSearch:
             expr = expr - lam[e] * ge
         price = PENALTY * cp.sum(lam) / self.m
         prob = cp.Problem(cp.Minimize(gam + price), [0.5 * (expr + expr.T) >> 0])
-        if not _solve(prob) or lam.value is None:
+        if not solve_sdp(prob) or lam.value is None:
             return None
         lv = np.maximum(np.asarray(lam.value, dtype=float).reshape(-1), 0.0) * scale
         for bump in (1e-6, 1e-4, 1e-3, 1e-2):
@@ -424,4 +459,12 @@ class OffsetSearch:
         return None
 
 
-__all__ = ["GAIN_EPS", "OFFSET_MAX_ROWS", "OffsetSearch", "gains", "gains_proven", "input_float"]
+__all__ = [
+    "GAIN_EPS",
+    "OFFSET_MAX_ROWS",
+    "OffsetSearch",
+    "gains",
+    "gains_proven",
+    "input_float",
+    "offset_search",
+]

@@ -152,6 +152,18 @@ def _norm_bounds(des: ProtocolDesign) -> np.ndarray | None:
     return nu if np.all(proven) else None
 
 
+def _dominance_weights(top, comp: np.ndarray, mu: np.ndarray, nu_r: np.ndarray):
+    """The comparison matrix's off-diagonal part N (edges inside a component) and the
+    weights v: M⁻¹1 for M = diag(μ) − N, moved towards the Perron vector when positive."""
+    import scipy.sparse as sparse
+
+    ea, n = top.edge_arrays, top.n
+    same = comp[ea.rows] == comp[ea.cols]
+    off = sparse.csr_matrix((nu_r[same], (ea.rows[same], ea.cols[same])), shape=(n, n)).tocsr()
+    v = comparison_solve((sparse.diags(mu) - off).tocsr())
+    return off, (_perron(mu, off, v) if np.all(v > 0) else v)
+
+
 def proven_rate(
     des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray, nu: np.ndarray | None = None
 ) -> float | None:
@@ -173,22 +185,16 @@ def proven_rate(
     -------
     float or None
     """
-    import scipy.sparse as sparse
 
     top = des.topology
-    ea = top.edge_arrays
     n = top.n
     bounds = _agent_bounds(des, rad, nu)
     if bounds is None:
         return None
     mu, nu_r = bounds
-    same = comp[ea.rows] == comp[ea.cols]
-    off = sparse.csr_matrix((nu_r[same], (ea.rows[same], ea.cols[same])), shape=(n, n)).tocsr()
-    m = (sparse.diags(mu) - off).tocsr()
-    v = comparison_solve(m)
+    off, v = _dominance_weights(top, comp, mu, nu_r)
     if not np.all(v > 0):
         return None
-    v = _perron(mu, off, v)
     rhs = off @ v
     alpha = float(np.min(mu - rhs / v))
     alpha = alpha - 1e-9 * abs(alpha) - 1e-12 * float(np.max(np.abs(mu)))
@@ -311,20 +317,15 @@ def dominance_failures(des: ProtocolDesign, rad: np.ndarray, comp: np.ndarray, n
     -------
     set of int, or None
     """
-    import scipy.sparse as sparse
 
     top = des.topology
-    ea, n = top.edge_arrays, top.n
+    n = top.n
     bounds = _agent_bounds_per_agent(des, rad, nu)
     if bounds is None:
         return None
     mu, nu_r, ok = bounds
     mu = np.where(ok, mu, 1.0)  # an agent without a proven μ_i fails below in any case
-    same = comp[ea.rows] == comp[ea.cols]
-    off = sparse.csr_matrix((nu_r[same], (ea.rows[same], ea.cols[same])), shape=(n, n)).tocsr()
-    v = comparison_solve((sparse.diags(mu) - off).tocsr())
-    if np.all(v > 0):
-        v = _perron(mu, off, v)
+    _, v = _dominance_weights(top, comp, mu, nu_r)
     held = dominance_holds(top, comp, mu - 4 * U * np.abs(mu), v, nu_r, np.ones(n, dtype=bool))
     return {int(c) for c in np.unique(comp[~(held & ok)])}
 

@@ -439,12 +439,12 @@ def _histogram(f: AggregateFacts, gid: str | None) -> list[Drawn]:
 
 #: The large run's figures, in order: one function each, drawing from AggregateFacts.
 AGGREGATE_FIGURES = (
-    FigureSpec("topology", ONE_COLUMN, _degrees, interactive=False),
-    FigureSpec("topology", ONE_COLUMN, _sparsity, interactive=False),
-    FigureSpec("topology", ONE_COLUMN, _spectrum, interactive=False),
-    FigureSpec("ms", TWO_COLUMN, _quantiles, interactive=False),
-    FigureSpec("paths", TWO_COLUMN, _worst_paths, interactive=False),
-    FigureSpec("paths", ONE_COLUMN, _histogram, interactive=False),
+    FigureSpec("topology", ONE_COLUMN, _degrees),
+    FigureSpec("topology", ONE_COLUMN, _sparsity),
+    FigureSpec("topology", ONE_COLUMN, _spectrum),
+    FigureSpec("ms", TWO_COLUMN, _quantiles),
+    FigureSpec("paths", TWO_COLUMN, _worst_paths),
+    FigureSpec("paths", ONE_COLUMN, _histogram),
 )
 
 

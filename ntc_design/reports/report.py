@@ -65,8 +65,11 @@ def _modes(des: ProtocolDesign | SwitchingDesign) -> dict[str, ProtocolDesign]:
 def design_tables(des: ProtocolDesign | SwitchingDesign) -> tuple[list, dict]:
     """The Lemma 1 parameters as one table with a column per mode (the design's own
     table); and the designs' dict forms."""
-    docs = {name: d.to_dict() for name, d in _modes(des).items()}
-    return [("", html_table(des.table()))], docs
+    return [("", html_table(des.table()))], _design_docs(des)
+
+
+def _design_docs(des: ProtocolDesign | SwitchingDesign) -> dict:
+    return {name: d.to_dict() for name, d in _modes(des).items()}
 
 
 # ------------------------------------------------------------------------ convergence
@@ -597,7 +600,7 @@ def run_section(
     base = base or run.path
     facts = run_facts(run, base, fine)
     section = render_run(facts, figdir, title, key, base, rerun, interactive)
-    _, des_docs = design_tables(facts.design)
+    des_docs = _design_docs(facts.design)
     doc = facts.cert_res.to_dict()
     exact, mc = facts.exact, facts.mc
     summary = {
