@@ -290,10 +290,12 @@ def test_python_dash_m_runs_the_program(monkeypatch):
 
 @pytest.mark.parametrize("ignored", [False, True])
 def test_the_program_notes_ctrl_c_and_keeps_an_ignored_one_ignored(ignored):
-    # a background job starts with SIGINT ignored: ntc leaves it so, as Python does
+    # a background job starts with SIGINT ignored: ntc leaves it so, as Python does. The
+    # child sets its starting state itself: pytest may run in a background job too
     code = (
         "import signal, sys\n"
         + ("signal.signal(signal.SIGINT, signal.SIG_IGN)\n" if ignored else "")
+        + ("" if ignored else "signal.signal(signal.SIGINT, signal.default_int_handler)\n")
         + "from ntc_design import cli, errors\n"
         "cli.main = lambda: print(signal.getsignal(signal.SIGINT) is errors.note_interrupt,"
         " signal.getsignal(signal.SIGINT) is signal.SIG_IGN)\n"
