@@ -50,7 +50,7 @@ VOLATILE = ["wall_seconds", "worker"]
 
 
 @pytest.fixture(scope="module")
-def files(tmp_path_factory):
+def sweep_files(tmp_path_factory):
     d = tmp_path_factory.mktemp("sweep")
     (d / "tiny.yaml").write_text(TOPOLOGY)
     (d / "sc.yaml").write_text(SCENARIO)
@@ -59,10 +59,10 @@ def files(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def reference(files):
+def sweep_reference(sweep_files):
     """The sweep run here, undisturbed, with no cluster."""
-    out = files / "ref"
-    res = run_sweep(files / "sw.yaml", out, workers=1)
+    out = sweep_files / "ref"
+    res = run_sweep(sweep_files / "sw.yaml", out, workers=1)
     assert (res.points, res.computed, res.failed) == (8, 8, 0)
     return out
 
@@ -100,7 +100,7 @@ def _alive(pid: int) -> bool:
 
 
 @pytest.mark.slow
-def test_sweep_on_cluster_survives_a_killed_worker(files, reference, cluster):
+def test_sweep_on_cluster_survives_a_killed_worker(sweep_files, sweep_reference, cluster):
     addr = cluster.scheduler.address
     assert addr.startswith("tcp://127.0.0.1:")
     pids = cluster.run(os.getpid)
@@ -115,16 +115,18 @@ def test_sweep_on_cluster_survives_a_killed_worker(files, reference, cluster):
             killed.append(pids[busy[0]])
             os.kill(pids[busy[0]], signal.SIGKILL)
 
-    out = files / "cluster"
+    out = sweep_files / "cluster"
     with DaskEngine(cluster) as eng:
-        res = run_sweep(files / "sw.yaml", out, engine=eng, progress=kill_a_busy_worker)
+        res = run_sweep(sweep_files / "sw.yaml", out, engine=eng, progress=kill_a_busy_worker)
     assert killed, "no worker was busy to kill"
     assert not _alive(killed[0])
     assert (res.points, res.computed, res.failed) == (8, 8, 0)
     # the same numbers as the undisturbed local run: every row and every curve
-    pd.testing.assert_frame_equal(_stable(out / "results.csv"), _stable(reference / "results.csv"))
     pd.testing.assert_frame_equal(
-        pd.read_parquet(out / "curves.parquet"), pd.read_parquet(reference / "curves.parquet")
+        _stable(out / "results.csv"), _stable(sweep_reference / "results.csv")
+    )
+    pd.testing.assert_frame_equal(
+        pd.read_parquet(out / "curves.parquet"), pd.read_parquet(sweep_reference / "curves.parquet")
     )
     table = pd.read_csv(out / "results.csv")
     assert table["worker"].str.startswith("tcp://127.0.0.1:").all()
@@ -134,8 +136,8 @@ def test_sweep_on_cluster_survives_a_killed_worker(files, reference, cluster):
     assert ex[0.3] > ex[0.1]
 
 
-def test_monte_carlo_bit_identical_through_the_scheduler(files, cluster):
-    top, spec, _ = load_scenario(files / "sc.yaml")
+def test_monte_carlo_bit_identical_through_the_scheduler(sweep_files, cluster):
+    top, spec, _ = load_scenario(sweep_files / "sc.yaml")
     # 6 blocks, the last one short
     spec = spec.replace(mc=replace(spec.mc, paths=230, block_size=40), method="mc")
     local1 = simulate(top, spec.replace(mc=replace(spec.mc, workers=1)))
@@ -150,8 +152,10 @@ def test_monte_carlo_bit_identical_through_the_scheduler(files, cluster):
             assert np.array_equal(got, getattr(local2.mc, key)), (chunk, key)
 
 
-def test_cli_simulate_with_scheduler_matches_local(files, cluster, tmp_path, capsys, monkeypatch):
-    sc = files / "sc.yaml"
+def test_cli_simulate_with_scheduler_matches_local(
+    sweep_files, cluster, tmp_path, capsys, monkeypatch
+):
+    sc = sweep_files / "sc.yaml"
     code, _, err = run_cli(["simulate", sc, "--out", tmp_path / "local"], capsys, monkeypatch)
     assert code == 0, err
     args = ["simulate", sc, "--out", tmp_path / "dask", "--scheduler", cluster.scheduler.address]
@@ -161,7 +165,7 @@ def test_cli_simulate_with_scheduler_matches_local(files, cluster, tmp_path, cap
     assert (tmp_path / "dask" / "ms_error.csv").read_text() == local
 
 
-def test_interrupted_sweep_resumes_to_the_same_results(files, reference, tmp_path):
+def test_interrupted_sweep_resumes_to_the_same_results(sweep_files, sweep_reference, tmp_path):
     out = tmp_path / "resumed"
 
     def stop_after_three(state) -> None:
@@ -169,22 +173,22 @@ def test_interrupted_sweep_resumes_to_the_same_results(files, reference, tmp_pat
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_sweep(files / "sw.yaml", out, workers=1, progress=stop_after_three)
+        run_sweep(sweep_files / "sw.yaml", out, workers=1, progress=stop_after_three)
     assert len(list((out / "points").glob("*.json"))) == 3
     assert not (out / "results.csv").exists()
     assert not list(out.rglob("*.tmp*"))  # nothing half-written
-    res = run_sweep(files / "sw.yaml", out, workers=1)
+    res = run_sweep(sweep_files / "sw.yaml", out, workers=1)
     assert (res.computed, res.reused) == (5, 3)
-    assert _stable(out / "results.csv").equals(_stable(reference / "results.csv"))
+    assert _stable(out / "results.csv").equals(_stable(sweep_reference / "results.csv"))
     # a third run computes nothing
-    again = run_sweep(files / "sw.yaml", out, workers=1)
+    again = run_sweep(sweep_files / "sw.yaml", out, workers=1)
     assert (again.computed, again.reused) == (0, 8)
 
 
-def test_a_failing_point_is_a_row_and_the_others_go_on(files, tmp_path, capsys, monkeypatch):
+def test_a_failing_point_is_a_row_and_the_others_go_on(sweep_files, tmp_path, capsys, monkeypatch):
     sw = tmp_path / "bad.yaml"
     sw.write_text(
-        f"base: {files / 'sc.yaml'}\n"
+        f"base: {sweep_files / 'sc.yaml'}\n"
         "points:\n"
         "  - {noise.sigma: 0.2}\n"
         "  - {noise.sigma: -1}\n"  # a bad parameter
@@ -205,15 +209,15 @@ def test_a_failing_point_is_a_row_and_the_others_go_on(files, tmp_path, capsys, 
     assert "sweep: 4/4 points (2 failed" in err
 
 
-def test_report_of_a_sweep_directory(reference, capsys, monkeypatch):
-    code, out, err = run_cli(["report", reference], capsys, monkeypatch)
+def test_report_of_a_sweep_directory(sweep_reference, capsys, monkeypatch):
+    code, out, err = run_cli(["report", sweep_reference], capsys, monkeypatch)
     assert code == 0, err
-    html = (reference / "report.html").read_text()
+    html = (sweep_reference / "report.html").read_text()
     for needle in ('href="results.csv"', 'href="results.parquet"', 'href="curves.parquet"'):
         assert needle in html
     assert html.count("data:image/png;base64,") == 3  # noise.sigma, seed, the overlay
     assert html.count("<tr>") == 1 + 8  # header + one row per point
-    assert (reference / "figures" / "sweep_ms_vs_noise_sigma.png").is_file()
+    assert (sweep_reference / "figures" / "sweep_ms_vs_noise_sigma.png").is_file()
 
 
 def _free_port() -> int:
@@ -223,7 +227,7 @@ def _free_port() -> int:
 
 
 @pytest.mark.hostile
-def test_unreachable_scheduler_is_one_line(files, tmp_path, capsys, monkeypatch):
+def test_unreachable_scheduler_is_one_line(sweep_files, tmp_path, capsys, monkeypatch):
     import distributed
 
     monkeypatch.setattr(dist, "CONNECT_TIMEOUT", 1.0)
@@ -237,8 +241,8 @@ def test_unreachable_scheduler_is_one_line(files, tmp_path, capsys, monkeypatch)
     monkeypatch.setattr(distributed, "Client", client)
     addr = f"tcp://127.0.0.1:{_free_port()}"
     for cmd in (
-        ["simulate", files / "sc.yaml", "--out", tmp_path / "a"],
-        ["sweep", files / "sw.yaml", "--out", tmp_path / "b"],
+        ["simulate", sweep_files / "sc.yaml", "--out", tmp_path / "a"],
+        ["sweep", sweep_files / "sw.yaml", "--out", tmp_path / "b"],
     ):
         assert_input_error([*cmd, "--scheduler", addr], capsys, monkeypatch, "--scheduler", addr)
     assert timeouts == [1.0, 1.0]  # one attempt per command, each bounded
@@ -246,7 +250,7 @@ def test_unreachable_scheduler_is_one_line(files, tmp_path, capsys, monkeypatch)
 
 
 @pytest.mark.hostile
-def test_a_service_that_is_not_dask_is_one_line(files, tmp_path, capsys, monkeypatch):
+def test_a_service_that_is_not_dask_is_one_line(sweep_files, tmp_path, capsys, monkeypatch):
     """A non-Dask service at the address: its reply was read as a frame length of
     exabytes (MemoryError, reported as 'out of memory')."""
     import threading
@@ -273,7 +277,7 @@ def test_a_service_that_is_not_dask_is_one_line(files, tmp_path, capsys, monkeyp
     addr = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
     try:
         line = assert_input_error(
-            ["sweep", files / "sw.yaml", "--out", tmp_path / "b", "--scheduler", addr],
+            ["sweep", sweep_files / "sw.yaml", "--out", tmp_path / "b", "--scheduler", addr],
             capsys,
             monkeypatch,
             "--scheduler",
@@ -319,8 +323,8 @@ def test_a_service_that_is_not_dask_is_one_line(files, tmp_path, capsys, monkeyp
         ("description: {a: 1}\nbase: sc.yaml\ngrid: {seed: [0]}\n", ["description", "text"]),
     ],
 )
-def test_bad_sweep_files(files, tmp_path, capsys, monkeypatch, body, needles):
-    (tmp_path / "sc.yaml").write_text((files / "sc.yaml").read_text())
+def test_bad_sweep_files(sweep_files, tmp_path, capsys, monkeypatch, body, needles):
+    (tmp_path / "sc.yaml").write_text((sweep_files / "sc.yaml").read_text())
     (tmp_path / "tiny.yaml").write_text(TOPOLOGY)
     sw = tmp_path / "sw.yaml"
     sw.write_text(body)
@@ -342,7 +346,7 @@ def test_bad_sweep_files(files, tmp_path, capsys, monkeypatch, body, needles):
     ids=["workers-0", "workers--1", "workers-1e6", "scheduler-empty", "scheduler-blank", "both"],
 )
 def test_bad_sweep_options_are_refused_before_any_point(
-    files, tmp_path, capsys, monkeypatch, opts, needles
+    sweep_files, tmp_path, capsys, monkeypatch, opts, needles
 ):
     """Every point used to fail with the same error (workers), or the empty address was
     taken as 'no scheduler', and out/ was written either way."""
@@ -353,35 +357,35 @@ def test_bad_sweep_options_are_refused_before_any_point(
     monkeypatch.setattr("ntc_design.sweep.run.run_point", no_point)
     out = tmp_path / "o"
     assert_input_error(
-        ["sweep", files / "sw.yaml", "--out", out, *opts], capsys, monkeypatch, *needles
+        ["sweep", sweep_files / "sw.yaml", "--out", out, *opts], capsys, monkeypatch, *needles
     )
     assert not out.exists()
 
 
 @pytest.mark.hostile
-def test_bad_workers_and_scheduler_in_the_api(files, tmp_path):
+def test_bad_workers_and_scheduler_in_the_api(sweep_files, tmp_path):
     with pytest.raises(InputError, match="--workers: must be a positive integer"):
         dist.LocalEngine(0)  # used to run on 2 processes
     with pytest.raises(InputError, match="--scheduler: expected an address"):
         dist.engine_for("")
     with pytest.raises(InputError, match="--workers: must be at most 4096"):
-        run_sweep(files / "sw.yaml", tmp_path / "o", workers=10**6)
+        run_sweep(sweep_files / "sw.yaml", tmp_path / "o", workers=10**6)
     assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.hostile
-def test_too_many_points_is_refused_before_anything_runs(files, tmp_path):
+def test_too_many_points_is_refused_before_anything_runs(sweep_files, tmp_path):
     sw = tmp_path / "big.yaml"
     n = int(MAX_POINTS**0.5) + 1
     sw.write_text(
-        f"base: {files / 'sc.yaml'}\ngrid:\n  seed: {list(range(n))}\n  margin: {[0.1 * (k + 1) for k in range(n)]}\n"
+        f"base: {sweep_files / 'sc.yaml'}\ngrid:\n  seed: {list(range(n))}\n  margin: {[0.1 * (k + 1) for k in range(n)]}\n"
     )
     with pytest.raises(Exception, match=f"{n * n} points; at most {MAX_POINTS}"):
         load_sweep(sw)
 
 
 @pytest.mark.hostile
-def test_initial_seed_needs_a_mapping_initial(files, tmp_path):
+def test_initial_seed_needs_a_mapping_initial(sweep_files, tmp_path):
     (tmp_path / "tiny.yaml").write_text(TOPOLOGY)
     (tmp_path / "sc.yaml").write_text(SCENARIO.replace("{uniform: [-1, 1], seed: 1}", "[0, 1, 2]"))
     (tmp_path / "sw.yaml").write_text("base: sc.yaml\ngrid: {initial.seed: [1, 2]}\n")
@@ -409,7 +413,7 @@ def test_local_engine_runs_in_process():
     assert got == [("a", (1, False), None)]
 
 
-def test_sweep_report_shows_every_point(files, reference, tmp_path):
+def test_sweep_report_shows_every_point(sweep_files, sweep_reference, tmp_path):
     """``ntc report`` on a sweep folder: one table row per point (its hash and its final
     error as in results.csv), a figure per swept key with two or more values plus the
     overlay, each also written to figures/."""
@@ -420,7 +424,7 @@ def test_sweep_report_shows_every_point(files, reference, tmp_path):
     from ntc_design.reports.sweep import write_sweep_report
 
     d = tmp_path / "sw"
-    shutil.copytree(reference, d)
+    shutil.copytree(sweep_reference, d)
     out = write_sweep_report(d)
     page = out.read_text(encoding="utf-8")
     table = pd.read_csv(d / "results.csv")

@@ -18,7 +18,7 @@ from ntc_design.simulate.system import mode_system
 
 
 @pytest.fixture(scope="module")
-def net():
+def implicit_net():
     top = nd.random_network(400, 3, seed=5)
     des = nd.design(top, THETA, thresholds=False)
     return des, mode_system(des, NoiseModel(sigma=0.4, f=0.3))
@@ -30,8 +30,8 @@ def _reference(lap, ch, b):
 
 
 @pytest.mark.parametrize("ch", [1e-3, 1e-2, 3e-2])
-def test_jacobi_matches_a_direct_solve_to_its_a_priori_bound(net, ch):
-    _, s = net
+def test_jacobi_matches_a_direct_solve_to_its_a_priori_bound(implicit_net, ch):
+    _, s = implicit_net
     b = np.random.default_rng(np.random.SeedSequence(7)).normal(size=(s.nd, 3))
     sol = ImplicitSolver(s.lap_b, ch, 3, method="jacobi")
     exact = _reference(s.lap_b, ch, b)
@@ -49,8 +49,8 @@ def test_jacobi_matches_a_direct_solve_to_its_a_priori_bound(net, ch):
     assert np.allclose(sol.solve(b[:, 0]), got[:, 0], rtol=0, atol=1e-14 * np.abs(got).max())
 
 
-def test_gmres_solves_where_jacobi_would_not_contract(net):
-    _, s = net
+def test_gmres_solves_where_jacobi_would_not_contract(implicit_net):
+    _, s = implicit_net
     ch = 20.0  # c h ρ(L_B) in the thousands: q > 1
     b = np.random.default_rng(np.random.SeedSequence(8)).normal(size=(s.nd, 2))
     sol = ImplicitSolver(s.lap_b, ch, 3, method="gmres")
@@ -66,8 +66,8 @@ def test_gmres_solves_where_jacobi_would_not_contract(net):
         ImplicitSolver(s.lap_b, ch, 3, method="cg")
 
 
-def test_gmres_that_cannot_converge_is_refused_in_one_line(monkeypatch, net):
-    _, s = net
+def test_gmres_that_cannot_converge_is_refused_in_one_line(monkeypatch, implicit_net):
+    _, s = implicit_net
     monkeypatch.setattr(implicit, "GMRES_MAX_RESTARTS", 1)
     monkeypatch.setattr(implicit, "GMRES_RESTART", 2)
     sol = ImplicitSolver(s.lap_b, 50.0, 3, method="gmres")
@@ -76,16 +76,16 @@ def test_gmres_that_cannot_converge_is_refused_in_one_line(monkeypatch, net):
     assert "\n" not in str(e.value)
 
 
-def test_auto_picks_lu_small_jacobi_large(monkeypatch, net):
-    _, s = net
+def test_auto_picks_lu_small_jacobi_large(monkeypatch, implicit_net):
+    _, s = implicit_net
     assert ImplicitSolver(s.lap_b, 0.01, 3).method == "lu"
     monkeypatch.setattr(implicit, "IMPLICIT_LU_MAX_ND", 10)
     assert ImplicitSolver(s.lap_b, 0.01, 3).method == "jacobi"
     assert ImplicitSolver(s.lap_b, 20.0, 3).method == "gmres"
 
 
-def test_steps_differing_by_rounding_share_one_solver(net):
-    _, s = net
+def test_steps_differing_by_rounding_share_one_solver(implicit_net):
+    _, s = implicit_net
     cache = SolverCache(s.lap_b, 3)
     ch = 0.1 / 3
     near = ch * (1 + 4e-16)
@@ -94,9 +94,9 @@ def test_steps_differing_by_rounding_share_one_solver(net):
     assert cache(ch).ch == ch_key(ch) and abs(ch_key(ch) / ch - 1) <= 5e-12
 
 
-def test_guard_floor_by_dominance_is_below_every_real_part(net):
+def test_guard_floor_by_dominance_is_below_every_real_part(implicit_net):
     """Re λ >= min_i (M v)_i / v_i, against every eigenvalue, without ARPACK."""
-    _, s = net
+    _, s = implicit_net
     assert s.nd > sysmod.DENSE_EIG_MAX_ND
     floor, how = s.implicit_floor
     lam = np.linalg.eigvals(s.lap_b.toarray())
@@ -104,8 +104,8 @@ def test_guard_floor_by_dominance_is_below_every_real_part(net):
     assert "spectrum" not in s.__dict__  # the eigenvalues were not needed
 
 
-def test_guard_falls_back_to_eigenvalues_when_dominance_fails(monkeypatch, net):
-    des, _ = net
+def test_guard_falls_back_to_eigenvalues_when_dominance_fails(monkeypatch, implicit_net):
+    des, _ = implicit_net
     monkeypatch.setattr(sysmod, "_dominance_floor", lambda s: -np.inf)
     s = mode_system(des, NoiseModel())
     floor, how = s.implicit_floor
@@ -129,10 +129,10 @@ def test_monte_carlo_by_jacobi_equals_the_lu(monkeypatch):
     assert np.array_equal(jac.mc.mean, jac2.mc.mean)
 
 
-def test_solver_cache_keeps_the_most_recent_few(net):
+def test_solver_cache_keeps_the_most_recent_few(implicit_net):
     """A decaying gain under h_max gives a new c·h at every capped step: the cache keeps
     the CACHE_SOLVERS most recent, so memory does not grow with the horizon."""
-    _, s = net
+    _, s = implicit_net
     cache = SolverCache(s.lap_b, 3)
     made = [cache(1e-3 * (k + 1)) for k in range(implicit.CACHE_SOLVERS + 2)]
     assert len(cache._by_ch) == implicit.CACHE_SOLVERS
@@ -141,9 +141,9 @@ def test_solver_cache_keeps_the_most_recent_few(net):
     assert cache(made[0].ch).ch == made[0].ch
 
 
-def test_a_floor_within_rounding_of_zero_is_not_trusted(monkeypatch, net):
+def test_a_floor_within_rounding_of_zero_is_not_trusted(monkeypatch, implicit_net):
     """The dominance floor must clear FLOOR_RTOL·max|μ_i|; below it the eigenvalues decide."""
-    des, s0 = net
+    des, s0 = implicit_net
     floor, _ = s0.implicit_floor
     blocks = implicit.diagonal_blocks(s0.lap_b, 3)
     mu_max = np.max(np.abs(np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, 0]))

@@ -125,7 +125,7 @@ def test_sparse_step_applies_a_callable_f(g1):
     np.testing.assert_allclose(x, ref, rtol=1e-12, atol=1e-12)
 
 
-def _spec(system_, paths, block=500, scheme="explicit", t_end=0.3, grid=None):
+def _kernel_spec(system_, paths, block=500, scheme="explicit", t_end=0.3, grid=None):
     grid = grid or build_grid(t_end, 1e-3, np.arange(0, t_end + 1e-9, 0.1))
     gain = lambda t: 1.0 / (1.0 + t)  # noqa: E731
     return MonteCarloSpec(
@@ -137,15 +137,15 @@ def _spec(system_, paths, block=500, scheme="explicit", t_end=0.3, grid=None):
 def test_few_paths_still_make_two_blocks(g1_system):
     _, s = g1_system
     for paths, blocks in ((1, 1), (2, 2), (30, 2), (200, 2), (1000, 2), (1001, 3), (2000, 4)):
-        assert _spec(s, paths).n_blocks == blocks
-    spec = _spec(s, 30)
+        assert _kernel_spec(s, paths).n_blocks == blocks
+    spec = _kernel_spec(s, 30)
     a, b = run(spec, workers=1), run(spec, workers=2)
     assert a.count == 30 and np.array_equal(a.sq, b.sq) and np.array_equal(a.stored, b.stored)
 
 
 def test_batch_and_tile_sizes_do_not_change_results(g1_system, monkeypatch):
     _, s = g1_system
-    spec = _spec(s, 40)
+    spec = _kernel_spec(s, 40)
     ref = run_chunk(spec, [0, 1])
     monkeypatch.setattr(montecarlo, "XI_BYTES", 8 * 20 * 16 * 3)  # 3 steps per batch
     monkeypatch.setattr(kernels, "TILE_MIN", 3)  # tiles of 3 paths (and a last one of 2)

@@ -19,7 +19,7 @@ from .test_robust import features, forged_valid, in_set, raise_alpha_to, realise
 
 
 @pytest.fixture(scope="module")
-def mid():
+def mid_robust():
     top = random_network(14, 3, seed=4)  # Nd = 42: past the LMI, where dominance is loose
     des = nd.design(top, THETA, thresholds=False)
     with warnings.catch_warnings():
@@ -27,8 +27,8 @@ def mid():
         return des, robust(des, 0.05, starts=2), robust_scale(des, 0.05)
 
 
-def test_the_riccati_ends_are_sound_and_within_the_targets(mid):
-    des, rep, sparse = mid
+def test_the_riccati_ends_are_sound_and_within_the_targets(mid_robust):
+    des, rep, sparse = mid_robust
     assert ROBUST_MAX_ND < des.topology.nd <= RICCATI_MAX_ND
     assert rep.proofs["method"] == "riccati" and rep.proofs["offset"] is not None
     # tighter than block dominance, and within 2× of what a realisation attains
@@ -56,8 +56,8 @@ def test_the_riccati_ends_are_sound_and_within_the_targets(mid):
         assert features(des, w)[col] == pytest.approx(figure, rel=1e-6)
 
 
-def test_a_proof_is_refused_when_any_premise_fails(mid):
-    des, rep, _ = mid
+def test_a_proof_is_refused_when_any_premise_fails(mid_robust):
+    des, rep, _ = mid_robust
     p = _problem(des)
     search = RiccatiSearch(*lap_b_float(des.topology, des.B, des.delta), p.edges, p.d)
     rad = np.full(search.m, 0.05)
@@ -76,21 +76,21 @@ def test_a_proof_is_refused_when_any_premise_fails(mid):
     assert search(rep.decay.upper * 1.001, rad) is None  # a realisation decays slower
 
 
-def test_the_table_names_the_method_of_each_proven_end(mid):
-    _, rep, sparse = mid
+def test_the_table_names_the_method_of_each_proven_end(mid_robust):
+    _, rep, sparse = mid_robust
     said = [r[-1].text for r in rep.table().rows]
     assert "Riccati search" in said[0] and "S-procedure, reduced" in said[1]
     assert "Riccati search at α = 0" in said[2]
     assert "block dominance" in [r[-1].text for r in sparse.table().rows][0]
 
 
-def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid):
+def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid_robust):
     import json
 
     from ntc_design.certify import verify
     from ntc_design.certify.kinds.robust import robust_certificate
 
-    des, rep, _ = mid
+    des, rep, _ = mid_robust
     doc = json.loads(json.dumps(robust_certificate(rep)))
     ver = verify(doc)
     assert ver.valid

@@ -88,7 +88,7 @@ def test_the_terminal_verdict_names_a_failing_assumption(capsys, monkeypatch):
 
 
 @pytest.mark.parametrize("expr", ["(1+t)^(-1/3)", "1/(1+t)", "exp(-t)", "t^2/(1+t^3)"])
-def test_no_sympy_spelling_reaches_a_user(expr, capsys, monkeypatch):
+def test_no_sympy_spelling_of_an_expression_reaches_a_user(expr, capsys, monkeypatch):
     _, out, _ = run_cli(["gain", expr], capsys, monkeypatch)
     text = out + analyse_gain(expr).table().text()
     assert "oo" not in text.replace("root", "") and "**" not in text

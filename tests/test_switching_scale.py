@@ -55,33 +55,33 @@ def _refresh(doc):
 
 
 @pytest.fixture(scope="module")
-def sw():
+def big_switching():
     return _switching()
 
 
 @pytest.fixture(scope="module")
-def cert(sw):
-    return switching_scale_certificate(design(sw, THETA, thresholds=False))
+def big_cert(big_switching):
+    return switching_scale_certificate(design(big_switching, THETA, thresholds=False))
 
 
-def test_proven_bound_brackets_the_dense_eigenvalue(sw, cert):
-    des = design(sw, THETA, thresholds=False)
+def test_proven_bound_brackets_the_dense_eigenvalue(big_switching, big_cert):
+    des = design(big_switching, THETA, thresholds=False)
     for k, d in des.modes.items():
         lam = _dense_sym_min(d)
-        lo = cert["proofs"][k]["lower"]
-        est = cert["results"]["symmetric_part_min_eig"][k]
+        lo = big_cert["proofs"][k]["lower"]
+        est = big_cert["results"]["symmetric_part_min_eig"][k]
         assert lam > 0
         assert est == pytest.approx(lam, rel=1e-9)
         assert 0 < lo < lam  # a lower bound ...
         assert lo > lam * (1 - 2e-3)  # ... and a tight one
-    ver = verify(cert)
+    ver = verify(big_cert)
     assert ver.valid, [c for c in ver.failed]
     assert ver.about.kind == "switching-scale"
     assert ver.about.scheduled == ("A", "B")
 
 
-def test_certify_uses_the_sparse_kind_above_the_dense_size_and_agrees_with_dense(sw):
-    res = certify(sw, THETA, gain="1/(1+t)")
+def test_certify_uses_the_sparse_kind_above_the_dense_size_and_agrees_with_dense(big_switching):
+    res = certify(big_switching, THETA, gain="1/(1+t)")
     assert res.certificate["kind"] == "switching-scale"
     assert res.verification.valid and res.proven
     assert [t.guaranteed for t in res.theorems] == [True, True]
@@ -95,12 +95,12 @@ def test_certify_uses_the_sparse_kind_above_the_dense_size_and_agrees_with_dense
         )
 
 
-def test_a_failing_mode_is_never_certified(sw):
-    des = design(sw, THETA, thresholds=True)
+def test_a_failing_mode_is_never_certified(big_switching):
+    des = design(big_switching, THETA, thresholds=True)
     ds = des.modes["B"].thresholds.symmetric
     assert ds is not None and ds > 0
     # δ below δ_S in every mode: L_B + L_Bᵀ is indefinite in at least mode B
-    res = certify(sw, THETA, delta=0.5 * ds, gain="1/(1+t)")
+    res = certify(big_switching, THETA, delta=0.5 * ds, gain="1/(1+t)")
     assert res.certificate["kind"] == "switching-scale"
     assert not res.verification.valid and not res.proven
     assert "B" not in res.certificate["proofs"]
@@ -116,8 +116,8 @@ def test_an_agent_nothing_reaches_is_never_certified():
     ea = a.edge_arrays
     keep = ea.rows != 7  # agent 7 loses every in-edge: its row of L_B is 0
     b = Topology.from_arrays(a.labels, 3, ea.rows[keep], ea.cols[keep], ea.w[keep])
-    sw = SwitchingTopology({"A": a, "B": b}, (("A", 1.0), ("B", 1.0)))
-    res = certify(sw, THETA)
+    big_switching = SwitchingTopology({"A": a, "B": b}, (("A", 1.0), ("B", 1.0)))
+    res = certify(big_switching, THETA)
     assert res.certificate["kind"] == "switching-scale"
     assert not res.verification.valid and not res.proven
     assert "B" not in res.certificate["proofs"] and "A" in res.certificate["proofs"]
@@ -138,8 +138,8 @@ def test_an_agent_nothing_reaches_is_never_certified():
         (lambda d: d["subject"]["modes"]["A"].update(informed=[]), "informed"),
     ],
 )
-def test_forgeries_fail_after_the_digest_is_recomputed(cert, forge, needle):
-    doc = copy.deepcopy(cert)
+def test_forgeries_fail_after_the_digest_is_recomputed(big_cert, forge, needle):
+    doc = copy.deepcopy(big_cert)
     forge(doc)
     ver = verify(_refresh(doc))
     assert not ver.valid
@@ -157,21 +157,21 @@ def test_forgeries_fail_after_the_digest_is_recomputed(cert, forge, needle):
         ("k", 3, "expected {lower}"),
     ],
 )
-def test_malformed_proof_fields_are_bad_input(cert, field, value, needle):
-    doc = copy.deepcopy(cert)
+def test_malformed_proof_fields_are_bad_input(big_cert, field, value, needle):
+    doc = copy.deepcopy(big_cert)
     doc["proofs"]["A"][field] = value
     with pytest.raises(InputError, match=needle):
         verify(_refresh(doc))
 
 
-def test_verify_checks_the_users_topology_and_theta(sw, cert):
-    assert verify(cert, topology=sw, theta=THETA).valid
-    other = SwitchingTopology(dict(sw.modes), (("A", 0.1), ("B", 0.3)))
-    ver = verify(cert, topology=other)
+def test_verify_checks_the_users_topology_and_theta(big_switching, big_cert):
+    assert verify(big_cert, topology=big_switching, theta=THETA).valid
+    other = SwitchingTopology(dict(big_switching.modes), (("A", 0.1), ("B", 0.3)))
+    ver = verify(big_cert, topology=other)
     assert [c.name for c in ver.failed] == ["about the given topology"]
-    ver = verify(cert, theta=[1.0, 2.0, 0.5])
+    ver = verify(big_cert, theta=[1.0, 2.0, 0.5])
     assert [c.name for c in ver.failed] == ["θ is the one given"]
-    ver = verify(cert, topology=sw.modes["A"])
+    ver = verify(big_cert, topology=big_switching.modes["A"])
     assert [c.name for c in ver.failed] == ["about the given topology"]
 
 
@@ -190,16 +190,16 @@ def test_hurwitz_scale_verify_checks_the_users_topology_and_theta():
     assert verify(res.certificate).about.modes[0].topology_hash == topology_hash(top)
 
 
-def test_memory_guard_refuses_a_factor_that_will_not_fit(sw, cert, monkeypatch):
+def test_memory_guard_refuses_a_factor_that_will_not_fit(big_switching, big_cert, monkeypatch):
     import ntc_design.linalg as la
 
     monkeypatch.setattr(la, "SPARSE_FACTOR_MAX_BYTES", 1000.0)
-    res = certify(sw, THETA)
+    res = certify(big_switching, THETA)
     assert not res.verification.valid and not res.proven
     assert res.certificate["proofs"] == {}
     assert "refused" in res.certificate["results"]["details"]["A"]
     with pytest.raises(InputError, match="refused"):
-        verify(cert)
+        verify(big_cert)
 
 
 def _reference_fill(a, perm):
@@ -241,15 +241,15 @@ def test_cholesky_fill_is_the_exact_factor_structure(seed):
     assert ok and k >= fill.row_max
 
 
-def test_npz_modes_in_a_switching_file(tmp_path, sw, capsys, monkeypatch):
-    for k, t in sw.modes.items():
+def test_npz_modes_in_a_switching_file(tmp_path, big_switching, capsys, monkeypatch):
+    for k, t in big_switching.modes.items():
         write_topology(t, tmp_path / f"{k}.npz")
-    f = tmp_path / "sw.yaml"
+    f = tmp_path / "big_switching.yaml"
     f.write_text(
         "modes: {A: A.npz, B: B.npz}\nschedule: [{mode: A, duration: 0.1}, {mode: B, duration: 0.2}]\n"
     )
     got = load(f)
-    for k, t in sw.modes.items():
+    for k, t in big_switching.modes.items():
         assert topology_hash(got.modes[k]) == topology_hash(t)
     out = tmp_path / "c.json"
     code, text, err = run_cli(
@@ -276,7 +276,7 @@ def test_npz_modes_in_a_switching_file(tmp_path, sw, capsys, monkeypatch):
     code, _, err = run_cli(["verify", out], capsys, monkeypatch)
     assert code == 1 and "L_B(A) + L_B(A)ᵀ ≻ 0" in err
     (tmp_path / "B.npz").write_bytes(b"not a zip")
-    assert_input_error(["check", f], capsys, monkeypatch, "sw.yaml", "modes.B", "B.npz")
+    assert_input_error(["check", f], capsys, monkeypatch, "big_switching.yaml", "modes.B", "B.npz")
 
 
 def _reference_hash(top):
@@ -347,8 +347,8 @@ def test_rate_estimate_skips_a_component_that_fills_in(monkeypatch):
         lambda d: d["proofs"].update(C={"lower": 0.0}),  # a mode the schedule never uses
     ],
 )
-def test_forged_switching_results_fail(cert, forge):
-    doc = copy.deepcopy(cert)
+def test_forged_switching_results_fail(big_cert, forge):
+    doc = copy.deepcopy(big_cert)
     forge(doc)
     ver = verify(_refresh(doc))
     assert [c.name for c in ver.failed] == [
@@ -373,33 +373,35 @@ def test_forged_switching_results_fail(cert, forge):
 )
 def test_forged_hurwitz_scale_results_fail(forge, needle):
     top = random_network(40, 3, seed=5)
-    cert = certify(top, THETA).certificate
-    doc = copy.deepcopy(cert)
+    big_cert = certify(top, THETA).certificate
+    doc = copy.deepcopy(big_cert)
     forge(doc["results"])
     ver = verify(_refresh(doc))
     assert len(ver.failed) == 1 and ver.failed[0].name.startswith("reported results")
     assert needle in ver.failed[0].detail
 
 
-def test_an_unscheduled_mode_is_neither_proven_nor_reported(sw):
-    once = SwitchingTopology(dict(sw.modes), (("A", 0.5),))
+def test_an_unscheduled_mode_is_neither_proven_nor_reported(big_switching):
+    once = SwitchingTopology(dict(big_switching.modes), (("A", 0.5),))
     res = certify(once, THETA)
     c = res.certificate
     assert res.verification.valid
     assert set(c["proofs"]) == {"A"} and set(c["results"]["symmetric_part_min_eig"]) == {"A"}
 
 
-def test_a_topology_mismatch_names_the_mode(sw, cert):
-    other = SwitchingTopology({"A": sw.modes["A"], "B": sw.modes["A"]}, (("A", 0.1), ("B", 0.2)))
-    (bad,) = verify(cert, topology=other).failed
+def test_a_topology_mismatch_names_the_mode(big_switching, big_cert):
+    other = SwitchingTopology(
+        {"A": big_switching.modes["A"], "B": big_switching.modes["A"]}, (("A", 0.1), ("B", 0.2))
+    )
+    (bad,) = verify(big_cert, topology=other).failed
     assert "(mode B differs)" in bad.detail
-    moved = SwitchingTopology(dict(sw.modes), (("A", 0.1), ("B", 0.25)))
-    (bad,) = verify(cert, topology=moved).failed
+    moved = SwitchingTopology(dict(big_switching.modes), (("A", 0.1), ("B", 0.25)))
+    (bad,) = verify(big_cert, topology=moved).failed
     assert "(the schedule differs)" in bad.detail
 
 
 def test_a_missing_npz_mode_says_so(tmp_path, capsys, monkeypatch):
-    f = tmp_path / "sw.yaml"
+    f = tmp_path / "big_switching.yaml"
     f.write_text("modes: {A: nope.npz}\nschedule: [{mode: A, duration: 1}]\n")
     assert_input_error(["check", f], capsys, monkeypatch, "modes.A", "nope.npz: no such file")
 
@@ -432,8 +434,8 @@ def test_overflow_or_nan_never_proves_anything():
         (("proofs", "A", "lower"), 10**400, "lower"),
     ],
 )
-def test_out_of_range_numbers_are_bad_input(cert, path, value, needle):
-    doc = copy.deepcopy(cert)
+def test_out_of_range_numbers_are_bad_input(big_cert, path, value, needle):
+    doc = copy.deepcopy(big_cert)
     node = doc
     for key in path[:-1]:
         node = node[key]
@@ -442,10 +444,10 @@ def test_out_of_range_numbers_are_bad_input(cert, path, value, needle):
         verify(_refresh(doc))
 
 
-def test_tiny_weights_are_bad_input_not_a_proof(cert):
+def test_tiny_weights_are_bad_input_not_a_proof(big_cert):
     from ntc_design.certify.arrays import pack
 
-    doc = copy.deepcopy(cert)
+    doc = copy.deepcopy(big_cert)
     t = doc["subject"]["modes"]["A"]["topology"]
     from ntc_design.certify.arrays import unpack
 
@@ -518,8 +520,8 @@ def test_rate_lower_bound_only_when_every_component_is_dominance():
     ],
 )
 def test_hurwitz_scale_checks_what_it_certifies_and_claims(forge):
-    cert = certify(random_network(40, 3, seed=5), THETA).certificate
-    doc = copy.deepcopy(cert)
+    big_cert = certify(random_network(40, 3, seed=5), THETA).certificate
+    doc = copy.deepcopy(big_cert)
     forge(doc)
     doc["digest"] = digest(doc)
     if "subject_digest" in doc and doc["subject_digest"] != "sha256:0":
@@ -528,8 +530,8 @@ def test_hurwitz_scale_checks_what_it_certifies_and_claims(forge):
 
 
 @pytest.mark.parametrize("value", ["abc", [1], None, 10**400])
-def test_malformed_unscheduled_proof_is_invalid_not_a_crash(cert, value):
-    doc = copy.deepcopy(cert)
+def test_malformed_unscheduled_proof_is_invalid_not_a_crash(big_cert, value):
+    doc = copy.deepcopy(big_cert)
     doc["proofs"]["Z"] = {"lower": value}
     doc["results"]["symmetric_part_min_eig"]["Z"] = 1.0
     ver = verify(_refresh(doc))
@@ -544,8 +546,8 @@ def test_a_bound_below_the_number_range_is_issued_as_zero():
     i2, t2 = np.eye(2) * s, np.diag([1.0, 2.0**-9]) * s
     a = Topology.from_edges(4, 2, [(1, 2, -i2), (2, 1, -i2), (3, 4, -t2), (4, 3, -t2)])
     b = Topology.from_edges(4, 2, [(1, 2, -i2), (2, 1, -i2), (3, 4, -i2), (4, 3, -i2)])
-    sw = SwitchingTopology({"A": a, "B": b}, (("A", 1.0), ("B", 1.0)))
-    c = switching_scale_certificate(design(sw, [1.0, -2.0], thresholds=False))
+    big_switching = SwitchingTopology({"A": a, "B": b}, (("A", 1.0), ("B", 1.0)))
+    c = switching_scale_certificate(design(big_switching, [1.0, -2.0], thresholds=False))
     assert c["proofs"]["A"]["lower"] == 0.0 and c["results"]["symmetric_part_min_eig"]["A"] > 0
     assert verify(json.loads(json.dumps(c))).valid
 
@@ -583,7 +585,7 @@ def _count_numeric(monkeypatch):
     return calls
 
 
-def test_factorisations_per_mode(sw, monkeypatch):
+def test_factorisations_per_mode(big_switching, monkeypatch):
     """Issue 20: the issuer factorises twice per mode (the ℓ = 0 proof, which is also the
     eigensolver's inverse, then ℓ), ``certify`` re-verifies without factorising the same
     matrices again, and a fresh verify factorises once per mode."""
@@ -591,7 +593,7 @@ def test_factorisations_per_mode(sw, monkeypatch):
 
     la._PROVEN.clear()
     calls = _count_numeric(monkeypatch)
-    res = certify(sw, THETA)
+    res = certify(big_switching, THETA)
     assert res.certificate["kind"] == "switching-scale" and res.verification.valid
     assert all(lo > 0 for lo in res.certificate["results"]["symmetric_part_lower_bound"].values())
     assert len(calls) == 4
@@ -625,7 +627,7 @@ def test_reuse_needs_the_bit_identical_matrix(monkeypatch):
     assert len(la._PROVEN) <= la.PROVEN_KEEP
 
 
-def test_a_mode_above_the_rate_proof_size_keeps_one_factorisation(sw, monkeypatch):
+def test_a_mode_above_the_rate_proof_size_keeps_one_factorisation(big_switching, monkeypatch):
     """Issue 20: above RATE_PROOF_MAX_FLOPS the second factorisation (ℓ > 0) is not made:
     ℓ = 0 is proven by the factor that serves the estimate, the estimate is still the
     dense eigenvalue, and the certificate verifies."""
@@ -640,7 +642,7 @@ def test_a_mode_above_the_rate_proof_size_keeps_one_factorisation(sw, monkeypatc
         return real(self, *a, **k)
 
     monkeypatch.setattr(linalg.SPDFamily, "factor", counting)
-    des = design(sw, THETA, thresholds=False)
+    des = design(big_switching, THETA, thresholds=False)
     full = switching_scale_certificate(des)
     n_full = len(calls)
     monkeypatch.setattr(ss, "RATE_PROOF_MAX_FLOPS", 0.0)
@@ -656,14 +658,14 @@ def test_a_mode_above_the_rate_proof_size_keeps_one_factorisation(sw, monkeypatc
     assert verify(one).valid
 
 
-def test_big_modes_are_proven_in_parallel_with_the_same_certificate(sw, monkeypatch):
+def test_big_modes_are_proven_in_parallel_with_the_same_certificate(big_switching, monkeypatch):
     """Modes above PARALLEL_MIN_ND are proven in forked processes (certify and verify):
     the same proofs and numbers as in one process, and certify's own re-verification
     still reuses the children's factorisations (none repeated in the parent)."""
     from ntc_design import linalg
     from ntc_design.certify import switching_scale as ss
 
-    des = design(sw, THETA, thresholds=False)
+    des = design(big_switching, THETA, thresholds=False)
     serial = switching_scale_certificate(des)
     big_nd = ss.PARALLEL_MIN_ND
     monkeypatch.setattr(ss, "PARALLEL_MIN_ND", 0)

@@ -89,7 +89,7 @@ def test_search_skips_infinite_candidates():
 # eigenbasis S_k' = −2λ_k c S_k + c² w²σ², which for c = a/(b + t) integrates to
 # S_k(T) = S_k(0) (b/(b+T))^(2λa) + a²w²σ²/(2λa − 1)·[(b+T)^(−1) − b^(2λa−1)(b+T)^(−2λa)].
 
-PAIR = """name: pair
+PAIR = """name: pair_network
 dim: 1
 agents: 2
 edges:
@@ -101,7 +101,7 @@ X0_PAIR = np.array([3.0, -1.0])
 
 
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
+def pair_network(tmp_path_factory):
     p = tmp_path_factory.mktemp("pair") / "pair.yaml"
     p.write_text(PAIR, encoding="utf-8")
     top = nd.load(p)
@@ -121,16 +121,16 @@ def pair(tmp_path_factory):
 
 
 @pytest.mark.parametrize("a, b", [(1.0, 1.0), (0.3, 2.0), (2.0, 0.5), (6.0, 7.0)])
-def test_exact_objective_equals_the_closed_form(pair, a, b):
-    top, spec, closed = pair
+def test_exact_objective_equals_the_closed_form(pair_network, a, b):
+    top, spec, closed = pair_network
     obj = ExactObjective(top, spec, T_PAIR)
     assert obj.curve(PowerGain(a, b, 1.0)).final == pytest.approx(closed(a, b), rel=1e-8)
     # the search's coarser RK4 is still accurate to 1e-5
     assert obj.value(PowerGain(a, b, 1.0)) == pytest.approx(closed(a, b), rel=1e-5)
 
 
-def test_tuned_gain_reaches_the_known_optimum(pair):
-    top, spec, closed = pair
+def test_tuned_gain_reaches_the_known_optimum(pair_network):
+    top, spec, closed = pair_network
     ref = minimize(
         lambda p: closed(math.exp(p[0]), math.exp(p[1])),
         [0.0, 0.0],

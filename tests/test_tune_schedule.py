@@ -36,19 +36,14 @@ X0 = np.linspace(-3, 3, 21)
 
 
 @pytest.fixture(scope="module")
-def g1():
-    return nd.load("examples/g1.yaml")
-
-
-@pytest.fixture(scope="module")
-def spec():
+def g1_spec():
     return SimulationSpec.build(THETA, noise=NoiseModel(0.4, 0.3), initial=X0, margin=0.1)
 
 
 @pytest.fixture(scope="module")
-def problem(g1, spec):
+def problem(g1, g1_spec):
     def build(horizon):
-        pm = prepare_modes(g1, spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
+        pm = prepare_modes(g1, g1_spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
         return ScheduleProblem(pm, horizon)
 
     return build
@@ -154,19 +149,19 @@ def test_adjoint_gradient_matches_finite_differences(problem):
     assert gw[2] == pytest.approx(fd, rel=1e-6)
 
 
-def test_forward_agrees_with_the_independent_moment_integrator(problem, g1, spec):
+def test_forward_agrees_with_the_independent_moment_integrator(problem, g1, g1_spec):
     """tr S(T) of the half-vectorised RK4 against the tuner's matrix RK4 (κ = 0.2)."""
     prob = problem(3.0)
     nodes = np.linspace(0, 3, 31)
     c = 1.3 / (0.5 + nodes)
     sched = ScheduleGain(nodes, c, tail=join_tail(3.0, float(c[-1])))
     st = prob.forward(c, prob.plan(c), store=False)
-    ind = ExactObjective(g1, spec, 3.0).curve(sched, None, points=31).final
+    ind = ExactObjective(g1, g1_spec, 3.0).curve(sched, None, points=31).final
     assert st.value == pytest.approx(ind, rel=2e-5)
 
 
-def test_operators_reproduce_the_moment_right_hand_side(g1, spec):
-    pm = prepare_modes(g1, spec.replace(T=1.0, method="exact"), lambda t: 1 + 0 * t)
+def test_operators_reproduce_the_moment_right_hand_side(g1, g1_spec):
+    pm = prepare_modes(g1, g1_spec.replace(T=1.0, method="exact"), lambda t: 1 + 0 * t)
     ops = MomentOperators.build(pm.systems[0], pm.n, pm.d)
     from ntc_design.simulate.moments import MomentRhs
 
@@ -234,13 +229,13 @@ def _independent_problem(pm, horizon, pieces):
 
 
 @pytest.mark.slow
-def test_optimum_is_within_3_percent_of_an_independent_optimum(problem, g1, spec):
+def test_optimum_is_within_3_percent_of_an_independent_optimum(problem, g1, g1_spec):
     """The independent optimum: 6 constant pieces propagated by matrix exponentials,
     L-BFGS-B with finite differences from c = 1. The continuous schedule on finer pieces
     is at least as good, and within 3 %."""
     horizon = 2.0
     sol = optimise_schedule(problem(horizon), BASELINE, levels=(10, 20, 40))
-    pm = prepare_modes(g1, spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
+    pm = prepare_modes(g1, g1_spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
     value = _independent_problem(pm, horizon, 6)
     r = minimize(
         value, np.zeros(6), method="L-BFGS-B", bounds=[(-6, 1.5)] * 6, options={"eps": 1e-6}
@@ -249,11 +244,11 @@ def test_optimum_is_within_3_percent_of_an_independent_optimum(problem, g1, spec
     assert sol.value >= 0.97 * r.fun
 
 
-def test_optimum_is_below_an_independent_piecewise_constant_evaluation(problem, g1, spec):
+def test_optimum_is_below_an_independent_piecewise_constant_evaluation(problem, g1, g1_spec):
     horizon = 2.0
     prob = problem(horizon)
     sol = optimise_schedule(prob, BASELINE, levels=(10, 20, 40))
-    pm = prepare_modes(g1, spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
+    pm = prepare_modes(g1, g1_spec.replace(T=horizon, method="exact"), lambda t: 1 + 0 * t)
     value = _independent_problem(pm, horizon, 8)
     mid = np.linspace(0, horizon, 17)[1::2]
     near = value(np.log(np.interp(mid, sol.t, sol.c)))
@@ -264,7 +259,7 @@ def test_optimum_is_below_an_independent_piecewise_constant_evaluation(problem, 
     assert value(np.log(1 / (1 + mid))) > 1.5 * sol.value
     # and re-evaluated independently, the returned schedule gives the reported value
     sched = ScheduleGain(sol.t, sol.c, tail=join_tail(horizon, float(sol.c[-1])))
-    again = ExactObjective(g1, spec, horizon).curve(sched, None).final
+    again = ExactObjective(g1, g1_spec, horizon).curve(sched, None).final
     assert again == pytest.approx(sol.value, rel=1e-3)
     assert sol.optimality < 1e-3
     assert [lv.pieces for lv in sol.levels][:2] == [10, 20]
@@ -297,11 +292,13 @@ def test_max_gain_binds_and_says_so(problem):
 
 
 @pytest.mark.slow
-def test_g1_deadline_numbers_of_the_issue(g1, spec):
+def test_g1_deadline_numbers_of_the_issue(g1, g1_spec):
     """G1, T = 10, x(0) = linspace(−3, 3, 21): the optimum about 0.8325, the best power law
     about 1.545, 1/(1 + t) 2.917 (independent numbers of issue 28), every Monte Carlo
     value inside its 99 % band, both theorems for the schedule with its tail."""
-    r = tune(g1, spec.replace(mc=spec.mc.__class__(paths=200, seed=0)), 10.0, schedule="optimal")
+    r = tune(
+        g1, g1_spec.replace(mc=g1_spec.mc.__class__(paths=200, seed=0)), 10.0, schedule="optimal"
+    )
     ms = r.ms_error_T
     assert ms["optimal"] == pytest.approx(0.8325, rel=3e-3)
     assert ms["power"] == pytest.approx(1.545, rel=1e-2)
@@ -500,8 +497,8 @@ def test_cli_schedule_end_to_end_writes_a_runnable_folder(tmp_path, capsys, monk
     assert f"schedule ({len(doc['schedule']['t'])} points on [0, 1.5], linear)" in page
 
 
-def test_power_tune_reports_its_peak(g1, spec):
-    r = tune(g1, spec, 2.0, max_evaluations=20, landscape=False, certificate=False)
+def test_power_tune_reports_its_peak(g1, g1_spec):
+    r = tune(g1, g1_spec, 2.0, max_evaluations=20, landscape=False, certificate=False)
     pk = r.ms_error_peak
     assert pk["tuned"]["value"] == pytest.approx(float(r.curves["tuned"].total.max()))
     assert 0 <= pk["tuned"]["t"] <= 2.0
