@@ -20,6 +20,8 @@ settings.load_profile("ntc")
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
+# the initial state of the G1 simulations (21 = 7 agents × d 3), one seed for every test
+X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
 
 
 def random_topology(

@@ -18,9 +18,7 @@ from ntc_design.simulate.moments import em_moments, exact_moments
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run, run_chunk
 from ntc_design.simulate.system import grounded_laplacian_sparse, mode_system
 
-from .conftest import random_topology
-
-X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
+from .conftest import X0, random_topology
 
 
 def stiff_network(n: int, seed: int, d: int = 3) -> nd.Topology:

@@ -16,9 +16,7 @@ from ntc_design.simulate.montecarlo import MonteCarloSpec, run
 from ntc_design.simulate.system import mode_system
 
 from .cli_helpers import assert_input_error, run_cli
-from .conftest import ROOT
-
-X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
+from .conftest import ROOT, X0
 
 
 @pytest.fixture(scope="module")

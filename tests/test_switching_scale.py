@@ -26,7 +26,7 @@ from ntc_design.model import SwitchingTopology, Topology
 
 from .cli_helpers import assert_input_error, run_cli
 
-THETA = [1.0, -2.0, 0.5]
+THETA_SW = [1.0, -2.0, 0.5]
 
 
 def _switching(n=30, d=3, seeds=(1, 2), families=("random", "small-world")):
@@ -61,11 +61,11 @@ def big_switching():
 
 @pytest.fixture(scope="module")
 def big_cert(big_switching):
-    return switching_scale_certificate(design(big_switching, THETA, thresholds=False))
+    return switching_scale_certificate(design(big_switching, THETA_SW, thresholds=False))
 
 
 def test_proven_bound_brackets_the_dense_eigenvalue(big_switching, big_cert):
-    des = design(big_switching, THETA, thresholds=False)
+    des = design(big_switching, THETA_SW, thresholds=False)
     for k, d in des.modes.items():
         lam = _dense_sym_min(d)
         lo = big_cert["proofs"][k]["lower"]
@@ -81,7 +81,7 @@ def test_proven_bound_brackets_the_dense_eigenvalue(big_switching, big_cert):
 
 
 def test_certify_uses_the_sparse_kind_above_the_dense_size_and_agrees_with_dense(big_switching):
-    res = certify(big_switching, THETA, gain="1/(1+t)")
+    res = certify(big_switching, THETA_SW, gain="1/(1+t)")
     assert res.certificate["kind"] == "switching-scale"
     assert res.verification.valid and res.proven
     assert [t.guaranteed for t in res.theorems] == [True, True]
@@ -96,11 +96,11 @@ def test_certify_uses_the_sparse_kind_above_the_dense_size_and_agrees_with_dense
 
 
 def test_a_failing_mode_is_never_certified(big_switching):
-    des = design(big_switching, THETA, thresholds=True)
+    des = design(big_switching, THETA_SW, thresholds=True)
     ds = des.modes["B"].thresholds.symmetric
     assert ds is not None and ds > 0
     # δ below δ_S in every mode: L_B + L_Bᵀ is indefinite in at least mode B
-    res = certify(big_switching, THETA, delta=0.5 * ds, gain="1/(1+t)")
+    res = certify(big_switching, THETA_SW, delta=0.5 * ds, gain="1/(1+t)")
     assert res.certificate["kind"] == "switching-scale"
     assert not res.verification.valid and not res.proven
     assert "B" not in res.certificate["proofs"]
@@ -117,7 +117,7 @@ def test_an_agent_nothing_reaches_is_never_certified():
     keep = ea.rows != 7  # agent 7 loses every in-edge: its row of L_B is 0
     b = Topology.from_arrays(a.labels, 3, ea.rows[keep], ea.cols[keep], ea.w[keep])
     big_switching = SwitchingTopology({"A": a, "B": b}, (("A", 1.0), ("B", 1.0)))
-    res = certify(big_switching, THETA)
+    res = certify(big_switching, THETA_SW)
     assert res.certificate["kind"] == "switching-scale"
     assert not res.verification.valid and not res.proven
     assert "B" not in res.certificate["proofs"] and "A" in res.certificate["proofs"]
@@ -165,7 +165,7 @@ def test_malformed_proof_fields_are_bad_input(big_cert, field, value, needle):
 
 
 def test_verify_checks_the_users_topology_and_theta(big_switching, big_cert):
-    assert verify(big_cert, topology=big_switching, theta=THETA).valid
+    assert verify(big_cert, topology=big_switching, theta=THETA_SW).valid
     other = SwitchingTopology(dict(big_switching.modes), (("A", 0.1), ("B", 0.3)))
     ver = verify(big_cert, topology=other)
     assert [c.name for c in ver.failed] == ["about the given topology"]
@@ -177,9 +177,9 @@ def test_verify_checks_the_users_topology_and_theta(big_switching, big_cert):
 
 def test_hurwitz_scale_verify_checks_the_users_topology_and_theta():
     top = random_network(40, 3, seed=5)
-    res = certify(top, THETA)
+    res = certify(top, THETA_SW)
     assert res.certificate["kind"] == "hurwitz-scale" and res.verification.valid
-    assert verify(res.certificate, topology=top, theta=THETA).valid
+    assert verify(res.certificate, topology=top, theta=THETA_SW).valid
     other = random_network(40, 3, seed=6)
     assert [c.name for c in verify(res.certificate, topology=other).failed] == [
         "about the given topology"
@@ -194,7 +194,7 @@ def test_memory_guard_refuses_a_factor_that_will_not_fit(big_switching, big_cert
     import ntc_design.linalg as la
 
     monkeypatch.setattr(la, "SPARSE_FACTOR_MAX_BYTES", 1000.0)
-    res = certify(big_switching, THETA)
+    res = certify(big_switching, THETA_SW)
     assert not res.verification.valid and not res.proven
     assert res.certificate["proofs"] == {}
     assert "refused" in res.certificate["results"]["details"]["A"]
@@ -310,14 +310,14 @@ def test_delta_s_is_skipped_with_a_reason_when_the_bisection_would_not_fit(monke
     import ntc_design.linalg as la
 
     top = random_network(80, 3, seed=2)
-    full = design(top, THETA, thresholds=True).thresholds
+    full = design(top, THETA_SW, thresholds=True).thresholds
     assert full.symmetric is not None and full.symmetric > 0
     monkeypatch.setattr(
         la,
         "SPARSE_FACTOR_MAX_FLOPS",
         10 * la.cholesky_fill((top.laplacian_sparse() + top.laplacian_sparse().T).tocsr()).flops,
     )
-    th = design(top, THETA, thresholds=True).thresholds
+    th = design(top, THETA_SW, thresholds=True).thresholds
     assert th.symmetric is None
     assert any(n.startswith("δ_S not computed: the bisection needs about 50") for n in th.notes)
     assert th.hurwitz == full.hurwitz  # the per-component δ_H does not factorise
@@ -327,13 +327,13 @@ def test_rate_estimate_skips_a_component_that_fills_in(monkeypatch):
     import ntc_design.certify.scale as sc
 
     top = random_network(700, 3, seed=1, extra=2.0)
-    res = certify(top, THETA)
+    res = certify(top, THETA_SW)
     assert res.certificate["kind"] == "hurwitz-scale" and res.verification.valid
     big = res.certificate["results"]["largest_component_agents"]
     assert big * 3 > sc.RATE_DENSE_MAX_ND  # the big component goes to ARPACK ...
     assert "ARPACK" in res.certificate["results"]["rate_estimate"]["method"]
     monkeypatch.setattr(sc, "RATE_ARPACK_MAX_FLOPS", 1.0)  # ... unless it fills in
-    res2 = certify(top, THETA)
+    res2 = certify(top, THETA_SW)
     assert res2.verification.valid
     assert "filling in too much" in res2.certificate["results"]["rate_estimate"]["method"]
 
@@ -373,7 +373,7 @@ def test_forged_switching_results_fail(big_cert, forge):
 )
 def test_forged_hurwitz_scale_results_fail(forge, needle):
     top = random_network(40, 3, seed=5)
-    big_cert = certify(top, THETA).certificate
+    big_cert = certify(top, THETA_SW).certificate
     doc = copy.deepcopy(big_cert)
     forge(doc["results"])
     ver = verify(_refresh(doc))
@@ -383,7 +383,7 @@ def test_forged_hurwitz_scale_results_fail(forge, needle):
 
 def test_an_unscheduled_mode_is_neither_proven_nor_reported(big_switching):
     once = SwitchingTopology(dict(big_switching.modes), (("A", 0.5),))
-    res = certify(once, THETA)
+    res = certify(once, THETA_SW)
     c = res.certificate
     assert res.verification.valid
     assert set(c["proofs"]) == {"A"} and set(c["results"]["symmetric_part_min_eig"]) == {"A"}
@@ -501,7 +501,7 @@ def test_rate_lower_bound_only_when_every_component_is_dominance():
     (bad,) = verify(_refresh(doc)).failed
     assert "not every component is a dominance one" in bad.detail
     # all-dominance network: the bound is there, below the estimate, and checked
-    c2 = certify(random_network(40, 3, seed=5), THETA).certificate
+    c2 = certify(random_network(40, 3, seed=5), THETA_SW).certificate
     lo, est = c2["results"]["rate_lower_bound"]["value"], c2["results"]["eig_bound"]
     assert lo is not None and 0 < lo <= est
     doc = copy.deepcopy(c2)
@@ -520,7 +520,7 @@ def test_rate_lower_bound_only_when_every_component_is_dominance():
     ],
 )
 def test_hurwitz_scale_checks_what_it_certifies_and_claims(forge):
-    big_cert = certify(random_network(40, 3, seed=5), THETA).certificate
+    big_cert = certify(random_network(40, 3, seed=5), THETA_SW).certificate
     doc = copy.deepcopy(big_cert)
     forge(doc)
     doc["digest"] = digest(doc)
@@ -593,7 +593,7 @@ def test_factorisations_per_mode(big_switching, monkeypatch):
 
     la._PROVEN.clear()
     calls = _count_numeric(monkeypatch)
-    res = certify(big_switching, THETA)
+    res = certify(big_switching, THETA_SW)
     assert res.certificate["kind"] == "switching-scale" and res.verification.valid
     assert all(lo > 0 for lo in res.certificate["results"]["symmetric_part_lower_bound"].values())
     assert len(calls) == 4
@@ -642,7 +642,7 @@ def test_a_mode_above_the_rate_proof_size_keeps_one_factorisation(big_switching,
         return real(self, *a, **k)
 
     monkeypatch.setattr(linalg.SPDFamily, "factor", counting)
-    des = design(big_switching, THETA, thresholds=False)
+    des = design(big_switching, THETA_SW, thresholds=False)
     full = switching_scale_certificate(des)
     n_full = len(calls)
     monkeypatch.setattr(ss, "RATE_PROOF_MAX_FLOPS", 0.0)
@@ -665,7 +665,7 @@ def test_big_modes_are_proven_in_parallel_with_the_same_certificate(big_switchin
     from ntc_design import linalg
     from ntc_design.certify import switching_scale as ss
 
-    des = design(big_switching, THETA, thresholds=False)
+    des = design(big_switching, THETA_SW, thresholds=False)
     serial = switching_scale_certificate(des)
     big_nd = ss.PARALLEL_MIN_ND
     monkeypatch.setattr(ss, "PARALLEL_MIN_ND", 0)

@@ -23,9 +23,7 @@ from ntc_design.simulate.timevarying import exact_moments_tv, time_varying_syste
 from ntc_design.timevarying import ExpressionTopology, TimeVaryingDesign, from_document
 
 from .cli_helpers import assert_input_error, run_cli
-from .conftest import ROOT
-
-X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
+from .conftest import ROOT, X0
 
 
 @pytest.fixture(scope="module")
