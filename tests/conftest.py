@@ -81,3 +81,19 @@ def g3() -> Topology:
 def switching_set() -> SwitchingTopology:
     """The paper's switching set G1, G2, G3 with its schedule."""
     return paper.switching()
+
+
+# fixtures shared by several test files, defined once beside their helpers
+pytest_plugins = [
+    "tests.support.certificates",
+    "tests.support.distributed",
+    "tests.support.implicit",
+    "tests.support.kernel",
+    "tests.support.reports",
+    "tests.support.robust",
+    "tests.support.robust_are",
+    "tests.support.switching_scale",
+    "tests.support.time_varying",
+    "tests.support.tune",
+    "tests.support.tune_schedule",
+]

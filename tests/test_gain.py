@@ -1,9 +1,4 @@
-"""Gain conditions of Theorems 1-4 on gains with known answers, and their hard limits.
-
-Known answers (by hand): ∫^∞ t^p diverges iff p >= −1; ∫^∞ 1/(t log^q t) diverges iff
-q <= 1; sin² t = (1 − cos 2t)/2 and |∫^T g·cos(2t)| stays bounded for g → 0 monotone;
-sin² t <= |sin t| <= 1.
-"""
+"""Tests of :mod:`ntc_design.gain`."""
 
 import json
 import warnings
@@ -12,8 +7,45 @@ import pytest
 
 from ntc_design.errors import InputError
 from ntc_design.gain import CONDITION_LABELS, analyse_gain
+from tests.cli_helpers import assert_input_error, run_cli
+from tests.support.rows import _text
 
-from .cli_helpers import assert_input_error, run_cli
+# -------------------------------------------------------------------- gain and verdicts
+
+
+@pytest.mark.parametrize(
+    "expr, integral, zero, square, ms, as_",
+    [
+        ("1/(1+t)", True, True, True, True, True),
+        ("(1+t)^-2", False, True, True, False, False),
+        ("(1+t)^(-1/3)", True, True, False, True, False),
+    ],
+)
+def test_gain_table(capsys, monkeypatch, expr, integral, zero, square, ms, as_):
+    code, out, err = run_cli(["gain", expr, "--json"], capsys, monkeypatch)
+    assert code == (0 if ms else 1), err  # exit 1 when no theorem's conditions hold
+    g = json.loads(out)
+    assert g["continuous_nonnegative"]["value"] is True
+    assert g["integral_diverges"]["value"] is integral
+    assert g["tends_to_zero"]["value"] is zero
+    assert g["square_integrable"]["value"] is square
+    assert g["mean_square"] is ms and g["almost_sure"] is as_
+    for k in ("integral_diverges", "tends_to_zero", "square_integrable"):
+        assert g[k]["reason"]
+
+
+@pytest.mark.parametrize(
+    "expr, needles",
+    [
+        ("1/(1+", ["cannot parse"]),
+        ("x/(1+t)", ["uses x", "only the variable t"]),
+        ("cos(t)", ["negative"]),
+        ("1 - t", ["negative"]),
+    ],
+)
+def test_bad_gains(capsys, monkeypatch, expr, needles):
+    assert_input_error(["gain", expr], capsys, monkeypatch, "gain", *needles)
+
 
 # gain, ∫c = ∞, c → 0, ∫c² < ∞
 KNOWN = [
@@ -132,7 +164,7 @@ def test_one_label_table():
     "gain", ["(1+t)^(-1/3)", "1/(1+t)", "(1+t)^(-2)", "exp(-t)", "1", "(2+t)^(-0.7)"]
 )
 def test_no_sympy_spelling_reaches_a_user(gain, capsys, monkeypatch):
-    from .cli_helpers import run_cli
+    from tests.cli_helpers import run_cli
 
     for extra in ([], ["--json"]):
         code, out, err = run_cli(["gain", gain, *extra], capsys, monkeypatch)
@@ -182,3 +214,20 @@ def test_the_analysis_in_process_gives_the_textbook_answers(text, diverges, to_z
     assert got["integral_diverges"].value is diverges, got["integral_diverges"].reason
     assert got["tends_to_zero"].value is to_zero, got["tends_to_zero"].reason
     assert got["square_integrable"].value is square, got["square_integrable"].reason
+
+
+@pytest.mark.parametrize("expr", ["(1+t)^(-1/3)", "1/(1+t)", "exp(-t)", "t^2/(1+t^3)"])
+def test_no_sympy_spelling_of_an_expression_reaches_a_user(expr, capsys, monkeypatch):
+    _, out, _ = run_cli(["gain", expr], capsys, monkeypatch)
+    text = out + analyse_gain(expr).table().text()
+    assert "oo" not in text.replace("root", "") and "**" not in text
+    assert "gain c(t) =" in out
+
+
+def test_gain_table_html_holds_the_terminal_verdicts():
+    g = analyse_gain("(1+t)^(-1/3)")
+    t = g.table()
+    page = _text(g._repr_html_())
+    assert [r[1].verdict_word for r in t.rows] == ["yes", "yes", "yes", "no", "yes", "no"]
+    for label in t.labels:
+        assert label in page

@@ -1,24 +1,20 @@
-"""Interop with networkx, python-control, pandas and topology files."""
+"""Tests of :mod:`ntc_design.interop`."""
 
 import control
 import networkx as nx
 import numpy as np
-import pandas as pd
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from ntc_design import InputError, Topology, design, load, paper
-from ntc_design.certify import certify
 from ntc_design.interop import (
     design_statespace,
     save_topology,
     topology_from_networkx,
     topology_to_networkx,
 )
-from ntc_design.simulate import NoiseModel, simulate
-
-from .conftest import random_topology
+from tests.conftest import random_topology
 
 
 def _same(a: Topology, b: Topology) -> None:
@@ -89,45 +85,3 @@ def test_statespace_dc_gain_is_one_kron_identity():
     resp = control.step_response(design_statespace(des), T=np.linspace(0, 40, 400))
     final = resp.outputs[:, :, -1]  # (outputs, inputs): response to a unit step in θ_k
     assert np.allclose(final, np.kron(np.ones((7, 1)), np.eye(3)), atol=1e-6)
-
-
-def test_control_lyap_cross_checks_the_certificate():
-    res = certify(paper.g1(), paper.THETA, 0.1)
-    mats = res.certificate["matrices"]
-    lap_b = np.array(mats["L_B"]["G1"])
-    p = np.array(mats["P"]["lyapunov"])
-    # control.lyap solves A X + X Aᵀ + Q = 0: with A = −L_Bᵀ, Q = I it is P L_B + L_Bᵀ P = I
-    x = control.lyap(-lap_b.T, np.eye(lap_b.shape[0]))
-    assert np.allclose(x, p, rtol=1e-9, atol=1e-12)
-    assert np.linalg.eigvalsh(0.5 * (x + x.T))[0] > 0
-
-
-def test_tidy_dataframe_and_long_csv(tmp_path):
-    from ntc_design.simulate.scenario import write_outputs
-
-    res = simulate(
-        paper.g1(),
-        paper.THETA,
-        noise=NoiseModel(0.4, 0.3),
-        T=0.5,
-        paths=40,
-        seed=3,
-        save_every=0.1,
-        workers=1,
-    )
-    df = res.to_pandas()
-    assert list(df.columns) == ["t", "agent", "mc", "lo", "hi", "exact"]
-    assert len(df) == res.save_times.size * 7
-    assert not df.isna().any().any()
-    row = df[(df.agent == "4") & np.isclose(df.t, 0.3)].iloc[0]
-    k = int(np.argmin(np.abs(res.save_times - 0.3)))
-    assert row.mc == res.mc.mean[k, 3] and row.exact == res.exact.ms_error[k, 3]
-    assert (df.lo <= df.mc).all() and (df.mc <= df.hi).all()
-    # pivoting back gives the wide matrix
-    wide = df.pivot(index="t", columns="agent", values="exact")[[str(a) for a in res.labels]]
-    assert np.array_equal(wide.to_numpy(), res.exact.ms_error)
-    write_outputs(res, tmp_path)
-    back = pd.read_csv(tmp_path / "ms_error_long.csv", dtype={"agent": str})
-    pd.testing.assert_frame_equal(back, df, check_exact=True)
-    exact_only = simulate(paper.g1(), paper.THETA, T=0.2, method="exact", save_every=0.1)
-    assert exact_only.to_pandas()["mc"].isna().all()

@@ -1,4 +1,4 @@
-"""Brent's method without scipy.optimize, against SciPy's brentq (the same algorithm)."""
+"""Tests of :mod:`ntc_design.roots`."""
 
 import math
 

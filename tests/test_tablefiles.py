@@ -1,18 +1,42 @@
-"""CSV edge lists and MATLAB block matrices: G1 written either way gives exactly the YAML
-design and certificate; design.mat round-trips through scipy.io; hostile files give one
-line each, naming the row or the variable."""
+"""Tests of :mod:`ntc_design.tablefiles`."""
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from scipy.io import loadmat, savemat
+from scipy.io import savemat
 
 import ntc_design as nd
 from ntc_design.certify import certify, topology_hash
 from ntc_design.tablefiles import write_csv_edges
+from tests.cli_helpers import assert_input_error
+from tests.conftest import EXAMPLES
 
-from .cli_helpers import assert_input_error, run_cli
-from .conftest import EXAMPLES
+
+def test_csv_and_mat_carry_the_radii(tmp_path):
+    from scipy.io import savemat
+
+    (tmp_path / "t.csv").write_text("from,to,a11,uncertainty\n2,1,-1,0.02\n3,2,2,\n")
+    assert nd.load(tmp_path / "t.csv").uncertainty == {(1, 0): 0.02}
+    a = np.zeros((3, 3))
+    a[0, 1], a[1, 2] = -1.0, 2.0
+    u = np.zeros((3, 3))
+    u[0, 1] = 0.03
+    savemat(tmp_path / "m.mat", {"A": a, "dim": 1, "uncertainty": u})
+    assert nd.load(tmp_path / "m.mat").uncertainty == {(0, 1): 0.03}
+
+
+@pytest.mark.hostile
+def test_mat_uncertainty_on_a_missing_edge_is_refused(tmp_path):
+    from scipy.io import savemat
+
+    a = np.zeros((3, 3))
+    a[0, 1] = -1.0
+    u = np.zeros((3, 3))
+    u[2, 0] = 0.1
+    savemat(tmp_path / "m.mat", {"A": a, "dim": 1, "uncertainty": u})
+    with pytest.raises(nd.InputError, match=r"uncertainty\(3, 1\): uncertainty on a missing edge"):
+        nd.load(tmp_path / "m.mat")
+
 
 HEADER = "from,to,a11,a12,a13,a21,a22,a23,a31,a32,a33\n"
 
@@ -51,28 +75,6 @@ def test_csv_round_trip_of_a_random_network(tmp_path):
         k = (back.index(top.labels[i]), back.index(top.labels[j]))
         assert np.array_equal(back.weights[k], w)
     assert len(back.weights) == len(top.weights)
-
-
-def test_design_mat_loads_in_scipy_with_the_toolkits_l_b(tmp_path, capsys, monkeypatch, g1, theta):
-    out = tmp_path / "design.mat"
-    code, _, err = run_cli(
-        ["design", EXAMPLES / "g1.yaml", "--theta", "1,2,-1", "--out", out], capsys, monkeypatch
-    )
-    assert code == 0, err
-    m = loadmat(out)
-    des = nd.design(g1, theta, 0.1)
-    assert sp.issparse(m["L_B"]) and np.array_equal(m["L_B"].toarray(), des.grounded_laplacian())
-    assert float(m["delta"].ravel()[0]) == des.delta and float(m["k1"].ravel()[0]) == des.k1
-    np.testing.assert_array_equal(m["x0"].ravel(), des.x0)
-    np.testing.assert_array_equal(m["informed"].ravel(), np.array(des.informed) + 1)
-    np.testing.assert_array_equal(m["B"], np.vstack([des.B[i] for i in des.informed]))
-    assert [str(x[0]) for x in m["labels"].ravel()] == [str(a) for a in g1.labels]
-    code, _, err = run_cli(
-        ["design", EXAMPLES / "g1.yaml", "--theta", "1,2,-1", "--out", tmp_path / "d.json"],
-        capsys,
-        monkeypatch,
-    )
-    assert code == 0 and (tmp_path / "d.json").read_text().startswith("{")
 
 
 CSV_BAD = [

@@ -1,15 +1,76 @@
-"""Critical couplings δ_H, δ_S and the best rate, cross-checked against an independent
-eigenvalue scan over δ."""
+"""Tests of :mod:`ntc_design.thresholds`."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 
 import ntc_design as nd
+from ntc_design.design import (
+    design,
+)
+from ntc_design.generate import random_network
+from ntc_design.linalg import DEF_CODES
 from ntc_design.thresholds import critical_couplings
+from tests.conftest import random_topology
+from tests.support.switching_scale import THETA_SW
 
-from .conftest import random_topology
+
+def test_sparse_critical_couplings_agree_with_dense():
+    """δ_S (sparse bisection) and δ_H (per component) against the dense method."""
+    from ntc_design.thresholds import critical_couplings, critical_couplings_sparse
+
+    for seed in range(4):
+        top = random_network(25, 2, seed, "ring" if seed % 2 else "random")
+        des = nd.design(top, [1.0, 1.0], thresholds=False)
+        dense = critical_couplings(des.topology.laplacian(), des.coupling_matrix())
+        sp_ = critical_couplings_sparse(
+            top.laplacian_sparse(), des.coupling_matrix_sparse(), top.dim
+        )
+        assert sp_.symmetric == pytest.approx(dense.symmetric, rel=2e-4, abs=1e-9)
+        if sp_.hurwitz is not None:
+            assert sp_.hurwitz == pytest.approx(dense.hurwitz, rel=1e-6, abs=1e-9)
+        assert DEF_CODES  # the batched codes table is exported
+
+
+def test_component_decomposition_is_block_triangular():
+    from ntc_design.thresholds import strong_components
+
+    top = random_network(400, 2, seed=5)
+    des = nd.design(top, [1.0, 1.0], thresholds=False)
+    lb = des.grounded_laplacian_sparse()
+    ncomp, comp = strong_components(lb, 2)
+    ea = top.edge_arrays
+    assert np.all(comp[ea.cols] <= comp[ea.rows])  # every edge goes forward
+    # the eigenvalues of L_B are those of its component blocks
+    dense = lb.toarray()
+    ev = np.sort_complex(np.linalg.eigvals(dense))
+    parts = []
+    for c in range(ncomp):
+        ix = (np.flatnonzero(comp == c)[:, None] * 2 + np.arange(2)).ravel()
+        parts.append(np.linalg.eigvals(dense[np.ix_(ix, ix)]))
+    np.testing.assert_allclose(
+        np.sort_complex(np.concatenate(parts)), ev, atol=1e-8 * abs(ev).max()
+    )
+    assert ncomp > 1 and np.bincount(comp).max() > 1
+
+
+def test_delta_s_is_skipped_with_a_reason_when_the_bisection_would_not_fit(monkeypatch):
+    import ntc_design.linalg as la
+
+    top = random_network(80, 3, seed=2)
+    full = design(top, THETA_SW, thresholds=True).thresholds
+    assert full.symmetric is not None and full.symmetric > 0
+    monkeypatch.setattr(
+        la,
+        "SPARSE_FACTOR_MAX_FLOPS",
+        10 * la.cholesky_fill((top.laplacian_sparse() + top.laplacian_sparse().T).tocsr()).flops,
+    )
+    th = design(top, THETA_SW, thresholds=True).thresholds
+    assert th.symmetric is None
+    assert any(n.startswith("δ_S not computed: the bisection needs about 50") for n in th.notes)
+    assert th.hurwitz == full.hurwitz  # the per-component δ_H does not factorise
 
 
 def scan(lap, dmat, deltas):
@@ -99,3 +160,62 @@ def test_random_topologies_against_scan(seed):
     top = random_topology(seed, n=4, d=2)
     d = nd.design(top, [1.0, -0.5])
     check_against_scan(top.laplacian(), d.coupling_matrix(), d.thresholds)
+
+
+def _design(top):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", nd.AssumptionWarning)  # thresholds exist regardless
+        return nd.design(top, np.ones(top.dim), 0.1, thresholds=True)
+
+
+def _alpha(des, delta: float) -> float:
+    """Spectral abscissa of −L_B(δ), by dense eigenvalues."""
+    return float(np.linalg.eigvals(-des.grounded_laplacian(delta)).real.max())
+
+
+def _lam_sym(des, delta: float) -> float:
+    lb = des.grounded_laplacian(delta)
+    return float(np.linalg.eigvalsh(lb + lb.T)[0])
+
+
+# networks whose −L alone is not Hurwitz (δ_H > 0): found among random_topology's seeds
+HURWITZ_CASES = [8, 11, 166, 201]
+
+
+@pytest.mark.parametrize("seed", HURWITZ_CASES)
+def test_delta_h_is_where_hurwitz_starts(seed):
+    des = _design(random_topology(seed, n=5, d=2))
+    dh = des.thresholds.hurwitz
+    assert dh is not None and dh > 0
+    assert _alpha(des, dh * (1 - 1e-3)) > 0  # just below: an eigenvalue in Re λ >= 0
+    for f in (1 + 1e-3, 2.0, 10.0, 1e3):  # above: Hurwitz for every δ tried
+        assert _alpha(des, dh * f) < 0, f
+    # the reported Hurwitz set agrees with a scan of α(δ) computed here
+    grid = np.geomspace(dh * 1e-2, dh * 1e2, 200)
+    inside = [any(lo < x < hi for lo, hi in des.thresholds.hurwitz_intervals) for x in grid]
+    alphas = np.array([_alpha(des, x) for x in grid])
+    scale = np.abs(des.grounded_laplacian(dh)).max()
+    clear = np.abs(alphas) > 1e-9 * scale  # away from the boundary itself
+    assert np.array_equal(np.array(inside)[clear], (alphas < 0)[clear])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_delta_s_is_where_the_symmetric_part_turns_positive(seed):
+    des = _design(random_network(15, 2, seed, "random"))
+    ds = des.thresholds.symmetric
+    assert ds is not None
+    if ds > 0:
+        assert _lam_sym(des, ds * (1 - 1e-4)) < 0
+    assert _lam_sym(des, ds * (1 + 1e-4)) > 0
+    assert _lam_sym(des, ds * 10 + 1) > 0  # monotone in δ: D ⪰ 0
+    # L_B + L_Bᵀ ≻ 0 implies −L_B Hurwitz: δ_H never exceeds δ_S
+    assert des.thresholds.hurwitz is not None and des.thresholds.hurwitz <= ds * (1 + 1e-9)
+
+
+def test_best_rate_is_the_largest_abscissa_over_delta():
+    des = _design(nd.paper.g1())
+    th = des.thresholds
+    grid = np.geomspace(1e-2, 1e3, 400)
+    rates = np.array([-_alpha(des, x) for x in grid])
+    assert rates.max() <= th.best_rate * (1 + 1e-6)
+    assert rates.max() >= th.best_rate * (1 - 1e-3)  # the grid comes close to it

@@ -1,11 +1,4 @@
-"""The fast YAML reader (:mod:`ntc_design.yamlfast`) gives exactly the full reader's
-documents, or declines.
-
-Every text it reads must give the value PyYAML's safe loader gives (same types: ints stay
-ints, floats floats, strings strings; same key order), every text PyYAML refuses it must
-decline, and :func:`ntc_design.files.read_document` must give the same document or the
-same one-line error with and without it.
-"""
+"""Tests of :mod:`ntc_design.yamlfast`."""
 
 import math
 
@@ -19,8 +12,7 @@ from ntc_design.errors import InputError
 from ntc_design.files import read_document
 from ntc_design.generate import random_network, write_topology
 from ntc_design.yamlfast import load_fast, node_bound
-
-from .conftest import ROOT
+from tests.conftest import ROOT
 
 
 def same(a, b) -> bool:
@@ -233,7 +225,11 @@ SCALARS = st.one_of(
     st.booleans(),
     st.none(),
 )
+
+
 KEYS = st.sampled_from(["from", "to", "weight", "a", "k_1", "yes", "1e5"]) | st.integers(0, 3)
+
+
 DOCS = st.recursive(
     SCALARS,
     lambda c: st.lists(c, max_size=4) | st.dictionaries(KEYS, c, max_size=4),
@@ -250,85 +246,3 @@ def test_random_documents(doc, style, width, data):
     pos = data.draw(st.integers(0, len(text)))
     junk = data.draw(st.sampled_from([" ", "\n", "- ", ": ", ",", "]", "[", "e", "-", "  "]))
     check(text[:pos] + junk + text[pos:])  # layouts and tokens the dumper never writes
-
-
-@pytest.mark.parametrize(
-    "rows,expect",
-    [
-        ([[1, 2], [2, 5.5]], [[1.0, 2.0], [2.0, 5.5]]),
-        ([[2**53 + 1, 0], [0, 1]], [[float(2**53 + 1), 0.0], [0.0, 1.0]]),
-        ([[True, 0], [0, 1]], "expected a number, got True"),
-        ([[10**400, 0], [0, 1]], "is too large"),
-        ([[float("inf"), 0], [0, 1]], "numbers must be finite"),
-        ([[1, "t"], [0, 1]], "expected a number, got 't'"),
-    ],
-)
-def test_weight_rows_read_in_c_give_the_same_values_and_errors(rows, expect):
-    """The rows of numbers are converted at once; anything else gets the entry's message."""
-    if isinstance(expect, str):
-        with pytest.raises(InputError, match=expect.replace("(", r"\(")):
-            files.parse_weight(rows, 2, "f.yaml", "edge 1->2")
-    else:
-        w = files.parse_weight(rows, 2, "f.yaml", "edge 1->2")
-        assert w.dtype == float and w.tolist() == expect
-
-
-@pytest.mark.parametrize(
-    "weight,expect",
-    [
-        ([[1, 2.5], [None, True]], False),
-        ([[1, "t"], [0, 1]], True),
-        ([[1, [2, "t"]]], True),
-        ([[1, {"diag": [1]}]], False),
-        ({"matrix": "A", "scale": "2*t"}, True),
-        ([], False),
-    ],
-)
-def test_has_text(weight, expect):
-    assert files.has_text(weight) is expect
-
-
-@pytest.mark.parametrize(
-    "edge,message",
-    [
-        ({"from": 1, "to": 2}, "f.yaml: edges[0]: missing weight"),
-        ({"to": 2}, "f.yaml: edges[0]: missing from, weight"),
-        (
-            {"from": 1, "to": 2, "wieght": 1},
-            "f.yaml: edges[0]: unknown field 'wieght'; did you mean 'weight'?",
-        ),
-        ({"from": 1, "to": 2, "weight": 1, "x": 0}, "f.yaml: edges[0]: unknown field 'x'"),
-    ],
-)
-def test_edge_field_messages(edge, message):
-    doc = {"dim": 1, "agents": 2, "edges": [edge]}
-    with pytest.raises(InputError) as err:
-        files.parse_topology(doc, "f.yaml")
-    assert str(err.value) == message
-
-
-@pytest.mark.parametrize(
-    "weights,message",
-    [
-        ([[[1, 0], [0, 1]], [[2, 0.5], [0.5, 2]]], None),
-        ([[[1, 0], [0, 1]], [[True, 0], [0, 1]]], "f.yaml: edge 2->3: expected a number, got True"),
-        ([[[1, 0], [0, 1]], [[1, 0], [0]]], "f.yaml: edge 2->3: expected a 2x2 matrix, got 2x1/2"),
-        ([[[1, 0], [0, 1]], [[10**400, 0], [0, 1]]], "is too large"),
-        ([[[1, 0], [0, 1]], 2.5], None),
-    ],
-)
-def test_weights_read_at_once_or_one_by_one(weights, message):
-    """All-rows weights are converted in one call; the same arrays and messages as one by one."""
-    doc = {"dim": 2, "agents": 3, "edges": [{"from": 1, "to": 2, "weight": weights[0]}]}
-    doc["edges"].append({"from": 2, "to": 3, "weight": weights[1]})
-    if message is not None:
-        with pytest.raises(InputError, match=message.replace("(", r"\(")):
-            files.parse_topology(doc, "f.yaml")
-        return
-    got = [e.weight for e in files.parse_topology(doc, "f.yaml").edges]
-    one = [files.parse_weight(w, 2, "f.yaml", "w") for w in weights]
-    assert all(
-        a.dtype == b.dtype and a.shape == b.shape and (a == b).all()
-        for a, b in zip(got, one, strict=True)
-    )
-    assert got[0].base is None  # each weight owns its numbers

@@ -1,0 +1,105 @@
+"""Tests of :mod:`ntc_design.certify.kinds.robust`."""
+
+import json
+
+import numpy as np
+import pytest
+
+from ntc_design.certify import verify
+from ntc_design.certify.kinds.robust import robust_certificate
+from tests.support.robust import forged_valid, raise_alpha_to
+
+
+def test_the_certificate_verifies_and_forgeries_do_not(g1_robust):
+    _, rep = g1_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    ver = verify(doc)
+    assert ver.valid and ver.about.kind == "robust"
+
+    def forged(edit):
+        return forged_valid(doc, edit)
+
+    raise_alpha = raise_alpha_to(rep.decay.upper * 1.01)
+
+    def raise_radius(d):
+        d["subject"]["radius"] = 0.5
+        d["results"]["radius"] = 0.5
+        for c in d["claims"]:
+            if c.get("radius") == rep.radius:
+                c["radius"] = 0.5
+
+    def shrink_gamma(d):
+        d["results"]["offset"]["gamma"] *= 0.5
+        d["results"]["offset"]["upper"] = d["results"]["offset"]["gamma"] ** 0.5
+
+    def zero_tau(d):
+        d["matrices"]["multipliers"]["robust_decay"] = [0.0] * len(
+            d["matrices"]["multipliers"]["robust_decay"]
+        )
+
+    def outside(d):
+        e = d["realizations"]["decay"]["edges"][0]
+        e["weight"] = (2.0 * np.asarray(e["weight"])).tolist()
+
+    for edit in (raise_alpha, raise_radius, shrink_gamma, zero_tau, outside):
+        assert not forged(edit), edit.__name__
+
+
+def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid_robust):
+    import json
+
+    from ntc_design.certify import verify
+    from ntc_design.certify.kinds.robust import robust_certificate
+
+    des, rep, _ = mid_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    ver = verify(doc)
+    assert ver.valid
+    assert doc["certifies"] == ["robust_margin", "robust_decay", "robust_offset"]
+    assert "Y" not in doc["matrices"]  # a witness the verifier rebuilds
+    # ntc verify says the numbers each property states, beside the property
+    said = {p["property"]: p.get("stated") for p in ver.about.to_dict()["properties"]}
+    alpha, gamma = doc["results"]["decay"]["lower"], doc["results"]["offset"]["gamma"]
+    assert said["robust_decay"] == f"α = {alpha:.6g} at ρ = 0.05"
+    assert said["robust_margin"] == f"margin radius {doc['results']['margin']['lower']:.6g}"
+    assert said["robust_offset"] == f"<= {gamma**0.5:.6g} at ρ = 0.05"
+    assert doc["results"]["offset"]["upper"] == pytest.approx(rep.offset.upper, rel=1e-15)
+    assert doc["results"]["decay"]["lower"] == rep.proofs["alpha"] <= rep.decay.lower
+    assert "Riccati" in doc["solver"]["name"]
+
+    def forged(edit):
+        return forged_valid(doc, edit)
+
+    raise_alpha = raise_alpha_to(rep.decay.upper * 1.01)
+
+    def raise_margin(d):
+        d["results"]["margin"]["lower"] = 0.99
+        for c in d["claims"]:
+            if c["property"] == "robust_margin" and "radius" in c:
+                c["radius"] = 0.99
+
+    def zero_tau(d):
+        t = d["matrices"]["multipliers"]["robust_decay"]
+        d["matrices"]["multipliers"]["robust_decay"] = [0.0] + t[1:]
+
+    def bend_p(d):
+        d["matrices"]["P"]["robust_decay"][0][1] *= 1.0 + 1e-6
+
+    def lower_gamma(d):  # below what a realisation attains: it must not verify
+        d["results"]["offset"]["gamma"] = 0.99 * rep.offset.lower**2
+        d["results"]["offset"]["upper"] = d["results"]["offset"]["gamma"] ** 0.5
+
+    def zero_lambda(d):
+        d["matrices"]["multipliers"]["robust_offset"] = [0.0] * len(
+            d["matrices"]["multipliers"]["robust_offset"]
+        )
+
+    def widen_radius_of_offset(d):  # the offset claim's radius is the subject's
+        for c in d["claims"]:
+            if c["property"] == "robust_offset":
+                c["radius"] = 0.2
+
+    edits = (raise_alpha, raise_margin, zero_tau, bend_p, lower_gamma, zero_lambda,
+             widen_radius_of_offset)  # fmt: skip
+    for edit in edits:
+        assert not forged(edit), edit.__name__

@@ -1,0 +1,109 @@
+"""Tests of :mod:`ntc_design.simulate.kernels`."""
+
+import math
+
+import numpy as np
+import pytest
+
+import ntc_design as nd
+from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.simulate import NoiseModel
+from ntc_design.simulate.kernels import em_steps, kernel_arrays, numpy_step
+from ntc_design.simulate.rng import NormalSource, path_states
+from ntc_design.simulate.system import mode_system
+from tests.support.kernel import stiff_network
+
+
+@pytest.mark.parametrize("d", [1, 2, 3, 4])
+def test_the_block_and_general_loops_equal_the_dense_step(d):
+    # d = 3 takes the 3×3-block loops, other d the general ones; both against dense algebra
+    top = stiff_network(12, seed=d, d=d)
+    s = mode_system(nd.design(top, np.arange(1.0, d + 1), thresholds=False), NoiseModel())
+    rng = np.random.default_rng(d)
+    p, k_n = 19, 15
+    x0 = rng.normal(size=(p, s.nd))
+    xi = rng.normal(size=(k_n, p, 2 * s.n_edges))
+    ch = 1e-4 * (1 + rng.random(k_n))
+    ref = x0.copy()
+    for k in range(k_n):
+        ref = dense_step(ref, xi[k], ch[k], np.sqrt(ch[k]), s)
+    args = kernel_arrays(s)
+    assert (args[3].size > 1) == (d == 3)  # the block form only for d = 3
+    for tile in (1, 7, p):
+        x = x0.copy()
+        em_steps(x, xi, 0, k_n, ch, np.sqrt(ch), *args, True, tile)
+        np.testing.assert_allclose(x, ref, rtol=1e-12, atol=1e-12)
+
+
+def dense_step(x, xi_k, ch, cs, s, f=None):
+    """The earlier dense kernel: x + ch (u − L_B x) + cs (G ξ1 + W (F D x ⊙ ξ2))."""
+    ne, d = s.n_edges, s.dim
+    diff = (x @ s.dmat.toarray().T).reshape(x.shape[0], ne, d)
+    if f is not None:
+        diff = f(diff)
+    z = (diff * xi_k[:, ne : 2 * ne, None]).reshape(x.shape[0], ne * d)
+    noise = xi_k[:, :ne] @ s.g.toarray().T + z @ s.wmat.toarray().T
+    return x + ch * (s.u - x @ s.lap_b.toarray().T) + cs * noise
+
+
+@pytest.mark.parametrize(
+    "noise",
+    [
+        NoiseModel(),
+        NoiseModel(0.2, np.array([[0.3, 0.1, 0.0], [0.1, 0.2, 0.0], [0.0, 0.0, 0.1]])),
+        NoiseModel(0.4, 0.3, {(2, 1): 0.05}),
+    ],
+)
+def test_compiled_and_sparse_steps_equal_the_dense_kernel(g1, noise):
+    des = nd.design(g1, THETA, thresholds=False)
+    s = mode_system(des, noise)
+    rng = np.random.default_rng(4)
+    p, k_n = 37, 25
+    x0 = rng.normal(size=(p, 21))
+    xi = rng.normal(size=(k_n, p, 2 * s.n_edges))
+    ch = 1e-3 * (1 + rng.random(k_n))
+    cs = np.sqrt(ch)
+    ref = x0.copy()
+    for k in range(k_n):
+        ref = dense_step(ref, xi[k], ch[k], cs[k], s)
+    args = kernel_arrays(s)
+    for tile in (1, 8, p):  # the tile of paths changes nothing
+        x = x0.copy()
+        em_steps(x, xi, 0, k_n, ch, cs, *args, True, tile)
+        np.testing.assert_allclose(x, ref, rtol=1e-12, atol=1e-12)
+    x = x0.copy()
+    for k in range(k_n):
+        numpy_step(x, xi[k], ch[k], cs[k], s)
+    np.testing.assert_allclose(x, ref, rtol=1e-12, atol=1e-12)
+
+
+def test_sparse_step_applies_a_callable_f(g1):
+    des = nd.design(g1, THETA, thresholds=False)
+    f = lambda v: 0.3 * np.tanh(v)  # noqa: E731
+    s = mode_system(des, NoiseModel(0.4, f))
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=(9, 21))
+    xi = rng.normal(size=(9, 2 * s.n_edges))
+    ref = dense_step(x, xi, 1e-3, 0.03, s, f)
+    numpy_step(x, xi, 1e-3, 0.03, s)
+    np.testing.assert_allclose(x, ref, rtol=1e-12, atol=1e-12)
+
+
+def test_fused_kernel_draws_the_array_kernels_numbers(g1, theta):
+    from ntc_design.simulate.kernels import em_steps, em_steps_rng
+    from ntc_design.simulate.montecarlo import _Stepper
+    from ntc_design.simulate.noise import NoiseModel
+    from ntc_design.simulate.system import mode_system
+
+    s = mode_system(nd.design(g1, theta), NoiseModel(0.4, 0.3), "G1")
+    st = _Stepper(s, False)
+    p, k = 37, 20
+    ch, cs = np.full(k, 1e-3), np.full(k, math.sqrt(1e-3))
+    x0 = np.random.default_rng(0).uniform(-3, 3, (p, s.nd))
+    xa, xb = x0.copy(), x0.copy()
+    states = path_states(11, 0, p)
+    xi = np.empty((k, p, 2 * s.n_edges))
+    NormalSource("xoshiro", 11, 0, p).fill(xi)
+    em_steps(xa, xi, 0, k, ch, cs, *st.args, True, 8)
+    em_steps_rng(xb, states, 2 * s.n_edges, 0, k, ch, cs, *st.args, True, 16)
+    np.testing.assert_array_equal(xa, xb)  # tile widths 8 and 16: the same bits

@@ -1,0 +1,15 @@
+"""Helpers shared by the tests that came from test_implicit.py."""
+
+import pytest
+
+import ntc_design as nd
+from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.simulate import NoiseModel
+from ntc_design.simulate.system import mode_system
+
+
+@pytest.fixture(scope="session")
+def implicit_net():
+    top = nd.random_network(400, 3, seed=5)
+    des = nd.design(top, THETA, thresholds=False)
+    return des, mode_system(des, NoiseModel(sigma=0.4, f=0.3))

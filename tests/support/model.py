@@ -1,0 +1,5 @@
+"""Helpers shared by the tests that came from test_model.py."""
+
+from hypothesis import strategies as st
+
+seeds = st.integers(min_value=0, max_value=2**32 - 1)

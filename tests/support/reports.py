@@ -1,0 +1,34 @@
+"""Helpers shared by the tests that came from test_reports.py."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from ntc_design.reports.reproduce import reproduce_paper
+
+
+@pytest.fixture(scope="session")
+def paper_run(tmp_path_factory):
+    """The paper's Section 5 at its settings (1000 paths, ds = dt = 1e-3, T = 100)."""
+    out = tmp_path_factory.mktemp("paper")
+    path, ok, wall = reproduce_paper(out)
+    return out, path, ok, wall
+
+
+def _links(path: Path) -> tuple[list[str], set[str]]:
+    """Every href of a report and every id it defines."""
+    html = path.read_text()
+    return re.findall(r'href="([^"]+)"', html), set(re.findall(r'id="([^"]+)"', html))
+
+
+def _assert_links_resolve(path: Path) -> int:
+    hrefs, ids = _links(path)
+    files = [h for h in hrefs if not h.startswith("#")]
+    for h in hrefs:
+        if h.startswith("#"):
+            assert h[1:] in ids, h
+        else:
+            assert "://" not in h, h
+            assert (path.parent / h).is_file(), h
+    return len(files)

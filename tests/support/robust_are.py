@@ -1,0 +1,20 @@
+"""Helpers shared by the tests that came from test_robust_are.py."""
+
+import warnings
+
+import pytest
+
+import ntc_design as nd
+from ntc_design.certify.robust import robust
+from ntc_design.certify.robust_scale import robust_scale
+from ntc_design.generate import random_network
+from ntc_design.paper import THETA
+
+
+@pytest.fixture(scope="session")
+def mid_robust():
+    top = random_network(14, 3, seed=4)  # Nd = 42: past the LMI, where dominance is loose
+    des = nd.design(top, THETA, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return des, robust(des, 0.05, starts=2), robust_scale(des, 0.05)

@@ -1,0 +1,14 @@
+"""Helpers shared by the tests that came from test_tune_schedule.py."""
+
+import numpy as np
+import pytest
+
+from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.simulate import NoiseModel, SimulationSpec
+
+X0 = np.linspace(-3, 3, 21)
+
+
+@pytest.fixture(scope="session")
+def g1_spec():
+    return SimulationSpec.build(THETA, noise=NoiseModel(0.4, 0.3), initial=X0, margin=0.1)

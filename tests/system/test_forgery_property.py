@@ -1,0 +1,738 @@
+"""Forgery property test over all six certificate kinds.
+
+Every field of an honest certificate of each kind is mutated (numbers scaled, negated,
+zeroed; strings and nulls replaced; list entries dropped; keys deleted and added), the
+digests are recomputed, and a careful forger also lists exactly the claims verify derives
+for the edited certificate. Whenever verify then answers VALID, every listed claim and
+every reported number must be true, as decided here by independent dense computations
+(numpy eigenvalues of L_B built in this file, networkx components, sampling of the
+time-varying weights), never by the code under test.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import warnings
+
+import networkx as nx
+import numpy as np
+import pytest
+
+import ntc_design as nd
+from ntc_design.certify import KINDS, verify
+from ntc_design.certify.arrays import topology_from_subject
+from ntc_design.certify.format import digest, document_hash, topology_hash
+from ntc_design.certify.kinds import IssueOptions
+from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
+from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
+from ntc_design.design import design
+from ntc_design.errors import InputError
+from ntc_design.files import parse_topology
+from ntc_design.gain import analyse_gain
+from ntc_design.generate import random_network
+from ntc_design.model import Topology
+from ntc_design.timevarying import TimeVaryingDesign, from_document
+from tests.conftest import ROOT
+
+hostile = pytest.mark.hostile
+SKIP_KEYS = {"digest", "subject_digest", "versions"}
+MAX_LIST = 3  # entries mutated per list: the first, the middle and the last
+
+
+# ------------------------------------------------------------------ honest certificates
+
+
+def _tv_topology() -> dict:
+    """A 3-agent path whose antagonistic weight varies with t (period 2π)."""
+    w = {
+        "1->2": {"diag": ["-1 - 0.5*sin(t)", -2]},
+        "2->3": [[2, 0], [0, 1]],
+        "3->1": {"identity": 1},
+        "2->1": {"identity": 1},
+    }
+    edges = [{"from": int(k[0]), "to": int(k[-1]), "weight": v} for k, v in w.items()]
+    return {"dim": 2, "agents": 3, "edges": edges, "period": "2*pi"}
+
+
+@pytest.fixture(scope="module")
+def honest() -> dict[str, dict]:
+    certs = ROOT / "certificates"
+    g1 = json.loads((certs / "g1.json").read_text())
+    sw = json.loads((certs / "switching.json").read_text())
+    theta3 = [1.0, 2.0, -1.0]
+    scale_rand = scale_certificate(design(random_network(12, 2, seed=3), [1.0, -1.0], 0.1))
+    scale_g1 = scale_certificate(design(nd.load(ROOT / "examples" / "g1.yaml"), theta3, 0.1))
+    with pytest.warns(Warning):  # G3 fails Assumption 2 (the paper's own example)
+        sd = design(nd.load(ROOT / "examples" / "switching.yaml"), theta3, 0.1)
+    sws = switching_scale_certificate(sd)
+    tv = from_document(_tv_topology(), "tv")
+    tvc = KINDS["time_varying"].issue(
+        TimeVaryingDesign(tv, np.array([1.0, 2.0]), 0.1),
+        IssueOptions(gain=analyse_gain("1/(1+t)")),
+    )
+    from ntc_design.certify.kinds.robust import robust_certificate
+    from ntc_design.certify.robust import robust
+
+    rdes = design(random_network(4, 2, seed=1), [1.0, -1.0], 0.1, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
+    out = {
+        "robust": rob,
+        "hurwitz": g1,
+        "switching": sw,
+        "hurwitz-scale": scale_rand,
+        "hurwitz-scale-g1": scale_g1,
+        "switching-scale": sws,
+        "time_varying": tvc,
+    }
+    for name, doc in out.items():
+        assert verify(copy.deepcopy(doc)).valid, name
+    return out
+
+
+# ------------------------------------------------------------------ the independent truth
+
+
+def _sign(a: np.ndarray) -> int:
+    """+1 for a PSD weight, −1 for an NSD one (tolerance relative to its norm)."""
+    w = np.linalg.eigvalsh(a)
+    tol = 1e-12 * max(np.max(np.abs(w)), 1e-300)
+    if w[0] >= -tol:
+        return 1
+    if w[-1] <= tol:
+        return -1
+    raise ValueError("indefinite weight")
+
+
+def _lap_b(top: Topology, delta: float) -> np.ndarray:
+    """L_B = L + δ·blockdiag(B_i) with B_i = Σ_{j: A_ij ≺ 0}|A_ij| (written here, from the
+    definitions: L_ij = −A_ij, L_ii = Σ_k |A_ik|)."""
+    d = top.dim
+    lap = np.zeros((top.n * d, top.n * d))
+    for (i, j), a in top.weights.items():
+        s = _sign(a)
+        lap[i * d : (i + 1) * d, j * d : (j + 1) * d] -= a
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += s * a + (delta * -a if s < 0 else 0)
+    return lap
+
+
+def _antagonised(top: Topology) -> set[str]:
+    return {str(top.labels[i]) for (i, _j), a in top.weights.items() if _sign(a) < 0}
+
+
+def _pos(m: np.ndarray) -> bool:
+    """m ≻ 0, with a margin for the rounding of this check itself."""
+    s = 0.5 * (m + m.T)
+    return bool(np.linalg.eigvalsh(s)[0] > 1e-10 * max(1.0, np.max(np.abs(s))))
+
+
+def _close(x, y, rtol=1e-6, atol=1e-12) -> bool:
+    return (
+        isinstance(x, (int, float))
+        and not isinstance(x, bool)
+        and math.isfinite(x)
+        and abs(x - y) <= rtol * max(abs(y), atol / rtol)
+    )
+
+
+def _truth_dense(doc: dict) -> list[str]:
+    """What is false in a valid hurwitz or switching certificate."""
+    bad: list[str] = []
+    modes, laps = doc["subject"]["modes"], {}
+    for k, m in modes.items():
+        top = Topology.from_data(parse_topology(m["topology"], k))
+        theta, delta = np.array(m["theta"]), m["delta"]
+        if not np.any(theta):
+            bad.append(f"{k}: θ = 0")
+        if m["x0"] != ((1 + 2 / delta) * theta).tolist():
+            bad.append(f"{k}: x0")
+        if {str(x) for x in m["informed"]} != _antagonised(top):
+            bad.append(f"{k}: informed ≠ U")
+        if m["topology_hash"] != topology_hash(top):
+            bad.append(f"{k}: topology hash")
+        laps[k] = _lap_b(top, delta)
+    sched = doc["subject"].get("schedule")
+    used = list(dict.fromkeys(s["mode"] for s in sched)) if sched else list(modes)
+    ps = {k: np.array(v) for k, v in doc["matrices"]["P"].items()}
+    res = doc["results"]
+    # the certified properties, whatever the claims list says
+    if "symmetric_part" in doc["certifies"] and not all(_pos(laps[k] + laps[k].T) for k in used):
+        bad.append("a scheduled mode with L_B + L_Bᵀ not ≻ 0")
+    if "common_lyapunov" in doc["certifies"]:
+        p = ps.get("common")
+        if p is None or not _pos(p) or not all(_pos(p @ laps[k] + laps[k].T @ p) for k in used):
+            bad.append("no common Lyapunov P")
+    for c in doc["claims"]:
+        kind, p = c["kind"], ps.get(c.get("P", ""))
+        lap = laps.get(c.get("mode", ""))
+        if kind == "pd":
+            ok = _pos(p)
+        elif kind == "lyapunov":
+            ok = _pos(p @ lap + lap.T @ p - 2 * c.get("alpha", 0.0) * p)
+        elif kind == "symmetric_part":
+            ok = _pos(lap + lap.T)
+        elif kind == "positive_rate":
+            ok = c["alpha"] > 0
+        else:
+            ok = False
+        if not ok:
+            bad.append(f"claim {c['id']}")
+    if doc["kind"] == "hurwitz":
+        (lap,) = laps.values()
+        eig = float(np.min(np.linalg.eigvals(lap).real))
+        if not eig > 0:
+            bad.append("not Hurwitz")
+        if not _close(res["eig_bound"], eig):
+            bad.append("eig_bound")
+        if "lyapunov" in res:  # absent numbers state nothing
+            p = ps["lyapunov"]
+            r = p @ lap + lap.T @ p - np.eye(len(p))
+            resid = float(np.linalg.norm(r) / np.sqrt(len(p)))
+            if not _close(res["lyapunov"]["residual"], resid, 1e-3, 1e-12):
+                bad.append("residual")
+            if not _close(res["lyapunov"]["P_min_eig"], float(np.linalg.eigvalsh(p)[0])):
+                bad.append("P_min_eig")
+        lmi = res.get("lmi")
+        if lmi is not None:
+            if not (_close(lmi["eig_bound"], eig) and lmi["alpha"] <= eig * (1 + 1e-9)):
+                bad.append("lmi")
+            if not _close(lmi["gap"], eig - lmi["alpha"], 1e-6, 1e-9):
+                bad.append("gap")
+    else:
+        for k, lap in laps.items():
+            lam = float(np.linalg.eigvalsh(lap + lap.T)[0])
+            if not _close(res["symmetric_part_min_eig"].get(k), lam):
+                bad.append(f"symmetric_part_min_eig.{k}")
+        if set(res["symmetric_part_min_eig"]) != set(laps):
+            bad.append("symmetric_part_min_eig: modes")
+    return bad
+
+
+def _unpack_top(mode: dict, where: str) -> Topology:
+    return topology_from_subject(mode["topology"], where)
+
+
+def _truth_hurwitz_scale(doc: dict, honest_doc: dict) -> list[str]:
+    bad: list[str] = []
+    ((name, m),) = doc["subject"]["modes"].items()
+    top = _unpack_top(m, name)
+    if {str(x) for x in m["informed"]} != _antagonised(top) or not np.any(m["theta"]):
+        bad.append("subject")
+    lap = _lap_b(top, m["delta"])
+    eig = float(np.min(np.linalg.eigvals(lap).real))
+    if not eig > 0:
+        bad.append("not Hurwitz")
+    res = doc["results"]
+    g = nx.DiGraph()
+    g.add_nodes_from(range(top.n))
+    g.add_edges_from((j, i) for (i, j), a in top.weights.items() if np.any(a))
+    comps = list(nx.strongly_connected_components(g))
+    if res["components"] != len(comps):
+        bad.append("components")
+    if res["largest_component_agents"] != max(len(c) for c in comps):
+        bad.append("largest component")
+    if res["methods"] != honest_doc["results"]["methods"]:
+        bad.append("methods")
+    if (
+        not _close(res["rate_estimate"]["value"], eig)
+        or res["eig_bound"] != res["rate_estimate"]["value"]
+    ):
+        bad.append("rate estimate")
+    lower = res["rate_lower_bound"]["value"]
+    if lower is not None and not lower <= eig:
+        bad.append("rate lower bound above min Re λ")
+    return bad
+
+
+def _truth_switching_scale(doc: dict) -> list[str]:
+    bad: list[str] = []
+    res = doc["results"]
+    sched = list(dict.fromkeys(s["mode"] for s in doc["subject"]["schedule"]))
+    for k in sched:
+        m = doc["subject"]["modes"][k]
+        top = _unpack_top(m, k)
+        if {str(x) for x in m["informed"]} != _antagonised(top) or not np.any(m["theta"]):
+            bad.append(f"{k}: subject")
+        lap = _lap_b(top, m["delta"])
+        lam = float(np.linalg.eigvalsh(lap + lap.T)[0])
+        lo = doc["proofs"].get(k, {}).get("lower")
+        if lo is None or not lam > lo:
+            bad.append(f"{k}: λ_min(L_B + L_Bᵀ) > ℓ")
+        if res["symmetric_part_lower_bound"].get(k) != lo:
+            bad.append(f"{k}: reported bound")
+        est = res["symmetric_part_min_eig"].get(k)
+        if est is not None and not _close(est, lam):
+            bad.append(f"{k}: estimate")
+    all_proven = all(k in doc["proofs"] for k in sched)
+    if res["common_lyapunov"]["structure"] != ("identity" if all_proven else None):
+        bad.append("common P")
+    return bad
+
+
+def _truth_time_varying(doc: dict) -> list[str]:
+    """Sampled: λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂, |a_kl(t)| <= D, λ_max²(|A_ij(t)|) <= Λ₁ on
+    a fine grid of the period; c(t) < κ after t₀; σ̄, κ, the gap and the domain."""
+    bad: list[str] = []
+    s = doc["subject"]
+    tv = from_document(s["topology"], "tv")
+    theta = np.array(s["theta"])
+    if not np.any(theta):
+        bad.append("θ = 0")
+    r = doc["results"]["time_varying"]
+    period = 2 * math.pi
+    ts = np.linspace(0.0, period, 1201)
+    des = TimeVaryingDesign(tv, theta, s["margin"])
+    lap = des.at(ts).lap_b(des.structure)
+    lam = np.linalg.eigvalsh(lap + np.swapaxes(lap, 1, 2))[:, 0]
+    if not (r["lambda2"] > 0 and lam.min() >= r["lambda2"] * (1 - 1e-12)):
+        bad.append("Λ₂")
+    w = tv.weights_at(ts)
+    if not np.max(np.abs(w)) <= r["D"] * (1 + 1e-12):
+        bad.append("D")
+    lmax = np.max(np.abs(np.linalg.eigvalsh(np.abs(w))), axis=-1)
+    if not np.max(lmax**2) <= r["Lambda1"] * (1 + 1e-12):
+        bad.append("Λ₁")
+    sigma_bar = abs(float(s["noise"]["f"]))
+    if not _close(r["sigma_bar"], sigma_bar, 1e-12, 1e-300):
+        bad.append("σ̄")
+    kappa = r["lambda2"] / (2 * sigma_bar * r["Lambda1"] * tv.n)
+    if not _close(r["kappa"], kappa, 1e-9):
+        bad.append("κ")
+    t0 = r["t0"]
+    if s["gain"] is not None:
+        tt = t0 + np.geomspace(1e-9, 1e6, 2000)
+        if t0 is None or not np.all(1 / (1 + tt) < kappa) or 1 / (1 + 0.999 * t0) < kappa * 0.99:
+            bad.append("t₀")  # c(t) < κ from t₀ on, and t₀ not far beyond the crossing
+    if not (r["lambda2"] <= r["sampled_inf"] and _close(r["sampled_inf"], float(lam.min()), 1e-3)):
+        bad.append("sampled infimum")
+    if not _close(r["relative_gap"], (r["sampled_inf"] - r["lambda2"]) / r["sampled_inf"], 1e-9):
+        bad.append("relative gap")
+    if r["domain"] != [0.0, doc["results"]["time_varying"]["domain"][1]] or not _close(
+        r["domain"][1], period, 1e-12
+    ):
+        bad.append("domain")
+    if r["intervals"] != len(doc["intervals"]):
+        bad.append("intervals")
+    return bad
+
+
+def _abs(a: np.ndarray) -> np.ndarray:
+    lam, q = np.linalg.eigh(a)
+    return (q * np.abs(lam)) @ q.T
+
+
+def _robust_channels(top: Topology):
+    """Per edge, ordered by (to, from): (E_i W V, D W Dᵀ, Vᵀ W V) with V an orthonormal
+    basis of range(W) from eigh (any basis gives a congruent Ψ, so PD-ness is the same)."""
+    n, d = top.n, top.dim
+    out = []
+    for (i, j), a in sorted(top.weights.items()):
+        if not np.any(a):
+            continue
+        s = _sign(a)
+        w = s * a
+        lam, q = np.linalg.eigh(w)
+        v = q[:, lam > 1e-12 * max(lam.max(), 1e-300)]
+        e_i = np.zeros((n * d, d))
+        e_i[i * d : (i + 1) * d] = np.eye(d)
+        dm = e_i.copy()
+        dm[j * d : (j + 1) * d] -= s * np.eye(d)
+        out.append((e_i @ w @ v, dm @ w @ dm.T, v.T @ w @ v))
+    return out
+
+
+def _psi(lap, ch, p, tau, alpha, radii):
+    n = lap.shape[0]
+    top_left = p @ (lap - alpha * np.eye(n)) + (lap - alpha * np.eye(n)).T @ p
+    cols, blocks = [], []
+    for t, r, (ewv, dwd, vwv) in zip(tau, radii, ch, strict=True):
+        top_left = top_left - t * r * r * dwd
+        cols.append(p @ ewv)
+        blocks.append(t * vwv)
+    k = sum(b.shape[0] for b in blocks)
+    out = np.zeros((n + k, n + k))
+    out[:n, :n] = top_left
+    c = n
+    for col, b in zip(cols, blocks, strict=True):
+        m = b.shape[0]
+        out[:n, c : c + m] = col
+        out[c : c + m, :n] = col.T
+        out[c : c + m, c : c + m] = b
+        c += m
+    return out
+
+
+def _lmi_holds(lap, ch, p, tau, alpha, radii) -> bool:
+    """Ψ ≻ 0 up to Nd = 40; past it, the Schur complement of Ψ on its channel blocks,
+    P(L_B − αI) + (L_B − αI)ᵀP − Σ τρ² D W Dᵀ − P (Σ E W Eᵀ/τ) P ≻ 0 (the block form is
+    singular to rounding when a weight is nearly singular), with P ≻ 0 and τ > 0."""
+    if not _pos(p):
+        return False
+    if lap.shape[0] <= 40:
+        return _pos(_psi(lap, ch, p, tau, alpha, radii))
+    tau = np.asarray(tau, dtype=float)
+    if not np.all(tau > 0):
+        return False
+    sh = lap - alpha * np.eye(lap.shape[0])
+    m = p @ sh + sh.T @ p
+    for t, r, (ewv, dwd, vwv) in zip(tau, radii, ch, strict=True):
+        m = m - t * r * r * dwd - p @ (ewv @ np.linalg.solve(vwv, ewv.T)) @ p / t
+    return _pos(m)
+
+
+def _sample_realisations(top: Topology, radii, rng, count):
+    keys = [k for k, a in sorted(top.weights.items()) if np.any(a)]
+    for _ in range(count):
+        w = dict(top.weights)
+        for key, r in zip(keys, radii, strict=True):
+            a = top.weights[key]
+            s = _sign(a)
+            lw, qw = np.linalg.eigh(s * a)
+            f = (qw * np.sqrt(np.clip(lw, 0, None))) @ qw.T
+            d = a.shape[0]
+            qr = np.linalg.qr(rng.normal(size=(d, d)))[0]
+            e = qr @ np.diag(r * rng.choice([-1.0, 1.0], size=d)) @ qr.T
+            b = s * (f @ (np.eye(d) + e) @ f)
+            w[key] = 0.5 * (b + b.T)
+        yield w
+
+
+def _lap_with(top: Topology, w: dict, delta: float, b: dict) -> np.ndarray:
+    d = top.dim
+    lap = np.zeros((top.n * d, top.n * d))
+    for (i, j), a in w.items():
+        lap[i * d : (i + 1) * d, j * d : (j + 1) * d] -= a
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += _abs(a)
+    for i, bi in b.items():
+        lap[i * d : (i + 1) * d, i * d : (i + 1) * d] += delta * bi
+    return lap
+
+
+def _truth_robust(doc: dict) -> list[str]:
+    """Robust certificates: the S-procedure matrices rebuilt here (independent channels),
+    sampled realisations against every proven end, and the reported realisations."""
+    bad: list[str] = []
+    ((name, m),) = doc["subject"]["modes"].items()
+    top = Topology.from_data(parse_topology(m["topology"], name))
+    theta, delta = np.array(m["theta"]), m["delta"]
+    if {str(x) for x in m["informed"]} != _antagonised(top) or not np.any(theta):
+        bad.append("subject")
+    if m["x0"] != ((1 + 2 / delta) * theta).tolist():
+        bad.append("x0")
+    b = {
+        i: sum(-a for (ii, _j), a in top.weights.items() if ii == i and _sign(a) < 0)
+        for i in range(top.n)
+    }
+    b = {i: v for i, v in b.items() if np.any(v)}
+    lap = _lap_with(top, dict(top.weights), delta, b)
+    ch = _robust_channels(top)
+    r = doc["subject"]["radius"]
+    radii = list(r) if isinstance(r, list) else [r] * len(ch)
+    res, mats = doc["results"], doc["matrices"]
+    props = doc["certifies"]
+    rng = np.random.default_rng(7)
+    samples = list(_sample_realisations(top, radii, rng, 200))
+    u = delta * np.concatenate(
+        [b.get(i, np.zeros((top.dim, top.dim))) @ m["x0"] for i in range(top.n)]
+    )
+    target = np.tile(theta, top.n)
+    if "robust_margin" in props:
+        rm = res["margin"]["lower"]
+        p = np.array(mats["P"]["robust_margin"])
+        tau = mats["multipliers"]["robust_margin"]
+        if not _lmi_holds(lap, ch, p, tau, 0.0, [rm] * len(ch)):
+            bad.append("margin LMI")
+        for w in _sample_realisations(top, [rm] * len(ch), rng, 100):
+            if not np.min(np.linalg.eigvals(_lap_with(top, w, delta, b)).real) > 0:
+                bad.append("a realisation within the margin is not Hurwitz")
+                break
+    if "robust_decay" in props or "robust_offset" in props:
+        al = res["decay"]["lower"]
+        p = np.array(mats["P"]["robust_decay"])
+        tau = mats["multipliers"]["robust_decay"]
+        if not _lmi_holds(lap, ch, p, tau, al, radii):
+            bad.append("decay LMI")
+        worst = min(np.min(np.linalg.eigvals(_lap_with(top, w, delta, b)).real) for w in samples)
+        if not worst > al:
+            bad.append("a sampled realisation decays slower than α_lower")
+    if "robust_offset" in props:
+        gam = res["offset"]["gamma"]
+        worst = max(
+            np.linalg.norm(np.linalg.solve(_lap_with(top, w, delta, b), u) - target)
+            for w in samples
+        )
+        if not worst**2 <= gam or not _close(res["offset"]["upper"], math.sqrt(gam)):
+            bad.append("offset bound")
+    eig = float(np.min(np.linalg.eigvals(lap).real))
+    if not _close(res["nominal_decay"], eig):
+        bad.append("nominal decay")
+    reals = doc.get("realizations", {})
+    for key, path in (("decay", ("decay", "upper")), ("offset", ("offset", "lower"))):
+        if path[0] in res and path[1] in res[path[0]]:
+            w = dict(top.weights)
+            for e in reals[key]["edges"]:
+                w[(top.index(e["to"]), top.index(e["from"]))] = np.array(e["weight"])
+            lw = _lap_with(top, w, delta, b)
+            got = (
+                float(np.min(np.linalg.eigvals(lw).real))
+                if key == "decay"
+                else float(np.linalg.norm(np.linalg.solve(lw, u) - target))
+            )
+            # an eigenvalue is defined to a tolerance relative to the matrix's size
+            atol = 1e-6 * float(np.max(np.abs(lw))) if key == "decay" else 1e-12
+            if not _close(res[path[0]][path[1]], got, 1e-6, atol):
+                bad.append(f"{key} realisation")
+    return bad
+
+
+def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
+    """What is false in ``doc`` (empty: every claim and reported number is true)."""
+    if kind.startswith("robust"):
+        return _truth_robust(doc)
+    if doc.get("certifies") != honest_doc["certifies"] and kind not in ("hurwitz", "switching"):
+        return ["certifies"]
+    if kind in ("hurwitz", "switching"):
+        return _truth_dense(doc)
+    if kind.startswith("hurwitz-scale"):
+        return _truth_hurwitz_scale(doc, honest_doc)
+    if kind == "switching-scale":
+        return _truth_switching_scale(doc)
+    return _truth_time_varying(doc)
+
+
+# ------------------------------------------------------------------ the mutations
+
+
+def _paths(x, path=()):
+    """Every leaf and container path worth mutating (lists sampled)."""
+    if isinstance(x, dict):
+        yield path, x
+        for k, v in x.items():
+            if not (path == () and k in SKIP_KEYS):
+                yield from _paths(v, (*path, k))
+    elif isinstance(x, list):
+        yield path, x
+        idx = sorted({0, len(x) // 2, len(x) - 1}) if len(x) > MAX_LIST else range(len(x))
+        for i in idx:
+            yield from _paths(x[i], (*path, i))
+    else:
+        yield path, x
+
+
+def _variants(x) -> list:
+    if isinstance(x, bool):
+        return [not x]
+    if isinstance(x, int):
+        return [x + 1, 0 if x else 1, -x - 1]
+    if isinstance(x, float):
+        return [v for v in (x * (1 + 1e-6), 2 * x + 1.0, -x, 0.0) if v != x]
+    if isinstance(x, str):
+        return [x[:-1] + ("A" if x[-1:] != "A" else "B"), ""]
+    if x is None:
+        return [1.0, "x"]
+    if isinstance(x, list):
+        return [x[:-1], []] if x else [[1.0]]
+    return ["__drop__", "__extra__"]
+
+
+def _mutants(doc):
+    for path, value in list(_paths(doc)):
+        if path == ():
+            continue
+        for v in _variants(value):
+            m = copy.deepcopy(doc)
+            parent = m
+            for k in path[:-1]:
+                parent = parent[k]
+            if v == "__drop__":
+                for key in list(value):
+                    mm = copy.deepcopy(m)
+                    par = mm
+                    for k in path:
+                        par = par[k]
+                    del par[key]
+                    yield f"{path}-{key}", mm
+                continue
+            if v == "__extra__":
+                parent[path[-1]] = {**value, "forged": 1.0}
+            else:
+                parent[path[-1]] = v
+            yield f"{path}={str(v)[:20]}", m
+
+
+def _redigest(doc):
+    if isinstance(doc.get("subject"), dict):
+        doc["subject_digest"] = document_hash(doc["subject"])
+    doc["digest"] = digest(doc)
+    return doc
+
+
+def _careful(doc):
+    """A careful forger: lists exactly the claims verify derives for the edited file."""
+    ver = verify(doc)
+    kind = KINDS.get(doc.get("kind"))
+    if kind is not None and ver.about is not None:
+        doc = copy.deepcopy(doc)
+        doc["claims"] = [kind.record(c.claim) for c in ver.checks if c.claim is not None]
+    return _redigest(doc)
+
+
+KIND_OF = {
+    "robust": "robust",
+    "robust-riccati": "robust",
+    "hurwitz": "hurwitz",
+    "switching": "switching",
+    "hurwitz-scale": "hurwitz-scale",
+    "hurwitz-scale-g1": "hurwitz-scale",
+    "switching-scale": "switching-scale",
+    "time_varying": "time_varying",
+}
+
+
+STRIDE = {"robust-riccati": 4}
+
+
+@pytest.fixture(scope="module")
+def honest_all(honest) -> dict[str, dict]:
+    """Besides ``honest``, a robust certificate past the LMI's size (N = 14, d = 3:
+    Riccati decay and margin, the offset with the equation eliminated); built for the
+    slow lane only."""
+    from ntc_design.certify.kinds.robust import robust_certificate
+    from ntc_design.certify.robust import robust
+
+    mid = design(random_network(14, 3, seed=4), [1.0, 2.0, -1.0], 0.1, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        doc = json.loads(json.dumps(robust_certificate(robust(mid, 0.05, starts=1))))
+    assert doc["certifies"] == ["robust_margin", "robust_decay", "robust_offset"]
+    assert verify(copy.deepcopy(doc)).valid and truth("robust", doc, doc) == []
+    return {**honest, "robust-riccati": doc}
+
+
+@hostile
+@pytest.mark.slow
+@pytest.mark.parametrize("which", list(KIND_OF))
+def test_no_valid_forgery_states_something_false(which, honest_all):
+    base = honest_all[which]
+    tried = accepted = 0
+    for k, (label, m) in enumerate(_mutants(base)):
+        if k % STRIDE.get(which, 1):
+            continue  # a large certificate: every STRIDE-th of its ~1,200 mutants
+        doc = _redigest(m)
+        for careful in (False, True):
+            tried += 1
+            try:
+                ver = verify(doc)
+            except (InputError, RecursionError):
+                break  # malformed: rejected with exit 2
+            if not ver.valid:
+                # a careful forger re-lists the claims when that is what failed
+                if careful or "listed claims" not in " ".join(c.name for c in ver.failed):
+                    break
+                doc = _careful(doc)
+                continue
+            accepted += 1
+            try:
+                wrong = truth(which, doc, base)
+            except (InputError, KeyError, TypeError, ValueError, AttributeError) as exc:
+                wrong = [f"{type(exc).__name__}: {exc}"]
+            assert not wrong, (which, label, careful, wrong)
+            break
+    # the enumeration is not vacuous: many edits, most of them refused
+    assert tried >= 60 and accepted < tried / 2, (tried, accepted)
+
+
+@hostile
+def test_truth_oracle_accepts_every_honest_certificate_and_catches_a_false_number(honest):
+    for which, doc in honest.items():
+        assert truth(which, doc, doc) == [], which
+    forged = copy.deepcopy(honest["hurwitz-scale"])
+    forged["results"]["rate_estimate"]["value"] = forged["results"]["eig_bound"] = 100.0
+    assert "rate estimate" in truth("hurwitz-scale", forged, honest["hurwitz-scale"])
+
+
+def test_mutants_cover_every_top_level_field(honest):
+    for which, doc in honest.items():
+        touched = {path[0] for path, _ in _paths(doc) if path}
+        assert touched == set(doc) - SKIP_KEYS, which
+
+
+# ------------------------------------------------------------------ named forgeries
+
+
+def _cli_verify(doc, tmp_path, capsys, monkeypatch):
+    from tests.cli_helpers import run_cli
+
+    p = tmp_path / "forged.json"
+    p.write_text(json.dumps(_redigest(doc)))
+    code, out, err = run_cli(["verify", p], capsys, monkeypatch)
+    assert "Traceback" not in err
+    return code, out, err
+
+
+TV = json.loads((ROOT / "certificates" / "g1_tv.json").read_text())
+
+
+@hostile
+def test_time_varying_claims_and_certifies_are_derived(tmp_path, capsys, monkeypatch):
+    doc = copy.deepcopy(TV)
+    doc["claims"][0]["id"] = "λ_min(L_B(t) + L_B(t)ᵀ) >= 100 on every interval"
+    doc["claims"].append({"id": "−L_B Hurwitz with decay rate 1000", "kind": "hurwitz"})
+    doc["certifies"] += ["hurwitz", "symmetric_part"]
+    code, out, err = _cli_verify(doc, tmp_path, capsys, monkeypatch)
+    assert code == 1
+    assert "certifies what kind 'time_varying' can" in err and "listed claims" in err
+    assert "FAILS certifies what kind 'time_varying' can: unknown property 'hurwitz'" in out
+
+
+@hostile
+def test_time_varying_theta_zero_is_invalid(tmp_path, capsys, monkeypatch):
+    doc = copy.deepcopy(TV)
+    doc["subject"]["theta"] = [0.0, 0.0, 0.0]
+    code, out, err = _cli_verify(doc, tmp_path, capsys, monkeypatch)
+    assert code == 1 and "θ ≠ 0" in err and "θ = 0" in out
+
+
+@hostile
+@pytest.mark.parametrize("key", ["sigma_bar", "kappa"])
+def test_time_varying_reported_numbers_are_recomputed(key, tmp_path, capsys, monkeypatch):
+    doc = copy.deepcopy(TV)
+    doc["results"]["time_varying"][key] = 0.0
+    code, out, err = _cli_verify(doc, tmp_path, capsys, monkeypatch)
+    assert code == 1 and "reported results" in err
+    assert f"time_varying.{key}: reported 0.0, recomputed" in out
+
+
+@hostile
+@pytest.mark.parametrize("recompute", [True, False])
+def test_forged_scale_rate_estimate_is_invalid(recompute, honest, tmp_path, capsys, monkeypatch):
+    """The estimate is redone where it is cheap, and bounded on both sides where it is not
+    (min Re λ of a component is at most the mean of its eigenvalues, trace/(n·d))."""
+    from ntc_design.certify.kinds import hurwitz_scale
+
+    if not recompute:
+        monkeypatch.setattr(hurwitz_scale, "RECOMPUTE_FLOPS", 0)
+    doc = copy.deepcopy(honest["hurwitz-scale-g1"])
+    true = doc["results"]["rate_estimate"]["value"]
+    doc["results"]["eig_bound"] = doc["results"]["rate_estimate"]["value"] = 100.0
+    code, out, err = _cli_verify(doc, tmp_path, capsys, monkeypatch)
+    assert code == 1 and "reported results" in err
+    want = "recomputed" if recompute else "above"
+    assert "rate_estimate.value: " in out and want in out.split("rate_estimate.value:")[1][:80]
+    assert 0 < true < 100
+
+
+@hostile
+def test_an_added_number_in_results_is_invalid(honest):
+    for which, doc in honest.items():
+        doc = copy.deepcopy(doc)
+        doc["results"]["decay_rate_proven"] = 1000.0
+        ver = verify(_redigest(doc))
+        assert not ver.valid, which
+        assert (
+            "decay_rate_proven: a reported number this kind does not report"
+            in ver.failed[-1].detail
+        )

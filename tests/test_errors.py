@@ -1,0 +1,45 @@
+"""Tests of :mod:`ntc_design.errors`."""
+
+import warnings
+
+import pytest
+
+import ntc_design as nd
+from ntc_design.errors import InputError, one_line, quote
+from ntc_design.simulate import (
+    simulate,
+)
+from tests.cli_helpers import assert_input_error
+from tests.conftest import EXAMPLES, ROOT
+
+
+def test_assumption_warning_points_at_the_users_call():
+    top = nd.load(EXAMPLES / "g3.yaml")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        nd.design(top, [1, 2, -1], 0.1)
+    (w,) = [w for w in caught if issubclass(w.category, nd.AssumptionWarning)]
+    assert w.filename == __file__
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "radius, needle",
+    [("1.5", "below 1"), ("-0.1", ">= 0"), ("nan", "finite"), ("1", "below 1")],
+)
+def test_a_bad_radius_is_one_line_exit_2(radius, needle, capsys, monkeypatch):
+    g1_robust = ROOT / "examples" / "g1.yaml"
+    args = ["robust", g1_robust, "--theta", "1,2,-1", "--radius", radius]
+    assert_input_error(args, capsys, monkeypatch, needle, "--radius")
+
+
+@pytest.mark.hostile
+def test_theta_length_checked_against_the_topology(g1):
+    with pytest.raises(InputError, match=r"^theta: expected 3 numbers"):
+        simulate(g1, [1, 2], T=0.1, paths=2)
+
+
+def test_quote_and_one_line():
+    assert quote(3) == "3" and quote("a") == "'a'"
+    assert "\n" not in quote("a\nerror: forged")
+    assert one_line("a\nb\rc\x1b") == "a\\nb\\rc\\x1b"

@@ -1,0 +1,76 @@
+"""Tests of :mod:`ntc_design.tune.objective`."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import ntc_design as nd
+from ntc_design.simulate import NoiseModel, SimulationSpec, simulate
+from ntc_design.simulate.scenario import load_scenario
+from ntc_design.tune import (
+    ExactObjective,
+    MonteCarloObjective,
+    PowerGain,
+    objective_for,
+    tune,
+)
+from tests.support.tune import T_PAIR
+
+
+@pytest.mark.parametrize("a, b", [(1.0, 1.0), (0.3, 2.0), (2.0, 0.5), (6.0, 7.0)])
+def test_exact_objective_equals_the_closed_form(pair_network, a, b):
+    top, spec, closed = pair_network
+    obj = ExactObjective(top, spec, T_PAIR)
+    assert obj.curve(PowerGain(a, b, 1.0)).final == pytest.approx(closed(a, b), rel=1e-8)
+    # the search's coarser RK4 is still accurate to 1e-5
+    assert obj.value(PowerGain(a, b, 1.0)) == pytest.approx(closed(a, b), rel=1e-5)
+
+
+def test_nonlinear_noise_is_tuned_by_monte_carlo_with_common_random_numbers(g1, theta):
+    spec = SimulationSpec.build(
+        theta,
+        noise=NoiseModel(0.4, lambda x: 0.3 * np.sin(x)),
+        initial=np.linspace(-3, 3, g1.n * g1.dim),
+        paths=64,
+        dt=0.01,
+        seed=3,
+        workers=1,
+    )
+    obj = objective_for(g1, spec, 1.0)
+    assert isinstance(obj, MonteCarloObjective) and obj.statistical
+    g = PowerGain(1.3, 0.8, 0.9)
+    assert obj.value(g) == obj.value(g)  # the same draws for every evaluation
+    res = tune(g1, spec, 1.0, max_evaluations=12, landscape=False, certificate=False)
+    assert res.statistical and "statistical" in res.method
+    c = res.curves["tuned"]
+    assert c.lo[-1] <= c.final <= c.hi[-1] and c.hi[-1] > c.lo[-1]
+    assert res.ms_error_T["tuned"] <= res.ms_error_T["baseline"]
+
+
+def test_exact_is_refused_for_a_nonlinear_f(g1, theta):
+    spec = SimulationSpec.build(theta, noise=NoiseModel(0.4, np.sin))
+    with pytest.raises(nd.InputError, match="exact moments are not available here"):
+        objective_for(g1, spec, 1.0, method="exact")
+
+
+def test_a_stiff_or_unstable_candidate_scores_infinity_without_being_integrated(g1, theta):
+    spec = SimulationSpec.build(theta, noise=NoiseModel(0.4, 0.3), initial=np.ones(21))
+    obj = ExactObjective(g1, spec, 10.0)
+    assert obj.value(PowerGain(20.0, 0.1, 1.0)) == math.inf  # c(0) = 200: about 4e5 RK4 steps
+    assert "too stiff" in next(iter(obj.skipped.values()))
+    # c(0) = 4.5: integrable, but the multiplicative noise makes E‖ε‖² grow without bound
+    assert obj.value(PowerGain(4.472, 1.0, 0.51)) == math.inf
+
+
+@pytest.mark.slow  # ~14 s: exact moments of a time-varying topology at every evaluation
+def test_a_topology_given_as_expressions_of_t_is_tuned_by_its_exact_moments(examples):
+    top, spec, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = tune(top, spec, 1.0, max_evaluations=10, landscape=False, certificate=False)
+        again = simulate(top, spec=spec.replace(T=1.0, gain=res.tuned.text, method="exact"))
+    assert res.method == "exact moments (A(t))" and not res.statistical
+    assert res.ms_error_T["tuned"] <= res.ms_error_T["baseline"]
+    assert res.ms_error_T["tuned"] == pytest.approx(again.exact.ms_error[-1].sum(), rel=1e-9)
