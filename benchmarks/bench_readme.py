@@ -6,7 +6,7 @@ or a benchmark re-measures).
     python benchmarks/bench_readme.py --all      # also the suite, the install, the docs
 
 The README's numbers themselves (design, certificate, tune) are asserted by
-tests/test_readme.py; this script measures what depends on the machine: times and sizes.
+tests/system/test_readme.py; this script measures what depends on the machine: times and sizes.
 The install is timed in a fresh virtual environment from the configured package index.
 """
 

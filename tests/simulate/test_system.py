@@ -143,7 +143,7 @@ def test_step_size_guard(g1):
     with pytest.raises(nd.InputError, match=r"dt: Euler–Maruyama is unstable.*use dt <"):
         simulate(g1, THETA, T=1.0, dt=0.3, paths=10, save_every=1.0)
     # G1's drift bound 2·Re λ/|λ|² is 0.137 (λ = 14.58), but in mean square h = 0.1 is
-    # unstable (the second moment of the recursion grows 1.8× per step, test_kernel.py):
+    # unstable (the second moment of the recursion grows 1.8× per step):
     # the multiplicative-noise limit of agent 5 (0.057) refuses it; h = 0.04 is close
     with pytest.raises(nd.InputError, match=r"mean-square limit .* of agent 5.*use dt < 0.057"):
         simulate(g1, THETA, T=0.5, dt=0.1, paths=10, method="mc", save_every=0.5)
