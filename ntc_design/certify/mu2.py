@@ -101,7 +101,8 @@ def mu2_t0(gain: Any, kappa: float) -> tuple[float | None, str]:
             continue
         if b - a < 1e-9 * max(1.0, a) or n_ev > 20000:
             return t0, "numerical (the ball-arithmetic proof did not close)"
-        m = 0.5 * (a + b) if b < 2 * max(a, 1.0) else max(2 * a, a + 1.0)
+        # [a, 2a] bisects (splitting it at 2a would give it back); longer ones split at 2a
+        m = 0.5 * (a + b) if b <= 2 * max(a, 1.0) else max(2 * a, a + 1.0)
         stack += [(a, m), (m, b)]
     try:
         dec = sp.is_decreasing(c, sp.Interval(T0_SCAN_END, sp.oo))
