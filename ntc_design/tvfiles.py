@@ -202,6 +202,8 @@ def _time_constant(x: Any, source: str | None, key: str) -> sp.Expr:
     if isinstance(x, str):
         e = parse_expression(x, f"{source}: {key}" if source else key, variables=())
     elif isinstance(x, (int, float)) and not isinstance(x, bool):
+        if not np.isfinite(x):
+            raise field_error(source, key, f"must be in (0, {MAX_PERIOD:g}], got {x}")
         e = sp.Rational(str(x)) if isinstance(x, float) else sp.Integer(x)
     else:
         raise field_error(
@@ -237,7 +239,8 @@ def parse_time_varying(doc: dict[str, Any], source: str | None = None) -> TimeVa
         An unknown or missing field, both ``period`` and ``constant_after``, a bad label,
         edge, weight or time value.
     """
-    allowed = TOPOLOGY_KEYS | TIME_KEYS
+    # robust certification (uncertainty:) is for fixed weights, not for weights of t
+    allowed = (TOPOLOGY_KEYS - {"uncertainty"}) | TIME_KEYS
     unknown = sorted(set(doc) - allowed)
     if unknown:
         raise field_error(

@@ -105,7 +105,9 @@ def window_warning(t_from: float, t_end: float) -> str:
     if decades >= 1.0:
         return ""
     return (
-        f" The window spans only {decades:.2f} decades of 1 + t: too short for the fitted "
+        # at most 0.99: a window of 0.996 decades must not read "only 1.00"
+        f" The window spans only {min(round(decades, 2), 0.99):.2f} decades of 1 + t: too "
+        "short for the fitted "
         "exponent to test a prediction (which describes t → ∞); take it as indicative."
     )
 
@@ -125,7 +127,8 @@ def fitted_exponent(t: np.ndarray, y: np.ndarray, t_from: float) -> float | None
     Returns
     -------
     float or None
-        p; None with fewer than three positive points in the window.
+        p; None with fewer than five positive points in the window (a slope from fewer
+        says little about a decay).
     """
     sel = (t >= t_from) & (y > 0) & np.isfinite(y)
     if sel.sum() < 5:

@@ -45,15 +45,46 @@ def t_ball(a: float, b: float) -> arb:
     return arb(a).union(arb(b))
 
 
+def _abs(x: arb) -> arb:
+    """A ball containing ``{|v| : v in x}`` (not finite if ``x`` is not)."""
+    if not x.is_finite():
+        return arb("nan")
+    lo, hi = x.lower(), x.upper()
+    if lo >= 0:
+        return x
+    if hi <= 0:
+        return -x
+    return arb(0).union(-lo if -lo > hi else hi)
+
+
+def _ipow(x: arb, n: int) -> arb:
+    """``x**n`` for an integer n >= 0, from the ends: x**n is monotone on x for odd n and on
+    |x| for even n. (python-flint's ``**`` returns NaN for a ball centred at 0 and ±1.01
+    for ``[0.25, 1]**2``; products of the ball itself lose the sign of an even power.)"""
+    if not x.is_finite():
+        return arb("nan")
+    y = _abs(x) if n % 2 == 0 else x
+
+    def point_pow(v: arb) -> arb:  # a ball containing v**n, v exact: binary products
+        r, b, k = arb(1), v, n
+        while k:
+            if k & 1:
+                r = r * b
+            k >>= 1
+            if k:
+                b = b * b
+        return r
+
+    return arb(point_pow(y.lower()).lower()).union(arb(point_pow(y.upper()).upper()))
+
+
 def _pow(base: arb, e: sp.Expr, ev: Callable[[sp.Expr], arb]) -> arb:
     if isinstance(e, sp.Integer):
         n = int(e)
-        if n >= 0:
-            return base**n
-        return 1 / base ** (-n)
+        return _ipow(base, n) if n >= 0 else 1 / _ipow(base, -n)
     if isinstance(e, sp.Rational) and int(e.q) == 2:
         r = base.sqrt()
-        return r ** int(e.p) if e.p > 0 else 1 / r ** int(-e.p)
+        return _ipow(r, int(e.p)) if e.p > 0 else 1 / _ipow(r, int(-e.p))
     return (ev(e) * base.log()).exp()
 
 
@@ -108,20 +139,14 @@ def enclose(expr: sp.Expr, t: arb, cache: dict | None = None) -> arb:
         elif isinstance(e, sp.Pow):
             r = _pow(ev(e.args[0]), e.args[1], ev)
         elif isinstance(e, sp.Abs):
-            x = ev(e.args[0])
-            lo, hi = x.lower(), x.upper()
-            if lo >= 0:
-                r = x
-            elif hi <= 0:
-                r = -x
-            else:
-                r = arb(0).union(-lo if -lo > hi else hi)
+            r = _abs(ev(e.args[0]))
         elif isinstance(e, (sp.Min, sp.Max)):
             xs = [ev(a) for a in e.args]
-            pick = min if isinstance(e, sp.Min) else max
-            lo = pick(x.lower() for x in xs)
-            hi = pick(x.upper() for x in xs)
-            r = arb(lo).union(arb(hi))
+            if not all(x.is_finite() for x in xs):
+                r = arb("nan")  # Python's min/max skip a NaN bound: never a finite answer
+            else:
+                pick = min if isinstance(e, sp.Min) else max
+                r = arb(pick(x.lower() for x in xs)).union(arb(pick(x.upper() for x in xs)))
         else:
             fn = {
                 sp.exp: arb.exp,
