@@ -725,12 +725,25 @@ def analyse_gain(text: str, seconds: float = GAIN_SECONDS) -> GainAnalysis:
         negative or non-finite on [0, ∞).
     """
     expr = parse_gain(text)
+    if text in _DECIDED:
+        return _DECIDED[text]
     results, why = _run(expr, text, seconds)
     if "error" in results:
         raise InputError(results["error"])
     missing = Condition(None, why or "not decided")
     got = {k: results.get(k, missing) for k in CONDITION_LABELS}
-    return GainAnalysis(text, expr, **got)
+    analysis = GainAnalysis(text, expr, **got)
+    if not why and all(k in results for k in CONDITION_LABELS):
+        # every condition decided: the same answer on any machine, so kept for this process
+        # (a notebook, a sweep or a tuning analyses one gain many times; a fork each)
+        if len(_DECIDED) >= _DECIDED_MAX:
+            del _DECIDED[next(iter(_DECIDED))]
+        _DECIDED[text] = analysis
+    return analysis
+
+
+_DECIDED: dict[str, GainAnalysis] = {}  # text -> complete analysis, oldest first
+_DECIDED_MAX = 256
 
 
 __all__ = [

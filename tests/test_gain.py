@@ -231,3 +231,30 @@ def test_gain_table_html_holds_the_terminal_verdicts():
     assert [r[1].verdict_word for r in t.rows] == ["yes", "yes", "yes", "no", "yes", "no"]
     for label in t.labels:
         assert label in page
+
+
+def test_a_decided_gain_is_analysed_once_per_process(monkeypatch):
+    import ntc_design.gain as gain_mod
+
+    calls = []
+    real = gain_mod._run
+
+    def counting(expr, text, seconds):
+        calls.append(text)
+        return real(expr, text, seconds)
+
+    monkeypatch.setattr(gain_mod, "_DECIDED", {})
+    monkeypatch.setattr(gain_mod, "_run", counting)
+    first = analyse_gain("3/(2+t)")
+    assert analyse_gain("3/(2+t)") is first and calls == ["3/(2+t)"]
+    assert first.integral_diverges.value is True and first.square_integrable.value is True
+
+    # an analysis cut short by its time limit depends on the machine: never kept
+    def undecided(expr, text, seconds):
+        calls.append(text)
+        return {}, "not decided within the 0.1 s time limit"
+
+    monkeypatch.setattr(gain_mod, "_run", undecided)
+    for _ in range(2):
+        assert analyse_gain("4/(2+t)").tends_to_zero.value is None
+    assert calls == ["3/(2+t)", "4/(2+t)", "4/(2+t)"]
