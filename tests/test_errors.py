@@ -6,9 +6,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.errors import InputError, one_line, quote
-from ntc_design.simulate import (
-    simulate,
-)
+from ntc_design.simulate import simulate
 from tests.cli_helpers import assert_input_error
 from tests.conftest import EXAMPLES, ROOT
 

@@ -4,9 +4,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design import (
-    assumption2,
-)
+from ntc_design.design import assumption2
 from ntc_design.generate import FAMILIES, random_network, write_topology
 from tests.cli_helpers import run_cli
 

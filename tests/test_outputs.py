@@ -10,9 +10,7 @@ import pytest
 from ntc_design.errors import InputError
 from ntc_design.outputs import atomic_path, output_folder, write_atomic
 from ntc_design.paper import THETA  # the paper's θ, defined once
-from ntc_design.simulate import (
-    simulate,
-)
+from ntc_design.simulate import simulate
 from ntc_design.simulate.scenario import write_outputs
 
 # ------------------------------------------------------------------- atomic outputs

@@ -7,9 +7,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design import (
-    design,
-)
+from ntc_design.design import design
 from ntc_design.generate import random_network
 from ntc_design.linalg import DEF_CODES
 from ntc_design.thresholds import critical_couplings

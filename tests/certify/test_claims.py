@@ -22,9 +22,10 @@ K = ClaimKind
 def test_every_property_has_a_statement_and_values_round_trip():
     assert set(PROPERTY_TEXT) == set(Property)
     assert all(isinstance(t, str) and t for t in PROPERTY_TEXT.values())
-    # certificates store the values: parsing a value gives the member back
-    for member in (*Property, *ClaimKind):
-        assert type(member)(member.value) is member
+    # certificates store the values: no two members may share one (an alias would read
+    # back as the other member)
+    assert len(Property.__members__) == len(Property)
+    assert len(ClaimKind.__members__) == len(ClaimKind)
     assert ClaimKind("D") is ClaimKind.WEIGHT_BOUND
     with pytest.raises(ValueError, match="bogus"):
         Property("bogus")

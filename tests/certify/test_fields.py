@@ -151,7 +151,7 @@ def test_parse_schedule_reads_modes_and_durations():
             [{"mode": "G1", "duration": -1.0}],
             r"^subject\.schedule\[0\]\.duration: must be positive and finite$",
         ),
-        # a period this long would overflow any sum of durations
+        # durations are capped below 1e300 (10 000 of them still sum to a finite double)
         (
             [{"mode": "G1", "duration": 1e300}],
             r"^subject\.schedule\[0\]\.duration: must be positive and finite$",

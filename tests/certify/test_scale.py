@@ -16,9 +16,7 @@ from ntc_design.linalg import (
     DenseRefused,
     SPDFamily,
 )
-from ntc_design.model import (
-    Topology,
-)
+from ntc_design.model import Topology
 from tests.cli_helpers import run_cli
 from tests.support.scale import _methods
 from tests.support.switching_scale import THETA_SW

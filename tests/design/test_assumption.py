@@ -14,9 +14,7 @@ from ntc_design.design import (
     lemma1_coefficient,
 )
 from ntc_design.design.assumption import lemma1_coefficients
-from ntc_design.linalg import (
-    classify,
-)
+from ntc_design.linalg import classify
 from ntc_design.model import (
     Topology,
     antagonistic_in_weight,

@@ -8,13 +8,9 @@ from hypothesis import strategies as st
 from scipy.io import loadmat
 
 import ntc_design as nd
-from ntc_design.design import (
-    AssumptionWarning,
-)
+from ntc_design.design import AssumptionWarning
 from ntc_design.generate import random_network
-from ntc_design.model import (
-    Topology,
-)
+from ntc_design.model import Topology
 from ntc_design.rows import fmt
 from tests.cli_helpers import run_cli
 from tests.conftest import EXAMPLES, random_topology

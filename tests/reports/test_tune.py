@@ -320,7 +320,7 @@ def test_outputs_of_a_schedule_tuning_replace_an_earlier_folder(
     doc = yaml.safe_load((out / "tuned.yaml").read_text(encoding="utf-8"))
     assert doc["gain"] == {"schedule": "schedule.csv", "tail": "1.5/(1 + t)",
                            "interpolation": "linear"}  # fmt: skip
-    # the tuned δ replaces the margin; the unstable explicit step asks for the implicit one
+    # the tuned δ replaces the margin; the result's stepping is written as it is
     assert doc["delta"] == 0.8 and "margin" not in doc
     assert (doc["stepping"], doc["scheme"]) == ("intrinsic", "implicit")
     rows = [ln for ln in (out / "schedule.csv").read_text().splitlines() if ln[0].isdigit()]

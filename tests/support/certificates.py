@@ -1,4 +1,5 @@
-"""Helpers shared by the tests that came from test_certificates.py."""
+"""The certificates bundled in certificates/, reading and writing them, and the
+paper's designs as a session fixture."""
 
 import json
 

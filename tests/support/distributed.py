@@ -1,4 +1,5 @@
-"""Helpers shared by the tests that came from test_distributed.py."""
+"""A tiny sweep (topology, scenario, grid) written once, its undisturbed run as the
+reference, and results without the columns that differ between runs."""
 
 import pandas as pd
 import pytest

@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_implicit.py."""
+"""A 400-agent random network and its system: the drift-implicit solvers' test bed."""
 
 import pytest
 

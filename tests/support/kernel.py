@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_kernel.py."""
+"""Stiff random networks and G1's mode system for the Monte Carlo kernels."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_model.py."""
+"""Hypothesis strategies for network seeds."""
 
 from hypothesis import strategies as st
 

@@ -1,4 +1,5 @@
-"""Helpers shared by the tests that came from test_moments_math.py."""
+"""An independent right-hand side of the moment equations (dense NumPy, from the
+definitions) and the paper's noise settings."""
 
 import numpy as np
 

@@ -1,4 +1,5 @@
-"""Helpers shared by the tests that came from test_reports.py."""
+"""The paper's Section 5 run once at full size for the report tests, and the checks that
+a report's links and anchors resolve."""
 
 import re
 from pathlib import Path

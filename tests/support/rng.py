@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_rng.py."""
+"""A small Monte Carlo run of G1 with options, for the generator tests."""
 
 from ntc_design.simulate import NoiseModel, simulate
 

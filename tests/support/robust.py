@@ -1,4 +1,5 @@
-"""Helpers shared by the tests that came from test_robust.py."""
+"""Robust certification from scratch: L_B(A') rebuilt independently, weight
+realisations sampled in the set, their decay and offset, forged certificates."""
 
 import copy
 import warnings

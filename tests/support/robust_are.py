@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_robust_are.py."""
+"""A 14-agent network past the LMI's size (Nd = 42), certified robustly once."""
 
 import warnings
 

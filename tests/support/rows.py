@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_rows.py."""
+"""Text of an HTML fragment without tags and with whitespace squashed."""
 
 import html
 import re

@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_scale.py."""
+"""The proof methods a scale certificate used, per component."""
 
 
 def _methods(cert):

@@ -1,4 +1,5 @@
-"""Helpers shared by the tests that came from test_simulate.py."""
+"""Euler–Maruyama moments by exact recursion, the Monte Carlo band check against exact
+moments, and a scenario file writer."""
 
 import json
 

@@ -1,4 +1,5 @@
-"""Helpers shared by the tests that came from test_switching_scale.py."""
+"""A big switching set (30 agents per mode), its certificate, and a spy counting the
+numeric work of verification."""
 
 import numpy as np
 import pytest

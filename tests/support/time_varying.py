@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_time_varying.py."""
+"""G1 with time-varying weights, and small time-varying documents."""
 
 import pytest
 

@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_tune.py."""
+"""A two-agent network whose tuning objective has a closed form, and G1 tuned once."""
 
 import subprocess
 import sys
@@ -15,7 +15,7 @@ from ntc_design.simulate import NoiseModel, SimulationSpec
 # eigenbasis S_k' = −2λ_k c S_k + c² w²σ², which for c = a/(b + t) integrates to
 # S_k(T) = S_k(0) (b/(b+T))^(2λa) + a²w²σ²/(2λa − 1)·[(b+T)^(−1) − b^(2λa−1)(b+T)^(−2λa)].
 
-PAIR = """name: pair_network
+PAIR = """name: pair
 dim: 1
 agents: 2
 edges:

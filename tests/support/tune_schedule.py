@@ -1,4 +1,4 @@
-"""Helpers shared by the tests that came from test_tune_schedule.py."""
+"""The simulation settings of the deadline-schedule tests (G1, σ = 0.4, f = 0.3x)."""
 
 import numpy as np
 import pytest

@@ -191,9 +191,14 @@ def test_oversized_point_files_are_not_read(tmp_path, monkeypatch):
     save_point(tmp_path, _result("p1"))
     js = tmp_path / "points" / "p1.json"
     npz = tmp_path / "points" / "p1.npz"
-    # the limit is checked on either file's size, before reading it
-    monkeypatch.setattr(store, "MAX_POINT_BYTES", min(js.stat().st_size, npz.stat().st_size) - 1)
-    assert load_point(tmp_path, "p1") is None
+    # the limit is checked on either file's size, before reading it: each file alone over it
+    assert npz.stat().st_size > js.stat().st_size  # the arrays are the bigger file
+    monkeypatch.setattr(store, "MAX_POINT_BYTES", npz.stat().st_size - 1)
+    assert load_point(tmp_path, "p1") is None  # the npz alone is over the limit
+    js.write_text(js.read_text() + " " * 2 * npz.stat().st_size)  # still valid JSON
+    monkeypatch.setattr(store, "MAX_POINT_BYTES", js.stat().st_size - 1)
+    assert npz.stat().st_size <= store.MAX_POINT_BYTES
+    assert load_point(tmp_path, "p1") is None  # the JSON alone is over the limit
     monkeypatch.setattr(store, "MAX_POINT_BYTES", 2**30)
     assert load_point(tmp_path, "p1") is not None
 

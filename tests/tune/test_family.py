@@ -8,9 +8,7 @@ from scipy.integrate import quad
 
 import ntc_design as nd
 from ntc_design.gain import gain_function
-from ntc_design.tune import (
-    PowerGain,
-)
+from ntc_design.tune import PowerGain
 
 # -- the family ---------------------------------------------------------------------------
 

@@ -14,9 +14,7 @@ from ntc_design.design import (
     design,
 )
 from ntc_design.generate import random_network, write_topology
-from ntc_design.model import (
-    Topology,
-)
+from ntc_design.model import Topology
 from tests.cli_helpers import assert_input_error, run_cli
 from tests.support.scale import _methods
 from tests.support.switching_scale import THETA_SW, _refresh
