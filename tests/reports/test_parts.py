@@ -7,38 +7,23 @@ import json
 import numpy as np
 import pytest
 
-import ntc_design as nd
 from ntc_design.errors import InputError
 from ntc_design.reports import parts
 from ntc_design.reports.rundata import load_run
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.scenario import write_outputs
 
-# Two agents, d = 1, both edges antagonistic (−1), both informed with B_i = 1:
-# L_B = [[1 + δ, 1], [1, 1 + δ]] with eigenvalues 2 + δ and δ (hand-worked).
-PAIR = """name: pair
-dim: 1
-agents: 2
-edges:
-  - {from: 2, to: 1, weight: [[-1.0]]}
-  - {from: 1, to: 2, weight: [[-1.0]]}
-"""
+# pair_topology (tests/support/tune.py): two agents, d = 1, both edges antagonistic (−1),
+# both informed with B_i = 1: L_B = [[1 + δ, 1], [1, 1 + δ]], eigenvalues 2 + δ and δ.
 T_RUN = 0.5
 X_INIT = [3.0, -1.0]
 
 
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
-    p = tmp_path_factory.mktemp("pair") / "pair.yaml"
-    p.write_text(PAIR, encoding="utf-8")
-    return nd.load(p)
-
-
-@pytest.fixture(scope="module")
-def run(pair, tmp_path_factory):
+def run(pair_topology, tmp_path_factory):
     """A small run written and read back as ``ntc report`` does (margin 0.3, gain 2/(1+t))."""
     res = simulate(
-        pair, [1.0], noise=NoiseModel(0.5, 0.2), initial=X_INIT, T=T_RUN, dt=0.01, paths=8,
+        pair_topology, [1.0], noise=NoiseModel(0.5, 0.2), initial=X_INIT, T=T_RUN, dt=0.01, paths=8,
         seed=3, save_every=0.05, workers=1, margin=0.3, gain="2/(1+t)",
     )  # fmt: skip
     out = tmp_path_factory.mktemp("run") / "run"
@@ -246,20 +231,22 @@ def test_data_links_list_data_files_then_the_sections_figures(run, tmp_path):
 # -- companion_paths ------------------------------------------------------------------------
 
 
-def test_companion_paths_repeat_the_runs_scenario_finely(run, pair):
-    got = parts.companion_paths(run, pair)
+def test_companion_paths_repeat_the_runs_scenario_finely(run, pair_topology):
+    got = parts.companion_paths(run, pair_topology)
     t, paths = got["t"], got["paths"]
     assert t.size == parts.FINE_POINTS + 1 and t[0] == 0.0 and t[-1] == pytest.approx(T_RUN)
     np.testing.assert_allclose(np.diff(t), T_RUN / parts.FINE_POINTS, rtol=1e-9)
     assert paths.shape == (2, t.size, 2)
     np.testing.assert_array_equal(paths[:, 0, :], [X_INIT, X_INIT])  # the run's x(0)
     assert not np.allclose(paths[0], paths[1])  # two independent noise realisations
-    again = parts.companion_paths(run, pair)  # the run's seed: the same paths
+    again = parts.companion_paths(run, pair_topology)  # the run's seed: the same paths
     np.testing.assert_array_equal(again["paths"], paths)
 
 
-def test_companion_paths_none_when_too_costly_or_not_repeatable(run, pair):
+def test_companion_paths_none_when_too_costly_or_not_repeatable(run, pair_topology):
     # 2 paths × T/dt steps over the budget
     steps = parts.COMPANION_MAX_STEPS / 2 + 100
-    assert parts.companion_paths(with_parameters(run, T=steps * 0.01), pair) is None
-    assert parts.companion_paths(with_parameters(run, gain="log(t"), pair) is None  # refused
+    assert parts.companion_paths(with_parameters(run, T=steps * 0.01), pair_topology) is None
+    assert (
+        parts.companion_paths(with_parameters(run, gain="log(t"), pair_topology) is None
+    )  # refused

@@ -22,6 +22,7 @@ from ntc_design.schedule import ScheduleGain, analyse_schedule
 from ntc_design.tune import BASELINE, Landscape, PowerGain, ScheduleTuneResult, TuneResult
 from ntc_design.tune.objective import Curve
 from ntc_design.tune.optimal import Level, ScheduleSolution
+from tests.support.tune import PAIR
 
 matplotlib.use("Agg")  # files only, whatever the machine's display
 
@@ -33,13 +34,6 @@ TUNED = PowerGain(1.5, 2.0, 0.7)  # 1.5·(2 + t)^(−0.7)
 FALLING = 4.0 * np.exp(-2.0 * T)  # peak 4 at t = 0, final 4e^(−4)
 HUMP = 1.0 + T * (2.0 - T)  # peak 2 at t = 1, final 1
 SCHED = ScheduleGain([0.0, 0.5, 1.0, 2.0], [3.0, 2.0, 1.0, 0.5], tail="1.5/(1 + t)")
-PAIR = """name: pair
-dim: 1
-agents: 2
-edges:
-  - {from: 2, to: 1, weight: [[-1.0]]}
-  - {from: 1, to: 2, weight: [[-1.0]]}
-"""
 
 
 @pytest.fixture(autouse=True)

@@ -31,10 +31,17 @@ X0_PAIR = np.array([3.0, -1.0])
 
 
 @pytest.fixture(scope="session")
-def pair_network(tmp_path_factory):
+def pair_topology(tmp_path_factory):
+    """The two-agent network of :data:`PAIR`, loaded from its file."""
     p = tmp_path_factory.mktemp("pair") / "pair.yaml"
     p.write_text(PAIR, encoding="utf-8")
-    top = nd.load(p)
+    return nd.load(p)
+
+
+@pytest.fixture(scope="session")
+def pair_network(pair_topology):
+    """The pair, its simulation settings and E‖ε(T)‖² in closed form as a function of (a, b)."""
+    top = pair_topology
     spec = SimulationSpec.build([1.0], noise=NoiseModel(SIG, 0.0), initial=X0_PAIR)
     delta = nd.design(top, [1.0]).delta
     lam = np.array([W * (2 + delta), W * delta])

@@ -13,23 +13,9 @@ from ntc_design.tune.evidence import IMPLICIT, certify_tuned, checked_spec, stab
 from ntc_design.tune.family import PowerGain
 from tests.conftest import EXAMPLES
 
-# Two agents, d = 1, both edges antagonistic with weight −1, both agents informed with
-# B_i = 1: L_B = [[1 + δ, 1], [1, 1 + δ]], eigenvalues 2 + δ and δ (hand-worked).
-PAIR = """name: pair
-dim: 1
-agents: 2
-edges:
-  - {from: 2, to: 1, weight: [[-1.0]]}
-  - {from: 1, to: 2, weight: [[-1.0]]}
-"""
+# pair_topology (tests/support/tune.py): two agents, d = 1, both edges antagonistic (−1),
+# both informed with B_i = 1: L_B = [[1 + δ, 1], [1, 1 + δ]], eigenvalues 2 + δ and δ.
 DT = 0.1
-
-
-@pytest.fixture(scope="module")
-def pair(tmp_path_factory):
-    p = tmp_path_factory.mktemp("pair") / "pair.yaml"
-    p.write_text(PAIR, encoding="utf-8")
-    return nd.load(p)
 
 
 @pytest.fixture(scope="module")
@@ -50,26 +36,28 @@ def explicit_limit(delta: float) -> float:
 
 
 @pytest.fixture(scope="module")
-def delta0(pair):
-    return nd.design(pair, [1.0]).delta  # Lemma 1's δ for the spec's margin
+def delta0(pair_topology):
+    return nd.design(pair_topology, [1.0]).delta  # Lemma 1's δ for the spec's margin
 
 
 # -- checked_spec ---------------------------------------------------------------------------
 
 
-def test_checked_spec_keeps_a_spec_below_the_explicit_limit(pair, spec, delta0):
+def test_checked_spec_keeps_a_spec_below_the_explicit_limit(pair_topology, spec, delta0):
     a = float(0.9 * explicit_limit(delta0) / DT)  # c(0)·h at 90 % of the limit
     s = spec.replace(gain=f"{a!r}/(1+t)")
     with pytest.warns(UserWarning, match="within a factor 1.11 of instability"):
-        got, why = checked_spec(pair, s)
+        got, why = checked_spec(pair_topology, s)
     assert got is s and why is None
 
 
-def test_checked_spec_switches_to_drift_implicit_past_the_explicit_limit(pair, spec, delta0):
+def test_checked_spec_switches_to_drift_implicit_past_the_explicit_limit(
+    pair_topology, spec, delta0
+):
     limit = explicit_limit(delta0)
     a = float(1.1 * limit / DT)
     s = spec.replace(gain=f"{a!r}/(1+t)")
-    got, why = checked_spec(pair, s)
+    got, why = checked_spec(pair_topology, s)
     assert (got.stepping.kind, got.stepping.scheme) == ("intrinsic", "implicit")
     assert got.stepping.dt == DT
     # only the stepping changed
@@ -78,26 +66,26 @@ def test_checked_spec_switches_to_drift_implicit_past_the_explicit_limit(pair, s
     assert f"{limit:.4g}" in why  # the refusal quotes the independent limit 2/λ_max
 
 
-def test_checked_spec_reraises_an_error_that_is_not_the_step_guard(pair):
+def test_checked_spec_reraises_an_error_that_is_not_the_step_guard(pair_topology):
     bad = SimulationSpec.build([1.0, 2.0], T=1.0, dt=DT, paths=2, workers=1)  # d = 2 ≠ 1
     with pytest.raises(InputError, match=r"^theta: expected 1 numbers"):
-        checked_spec(pair, bad)
+        checked_spec(pair_topology, bad)
 
 
 # -- stable_stepping ------------------------------------------------------------------------
 
 
-def test_stable_stepping_needs_nothing_for_a_stable_tuned_gain(pair, spec, delta0):
+def test_stable_stepping_needs_nothing_for_a_stable_tuned_gain(pair_topology, spec, delta0):
     notes = []
     tuned = PowerGain(0.5 * explicit_limit(delta0) / DT, 1.0, 1.0)
-    assert stable_stepping(pair, spec, tuned, None, 1.0, notes) == {}
+    assert stable_stepping(pair_topology, spec, tuned, None, 1.0, notes) == {}
     assert notes == []
 
 
-def test_stable_stepping_asks_for_the_implicit_scheme_with_a_note(pair, spec, delta0):
+def test_stable_stepping_asks_for_the_implicit_scheme_with_a_note(pair_topology, spec, delta0):
     notes = []
     tuned = PowerGain(1.5 * explicit_limit(delta0) / DT, 1.0, 1.0)
-    got = stable_stepping(pair, spec, tuned, None, 1.0, notes)
+    got = stable_stepping(pair_topology, spec, tuned, None, 1.0, notes)
     assert got == {"stepping": "intrinsic", "scheme": "implicit"}
     got["scheme"] = "changed"
     assert IMPLICIT["scheme"] == "implicit"  # a copy: the module's constant is untouched
@@ -109,7 +97,7 @@ def test_stable_stepping_asks_for_the_implicit_scheme_with_a_note(pair, spec, de
     assert "(Euler–Maruyama is unstable" in note and "use dt <" not in note
 
 
-def test_stable_stepping_uses_the_tuned_delta(pair, spec, delta0):
+def test_stable_stepping_uses_the_tuned_delta(pair_topology, spec, delta0):
     """A gain stable at Lemma 1's δ is unstable at a larger tuned δ (λ_max = 2 + δ)."""
     big = 5.0
     assert explicit_limit(big) < explicit_limit(delta0)
@@ -117,11 +105,11 @@ def test_stable_stepping_uses_the_tuned_delta(pair, spec, delta0):
     a = 0.45 * explicit_limit(delta0) / DT
     assert a * DT > explicit_limit(big)
     tuned = PowerGain(a, 1.0, 1.0)
-    assert stable_stepping(pair, spec, tuned, None, 1.0, []) == {}
-    assert stable_stepping(pair, spec, tuned, big, 1.0, []) == IMPLICIT
+    assert stable_stepping(pair_topology, spec, tuned, None, 1.0, []) == {}
+    assert stable_stepping(pair_topology, spec, tuned, big, 1.0, []) == IMPLICIT
 
 
-def test_stable_stepping_checks_the_written_scenario(pair, spec, monkeypatch):
+def test_stable_stepping_checks_the_written_scenario(pair_topology, spec, monkeypatch):
     """The probe runs T = horizon, the tuned gain and δ, Monte Carlo only."""
     seen = []
 
@@ -131,18 +119,18 @@ def test_stable_stepping_checks_the_written_scenario(pair, spec, monkeypatch):
 
     monkeypatch.setattr(evidence, "checked_spec", record)
     tuned = PowerGain(2.0, 3.0, 0.75)
-    stable_stepping(pair, spec.replace(delta=0.4), tuned, None, 7.5, [])
-    stable_stepping(pair, spec, tuned, 1.25, 7.5, [])
+    stable_stepping(pair_topology, spec.replace(delta=0.4), tuned, None, 7.5, [])
+    stable_stepping(pair_topology, spec, tuned, 1.25, 7.5, [])
     assert [(s.T, s.gain, s.delta, s.method) for s in seen] == [
         (7.5, tuned, 0.4, "mc"),  # δ None: the scenario's
         (7.5, tuned, 1.25, "mc"),
     ]
 
 
-def test_stable_stepping_notes_a_scenario_that_cannot_run(pair):
+def test_stable_stepping_notes_a_scenario_that_cannot_run(pair_topology):
     notes = []
     bad = SimulationSpec.build([1.0, 2.0], T=1.0, dt=DT, paths=2, workers=1)
-    assert stable_stepping(pair, bad, PowerGain(1.0, 1.0, 1.0), None, 1.0, notes) == {}
+    assert stable_stepping(pair_topology, bad, PowerGain(1.0, 1.0, 1.0), None, 1.0, notes) == {}
     assert notes == ["the tuned scenario cannot be simulated as written: theta: expected 1 "
                      "numbers (the state dimension d), got 2"]  # fmt: skip
 
@@ -150,9 +138,9 @@ def test_stable_stepping_notes_a_scenario_that_cannot_run(pair):
 # -- certify_tuned --------------------------------------------------------------------------
 
 
-def test_certify_tuned_certifies_the_power_gain_at_the_tuned_delta(pair, spec):
+def test_certify_tuned_certifies_the_power_gain_at_the_tuned_delta(pair_topology, spec):
     notes = []
-    res = certify_tuned(pair, spec, PowerGain(2.0, 1.0, 1.0), 0.7, notes)
+    res = certify_tuned(pair_topology, spec, PowerGain(2.0, 1.0, 1.0), 0.7, notes)
     assert notes == [] and res.verification.valid
     assert res.design.delta == 0.7
     # the decay-rate bound is min Re λ(L_B) = δ for this network
@@ -161,9 +149,9 @@ def test_certify_tuned_certifies_the_power_gain_at_the_tuned_delta(pair, spec):
     assert res.gain.expression == "2/(1 + t)"  # the tuned gain's text
 
 
-def test_certify_tuned_stores_a_schedule_in_the_certificate(pair, spec, delta0):
+def test_certify_tuned_stores_a_schedule_in_the_certificate(pair_topology, spec, delta0):
     sched = ScheduleGain([0.0, 0.5, 1.0], [2.0, 1.0, 0.5], tail="1/(1+t)")
-    res = certify_tuned(pair, spec, sched, None, [])
+    res = certify_tuned(pair_topology, spec, sched, None, [])
     assert res.design.delta == pytest.approx(delta0)  # δ None: the scenario's
     assert res.certificate["gain"] == {
         "t": [0.0, 0.5, 1.0], "c": [2.0, 1.0, 0.5], "interpolation": "linear", "tail": "1/(1+t)"
@@ -213,8 +201,8 @@ def test_certify_tuned_passes_the_noise_bound_sigma_and_delta(f, bound, monkeypa
     assert kw["noise_f"] == pytest.approx(bound, rel=1e-12)
 
 
-def test_certify_tuned_turns_a_refusal_into_a_note(pair):
+def test_certify_tuned_turns_a_refusal_into_a_note(pair_topology):
     notes = []
     sp = SimulationSpec.build([1.0, 2.0])  # θ of dimension 2 for a d = 1 network
-    assert certify_tuned(pair, sp, PowerGain(1.0, 1.0, 1.0), None, notes) is None
+    assert certify_tuned(pair_topology, sp, PowerGain(1.0, 1.0, 1.0), None, notes) is None
     assert notes == ["no certificate: theta: expected 1 numbers (the state dimension d), got 2"]
