@@ -53,8 +53,8 @@ class MomentOperators:
     lap : numpy.ndarray
         L_B (dense).
     a2 : scipy.sparse.csr_matrix
-        𝓐₂, built column by column from :class:`~ntc_design.simulate.moments.MomentRhs`
-        (the right-hand side the simulator integrates).
+        𝓐₂, the operator :meth:`~ntc_design.simulate.moments.MomentRhs.noise_operator`
+        builds (the right-hand side the simulator integrates).
     q : numpy.ndarray
         GGᵀ, flattened.
     rho1, rho2 : float
@@ -85,33 +85,8 @@ class MomentOperators:
         MomentOperators
         """
         rhs = MomentRhs(system, n, d)
-        nd_ = n * d
         lap = rhs.l if isinstance(rhs.l, np.ndarray) else rhs.l.toarray()
-        rows, cols, vals = [], [], []
-        e = np.zeros((nd_, nd_))
-        # only the entries of agents at an edge's ends move the noise; other columns are 0
-        agents = np.unique(np.concatenate([rhs.ii, rhs.jj])) if rhs.k.size else np.zeros(0, int)
-        idx = (agents[:, None] * d + np.arange(d)).ravel()
-        for a in idx:
-            for b in idx:
-                e[a, b] = 1.0
-                col = (rhs.noise(e) - rhs.q).ravel()
-                e[a, b] = 0.0
-                nz = np.flatnonzero(col)
-                rows.append(nz)
-                cols.append(np.full(nz.size, a * nd_ + b))
-                vals.append(col[nz])
-        size = nd_ * nd_
-        a2 = sps.csr_matrix(
-            (
-                np.concatenate(vals) if vals else np.zeros(0),
-                (
-                    np.concatenate(rows) if rows else np.zeros(0, int),
-                    np.concatenate(cols) if cols else np.zeros(0, int),
-                ),
-            ),
-            shape=(size, size),
-        )
+        a2 = rhs.a2 if rhs.a2 is not None else rhs.noise_operator()
         return cls(lap, a2, rhs.q.ravel().copy(), 2 * system.spectral_radius, spectral_radius(a2))
 
     @staticmethod

@@ -182,3 +182,33 @@ def test_vanishing_gain_stays_away(g1):
     tot = res.exact.ms_error.sum(axis=1)
     assert tot[-1] > 1.0
     assert tot[-1] == pytest.approx(tot[-2], rel=0.05)
+
+
+@pytest.mark.parametrize("seed, d, f", [(1, 1, 0.3), (2, 2, 0.3), (3, 3, 0.5), (4, 2, 0.0)])
+def test_the_noise_operator_is_the_sum_over_edges(seed, d, f):
+    """𝓐₂ vec(S) against Σ_e K_e (S_jj − S_ji − S_ij + S_ii) K_eᵀ in block (i, i), summed
+    edge by edge in plain loops; and the operator path of ``noise`` against the gathers."""
+    from ntc_design.simulate.moments import MomentRhs
+    from tests.conftest import random_topology
+
+    top = random_topology(seed, n=6, d=d)
+    des = nd.design(top, np.linspace(1.0, -1.0, d), thresholds=False)
+    s = mode_system(des, nd.simulate.NoiseModel(0.4, f))
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    m = rng.normal(size=(s.nd, s.nd))
+    big_s = m @ m.T
+    want = np.zeros_like(big_s)
+    for i, j, k in s.h_blocks:
+        b = {
+            (p, q): big_s[p * d : (p + 1) * d, q * d : (q + 1) * d] for p in (i, j) for q in (i, j)
+        }
+        delta = b[j, j] - b[j, i] - b[i, j] + b[i, i]
+        want[i * d : (i + 1) * d, i * d : (i + 1) * d] += k @ delta @ k.T
+    rhs = MomentRhs(s, top.n, d)
+    got = (rhs.noise_operator() @ big_s.ravel()).reshape(big_s.shape)
+    scale = np.abs(want).max() or 1.0
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-13 * scale)
+    assert (rhs.a2.nnz == 0) == (f == 0.0)  # no multiplicative noise: an empty operator
+    via_operator = rhs.noise(big_s)
+    rhs.a2 = None  # the gathers the operator replaces at small Nd
+    np.testing.assert_allclose(via_operator, rhs.noise(big_s), rtol=0, atol=1e-13 * scale)
