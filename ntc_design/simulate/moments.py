@@ -16,7 +16,9 @@ radius of the S-equation's generator, κ = 0.2), so c·h·ρ stays in RK4's accu
 the tests compare it with SciPy's DOP853 at rtol 1e-11.
 
 L_B is sparse, so one evaluation costs O(nnz(L_B)·Nd + E·d³) on top of the dense S
-(Nd×Nd). S and the RK4 stages hold about ``MOMENT_COPIES`` dense Nd×Nd matrices:
+(Nd×Nd); up to Nd = ``DENSE_MOMENTS_ND`` the noise term is one sparse product with a
+prebuilt operator of 4·E·d⁴ entries instead of the per-edge gathers, whose call overhead
+dominates at small sizes. S and the RK4 stages hold about ``MOMENT_COPIES`` dense Nd×Nd matrices:
 the moments are refused above ``MOMENTS_MAX_ND`` (3000, about 0.9 GB) with the
 estimate, before anything is allocated.
 """
