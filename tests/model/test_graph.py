@@ -222,3 +222,13 @@ def test_g1_reachability_from_the_antagonised_agents(g1):
     assert set(paths) == set(range(7))
     assert [g1.labels[k] for k in paths[ix(4)]] == [3, 4]
     assert [g1.labels[k] for k in paths[ix(1)]] == [2, 1]
+    assert [g1.labels[k] for k in paths[ix(7)]] == [2, 5, 6, 7]
+    # the NSD edge 1 -> 2 cannot be used by a positive-negative path
+    assert ix(2) not in positive_negative_reachable(g1, [ix(1)])
+
+
+def test_g1_in_degree_dominance_by_agent(g1):
+    # agents 2 and 3 (the antagonised ones) are not dominated by their in-degree in G1
+    assert [in_degree_dominated(g1, i) for i in range(7)] == [
+        True, False, False, True, True, True, True,
+    ]  # fmt: skip
