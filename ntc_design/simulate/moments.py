@@ -16,8 +16,8 @@ radius of the S-equation's generator, κ = 0.2), so c·h·ρ stays in RK4's accu
 the tests compare it with SciPy's DOP853 at rtol 1e-11.
 
 L_B is sparse, so one evaluation costs O(nnz(L_B)·Nd + E·d³) on top of the dense S
-(Nd×Nd); up to Nd = ``DENSE_MOMENTS_ND`` the noise term is one sparse product with a
-prebuilt operator of 4·E·d⁴ entries instead of the per-edge gathers, whose call overhead
+(Nd×Nd); up to Nd = ``NOISE_OPERATOR_MAX_ND`` the noise term is one sparse product with
+a prebuilt operator of 4·E·d⁴ entries instead of the per-edge gathers, whose call overhead
 dominates at small sizes. S and the RK4 stages hold about ``MOMENT_COPIES`` dense Nd×Nd matrices:
 the moments are refused above ``MOMENTS_MAX_ND`` (3000, about 0.9 GB) with the
 estimate, before anything is allocated.
@@ -38,7 +38,10 @@ from .system import ModeSystem
 KAPPA = 0.2
 MOMENTS_MAX_ND = 3000  # N = 1000 agents in d = 3
 DENSE_MOMENTS_ND = 300  # L_B dense in the moment equations up to this Nd
-NOISE_OPERATOR_MAX_NNZ = 2_000_000  # the noise term as one sparse operator up to this size
+# the noise term as one sparse operator up to these sizes; past Nd ≈ 120 the product over
+# (Nd)² rows costs more than the per-edge gathers (benchmarked for d = 1, 3, 5)
+NOISE_OPERATOR_MAX_ND = 120
+NOISE_OPERATOR_MAX_NNZ = 2_000_000
 MOMENT_COPIES = 12  # dense Nd×Nd matrices alive during an RK4 step (S, stages, products)
 
 
@@ -218,7 +221,7 @@ class MomentRhs:
         self.ar = np.arange(n)
         # at small Nd the multiplicative part is one sparse product with a prebuilt
         # operator (an RK4 step calls it four times; the gathers cost 4x as much)
-        small = s.nd <= DENSE_MOMENTS_ND and 4 * len(self.ii) * d**4 <= NOISE_OPERATOR_MAX_NNZ
+        small = s.nd <= NOISE_OPERATOR_MAX_ND and 4 * len(self.ii) * d**4 <= NOISE_OPERATOR_MAX_NNZ
         self.a2 = self.noise_operator() if small and self.k.size else None
 
     def noise_operator(self):
