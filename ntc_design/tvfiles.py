@@ -202,7 +202,7 @@ def _time_constant(x: Any, source: str | None, key: str) -> sp.Expr:
     if isinstance(x, str):
         e = parse_expression(x, f"{source}: {key}" if source else key, variables=())
     elif isinstance(x, (int, float)) and not isinstance(x, bool):
-        if not np.isfinite(x):
+        if isinstance(x, float) and not np.isfinite(x):  # sympy.Rational("inf") raises
             raise field_error(source, key, f"must be in (0, {MAX_PERIOD:g}], got {x}")
         e = sp.Rational(str(x)) if isinstance(x, float) else sp.Integer(x)
     else:

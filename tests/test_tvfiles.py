@@ -215,6 +215,7 @@ def test_string_labels_and_no_matrices():
         # an infinite or NaN time once crashed in sympy.Rational (an internal error)
         ({"period": float("inf")}, "period: must be in (0, 1e+06], got inf"),
         ({"constant_after": float("nan")}, "constant_after: must be in (0, 1e+06], got nan"),
+        ({"period": 10**400}, "period: must be in (0, 1e+06], got inf"),  # an exact integer
         # robust radii are for fixed weights: a time-varying file refuses them
         ({"uncertainty": 0.1}, "uncertainty: unknown field (allowed: agents, constant_after,"),
     ],
