@@ -41,7 +41,7 @@ from scipy.sparse import csgraph
 
 from .edgelist import MAX_AGENTS, MAX_DIM, MAX_EDGES, write_npz
 from .errors import InputError, format_bytes, require_positive
-from .linalg import available_memory
+from .memory import available_memory
 from .model import Topology
 from .outputs import check_output_file, write_atomic
 

@@ -38,7 +38,7 @@ from .edgelist import (
     label_from_text,
 )
 from .errors import InputError, format_bytes
-from .linalg import available_memory
+from .memory import available_memory
 from .outputs import atomic_path
 
 MAX_CSV_BYTES = 2 * 2**30  # a 10⁶-agent edge list with d = 3 is about 120 MB
