@@ -1,7 +1,7 @@
 """How fast are the guarded readers: files, expressions and the gain analysis?
 
 1. A random topology file with E edges (3x3 weights, flow style) read by
-   :func:`ntc_design.files.read_document` (libyaml events, an iterative composer with the
+   :func:`ntc_design.documents.read_document` (libyaml events, an iterative composer with the
    depth and alias limits, PyYAML's safe constructor), against ``yaml.safe_load`` (pure
    Python, the reader before issue 8) and ``yaml.load(..., CSafeLoader)`` (no limits).
 2. Hostile documents refused: billion laughs, 10⁵ levels of nesting, a 5000-digit integer.
@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ntc_design.documents import read_document
 from ntc_design.errors import InputError
 from ntc_design.expr import parse_expression
-from ntc_design.files import read_document
 from ntc_design.gain import analyse_gain
 
 
@@ -103,7 +103,7 @@ def styles(n: int) -> None:
     """Three machine-written styles of an n-agent topology, each read five ways."""
     import json
 
-    from ntc_design import files
+    from ntc_design import documents
     from ntc_design.generate import random_network
 
     doc = random_network(n, 3, seed=0).to_dict()
@@ -146,12 +146,12 @@ def styles(n: int) -> None:
             part = text if style == "json" else text[: len(text) // 10]
             if style != "json":
                 part = part[: part.rfind("\n  - ")] + "\n"
-            old = files.COMPILED_YAML_MIN_CHARS
-            files.COMPILED_YAML_MIN_CHARS = 1 << 62
+            old = documents.COMPILED_YAML_MIN_CHARS
+            documents.COMPILED_YAML_MIN_CHARS = 1 << 62
             try:
-                t_py, _ = timed(lambda part=part, p=p: files._load_yaml(part, p))
+                t_py, _ = timed(lambda part=part, p=p: documents._load_yaml(part, p))
             finally:
-                files.COMPILED_YAML_MIN_CHARS = old
+                documents.COMPILED_YAML_MIN_CHARS = old
             scale = len(text) / len(part)
             print(
                 f"{style:<7} {len(text) / 1e6:>6.1f} " + " ".join(cells) + f" ~{t_py * scale:.0f}"

@@ -6,8 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from .documents import read_document
 from .edgelist import read_npz
-from .files import is_time_varying, parse_switching, parse_topology, read_document
+from .files import is_time_varying, parse_switching, parse_topology
 from .tablefiles import read_csv_edges, read_mat
 
 

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from .documents import type_name
 from .expr import parse_expression, symbol
 from .files import (
     TOPOLOGY_KEYS,
@@ -43,7 +44,6 @@ from .files import (
     is_time_varying,
     parse_labels,
     parse_weight,
-    type_name,
 )
 
 TIME_KEYS = {"period", "constant_after"}

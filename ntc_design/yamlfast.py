@@ -11,7 +11,7 @@ JSON by a few regular-expression passes and one loop over its lines, and parsed 
 The subset is checked strictly and cheaply first; a text outside it (anchors, aliases,
 tags, quotes, comments, nested flow collections, YAML 1.1 words such as ``yes`` or
 ``null``, numbers in any form but ``-12``/``1.5``/``1.5e-07``, ...) is declined (``None``)
-and read by the full reader (:func:`ntc_design.files.read_document`), which then gives the
+and read by the full reader (:func:`ntc_design.documents.read_document`), which then gives the
 same document or the same error as before. Within the subset every scalar is resolved as
 PyYAML's safe loader resolves it: identifiers are strings, the numbers ints and floats of
 the same value. Nothing is evaluated.

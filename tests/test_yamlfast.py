@@ -7,9 +7,9 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ntc_design import files
+from ntc_design import documents
+from ntc_design.documents import read_document
 from ntc_design.errors import InputError
-from ntc_design.files import read_document
 from ntc_design.generate import random_network, write_topology
 from ntc_design.yamlfast import load_fast, node_bound
 from tests.conftest import ROOT
@@ -31,7 +31,7 @@ def same(a, b) -> bool:
 
 
 def fast(text: str):
-    return load_fast(text, files.MAX_DEPTH, files.MAX_EXPANDED_NODES)
+    return load_fast(text, documents.MAX_DEPTH, documents.MAX_EXPANDED_NODES)
 
 
 def check(text: str) -> bool:
@@ -54,7 +54,7 @@ def read_both(path, monkeypatch):
     for use_fast in (True, False):
         with monkeypatch.context() as m:
             if not use_fast:
-                m.setattr(files, "load_fast", lambda *a: None)
+                m.setattr(documents, "load_fast", lambda *a: None)
             try:
                 results.append(("doc", read_document(path)))
             except InputError as exc:
@@ -92,7 +92,7 @@ def test_a_generated_file_never_reaches_pyyaml(tmp_path, monkeypatch):
             calls.append(text)
             raise AssertionError("the full reader was used")
 
-    monkeypatch.setattr(files, "_Loader", Spy)
+    monkeypatch.setattr(documents, "_Loader", Spy)
     assert read_document(path)["dim"] == 2
     assert calls == []
 
@@ -208,7 +208,7 @@ def test_node_bound(tmp_path, monkeypatch):
     assert load_fast(text, 64, 50) is None and load_fast(text, 64, 1000) is not None
     path = tmp_path / "many.yaml"
     path.write_text(text)
-    monkeypatch.setattr(files, "MAX_EXPANDED_NODES", 50)
+    monkeypatch.setattr(documents, "MAX_EXPANDED_NODES", 50)
     with pytest.raises(InputError, match="more than 50 nodes"):
         read_document(path)
 

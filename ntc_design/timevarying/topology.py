@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
+from ..documents import read_document
 from ..errors import InputError
 from ..expr import compile_expression, symbol
-from ..files import read_document
 from ..linalg import Definiteness, classify, is_symmetric
 from ..model import Label, Topology
 from ..rigorous.interval import bounds, enclose, t_ball

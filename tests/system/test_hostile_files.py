@@ -18,9 +18,9 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from ntc_design.documents import MAX_FILE_BYTES, read_document
 from ntc_design.errors import InputError
 from ntc_design.expr import parse_expression, symbol
-from ntc_design.files import MAX_FILE_BYTES, read_document
 from ntc_design.loader import load
 from tests.cli_helpers import assert_input_error
 from tests.conftest import ROOT

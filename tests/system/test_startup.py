@@ -120,10 +120,10 @@ def test_the_lazy_names_are_the_same_objects():
 
 @pytest.fixture
 def compiled(monkeypatch):
-    from ntc_design import files
+    from ntc_design import documents
 
-    monkeypatch.setattr(files, "COMPILED_YAML_MIN_CHARS", 200)  # small texts take the path
-    return files
+    monkeypatch.setattr(documents, "COMPILED_YAML_MIN_CHARS", 200)  # small texts take the path
+    return documents
 
 
 @pytest.mark.parametrize("style", ["flow", "block", "json"])
