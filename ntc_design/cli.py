@@ -3,17 +3,16 @@ stderr, exit code 2."""
 
 from __future__ import annotations
 
-import contextlib
 import json
 import re
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from . import __version__
+from .cli_base import ARGS, FileArg, JsonOpt, app, json_text, parse_vector
 from .errors import AssumptionWarning, InputError, interrupt_seen, note_interrupt, one_line
 from .outputs import exit_process
 
@@ -22,98 +21,6 @@ if TYPE_CHECKING:
 
 # Everything else loads in the command that needs it: `ntc --help` and a mistyped option
 # answer without importing NumPy, SciPy, SymPy or the library's layers.
-
-
-def _flag_type(original):
-    """A flag (``--json``, ``--help``, ``--tune-delta``) takes no value: its help line
-    shows no type (this typer prints ``<bool>`` for it)."""
-
-    def display_type_rich(self, ctx):
-        if getattr(self, "is_flag", False) and not getattr(self, "count", False):
-            return None
-        return original(self, ctx)
-
-    return display_type_rich
-
-
-with contextlib.suppress(AttributeError):  # another typer: its own rendering stays
-    typer.core.TyperOption.display_type_rich = _flag_type(  # type: ignore[method-assign]
-        typer.core.TyperOption.display_type_rich
-    )
-
-app = typer.Typer(
-    add_completion=True,
-    pretty_exceptions_enable=False,
-    no_args_is_help=True,
-    rich_markup_mode="markdown",  # paragraphs of a docstring reflow to the terminal
-    help="Certify, design and validate non-trivial consensus protocols on signed "
-    "matrix-weighted networks with compound measurement noise.",
-)
-
-
-def _version(value: bool) -> None:
-    if value:
-        print(f"ntc {__version__}")
-        raise typer.Exit()
-
-
-@app.callback()
-def _root(
-    version: Annotated[
-        bool,
-        typer.Option(
-            "--version", callback=_version, is_eager=True, help="Print the version.", metavar=""
-        ),
-    ] = False,
-) -> None:
-    """Certify, design and validate non-trivial consensus protocols on signed
-    matrix-weighted networks with compound measurement noise."""
-
-
-FileArg = Annotated[
-    Path,
-    typer.Argument(
-        help="A topology, switching or time-varying topology file (YAML or JSON), an edge "
-        "list (.csv, .npz) or a MATLAB block matrix (.mat)."
-    ),
-]
-# a flag takes no value: no metavar (click would print <bool>)
-JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.", metavar="")]
-SchedulerOpt = Annotated[
-    str | None,
-    typer.Option(
-        help="Run on a Dask cluster: the scheduler's address, e.g. tcp://10.0.0.5:8786 "
-        "(start one with `dask scheduler` and `dask worker ADDRESS`). Default: this machine."
-    ),
-]
-
-
-def parse_vector(text: str, field: str) -> list[float]:
-    """``"1,2,-1"`` -> ``[1.0, 2.0, -1.0]``; one clear error otherwise."""
-    try:
-        vals = [float(x) for x in text.replace(" ", "").strip("[]").split(",") if x != ""]
-    except ValueError:
-        raise InputError(f"{field}: expected comma-separated numbers, got {text!r}") from None
-    if not vals:
-        raise InputError(f"{field}: expected comma-separated numbers, got {text!r}")
-    return vals
-
-
-_ARGS: list[str] = []  # this invocation's arguments (set by main)
-
-
-def _command_line() -> str:
-    """This invocation as a shell command (``ntc`` and its arguments, quoted), whether
-    ``main`` read them from ``sys.argv`` or was given them."""
-    import shlex
-
-    return shlex.join(["ntc", *_ARGS])
-
-
-def _json(obj) -> str:
-    from .files import jsonable
-
-    return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
 
 
 @app.command(epilog="Example: ntc check examples/g1.yaml")
@@ -160,7 +67,7 @@ def check(
             if not as_json:
                 print_table(summary_table(reports[k], title))
     if as_json:
-        print(_json({"modes": reports} if None not in reports else reports[None]))
+        print(json_text({"modes": reports} if None not in reports else reports[None]))
 
 
 @app.command("design", epilog="Example: ntc design examples/g1.yaml --theta 1,2,-1")
@@ -204,7 +111,7 @@ def design_cmd(
 
         tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
         if as_json:
-            print(_json(tv.to_dict()))
+            print(json_text(tv.to_dict()))
         else:
             print_table(tv.table(f"{top.name or file}: Lemma 1 at every instant"))
         return
@@ -214,7 +121,7 @@ def design_cmd(
         res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
     written = _write_design(res, out_path) if out_path is not None else []
     if as_json:
-        print(_json(res.to_dict()))
+        print(json_text(res.to_dict()))
     elif isinstance(res, SwitchingDesign):
         for k, d in res.modes.items():
             print_table(d.table(f"mode {k}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
@@ -232,7 +139,7 @@ def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Pat
     from .outputs import write_atomic
 
     if path.suffix.lower() == ".json":
-        return [write_atomic(path, _json(res.to_dict()) + "\n")]
+        return [write_atomic(path, json_text(res.to_dict()) + "\n")]
     if isinstance(res, SwitchingDesign):
         from .outputs import check_output_file
 
@@ -280,7 +187,7 @@ def generate(
         write_topology(top, out_path)
     if as_json:
         doc = {"file": str(out_path), "name": top.name, "N": top.n, "d": top.dim}
-        print(_json({**doc, "edges": len(top.weights), "seed": seed, "family": family}))
+        print(json_text({**doc, "edges": len(top.weights), "seed": seed, "family": family}))
         return
     out.print(f"wrote {out_path}: {top.name}, N = {top.n}, d = {top.dim}, {len(top.weights)} edges")
 
@@ -296,7 +203,7 @@ def gain(
     from .reports.terminal import print_table
 
     analysis = analyse_gain(expr)
-    print(_json(analysis.to_dict())) if as_json else print_table(analysis.table())
+    print(json_text(analysis.to_dict())) if as_json else print_table(analysis.table())
     if analysis.mean_square is not True:  # no theorem's conditions on c hold (as certify)
         raise typer.Exit(1)
 
@@ -372,7 +279,7 @@ def certify(
     if out_path is not None and written:
         write_certificate(res.certificate, out_path)
     if as_json:
-        print(_json(doc))
+        print(json_text(doc))
     else:
         _print_certify(res, out_path if written else None)
     if out_path is not None and not written:
@@ -417,7 +324,7 @@ def verify(
     ver = verify_file(cert, top, th)
     doc = ver.to_dict()
     if as_json:
-        print(_json(doc))
+        print(json_text(doc))
     else:
         print_verification(doc)
     if not ver.valid:
@@ -486,7 +393,7 @@ def robust(
     if out_path is not None and doc is not None and ok:
         write_certificate(doc, out_path)
     if as_json:
-        print(_json({**rep.to_dict(), "valid": ok}))
+        print(json_text({**rep.to_dict(), "valid": ok}))
     else:
         print_table(rep.table())
         if ver is not None:
@@ -512,416 +419,8 @@ def robust(
         raise typer.Exit(1)
 
 
-@app.command(
-    epilog="Example: ntc simulate examples/scenarios/g1_fixed.yaml --out runs/g1 --paths 200"
-)
-def simulate(
-    scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
-    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
-    workers: Annotated[
-        int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
-    ] = None,
-    paths: Annotated[
-        int | None, typer.Option(help="Monte Carlo paths (overrides the scenario).")
-    ] = None,
-    horizon: Annotated[
-        float | None, typer.Option("--horizon", "--T", help="Horizon T (overrides the scenario).")
-    ] = None,
-    dt: Annotated[
-        float | None, typer.Option(help="Euler–Maruyama step (overrides the scenario).")
-    ] = None,
-    seed: Annotated[
-        int | None, typer.Option(help="Monte Carlo seed (overrides the scenario).")
-    ] = None,
-    method: Annotated[
-        str | None, typer.Option(help="mc, exact or both (overrides the scenario).")
-    ] = None,
-    rng: Annotated[
-        str | None,
-        typer.Option(
-            help="Normals: xoshiro (one xoshiro256** stream per path, drawn in the compiled "
-            "kernel; default) or numpy (NumPy's PCG64 per block). Overrides the scenario."
-        ),
-    ] = None,
-    scheduler: SchedulerOpt = None,
-    as_json: JsonOpt = False,
-) -> None:
-    """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
-    summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
-    or nothing)."""
-    from .distributed import DaskEngine
-    from .errors import format_bytes
-    from .reports.terminal import Progress, out
-    from .simulate import SimulationDiverged
-    from .simulate import simulate as run
-    from .simulate.scenario import (
-        check_output,
-        load_scenario,
-        result_output_bytes,
-        write_outputs,
-    )
-    from .simulate.spec import MonteCarlo, check_workers
-
-    given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method, "rng": rng}
-    overrides = {k: v for k, v in given.items() if v is not None}
-    top, spec, sc = load_scenario(scenario, overrides)
-    # summary.json records the command as typed: the report's re-run line keeps the overrides
-    recorded = {"scenario": str(scenario), "command": _command_line(), "overrides": overrides}
-    if workers is not None:
-        check_workers(workers, "--workers")
-        spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
-    check_output(out_dir)  # before the run, not after it
-    # "" is a malformed address (refused by connect), not "no scheduler"
-    engine = DaskEngine.connect(scheduler) if scheduler is not None else None
-    with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
-        if engine is not None:
-            stack.callback(engine.close)
-        prog.stage(f"simulating {scenario}")
-        try:
-            res = run(
-                top,
-                spec,
-                progress=lambda done, total: prog.tick("simulating", done, total),
-                engine=engine,
-            )
-        except InputError as exc:  # a field of the scenario: name the file
-            raise InputError(f"{sc.source}: {exc}") from None
-        except SimulationDiverged as exc:
-            written = write_outputs(exc.result, out_dir, recorded)
-            if as_json:
-                print(_json({"ok": False, "error": str(exc), "files": [str(p) for p in written]}))
-            print(f"error: {one_line(str(exc))}", file=sys.stderr)
-            raise typer.Exit(1) from None
-    study = None
-    if spec.robust is not None:  # weight realisations with the nominal protocol
-        from .sweep.robust import robust_study
-
-        with Progress("ntc simulate") as prog, warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the brackets' solver notes; every end is proven
-            prog.stage(f"simulating {spec.robust.realizations} weight realisations")
-            study = robust_study(top, spec, progress=lambda k, n: prog.tick("realisations", k, n))
-        recorded["robust"] = study.to_dict()
-    size = result_output_bytes(res, top)
-    if size > OUTPUT_NOTE_BYTES and not as_json:
-        print(
-            f"note: writing about {format_bytes(size)} to {one_line(str(out_dir))}", file=sys.stderr
-        )
-    written = write_outputs(
-        res, out_dir, recorded, {"robust.csv": study.csv()} if study is not None else None
-    )
-    st = res.stats
-    if as_json:
-        summary = res.summary()
-        print(
-            _json(
-                {
-                    "ok": True,
-                    "out": str(out_dir),
-                    "files": [str(p) for p in written],
-                    "stats": st.to_dict(),
-                    "notes": list(res.notes),
-                    **{
-                        k: summary[k]
-                        for k in ("final_ms_error_mc", "final_ms_error_exact", "sample_paths")
-                        if k in summary
-                    },
-                }
-            )
-        )
-        return
-    rate = (
-        f", {st.path_steps_per_second:.3g} path-steps/s"
-        if st.path_steps_per_second is not None
-        else ""
-    )
-    parts = []
-    if st.mc_seconds is not None:
-        parts.append(f"{st.path_steps:.3g} path-steps in {st.mc_seconds:.1f} s{rate}")
-    if st.exact_seconds is not None:
-        parts.append(f"exact moments {st.exact_seconds:.2f} s")
-    out.print("; ".join(parts))
-    for n in res.notes:
-        out.print(f"note: {n}")
-    if study is not None:
-        from .sweep.robust import study_sentence
-
-        out.print(study_sentence(study.to_dict()))
-    out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
-
-
-@app.command(
-    epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --horizon 10 --eps 1.5 --out runs/g1-tuned"
-)
-def tune(
-    scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
-    horizon: Annotated[
-        float,
-        typer.Option("--horizon", "--T", help="The deadline T: minimise E Σ‖x_i(T) − θ‖²."),
-    ],
-    family: Annotated[str, typer.Option(help="The gain family: power, a·(b + t)^(−γ).")] = "power",
-    require: Annotated[
-        str,
-        typer.Option(
-            help="Theorems the gain must satisfy: both (γ in [0.51, 1]) or mean-square "
-            "(γ in [0.05, 1])."
-        ),
-    ] = "both",
-    tune_delta: Annotated[
-        bool, typer.Option("--tune-delta", help="Also tune a common coupling δ (certified).")
-    ] = False,
-    eps: Annotated[
-        float | None, typer.Option(help="Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.")
-    ] = None,
-    method: Annotated[
-        str, typer.Option(help="auto (exact moments where they apply), exact or mc.")
-    ] = "auto",
-    evaluations: Annotated[int, typer.Option(help="Search budget (objective evaluations).")] = 160,
-    schedule: Annotated[
-        str,
-        typer.Option(
-            help="power: the family a·(b + t)^(−γ); optimal: the best schedule c(t) on "
-            "[0, T] by optimal control of the exact moments, with an admissible tail after T."
-        ),
-    ] = "power",
-    max_gain: Annotated[
-        float, typer.Option(help="--schedule optimal: the upper bound on c(t).")
-    ] = 50.0,
-    max_peak: Annotated[
-        float | None,
-        typer.Option(help="--schedule optimal: keep sup_t E Σ‖x_i(t) − θ‖² <= this."),
-    ] = None,
-    check_paths: Annotated[
-        int,
-        typer.Option(help="--schedule optimal: Monte Carlo paths of the evidence (0: none)."),
-    ] = 200,
-    out_dir: Annotated[
-        Path | None,
-        typer.Option(
-            "--out",
-            help="Write tuned.yaml (the scenario with the tuned gain), tune.json, "
-            "certificate.json, tune.html and its figures here (and schedule.csv).",
-        ),
-    ] = None,
-    as_json: JsonOpt = False,
-) -> None:
-    """Tune the gain c(t) = a·(b + t)^(−γ) (and with --tune-delta the coupling δ) to bring
-    the agents closest to θ by the deadline T under the scenario's noise, initial state and
-    topology, by the exact moment equations (Monte Carlo with common random numbers where
-    they do not apply). Prints the tuned gain beside 1/(1 + t). Exit 0 when the tuned gain
-    satisfies the required theorems and its design's certificate verifies, 1 otherwise."""
-    from .outputs import check_output_folder
-    from .reports.terminal import Progress, out, print_table
-    from .reports.tune import TUNE_FILES, write_tune_outputs
-    from .simulate.scenario import load_scenario
-    from .tune import tune as run
-
-    top, spec, sc = load_scenario(scenario)
-    if out_dir is not None:
-        check_output_folder(out_dir, TUNE_FILES)  # before the run, not after it
-    with warnings.catch_warnings(), Progress("ntc tune") as prog:
-        warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
-        prog.stage(f"tuning {scenario}")
-        opts: dict[str, Any] = dict(
-            require=require, tune_delta=tune_delta, eps=eps, method=method, progress=prog.stage
-        )
-        if schedule == "optimal":
-            opts.update(max_gain=max_gain, max_peak=max_peak, check_paths=check_paths)
-        elif max_peak is not None:
-            raise InputError("--max-peak: applies to --schedule optimal")
-        try:
-            res = run(
-                top,
-                spec,
-                horizon,
-                family=family,
-                max_evaluations=evaluations,
-                schedule=schedule,
-                **opts,
-            )
-        except InputError as exc:
-            raise InputError(f"{sc.source}: {exc}") from None
-    doc = res.to_dict()
-    written: list[str] = []
-    if out_dir is not None:
-        written = write_tune_outputs(res, sc, out_dir)
-        doc["out"] = str(out_dir)
-    if as_json:
-        print(_json(doc))
-    else:
-        for t in getattr(res, "tables", lambda: [res.table()])():
-            print_table(t)
-        if out_dir is not None:
-            rest = ", ".join(f for f in written if f != "tuned.yaml")
-            out.print(
-                f"written to {out_dir}: tuned.yaml (check it by Monte Carlo: ntc simulate "
-                f"{out_dir / 'tuned.yaml'} --out {out_dir}-mc), {rest}"
-            )
-    if not res.certified:
-        msg = "not proven: the tuned design is not certified for the required theorems"
-        print(msg, file=sys.stderr)
-        raise typer.Exit(1)
-
-
-@app.command(epilog="Example: ntc sweep examples/sweeps/g1_noise.yaml --out runs/g1_noise")
-def sweep(
-    sweep_file: Annotated[Path, typer.Argument(help="A sweep file (YAML/JSON).")],
-    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
-    scheduler: SchedulerOpt = None,
-    workers: Annotated[
-        int | None,
-        typer.Option(help="Local processes per point without --scheduler (default: 2)."),
-    ] = None,
-    as_json: JsonOpt = False,
-) -> None:
-    """Design, certify and simulate every point of a sweep (a grid or a list of points over
-    a base scenario); points already in --out are reused. Writes results.csv,
-    results.parquet, curves.parquet and points/. Exit 1 when some point failed."""
-    from .reports.terminal import out, sweep_progress
-    from .sweep import load_sweep, run_sweep
-
-    sw = load_sweep(sweep_file)
-    callback, ctx = sweep_progress()
-    with ctx:
-        res = run_sweep(sw, out_dir, scheduler=scheduler, workers=workers, progress=callback)
-    import pandas as pd
-
-    table = pd.read_csv(out_dir / "results.csv")
-    failed = table[table["error"].notna()]
-    if as_json:
-        print(
-            _json(
-                {
-                    "ok": not res.failed,
-                    "out": str(out_dir),
-                    "points": res.points,
-                    "computed": res.computed,
-                    "reused": res.reused,
-                    "failed": res.failed,
-                    "seconds": res.seconds,
-                    "files": [str(f) for f in res.files],
-                    "failures": [
-                        {"point": r["point"], **{k: r[k] for k in sw.keys}, "error": r["error"]}
-                        for _, r in failed.iterrows()
-                    ],
-                }
-            )
-        )
-    else:
-        out.print(
-            f"{res.points} points in {res.seconds:.1f} s: {res.computed} computed, "
-            f"{res.reused} reused, {res.failed} failed"
-        )
-        for _, row in failed.head(10).iterrows():
-            vals = ", ".join(f"{k}={row[k]}" for k in sw.keys)
-            out.print(f"  failed: {vals}: {row['error']}", soft_wrap=True)
-        out.print(
-            f"wrote {out_dir}/results.csv, results.parquet, curves.parquet "
-            f"(report: ntc report {out_dir})",
-            soft_wrap=True,
-        )
-    if res.failed:
-        raise typer.Exit(1)
-
-
-@app.command(epilog="Example: ntc report runs/g1")
-def report(
-    directory: Annotated[
-        Path,
-        typer.Argument(help="A simulation or sweep output directory (ntc simulate/sweep --out)."),
-    ],
-    interactive: Annotated[
-        bool,
-        typer.Option(
-            help="Embed SVG figures with per-agent toggles, as report_interactive.html "
-            "(the static report.html is kept).",
-            metavar="",
-        ),
-    ] = False,
-    as_json: JsonOpt = False,
-) -> None:
-    """Turn a simulation or sweep output directory into one self-contained report.html
-    (figures also in DIR/figures)."""
-    from .reports.report import write_report
-    from .reports.sweep import is_sweep_dir, write_sweep_report
-    from .reports.terminal import out
-
-    if is_sweep_dir(directory):
-        out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
-        return
-    path = write_report(directory, interactive=interactive)
-    if as_json:
-        figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
-        print(
-            _json(
-                {
-                    "report": str(path),
-                    "certificate": str(path.parent / "certificate.json"),
-                    "figures": figs,
-                }
-            )
-        )
-        return
-    out.print(f"wrote {path}", soft_wrap=True)
-
-
-@app.command(epilog="Example: ntc reproduce paper --out runs/paper")
-def reproduce(
-    what: Annotated[str, typer.Argument(help="What to reproduce: 'paper' (its Section 5).")],
-    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
-    t_end: Annotated[float, typer.Option("--horizon", "--T", help="Horizon T.")] = 100.0,
-    paths: Annotated[int, typer.Option(help="Sample paths per run.")] = 1000,
-    dt: Annotated[
-        float, typer.Option(help="Euler–Maruyama step (ds for intrinsic stepping).")
-    ] = 1e-3,
-    stepping: Annotated[
-        str, typer.Option(help="intrinsic (validated fast path) or uniform.")
-    ] = "intrinsic",
-    workers: Annotated[int, typer.Option(help="Worker processes.")] = 2,
-    seed: Annotated[int, typer.Option(help="Monte Carlo seed.")] = 0,
-    interactive: Annotated[
-        bool,
-        typer.Option(
-            help="Embed SVG figures with per-agent toggles, as report_interactive.html "
-            "(the static report.html is kept).",
-            metavar="",
-        ),
-    ] = False,
-    as_json: JsonOpt = False,
-) -> None:
-    """Run the paper's Section 5 end to end and write one report beside its numbers."""
-    from .reports.reproduce import reproduce_paper
-    from .reports.terminal import Progress, out
-
-    if what != "paper":
-        raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
-    from .outputs import check_output_folder
-    from .simulate.spec import check_workers
-
-    check_workers(workers, "--workers")
-    check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
-    with Progress("ntc reproduce") as prog:
-        path, ok, wall = reproduce_paper(
-            out_dir,
-            t_end,
-            paths,
-            dt,
-            stepping,
-            workers,
-            seed,
-            progress=prog.tick,
-            status=prog.stage,
-            interactive=interactive,
-        )
-    if as_json:
-        doc = json.loads((path.parent / "paper_summary.json").read_text(encoding="utf-8"))
-        print(_json({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))
-    else:
-        out.print(
-            f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}",
-            soft_wrap=True,
-        )
-    if not ok:
-        raise typer.Exit(1)
+# the commands that run a study register after the ones above (``ntc --help`` order)
+from . import cli_runs  # noqa: E402, F401
 
 
 def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
@@ -945,8 +444,6 @@ def _argv(args: list[str]) -> list[str]:
         (negative if looks_negative and not takes_value else rest).append(tok)
     return rest + ["--", *negative] if negative else rest
 
-
-OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
 
 _FLAGS = {"--json", "--help", "--version"}  # options that take no value
 
@@ -978,7 +475,7 @@ def main(argv: list[str] | None = None) -> None:
         from click import exceptions as click  # type: ignore[no-redef]
 
     args = sys.argv[1:] if argv is None else list(argv)
-    _ARGS[:] = args
+    ARGS[:] = args
     # figures are written to files: no display, whatever the machine has (a GUI backend
     # would open windows or fail without one); set before matplotlib is ever imported
     os.environ.setdefault("MPLBACKEND", "Agg")

@@ -37,7 +37,12 @@ from ntc_design.errors import InputError, require_positive
 ROOT = Path(ntc_design.__file__).parent
 
 # Not API: the command line (documented by --help) and the ``python -m`` entry.
-SKIP_MODULES = {"ntc_design.cli", "ntc_design.__main__"}
+SKIP_MODULES = {
+    "ntc_design.cli",
+    "ntc_design.cli_base",
+    "ntc_design.cli_runs",
+    "ntc_design.__main__",
+}
 
 SECTION = re.compile(r"^([A-Z][A-Za-z ]+)\n-{3,}\s*$", re.M)
 ENTRY = re.compile(r"^(\*{0,2}[A-Za-z_][\w]*(?:\s*,\s*\*{0,2}[A-Za-z_][\w]*)*)\s*(?::.*)?$")

@@ -1,0 +1,434 @@
+"""The ``ntc`` commands that run a study and write a folder: ``simulate``, ``tune``,
+``sweep``, ``report`` and ``reproduce`` (registered on :data:`ntc_design.cli_base.app`;
+:mod:`ntc_design.cli` imports this module after its own commands, so ``ntc --help`` lists
+them in this order after those)."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import sys
+import warnings
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from .cli_base import JsonOpt, SchedulerOpt, app, command_line, json_text
+from .errors import AssumptionWarning, InputError, one_line
+
+OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
+
+
+@app.command(
+    epilog="Example: ntc simulate examples/scenarios/g1_fixed.yaml --out runs/g1 --paths 200"
+)
+def simulate(
+    scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
+    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    workers: Annotated[
+        int | None, typer.Option(help="Worker processes (default: the scenario's, or 2).")
+    ] = None,
+    paths: Annotated[
+        int | None, typer.Option(help="Monte Carlo paths (overrides the scenario).")
+    ] = None,
+    horizon: Annotated[
+        float | None, typer.Option("--horizon", "--T", help="Horizon T (overrides the scenario).")
+    ] = None,
+    dt: Annotated[
+        float | None, typer.Option(help="Euler–Maruyama step (overrides the scenario).")
+    ] = None,
+    seed: Annotated[
+        int | None, typer.Option(help="Monte Carlo seed (overrides the scenario).")
+    ] = None,
+    method: Annotated[
+        str | None, typer.Option(help="mc, exact or both (overrides the scenario).")
+    ] = None,
+    rng: Annotated[
+        str | None,
+        typer.Option(
+            help="Normals: xoshiro (one xoshiro256** stream per path, drawn in the compiled "
+            "kernel; default) or numpy (NumPy's PCG64 per block). Overrides the scenario."
+        ),
+    ] = None,
+    scheduler: SchedulerOpt = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
+    summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
+    or nothing)."""
+    from .distributed import DaskEngine
+    from .errors import format_bytes
+    from .reports.terminal import Progress, out
+    from .simulate import SimulationDiverged
+    from .simulate import simulate as run
+    from .simulate.scenario import (
+        check_output,
+        load_scenario,
+        result_output_bytes,
+        write_outputs,
+    )
+    from .simulate.spec import MonteCarlo, check_workers
+
+    given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method, "rng": rng}
+    overrides = {k: v for k, v in given.items() if v is not None}
+    top, spec, sc = load_scenario(scenario, overrides)
+    # summary.json records the command as typed: the report's re-run line keeps the overrides
+    recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}
+    if workers is not None:
+        check_workers(workers, "--workers")
+        spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
+    check_output(out_dir)  # before the run, not after it
+    # "" is a malformed address (refused by connect), not "no scheduler"
+    engine = DaskEngine.connect(scheduler) if scheduler is not None else None
+    with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
+        if engine is not None:
+            stack.callback(engine.close)
+        prog.stage(f"simulating {scenario}")
+        try:
+            res = run(
+                top,
+                spec,
+                progress=lambda done, total: prog.tick("simulating", done, total),
+                engine=engine,
+            )
+        except InputError as exc:  # a field of the scenario: name the file
+            raise InputError(f"{sc.source}: {exc}") from None
+        except SimulationDiverged as exc:
+            written = write_outputs(exc.result, out_dir, recorded)
+            if as_json:
+                print(
+                    json_text({"ok": False, "error": str(exc), "files": [str(p) for p in written]})
+                )
+            print(f"error: {one_line(str(exc))}", file=sys.stderr)
+            raise typer.Exit(1) from None
+    study = None
+    if spec.robust is not None:  # weight realisations with the nominal protocol
+        from .sweep.robust import robust_study
+
+        with Progress("ntc simulate") as prog, warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the brackets' solver notes; every end is proven
+            prog.stage(f"simulating {spec.robust.realizations} weight realisations")
+            study = robust_study(top, spec, progress=lambda k, n: prog.tick("realisations", k, n))
+        recorded["robust"] = study.to_dict()
+    size = result_output_bytes(res, top)
+    if size > OUTPUT_NOTE_BYTES and not as_json:
+        print(
+            f"note: writing about {format_bytes(size)} to {one_line(str(out_dir))}", file=sys.stderr
+        )
+    written = write_outputs(
+        res, out_dir, recorded, {"robust.csv": study.csv()} if study is not None else None
+    )
+    st = res.stats
+    if as_json:
+        summary = res.summary()
+        print(
+            json_text(
+                {
+                    "ok": True,
+                    "out": str(out_dir),
+                    "files": [str(p) for p in written],
+                    "stats": st.to_dict(),
+                    "notes": list(res.notes),
+                    **{
+                        k: summary[k]
+                        for k in ("final_ms_error_mc", "final_ms_error_exact", "sample_paths")
+                        if k in summary
+                    },
+                }
+            )
+        )
+        return
+    rate = (
+        f", {st.path_steps_per_second:.3g} path-steps/s"
+        if st.path_steps_per_second is not None
+        else ""
+    )
+    parts = []
+    if st.mc_seconds is not None:
+        parts.append(f"{st.path_steps:.3g} path-steps in {st.mc_seconds:.1f} s{rate}")
+    if st.exact_seconds is not None:
+        parts.append(f"exact moments {st.exact_seconds:.2f} s")
+    out.print("; ".join(parts))
+    for n in res.notes:
+        out.print(f"note: {n}")
+    if study is not None:
+        from .sweep.robust import study_sentence
+
+        out.print(study_sentence(study.to_dict()))
+    out.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
+
+
+@app.command(
+    epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --horizon 10 --eps 1.5 --out runs/g1-tuned"
+)
+def tune(
+    scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
+    horizon: Annotated[
+        float,
+        typer.Option("--horizon", "--T", help="The deadline T: minimise E Σ‖x_i(T) − θ‖²."),
+    ],
+    family: Annotated[str, typer.Option(help="The gain family: power, a·(b + t)^(−γ).")] = "power",
+    require: Annotated[
+        str,
+        typer.Option(
+            help="Theorems the gain must satisfy: both (γ in [0.51, 1]) or mean-square "
+            "(γ in [0.05, 1])."
+        ),
+    ] = "both",
+    tune_delta: Annotated[
+        bool, typer.Option("--tune-delta", help="Also tune a common coupling δ (certified).")
+    ] = False,
+    eps: Annotated[
+        float | None, typer.Option(help="Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.")
+    ] = None,
+    method: Annotated[
+        str, typer.Option(help="auto (exact moments where they apply), exact or mc.")
+    ] = "auto",
+    evaluations: Annotated[int, typer.Option(help="Search budget (objective evaluations).")] = 160,
+    schedule: Annotated[
+        str,
+        typer.Option(
+            help="power: the family a·(b + t)^(−γ); optimal: the best schedule c(t) on "
+            "[0, T] by optimal control of the exact moments, with an admissible tail after T."
+        ),
+    ] = "power",
+    max_gain: Annotated[
+        float, typer.Option(help="--schedule optimal: the upper bound on c(t).")
+    ] = 50.0,
+    max_peak: Annotated[
+        float | None,
+        typer.Option(help="--schedule optimal: keep sup_t E Σ‖x_i(t) − θ‖² <= this."),
+    ] = None,
+    check_paths: Annotated[
+        int,
+        typer.Option(help="--schedule optimal: Monte Carlo paths of the evidence (0: none)."),
+    ] = 200,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            help="Write tuned.yaml (the scenario with the tuned gain), tune.json, "
+            "certificate.json, tune.html and its figures here (and schedule.csv).",
+        ),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Tune the gain c(t) = a·(b + t)^(−γ) (and with --tune-delta the coupling δ) to bring
+    the agents closest to θ by the deadline T under the scenario's noise, initial state and
+    topology, by the exact moment equations (Monte Carlo with common random numbers where
+    they do not apply). Prints the tuned gain beside 1/(1 + t). Exit 0 when the tuned gain
+    satisfies the required theorems and its design's certificate verifies, 1 otherwise."""
+    from .outputs import check_output_folder
+    from .reports.terminal import Progress, out, print_table
+    from .reports.tune import TUNE_FILES, write_tune_outputs
+    from .simulate.scenario import load_scenario
+    from .tune import tune as run
+
+    top, spec, sc = load_scenario(scenario)
+    if out_dir is not None:
+        check_output_folder(out_dir, TUNE_FILES)  # before the run, not after it
+    with warnings.catch_warnings(), Progress("ntc tune") as prog:
+        warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
+        prog.stage(f"tuning {scenario}")
+        opts: dict[str, Any] = dict(
+            require=require, tune_delta=tune_delta, eps=eps, method=method, progress=prog.stage
+        )
+        if schedule == "optimal":
+            opts.update(max_gain=max_gain, max_peak=max_peak, check_paths=check_paths)
+        elif max_peak is not None:
+            raise InputError("--max-peak: applies to --schedule optimal")
+        try:
+            res = run(
+                top,
+                spec,
+                horizon,
+                family=family,
+                max_evaluations=evaluations,
+                schedule=schedule,
+                **opts,
+            )
+        except InputError as exc:
+            raise InputError(f"{sc.source}: {exc}") from None
+    doc = res.to_dict()
+    written: list[str] = []
+    if out_dir is not None:
+        written = write_tune_outputs(res, sc, out_dir)
+        doc["out"] = str(out_dir)
+    if as_json:
+        print(json_text(doc))
+    else:
+        for t in getattr(res, "tables", lambda: [res.table()])():
+            print_table(t)
+        if out_dir is not None:
+            rest = ", ".join(f for f in written if f != "tuned.yaml")
+            out.print(
+                f"written to {out_dir}: tuned.yaml (check it by Monte Carlo: ntc simulate "
+                f"{out_dir / 'tuned.yaml'} --out {out_dir}-mc), {rest}"
+            )
+    if not res.certified:
+        msg = "not proven: the tuned design is not certified for the required theorems"
+        print(msg, file=sys.stderr)
+        raise typer.Exit(1)
+
+
+@app.command(epilog="Example: ntc sweep examples/sweeps/g1_noise.yaml --out runs/g1_noise")
+def sweep(
+    sweep_file: Annotated[Path, typer.Argument(help="A sweep file (YAML/JSON).")],
+    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    scheduler: SchedulerOpt = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(help="Local processes per point without --scheduler (default: 2)."),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Design, certify and simulate every point of a sweep (a grid or a list of points over
+    a base scenario); points already in --out are reused. Writes results.csv,
+    results.parquet, curves.parquet and points/. Exit 1 when some point failed."""
+    from .reports.terminal import out, sweep_progress
+    from .sweep import load_sweep, run_sweep
+
+    sw = load_sweep(sweep_file)
+    callback, ctx = sweep_progress()
+    with ctx:
+        res = run_sweep(sw, out_dir, scheduler=scheduler, workers=workers, progress=callback)
+    import pandas as pd
+
+    table = pd.read_csv(out_dir / "results.csv")
+    failed = table[table["error"].notna()]
+    if as_json:
+        print(
+            json_text(
+                {
+                    "ok": not res.failed,
+                    "out": str(out_dir),
+                    "points": res.points,
+                    "computed": res.computed,
+                    "reused": res.reused,
+                    "failed": res.failed,
+                    "seconds": res.seconds,
+                    "files": [str(f) for f in res.files],
+                    "failures": [
+                        {"point": r["point"], **{k: r[k] for k in sw.keys}, "error": r["error"]}
+                        for _, r in failed.iterrows()
+                    ],
+                }
+            )
+        )
+    else:
+        out.print(
+            f"{res.points} points in {res.seconds:.1f} s: {res.computed} computed, "
+            f"{res.reused} reused, {res.failed} failed"
+        )
+        for _, row in failed.head(10).iterrows():
+            vals = ", ".join(f"{k}={row[k]}" for k in sw.keys)
+            out.print(f"  failed: {vals}: {row['error']}", soft_wrap=True)
+        out.print(
+            f"wrote {out_dir}/results.csv, results.parquet, curves.parquet "
+            f"(report: ntc report {out_dir})",
+            soft_wrap=True,
+        )
+    if res.failed:
+        raise typer.Exit(1)
+
+
+@app.command(epilog="Example: ntc report runs/g1")
+def report(
+    directory: Annotated[
+        Path,
+        typer.Argument(help="A simulation or sweep output directory (ntc simulate/sweep --out)."),
+    ],
+    interactive: Annotated[
+        bool,
+        typer.Option(
+            help="Embed SVG figures with per-agent toggles, as report_interactive.html "
+            "(the static report.html is kept).",
+            metavar="",
+        ),
+    ] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Turn a simulation or sweep output directory into one self-contained report.html
+    (figures also in DIR/figures)."""
+    from .reports.report import write_report
+    from .reports.sweep import is_sweep_dir, write_sweep_report
+    from .reports.terminal import out
+
+    if is_sweep_dir(directory):
+        out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
+        return
+    path = write_report(directory, interactive=interactive)
+    if as_json:
+        figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
+        print(
+            json_text(
+                {
+                    "report": str(path),
+                    "certificate": str(path.parent / "certificate.json"),
+                    "figures": figs,
+                }
+            )
+        )
+        return
+    out.print(f"wrote {path}", soft_wrap=True)
+
+
+@app.command(epilog="Example: ntc reproduce paper --out runs/paper")
+def reproduce(
+    what: Annotated[str, typer.Argument(help="What to reproduce: 'paper' (its Section 5).")],
+    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    t_end: Annotated[float, typer.Option("--horizon", "--T", help="Horizon T.")] = 100.0,
+    paths: Annotated[int, typer.Option(help="Sample paths per run.")] = 1000,
+    dt: Annotated[
+        float, typer.Option(help="Euler–Maruyama step (ds for intrinsic stepping).")
+    ] = 1e-3,
+    stepping: Annotated[
+        str, typer.Option(help="intrinsic (validated fast path) or uniform.")
+    ] = "intrinsic",
+    workers: Annotated[int, typer.Option(help="Worker processes.")] = 2,
+    seed: Annotated[int, typer.Option(help="Monte Carlo seed.")] = 0,
+    interactive: Annotated[
+        bool,
+        typer.Option(
+            help="Embed SVG figures with per-agent toggles, as report_interactive.html "
+            "(the static report.html is kept).",
+            metavar="",
+        ),
+    ] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Run the paper's Section 5 end to end and write one report beside its numbers."""
+    from .reports.reproduce import reproduce_paper
+    from .reports.terminal import Progress, out
+
+    if what != "paper":
+        raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
+    from .outputs import check_output_folder
+    from .simulate.spec import check_workers
+
+    check_workers(workers, "--workers")
+    check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
+    with Progress("ntc reproduce") as prog:
+        path, ok, wall = reproduce_paper(
+            out_dir,
+            t_end,
+            paths,
+            dt,
+            stepping,
+            workers,
+            seed,
+            progress=prog.tick,
+            status=prog.stage,
+            interactive=interactive,
+        )
+    if as_json:
+        doc = json.loads((path.parent / "paper_summary.json").read_text(encoding="utf-8"))
+        print(json_text({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))
+    else:
+        out.print(
+            f"wrote {path} in {wall:.0f} s; every row matches the paper: {'yes' if ok else 'NO'}",
+            soft_wrap=True,
+        )
+    if not ok:
+        raise typer.Exit(1)

@@ -1,0 +1,99 @@
+"""Tests of :mod:`ntc_design.cli_runs`: simulate, tune, sweep, report and reproduce."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tests.cli_helpers import assert_input_error, run_cli
+from tests.conftest import EXAMPLES, ROOT
+
+
+def test_simulate_takes_overrides(tmp_path, capsys, monkeypatch):
+    sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+    args = ["simulate", sc, "--out", tmp_path / "o", "--paths", "30", "--T", "0.5"]
+    code, _, err = run_cli(
+        [*args, "--seed", "9", "--method", "mc", "--dt", "0.01"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    p = json.loads((tmp_path / "o" / "summary.json").read_text())["parameters"]
+    assert (p["paths"], p["T"], p["seed"], p["method"], p["dt"]) == (30, 0.5, 9, "mc", 0.01)
+    assert_input_error(
+        ["simulate", sc, "--out", tmp_path / "p", "--paths", "0"], capsys, monkeypatch, "paths"
+    )
+    assert not (tmp_path / "p").exists()
+
+
+def test_sweep_json(tmp_path, capsys, monkeypatch):
+    sw = tmp_path / "sw.yaml"
+    sw.write_text(
+        f"base: {EXAMPLES / 'scenarios' / 'g1_fixed.yaml'}\ngrid: {{margin: [0.1, 1.0]}}\n"
+    )
+    code, out, err = run_cli(
+        ["sweep", sw, "--out", tmp_path / "o", "--json", "--workers", "1"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["points"] == 2 and doc["computed"] == 2 and doc["failed"] == 0
+    assert doc["failures"] == [] and any(f.endswith("results.csv") for f in doc["files"])
+
+
+def test_reproduce_unknown_target(tmp_path, capsys, monkeypatch):
+    assert_input_error(
+        ["reproduce", "thesis", "--out", tmp_path / "x"],
+        capsys,
+        monkeypatch,
+        "unknown target 'thesis'",
+    )
+    assert not Path(tmp_path / "x").exists()
+
+
+def test_simulate_json_and_plain_progress(tmp_path, capsys, monkeypatch):
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        f"topology: {ROOT / 'examples' / 'g1.yaml'}\ntheta: [1, 2, -1]\ngain: '1/(1+t)'\n"
+        "T: 0.2\npaths: 20\nsave_every: 0.1\nworkers: 1\n"
+    )
+    code, text, err = run_cli(
+        ["simulate", sc, "--out", tmp_path / "r", "--json"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["ok"] and set(doc["final_ms_error_exact"]) == {str(a) for a in range(1, 8)}
+    assert str(tmp_path / "r" / "ms_error_long.csv") in doc["files"]
+
+
+@pytest.mark.hostile
+def test_cli_out_that_is_a_file_is_refused_before_the_run(examples, tmp_path, capsys, monkeypatch):
+    f = tmp_path / "taken"
+    f.write_text("mine", encoding="utf-8")
+    assert_input_error(
+        ["tune", examples / "scenarios" / "g1_fixed.yaml", "--horizon", "1", "--out", f],
+        capsys,
+        monkeypatch,
+        "--out",
+    )
+    assert f.read_text(encoding="utf-8") == "mine"
+
+
+def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch, tmp_path):
+    code, out, err = run_cli(
+        [
+            "tune",
+            examples / "scenarios" / "g1_fixed.yaml",
+            "--horizon",
+            "2",
+            "--evaluations",
+            "30",
+            "--out",
+            tmp_path / "t",
+        ],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 0, err
+    for label in ("gain c(t)", "E Σ‖x_i(T) − θ‖², T = 2.0000", "certificate of the tuned design"):
+        assert label in out
+    said = " ".join(out.split("written to", 1)[1].split())  # the line, unwrapped
+    files = sorted(p.name for p in (tmp_path / "t").iterdir() if p.is_file())
+    assert files and all(f in said for f in files), (files, said)  # every file is named
