@@ -93,6 +93,74 @@ def parse_vector(text: str, field: str) -> list[float]:
     return vals
 
 
+PeriodOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--period",
+        help="The digital protocol's sampling period h: agents sample every h and hold their "
+        "input (overrides the scenario's digital block).",
+    ),
+]
+DelayOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--delay",
+        help="The digital protocol's measurement delay D, in samples (with --period or the "
+        "scenario's digital block; default 0).",
+    ),
+]
+
+
+def digital_option(
+    period: float | None, delay: int | None, given: object = None, horizon: object = None
+) -> dict | None:
+    """The ``digital`` block from ``--period`` and ``--delay`` over a scenario's own
+    (``given``), checked with the flags named in errors.
+
+    Parameters
+    ----------
+    period : float or None
+        ``--period``.
+    delay : int or None
+        ``--delay``.
+    given : mapping or None
+        The scenario's ``digital`` block, if any.
+    horizon : float, optional
+        T (a period longer than it is refused, naming ``--period``).
+
+    Returns
+    -------
+    dict or None
+        ``{period, delay}``, or None when neither the flags nor the scenario ask for one.
+
+    Raises
+    ------
+    InputError
+        A bad flag value (naming the flag), or ``--delay`` without a period.
+    """
+    from .design.digital import Digital
+
+    if period is None and delay is None:
+        return None
+    base = dict(given) if isinstance(given, dict) else {}
+    if period is None and "period" not in base:
+        raise InputError("--delay: needs --period (or a digital block in the scenario)")
+    try:
+        dg = Digital(
+            period if period is not None else base["period"],
+            delay if delay is not None else base.get("delay", 0),
+        )
+        if isinstance(horizon, (int, float)) and not isinstance(horizon, bool) and horizon > 0:
+            dg.steps(float(horizon))
+    except InputError as exc:
+        text = str(exc)
+        for field, flag in (("digital.period", "--period"), ("digital.delay", "--delay")):
+            if text.startswith(field) and (period if flag == "--period" else delay) is not None:
+                text = flag + text[len(field) :]
+        raise InputError(text) from None
+    return dg.to_dict()
+
+
 ARGS: list[str] = []  # this invocation's arguments (set by main)
 
 

@@ -14,7 +14,16 @@ from typing import Annotated, Any
 
 import typer
 
-from .cli_base import JsonOpt, SchedulerOpt, app, command_line, json_text
+from .cli_base import (
+    DelayOpt,
+    JsonOpt,
+    PeriodOpt,
+    SchedulerOpt,
+    app,
+    command_line,
+    digital_option,
+    json_text,
+)
 from .errors import AssumptionWarning, InputError, one_line
 
 OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
@@ -51,6 +60,8 @@ def simulate(
             "kernel; default) or numpy (NumPy's PCG64 per block). Overrides the scenario."
         ),
     ] = None,
+    period: PeriodOpt = None,
+    delay: DelayOpt = None,
     scheduler: SchedulerOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -59,6 +70,7 @@ def simulate(
     or nothing)."""
     from .distributed import DaskEngine
     from .errors import format_bytes
+    from .files import parse_scenario
     from .reports.terminal import Progress, out
     from .simulate import SimulationDiverged
     from .simulate import simulate as run
@@ -71,8 +83,13 @@ def simulate(
     from .simulate.spec import MonteCarlo, check_workers
 
     given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method, "rng": rng}
-    overrides = {k: v for k, v in given.items() if v is not None}
-    top, spec, sc = load_scenario(scenario, overrides)
+    overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
+    sc = parse_scenario(scenario)
+    if period is not None or delay is not None:
+        overrides["digital"] = digital_option(
+            period, delay, sc.document.get("digital"), overrides.get("T", sc.document.get("T"))
+        )
+    top, spec, sc = load_scenario(scenario, overrides, sc)
     # summary.json records the command as typed: the report's re-run line keeps the overrides
     recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}
     if workers is not None:
@@ -132,7 +149,12 @@ def simulate(
                     "notes": list(res.notes),
                     **{
                         k: summary[k]
-                        for k in ("final_ms_error_mc", "final_ms_error_exact", "sample_paths")
+                        for k in (
+                            "final_ms_error_mc",
+                            "final_ms_error_exact",
+                            "sample_paths",
+                            "digital",
+                        )
                         if k in summary
                     },
                 }

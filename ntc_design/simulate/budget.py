@@ -245,6 +245,7 @@ def estimate(
     mc: bool,
     exact: bool,
     mode_field: str = "topology",
+    delay: int = 0,
 ) -> Estimate:
     """Peak memory by part (see the module docstring) for the sizes given.
 
@@ -264,6 +265,9 @@ def estimate(
         Which methods run.
     mode_field : str
         The field that sets ``modes`` (named in a refusal).
+    delay : int, optional
+        The sampled protocol's delay D: every path holds D + 1 states, and the exact
+        moments ((D+1)·Nd)² numbers (:mod:`.digital`).
 
     Returns
     -------
@@ -291,6 +295,8 @@ def estimate(
             "block_size",
             w * (F8 * b * (4 * nd_ + 3 * ed) + min(F8 * b * BATCH * 2 * edges, XI_BYTES)),
         )
+        if delay:
+            parts["delayed states"] = ("digital.delay", w * F8 * b * 2 * delay * nd_)
         parts["statistics at the save times"] = (
             "save_every",
             stats * (2 * w + 2) + F8 * saves * 3 * n,
@@ -300,7 +306,10 @@ def estimate(
             "store_paths" if k >= saves else "save_every",
             3 * F8 * k * saves * nd_,
         )
-    if exact:
+    if exact and delay:
+        wd = (delay + 1) * nd_
+        parts["exact moments"] = ("digital.delay", F8 * (4 * wd * wd + saves * (nd_ + n)))
+    elif exact:
         parts["exact moments"] = ("method", F8 * (12 * nd_ * nd_ + saves * (nd_ + n)))
     parts["output tables"] = ("save_every", 30.0 * saves * (4 * n + 1))
     return Estimate(parts, float(steps), float(steps) * paths if mc else 0.0)
@@ -346,6 +355,7 @@ _HINTS = {
     "topology": "the topology is too large for this machine's memory",
     "dt": "raise dt (or ds), or shorten T",
     "save_every": "save less often (save_every) or fewer save_times",
+    "digital.delay": "lower the delay D (every path and the exact moments hold D + 1 states)",
 }
 
 

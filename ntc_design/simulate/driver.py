@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, TypeAlias, TypeGuard, cast
 import numpy as np
 
 from ..design import ProtocolDesign, design_topology
+from ..design.digital import Digital, step_modes
 from ..errors import InputError, format_seconds, quote, warn_user
 from ..exprtree import numeric_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
@@ -32,6 +33,13 @@ from .budget import (
     estimate_steps,
     gain_samples,
     mc_seconds,
+)
+from .digital import (
+    DigitalMoments,
+    DigitalRun,
+    check_digital_moments,
+    digital_grid,
+    digital_moments,
 )
 from .grid import TimeGrid
 from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
@@ -230,9 +238,12 @@ def _check_size(
     """Estimate memory and work from the input and refuse before allocating."""
     saves = spec.save.count(spec.T)
     st = spec.stepping
-    steps = estimate_steps(
-        spec.T, st.dt, st.intrinsic_ds, st.max_step, cfun, saves + 2 * n_segments
-    )
+    if spec.digital is not None:  # one step per sample
+        steps = float(spec.digital.steps(spec.T)[0])
+    else:
+        steps = estimate_steps(
+            spec.T, st.dt, st.intrinsic_ds, st.max_step, cfun, saves + 2 * n_segments
+        )
     est = estimate(
         n=topology.n,
         d=topology.dim,
@@ -248,6 +259,7 @@ def _check_size(
         mc=spec.method != "exact",
         exact=spec.method != "mc",
         mode_field="resample" if isinstance(topology, TimeVaryingTopology) else "topology",
+        delay=spec.digital.delay if spec.digital is not None else 0,
     )
     check_budget(est)
     nd = topology.n * topology.dim
@@ -356,6 +368,11 @@ def simulate(
     if is_expression_topology(topology):  # A(t)
         from .timevarying import simulate_expression
 
+        if spec.digital is not None:
+            raise InputError(
+                "digital: a topology given as expressions of t is not sampled by the digital "
+                "protocol; give it as a switching schedule or a fixed topology"
+            )
         if spec.delta is not None:
             raise InputError(
                 "delta: a topology given as expressions of t takes Lemma 1's δ(t) at every t; "
@@ -491,12 +508,21 @@ def _simulate_modes(
     per mode, checks, the grid, the runs."""
     pm = prepare_modes(topology, spec, cfun, workers, protocol)
     systems, segments, notes, n, d = pm.systems, pm.segments, pm.notes, pm.n, pm.d
-    if spec.method != "mc" and spec.noise.linear:
-        _check_exact_work(systems, spec, cfun, gain_text, len(segments))
-    grid = spec_grid(spec, cfun, segments)
-    c_grid = check_gain(cfun, gain_text, grid.t[:-1])
-    if spec.method != "exact":
-        _step_size_guard(systems, grid, c_grid, notes, spec.stepping.scheme)
+    if spec.digital is not None:
+        grid, more = digital_grid(
+            spec.digital, spec.T, spec.save.resolve(spec.T), _step_mode(topology, pm)
+        )
+        notes.extend(more)
+        check_gain(cfun, gain_text, grid.t[:-1])
+        if spec.method != "mc" and spec.noise.linear:
+            check_digital_moments(n * d, spec.digital.delay, grid.n_steps)
+    else:
+        if spec.method != "mc" and spec.noise.linear:
+            _check_exact_work(systems, spec, cfun, gain_text, len(segments))
+        grid = spec_grid(spec, cfun, segments)
+        c_grid = check_gain(cfun, gain_text, grid.t[:-1])
+        if spec.method != "exact":
+            _step_size_guard(systems, grid, c_grid, notes, spec.stepping.scheme)
     spec.noise.term.check(d, systems[0].n_edges)
     params = run_parameters(spec, pm.theta, gain_text, pm.x_init, workers, grid, pm.names)
     if isinstance(topology, SwitchingTopology):
@@ -516,11 +542,88 @@ def _simulate_modes(
         agent_labels=tuple(topology.labels),
         scheme=spec.stepping.scheme,
         rng=spec.mc.rng,
+        delay=spec.digital.delay if spec.digital is not None else 0,
     )
     part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, engine, notes)
-    exact, exact_stats = run_exact(spec, notes, lambda: pm.moments(cfun, grid.save_times))
+    if spec.digital is None:
+        exact, exact_stats = run_exact(spec, notes, lambda: pm.moments(cfun, grid.save_times))
+        runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
+        return finish_run(
+            tuple(topology.labels), pm.theta, grid, pm.designs, params, spec, runs, notes
+        )
+    found: list[DigitalMoments] = []
+    delay = spec.digital.delay
+
+    def moments() -> Moments:
+        dm = digital_moments(systems, grid, cfun, pm.eps0, n, d, delay)
+        found.append(dm)
+        return dm.moments
+
+    exact, exact_stats = run_exact(spec, notes, moments)
+    summary = digital_summary(spec.digital, grid, found[0] if found else None, pm, cfun)
     runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
-    return finish_run(tuple(topology.labels), pm.theta, grid, pm.designs, params, spec, runs, notes)
+    return finish_run(
+        tuple(topology.labels), pm.theta, grid, pm.designs, params, spec, runs, notes, summary
+    )
+
+
+def _step_mode(
+    topology: Topology | SwitchingTopology | TimeVaryingTopology, pm: PreparedModes
+) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The mode index at each sample time: the schedule's rule for a switching set
+    (:func:`~ntc_design.design.digital.step_modes`), the re-design segment for a sampled
+    A(t), None for one topology."""
+    if isinstance(topology, SwitchingTopology):
+        schedule = topology.schedule
+        return lambda t: step_modes(schedule, t, pm.names)
+    if isinstance(topology, TimeVaryingTopology):
+        starts = np.array([a for a, _, _ in pm.segments])
+        index = np.array([m for _, _, m in pm.segments], dtype=np.int64)
+        return lambda t: index[np.clip(np.searchsorted(starts, t, side="right") - 1, 0, None)]
+    return None
+
+
+def digital_summary(
+    digital: Digital,
+    grid: TimeGrid,
+    found: DigitalMoments | None,
+    pm: PreparedModes,
+    cfun: Callable,
+) -> DigitalRun:
+    """What a digital run reports beside its curves: the period, the delay, K, the peak of
+    the exact E‖e_k‖² and the continuous design's exact final error at the same time
+    K·h (None where the exact moments did not run).
+
+    Parameters
+    ----------
+    digital : Digital
+        The period and delay.
+    grid : TimeGrid
+        The sampling grid.
+    found : DigitalMoments or None
+        The digital exact moments, if they ran.
+    pm : PreparedModes
+        The modes (for the continuous moments).
+    cfun : callable
+        Vectorised c(t).
+
+    Returns
+    -------
+    DigitalRun
+    """
+    t_end = float(grid.t[-1])
+    continuous = None
+    if found is not None:
+        cont = pm.moments(cfun, np.array([0.0, t_end]))
+        continuous = float(cont.ms_error[-1].sum())
+    return DigitalRun(
+        period=digital.period,
+        delay=digital.delay,
+        steps=grid.n_steps,
+        ms_error_peak=found.peak if found is not None else None,
+        peak_time=found.peak_time if found is not None else None,
+        continuous_final_ms_error=continuous,
+    )
 
 
 def _resolve_spec(theta, spec: SimulationSpec | None, options: dict) -> SimulationSpec:

@@ -247,22 +247,29 @@ def _drift_noise_d3(xt, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, 
 @numba.njit(cache=True, nogil=True)
 def _em_core(
     x, xi, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
-    src, dst, kmat, gvec, drift, tile,
+    src, dst, kmat, gvec, drift, tile, delay,
 ):  # fmt: skip
     """:func:`em_steps` and :func:`em_steps_rng` in one body: the normals are read from
     ``xi`` when ``states`` is empty, else drawn here from the paths' xoshiro streams. For
     d = 3 (the paper's examples) one loop over the tile does a whole 3×3 block of L_B or a
     whole edge, its nine coefficients in registers: a third of the memory traffic of the
-    general loops (one per nonzero), 1.2x faster on G1; the sums are the same up to rounding."""
-    p, nd = x.shape
+    general loops (one per nonzero), 1.2x faster on G1; the sums are the same up to rounding.
+
+    With ``delay`` D > 0 a row of ``x`` is the shift register (x_k, x_{k−1}, …, x_{k−D})
+    of the sampled protocol (:mod:`.digital`): the drift and the noise are taken at
+    x_{k−D}, added to x_k, and the register shifts by one state."""
+    p, width = x.shape
+    nd = width // (delay + 1)
+    lo = delay * nd
     ne = src.size
     d = gvec.shape[1]
     for q0 in range(0, p, tile):
         w = min(tile, p - q0)
-        xt = np.empty((nd, w))
+        xt = np.empty((width, w))
         for q in range(w):
-            for r in range(nd):
+            for r in range(width):
                 xt[r, q] = x[q0 + q, r]
+        xd = xt[lo:, :]  # the state the feedback measures: x_{k−D}
         dx = np.empty((nd, w))
         zt = np.empty((max(2 * ne, m_draw), w))  # rows past 2·E: drawn, not used
         df = np.empty((d, w))
@@ -282,7 +289,7 @@ def _em_core(
             if states.shape[0]:
                 _draw_lanes(st[0], st[1], st[2], st[3], zt, wl, c2)
             if d == 3:
-                _drift_noise_d3(xt, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, drift)
+                _drift_noise_d3(xd, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, drift)
             else:
                 for r in range(nd):
                     ur = c1 * u[r]
@@ -293,13 +300,13 @@ def _em_core(
                             a = c1 * data[b]
                             jc = indices[b]
                             for q in range(w):
-                                dx[r, q] -= a * xt[jc, q]
+                                dx[r, q] -= a * xd[jc, q]
                 for e in range(ne):
                     io = dst[e] * d
                     jo = src[e] * d
                     for c in range(d):
                         for q in range(w):
-                            df[c, q] = xt[jo + c, q] - xt[io + c, q]
+                            df[c, q] = xd[jo + c, q] - xd[io + c, q]
                     for a in range(d):
                         for q in range(w):
                             mb[q] = 0.0
@@ -310,11 +317,14 @@ def _em_core(
                         ga = gvec[e, a]
                         for q in range(w):
                             dx[io + a, q] += ga * zt[e, q] + mb[q] * zt[ne + e, q]
+            for r in range(width - 1, nd - 1, -1):  # the register shifts (D > 0)
+                for q in range(w):
+                    xt[r, q] = xt[r - nd, q]
             for r in range(nd):
                 for q in range(w):
                     xt[r, q] += dx[r, q]
         for q in range(w):
-            for r in range(nd):
+            for r in range(width):
                 x[q0 + q, r] = xt[r, q]
         for q in range(st.shape[1]):
             for c in range(4):
@@ -324,7 +334,7 @@ def _em_core(
 @numba.njit(cache=True, nogil=True)
 def em_steps(
     x, xi, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat,
-    gvec, drift, tile,
+    gvec, drift, tile, delay=0,
 ):  # fmt: skip
     """Advance every row of ``x`` (p, Nd) in place over the steps ``k_from .. k_to − 1``
     of the batch: ``x += ch[k]·(u − L_B x) + cs[k]·Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e)``
@@ -333,17 +343,18 @@ def em_steps(
     bdata; :func:`kernel_arrays` makes both), K_e = ``kmat[e]`` and g_e = ``gvec[e]`` (agent
     ``dst[e]``'s rows). With ``drift`` False the L_B term is left out (the implicit
     scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
-    innermost loop runs over the tile (no array views inside: they cost per nonzero)."""
+    innermost loop runs over the tile (no array views inside: they cost per nonzero). With
+    ``delay`` D > 0 each row is the register (x_k, …, x_{k−D}) of :func:`_em_core`."""
     _em_core(
         x, xi, np.zeros((0, 4), dtype=np.uint64), 0, k_from, k_to, ch, cs,
-        indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile,
+        indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay,
     )  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
 def em_steps_rng(
     x, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
-    src, dst, kmat, gvec, drift, tile,
+    src, dst, kmat, gvec, drift, tile, delay=0,
 ):  # fmt: skip
     """:func:`em_steps` with the normals drawn in the kernel, path by path from its
     xoshiro256** state ``states[path]`` (the same numbers as :func:`fill_normals` gives
@@ -351,7 +362,7 @@ def em_steps_rng(
     normals is written or read."""
     _em_core(
         x, np.zeros((1, 1, 1)), states, m_draw, k_from, k_to, ch, cs, indptr,
-        indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile,
+        indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay,
     )  # fmt: skip
 
 
@@ -402,7 +413,7 @@ def kernel_arrays(s) -> KernelArrays:
     )
 
 
-def numpy_step(x, xi_k, ch, cs, s, drift=True):
+def numpy_step(x, xi_k, ch, cs, s, drift=True, delay=0):
     """One step of the same recursion with SciPy sparse products, in place (any f,
     callable ones included: f acts on the (p, E, d) array of differences).
 
@@ -420,9 +431,13 @@ def numpy_step(x, xi_k, ch, cs, s, drift=True):
         The mode's matrices.
     drift : bool, optional
         Include −L_B x (False for the implicit scheme, which solves for it).
+    delay : int, optional
+        D > 0: each row of ``x`` is the register (x_k, …, x_{k−D}); the drift and the
+        noise are taken at x_{k−D} and the register shifts (:func:`_em_core`).
     """
     p = x.shape[0]
     ne, d = s.n_edges, s.dim
+    full, x = x, x[:, delay * s.nd :]
     x3 = x.reshape(p, s.n_agents, d)
     diff = x3[:, s.src] - x3[:, s.dst]
     if s.f is not None:
@@ -434,4 +449,6 @@ def numpy_step(x, xi_k, ch, cs, s, drift=True):
     inc = ch * s.u + cs * noise
     if drift:
         inc -= ch * (s.lap_b @ x.T).T
-    x += inc
+    if delay:
+        full[:, s.nd :] = full[:, : -s.nd].copy()
+    full[:, : s.nd] += inc

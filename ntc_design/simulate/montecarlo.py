@@ -59,6 +59,7 @@ class MonteCarloSpec:
     agent_labels: tuple = ()
     scheme: str = "explicit"  # or "implicit": x_{k+1} = (I + c h L_B)^{-1}(x_k + …)
     rng: str = "xoshiro"  # per-path streams drawn in the kernel (.rng), or "numpy"
+    delay: int = 0  # the sampled protocol's D: feedback and noise at x_{k−D} (.digital)
 
     @property
     def block_paths(self) -> int:
@@ -116,8 +117,8 @@ class _Stepper:
     distinct c·h: with intrinsic stepping c·h = ds except next to events), kept for every
     block of a chunk."""
 
-    def __init__(self, s: ModeSystem, implicit: bool):
-        self.s = s
+    def __init__(self, s: ModeSystem, implicit: bool, delay: int = 0):
+        self.s, self.delay = s, delay
         self.compiled = s.f is None
         if self.compiled:
             from .kernels import kernel_arrays
@@ -136,7 +137,7 @@ class _Stepper:
         from .kernels import em_steps_rng, tile_width
 
         tile = tile_width(x.shape[0], x.shape[1])
-        em_steps_rng(x, states, m_draw, k_from, k_to, ch, cs, *self.args, True, tile)
+        em_steps_rng(x, states, m_draw, k_from, k_to, ch, cs, *self.args, True, tile, self.delay)
 
     def advance(self, x, xi, k_from, k_to, ch, cs) -> None:
         from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
@@ -144,10 +145,10 @@ class _Stepper:
         tile = tile_width(x.shape[0], x.shape[1])
         if self.solver is None:
             if self.compiled:
-                em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile)
+                em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile, self.delay)
             else:
                 for k in range(k_from, k_to):
-                    numpy_step(x, xi[k], ch[k], cs[k], self.s)
+                    numpy_step(x, xi[k], ch[k], cs[k], self.s, delay=self.delay)
             return
         solver = self.solver
         for k in range(k_from, k_to):
@@ -176,17 +177,18 @@ def prepare(spec: MonteCarloSpec) -> None:
     fused = xoshiro and explicit and bool(systems) and all(s.f is None for s in systems)
     if xoshiro and not fused:
         fill_normals(np.zeros((0, 4), np.uint64), np.zeros((1, 0, 1)))
+    delay = getattr(spec, "delay", 0)
     for s in systems:
         if s.f is None:
             st = _Stepper(s, False)
-            x = np.zeros((0, s.nd))
+            x = np.zeros((0, s.nd * (delay + 1)))
             one = np.ones(1)
             if fused:
                 states = np.zeros((0, 4), np.uint64)
-                em_steps_rng(x, states, 2, 0, 1, one, one, *st.args, True, 1)
+                em_steps_rng(x, states, 2, 0, 1, one, one, *st.args, True, 1, delay)
             else:
                 xi = np.zeros((1, 0, 2 * s.n_edges))
-                em_steps(x, xi, 0, 1, one, one, *st.args, True, 1)
+                em_steps(x, xi, 0, 1, one, one, *st.args, True, 1, delay)
             return
 
 
@@ -284,7 +286,7 @@ class BlockStats:
 def _steppers(spec: MonteCarloSpec) -> list[_Stepper]:
     """One stepper per mode, shared by the blocks of a chunk (the implicit solvers are
     built once)."""
-    return [_Stepper(s, spec.scheme == "implicit") for s in spec.systems]
+    return [_Stepper(s, spec.scheme == "implicit", spec.delay) for s in spec.systems]
 
 
 def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> PartialStats:
@@ -296,7 +298,10 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
 
     src = NormalSource(getattr(spec, "rng", "xoshiro"), spec.seed, b, p)
     stats = BlockStats(spec, b, p0, p)
-    x = np.tile(spec.x_init, (p, 1))
+    nd_ = spec.x_init.size
+    # the sampled protocol holds the initial state for k < 0: every slot of the register
+    x = np.tile(spec.x_init, (p, spec.delay + 1))
+    now = x[:, :nd_]  # x_k (a view: the register keeps it in front)
     e_max = max(s.n_edges for s in spec.systems)
     steppers = steppers if steppers is not None else _steppers(spec)
     c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
@@ -305,7 +310,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     cs_all = c_all * np.sqrt(h_all)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     ends = _run_ends(grid)
-    if 0 in save_at and not stats.record(x, save_at[0]):
+    if 0 in save_at and not stats.record(now, save_at[0]):
         return stats.result()
     # the normals of step k are rows (p, 2·e_max) drawn in step order: the batch size
     # changes how many are drawn per call, not which (Generator fills sequentially)
@@ -329,11 +334,11 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
             else:
                 steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs)
             k = stop
-            if k in save_at and not stats.record(x, save_at[k]):
+            if k in save_at and not stats.record(now, save_at[k]):
                 return stats.result()
         if progress is not None:
             progress(kb * p)
-        if not stats.check(x, k0 + kb):
+        if not stats.check(now, k0 + kb):
             return stats.result()
     return stats.result()
 

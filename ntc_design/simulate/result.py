@@ -14,6 +14,7 @@ from ..design.lemma1 import DESIGN_KEYS
 from ..errors import quote
 from ..rows import Table, fmt
 from ..svg import curve_svg
+from .digital import DigitalRun
 from .grid import TimeGrid
 from .moments import Moments
 from .montecarlo import PartialStats
@@ -182,6 +183,7 @@ class SimulationResult:
     notes: tuple[str, ...] = ()
     failure: Failure | None = None
     grid: TimeGrid | None = None
+    digital: DigitalRun | None = None  # the sampled protocol's figures (a digital run)
 
     def summary(self) -> dict:
         """The JSON summary written as ``summary.json``.
@@ -221,6 +223,8 @@ class SimulationResult:
                 zip(lab, self.exact.ms_error[-1].tolist(), strict=True)
             )
             out["min_ms_error_exact"] = float(np.min(self.exact.ms_error.sum(axis=1)))
+        if self.digital is not None:
+            out["digital"] = self.digital.to_dict()
         return out
 
     def __repr__(self) -> str:
@@ -259,6 +263,17 @@ class SimulationResult:
             for k, when in ((0, "t = 0"), (-1, "T")):
                 rows.append(
                     (f"Σ_i E‖x_i − θ‖² at {when} (exact)", float(self.exact.ms_error[k].sum()))
+                )
+        dg = self.digital
+        if dg is not None:
+            rows.append(
+                ("sampling", f"period h = {dg.period:g}, delay D = {dg.delay}, K = {dg.steps}")
+            )
+            if dg.ms_error_peak is not None:
+                rows.append(("peak of Σ_i E‖x_i − θ‖² (exact, sampled)", dg.ms_error_peak))
+            if dg.continuous_final_ms_error is not None:
+                rows.append(
+                    ("Σ_i E‖x_i − θ‖² at T (exact, continuous)", dg.continuous_final_ms_error)
                 )
         if self.failure is not None:
             rows.append(("diverged", f"t = {self.failure.t:.6g}, agent {self.failure.agent}"))

@@ -36,7 +36,7 @@ REPLACEABLE = (
 
 
 def load_scenario(
-    path: str | Path, overrides: dict | None = None
+    path: str | Path, overrides: dict | None = None, data: ScenarioData | None = None
 ) -> tuple[AnyTopology, SimulationSpec, ScenarioData]:
     """Read a scenario file: (topology, spec, the scenario as read).
 
@@ -47,6 +47,8 @@ def load_scenario(
     overrides : dict, optional
         Top-level scenario keys that replace the file's (``paths``, ``T``, ``dt``,
         ``seed``, ``method``, ...), checked exactly as the file's own.
+    data : ScenarioData, optional
+        The file as :func:`ntc_design.files.parse_scenario` already read it (not read again).
 
     Returns
     -------
@@ -58,7 +60,7 @@ def load_scenario(
     InputError
         ``FILE: FIELD: what is wrong``.
     """
-    sc = parse_scenario(path)
+    sc = data if data is not None else parse_scenario(path)
     doc = {**sc.document, **(overrides or {})}
     spec = SimulationSpec.from_document(doc, sc.source)
     top = load(sc.topology)

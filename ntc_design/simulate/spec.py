@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..design.digital import Digital
 from ..errors import MAX_SEED, InputError, quote, require_int, require_number, require_positive
 from ..exprtree import numeric_function
 from ..schedule import ScheduleGain, read_schedule, schedule_from_document
@@ -395,6 +396,7 @@ SCENARIO_KEYS = (
     "rng",
     "resample",
     "robust",
+    "digital",
 )
 OPTION_KEYS = tuple(k for k in SCENARIO_KEYS if k not in ("name", "description", "topology"))
 METHODS = ("mc", "exact", "both")
@@ -446,6 +448,9 @@ class SimulationSpec:
     robust : RobustSampling or None
         Weight realisations to simulate too (``ntc simulate`` runs them after the nominal
         network; :func:`ntc_design.sweep.robust.robust_study`).
+    digital : Digital or None
+        The sampled protocol (period h, delay D; :mod:`ntc_design.design.digital`): the
+        recursion is stepped every h instead of the continuous SAN; None: continuous.
     """
 
     theta: np.ndarray
@@ -461,6 +466,7 @@ class SimulationSpec:
     method: str = "both"
     resample: float | None = None
     robust: RobustSampling | None = None
+    digital: Digital | None = None
 
     def __post_init__(self) -> None:
         th = _check_vector("theta", self.theta, bound=MAX_MAGNITUDE)
@@ -497,6 +503,14 @@ class SimulationSpec:
             raise InputError(f"method: must be mc, exact or both, got {self.method!r}")
         if self.resample is not None:
             require_positive("resample", self.resample)
+        if self.digital is not None:
+            object.__setattr__(self, "digital", Digital.from_document(self.digital))
+            if self.stepping.kind != "uniform" or self.stepping.scheme != "explicit":
+                raise InputError(
+                    "digital: the sampled protocol steps every period h; stepping: intrinsic "
+                    "and scheme: implicit do not apply to it"
+                )
+            self.digital.steps(self.T)  # h <= T and a bounded number of steps
 
     # -- constructors -------------------------------------------------------------
 
@@ -504,7 +518,8 @@ class SimulationSpec:
     def build(cls, theta, **options: Any) -> SimulationSpec:
         """A spec from the flat keyword options of :func:`simulate` (the keys of a
         scenario file: T, dt, paths, seed, save_every or save_times, method, stepping,
-        ds, workers, block_size, store_paths, resample, margin, delta, gain, noise, initial).
+        ds, workers, block_size, store_paths, resample, margin, delta, gain, noise, initial,
+        digital).
 
         Parameters
         ----------
@@ -700,6 +715,7 @@ class SimulationSpec:
             "scheme": self.stepping.scheme,
             "method": self.method,
             "resample": self.resample,
+            "digital": self.digital.to_dict() if self.digital is not None else None,
             "noise": {
                 "sigma": n.sigma,
                 "f": np.asarray(n.f).tolist() if not callable(n.f) else "callable",

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from .digital import DigitalRun
 from .grid import TimeGrid, build_grid
 from .moments import Moments
 from .montecarlo import PartialStats, run
@@ -219,6 +220,7 @@ def finish_run(
     spec: SimulationSpec,
     runs: Runs,
     notes: list[str],
+    digital: DigitalRun | None = None,
 ) -> SimulationResult:
     """The result of a run, or :class:`~.result.SimulationDiverged` (one path for every
     kind of topology, :func:`.result.finish`).
@@ -241,6 +243,8 @@ def finish_run(
         What the methods produced.
     notes : list of str
         The notes.
+    digital : DigitalRun, optional
+        The sampled protocol's figures (a digital run).
 
     Returns
     -------
@@ -262,5 +266,6 @@ def finish_run(
         stats=run_stats(grid, spec.mc.paths, runs.mc_stats, runs.exact_stats),
         notes=tuple(notes),
         grid=grid,
+        digital=digital,
     )
     return finish(res, runs.part)
