@@ -12,7 +12,17 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from .cli_base import ARGS, FileArg, JsonOpt, app, json_text, parse_vector
+from .cli_base import (
+    ARGS,
+    DelayOpt,
+    FileArg,
+    JsonOpt,
+    PeriodOpt,
+    app,
+    digital_option,
+    json_text,
+    parse_vector,
+)
 from .errors import AssumptionWarning, InputError, interrupt_seen, note_interrupt, one_line
 from .outputs import exit_process
 
@@ -246,14 +256,20 @@ def certify(
             "solver) or lmi (the LMI bisection with Clarabel)."
         ),
     ] = "lyapunov",
+    period: PeriodOpt = None,
+    delay: DelayOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
     common P), re-verify it exactly, and say which of Theorems 1-4 is guaranteed.
-    Exit 0 when one is (or, without --gain, when the certificate is valid), 1 when none is;
-    --out is written only when the certificate is valid."""
+    With --period (and --delay) the sampled protocol is certified too: the step k₀ from
+    which it contracts in mean square and the sampled analogues of the theorems.
+    Exit 0 when one is (the sampled ones with --period; or, without --gain, when the
+    certificate is valid), 1 when none is; --out is written only when the certificate is
+    valid."""
     from .certify import certify as run
     from .certify import write_certificate
+    from .design.digital import Digital
     from .loader import load
     from .outputs import check_output_file
     from .schedule import gain_from_option
@@ -261,6 +277,7 @@ def certify(
     th = parse_vector(theta, "--theta")
     if rate_method not in ("lyapunov", "lmi"):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
+    sampled = digital_option(period, delay)
     if out_path is not None:
         check_output_file(out_path, "--out")
     with warnings.catch_warnings():
@@ -273,6 +290,7 @@ def certify(
             noise_sigma=noise_sigma,
             noise_f=noise_f,
             rate_method=rate_method,
+            digital=Digital.from_document(sampled) if sampled is not None else None,
         )
     doc = res.to_dict()  # every step that can fail runs before anything is written
     written = out_path is not None and res.verification.valid

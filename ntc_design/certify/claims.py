@@ -26,6 +26,8 @@ class Property(StrEnum):
     ROBUST_MARGIN = "robust_margin"  # −L_B(A') Hurwitz for every A' within radius ρ_lower
     ROBUST_DECAY = "robust_decay"  # min Re λ(L_B(A')) > α_lower for every A' within ρ
     ROBUST_OFFSET = "robust_offset"  # ‖x*(A') − 1⊗θ‖² <= γ for every A' within ρ
+    # the sampled protocol (period h, delay D) contracts in mean square from step k₀ on
+    DIGITAL_MEAN_SQUARE = "digital_mean_square"
 
 
 PROPERTY_TEXT = {
@@ -39,6 +41,8 @@ PROPERTY_TEXT = {
     "margin radius",
     Property.ROBUST_DECAY: "min Re λ(L_B(A')) > α for every weight realisation within ρ",
     Property.ROBUST_OFFSET: "‖x*(A') − 1⊗θ‖ bounded for every weight realisation within ρ",
+    Property.DIGITAL_MEAN_SQUARE: "the sampled protocol (period h, delay D) contracts in "
+    "mean square from step k₀ on: E[eᵀPe] (D = 0) or its Razumikhin functional (D > 0)",
 }
 
 
@@ -56,7 +60,23 @@ class ClaimKind(StrEnum):
     T0 = "t0"  # μ₂(t) > 0 for t >= t₀ (the gain is small enough from t₀ on)
     ROBUST_LMI = "robust_lmi"  # the S-procedure matrix Ψ(P, τ; α, ρ) ≻ 0 (robust kind)
     ROBUST_OFFSET = "robust_offset"  # the S-procedure matrix Γ(γ, λ, Y; ρ) ≻ 0 (robust kind)
+    DIGITAL_MS = "digital_ms"  # (PL + LᵀP − αP) − κ(h LᵀPL + N) ≻ 0 (digital kinds)
+    DIGITAL_NOISE = "digital_noise"  # βP − N ≻ 0 (D > 0)
+    DIGITAL_LIPSCHITZ = "digital_lipschitz"  # ℓ²P − LᵀPL ≻ 0 (D > 0)
+    DIGITAL_LEVEL = "digital_level"  # ρ(κ) <= 1/2 (D > 0)
+    DIGITAL_ADDITIVE = "digital_additive"  # γ >= Σ_e g_eᵀ P g_e
+    DIGITAL_T0 = "digital_t0"  # c(t) < κ for every t >= t₀
 
+
+#: The statements of the digital kinds' claims ({m}: the mode).
+DIGITAL_CLAIM_TEXT = {
+    ClaimKind.DIGITAL_MS: "(P_d·L_B({m}) + L_B({m})ᵀ·P_d − α·P_d) − κ·(h·L_B({m})ᵀ·P_d·L_B({m}) + N({m})) ≻ 0",
+    ClaimKind.DIGITAL_NOISE: "β·P_d − N({m}) ≻ 0",
+    ClaimKind.DIGITAL_LIPSCHITZ: "ℓ²·P_d − L_B({m})ᵀ·P_d·L_B({m}) ≻ 0",
+    ClaimKind.DIGITAL_LEVEL: "ρ(κ) <= 1/2 (the delayed bound)",
+    ClaimKind.DIGITAL_ADDITIVE: "γ >= Σ_e g_eᵀ·P_d·g_e in every mode",
+    ClaimKind.DIGITAL_T0: "c(t) < κ for every t >= t₀",
+}
 
 #: The statements of the time-varying kind's claims (their certificates list exactly these).
 TV_CLAIM_TEXT = {
@@ -92,6 +112,8 @@ class Claim:
             return f"−L_B({m}) Hurwitz: every component block certified"
         if self.kind in TV_CLAIM_TEXT:
             return TV_CLAIM_TEXT[self.kind]
+        if self.kind in DIGITAL_CLAIM_TEXT:
+            return DIGITAL_CLAIM_TEXT[self.kind].format(m=m)
         if self.kind is ClaimKind.ROBUST_LMI:
             return f"Ψ(P_{p}, τ_{p}; α, ρ) ≻ 0 for L_B({m}): every realisation within ρ"
         if self.kind is ClaimKind.ROBUST_OFFSET:
@@ -179,6 +201,7 @@ def derive_claims(
 
 
 __all__ = [
+    "DIGITAL_CLAIM_TEXT",
     "PROPERTY_TEXT",
     "Claim",
     "ClaimKind",

@@ -90,8 +90,34 @@ def mu2_t0(gain: Any, kappa: float) -> tuple[float | None, str]:
         # ball-arithmetic proof below closes
         e10 = 10 ** (math.floor(math.log10(hi)) - 5) if hi > 0 else 1e-6
         t0 = float(math.ceil(hi * (1 + 1e-7) / e10) * e10)
-    # prove c < κ on [t0, T0_SCAN_END] by bisection in ball arithmetic
-    stack = [(t0, T0_SCAN_END)]
+    return t0, prove_below(c, kappa, t0)[1]
+
+
+def prove_below(c: sp.Expr, kappa: float, t0: float) -> tuple[bool | None, str]:
+    """Prove c(t) < κ for every t >= t₀: ball arithmetic on [t₀, 10⁹] (bisection), and
+    sympy's monotonicity of c beyond.
+
+    Parameters
+    ----------
+    c : sympy.Expr
+        c(t) (a constant is decided at once).
+    kappa : float
+        The level.
+    t0 : float
+        From where.
+
+    Returns
+    -------
+    (bool or None, str)
+        True when proven; False when c >= κ somewhere was found; None when the proof did
+        not close (undecided); and how.
+    """
+    if not c.has(symbol("t")):
+        v = float(c)
+        return (
+            (True, "constant gain below κ") if v < kappa else (False, f"constant gain {v:.4g} >= κ")
+        )
+    stack = [(t0, max(T0_SCAN_END, t0))]
     n_ev = 0
     while stack:
         a, b = stack.pop()
@@ -100,17 +126,20 @@ def mu2_t0(gain: Any, kappa: float) -> tuple[float | None, str]:
         if hi_c < kappa:
             continue
         if b - a < 1e-9 * max(1.0, a) or n_ev > 20000:
-            return t0, "numerical (the ball-arithmetic proof did not close)"
+            lo_c = bounds(enclose(c, t_ball(a, a)))[0]
+            if lo_c >= kappa:
+                return False, f"c({a:.6g}) >= κ = {kappa:.6g}"
+            return None, "numerical (the ball-arithmetic proof did not close)"
         # [a, 2a] bisects (splitting it at 2a would give it back); longer ones split at 2a
         m = 0.5 * (a + b) if b <= 2 * max(a, 1.0) else max(2 * a, a + 1.0)
         stack += [(a, m), (m, b)]
     try:
-        dec = sp.is_decreasing(c, sp.Interval(T0_SCAN_END, sp.oo))
+        dec = sp.is_decreasing(c, sp.Interval(max(T0_SCAN_END, t0), sp.oo))
     except Exception:  # noqa: BLE001 - sympy may fail on anything
         dec = None
     if dec:
-        return t0, "ball arithmetic on t0 <= t <= 1e9, c decreasing beyond (sympy)"
-    return t0, "ball arithmetic on t0 <= t <= 1e9; beyond 1e9 not proven"
+        return True, "ball arithmetic on t0 <= t <= 1e9, c decreasing beyond (sympy)"
+    return None, "ball arithmetic on t0 <= t <= 1e9; beyond 1e9 not proven"
 
 
 def noise_sigma_bar(f: Any) -> float:
@@ -129,4 +158,4 @@ def noise_sigma_bar(f: Any) -> float:
     return float(abs(arr)) if arr.ndim == 0 else float(np.linalg.norm(arr, 2))
 
 
-__all__ = ["T0_SCAN_END", "mu2_t0", "mu2_threshold", "noise_sigma_bar"]
+__all__ = ["T0_SCAN_END", "mu2_t0", "mu2_threshold", "noise_sigma_bar", "prove_below"]

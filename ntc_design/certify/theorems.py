@@ -17,11 +17,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import sympy as sp
+
 from ..design import ProtocolDesign, SwitchingDesign
 from ..gain import CONDITION_LABELS, GainAnalysis
 from ..rows import Table, lines, verdict
 from .checks import Verification
 from .claims import Property
+from .mu2 import T0_SCAN_END
 
 
 @dataclass(frozen=True)
@@ -59,6 +62,8 @@ class TheoremVerdict:
     theorem: int
     sense: str  # "mean square" or "almost sure"
     premises: tuple[Premise, ...]
+    #: the sampled protocol's analogue (period h, delay D; :mod:`.digital`), not the SAN's
+    sampled: bool = False
 
     @property
     def guaranteed(self) -> bool | None:
@@ -95,6 +100,7 @@ class TheoremVerdict:
         return {
             "theorem": self.theorem,
             "sense": self.sense,
+            "sampled": self.sampled,
             "guaranteed": self.guaranteed,
             "premises": [p.to_dict() for p in self.premises],
             "failing": [p.to_dict() for p in self.failing],
@@ -354,7 +360,122 @@ def time_varying_verdicts(result: dict, ver, gain) -> tuple:
     )
 
 
+def _eventually_decreasing(expr: sp.Expr) -> bool | None:
+    """Whether c is non-increasing on [10⁹, ∞) (sympy), so that its sampled series and its
+    integral converge or diverge together (the integral test)."""
+    t = sp.Symbol("t", real=True)
+    free = [s for s in expr.free_symbols if s.name == "t"]
+    if not free:
+        return True
+    try:
+        return bool(sp.is_decreasing(expr.subs(free[0], t), sp.Interval(T0_SCAN_END, sp.oo)))
+    except Exception:  # noqa: BLE001 - sympy may fail on anything
+        return None
+
+
+def sampled_gain_premises(gain: GainAnalysis | None, h: float, almost_sure: bool) -> list[Premise]:
+    """The sampled gain's premises: Σ_k c(kh) = ∞ and c(kh) → 0, and Σ_k c(kh)² < ∞ for
+    almost-sure convergence, from the continuous conditions: c(t) → 0 gives c(kh) → 0; for
+    the sums, c non-increasing beyond some time makes each sum and its integral (over h)
+    converge or diverge together (the integral test).
+
+    Parameters
+    ----------
+    gain : GainAnalysis or None
+        The gain's continuous conditions.
+    h : float
+        The period.
+    almost_sure : bool
+        Add Σ c(kh)² < ∞.
+
+    Returns
+    -------
+    list of Premise
+    """
+    if gain is None:
+        return [Premise("gain c(kh)", None, "no gain given (--gain)")]
+    mono = _eventually_decreasing(gain.expr)
+    transfer = "c non-increasing on [1e9, ∞) (sympy): integral test"
+
+    def series(key: str, name: str) -> Premise:
+        cont = gain.condition(key)
+        if mono:
+            return Premise(
+                name, cont.value, f"{transfer}, with {CONDITION_LABELS[key]}: {cont.reason}"
+            )
+        return Premise(
+            name,
+            None,
+            "c is not proven eventually non-increasing: the sum is not compared with the integral",
+        )
+
+    out = [
+        Premise(
+            f"c continuous and >= 0 (sampled every h = {h:g})",
+            gain.continuous_nonnegative.value,
+            gain.continuous_nonnegative.reason,
+        ),
+        series("integral_diverges", "Σ_k c(kh) = ∞"),
+        Premise(
+            "c(kh) → 0", gain.tends_to_zero.value, f"from c(t) → 0: {gain.tends_to_zero.reason}"
+        ),
+    ]
+    if almost_sure:
+        out.append(series("square_integrable", "Σ_k c(kh)² < ∞"))
+    return out
+
+
+def digital_verdicts(
+    base: tuple[TheoremVerdict, ...],
+    ver: Verification,
+    gain: GainAnalysis | None,
+    h: float,
+    delay: int,
+    detail: str,
+) -> tuple[TheoremVerdict, ...]:
+    """The sampled protocol's analogues of the base verdicts (Theorems 1-2 or 3-4): the
+    same structural premises, the certified contraction of the sampled recursion from step
+    k₀ on, and the sampled gain conditions.
+
+    Parameters
+    ----------
+    base : tuple of TheoremVerdict
+        The continuous verdicts of the design (mean square, then almost sure).
+    ver : Verification
+        The digital certificate's verification.
+    gain : GainAnalysis or None
+        The gain's conditions.
+    h : float
+        The period.
+    delay : int
+        D.
+    detail : str
+        What the certificate states (k₀, κ, …) or why it stops.
+
+    Returns
+    -------
+    tuple of TheoremVerdict
+        The sampled mean-square and almost-sure verdicts.
+    """
+    ok = ver.property_holds(Property.DIGITAL_MEAN_SQUARE)
+    contraction = Premise(
+        f"the sampled recursion (h = {h:g}, D = {delay}) contracts in mean square from step k₀",
+        ok,
+        f"certified: {detail}" if ok else f"not certified: {detail}",
+    )
+    gain_names = set(CONDITION_LABELS.values()) | {"gain c(t)"}
+    out = []
+    for th, sure in zip(base, (False, True), strict=True):
+        structural = tuple(p for p in th.premises if p.name not in gain_names)
+        sense = f"{th.sense}, sampled: h = {h:g}, D = {delay}"
+        prem = (*structural, contraction, *sampled_gain_premises(gain, h, sure))
+        out.append(TheoremVerdict(th.theorem, sense, prem, sampled=True))
+    return tuple(out)
+
+
 __all__ = [
+    "digital_verdicts",
+    "sampled_gain_premises",
     "violations_text",
     "gain_premises",
     "time_varying_verdicts",

@@ -20,12 +20,13 @@ exported code share).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError, require_int, require_number
+from ..rows import Table
 
 #: The largest delay D in samples (the augmented state holds D + 1 copies of the state).
 MAX_DELAY = 10_000
@@ -141,6 +142,106 @@ class Digital:
         return {"period": self.period, "delay": self.delay}
 
 
+@dataclass(frozen=True, eq=False)
+class DigitalDesign:
+    """A continuous Lemma 1 design (one topology or a switching set) run as the digital
+    protocol, with what its certificate needs: the gain and the noise (σ per edge, f).
+
+    Attributes
+    ----------
+    base : ProtocolDesign or SwitchingDesign
+        The continuous design.
+    digital : Digital
+        The period and delay.
+    gain : str or ScheduleGain
+        c(t).
+    sigma : float
+        σ of every edge without its own.
+    f : float or numpy.ndarray
+        f(x) = f·x (a scale) or F x (a d×d matrix).
+    sigma_edges : mapping of (str, str) to float
+        Per-edge σ, keyed by (from, to) labels.
+    """
+
+    base: Any
+    digital: Digital
+    gain: Any
+    sigma: float = 0.4
+    f: Any = 0.3
+    sigma_edges: Mapping[tuple[str, str], float] = field(default_factory=dict)
+
+    def f_matrix(self, d: int) -> np.ndarray:
+        """F as a d×d matrix (a scale s is s·I).
+
+        Parameters
+        ----------
+        d : int
+            The state dimension.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        arr = np.asarray(self.f, dtype=float)
+        return float(arr) * np.eye(d) if arr.ndim == 0 else arr
+
+    def noise_document(self) -> dict:
+        """The noise as the certificate's subject states it.
+
+        Returns
+        -------
+        dict
+            ``sigma``, ``f`` (a number or a d×d list) and ``sigma_edges`` ({from, to, sigma}).
+        """
+        arr = np.asarray(self.f, dtype=float)
+        return {
+            "sigma": float(self.sigma),
+            "f": float(arr) if arr.ndim == 0 else arr.tolist(),
+            "sigma_edges": [
+                {"from": str(a), "to": str(b), "sigma": float(v)}
+                for (a, b), v in self.sigma_edges.items()
+            ],
+        }
+
+    def table(self, title: str | None = None) -> Table:
+        """The continuous design's table with the sampling rows.
+
+        Parameters
+        ----------
+        title : str, optional
+            The table's title.
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        base = self.base.table(title)
+        width = len(base.columns) - 1
+        extra = [
+            (label, *[value] * width)
+            for label, value in (
+                ("sampling period h", self.digital.period),
+                ("measurement delay D (samples)", self.digital.delay),
+            )
+        ]
+        return Table.build(base.title, base.columns, [*base.rows, *extra], base.notes, base.layout)
+
+    def _repr_html_(self) -> str:
+        return self.table().html()
+
+    def __repr__(self) -> str:
+        return f"DigitalDesign({self.base!r}, h={self.digital.period:g}, D={self.digital.delay})"
+
+    def to_dict(self) -> dict:
+        """The design as a JSON-ready mapping: the continuous design and ``digital``.
+
+        Returns
+        -------
+        dict
+        """
+        return {**self.base.to_dict(), "digital": self.digital.to_dict()}
+
+
 def step_modes(
     schedule: Sequence[tuple[str, float]], times: np.ndarray, names: Sequence[str]
 ) -> np.ndarray:
@@ -179,4 +280,4 @@ def step_modes(
     return index[slot]
 
 
-__all__ = ["MAX_DELAY", "MAX_STEPS", "Digital", "step_modes"]
+__all__ = ["MAX_DELAY", "MAX_STEPS", "Digital", "DigitalDesign", "step_modes"]

@@ -285,6 +285,20 @@ class ResultsAudit:
         else:
             self.estimates.append(label)
 
+    def proven(self, path: tuple) -> None:
+        """A number that a derived claim states (the kind read it from here to build the
+        claim), so its proof among the checks fails if the number is false: it must be a
+        finite number.
+
+        Parameters
+        ----------
+        path : tuple
+            Where it is reported.
+        """
+        self._mark(path)
+        if finite_number(self.get(*path)) is None:
+            self.bad.append(f"{self.name(path)}: reported {self._show(path)}, expected a number")
+
     def informational(self, path: tuple, integer: bool = False) -> None:
         """A number that proves nothing (a run time, an iteration count): it must be a
         finite number >= 0 (an integer when asked), and is never used as evidence.

@@ -6,6 +6,7 @@ A new kind is one module beside this one and one line here (CONTRIBUTING.md)."""
 from __future__ import annotations
 
 from .base import CertificateKind
+from .digital import DigitalKind, DigitalSwitchingKind
 from .hurwitz import HurwitzKind
 from .hurwitz_scale import HurwitzScaleKind
 from .robust import RobustKind
@@ -23,6 +24,8 @@ KINDS: dict[str, CertificateKind] = {
         SwitchingScaleKind(),
         TimeVaryingKind(),
         RobustKind(),
+        DigitalKind(),
+        DigitalSwitchingKind(),
     )
 }
 

@@ -1,0 +1,462 @@
+"""Kinds ``digital`` and ``digital_switching``: a ``hurwitz`` or ``switching`` certificate
+whose design runs as the sampled protocol (period h, delay D; :mod:`ntc_design.design.digital`),
+with the proof that the sampled recursion contracts in mean square from step k₀ on
+(:mod:`ntc_design.certify.digital` states the mathematics).
+
+The subject adds ``digital: {period, delay, gain, noise}``; the matrices add ``P.digital``;
+``results.digital`` states α, κ, γ (and β, ℓ² for D > 0), t₀ and k₀. Every one of them is
+proven by a derived claim (k₀ = ⌈t₀/h⌉ + D recomputed exactly). When no level can be
+certified (no P gives α > 0, or the gain never stays below κ) the certificate certifies the
+continuous properties only and ``results.digital.stopped`` says where it stopped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from ...design.digital import Digital, DigitalDesign
+from ...errors import InputError
+from ...linalg import RANGE_TEXT, out_of_range
+from ...rigorous.exact import Dyadic, exact_affordable
+from ...rigorous.floatmat import FloatMat
+from ...schedule import ScheduleGain
+from ..checks import Check
+from ..claims import Claim, ClaimKind, Property
+from ..digital import (
+    additive_energy,
+    edge_noises,
+    first_step,
+    gain_t0,
+    level_holds,
+    lipschitz_matrix,
+    ms_matrix,
+    noise_matrix,
+    plan,
+    prove_gain_below,
+    prove_psd,
+)
+from ..fields import matrix, need, number
+from ..format import finish, scheduled_modes
+from ..theorems import TheoremVerdict, digital_verdicts
+from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, number_text
+from .dense import prove_dense
+from .hurwitz import HurwitzKind
+from .switching import SwitchingKind
+
+P_NAME = "digital"
+MS = Property.DIGITAL_MEAN_SQUARE
+
+
+@dataclass(frozen=True, eq=False)
+class DigitalSubject:
+    """``subject.digital`` as read: the period, the delay, the gain (text or a schedule
+    document) and the noise (F as a d×d matrix, σ, per-edge σ by (from, to) labels)."""
+
+    period: float
+    delay: int
+    gain: Any
+    f: np.ndarray
+    sigma: float
+    sigma_edges: dict
+
+
+@dataclass(frozen=True)
+class Stated:
+    """``results.digital``'s numbers that the claims use."""
+
+    alpha: float
+    kappa: float
+    gamma: float
+    t0: float
+    beta: float | None
+    ell2: float | None
+
+
+def _gain_document(gain: Any) -> Any:
+    if isinstance(gain, ScheduleGain):
+        return gain.to_document()
+    if isinstance(gain, str):
+        return gain
+    raise InputError("gain: the digital certificate needs c(t) as an expression or a schedule")
+
+
+def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
+    """Parse ``subject.digital``.
+
+    Parameters
+    ----------
+    doc : dict
+        The certificate.
+    source : str
+        Its name, for messages.
+    d : int
+        The state dimension.
+
+    Returns
+    -------
+    DigitalSubject
+
+    Raises
+    ------
+    InputError
+        A missing or malformed field.
+    """
+    where = f"{source}: subject.digital"
+    sub = need(need(doc, "subject", dict, source), "digital", dict, f"{source}: subject")
+    try:
+        dg = Digital(sub.get("period"), sub.get("delay"))
+    except InputError as exc:
+        raise InputError(f"{source}: subject.{exc}") from None
+    gain = sub.get("gain")
+    if isinstance(gain, dict):
+        ScheduleGain(
+            gain.get("t"),
+            gain.get("c"),
+            gain.get("interpolation", "linear"),
+            gain.get("tail"),
+            f"{where}.gain",
+        )
+    elif not isinstance(gain, str):
+        raise InputError(f"{where}.gain: expected an expression in t or a schedule")
+    noise = need(sub, "noise", dict, where)
+    sigma = number(need(noise, "sigma", (int, float), f"{where}.noise"), f"{where}.noise.sigma")
+    if sigma < 0:
+        raise InputError(f"{where}.noise.sigma: must be >= 0")
+    f_raw = need(noise, "f", (int, float, list), f"{where}.noise")
+    f = (
+        number(f_raw, f"{where}.noise.f") * np.eye(d)
+        if not isinstance(f_raw, list)
+        else matrix(f_raw, d, f"{where}.noise.f")
+    )
+    edges: dict = {}
+    for k, e in enumerate(need(noise, "sigma_edges", list, f"{where}.noise")):
+        w = f"{where}.noise.sigma_edges[{k}]"
+        if (
+            not isinstance(e, dict)
+            or not isinstance(e.get("from"), str)
+            or not isinstance(e.get("to"), str)
+        ):
+            raise InputError(f"{w}: expected {{from, to, sigma}}")
+        s = number(need(e, "sigma", (int, float), w), f"{w}.sigma")
+        if s < 0:
+            raise InputError(f"{w}.sigma: must be >= 0")
+        edges[(e["from"], e["to"])] = s
+    if out_of_range(f) or out_of_range(sigma) or any(out_of_range(v) for v in edges.values()):
+        raise InputError(f"{where}.noise: {RANGE_TEXT}")
+    return DigitalSubject(dg.period, dg.delay, gain, f, sigma, edges)
+
+
+def _stated(doc: dict, source: str, delay: int) -> Stated:
+    res = need(need(doc, "results", dict, source), "digital", dict, f"{source}: results")
+    where = f"{source}: results.digital"
+
+    def num(key: str) -> float:
+        return number(need(res, key, (int, float), where), f"{where}.{key}")
+
+    return Stated(
+        num("alpha"),
+        num("kappa"),
+        num("gamma"),
+        num("t0"),
+        num("beta") if delay else None,
+        num("ell2") if delay else None,
+    )
+
+
+def digital_claims(modes: tuple[str, ...], delay: int) -> tuple[Claim, ...]:
+    """The claims the sampled contraction needs for the scheduled modes.
+
+    Parameters
+    ----------
+    modes : tuple of str
+        The modes the schedule uses (the one mode of a fixed topology).
+    delay : int
+        D.
+
+    Returns
+    -------
+    tuple of Claim
+    """
+    out = [Claim(ClaimKind.PD, MS, p=P_NAME)]
+    out += [Claim(ClaimKind.DIGITAL_MS, MS, mode=m, p=P_NAME) for m in modes]
+    if delay:
+        out += [Claim(ClaimKind.DIGITAL_NOISE, MS, mode=m, p=P_NAME) for m in modes]
+        out += [Claim(ClaimKind.DIGITAL_LIPSCHITZ, MS, mode=m, p=P_NAME) for m in modes]
+        out.append(Claim(ClaimKind.DIGITAL_LEVEL, MS))
+    out += [Claim(ClaimKind.DIGITAL_ADDITIVE, MS, p=P_NAME), Claim(ClaimKind.DIGITAL_T0, MS)]
+    return tuple(out)
+
+
+class _DigitalMixin:
+    """What the two digital kinds add to their dense base kind (``hurwitz`` or
+    ``switching``): issuing the digital section, its claims, proofs, audit, rows and
+    verdicts."""
+
+    base_name: str  # the base kind's name
+
+    # -------------------------------------------------------------- issuing
+    def _modes_of(self, design: DigitalDesign) -> dict[str, Any]:
+        base = design.base
+        if hasattr(base, "switching"):
+            used = scheduled_modes(base.switching.schedule)
+            return {k: base.modes[k] for k in used}
+        return {base.topology.name or "topology": base}
+
+    def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
+        """The base certificate with the digital section (see the module docstring).
+
+        Parameters
+        ----------
+        design : DigitalDesign
+            The design and its sampling.
+        options : IssueOptions, optional
+            As for the base kind.
+
+        Returns
+        -------
+        dict
+        """
+        doc = super().issue(design.base, options)  # type: ignore[misc]
+        dg = design.digital
+        modes = self._modes_of(design)
+        d = next(iter(modes.values())).topology.dim
+        f = design.f_matrix(d)
+        noises = [
+            edge_noises(m.topology, f, design.sigma, design.sigma_edges) for m in modes.values()
+        ]
+        laps = [m.grounded_laplacian() for m in modes.values()]
+        fixed = (
+            np.array(doc["matrices"]["P"]["lyapunov"])
+            if "lyapunov" in doc["matrices"]["P"]
+            else None
+        )
+        gain_doc = _gain_document(design.gain)
+        doc["kind"] = self.name  # type: ignore[attr-defined]
+        doc["subject"]["digital"] = {
+            "period": dg.period,
+            "delay": dg.delay,
+            "gain": gain_doc,
+            "noise": design.noise_document(),
+        }
+        pl = plan(laps, noises, d, dg.period, dg.delay, fixed)
+        t0, how = gain_t0(gain_doc, pl.kappa) if pl is not None else (None, "")
+        if pl is None or t0 is None:
+            why = (
+                "no Lyapunov matrix gives α > 0 for every mode"
+                if pl is None
+                else f"c(t) does not stay below κ = {pl.kappa:.6g}: {how}"
+            )
+            doc["results"]["digital"] = {"stopped": why}
+            doc.pop("digest", None)
+            return finish(doc)
+        doc["matrices"]["P"][P_NAME] = pl.p.tolist()
+        res: dict[str, Any] = {
+            "P_from": pl.source,
+            "alpha": pl.alpha,
+            "kappa": pl.kappa,
+            "gamma": pl.gamma,
+            "t0": t0,
+            "t0_proof": how,
+            "k0": first_step(t0, dg.period, dg.delay),
+        }
+        if dg.delay:
+            res["beta"], res["ell2"] = pl.beta, pl.ell2
+        doc["results"]["digital"] = res
+        doc["certifies"] = [*doc["certifies"], MS.value]
+        claims = digital_claims(tuple(modes), dg.delay)
+        doc["claims"] = [*doc["claims"], *(c.to_dict() for c in claims)]
+        doc.pop("digest", None)
+        return finish(doc)
+
+    # -------------------------------------------------------------- verifying
+    def read(self, doc: dict, source: str) -> Reading:
+        reading = super().read(doc, source)  # type: ignore[misc]
+        ctx = reading.state
+        d = next(iter(reading.modes.values())).d
+        ctx.digital = read_digital(doc, source, d)
+        ctx.stated = None
+        if MS.value in doc.get("certifies", []):
+            ctx.stated = _stated(doc, source, ctx.digital.delay)
+        return reading
+
+    def claims(
+        self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
+    ) -> tuple[Claim, ...]:
+        base = tuple(p for p in properties if p is not MS)
+        out = super().claims(base, subject, reading, alpha)  # type: ignore[misc]
+        if MS in properties:
+            out = (*out, *digital_claims(subject.scheduled, reading.state.digital.delay))
+        return out
+
+    def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
+        if claim.prop is not MS:
+            return super().prove(claim, subject, reading)  # type: ignore[misc]
+        if claim.kind is ClaimKind.PD:
+            return prove_dense(claim, subject, reading)
+        ctx = reading.state
+        dg, st = ctx.digital, ctx.stated
+        if claim.kind is ClaimKind.DIGITAL_T0:
+            ok, how = prove_gain_below(dg.gain, st.kappa, st.t0)
+            return Check(
+                claim.id, ok is True, f"interval: {how} (κ = {st.kappa!r}, t₀ = {st.t0!r})", claim
+            )
+        if claim.kind is ClaimKind.DIGITAL_LEVEL:
+            ok, how = level_holds(st.kappa, st.alpha, st.beta, st.ell2, dg.period, dg.delay)
+            return Check(claim.id, ok, how, claim)
+        p = ctx.p(P_NAME)
+        if p is None:
+            return Check(claim.id, False, f"matrices.P.{P_NAME} has {RANGE_TEXT}", claim)
+        if claim.kind is ClaimKind.DIGITAL_ADDITIVE:
+            worst = max(
+                additive_energy(p, edge_noises(m.top, dg.f, dg.sigma, dg.sigma_edges), m.top.dim)
+                for k, m in ctx.modes.items()
+                if k in subject.scheduled
+            )
+            ok = Fraction(st.gamma) >= worst
+            return Check(claim.id, ok, f"exact fractions: Σ g_eᵀPg_e = {float(worst):.10g}", claim)
+        return self._prove_matrix(claim, ctx, p)
+
+    def _prove_matrix(self, claim: Claim, ctx: Any, p: np.ndarray) -> Check:
+        mode = ctx.modes.get(claim.mode or "")
+        dg, st = ctx.digital, ctx.stated
+        if mode is None:
+            return Check(
+                claim.id, False, f"the certificate does not describe mode {claim.mode!r}", claim
+            )
+        nums = [st.alpha, st.kappa, dg.period] + ([st.beta, st.ell2] if dg.delay else [])
+        if (
+            not mode.in_range
+            or any(out_of_range(x) for x in nums)
+            or not (st.alpha > 0 and st.kappa > 0)
+        ):
+            return Check(
+                claim.id, False, f"mode {mode.name}, α or κ has {RANGE_TEXT} (or is not > 0)", claim
+            )
+        edges = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
+        d = mode.top.dim
+
+        def build(exact: bool) -> Any:
+            pm = Dyadic.of(p) if exact else FloatMat.of(p)
+            lap = mode.exact if exact else FloatMat.of(mode.lap, mode.err)
+            if claim.kind is ClaimKind.DIGITAL_MS:
+                return ms_matrix(
+                    pm, lap, noise_matrix(pm, edges, d, exact), st.alpha, st.kappa, dg.period
+                )
+            if claim.kind is ClaimKind.DIGITAL_NOISE:
+                beta = pm.scale(Dyadic.of(st.beta)) if exact else pm.scale(st.beta)
+                return beta - noise_matrix(pm, edges, d, exact)
+            return lipschitz_matrix(pm, lap, st.ell2)
+
+        m = build(True) if mode.exact is not None else None
+        if m is not None and exact_affordable(m.num.shape[0], m.bits):
+            proof = prove_psd(m)
+        else:
+            proof = prove_psd(build(False))
+        ctx.methods.add(proof.method)
+        return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail}", claim)
+
+    def audit(
+        self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float
+    ) -> None:
+        # the base kind's results, then results.digital: every number stated by a claim
+        # (proven there), k₀ recomputed exactly; a stopped section reports no number
+        super().audit(audit, doc, subject, reading, alpha)  # type: ignore[misc]
+        ctx = reading.state
+        dg = ctx.digital
+        if ctx.stated is None:
+            sec = audit.get("digital")
+            if isinstance(sec, dict) and any(isinstance(v, (int, float)) for v in sec.values()):
+                for key, v in sec.items():
+                    if isinstance(v, (int, float)) and not isinstance(v, bool):
+                        audit.fail(f"digital.{key}: a number for a property not certified")
+                        audit.informational(("digital", key))
+            return
+        for key in ("alpha", "kappa", "gamma", "t0") + (("beta", "ell2") if dg.delay else ()):
+            audit.proven(("digital", key))
+        audit.exact(("digital", "k0"), first_step(ctx.stated.t0, dg.period, dg.delay))
+
+    # -------------------------------------------------------------- presenting
+    def rows(self, results: dict) -> tuple[ResultRow, ...]:
+        base = super().rows(results)  # type: ignore[misc]
+        r = results.get("digital") or {}
+        if "stopped" in r:
+            return (*base, ResultRow("sampled protocol", f"not certified: {r['stopped']}"))
+        extra = (
+            f", β = {number_text(r.get('beta'))}, ℓ² = {number_text(r.get('ell2'))}"
+            if "beta" in r
+            else ""
+        )
+        return (
+            *base,
+            ResultRow(
+                "sampled protocol",
+                f"contracts in mean square from step k₀ = {r.get('k0')} (t₀ = {number_text(r.get('t0'))}): "
+                f"c(t) < κ = {number_text(r.get('kappa'))} from t₀ on; α = {number_text(r.get('alpha'))}, "
+                f"γ = {number_text(r.get('gamma'))}{extra}; P from {r.get('P_from')}",
+            ),
+        )
+
+    def stated(
+        self, properties: tuple[Property, ...], reading: Reading
+    ) -> tuple[tuple[Property, str], ...]:
+        base = super().stated(properties, reading)  # type: ignore[misc]
+        st, dg = reading.state.stated, reading.state.digital
+        if MS not in properties or st is None:
+            return base
+        k0 = first_step(st.t0, dg.period, dg.delay)
+        return (
+            *base,
+            (MS, f"h = {dg.period:g}, D = {dg.delay}: from step k₀ = {k0} (κ = {st.kappa:.6g})"),
+        )
+
+    def verdicts(
+        self, design: Any, certificate: dict, verification: Any, gain: Any
+    ) -> tuple[TheoremVerdict, ...]:
+        base = super().verdicts(design.base, certificate, verification, gain)  # type: ignore[misc]
+        r = certificate["results"].get("digital", {})
+        dg = design.digital
+        if "stopped" in r:
+            detail = r["stopped"]
+        else:
+            detail = f"k₀ = {r['k0']} (t₀ = {r['t0']:.6g}, c(t) < κ = {r['kappa']:.6g} from t₀ on)"
+        return (*base, *digital_verdicts(base, verification, gain, dg.period, dg.delay, detail))
+
+
+class DigitalKind(_DigitalMixin, HurwitzKind):
+    """One topology run as the sampled protocol: ``hurwitz`` plus the sampled contraction."""
+
+    name = "digital"
+    description = "one topology run as the sampled, delayed protocol (period h, delay D)"
+    properties = (Property.HURWITZ, Property.DECAY_RATE, MS)
+    required = frozenset({Property.HURWITZ})
+    base_name = "hurwitz"
+
+    def accepts(self, design: Any) -> bool:
+        return isinstance(design, DigitalDesign) and HurwitzKind.accepts(self, design.base)
+
+
+class DigitalSwitchingKind(_DigitalMixin, SwitchingKind):
+    """A switching set run as the sampled protocol: ``switching`` plus the sampled
+    contraction under the sampled schedule."""
+
+    name = "digital_switching"
+    description = "a switching topology run as the sampled, delayed protocol (period h, delay D)"
+    properties = (Property.SYMMETRIC_PART, Property.COMMON_LYAPUNOV, MS)
+    required = frozenset({Property.SYMMETRIC_PART})
+    base_name = "switching"
+
+    def accepts(self, design: Any) -> bool:
+        return isinstance(design, DigitalDesign) and SwitchingKind.accepts(self, design.base)
+
+
+__all__ = [
+    "DigitalKind",
+    "DigitalSubject",
+    "DigitalSwitchingKind",
+    "digital_claims",
+    "read_digital",
+]
