@@ -64,7 +64,7 @@ from .mu2 import T0_SCAN_END, mu2_t0, prove_below
 
 #: Relative back-off of the stated constants from the computed ones, so that the stated
 #: inequalities hold strictly and survive the exact re-check.
-BACKOFF = 1e-6
+BACKOFF = 1e-4
 #: The Razumikhin factor the level κ keeps ρ(κ) below (D > 0): the functional then
 #: decreases by at least a_k/2 per step.
 RHO_TARGET = Fraction(1, 2)
@@ -134,7 +134,20 @@ class DigitalPlan:
     source: str = ""  # which P
 
 
-def _scale(m: Any, s: float) -> Any:
+def scaled(m: Any, s: float) -> Any:
+    """``s·m`` for a Dyadic (exactly) or a FloatMat.
+
+    Parameters
+    ----------
+    m : Dyadic or FloatMat
+        The matrix.
+    s : float
+        The factor.
+
+    Returns
+    -------
+    Dyadic or FloatMat
+    """
     return m.scale(Dyadic.of(s)) if isinstance(m, Dyadic) else m.scale(s)
 
 
@@ -156,7 +169,7 @@ def lipschitz_matrix(p: Any, lap: Any, ell2: float) -> Any:
     -------
     Dyadic or FloatMat
     """
-    return _scale(p, ell2) - lap.T @ (p @ lap)
+    return scaled(p, ell2) - lap.T @ (p @ lap)
 
 
 def noise_matrix(p: Any, edges: Sequence[EdgeNoise], d: int, exact: bool) -> Any:
@@ -306,11 +319,27 @@ def noise_operator(edges: Sequence[EdgeNoise], n: int, d: int) -> sp.csr_matrix:
     )
 
 
-def _ms_lyapunov(
+def ms_lyapunov(
     laps: Sequence[np.ndarray], ops: Sequence[sp.csr_matrix], c: float
 ) -> np.ndarray | None:
-    """P solving Σ_m (L_mᵀP + PL_m − c·N_m(P)) = (number of modes)·I, or None when it is not
-    positive definite (c at or beyond the mean-square stability limit of the average)."""
+    """P solving Σ_m (L_mᵀP + PL_m − c·N_m(P)) = (number of modes)·I (the mean-square
+    Lyapunov equation of the frozen-gain SDE, averaged over the modes).
+
+    Parameters
+    ----------
+    laps : sequence of numpy.ndarray
+        L_B of every mode.
+    ops : sequence of scipy.sparse.csr_matrix
+        Their :func:`noise_operator`.
+    c : float
+        The frozen gain c₁.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        P, or None when it is not positive definite (c₁ at or beyond the mean-square
+        stability limit).
+    """
     n = laps[0].shape[0]
     eye = sp.identity(n, format="csr")
     op = sum(
@@ -365,21 +394,21 @@ def candidate_ps(
         )
     ]
     ops = [noise_operator(e, n, d) for e in noises]
-    if not any(o.nnz for o in ops) or _ms_lyapunov(laps, ops, 0.0) is None:
+    if not any(o.nnz for o in ops) or ms_lyapunov(laps, ops, 0.0) is None:
         return out
     hi = 1.0
-    while _ms_lyapunov(laps, ops, hi) is not None and hi < 1e12:
+    while ms_lyapunov(laps, ops, hi) is not None and hi < 1e12:
         hi *= 4.0
-    lo = 0.0 if _ms_lyapunov(laps, ops, hi / 4) is None else hi / 4
+    lo = 0.0 if ms_lyapunov(laps, ops, hi / 4) is None else hi / 4
     hi = hi if lo else hi / 4
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        if _ms_lyapunov(laps, ops, mid) is not None:
+        if ms_lyapunov(laps, ops, mid) is not None:
             lo = mid
         else:
             hi = mid
     for frac in (0.25, 0.5, 0.75):
-        p = _ms_lyapunov(laps, ops, frac * lo)
+        p = ms_lyapunov(laps, ops, frac * lo)
         if p is not None:
             out.append(
                 (f"the mean-square Lyapunov equation at c₁ = {frac:g}·c_ms (c_ms ≈ {lo:.4g})", p)
@@ -506,10 +535,10 @@ def level(alpha: float, kappa0: float, beta: float, ell2: float, h: float, delay
     float
         κ > 0.
     """
-    fr = [Fraction(x) for x in (alpha, beta, ell2, h)]
+    fa, fb, fl, fh = (Fraction(x) for x in (alpha, beta, ell2, h))
 
     def ok(c: float) -> bool:
-        return rho(Fraction(c), *fr, delay) <= RHO_TARGET
+        return rho(Fraction(c), fa, fb, fl, fh, delay) <= RHO_TARGET
 
     if ok(kappa0):
         return kappa0
@@ -540,7 +569,7 @@ def ms_matrix(p: Any, lap: Any, noise: Any, alpha: float, kappa: float, h: float
     Dyadic or FloatMat
     """
     pl = p @ lap
-    return (pl + pl.T) - _scale(p, alpha) - _scale(_scale(lap.T @ pl, h) + noise, kappa)
+    return (pl + pl.T) - scaled(p, alpha) - scaled(scaled(lap.T @ pl, h) + noise, kappa)
 
 
 def level_holds(
@@ -688,6 +717,7 @@ __all__ = [
     "additive_energy",
     "edge_noises",
     "candidate_ps",
+    "ms_lyapunov",
     "ms_matrix",
     "noise_operator",
     "plan",
@@ -700,6 +730,7 @@ __all__ = [
     "prove_gain_below",
     "prove_psd",
     "rho",
+    "scaled",
     "sqrt_up",
     "use_exact",
 ]

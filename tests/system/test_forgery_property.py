@@ -1,4 +1,4 @@
-"""Forgery property test over all six certificate kinds.
+"""Forgery property test over all eight certificate kinds.
 
 Every field of an honest certificate of each kind is mutated (numbers scaled, negated,
 zeroed; strings and nulls replaced; list entries dropped; keys deleted and added), the
@@ -79,7 +79,17 @@ def honest() -> dict[str, dict]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
+    from ntc_design.certify import certify
+    from ntc_design.design.digital import Digital
+
+    g1t = nd.load(ROOT / "examples" / "g1.yaml")
+    dig = certify(g1t, theta3, gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
+    with pytest.warns(Warning):  # G3 fails Assumption 2
+        sw_top = nd.load(ROOT / "examples" / "switching.yaml")
+        digsw = certify(sw_top, theta3, gain="1/(1+t)", digital=Digital(0.013, 0)).certificate
     out = {
+        "digital": json.loads(json.dumps(dig)),
+        "digital_switching": json.loads(json.dumps(digsw)),
         "robust": rob,
         "hurwitz": g1,
         "switching": sw,
@@ -488,10 +498,75 @@ def _truth_robust(doc: dict) -> list[str]:
     return bad
 
 
+def _truth_digital(doc: dict) -> list[str]:
+    """The base kind's truth on the certificate without its digital section, then the
+    sampled contraction's inequalities rebuilt here from the weights (G_e, g_e from their
+    definitions), c(t) = 1/(1+t) sampled beyond t₀ and k₀ = ⌈t₀/h⌉ + D."""
+    base = copy.deepcopy(doc)
+    base["kind"] = {"digital": "hurwitz", "digital_switching": "switching"}[doc["kind"]]
+    base["claims"] = [c for c in doc["claims"] if c.get("property") != "digital_mean_square"]
+    base["certifies"] = [p for p in doc["certifies"] if p != "digital_mean_square"]
+    base["matrices"]["P"].pop("digital", None)
+    bad = _truth_dense(base)
+    sub, res = doc["subject"]["digital"], doc["results"]["digital"]
+    if "digital_mean_square" not in doc["certifies"]:
+        return bad + ([] if set(res) == {"stopped"} else ["numbers of an uncertified section"])
+    h, dl = sub["period"], sub["delay"]
+    f = sub["noise"]["f"]
+    sched = doc["subject"].get("schedule")
+    used = list(dict.fromkeys(x["mode"] for x in sched)) if sched else list(doc["subject"]["modes"])
+    p = np.array(doc["matrices"]["P"]["digital"])
+    al, kap, gam, t0 = res["alpha"], res["kappa"], res["gamma"], res["t0"]
+    if not (_pos(p) and al > 0 and kap > 0):
+        bad.append("P, α or κ")
+        return bad
+    own = {(e["from"], e["to"]): e["sigma"] for e in sub["noise"]["sigma_edges"]}
+    for k in used:
+        m = doc["subject"]["modes"][k]
+        top = Topology.from_data(parse_topology(m["topology"], k))
+        d, n = top.dim, top.n * top.dim
+        fm = np.asarray(f, dtype=float) * np.eye(d) if not isinstance(f, list) else np.array(f)
+        lap = _lap_b(top, m["delta"])
+        nmat, energy = np.zeros((n, n)), 0.0
+        for (i, j), a in top.weights.items():
+            w = _sign(a) * a
+            gm = np.zeros((n, n))
+            gm[i * d : i * d + d, j * d : j * d + d] += w @ fm
+            gm[i * d : i * d + d, i * d : i * d + d] -= w @ fm
+            nmat += gm.T @ p @ gm
+            g = np.zeros(n)
+            sig = own.get((str(top.labels[j]), str(top.labels[i])), sub["noise"]["sigma"])
+            g[i * d : i * d + d] = sig * w.sum(axis=1)
+            energy += g @ p @ g
+        mm, q = p @ lap + lap.T @ p, lap.T @ p @ lap
+        if not _pos(mm - al * p - kap * (h * q + nmat)):
+            bad.append(f"{k}: mean-square inequality")
+        if dl and not (_pos(res["beta"] * p - nmat) and _pos(res["ell2"] * p - q)):
+            bad.append(f"{k}: β or ℓ²")
+        if not energy <= gam * (1 + 1e-12):
+            bad.append(f"{k}: γ")
+    if dl:
+        be, l2 = res["beta"], res["ell2"]
+        ell = math.sqrt(l2)
+        rho = (2 / al) * ((2 / al) * (ell + kap * be) ** 2 + h * kap * l2 + kap * be)
+        rho *= dl * dl * h * kap * kap * (h * l2 + be)
+        if not rho <= 0.5 * (1 + 1e-9):
+            bad.append("ρ(κ)")
+    if sub["gain"] != "1/(1+t)":
+        bad.append("gain")
+    elif not np.all(1 / (1 + (t0 + np.concatenate([[0.0], np.geomspace(1e-9, 1e9, 3000)]))) < kap):
+        bad.append("t₀")
+    if res["k0"] != math.ceil(t0 / h - 1e-12) + dl:
+        bad.append("k₀")
+    return bad
+
+
 def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
     """What is false in ``doc`` (empty: every claim and reported number is true)."""
     if kind.startswith("robust"):
         return _truth_robust(doc)
+    if kind.startswith("digital"):
+        return _truth_digital(doc)
     if doc.get("certifies") != honest_doc["certifies"] and kind not in ("hurwitz", "switching"):
         return ["certifies"]
     if kind in ("hurwitz", "switching"):
@@ -581,6 +656,8 @@ def _careful(doc):
 
 
 KIND_OF = {
+    "digital": "digital",
+    "digital_switching": "digital_switching",
     "robust": "robust",
     "robust-riccati": "robust",
     "hurwitz": "hurwitz",
@@ -592,7 +669,7 @@ KIND_OF = {
 }
 
 
-STRIDE = {"robust-riccati": 4}
+STRIDE = {"robust-riccati": 4, "digital": 3, "digital_switching": 4}
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -38,11 +38,20 @@ from ..digital import (
     plan,
     prove_gain_below,
     prove_psd,
+    scaled,
 )
 from ..fields import matrix, need, number
 from ..format import finish, scheduled_modes
 from ..theorems import TheoremVerdict, digital_verdicts
-from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, number_text
+from .base import (
+    CertificateKind,
+    IssueOptions,
+    Reading,
+    ResultRow,
+    ResultsAudit,
+    Subject,
+    number_text,
+)
 from .dense import prove_dense
 from .hurwitz import HurwitzKind
 from .switching import SwitchingKind
@@ -117,7 +126,7 @@ def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
             gain.get("t"),
             gain.get("c"),
             gain.get("interpolation", "linear"),
-            gain.get("tail"),
+            gain["tail"] if isinstance(gain.get("tail"), str) else "",
             f"{where}.gain",
         )
     elif not isinstance(gain, str):
@@ -197,6 +206,12 @@ class _DigitalMixin:
     verdicts."""
 
     base_name: str  # the base kind's name
+    name: ClassVar[str]
+
+    @property
+    def _base(self) -> Any:
+        # the base kind's methods (next in the method resolution order)
+        return super()
 
     # -------------------------------------------------------------- issuing
     def _modes_of(self, design: DigitalDesign) -> dict[str, Any]:
@@ -220,7 +235,7 @@ class _DigitalMixin:
         -------
         dict
         """
-        doc = super().issue(design.base, options)  # type: ignore[misc]
+        doc = self._base.issue(design.base, options)
         dg = design.digital
         modes = self._modes_of(design)
         d = next(iter(modes.values())).topology.dim
@@ -235,7 +250,7 @@ class _DigitalMixin:
             else None
         )
         gain_doc = _gain_document(design.gain)
-        doc["kind"] = self.name  # type: ignore[attr-defined]
+        doc["kind"] = self.name
         doc["subject"]["digital"] = {
             "period": dg.period,
             "delay": dg.delay,
@@ -274,7 +289,7 @@ class _DigitalMixin:
 
     # -------------------------------------------------------------- verifying
     def read(self, doc: dict, source: str) -> Reading:
-        reading = super().read(doc, source)  # type: ignore[misc]
+        reading = self._base.read(doc, source)
         ctx = reading.state
         d = next(iter(reading.modes.values())).d
         ctx.digital = read_digital(doc, source, d)
@@ -287,14 +302,14 @@ class _DigitalMixin:
         self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
     ) -> tuple[Claim, ...]:
         base = tuple(p for p in properties if p is not MS)
-        out = super().claims(base, subject, reading, alpha)  # type: ignore[misc]
+        out = self._base.claims(base, subject, reading, alpha)
         if MS in properties:
             out = (*out, *digital_claims(subject.scheduled, reading.state.digital.delay))
         return out
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
         if claim.prop is not MS:
-            return super().prove(claim, subject, reading)  # type: ignore[misc]
+            return self._base.prove(claim, subject, reading)
         if claim.kind is ClaimKind.PD:
             return prove_dense(claim, subject, reading)
         ctx = reading.state
@@ -347,8 +362,7 @@ class _DigitalMixin:
                     pm, lap, noise_matrix(pm, edges, d, exact), st.alpha, st.kappa, dg.period
                 )
             if claim.kind is ClaimKind.DIGITAL_NOISE:
-                beta = pm.scale(Dyadic.of(st.beta)) if exact else pm.scale(st.beta)
-                return beta - noise_matrix(pm, edges, d, exact)
+                return scaled(pm, st.beta) - noise_matrix(pm, edges, d, exact)
             return lipschitz_matrix(pm, lap, st.ell2)
 
         m = build(True) if mode.exact is not None else None
@@ -364,7 +378,7 @@ class _DigitalMixin:
     ) -> None:
         # the base kind's results, then results.digital: every number stated by a claim
         # (proven there), k₀ recomputed exactly; a stopped section reports no number
-        super().audit(audit, doc, subject, reading, alpha)  # type: ignore[misc]
+        self._base.audit(audit, doc, subject, reading, alpha)
         ctx = reading.state
         dg = ctx.digital
         if ctx.stated is None:
@@ -381,7 +395,7 @@ class _DigitalMixin:
 
     # -------------------------------------------------------------- presenting
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
-        base = super().rows(results)  # type: ignore[misc]
+        base = self._base.rows(results)
         r = results.get("digital") or {}
         if "stopped" in r:
             return (*base, ResultRow("sampled protocol", f"not certified: {r['stopped']}"))
@@ -403,7 +417,7 @@ class _DigitalMixin:
     def stated(
         self, properties: tuple[Property, ...], reading: Reading
     ) -> tuple[tuple[Property, str], ...]:
-        base = super().stated(properties, reading)  # type: ignore[misc]
+        base = self._base.stated(properties, reading)
         st, dg = reading.state.stated, reading.state.digital
         if MS not in properties or st is None:
             return base
@@ -416,7 +430,7 @@ class _DigitalMixin:
     def verdicts(
         self, design: Any, certificate: dict, verification: Any, gain: Any
     ) -> tuple[TheoremVerdict, ...]:
-        base = super().verdicts(design.base, certificate, verification, gain)  # type: ignore[misc]
+        base = self._base.verdicts(design.base, certificate, verification, gain)
         r = certificate["results"].get("digital", {})
         dg = design.digital
         if "stopped" in r:
@@ -452,6 +466,11 @@ class DigitalSwitchingKind(_DigitalMixin, SwitchingKind):
     def accepts(self, design: Any) -> bool:
         return isinstance(design, DigitalDesign) and SwitchingKind.accepts(self, design.base)
 
+
+# the mixin's overrides show the base class's documentation, as a kind's own do
+for _name in ("issue", "read", "claims", "prove", "audit", "rows", "stated", "verdicts"):
+    _member = getattr(_DigitalMixin, _name)
+    _member.__doc__ = _member.__doc__ or getattr(CertificateKind, _name).__doc__
 
 __all__ = [
     "DigitalKind",

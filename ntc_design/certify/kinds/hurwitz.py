@@ -4,7 +4,7 @@ with a decay rate α when the LMI found one (P ≻ 0, P L_B + L_Bᵀ P − 2αP 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -112,7 +112,7 @@ class HurwitzKind(DenseKind):
 
     name = "hurwitz"
     description = "one topology: −L_B Hurwitz, with a decay rate when one is proven"
-    properties = (Property.HURWITZ, Property.DECAY_RATE)
+    properties: ClassVar[tuple[Property, ...]] = (Property.HURWITZ, Property.DECAY_RATE)
     required = frozenset({Property.HURWITZ})
     switching = False
     method = "exact-rational"

@@ -3,7 +3,7 @@ common Lyapunov P for every scheduled mode when one was found."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -118,7 +118,7 @@ class SwitchingKind(DenseKind):
 
     name = "switching"
     description = "a switching topology: every mode its schedule uses"
-    properties = (Property.SYMMETRIC_PART, Property.COMMON_LYAPUNOV)
+    properties: ClassVar[tuple[Property, ...]] = (Property.SYMMETRIC_PART, Property.COMMON_LYAPUNOV)
     required = frozenset({Property.SYMMETRIC_PART})
     switching = True
     method = "exact-rational"

@@ -34,6 +34,8 @@ def test_every_kind_is_registered_under_its_own_name():
         "switching-scale",
         "time_varying",
         "robust",
+        "digital",
+        "digital_switching",
     }
     assert all(isinstance(k, CertificateKind) for k in KINDS.values())
     assert len({type(k) for k in KINDS.values()}) == len(KINDS)
@@ -46,7 +48,11 @@ def test_kinds_declare_consistent_properties():
         assert kind.description and kind.method, kind.name
     # every property some certificate can prove has a kind that proves it
     assert set().union(*(k.properties for k in KINDS.values())) == set(Property)
-    assert {k.name for k in KINDS.values() if k.switching} == {"switching", "switching-scale"}
+    assert {k.name for k in KINDS.values() if k.switching} == {
+        "switching",
+        "switching-scale",
+        "digital_switching",
+    }
 
 
 def test_every_method_of_every_kind_is_documented():
