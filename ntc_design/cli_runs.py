@@ -234,6 +234,20 @@ def tune(
             "certificate.json, tune.html and its figures here (and schedule.csv).",
         ),
     ] = None,
+    period: Annotated[
+        str | None,
+        typer.Option(
+            "--period",
+            help="The digital protocol's sampling period h: tune the gain for the sampled "
+            "recursion; or 'auto': find the longest period whose exact error at T stays "
+            "within --tolerance of the continuous design's (and its peak within --max-peak).",
+        ),
+    ] = None,
+    delay: DelayOpt = None,
+    tolerance: Annotated[
+        float,
+        typer.Option(help="--period auto: allowed relative excess over the continuous error."),
+    ] = 0.1,
     as_json: JsonOpt = False,
 ) -> None:
     """Tune the gain c(t) = a·(b + t)^(−γ) (and with --tune-delta the coupling δ) to bring
@@ -241,13 +255,25 @@ def tune(
     topology, by the exact moment equations (Monte Carlo with common random numbers where
     they do not apply). Prints the tuned gain beside 1/(1 + t). Exit 0 when the tuned gain
     satisfies the required theorems and its design's certificate verifies, 1 otherwise."""
+    from .files import parse_scenario
     from .outputs import check_output_folder
     from .reports.terminal import Progress, out, print_table
     from .reports.tune import TUNE_FILES, write_tune_outputs
     from .simulate.scenario import load_scenario
     from .tune import tune as run
 
-    top, spec, sc = load_scenario(scenario)
+    sc0 = parse_scenario(scenario)
+    if period == "auto":
+        _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json)
+        return
+    overrides: dict[str, Any] = {}
+    if period is not None or delay is not None:
+        try:
+            value = float(period) if period is not None else None
+        except ValueError:
+            raise InputError(f"--period: expected a number or auto, got {period!r}") from None
+        overrides["digital"] = digital_option(value, delay, sc0.document.get("digital"), horizon)
+    top, spec, sc = load_scenario(scenario, overrides, sc0)
     if out_dir is not None:
         check_output_folder(out_dir, TUNE_FILES)  # before the run, not after it
     with warnings.catch_warnings(), Progress("ntc tune") as prog:
@@ -291,6 +317,43 @@ def tune(
     if not res.certified:
         msg = "not proven: the tuned design is not certified for the required theorems"
         print(msg, file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json) -> None:
+    """``ntc tune --period auto``: the longest safe period, its curve, period.json."""
+    from .outputs import check_output_folder, output_folder
+    from .reports.terminal import Progress, out, print_table
+    from .simulate.scenario import load_scenario
+    from .tune.period import longest_safe_period
+
+    given = sc0.document.get("digital")
+    d = delay if delay is not None else (given.get("delay", 0) if isinstance(given, dict) else 0)
+    top, spec, sc = load_scenario(scenario, None, sc0)
+    if out_dir is not None:
+        check_output_folder(out_dir, ("period.json",))
+    with warnings.catch_warnings(), Progress("ntc tune") as prog:
+        warnings.simplefilter("ignore", AssumptionWarning)
+        prog.stage(f"the longest safe period of {scenario} (delay D = {d})")
+        try:
+            res = longest_safe_period(
+                top, spec, horizon, delay=d, tolerance=tolerance, max_peak=max_peak
+            )
+        except InputError as exc:
+            raise InputError(f"{sc.source}: {exc}") from None
+    doc = res.to_dict()
+    if out_dir is not None:
+        with output_folder(out_dir, ("period.json",)) as tmp:
+            (tmp / "period.json").write_text(json_text(doc) + "\n", encoding="utf-8")
+        doc["out"] = str(out_dir)
+    if as_json:
+        print(json_text(doc))
+    else:
+        print_table(res.table())
+        if out_dir is not None:
+            out.print(f"written to {out_dir}: period.json")
+    if res.period is None:
+        print("not found: no period meets the bounds", file=sys.stderr)
         raise typer.Exit(1)
 
 
@@ -369,18 +432,30 @@ def report(
             metavar="",
         ),
     ] = False,
+    period: PeriodOpt = None,
+    delay: DelayOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Turn a simulation or sweep output directory into one self-contained report.html
-    (figures also in DIR/figures)."""
+    (figures also in DIR/figures). A run of the digital protocol (or --period, --delay)
+    adds its digital section: the error and the peak against the period for delays 0, 1
+    and 2, the certified k₀ and the continuous curve beside the sampled one."""
+    from .design.digital import Digital
     from .reports.report import write_report
     from .reports.sweep import is_sweep_dir, write_sweep_report
     from .reports.terminal import out
 
+    sampled = digital_option(period, delay)
     if is_sweep_dir(directory):
+        if sampled is not None:
+            raise InputError("--period: applies to a run's report, not a sweep's")
         out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
         return
-    path = write_report(directory, interactive=interactive)
+    path = write_report(
+        directory,
+        interactive=interactive,
+        digital=Digital.from_document(sampled) if sampled is not None else None,
+    )
     if as_json:
         figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
         print(

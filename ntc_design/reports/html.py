@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import base64
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
@@ -66,6 +66,9 @@ class RunSection:
     robust: Table | None = None  # weight realisations against the proven brackets
     robust_figure: Figure | None = None
     robust_note: str = ""
+    digital: Table | None = None  # the sampled protocol (a digital run)
+    digital_figures: list = field(default_factory=list)
+    digital_note: str = ""
 
     def toc(self) -> dict:
         sub = [
@@ -78,6 +81,7 @@ class RunSection:
             ("figures", "Topology and sample paths"),
             ("final", "Final errors"),
             ("robust", "Weights within ρ"),
+            ("digital", "Digital protocol"),
             ("data", "Data files"),
             ("parameters", "Parameters"),
         ]
@@ -85,6 +89,8 @@ class RunSection:
             sub = [x for x in sub if x[0] != "coupling"]
         if self.robust is None:
             sub = [x for x in sub if x[0] != "robust"]
+        if self.digital is None:
+            sub = [x for x in sub if x[0] != "digital"]
         return {
             "id": self.key,
             "title": self.title,

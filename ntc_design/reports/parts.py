@@ -9,12 +9,14 @@ from pathlib import Path
 import numpy as np
 
 from ..certify import CertifyResult, certify, verify_file, write_certificate
+from ..design.digital import Digital
 from ..errors import InputError
 from ..rows import Table as RowsTable
 from ..rows import fmt
 from ..rows import matrix as rows_matrix
 from ..schedule import schedule_from_document
 from ..simulate import SimulationDiverged, SimulationSpec, simulate
+from ..simulate.noise import noise_from_document
 from ..simulate.result import MeanSquareBand
 from .html import Table, html_table, rel
 from .rundata import RunData
@@ -38,7 +40,22 @@ def certify_run(run: RunData) -> CertifyResult:
         A malformed topology, θ or gain in the run.
     """
     p = run.summary["parameters"]
-    return certify(run.topology(), p["theta"], p["margin"], run.gain)
+    if p.get("digital") is None:
+        return certify(run.topology(), p["theta"], p["margin"], run.gain)
+    noise = noise_from_document(p.get("noise"))
+    if not noise.linear:
+        raise InputError(f"{run.path}: the digital certificate needs a linear f")
+    return certify(
+        run.topology(),
+        p["theta"],
+        p["margin"],
+        run.gain,
+        delta=p.get("delta"),
+        noise_sigma=noise.sigma,
+        noise_f=noise.f,
+        digital=Digital.from_document(p["digital"]),
+        sigma_edges={(str(a), str(b)): v for (a, b), v in noise.sigma_edges.items()},
+    )
 
 
 def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, dict]:

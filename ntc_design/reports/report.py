@@ -8,7 +8,7 @@ parameters as a table and a re-run command."""
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +19,7 @@ from ..certify import CertifyResult, certify
 from ..certify.kinds.time_varying import time_varying_results
 from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
+from ..design.digital import Digital, DigitalDesign
 from ..errors import InputError
 from ..gain import T, limit_at_infinity, parse_gain
 from ..model import SwitchingTopology, Topology
@@ -32,6 +33,7 @@ from ..sweep.robust import study_sentence
 from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
 from .aggregate import AGGREGATE_ABOVE, aggregate_section
+from .digital import DigitalFacts, digital_drawings, digital_facts
 from .figlist import Drawn, FigureSpec, first, render_figures
 from .html import (
     RunSection,
@@ -202,6 +204,7 @@ class RunFacts:
     fine: dict | None
     robust: Table | None
     robust_note: str
+    digital: DigitalFacts | None = None  # a run of the sampled protocol
 
     @property
     def cert_res(self) -> CertifyResult:
@@ -242,7 +245,7 @@ def run_facts(run: RunData, base: Path, fine: dict | None = None) -> RunFacts:
     cert_tab, checks, cert = certificate_tables(
         tv.res if tv else res, run.path / "certificate.json", base
     )
-    des = res.design
+    des = res.design.base if isinstance(res.design, DigitalDesign) else res.design
     assert isinstance(des, (ProtocolDesign, SwitchingDesign))  # RunData.topology() is not A(t)
     mc, exact = mc_band(run), run.ms("exact")
     conv = convergence_table(run, mc, exact, _average_rate(des, top))
@@ -250,7 +253,21 @@ def run_facts(run: RunData, base: Path, fine: dict | None = None) -> RunFacts:
         fine = companion_paths(run, top)
     rob, rob_note = _robust_table(run)
     return RunFacts(
-        run, top, res, des, tv, cert_tab, checks, cert, mc, exact, conv, fine, rob, rob_note
+        run,
+        top,
+        res,
+        des,
+        tv,
+        cert_tab,
+        checks,
+        cert,
+        mc,
+        exact,
+        conv,
+        fine,
+        rob,
+        rob_note,
+        digital_facts(run, res.certificate),
     )
 
 
@@ -469,6 +486,10 @@ def _robust(f: RunFacts, gid: str | None) -> list[Drawn]:
     ]
 
 
+def _digital(f: RunFacts, gid: str | None) -> list[Drawn]:
+    return digital_drawings(f.digital)
+
+
 #: The run report's figures, in order: one function each, drawing from :class:`RunFacts`.
 RUN_FIGURES = (
     FigureSpec("coupling", style.TWO_COLUMN, _coupling),
@@ -479,6 +500,7 @@ RUN_FIGURES = (
     FigureSpec("paths", style.TWO_COLUMN, _states),
     FigureSpec("gain", style.TWO_COLUMN, _gain),
     FigureSpec("robust", style.ONE_COLUMN, _robust, interactive=False),
+    FigureSpec("digital", style.TWO_COLUMN, _digital, interactive=False),
 )
 
 
@@ -551,6 +573,9 @@ def render_run(
         robust=facts.robust,
         robust_figure=first(figs["robust"]),
         robust_note=facts.robust_note,
+        digital=facts.digital.table() if facts.digital is not None else None,
+        digital_figures=figs["digital"],
+        digital_note=facts.digital.note if facts.digital is not None else "",
     )
 
 
@@ -619,7 +644,9 @@ def run_section(
     return section, summary
 
 
-def write_report(directory: str | Path, interactive: bool = False) -> Path:
+def write_report(
+    directory: str | Path, interactive: bool = False, digital: Digital | None = None
+) -> Path:
     """`ntc report DIR`: DIR/report.html (``report_interactive.html`` with
     ``interactive``) for one simulation output directory.
 
@@ -630,6 +657,9 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
     interactive
         Embed the figures as SVG with per-agent toggles instead of PNG images (the page
         stays one self-contained file either way).
+    digital
+        The sampled protocol to report (period h, delay D) instead of the run's own
+        ``digital`` block, or for a continuous run.
 
     Returns
     -------
@@ -642,6 +672,9 @@ def write_report(directory: str | Path, interactive: bool = False) -> Path:
         A missing or unreadable output file (named).
     """
     run = load_run(directory)
+    if digital is not None:  # certified and reported for this period and delay
+        params = {**run.summary["parameters"], "digital": digital.to_dict()}
+        run = replace(run, summary={**run.summary, "parameters": params})
     # the interactive page has its own name: it never replaces the static report
     name = "report_interactive.html" if interactive else "report.html"
     check_output_file(run.path / name, "report")  # before the certificate and figures

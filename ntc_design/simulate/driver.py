@@ -567,6 +567,44 @@ def _simulate_modes(
     )
 
 
+def sampled_grid(
+    topology: AnyTopology,
+    pm: PreparedModes,
+    digital: Digital,
+    t_end: float,
+    save_times: np.ndarray,
+) -> TimeGrid:
+    """The sampling grid of the digital protocol on these modes (the mode of each sample
+    by the schedule's rule).
+
+    Parameters
+    ----------
+    topology : Topology, SwitchingTopology or TimeVaryingTopology
+        The network the modes were prepared from.
+    pm : PreparedModes
+        Its modes.
+    digital : Digital
+        The period and delay.
+    t_end : float
+        T.
+    save_times : numpy.ndarray
+        Where to record (moved to the nearest sample).
+
+    Returns
+    -------
+    TimeGrid
+
+    Raises
+    ------
+    InputError
+        h > T or too many steps.
+    """
+    if is_expression_topology(topology):
+        raise InputError("digital: a topology given as expressions of t is not sampled")
+    fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
+    return digital_grid(digital, t_end, save_times, _step_mode(fixed, pm))[0]
+
+
 def _step_mode(
     topology: Topology | SwitchingTopology | TimeVaryingTopology, pm: PreparedModes
 ) -> Callable[[np.ndarray], np.ndarray] | None:

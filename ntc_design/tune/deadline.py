@@ -27,7 +27,7 @@ from ..model import TimeVaryingTopology
 from ..rows import Table, fmt, verdict
 from ..schedule import ScheduleGain, analyse_schedule, join_tail
 from ..simulate import SimulationSpec, simulate
-from ..simulate.driver import AnyTopology
+from ..simulate.driver import AnyTopology, sampled_grid
 from ..simulate.result import Z95
 from ..simulate.spec import SaveAt
 from ..timevarying import ExpressionTopology
@@ -37,12 +37,14 @@ from .objective import AnyGain, Curve, ExactObjective, objective_for
 from .optimal import (
     DEFAULT_MAX_GAIN,
     LEVELS,
+    MomentProblem,
     ScheduleProblem,
     ScheduleSolution,
     fit_power,
     optimise_schedule,
 )
 from .run import delta_range, tune_power
+from .sampled import SampledScheduleProblem
 
 #: The coarse power-law search's budget before the gradient polish.
 POWER_EVALUATIONS = 40
@@ -488,8 +490,56 @@ def _monte_carlo(
     return out
 
 
+def problem_for(obj: ExactObjective, delta: float | None, model: AnyTopology) -> MomentProblem:
+    """The optimal-control problem of a scenario: the sampled recursion's when it has a
+    ``digital`` block (:class:`.sampled.SampledScheduleProblem`), else the moment
+    equations' (:class:`.optimal.ScheduleProblem`).
+
+    Parameters
+    ----------
+    obj : ExactObjective
+        The scenario's exact objective (its designs per δ).
+    delta : float or None
+        The δ.
+    model : Topology, SwitchingTopology or TimeVaryingTopology
+        The network the objective was built on.
+
+    Returns
+    -------
+    MomentProblem
+    """
+    pm = obj.prepared(delta)[0]
+    dg = obj.spec.digital
+    if dg is None:
+        return ScheduleProblem(pm, obj.horizon)
+    grid = sampled_grid(model, pm, dg, obj.horizon, np.array([obj.horizon]))
+    return SampledScheduleProblem(pm, grid, dg)
+
+
+def sampled_levels(prob: MomentProblem, levels: tuple[int, ...]) -> tuple[int, ...]:
+    """The refinement levels of a problem: for the sampled recursion no finer than one
+    node per sample (the last level then is the sampled schedule itself).
+
+    Parameters
+    ----------
+    prob : MomentProblem
+        The problem.
+    levels : tuple of int
+        The levels asked for.
+
+    Returns
+    -------
+    tuple of int
+    """
+    if not isinstance(prob, SampledScheduleProblem):
+        return levels
+    k = prob.grid.n_steps
+    out = tuple(x for x in levels if x < k)
+    return (*out, k) if k <= max(levels) else out
+
+
 def _polish(
-    prob: ScheduleProblem,
+    prob: MomentProblem,
     found: PowerGain,
     require: str,
     obj: ExactObjective,
@@ -505,6 +555,7 @@ def _polish(
 
 def _schedule_delta(
     obj: ExactObjective,
+    model: AnyTopology,
     topology: AnyTopology,
     theta,
     start: PowerGain,
@@ -523,7 +574,7 @@ def _schedule_delta(
 
     def score(log_delta: float) -> float:
         near = min(seen, key=lambda v: abs(v - log_delta)) if seen else None
-        prob = ScheduleProblem(obj.prepared(math.exp(log_delta))[0], obj.horizon)
+        prob = problem_for(obj, math.exp(log_delta), model)
         sol = optimise_schedule(
             prob,
             seen[near] if near is not None else start,
@@ -641,13 +692,14 @@ def tune_schedule(
         landscape=False,
         certificate=False,
     )
-    prob = ScheduleProblem(obj.prepared(pw.delta)[0], horizon)
+    prob = problem_for(obj, pw.delta, model)
+    levels = sampled_levels(prob, levels)
     power = _polish(prob, pw.tuned, require, obj, pw.delta)
     delta = pw.delta
     if tune_delta:
         say("δ for the schedule")
-        delta = _schedule_delta(obj, topology, spec.theta, power, max_gain, max_peak, notes)
-        prob = ScheduleProblem(obj.prepared(delta)[0], horizon)
+        delta = _schedule_delta(obj, model, topology, spec.theta, power, max_gain, max_peak, notes)
+        prob = problem_for(obj, delta, model)
     say("the optimal schedule")
     sol = optimise_schedule(
         prob, power, max_gain=max_gain, max_peak=max_peak, levels=levels, progress=say
@@ -690,9 +742,16 @@ def tune_schedule(
                 "Maruyama bias at the scenario's dt, or a 1 % chance per gain)"
             )
     cert = certify_tuned(topology, spec, schedule, delta, notes) if certificate else None
+    dg = spec.digital
     method = (
-        "optimal control: piecewise-linear c on K pieces, exact second-moment equations "
-        "by RK4 with their exact discrete adjoint, "
+        (
+            "optimal control: piecewise-linear c on K pieces sampled every h = "
+            f"{dg.period:g} (delay D = {dg.delay}), the sampled recursion's exact second "
+            "moments with their exact discrete adjoint, "
+            if dg is not None
+            else "optimal control: piecewise-linear c on K pieces, exact second-moment "
+            "equations by RK4 with their exact discrete adjoint, "
+        )
         + ("SLSQP with the peak bound" if max_peak is not None else "L-BFGS-B")
         + ("; A(t) sampled every 0.1 for the optimiser" if model is not topology else "")
         + f"; re-evaluated by {judge.describe()}"

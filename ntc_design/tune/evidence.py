@@ -89,6 +89,8 @@ def stable_stepping(
     -------
     dict of str to str
     """
+    if spec.digital is not None:  # the sampled protocol has no stepping to choose
+        return {}
     base = spec.replace(
         T=horizon,
         gain=tuned,
@@ -153,7 +155,9 @@ def certify_tuned(
             gain=tuned.text if isinstance(tuned, PowerGain) else tuned,
             delta=delta if delta is not None else spec.delta,
             noise_sigma=spec.noise.sigma,
-            noise_f=f_bound,
+            noise_f=f_bound if spec.digital is None else spec.noise.f,
+            digital=spec.digital,
+            sigma_edges={(str(a), str(b)): v for (a, b), v in spec.noise.sigma_edges.items()},
         )
     except InputError as exc:
         notes.append(f"no certificate: {exc}")

@@ -3,6 +3,8 @@
 A family of objectives, one class each, chosen by :func:`objective_for` from the
 registry :data:`OBJECTIVES` (the first whose ``accepts`` is true, or the one named):
 
+- :class:`DigitalObjective`: the exact moments of the sampled, delayed recursion (a
+  scenario with a ``digital`` block);
 - :class:`ExactObjective`: the exact moment equations (linear f, Nd up to
   ``MOMENTS_MAX_ND``) of a fixed topology, a switching schedule or a sampled A(t);
 - :class:`ExpressionObjective`: the exact moments of a topology given as expressions of t,
@@ -27,7 +29,8 @@ from ..errors import InputError
 from ..schedule import ScheduleGain
 from ..simulate import SimulationSpec, simulate
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
-from ..simulate.driver import AnyTopology, PreparedModes, prepare_modes
+from ..simulate.digital import digital_moments
+from ..simulate.driver import AnyTopology, PreparedModes, prepare_modes, sampled_grid
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
 from ..simulate.spec import SaveAt
 from ..simulate.system import mode_system
@@ -200,6 +203,7 @@ class ExactObjective(Objective):
         return (
             not isinstance(topology, ExpressionTopology)
             and spec.noise.linear
+            and spec.digital is None
             and topology.n * topology.dim <= MOMENTS_MAX_ND
         )
 
@@ -227,6 +231,7 @@ class ExactObjective(Objective):
             if len(self._prepared) > 64:  # a δ search visits few values; bound the cache
                 self._prepared.clear()
             spec = self.spec if delta is None else self.spec.replace(delta=delta)
+            spec = spec.replace(digital=None)  # the designs; a digital objective samples them
             assert not isinstance(self.topology, ExpressionTopology)  # see accepts
             pm = prepare_modes(self.topology, spec, spec.gain if callable(spec.gain) else _one)
             rho = np.array([generator_radius(s) for s in pm.systems])
@@ -296,6 +301,46 @@ class ExactObjective(Objective):
 
 def _one(t):
     return np.ones(np.shape(t))
+
+
+class DigitalObjective(ExactObjective):
+    """The exact moments of the sampled, delayed recursion (:func:`.simulate.digital.
+    digital_moments`; the scenario's ``digital`` block): what the digital protocol's
+    agents reach at the deadline, with K = round(T/h) steps and no integration error."""
+
+    name = "exact moments of the sampled recursion"
+
+    @classmethod
+    def _accepts(cls, topology: AnyTopology, spec: SimulationSpec) -> bool:
+        return (
+            not isinstance(topology, ExpressionTopology)
+            and spec.noise.linear
+            and spec.digital is not None
+            and topology.n * topology.dim <= MOMENTS_MAX_ND
+        )
+
+    def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
+        pm = self.prepared(delta)[0]
+        dg = self.spec.digital
+        assert dg is not None  # see accepts
+        grid = sampled_grid(
+            self.topology, pm, dg, self.horizon, np.linspace(0, self.horizon, points)
+        )
+        limit = None if accurate else GROWTH_LIMIT * max(float(pm.eps0 @ pm.eps0), 1.0)
+        with np.errstate(all="ignore"):
+            m = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, dg.delay, limit)
+        return Curve(grid.save_times, m.moments.ms_error.sum(axis=1))
+
+    def describe(self) -> str:
+        """What the objective computes.
+
+        Returns
+        -------
+        str
+        """
+        dg = self.spec.digital
+        assert dg is not None
+        return f"{self.name} (h = {dg.period:g}, D = {dg.delay})"
 
 
 class ExpressionObjective(Objective):
@@ -390,6 +435,7 @@ def _save_at(t: np.ndarray) -> SaveAt:
 
 #: The objectives in the order :func:`objective_for` tries them.
 OBJECTIVES: dict[str, type[Objective]] = {
+    "exact-digital": DigitalObjective,
     "exact": ExactObjective,
     "exact-expression": ExpressionObjective,
     "mc": MonteCarloObjective,

@@ -57,7 +57,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -86,6 +86,24 @@ MAX_STORE = 2 * 2**30
 #: maximum by at most log(steps) / KS_RHO.
 KS_RHO = 2000.0
 BIG = 1e10
+
+
+class MomentProblem(Protocol):
+    """What :func:`solve` and :func:`optimise_schedule` need of a problem: the moment
+    equations (:class:`ScheduleProblem`) or the sampled recursion
+    (:class:`~ntc_design.tune.sampled.SampledScheduleProblem`)."""
+
+    horizon: float
+    initial: float
+    evaluations: int
+
+    def node_times(self, pieces: int) -> np.ndarray: ...  # noqa: D102
+
+    def plan(self, c: np.ndarray, kappa: float = ...) -> Any: ...  # noqa: D102
+
+    def forward(self, c: np.ndarray, plan: Any, store: bool = ...) -> Forward | None: ...  # noqa: D102
+
+    def adjoint(self, plan: Any, fwd: Forward, sources: np.ndarray | None = ...) -> np.ndarray: ...  # noqa: D102
 
 
 @dataclass(frozen=True, eq=False)
@@ -470,14 +488,14 @@ class Solved:
 
     x: np.ndarray
     c: np.ndarray
-    plan: Plan
+    plan: Any
     fwd: Forward
     grad: np.ndarray
     message: str
 
 
 def solve(
-    prob: ScheduleProblem,
+    prob: MomentProblem,
     param: NodeLogs,
     x0: np.ndarray,
     bounds: Sequence[tuple[float, float]],
@@ -493,8 +511,8 @@ def solve(
 
     Parameters
     ----------
-    prob : ScheduleProblem
-        The moment equations.
+    prob : MomentProblem
+        The moment equations, or the sampled recursion.
     param : NodeLogs
         How parameters map to node values.
     x0 : numpy.ndarray
@@ -528,7 +546,7 @@ def solve(
     for _ in range(4):
         memo: dict[bytes, Forward | None] = {}
 
-        def run(z: np.ndarray, plan: Plan = plan, memo=memo) -> Forward | None:
+        def run(z: np.ndarray, plan: Any = plan, memo=memo) -> Forward | None:
             key = z.tobytes()
             if key not in memo:
                 if len(memo) > 8:
@@ -536,7 +554,7 @@ def solve(
                 memo[key] = prob.forward(param.nodes(z), plan)
             return memo[key]
 
-        def grad(z: np.ndarray, fwd: Forward, sources=None, plan: Plan = plan) -> np.ndarray:
+        def grad(z: np.ndarray, fwd: Forward, sources=None, plan: Any = plan) -> np.ndarray:
             return param.pullback(z, param.nodes(z), prob.adjoint(plan, fwd, sources))
 
         def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
@@ -592,7 +610,7 @@ def solve(
 
 
 def optimise_schedule(
-    prob: ScheduleProblem,
+    prob: MomentProblem,
     start: Callable[[np.ndarray], np.ndarray],
     *,
     max_gain: float = DEFAULT_MAX_GAIN,
@@ -608,8 +626,8 @@ def optimise_schedule(
 
     Parameters
     ----------
-    prob : ScheduleProblem
-        The moment equations.
+    prob : MomentProblem
+        The moment equations, or the sampled recursion.
     start : callable
         c(t) to start the coarsest level from (e.g. the best power law).
     max_gain : float, optional
@@ -690,7 +708,7 @@ def optimise_schedule(
 
 
 def fit_power(
-    prob: ScheduleProblem,
+    prob: MomentProblem,
     start: PowerGain,
     gamma: tuple[float, float],
     a_range: tuple[float, float],
@@ -703,8 +721,8 @@ def fit_power(
 
     Parameters
     ----------
-    prob : ScheduleProblem
-        The moment equations.
+    prob : MomentProblem
+        The moment equations, or the sampled recursion.
     start : PowerGain
         Where to start (e.g. the coarse search's optimum).
     gamma, a_range, b_range : (float, float)
@@ -736,6 +754,7 @@ __all__ = [
     "DEFAULT_MAX_GAIN",
     "Forward",
     "Level",
+    "MomentProblem",
     "NodeLogs",
     "OPTIMAL_MAX_ND",
     "Plan",
