@@ -213,7 +213,11 @@ def curve_figure(f: DigitalFacts):
         ax.plot(f.t, f.continuous, "k-", lw=1.0, label="continuous (exact)")
         if f.sampled is not None:
             ax.plot(
-                f.t, f.sampled, "C3--", lw=1.2, label=f"sampled h = {f.period:g}, D = {f.delay}"
+                f.t_sampled,
+                f.sampled,
+                "C3--",
+                lw=1.2,
+                label=f"sampled h = {f.period:g}, D = {f.delay}",
             )
         if f.k0 is not None and f.k0 * f.period <= f.t[-1]:
             ax.axvline(f.k0 * f.period, color="C2", lw=0.8, ls=":", label="certified k₀·h")
