@@ -97,13 +97,71 @@ class MomentProblem(Protocol):
     initial: float
     evaluations: int
 
-    def node_times(self, pieces: int) -> np.ndarray: ...  # noqa: D102
+    def node_times(self, pieces: int) -> np.ndarray:
+        """The K + 1 node times of K equal pieces of [0, T].
 
-    def plan(self, c: np.ndarray, kappa: float = ...) -> Any: ...  # noqa: D102
+        Parameters
+        ----------
+        pieces : int
+            K.
 
-    def forward(self, c: np.ndarray, plan: Any, store: bool = ...) -> Forward | None: ...  # noqa: D102
+        Returns
+        -------
+        numpy.ndarray
+        """
+        ...
 
-    def adjoint(self, plan: Any, fwd: Forward, sources: np.ndarray | None = ...) -> np.ndarray: ...  # noqa: D102
+    def plan(self, c: np.ndarray, kappa: float = ...) -> Any:
+        """The steps for node values ``c``.
+
+        Parameters
+        ----------
+        c : numpy.ndarray
+            Node values.
+        kappa : float, optional
+            The step control (RK4's h·ρ), where there is one.
+
+        Returns
+        -------
+        Any
+        """
+        ...
+
+    def forward(self, c: np.ndarray, plan: Any, store: bool = ...) -> Forward | None:
+        """J and the traces after every step; None when the run leaves its range.
+
+        Parameters
+        ----------
+        c : numpy.ndarray
+            Node values.
+        plan : Any
+            The steps.
+        store : bool, optional
+            Keep what the adjoint needs.
+
+        Returns
+        -------
+        Forward or None
+        """
+        ...
+
+    def adjoint(self, plan: Any, fwd: Forward, sources: np.ndarray | None = ...) -> np.ndarray:
+        """The gradient of Σ_j sources_j·(trace after step j) with respect to the nodes.
+
+        Parameters
+        ----------
+        plan : Any
+            The steps.
+        fwd : Forward
+            The forward run.
+        sources : numpy.ndarray, optional
+            Weights on the traces (default: the last alone).
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        ...
 
 
 @dataclass(frozen=True, eq=False)
