@@ -19,12 +19,12 @@ from tests.test_exprtree import _HOSTILE, _VALID
 T = [0.0, 0.1, 0.5, 1.0, 2.0, 7.3, 50.0]
 
 
-@pytest.mark.parametrize("text", _VALID)
-def test_value_agrees_with_the_numpy_backend(text):
-    p = scalar_program(text, "gain")
-    want = numeric_function(text, "gain")(np.array(T))
-    got = np.array([p.evaluate(t) for t in T])
-    np.testing.assert_allclose(got, want, rtol=1e-13, atol=0)
+def test_value_agrees_with_the_numpy_backend():
+    for text in _VALID:  # one test: two dozen cheap expressions
+        p = scalar_program(text, "gain")
+        want = numeric_function(text, "gain")(np.array(T))
+        got = np.array([p.evaluate(t) for t in T])
+        np.testing.assert_allclose(got, want, rtol=1e-13, atol=0, err_msg=text)
 
 
 def _run_python(p, t):
@@ -36,12 +36,12 @@ def _run_python(p, t):
     return space["f"](t)
 
 
-@pytest.mark.parametrize("text", _VALID)
-def test_the_python_code_computes_the_same_bits(text):
-    p = scalar_program(text, "gain")
-    for t in T:
-        a, b = p.evaluate(t), _run_python(p, t)
-        assert a == b or (math.isnan(a) and math.isnan(b)), (text, t)
+def test_the_python_code_computes_the_same_bits():
+    for text in _VALID:
+        p = scalar_program(text, "gain")
+        for t in T:
+            a, b = p.evaluate(t), _run_python(p, t)
+            assert a == b or (math.isnan(a) and math.isnan(b)), (text, t)
 
 
 @pytest.mark.parametrize(
@@ -101,13 +101,13 @@ def test_domain_errors_are_nan(text):
 
 
 @pytest.mark.hostile
-@pytest.mark.parametrize("text", _HOSTILE, ids=lambda x: repr(x)[:30])
-def test_refuses_what_the_numpy_backend_refuses(text):
-    with pytest.raises(InputError) as a:
-        numeric_function(text, "gain")
-    with pytest.raises(InputError) as b:
-        scalar_program(text, "gain")
-    assert str(a.value) == str(b.value)
+def test_refuses_what_the_numpy_backend_refuses():
+    for text in _HOSTILE:  # the same messages, word for word
+        with pytest.raises(InputError) as a:
+            numeric_function(text, "gain")
+        with pytest.raises(InputError) as b:
+            scalar_program(text, "gain")
+        assert str(a.value) == str(b.value), text
 
 
 @pytest.mark.parametrize(

@@ -91,7 +91,7 @@ class ModeLaw:
     sign : numpy.ndarray
         (E,) sgn A_ij, ±1.0.
     weight : numpy.ndarray
-        (E, d, d) |A_ij|.
+        (E, d, d) ``|A_ij|``.
     sigma : numpy.ndarray
         (E,) the additive noise σ_e of the edge's measurement.
     informed : tuple of int
@@ -99,9 +99,9 @@ class ModeLaw:
     delta : float
         δ (δ_i on the informed agents).
     bd : numpy.ndarray
-        (N, d, d) δ·|B_i| (zero blocks for the uninformed).
+        (N, d, d) ``δ·|B_i|`` (zero blocks for the uninformed).
     u : numpy.ndarray
-        (N, d) u_i = δ|B_i|x0 (zero for the uninformed).
+        (N, d) ``u_i = δ|B_i|x0`` (zero for the uninformed).
     sorted_index : numpy.ndarray
         (E,) where edge e sits in :attr:`Topology.edges` (the simulator's order).
     """
