@@ -41,6 +41,10 @@ from ..model import SwitchingTopology, Topology
 from ..paper import F_SCALE, SIGMA
 from ..schedule import ScheduleGain, analyse_any_gain, schedule_from_document
 from ..simulate.noise import NoiseModel, noise_from_document
+from ..simulate.spec import SimulationSpec
+
+#: A scenario's horizon when it gives none (the simulator's default).
+DEFAULT_T = SimulationSpec.__dataclass_fields__["T"].default
 
 
 @dataclass(frozen=True, eq=False)
@@ -158,13 +162,19 @@ def from_scenario(
 
     sc = parse_scenario(path)
     src = sc.source
-    top, spec, _ = load_scenario(path, None, sc)
+    given = sc.document.get("digital")
+    horizon = sc.document.get("T", DEFAULT_T)
+    if isinstance(horizon, bool) or not isinstance(horizon, (int, float)) or not horizon > 0:
+        horizon = None  # the scenario's own check names it
+    # the options replace the file's block before the scenario is checked (a period of the
+    # file's that the option overrides is not refused)
+    dg = _digital(period, delay, given, horizon, src)
+    top, spec, _ = load_scenario(path, {"digital": dg.to_dict()}, sc)
     if not isinstance(top, (Topology, SwitchingTopology)):
         raise InputError(
             f"{src}: topology: only a fixed topology or a switching set can be exported "
             f"(got {type(top).__name__})"
         )
-    dg = _digital(period, delay, sc.document.get("digital"), spec.T, src)
     g = _gain_option(gain)
     if g is not None:
         spec = spec.replace(gain=g)

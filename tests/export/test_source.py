@@ -169,3 +169,46 @@ def test_a_kind_without_dense_modes_is_refused(g1_robust, tmp_path):
     doc = json.loads(json.dumps(robust_certificate(g1_robust[1])))
     with pytest.raises(InputError, match=r"kind: a robust certificate cannot be exported"):
         from_certificate(tmp_path / "r.json", period=0.1, doc=doc)
+
+
+def _sealed(tmp_path, **subject):
+    """certificates/g1.json with more subject fields (as a digital certificate states
+    them), its digests sealed again: it still verifies."""
+    from ntc_design.certify.format import finish
+
+    doc = json.loads((CERTS / "g1.json").read_text())
+    doc["subject"].update(subject)
+    for key in ("digest", "subject_digest", "versions"):
+        doc.pop(key, None)
+    p = tmp_path / "sealed.json"
+    p.write_text(json.dumps(finish(doc)))
+    return p
+
+
+def test_a_subject_that_states_period_gain_and_noise(tmp_path):
+    p = _sealed(
+        tmp_path,
+        digital={"period": 0.05, "delay": 1},
+        gain="2/(2+t)",
+        noise={"sigma": 0.2, "f": 0.1, "sigma_edges": [{"from": 5, "to": 6, "sigma": 0.7}]},
+    )
+    law = load_source(p).law
+    assert law.digital == Digital(0.05, 1) and law.gain.label == "2/(2+t)"
+    assert sorted(set(law.modes[0].sigma.tolist())) == [0.2, 0.7]
+    assert (law.noise_f == 0.1 * np.eye(3)).all()
+    assert load_source(p, period=0.02, sigma=0.3).law.digital == Digital(0.02, 1)
+    with pytest.raises(InputError, match=r"^--gain: the certificate states its gain"):
+        load_source(p, gain="1/(1+t)")
+
+
+@pytest.mark.hostile
+def test_a_time_varying_scenario_is_refused():
+    with pytest.raises(InputError, match=r"only a fixed topology or a switching set"):
+        from_scenario(EXAMPLES / "scenarios" / "g1_tv.yaml", period=0.1)
+
+
+def test_the_option_replaces_a_file_period_that_would_be_refused(tmp_path):
+    p = _scenario(tmp_path, "digital: {period: 20, delay: 1}\n")  # longer than T = 5
+    with pytest.raises(InputError, match=r"s.yaml: digital.period: h = 20 is longer"):
+        from_scenario(p)
+    assert from_scenario(p, period=0.1).law.digital == Digital(0.1, 1)
