@@ -38,7 +38,9 @@ def test_gain_exit_code_says_whether_a_theorem_applies(expr, code, capsys, monke
     assert got == code and (json.loads(out)["mean_square"] is True) == (code == 0)
 
 
-@pytest.mark.parametrize("command", ["certify", "simulate", "sweep", "gain", "report", "design"])
+@pytest.mark.parametrize(
+    "command", ["certify", "simulate", "sweep", "gain", "report", "design", "export"]
+)
 def test_help_ends_with_an_example(command, capsys, monkeypatch):
     code, out, _ = run_cli([command, "--help"], capsys, monkeypatch)
     assert code == 0
@@ -60,6 +62,7 @@ def test_help_ends_with_an_example(command, capsys, monkeypatch):
         "sweep",
         "report",
         "reproduce",
+        "export",
     ],
 )
 def test_every_command_with_a_result_has_json(command, capsys, monkeypatch):
@@ -97,3 +100,77 @@ def test_out_above_the_dense_size_is_refused_before_work(tmp_path, capsys, monke
     needle = f"--out: a robust certificate is issued up to Nd = {RICCATI_MAX_ND}"
     assert_input_error(args, capsys, monkeypatch, needle)
     assert not (tmp_path / "c.json").exists()
+
+
+# -- ntc export ---------------------------------------------------------------------------
+
+
+def test_export_writes_the_folder(tmp_path, examples, capsys, monkeypatch):
+    out = tmp_path / "g1-c"
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--lang", "c"]
+    code, text, err = run_cli(
+        [*args, "--out", out, "--period", "0.1", "--delay", "1"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert "exported G1 (7 agents, d = 3, 1 mode(s); h = 0.1, D = 1, c(t) = 1/(1+t)) as c" in text
+    assert (out / "ntc_protocol.c").is_file() and (out / "README.txt").is_file()
+    code, text, err = run_cli(
+        ["export", examples.parent / "certificates" / "g1.json", "--lang", "python",
+         "--out", tmp_path / "py", "--period", "0.05", "--gain", "2/(2+t)", "--json"],
+        capsys, monkeypatch,
+    )  # fmt: skip
+    doc = json.loads(text)
+    assert code == 0 and doc["ok"] and doc["kind"] == "certificate (hurwitz)"
+    assert doc["period"] == 0.05 and doc["delay"] == 0 and doc["gain"] == "2/(2+t)"
+    assert doc["files"] == [
+        "ntc_protocol.py",
+        "README.txt",
+        "example_input.txt",
+        "example_output.txt",
+    ]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, needles",
+    [
+        (["--period", "0"], ["--period: must be a positive number"]),
+        (["--period", "-0.1"], ["--period: must be a positive number"]),
+        (["--period", "nan"], ["--period: must be finite"]),
+        (["--period", "inf"], ["--period: must be finite"]),
+        (["--period", "11"], ["--period: h = 11 is longer than the horizon T = 10"]),
+        (["--period", "0.1", "--delay", "-1"], ["--delay: must be an integer >= 0"]),
+        (["--period", "0.1", "--delay", "1.5"], ["--delay", "integer"]),
+        (["--period", "0.1", "--lang", "fortran"], ["--lang: expected one of c, python"]),
+        ([], ["--period:", "g1_deadline.yaml has no digital block"]),
+        (["--period", "0.1", "--gain", "1"], ["g1_deadline.yaml: no theorem is guaranteed"]),
+        (["--period", "0.1", "--gain", "__import__('os')"], ["gain: "]),
+    ],
+)
+def test_export_refusals_write_nothing(tmp_path, examples, capsys, monkeypatch, extra, needles):
+    out = tmp_path / "o"
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", out, *extra]
+    assert_input_error(args, capsys, monkeypatch, *needles)
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.hostile
+def test_export_refuses_a_certificate_that_does_not_verify(tmp_path, examples, capsys, monkeypatch):
+    doc = json.loads((examples.parent / "certificates" / "g1.json").read_text())
+    doc["subject"]["modes"]["G1"]["x0"][0] += 1.0
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    out = tmp_path / "o"
+    args = ["export", bad, "--out", out, "--period", "0.1"]
+    assert_input_error(args, capsys, monkeypatch, str(bad), "the certificate does not verify")
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+def test_export_refuses_a_folder_with_other_files(tmp_path, examples, capsys, monkeypatch):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "mine.txt").write_text("x")
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", out, "--period", "0.1"]
+    assert_input_error(args, capsys, monkeypatch, "--out:", "holds other files ('mine.txt')")
+    assert [p.name for p in out.iterdir()] == ["mine.txt"]

@@ -1,0 +1,416 @@
+"""The agents' law (:mod:`ntc_design.design.agents`) as dependency-free C99:
+``ntc_protocol.h`` (the types, the sizes, the functions), ``ntc_protocol.c`` (the tables,
+c(t), the schedule rule, the measurement and the agent's update) and ``ntc_replay.c`` (a
+program that reads x(0), K and the normals on stdin and prints x_K).
+
+Every number is written with ``%.17g`` (it reads back to the same double), every
+operation in the law's order; compiled with ``cc -std=c99 -O2 -ffp-contract=off`` (no
+fused multiply-add) the program agrees bit for bit with
+:func:`~ntc_design.simulate.replay.replay`. User text (labels, mode names) only appears in
+string literals, escaped byte by byte.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .. import __version__
+from ..design.agents import AgentLaw, ModeLaw
+from ..exprcode import literal
+
+#: The command the README gives (and the tests run).
+COMPILE = (
+    "cc -std=c99 -O2 -ffp-contract=off -Wall -Wextra -o ntc_replay ntc_replay.c ntc_protocol.c -lm"
+)
+FILES = ("ntc_protocol.h", "ntc_protocol.c", "ntc_replay.c")
+
+
+def c_string(text: str) -> str:
+    """A C string literal for any text: letters, digits and a few signs as they are, every
+    other byte of its UTF-8 as an octal escape (no trigraph, quote or backslash survives).
+
+    Parameters
+    ----------
+    text : str
+        The text.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> c_string('a"b?')
+    '"a\\\\042b\\\\077"'
+    """
+    safe = set(b"abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 _-.,:;+=()[]{}<>/")
+    out = []
+    for byte in str(text).encode("utf-8"):
+        out.append(chr(byte) if byte in safe else f"\\{byte:03o}")
+    return '"' + "".join(out) + '"'
+
+
+def _vec(values: Sequence[float]) -> str:
+    return "{" + ", ".join(literal(v) for v in values) + "}"
+
+
+def _mat(m: np.ndarray) -> str:
+    return "{" + ", ".join(_vec(row) for row in np.asarray(m, dtype=float).tolist()) + "}"
+
+
+def _in_array(mi: int, ml: ModeLaw, i: int) -> tuple[str, str]:
+    """(the static array of agent i's in-edges in mode mi, its name), or ("", "NULL")."""
+    edges = ml.in_edges(i)
+    if not edges:
+        return "", "NULL"
+    name = f"ntc_in_m{mi}_a{i}"
+    rows = [
+        f"    {{{int(ml.src[e])}, {e}, {literal(ml.sign[e])}, {literal(ml.sigma[e])}, "
+        f"{_mat(ml.weight[e])}}}"
+        for e in edges
+    ]
+    return f"static const ntc_in_edge {name}[{len(edges)}] = {{\n" + ",\n".join(
+        rows
+    ) + "\n};\n", name
+
+
+def header(law: AgentLaw) -> str:
+    """``ntc_protocol.h``.
+
+    Parameters
+    ----------
+    law : AgentLaw
+        The agents' law.
+
+    Returns
+    -------
+    str
+    """
+    max_in = max((m.max_in_degree for m in law.modes), default=0)
+    max_e = max((m.n_edges for m in law.modes), default=0)
+    return f"""/* ntc_protocol.h: the digital protocol exported by ntc-design {__version__}.
+   A generated file (ntc export); README.txt says how to build and run it. */
+#ifndef NTC_PROTOCOL_H
+#define NTC_PROTOCOL_H
+
+#define NTC_N {law.n}            /* agents */
+#define NTC_D {law.dim}            /* the state dimension d */
+#define NTC_MODES {len(law.modes)}        /* topologies (modes) */
+#define NTC_DELAY {law.digital.delay}        /* D: a measurement is D samples old */
+#define NTC_MAX_IN {max_in}       /* the most in-edges of one agent, in any mode */
+#define NTC_MAX_EDGES {max_e}    /* the most edges of one mode */
+
+/* One in-edge e = (j -> i) of an agent, in its mode's file order. */
+typedef struct {{
+    int from;                    /* j, the in-neighbour (0-based agent index) */
+    int edge;                    /* e, the edge's index in its mode's file order */
+    double sign;                 /* sgn(A_ij): +1 or -1 */
+    double sigma;                /* sigma_e: the measurement's additive noise (replay) */
+    double weight[NTC_D][NTC_D]; /* |A_ij| */
+}} ntc_in_edge;
+
+/* One agent's law in one mode. */
+typedef struct {{
+    int informed;                /* 1: the agent hears the external signal */
+    double delta;                /* delta_i (0 for an uninformed agent) */
+    double bd[NTC_D][NTC_D];     /* delta_i |B_i| */
+    double u[NTC_D];             /* u_i = delta_i |B_i| x0 */
+    int n_in;                    /* its in-edges */
+    const ntc_in_edge *in;       /* in file order (NULL when none) */
+}} ntc_agent;
+
+typedef struct {{
+    const char *name;
+    int n_edges;                 /* E: step k of this mode reads 2E normals */
+    ntc_agent agents[NTC_N];
+}} ntc_mode;
+
+extern const double ntc_period;                     /* h */
+extern const double ntc_sqrt_period;                /* sqrt(h) */
+extern const double ntc_noise_f[NTC_D][NTC_D];      /* F of f(x) = F x */
+extern const ntc_mode ntc_modes[NTC_MODES];
+extern const char *const ntc_labels[NTC_N];
+
+/* t_k = k h */
+double ntc_time(long k);
+/* the gain c(t) */
+double ntc_gain(double t);
+/* the mode (index into ntc_modes) of step k */
+int ntc_mode_at(long k);
+/* the measurement m[0..d-1] of in-edge e from the delayed states xd_i, xd_j and the
+   edge's normals z1 (additive), z2 (multiplicative): what a sensor delivers */
+void ntc_measure(const ntc_in_edge *e, const double *xd_i, const double *xd_j,
+                 double z1, double z2, double *m);
+/* the agent's next state from its state x_i, its delayed state xd_i and its
+   measurements m (n_in rows of d, in its in-edges' order), with c = c(t_k) */
+void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
+                      const double *xd_i, const double *m, double *x_next);
+
+#endif
+"""
+
+
+def _gain(law: AgentLaw) -> str:
+    g = law.gain
+    prog = g.program
+    body = "\n".join(f"    {line}" for line in prog.c_lines())
+    tail_name = "ntc_gain_tail" if g.is_schedule else "ntc_gain"
+    kind = "static double" if g.is_schedule else "double"
+    out = [
+        f"/* c(t) = {'the tail ' if g.is_schedule else ''}{_comment(prog.text)} */",
+        f"{kind} {tail_name}(double t)\n{{\n"
+        + ("    (void)t;\n" if prog.constant else "")
+        + (body + "\n" if body else "")
+        + f"    return {prog.returned()};\n}}\n",
+    ]
+    if not g.is_schedule:
+        return "\n".join(out)
+    n = len(g.t)
+    linear = g.interpolation == "linear"
+    pick = (
+        """    if (j < 0) return ntc_table_c[0];
+    if (ntc_table_t[j] == t) return ntc_table_c[j];
+    {
+        const double s = (ntc_table_c[j + 1] - ntc_table_c[j]) / (ntc_table_t[j + 1] - ntc_table_t[j]);
+        double r = s * (t - ntc_table_t[j]) + ntc_table_c[j];
+        if (r != r) {
+            r = s * (t - ntc_table_t[j + 1]) + ntc_table_c[j + 1];
+            if (r != r && ntc_table_c[j] == ntc_table_c[j + 1]) r = ntc_table_c[j];
+        }
+        return r;
+    }"""
+        if linear
+        else "    return ntc_table_c[j < 0 ? 0 : j];"
+    )
+    out += [
+        f"/* the schedule's table ({n} points, {g.interpolation} between them), then the tail */",
+        f"#define NTC_TABLE {n}",
+        f"static const double ntc_table_t[NTC_TABLE] = {_vec(g.t)};",
+        f"static const double ntc_table_c[NTC_TABLE] = {_vec(g.c)};",
+        "",
+        f"""double ntc_gain(double t)
+{{
+    long lo = 0, hi = NTC_TABLE, j;
+    if (!(t < ntc_table_t[NTC_TABLE - 1])) return ntc_gain_tail(t);
+    while (lo < hi) {{  /* the first index with t_i > t */
+        const long mid = lo + (hi - lo) / 2;
+        if (t < ntc_table_t[mid]) hi = mid; else lo = mid + 1;
+    }}
+    j = lo - 1;         /* the last index with t_j <= t */
+{pick}
+}}
+""",
+    ]
+    return "\n".join(out)
+
+
+def _comment(text: str) -> str:
+    """User text safe inside a C comment (no ``*/``, printable ASCII)."""
+    s = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
+    return s.replace("*/", "* /").replace("/*", "/ *")[:200]
+
+
+def _mode_rule(law: AgentLaw) -> str:
+    if not law.schedule:
+        return "int ntc_mode_at(long k)\n{\n    (void)k;\n    return 0;\n}\n"
+    s = len(law.schedule)
+    return f"""/* the schedule: (mode, duration) {len(law.schedule)} entries, period P = the sum of the
+   durations; step k runs the entry whose cumulative end first exceeds
+   tau = t_k - floor(t_k / P) P (a switching instant belongs to the next entry) */
+#define NTC_SCHEDULE {s}
+static const double ntc_schedule_period = {literal(law.schedule_period)};
+static const double ntc_schedule_ends[NTC_SCHEDULE] = {_vec(law.schedule_ends)};
+static const int ntc_schedule_mode[NTC_SCHEDULE] = {{{", ".join(str(m) for m in law.schedule_modes)}}};
+
+int ntc_mode_at(long k)
+{{
+    const double t = ntc_time(k);
+    const double tau = t - floor(t / ntc_schedule_period) * ntc_schedule_period;
+    int s = 0;
+    while (s < NTC_SCHEDULE - 1 && !(tau < ntc_schedule_ends[s])) s++;
+    return ntc_schedule_mode[s];
+}}
+"""
+
+
+def protocol(law: AgentLaw) -> str:
+    """``ntc_protocol.c``: the tables and the functions.
+
+    Parameters
+    ----------
+    law : AgentLaw
+        The agents' law.
+
+    Returns
+    -------
+    str
+    """
+    parts = [
+        f"/* ntc_protocol.c: the digital protocol exported by ntc-design {__version__}\n"
+        f"   (h = {literal(law.digital.period)}, D = {law.digital.delay}). Generated. */",
+        "#include <math.h>",
+        '#include "ntc_protocol.h"',
+        "",
+        f"const double ntc_period = {literal(law.digital.period)};",
+        f"const double ntc_sqrt_period = {literal(law.sqrt_period)};",
+        f"const double ntc_noise_f[NTC_D][NTC_D] = {_mat(law.noise_f)};",
+        "const char *const ntc_labels[NTC_N] = {"
+        + ", ".join(c_string(str(a)) for a in law.labels)
+        + "};",
+        "",
+    ]
+    modes = []
+    for mi, ml in enumerate(law.modes):
+        agents = []
+        for i in range(law.n):
+            arr, name = _in_array(mi, ml, i)
+            if arr:
+                parts.append(arr)
+            inf = i in ml.informed
+            agents.append(
+                f"        {{{int(inf)}, {literal(ml.delta if inf else 0.0)}, {_mat(ml.bd[i])}, "
+                f"{_vec(ml.u[i])}, {len(ml.in_edges(i))}, {name}}}"
+            )
+        modes.append(
+            f"    {{{c_string(ml.name)}, {ml.n_edges}, {{\n" + ",\n".join(agents) + "\n    }}"
+        )
+    parts.append("const ntc_mode ntc_modes[NTC_MODES] = {\n" + ",\n".join(modes) + "\n};\n")
+    helpers = law.gain.program.c_helpers()
+    if helpers:
+        parts.append(helpers)
+    parts.append(_gain(law))
+    parts.append("double ntc_time(long k)\n{\n    return (double)k * ntc_period;\n}\n")
+    parts.append(_mode_rule(law))
+    parts.append(
+        """void ntc_measure(const ntc_in_edge *e, const double *xd_i, const double *xd_j,
+                 double z1, double z2, double *m)
+{
+    double diff[NTC_D];
+    int a, b;
+    for (b = 0; b < NTC_D; b++) diff[b] = xd_j[b] - xd_i[b];
+    for (a = 0; a < NTC_D; a++) {
+        double fd = ntc_noise_f[a][0] * diff[0];
+        for (b = 1; b < NTC_D; b++) fd += ntc_noise_f[a][b] * diff[b];
+        m[a] = e->sign * xd_j[a] - xd_i[a] + (e->sigma * z1 + fd * z2) / ntc_sqrt_period;
+    }
+}
+
+void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
+                      const double *xd_i, const double *m, double *x_next)
+{
+    const double hc = ntc_period * c;
+    int a, b, s;
+    for (a = 0; a < NTC_D; a++) {
+        double acc = agent->u[a];
+        if (agent->informed)
+            for (b = 0; b < NTC_D; b++) acc -= agent->bd[a][b] * xd_i[b];
+        for (s = 0; s < agent->n_in; s++)
+            for (b = 0; b < NTC_D; b++) acc += agent->in[s].weight[a][b] * m[s * NTC_D + b];
+        x_next[a] = x_i[a] + hc * acc;
+    }
+}
+"""
+    )
+    return "\n".join(parts)
+
+
+REPLAY = """/* ntc_replay.c: replays the exported protocol on given normals. Generated by ntc-design.
+   stdin (whitespace-separated): x(0) as N*d numbers agent by agent, the number of
+   steps K, then for every step k the 2E normals of the edges of its mode in file order
+   (each edge's additive xi1, then its multiplicative xi2). stdout: x_K, one agent per
+   line, %.17g. Exit 2 on malformed input, 1 when c(t_k) is not finite. */
+#include <ctype.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "ntc_protocol.h"
+
+static int fail(const char *what, long k)
+{
+    if (k >= 0)
+        fprintf(stderr, "ntc_replay: stdin: %s (step %ld)\\n", what, k);
+    else
+        fprintf(stderr, "ntc_replay: stdin: %s\\n", what);
+    return 2;
+}
+
+int main(void)
+{
+    const long nd = (long)NTC_N * NTC_D;
+    const long slots = (long)NTC_DELAY + 1;
+    double *ring = malloc(sizeof(double) * (size_t)(slots * nd));
+    double *next = malloc(sizeof(double) * (size_t)nd);
+    double *z = malloc(sizeof(double) * (size_t)(2 * NTC_MAX_EDGES + 1));
+    double *m = malloc(sizeof(double) * (size_t)(NTC_MAX_IN * NTC_D + 1));
+    long K, k, r, q;
+    int i, s, ch;
+    if (!ring || !next || !z || !m) {
+        fprintf(stderr, "ntc_replay: out of memory\\n");
+        return 2;
+    }
+    for (q = 0; q < nd; q++)
+        if (scanf("%lf", &ring[q]) != 1) return fail("expected N*d numbers of the initial state", -1);
+    for (r = 1; r < slots; r++) memcpy(ring + r * nd, ring, sizeof(double) * (size_t)nd);
+    if (scanf("%ld", &K) != 1 || K < 0) return fail("expected the number of steps K >= 0", -1);
+    for (k = 0; k < K; k++) {
+        const ntc_mode *md = &ntc_modes[ntc_mode_at(k)];
+        const double c = ntc_gain(ntc_time(k));
+        const double *now = ring + (k % slots) * nd;
+        double *xd = ring + ((k + 1) % slots) * nd;
+        if (!isfinite(c)) {
+            fprintf(stderr, "ntc_replay: c(t) = %g is not finite at step %ld\\n", c, k);
+            return 1;
+        }
+        for (q = 0; q < 2L * md->n_edges; q++)
+            if (scanf("%lf", &z[q]) != 1) return fail("expected 2E normals", k);
+        for (i = 0; i < NTC_N; i++) {
+            const ntc_agent *ag = &md->agents[i];
+            for (s = 0; s < ag->n_in; s++) {
+                const ntc_in_edge *e = &ag->in[s];
+                ntc_measure(e, xd + (long)i * NTC_D, xd + (long)e->from * NTC_D,
+                            z[2 * e->edge], z[2 * e->edge + 1], m + s * NTC_D);
+            }
+            ntc_agent_update(ag, c, now + (long)i * NTC_D, xd + (long)i * NTC_D, m,
+                             next + (long)i * NTC_D);
+        }
+        memcpy(xd, next, sizeof(double) * (size_t)nd);  /* x_{k+1} replaces x_{k-D} */
+    }
+    while ((ch = getchar()) != EOF)
+        if (!isspace(ch)) return fail("more numbers than the K steps read", -1);
+    for (i = 0; i < NTC_N; i++) {
+        const double *x = ring + (K % slots) * nd + (long)i * NTC_D;
+        for (s = 0; s < NTC_D; s++) {
+            if (s) putchar(' ');
+            printf("%.17g", x[s]);
+        }
+        printf("\\n");
+    }
+    free(ring);
+    free(next);
+    free(z);
+    free(m);
+    return 0;
+}
+"""
+
+
+def c_files(law: AgentLaw) -> dict[str, str]:
+    """The three C files, by name.
+
+    Parameters
+    ----------
+    law : AgentLaw
+        The agents' law.
+
+    Returns
+    -------
+    dict of str to str
+        ``ntc_protocol.h``, ``ntc_protocol.c``, ``ntc_replay.c``.
+    """
+    return {"ntc_protocol.h": header(law), "ntc_protocol.c": protocol(law), "ntc_replay.c": REPLAY}
+
+
+__all__ = ["COMPILE", "FILES", "c_files", "c_string", "header", "protocol"]

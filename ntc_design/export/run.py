@@ -1,0 +1,382 @@
+"""``ntc export``: write the agents' code (C99 or Python) of a certified design into a
+folder, all or nothing, with a README and an example to check a build against.
+
+Besides the code (:mod:`.c`, :mod:`.python`) the folder holds ``README.txt`` (how to
+compile and run, the stdin format, the law) and ``example_input.txt`` /
+``example_output.txt``: x(0) (the scenario's, else zero), up to :data:`EXAMPLE_STEPS`
+steps of seeded normals, and the state the toolkit's
+:func:`~ntc_design.simulate.replay.replay` reaches, printed as the programs print it, so
+``./ntc_replay < example_input.txt | diff - example_output.txt`` checks a build.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..design.agents import AgentLaw
+from ..errors import InputError
+from ..exprcode import literal
+from ..outputs import check_output_folder, output_folder
+from ..schedule import ScheduleGain
+from ..simulate.replay import replay
+from .c import COMPILE, c_files
+from .python import python_files
+from .source import ExportSource, load_source
+
+LANGUAGES = ("c", "python")
+#: Steps of the example input (fewer when the scenario's horizon has fewer).
+EXAMPLE_STEPS = 100
+#: The seed of the example's normals.
+EXAMPLE_SEED = 0
+#: Refuse an export whose tables would exceed this many numbers.
+MAX_NUMBERS = 20_000_000
+EXAMPLES = ("example_input.txt", "example_output.txt")
+
+
+def stdin_text(x_init, steps: int, normals) -> str:
+    """The input of an exported program: x(0), K and the normals, each number written so
+    that it reads back to the same double.
+
+    Parameters
+    ----------
+    x_init : array_like
+        x(0), N·d numbers.
+    steps : int
+        K.
+    normals : array_like
+        The normals in the programs' order.
+
+    Returns
+    -------
+    str
+    """
+    x = " ".join(repr(float(v)) for v in np.asarray(x_init, dtype=float).ravel())
+    z = np.asarray(normals, dtype=float).ravel().tolist()
+    rows = [" ".join(repr(v) for v in z[k : k + 8]) for k in range(0, len(z), 8)]
+    return "\n".join([x, str(int(steps)), *rows]) + "\n"
+
+
+def state_text(x, d: int) -> str:
+    """A state as the exported programs print it: one agent per line, ``%.17g``.
+
+    Parameters
+    ----------
+    x : array_like
+        N·d numbers.
+    d : int
+        The state dimension.
+
+    Returns
+    -------
+    str
+    """
+    rows = np.asarray(x, dtype=float).reshape(-1, d).tolist()
+    return "".join(" ".join("%.17g" % v for v in row) + "\n" for row in rows)  # noqa: UP031
+
+
+def read_state(text: str, nd: int) -> np.ndarray:
+    """The state an exported program printed, as numbers.
+
+    Parameters
+    ----------
+    text : str
+        Its stdout.
+    nd : int
+        N·d.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    InputError
+        Not N·d numbers.
+    """
+    try:
+        x = np.array([float(w) for w in text.split()])
+    except ValueError:
+        raise InputError("output: expected numbers") from None
+    if x.size != nd:
+        raise InputError(f"output: expected {nd} numbers, got {x.size}")
+    return x
+
+
+def example(src: ExportSource) -> tuple[str, str]:
+    """The example input and the output the toolkit's replay gives for it.
+
+    Parameters
+    ----------
+    src : ExportSource
+        What is exported.
+
+    Returns
+    -------
+    (str, str)
+        ``example_input.txt`` and ``example_output.txt``.
+
+    Raises
+    ------
+    InputError
+        c(t) is not finite on the example's steps.
+    """
+    law = src.law
+    steps = EXAMPLE_STEPS
+    if src.horizon is not None:
+        steps = min(steps, law.digital.steps(src.horizon)[0])
+    count = int(law.normals_per_step(steps).sum())
+    z = np.random.default_rng(EXAMPLE_SEED).standard_normal(count)
+    x = replay(law, src.initial, z, steps)
+    return stdin_text(src.initial, steps, z), state_text(x, law.dim)
+
+
+def _edges_text(law: AgentLaw, most: int = 40) -> list[str]:
+    out = []
+    lab = law.labels
+    for ml in law.modes:
+        names = [f"{lab[int(j)]}->{lab[int(i)]}" for i, j in zip(ml.dst, ml.src, strict=True)]
+        shown = ", ".join(names[:most]) + (
+            f", … ({len(names)} in all)" if len(names) > most else ""
+        )
+        out.append(f"  mode {ml.name!r} ({ml.n_edges} edges): {shown or 'none'}")
+    return out
+
+
+def readme(src: ExportSource, lang: str) -> str:
+    """``README.txt``: what the folder holds, how to build and run it, the stdin format and
+    the law.
+
+    Parameters
+    ----------
+    src : ExportSource
+        What is exported.
+    lang : str
+        ``c`` or ``python``.
+
+    Returns
+    -------
+    str
+    """
+    law = src.law
+    g = law.gain
+    gain = (
+        f"a table of {len(g.t)} points ({g.interpolation}) on [0, {g.end:g}], then {g.program.text}"
+        if g.is_schedule
+        else g.program.text
+    )
+    run = (
+        [
+            "Build and check (a C99 compiler; no library but libm):",
+            "",
+            f"  {COMPILE}",
+            "  ./ntc_replay < example_input.txt | diff - example_output.txt && echo same",
+            "",
+            "-ffp-contract=off keeps the compiler from fusing a multiply and an add (FMA): every",
+            "operation then rounds as in the toolkit, and the output is the same to the last bit.",
+            "On a device, call ntc_gain(ntc_time(k)), ntc_mode_at(k) and, per agent, ntc_measure",
+            "(what a sensor delivers; on hardware it is measured) and ntc_agent_update",
+            "(ntc_protocol.h).",
+        ]
+        if lang == "c"
+        else [
+            "Run and check (Python 3, no package but the standard library):",
+            "",
+            "  python ntc_protocol.py < example_input.txt | diff - example_output.txt && echo same",
+            "",
+            "Import it to drive agents yourself: gain(time_of(k)), mode_at(k), measure(...) and",
+            "agent_update(...).",
+        ]
+    )
+    sched = (
+        [
+            "Schedule (mode, duration), repeated with period P = "
+            f"{literal(law.schedule_period)}: " + ", ".join(f"{m} {d:g}" for m, d in law.schedule),
+            "Step k runs the mode of the entry whose cumulative end first exceeds",
+            "tau = t_k - floor(t_k / P) * P (a switching instant belongs to the next entry).",
+        ]
+        if law.schedule
+        else []
+    )
+    lines = [
+        f"Digital protocol of {law.name}, exported by ntc export from {src.source} ({src.kind}).",
+        *src.notes,
+        "",
+        f"Agents N = {law.n} (labels {', '.join(str(a) for a in law.labels[:20])}"
+        + (", …" if law.n > 20 else "")
+        + f"), state dimension d = {law.dim}, theta = {law.theta.tolist()}.",
+        f"Period h = {literal(law.digital.period)}, delay D = {law.digital.delay} samples, "
+        f"gain c(t) = {gain}.",
+        *sched,
+        "",
+        *run,
+        "",
+        "stdin (numbers separated by any whitespace):",
+        "  x(0): N*d numbers, agent by agent (agent 1's d numbers, then agent 2's, ...);",
+        "  K: the number of steps;",
+        "  then for k = 0 .. K-1 the 2E normals of step k: for each edge of the mode of",
+        "  step k, in file order (below), its additive xi1, then its multiplicative xi2.",
+        "stdout: x_K, one agent per line, d numbers each, printed with %.17g.",
+        "",
+        "The model (t_k = k*h, c_k = c(t_k), e = x - 1 (x) theta, the state held before t = 0):",
+        "  x_{k+1} = x_k + h c_k (u - L_B x_{k-D})",
+        "            + c_k sqrt(h) sum_e (g_e xi_{k,e,1} + G_e x_{k-D} xi_{k,e,2})",
+        "",
+        "The law each agent i runs (xd = x_{k-D}, sqrth = sqrt(h)), for in-edge e = j -> i:",
+        "  diff[b] = xd_j[b] - xd_i[b];  fd[a] = sum_b F[a][b] diff[b] (b in order)",
+        "  m[a] = s_e xd_j[a] - xd_i[a] + (sigma_e z1 + fd[a] z2) / sqrth",
+        "and with hc = h c_k, for each component a:",
+        "  acc = u_i[a];  informed: acc -= (delta |B_i|)[a][b] xd_i[b] for b in order",
+        "  for each in-edge in file order, for b in order: acc += |A_ij|[a][b] m_e[b]",
+        "  x_next[a] = x_i[a] + hc acc",
+        "",
+        "Edges in file order (the order of the normals):",
+        *_edges_text(law),
+        "",
+    ]
+    return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class ExportResult:
+    """What :func:`export` wrote.
+
+    Attributes
+    ----------
+    folder : Path
+        The folder.
+    files : tuple of str
+        The files in it.
+    source : ExportSource
+        What was exported.
+    """
+
+    folder: Path
+    files: tuple[str, ...]
+    source: ExportSource
+
+
+def _size_check(law: AgentLaw) -> None:
+    d = law.dim
+    numbers = sum(m.n_edges * (d * d + 2) + law.n * (d * d + d) for m in law.modes)
+    if numbers > MAX_NUMBERS:
+        raise InputError(
+            f"export: the tables would hold {numbers:.3g} numbers (limit {MAX_NUMBERS:.0e}); "
+            "too large to write as source code"
+        )
+
+
+def files_for(src: ExportSource, lang: str) -> dict[str, str]:
+    """Every file of the export, by name.
+
+    Parameters
+    ----------
+    src : ExportSource
+        What is exported.
+    lang : str
+        ``c`` or ``python``.
+
+    Returns
+    -------
+    dict of str to str
+
+    Raises
+    ------
+    InputError
+        An unknown language, tables too large, or c(t) not finite on the example's steps.
+    """
+    if lang not in LANGUAGES:
+        raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
+    _size_check(src.law)
+    code = c_files(src.law) if lang == "c" else python_files(src.law)
+    inp, out = example(src)
+    return {**code, "README.txt": readme(src, lang), EXAMPLES[0]: inp, EXAMPLES[1]: out}
+
+
+def replaceable(lang: str | None = None) -> tuple[str, ...]:
+    """The files an earlier export leaves in a folder (which a new one replaces).
+
+    Parameters
+    ----------
+    lang : str, optional
+        Only that language's (default: any).
+
+    Returns
+    -------
+    tuple of str
+    """
+    from .c import FILES as C_FILES
+    from .python import FILES as PY_FILES
+
+    code: Sequence[str] = {"c": C_FILES, "python": PY_FILES}.get(lang or "", (*C_FILES, *PY_FILES))
+    return (*code, "README.txt", *EXAMPLES, "ntc_replay")
+
+
+def export(
+    path: str | Path,
+    lang: str,
+    out: str | Path,
+    period: float | None = None,
+    delay: int | None = None,
+    gain: str | ScheduleGain | None = None,
+    sigma: float | None = None,
+    f: float | None = None,
+) -> ExportResult:
+    """Export a scenario's or a certificate's certified design as code, into ``out`` (all
+    or nothing: refused before any work when ``out`` holds other files).
+
+    Parameters
+    ----------
+    path : str or Path
+        A scenario or a certificate.
+    lang : {"c", "python"}
+        The language.
+    out : str or Path
+        The folder.
+    period, delay : float, int, optional
+        h and D (over a scenario's or a subject's digital block).
+    gain : str or ScheduleGain, optional
+        c(t).
+    sigma, f : float, optional
+        The noise's σ and f.
+
+    Returns
+    -------
+    ExportResult
+
+    Raises
+    ------
+    InputError
+        A bad language, folder, file or value, or a design that is not certified
+        (:func:`~ntc_design.export.source.load_source`).
+    """
+    if lang not in LANGUAGES:
+        raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
+    check_output_folder(out, replaceable())
+    src = load_source(path, period, delay, gain, sigma, f)
+    texts = files_for(src, lang)
+    with output_folder(out, replaceable()) as tmp:
+        for name, text in texts.items():
+            (tmp / name).write_text(text, encoding="utf-8")
+    return ExportResult(Path(out), tuple(texts), src)
+
+
+__all__ = [
+    "EXAMPLES",
+    "EXAMPLE_SEED",
+    "EXAMPLE_STEPS",
+    "LANGUAGES",
+    "MAX_NUMBERS",
+    "ExportResult",
+    "example",
+    "export",
+    "files_for",
+    "read_state",
+    "readme",
+    "replaceable",
+    "state_text",
+    "stdin_text",
+]

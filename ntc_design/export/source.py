@@ -1,0 +1,401 @@
+"""What ``ntc export`` exports: the agents' law (:class:`~ntc_design.design.agents.AgentLaw`)
+of a certified design, from a scenario or from a certificate.
+
+- A scenario (YAML or JSON, :func:`~ntc_design.simulate.scenario.load_scenario`): its
+  ``digital:`` block gives h and D (``period``/``delay`` override it), its gain, noise and θ
+  the rest; the design is Lemma 1's, and it is certified first
+  (:func:`ntc_design.certify.certify`): refused unless the certificate verifies and a
+  theorem is guaranteed.
+- A certificate (kinds whose subject has dense modes: ``hurwitz``, ``switching``): verified
+  first (:func:`ntc_design.certify.verify`) and refused unless valid; its subject gives the
+  topologies (their edge order is the subject's), the informed agents, B_i, δ, x0, θ and
+  the schedule. h, D, the gain and the noise come from its subject where it states them
+  (``digital: {period, delay}``, ``gain``, ``noise: {sigma, f, sigma_edges}``), else from
+  the arguments (``period`` is then required; the gain defaults to 1/(1+t), the noise to
+  the paper's σ and f), and the gain must satisfy the conditions of Theorem 1.
+
+Messages name the command's options (``--period``, ``--delay``, ``--gain``) for the values
+given as arguments.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..certify import KINDS, verify
+from ..certify.dense import DenseContext
+from ..certify.fields import vector
+from ..certify.format import FORMAT
+from ..design.agents import AgentLaw, agent_law, make_law, mode_law
+from ..design.digital import Digital
+from ..design.lemma1 import ProtocolDesign, SwitchingDesign
+from ..documents import read_document
+from ..errors import AssumptionWarning, InputError
+from ..model import SwitchingTopology, Topology
+from ..paper import F_SCALE, SIGMA
+from ..schedule import ScheduleGain, analyse_any_gain, schedule_from_document
+from ..simulate.noise import NoiseModel, noise_from_document
+from ..simulate.spec import SimulationSpec
+
+#: A scenario's horizon when it gives none (the simulator's default).
+DEFAULT_T = SimulationSpec.__dataclass_fields__["T"].default
+
+
+@dataclass(frozen=True, eq=False)
+class ExportSource:
+    """A certified design's agents' law and where it came from.
+
+    Attributes
+    ----------
+    law : AgentLaw
+        What the agents run.
+    source : str
+        The file.
+    kind : str
+        ``scenario`` or ``certificate (KIND)``.
+    initial : numpy.ndarray
+        x(0) for the example input (the scenario's, else zero).
+    horizon : float or None
+        T (a scenario's), else None.
+    notes : tuple of str
+        What the reader should know.
+    """
+
+    law: AgentLaw
+    source: str
+    kind: str
+    initial: np.ndarray
+    horizon: float | None
+    notes: tuple[str, ...] = ()
+
+
+def _digital(
+    period: float | None, delay: int | None, given: Any, horizon: float | None, where: str
+) -> Digital:
+    """h and D: the arguments over a block ``given`` (a scenario's or a subject's), errors
+    naming the option for an argument and the block for the file's value."""
+    base = dict(given) if isinstance(given, dict) else {}
+    if period is None and "period" not in base:
+        raise InputError(
+            f"--period: {where} has no digital block (period h, delay D); give --period"
+        )
+    try:
+        dg = Digital(
+            period if period is not None else base["period"],
+            delay if delay is not None else base.get("delay", 0),
+        )
+        if horizon is not None:
+            dg.steps(horizon)
+    except InputError as exc:
+        text = str(exc)
+        for field, flag, value in (
+            ("digital.period", "--period", period),
+            ("digital.delay", "--delay", delay),
+        ):
+            if text.startswith(field):
+                text = (flag + text[len(field) :]) if value is not None else f"{where}: {text}"
+        raise InputError(text) from None
+    if not math.isfinite(dg.period):
+        raise InputError(f"--period: must be a finite number, got {dg.period!r}")
+    return dg
+
+
+def _gain_option(gain: str | ScheduleGain | None) -> str | ScheduleGain | None:
+    if gain is None or isinstance(gain, ScheduleGain):
+        return gain
+    from ..schedule import gain_from_option
+
+    return gain_from_option(gain, "--gain")
+
+
+def _check_gain(gain: str | ScheduleGain, where: str) -> None:
+    """Refuse a gain whose conditions of Theorem 1 do not hold (or are undetermined)."""
+    a = analyse_any_gain(gain)
+    if a.mean_square is not True:
+        label = gain.text if isinstance(gain, ScheduleGain) else gain
+        raise InputError(
+            f"{where}: c(t) = {label} does not satisfy the gain conditions of Theorem 1 "
+            "(continuous and >= 0, ∫c = ∞, c → 0); no theorem would be guaranteed"
+        )
+
+
+def from_scenario(
+    path: str | Path,
+    period: float | None = None,
+    delay: int | None = None,
+    gain: str | ScheduleGain | None = None,
+    sigma: float | None = None,
+    f: float | None = None,
+) -> ExportSource:
+    """The agents' law of a scenario's certified Lemma 1 design.
+
+    Parameters
+    ----------
+    path : str or Path
+        The scenario (YAML or JSON).
+    period, delay : float, int, optional
+        h and D over the scenario's ``digital:`` block.
+    gain : str or ScheduleGain, optional
+        c(t) instead of the scenario's (a ``.csv`` name is a schedule file).
+    sigma, f : float, optional
+        The noise's σ and f instead of the scenario's.
+
+    Returns
+    -------
+    ExportSource
+
+    Raises
+    ------
+    InputError
+        A bad file or value; a topology that is neither fixed nor switching; a design whose
+        certificate does not verify or for which no theorem is guaranteed.
+    """
+    from ..certify import certify
+    from ..files import parse_scenario
+    from ..simulate.scenario import load_scenario
+
+    sc = parse_scenario(path)
+    src = sc.source
+    given = sc.document.get("digital")
+    horizon = sc.document.get("T", DEFAULT_T)
+    if isinstance(horizon, bool) or not isinstance(horizon, (int, float)) or not horizon > 0:
+        horizon = None  # the scenario's own check names it
+    # the options replace the file's block before the scenario is checked (a period of the
+    # file's that the option overrides is not refused)
+    dg = _digital(period, delay, given, horizon, src)
+    top, spec, _ = load_scenario(path, {"digital": dg.to_dict()}, sc)
+    if not isinstance(top, (Topology, SwitchingTopology)):
+        raise InputError(
+            f"{src}: topology: only a fixed topology or a switching set can be exported "
+            f"(got {type(top).__name__})"
+        )
+    g = _gain_option(gain)
+    if g is not None:
+        spec = spec.replace(gain=g)
+    if sigma is not None or f is not None:
+        noise = spec.noise
+        spec = spec.replace(
+            noise=NoiseModel(
+                sigma=noise.sigma if sigma is None else _number("--sigma", sigma, 0.0),
+                f=noise.f if f is None else _number("--f", f),
+                sigma_edges=noise.sigma_edges,
+            )
+        )
+    if not isinstance(spec.gain, (str, ScheduleGain)):
+        raise InputError(f"{src}: gain: a Python function cannot be exported")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AssumptionWarning)  # the verdict says it
+        res = certify(top, spec.theta, spec.margin, spec.gain, spec.delta)
+    if not res.verification.valid:
+        failed = "; ".join(c.name for c in res.verification.failed)[:300]
+        raise InputError(
+            f"{src}: the design's certificate ({res.certificate['kind']}) does not verify "
+            f"({failed}); nothing exported"
+        )
+    if not res.proven:
+        raise InputError(
+            f"{src}: no theorem is guaranteed for this design and gain (ntc certify says "
+            "why); nothing exported"
+        )
+    design = res.design
+    if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
+        raise InputError(f"{src}: topology: this design cannot be exported")
+    law = agent_law(
+        design,
+        dg,
+        spec.gain,
+        spec.noise.sigma,
+        spec.noise.f,
+        spec.noise.sigma_edges,
+    )
+    if isinstance(top, Topology):
+        law = _named(law, top.name or Path(src).stem)
+    x_init, _ = spec.initial_state(top.n, top.dim)
+    return ExportSource(
+        law, src, "scenario", np.asarray(x_init, dtype=float), spec.T, (_certified(res),)
+    )
+
+
+def _named(law: AgentLaw, name: str) -> AgentLaw:
+    from dataclasses import replace
+
+    return replace(law, name=name)
+
+
+def _certified(res: Any) -> str:
+    theorems = ", ".join(str(t.theorem) for t in res.theorems if t.guaranteed is True)
+    return (
+        f"certified: {res.certificate['kind']} certificate valid "
+        f"({res.verification.method}); Theorem {theorems} guaranteed for the continuous protocol"
+    )
+
+
+def _number(flag: str, value: Any, minimum: float | None = None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"{flag}: expected a number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v) or (minimum is not None and v < minimum):
+        raise InputError(f"{flag}: expected a finite number >= {minimum:g}, got {v!r}"[:200])
+    return v
+
+
+def from_certificate(
+    path: str | Path,
+    period: float | None = None,
+    delay: int | None = None,
+    gain: str | ScheduleGain | None = None,
+    sigma: float | None = None,
+    f: float | None = None,
+    doc: dict | None = None,
+) -> ExportSource:
+    """The agents' law of a certificate's design, once the certificate verifies.
+
+    Parameters
+    ----------
+    path : str or Path
+        The certificate (JSON).
+    period, delay : float, int, optional
+        h and D (``period`` required unless the subject states a ``digital`` block).
+    gain : str or ScheduleGain, optional
+        c(t) (default: the certificate's, else 1/(1+t)).
+    sigma, f : float, optional
+        The noise (default: the subject's, else the paper's σ = 0.4, f = 0.3).
+    doc : dict, optional
+        The certificate already read.
+
+    Returns
+    -------
+    ExportSource
+
+    Raises
+    ------
+    InputError
+        A malformed certificate, one that does not verify, a kind without dense modes, a
+        missing period, or a gain whose conditions do not hold.
+    """
+    src = str(path)
+    doc = read_document(path) if doc is None else doc
+    ver = verify(doc, src)
+    if not ver.valid:
+        failed = "; ".join(c.name for c in ver.failed)[:300]
+        raise InputError(f"{src}: the certificate does not verify ({failed}); nothing exported")
+    kind = KINDS[str(doc["kind"])]
+    reading = kind.read(doc, src)
+    if not isinstance(reading.state, DenseContext):
+        raise InputError(
+            f"{src}: kind: a {kind.name} certificate cannot be exported (its subject has no "
+            "dense modes; the hurwitz and switching kinds can)"
+        )
+    subject = doc["subject"]
+    modes_doc = subject["modes"]
+    dg = _digital(period, delay, subject.get("digital"), None, f"{src}: subject")
+    stated = doc.get("gain", subject.get("gain"))
+    if stated is not None and gain is not None:
+        raise InputError(f"--gain: the certificate states its gain ({src}: gain); drop --gain")
+    if stated is not None:
+        g: str | ScheduleGain = (
+            stated if isinstance(stated, str) else schedule_from_document(stated, f"{src}: gain")
+        )
+    else:
+        g = _gain_option(gain) or "1/(1+t)"
+    _check_gain(g, "--gain" if gain is not None else f"{src}: gain")
+    noise_doc = subject.get("noise")
+    if noise_doc is not None:
+        noise = noise_from_document(noise_doc)
+    else:
+        noise = NoiseModel(sigma=SIGMA, f=F_SCALE)
+    noise = NoiseModel(
+        sigma=noise.sigma if sigma is None else _number("--sigma", sigma, 0.0),
+        f=noise.f if f is None else _number("--f", f),
+        sigma_edges=noise.sigma_edges,
+    )
+    ctx: DenseContext = reading.state
+    modes = []
+    for name, m in ctx.modes.items():
+        x0 = vector(modes_doc[name]["x0"], m.top.dim, f"{src}: subject.modes.{name}.x0")
+        modes.append(
+            mode_law(name, m.top, sorted(m.b), m.b, m.delta, x0, noise.sigma, noise.sigma_edges)
+        )
+    first = next(iter(ctx.modes.values()))
+    schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
+    law = make_law(
+        first.top.name or Path(src).stem,
+        first.top,
+        first.theta,
+        modes,
+        schedule,
+        dg,
+        g,
+        noise.f,
+    )
+    notes = (f"certificate: {kind.name}, valid ({ver.method})",)
+    return ExportSource(
+        law, src, f"certificate ({kind.name})", np.zeros(law.n * law.dim), None, notes
+    )
+
+
+def is_certificate(doc: Any) -> bool:
+    """Whether a document read from a file is a certificate (its ``format`` says so).
+
+    Parameters
+    ----------
+    doc : Any
+        The document.
+
+    Returns
+    -------
+    bool
+    """
+    return isinstance(doc, dict) and doc.get("format") == FORMAT
+
+
+def load_source(
+    path: str | Path,
+    period: float | None = None,
+    delay: int | None = None,
+    gain: str | ScheduleGain | None = None,
+    sigma: float | None = None,
+    f: float | None = None,
+) -> ExportSource:
+    """A scenario's or a certificate's agents' law (:func:`from_scenario`,
+    :func:`from_certificate`), told apart by the file's content.
+
+    Parameters
+    ----------
+    path : str or Path
+        The scenario or certificate.
+    period, delay : float, int, optional
+        h and D.
+    gain : str or ScheduleGain, optional
+        c(t).
+    sigma, f : float, optional
+        The noise's σ and f.
+
+    Returns
+    -------
+    ExportSource
+
+    Raises
+    ------
+    InputError
+        As :func:`from_scenario` and :func:`from_certificate`.
+    """
+    doc = read_document(path)
+    if is_certificate(doc):
+        return from_certificate(path, period, delay, gain, sigma, f, doc=doc)
+    return from_scenario(path, period, delay, gain, sigma, f)
+
+
+__all__ = [
+    "ExportSource",
+    "from_certificate",
+    "from_scenario",
+    "is_certificate",
+    "load_source",
+]

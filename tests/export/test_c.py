@@ -1,0 +1,164 @@
+"""Tests of :mod:`ntc_design.export.c`: the exported C, compiled with ``cc -std=c99 -O2
+-ffp-contract=off -Wall -Wextra -Werror``, agrees bit for bit with the toolkit's replay fed
+the same normals (G1 with D = 0 and 2, the switching schedule with every mode sampled, a
+schedule-table gain), and its replay program refuses malformed input."""
+
+import subprocess
+import warnings
+
+import numpy as np
+import pytest
+
+import ntc_design as nd
+from ntc_design.design.agents import agent_law
+from ntc_design.design.digital import Digital
+from ntc_design.export.c import c_string, header, protocol
+from ntc_design.schedule import ScheduleGain, join_tail
+from ntc_design.simulate.replay import replay
+from tests.conftest import X0
+from tests.support.export import CC, CFLAGS, build_c, needs_cc, normals_for, run_program
+
+
+@pytest.fixture(scope="module")
+def g1_design(g1, theta):
+    return nd.design(g1, theta, thresholds=False)
+
+
+@pytest.fixture(scope="module")
+def sw_design(switching_set, theta):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return nd.design(switching_set, theta, thresholds=False)
+
+
+def _table_gain():
+    t = np.linspace(0.0, 6.0, 61)
+    c = 1.2 / (0.5 + t) ** 0.9
+    return ScheduleGain(t, c, "linear", join_tail(6.0, float(c[-1])))
+
+
+def _same(law, tmp_path, steps, delay_note="", x0=X0, seed=0):
+    exe = build_c(tmp_path, law)
+    z = normals_for(law, steps, seed)
+    got = run_program(exe, law, x0, steps, z)
+    want = replay(law, x0, z, steps)
+    assert (got == want).all(), (delay_note, np.max(np.abs(got - want)))
+    return got
+
+
+@needs_cc
+@pytest.mark.parametrize("delay", [0, 2])
+def test_g1_bit_for_bit(g1_design, tmp_path, delay):
+    law = agent_law(g1_design, Digital(0.01, delay), "1/(1+t)", 0.4, 0.3)
+    x = _same(law, tmp_path, 1000, f"D = {delay}")
+    assert np.all(np.isfinite(x)) and np.max(np.abs(x - X0)) > 0.1  # it moved
+
+
+@needs_cc
+def test_switching_schedule_bit_for_bit(sw_design, tmp_path):
+    law = agent_law(sw_design, Digital(0.013, 1), "1/(1+t)", 0.4, 0.3)
+    assert set(law.step_modes(600).tolist()) == {0, 1, 2}  # every mode is sampled
+    _same(law, tmp_path, 600)
+
+
+@needs_cc
+@pytest.mark.parametrize("interpolation", ["linear", "previous"])
+def test_schedule_table_gain_bit_for_bit(g1_design, tmp_path, interpolation):
+    g = _table_gain()
+    g = ScheduleGain(g.t, g.c, interpolation, g.tail)
+    law = agent_law(g1_design, Digital(0.07, 1), g, 0.4, 0.3)
+    _same(law, tmp_path, 200)  # 14 time units: the table and its tail
+    assert "#define NTC_TABLE 61" in protocol(law)
+
+
+@needs_cc
+@pytest.mark.parametrize(
+    "gain", ["min(1, 2*(1+t)^(-0.75))", "max(0.1, exp(-t/3))*sqrt(1+t)/(1+t)", "0.5", "2/(2+t)^2"]
+)
+def test_gains_with_helpers_compile_cleanly_and_agree(g1_design, tmp_path, gain):
+    law = agent_law(g1_design, Digital(0.05, 0), gain, 0.4, 0.3)
+    _same(law, tmp_path, 100)
+
+
+@needs_cc
+def test_matrix_noise_per_edge_sigma_and_a_listener_without_inputs(tmp_path):
+    eye = np.eye(2)
+    top = nd.Topology.from_edges(
+        ["a", "b", "c", "d"],
+        2,
+        [("b", "a", -eye), ("a", "b", 2 * eye), ("a", "c", np.diag([1.0, 3.0])), ("c", "d", eye)],
+    )
+    des = nd.design(top, [1.0, -2.0], thresholds=False)
+    f = np.array([[0.2, 0.05], [0.05, 0.1]])
+    law = agent_law(des, Digital(0.02, 3), "1/(1+t)", 0.3, f, {("a", "c"): 0.9})
+    assert law.modes[0].n_edges == 4 and law.modes[0].in_edges(0) == [0]
+    _same(law, tmp_path, 300, x0=np.arange(8.0))
+
+
+@needs_cc
+def test_hostile_labels_and_mode_names_stay_strings(tmp_path, g1_design):
+    labels = ['q"uote', "back\\slash", "tri??=graph", "*/ end", "new\nline", "é", "%s"]
+    top = nd.Topology(tuple(labels), 3, dict(g1_design.topology.weights), name='x */ "y')
+    law = agent_law(nd.design(top, [1, 2, -1], thresholds=False), Digital(0.1), "1", 0.4, 0.3)
+    exe = build_c(tmp_path, law)
+    assert exe.exists()
+    probe = tmp_path / "probe.c"
+    probe.write_text(
+        '#include <stdio.h>\n#include "ntc_protocol.h"\nint main(void)\n{\n    int i;\n'
+        '    for (i = 0; i < NTC_N; i++) printf("%s\\x1f", ntc_labels[i]);\n'
+        '    printf("%s", ntc_modes[0].name);\n    return 0;\n}\n'
+    )
+    cmd = [CC, *CFLAGS, "-o", "probe", "probe.c", "ntc_protocol.c", "-lm"]
+    assert subprocess.run(cmd, cwd=tmp_path, capture_output=True).returncode == 0
+    out = subprocess.run([str(tmp_path / "probe")], capture_output=True).stdout.decode("utf-8")
+    assert out.split("\x1f") == [*labels, 'x */ "y']
+
+
+def test_c_string_escapes_every_unsafe_byte():
+    assert c_string("G1") == '"G1"'
+    assert c_string('a"b') == '"a\\042b"'
+    assert c_string("??=") == '"\\077\\077="'
+    assert c_string("é") == '"\\303\\251"'
+
+
+def test_the_header_states_the_sizes(g1_design):
+    law = agent_law(g1_design, Digital(0.1, 3), "1/(1+t)", 0.4, 0.3)
+    h = header(law)
+    for line in (
+        "#define NTC_N 7",
+        "#define NTC_D 3",
+        "#define NTC_DELAY 3",
+        "#define NTC_MODES 1",
+    ):
+        assert line in h
+
+
+@needs_cc
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "cut, message",
+    [
+        (lambda s: s.rsplit(" ", 3)[0], "expected 2E normals (step"),
+        (lambda s: s + " 0.5", "more numbers than the K steps read"),
+        (lambda s: "1 2 3", "expected N*d numbers of the initial state"),
+        (lambda s: s.split("\n", 1)[0], "expected the number of steps K >= 0"),
+    ],
+)
+def test_the_replay_program_refuses_malformed_input(g1_design, tmp_path, cut, message):
+    from tests.support.export import stdin_text
+
+    law = agent_law(g1_design, Digital(0.1), "1/(1+t)", 0.4, 0.3)
+    exe = build_c(tmp_path, law)
+    text = stdin_text(X0, 3, normals_for(law, 3)).strip()
+    res = subprocess.run([str(exe)], input=cut(text), capture_output=True, text=True)
+    assert res.returncode == 2 and res.stdout == ""
+    assert len(res.stderr.splitlines()) == 1 and message in res.stderr
+
+
+@needs_cc
+@pytest.mark.hostile
+def test_a_gain_that_is_not_finite_stops_the_replay(g1_design, tmp_path):
+    law = agent_law(g1_design, Digital(0.1), "1/(1-t)", 0.4, 0.3)
+    exe = build_c(tmp_path, law)
+    res = run_program(exe, law, X0, 20, normals_for(law, 20), expect=1)
+    assert "c(t) = inf is not finite at step 10" in res.stderr

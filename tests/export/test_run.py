@@ -1,0 +1,112 @@
+"""Tests of :mod:`ntc_design.export.run`: the folder an export writes (all or nothing),
+its README, and its example, which the compiled program and the module reproduce byte for
+byte."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from ntc_design.errors import InputError
+from ntc_design.export import run
+from ntc_design.export.run import export, read_state, state_text, stdin_text
+from ntc_design.simulate.replay import replay
+from tests.conftest import EXAMPLES, ROOT
+from tests.support.export import CC, CFLAGS, needs_cc
+
+DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"
+
+
+@pytest.fixture(scope="module")
+def c_export(tmp_path_factory):
+    out = tmp_path_factory.mktemp("exp") / "g1-c"
+    return export(DEADLINE, "c", out, period=0.1, delay=1)
+
+
+def test_the_folder(c_export):
+    names = sorted(p.name for p in c_export.folder.iterdir())
+    assert (
+        names
+        == sorted(c_export.files)
+        == sorted(
+            ["ntc_protocol.h", "ntc_protocol.c", "ntc_replay.c", "README.txt"] + list(run.EXAMPLES)
+        )
+    )
+    text = (c_export.folder / "README.txt").read_text()
+    for needle in (
+        "cc -std=c99 -O2 -ffp-contract=off",
+        "./ntc_replay < example_input.txt | diff - example_output.txt",
+        "x(0): N*d numbers, agent by agent",
+        "its additive xi1, then its multiplicative xi2",
+        "mode 'G1' (8 edges): 2->1, 1->2, 5->6, 2->5, 6->7, 6->2, 6->3, 3->4",
+        "Period h = 0.10000000000000001, delay D = 1 samples",
+    ):
+        assert needle in text, needle
+
+
+def test_the_example_is_the_replay(c_export):
+    law = c_export.source.law
+    words = (c_export.folder / "example_input.txt").read_text().split()
+    x0 = np.array([float(w) for w in words[:21]])
+    k = int(words[21])
+    z = np.array([float(w) for w in words[22:]])
+    assert k == run.EXAMPLE_STEPS and z.size == 16 * k
+    assert (x0 == c_export.source.initial).all()
+    want = replay(law, x0, z, k)
+    out = (c_export.folder / "example_output.txt").read_text()
+    assert (read_state(out, 21) == want).all() and out == state_text(want, 3)
+
+
+@needs_cc
+def test_the_compiled_program_reproduces_the_example_byte_for_byte(c_export, tmp_path):
+    exe = tmp_path / "ntc_replay"
+    src = [str(c_export.folder / n) for n in ("ntc_replay.c", "ntc_protocol.c")]
+    res = subprocess.run([CC, *CFLAGS, "-o", str(exe), *src, "-lm"], capture_output=True)
+    assert res.returncode == 0, res.stderr
+    inp = (c_export.folder / "example_input.txt").read_text()
+    out = subprocess.run([str(exe)], input=inp, capture_output=True, text=True).stdout
+    assert out == (c_export.folder / "example_output.txt").read_text()
+
+
+def test_a_python_export_reproduces_its_example(tmp_path):
+    res = export(ROOT / "certificates" / "g1.json", "python", tmp_path / "py", period=0.05)
+    folder = res.folder
+    assert sorted(res.files) == sorted(["ntc_protocol.py", "README.txt", *run.EXAMPLES])
+    inp = (folder / "example_input.txt").read_text()
+    cmd = [sys.executable, str(folder / "ntc_protocol.py")]
+    out = subprocess.run(cmd, input=inp, capture_output=True, text=True).stdout
+    assert out == (folder / "example_output.txt").read_text()
+    assert "python ntc_protocol.py < example_input.txt" in (folder / "README.txt").read_text()
+    # an earlier export's folder is replaced (the language may change)
+    again = export(ROOT / "certificates" / "g1.json", "c", tmp_path / "py", period=0.05)
+    assert not (again.folder / "ntc_protocol.py").exists()
+
+
+def test_stdin_and_state_texts_round_trip():
+    x = np.array([0.1, -2.0, 1e-300, 3.0])
+    text = stdin_text(x, 2, np.arange(10) / 3)
+    words = text.split()
+    assert [float(w) for w in words[:4]] == x.tolist() and words[4] == "2"
+    assert [float(w) for w in words[5:]] == (np.arange(10) / 3).tolist()
+    assert state_text(x, 2) == "0.10000000000000001 -2\n1e-300 3\n"
+    assert (read_state(state_text(x, 2), 4) == x).all()
+
+
+@pytest.mark.hostile
+def test_refusals_write_nothing(tmp_path, monkeypatch):
+    out = tmp_path / "o"
+    with pytest.raises(InputError, match=r"^--lang: expected one of c, python, got 'fortran'"):
+        export(DEADLINE, "fortran", out, period=0.1)
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep")
+    with pytest.raises(InputError, match=r"^--out: .* holds other files \('notes.txt'\)"):
+        export(DEADLINE, "c", mine, period=0.1)
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]
+    monkeypatch.setattr(run, "MAX_NUMBERS", 100)
+    with pytest.raises(InputError, match=r"^export: the tables would hold"):
+        export(DEADLINE, "c", out, period=0.1)
+    with pytest.raises(InputError, match=r"^output: expected 21 numbers, got 2"):
+        read_state("1 2", 21)
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["mine"]

@@ -1,0 +1,78 @@
+"""Building and running the exported agents (C and Python) for the tests: the compiler
+command the README gives, with warnings as errors, and a run on a given stdin."""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ntc_design.export.c import c_files
+from ntc_design.export.python import python_files
+from ntc_design.export.run import read_state, stdin_text
+
+__all__ = [
+    "CC",
+    "CFLAGS",
+    "build_c",
+    "needs_cc",
+    "normals_for",
+    "read_state",
+    "run_program",
+    "stdin_text",
+    "write_files",
+    "write_python",
+]
+
+CC = shutil.which("cc")
+needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler 'cc' on this machine")
+# exactly what the task asks of the build: C99, no FMA contraction, every warning an error
+CFLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-Werror"]
+
+
+def write_files(folder: Path, files: dict[str, str]) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in files.items():
+        (folder / name).write_text(text, encoding="utf-8")
+    return folder
+
+
+def build_c(folder: Path, law) -> Path:
+    """Write and compile the C export of ``law``; the program's path."""
+    write_files(folder, c_files(law))
+    exe = folder / "ntc_replay"
+    cmd = [CC, *CFLAGS, "-o", str(exe), "ntc_replay.c", "ntc_protocol.c", "-lm"]
+    res = subprocess.run(cmd, cwd=folder, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    return exe
+
+
+def write_python(folder: Path, law) -> list[str]:
+    """Write the Python export of ``law``; the command that runs it."""
+    write_files(folder, python_files(law))
+    return [sys.executable, str(folder / "ntc_protocol.py")]
+
+
+def run_program(cmd, law, x_init, steps, normals, expect=0):
+    """Run an exported program on x(0), K and the normals; x_K (or the completed process
+    when the exit code is not 0)."""
+    res = subprocess.run(
+        cmd if isinstance(cmd, list) else [str(cmd)],
+        input=stdin_text(x_init, steps, normals),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert res.returncode == expect, res.stderr
+    if expect:
+        return res
+    return read_state(res.stdout, law.n * law.dim)
+
+
+def normals_for(law, steps, seed=0, paths=None):
+    """Independent standard normals from a seeded Generator, as many as K steps read."""
+    count = int(law.normals_per_step(steps).sum())
+    rng = np.random.default_rng(seed)
+    return rng.standard_normal(count if paths is None else (paths, count))
