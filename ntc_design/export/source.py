@@ -33,7 +33,7 @@ from ..certify.dense import DenseContext
 from ..certify.fields import vector
 from ..certify.format import FORMAT
 from ..design.agents import AgentLaw, agent_law, make_law, mode_law
-from ..design.digital import Digital
+from ..design.digital import Digital, DigitalDesign
 from ..design.lemma1 import ProtocolDesign, SwitchingDesign
 from ..documents import read_document
 from ..errors import AssumptionWarning, InputError
@@ -191,7 +191,18 @@ def from_scenario(
         raise InputError(f"{src}: gain: a Python function cannot be exported")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AssumptionWarning)  # the verdict says it
-        res = certify(top, spec.theta, spec.margin, spec.gain, spec.delta)
+        f_cert = spec.noise.f if not callable(spec.noise.f) else 0.0
+        res = certify(
+            top,
+            spec.theta,
+            spec.margin,
+            spec.gain,
+            spec.delta,
+            noise_sigma=spec.noise.sigma,
+            noise_f=f_cert,
+            digital=dg,
+            sigma_edges={(str(a), str(b)): v for (a, b), v in spec.noise.sigma_edges.items()},
+        )
     if not res.verification.valid:
         failed = "; ".join(c.name for c in res.verification.failed)[:300]
         raise InputError(
@@ -203,7 +214,7 @@ def from_scenario(
             f"{src}: no theorem is guaranteed for this design and gain (ntc certify says "
             "why); nothing exported"
         )
-    design = res.design
+    design = res.design.base if isinstance(res.design, DigitalDesign) else res.design
     if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
         raise InputError(f"{src}: topology: this design cannot be exported")
     law = agent_law(
@@ -229,10 +240,17 @@ def _named(law: AgentLaw, name: str) -> AgentLaw:
 
 
 def _certified(res: Any) -> str:
-    theorems = ", ".join(str(t.theorem) for t in res.theorems if t.guaranteed is True)
+    cont = ", ".join(str(t.theorem) for t in res.theorems if t.guaranteed and not t.sampled)
+    samp = ", ".join(str(t.theorem) for t in res.theorems if t.guaranteed and t.sampled)
+    k0 = res.certificate["results"].get("digital", {}).get("k0")
     return (
         f"certified: {res.certificate['kind']} certificate valid "
-        f"({res.verification.method}); Theorem {theorems} guaranteed for the continuous protocol"
+        f"({res.verification.method}); Theorem {cont} guaranteed for the continuous protocol"
+        + (
+            f", Theorem {samp} for the sampled one (contracting from step k₀ = {k0})"
+            if samp
+            else ""
+        )
     )
 
 
@@ -295,7 +313,8 @@ def from_certificate(
     subject = doc["subject"]
     modes_doc = subject["modes"]
     dg = _digital(period, delay, subject.get("digital"), None, f"{src}: subject")
-    stated = doc.get("gain", subject.get("gain"))
+    sampled = subject.get("digital") if isinstance(subject.get("digital"), dict) else {}
+    stated = doc.get("gain", subject.get("gain", sampled.get("gain")))
     if stated is not None and gain is not None:
         raise InputError(f"--gain: the certificate states its gain ({src}: gain); drop --gain")
     if stated is not None:
@@ -305,7 +324,7 @@ def from_certificate(
     else:
         g = _gain_option(gain) or "1/(1+t)"
     _check_gain(g, "--gain" if gain is not None else f"{src}: gain")
-    noise_doc = subject.get("noise")
+    noise_doc = subject.get("noise", sampled.get("noise"))
     if noise_doc is not None:
         noise = noise_from_document(noise_doc)
     else:
