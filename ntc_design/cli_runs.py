@@ -161,7 +161,8 @@ def simulate(
     )
     parts = []
     if st.mc_seconds is not None:
-        where = f" on {st.engine['device']}" if (st.engine or {}).get("engine") == "gpu" else ""
+        eng = st.engine or {}
+        where = f" on {eng['device']}" if eng.get("engine") == "gpu" else ""
         parts.append(f"{st.path_steps:.3g} path-steps in {st.mc_seconds:.1f} s{rate}{where}")
     if st.exact_seconds is not None:
         parts.append(f"exact moments {st.exact_seconds:.2f} s")

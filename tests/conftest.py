@@ -87,6 +87,7 @@ def switching_set() -> SwitchingTopology:
 pytest_plugins = [
     "tests.support.certificates",
     "tests.support.distributed",
+    "tests.support.gpu",
     "tests.support.implicit",
     "tests.support.kernel",
     "tests.support.reports",

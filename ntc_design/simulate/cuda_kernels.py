@@ -40,12 +40,17 @@ from __future__ import annotations
 
 import math
 from functools import cache
+from typing import Any
 
 import numpy as np
-from numba import cuda, float64, uint64
+from numba import cuda as _cuda
+from numba import float64, uint64
 
 from .rng import LAYERS
 
+# the device dialect (threadIdx, local and shared arrays) is not Python as a type checker
+# reads it: typed as Any
+cuda: Any = _cuda
 MASK = np.uint64(LAYERS - 1)
 TO_UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³, as kernels.TO_UNIT
 HALF_UNIT = 0.5 * TO_UNIT

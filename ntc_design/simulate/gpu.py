@@ -182,6 +182,11 @@ class GpuEngine:
         -------
         dict
             ``engine`` ("gpu") and ``device`` (its name).
+
+        Raises
+        ------
+        InputError
+            No usable GPU (:func:`load_cuda`).
         """
         return {"engine": "gpu", "device": device_name(load_cuda())}
 

@@ -376,7 +376,13 @@ class DeviceRun:
         self.dev = modes.device(cuda)
 
     def chunk_paths(self) -> int:
-        """Paths whose states fit :data:`CHUNK_BYTES` (at least one)."""
+        """Paths whose states fit :data:`CHUNK_BYTES`.
+
+        Returns
+        -------
+        int
+            At least one.
+        """
         per = 8 * (self.ring * self.nd + (self.m_draw if self.sparse else 0) + 4)
         return max(1, CHUNK_BYTES // per)
 
