@@ -52,6 +52,7 @@ from .rng import LAYERS
 # reads it: typed as Any
 cuda: Any = _cuda
 MASK = np.uint64(LAYERS - 1)
+ZX_SIZE, ZR_SIZE = LAYERS + 1, LAYERS  # the ziggurat's tables in shared memory
 TO_UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³, as kernels.TO_UNIT
 HALF_UNIT = 0.5 * TO_UNIT
 BAD_LIMIT = 1e150  # a state beyond this is an overflow (montecarlo._first_bad)
@@ -169,8 +170,8 @@ def fused_kernel(nd: int, slots: int, m_draw: int, d3: bool):
         x, st, k_from, k_to, ch, cs, mode, iptr, ind, val, bptr, bind, bval, u,
         e_off, e_cnt, src, dst, kmat, gvec, d, zx_g, zr_g,
     ):  # fmt: skip
-        zx = cuda.shared.array(LAYERS + 1, float64)
-        zr = cuda.shared.array(LAYERS, float64)
+        zx = cuda.shared.array(ZX_SIZE, float64)
+        zr = cuda.shared.array(ZR_SIZE, float64)
         load_tables(zx_g, zr_g, zx, zr)
         q = cuda.grid(1)
         if q >= x.shape[1]:
@@ -247,8 +248,8 @@ def draw_kernel():
 
     @cuda.jit
     def kernel(st, z, m_draw, c2, zx_g, zr_g):
-        zx = cuda.shared.array(LAYERS + 1, float64)
-        zr = cuda.shared.array(LAYERS, float64)
+        zx = cuda.shared.array(ZX_SIZE, float64)
+        zr = cuda.shared.array(ZR_SIZE, float64)
         load_tables(zx_g, zr_g, zx, zr)
         q = cuda.grid(1)
         if q >= z.shape[1]:

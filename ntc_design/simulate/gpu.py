@@ -101,10 +101,11 @@ def load_cuda() -> Any:
 
 
 def _simulating(cuda) -> bool:
-    """Whether this ``numba.cuda`` is the simulator."""
-    from numba.cuda.core import config
+    """Whether this ``numba.cuda`` is the simulator (numba's configuration, which
+    numba-cuda reads when numba is there)."""
+    from numba.core import config
 
-    return bool(config.ENABLE_CUDASIM)
+    return bool(getattr(config, "ENABLE_CUDASIM", 0))
 
 
 def _why_unavailable() -> str:

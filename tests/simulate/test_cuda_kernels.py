@@ -2,10 +2,15 @@
 NTC_GPU_TESTS=device): the streams word for word against the CPU's, the check and the
 statistics against NumPy."""
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
 from ntc_design.simulate.rng import ZIG_R, ZIG_X, normals, path_states
+from tests.conftest import ROOT
 from tests.support.gpu import sizes
 
 pytestmark = [
@@ -77,3 +82,45 @@ def test_statistics_are_numpy_sums_over_the_paths(cuda_device):
     np.testing.assert_allclose(got[1, 2 * n :], x[n * d :].sum(axis=1), rtol=1e-13)
     assert not got[0].any()  # another save slot: untouched
     np.testing.assert_array_equal(stored.copy_to_host()[1], x[n * d :, :n_store].T)
+
+
+# every kernel through numba-cuda's real compiler to PTX for sm_90 (H100/H200): the typing
+# and code generation the simulator does not exercise; no device needed, only NVVM/NVRTC
+_PTX = """
+import numba.cuda.dispatcher as dp
+from numba import cuda, types as T
+from ntc_design.simulate import cuda_kernels as ck
+
+class Hopper:
+    compute_capability = (9, 0)
+
+dp.get_current_device = lambda: Hopper()  # device functions ask for a device's cc
+f8, i8, u8 = T.float64, T.int64, T.uint64
+a1, a2, a3 = (lambda t: t[::1]), (lambda t: t[:, ::1]), (lambda t: t[:, :, ::1])
+modes = (a2(i8), a1(i8), a1(f8), a2(i8), a1(i8), a3(f8), a2(f8), a1(i8), a1(i8))
+kernels = [(ck.draw_kernel(), (a2(u8), a2(f8), i8, f8, a1(f8), a1(f8))),
+           (ck.check_kernel(), (a2(f8), i8, i8, a1(i8))),
+           (ck.stats_kernel(), (a2(f8), i8, a1(f8), i8, i8, i8, a2(f8), a3(f8), i8, i8)),
+           (ck.sum_kernel(), (a2(f8), i8, a2(f8), i8))]
+for d3 in (True, False):
+    kernels.append((ck.fused_kernel(21, 3, 16, d3), (a2(f8), a2(u8), i8, i8, a1(f8), a1(f8),
+        a1(i8), *modes, a1(i8), a1(i8), a3(f8), a2(f8), i8, a1(f8), a1(f8))))
+    kernels.append((ck.step_kernel(d3), (a2(f8), a2(f8), i8, i8, i8, f8, i8, i8, *modes,
+        a2(i8), a1(i8), a1(i8), a3(f8), a2(f8), i8)))
+for k, sig in kernels:
+    ptx, _ = cuda.compile_ptx(k.py_func, sig, cc=(9, 0))
+    assert ".entry" in ptx
+print(len(kernels))
+"""
+
+
+@pytest.mark.slow
+def test_every_kernel_compiles_to_ptx_for_hopper():
+    env = {k: v for k, v in os.environ.items() if "CUDASIM" not in k and "NTC_CUDA" not in k}
+    r = subprocess.run(
+        [sys.executable, "-c", _PTX], env=env, cwd=ROOT, capture_output=True, text=True
+    )
+    if r.returncode and ("libnvrtc" in r.stderr or "NVVM" in r.stderr or "libnvvm" in r.stderr):
+        pytest.skip("no NVVM/NVRTC here (numba-cuda[cu12] brings them)")
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split() == ["8"]
