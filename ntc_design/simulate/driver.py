@@ -255,7 +255,8 @@ def _check_size(
     secs = mc_seconds(
         est, nd, edge_count(topology) * topology.dim**2, workers, st.scheme == "implicit"
     )
-    if spec.method != "exact" and secs > LONG_RUN_SECONDS:
+    # the estimate is the CPU kernel's: a GPU's rate is not known here
+    if spec.method != "exact" and spec.mc.device == "cpu" and secs > LONG_RUN_SECONDS:
         warn_user(
             f"paths: {est.path_steps:.3g} path-steps ({spec.mc.paths} paths × "
             f"{est.steps:.3g} steps) on N·d = {nd}: roughly {format_seconds(secs)} with "

@@ -213,9 +213,14 @@ class GpuEngine:
         """
         check_supported(spec)
         cuda = load_cuda()
+        from numba.core.errors import NumbaPerformanceWarning
+
         with warnings.catch_warnings():
             if _simulating(cuda):  # uint64 arithmetic wraps by design (xoshiro)
                 warnings.simplefilter("ignore", RuntimeWarning)
+            # small grids (the statistics of few agents, the simulator's few paths) are
+            # by design, not a user's concern
+            warnings.simplefilter("ignore", NumbaPerformanceWarning)
             if hasattr(spec, "systems"):
                 from .gpu_run import run_modes
 

@@ -25,7 +25,8 @@ FUSED_MAX_DRAW = 512  # normals a thread keeps per step in the fused kernel
 CHUNK_BYTES = 2 * 2**30  # device memory for the states of one chunk of paths
 THREADS = 128  # threads per block of the path kernels
 ROW_THREADS = 256  # threads per block of the (row, path) kernels
-PATHS_PER_THREAD = 64  # paths one thread sums in the statistics
+PATHS_PER_THREAD = 64  # paths one thread sums in the statistics (more past MAX_GRID_Y groups)
+MAX_GRID_Y = 65535  # CUDA's limit on a grid's second dimension
 
 # -- the modes' arrays, concatenated ----------------------------------------------------
 
@@ -243,7 +244,8 @@ class Chunk:
         self.acc = cu.to_device(np.zeros((max(n_saves, 1), q)))
         self.n_store = max(0, min(run.store_paths - g0, p))
         self.stored = cu.to_device(np.zeros((max(n_saves, 1), max(self.n_store, 1), nd)))
-        self.groups = -(-p // PATHS_PER_THREAD)
+        self.ppt = max(PATHS_PER_THREAD, -(-p // MAX_GRID_Y))
+        self.groups = -(-p // self.ppt)
         self.part = cu.device_array((self.groups, q))
         self.bad = cu.to_device(np.array([np.iinfo(np.int64).max], np.int64))
         self.valid = 0
@@ -288,7 +290,7 @@ class Chunk:
         if save is not None:
             tn = min(THREADS, run.n)
             ck.stats_kernel()[(_blocks(run.n, tn), self.groups), tn](
-                self.x, row0, run.theta, run.n, run.d, PATHS_PER_THREAD, self.part,
+                self.x, row0, run.theta, run.n, run.d, self.ppt, self.part,
                 self.stored, self.n_store, save,
             )  # fmt: skip
             q = self.part.shape[1]

@@ -23,7 +23,7 @@ def cuda_device(monkeypatch):
     from ntc_design.errors import InputError
     from ntc_design.simulate.gpu import load_cuda
 
-    if not REAL:
+    if not REAL:  # tests/conftest.py set it for the whole session; a file run alone too
         monkeypatch.setenv(SIMULATOR_ENV, "1")
     try:
         return load_cuda()
