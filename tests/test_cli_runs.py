@@ -130,7 +130,9 @@ def test_simulate_device_gpu_with_numpy_normals_is_refused(tmp_path, capsys, mon
 
 
 @pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
-def test_simulate_device_gpu_on_the_simulator(tmp_path, capsys, monkeypatch, cuda_device):
+def test_simulate_device_gpu_runs_where_the_fixture_says(
+    tmp_path, capsys, monkeypatch, cuda_device
+):
     sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
     args = ["simulate", sc, "--device", "gpu", "--paths", "4", "--T", "0.01", "--method", "mc"]
     code, out, err = run_cli([*args, "--out", tmp_path / "o"], capsys, monkeypatch)
