@@ -60,6 +60,13 @@ def simulate(
             "kernel; default) or numpy (NumPy's PCG64 per block). Overrides the scenario."
         ),
     ] = None,
+    device: Annotated[
+        str | None,
+        typer.Option(
+            help="Where the Monte Carlo paths run: cpu (default) or gpu (an NVIDIA GPU, "
+            "installed with the gpu extra; the same paths to rounding). Overrides the scenario."
+        ),
+    ] = None,
     period: PeriodOpt = None,
     delay: DelayOpt = None,
     scheduler: SchedulerOpt = None,
@@ -82,7 +89,15 @@ def simulate(
     )
     from .simulate.spec import MonteCarlo, check_workers
 
-    given = {"paths": paths, "T": horizon, "dt": dt, "seed": seed, "method": method, "rng": rng}
+    given = {
+        "paths": paths,
+        "T": horizon,
+        "dt": dt,
+        "seed": seed,
+        "method": method,
+        "rng": rng,
+        "device": device,
+    }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
     sc = parse_scenario(scenario)
     if period is not None or delay is not None:
@@ -168,7 +183,9 @@ def simulate(
     )
     parts = []
     if st.mc_seconds is not None:
-        parts.append(f"{st.path_steps:.3g} path-steps in {st.mc_seconds:.1f} s{rate}")
+        eng = st.engine or {}
+        where = f" on {eng['device']}" if eng.get("engine") == "gpu" else ""
+        parts.append(f"{st.path_steps:.3g} path-steps in {st.mc_seconds:.1f} s{rate}{where}")
     if st.exact_seconds is not None:
         parts.append(f"exact moments {st.exact_seconds:.2f} s")
     out.print("; ".join(parts))

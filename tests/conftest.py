@@ -14,6 +14,13 @@ os.environ["NTC_AVAILABLE_MEMORY"] = "6G"
 # temporary folders the tests check for stray files
 os.environ.setdefault("COVERAGE_FILE", str(Path(__file__).resolve().parent.parent / ".coverage"))
 
+# The GPU kernels' tests run on numba-cuda's CUDA simulator (tests/support/gpu.py) unless
+# NTC_GPU_TESTS=device (benchmarks/gpu_check.sh, on a GPU): chosen here, before any test
+# imports numba.cuda (importing a module to read its docstrings does), which fixes the mode
+if os.environ.get("NTC_GPU_TESTS", "") != "device":
+    os.environ.setdefault("NTC_CUDA_SIMULATOR", "1")
+    os.environ.setdefault("NUMBA_ENABLE_CUDASIM", "1")
+
 # Property tests draw the same examples on every run: results are identical on re-run.
 settings.register_profile("ntc", derandomize=True, print_blob=True)
 settings.load_profile("ntc")
@@ -87,6 +94,7 @@ def switching_set() -> SwitchingTopology:
 pytest_plugins = [
     "tests.support.certificates",
     "tests.support.distributed",
+    "tests.support.gpu",
     "tests.support.implicit",
     "tests.support.kernel",
     "tests.support.reports",

@@ -97,3 +97,46 @@ def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch, tmp_
     said = " ".join(out.split("written to", 1)[1].split())  # the line, unwrapped
     files = sorted(p.name for p in (tmp_path / "t").iterdir() if p.is_file())
     assert files and all(f in said for f in files), (files, said)  # every file is named
+
+
+@pytest.mark.hostile
+def test_simulate_on_a_gpu_without_one_is_one_line_and_exit_2(tmp_path):
+    # a fresh process without numba-cuda's simulator: the machine as it is
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if "CUDASIM" not in k and "NTC_CUDA" not in k}
+    sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+    args = ["simulate", sc, "--device", "gpu", "--paths", "8", "--T", "0.05"]
+    r = subprocess.run(
+        [sys.executable, "-m", "ntc_design", *map(str, args), "--out", str(tmp_path / "o")],
+        env=env, cwd=ROOT, capture_output=True, text=True,
+    )  # fmt: skip
+    if r.returncode == 0:
+        pytest.skip("this machine has a usable GPU")
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    assert lines[0].startswith(f"error: {sc}: device: gpu") and "Traceback" not in r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.hostile
+def test_simulate_device_gpu_with_numpy_normals_is_refused(tmp_path, capsys, monkeypatch):
+    sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+    args = ["simulate", sc, "--device", "gpu", "--rng", "numpy", "--out", tmp_path / "o"]
+    assert_input_error(args, capsys, monkeypatch, "rng: numpy stays on the CPU")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+def test_simulate_device_gpu_runs_where_the_fixture_says(
+    tmp_path, capsys, monkeypatch, cuda_device
+):
+    sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+    args = ["simulate", sc, "--device", "gpu", "--paths", "4", "--T", "0.01", "--method", "mc"]
+    code, out, err = run_cli([*args, "--out", tmp_path / "o"], capsys, monkeypatch)
+    assert code == 0, err
+    doc = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert doc["parameters"]["device"] == "gpu" and doc["run"]["engine"]["engine"] == "gpu"
+    assert "path-steps/s on " in out

@@ -41,6 +41,7 @@ from .digital import (
     digital_grid,
     digital_moments,
 )
+from .gpu import GpuEngine, load_cuda
 from .grid import TimeGrid
 from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec
@@ -266,7 +267,8 @@ def _check_size(
     secs = mc_seconds(
         est, nd, edge_count(topology) * topology.dim**2, workers, st.scheme == "implicit"
     )
-    if spec.method != "exact" and secs > LONG_RUN_SECONDS:
+    # the estimate is the CPU kernel's: a GPU's rate is not known here
+    if spec.method != "exact" and spec.mc.device == "cpu" and secs > LONG_RUN_SECONDS:
         warn_user(
             f"paths: {est.path_steps:.3g} path-steps ({spec.mc.paths} paths × "
             f"{est.steps:.3g} steps) on N·d = {nd}: roughly {format_seconds(secs)} with "
@@ -330,8 +332,10 @@ def simulate(
         Called with path-steps done.
     engine : optional
         Runs the Monte Carlo blocks elsewhere: an object with ``run_mc(spec, progress)``
-        and ``describe()``, e.g. :class:`ntc_design.distributed.DaskEngine`. None: on
-        ``workers`` local processes. The result is the same either way.
+        and ``describe()``, e.g. :class:`ntc_design.distributed.DaskEngine` or
+        :class:`ntc_design.simulate.gpu.GpuEngine`. None: on ``workers`` local processes,
+        or on the GPU with ``device="gpu"``. The result is the same either way (to
+        rounding on the GPU).
     protocol : ProtocolDesign, optional
         For one fixed topology: the protocol (informed agents, B_i, δ, x0) to run instead
         of Lemma 1's design of ``topology`` (its ``topology`` must be ``topology``), e.g.
@@ -363,6 +367,7 @@ def simulate(
         raise InputError(
             f"theta: expected {topology.dim} numbers (the state dimension d), got {spec.theta.size}"
         )
+    engine = device_engine(spec, engine)
     cfun, gain_text = make_gain(spec.gain)
     workers = min(spec.mc.workers, os.cpu_count() or 1)
     if is_expression_topology(topology):  # A(t)
@@ -379,9 +384,42 @@ def simulate(
                 "an explicit δ does not apply"
             )
         _check_size(topology, spec, cfun, 1, 1, workers)
-        return simulate_expression(topology, spec, cfun, gain_text, workers, progress)
+        gpu = engine if isinstance(engine, GpuEngine) else None  # A(t) runs locally otherwise
+        return simulate_expression(topology, spec, cfun, gain_text, workers, progress, gpu)
     fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)  # not A(t)
     return _simulate_modes(fixed, spec, cfun, gain_text, workers, progress, engine, protocol)
+
+
+def device_engine(spec: SimulationSpec, engine):
+    """The engine of a run: ``engine`` as given, or :class:`.gpu.GpuEngine` for
+    ``device: gpu`` once the GPU is known to be usable (before any design is computed).
+
+    Parameters
+    ----------
+    spec : SimulationSpec
+        The run's options (``mc.device``, ``method``).
+    engine : object or None
+        The engine given to :func:`simulate`.
+
+    Returns
+    -------
+    object or None
+
+    Raises
+    ------
+    InputError
+        ``device: gpu`` with no usable GPU (one line naming what is missing), or with a
+        Dask engine.
+    """
+    if spec.mc.device != "gpu" or spec.method == "exact" or isinstance(engine, GpuEngine):
+        return engine
+    if engine is not None:
+        raise InputError(
+            "device: gpu runs the paths on this machine's GPU; it does not combine with a "
+            "scheduler (use device: cpu there)"
+        )
+    load_cuda()
+    return GpuEngine()
 
 
 @dataclass(frozen=True, eq=False)

@@ -10,7 +10,8 @@ of diffrax's ``SaveAt``):
 - :class:`Stepping` -- ``uniform`` steps ``dt`` or ``intrinsic`` steps ``ds`` in
   s = ∫c dt, capped at ``h_max``;
 - :class:`MonteCarlo` -- ``paths``, ``seed``, ``block_size``, ``store_paths``, ``workers``,
-  ``rng`` (``xoshiro``: per-path streams drawn in the kernel, :mod:`.rng`; ``numpy``);
+  ``rng`` (``xoshiro``: per-path streams drawn in the kernel, :mod:`.rng`; ``numpy``),
+  ``device`` (``cpu``, or ``gpu``: :mod:`.gpu`, the same paths on an NVIDIA GPU);
 - :class:`UniformInitial` -- x(0) drawn uniformly from [lo, hi] with its own seed;
 - the noise (:class:`~ntc_design.simulate.system.NoiseModel`), checked by
   :func:`check_noise`.
@@ -42,6 +43,7 @@ from .robust_sampling import RobustSampling
 
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
 MAX_WORKERS = 4096
+DEVICES = ("cpu", "gpu")
 Noise = NoiseModel
 
 
@@ -256,7 +258,9 @@ class Stepping:
 class MonteCarlo:
     """Monte Carlo options: the number of sample ``paths``, the ``seed`` of the run's
     numpy SeedSequence, paths per ``block_size`` (a block is the unit of work and of
-    randomness), how many paths to keep (``store_paths``) and worker processes."""
+    randomness), how many paths to keep (``store_paths``), worker processes, the normals'
+    generator (``rng``) and the ``device`` (``cpu``, or ``gpu``: the same paths on an
+    NVIDIA GPU, :mod:`.gpu`)."""
 
     paths: int = 1000
     seed: int = 0
@@ -264,6 +268,7 @@ class MonteCarlo:
     store_paths: int = 10
     workers: int = 2
     rng: str = "xoshiro"  # xoshiro256** per path, drawn in the kernel; or numpy (PCG64)
+    device: str = "cpu"  # or "gpu": the same paths on an NVIDIA GPU (.gpu)
 
     def __post_init__(self) -> None:
         require_int("paths", self.paths, minimum=1)
@@ -273,8 +278,15 @@ class MonteCarlo:
         check_workers(self.workers)
         if self.rng not in ("xoshiro", "numpy"):
             raise InputError(f"rng: expected xoshiro or numpy, got {self.rng!r}")
+        if self.device not in DEVICES:
+            raise InputError(f"device: expected cpu or gpu, got {self.device!r}")
+        if self.device == "gpu" and self.rng == "numpy":
+            raise InputError(
+                "rng: numpy stays on the CPU (device: gpu draws xoshiro256** normals in the "
+                "kernel); use rng: xoshiro or device: cpu"
+            )
         for f in fields(self):
-            if f.name != "rng":
+            if f.name not in ("rng", "device"):
                 object.__setattr__(self, f.name, int(getattr(self, f.name)))
 
 
@@ -394,6 +406,7 @@ SCENARIO_KEYS = (
     "block_size",
     "store_paths",
     "rng",
+    "device",
     "resample",
     "robust",
     "digital",
@@ -511,6 +524,13 @@ class SimulationSpec:
                     "and scheme: implicit do not apply to it"
                 )
             self.digital.steps(self.T)  # h <= T and a bounded number of steps
+        if self.mc.device == "gpu":
+            if self.stepping.scheme != "explicit":
+                raise InputError("scheme: implicit runs on the CPU only (device: cpu)")
+            if callable(self.noise.f):
+                raise InputError(
+                    "noise.f: a callable f runs on the CPU only (device: gpu compiles a linear f)"
+                )
 
     # -- constructors -------------------------------------------------------------
 
@@ -561,7 +581,7 @@ class SimulationSpec:
         mc = MonteCarlo(
             **{
                 k: o.pop(k)
-                for k in ("paths", "seed", "block_size", "store_paths", "workers", "rng")
+                for k in ("paths", "seed", "block_size", "store_paths", "workers", "rng", "device")
                 if k in o
             }
         )
@@ -746,6 +766,7 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
 
 
 __all__ = [
+    "DEVICES",
     "METHODS",
     "OPTION_KEYS",
     "RobustSampling",

@@ -462,7 +462,9 @@ def _check_exact_work_tv(sys_: TimeVaryingSystem, spec, cfun, gain_text: str) ->
     check_exact_work(steps, sys_.design.topology.n * sys_.design.topology.dim)
 
 
-def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, workers: int, progress):
+def simulate_expression(
+    tv: ExpressionTopology, spec, cfun, gain_text: str, workers: int, progress, engine=None
+):
     """The driver's path for an :class:`ExpressionTopology` (``simulate`` dispatches here):
     grid, checks, Monte Carlo and exact moments with A(t), and the result; the grid, the
     parameters, the runs and the divergence check are the fixed topology's
@@ -482,6 +484,8 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         Processes.
     progress : callable(done, total) or None
         Called with path-steps done.
+    engine : GpuEngine, optional
+        Runs the paths on the GPU (``device: gpu``); None: on local processes.
 
     Returns
     -------
@@ -521,7 +525,7 @@ def simulate_expression(tv: ExpressionTopology, spec, cfun, gain_text: str, work
         block_size=spec.mc.block_size,
         store_paths=spec.mc.store_paths,
     )
-    part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, None, notes)
+    part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, engine, notes)
     exact, exact_stats = run_exact(
         spec,
         notes,

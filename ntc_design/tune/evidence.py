@@ -53,7 +53,8 @@ def checked_spec(topology: AnyTopology, spec: SimulationSpec) -> tuple[Simulatio
             raise
         why = str(exc)
     implicit = spec.replace(
-        stepping=Stepping(kind="intrinsic", dt=spec.stepping.dt, scheme="implicit")
+        stepping=Stepping(kind="intrinsic", dt=spec.stepping.dt, scheme="implicit"),
+        mc=MonteCarlo(**{**spec.mc.__dict__, "device": "cpu"}),  # sparse LU: on the CPU
     )
     simulate(topology, spec=implicit.replace(mc=probe, save=save))
     return implicit, why

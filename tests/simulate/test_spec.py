@@ -42,6 +42,33 @@ def test_an_unknown_generator_is_refused(g1, bad):
         simulate(g1, [1, 2, -1], T=0.1, paths=4, rng=bad)
 
 
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "options, needle",
+    [
+        ({"device": "tpu"}, "device: expected cpu or gpu, got 'tpu'"),
+        ({"device": 1}, "device: expected cpu or gpu, got 1"),
+        ({"device": "gpu", "rng": "numpy"}, "rng: numpy stays on the CPU"),
+        (
+            {"device": "gpu", "scheme": "implicit", "stepping": "intrinsic", "ds": 0.01},
+            "scheme: implicit runs on the CPU only",
+        ),
+        ({"device": "gpu", "noise": NoiseModel(0.4, np.tanh)}, "noise.f: a callable f runs"),
+    ],
+)
+def test_what_the_gpu_does_not_run_is_refused_before_any_device(options, needle):
+    # checked with the spec: no GPU, no numba-cuda needed to say so
+    with pytest.raises(InputError, match=f"^{needle}"):
+        SimulationSpec.build(THETA, **options)
+
+
+def test_device_is_a_monte_carlo_option_and_a_scenario_key():
+    spec = SimulationSpec.build(THETA, device="gpu")
+    assert spec.mc.device == "gpu" and spec.options()["device"] == "gpu"
+    assert SimulationSpec.build(THETA).mc.device == "cpu"
+    assert "device" in SCENARIO_KEYS and "device" in OPTION_KEYS
+
+
 @pytest.mark.parametrize(
     "over, needles",
     [

@@ -80,3 +80,13 @@ def test_point_hash_depends_on_resolved_parameters_only(tmp_path):
     assert len(set(a)) == 2 and b == a[1:]  # T: 1 is the base's own value
     (tmp_path / "tiny.yaml").write_text(TOPOLOGY.replace("[[2]]", "[[3]]"))
     assert [t.point for t in load_sweep(tmp_path / "b.yaml").tasks()] != b
+
+
+def test_device_is_a_sweep_key(tmp_path):
+    (tmp_path / "tiny.yaml").write_text(TOPOLOGY)
+    (tmp_path / "sc.yaml").write_text(SCENARIO)
+    (tmp_path / "sw.yaml").write_text("base: sc.yaml\ngrid: {device: [cpu, gpu]}\n")
+    tasks = load_sweep(tmp_path / "sw.yaml").tasks()
+    assert [t.params for t in tasks] == [{"device": "cpu"}, {"device": "gpu"}]
+    assert [t.scenario["device"] for t in tasks] == ["cpu", "gpu"]
+    assert tasks[0].point != tasks[1].point  # the same paths to rounding, not bit for bit

@@ -66,6 +66,16 @@ def test_checked_spec_switches_to_drift_implicit_past_the_explicit_limit(
     assert f"{limit:.4g}" in why  # the refusal quotes the independent limit 2/λ_max
 
 
+def test_checked_spec_on_a_gpu_falls_back_to_the_cpu_for_the_implicit_scheme(
+    pair_topology, spec, delta0
+):
+    a = float(1.1 * explicit_limit(delta0) / DT)
+    s = spec.replace(gain=f"{a!r}/(1+t)").replace(mc=spec.mc.__class__(paths=4, device="gpu"))
+    got, why = checked_spec(pair_topology, s)  # the explicit probe runs on the CPU: no GPU
+    assert got.stepping.scheme == "implicit" and got.mc.device == "cpu"
+    assert got.mc.paths == 4 and "unstable" in why
+
+
 def test_checked_spec_reraises_an_error_that_is_not_the_step_guard(pair_topology):
     bad = SimulationSpec.build([1.0, 2.0], T=1.0, dt=DT, paths=2, workers=1)  # d = 2 ≠ 1
     with pytest.raises(InputError, match=r"^theta: expected 1 numbers"):
