@@ -247,7 +247,7 @@ def _drift_noise_d3(xt, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, 
 @numba.njit(cache=True, nogil=True)
 def _em_core(
     x, xi, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
-    src, dst, kmat, gvec, drift, tile, delay,
+    src, dst, kmat, gvec, drift, tile, delay, k_base,
 ):  # fmt: skip
     """:func:`em_steps` and :func:`em_steps_rng` in one body: the normals are read from
     ``xi`` when ``states`` is empty, else drawn here from the paths' xoshiro streams. For
@@ -255,12 +255,13 @@ def _em_core(
     whole edge, its nine coefficients in registers: a third of the memory traffic of the
     general loops (one per nonzero), 1.2x faster on G1; the sums are the same up to rounding.
 
-    With ``delay`` D > 0 a row of ``x`` is the shift register (x_k, x_{k−1}, …, x_{k−D})
-    of the sampled protocol (:mod:`.digital`): the drift and the noise are taken at
-    x_{k−D}, added to x_k, and the register shifts by one state."""
+    With ``delay`` D > 0 a row of ``x`` is a ring of D + 1 states of the sampled protocol
+    (:mod:`.digital`): x_j in slot j mod (D + 1), where j = ``k_base`` + k counts the steps
+    from the start; the drift and the noise are taken at x_{j−D}, the slot that x_{j+1}
+    (= x_j + the increment) then overwrites, so a step costs the same whatever D."""
     p, width = x.shape
-    nd = width // (delay + 1)
-    lo = delay * nd
+    ring = delay + 1
+    nd = width // ring
     ne = src.size
     d = gvec.shape[1]
     for q0 in range(0, p, tile):
@@ -269,7 +270,6 @@ def _em_core(
         for q in range(w):
             for r in range(width):
                 xt[r, q] = x[q0 + q, r]
-        xd = xt[lo:, :]  # the state the feedback measures: x_{k−D}
         dx = np.empty((nd, w))
         zt = np.empty((max(2 * ne, m_draw), w))  # rows past 2·E: drawn, not used
         df = np.empty((d, w))
@@ -282,6 +282,9 @@ def _em_core(
         for k in range(k_from, k_to):
             c1 = ch[k]
             c2 = cs[k]
+            cur = ((k_base + k) % ring) * nd
+            nxt = ((k_base + k + 1) % ring) * nd  # x_{j−D}'s slot, then x_{j+1}'s
+            xd = xt[nxt : nxt + nd, :]  # the state the feedback measures: x_{j−D}
             if states.shape[0] == 0:
                 for q in range(w):
                     for e in range(2 * ne):
@@ -317,12 +320,9 @@ def _em_core(
                         ga = gvec[e, a]
                         for q in range(w):
                             dx[io + a, q] += ga * zt[e, q] + mb[q] * zt[ne + e, q]
-            for r in range(width - 1, nd - 1, -1):  # the register shifts (D > 0)
-                for q in range(w):
-                    xt[r, q] = xt[r - nd, q]
             for r in range(nd):
                 for q in range(w):
-                    xt[r, q] += dx[r, q]
+                    xt[nxt + r, q] = xt[cur + r, q] + dx[r, q]
         for q in range(w):
             for r in range(width):
                 x[q0 + q, r] = xt[r, q]
@@ -334,7 +334,7 @@ def _em_core(
 @numba.njit(cache=True, nogil=True)
 def em_steps(
     x, xi, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat,
-    gvec, drift, tile, delay=0,
+    gvec, drift, tile, delay=0, k_base=0,
 ):  # fmt: skip
     """Advance every row of ``x`` (p, Nd) in place over the steps ``k_from .. k_to − 1``
     of the batch: ``x += ch[k]·(u − L_B x) + cs[k]·Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e)``
@@ -344,17 +344,19 @@ def em_steps(
     ``dst[e]``'s rows). With ``drift`` False the L_B term is left out (the implicit
     scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
     innermost loop runs over the tile (no array views inside: they cost per nonzero). With
-    ``delay`` D > 0 each row is the register (x_k, …, x_{k−D}) of :func:`_em_core`."""
+    ``delay`` D > 0 each row is the ring of D + 1 states of :func:`_em_core` (``k_base``: the
+    steps taken before ``ch[0]``)."""
     _em_core(
         x, xi, np.zeros((0, 4), dtype=np.uint64), 0, k_from, k_to, ch, cs,
         indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay,
+        k_base,
     )  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
 def em_steps_rng(
     x, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
-    src, dst, kmat, gvec, drift, tile, delay=0,
+    src, dst, kmat, gvec, drift, tile, delay=0, k_base=0,
 ):  # fmt: skip
     """:func:`em_steps` with the normals drawn in the kernel, path by path from its
     xoshiro256** state ``states[path]`` (the same numbers as :func:`fill_normals` gives
@@ -362,7 +364,7 @@ def em_steps_rng(
     normals is written or read."""
     _em_core(
         x, np.zeros((1, 1, 1)), states, m_draw, k_from, k_to, ch, cs, indptr,
-        indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay,
+        indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay, k_base,
     )  # fmt: skip
 
 
@@ -413,7 +415,7 @@ def kernel_arrays(s) -> KernelArrays:
     )
 
 
-def numpy_step(x, xi_k, ch, cs, s, drift=True, delay=0):
+def numpy_step(x, xi_k, ch, cs, s, drift=True, delay=0, step=0):
     """One step of the same recursion with SciPy sparse products, in place (any f,
     callable ones included: f acts on the (p, E, d) array of differences).
 
@@ -432,12 +434,17 @@ def numpy_step(x, xi_k, ch, cs, s, drift=True, delay=0):
     drift : bool, optional
         Include −L_B x (False for the implicit scheme, which solves for it).
     delay : int, optional
-        D > 0: each row of ``x`` is the register (x_k, …, x_{k−D}); the drift and the
-        noise are taken at x_{k−D} and the register shifts (:func:`_em_core`).
+        D > 0: each row of ``x`` is the ring of D + 1 states of :func:`_em_core`; the drift
+        and the noise are taken at x_{j−D}, whose slot x_{j+1} then takes.
+    step : int, optional
+        j, the steps taken so far (the ring's position).
     """
     p = x.shape[0]
     ne, d = s.n_edges, s.dim
-    full, x = x, x[:, delay * s.nd :]
+    ring = delay + 1
+    cur = (step % ring) * s.nd
+    nxt = ((step + 1) % ring) * s.nd
+    full, x = x, x[:, nxt : nxt + s.nd]
     x3 = x.reshape(p, s.n_agents, d)
     diff = x3[:, s.src] - x3[:, s.dst]
     if s.f is not None:
@@ -449,6 +456,4 @@ def numpy_step(x, xi_k, ch, cs, s, drift=True, delay=0):
     inc = ch * s.u + cs * noise
     if drift:
         inc -= ch * (s.lap_b @ x.T).T
-    if delay:
-        full[:, s.nd :] = full[:, : -s.nd].copy()
-    full[:, : s.nd] += inc
+    full[:, nxt : nxt + s.nd] = full[:, cur : cur + s.nd] + inc

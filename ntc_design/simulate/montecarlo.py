@@ -131,24 +131,26 @@ class _Stepper:
         """Whether the kernel draws its own normals (compiled and explicit)."""
         return self.compiled and self.solver is None
 
-    def advance_drawing(self, x, states, m_draw, k_from, k_to, ch, cs) -> None:
+    def advance_drawing(self, x, states, m_draw, k_from, k_to, ch, cs, k_base=0) -> None:
         """:meth:`advance` with the normals drawn in the kernel from ``states`` (``m_draw``
         per path and step, the widest mode's 2·E, so every mode consumes the same)."""
         from .kernels import em_steps_rng, tile_width
 
         tile = tile_width(x.shape[0], x.shape[1])
-        em_steps_rng(x, states, m_draw, k_from, k_to, ch, cs, *self.args, True, tile, self.delay)
+        em_steps_rng(
+            x, states, m_draw, k_from, k_to, ch, cs, *self.args, True, tile, self.delay, k_base
+        )
 
-    def advance(self, x, xi, k_from, k_to, ch, cs) -> None:
+    def advance(self, x, xi, k_from, k_to, ch, cs, k_base=0) -> None:
         from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
 
         tile = tile_width(x.shape[0], x.shape[1])
         if self.solver is None:
             if self.compiled:
-                em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile, self.delay)
+                em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile, self.delay, k_base)
             else:
                 for k in range(k_from, k_to):
-                    numpy_step(x, xi[k], ch[k], cs[k], self.s, delay=self.delay)
+                    numpy_step(x, xi[k], ch[k], cs[k], self.s, delay=self.delay, step=k_base + k)
             return
         solver = self.solver
         for k in range(k_from, k_to):
@@ -185,10 +187,10 @@ def prepare(spec: MonteCarloSpec) -> None:
             one = np.ones(1)
             if fused:
                 states = np.zeros((0, 4), np.uint64)
-                em_steps_rng(x, states, 2, 0, 1, one, one, *st.args, True, 1, delay)
+                em_steps_rng(x, states, 2, 0, 1, one, one, *st.args, True, 1, delay, 0)
             else:
                 xi = np.zeros((1, 0, 2 * s.n_edges))
-                em_steps(x, xi, 0, 1, one, one, *st.args, True, 1, delay)
+                em_steps(x, xi, 0, 1, one, one, *st.args, True, 1, delay, 0)
             return
 
 
@@ -299,9 +301,14 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     src = NormalSource(getattr(spec, "rng", "xoshiro"), spec.seed, b, p)
     stats = BlockStats(spec, b, p0, p)
     nd_ = spec.x_init.size
-    # the sampled protocol holds the initial state for k < 0: every slot of the register
-    x = np.tile(spec.x_init, (p, spec.delay + 1))
-    now = x[:, :nd_]  # x_k (a view: the register keeps it in front)
+    # the sampled protocol holds the initial state for k < 0: every slot of the ring
+    ring = spec.delay + 1
+    x = np.tile(spec.x_init, (p, ring))
+
+    def now(k: int) -> np.ndarray:  # x_k: slot k mod (D + 1) of the ring (a view)
+        slot = (k % ring) * nd_
+        return x[:, slot : slot + nd_]
+
     e_max = max(s.n_edges for s in spec.systems)
     steppers = steppers if steppers is not None else _steppers(spec)
     c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
@@ -310,7 +317,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     cs_all = c_all * np.sqrt(h_all)
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     ends = _run_ends(grid)
-    if 0 in save_at and not stats.record(now, save_at[0]):
+    if 0 in save_at and not stats.record(now(0), save_at[0]):
         return stats.result()
     # the normals of step k are rows (p, 2·e_max) drawn in step order: the batch size
     # changes how many are drawn per call, not which (Generator fills sequentially)
@@ -329,16 +336,16 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
             stop = min(int(ends[k]), k0 + kb)
             if fused:
                 steppers[grid.mode[k]].advance_drawing(
-                    x, src.states, 2 * e_max, k - k0, stop - k0, ch, cs
+                    x, src.states, 2 * e_max, k - k0, stop - k0, ch, cs, k0
                 )
             else:
-                steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs)
+                steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs, k0)
             k = stop
-            if k in save_at and not stats.record(now, save_at[k]):
+            if k in save_at and not stats.record(now(k), save_at[k]):
                 return stats.result()
         if progress is not None:
             progress(kb * p)
-        if not stats.check(now, k0 + kb):
+        if not stats.check(now(k0 + kb), k0 + kb):
             return stats.result()
     return stats.result()
 

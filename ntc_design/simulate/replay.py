@@ -257,7 +257,9 @@ def kernel_replay(
             stop += 1
         em_steps(x, xi, k, stop, ch, cs, *args[int(modes[k])], True, tile, lag)
         k = stop
-    out = x[:, : law.n * law.dim]
+    nd_ = law.n * law.dim
+    slot = (steps % (lag + 1)) * nd_  # x_K's slot of the kernel's ring
+    out = x[:, slot : slot + nd_]
     return out[0].copy() if single else out.copy()
 
 

@@ -121,7 +121,8 @@ def test_switching_moments_use_the_mode_of_each_sample(switching_set):
 
 @pytest.mark.parametrize("delay", [0, 1, 3])
 def test_the_delayed_kernel_is_the_recursion_written_out(g1_issue, delay):
-    """em_steps with a delay against a plain loop over a shift register (same normals)."""
+    """em_steps with a delay (a ring of D + 1 states) against a plain loop over a shift
+    register (same normals)."""
     s, _ = g1_issue
     st = _Stepper(s, False)
     lap, e_n = s.lap_b.toarray(), s.n_edges
@@ -144,7 +145,9 @@ def test_the_delayed_kernel_is_the_recursion_written_out(g1_issue, delay):
                     s.g_edge[e] * xi[k, q, e] + s.k_blocks[e] @ diff * xi[k, q, e_n + e]
                 )
             reg = [reg[0] + ch[k] * (s.u - lap @ xd) + cs[k] * noise] + reg[:-1]
-        assert np.allclose(x[q].reshape(delay + 1, 21), np.array(reg), rtol=1e-13, atol=1e-12)
+        ring = x[q].reshape(delay + 1, 21)  # x_j in slot j mod (D + 1)
+        got = np.array([ring[(k_n - i) % (delay + 1)] for i in range(delay + 1)])
+        assert np.allclose(got, np.array(reg), rtol=1e-13, atol=1e-12)
 
 
 @pytest.mark.parametrize("rng", ["xoshiro", "numpy"])
@@ -202,3 +205,19 @@ def test_a_delay_too_large_for_memory_is_refused_before_any_allocation(g1):
 def test_digital_runs_refuse_what_does_not_apply(g1, options, message):
     with pytest.raises(InputError, match=message):
         simulate(g1, THETA, digital={"period": 0.1}, method="exact", **{"T": 1.0, **options})
+
+
+def test_a_step_writes_one_state_whatever_the_delay(g1_issue):
+    """The ring: a step of the delayed kernel writes x_{j+1} over x_{j−D}'s slot and leaves
+    the other D states alone (a shift register would move all D + 1: work growing with D)."""
+    s, _ = g1_issue
+    st = _Stepper(s, False)
+    delay, p = 500, 3
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(p, 21 * (delay + 1)))
+    before = x.copy()
+    xi = rng.standard_normal((1, p, 2 * s.n_edges))
+    em_steps(x, xi, 0, 1, np.array([0.01]), np.array([0.1]), *st.args, True, 4, delay, 7)
+    changed = np.flatnonzero(np.any(x != before, axis=0))
+    slot = (7 + 1) % (delay + 1)
+    assert changed.min() >= 21 * slot and changed.max() < 21 * (slot + 1)
