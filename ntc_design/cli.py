@@ -419,6 +419,38 @@ def robust(
         raise typer.Exit(1)
 
 
+@app.command(epilog="Example: ntc examples --copy my-examples")
+def examples(
+    copy: Annotated[
+        Path | None,
+        typer.Option(
+            "--copy", help="Copy the examples into this folder (new, or existing and empty)."
+        ),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """The bundled example files (topologies, scenarios, sweeps) and where they are
+    installed; with --copy, a copy of them to edit and run (no checkout needed)."""
+    from .paper import copy_examples, example_files, example_path
+
+    root = example_path()
+    names = example_files()
+    written = copy_examples(copy) if copy is not None else None
+    if as_json:
+        doc = {"folder": str(root), "files": names}
+        if written is not None:
+            doc["copied_to"] = str(copy)
+        print(json_text(doc))
+        return
+    if written is None:
+        print(f"the bundled examples are in {root}:")
+        for name in names:
+            print(f"  {name}")
+        print("copy them to a folder of your own with: ntc examples --copy DIR")
+    else:
+        print(f"copied {len(written)} example files to {copy} (e.g. ntc check {copy}/g1.yaml)")
+
+
 # the commands that run a study register after the ones above (``ntc --help`` order)
 from . import cli_runs  # noqa: E402, F401
 

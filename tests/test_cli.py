@@ -97,3 +97,50 @@ def test_out_above_the_dense_size_is_refused_before_work(tmp_path, capsys, monke
     needle = f"--out: a robust certificate is issued up to Nd = {RICCATI_MAX_ND}"
     assert_input_error(args, capsys, monkeypatch, needle)
     assert not (tmp_path / "c.json").exists()
+
+
+def test_examples_lists_and_copies_the_bundled_files(tmp_path, capsys, monkeypatch):
+    from ntc_design.paper import example_files, example_path
+
+    code, out, err = run_cli(["examples"], capsys, monkeypatch)
+    assert code == 0, err
+    assert f"the bundled examples are in {example_path()}:" in out
+    assert [ln.strip() for ln in out.splitlines()[1:-1]] == example_files()
+    code, out, err = run_cli(
+        ["examples", "--copy", tmp_path / "mine", "--json"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["files"] == example_files() and doc["copied_to"] == str(tmp_path / "mine")
+    assert (
+        sorted(
+            p.relative_to(tmp_path / "mine").as_posix()
+            for p in (tmp_path / "mine").rglob("*")
+            if p.is_file()
+        )
+        == example_files()
+    )
+    # the copy is a user's to run, as the checkout's examples are
+    code, _, err = run_cli(
+        ["design", tmp_path / "mine" / "g1.yaml", "--theta", "1,2,-1"], capsys, monkeypatch
+    )
+    assert code == 0, err
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("as_json", [False, True])
+@pytest.mark.parametrize(
+    "make, needle",
+    [
+        (lambda p: (p.mkdir(), (p / "notes.txt").write_text("mine")), "the folder is not empty"),
+        (lambda p: p.write_text("mine"), "exists and is not a folder"),
+    ],
+    ids=["non-empty folder", "a file"],
+)
+def test_examples_copy_refuses_to_overwrite(tmp_path, capsys, monkeypatch, make, needle, as_json):
+    dest = tmp_path / "dest"
+    make(dest)
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    args = ["examples", "--copy", dest, *(["--json"] if as_json else [])]
+    assert_input_error(args, capsys, monkeypatch, f"{dest}: {needle}")
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
