@@ -129,6 +129,16 @@ def _pos(m: np.ndarray) -> bool:
     return bool(np.linalg.eigvalsh(s)[0] > 1e-10 * max(1.0, np.max(np.abs(s))))
 
 
+def _at_least(x, y, rtol=1e-6, atol=1e-12) -> bool:
+    """x >= y, but for a relative tolerance (an upper bound that is still true)."""
+    return (
+        isinstance(x, (int, float))
+        and not isinstance(x, bool)
+        and math.isfinite(x)
+        and x >= y - rtol * max(abs(y), atol / rtol)
+    )
+
+
 def _close(x, y, rtol=1e-6, atol=1e-12) -> bool:
     return (
         isinstance(x, (int, float))
@@ -304,8 +314,8 @@ def _truth_time_varying(doc: dict) -> list[str]:
     t0 = r["t0"]
     if s["gain"] is not None:
         tt = t0 + np.geomspace(1e-9, 1e6, 2000)
-        if t0 is None or not np.all(1 / (1 + tt) < kappa) or 1 / (1 + 0.999 * t0) < kappa * 0.99:
-            bad.append("t₀")  # c(t) < κ from t₀ on, and t₀ not far beyond the crossing
+        if t0 is None or not np.all(1 / (1 + tt) < kappa):
+            bad.append("t₀")  # c(t) < κ from t₀ on (a later t₀ is still true)
     if not (r["lambda2"] <= r["sampled_inf"] and _close(r["sampled_inf"], float(lam.min()), 1e-3)):
         bad.append("sampled infimum")
     if not _close(r["relative_gap"], (r["sampled_inf"] - r["lambda2"]) / r["sampled_inf"], 1e-9):
@@ -464,7 +474,8 @@ def _truth_robust(doc: dict) -> list[str]:
             np.linalg.norm(np.linalg.solve(_lap_with(top, w, delta, b), u) - target)
             for w in samples
         )
-        if not worst**2 <= gam or not _close(res["offset"]["upper"], math.sqrt(gam)):
+        # an upper bound: true when at or above √γ (a looser one is still true)
+        if not worst**2 <= gam or not _at_least(res["offset"]["upper"], math.sqrt(gam)):
             bad.append("offset bound")
     eig = float(np.min(np.linalg.eigvals(lap).real))
     if not _close(res["nominal_decay"], eig):
@@ -481,9 +492,12 @@ def _truth_robust(doc: dict) -> list[str]:
                 if key == "decay"
                 else float(np.linalg.norm(np.linalg.solve(lw, u) - target))
             )
-            # an eigenvalue is defined to a tolerance relative to the matrix's size
+            # an eigenvalue is defined to a tolerance relative to the matrix's size; the
+            # realisation's rate bounds the robust rate above, its offset the worst offset
+            # below: the reported end is true on that side of it
             atol = 1e-6 * float(np.max(np.abs(lw))) if key == "decay" else 1e-12
-            if not _close(res[path[0]][path[1]], got, 1e-6, atol):
+            end = res[path[0]][path[1]]
+            if not (_at_least(end, got, 1e-6, atol) if key == "decay" else _at_least(-end, -got)):
                 bad.append(f"{key} realisation")
     return bad
 

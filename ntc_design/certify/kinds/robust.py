@@ -579,11 +579,13 @@ class RobustKind(CertificateKind):
             audit.exact(("decay", "lower"), float(st.alpha or 0.0))
         if audit.has("offset", "gamma"):
             audit.exact(("offset", "gamma"), float(st.gamma or 0.0))
-            audit.recomputed(("offset", "upper"), math.sqrt(max(st.gamma or 0.0, 0.0)), 0.0)
+            audit.bound(("offset", "upper"), math.sqrt(max(st.gamma or 0.0, 0.0)), "upper")
         reals = doc.get("realizations") or {}
         if not isinstance(reals, dict):
             audit.fail("realizations: expected an object")
             return
+        # the other ends, attained by a realisation: the robust rate is at most its rate,
+        # the worst offset at least its offset (so the reported ends on their sound side)
         for key, path in (("decay", ("decay", "upper")), ("offset", ("offset", "lower"))):
             if audit.has(*path):
                 got = _attained(reals.get(key), mode, st.radii, key)
@@ -591,7 +593,7 @@ class RobustKind(CertificateKind):
                     audit.fail(f"realizations.{key}: {got}")
                     audit.informational(path)
                 else:
-                    audit.recomputed(path, got, scale if key == "decay" else 0.0)
+                    audit.bound(path, got, path[1], scale if key == "decay" else 0.0)
         if audit.has("margin", "upper"):
             r = reals.get("margin")
             rad = r.get("radius") if isinstance(r, dict) else None
@@ -608,7 +610,7 @@ class RobustKind(CertificateKind):
                 audit.fail(
                     f"realizations.margin: min Re λ = {got:.3g} > 0, it is not destabilising"
                 )
-            audit.recomputed(("margin", "upper"), rho, 0.0)
+            audit.bound(("margin", "upper"), rho, "upper")  # a destabilising radius
 
 
 def _prove_lmi(claim: Claim, st: _State) -> Check:

@@ -1,11 +1,13 @@
 """Tests of :mod:`ntc_design.certify.kinds.robust`."""
 
+import copy
 import json
 
 import numpy as np
 import pytest
 
 from ntc_design.certify import verify
+from ntc_design.certify.format import finish
 from ntc_design.certify.kinds.robust import robust_certificate
 from tests.support.robust import forged_valid, raise_alpha_to
 
@@ -103,3 +105,47 @@ def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid_rob
              widen_radius_of_offset)  # fmt: skip
     for edit in edits:
         assert not forged(edit), edit.__name__
+
+
+# -- the brackets' other ends: checked in their sound direction ---------------------------
+
+_ENDS = {  # the end, and which side of the value re-derived from its realisation it is on
+    ("decay", "upper"): "upper",
+    ("offset", "lower"): "lower",
+    ("offset", "upper"): "upper",
+    ("margin", "upper"): "upper",
+}
+
+
+def _set_end(path, value):
+    def edit(d):
+        d["results"][path[0]][path[1]] = value
+
+    return edit
+
+
+@pytest.mark.parametrize("path", list(_ENDS), ids=".".join)
+def test_a_looser_end_still_verifies(g1_robust, path):
+    # a bracket end a little wider than today's re-derivation is still true
+    _, rep = g1_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    got = doc["results"][path[0]][path[1]]
+    looser = got * 1.01 if _ENDS[path] == "upper" else got * 0.99
+    assert forged_valid(doc, _set_end(path, looser))
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("path", list(_ENDS), ids=".".join)
+def test_an_end_forged_in_the_unsound_direction_is_rejected(g1_robust, path):
+    _, rep = g1_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    got = doc["results"][path[0]][path[1]]
+    tighter = got * 0.99 if _ENDS[path] == "upper" else got * 1.01
+    bad = copy.deepcopy(doc)
+    _set_end(path, tighter)(bad)
+    for k in ("digest", "subject_digest", "versions"):
+        bad.pop(k, None)
+    ver = verify(finish(bad))
+    audit = [c for c in ver.failed if c.name.startswith("reported results")]
+    needle = f"{'.'.join(path)}: reported {_ENDS[path]} bound {tighter!r}"
+    assert audit and needle in audit[0].detail, [(c.name, c.detail) for c in ver.failed]
