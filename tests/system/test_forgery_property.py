@@ -20,17 +20,12 @@ import networkx as nx
 import numpy as np
 import pytest
 
-import ntc_design as nd
 from ntc_design.certify import KINDS, verify
 from ntc_design.certify.arrays import topology_from_subject
 from ntc_design.certify.format import digest, document_hash, topology_hash
-from ntc_design.certify.kinds import IssueOptions
-from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
-from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
 from ntc_design.design import design
 from ntc_design.errors import InputError
 from ntc_design.files import parse_topology
-from ntc_design.gain import analyse_gain
 from ntc_design.generate import random_network
 from ntc_design.model import Topology
 from ntc_design.timevarying import TimeVaryingDesign, from_document
@@ -44,53 +39,10 @@ MAX_LIST = 3  # entries mutated per list: the first, the middle and the last
 # ------------------------------------------------------------------ honest certificates
 
 
-def _tv_topology() -> dict:
-    """A 3-agent path whose antagonistic weight varies with t (period 2π)."""
-    w = {
-        "1->2": {"diag": ["-1 - 0.5*sin(t)", -2]},
-        "2->3": [[2, 0], [0, 1]],
-        "3->1": {"identity": 1},
-        "2->1": {"identity": 1},
-    }
-    edges = [{"from": int(k[0]), "to": int(k[-1]), "weight": v} for k, v in w.items()]
-    return {"dim": 2, "agents": 3, "edges": edges, "period": "2*pi"}
-
-
 @pytest.fixture(scope="module")
-def honest() -> dict[str, dict]:
-    certs = ROOT / "certificates"
-    g1 = json.loads((certs / "g1.json").read_text())
-    sw = json.loads((certs / "switching.json").read_text())
-    theta3 = [1.0, 2.0, -1.0]
-    scale_rand = scale_certificate(design(random_network(12, 2, seed=3), [1.0, -1.0], 0.1))
-    scale_g1 = scale_certificate(design(nd.load(ROOT / "examples" / "g1.yaml"), theta3, 0.1))
-    with pytest.warns(Warning):  # G3 fails Assumption 2 (the paper's own example)
-        sd = design(nd.load(ROOT / "examples" / "switching.yaml"), theta3, 0.1)
-    sws = switching_scale_certificate(sd)
-    tv = from_document(_tv_topology(), "tv")
-    tvc = KINDS["time_varying"].issue(
-        TimeVaryingDesign(tv, np.array([1.0, 2.0]), 0.1),
-        IssueOptions(gain=analyse_gain("1/(1+t)")),
-    )
-    from ntc_design.certify.kinds.robust import robust_certificate
-    from ntc_design.certify.robust import robust
-
-    rdes = design(random_network(4, 2, seed=1), [1.0, -1.0], 0.1, thresholds=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
-    out = {
-        "robust": rob,
-        "hurwitz": g1,
-        "switching": sw,
-        "hurwitz-scale": scale_rand,
-        "hurwitz-scale-g1": scale_g1,
-        "switching-scale": sws,
-        "time_varying": tvc,
-    }
-    for name, doc in out.items():
-        assert verify(copy.deepcopy(doc)).valid, name
-    return out
+def honest(honest_certificates) -> dict[str, dict]:
+    """One honest certificate of every kind (tests/support/certificates.py)."""
+    return honest_certificates
 
 
 # ------------------------------------------------------------------ the independent truth
