@@ -300,8 +300,8 @@ class HurwitzScaleKind(CertificateKind):
         return (
             ResultRow(
                 "components",
-                f"{r['components']} (largest {r['largest_component_agents']} agents), "
-                f"methods {r['methods']}",
+                f"{r['components']} (largest {r['largest_component_agents']} agents), by "
+                + ", ".join(f"{m} {k}" for m, k in r["methods"].items()),
             ),
             ResultRow("decay rate", f"{number_text(est['value'])} ({est['method']})", True),
             *(ResultRow("skipped", sk) for sk in r["skipped"]),

@@ -201,3 +201,17 @@ def test_hurwitz_scale_checks_what_it_certifies_and_claims(forge):
     if "subject_digest" in doc and doc["subject_digest"] != "sha256:0":
         _refresh(doc)
     assert not verify(doc).valid
+
+
+def test_the_components_row_names_the_methods_in_words():
+    from ntc_design.certify.kinds.hurwitz_scale import HurwitzScaleKind
+
+    res = certify(random_network(40, 3, seed=5), THETA_SW).certificate["results"]
+    (comp, *_) = HurwitzScaleKind().rows(res)
+    m = res["methods"]
+    assert comp.label == "components"
+    assert comp.value == (
+        f"{res['components']} (largest {res['largest_component_agents']} agents), by "
+        f"dominance {m['dominance']}, symmetric {m['symmetric']}, lyapunov {m['lyapunov']}, "
+        f"none {m['none']}"
+    )
