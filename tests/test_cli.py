@@ -184,3 +184,20 @@ def test_every_error_exit_is_one_line_and_json_under_json(
         assert json.loads(out) == {"ok": False, "error": message, "exit_code": code}
     else:
         assert out == ""
+
+
+def test_robust_and_verify_name_the_per_edge_radii(tmp_path, capsys, monkeypatch):
+    from tests.support.robust import TRI, TRI_SET
+
+    (tmp_path / "tri.yaml").write_text(TRI, encoding="utf-8")
+    out = tmp_path / "c.json"
+    code, text, err = run_cli(
+        ["robust", tmp_path / "tri.yaml", "--theta", "1", "--out", out], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert text.splitlines()[0] == f"tri: robust brackets for {TRI_SET}"
+    code, shown, err = run_cli(["verify", out], capsys, monkeypatch)
+    assert code == 0, err
+    assert shown.count(f"for {TRI_SET})") == 2  # the decay and the offset, beside them
+    for said in (text, shown):
+        assert "at ρ = 0.5" not in said and "ρ = 0.5)" not in said

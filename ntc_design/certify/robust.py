@@ -48,6 +48,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
@@ -104,6 +105,21 @@ class UncertainEdges:
         return np.array(
             [unc.get((int(i), int(j)), default) for i, j in zip(self.dst, self.src, strict=True)]
         )
+
+    def labels(self, top: Topology) -> list[str]:
+        """Each edge as ``from→to`` with the topology's agent labels.
+
+        Parameters
+        ----------
+        top : Topology
+            The topology these edges are of.
+
+        Returns
+        -------
+        list of str
+        """
+        lab = top.labels
+        return [f"{lab[int(j)]}→{lab[int(i)]}" for i, j in zip(self.dst, self.src, strict=True)]
 
     def basis(self, e: int) -> np.ndarray:
         """V_e: the pivot columns of W_e (d × rank).
@@ -185,6 +201,71 @@ def uncertain_edges(top: Topology) -> UncertainEdges:
 
 
 check_radius = require_radius  # the one radius check (errors.require_radius)
+
+#: Per-edge radii named in a statement (the rest counted).
+RADII_SHOWN = 8
+
+
+def radius_text(
+    radii: Sequence[float],
+    radius: float,
+    short: bool = False,
+    edges: Sequence[str] | None = None,
+) -> str:
+    """The uncertainty set as a statement names it: ``ρ = 0.05`` when every edge has the
+    same radius, else ``the per-edge radii (max 0.5; 1→2: 0.02, 2→3: 0.5, 3→1: 0.02)``: a
+    bound proven for per-edge radii is not one for every weight at the largest of them.
+
+    Parameters
+    ----------
+    radii : sequence of float
+        ρ_e per uncertain edge (:attr:`RobustReport.radii`; empty: no uncertain edge).
+    radius : float
+        The largest (ρ itself when every edge has the same).
+    short : bool, optional
+        Leave the list of ρ_e out (a figure's title).
+    edges : sequence of str, optional
+        The edges' names (:meth:`UncertainEdges.labels`), in the order of ``radii``;
+        without them the radii are listed as ``ρ_e = 0.02, 0.5, …``.
+
+    Returns
+    -------
+    str
+    """
+    vals = [float(r) for r in radii]
+    if len(set(vals)) <= 1:
+        return f"ρ = {radius:.6g}"
+    if short:
+        return f"the per-edge radii (max {radius:.6g})"
+    if edges is not None and len(edges) == len(vals):
+        shown = ", ".join(
+            f"{e}: {r:.6g}" for e, r in list(zip(edges, vals, strict=True))[:RADII_SHOWN]
+        )
+    else:
+        shown = "ρ_e = " + ", ".join(f"{r:.6g}" for r in vals[:RADII_SHOWN])
+    more = f", …; {len(vals)} edges" if len(vals) > RADII_SHOWN else ""
+    return f"the per-edge radii (max {radius:.6g}; {shown}{more})"
+
+
+def radius_phrase(radii: Sequence[float], radius: float, edges: Sequence[str] | None = None) -> str:
+    """What a proven number holds for: ``at ρ = 0.05``, or ``for the per-edge radii (max
+    0.5; …)`` (:func:`radius_text`).
+
+    Parameters
+    ----------
+    radii : sequence of float
+        ρ_e per uncertain edge.
+    radius : float
+        The largest.
+    edges : sequence of str, optional
+        The edges' names, in the order of ``radii``.
+
+    Returns
+    -------
+    str
+    """
+    text = radius_text(radii, radius, edges=edges)
+    return f"at {text}" if text.startswith("ρ = ") else f"for {text}"
 
 
 # -- realisations ----------------------------------------------------------------------
@@ -370,15 +451,22 @@ class RobustReport:
             ("margin radius ρ", num(self.margin.lower), num(self.margin.upper),
              f"lower proven ({m} at α = 0); upper: a destabilising realisation"),
         ]  # fmt: skip
-        antag = int(np.sum(uncertain_edges(top).s < 0))
-        notes = (
+        ed = uncertain_edges(top)
+        antag = int(np.sum(ed.s < 0))
+        notes: tuple[str, ...] = (
             f"nominal decay rate {self.nominal_decay:.6g}; the protocol (informed agents, B_i, "
             f"δ = {self.design.delta:.6g}, x0) is kept at its nominal design",
             f"only the {antag} antagonistic weight(s) move the consensus point "
             "(D_eᵀ(1⊗θ) = 0 on cooperative edges)",
         )
+        if len(set(self.radii)) > 1:  # what each bracket is about, said where it differs
+            notes += (
+                "the decay and offset brackets hold for the per-edge radii; the margin radius "
+                "is one ρ on every edge",
+            )
+        phrase = radius_phrase(self.radii, self.radius, ed.labels(top))
         return Table.build(
-            title or f"{top.name or 'topology'}: robust brackets at ρ = {self.radius:g}",
+            title or f"{top.name or 'topology'}: robust brackets {phrase}",
             ("bracket", "lower", "upper", "which end is proven"),
             rows,
             notes,
@@ -684,6 +772,8 @@ __all__ = [
     "UncertainEdges",
     "abscissa",
     "check_radius",
+    "radius_phrase",
+    "radius_text",
     "pivot_columns",
     "realised_topology",
     "robust",

@@ -169,3 +169,69 @@ def test_the_table_names_the_method_of_each_proven_end(mid_robust):
     assert "Riccati search" in said[0] and "S-procedure, reduced" in said[1]
     assert "Riccati search at α = 0" in said[2]
     assert "block dominance" in [r[-1].text for r in sparse.table().rows][0]
+
+
+# -- how a statement names its set: one radius, or the per-edge radii ---------------------
+
+
+@pytest.mark.parametrize(
+    "radii, radius, kw, text",
+    [
+        ([0.05, 0.05], 0.05, {}, "ρ = 0.05"),
+        ([], 0.05, {}, "ρ = 0.05"),  # no uncertain edge: the radius asked for
+        ([0.02, 0.5], 0.5, {}, "the per-edge radii (max 0.5; ρ_e = 0.02, 0.5)"),
+        ([0.02, 0.5], 0.5, {"short": True}, "the per-edge radii (max 0.5)"),
+        (
+            [0.02, 0.5],
+            0.5,
+            {"edges": ["1→2", "2→3"]},
+            "the per-edge radii (max 0.5; 1→2: 0.02, 2→3: 0.5)",
+        ),
+        (
+            [0.1] * 9 + [0.2],
+            0.2,
+            {},
+            "the per-edge radii (max 0.2; ρ_e = " + ", ".join(["0.1"] * 8) + ", …; 10 edges)",
+        ),
+    ],
+)
+def test_radius_text_names_one_radius_or_the_per_edge_radii(radii, radius, kw, text):
+    from ntc_design.certify.robust import radius_phrase, radius_text
+
+    assert radius_text(radii, radius, **kw) == text
+    edges = kw.get("edges")
+    phrase = radius_phrase(radii, radius, edges)
+    assert phrase == ("at " if text.startswith("ρ") else "for ") + radius_text(
+        radii, radius, edges=edges
+    )
+
+
+def test_per_edge_brackets_are_not_stated_at_one_radius(tri_robust):
+    from tests.support.robust import TRI_SET
+
+    _, des, rep = tri_robust
+    assert sorted(rep.radii) == [0.02, 0.02, 0.5] and rep.radius == 0.5
+    table = rep.table()
+    assert table.title == f"tri: robust brackets for {TRI_SET}"
+    assert "at ρ = 0.5" not in table.text()
+    assert table.notes[-1] == (
+        "the decay and offset brackets hold for the per-edge radii; the margin radius is one "
+        "ρ on every edge"
+    )
+    # why: every weight at −50 % (inside one radius 0.5, outside the per-edge set) decays
+    # slower than the proven α, so "α at ρ = 0.5" would be false
+    half = {k: 0.5 * a for k, a in des.topology.weights.items()}
+    slow = float(np.min(np.linalg.eigvals(independent_lap_b(des, half)).real))
+    assert slow < rep.decay.lower
+    assert slow == pytest.approx(0.52885211, rel=1e-6)  # the protocol (B_i, δ) nominal
+    # a uniform radius is still said as one
+    assert "robust brackets at ρ = 0.05" in robust_uniform_title(des)
+
+
+def robust_uniform_title(des):
+    import dataclasses
+
+    top = dataclasses.replace(des.topology, uncertainty={})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return robust(dataclasses.replace(des, topology=top), 0.05, starts=1).table().title

@@ -31,6 +31,8 @@ from ..robust import (
     RobustReport,
     abscissa,
     check_radius,
+    radius_phrase,
+    radius_text,
     robust,
     uncertain_edges,
 )
@@ -503,9 +505,8 @@ class RobustKind(CertificateKind):
         u = _input_exact(mode)
         r0 = u - mode.exact @ Dyadic.of(target.reshape(n, 1))
         proof = _pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radii))
-        return Check(
-            claim.id, proof.holds, f"{proof.method}: {proof.detail} (ρ = {st.radius!r})", claim
-        )
+        at = _set_text(st)
+        return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail} ({at})", claim)
 
     def stated(
         self, properties: tuple[Property, ...], reading: Reading
@@ -526,13 +527,18 @@ class RobustKind(CertificateKind):
         """
         st: _State = reading.state
         out: list[tuple[Property, str]] = []
+        # the decay and offset are proven for the subject's set, per-edge radii included
+        # (not for every weight at the largest of them); the margin is one ρ on every edge
+        at = radius_phrase(st.radii.tolist(), st.radius, _edge_names(st))
+        per_edge = len(set(st.radii.tolist())) > 1
         if Property.ROBUST_MARGIN in properties and st.margin is not None:
-            out.append((Property.ROBUST_MARGIN, f"margin radius {st.margin:.6g}"))
+            one = ", one ρ on every edge" if per_edge else ""
+            out.append((Property.ROBUST_MARGIN, f"margin radius {st.margin:.6g}{one}"))
         if Property.ROBUST_DECAY in properties and st.alpha is not None:
-            out.append((Property.ROBUST_DECAY, f"α = {st.alpha:.6g} at ρ = {st.radius:.6g}"))
+            out.append((Property.ROBUST_DECAY, f"α = {st.alpha:.6g} {at}"))
         if Property.ROBUST_OFFSET in properties and st.gamma is not None and st.gamma >= 0:
             bound = math.sqrt(st.gamma)
-            out.append((Property.ROBUST_OFFSET, f"<= {bound:.6g} at ρ = {st.radius:.6g}"))
+            out.append((Property.ROBUST_OFFSET, f"<= {bound:.6g} {at}"))
         return tuple(out)
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
@@ -613,6 +619,17 @@ class RobustKind(CertificateKind):
             audit.bound(("margin", "upper"), rho, "upper")  # a destabilising radius
 
 
+def _edge_names(st: _State) -> list[str] | None:
+    """The uncertain edges' names (``from→to``), in the order of ``st.radii``."""
+    return uncertain_edges(st.mode.top).labels(st.mode.top) if st.mode.in_range else None
+
+
+def _set_text(st: _State) -> str:
+    """The subject's uncertainty set in a check's detail: ``ρ = 0.05``, or the per-edge
+    radii named by edge (:func:`ntc_design.certify.robust.radius_text`)."""
+    return radius_text(st.radii.tolist(), st.radius, edges=_edge_names(st))
+
+
 def _prove_lmi(claim: Claim, st: _State) -> Check:
     """A decay or margin claim: Ψ(P, τ) ≻ 0 exactly up to the LMI's size; past it, P ≻ 0,
     τ > 0 and the Schur form M(P, τ) ≻ 0 of :mod:`ntc_design.certify.robust_are` by
@@ -644,7 +661,8 @@ def _prove_lmi(claim: Claim, st: _State) -> Check:
         how = "verified-float: P ≻ 0, τ > 0 and P S + SᵀP − Q(τ) − P R(τ) P ≻ 0 " + (
             "hold" if ok else "not proven"
         )
-    return Check(claim.id, ok, f"{how} (α = {claim.alpha!r}, ρ = {radius!r})", claim)
+    at = _set_text(st) if claim.prop is Property.ROBUST_DECAY else f"ρ = {radius!r}"
+    return Check(claim.id, ok, f"{how} (α = {claim.alpha!r}, {at})", claim)
 
 
 def _prove_offset_float(claim: Claim, st: _State) -> Check:
@@ -668,7 +686,7 @@ def _prove_offset_float(claim: Claim, st: _State) -> Check:
     how = "verified-float: G_e G_eᵀ ≻ W_e and Γ(γ, λ) ≻ 0 with Y rebuilt " + (
         "hold" if ok else "not proven"
     )
-    return Check(claim.id, ok, f"{how} (ρ = {st.radius!r})", claim)
+    return Check(claim.id, ok, f"{how} ({_set_text(st)})", claim)
 
 
 def _input_exact(mode: DenseMode) -> Dyadic:

@@ -149,3 +149,26 @@ def test_an_end_forged_in_the_unsound_direction_is_rejected(g1_robust, path):
     audit = [c for c in ver.failed if c.name.startswith("reported results")]
     needle = f"{'.'.join(path)}: reported {_ENDS[path]} bound {tighter!r}"
     assert audit and needle in audit[0].detail, [(c.name, c.detail) for c in ver.failed]
+
+
+def test_per_edge_radii_are_stated_as_the_per_edge_set(tri_robust):
+    # what ntc verify prints beside each property, and in the claims' checks
+    from tests.support.robust import TRI_SET
+
+    _, _, rep = tri_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    ver = verify(doc)
+    assert ver.valid
+    said = {p["property"]: p.get("stated") for p in ver.about.to_dict()["properties"]}
+    alpha, gamma = doc["results"]["decay"]["lower"], doc["results"]["offset"]["gamma"]
+    margin = doc["results"]["margin"]["lower"]
+    assert said == {
+        "robust_margin": f"margin radius {margin:.6g}, one ρ on every edge",
+        "robust_decay": f"α = {alpha:.6g} for {TRI_SET}",
+        "robust_offset": f"<= {gamma**0.5:.6g} for {TRI_SET}",
+    }
+    details = {c.claim.prop.value: c.detail for c in ver.checks if c.claim is not None}
+    assert details["robust_decay"].endswith(f"(α = {alpha!r}, {TRI_SET})")
+    assert details["robust_offset"].endswith(f"({TRI_SET})")
+    assert details["robust_margin"].endswith(f"(α = 0.0, ρ = {margin!r})")  # one ρ: true
+    assert "ρ = 0.5" not in " ".join([*said.values(), *details.values()])
