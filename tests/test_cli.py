@@ -201,3 +201,29 @@ def test_robust_and_verify_name_the_per_edge_radii(tmp_path, capsys, monkeypatch
     assert shown.count(f"for {TRI_SET})") == 2  # the decay and the offset, beside them
     for said in (text, shown):
         assert "at ρ = 0.5" not in said and "ρ = 0.5)" not in said
+
+
+@pytest.mark.parametrize("radius", ["0", "0.05"])
+def test_robust_proves_brackets_where_certify_proves_the_nominal_case(
+    radius, tmp_path, capsys, monkeypatch
+):
+    # the network: a weight v vᵀ whose kernel rounding lost left every bracket
+    # end unproven, ρ = 0 included; at ρ = 0 the LMI is the nominal Lyapunov inequality
+    net, out = tmp_path / "g.yaml", tmp_path / "c.json"
+    args = ["generate", "--n", "6", "--d", "2", "--seed", "11", "--out", net]
+    assert run_cli(args, capsys, monkeypatch)[0] == 0
+    assert run_cli(["certify", net, "--theta", "1,-1"], capsys, monkeypatch)[0] == 0
+    code, text, err = run_cli(
+        ["robust", net, "--theta", "1,-1", "--radius", radius, "--out", out, "--json"],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["valid"] is True
+    # ρ = 0: the nominal rate to 0.005/2³ (robust's docstring); ρ = 0.05: 0.558354 here
+    floor = (1 - 0.005 / 8) * (1 - 1e-12) if radius == "0" else 0.9
+    assert doc["decay"]["lower"] >= floor * doc["nominal_decay"]
+    assert doc["offset"]["upper"] is not None and doc["margin"]["lower"] > 0.5
+    code, text, err = run_cli(["verify", out], capsys, monkeypatch)
+    assert code == 0 and "VALID" in text, err

@@ -37,6 +37,7 @@ from ..robust import (
     uncertain_edges,
 )
 from ..robust_are import RICCATI_MAX_ND, RiccatiSearch
+from ..robust_lmi import active_columns, perturbed
 from ..robust_offset import OffsetSearch, input_float
 from ..theorems import TheoremVerdict
 from .base import (
@@ -226,7 +227,7 @@ def _exact_channels(top: Topology) -> list[_Channel]:
     out = []
     for e in range(ed.m):
         i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
-        w = Dyadic.of(ed.w[e])
+        w = Dyadic.of(ed.channel_w[e])  # W̄_e, as the issuer's (robust.channel_bound)
         v = Dyadic.of(ed.basis(e))
         sel = np.zeros((n, d), dtype=object)
         sel[i : i + d] = np.eye(d, dtype=np.int64).astype(object)
@@ -268,6 +269,8 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
     Returns
     -------
     Dyadic
+        On the edges of radius ρ_e > 0: an edge of radius 0 is not perturbed and has no
+        channel (Ψ of a certificate that lists one is its principal submatrix).
     """
     pd_ = Dyadic.of(p)
     top = (
@@ -275,6 +278,8 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
     )
     offs, diag = [], []
     for t, q, c in zip(tau, radius, ch, strict=True):
+        if not q > 0:
+            continue
         top = top - c.dwd.scale(_dy(t) @ _dy(q) @ _dy(q))
         offs.append(pd_ @ c.ewv)
         diag.append(c.vwv.scale(_dy(t)))
@@ -320,11 +325,26 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     Raises
     ------
     InputError
-        Y is not Nd × (Nd + Σ rank W_e + 1).
+        Y is not Nd × (Nd + Σ rank W̄_e + 1).
+
+    Notes
+    -----
+    Γ is built on ξ = (z, η_e of the edges of radius ρ_e > 0, 1): an edge of radius 0 is
+    not perturbed and has no channel (the columns of Y for it are not used; Γ of a
+    certificate that uses them is a principal submatrix of its own).
     """
     n = lap.num.shape[0]
     sizes = [c.vwv.num.shape[0] for c in ch]
     k = n + sum(sizes) + 1
+    yd = Dyadic.of(y)
+    if yd.num.shape != (n, k):
+        raise InputError(f"matrices.Y: expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}")
+    active = perturbed(np.asarray(radius, dtype=float), len(ch))
+    yd = Dyadic(yd.num[:, active_columns(n, sizes, active)], yd.exp)
+    ch = [ch[e] for e in active]
+    lam = [lam[e] for e in active]
+    radius = [radius[e] for e in active]
+    sizes = [sizes[e] for e in active]
     c_ = Dyadic.of(np.asarray(target, dtype=float).reshape(n, 1))
     zz = Dyadic(np.zeros((n, n), dtype=object), 0)
     zc = Dyadic(np.zeros((n, 1), dtype=object), 0)
@@ -354,9 +374,6 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     rows.append([zc.T] + [zeros(1, s) for s in sizes] + [cc])
     g = _blocks(rows)
     a = _blocks([[lap] + [c.ewv for c in ch] + [zeros(n, 1) - r0]])
-    yd = Dyadic.of(y)
-    if yd.num.shape != (n, k):
-        raise InputError(f"matrices.Y: expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}")
     ay = a.T @ yd
     return g + ay + ay.T
 
@@ -599,7 +616,11 @@ class RobustKind(CertificateKind):
                     audit.fail(f"realizations.{key}: {got}")
                     audit.informational(path)
                 else:
-                    audit.bound(path, got, path[1], scale if key == "decay" else 0.0)
+                    # an eigenvalue to the matrix's size, an offset to the state's: a
+                    # realisation's figure is computed in floating point
+                    target = np.tile(mode.theta, mode.top.n)
+                    floor = scale if key == "decay" else float(np.linalg.norm(target))
+                    audit.bound(path, got, path[1], floor)
         if audit.has("margin", "upper"):
             r = reals.get("margin")
             rad = r.get("radius") if isinstance(r, dict) else None
