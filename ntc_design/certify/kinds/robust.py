@@ -616,10 +616,11 @@ class RobustKind(CertificateKind):
                     audit.fail(f"realizations.{key}: {got}")
                     audit.informational(path)
                 else:
-                    # an eigenvalue to the matrix's size, an offset to the state's: a
-                    # realisation's figure is computed in floating point
+                    # a realisation's figure is computed in floating point: an eigenvalue
+                    # to the matrix's size; an offset (a solve) to 1e−12‖1⊗θ‖ at least, so
+                    # a zero offset's rounding (1e−16‖1⊗θ‖) is not read as a forgery
                     target = np.tile(mode.theta, mode.top.n)
-                    floor = scale if key == "decay" else float(np.linalg.norm(target))
+                    floor = scale if key == "decay" else 1e-4 * float(np.linalg.norm(target))
                     audit.bound(path, got, path[1], floor)
         if audit.has("margin", "upper"):
             r = reals.get("margin")
