@@ -504,6 +504,38 @@ def export_cmd(
     print(f"build and check: see {res.folder / 'README.txt'}")
 
 
+@app.command(epilog="Example: ntc examples --copy my-examples")
+def examples(
+    copy: Annotated[
+        Path | None,
+        typer.Option(
+            "--copy", help="Copy the examples into this folder (new, or existing and empty)."
+        ),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """The bundled example files (topologies, scenarios, sweeps) and where they are
+    installed; with --copy, a copy of them to edit and run (no checkout needed)."""
+    from .paper import copy_examples, example_files, example_path
+
+    root = example_path()
+    names = example_files()
+    written = copy_examples(copy) if copy is not None else None
+    if as_json:
+        doc = {"folder": str(root), "files": names}
+        if written is not None:
+            doc["copied_to"] = str(copy)
+        print(json_text(doc))
+        return
+    if written is None:
+        print(f"the bundled examples are in {root}:")
+        for name in names:
+            print(f"  {name}")
+        print("copy them to a folder of your own with: ntc examples --copy DIR")
+    else:
+        print(f"copied {len(written)} example files to {copy} (e.g. ntc check {copy}/g1.yaml)")
+
+
 # the commands that run a study register after the ones above (``ntc --help`` order)
 from . import cli_runs  # noqa: E402, F401
 
@@ -533,13 +565,20 @@ def _argv(args: list[str]) -> list[str]:
 _FLAGS = {"--json", "--help", "--version"}  # options that take no value
 
 
-def _input_error(message: str, args: list[str]) -> int:
-    """Bad input: ``error: ...`` on stderr, and with --json ``{"error": ...}`` on stdout
-    too (a script reading stdout gets JSON for every bad-input exit). Returns exit code 2."""
+def _error_exit(message: str, args: list[str], code: int = 2) -> int:
+    """An error exit: ``error: ...`` on stderr, and with --json ``{"error": ...}`` on
+    stdout too (a script reading stdout gets JSON for every error exit: bad input, memory,
+    an unreadable file, an interrupt, an internal error). Returns ``code`` (2: bad
+    input)."""
     print(f"error: {message}", file=sys.stderr)
     if "--json" in args[: args.index("--")] if "--" in args else "--json" in args:
-        print(json.dumps({"ok": False, "error": message, "exit_code": 2}, ensure_ascii=False))
-    return 2
+        try:
+            print(
+                json.dumps({"ok": False, "error": message, "exit_code": code}, ensure_ascii=False)
+            )
+        except OSError:  # stdout itself is gone (a closed pipe): stderr has said it
+            pass
+    return code
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -579,38 +618,34 @@ def main(argv: list[str] | None = None) -> None:
             if code == 0 and interrupt_seen():  # Ctrl-C came, its exception was lost
                 code = 130
             if code == 130:  # typer turns KeyboardInterrupt into Exit(130)
-                print("error: interrupted", file=sys.stderr)
+                _error_exit("interrupted", args, 130)
     except InputError as exc:
-        code = _input_error(one_line(str(exc)), args)
+        code = _error_exit(one_line(str(exc)), args)
     except click.UsageError as exc:
         where = f" (see: {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
-        code = _input_error(f"{one_line(exc.format_message())}{where}", args)
+        code = _error_exit(f"{one_line(exc.format_message())}{where}", args)
     except click.ClickException as exc:  # e.g. an unreadable file argument
-        code = _input_error(one_line(exc.format_message()), args)
+        code = _error_exit(one_line(exc.format_message()), args)
     except (KeyboardInterrupt, typer.Abort):
-        print("error: interrupted", file=sys.stderr)
-        code = 130
+        code = _error_exit("interrupted", args, 130)
     except MemoryError:
-        print(
-            "error: out of memory: the input asks for more memory than the machine has",
-            file=sys.stderr,
+        code = _error_exit(
+            "out of memory: the input asks for more memory than the machine has", args
         )
-        code = 2
     except BrokenPipeError:
         code = 1
     except OSError as exc:  # a file or folder the user named cannot be read or written
         where = f"{one_line(str(exc.filename))!r}: " if exc.filename else ""
-        print(f"error: {where}{exc.strerror or exc.__class__.__name__}", file=sys.stderr)
-        code = 2
+        code = _error_exit(f"{where}{exc.strerror or exc.__class__.__name__}", args)
     except Exception as exc:  # a bug: one line, the traceback with NTC_DEBUG=1
         if os.environ.get("NTC_DEBUG"):
             raise
-        print(
-            f"error: internal error ({exc.__class__.__name__}: {one_line(str(exc))[:300]}); "
+        code = _error_exit(
+            f"internal error ({exc.__class__.__name__}: {one_line(str(exc))[:300]}); "
             "re-run with NTC_DEBUG=1 for the traceback",
-            file=sys.stderr,
+            args,
+            1,
         )
-        code = 1
     sys.exit(code)
 
 

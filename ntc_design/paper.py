@@ -4,6 +4,8 @@ the simulation settings and the numbers the paper states (for `ntc reproduce pap
 
 from __future__ import annotations
 
+import importlib.resources
+from importlib.resources.abc import Traversable
 from pathlib import Path
 
 import numpy as np
@@ -169,15 +171,115 @@ def example_path(name: str = "") -> Path:
 
 
 def _examples_root() -> Path:
-    try:  # an installed wheel: the package data
-        from importlib.resources import files
-
-        root = Path(str(files("ntc_design.examples")))
-        if (root / "g1.yaml").is_file():
-            return root
+    # An installed wheel holds the examples in the package's own folder, ntc_design/examples
+    # (pyproject.toml maps examples/ there). They are found through the regular package
+    # ntc_design: ``files("ntc_design.examples")`` would be a namespace package (examples/
+    # has no __init__.py), a MultiplexedPath whose text is no path.
+    try:
+        bundled = importlib.resources.files("ntc_design").joinpath("examples")
     except (ModuleNotFoundError, TypeError):
-        pass
+        bundled = None
+    if isinstance(bundled, Path) and (bundled / "g1.yaml").is_file():
+        return bundled
+    if bundled is not None and not isinstance(bundled, Path) and _has_examples(bundled):
+        return _extracted(bundled)  # a zip or another loader: the files, copied out once
     checkout = Path(__file__).resolve().parent.parent / "examples"  # a checkout (editable)
     if (checkout / "g1.yaml").is_file():
         return checkout
     raise InputError("example_path: the bundled examples are not installed with this package")
+
+
+def _has_examples(bundled: Traversable) -> bool:
+    try:
+        return bundled.joinpath("g1.yaml").is_file()
+    except OSError:
+        return False
+
+
+_EXTRACTED: list[Path] = []
+
+
+def _extracted(bundled: Traversable) -> Path:
+    """The examples of a package that is not on the file system (a zip), copied into a
+    temporary folder once per process (``importlib.resources.as_file`` copies one file,
+    not a folder, before Python 3.12)."""
+    if not _EXTRACTED:
+        import atexit
+        import shutil
+        import tempfile
+
+        root = Path(tempfile.mkdtemp(prefix="ntc-examples-"))
+        atexit.register(shutil.rmtree, root, True)
+
+        def copy(src: Traversable, dest: Path) -> None:
+            for entry in src.iterdir():
+                if entry.is_dir():
+                    (dest / entry.name).mkdir()
+                    copy(entry, dest / entry.name)
+                elif entry.is_file():
+                    (dest / entry.name).write_bytes(entry.read_bytes())
+
+        copy(bundled, root)
+        _EXTRACTED.append(root)
+    return _EXTRACTED[0]
+
+
+#: The example files a wheel ships (pyproject.toml's package data for ntc_design.examples;
+#: a test keeps the two lists equal): a checkout's examples/figures are not among them.
+EXAMPLE_FILES = ("*.yaml", "*.csv", "*.mat", "scenarios/*.yaml", "sweeps/*.yaml")
+
+
+def example_files() -> list[str]:
+    """The bundled examples' files, relative to their folder (``g1.yaml``,
+    ``scenarios/g1_fixed.yaml``, ...), sorted: what a wheel ships
+    (:data:`EXAMPLE_FILES`).
+
+    Returns
+    -------
+    list of str
+
+    Raises
+    ------
+    InputError
+        The examples are not installed with this package.
+    """
+    root = _examples_root()
+    return sorted({p.relative_to(root).as_posix() for g in EXAMPLE_FILES for p in root.glob(g)})
+
+
+def copy_examples(dest: str | Path) -> list[Path]:
+    """Copy the bundled examples into a new folder (for a user who installed the package
+    without a checkout: ``ntc examples --copy DIR``).
+
+    Parameters
+    ----------
+    dest : str or pathlib.Path
+        The folder to create; an existing one must be empty.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+
+    Raises
+    ------
+    InputError
+        ``dest`` is a file or a folder that is not empty, or the examples are not
+        installed with this package.
+    """
+    import shutil
+
+    dest = Path(dest)
+    if dest.exists() and not dest.is_dir():
+        raise InputError(f"{dest}: exists and is not a folder (give a new or empty folder)")
+    if dest.is_dir() and any(dest.iterdir()):
+        raise InputError(f"{dest}: the folder is not empty (give a new or empty folder)")
+    root = _examples_root()
+    names = example_files()
+    written = []
+    for name in names:
+        target = dest / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(root / name, target)
+        written.append(target)
+    return written

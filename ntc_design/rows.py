@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import html
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,11 +41,19 @@ def fmt(x: Any, digits: int = 4) -> str:
     -------
     str
 
+    Raises
+    ------
+    TypeError
+        A mapping or a set: it has no one way to be read (build the text, or a
+        :class:`Cell`, where it is shown), and its Python form is no text for a user.
+
     Examples
     --------
     >>> fmt(7.244), fmt(2.5e-7), fmt(None), fmt([1, 2.0]), fmt(float("inf"))
     ('7.2440', '2.5e-07', '—', '[1, 2.0000]', '∞')
     """
+    if isinstance(x, (Mapping, set, frozenset)):
+        raise TypeError(f"fmt: a {type(x).__name__} is not shown as Python ({x!r:.60})")
     if x is None:
         return "—"
     if isinstance(x, (bool, np.bool_)):
@@ -180,6 +188,12 @@ def cell(x: Any) -> Cell:
     Returns
     -------
     Cell
+
+    Raises
+    ------
+    TypeError
+        A mapping or a set (:func:`fmt`): a typed cell is built as a :class:`Cell`
+        (:func:`verdict`, a link by ``href``), never from a dict.
     """
     return x if isinstance(x, Cell) else Cell(text=fmt(x))
 
@@ -293,6 +307,8 @@ class Table:
         ------
         ValueError
             A row whose length differs from the columns', or an unknown layout.
+        TypeError
+            A value that is a mapping or a set (:func:`cell`).
         """
         built = tuple(tuple(cell(x) for x in r) for r in rows)
         for r in built:

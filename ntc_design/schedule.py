@@ -38,6 +38,7 @@ import numpy as np
 
 from .errors import InputError
 from .exprtree import numeric_function
+from .rows import VERDICT_TEXT
 
 if TYPE_CHECKING:  # SymPy (through .gain) loads only for an analysis, not to simulate
     from .gain import Condition, GainAnalysis
@@ -573,8 +574,9 @@ def schedule_checks(doc: Any, source: str = "certificate") -> list[tuple[str, bo
         (
             "gain schedule: tail admissible",
             adm,
-            f"∫c = ∞: {a.integral_diverges.value}, c → 0: {a.tends_to_zero.value}, "
-            f"∫c² < ∞: {a.square_integrable.value} ({g.tail})",
+            f"∫c = ∞: {VERDICT_TEXT[a.integral_diverges.value]}, "
+            f"c → 0: {VERDICT_TEXT[a.tends_to_zero.value]}, "
+            f"∫c² < ∞: {VERDICT_TEXT[a.square_integrable.value]} ({g.tail})",
         )
     )
     return out

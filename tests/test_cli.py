@@ -174,3 +174,133 @@ def test_export_refuses_a_folder_with_other_files(tmp_path, examples, capsys, mo
     args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", out, "--period", "0.1"]
     assert_input_error(args, capsys, monkeypatch, "--out:", "holds other files ('mine.txt')")
     assert [p.name for p in out.iterdir()] == ["mine.txt"]
+
+
+def test_examples_lists_and_copies_the_bundled_files(tmp_path, capsys, monkeypatch):
+    from ntc_design.paper import example_files, example_path
+
+    code, out, err = run_cli(["examples"], capsys, monkeypatch)
+    assert code == 0, err
+    assert f"the bundled examples are in {example_path()}:" in out
+    assert [ln.strip() for ln in out.splitlines()[1:-1]] == example_files()
+    code, out, err = run_cli(
+        ["examples", "--copy", tmp_path / "mine", "--json"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["files"] == example_files() and doc["copied_to"] == str(tmp_path / "mine")
+    assert (
+        sorted(
+            p.relative_to(tmp_path / "mine").as_posix()
+            for p in (tmp_path / "mine").rglob("*")
+            if p.is_file()
+        )
+        == example_files()
+    )
+    # the copy is a user's to run, as the checkout's examples are
+    code, _, err = run_cli(
+        ["design", tmp_path / "mine" / "g1.yaml", "--theta", "1,2,-1"], capsys, monkeypatch
+    )
+    assert code == 0, err
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("as_json", [False, True])
+@pytest.mark.parametrize(
+    "make, needle",
+    [
+        (lambda p: (p.mkdir(), (p / "notes.txt").write_text("mine")), "the folder is not empty"),
+        (lambda p: p.write_text("mine"), "exists and is not a folder"),
+    ],
+    ids=["non-empty folder", "a file"],
+)
+def test_examples_copy_refuses_to_overwrite(tmp_path, capsys, monkeypatch, make, needle, as_json):
+    dest = tmp_path / "dest"
+    make(dest)
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    args = ["examples", "--copy", dest, *(["--json"] if as_json else [])]
+    assert_input_error(args, capsys, monkeypatch, f"{dest}: {needle}")
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("as_json", [False, True], ids=["text", "json"])
+@pytest.mark.parametrize(
+    "exc, code, message",
+    [
+        (
+            ValueError("too many values to unpack (expected 1)"),
+            1,
+            "internal error (ValueError: too many values to unpack (expected 1)); re-run with "
+            "NTC_DEBUG=1 for the traceback",
+        ),
+        (
+            MemoryError(),
+            2,
+            "out of memory: the input asks for more memory than the machine has",
+        ),
+        (PermissionError(13, "Permission denied", "x.json"), 2, "'x.json': Permission denied"),
+        (KeyboardInterrupt(), 130, "interrupted"),
+    ],
+    ids=["internal", "memory", "os", "interrupt"],
+)
+def test_every_error_exit_is_one_line_and_json_under_json(
+    exc, code, message, as_json, capsys, monkeypatch, tmp_path
+):
+    import ntc_design.certify
+
+    def fails(*_args, **_kwargs):
+        raise exc
+
+    monkeypatch.setattr(ntc_design.certify, "verify_file", fails)
+    monkeypatch.delenv("NTC_DEBUG", raising=False)
+    args = ["verify", tmp_path / "c.json", *(["--json"] if as_json else [])]
+    got, out, err = run_cli(args, capsys, monkeypatch)
+    assert (got, err) == (code, f"error: {message}\n")
+    if as_json:  # a script reading stdout gets JSON for every error exit
+        assert json.loads(out) == {"ok": False, "error": message, "exit_code": code}
+    else:
+        assert out == ""
+
+
+def test_robust_and_verify_name_the_per_edge_radii(tmp_path, capsys, monkeypatch):
+    from tests.support.robust import TRI, TRI_SET
+
+    (tmp_path / "tri.yaml").write_text(TRI, encoding="utf-8")
+    out = tmp_path / "c.json"
+    code, text, err = run_cli(
+        ["robust", tmp_path / "tri.yaml", "--theta", "1", "--out", out], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert text.splitlines()[0] == f"tri: robust brackets for {TRI_SET}"
+    code, shown, err = run_cli(["verify", out], capsys, monkeypatch)
+    assert code == 0, err
+    assert shown.count(f"for {TRI_SET})") == 2  # the decay and the offset, beside them
+    for said in (text, shown):
+        assert "at ρ = 0.5" not in said and "ρ = 0.5)" not in said
+
+
+@pytest.mark.parametrize("radius", ["0", "0.05"])
+def test_robust_proves_brackets_where_certify_proves_the_nominal_case(
+    radius, tmp_path, capsys, monkeypatch
+):
+    # the network: a weight v vᵀ whose kernel rounding lost left every bracket
+    # end unproven, ρ = 0 included; at ρ = 0 the LMI is the nominal Lyapunov inequality
+    net, out = tmp_path / "g.yaml", tmp_path / "c.json"
+    args = ["generate", "--n", "6", "--d", "2", "--seed", "11", "--out", net]
+    assert run_cli(args, capsys, monkeypatch)[0] == 0
+    assert run_cli(["certify", net, "--theta", "1,-1"], capsys, monkeypatch)[0] == 0
+    code, text, err = run_cli(
+        ["robust", net, "--theta", "1,-1", "--radius", radius, "--out", out, "--json"],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["valid"] is True
+    # ρ = 0: the nominal rate to 0.005/2³ (robust's docstring); ρ = 0.05: 0.558354 here
+    floor = (1 - 0.005 / 8) * (1 - 1e-12) if radius == "0" else 0.9
+    assert doc["decay"]["lower"] >= floor * doc["nominal_decay"]
+    assert doc["offset"]["upper"] is not None and doc["margin"]["lower"] > 0.5
+    code, text, err = run_cli(["verify", out], capsys, monkeypatch)
+    assert code == 0 and "VALID" in text, err

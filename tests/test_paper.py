@@ -1,6 +1,8 @@
 """Tests of :mod:`ntc_design.paper`."""
 
 import importlib.resources
+import tomllib
+import zipfile
 from fractions import Fraction
 
 import numpy as np
@@ -194,19 +196,41 @@ def test_example_path_refuses_a_sibling_that_shares_the_prefix(tmp_path, monkeyp
 
 
 def test_examples_root_prefers_the_installed_package_data(monkeypatch, tmp_path):
-    # a wheel ships the examples as ntc_design.examples: found there before the checkout
-    (tmp_path / "g1.yaml").write_text("dim: 1\n")
-    monkeypatch.setattr(importlib.resources, "files", lambda name: tmp_path)
-    assert paper._examples_root() == tmp_path
-    assert paper.example_path("g1.yaml") == (tmp_path / "g1.yaml").resolve()
+    # a wheel ships the examples in the package's folder, ntc_design/examples: found there,
+    # through the regular package (not the namespace package ntc_design.examples, whose
+    # MultiplexedPath's text is no path), before the checkout
+    (tmp_path / "examples").mkdir()
+    (tmp_path / "examples" / "g1.yaml").write_text("dim: 1\n")
+    asked = []
+    monkeypatch.setattr(importlib.resources, "files", lambda name: asked.append(name) or tmp_path)
+    assert paper._examples_root() == tmp_path / "examples"
+    assert asked == ["ntc_design"]
+    assert paper.example_path("g1.yaml") == (tmp_path / "examples" / "g1.yaml").resolve()
     # package data without the examples in it: the checkout's folder
-    (tmp_path / "g1.yaml").unlink()
+    (tmp_path / "examples" / "g1.yaml").unlink()
     assert paper._examples_root().resolve() == EXAMPLES.resolve()
+
+
+def test_examples_of_a_zipped_package_are_copied_out_once(monkeypatch, tmp_path):
+    # a package imported from a zip: its examples are no files; they are copied out
+    archive = tmp_path / "pkg.zip"
+    with zipfile.ZipFile(archive, "w") as z:
+        z.writestr("ntc_design/examples/g1.yaml", "dim: 1\n")
+        z.writestr("ntc_design/examples/scenarios/s.yaml", "name: s\n")
+    monkeypatch.setattr(
+        importlib.resources, "files", lambda name: zipfile.Path(archive, "ntc_design/")
+    )
+    monkeypatch.setattr(paper, "_EXTRACTED", [])
+    root = paper._examples_root()
+    assert (root / "g1.yaml").read_text() == "dim: 1\n"
+    assert (root / "scenarios" / "s.yaml").read_text() == "name: s\n"
+    assert paper._examples_root() == root  # once per process
+    assert paper.example_files() == ["g1.yaml", "scenarios/s.yaml"]
 
 
 def test_examples_root_falls_back_to_the_checkout(monkeypatch):
     def missing(_name):
-        raise ModuleNotFoundError("ntc_design.examples")
+        raise ModuleNotFoundError("ntc_design")
 
     monkeypatch.setattr(importlib.resources, "files", missing)
     assert paper._examples_root().resolve() == EXAMPLES.resolve()
@@ -214,10 +238,49 @@ def test_examples_root_falls_back_to_the_checkout(monkeypatch):
 
 def test_examples_root_refuses_when_nothing_is_installed(monkeypatch, tmp_path):
     def missing(_name):
-        raise ModuleNotFoundError("ntc_design.examples")
+        raise ModuleNotFoundError("ntc_design")
 
     monkeypatch.setattr(importlib.resources, "files", missing)
     # no examples beside the package either: the module file is placed in an empty folder
     monkeypatch.setattr(paper, "__file__", str(tmp_path / "pkg" / "paper.py"))
     with pytest.raises(InputError, match="^example_path: the bundled examples are not installed"):
         paper.example_path("g1.yaml")
+
+
+def test_example_files_are_what_the_wheel_ships():
+    # pyproject.toml's package data for ntc_design.examples is the same list
+    data = tomllib.loads((EXAMPLES.parent / "pyproject.toml").read_text())
+    shipped = data["tool"]["setuptools"]["package-data"]["ntc_design.examples"]
+    assert tuple(shipped) == paper.EXAMPLE_FILES
+    names = paper.example_files()
+    assert "g1.yaml" in names and "scenarios/g1_fixed.yaml" in names
+    assert not [n for n in names if n.startswith("figures/")]
+    assert len(names) == 15
+
+
+def test_copy_examples_into_a_new_folder(tmp_path):
+    written = paper.copy_examples(tmp_path / "new" / "mine")
+    names = paper.example_files()
+    assert [p.relative_to(tmp_path / "new" / "mine").as_posix() for p in written] == names
+    for name in names:
+        assert (tmp_path / "new" / "mine" / name).read_bytes() == (EXAMPLES / name).read_bytes()
+    (tmp_path / "empty").mkdir()
+    assert len(paper.copy_examples(tmp_path / "empty")) == len(names)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "make, needle",
+    [
+        (lambda p: (p.mkdir(), (p / "x.txt").write_text("mine")), "the folder is not empty"),
+        (lambda p: p.write_text("a file"), "exists and is not a folder"),
+    ],
+    ids=["non-empty folder", "a file"],
+)
+def test_copy_examples_refuses_what_it_would_overwrite(tmp_path, make, needle):
+    dest = tmp_path / "dest"
+    make(dest)
+    before = sorted(tmp_path.rglob("*"))
+    with pytest.raises(InputError, match=f"^{dest}: {needle}"):
+        paper.copy_examples(dest)
+    assert sorted(tmp_path.rglob("*")) == before

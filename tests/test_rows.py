@@ -19,6 +19,18 @@ def test_fmt_is_the_one_number_format():
     assert fmt(np.float64(1234567.0)) == "1.235e+06"
 
 
+@pytest.mark.parametrize(
+    "value", [{"verdict": True, "text": "ok"}, {"dominance": 3}, {1, 2}, frozenset()]
+)
+def test_a_mapping_or_a_set_is_no_cell(value):
+    # its Python form ({'verdict': True, …}) is no text for a user: the table that shows
+    # it says how (a verdict cell, a link, words), so fmt and Table.build refuse it
+    with pytest.raises(TypeError, match="is not shown as Python"):
+        fmt(value)
+    with pytest.raises(TypeError, match="is not shown as Python"):
+        Table.build("t", ("a", "b"), [("label", value)])
+
+
 def test_cells_render_alike_in_text_and_html():
     t = Table.build(
         "t",

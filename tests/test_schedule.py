@@ -107,3 +107,17 @@ def test_cli_malformed_schedule_in_a_scenario(tmp_path, capsys, monkeypatch):
     assert_input_error(
         ["simulate", sc, "--out", tmp_path / "o"], capsys, monkeypatch, "times must increase"
     )
+
+
+@pytest.mark.parametrize(
+    "c, tail, ok, words",
+    [
+        ([1.0, 0.5], "1/(1+t)", True, "∫c = ∞: yes, c → 0: yes, ∫c² < ∞: yes"),
+        ([1.0, 1.0], "1", False, "∫c = ∞: yes, c → 0: no, ∫c² < ∞: no"),
+    ],
+)
+def test_schedule_checks_say_the_tail_conditions_in_words(c, tail, ok, words):
+    # the detail a report and ntc verify print: verdict words, never Python's True/False
+    name, holds, detail = schedule_checks({"t": [0, 1], "c": c, "tail": tail})[-1]
+    assert (name, holds) == ("gain schedule: tail admissible", ok)
+    assert detail == f"{words} ({tail})"

@@ -38,6 +38,13 @@ pivot columns of W (an exact basis of its range). Then
   λ_e >= 0) proves ``‖z‖² <= γ``, given that every L_B(A') is invertible (the decay
   bracket's certified end at the same ρ).
 
+**Edges of radius 0** are not perturbed and get no channel: at ρ = 0, Ψ is the nominal
+Lyapunov inequality P(L_B − αI) + (L_B − αI)ᵀP ≻ 0 and Γ bounds the nominal equilibrium,
+so the brackets are the nominal figures (:func:`robust`). **A weight singular only by
+rounding** (v vᵀ written in floating point: exactly it is full rank, even indefinite, by
+1e−18) has no positive definite VᵀWV, so no Ψ could be ≻ 0; its channels bound the change
+by W̄ = W + ηI ⪰ W instead (:func:`channel_bound`), a set that holds the one above.
+
 Past ROBUST_MAX_ND the sparse bounds of :mod:`.robust_scale` are tightened up to
 RICCATI_MAX_ND: decay and margin by the Riccati search (:mod:`.robust_are`), the offset by
 the same S-procedure with the equation eliminated (:mod:`.robust_offset`).
@@ -48,6 +55,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
@@ -73,13 +81,21 @@ DEFAULT_RADIUS = 0.05
 @dataclass(frozen=True, eq=False)
 class UncertainEdges:
     """The listed non-zero weights as the robust bounds use them: edge e = (src → dst),
-    sign ``s``, ``W = |A_e|`` and ``V`` (the pivot columns of W, a basis of its range)."""
+    sign ``s``, ``W = |A_e|``, the matrix ``W̄_e`` the S-procedure's channels bound the
+    change by (:func:`channel_bound`: W itself unless W is singular only by rounding) and
+    ``V`` (the pivot columns of W̄, a basis of its range)."""
 
     dst: np.ndarray
     src: np.ndarray
     s: np.ndarray
     w: np.ndarray  # (m, d, d)
-    pivots: tuple[tuple[int, ...], ...]
+    pivots: tuple[tuple[int, ...], ...]  # of the channel matrix W̄
+    bound: np.ndarray | None = None  # W̄ (m, d, d); None: W̄ = W
+
+    @property
+    def channel_w(self) -> np.ndarray:
+        """W̄_e for every edge (m, d, d): what the channels use (:func:`channel_bound`)."""
+        return self.w if self.bound is None else self.bound
 
     @property
     def m(self) -> int:
@@ -105,8 +121,24 @@ class UncertainEdges:
             [unc.get((int(i), int(j)), default) for i, j in zip(self.dst, self.src, strict=True)]
         )
 
+    def labels(self, top: Topology) -> list[str]:
+        """Each edge as ``from→to`` with the topology's agent labels.
+
+        Parameters
+        ----------
+        top : Topology
+            The topology these edges are of.
+
+        Returns
+        -------
+        list of str
+        """
+        lab = top.labels
+        return [f"{lab[int(j)]}→{lab[int(i)]}" for i, j in zip(self.dst, self.src, strict=True)]
+
     def basis(self, e: int) -> np.ndarray:
-        """V_e: the pivot columns of W_e (d × rank).
+        """V_e: the pivot columns of W̄_e (d × rank); where W̄_e = W_e + ηI, a whitening
+        basis (:func:`whitening_basis`).
 
         Parameters
         ----------
@@ -117,7 +149,119 @@ class UncertainEdges:
         -------
         numpy.ndarray
         """
-        return self.w[e][:, list(self.pivots[e])]
+        return self._bases[e]
+
+    @functools.cached_property
+    def _bases(self) -> tuple[np.ndarray, ...]:
+        # where W̄ = W + ηI (channel_bound), a whitening basis: VᵀW̄V ≈ I, so the block
+        # τ VᵀW̄V is as well conditioned as the solver needs (any basis of the range gives
+        # a congruent Ψ)
+        out = []
+        for e in range(self.m):
+            if self.bound is not None and not np.array_equal(self.bound[e], self.w[e]):
+                out.append(whitening_basis(self.bound[e]))
+            else:
+                out.append(self.channel_w[e][:, list(self.pivots[e])])
+        return tuple(out)
+
+
+#: A weight's magnitude W is kept as the channels' bound when the exact LDLᵀ of its
+#: principal block on the pivot columns has every pivot >= this × max|W| (so the block
+#: τ VᵀWV of Ψ is well conditioned); else it is singular or indefinite only by rounding (a
+#: rank-deficient weight written in floating point: its kernel lost in the last bits), and
+#: the channels use W̄ = W + ηI, η the power of two >= this × max|W|.
+CHANNEL_FLOOR = 2.0**-20
+
+
+def channel_bound(w: np.ndarray) -> tuple[np.ndarray, tuple[int, ...]]:
+    """The matrix W̄ that the S-procedure's channels bound a weight's change by, and its
+    pivot columns.
+
+    The set is every |A'| = W + Δ with −ρW̄ ⪯ Δ ⪯ ρW̄. For a weight whose magnitude W is
+    well conditioned on its range, W̄ = W: the set of the module docstring. Otherwise
+    W̄ = W + ηI (each diagonal entry rounded, never below W's): W̄ ⪰ W, so the set holds
+    the documented one and every bound proven for it holds there too, while τVᵀW̄V ≻ 0
+    stays within a solver's reach (with W itself, Ψ ≻ 0 would need VᵀWV ≻ 0, which a
+    weight singular or indefinite by 1e−18 does not have, and nothing is proven at any
+    radius, ρ = 0 included). Decided in exact arithmetic, so issuer and verifier agree.
+
+    Parameters
+    ----------
+    w : numpy.ndarray
+        W = |A_e| (d × d, non-zero).
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, tuple of int)
+        W̄ and its pivot columns (:func:`pivot_columns`).
+
+    Examples
+    --------
+    >>> channel_bound(np.diag([2.0, 0.0]))[1]  # an exact kernel is kept: one channel
+    (0,)
+    >>> wb, piv = channel_bound(np.array([[1.0, 1.0], [1.0, 1.0 + 2.0**-52]]))
+    >>> piv, bool(wb[0, 0] > 1.0)  # singular by rounding: W + ηI, two channels
+    ((0, 1), True)
+    """
+    w = np.asarray(w, dtype=float)
+    piv = pivot_columns(w)
+    scale = float(np.max(np.abs(w)))
+    floor = Fraction(CHANNEL_FLOOR) * Fraction(scale)
+    block = [[Fraction(float(w[i, j])) for j in piv] for i in piv]
+    for k in range(len(block)):  # LDLᵀ without pivoting: every pivot well above 0
+        if block[k][k] < floor:
+            break
+        for i in range(k + 1, len(block)):
+            f = block[i][k] / block[k][k]
+            block[i] = [a - f * b for a, b in zip(block[i], block[k], strict=True)]
+    else:
+        return w, piv
+    eta = 2.0 ** math.ceil(math.log2(CHANNEL_FLOOR * scale))
+    wb = w + eta * np.eye(w.shape[0])  # rounding keeps each diagonal entry >= W's
+    return wb, pivot_columns(wb)
+
+
+def whitening_basis(w: np.ndarray) -> np.ndarray:
+    """V = L⁻ᵀ D^(−1/2) from the exact LDLᵀ of a positive definite W (so VᵀWV ≈ I), each
+    entry correctly rounded: the same doubles on every machine, as issuer and verifier
+    need. The identity when W is not positive definite (nothing can be proven with it).
+
+    Parameters
+    ----------
+    w : numpy.ndarray
+        A symmetric d×d matrix of doubles.
+
+    Returns
+    -------
+    numpy.ndarray
+        d × d.
+
+    Examples
+    --------
+    >>> v = whitening_basis(np.array([[4.0, 2.0], [2.0, 2.0]]))
+    >>> np.allclose(v.T @ np.array([[4.0, 2.0], [2.0, 2.0]]) @ v, np.eye(2))
+    True
+    """
+    d = w.shape[0]
+    a = [[Fraction(float(x)) for x in r] for r in np.asarray(w, dtype=float)]
+    low = [[Fraction(int(i == j)) for j in range(d)] for i in range(d)]
+    piv: list[Fraction] = []
+    for k in range(d):
+        pk = a[k][k] - sum(low[k][j] ** 2 * piv[j] for j in range(k))
+        if pk <= 0:
+            return np.eye(d)
+        piv.append(pk)
+        for i in range(k + 1, d):
+            s = a[i][k] - sum(low[i][j] * low[k][j] * piv[j] for j in range(k))
+            low[i][k] = s / pk
+    inv = [[Fraction(int(i == j)) for j in range(d)] for i in range(d)]  # L⁻¹, forward
+    for i in range(d):
+        for j in range(i):
+            inv[i][j] = -sum((low[i][k] * inv[k][j] for k in range(j, i)), Fraction(0))
+    # V[i][j] = (L⁻ᵀ)[i][j] / √D_j = L⁻¹[j][i] / √D_j
+    return np.array(
+        [[float(inv[j][i]) / math.sqrt(float(piv[j])) for j in range(d)] for i in range(d)]
+    )
 
 
 def pivot_columns(w: np.ndarray) -> tuple[int, ...]:
@@ -175,16 +319,83 @@ def uncertain_edges(top: Topology) -> UncertainEdges:
     keep = np.flatnonzero(ea.sign != 0)
     keep = keep[np.lexsort((ea.cols[keep], ea.rows[keep]))]  # canonical: by (to, from)
     w = ea.abs_w[keep]
+    bounds = [channel_bound(x) for x in w]
     return UncertainEdges(
         ea.rows[keep].astype(np.int64),
         ea.cols[keep].astype(np.int64),
         ea.sign[keep].astype(float),
         w,
-        tuple(pivot_columns(x) for x in w),
+        tuple(piv for _, piv in bounds),
+        np.array([b for b, _ in bounds]).reshape(w.shape),
     )
 
 
 check_radius = require_radius  # the one radius check (errors.require_radius)
+
+#: Per-edge radii named in a statement (the rest counted).
+RADII_SHOWN = 8
+
+
+def radius_text(
+    radii: Sequence[float],
+    radius: float,
+    short: bool = False,
+    edges: Sequence[str] | None = None,
+) -> str:
+    """The uncertainty set as a statement names it: ``ρ = 0.05`` when every edge has the
+    same radius, else ``the per-edge radii (max 0.5; 1→2: 0.02, 2→3: 0.5, 3→1: 0.02)``: a
+    bound proven for per-edge radii is not one for every weight at the largest of them.
+
+    Parameters
+    ----------
+    radii : sequence of float
+        ρ_e per uncertain edge (:attr:`RobustReport.radii`; empty: no uncertain edge).
+    radius : float
+        The largest (ρ itself when every edge has the same).
+    short : bool, optional
+        Leave the list of ρ_e out (a figure's title).
+    edges : sequence of str, optional
+        The edges' names (:meth:`UncertainEdges.labels`), in the order of ``radii``;
+        without them the radii are listed as ``ρ_e = 0.02, 0.5, …``.
+
+    Returns
+    -------
+    str
+    """
+    vals = [float(r) for r in radii]
+    if len(set(vals)) <= 1:
+        return f"ρ = {radius:.6g}"
+    if short:
+        return f"the per-edge radii (max {radius:.6g})"
+    if edges is not None and len(edges) == len(vals):
+        shown = ", ".join(
+            f"{e}: {r:.6g}" for e, r in list(zip(edges, vals, strict=True))[:RADII_SHOWN]
+        )
+    else:
+        shown = "ρ_e = " + ", ".join(f"{r:.6g}" for r in vals[:RADII_SHOWN])
+    more = f", …; {len(vals)} edges" if len(vals) > RADII_SHOWN else ""
+    return f"the per-edge radii (max {radius:.6g}; {shown}{more})"
+
+
+def radius_phrase(radii: Sequence[float], radius: float, edges: Sequence[str] | None = None) -> str:
+    """What a proven number holds for: ``at ρ = 0.05``, or ``for the per-edge radii (max
+    0.5; …)`` (:func:`radius_text`).
+
+    Parameters
+    ----------
+    radii : sequence of float
+        ρ_e per uncertain edge.
+    radius : float
+        The largest.
+    edges : sequence of str, optional
+        The edges' names, in the order of ``radii``.
+
+    Returns
+    -------
+    str
+    """
+    text = radius_text(radii, radius, edges=edges)
+    return f"at {text}" if text.startswith("ρ = ") else f"for {text}"
 
 
 # -- realisations ----------------------------------------------------------------------
@@ -370,15 +581,22 @@ class RobustReport:
             ("margin radius ρ", num(self.margin.lower), num(self.margin.upper),
              f"lower proven ({m} at α = 0); upper: a destabilising realisation"),
         ]  # fmt: skip
-        antag = int(np.sum(uncertain_edges(top).s < 0))
-        notes = (
+        ed = uncertain_edges(top)
+        antag = int(np.sum(ed.s < 0))
+        notes: tuple[str, ...] = (
             f"nominal decay rate {self.nominal_decay:.6g}; the protocol (informed agents, B_i, "
             f"δ = {self.design.delta:.6g}, x0) is kept at its nominal design",
             f"only the {antag} antagonistic weight(s) move the consensus point "
             "(D_eᵀ(1⊗θ) = 0 on cooperative edges)",
         )
+        if len(set(self.radii)) > 1:  # what each bracket is about, said where it differs
+            notes += (
+                "the decay and offset brackets hold for the per-edge radii; the margin radius "
+                "is one ρ on every edge",
+            )
+        phrase = radius_phrase(self.radii, self.radius, ed.labels(top))
         return Table.build(
-            title or f"{top.name or 'topology'}: robust brackets at ρ = {self.radius:g}",
+            title or f"{top.name or 'topology'}: robust brackets {phrase}",
             ("bracket", "lower", "upper", "which end is proven"),
             rows,
             notes,
@@ -471,6 +689,10 @@ def robust(
     Returns
     -------
     RobustReport
+        At ρ = 0 (every edge unperturbed) the brackets are the nominal figures: the decay's
+        proven end within ``(1 − FRACTIONS[0])/2**bisection_steps`` of the nominal rate,
+        relative (6.25e−4 with the defaults), its other end the nominal rate; the offset's
+        proven end within 1e−4·‖1⊗θ‖ of the nominal offset (the SDP's strict margin).
         Above :data:`ROBUST_MAX_ND`, the sparse brackets of
         :func:`ntc_design.certify.robust_scale.robust_scale`, up to
         :data:`ntc_design.certify.robust_are.RICCATI_MAX_ND` tightened by the Riccati
@@ -683,7 +905,12 @@ __all__ = [
     "RobustReport",
     "UncertainEdges",
     "abscissa",
+    "CHANNEL_FLOOR",
+    "channel_bound",
+    "whitening_basis",
     "check_radius",
+    "radius_phrase",
+    "radius_text",
     "pivot_columns",
     "realised_topology",
     "robust",

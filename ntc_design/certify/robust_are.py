@@ -110,8 +110,8 @@ class RiccatiSearch:
         self.i = edges.dst.astype(int) * dim
         self.j = edges.src.astype(int) * dim
         self.s = edges.s.astype(float)
-        self.w = edges.w
-        self.wabs = np.abs(edges.w)
+        self.w = edges.channel_w  # W̄_e (robust.channel_bound)
+        self.wabs = np.abs(self.w)
 
     def _q(self, tau: np.ndarray, rad2: np.ndarray, absolute: bool = False) -> np.ndarray:
         """Σ τ_e ρ_e² D_e W_e D_eᵀ; with ``absolute``, its magnitude (for the error bound)."""

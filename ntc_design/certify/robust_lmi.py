@@ -68,7 +68,7 @@ def _channels(
     out = []
     for e in range(ed.m):
         i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
-        w, v = ed.w[e] / scale, ed.basis(e)
+        w, v = ed.channel_w[e] / scale, ed.basis(e)  # W̄_e (robust.channel_bound)
         if normalise:
             v = v / np.linalg.norm(v, axis=0)
         ewv = np.zeros((n, v.shape[1]))
@@ -108,7 +108,7 @@ def decay_matrix(
     Returns
     -------
     numpy.ndarray
-        Ψ, symmetric.
+        Ψ, symmetric, on the edges of radius ρ_e > 0 (:func:`perturbed`).
     """
     n = lap_b.shape[0]
     sh = lap_b - alpha * np.eye(n)
@@ -116,6 +116,8 @@ def decay_matrix(
     cols, diag = [], []
     r2 = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, (len(channels),))
     for t, q, (ewv, dwd, vwv) in zip(tau, r2, channels, strict=True):
+        if not q > 0:
+            continue  # an edge of radius 0 is not perturbed: no channel
         top = top - t * q * dwd
         cols.append(p @ ewv)
         diag.append(t * vwv)
@@ -125,32 +127,81 @@ def decay_matrix(
     return np.block([[top, off], [off.T, sla.block_diag(*diag) if diag else np.zeros((0, 0))]])
 
 
+def active_columns(n: int, sizes: list[int], active: tuple[int, ...]) -> list[int]:
+    """The columns of ξ = (z, η_1, …, η_m, 1) that remain when only the channels of the
+    ``active`` edges are kept (a certificate's Y has every channel's columns).
+
+    Parameters
+    ----------
+    n : int
+        Nd (the columns of z).
+    sizes : list of int
+        Each channel's columns (rank of W̄_e).
+    active : tuple of int
+        The edges kept (:func:`perturbed`).
+
+    Returns
+    -------
+    list of int
+    """
+    starts = np.cumsum([n, *sizes])
+    cols = list(range(n))
+    for e in active:
+        cols += list(range(int(starts[e]), int(starts[e]) + sizes[e]))
+    return [*cols, int(starts[-1])]
+
+
+def perturbed(radius: float | np.ndarray, m: int) -> tuple[int, ...]:
+    """The edges with ρ_e > 0: the only ones with a channel in Ψ and Γ. An edge of radius
+    0 is not perturbed (its interval is its nominal weight), so it needs no channel; with
+    none, Ψ is the nominal Lyapunov inequality P(L_B − αI) + (L_B − αI)ᵀP ≻ 0 and Γ the
+    nominal equilibrium's bound.
+
+    Parameters
+    ----------
+    radius : float or numpy.ndarray
+        ρ, or ρ_e per edge.
+    m : int
+        The number of edges.
+
+    Returns
+    -------
+    tuple of int
+    """
+    r = np.broadcast_to(np.asarray(radius, dtype=float), (m,))
+    return tuple(int(e) for e in np.flatnonzero(r > 0))
+
+
 class _DecayLMI:
-    """The decay LMI built once with α and ρ² as parameters (cvxpy DPP): each bisection
-    step only re-solves."""
+    """The decay LMI with α and ρ² as parameters (cvxpy DPP), built once for each set of
+    perturbed edges (:func:`perturbed`): each bisection step only re-solves."""
 
     def __init__(self, p: _Problem, ch) -> None:
-        cp = load_cvxpy()
         self.p, self.ch = p, ch
-        n = p.n
         # solved on (L_B, W)/s with s = max|L_B|: the same P, τ prove the unscaled LMI
         self.scale = float(np.max(np.abs(p.lap_b))) or 1.0
-        lap_s = p.lap_b / self.scale
-        ch_s = _channels(p, self.scale, normalise=True)
-        self.pv = cp.Variable((n, n), symmetric=True)
-        self.tv = cp.Variable(len(ch), nonneg=True)
-        self.alpha = cp.Parameter(nonneg=True)
-        self.rho2 = cp.Parameter(max(len(ch), 1), nonneg=True)
-        top = self.pv @ lap_s + lap_s.T @ self.pv - 2 * self.alpha * self.pv
+        self.ch_s = _channels(p, self.scale, normalise=True)
+        self._built: dict[tuple[int, ...], tuple] = {}
+
+    def _build(self, active: tuple[int, ...]) -> tuple:
+        cp = load_cvxpy()
+        n = self.p.n
+        lap_s = self.p.lap_b / self.scale
+        ch_s = [self.ch_s[e] for e in active]
+        pv = cp.Variable((n, n), symmetric=True)
+        tv = cp.Variable(max(len(ch_s), 1), nonneg=True)
+        alpha = cp.Parameter(nonneg=True)
+        rho2 = cp.Parameter(max(len(ch_s), 1), nonneg=True)
+        top = pv @ lap_s + lap_s.T @ pv - 2 * alpha * pv
         rows_off, diag = [], []
         r = sum(c[0].shape[1] for c in ch_s)
         col = 0
         for k, (ewv, dwd, vwv) in enumerate(ch_s):
-            top = top - self.rho2[k] * (self.tv[k] * dwd)
-            rows_off.append(self.pv @ ewv)
+            top = top - rho2[k] * (tv[k] * dwd)
+            rows_off.append(pv @ ewv)
             m = vwv.shape[0]
             row = [np.zeros((m, col))] if col else []
-            row.append(self.tv[k] * vwv)
+            row.append(tv[k] * vwv)
             if r - col - m:
                 row.append(np.zeros((m, r - col - m)))
             diag.append(cp.hstack(row) if len(row) > 1 else row[0])
@@ -160,22 +211,30 @@ class _DecayLMI:
             psi = cp.bmat([[top, off], [off.T, cp.vstack(diag)]])
         else:
             psi = top
-        self.prob = cp.Problem(
-            cp.Minimize(0),
-            [self.pv >> np.eye(n), 0.5 * (psi + psi.T) >> 1e-7 * np.eye(n + r)],
+        prob = cp.Problem(
+            cp.Minimize(0), [pv >> np.eye(n), 0.5 * (psi + psi.T) >> 1e-7 * np.eye(n + r)]
         )
+        return prob, pv, tv, alpha, rho2
 
     def __call__(
         self, alpha: float, radius: float | np.ndarray
     ) -> tuple[np.ndarray, np.ndarray] | None:
         """P, τ with Ψ ≻ 0 at ρ (or ρ_e per edge), checked in floats with a strict margin;
-        or None."""
-        self.alpha.value = alpha / self.scale
-        self.rho2.value = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, self.rho2.shape)
-        if not solve_sdp(self.prob) or self.pv.value is None:
+        or None. τ_e = 0 on an edge of radius 0 (it has no channel)."""
+        m = len(self.ch)
+        active = perturbed(radius, m)
+        if active not in self._built:
+            self._built[active] = self._build(active)
+        prob, pv, tv, alpha_p, rho2 = self._built[active]
+        r2 = np.broadcast_to(np.asarray(radius, dtype=float) ** 2, (m,))
+        alpha_p.value = alpha / self.scale
+        rho2.value = np.array([r2[e] for e in active]) if active else np.zeros(1)
+        if not solve_sdp(prob) or pv.value is None:
             return None
-        pm = 0.5 * (self.pv.value + self.pv.value.T)
-        tau = np.maximum(np.asarray(self.tv.value, dtype=float).reshape(-1), 0.0)
+        pm = 0.5 * (pv.value + pv.value.T)
+        tau = np.zeros(m)
+        if active:
+            tau[list(active)] = np.maximum(np.asarray(tv.value, dtype=float).reshape(-1), 0.0)
         psi_f = decay_matrix(self.p.lap_b, self.ch, pm, tau, alpha, radius)
         if np.linalg.eigvalsh(0.5 * (psi_f + psi_f.T))[0] <= 1e-10 * np.linalg.norm(psi_f, 2):
             return None
@@ -216,9 +275,16 @@ def offset_matrix(
     Returns
     -------
     numpy.ndarray
-        Γ, symmetric.
+        Γ, symmetric, on ξ = (z, η_e of the edges of radius ρ_e > 0, 1): an edge of
+        radius 0 has no channel (:func:`perturbed`; its columns of Y are not used).
     """
-    n = lap_b.shape[0]
+    n, m = lap_b.shape[0], len(channels)
+    rad = np.broadcast_to(np.asarray(radius, dtype=float), (m,))
+    active = perturbed(rad, m)
+    y = y[:, active_columns(n, [c[0].shape[1] for c in channels], active)]
+    channels = [channels[e] for e in active]
+    lam = np.asarray(lam, dtype=float)[list(active)]
+    radius = rad[list(active)]
     r = sum(c[0].shape[1] for c in channels)
     k = n + r + 1
     g = np.zeros((k, k))
@@ -242,14 +308,19 @@ def offset_matrix(
     return g
 
 
-def _offset_sdp(p: _Problem, ch, radius) -> tuple[float, np.ndarray, np.ndarray] | None:
-    """γ, λ, Y with Γ ≻ 0 (floats, a strict margin), or None."""
+def _offset_sdp(p: _Problem, ch_all, radius) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """γ, λ, Y with Γ ≻ 0 (floats, a strict margin), or None; the channels of the edges
+    of radius 0 are left out (:func:`perturbed`): their λ_e and columns of Y are 0."""
     cp = load_cvxpy()
-    n = p.n
+    n, m_all = p.n, len(ch_all)
+    rad_all = np.broadcast_to(np.asarray(radius, dtype=float), (m_all,))
+    active = perturbed(rad_all, m_all)
+    ch = [ch_all[e] for e in active]
+    radius = rad_all[list(active)]
     r = sum(c[0].shape[1] for c in ch)
     k = n + r + 1
     gam = cp.Variable()
-    lam = cp.Variable(len(ch), nonneg=True)
+    lam = cp.Variable(max(len(ch), 1), nonneg=True)
     y = cp.Variable((n, k))
     a = np.hstack([p.lap_b] + [c[0] for c in ch] + [-p.r0.reshape(n, 1)])
     e_last = np.zeros((k, 1))
@@ -277,12 +348,16 @@ def _offset_sdp(p: _Problem, ch, radius) -> tuple[float, np.ndarray, np.ndarray]
     prob = cp.Problem(cp.Minimize(gam), [0.5 * (expr + expr.T) >> 1e-9 * scale * np.eye(k)])
     if not solve_sdp(prob) or gam.value is None:
         return None
-    lam_v = np.maximum(np.asarray(lam.value, dtype=float).reshape(-1), 0.0)
-    y_v = np.asarray(y.value, dtype=float)
+    lam_v = np.zeros(m_all)
+    if active:
+        lam_v[list(active)] = np.maximum(np.asarray(lam.value, dtype=float).reshape(-1), 0.0)
+    sizes = [c[0].shape[1] for c in ch_all]
+    y_v = np.zeros((n, n + sum(sizes) + 1))  # every channel's columns, as verify reads Y
+    y_v[:, active_columns(n, sizes, active)] = np.asarray(y.value, dtype=float)
     g0 = float(gam.value)
     for bump in (1e-7, 1e-5, 1e-3, 1e-2):  # back off until the float test is strict
         gv = g0 * (1 + bump) + bump * 1e-6 * scale
-        gm = offset_matrix(p.lap_b, ch, p.target, p.r0, gv, lam_v, y_v, radius)
+        gm = offset_matrix(p.lap_b, ch_all, p.target, p.r0, gv, lam_v, y_v, rad_all)
         if np.linalg.eigvalsh(0.5 * (gm + gm.T))[0] > 1e-12 * np.linalg.norm(gm, 2):
             return gv, lam_v, y_v
     return None
@@ -316,4 +391,13 @@ def _descend(test, top: float, steps: int, floor: float = 0.0):
     return lo, best
 
 
-__all__ = ["FRACTIONS", "SOLVERS", "decay_matrix", "load_cvxpy", "offset_matrix", "solve_sdp"]
+__all__ = [
+    "FRACTIONS",
+    "SOLVERS",
+    "active_columns",
+    "decay_matrix",
+    "load_cvxpy",
+    "offset_matrix",
+    "perturbed",
+    "solve_sdp",
+]

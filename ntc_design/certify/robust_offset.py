@@ -184,8 +184,8 @@ class OffsetSearch:
         self.i = edges.dst.astype(int) * dim
         self.j = edges.src.astype(int) * dim
         self.s = edges.s.astype(float)
-        self.w = edges.w
-        self.g = gains(edges.w) if edges.m else np.zeros((0, dim, dim))
+        self.w = edges.channel_w  # W̄_e (robust.channel_bound)
+        self.g = gains(self.w) if edges.m else np.zeros((0, dim, dim))
         self.r0 = u - lap @ target
         ac = np.abs(target)
         self._memo: tuple | None = None

@@ -351,7 +351,7 @@ def component_riccati(des: ProtocolDesign, comp: np.ndarray, c: int):
         The search on the block (L_B's block and its rounding bound built from the
         weights), and the number of uncertain edges into it.
     """
-    from .robust import UncertainEdges
+    from .robust import UncertainEdges, channel_bound
     from .robust_are import RiccatiSearch
 
     top = des.topology
@@ -382,12 +382,14 @@ def component_riccati(des: ProtocolDesign, comp: np.ndarray, c: int):
     dst = loc[ea.rows[into]]
     src = loc[ea.cols[into]]
     inside = src >= 0
+    absw = ea.sign[into][:, None, None] * ea.w[into]
     edges = UncertainEdges(
         dst,
         np.where(inside, src, dst),
         np.where(inside, ea.sign[into], 0).astype(float),
-        ea.sign[into][:, None, None] * ea.w[into],
+        absw,
         tuple(() for _ in range(int(into.sum()))),
+        np.array([channel_bound(x)[0] for x in absw]).reshape(absw.shape),
     )
     return RiccatiSearch(lap, err, edges, d), int(into.sum())
 

@@ -209,6 +209,13 @@ def verify(
     listed = need(doc, "claims", list, source)
     listed_props = need(doc, "certifies", list, source)
     checks: list[Check] = integrity_checks(doc, doc_subject, stated)
+    modes_doc = doc_subject.get("modes")
+    if not kind.switching and isinstance(modes_doc, dict) and len(modes_doc) != 1:
+        # before the kind reads a subject it takes to be one topology (a kind edited)
+        raise InputError(
+            f"{source}: kind {kind.name!r} is about one topology, but subject.modes lists "
+            f"{len(modes_doc)} modes"
+        )
 
     reading = kind.read(doc, source)
     checks += reading.checks

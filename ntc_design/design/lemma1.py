@@ -593,11 +593,12 @@ def _residual_and_thresholds(top, b, dl, u, th, thresholds, notes):
         notes.append(
             "critical couplings δ_H, δ_S not computed "
             + (
-                "(not asked for here"
+                "(not asked for here; "
                 if thresholds is False
                 else f"by default above Nd = {THRESHOLDS_DEFAULT_MAX_ND} ("
             )
-            + "ntc design --thresholds, or thresholds=True in Python, computes them)"
+            + "ntc design --thresholds computes them, as does the thresholds option of design "
+            "in Python)"
         )
     return res, crit
 

@@ -34,6 +34,7 @@ from matplotlib.patches import Patch
 from ..gain import parse_gain
 from ..simulate import make_gain
 from ..simulate.result import MeanSquareBand
+from ..sweep.robust import study_radius_text
 from .style import (
     BLUE,
     LINESTYLES,
@@ -682,7 +683,6 @@ def realisations_figure(study: dict):
             ax.plot([nom], [0.0], "k*", ms=7, label="nominal network")
         ax.set_xlabel("decay rate min Re λ(L_B(A'))")
         ax.set_ylabel("consensus offset ‖x* − 1⊗θ‖₂")
-        r = study["radius"]
-        ax.set_title(f"weights within ρ = {r:g}", fontsize=8)
+        ax.set_title(f"weights within {study_radius_text(study, short=True)}", fontsize=8)
         ax.legend(fontsize=6.5, loc="best")
     return fig

@@ -28,6 +28,17 @@ class Table:
     rows: list
     id: str | None = None
 
+    def __post_init__(self) -> None:
+        # a cell is text or Markup, never a value the template would print as Python
+        # (a dict, a bool, None): build such a cell as a ntc_design.rows.Cell
+        for r in self.rows:
+            for c in r:
+                if not isinstance(c, str):
+                    raise TypeError(
+                        f"report table cell {c!r:.60}: expected text or Markup (a rows.Cell's "
+                        f"html), not a {type(c).__name__}"
+                    )
+
 
 @dataclass(frozen=True)
 class Figure:

@@ -11,8 +11,8 @@ import numpy as np
 from ..certify import CertifyResult, certify, verify_file, write_certificate
 from ..design.digital import Digital
 from ..errors import InputError
+from ..rows import Cell, fmt, verdict
 from ..rows import Table as RowsTable
-from ..rows import fmt
 from ..rows import matrix as rows_matrix
 from ..schedule import schedule_from_document
 from ..simulate import SimulationDiverged, SimulationSpec, simulate
@@ -83,23 +83,28 @@ def certificate_tables(res, cert_path: Path, base: Path) -> tuple[Table, Table, 
     write_certificate(res.certificate, cert_path, "report")
     ver = verify_file(cert_path)
     r = res.certificate["results"]
-    rows = [
-        (
-            "certificate",
-            {
-                "href": rel(cert_path, base),
-                "text": f"{cert_path.name} ({res.certificate['kind']}, {res.certificate['digest'][:23]}…)",
-            },
-        ),
-        (
-            "re-verified from the file (no SDP solver)",
-            {
-                "verdict": ver.valid,
-                "text": f"— {ver.method}, {sum(c.ok for c in ver.checks)}/{len(ver.checks)} checks",
-            },
-        ),
-    ]
-    rows += list(html_table(res.results_table()).rows)
+    head = RowsTable.build(
+        "",
+        ("property", "result"),
+        [
+            (
+                "certificate",
+                Cell(
+                    text=f"{cert_path.name} ({res.certificate['kind']}, "
+                    f"{res.certificate['digest'][:23]}…)",
+                    href=rel(cert_path, base),
+                ),
+            ),
+            (
+                "re-verified from the file (no SDP solver)",
+                verdict(
+                    ver.valid,
+                    f"— {ver.method}, {sum(c.ok for c in ver.checks)}/{len(ver.checks)} checks",
+                ),
+            ),
+        ],
+    )
+    rows = html_table(head).rows + html_table(res.results_table()).rows
     checks = html_table(ver.table())
     return Table(("property", "result"), rows), checks, {"valid": ver.valid, "results": r}
 

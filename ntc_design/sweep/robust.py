@@ -23,7 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from ..certify.robust import abscissa, realised_topology, robust, uncertain_edges
+from ..certify.robust import (
+    abscissa,
+    radius_text,
+    realised_topology,
+    robust,
+    uncertain_edges,
+)
 from ..design import ProtocolDesign, design_topology
 from ..errors import InputError
 from ..model import Topology
@@ -212,11 +218,30 @@ def study_sentence(study: dict) -> str:
     ok_d, ok_o = _respected(rows, b)
     num = functools.partial(fmt, digits=5)
     return (
-        f"{len(rows)} weight realisations within ρ = {study['radius']:g}, nominal protocol: "
+        f"{len(rows)} weight realisations within {study_radius_text(study)}, nominal protocol: "
         f"decay rate {num(min(dec))}–{num(max(dec))} (proven >= {num(lo)}), consensus offset "
         f"{num(min(off))}–{num(max(off))} (proven <= {num(hi)}); "
         + ("both proven bounds hold" if ok_d and ok_o else "a proven bound is VIOLATED (a bug)")
     )
+
+
+def study_radius_text(study: dict, short: bool = False) -> str:
+    """The study's uncertainty set in words: ``ρ = 0.05``, or the per-edge radii with
+    their largest (:func:`ntc_design.certify.robust.radius_text`).
+
+    Parameters
+    ----------
+    study : dict
+        :meth:`RobustStudy.to_dict` (summary.json's ``robust``).
+    short : bool, optional
+        Leave the list of ρ_e out.
+
+    Returns
+    -------
+    str
+    """
+    radii = (study.get("brackets") or {}).get("radius")  # a list for per-edge radii
+    return radius_text(radii if isinstance(radii, list) else [], study["radius"], short)
 
 
 def _proven_ends(brackets: dict) -> tuple[float | None, float | None]:
@@ -257,5 +282,6 @@ __all__ = [
     "RobustStudy",
     "draw_realisation",
     "robust_study",
+    "study_radius_text",
     "within_brackets",
 ]

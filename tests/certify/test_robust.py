@@ -169,3 +169,176 @@ def test_the_table_names_the_method_of_each_proven_end(mid_robust):
     assert "Riccati search" in said[0] and "S-procedure, reduced" in said[1]
     assert "Riccati search at α = 0" in said[2]
     assert "block dominance" in [r[-1].text for r in sparse.table().rows][0]
+
+
+# -- how a statement names its set: one radius, or the per-edge radii ---------------------
+
+
+@pytest.mark.parametrize(
+    "radii, radius, kw, text",
+    [
+        ([0.05, 0.05], 0.05, {}, "ρ = 0.05"),
+        ([], 0.05, {}, "ρ = 0.05"),  # no uncertain edge: the radius asked for
+        ([0.02, 0.5], 0.5, {}, "the per-edge radii (max 0.5; ρ_e = 0.02, 0.5)"),
+        ([0.02, 0.5], 0.5, {"short": True}, "the per-edge radii (max 0.5)"),
+        (
+            [0.02, 0.5],
+            0.5,
+            {"edges": ["1→2", "2→3"]},
+            "the per-edge radii (max 0.5; 1→2: 0.02, 2→3: 0.5)",
+        ),
+        (
+            [0.1] * 9 + [0.2],
+            0.2,
+            {},
+            "the per-edge radii (max 0.2; ρ_e = " + ", ".join(["0.1"] * 8) + ", …; 10 edges)",
+        ),
+    ],
+)
+def test_radius_text_names_one_radius_or_the_per_edge_radii(radii, radius, kw, text):
+    from ntc_design.certify.robust import radius_phrase, radius_text
+
+    assert radius_text(radii, radius, **kw) == text
+    edges = kw.get("edges")
+    phrase = radius_phrase(radii, radius, edges)
+    assert phrase == ("at " if text.startswith("ρ") else "for ") + radius_text(
+        radii, radius, edges=edges
+    )
+
+
+def test_per_edge_brackets_are_not_stated_at_one_radius(tri_robust):
+    from tests.support.robust import TRI_SET
+
+    _, des, rep = tri_robust
+    assert sorted(rep.radii) == [0.02, 0.02, 0.5] and rep.radius == 0.5
+    table = rep.table()
+    assert table.title == f"tri: robust brackets for {TRI_SET}"
+    assert "at ρ = 0.5" not in table.text()
+    assert table.notes[-1] == (
+        "the decay and offset brackets hold for the per-edge radii; the margin radius is one "
+        "ρ on every edge"
+    )
+    # why: every weight at −50 % (inside one radius 0.5, outside the per-edge set) decays
+    # slower than the proven α, so "α at ρ = 0.5" would be false
+    half = {k: 0.5 * a for k, a in des.topology.weights.items()}
+    slow = float(np.min(np.linalg.eigvals(independent_lap_b(des, half)).real))
+    assert slow < rep.decay.lower
+    assert slow == pytest.approx(0.52885211, rel=1e-6)  # the protocol (B_i, δ) nominal
+    # a uniform radius is still said as one
+    assert "robust brackets at ρ = 0.05" in robust_uniform_title(des)
+
+
+def robust_uniform_title(des):
+    import dataclasses
+
+    top = dataclasses.replace(des.topology, uncertainty={})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return robust(dataclasses.replace(des, topology=top), 0.05, starts=1).table().title
+
+
+# -- weights singular only by rounding, and ρ = 0 -----------------------------------------
+
+
+def test_channel_bound_keeps_a_well_conditioned_weight_and_an_exact_kernel():
+    from ntc_design.certify.robust import channel_bound
+
+    for w, piv in (
+        (np.array([[2.0, 0.5], [0.5, 1.0]]), (0, 1)),
+        (np.diag([2.0, 0.0]), (0,)),  # an exact kernel: one channel
+        (np.array([[1.0, 1.0], [1.0, 1.0]]), (0,)),
+    ):
+        wb, got = channel_bound(w)
+        assert wb is w and got == piv
+
+
+@pytest.mark.parametrize("det_sign", [-1, 1])
+def test_channel_bound_of_a_weight_singular_by_rounding(det_sign):
+    # v vᵀ in floating point: exactly, full rank with a determinant of ±1e−20 or so
+    from fractions import Fraction
+
+    from ntc_design.certify.robust import CHANNEL_FLOOR, channel_bound, whitening_basis
+
+    rng = np.random.default_rng(5)
+    while True:
+        v = rng.normal(size=2)
+        w = np.outer(v, v)
+        det = Fraction(w[0, 0]) * Fraction(w[1, 1]) - Fraction(w[0, 1]) ** 2
+        if det != 0 and (det > 0) == (det_sign > 0):
+            break
+    wb, piv = channel_bound(w)
+    assert piv == (0, 1)
+    eta = np.diag(wb - w)
+    # W̄ − W is diagonal, at least η ≈ CHANNEL_FLOOR·max|W| (rounded up, never below W)
+    assert np.array_equal(wb - np.diag(np.diag(wb)), w - np.diag(np.diag(w)))
+    assert np.all(eta >= 0.99 * CHANNEL_FLOOR * np.max(np.abs(w)))
+    assert np.all(eta <= 2.01 * CHANNEL_FLOOR * np.max(np.abs(w)))
+    assert np.all(
+        [Fraction(x) >= Fraction(y) for x, y in zip(np.diag(wb), np.diag(w), strict=True)]
+    )
+    v = whitening_basis(wb)
+    np.testing.assert_allclose(v.T @ wb @ v, np.eye(2), atol=1e-12)  # well conditioned
+
+
+def test_whitening_basis_is_the_identity_without_positive_definiteness():
+    from ntc_design.certify.robust import whitening_basis
+
+    np.testing.assert_array_equal(whitening_basis(np.diag([1.0, -1.0])), np.eye(2))
+    np.testing.assert_array_equal(whitening_basis(np.diag([1.0, 0.0])), np.eye(2))
+    v = whitening_basis(np.diag([4.0, 9.0]))
+    np.testing.assert_array_equal(v, np.diag([0.5, 1 / 3]))  # L = I: D^(−1/2), rounded
+
+
+#: At ρ = 0 the brackets are the nominal figures, to these tolerances (robust()'s
+#: docstring): the decay's proven end within 0.005/2³ (FRACTIONS[0] and three bisection
+#: steps) relative; the offset's within 1e−4·‖1⊗θ‖ (the offset SDP's strict margin).
+DECAY_RTOL_AT_ZERO = 0.005 / 2**3
+OFFSET_TOL_AT_ZERO = 1e-4
+
+
+@pytest.mark.parametrize("n, d, theta", [(6, 2, [1.0, -1.0]), (5, 3, [1.0, 2.0, -1.0])])
+@pytest.mark.parametrize("seed", range(16))
+def test_at_radius_zero_the_brackets_are_the_nominal_figures(n, d, theta, seed):
+    # ntc generate --n 6 --d 2 --seed 11 once gave no bracket end at any radius (a weight
+    # v vᵀ whose kernel rounding had lost: VᵀWV not positive definite)
+    from ntc_design.certify import certify
+
+    top = random_network(n, d, seed=seed)
+    assert certify(top, theta).verification.valid  # the nominal case is proven
+    des = nd.design(top, theta, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = robust(des, 0.0, starts=0, margin=False)
+    lap = independent_lap_b(des, dict(top.weights))
+    nominal = float(np.min(np.linalg.eigvals(lap).real))
+    target = np.tile(des.theta, n)
+    offset = float(np.linalg.norm(np.linalg.solve(lap, des.input_vector()) - target))
+    assert rep.decay.upper == pytest.approx(nominal, rel=1e-9)
+    assert rep.decay.lower is not None
+    assert nominal * (1 - DECAY_RTOL_AT_ZERO) * (1 - 1e-12) <= rep.decay.lower <= nominal
+    assert rep.offset.upper is not None
+    assert offset <= rep.offset.upper <= offset + OFFSET_TOL_AT_ZERO * np.linalg.norm(target)
+    assert rep.offset.lower == pytest.approx(offset, abs=1e-12 * np.linalg.norm(target))
+
+
+def test_a_weight_singular_by_rounding_is_certified_soundly_at_every_radius():
+    # seed 11's weight 6→3 is v vᵀ rounded (determinant −6.5e−20 exactly): brackets at
+    # ρ = 0.05 now, each proven end respected by sampled realisations of the set
+    from ntc_design.certify.robust import uncertain_edges
+
+    top = random_network(6, 2, seed=11)
+    ed = uncertain_edges(top)
+    assert sum(not np.array_equal(ed.channel_w[e], ed.w[e]) for e in range(ed.m)) == 1
+    des = nd.design(top, [1.0, -1.0], thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = robust(des, 0.05, starts=1)
+    assert rep.decay.lower is not None and rep.offset.upper is not None
+    assert rep.margin.lower is not None and rep.margin.lower > 0.05
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    assert verify(doc).valid
+    rng = np.random.default_rng(np.random.SeedSequence(11))
+    for kind in ("vertex", "ball"):
+        for _ in range(100):
+            a, o = features(des, sample(des, 0.05, rng, kind))
+            assert a >= rep.decay.lower and o <= rep.offset.upper

@@ -309,3 +309,46 @@ def test_descend_when_the_top_passes_or_nothing_does():
     assert _descend(test, 2.0, steps=5, floor=0.5) == (0.5, None)
     assert len(test.calls) == len(FRACTIONS)  # the floor itself was tried last
     assert test.calls[-1] == 0.5
+
+
+# -- edges of radius 0 carry no channel --------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "radius, active", [(0.0, ()), (0.1, (0, 1, 2)), (np.array([0.0, 0.2, 0.0]), (1,))]
+)
+def test_perturbed_edges_are_those_of_positive_radius(radius, active):
+    from ntc_design.certify.robust_lmi import perturbed
+
+    assert perturbed(radius, 3) == active
+
+
+def test_active_columns_keep_z_the_kept_channels_and_the_last():
+    from ntc_design.certify.robust_lmi import active_columns
+
+    # ξ = (z: 3, η_0: 2, η_1: 1, η_2: 2, 1)
+    assert active_columns(3, [2, 1, 2], (0, 1, 2)) == list(range(9))
+    assert active_columns(3, [2, 1, 2], (1,)) == [0, 1, 2, 5, 8]
+    assert active_columns(3, [2, 1, 2], ()) == [0, 1, 2, 8]
+
+
+def test_at_radius_zero_psi_is_the_nominal_lyapunov_form(semi):
+    # no edge is perturbed: Ψ is P(L_B − αI) + (L_B − αI)ᵀP whatever the multipliers
+    ch = _channels(semi)
+    n = semi.n
+    rng = _rng(3)
+    lap = rng.normal(size=(n, n))
+    a = rng.normal(size=(n, n))
+    p = a @ a.T + n * np.eye(n)
+    tau = rng.uniform(1, 2, size=len(ch))
+    sh = lap - 0.3 * np.eye(n)
+    np.testing.assert_allclose(decay_matrix(lap, ch, p, tau, 0.3, 0.0), p @ sh + sh.T @ p)
+    # one edge of radius 0 among others: Ψ without its channel's rows, which is the
+    # principal submatrix of the Ψ that keeps its channel at ρ_e = 0 (so a certificate
+    # that kept it still verifies)
+    rad = np.array([0.1, 0.0, 0.1, 0.1])
+    tiny = np.where(rad > 0, rad, 1e-150)  # the channel kept, its ρ_e² term negligible
+    full = decay_matrix(lap, ch, p, tau, 0.3, tiny)
+    sizes = [c[0].shape[1] for c in ch]
+    keep = list(range(n)) + [n + sum(sizes[:e]) + k for e in (0, 2, 3) for k in range(sizes[e])]
+    np.testing.assert_allclose(decay_matrix(lap, ch, p, tau, 0.3, rad), full[np.ix_(keep, keep)])

@@ -1,7 +1,9 @@
 """Tests of :mod:`ntc_design.certify.verify`."""
 
 import json
+import re
 import shutil
+from pathlib import Path
 
 import pytest
 
@@ -12,12 +14,44 @@ from ntc_design.schedule import ScheduleGain
 from tests.cli_helpers import assert_input_error, run_cli
 from tests.support.certificates import CERTS, _load
 
+# what each shipped certificate is about (verified against the example file and θ too)
+_SUBJECTS = {
+    "g1.json": "g1.yaml",
+    "switching.json": "switching.yaml",
+    "g1_tv.json": "g1_tv.yaml",
+    "g1_digital.json": "g1.yaml",
+}
+PREVIOUS_RELEASE = Path(__file__).resolve().parents[1] / "data" / "previous_release"
 
-def test_certificate_files_verify(capsys, monkeypatch):
-    for name in ("g1.json", "switching.json"):
-        code, out, err = run_cli(["verify", CERTS / name], capsys, monkeypatch)
-        assert code == 0, err
-        assert "VALID (exact-rational)" in out
+
+def _verifies(path, capsys, monkeypatch, examples) -> str:
+    code, out, err = run_cli(["verify", path], capsys, monkeypatch)
+    assert code == 0, (path.name, err)
+    assert re.search(r"^VALID \((exact-rational|interval)\): \d+ checks$", out, re.M), out[-300:]
+    subject = examples / _SUBJECTS[path.name]
+    args = ["verify", path, "--topology", subject, "--theta", "1,2,-1", "--json"]
+    code, out, err = run_cli(args, capsys, monkeypatch)
+    assert code == 0 and json.loads(out)["valid"] is True, (path.name, err)
+    return out
+
+
+def test_every_shipped_certificate_verifies(capsys, monkeypatch, examples):
+    # CI's check that `ntc verify` exits 0 on every file in certificates/
+    shipped = sorted(CERTS.glob("*.json"))
+    assert [p.name for p in shipped] == sorted(_SUBJECTS)
+    for path in shipped:
+        _verifies(path, capsys, monkeypatch, examples)
+
+
+def test_the_previous_release_certificates_still_verify(capsys, monkeypatch, examples):
+    # a certificate whose claims are true keeps verifying: g1_tv.json's Λ₁, an upper bound
+    # 4e-9 above today's re-enclosure, is still a true upper bound
+    previous = sorted(PREVIOUS_RELEASE.glob("*.json"))
+    assert [p.name for p in previous] == sorted(set(_SUBJECTS) - {"g1_digital.json"})
+    for path in previous:
+        _verifies(path, capsys, monkeypatch, examples)
+    tv = json.loads((PREVIOUS_RELEASE / "g1_tv.json").read_text())["results"]["time_varying"]
+    assert tv["Lambda1"] == 238.86572880182226
 
 
 @pytest.mark.hostile

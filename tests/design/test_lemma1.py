@@ -167,3 +167,21 @@ def test_design_mat_loads_in_scipy_with_the_toolkits_l_b(tmp_path, capsys, monke
         monkeypatch,
     )
     assert code == 0 and (tmp_path / "d.json").read_text().startswith("{")
+
+
+@pytest.mark.parametrize(
+    "thresholds, why",
+    [(False, "(not asked for here; "), (None, "by default above Nd = ")],
+)
+def test_the_note_on_critical_couplings_not_computed_reads_as_a_sentence(
+    g1, theta, monkeypatch, thresholds, why
+):
+    from ntc_design.design import lemma1
+
+    monkeypatch.setattr(lemma1, "THRESHOLDS_DEFAULT_MAX_ND", 1)  # G1 (Nd = 21) is above
+    (note,) = [n for n in nd.design(g1, theta, thresholds=thresholds).notes if "δ_H" in n]
+    assert note.startswith(f"critical couplings δ_H, δ_S not computed {why}")
+    assert note.endswith(
+        "ntc design --thresholds computes them, as does the thresholds option of design in Python)"
+    )
+    assert "herentc" not in note and "=True" not in note

@@ -4,6 +4,9 @@ import shutil
 import subprocess
 
 import pytest
+from markupsafe import Markup
+
+from ntc_design.reports.html import Table
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
@@ -56,3 +59,16 @@ def test_report_opens_in_headless_chromium(paper_run, tmp_path):
         timeout=120,
     )
     assert shot.stat().st_size > 50_000
+
+
+@pytest.mark.parametrize(
+    "value",
+    [{"href": "c.json", "text": "c.json"}, {"verdict": True, "text": "ok"}, True, None, 1.5],
+    ids=["link dict", "verdict dict", "bool", "None", "float"],
+)
+def test_a_report_table_takes_only_text_cells(value):
+    # a value the template would print as Python is refused where the table is built;
+    # links and verdicts are rows.Cell, rendered by html_table
+    with pytest.raises(TypeError, match="expected text or Markup"):
+        Table(("property", "result"), [("certificate", value)])
+    assert Table(("a",), [("text",), (Markup("<b>x</b>"),)]).rows[1][0] == "<b>x</b>"

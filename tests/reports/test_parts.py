@@ -64,11 +64,12 @@ def test_certificate_tables_write_and_reverify_the_file(cert, tmp_path):
     on_disk = json.loads(path.read_text(encoding="utf-8"))
     assert on_disk["digest"] == cert.certificate["digest"]
     (label, first), (label2, second), *results = summary.rows
-    assert label == "certificate" and first["href"] == "sub/c.json"
-    assert first["text"] == f"c.json (hurwitz, {on_disk['digest'][:23]}…)"
-    assert label2.startswith("re-verified from the file") and second["verdict"] is True
+    # typed cells, rendered: a link and a verdict (never a dict printed as Python)
+    assert label == "certificate"
+    assert first == f'<a href="sub/c.json">c.json (hurwitz, {on_disk["digest"][:23]}…)</a>'
+    assert label2.startswith("re-verified from the file")
     n = len(checks.rows)
-    assert second["text"].endswith(f", {n}/{n} checks")
+    assert second == f'<span class="ok">yes</span> — exact-rational, {n}/{n} checks'
     assert len(results) == len(cert.rows) and "decay rate" in str(results[0][0])
     assert info == {"valid": True, "results": cert.certificate["results"]}
 
@@ -80,11 +81,11 @@ def test_certificate_tables_judge_the_file_not_the_result(cert, tmp_path):
     summary, checks, info = parts.certificate_tables(
         dataclasses.replace(cert, certificate=bad), tmp_path / "c.json", tmp_path
     )
-    assert info["valid"] is False and summary.rows[1][1]["verdict"] is False
+    assert info["valid"] is False and summary.rows[1][1].startswith('<span class="bad">no</span>')
     failing = [str(r[0]) for r in checks.rows if "FAILS" in str(r[1])]
     assert "digest" in failing and any("reported results" in f for f in failing)
     ok = len(checks.rows) - len(failing)
-    assert summary.rows[1][1]["text"].endswith(f", {ok}/{len(checks.rows)} checks")
+    assert summary.rows[1][1].endswith(f", {ok}/{len(checks.rows)} checks")
 
 
 def test_certificate_tables_refuse_a_missing_folder(cert, tmp_path):

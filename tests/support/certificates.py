@@ -1,12 +1,26 @@
-"""The certificates bundled in certificates/, reading and writing them, and the
-paper's designs as a session fixture."""
+"""The certificates bundled in certificates/, reading and writing them, the paper's
+designs and one honest certificate of every kind as session fixtures."""
 
+import copy
 import json
+import warnings
 
+import numpy as np
 import pytest
 
 import ntc_design as nd
+from ntc_design.certify import KINDS, certify, verify
+from ntc_design.certify.kinds import IssueOptions
+from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
+from ntc_design.certify.kinds.robust import robust_certificate
+from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
+from ntc_design.certify.robust import robust
+from ntc_design.design import design
+from ntc_design.design.digital import Digital
+from ntc_design.gain import analyse_gain
+from ntc_design.generate import random_network
 from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.timevarying import TimeVaryingDesign, from_document
 from tests.conftest import ROOT
 
 CERTS = ROOT / "certificates"
@@ -27,3 +41,59 @@ def _write(tmp_path, doc, name="c.json"):
     p = tmp_path / name
     p.write_text(json.dumps(doc))
     return p
+
+
+def _tv_topology() -> dict:
+    """A 3-agent path whose antagonistic weight varies with t (period 2π)."""
+    w = {
+        "1->2": {"diag": ["-1 - 0.5*sin(t)", -2]},
+        "2->3": [[2, 0], [0, 1]],
+        "3->1": {"identity": 1},
+        "2->1": {"identity": 1},
+    }
+    edges = [{"from": int(k[0]), "to": int(k[-1]), "weight": v} for k, v in w.items()]
+    return {"dim": 2, "agents": 3, "edges": edges, "period": "2*pi"}
+
+
+@pytest.fixture(scope="session")
+def honest_certificates() -> dict[str, dict]:
+    """One honest certificate of every kind (two of hurwitz-scale; the digital kinds with and
+    without a delay), each verified: the
+    forgery property test mutates them, the kind-swap test relabels them. Copy before
+    editing."""
+    g1 = _load("g1.json")
+    sw = _load("switching.json")
+    theta3 = [1.0, 2.0, -1.0]
+    scale_rand = scale_certificate(design(random_network(12, 2, seed=3), [1.0, -1.0], 0.1))
+    scale_g1 = scale_certificate(design(nd.load(ROOT / "examples" / "g1.yaml"), theta3, 0.1))
+    with pytest.warns(Warning):  # G3 fails Assumption 2 (the paper's own example)
+        sd = design(nd.load(ROOT / "examples" / "switching.yaml"), theta3, 0.1)
+    sws = switching_scale_certificate(sd)
+    tv = from_document(_tv_topology(), "tv")
+    tvc = KINDS["time_varying"].issue(
+        TimeVaryingDesign(tv, np.array([1.0, 2.0]), 0.1),
+        IssueOptions(gain=analyse_gain("1/(1+t)")),
+    )
+    rdes = design(random_network(4, 2, seed=1), [1.0, -1.0], 0.1, thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
+    g1t = nd.load(ROOT / "examples" / "g1.yaml")
+    dig = certify(g1t, theta3, gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
+    with pytest.warns(Warning):  # G3 fails Assumption 2
+        sw_top = nd.load(ROOT / "examples" / "switching.yaml")
+        digsw = certify(sw_top, theta3, gain="1/(1+t)", digital=Digital(0.013, 0)).certificate
+    out = {
+        "digital": json.loads(json.dumps(dig)),
+        "digital_switching": json.loads(json.dumps(digsw)),
+        "robust": rob,
+        "hurwitz": g1,
+        "switching": sw,
+        "hurwitz-scale": scale_rand,
+        "hurwitz-scale-g1": scale_g1,
+        "switching-scale": sws,
+        "time_varying": tvc,
+    }
+    for name, doc in out.items():
+        assert verify(copy.deepcopy(doc)).valid, name
+    return out

@@ -122,3 +122,30 @@ def _scenario(tmp_path, robust_block: str, paths: int = 60) -> Path:
         f"T: 2\ndt: 0.002\npaths: {paths}\nworkers: 1\n{robust_block}\n"
     )
     return p
+
+
+# -- per-edge radii: a 3-agent cycle whose radii differ (0.02, 0.5, 0.02) -----------------
+
+TRI = """name: tri
+dim: 1
+agents: 3
+edges:
+  - {from: 1, to: 2, weight: [[1]], uncertainty: 0.02}
+  - {from: 2, to: 3, weight: [[-1]], uncertainty: 0.5}
+  - {from: 3, to: 1, weight: [[2]], uncertainty: 0.02}
+"""
+
+#: How every face names TRI's set (edges in the robust bounds' order, (to, from)).
+TRI_SET = "the per-edge radii (max 0.5; 3→1: 0.02, 1→2: 0.02, 2→3: 0.5)"
+
+
+@pytest.fixture(scope="session")
+def tri_robust(tmp_path_factory):
+    """TRI's file, its design and its robust report (the radii come from the file)."""
+    p = tmp_path_factory.mktemp("tri") / "tri.yaml"
+    p.write_text(TRI, encoding="utf-8")
+    des = nd.design(nd.load(p), [1.0], thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = robust(des, 0.05, starts=2)
+    return p, des, rep

@@ -103,3 +103,26 @@ def test_a_study_needs_robust_and_one_fixed_topology(small):
         robust_study(top, dataclasses.replace(spec, robust=None))
     with pytest.raises(InputError, match="one fixed topology"):
         robust_study("not a topology", spec)
+
+
+@pytest.mark.parametrize(
+    "radii, radius, said, title",
+    [
+        ([0.05, 0.05], 0.05, "3 weight realisations within ρ = 0.05,", "ρ = 0.05"),
+        (
+            [0.02, 0.5, 0.02],
+            0.5,
+            "3 weight realisations within the per-edge radii (max 0.5; ρ_e = 0.02, 0.5, 0.02),",
+            "the per-edge radii (max 0.5)",
+        ),
+    ],
+)
+def test_a_study_names_its_set(small, radii, radius, said, title):
+    # summary.json keeps the brackets' radius: one number, or the per-edge list
+    from ntc_design.sweep.robust import study_radius_text
+
+    _, _, st = small
+    brackets = {**st.brackets, "radius": radius if len(set(radii)) == 1 else radii}
+    doc = RobustStudy(radius, tuple(radii), brackets, st.rows).to_dict()
+    assert study_sentence(doc).startswith(said)
+    assert study_radius_text(doc, short=True) == title

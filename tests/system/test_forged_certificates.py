@@ -621,3 +621,55 @@ def test_verify_and_certify_bad_arguments_are_one_line(capsys, monkeypatch, args
 def test_verify_with_theta_of_the_wrong_length_is_invalid(tmp_path, capsys, monkeypatch):
     code, _, err = run_cli(["verify", CERTS / "g1.json", "--theta", "1,2"], capsys, monkeypatch)
     assert code == 1 and "θ is the one given" in err
+
+
+# -- a certificate relabelled as another kind ---------------------------------------------
+
+
+def _relabelled():
+    from ntc_design.certify import KINDS
+
+    honest = ("robust", "hurwitz", "switching", "hurwitz-scale", "switching-scale", "time_varying")
+    return [(h, k) for h in honest for k in KINDS if k != h]
+
+
+@hostile
+@pytest.mark.parametrize("as_json", [False, True], ids=["text", "json"])
+@pytest.mark.parametrize("reseal", [False, True], ids=["as-edited", "resealed"])
+@pytest.mark.parametrize("honest_kind, kind", _relabelled())
+def test_a_certificate_relabelled_as_another_kind_is_refused(
+    honest_kind, kind, reseal, as_json, honest_certificates, tmp_path, capsys, monkeypatch
+):
+    # one edit of a genuine certificate (its kind), with and without its digests
+    # recomputed: invalid (1) or malformed (2), in one line, never an internal error
+    doc = copy.deepcopy(honest_certificates[honest_kind])
+    doc["kind"] = kind
+    if reseal:
+        redigest(doc)
+    p = tmp_path / "relabelled.json"
+    p.write_text(json.dumps(doc))
+    code, out, err = run_cli(["verify", p, *(["--json"] if as_json else [])], capsys, monkeypatch)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code in (1, 2), (code, err)
+    assert len(lines) == 1 and "Traceback" not in err and "internal error" not in err, err
+    if code == 2:
+        assert lines[0].startswith(f"error: {p}: "), lines[0]
+    if as_json:  # a script reading stdout gets JSON either way
+        got = json.loads(out)
+        if code == 1:
+            assert got["valid"] is False
+        else:
+            assert got == {"ok": False, "error": lines[0][len("error: ") :], "exit_code": 2}
+
+
+@hostile
+def test_a_switching_certificate_relabelled_robust_names_the_field(capsys, monkeypatch, tmp_path):
+    # the case that once unpacked three modes into one (ValueError, empty stdout)
+    doc = copy.deepcopy(SW)
+    doc["kind"] = "robust"
+    p = tmp_path / "sw.json"
+    p.write_text(json.dumps(doc))
+    code, out, err = run_cli(["verify", p, "--json"], capsys, monkeypatch)
+    msg = f"{p}: kind 'robust' is about one topology, but subject.modes lists 3 modes"
+    assert (code, err) == (2, f"error: {msg}\n")
+    assert json.loads(out) == {"ok": False, "error": msg, "exit_code": 2}

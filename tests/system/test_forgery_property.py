@@ -20,17 +20,12 @@ import networkx as nx
 import numpy as np
 import pytest
 
-import ntc_design as nd
 from ntc_design.certify import KINDS, verify
 from ntc_design.certify.arrays import topology_from_subject
 from ntc_design.certify.format import digest, document_hash, topology_hash
-from ntc_design.certify.kinds import IssueOptions
-from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
-from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
 from ntc_design.design import design
 from ntc_design.errors import InputError
 from ntc_design.files import parse_topology
-from ntc_design.gain import analyse_gain
 from ntc_design.generate import random_network
 from ntc_design.model import Topology
 from ntc_design.timevarying import TimeVaryingDesign, from_document
@@ -44,63 +39,10 @@ MAX_LIST = 3  # entries mutated per list: the first, the middle and the last
 # ------------------------------------------------------------------ honest certificates
 
 
-def _tv_topology() -> dict:
-    """A 3-agent path whose antagonistic weight varies with t (period 2π)."""
-    w = {
-        "1->2": {"diag": ["-1 - 0.5*sin(t)", -2]},
-        "2->3": [[2, 0], [0, 1]],
-        "3->1": {"identity": 1},
-        "2->1": {"identity": 1},
-    }
-    edges = [{"from": int(k[0]), "to": int(k[-1]), "weight": v} for k, v in w.items()]
-    return {"dim": 2, "agents": 3, "edges": edges, "period": "2*pi"}
-
-
 @pytest.fixture(scope="module")
-def honest() -> dict[str, dict]:
-    certs = ROOT / "certificates"
-    g1 = json.loads((certs / "g1.json").read_text())
-    sw = json.loads((certs / "switching.json").read_text())
-    theta3 = [1.0, 2.0, -1.0]
-    scale_rand = scale_certificate(design(random_network(12, 2, seed=3), [1.0, -1.0], 0.1))
-    scale_g1 = scale_certificate(design(nd.load(ROOT / "examples" / "g1.yaml"), theta3, 0.1))
-    with pytest.warns(Warning):  # G3 fails Assumption 2 (the paper's own example)
-        sd = design(nd.load(ROOT / "examples" / "switching.yaml"), theta3, 0.1)
-    sws = switching_scale_certificate(sd)
-    tv = from_document(_tv_topology(), "tv")
-    tvc = KINDS["time_varying"].issue(
-        TimeVaryingDesign(tv, np.array([1.0, 2.0]), 0.1),
-        IssueOptions(gain=analyse_gain("1/(1+t)")),
-    )
-    from ntc_design.certify.kinds.robust import robust_certificate
-    from ntc_design.certify.robust import robust
-
-    rdes = design(random_network(4, 2, seed=1), [1.0, -1.0], 0.1, thresholds=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
-    from ntc_design.certify import certify
-    from ntc_design.design.digital import Digital
-
-    g1t = nd.load(ROOT / "examples" / "g1.yaml")
-    dig = certify(g1t, theta3, gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
-    with pytest.warns(Warning):  # G3 fails Assumption 2
-        sw_top = nd.load(ROOT / "examples" / "switching.yaml")
-        digsw = certify(sw_top, theta3, gain="1/(1+t)", digital=Digital(0.013, 0)).certificate
-    out = {
-        "digital": json.loads(json.dumps(dig)),
-        "digital_switching": json.loads(json.dumps(digsw)),
-        "robust": rob,
-        "hurwitz": g1,
-        "switching": sw,
-        "hurwitz-scale": scale_rand,
-        "hurwitz-scale-g1": scale_g1,
-        "switching-scale": sws,
-        "time_varying": tvc,
-    }
-    for name, doc in out.items():
-        assert verify(copy.deepcopy(doc)).valid, name
-    return out
+def honest(honest_certificates) -> dict[str, dict]:
+    """One honest certificate of every kind (tests/support/certificates.py)."""
+    return honest_certificates
 
 
 # ------------------------------------------------------------------ the independent truth
@@ -137,6 +79,16 @@ def _pos(m: np.ndarray) -> bool:
     """m ≻ 0, with a margin for the rounding of this check itself."""
     s = 0.5 * (m + m.T)
     return bool(np.linalg.eigvalsh(s)[0] > 1e-10 * max(1.0, np.max(np.abs(s))))
+
+
+def _at_least(x, y, rtol=1e-6, atol=1e-12) -> bool:
+    """x >= y, but for a relative tolerance (an upper bound that is still true)."""
+    return (
+        isinstance(x, (int, float))
+        and not isinstance(x, bool)
+        and math.isfinite(x)
+        and x >= y - rtol * max(abs(y), atol / rtol)
+    )
 
 
 def _close(x, y, rtol=1e-6, atol=1e-12) -> bool:
@@ -314,8 +266,8 @@ def _truth_time_varying(doc: dict) -> list[str]:
     t0 = r["t0"]
     if s["gain"] is not None:
         tt = t0 + np.geomspace(1e-9, 1e6, 2000)
-        if t0 is None or not np.all(1 / (1 + tt) < kappa) or 1 / (1 + 0.999 * t0) < kappa * 0.99:
-            bad.append("t₀")  # c(t) < κ from t₀ on, and t₀ not far beyond the crossing
+        if t0 is None or not np.all(1 / (1 + tt) < kappa):
+            bad.append("t₀")  # c(t) < κ from t₀ on (a later t₀ is still true)
     if not (r["lambda2"] <= r["sampled_inf"] and _close(r["sampled_inf"], float(lam.min()), 1e-3)):
         bad.append("sampled infimum")
     if not _close(r["relative_gap"], (r["sampled_inf"] - r["lambda2"]) / r["sampled_inf"], 1e-9):
@@ -474,7 +426,8 @@ def _truth_robust(doc: dict) -> list[str]:
             np.linalg.norm(np.linalg.solve(_lap_with(top, w, delta, b), u) - target)
             for w in samples
         )
-        if not worst**2 <= gam or not _close(res["offset"]["upper"], math.sqrt(gam)):
+        # an upper bound: true when at or above √γ (a looser one is still true)
+        if not worst**2 <= gam or not _at_least(res["offset"]["upper"], math.sqrt(gam)):
             bad.append("offset bound")
     eig = float(np.min(np.linalg.eigvals(lap).real))
     if not _close(res["nominal_decay"], eig):
@@ -491,9 +444,12 @@ def _truth_robust(doc: dict) -> list[str]:
                 if key == "decay"
                 else float(np.linalg.norm(np.linalg.solve(lw, u) - target))
             )
-            # an eigenvalue is defined to a tolerance relative to the matrix's size
+            # an eigenvalue is defined to a tolerance relative to the matrix's size; the
+            # realisation's rate bounds the robust rate above, its offset the worst offset
+            # below: the reported end is true on that side of it
             atol = 1e-6 * float(np.max(np.abs(lw))) if key == "decay" else 1e-12
-            if not _close(res[path[0]][path[1]], got, 1e-6, atol):
+            end = res[path[0]][path[1]]
+            if not (_at_least(end, got, 1e-6, atol) if key == "decay" else _at_least(-end, -got)):
                 bad.append(f"{key} realisation")
     return bad
 

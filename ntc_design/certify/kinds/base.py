@@ -112,8 +112,9 @@ class Subject:
 
 class ResultsAudit:
     """Every number a certificate reports in ``results`` must be accounted for: recomputed
-    (:meth:`recomputed`, :meth:`exact`), an estimate between rigorous bounds
-    (:meth:`estimate`), or declared informational (:meth:`informational`: run times,
+    (:meth:`recomputed`, :meth:`exact`), a one-sided bound in its sound direction
+    (:meth:`bound`), an estimate between rigorous bounds (:meth:`estimate`), or declared
+    informational (:meth:`informational`: run times,
     iteration counts, which prove nothing). A number nobody accounted for fails the audit,
     so a forged or added result cannot pass unread.
 
@@ -221,6 +222,59 @@ class ResultsAudit:
             self.bad.append(f"{self.name(path)}: reported {self._show(path)}, recomputed {value!r}")
         elif abs(got - value) > rtol * max(abs(value), scale, 1e-300):
             self.bad.append(f"{self.name(path)}: reported {got!r}, recomputed {value:.10g}")
+
+    def bound(
+        self,
+        path: tuple,
+        value: float,
+        side: str,
+        scale: float = 0.0,
+        rtol: float = RESULT_RTOL,
+    ) -> None:
+        """A reported one-sided bound, checked in its sound direction against ``value``
+        (the bound verify re-derived): an upper bound must be at or above it, a lower bound
+        at or below it (within ``rtol`` relative to ``max(|value|, scale)``, on that side
+        only). A looser bound than the one re-derived is still true and passes: a
+        certificate keeps verifying when a later version encloses or searches more
+        tightly. A missing or non-finite one fails.
+
+        Parameters
+        ----------
+        path : tuple
+            Where it is reported.
+        value : float
+            What verify re-derived (an upper bound for ``"upper"``, a lower one for
+            ``"lower"``).
+        side : {"upper", "lower"}
+            Which bound the reported number is.
+        scale : float, optional
+            A floor for the tolerance's scale (e.g. the matrix norm).
+        rtol : float, optional
+            The relative tolerance (documented by each kind).
+
+        Raises
+        ------
+        ValueError
+            ``side`` is neither ``"upper"`` nor ``"lower"``.
+        """
+        if side not in ("upper", "lower"):
+            raise ValueError(f"side must be 'upper' or 'lower', not {side!r}")
+        self._mark(path)
+        got = finite_number(self.get(*path))
+        if got is None or not math.isfinite(value):
+            self.bad.append(f"{self.name(path)}: reported {self._show(path)}, recomputed {value!r}")
+            return
+        slack = rtol * max(abs(value), scale, 1e-300)
+        if side == "upper" and got < value - slack:
+            self.bad.append(
+                f"{self.name(path)}: reported upper bound {got!r} is below the re-derived "
+                f"{value:.10g}"
+            )
+        elif side == "lower" and got > value + slack:
+            self.bad.append(
+                f"{self.name(path)}: reported lower bound {got!r} is above the re-derived "
+                f"{value:.10g}"
+            )
 
     def exact(self, path: tuple, value: Any) -> None:
         """The reported value (a count, a flag, a name, None) is exactly ``value``.

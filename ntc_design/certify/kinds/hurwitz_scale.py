@@ -300,8 +300,8 @@ class HurwitzScaleKind(CertificateKind):
         return (
             ResultRow(
                 "components",
-                f"{r['components']} (largest {r['largest_component_agents']} agents), "
-                f"methods {r['methods']}",
+                f"{r['components']} (largest {r['largest_component_agents']} agents), by "
+                + ", ".join(f"{m} {k}" for m, k in r["methods"].items()),
             ),
             ResultRow("decay rate", f"{number_text(est['value'])} ({est['method']})", True),
             *(ResultRow("skipped", sk) for sk in r["skipped"]),
@@ -310,8 +310,8 @@ class HurwitzScaleKind(CertificateKind):
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float
     ) -> None:
-        # Counts recomputed; the rate's lower bound recomputed (every component a
-        # dominance one) and the rate estimate between that bound (or 0) and
+        # Counts recomputed; the rate's lower bound at or below the recomputed one (every
+        # component a dominance one) and the rate estimate between that bound (or 0) and
         # :func:`rate_upper_bound`; the run time informational.
         st: ScaleState = reading.state
         meth = st.methods.tolist()
@@ -329,7 +329,7 @@ class HurwitzScaleKind(CertificateKind):
         if all_dom:
             _, _, rhs = self._dominance_data(st, np.ones(st.top.n, dtype=bool))
             lower = float(np.min(dominance_rate_bound(st.mu, st.v, rhs))) * (1 - 1e-12)
-            audit.recomputed(("rate_lower_bound", "value"), lower)
+            audit.bound(("rate_lower_bound", "value"), lower, "lower")
         elif audit.get("rate_lower_bound", "value") is not None:
             audit.informational(("rate_lower_bound", "value"))  # accounted for: it fails here
             audit.fail("rate_lower_bound given, but not every component is a dominance one")

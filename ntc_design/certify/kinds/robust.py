@@ -31,10 +31,13 @@ from ..robust import (
     RobustReport,
     abscissa,
     check_radius,
+    radius_phrase,
+    radius_text,
     robust,
     uncertain_edges,
 )
 from ..robust_are import RICCATI_MAX_ND, RiccatiSearch
+from ..robust_lmi import active_columns, perturbed
 from ..robust_offset import OffsetSearch, input_float
 from ..theorems import TheoremVerdict
 from .base import (
@@ -224,7 +227,7 @@ def _exact_channels(top: Topology) -> list[_Channel]:
     out = []
     for e in range(ed.m):
         i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
-        w = Dyadic.of(ed.w[e])
+        w = Dyadic.of(ed.channel_w[e])  # W̄_e, as the issuer's (robust.channel_bound)
         v = Dyadic.of(ed.basis(e))
         sel = np.zeros((n, d), dtype=object)
         sel[i : i + d] = np.eye(d, dtype=np.int64).astype(object)
@@ -266,6 +269,8 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
     Returns
     -------
     Dyadic
+        On the edges of radius ρ_e > 0: an edge of radius 0 is not perturbed and has no
+        channel (Ψ of a certificate that lists one is its principal submatrix).
     """
     pd_ = Dyadic.of(p)
     top = (
@@ -273,6 +278,8 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
     )
     offs, diag = [], []
     for t, q, c in zip(tau, radius, ch, strict=True):
+        if not q > 0:
+            continue
         top = top - c.dwd.scale(_dy(t) @ _dy(q) @ _dy(q))
         offs.append(pd_ @ c.ewv)
         diag.append(c.vwv.scale(_dy(t)))
@@ -318,11 +325,26 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     Raises
     ------
     InputError
-        Y is not Nd × (Nd + Σ rank W_e + 1).
+        Y is not Nd × (Nd + Σ rank W̄_e + 1).
+
+    Notes
+    -----
+    Γ is built on ξ = (z, η_e of the edges of radius ρ_e > 0, 1): an edge of radius 0 is
+    not perturbed and has no channel (the columns of Y for it are not used; Γ of a
+    certificate that uses them is a principal submatrix of its own).
     """
     n = lap.num.shape[0]
     sizes = [c.vwv.num.shape[0] for c in ch]
     k = n + sum(sizes) + 1
+    yd = Dyadic.of(y)
+    if yd.num.shape != (n, k):
+        raise InputError(f"matrices.Y: expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}")
+    active = perturbed(np.asarray(radius, dtype=float), len(ch))
+    yd = Dyadic(yd.num[:, active_columns(n, sizes, active)], yd.exp)
+    ch = [ch[e] for e in active]
+    lam = [lam[e] for e in active]
+    radius = [radius[e] for e in active]
+    sizes = [sizes[e] for e in active]
     c_ = Dyadic.of(np.asarray(target, dtype=float).reshape(n, 1))
     zz = Dyadic(np.zeros((n, n), dtype=object), 0)
     zc = Dyadic(np.zeros((n, 1), dtype=object), 0)
@@ -352,9 +374,6 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     rows.append([zc.T] + [zeros(1, s) for s in sizes] + [cc])
     g = _blocks(rows)
     a = _blocks([[lap] + [c.ewv for c in ch] + [zeros(n, 1) - r0]])
-    yd = Dyadic.of(y)
-    if yd.num.shape != (n, k):
-        raise InputError(f"matrices.Y: expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}")
     ay = a.T @ yd
     return g + ay + ay.T
 
@@ -503,9 +522,8 @@ class RobustKind(CertificateKind):
         u = _input_exact(mode)
         r0 = u - mode.exact @ Dyadic.of(target.reshape(n, 1))
         proof = _pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radii))
-        return Check(
-            claim.id, proof.holds, f"{proof.method}: {proof.detail} (ρ = {st.radius!r})", claim
-        )
+        at = _set_text(st)
+        return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail} ({at})", claim)
 
     def stated(
         self, properties: tuple[Property, ...], reading: Reading
@@ -526,13 +544,18 @@ class RobustKind(CertificateKind):
         """
         st: _State = reading.state
         out: list[tuple[Property, str]] = []
+        # the decay and offset are proven for the subject's set, per-edge radii included
+        # (not for every weight at the largest of them); the margin is one ρ on every edge
+        at = radius_phrase(st.radii.tolist(), st.radius, _edge_names(st))
+        per_edge = len(set(st.radii.tolist())) > 1
         if Property.ROBUST_MARGIN in properties and st.margin is not None:
-            out.append((Property.ROBUST_MARGIN, f"margin radius {st.margin:.6g}"))
+            one = ", one ρ on every edge" if per_edge else ""
+            out.append((Property.ROBUST_MARGIN, f"margin radius {st.margin:.6g}{one}"))
         if Property.ROBUST_DECAY in properties and st.alpha is not None:
-            out.append((Property.ROBUST_DECAY, f"α = {st.alpha:.6g} at ρ = {st.radius:.6g}"))
+            out.append((Property.ROBUST_DECAY, f"α = {st.alpha:.6g} {at}"))
         if Property.ROBUST_OFFSET in properties and st.gamma is not None and st.gamma >= 0:
             bound = math.sqrt(st.gamma)
-            out.append((Property.ROBUST_OFFSET, f"<= {bound:.6g} at ρ = {st.radius:.6g}"))
+            out.append((Property.ROBUST_OFFSET, f"<= {bound:.6g} {at}"))
         return tuple(out)
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
@@ -579,11 +602,13 @@ class RobustKind(CertificateKind):
             audit.exact(("decay", "lower"), float(st.alpha or 0.0))
         if audit.has("offset", "gamma"):
             audit.exact(("offset", "gamma"), float(st.gamma or 0.0))
-            audit.recomputed(("offset", "upper"), math.sqrt(max(st.gamma or 0.0, 0.0)), 0.0)
+            audit.bound(("offset", "upper"), math.sqrt(max(st.gamma or 0.0, 0.0)), "upper")
         reals = doc.get("realizations") or {}
         if not isinstance(reals, dict):
             audit.fail("realizations: expected an object")
             return
+        # the other ends, attained by a realisation: the robust rate is at most its rate,
+        # the worst offset at least its offset (so the reported ends on their sound side)
         for key, path in (("decay", ("decay", "upper")), ("offset", ("offset", "lower"))):
             if audit.has(*path):
                 got = _attained(reals.get(key), mode, st.radii, key)
@@ -591,7 +616,12 @@ class RobustKind(CertificateKind):
                     audit.fail(f"realizations.{key}: {got}")
                     audit.informational(path)
                 else:
-                    audit.recomputed(path, got, scale if key == "decay" else 0.0)
+                    # a realisation's figure is computed in floating point: an eigenvalue
+                    # to the matrix's size; an offset (a solve) to 1e−12‖1⊗θ‖ at least, so
+                    # a zero offset's rounding (1e−16‖1⊗θ‖) is not read as a forgery
+                    target = np.tile(mode.theta, mode.top.n)
+                    floor = scale if key == "decay" else 1e-4 * float(np.linalg.norm(target))
+                    audit.bound(path, got, path[1], floor)
         if audit.has("margin", "upper"):
             r = reals.get("margin")
             rad = r.get("radius") if isinstance(r, dict) else None
@@ -608,7 +638,18 @@ class RobustKind(CertificateKind):
                 audit.fail(
                     f"realizations.margin: min Re λ = {got:.3g} > 0, it is not destabilising"
                 )
-            audit.recomputed(("margin", "upper"), rho, 0.0)
+            audit.bound(("margin", "upper"), rho, "upper")  # a destabilising radius
+
+
+def _edge_names(st: _State) -> list[str] | None:
+    """The uncertain edges' names (``from→to``), in the order of ``st.radii``."""
+    return uncertain_edges(st.mode.top).labels(st.mode.top) if st.mode.in_range else None
+
+
+def _set_text(st: _State) -> str:
+    """The subject's uncertainty set in a check's detail: ``ρ = 0.05``, or the per-edge
+    radii named by edge (:func:`ntc_design.certify.robust.radius_text`)."""
+    return radius_text(st.radii.tolist(), st.radius, edges=_edge_names(st))
 
 
 def _prove_lmi(claim: Claim, st: _State) -> Check:
@@ -642,7 +683,8 @@ def _prove_lmi(claim: Claim, st: _State) -> Check:
         how = "verified-float: P ≻ 0, τ > 0 and P S + SᵀP − Q(τ) − P R(τ) P ≻ 0 " + (
             "hold" if ok else "not proven"
         )
-    return Check(claim.id, ok, f"{how} (α = {claim.alpha!r}, ρ = {radius!r})", claim)
+    at = _set_text(st) if claim.prop is Property.ROBUST_DECAY else f"ρ = {radius!r}"
+    return Check(claim.id, ok, f"{how} (α = {claim.alpha!r}, {at})", claim)
 
 
 def _prove_offset_float(claim: Claim, st: _State) -> Check:
@@ -666,7 +708,7 @@ def _prove_offset_float(claim: Claim, st: _State) -> Check:
     how = "verified-float: G_e G_eᵀ ≻ W_e and Γ(γ, λ) ≻ 0 with Y rebuilt " + (
         "hold" if ok else "not proven"
     )
-    return Check(claim.id, ok, f"{how} (ρ = {st.radius!r})", claim)
+    return Check(claim.id, ok, f"{how} ({_set_text(st)})", claim)
 
 
 def _input_exact(mode: DenseMode) -> Dyadic:

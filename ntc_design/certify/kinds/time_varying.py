@@ -2,7 +2,8 @@
 λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ > 0 for every t, Assumption 3's D, the proof's Λ₁ and p̄,
 and t₀ after which μ₂(t) > 0 (:mod:`ntc_design.certify.time_varying` has the branch and
 bound). Verify re-parses the topology (re-proving its sign classes), re-encloses every
-recorded t-interval, and recomputes every reported number."""
+recorded t-interval, and checks every reported number: a bound on its sound side of the
+re-enclosed one, the rest recomputed."""
 
 from __future__ import annotations
 
@@ -303,9 +304,10 @@ class TimeVaryingKind(CertificateKind):
     def audit(
         self, audit: ResultsAudit, doc: dict, subject: Subject, reading: Reading, alpha: float
     ) -> None:
-        # Λ₂, D, Λ₁, p̄ equal their re-enclosed values; the sampled infimum is λ_min at
-        # its time and lies above Λ₂; the gap, σ̄, κ, t₀ and the domain are recomputed;
-        # the run time is informational.
+        # Λ₂ (a lower bound), D, Λ₁, p̄ (upper bounds) on the sound side of their
+        # re-enclosed values; the sampled infimum is λ_min at its time and lies above Λ₂;
+        # the gap, σ̄, κ and the domain are recomputed, t₀ (from the reported Λ₂, Λ₁) is
+        # at or after the recomputed one; the run time is informational.
         st: TimeVaryingState = reading.state
         tv = (RESULTS_KEY,)
         if set(audit.results) != {RESULTS_KEY}:
@@ -317,8 +319,9 @@ class TimeVaryingKind(CertificateKind):
             "Lambda1": max(q.lambda1 for q in leaves),
             "p_bar": max(q.p_bar for q in leaves),
         }
-        for key in RESULT_NUMBERS:
-            audit.recomputed((*tv, key), enclosed[key], rtol=ENCLOSURE_RTOL)
+        for key in RESULT_NUMBERS:  # one-sided: a looser bound than today's is still true
+            side = "lower" if key == "lambda2" else "upper"
+            audit.bound((*tv, key), enclosed[key], side, rtol=ENCLOSURE_RTOL)
         a0, b0, text = domain_of(st.tv)
         lam2 = st.number("lambda2")
         t_inf = audit.get(*tv, "t_at_sampled_inf")
@@ -349,7 +352,7 @@ class TimeVaryingKind(CertificateKind):
         if t0_new is None:
             audit.exact((*tv, "t0"), None)
         else:
-            audit.recomputed((*tv, "t0"), t0_new, 1e-12)
+            audit.bound((*tv, "t0"), t0_new, "upper", 1e-12)  # μ₂ > 0 from t₀ on
         audit.exact((*tv, "t0_proof"), how)
         audit.exact((*tv, "domain", 0), float(a0))
         audit.exact((*tv, "domain", 1), float(b0))

@@ -283,3 +283,37 @@ def test_many_failures_are_summarised():
     assert not chk.ok
     assert chk.detail.count(";") == 6 and chk.detail.endswith("; … 3 more")
     assert chk.detail.startswith("own failure 0; own failure 1")
+
+
+@pytest.mark.parametrize(
+    ("got", "value", "side", "ok"),
+    [
+        (2.0, 1.0, "upper", True),  # a looser upper bound is still true
+        (1.0 - 0.5 * RESULT_RTOL, 1.0, "upper", True),  # rounding on the unsound side
+        (1.0 - 3 * RESULT_RTOL, 1.0, "upper", False),  # below the re-derived upper bound
+        (0.5, 1.0, "lower", True),  # a looser lower bound is still true
+        (-1e9, 1.0, "lower", True),
+        (1.0 + 3 * RESULT_RTOL, 1.0, "lower", False),  # above the re-derived lower bound
+        (1.0, math.inf, "upper", False),  # nothing re-derived: no bound to compare
+        ("1.0", 1.0, "upper", False),
+        (None, 1.0, "lower", False),
+    ],
+)
+def test_a_bound_is_checked_in_its_sound_direction(got, value, side, ok):
+    a = ResultsAudit({"b": got}, "c")
+    a.bound(("b",), value, side)
+    assert (a.bad == []) is ok, a.bad
+    assert a.check().ok is ok  # accounted for either way: no "not accounted for"
+
+
+def test_a_bound_says_which_side_it_failed():
+    a = ResultsAudit({"u": 0.5, "l": 2.0, "z": 1e-9}, "c")
+    a.bound(("u",), 1.0, "upper")
+    a.bound(("l",), 1.0, "lower")
+    a.bound(("z",), 0.0, "lower", scale=1.0)  # within rtol of the scale floor
+    assert a.bad == [
+        "u: reported upper bound 0.5 is below the re-derived 1",
+        "l: reported lower bound 2.0 is above the re-derived 1",
+    ]
+    with pytest.raises(ValueError, match="side must be 'upper' or 'lower'"):
+        a.bound(("u",), 1.0, "both")

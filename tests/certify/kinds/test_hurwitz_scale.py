@@ -133,7 +133,7 @@ def test_malformed_scale_certificate_is_one_line(tmp_path, capsys, monkeypatch):
         ),
         (
             lambda r: r["rate_lower_bound"].update(value=r["rate_lower_bound"]["value"] * 2),
-            "recomputed",
+            "rate_lower_bound.value: reported lower bound",  # above the re-derived one
         ),
         (lambda r: r.update(components=r["components"] + 1), "components: reported"),
     ],
@@ -146,6 +146,16 @@ def test_forged_hurwitz_scale_results_fail(forge, needle):
     ver = verify(_refresh(doc))
     assert len(ver.failed) == 1 and ver.failed[0].name.startswith("reported results")
     assert needle in ver.failed[0].detail
+
+
+@pytest.mark.parametrize("factor", [0.5, 0.0, -1.0])
+def test_a_looser_rate_lower_bound_still_verifies(factor):
+    # a lower bound below the re-derived one is still true: an older, more cautious
+    # issuer's certificate keeps verifying
+    doc = copy.deepcopy(certify(random_network(40, 3, seed=5), THETA_SW).certificate)
+    doc["results"]["rate_lower_bound"]["value"] *= factor
+    ver = verify(_refresh(doc))
+    assert ver.valid, [(c.name, c.detail) for c in ver.failed]
 
 
 def test_rate_lower_bound_only_when_every_component_is_dominance():
@@ -191,3 +201,17 @@ def test_hurwitz_scale_checks_what_it_certifies_and_claims(forge):
     if "subject_digest" in doc and doc["subject_digest"] != "sha256:0":
         _refresh(doc)
     assert not verify(doc).valid
+
+
+def test_the_components_row_names_the_methods_in_words():
+    from ntc_design.certify.kinds.hurwitz_scale import HurwitzScaleKind
+
+    res = certify(random_network(40, 3, seed=5), THETA_SW).certificate["results"]
+    (comp, *_) = HurwitzScaleKind().rows(res)
+    m = res["methods"]
+    assert comp.label == "components"
+    assert comp.value == (
+        f"{res['components']} (largest {res['largest_component_agents']} agents), by "
+        f"dominance {m['dominance']}, symmetric {m['symmetric']}, lyapunov {m['lyapunov']}, "
+        f"none {m['none']}"
+    )

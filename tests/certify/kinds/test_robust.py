@@ -1,11 +1,13 @@
 """Tests of :mod:`ntc_design.certify.kinds.robust`."""
 
+import copy
 import json
 
 import numpy as np
 import pytest
 
 from ntc_design.certify import verify
+from ntc_design.certify.format import finish
 from ntc_design.certify.kinds.robust import robust_certificate
 from tests.support.robust import forged_valid, raise_alpha_to
 
@@ -103,3 +105,109 @@ def test_the_certificate_past_the_lmi_size_verifies_and_forgeries_do_not(mid_rob
              widen_radius_of_offset)  # fmt: skip
     for edit in edits:
         assert not forged(edit), edit.__name__
+
+
+# -- the brackets' other ends: checked in their sound direction ---------------------------
+
+_ENDS = {  # the end, and which side of the value re-derived from its realisation it is on
+    ("decay", "upper"): "upper",
+    ("offset", "lower"): "lower",
+    ("offset", "upper"): "upper",
+    ("margin", "upper"): "upper",
+}
+
+
+def _set_end(path, value):
+    def edit(d):
+        d["results"][path[0]][path[1]] = value
+
+    return edit
+
+
+@pytest.mark.parametrize("path", list(_ENDS), ids=".".join)
+def test_a_looser_end_still_verifies(g1_robust, path):
+    # a bracket end a little wider than today's re-derivation is still true
+    _, rep = g1_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    got = doc["results"][path[0]][path[1]]
+    looser = got * 1.01 if _ENDS[path] == "upper" else got * 0.99
+    assert forged_valid(doc, _set_end(path, looser))
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("path", list(_ENDS), ids=".".join)
+def test_an_end_forged_in_the_unsound_direction_is_rejected(g1_robust, path):
+    _, rep = g1_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    got = doc["results"][path[0]][path[1]]
+    tighter = got * 0.99 if _ENDS[path] == "upper" else got * 1.01
+    bad = copy.deepcopy(doc)
+    _set_end(path, tighter)(bad)
+    for k in ("digest", "subject_digest", "versions"):
+        bad.pop(k, None)
+    ver = verify(finish(bad))
+    audit = [c for c in ver.failed if c.name.startswith("reported results")]
+    needle = f"{'.'.join(path)}: reported {_ENDS[path]} bound {tighter!r}"
+    assert audit and needle in audit[0].detail, [(c.name, c.detail) for c in ver.failed]
+
+
+def test_per_edge_radii_are_stated_as_the_per_edge_set(tri_robust):
+    # what ntc verify prints beside each property, and in the claims' checks
+    from tests.support.robust import TRI_SET
+
+    _, _, rep = tri_robust
+    doc = json.loads(json.dumps(robust_certificate(rep)))
+    ver = verify(doc)
+    assert ver.valid
+    said = {p["property"]: p.get("stated") for p in ver.about.to_dict()["properties"]}
+    alpha, gamma = doc["results"]["decay"]["lower"], doc["results"]["offset"]["gamma"]
+    margin = doc["results"]["margin"]["lower"]
+    assert said == {
+        "robust_margin": f"margin radius {margin:.6g}, one ρ on every edge",
+        "robust_decay": f"α = {alpha:.6g} for {TRI_SET}",
+        "robust_offset": f"<= {gamma**0.5:.6g} for {TRI_SET}",
+    }
+    details = {c.claim.prop.value: c.detail for c in ver.checks if c.claim is not None}
+    assert details["robust_decay"].endswith(f"(α = {alpha!r}, {TRI_SET})")
+    assert details["robust_offset"].endswith(f"({TRI_SET})")
+    assert details["robust_margin"].endswith(f"(α = 0.0, ρ = {margin!r})")  # one ρ: true
+    assert "ρ = 0.5" not in " ".join([*said.values(), *details.values()])
+
+
+def test_exact_psi_and_gamma_leave_out_the_edges_of_radius_zero(g1_robust):
+    # an edge of radius 0 is not perturbed: its channel's rows are left out, which keeps
+    # a certificate that listed them valid (Ψ and Γ are then principal submatrices)
+    from ntc_design.certify.kinds.robust import _exact_channels, gamma_exact, psi_exact
+    from ntc_design.certify.robust_lmi import active_columns
+    from ntc_design.rigorous.exact import Dyadic
+
+    des, rep = g1_robust
+    top = des.topology
+    ch = _exact_channels(top)
+    m, n = len(ch), top.nd
+    sizes = [c.vwv.num.shape[0] for c in ch]
+    rng = np.random.default_rng(4)
+    lap = Dyadic.of(des.grounded_laplacian())
+    a = rng.normal(size=(n, n))
+    p, tau = a @ a.T + n * np.eye(n), rng.uniform(1, 2, m)
+    rad = np.full(m, 0.05)
+    rad[[0, 3]] = 0.0
+    kept = active_columns(n, sizes, tuple(e for e in range(m) if rad[e] > 0))
+    tiny = np.where(rad > 0, rad, 2.0**-600)  # kept, ρ_e² exactly 2^−1200: no channel term
+    full = psi_exact(lap, ch, p, tau, 0.3, tiny)
+    got = psi_exact(lap, ch, p, tau, 0.3, rad)
+    idx = kept[:-1]  # Ψ has no last coordinate
+    sub = Dyadic(full.num[np.ix_(idx, idx)], full.exp)
+    assert got.num.shape == sub.num.shape == (len(idx), len(idx))
+    np.testing.assert_allclose(got.to_float(), sub.to_float(), rtol=1e-12)
+    # Γ: the kept coordinates of ξ, Y's columns for the left-out channels unused
+    k = n + sum(sizes) + 1
+    y = rng.normal(size=(n, k))
+    target = np.tile(des.theta, top.n)
+    r0 = Dyadic.of(rng.normal(size=(n, 1)))
+    lam = rng.uniform(0.5, 1.0, m)
+    g = gamma_exact(lap, ch, target, r0, 2.0, lam, y, rad)
+    assert g.num.shape == (len(kept), len(kept))
+    y2 = y.copy()
+    y2[:, [c for c in range(k) if c not in kept]] = 7.0  # what the left-out columns hold
+    assert np.array_equal(gamma_exact(lap, ch, target, r0, 2.0, lam, y2, rad).num, g.num)
