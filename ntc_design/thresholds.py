@@ -39,7 +39,7 @@ class CriticalCouplings:
     hurwitz_intervals: tuple[tuple[float, float], ...]  # the Hurwitz set, (lo, hi) with hi=inf
     symmetric: float | None  # δ_S; None when no δ gives L_B + L_Bᵀ ≻ 0
     best_rate: float
-    best_rate_delta: float | None  # None when the rate still grows at the largest δ tried
+    best_rate_delta: float | None  # None: approached as δ → ∞, not attained (or no δ acts)
     method: str
     notes: tuple[str, ...] = field(default=())
 

@@ -495,21 +495,8 @@ class RobustKind(CertificateKind):
         return _claims(properties, mode, _Stated(st.radius, st.margin, st.alpha))
 
     def verification_method(self, reading: Reading) -> str:
-        """The proofs actually used (``exact-rational``, ``verified-float`` or both,
-        joined), not every method the kind may use.
-
-        Parameters
-        ----------
-        reading : Reading
-            From :meth:`read`, after the proofs.
-
-        Returns
-        -------
-        str
-        """
-        st: _State = reading.state
-        used = sorted(st.dense.methods - {"not attempted"}) or ["none"]
-        return " + ".join(used)
+        # the proofs that ran (each prover records its method), not all the kind may use
+        return " + ".join(sorted(reading.state.dense.methods - {"not attempted"}) or ["none"])
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
         st: _State = reading.state
