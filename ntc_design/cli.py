@@ -103,7 +103,8 @@ def design_cmd(
     ] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S."""
+    """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S. Exit 1 when
+    nothing can be designed (no informed agent: no antagonistic edge into any agent)."""
     import numpy as np
 
     from .design import SwitchingDesign, design
@@ -124,12 +125,16 @@ def design_cmd(
             print(json_text(tv.to_dict()))
         else:
             print_table(tv.table(f"{top.name or file}: Lemma 1 at every instant"))
+        _exit_if_uninformed([] if tv.structure.informed else [None], out_path)
         return
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
         res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
-    written = _write_design(res, out_path) if out_path is not None else []
+    modes = res.modes if isinstance(res, SwitchingDesign) else {None: res}
+    uninformed = [k for k, d in modes.items() if not d.has_informed_agents]
+    # nothing designed is nothing written
+    written = _write_design(res, out_path) if out_path is not None and not uninformed else []
     if as_json:
         print(json_text(res.to_dict()))
     elif isinstance(res, SwitchingDesign):
@@ -140,6 +145,28 @@ def design_cmd(
         print_table(res.table(f"{name}: Lemma 1 design, θ = {th}, ΔC = {margin:g}"))
     if written and not as_json:
         out.print(f"wrote {', '.join(one_line(str(p)) for p in written)}", soft_wrap=True)
+    _exit_if_uninformed(uninformed, out_path)
+
+
+def _exit_if_uninformed(modes: list, out_path: Path | None) -> None:
+    """Exit 1 when a design (a mode's, or None for the only one) has no informed agent:
+    L_B = L then does not depend on δ and nothing draws the agents to θ, so Lemma 1
+    designs nothing (one line on stderr, with the fix)."""
+    if not modes:
+        return
+    where = (
+        f"mode(s) {', '.join(one_line(str(k)) for k in modes)} have"
+        if modes != [None]
+        else "the network has"
+    )
+    kept = f"; nothing written to {one_line(str(out_path))}" if out_path is not None else ""
+    print(
+        f"not designed: {where} no informed agent (U is empty), so L_B = L does not depend "
+        "on δ and Lemma 1 cannot bring the agents to θ; an antagonistic edge (A_ij negative "
+        f"definite) into an agent makes it informed{kept}",
+        file=sys.stderr,
+    )
+    raise typer.Exit(1)
 
 
 def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Path]:

@@ -30,10 +30,26 @@ def _flag_type(original):
     return display_type_rich
 
 
+def _usage_name(self) -> str:
+    """An argument in the usage line as click writes it, ``FILE`` (``[FILE]`` when
+    optional), not this typer's ``{file}`` (which reads as a placeholder to fill in)."""
+    name = self.metavar if self.metavar is not None else self.name.upper()
+    name = name if self.required else f"[{name}]"
+    return name + ("..." if self.nargs != 1 else "")
+
+
+def _error_hint(self, ctx: object = None) -> str:
+    """``Missing argument 'FILE'``: the argument named as the usage line names it."""
+    return f"'{self.metavar or self.name.upper()}'"
+
+
 with contextlib.suppress(AttributeError):  # another typer: its own rendering stays
     typer.core.TyperOption.display_type_rich = _flag_type(  # type: ignore[method-assign]
         typer.core.TyperOption.display_type_rich
     )
+if hasattr(typer.core.TyperArgument, "_usage_display_name"):  # typer >= 0.2x braces it
+    typer.core.TyperArgument._usage_display_name = _usage_name  # type: ignore[method-assign]
+    typer.core.TyperArgument.get_error_hint = _error_hint  # type: ignore[method-assign]
 
 app = typer.Typer(
     add_completion=True,

@@ -24,9 +24,48 @@ from .cli_base import (
     digital_option,
     json_text,
 )
-from .errors import AssumptionWarning, InputError, one_line
+from .errors import AssumptionWarning, InputError, blame, one_line
 
 OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
+
+#: The scenario field each override flag of ``ntc simulate`` gives (an error about the
+#: field names the flag, not the file).
+SIMULATE_FLAGS = {
+    "paths": "--paths",
+    "T": "--horizon",
+    "dt": "--dt",
+    "seed": "--seed",
+    "method": "--method",
+    "rng": "--rng",
+    "device": "--device",
+    "digital": "--period",
+}
+#: The scenario field each flag of ``ntc reproduce`` gives (``--dt`` is ds when
+#: intrinsic).
+REPRODUCE_FLAGS = {
+    "T": "--horizon",
+    "paths": "--paths",
+    "dt": "--dt",
+    "ds": "--dt",
+    "stepping": "--stepping",
+    "seed": "--seed",
+}
+#: The parameter of :func:`ntc_design.tune.tune` each flag of ``ntc tune`` gives.
+TUNE_FLAGS = {
+    "horizon": "--horizon",
+    "require": "--require",
+    "eps": "--eps",
+    "method": "--method",
+    "max_evaluations": "--evaluations",
+    "schedule": "--schedule",
+    "family": "--schedule",
+    "max_gain": "--max-gain",
+    "max_peak": "--max-peak",
+    "check_paths": "--check-paths",
+    "tolerance": "--tolerance",
+    "delay": "--delay",
+    "period": "--period",
+}
 
 
 @app.command(
@@ -51,7 +90,12 @@ def simulate(
         int | None, typer.Option(help="Monte Carlo seed (overrides the scenario).")
     ] = None,
     method: Annotated[
-        str | None, typer.Option(help="mc, exact or both (overrides the scenario).")
+        str | None,
+        typer.Option(
+            help="Which curves: mc (Monte Carlo paths), exact (the moment equations) or both, "
+            "to compare them (overrides the scenario). ntc tune's --method instead picks its "
+            "one objective: auto, exact or mc."
+        ),
     ] = None,
     rng: Annotated[
         str | None,
@@ -104,7 +148,8 @@ def simulate(
         overrides["digital"] = digital_option(
             period, delay, sc.document.get("digital"), overrides.get("T", sc.document.get("T"))
         )
-    top, spec, sc = load_scenario(scenario, overrides, sc)
+    flags = {k: f for k, f in SIMULATE_FLAGS.items() if k in overrides}
+    top, spec, sc = load_scenario(scenario, overrides, sc, flags)
     # summary.json records the command as typed: the report's re-run line keeps the overrides
     recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}
     if workers is not None:
@@ -124,8 +169,8 @@ def simulate(
                 progress=lambda done, total: prog.tick("simulating", done, total),
                 engine=engine,
             )
-        except InputError as exc:  # a field of the scenario: name the file
-            raise InputError(f"{sc.source}: {exc}") from None
+        except InputError as exc:  # a field of the scenario, or of a flag: name it
+            raise blame(exc, sc.source, flags, values=overrides) from None
         except SimulationDiverged as exc:
             written = write_outputs(exc.result, out_dir, recorded)
             if as_json:
@@ -199,15 +244,29 @@ def simulate(
 
 
 @app.command(
-    epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --horizon 10 --eps 1.5 --out runs/g1-tuned"
+    epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --eps 1.5 --out runs/g1-tuned"
 )
 def tune(
     scenario: Annotated[Path, typer.Argument(help="A scenario file (YAML/JSON).")],
     horizon: Annotated[
-        float,
-        typer.Option("--horizon", "--T", help="The deadline T: minimise E Σ‖x_i(T) − θ‖²."),
-    ],
-    family: Annotated[str, typer.Option(help="The gain family: power, a·(b + t)^(−γ).")] = "power",
+        float | None,
+        typer.Option(
+            "--horizon",
+            "--T",
+            help="The deadline T: minimise E Σ‖x_i(T) − θ‖² (default: the scenario's T).",
+        ),
+    ] = None,
+    schedule: Annotated[
+        str,
+        typer.Option(
+            help="power: the family a·(b + t)^(−γ); optimal: the best schedule c(t) on "
+            "[0, T] by optimal control of the exact moments, with an admissible tail after T."
+        ),
+    ] = "power",
+    family: Annotated[
+        str | None,
+        typer.Option(hidden=True, help="Deprecated: --schedule power (the power family)."),
+    ] = None,
     require: Annotated[
         str,
         typer.Option(
@@ -222,27 +281,28 @@ def tune(
         float | None, typer.Option(help="Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.")
     ] = None,
     method: Annotated[
-        str, typer.Option(help="auto (exact moments where they apply), exact or mc.")
-    ] = "auto",
-    evaluations: Annotated[int, typer.Option(help="Search budget (objective evaluations).")] = 160,
-    schedule: Annotated[
         str,
         typer.Option(
-            help="power: the family a·(b + t)^(−γ); optimal: the best schedule c(t) on "
-            "[0, T] by optimal control of the exact moments, with an admissible tail after T."
+            help="How the objective is computed: exact (the moment equations), mc (Monte "
+            "Carlo, common random numbers) or auto (exact where they apply, else mc). One "
+            "objective, so no 'both' (ntc simulate --method both draws the two curves)."
         ),
-    ] = "power",
+    ] = "auto",
+    evaluations: Annotated[int, typer.Option(help="Search budget (objective evaluations).")] = 160,
     max_gain: Annotated[
-        float, typer.Option(help="--schedule optimal: the upper bound on c(t).")
-    ] = 50.0,
+        float | None,
+        typer.Option(help="--schedule optimal: the upper bound on c(t) (default 50)."),
+    ] = None,
     max_peak: Annotated[
         float | None,
         typer.Option(help="--schedule optimal: keep sup_t E Σ‖x_i(t) − θ‖² <= this."),
     ] = None,
     check_paths: Annotated[
-        int,
-        typer.Option(help="--schedule optimal: Monte Carlo paths of the evidence (0: none)."),
-    ] = 200,
+        int | None,
+        typer.Option(
+            help="--schedule optimal: Monte Carlo paths of the evidence (0: none; default 200)."
+        ),
+    ] = None,
     out_dir: Annotated[
         Path | None,
         typer.Option(
@@ -268,10 +328,12 @@ def tune(
     as_json: JsonOpt = False,
 ) -> None:
     """Tune the gain c(t) = a·(b + t)^(−γ) (and with --tune-delta the coupling δ) to bring
-    the agents closest to θ by the deadline T under the scenario's noise, initial state and
-    topology, by the exact moment equations (Monte Carlo with common random numbers where
-    they do not apply). Prints the tuned gain beside 1/(1 + t). Exit 0 when the tuned gain
-    satisfies the required theorems and its design's certificate verifies, 1 otherwise."""
+    the agents closest to θ by the deadline T (the scenario's, or --horizon) under the
+    scenario's noise, initial state and topology, by the exact moment equations (Monte
+    Carlo with common random numbers where they do not apply); --schedule optimal finds the
+    best schedule c(t) instead. Prints the tuned gain beside 1/(1 + t). Exit 0 when the
+    tuned gain satisfies the required theorems and its design's certificate verifies, 1
+    otherwise."""
     from .files import parse_scenario
     from .outputs import check_output_folder
     from .reports.terminal import Progress, out, print_table
@@ -279,7 +341,16 @@ def tune(
     from .simulate.scenario import load_scenario
     from .tune import tune as run
 
+    schedule = _schedule_option(schedule, family)
     sc0 = parse_scenario(scenario)
+    # the flags given (an error about one names it); the deadline defaults to the file's T
+    given = {"horizon": horizon, "eps": eps, "max_gain": max_gain, "check_paths": check_paths}
+    flags = {k: f for k, f in TUNE_FLAGS.items() if given.get(k, k) is not None}
+    fields = {"horizon": "T"} if horizon is None else None
+    if schedule != "optimal":
+        for name, value in (("--max-gain", max_gain), ("--check-paths", check_paths)):
+            if value is not None:
+                raise InputError(f"{name}: applies to --schedule optimal")
     if period == "auto":
         _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json)
         return
@@ -289,32 +360,27 @@ def tune(
             value = float(period) if period is not None else None
         except ValueError:
             raise InputError(f"--period: expected a number or auto, got {period!r}") from None
-        overrides["digital"] = digital_option(value, delay, sc0.document.get("digital"), horizon)
-    top, spec, sc = load_scenario(scenario, overrides, sc0)
+        t_doc = horizon if horizon is not None else sc0.document.get("T")
+        overrides["digital"] = digital_option(value, delay, sc0.document.get("digital"), t_doc)
+    top, spec, sc = load_scenario(scenario, overrides, sc0, {"digital": "--period"})
     if out_dir is not None:
         check_output_folder(out_dir, TUNE_FILES)  # before the run, not after it
     with warnings.catch_warnings(), Progress("ntc tune") as prog:
         warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
-        prog.stage(f"tuning {scenario}")
+        deadline = spec.T if horizon is None else horizon
+        prog.stage(f"tuning {scenario} for T = {deadline:g}")
         opts: dict[str, Any] = dict(
             require=require, tune_delta=tune_delta, eps=eps, method=method, progress=prog.stage
         )
-        if schedule == "optimal":
-            opts.update(max_gain=max_gain, max_peak=max_peak, check_paths=check_paths)
+        if schedule == "optimal":  # the defaults of tune() where a flag is not given
+            opts["max_peak"] = max_peak
+            opts.update({k: given[k] for k in ("max_gain", "check_paths") if given[k] is not None})
         elif max_peak is not None:
             raise InputError("--max-peak: applies to --schedule optimal")
         try:
-            res = run(
-                top,
-                spec,
-                horizon,
-                family=family,
-                max_evaluations=evaluations,
-                schedule=schedule,
-                **opts,
-            )
+            res = run(top, spec, deadline, max_evaluations=evaluations, schedule=schedule, **opts)
         except InputError as exc:
-            raise InputError(f"{sc.source}: {exc}") from None
+            raise blame(exc, sc.source, flags, fields) from None
     doc = res.to_dict()
     written: list[str] = []
     if out_dir is not None:
@@ -337,6 +403,22 @@ def tune(
         raise typer.Exit(1)
 
 
+def _schedule_option(schedule: str, family: str | None) -> str:
+    """``--schedule``, with the deprecated ``--family`` read as its alias: ``--family
+    power`` is ``--schedule power`` (the only family), anything else is refused."""
+    if family is None:
+        return schedule
+    if family != "power":
+        raise InputError(
+            f"--family: replaced by --schedule power|optimal (power is a·(b + t)^(−γ)), "
+            f"got {family!r}"
+        )
+    if schedule != "power":
+        raise InputError(f"--family: power contradicts --schedule {schedule}; give --schedule only")
+    print("note: --family is deprecated; it is --schedule power", file=sys.stderr)
+    return "power"
+
+
 def _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json) -> None:
     """``ntc tune --period auto``: the longest safe period, its curve, period.json."""
     from .outputs import check_output_folder, output_folder
@@ -352,12 +434,17 @@ def _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as
     with warnings.catch_warnings(), Progress("ntc tune") as prog:
         warnings.simplefilter("ignore", AssumptionWarning)
         prog.stage(f"the longest safe period of {scenario} (delay D = {d})")
+        deadline = spec.T if horizon is None else horizon
         try:
             res = longest_safe_period(
-                top, spec, horizon, delay=d, tolerance=tolerance, max_peak=max_peak
+                top, spec, deadline, delay=d, tolerance=tolerance, max_peak=max_peak
             )
         except InputError as exc:
-            raise InputError(f"{sc.source}: {exc}") from None
+            # longest_safe_period names its options as flags; the defaulted T is the file's
+            text = str(exc)
+            if horizon is None and text.startswith("--horizon:"):
+                text = "T" + text[len("--horizon") :]
+            raise InputError(text if text.startswith("--") else f"{sc.source}: {text}") from None
     doc = res.to_dict()
     if out_dir is not None:
         with output_folder(out_dir, ("period.json",)) as tmp:
@@ -518,24 +605,35 @@ def reproduce(
 
     if what != "paper":
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
+    from .errors import MAX_SEED, require_int, require_positive
     from .outputs import check_output_folder
     from .simulate.spec import check_workers
 
+    # each flag checked and named before the run (not as the scenario field it becomes)
+    require_positive("--horizon", t_end)
+    require_positive("--paths", paths, integer=True)
+    require_positive("--dt", dt)
+    if stepping not in ("intrinsic", "uniform"):
+        raise InputError(f"--stepping: must be uniform or intrinsic, got {stepping!r}")
+    require_int("--seed", seed, minimum=0, maximum=MAX_SEED)
     check_workers(workers, "--workers")
     check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
     with Progress("ntc reproduce") as prog:
-        path, ok, wall = reproduce_paper(
-            out_dir,
-            t_end,
-            paths,
-            dt,
-            stepping,
-            workers,
-            seed,
-            progress=prog.tick,
-            status=prog.stage,
-            interactive=interactive,
-        )
+        try:
+            path, ok, wall = reproduce_paper(
+                out_dir,
+                t_end,
+                paths,
+                dt,
+                stepping,
+                workers,
+                seed,
+                progress=prog.tick,
+                status=prog.stage,
+                interactive=interactive,
+            )
+        except InputError as exc:  # a limit a flag's value breaks: name the flag
+            raise blame(exc, None, REPRODUCE_FLAGS) from None
     if as_json:
         doc = json.loads((path.parent / "paper_summary.json").read_text(encoding="utf-8"))
         print(json_text({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))

@@ -8,6 +8,7 @@ import os
 import sys
 import types
 import warnings
+from collections.abc import Mapping
 
 
 class InputError(ValueError):
@@ -198,6 +199,65 @@ def require_number(
     return v
 
 
+def blame(
+    exc: InputError,
+    source: object,
+    flags: Mapping[str, str] | None = None,
+    fields: Mapping[str, str] | None = None,
+    values: Mapping[str, object] | None = None,
+) -> InputError:
+    """Who an error of a run is about: the flag that gave the field it names
+    (``--paths: ...``), or else the file (``SOURCE: FIELD: ...``).
+
+    Parameters
+    ----------
+    exc : InputError
+        ``FIELD: what is wrong`` (a field of the scenario, or a parameter of the run); an
+        error that already names a flag (``--x: ...``) is kept as it is.
+    source : object
+        The file the other fields come from (its name prefixes their errors); None: no
+        file (the fields are the program's own).
+    flags : mapping of str to str, optional
+        Field -> the flag that gave its value (only the fields a flag gave).
+    fields : mapping of str to str, optional
+        Field -> the file's name for it, for a parameter the file gave (``horizon`` -> ``T``
+        when ``--horizon`` defaulted to the scenario's T).
+    values : mapping of str to object, optional
+        Field -> the value its flag gave: an error about the file's own field that arose
+        with flags given says them (``(with --horizon 1e+12)``), as they took part.
+
+    Returns
+    -------
+    InputError
+        The error to raise, one line, naming the flag or the file.
+    """
+    text = str(exc)
+    field, sep, rest = text.partition(": ")
+    if sep and field.startswith("--"):
+        return InputError(text)
+    head = field.split(".", 1)[0].split("[", 1)[0]
+    if sep and flags and head in flags:
+        return InputError(f"{flags[head]}{field[len(head) :]}: {rest}")
+    if sep and fields and head in fields:
+        text = f"{fields[head]}{field[len(head) :]}: {rest}"
+    given = [
+        f"{flags[k]} {_flag_value(v)}" for k, v in (values or {}).items() if flags and k in flags
+    ]
+    with_flags = f" (with {', '.join(dict.fromkeys(given))})" if given else ""
+    return InputError(f"{source}: {text}{with_flags}" if source is not None else text + with_flags)
+
+
+def _flag_value(value: object) -> str:
+    """A flag's value as typed back (a number in its short form)."""
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, Mapping):  # the digital block of --period/--delay
+        return ", ".join(
+            f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in value.items()
+        )
+    return str(value)
+
+
 class AssumptionWarning(UserWarning):
     """Assumption 2 fails for a topology being designed: Lemma 1 does not apply and the
     design must be certified before it is trusted (also flagged by
@@ -288,6 +348,7 @@ def require_radius(value, name: str = "--radius", below_one: bool = True) -> flo
 __all__ = [
     "MAX_SEED",
     "AssumptionWarning",
+    "blame",
     "require_theta",
     "InputError",
     "format_bytes",

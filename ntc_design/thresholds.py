@@ -39,7 +39,7 @@ class CriticalCouplings:
     hurwitz_intervals: tuple[tuple[float, float], ...]  # the Hurwitz set, (lo, hi) with hi=inf
     symmetric: float | None  # δ_S; None when no δ gives L_B + L_Bᵀ ≻ 0
     best_rate: float
-    best_rate_delta: float | None  # None when the rate still grows at the largest δ tried
+    best_rate_delta: float | None  # None: approached as δ → ∞, not attained (or no δ acts)
     method: str
     notes: tuple[str, ...] = field(default=())
 
@@ -201,6 +201,8 @@ def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
     if ndn == 0.0:
         a0 = spectral_abscissa(lap, d, 1.0)
         hur = a0 < -REL * nl
+        if abs(a0) <= REL * nl:  # no informed agent: L(1⊗v) = 0, the rate is 0 (not ±1e-16)
+            a0 = 0.0
         notes.append(
             "no informed agent: L_B = L does not depend on δ, so no δ changes the decay "
             "rate; an antagonistic edge (A_ij negative definite) into an agent makes it "
@@ -239,39 +241,84 @@ def critical_couplings(lap: np.ndarray, d: np.ndarray) -> CriticalCouplings:
                 g, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps, maxiter=100
             )
 
-    best_rate, best_delta = _best_rate(alpha, scale, notes)
+    best_rate, best_delta = _best_rate(alpha, scale, notes, rate_limit(lap, d))
     return CriticalCouplings(
         delta_h, tuple(intervals), delta_s, best_rate, best_delta, method, tuple(notes)
     )
 
 
-def _best_rate(alpha, scale: float, notes: list[str]) -> tuple[float, float | None]:
+def rate_limit(lap: np.ndarray, d: np.ndarray) -> float:
+    """The decay rate's limit as δ → ∞: the eigenvalues of L + δD that stay bounded tend
+    to those of ZᵀLZ, Z an orthonormal basis of ker D (first-order perturbation of the
+    semisimple zero eigenvalue of the symmetric D ⪰ 0), the others to +∞.
+
+    Parameters
+    ----------
+    lap : numpy.ndarray
+        L, Nd×Nd.
+    d : numpy.ndarray
+        D = blockdiag(B_i) ⪰ 0, Nd×Nd.
+
+    Returns
+    -------
+    float
+        ``min Re λ(ZᵀLZ)``; +∞ when D ≻ 0 (every direction is coupled: the rate grows
+        without bound).
+    """
+    w, v = np.linalg.eigh(0.5 * (d + d.T))
+    z = v[:, w <= 1e-10 * max(float(np.abs(w).max(initial=0.0)), 1e-300)]
+    if not z.shape[1]:
+        return math.inf
+    return float(np.min(np.linalg.eigvals(z.T @ lap @ z).real))
+
+
+def _best_rate(
+    alpha, scale: float, notes: list[str], limit: float = math.inf
+) -> tuple[float, float | None]:
     """max over δ > 0 of the decay rate r(δ) = -α(δ), and the smallest δ reaching it.
 
     r is evaluated on a log grid; a maximum at the grid's end means r still grows (its
-    supremum is approached as δ → ∞); a plateau (r within 1e-9 of its maximum on
-    neighbouring points) is reported at its start, found by bisection in log δ."""
+    supremum is approached as δ → ∞), as is a maximum below the limit ``limit`` of r as
+    δ → ∞ (:func:`rate_limit`); a plateau (r within 1e-9 of its maximum on neighbouring
+    points) is reported at its start, found by bisection in log δ, unless r still rises
+    towards its limit beyond that start: then the supremum is the limit, approached as
+    δ → ∞ and not attained (reported with no δ)."""
     grid = scale * np.logspace(-6, 4, 161)
     rates = np.array([-alpha(x) for x in grid])
     rmax = float(rates.max())
     tol = 1e-9 * max(1.0, abs(rmax))
     k = int(np.argmax(rates >= rmax - tol))
-    if k == len(grid) - 1:
+
+    def asymptote() -> tuple[float, None]:
+        if math.isfinite(limit):
+            sup = max(limit, rmax)
+            notes.append(
+                f"the decay rate approaches {sup:.6g} as δ → ∞ (not attained: "
+                f"{sup - float(rates[-1]):.2g} below it at δ = {grid[-1]:.3g})"
+            )
+            return sup, None
         notes.append(
-            f"the decay rate still grows at δ = {grid[-1]:.3g}; its supremum "
-            f"≈ {rmax:.6g} is approached as δ → ∞"
+            f"the decay rate grows without bound as δ → ∞ (every direction is coupled); "
+            f"at δ = {grid[-1]:.3g} it is {float(rates[-1]):.6g}"
         )
         return rmax, None
+
+    if k == len(grid) - 1 or limit > rmax + tol:  # still rising, or heading higher
+        return asymptote()
     if k > 0 and rates[k + 1] >= rmax - tol:
         lo, hi = math.log(grid[k - 1]), math.log(grid[k])
         for _ in range(80):
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if -alpha(math.exp(mid)) >= rmax - tol else (mid, hi)
+        start = math.exp(hi)
+        # a plateau stays at its value past its start; an asymptote still rises there
+        # (by about tol/2 at twice the start for a 1/δ approach, tol/8 for 1/δ³)
+        if -alpha(2.0 * start) < limit - tol / 16:
+            return asymptote()
         notes.append(
-            f"the decay rate reaches its maximum {rmax:.6g} at δ ≈ {math.exp(hi):.6g} "
-            "and stays there"
+            f"the decay rate reaches its maximum {rmax:.6g} at δ ≈ {start:.6g} and stays there"
         )
-        return rmax, math.exp(hi)
+        return rmax, start
     if k == 0:
         return rmax, float(grid[0])
     from scipy.optimize import minimize_scalar

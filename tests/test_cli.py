@@ -304,3 +304,56 @@ def test_robust_proves_brackets_where_certify_proves_the_nominal_case(
     assert doc["offset"]["upper"] is not None and doc["margin"]["lower"] > 0.5
     code, text, err = run_cli(["verify", out], capsys, monkeypatch)
     assert code == 0 and "VALID" in text, err
+
+
+# -- a network with no informed agent: nothing can be designed --------------------------
+
+COOPERATIVE = """name: coop
+dim: 2
+agents: 3
+edges:
+  - {from: 1, to: 2, weight: {diag: [1, 1]}}
+  - {from: 2, to: 3, weight: {diag: [1, 2]}}
+  - {from: 3, to: 1, weight: {diag: [2, 1]}}
+"""
+
+
+@pytest.mark.parametrize("extra", [[], ["--json"], ["--out", "design.json"]])
+def test_design_without_an_informed_agent_exits_1_with_the_fix(
+    tmp_path, capsys, monkeypatch, extra
+):
+    p = tmp_path / "coop.yaml"
+    p.write_text(COOPERATIVE, encoding="utf-8")
+    extra = [str(tmp_path / x) if x.endswith(".json") else x for x in extra]
+    code, out, err = run_cli(["design", p, "--theta", "21,42", *extra], capsys, monkeypatch)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == 1 and len(lines) == 1, err
+    assert lines[0].startswith("not designed: the network has no informed agent")
+    assert "an antagonistic edge (A_ij negative definite) into an agent makes it informed" in err
+    assert not (tmp_path / "design.json").exists()  # nothing designed, nothing written
+    if "--json" in extra:
+        assert json.loads(out)["informed"] == []
+    else:
+        # the rate is L's, exactly 0 (L(1⊗v) = 0), not rounding noise such as 8.9e-17
+        assert "best decay rate" in out and "e-1" not in out.split("best decay rate")[1][:60]
+
+
+def test_switching_design_names_the_mode_without_an_informed_agent(
+    tmp_path, capsys, monkeypatch, examples
+):
+    (tmp_path / "coop.yaml").write_text(COOPERATIVE, encoding="utf-8")
+    sw = tmp_path / "sw.yaml"
+    sw.write_text(
+        "modes:\n  a: coop.yaml\n  b: coop.yaml\nschedule:\n  - {mode: a, duration: 1}\n"
+        "  - {mode: b, duration: 1}\n",
+        encoding="utf-8",
+    )
+    code, _, err = run_cli(["design", sw, "--theta", "1,2"], capsys, monkeypatch)
+    assert code == 1 and "not designed: mode(s) a, b have no informed agent" in err
+
+
+def test_design_with_informed_agents_still_exits_0(examples, capsys, monkeypatch):
+    code, _, err = run_cli(
+        ["design", examples / "g3.yaml", "--theta", "1,2,-1"], capsys, monkeypatch
+    )
+    assert code == 0, err  # Assumption 2 fails in G3, but U is not empty: a design exists

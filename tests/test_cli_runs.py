@@ -108,17 +108,26 @@ def test_simulate_on_a_gpu_without_one_is_one_line_and_exit_2(tmp_path):
 
     env = {k: v for k, v in os.environ.items() if "CUDASIM" not in k and "NTC_CUDA" not in k}
     sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
-    args = ["simulate", sc, "--device", "gpu", "--paths", "8", "--T", "0.05"]
-    r = subprocess.run(
-        [sys.executable, "-m", "ntc_design", *map(str, args), "--out", str(tmp_path / "o")],
-        env=env, cwd=ROOT, capture_output=True, text=True,
-    )  # fmt: skip
-    if r.returncode == 0:
-        pytest.skip("this machine has a usable GPU")
-    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
-    assert r.returncode == 2 and len(lines) == 1, r.stderr
-    assert lines[0].startswith(f"error: {sc}: device: gpu") and "Traceback" not in r.stderr
-    assert not (tmp_path / "o").exists()
+    in_file = tmp_path / "gpu.yaml"  # the same, with device: gpu in the file
+    in_file.write_text(
+        sc.read_text(encoding="utf-8").replace("../g1.yaml", str(EXAMPLES / "g1.yaml"))
+        + "device: gpu\n",
+        encoding="utf-8",
+    )
+    for scenario, flag, who in ((sc, ["--device", "gpu"], "--device"), (in_file, [], None)):
+        args = ["simulate", scenario, *flag, "--paths", "8", "--T", "0.05"]
+        r = subprocess.run(
+            [sys.executable, "-m", "ntc_design", *map(str, args), "--out", str(tmp_path / "o")],
+            env=env, cwd=ROOT, capture_output=True, text=True,
+        )  # fmt: skip
+        if r.returncode == 0:
+            pytest.skip("this machine has a usable GPU")
+        lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+        assert r.returncode == 2 and len(lines) == 1, r.stderr
+        # the flag that asked for the GPU is named, or else the file that did
+        head = f"error: {who}: gpu" if who else f"error: {in_file}: device: gpu"
+        assert lines[0].startswith(head) and "Traceback" not in r.stderr, lines[0]
+        assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.hostile
@@ -140,3 +149,116 @@ def test_simulate_device_gpu_runs_where_the_fixture_says(
     doc = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert doc["parameters"]["device"] == "gpu" and doc["run"]["engine"]["engine"] == "gpu"
     assert "path-steps/s on " in out
+
+
+# -- a value given by a flag is checked and named as the flag, never as the file ---------
+
+G1_FIXED = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "command, extra, line",
+    [
+        ("simulate", ["--paths", "-5"], "--paths: must be a positive integer, got -5"),
+        ("simulate", ["--paths", "0"], "--paths: must be a positive integer, got 0"),
+        ("simulate", ["--horizon", "-1"], "--horizon: must be a positive number"),
+        ("simulate", ["--T", "nan"], "--horizon: must be finite"),
+        ("simulate", ["--dt", "0"], "--dt: must be a positive number"),
+        ("simulate", ["--seed", "-1"], "--seed: must be an integer >= 0"),
+        ("simulate", ["--method", "fast"], "--method: must be mc, exact or both"),
+        ("simulate", ["--rng", "pcg"], "--rng: expected xoshiro or numpy"),
+        ("simulate", ["--device", "tpu"], "--device: expected cpu or gpu"),
+        ("simulate", ["--paths", "100000000000"], "--paths: 1.01e+15 path-steps"),
+        ("simulate", ["--period", "20"], "--period: h = 20 is longer than the horizon"),
+        # the file's dt breaks a limit because of the flag: the file is named, with the flag
+        ("simulate", ["--horizon", "1e12"], "g1_fixed.yaml: dt: the run would need"),
+        ("tune", ["--horizon", "-1"], "--horizon: must be a positive number"),
+        ("tune", ["--evaluations", "0"], "--evaluations: expected an integer in [10, 10000]"),
+        ("tune", ["--eps", "-1"], "--eps: must be a positive number"),
+        ("tune", ["--method", "both"], "--method: expected auto, exact or mc, got 'both'"),
+        ("tune", ["--require", "sure"], "--require: expected one of both, mean-square"),
+        ("tune", ["--schedule", "best"], "--schedule: expected power or optimal"),
+        ("tune", ["--max-gain", "5"], "--max-gain: applies to --schedule optimal"),
+        ("tune", ["--check-paths", "5"], "--check-paths: applies to --schedule optimal"),
+        ("tune", ["--schedule", "optimal", "--max-gain", "-1"], "--max-gain: must be a positive"),
+        ("tune", ["--schedule", "optimal", "--check-paths", "-1"], "--check-paths: expected"),
+        ("tune", ["--period", "0.1", "--delay", "-1"], "--delay: must be an integer >= 0"),
+        ("tune", ["--period", "auto", "--horizon", "-2"], "--horizon: must be a positive"),
+        ("tune", ["--period", "auto", "--tolerance", "-1"], "--tolerance: must be >= 0"),
+        ("reproduce", ["--horizon", "-1"], "--horizon: must be a positive number"),
+        ("reproduce", ["--paths", "0"], "--paths: must be a positive integer"),
+        ("reproduce", ["--dt", "-1"], "--dt: must be a positive number"),
+        ("reproduce", ["--stepping", "rk4"], "--stepping: must be uniform or intrinsic"),
+        ("reproduce", ["--seed", "-1"], "--seed: must be an integer >= 0"),
+        ("reproduce", ["--dt", "1e-12"], "--dt: the run would need"),
+        ("report", ["--period", "-1"], "--period: must be a positive number"),
+        ("sweep", ["--workers", "0"], "--workers: must be a positive integer"),
+    ],
+)
+def test_an_override_flag_is_named_not_the_file(
+    tmp_path, capsys, monkeypatch, command, extra, line
+):
+    out = tmp_path / "o"
+    first = {
+        "simulate": [G1_FIXED, "--out", out],
+        "tune": [G1_FIXED, "--out", out],
+        "reproduce": ["paper", "--out", out],
+        "report": [tmp_path],
+        "sweep": [EXAMPLES / "sweeps" / "g1_noise.yaml", "--out", out],
+    }[command]
+    got = assert_input_error([command, *first, *extra], capsys, monkeypatch)
+    text = got.removeprefix("error: ")
+    if line.startswith("--"):
+        assert text.startswith(line), text
+    else:
+        assert line in text and text.endswith("(with --horizon 1e+12)"), text
+    assert not out.exists()  # nothing written
+
+
+def test_tune_defaults_its_deadline_to_the_scenario_t(tmp_path, capsys, monkeypatch):
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 2\nnoise: {{sigma: 0.4, f: 0.3}}\n",
+        encoding="utf-8",
+    )
+    args = ["tune", sc, "--evaluations", "12", "--json"]
+    code, out, err = run_cli(args, capsys, monkeypatch)
+    assert code in (0, 1), err
+    assert json.loads(out)["horizon"] == 2.0  # no --horizon: the scenario's T
+    code, out, err = run_cli([*args, "--horizon", "1"], capsys, monkeypatch)
+    assert code in (0, 1), err
+    assert json.loads(out)["horizon"] == 1.0  # --horizon still overrides it
+    # a bad T in the file is the file's, named as its field
+    sc.write_text(sc.read_text().replace("T: 2", "T: -2"), encoding="utf-8")
+    assert_input_error(args, capsys, monkeypatch, "sc.yaml: T: must be a positive number")
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, line",
+    [
+        (["--family", "exp"], "--family: replaced by --schedule power|optimal"),
+        (["--family", "power", "--schedule", "optimal"], "--family: power contradicts"),
+    ],
+)
+def test_family_is_a_deprecated_alias_of_schedule_power(tmp_path, capsys, monkeypatch, extra, line):
+    got = assert_input_error(["tune", G1_FIXED, *extra], capsys, monkeypatch)
+    assert got.removeprefix("error: ").startswith(line)
+
+
+@pytest.mark.parametrize(
+    "command, usage",
+    [
+        ("design", "Usage: ntc design [OPTIONS] FILE"),
+        ("tune", "Usage: ntc tune [OPTIONS] SCENARIO"),
+        ("simulate", "Usage: ntc simulate [OPTIONS] SCENARIO"),
+        ("report", "Usage: ntc report [OPTIONS] DIRECTORY"),
+        ("verify", "Usage: ntc verify [OPTIONS] CERT"),
+    ],
+)
+def test_usage_lines_name_arguments_as_click_does(capsys, monkeypatch, command, usage):
+    code, out, _ = run_cli([command, "--help"], capsys, monkeypatch)
+    assert code == 0 and usage in out and "{" not in out.split("\n\n")[0], out[:200]
+    code, _, err = run_cli([command], capsys, monkeypatch)
+    assert code == 2 and "Missing argument '" + usage.split()[-1] + "'" in err

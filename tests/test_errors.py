@@ -41,3 +41,29 @@ def test_quote_and_one_line():
     assert quote(3) == "3" and quote("a") == "'a'"
     assert "\n" not in quote("a\nerror: forged")
     assert one_line("a\nb\rc\x1b") == "a\\nb\\rc\\x1b"
+
+
+@pytest.mark.parametrize(
+    "message, flags, fields, values, want",
+    [
+        # a field a flag gave: the flag, not the file
+        ("paths: must be positive", {"paths": "--paths"}, None, None, "--paths: must be positive"),
+        ("T: too long", {"T": "--horizon"}, None, None, "--horizon: too long"),
+        ("initial.seed: bad", {"initial": "--x"}, None, None, "--x.seed: bad"),
+        # a field of the file: the file, with the flags that took part
+        ("dt: too small", {"T": "--horizon"}, None, {"T": 1e12}, "s.yaml: dt: too small "
+         "(with --horizon 1e+12)"),
+        ("gain: bad", None, None, None, "s.yaml: gain: bad"),
+        # an error that names its flag already is kept
+        ("--period: too long", {"digital": "--period"}, None, None, "--period: too long"),
+        # a parameter the file gave (no flag): the file's name for it
+        ("horizon: must be positive", {}, {"horizon": "T"}, None, "s.yaml: T: must be positive"),
+    ],
+)  # fmt: skip
+def test_blame_names_the_flag_or_the_file(message, flags, fields, values, want):
+    from ntc_design.errors import blame
+
+    got = blame(InputError(message), "s.yaml", flags, fields, values)
+    assert isinstance(got, InputError) and str(got) == want
+    assert str(blame(InputError("dt: x"), None, {"dt": "--dt"})) == "--dt: x"
+    assert str(blame(InputError("seed: x"), None, {"dt": "--dt"})) == "seed: x"

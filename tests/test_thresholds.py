@@ -10,7 +10,7 @@ import ntc_design as nd
 from ntc_design.design import design
 from ntc_design.generate import random_network
 from ntc_design.linalg import DEF_CODES
-from ntc_design.thresholds import critical_couplings
+from ntc_design.thresholds import critical_couplings, rate_limit
 from tests.conftest import random_topology
 from tests.support.switching_scale import THETA_SW
 
@@ -217,3 +217,41 @@ def test_best_rate_is_the_largest_abscissa_over_delta():
     rates = np.array([-_alpha(des, x) for x in grid])
     assert rates.max() <= th.best_rate * (1 + 1e-6)
     assert rates.max() >= th.best_rate * (1 - 1e-3)  # the grid comes close to it
+
+
+@pytest.mark.parametrize("e", [0.01, 0.03, 0.1])
+def test_an_asymptote_is_not_reported_as_an_attained_maximum(e):
+    """L = [[1, e], [e, 5]], D = diag(1, 0): the bounded eigenvalue of L + δD is
+    5 − e²/δ + O(δ⁻²), so the rate approaches 5 from below and never reaches it. A small e
+    brings it within 1e-9 of 5 on the grid (it was 'reaches its maximum 5 at δ ≈ 14289')."""
+    cc = critical_couplings(np.array([[1.0, e], [e, 5.0]]), np.diag([1.0, 0.0]))
+    assert cc.best_rate == pytest.approx(5.0, rel=1e-12)  # the supremum, ZᵀLZ = 5
+    assert cc.best_rate_delta is None
+    assert any("approaches 5 as δ → ∞ (not attained" in n for n in cc.notes), cc.notes
+    assert not any("reaches its maximum" in n for n in cc.notes)
+    # the rate at any δ stays below it
+    for delta in (1e2, 1e4, 1e6):
+        lam = np.linalg.eigvalsh(np.array([[1.0 + delta, e], [e, 5.0]]))[0]
+        assert lam < 5.0
+
+
+def test_a_true_plateau_is_still_reported_as_reached():
+    """L = [[1, 0], [-1, 5]] (agent 2 listens to agent 1 only), D = diag(1, 0): the
+    eigenvalue 5 does not move with δ, the other is 1 + δ: the rate min(1 + δ, 5) reaches
+    5 at δ = 4 and stays there."""
+    cc = critical_couplings(np.array([[1.0, 0.0], [-1.0, 5.0]]), np.diag([1.0, 0.0]))
+    assert cc.best_rate == pytest.approx(5.0, rel=1e-9)
+    assert cc.best_rate_delta == pytest.approx(4.0, rel=1e-6)
+    assert any("reaches its maximum 5 at δ ≈ 4" in n for n in cc.notes), cc.notes
+
+
+def test_rate_limit_is_the_compression_to_ker_d():
+    lap = np.array([[1.0, 0.3, 0.0], [0.2, 4.0, -1.0], [0.0, -1.0, 6.0]])
+    d = np.diag([1.0, 0.0, 0.0])
+    z = np.eye(3)[:, 1:]
+    want = float(np.min(np.linalg.eigvals(z.T @ lap @ z).real))
+    assert rate_limit(lap, d) == pytest.approx(want, rel=1e-12)
+    assert rate_limit(lap, np.eye(3)) == math.inf  # every direction coupled: no bound
+    # the bounded eigenvalue of L + δD tends to it
+    lam = np.sort(np.linalg.eigvals(lap + 1e8 * d).real)[0]
+    assert lam == pytest.approx(want, rel=1e-6)

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ..design import ProtocolDesign
+from ..design import ProtocolDesign, lemma1_delta
 from ..errors import InputError
 from ..linalg import RANGE_TEXT, out_of_range
 from ..model import Topology
@@ -165,9 +165,17 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
 
 
-def margin_check(name: str, sub: dict, where: str) -> Check:
+#: δ = C + ΔC is re-derived to this relative tolerance (C is an eigenvalue; the issuer's
+#: and the verifier's LAPACK may round it differently).
+MARGIN_RTOL = 1e-9
+
+
+def margin_check(name: str, sub: dict, where: str, top: Topology, delta: float) -> list[Check]:
     """Lemma 1's subject: δ = C + ΔC with a margin ΔC > 0 (read, never trusted: a
-    certificate whose subject states ΔC <= 0 is not about a Lemma 1 design).
+    certificate whose subject states ΔC <= 0 is not about a Lemma 1 design), and the
+    stated δ re-derived from the subject's topology and ΔC as the design chooses it
+    (:func:`ntc_design.design.lemma1_delta`: C from Assumption 2's decomposition), so a
+    margin changed in the subject and re-sealed no longer verifies.
 
     Parameters
     ----------
@@ -177,10 +185,15 @@ def margin_check(name: str, sub: dict, where: str) -> Check:
         The mode's subject entry.
     where : str
         The field, for messages.
+    top : Topology
+        The subject's topology (read and validated).
+    delta : float
+        The subject's δ.
 
     Returns
     -------
-    Check
+    list of Check
+        ΔC > 0, and (when a margin is stated) δ = C + ΔC.
 
     Raises
     ------
@@ -190,9 +203,26 @@ def margin_check(name: str, sub: dict, where: str) -> Check:
     if "margin" not in sub:
         raise InputError(f"{where}.margin: missing")
     if sub["margin"] is None:  # δ given directly: the subject makes no Lemma 1 claim
-        return Check(f"{name}: margin ΔC > 0", True, "none stated: δ was given directly")
+        return [Check(f"{name}: margin ΔC > 0", True, "none stated: δ was given directly")]
     m = number(need(sub, "margin", (int, float), where), f"{where}.margin")
-    return Check(f"{name}: margin ΔC > 0", m > 0, f"ΔC = {m:g}")
+    checks = [Check(f"{name}: margin ΔC > 0", m > 0, f"ΔC = {m:g}")]
+    if m > 0:
+        checks.append(_delta_check(name, top, m, delta))
+    return checks
+
+
+def _delta_check(name: str, top: Topology, margin: float, delta: float) -> Check:
+    """δ as Lemma 1 chooses it for ΔC from the topology (δ = C + ΔC, or ΔC when C is
+    undefined or C + ΔC <= 0), against the stated δ."""
+    title = f"{name}: δ = C + ΔC (C from the topology)"
+    try:
+        c, want = lemma1_delta(top, margin)
+    except (InputError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        return Check(title, False, f"C cannot be re-derived ({exc.__class__.__name__})")
+    ok = abs(delta - want) <= MARGIN_RTOL * max(abs(want), abs(delta))
+    c_text = "undefined (no agent can be in V1)" if c is None else f"{c:.10g}"
+    detail = f"C = {c_text}, ΔC = {margin:g}: δ = {want:.10g}"
+    return Check(title, ok, detail if ok else f"stated δ = {delta!r}, but {detail}")
 
 
 def read_array_mode(
@@ -213,7 +243,7 @@ def read_array_mode(
     Returns
     -------
     tuple
-        (topology, δ, θ, the checks: informed agents = U and ΔC > 0).
+        (topology, δ, θ, the checks: informed agents = U, ΔC > 0 and δ = C + ΔC).
 
     Raises
     ------
@@ -237,10 +267,11 @@ def read_array_mode(
     ok_u = inf_idx == sorted(top.antagonised)
     name = where.rsplit("subject.modes.", 1)[-1]
     check = Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")
-    return top, float(delta), theta, (check, margin_check(name, sub, where))
+    return top, float(delta), theta, (check, *margin_check(name, sub, where, top, float(delta)))
 
 
 __all__ = [
+    "MARGIN_RTOL",
     "margin_check",
     "mode_subject",
     "pack",

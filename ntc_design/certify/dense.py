@@ -455,7 +455,6 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
         raise InputError(f"{where}.delta: must be positive")
     k1 = number(need(sub, "k1", (int, float), where), f"{where}.k1")
     x0 = vector(need(sub, "x0", list, where), d, f"{where}.x0")
-    margin = margin_check(name, sub, where)
     stated_hash = need(sub, "topology_hash", str, where)
     informed_l = need(sub, "informed", list, where)
     try:
@@ -471,7 +470,7 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
         raise
 
     h = topology_hash(top)
-    checks.append(margin)
+    checks += margin_check(name, sub, where, top, delta)
     checks += _mode_checks(name, top, h, stated_hash, informed, b, delta, k1, x0, theta)
     in_range = checks[-1].ok
     if in_range:

@@ -21,7 +21,7 @@ from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
 from .format import digest
 from .kinds import KINDS, IssueOptions, ResultRow, kind_for
-from .theorems import GUARANTEE_WORD, TheoremVerdict, theorem_table
+from .theorems import GUARANTEE_WORD, TheoremVerdict, assumption_notes, theorem_table
 from .verify import verify
 
 
@@ -67,21 +67,37 @@ class CertifyResult:
         )
         return Table.build(title, ("property", "result"), rows, layout="list")
 
-    def tables(self) -> tuple[Table, ...]:
+    def tables(self, gain: bool = True) -> tuple[Table, ...]:
         """Everything the result shows: the certificate's checks and results, the gain
         conditions (when a gain was given) and the theorem verdicts.
+
+        Parameters
+        ----------
+        gain : bool, optional
+            Include the gain conditions (False for a page that shows them in a section of
+            their own, as the tune report).
 
         Returns
         -------
         tuple of ntc_design.rows.Table
         """
-        gain = (self.gain.table(),) if self.gain is not None else ()
+        conditions = (self.gain.table(),) if gain and self.gain is not None else ()
         return (
             self.verification.table(),
             self.results_table(),
-            *gain,
-            theorem_table(self.theorems),
+            *conditions,
+            self.theorems_table(),
         )
+
+    def theorems_table(self) -> Table:
+        """The theorem verdicts, with Assumption 2's violations and their fixes said once
+        below them (not in every theorem that names the premise).
+
+        Returns
+        -------
+        ntc_design.rows.Table
+        """
+        return theorem_table(self.theorems, assumption_notes(self.design))
 
     def _repr_html_(self) -> str:
         return "".join(t.html() for t in (self.design.table(), *self.tables()))

@@ -15,11 +15,15 @@ never from the claims' names.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import sympy as sp
 
-from ..design import ProtocolDesign, SwitchingDesign
+from ..design import ProtocolDesign, SwitchingDesign, fix_notes
+from ..design.digital import DigitalDesign
+from ..errors import one_line
 from ..gain import CONDITION_LABELS, GainAnalysis
 from ..rows import Table, lines, verdict
 from .checks import Verification
@@ -113,7 +117,9 @@ class TheoremVerdict:
 GUARANTEE_WORD = {True: "guaranteed", False: "not guaranteed", None: "undetermined"}
 
 
-def theorem_table(verdicts: tuple[TheoremVerdict, ...] | list[TheoremVerdict]) -> Table:
+def theorem_table(
+    verdicts: tuple[TheoremVerdict, ...] | list[TheoremVerdict], notes: Sequence[str] = ()
+) -> Table:
     """The theorem verdicts as the table every face shows: each theorem, its sense, the
     verdict, and every premise that fails, is undetermined or is replaced (with what
     replaces it).
@@ -122,6 +128,9 @@ def theorem_table(verdicts: tuple[TheoremVerdict, ...] | list[TheoremVerdict]) -
     ----------
     verdicts : sequence of TheoremVerdict
         The verdicts.
+    notes : sequence of str, optional
+        Said once below the verdicts (Assumption 2's violations and their fixes:
+        :func:`assumption_notes`), however many theorems share the premise.
 
     Returns
     -------
@@ -141,7 +150,62 @@ def theorem_table(verdicts: tuple[TheoremVerdict, ...] | list[TheoremVerdict]) -
                 lines(why or ["every premise holds"]),
             )
         )
-    return Table.build("theorems", ("theorem", "verdict", "premises"), rows, layout="list")
+    return Table.build(
+        "theorems", ("theorem", "verdict", "premises"), rows, list(notes), layout="list"
+    )
+
+
+#: Violations of Assumption 2 named in the theorems' notes (``--json`` has them all).
+MAX_VIOLATION_NOTES = 10
+
+
+def assumption_notes(design: Any) -> list[str]:
+    """Assumption 2's violations of a design (every mode's), each once, and each fix once
+    with the agents it is for: the notes under the theorem verdicts, which name the
+    premise without repeating them.
+
+    Parameters
+    ----------
+    design : ProtocolDesign, SwitchingDesign, DigitalDesign or another design
+        The design (the sampled protocol's: its continuous design's; a design without a
+        decomposition, as a time-varying one, gives no notes).
+
+    Returns
+    -------
+    list of str
+    """
+    if isinstance(design, DigitalDesign):  # the sampled protocol of a continuous design
+        design = design.base
+    if isinstance(design, SwitchingDesign):
+        modes = {f"mode {k}: ": d for k, d in design.modes.items()}
+    elif isinstance(design, ProtocolDesign):
+        modes = {"": design}
+    else:
+        return []
+    notes: list[str] = []
+    for at, d in modes.items():
+        viol = d.decomposition.violations
+        if not viol:
+            continue
+        lab = d.topology.labels
+        notes += [
+            f"{at}Assumption 2 fails for agent {one_line(str(lab[v.agent]))}: {v.reason}"
+            for v in viol[:MAX_VIOLATION_NOTES]
+        ]
+        if len(viol) > MAX_VIOLATION_NOTES:
+            notes.append(f"{at}… and {len(viol) - MAX_VIOLATION_NOTES} more (--json lists them)")
+        notes += [f"{at}{n}" for n in fix_notes(viol, lab)]
+    return notes
+
+
+def _violating(design: ProtocolDesign, most: int = 5) -> str:
+    """The agents violating Assumption 2, the first ``most`` named (the reasons are said
+    once, in :func:`assumption_notes`)."""
+    lab = design.topology.labels
+    viol = design.decomposition.violations
+    names = ", ".join(one_line(str(lab[v.agent])) for v in viol[:most])
+    more = f", … ({len(viol)} in all)" if len(viol) > most else ""
+    return f"agent{'s' if len(viol) > 1 else ''} {names}{more}"
 
 
 def violations_text(design, most: int = 5) -> str:
@@ -231,7 +295,7 @@ def fixed_verdicts(
     if design.assumption_holds:
         a2 = Premise(name, True, "holds")
     else:
-        why = f"fails ({violations_text(design)})"
+        why = f"fails for {_violating(design)} (each violation and its fix: below)"
         a2 = Premise(
             name,
             hurwitz,
@@ -309,7 +373,9 @@ def switching_verdicts(
     a2 = Premise(
         "Assumption 2 in every mode (used through L_B + L_Bᵀ ≻ 0)",
         True if all_sym else (not a2_fail),
-        "holds in every mode" if not a2_fail else f"fails in mode(s) {', '.join(a2_fail)}",
+        "holds in every mode"
+        if not a2_fail
+        else f"fails in mode(s) {', '.join(a2_fail)} (each violation and its fix: below)",
         "L_B(k) + L_B(k)ᵀ ≻ 0 in every scheduled mode, certified directly (the proofs of "
         "Theorems 3-4 use only that)"
         if a2_fail and all_sym
@@ -474,6 +540,7 @@ def digital_verdicts(
 
 
 __all__ = [
+    "assumption_notes",
     "digital_verdicts",
     "sampled_gain_premises",
     "violations_text",

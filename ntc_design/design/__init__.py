@@ -22,11 +22,15 @@ _EXPORTS = {
     "structure_summary": "assumption",
     "structure_tables": "assumption",
     "summary_table": "assumption",
+    "violation_fixes": "assumption",
+    "fix_notes": "assumption",
     "ProtocolDesign": "lemma1",
     "SwitchingDesign": "lemma1",
     "design": "lemma1",
     "design_table": "lemma1",
     "design_topology": "lemma1",
+    "lemma1_c": "lemma1",
+    "lemma1_delta": "lemma1",
 }
 
 if TYPE_CHECKING:
@@ -36,11 +40,13 @@ if TYPE_CHECKING:
         Decomposition,
         Violation,
         assumption2,
+        fix_notes,
         lemma1_coefficient,
         structure_report,
         structure_summary,
         structure_tables,
         summary_table,
+        violation_fixes,
     )
     from .lemma1 import (
         ProtocolDesign,
@@ -48,6 +54,8 @@ if TYPE_CHECKING:
         design,
         design_table,
         design_topology,
+        lemma1_c,
+        lemma1_delta,
     )
 
 __all__ = [
@@ -61,11 +69,15 @@ __all__ = [
     "design",
     "design_table",
     "design_topology",
+    "fix_notes",
+    "lemma1_c",
     "lemma1_coefficient",
+    "lemma1_delta",
     "structure_report",
     "structure_summary",
     "structure_tables",
     "summary_table",
+    "violation_fixes",
 ]
 
 

@@ -22,13 +22,86 @@ from ..model import (
 )
 from ..rows import Table, set_text, verdict
 
+#: What makes each kind of violating agent admissible (one of them suffices).
+FIX_NOT_DOMINATED = (
+    "give the agent an antagonistic in-edge with a negative definite weight (it is then "
+    "informed and can be in V1), or raise its in-weights until Σ_{N_i}|A_ij| ⪰ "
+    "Σ_{N'_i}|A_ji| (in-degree-dominated, it can be in V2)"
+)
+FIX_SEMIDEFINITE = (
+    "make the agent's antagonistic in-weight Σ_{Ω_i}|A_ij| positive definite (an "
+    "antagonistic in-edge covering the missing directions), or make it in-degree-dominated"
+)
+FIX_UNREACHED = (
+    "join the agent by definite (≻ 0 or ≺ 0) edges to an agent that can be in V1, or give "
+    "it an antagonistic in-edge with a negative definite weight"
+)
+FIX_NO_V1 = (
+    "no agent can be in V1: give at least one agent antagonistic in-edges whose weights sum "
+    "to a negative definite matrix (Lemma 1 needs an informed agent with Σ_{Ω_i}|A_ij| ≻ 0)"
+)
+
 
 @dataclass(frozen=True)
 class Violation:
-    """An agent that can be in neither V1 nor V2 of Assumption 2, and why."""
+    """An agent that can be in neither V1 nor V2 of Assumption 2, why, and what would
+    make it admissible."""
 
     agent: int  # index (internal); labels in to_dict()/structure_report
     reason: str
+    fix: str = ""
+
+
+def violation_fixes(violations: Sequence[Violation]) -> dict[str, tuple[int, ...]]:
+    """The distinct fixes of ``violations``, each with the agents it is for, in the order
+    they first occur (each fix said once, however many agents share it).
+
+    Parameters
+    ----------
+    violations : sequence of Violation
+        Assumption 2's violations.
+
+    Returns
+    -------
+    dict of str to tuple of int
+        fix -> the agents (indices) it applies to.
+    """
+    out: dict[str, list[int]] = {}
+    for v in violations:
+        if v.fix:
+            out.setdefault(v.fix, []).append(v.agent)
+    return {f: tuple(a) for f, a in out.items()}
+
+
+def fix_notes(violations: Sequence[Violation], labels: Sequence[Any]) -> list[str]:
+    """The fixes of ``violations`` as notes: ``fix (agents 2, 3): ...``, one per fix.
+
+    Parameters
+    ----------
+    violations : sequence of Violation
+        Assumption 2's violations.
+    labels : sequence
+        The topology's agent labels.
+
+    Returns
+    -------
+    list of str
+    """
+    return _fix_lines([(labels[v.agent], v.fix) for v in violations])
+
+
+def _fix_lines(pairs: Sequence[tuple[Any, str]], most: int = 12) -> list[str]:
+    """``fix (agents a, b): FIX`` per distinct fix of (agent label, fix) pairs, the first
+    ``most`` agents named."""
+    fixes: dict[str, list[str]] = {}
+    for agent, fix in pairs:
+        if fix:
+            fixes.setdefault(fix, []).append(one_line(str(agent)))
+    out = []
+    for fix, names in fixes.items():
+        who = ", ".join(names[:most]) + (f", … ({len(names)} in all)" if len(names) > most else "")
+        out.append(f"fix (agent{'s' if len(names) > 1 else ''} {who}): {fix}")
+    return out
 
 
 class _Paths(Mapping):
@@ -193,8 +266,11 @@ def assumption2(top: Topology) -> Decomposition:
             if i not in ant
             else "its antagonistic in-weight Σ_{Ω_i}|A_ij| is only semidefinite"
         )
+        fix = FIX_NOT_DOMINATED if i not in ant else FIX_SEMIDEFINITE
         violations.append(
-            Violation(i, f"not in-degree-dominated and {why}, so it can be neither in V1 nor in V2")
+            Violation(
+                i, f"not in-degree-dominated and {why}, so it can be neither in V1 nor in V2", fix
+            )
         )
     required = ~idd & cand
     floor = float(np.max(cvals[required])) if required.any() else -math.inf
@@ -238,6 +314,7 @@ def assumption2(top: Topology) -> Decomposition:
                     if not v1a.size
                     else ""
                 ),
+                FIX_UNREACHED if v1a.size else FIX_NO_V1,
             )
         )
     violations.sort(key=lambda v: v.agent)
@@ -294,7 +371,9 @@ def structure_report(top: Topology) -> dict:
         "V1": [lab[i] for i in dec.v1],
         "V2": [lab[i] for i in dec.v2],
         "paths": {str(lab[i]): [lab[k] for k in p] for i, p in dec.paths.items()},
-        "violations": [{"agent": lab[v.agent], "reason": v.reason} for v in dec.violations],
+        "violations": [
+            {"agent": lab[v.agent], "reason": v.reason, "fix": v.fix} for v in dec.violations
+        ],
     }
 
 
@@ -359,6 +438,7 @@ def structure_tables(rep: dict, title: str, most: int = 10) -> list[Table]:
         rows = [("Assumption 2", verdict(False, f"({len(vs)} agents violate it)", word="fails"))]
         rows += [(f"agent {lab(v['agent'])}", lab(v["reason"])) for v in vs[:most]]
         notes = [f"{len(vs) - most} more (--json lists them all)"] if len(vs) > most else []
+        notes += _fix_lines([(v["agent"], v.get("fix", "")) for v in vs])
     return [
         edges,
         agents,
@@ -413,7 +493,10 @@ def structure_summary(top: Topology) -> dict:
         "V2_count": len(dec.v2),
         "V2": first(dec.v2),
         "violations_count": len(dec.violations),
-        "violations": [{"agent": lab[v.agent], "reason": v.reason} for v in dec.violations[:SHOWN]],
+        "violations": [
+            {"agent": lab[v.agent], "reason": v.reason, "fix": v.fix}
+            for v in dec.violations[:SHOWN]
+        ],
     }
 
 
@@ -451,6 +534,7 @@ def summary_table(summary: dict, title: str) -> Table:
     notes = []
     if s["violations_count"] > len(s["violations"]):
         notes.append(f"{s['violations_count']} agents violate Assumption 2; {SHOWN} are shown")
+    notes += _fix_lines([(v["agent"], v.get("fix", "")) for v in s["violations"]])
     notes.append("--full prints every edge and agent; --full --json lists them as data")
     return Table.build(f"{title}: structure (summary)", ("quantity", "value"), rows, notes)
 
@@ -465,5 +549,7 @@ __all__ = [
     "structure_report",
     "structure_summary",
     "structure_tables",
+    "fix_notes",
     "summary_table",
+    "violation_fixes",
 ]

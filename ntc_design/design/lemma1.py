@@ -4,6 +4,7 @@ L_B for a topology and θ, with the exact critical couplings of the same design 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -20,7 +21,7 @@ from ..model import (
 from ..rows import Table, matrix, set_text, verdict
 from ..tablefiles import write_mat
 from ..thresholds import CriticalCouplings, critical_couplings, critical_couplings_sparse
-from .assumption import AssumptionWarning, Decomposition, assumption2
+from .assumption import AssumptionWarning, Decomposition, assumption2, fix_notes
 
 #: Up to this Nd the critical couplings are computed densely (exact Kronecker pencil /
 #: eigenvalue scans, :func:`critical_couplings`); above it by the sparse method
@@ -81,6 +82,13 @@ class ProtocolDesign:
     def assumption_holds(self) -> bool:
         """Whether Assumption 2 holds (else Lemma 1 does not apply: certify first)."""
         return self.decomposition.holds
+
+    @property
+    def has_informed_agents(self) -> bool:
+        """Whether U is non-empty: with no informed agent L_B = L does not depend on δ,
+        L(1⊗θ) = 0 for every θ and nothing draws the agents to θ (Lemma 1 designs
+        nothing)."""
+        return bool(self.informed)
 
     @property
     def informed_agents(self) -> tuple:
@@ -265,7 +273,9 @@ class ProtocolDesign:
             "V1": [lab[i] for i in dec.v1],
             "V2": [lab[i] for i in dec.v2],
             "assumption_holds": dec.holds,
-            "violations": [{"agent": lab[v.agent], "reason": v.reason} for v in dec.violations],
+            "violations": [
+                {"agent": lab[v.agent], "reason": v.reason, "fix": v.fix} for v in dec.violations
+            ],
             "identity_residual": self.identity_residual,
             "thresholds": th.to_dict() if th is not None else None,
             "conservatism": (self.delta / th.hurwitz if th is not None and th.hurwitz else None),
@@ -352,10 +362,13 @@ def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None
         return None if d.thresholds is None else getattr(d.thresholds, key)
 
     def best_delta(d: ProtocolDesign):
-        if d.thresholds is not None and d.thresholds.best_rate_delta is None:
-            if d.thresholds.method == "constant":
+        th = d.thresholds
+        if th is not None and th.best_rate_delta is None:
+            if th.method == "constant":
                 return "none: L_B does not depend on δ (no informed agent)"
-            return "none: the rate grows with δ"
+            if math.isnan(th.best_rate):
+                return "none: the best rate is not computed at this size"
+            return "none: approached as δ → ∞ (not attained)"
         return crit(d, "best_rate_delta")
 
     def holds(d: ProtocolDesign):
@@ -418,6 +431,7 @@ def _design_notes(d: ProtocolDesign, at: str) -> list[str]:
     if len(viol) > MAX_VIOLATIONS_SHOWN:
         more = len(viol) - MAX_VIOLATIONS_SHOWN
         notes.append(f"{at}… and {more} more violations (--json lists them all)")
+    notes += [f"{at}{n}" for n in fix_notes(viol, lab)]
     notes += [f"{at}{n}" for n in d.notes]
     if d.thresholds is not None:
         notes += [f"{at}{n}" for n in d.thresholds.notes]
@@ -509,10 +523,8 @@ def design_topology(
     require_positive("margin (ΔC)", margin)
     dec = assumption2(top)
     notes: list[str] = []
-    if dec.holds:
-        c = max((dec.coefficients[i] for i in dec.v1), default=None)
-    else:
-        c = max(dec.coefficients.values(), default=None)
+    c = lemma1_c(dec)
+    if not dec.holds:
         notes.append(
             "Assumption 2 fails: C is taken over the agents of U whose antagonistic "
             "in-weight is positive definite; certify the design before trusting it"
@@ -548,6 +560,51 @@ def design_topology(
         notes=tuple(notes),
         explicit_delta=delta is not None,
     )
+
+
+def lemma1_c(dec: Decomposition) -> float | None:
+    """Lemma 1's C = max_{i ∈ V1} C_i; when Assumption 2 fails, the largest C_i of the
+    agents that can be in V1; None when no agent can.
+
+    Parameters
+    ----------
+    dec : Decomposition
+        Assumption 2's decomposition (:func:`~ntc_design.design.assumption.assumption2`).
+
+    Returns
+    -------
+    float or None
+    """
+    if dec.holds:
+        return max((dec.coefficients[i] for i in dec.v1), default=None)
+    return max(dec.coefficients.values(), default=None)
+
+
+def lemma1_delta(top: Topology, margin: float) -> tuple[float | None, float]:
+    """C and the δ that the design chooses for a margin ΔC: δ = C + ΔC, or ΔC when C is
+    undefined or C + ΔC <= 0 (what :func:`design_topology` computes, for a certificate to
+    re-derive δ from its subject's topology and stated margin).
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+    margin : float
+        ΔC > 0.
+
+    Returns
+    -------
+    (float or None, float)
+        C (None when no agent can be in V1) and δ.
+
+    Raises
+    ------
+    InputError
+        ΔC is not a positive number.
+    """
+    require_positive("margin (ΔC)", margin)
+    c = lemma1_c(assumption2(top))
+    return c, _choose_delta(c, margin, None, [])
 
 
 def _choose_delta(c: float | None, margin: float, delta: float | None, notes: list[str]) -> float:
@@ -655,4 +712,12 @@ def design(
     return design_topology(topology, theta, margin, delta, thresholds)
 
 
-__all__ = ["ProtocolDesign", "SwitchingDesign", "design", "design_table", "design_topology"]
+__all__ = [
+    "ProtocolDesign",
+    "SwitchingDesign",
+    "design",
+    "design_table",
+    "design_topology",
+    "lemma1_c",
+    "lemma1_delta",
+]

@@ -18,7 +18,6 @@ from matplotlib.ticker import MaxNLocator
 
 from ..certify import KINDS, CertifyResult
 from ..certify.format import package_versions
-from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
 from ..model import Topology
 from ..rows import fmt
@@ -501,7 +500,7 @@ def aggregate_section(
         checks=f.checks,
         gain=_gain_table(f.res),
         gain_figure=None,
-        theorems=html_table(theorem_table(f.res.theorems)),
+        theorems=html_table(f.res.theorems_table()),
         ms_figure=figs["ms"][0],
         convergence_note=(
             f"The total error's decay exponent, fitted over t ∈ [T/10, T]: {fmt(f.fitted, 3)}."

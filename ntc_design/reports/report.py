@@ -17,7 +17,6 @@ from ntc_design.certify.format import package_versions
 
 from ..certify import CertifyResult, certify
 from ..certify.kinds.time_varying import time_varying_results
-from ..certify.theorems import theorem_table
 from ..design import ProtocolDesign, SwitchingDesign
 from ..design.digital import Digital, DigitalDesign
 from ..errors import InputError
@@ -556,7 +555,7 @@ def render_run(
         if cert_res.gain is not None
         else Table(("condition", "holds", "reason"), [("no gain was given", "—", "")]),
         gain_figure=first(figs["gain"]),
-        theorems=html_table(theorem_table(cert_res.theorems)),
+        theorems=html_table(cert_res.theorems_table()),
         ms_figure=figs["ms"][0],
         convergence_note=conv_note,
         convergence=conv,

@@ -77,7 +77,7 @@ def is_sweep_dir(directory: str | Path) -> bool:
 def _load(d: Path):
     import pandas as pd
 
-    for name in ("sweep.json", "results.parquet", "curves.parquet"):
+    for name in ("sweep.json", "results.csv", "results.parquet", "curves.parquet"):
         if not (d / name).is_file():
             raise InputError(f"{d}: {name}: missing (run ntc sweep ... --out {d} first)")
     try:
@@ -86,6 +86,7 @@ def _load(d: Path):
         curves = pd.read_parquet(d / "curves.parquet")
     except (OSError, ValueError, RecursionError) as exc:
         raise InputError(f"{d}: cannot read the sweep tables ({exc.__class__.__name__})") from None
+    _check_results_csv(d / "results.csv", res)
     if not isinstance(man, dict):
         raise InputError(f"{d}: sweep.json: expected a mapping")
     if len(res) == 0:
@@ -96,6 +97,29 @@ def _load(d: Path):
     if not isinstance(keys, list) or any(k not in res.columns for k in keys):
         raise InputError(f"{d}: sweep.json: keys do not match results.parquet")
     return man, res, curves, [str(k) for k in keys]
+
+
+def _check_results_csv(path: Path, res) -> None:
+    """results.csv, which the report links as the sweep's data, must be the table of
+    results.parquet (the same columns and points): an empty or damaged copy is refused
+    rather than linked."""
+    import pandas as pd
+
+    try:
+        csv = pd.read_csv(path)
+    except (OSError, ValueError, UnicodeDecodeError) as exc:  # EmptyDataError, ParserError
+        why = "empty" if isinstance(exc, pd.errors.EmptyDataError) else "not a results table"
+        raise InputError(f"{path}: {why} ({exc.__class__.__name__}); re-run ntc sweep") from None
+    if list(csv.columns) != [str(c) for c in res.columns]:
+        raise InputError(f"{path}: its columns are not those of results.parquet; re-run ntc sweep")
+    if len(csv) != len(res) or (
+        "point" in res.columns
+        and csv["point"].astype(str).tolist() != res["point"].astype(str).tolist()
+    ):
+        raise InputError(
+            f"{path}: {len(csv)} rows, not the {len(res)} points of results.parquet; re-run "
+            "ntc sweep"
+        )
 
 
 def _numeric(values) -> bool:

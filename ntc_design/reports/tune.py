@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import yaml
 from matplotlib.colors import LogNorm
+from matplotlib.patches import Rectangle
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ..certify import write_certificate
@@ -33,11 +34,8 @@ CURVE_CAPTION = (
     "(dash-dot), a marker at each curve's peak; the dotted line is ε, the deadline T is the "
     "right edge."
 )
-LANDSCAPE_CAPTION = (
-    "E Σ_i ‖x_i(T) − θ‖² over the scale a (log) and the exponent γ at the tuned offset b; "
-    "the cross marks the optimum, the circle the baseline's (a, γ) = (1, 1); blank where a "
-    "candidate is too stiff to integrate or its moments grow without bound."
-)
+#: The legend of the hatching: where no finite objective is drawn.
+HATCH_LABEL = "+∞: too stiff or unstable"
 
 
 SCHEDULE_GAINS_CAPTION = (
@@ -135,8 +133,86 @@ def curves_figure(result: TuneResult | ScheduleTuneResult):
     return fig
 
 
+@dataclass(frozen=True)
+class LandscapeMarks:
+    """What the landscape figure draws, which its caption says (one source for both)."""
+
+    curve: bool  # one of a, γ fixed: the objective as a curve, not a map
+    baseline: bool  # 1/(1 + t) (b = 1) lies on the slice: its circle is drawn
+    hatched: bool  # some candidate scored +∞: the area without a finite value is hatched
+    b: float
+
+
+def landscape_marks(result: TuneResult) -> LandscapeMarks:
+    """What :func:`landscape_figure` draws for ``result``.
+
+    Parameters
+    ----------
+    result : TuneResult
+        A tuning with a landscape.
+
+    Returns
+    -------
+    LandscapeMarks
+
+    Raises
+    ------
+    ValueError
+        The result has no landscape.
+    """
+    land = result.landscape
+    if land is None:
+        raise ValueError("the result has no landscape (tune(..., landscape=True))")
+    z = np.asarray(land.values, dtype=float)
+    curve = z.shape[0] == 1 or z.shape[1] == 1
+    return LandscapeMarks(
+        curve=curve,
+        baseline=not curve and math.isclose(land.b, BASELINE.b, rel_tol=1e-9),
+        hatched=not curve and bool((~np.isfinite(z)).any()),
+        b=float(land.b),
+    )
+
+
+def landscape_caption(result: TuneResult) -> str:
+    """The landscape figure's caption, from what it draws (:func:`landscape_marks`): the
+    cross is the tuned gain as the legend says, the circle is named only when drawn, the
+    hatching only when there is some.
+
+    Parameters
+    ----------
+    result : TuneResult
+        A tuning with a landscape.
+
+    Returns
+    -------
+    str
+    """
+    m = landscape_marks(result)
+    if m.curve:
+        return (
+            "E Σ_i ‖x_i(T) − θ‖² against the one parameter searched (the others fixed); "
+            "the cross marks the tuned gain."
+        )
+    text = (
+        "E Σ_i ‖x_i(T) − θ‖² over the scale a (log) and the exponent γ at the tuned offset "
+        f"b = {fmt(m.b)}; the cross marks the tuned gain"
+    )
+    text += (
+        ", the circle the baseline 1/(1 + t), (a, γ) = (1, 1)"
+        if m.baseline
+        else "; 1/(1 + t) has b = 1 and is not on this slice"
+    )
+    if m.hatched:
+        text += (
+            "; hatched where no finite value is drawn: a candidate there is too stiff to "
+            "integrate or its moments grow without bound (+∞)"
+        )
+    return text + "."
+
+
 def landscape_figure(result: TuneResult):
-    """The objective over (a, γ) at the tuned b as filled log-spaced contours.
+    """The objective over (a, γ) at the tuned b as filled log-spaced contours; where no
+    finite value is drawn (a candidate scored +∞), hatched to the contours' edge.
 
     Parameters
     ----------
@@ -152,14 +228,14 @@ def landscape_figure(result: TuneResult):
     ValueError
         The result has no landscape.
     """
+    marks = landscape_marks(result)
     land = result.landscape
-    if land is None:
-        raise ValueError("the result has no landscape (tune(..., landscape=True))")
+    assert land is not None  # landscape_marks refuses a result without one
     z = np.where(np.isfinite(land.values), land.values, np.nan)
     with style.paper_style():
         fig, ax = plt.subplots(figsize=(style.ONE_COLUMN, 2.8), layout="constrained")
         ok = z[np.isfinite(z)]
-        if z.shape[0] == 1 or z.shape[1] == 1:  # one of a, γ fixed: the objective as a curve
+        if marks.curve:  # one of a, γ fixed: the objective as a curve
             fig.clear()
             ax = fig.subplots()
             x, xl = (land.a, "a") if z.shape[1] > 1 else (land.gamma, r"$\gamma$")
@@ -180,21 +256,23 @@ def landscape_figure(result: TuneResult):
             ax.set_ylabel(r"$E\,\sum_i \|x_i(T) - \theta\|^2$")
             fig.legend(loc="outside lower center", frameon=False)
             return fig
+        if marks.hatched:
+            # the contours fill only the cells whose four corners are finite; everything
+            # else, up to their edge, is hatched (no white strip between the two: the
+            # objective is not finite at a corner of those cells)
+            ax.add_patch(
+                Rectangle(
+                    (0.0, 0.0), 1.0, 1.0, transform=ax.transAxes, fill=False, hatch="////",
+                    ec="0.2", lw=0.0, zorder=0,
+                )
+            )  # fmt: skip
+            ax.fill([], [], fc="none", hatch="////", ec="0.2", label=HATCH_LABEL)
         if ok.size >= 4 and ok.min() > 0 and ok.max() > ok.min():
             levels = np.geomspace(ok.min(), ok.max(), 14)
             cs = ax.contourf(land.a, land.gamma, z, levels=levels, norm=LogNorm(), cmap="viridis")
             fig.colorbar(cs, ax=ax, label=r"$E\,\sum_i \|x_i(T) - \theta\|^2$", format="%.3g")
-        blank = ~np.isfinite(z)
-        if blank.any():  # candidates that scored +∞: hatched and named, not left white
-            ax.contourf(
-                land.a,
-                land.gamma,
-                blank.astype(float),
-                levels=[0.5, 1.5],
-                colors="none",
-                hatches=["////"],
-            )
-            ax.fill([], [], fc="none", hatch="////", ec="0.2", label="+∞: too stiff or unstable")
+        ax.set_xlim(float(np.min(land.a)), float(np.max(land.a)))
+        ax.set_ylim(float(np.min(land.gamma)), float(np.max(land.gamma)))
         # markers on the γ = 1 edge are drawn whole (not clipped by the axes)
         ax.plot(
             [result.tuned.a],
@@ -208,7 +286,7 @@ def landscape_figure(result: TuneResult):
             clip_on=False,
             zorder=5,
         )
-        if math.isclose(land.b, BASELINE.b, rel_tol=1e-9):
+        if marks.baseline:
             ax.plot(
                 [BASELINE.a],
                 [BASELINE.gamma],
@@ -311,7 +389,7 @@ class Section:
     id: str
     title: str
     figure: Callable | None = None
-    caption: str = ""
+    caption: str | Callable[[Any], str] = ""  # a function of the result: what it drew
     tables: Callable[[Any], list[Table]] | None = None
 
 
@@ -319,14 +397,16 @@ class Section:
 POWER_SECTIONS = (
     Section("tuned", "Tuned gain", tables=lambda r: [r.table()]),
     Section("curves", "Mean-square error over time", curves_figure, CURVE_CAPTION),
-    Section("landscape", "Objective over (a, γ)", landscape_figure, LANDSCAPE_CAPTION),
+    Section("landscape", "Objective over (a, γ)", landscape_figure, landscape_caption),
     Section(
         "theorems",
         "Theorem conditions of the tuned gain",
         tables=lambda r: [r.gain_analysis.table()],
     ),
-    Section(
-        "certificate", "Certificate of the tuned design", tables=lambda r: r.certificate.tables()
+    Section(  # the gain's conditions have their own section above
+        "certificate",
+        "Certificate of the tuned design",
+        tables=lambda r: r.certificate.tables(gain=False),
     ),
 )
 SCHEDULE_SECTIONS = (
@@ -340,7 +420,7 @@ SCHEDULE_SECTIONS = (
     Section(
         "certificate",
         "Certificate of the design with the schedule",
-        tables=lambda r: r.certificate.tables(),
+        tables=lambda r: r.certificate.tables(gain=False),
     ),
 )
 
@@ -379,7 +459,8 @@ def write_tune_report(
         block = None
         if sec.figure is not None:
             saved = style.save(sec.figure(result), base / "figures" / f"tune_{sec.id}")
-            block = figure_block(saved, f"fig-{sec.id}", sec.caption, base, style.ONE_COLUMN)
+            caption = sec.caption(result) if callable(sec.caption) else sec.caption
+            block = figure_block(saved, f"fig-{sec.id}", caption, base, style.ONE_COLUMN)
         tables = [html_table(t) for t in sec.tables(result)] if sec.tables else []
         shown.append({"id": sec.id, "title": sec.title, "figure": block, "tables": tables})
     intro = (

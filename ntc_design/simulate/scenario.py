@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError, blame
 from ..files import ScenarioData, jsonable, parse_scenario
 from ..loader import load
 from ..outputs import check_output_folder, json_text, output_folder
@@ -36,7 +38,10 @@ REPLACEABLE = (
 
 
 def load_scenario(
-    path: str | Path, overrides: dict | None = None, data: ScenarioData | None = None
+    path: str | Path,
+    overrides: dict | None = None,
+    data: ScenarioData | None = None,
+    flags: Mapping[str, str] | None = None,
 ) -> tuple[AnyTopology, SimulationSpec, ScenarioData]:
     """Read a scenario file: (topology, spec, the scenario as read).
 
@@ -49,6 +54,9 @@ def load_scenario(
         ``seed``, ``method``, ...), checked exactly as the file's own.
     data : ScenarioData, optional
         The file as :func:`ntc_design.files.parse_scenario` already read it (not read again).
+    flags : mapping of str to str, optional
+        The flag that gave each override (``{"paths": "--paths"}``): an error about an
+        override names it, not the file.
 
     Returns
     -------
@@ -58,11 +66,16 @@ def load_scenario(
     Raises
     ------
     InputError
-        ``FILE: FIELD: what is wrong``.
+        ``FILE: FIELD: what is wrong``, or ``--FLAG: what is wrong`` for an override.
     """
     sc = data if data is not None else parse_scenario(path)
-    doc = {**sc.document, **(overrides or {})}
-    spec = SimulationSpec.from_document(doc, sc.source)
+    given = overrides or {}
+    doc = {**sc.document, **given}
+    try:  # unprefixed, to say whether the file or a flag gave the field
+        spec = SimulationSpec._from_document(doc, sc.source)
+    except InputError as exc:
+        named = {k: v for k, v in (flags or {}).items() if k in given}
+        raise blame(exc, sc.source, named, values=given) from None
     top = load(sc.topology)
     return top, spec, sc
 

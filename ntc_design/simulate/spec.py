@@ -449,8 +449,9 @@ class SimulationSpec:
     gain : str or callable
         c(t): an expression in t, or a vectorised callable.
     noise : NoiseModel
-    initial : ndarray, UniformInitial or None
-        x(0) (N·d numbers), a uniform draw, or zero.
+    initial : ndarray, UniformInitial, mapping or None
+        x(0) (N·d numbers), a uniform draw (a :class:`UniformInitial`, or the scenario's
+        mapping ``{"uniform": [lo, hi], "seed": S}``), or zero.
     save : SaveAt
     stepping : Stepping
     mc : MonteCarlo
@@ -505,7 +506,9 @@ class SimulationSpec:
             )
         check_noise(self.noise)
         ini = self.initial
-        if ini is not None and not isinstance(ini, UniformInitial):
+        if isinstance(ini, Mapping):  # the scenario's {uniform: [lo, hi], seed: S}
+            object.__setattr__(self, "initial", _initial_from_document(ini))
+        elif ini is not None and not isinstance(ini, UniformInitial):
             object.__setattr__(self, "initial", _check_states(ini))
         for name, cls in (("save", SaveAt), ("stepping", Stepping), ("mc", MonteCarlo)):
             if not isinstance(getattr(self, name), cls):
@@ -755,14 +758,20 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
         return None
     if isinstance(doc, Mapping):
         if set(doc) != {"uniform", "seed"}:
-            raise InputError("initial: expected {uniform: [lo, hi], seed: S} or a list of states")
+            raise InputError(
+                "initial: expected {uniform: [lo, hi], seed: S} (UniformInitial(lo, hi, seed) in "
+                "Python) or a list of states"
+            )
         uni = doc["uniform"]
-        if not isinstance(uni, list) or len(uni) != 2:
+        if not isinstance(uni, (list, tuple)) or len(uni) != 2:
             raise InputError("initial.uniform: expected [lo, hi]")
         return UniformInitial(uni[0], uni[1], doc["seed"])
     if isinstance(doc, list):
         return _check_states(doc)
-    raise InputError("initial: expected {uniform: [lo, hi], seed: S} or a list of states")
+    raise InputError(
+        "initial: expected {uniform: [lo, hi], seed: S} (UniformInitial(lo, hi, seed) in "
+        "Python) or a list of states"
+    )
 
 
 __all__ = [

@@ -469,7 +469,9 @@ def objective_for(
         ``exact`` for a non-linear f or above the exact moments' size; an unknown method.
     """
     if method not in ("auto", "exact", "mc"):
-        raise InputError(f"method: expected auto, exact or mc, got {method!r}")
+        # one objective per candidate: simulate's 'both' (the two curves) has no meaning here
+        why = " (tuning minimises one objective; both is simulate's)" if method == "both" else ""
+        raise InputError(f"method: expected auto, exact or mc, got {method!r}{why}")
     if method == "mc":
         return MonteCarloObjective(topology, spec, horizon)
     for key, cls in OBJECTIVES.items():

@@ -106,3 +106,33 @@ def test_the_terminal_verdict_names_a_failing_assumption(capsys, monkeypatch):
     res = certify(nd.load(EXAMPLES / "switching.yaml"), [1, 2, -1], gain="1/(1+t)")
     page = _text(res._repr_html_())
     assert "replaced: Assumption 2" in page  # the notebook and the report say it too
+
+
+def test_each_violation_is_said_once_with_its_fix(tmp_path):
+    """With the sampled analogues there are four verdicts that name Assumption 2; each
+    violation (and each fix) is said once, under them, not in every verdict."""
+    import warnings
+
+    from ntc_design.design.digital import Digital
+
+    p = tmp_path / "coop.yaml"
+    p.write_text(
+        "dim: 2\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: {diag: [1, 1]}}\n"
+        "  - {from: 2, to: 3, weight: {diag: [1, 2]}}\n"
+        "  - {from: 3, to: 1, weight: {diag: [2, 1]}}\n",
+        encoding="utf-8",
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = certify(nd.load(p), [1, 2], gain="1/(1+t)", digital=Digital(0.1, 0))
+    assert len(r.theorems) == 4
+    text = "\n".join(t.text() for t in r.tables())
+    for v in r.design.base.decomposition.violations:
+        said = f"agent {v.agent + 1}: {v.reason}"
+        assert text.count(said) == 1, said
+    assert text.count("not in-degree-dominated and has no antagonistic in-edge") == 2  # 2, 3
+    fixes = [ln for ln in r.theorems_table().notes if ln.startswith("fix (")]
+    assert len(fixes) == 2 and fixes[1].startswith("fix (agents 2, 3): give the agent")
+    for th in r.theorems:
+        (a2,) = [q for q in th.failing if q.name.startswith("Assumption 2")]
+        assert a2.detail.startswith("fails for agents 1, 2, 3")

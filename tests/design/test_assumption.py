@@ -13,7 +13,7 @@ from ntc_design.design import (
     design,
     lemma1_coefficient,
 )
-from ntc_design.design.assumption import lemma1_coefficients
+from ntc_design.design.assumption import lemma1_coefficients, violation_fixes
 from ntc_design.linalg import classify
 from ntc_design.model import (
     Topology,
@@ -47,7 +47,30 @@ def test_check_tables_are_typed_rows_every_face_renders(g1, g3):
     assert "<table" in edges.html() and "PD" in edges.text()  # the HTML and terminal faces
     *_, bad = structure_tables(structure_report(g3), "G3", most=1)
     assert bad.rows[0][1].verdict_word == "fails" and len(bad.rows) == 2
-    assert bad.notes == ("1 more (--json lists them all)",)
+    assert bad.notes[0] == "1 more (--json lists them all)"
+    # each fix once, for every agent it applies to (not only the rows shown)
+    assert len(bad.notes) == 2 and bad.notes[1].startswith("fix (agents 4, 7): give the agent")
+
+
+def test_each_violation_kind_names_its_fix():
+    # 1 -> 2 cooperative, 2 -> 3 with a semidefinite antagonistic weight, 4 listens to no
+    # one it can be reached through: every kind of violation, each with its own fix
+    top = Topology.from_edges(
+        4,
+        2,
+        [
+            (1, 2, [[5.0, 0.0], [0.0, 5.0]]),
+            (2, 3, [[-1.0, 0.0], [0.0, 0.0]]),
+            (3, 1, [[1.0, 0.0], [0.0, 1.0]]),
+            (1, 4, [[1.0, 0.0], [0.0, 1.0]]),
+        ],
+    )
+    dec = nd.assumption2(top)
+    fixes = {top.labels[v.agent]: v.fix for v in dec.violations}
+    assert not dec.holds and all(fixes.values()), fixes
+    by_fix = {f: [top.labels[i] for i in a] for f, a in violation_fixes(dec.violations).items()}
+    assert sum(len(a) for a in by_fix.values()) == len(dec.violations)  # each agent once
+    assert len(by_fix) == len(set(fixes.values()))  # each fix once
 
 
 def _reference_assumption2(top):

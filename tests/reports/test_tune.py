@@ -336,3 +336,72 @@ def test_outputs_refuse_a_folder_holding_other_files(power_analysis, scenario, t
     with pytest.raises(InputError, match=r"^--out: .*out' exists and holds other files \('mine"):
         rt.write_tune_outputs(power_result(power_analysis), scenario, out)
     assert [p.name for p in out.iterdir()] == ["mine.txt"]  # left as it was
+
+
+# -- issue 41, item 16: the strip, the caption, the conditions table -----------------------
+
+
+def _cliff(b=0.3738):
+    """G1's shape: the objective finite up to a ≈ 1.3, +∞ beyond (too stiff)."""
+    a, g = np.geomspace(0.15, 7.5, 13), np.linspace(0.51, 1.0, 8)
+    vals = np.outer(g, a) + 1.0
+    vals[:, a > 1.4] = np.inf
+    return Landscape(a, g, b, vals)
+
+
+def test_landscape_has_no_white_strip_between_contours_and_hatching(power_analysis):
+    """Rendered: every pixel column inside the axes holds a colour or a hatch line. The
+    contours stop at the last finite column and the hatching used to start half a cell
+    past the first +∞ one, leaving a white unlabelled band."""
+    fig = rt.landscape_figure(power_result(power_analysis, land=_cliff()))
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int)
+    ax = fig.axes[0]
+    box = ax.get_window_extent()
+    h = img.shape[0]
+    x0, x1 = int(box.x0) + 3, int(box.x1) - 3
+    y0, y1 = h - int(box.y1) + 3, h - int(box.y0) - 3  # image rows run downwards
+    inside = img[y0:y1, x0:x1]
+    white_columns = np.all(inside >= 250, axis=(0, 2))
+    assert not white_columns.any(), np.flatnonzero(white_columns)[:10]
+    # the hatching is one patch behind the contours, covering the whole axes
+    (hatch,) = [p for p in ax.patches if p.get_hatch() and p.get_data_transform() == ax.transAxes]
+    assert hatch.get_zorder() < 1 and hatch.get_width() == hatch.get_height() == 1.0
+
+
+@pytest.mark.parametrize(
+    "land, hatched, circle",
+    [
+        (_cliff(), True, False),
+        (_cliff(b=1.0), True, True),
+        (landscape(), False, False),
+        (landscape(b=1.0), False, True),
+    ],
+)
+def test_landscape_caption_says_what_the_legend_shows(power_analysis, land, hatched, circle):
+    res = power_result(power_analysis, land=land)
+    fig = rt.landscape_figure(res)
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    caption = rt.landscape_caption(res)
+    assert ("tuned" in legend) and "the cross marks the tuned gain" in caption
+    assert (rt.HATCH_LABEL in legend) is hatched and ("hatched" in caption) is hatched
+    assert ("baseline 1/(1 + t)" in legend) is circle and ("the circle" in caption) is circle
+    assert "blank" not in caption and "optimum" not in caption  # what the old caption said
+    assert fmt_b(land.b) in caption
+
+
+def fmt_b(b):
+    from ntc_design.rows import fmt
+
+    return f"b = {fmt(b)}"
+
+
+def test_power_report_shows_the_conditions_table_once(power_analysis, certificate, tmp_path, saves):
+    res = power_result(power_analysis, cert=certificate, land=_cliff())
+    html = rt.write_tune_report(res, tmp_path, "sc.yaml", []).read_text(encoding="utf-8")
+    condition = "∫₀^∞ c² dt &lt; ∞"
+    assert html.count(condition) == 1, html.count(condition)
+    body = html.split('id="certificate"')[1]
+    assert condition not in body and "Theorem 1" in body  # the verdicts stay there
+    # the caption on the page is the figure's own
+    assert rt.landscape_caption(res).split(";")[0] in html.replace("&#39;", "'")

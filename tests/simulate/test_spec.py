@@ -273,3 +273,32 @@ def test_scenario_with_a_schedule_gain_simulates_it(tmp_path, g1):
     b = simulate(g1, spec=spec_s.replace(gain="0.8", save=SaveAt(times=np.array([0.0, 2.0]))))
     assert np.allclose(a.exact.ms_error, b.exact.ms_error, rtol=1e-12)
     assert spec_s.options()["gain"]["tail"] == "0.8"
+
+
+def test_initial_takes_the_scenario_mapping_form(g1):
+    """``simulate(top, θ, initial={"uniform": [lo, hi], "seed": S})``, as a scenario
+    writes it, is the same x(0) as ``UniformInitial(lo, hi, S)`` (it was refused with
+    'expected a list of numbers, got dict')."""
+
+    a = simulate(g1, THETA, initial={"uniform": [-3, 3], "seed": 1}, T=0.1, method="exact")
+    b = simulate(g1, THETA, initial=UniformInitial(-3, 3, 1), T=0.1, method="exact")
+    assert np.array_equal(a.exact.ms_error, b.exact.ms_error)
+    spec = SimulationSpec.build(THETA, initial={"uniform": (-3, 3), "seed": 1})
+    assert spec.initial == UniformInitial(-3.0, 3.0, 1)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "initial, needle",
+    [
+        ({"uniform": [3, -3], "seed": 1}, "initial.uniform: need lo < hi"),
+        ({"uniform": [-3, 3]}, "UniformInitial(lo, hi, seed) in Python"),
+        ({"normal": [0, 1], "seed": 1}, "UniformInitial(lo, hi, seed) in Python"),
+        ({"uniform": [-3], "seed": 1}, "initial.uniform: expected [lo, hi]"),
+        ({"uniform": [-3, 3], "seed": -1}, "initial.seed: must be an integer >= 0"),
+    ],
+)
+def test_a_bad_initial_mapping_is_one_line_naming_it(initial, needle):
+    with pytest.raises(InputError) as err:
+        SimulationSpec.build(THETA, initial=initial)
+    assert needle in str(err.value) and "\n" not in str(err.value)

@@ -517,21 +517,42 @@ def _truth_digital(doc: dict) -> list[str]:
     return bad
 
 
+def _truth_margin(doc: dict, honest_doc: dict) -> list[str]:
+    """A stated ΔC must give the stated δ = C + ΔC. C depends on the topology only: the
+    honest certificate's δ − ΔC for the same mode and topology (a mode whose topology was
+    edited is compared by its own claims, not here)."""
+    bad: list[str] = []
+    honest = honest_doc.get("subject", {}).get("modes", {})
+    for k, m in (doc.get("subject", {}).get("modes") or {}).items():
+        h = honest.get(k)
+        if not isinstance(m, dict) or not isinstance(h, dict) or m.get("margin") is None:
+            continue
+        if h.get("margin") is None or m.get("topology") != h.get("topology"):
+            continue
+        c = h["delta"] - h["margin"]
+        if not _close(m["delta"], c + m["margin"], 1e-9, 1e-12):
+            bad.append(f"{k}: δ ≠ C + ΔC")
+    return bad
+
+
 def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
     """What is false in ``doc`` (empty: every claim and reported number is true)."""
+    if kind == "time_varying":  # ΔC is what δ(t) is derived from: nothing to tie
+        if doc.get("certifies") != honest_doc["certifies"]:
+            return ["certifies"]
+        return _truth_time_varying(doc)
+    margin = _truth_margin(doc, honest_doc)
     if kind.startswith("robust"):
-        return _truth_robust(doc)
+        return margin + _truth_robust(doc)
     if kind.startswith("digital"):
-        return _truth_digital(doc)
+        return margin + _truth_digital(doc)
     if doc.get("certifies") != honest_doc["certifies"] and kind not in ("hurwitz", "switching"):
         return ["certifies"]
     if kind in ("hurwitz", "switching"):
-        return _truth_dense(doc)
+        return margin + _truth_dense(doc)
     if kind.startswith("hurwitz-scale"):
-        return _truth_hurwitz_scale(doc, honest_doc)
-    if kind == "switching-scale":
-        return _truth_switching_scale(doc)
-    return _truth_time_varying(doc)
+        return margin + _truth_hurwitz_scale(doc, honest_doc)
+    return margin + _truth_switching_scale(doc)
 
 
 # ------------------------------------------------------------------ the mutations

@@ -387,8 +387,8 @@ def test_no_informed_agent_messages_agree(tmp_path, capsys, monkeypatch):
         "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
         "  - {from: 2, to: 3, weight: 1}\n"
     )
-    code, out, _ = run_cli(["design", p, "--theta", "1"], capsys, monkeypatch)
-    assert code == 0
+    code, out, err = run_cli(["design", p, "--theta", "1"], capsys, monkeypatch)
+    assert code == 1 and "not designed" in err  # nothing can be designed (issue 41, item 10)
     assert "the rate grows with δ" not in out
     assert "does not depend on δ" in out and "antagonistic edge" in out
     code, out, _ = run_cli(["certify", p, "--theta", "1", "--gain", "1/(1+t)"], capsys, monkeypatch)

@@ -128,7 +128,7 @@ def test_switching_set_tuned_with_delta_is_certified(examples):
         (["--horizon", "1", "--eps", "-1"], "eps"),
         (["--horizon", "1", "--method", "fast"], "method"),
         (["--horizon", "1", "--family", "exp"], "--family"),
-        (["--horizon", "1", "--evaluations", "3"], "max_evaluations"),
+        (["--horizon", "1", "--evaluations", "3"], "--evaluations:"),
     ],
 )
 def test_cli_bad_options_give_one_line(extra, needle, examples, capsys, monkeypatch):

@@ -494,11 +494,16 @@ class RobustKind(CertificateKind):
         (mode,) = subject.scheduled
         return _claims(properties, mode, _Stated(st.radius, st.margin, st.alpha))
 
+    def verification_method(self, reading: Reading) -> str:
+        # the proofs that ran (each prover records its method), not all the kind may use
+        return " + ".join(sorted(reading.state.dense.methods - {"not attempted"}) or ["none"])
+
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
         st: _State = reading.state
         src = st.dense.source
         if claim.kind is ClaimKind.PD:
             proof = PROVERS[ClaimKind.PD](claim, st.dense)
+            st.dense.methods.add(proof.method)
             return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail}", claim)
         if claim.kind is ClaimKind.ROBUST_LMI:
             return _prove_lmi(claim, st)
@@ -522,6 +527,7 @@ class RobustKind(CertificateKind):
         u = _input_exact(mode)
         r0 = u - mode.exact @ Dyadic.of(target.reshape(n, 1))
         proof = _pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radii))
+        st.dense.methods.add(proof.method)
         at = _set_text(st)
         return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail} ({at})", claim)
 
@@ -675,11 +681,13 @@ def _prove_lmi(claim: Claim, st: _State) -> Check:
         assert mode.exact is not None  # checked above
         proof = _pd(psi_exact(mode.exact, _exact_channels(mode.top), p, tau, claim.alpha, rad))
         ok, how = proof.holds, f"{proof.method}: {proof.detail}"
+        st.dense.methods.add(proof.method)
     elif mode.top.nd > RICCATI_MAX_ND:  # certificates are issued up to this size
         ok, how = False, f"Nd = {mode.top.nd} is past {RICCATI_MAX_ND}"
     else:
         search = RiccatiSearch(mode.lap, mode.err, ed, mode.top.dim)
         ok = search.proven(p, tau, claim.alpha, np.asarray(rad, dtype=float))  # P symmetric too
+        st.dense.methods.add("verified-float")
         how = "verified-float: P ≻ 0, τ > 0 and P S + SᵀP − Q(τ) − P R(τ) P ≻ 0 " + (
             "hold" if ok else "not proven"
         )
@@ -705,6 +713,7 @@ def _prove_offset_float(claim: Claim, st: _State) -> Check:
         mode.top.dim,
     )  # fmt: skip
     ok = search.proven(st.gamma, lam, np.asarray(st.radii, dtype=float))
+    st.dense.methods.add("verified-float")
     how = "verified-float: G_e G_eᵀ ≻ W_e and Γ(γ, λ) ≻ 0 with Y rebuilt " + (
         "hold" if ok else "not proven"
     )

@@ -261,18 +261,25 @@ class TimeVaryingKind(CertificateKind):
             return checks
         lows = np.array([q.lower for q in st.leaves])
         recorded = np.array([float(q[2]) for q in ivs])
+        lam2, worst = st.number("lambda2"), float(lows.min())
+        # a recorded bound is a lower bound (at or below its re-enclosure, so a tighter
+        # later enclosure keeps it true) and at least the claimed Λ₂, the least of them: a
+        # bound negated, or below Λ₂, states what the certificate does not
         over = recorded > lows + ENCLOSURE_RTOL * np.abs(lows)
+        under = recorded < lam2
+        bad = over | under
+        k = int(np.argmax(bad))
         checks.append(
             Check(
-                "each interval's recorded bound is its re-enclosed one",
-                not over.any(),
+                "each interval's recorded bound lies between the claimed Λ₂ and its "
+                "re-enclosed one",
+                not bad.any(),
                 "recomputed"
-                if not over.any()
-                else f"interval {int(np.argmax(over))}: recorded {recorded[over][0]:.6g}, "
-                f"re-enclosed {lows[over][0]:.6g}",
+                if not bad.any()
+                else f"interval {k}: recorded {recorded[k]:.6g}, re-enclosed {lows[k]:.6g}, "
+                f"claimed Λ₂ = {lam2:.6g}",
             )
         )
-        lam2, worst = st.number("lambda2"), float(lows.min())
         checks.append(
             Check(
                 claim.id,

@@ -211,3 +211,12 @@ def test_exact_psi_and_gamma_leave_out_the_edges_of_radius_zero(g1_robust):
     y2 = y.copy()
     y2[:, [c for c in range(k) if c not in kept]] = 7.0  # what the left-out columns hold
     assert np.array_equal(gamma_exact(lap, ch, target, r0, 2.0, lam, y2, rad).num, g.num)
+
+
+def test_the_verification_names_the_proof_it_used(honest_certificates):
+    """Not the kind's 'exact-rational, or verified-float past the LMI size': the method
+    of the proofs that ran (Nd = 8 here: every claim exactly)."""
+    doc = copy.deepcopy(honest_certificates["robust"])
+    ver = verify(doc)
+    assert ver.valid and ver.method == "exact-rational"
+    assert all(c.detail.startswith("exact-rational") for c in ver.checks if c.claim is not None)

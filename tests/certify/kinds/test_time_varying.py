@@ -43,10 +43,11 @@ def test_cli_certify_json_and_verify(tmp_path, capsys, monkeypatch):
     forged["digest"] = digest(forged)
     ver = verify(forged)
     assert not ver.valid and [c.name for c in ver.failed] == [
+        "each interval's recorded bound lies between the claimed Λ₂ and its re-enclosed one",
         "λ_min(L_B(t) + L_B(t)ᵀ) >= Λ₂ on every interval",
         "reported results (each number recomputed, bounded or informational)",
     ]
-    assert "lambda2: reported" in ver.failed[1].detail
+    assert "lambda2: reported" in ver.failed[2].detail
     # an interval dropped: the cover fails
     gap = copy.deepcopy(cert)
     del gap["intervals"][len(gap["intervals"]) // 2]
@@ -146,3 +147,33 @@ def test_a_bound_forged_in_the_unsound_direction_is_rejected(small_tv_cert, key,
     assert not ver.valid
     audit = [c for c in ver.failed if c.name.startswith("reported results")]
     assert audit and needle in audit[0].detail, [(c.name, c.detail) for c in ver.failed]
+
+
+def _interval_bound(cert, k: int, value) -> dict:
+    doc = copy.deepcopy(cert)
+    doc["intervals"][k][2] = value(doc["intervals"][k][2], doc["results"]["time_varying"])
+    doc["digest"] = digest(doc)
+    return doc
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "value",
+    [
+        lambda b, r: -b,  # negated: a lower bound still, but it states Λ₂ < 0 there
+        lambda b, r: 0.5 * r["lambda2"],  # positive, below the claimed Λ₂
+        lambda b, r: -1e300,
+    ],
+    ids=["negated", "below-lambda2", "huge-negative"],
+)
+def test_an_interval_bound_below_the_claimed_lambda2_is_rejected(small_tv_cert, value):
+    doc = _interval_bound(small_tv_cert, 1, value)
+    ver = verify(doc)
+    assert not ver.valid
+    (failed,) = [c for c in ver.failed if c.name.startswith("each interval's recorded bound")]
+    assert failed.detail.startswith("interval 1: recorded")
+
+
+def test_an_interval_bound_between_lambda2_and_its_enclosure_verifies(small_tv_cert):
+    doc = _interval_bound(small_tv_cert, 1, lambda b, r: r["lambda2"])  # looser, still ≥ Λ₂
+    assert verify(doc).valid
