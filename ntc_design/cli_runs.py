@@ -24,7 +24,7 @@ from .cli_base import (
     digital_option,
     json_text,
 )
-from .errors import AssumptionWarning, InputError, one_line
+from .errors import AssumptionWarning, InputError, one_line, require_horizon
 
 OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
 
@@ -99,6 +99,8 @@ def simulate(
         "device": device,
     }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
+    if horizon is not None:
+        require_horizon("--horizon", horizon)
     sc = parse_scenario(scenario)
     if period is not None or delay is not None:
         overrides["digital"] = digital_option(
@@ -279,6 +281,7 @@ def tune(
     from .simulate.scenario import load_scenario
     from .tune import tune as run
 
+    require_horizon("--horizon", horizon)
     sc0 = parse_scenario(scenario)
     if period == "auto":
         _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json)
@@ -522,6 +525,7 @@ def reproduce(
     from .simulate.spec import check_workers
 
     check_workers(workers, "--workers")
+    require_horizon("--horizon", t_end)
     check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
     with Progress("ntc reproduce") as prog:
         path, ok, wall = reproduce_paper(

@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from ..design import design_topology
-from ..errors import InputError, format_seconds, require_positive
+from ..errors import InputError, format_seconds, require_horizon, require_positive
 from ..gain import analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..simulate import SimulationSpec
@@ -175,7 +175,7 @@ def tune_power(
         A bad horizon, requirement, ε, method or δ range; a scenario the objective
         refuses.
     """
-    require_positive("horizon", horizon)
+    require_horizon("horizon", horizon)
     gamma_range(require)
     if eps is not None:
         require_positive("eps", eps)
