@@ -399,7 +399,7 @@ def robust(
     when the certificate verifies, 1 when not."""
     from .certify import verify, write_certificate
     from .certify.kinds.robust import robust_certificate
-    from .certify.robust import check_radius
+    from .certify.robust import check_radius, check_robust_work
     from .certify.robust import robust as run
     from .certify.robust_are import RICCATI_MAX_ND
     from .design import ProtocolDesign, design
@@ -425,9 +425,12 @@ def robust(
         )
     doc, ver = None, None
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # solver chatter; the verification decides
+        warnings.simplefilter("ignore")  # the certificate says whether Assumption 2 holds
         des = design(top, th, margin, thresholds=False)
-        assert isinstance(des, ProtocolDesign)  # a fixed topology's design
+    assert isinstance(des, ProtocolDesign)  # a fixed topology's design
+    check_robust_work(des)  # the estimate, before the work (a warning line past a minute)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # solver chatter; the verification decides
         rep = run(des, rho)
         if dense and rep.proofs.get("margin") is not None:
             doc = robust_certificate(rep)

@@ -24,7 +24,7 @@ from .cli_base import (
     digital_option,
     json_text,
 )
-from .errors import AssumptionWarning, InputError, blame, one_line
+from .errors import AssumptionWarning, InputError, blame, one_line, require_horizon
 
 OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
 
@@ -143,6 +143,8 @@ def simulate(
         "device": device,
     }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
+    if horizon is not None:
+        require_horizon("--horizon", horizon)
     sc = parse_scenario(scenario)
     if period is not None or delay is not None:
         overrides["digital"] = digital_option(
@@ -342,6 +344,8 @@ def tune(
     from .tune import tune as run
 
     schedule = _schedule_option(schedule, family)
+    if horizon is not None:
+        require_horizon("--horizon", horizon)
     sc0 = parse_scenario(scenario)
     # the flags given (an error about one names it); the deadline defaults to the file's T
     given = {"horizon": horizon, "eps": eps, "max_gain": max_gain, "check_paths": check_paths}
@@ -617,6 +621,7 @@ def reproduce(
         raise InputError(f"--stepping: must be uniform or intrinsic, got {stepping!r}")
     require_int("--seed", seed, minimum=0, maximum=MAX_SEED)
     check_workers(workers, "--workers")
+    require_horizon("--horizon", t_end)
     check_output_folder(out_dir, replaceable=None)  # before a long run, not after it
     with Progress("ntc reproduce") as prog:
         try:

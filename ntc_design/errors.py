@@ -58,8 +58,40 @@ def one_line(text: str) -> str:
 
 
 def _show(value) -> str:
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        digits = len(str(abs(int(value))))
+        if digits > 40:  # a 400-digit integer: its size, not its digits
+            return f"an integer of {digits} digits"
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def real_float(name: str, value) -> float:
+    """A real number as a float, an integer beyond the float range refused (``float`` of
+    a 400-digit integer raises OverflowError; a document may hold one).
+
+    Parameters
+    ----------
+    name : str
+        The field named in the message.
+    value : numbers.Real
+        The number (not a bool; the caller checks the type).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        An integer too large for a float (magnitude above about 1.8e308).
+    """
+    try:
+        return float(value)
+    except OverflowError:
+        raise InputError(
+            f"{name}: {_show(value)} is beyond the float range (about 1.8e308)"
+        ) from None
 
 
 def require_theta(theta, dim: int):
@@ -120,7 +152,7 @@ def require_positive(name: str, value, integer: bool = False) -> None:
     bad = (
         isinstance(value, bool)
         or not isinstance(value, numbers.Real)
-        or not math.isfinite(value)
+        or not math.isfinite(real_float(name, value))
         or value <= 0
     )
     if bad:
@@ -189,7 +221,7 @@ def require_number(
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputError(f"{name}: expected a number, got {_show(value)}")
-    v = float(value)
+    v = real_float(name, value)
     if not math.isfinite(v):
         raise InputError(f"{name}: must be finite, got {_show(value)}")
     if minimum is not None and v < minimum:
@@ -308,6 +340,42 @@ def format_seconds(s: float) -> str:
     return f"{s / 86400:.1f} days"
 
 
+#: The shortest horizon T accepted: the time grids compare instants to 1e-14 (relative
+#: above 1) and sample c(t) from 1e-6 on, so a T below this leaves no step to take (and a
+#: subnormal T halves to 0).
+MIN_HORIZON = 1e-9
+
+
+def require_horizon(name: str, value) -> float:
+    """A horizon T: a finite number of at least :data:`MIN_HORIZON`.
+
+    Parameters
+    ----------
+    name : str
+        The field or flag named in the message (``T``, ``--horizon``).
+    value : object
+        The value given.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Not a finite number, or below :data:`MIN_HORIZON`.
+    """
+    require_number(name, value)  # a non-finite one said as such first
+    require_positive(name, value)
+    t = real_float(name, value)
+    if t < MIN_HORIZON:
+        raise InputError(
+            f"{name}: {_show(value)} is shorter than the shortest horizon {MIN_HORIZON:g} (the "
+            "time grids resolve instants to about 1e-14)"
+        )
+    return t
+
+
 #: The largest seed accepted (numpy's SeedSequence takes any non-negative int).
 MAX_SEED = 2**128
 
@@ -336,7 +404,7 @@ def require_radius(value, name: str = "--radius", below_one: bool = True) -> flo
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputError(f"{name}: expected a number, got {_show(value)}")
-    r = float(value)
+    r = real_float(name, value)
     if not (math.isfinite(r) and r >= 0 and (r < 1 or not below_one)):
         limit = " and below 1 (at 1 a weight may vanish)" if below_one else ""
         raise InputError(
@@ -347,6 +415,7 @@ def require_radius(value, name: str = "--radius", below_one: bool = True) -> flo
 
 __all__ = [
     "MAX_SEED",
+    "MIN_HORIZON",
     "AssumptionWarning",
     "blame",
     "require_theta",
@@ -357,6 +426,8 @@ __all__ = [
     "note_interrupt",
     "one_line",
     "quote",
+    "real_float",
+    "require_horizon",
     "require_int",
     "require_number",
     "require_positive",

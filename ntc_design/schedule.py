@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, real_float
 from .exprtree import numeric_function
 from .rows import VERDICT_TEXT
 
@@ -95,6 +95,11 @@ class ScheduleGain:
             c = np.array(self.c, dtype=float).reshape(-1)
         except (TypeError, ValueError):
             raise InputError(f"{f}.schedule: expected lists of numbers t and c") from None
+        except OverflowError:  # an integer beyond the float range, from a document
+            for name, values in (("t", self.t), ("c", self.c)):
+                for k, v in enumerate(values):
+                    real_float(f"{f}.schedule: {name}[{k}]", v)
+            raise  # pragma: no cover - one of them overflowed
         if t.size != c.size:
             raise InputError(f"{f}.schedule: {t.size} times but {c.size} values")
         if not 2 <= t.size <= MAX_POINTS:

@@ -181,7 +181,11 @@ G1_FIXED = EXAMPLES / "scenarios" / "g1_fixed.yaml"
         ("tune", ["--schedule", "best"], "--schedule: expected power or optimal"),
         ("tune", ["--max-gain", "5"], "--max-gain: applies to --schedule optimal"),
         ("tune", ["--check-paths", "5"], "--check-paths: applies to --schedule optimal"),
-        ("tune", ["--schedule", "optimal", "--max-gain", "-1"], "--max-gain: must be a positive"),
+        (
+            "tune",
+            ["--schedule", "optimal", "--max-gain", "-1"],
+            "--max-gain: expected a number in (1e-06",
+        ),
         ("tune", ["--schedule", "optimal", "--check-paths", "-1"], "--check-paths: expected"),
         ("tune", ["--period", "0.1", "--delay", "-1"], "--delay: must be an integer >= 0"),
         ("tune", ["--period", "auto", "--horizon", "-2"], "--horizon: must be a positive"),
@@ -234,6 +238,20 @@ def test_tune_defaults_its_deadline_to_the_scenario_t(tmp_path, capsys, monkeypa
     assert_input_error(args, capsys, monkeypatch, "sc.yaml: T: must be a positive number")
 
 
+# -- issue 41, item 7: what escaped as an internal error ------------------------------------
+
+
+def _settled_scenario(tmp_path):
+    """G1 with x(0) = 1⊗θ and no noise: the error is 0 at every t for every gain."""
+    sc = tmp_path / "settled.yaml"
+    sc.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nnoise: {{sigma: 0, f: 0}}\n"
+        f"initial: {[1, 2, -1] * 7}\nT: 2\ndt: 0.01\npaths: 10\n",
+        encoding="utf-8",
+    )
+    return sc
+
+
 @pytest.mark.hostile
 @pytest.mark.parametrize(
     "extra, line",
@@ -262,3 +280,50 @@ def test_usage_lines_name_arguments_as_click_does(capsys, monkeypatch, command, 
     assert code == 0 and usage in out and "{" not in out.split("\n\n")[0], out[:200]
     code, _, err = run_cli([command], capsys, monkeypatch)
     assert code == 2 and "Missing argument '" + usage.split()[-1] + "'" in err
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "command, needles",
+    [
+        (["tune", "fixed", "--horizon", "5e-324"], ["--horizon", "shortest horizon 1e-09"]),
+        (["tune", "deadline", "--horizon", "1e-300", "--schedule", "optimal"], ["--horizon"]),
+        (["tune", "tv", "--horizon", "1e-12"], ["--horizon", "shortest horizon"]),
+        (["simulate", "tv", "--horizon", "5e-324"], ["--horizon", "shortest horizon"]),
+        (
+            ["tune", "deadline", "--horizon", "2", "--schedule", "optimal", "--max-gain", "1e-7"],
+            ["--max-gain", "(1e-06, 1e+06]", "got 1e-07"],
+        ),
+        (
+            ["tune", "settled", "--horizon", "2", "--schedule", "optimal", "--max-peak", "0.5"],
+            ["initial: x(0) = 1⊗θ and noise.sigma = 0", "nothing to tune"],
+        ),
+        (
+            ["tune", "settled", "--horizon", "2", "--schedule", "optimal"],
+            ["nothing to tune"],
+        ),
+    ],
+)
+def test_what_was_an_internal_error_is_one_line_naming_the_flag(
+    command, needles, tmp_path, capsys, monkeypatch
+):
+    files = {
+        "fixed": EXAMPLES / "scenarios" / "g1_fixed.yaml",
+        "deadline": EXAMPLES / "scenarios" / "g1_deadline.yaml",
+        "tv": EXAMPLES / "scenarios" / "g1_tv.yaml",
+    }
+    name = command[1]
+    sc = _settled_scenario(tmp_path) if name == "settled" else files[name]
+    out = tmp_path / "o"
+    args = [command[0], sc, *command[2:], "--out", out]
+    line = assert_input_error(args, capsys, monkeypatch, *needles)
+    assert "internal error" not in line
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+def test_reproduce_refuses_a_subnormal_horizon_before_any_run(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "p"
+    args = ["reproduce", "paper", "--out", out, "--horizon", "5e-324"]
+    assert_input_error(args, capsys, monkeypatch, "--horizon", "shortest horizon")
+    assert not out.exists()

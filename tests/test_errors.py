@@ -5,7 +5,17 @@ import warnings
 import pytest
 
 import ntc_design as nd
-from ntc_design.errors import InputError, one_line, quote
+from ntc_design.errors import (
+    MIN_HORIZON,
+    InputError,
+    one_line,
+    quote,
+    real_float,
+    require_horizon,
+    require_number,
+    require_positive,
+    require_radius,
+)
 from ntc_design.simulate import simulate
 from tests.cli_helpers import assert_input_error
 from tests.conftest import EXAMPLES, ROOT
@@ -67,3 +77,34 @@ def test_blame_names_the_flag_or_the_file(message, flags, fields, values, want):
     assert isinstance(got, InputError) and str(got) == want
     assert str(blame(InputError("dt: x"), None, {"dt": "--dt"})) == "--dt: x"
     assert str(blame(InputError("seed: x"), None, {"dt": "--dt"})) == "seed: x"
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "check",
+    [
+        real_float,
+        require_number,
+        require_positive,
+        require_horizon,
+        lambda n, v: require_radius(v, n),
+    ],
+)
+@pytest.mark.parametrize("value", [10**400, -(10**400)], ids=["big", "-big"])
+def test_an_integer_beyond_the_float_range_is_named_not_an_overflow(check, value):
+    # float(10**400) raises OverflowError: it used to escape as an internal error
+    with pytest.raises(InputError, match=r"^field: .*(401 digits|positive)") as info:
+        check("field", value)
+    assert "9999" not in str(info.value) and "0000000000" not in str(info.value)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("value", [5e-324, 1e-300, MIN_HORIZON / 2, 0.0, -1.0, float("inf")])
+def test_a_horizon_below_the_time_grids_resolution_is_refused(value):
+    with pytest.raises(InputError, match=r"^--horizon: "):
+        require_horizon("--horizon", value)
+
+
+def test_the_shortest_horizon_is_accepted():
+    assert require_horizon("T", MIN_HORIZON) == MIN_HORIZON
+    assert require_horizon("T", 3) == 3.0 and isinstance(require_horizon("T", 3), float)

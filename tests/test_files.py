@@ -53,6 +53,9 @@ def test_labels_from_list_and_json_file(tmp_path):
         ("text.yaml", "dim: 1\nagents: [1, 2]\nuncertainty: lots\nedges:\n  - {from: 2, to: 1, weight: [[1]]}\n", "uncertainty: expected a number"),
         ("neg.csv", "from,to,a11,uncertainty\n2,1,-1,-0.1\n", "row 2: uncertainty"),
         ("nan.csv", "from,to,a11,uncertainty\n2,1,-1,nan\n", "row 2: uncertainty"),
+        # a 400-digit integer: float() of it raised OverflowError, an internal error
+        ("huge.yaml", "dim: 1\nagents: [1, 2]\nuncertainty: " + "9" * 400 + "\nedges:\n  - {from: 2, to: 1, weight: [[1]]}\n", "uncertainty: an integer of 400 digits is beyond the float range"),
+        ("huge_edge.yaml", "dim: 1\nagents: [1, 2]\nedges:\n  - {from: 2, to: 1, weight: [[1]], uncertainty: -" + "9" * 400 + "}\n", "edge 2->1: uncertainty: an integer of 400 digits"),
     ],
 )  # fmt: skip
 def test_a_bad_uncertainty_is_one_line_exit_2(tmp_path, name, content, needle, capsys, monkeypatch):

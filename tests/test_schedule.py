@@ -38,7 +38,11 @@ def test_schedule_values_between_and_after_the_table():
         ([0, 1], [1.0, 1.0], "cubic", "1/(1+t)", "interpolation"),
         ([0, 1], [1.0, 1.0], "linear", "__import__('os')", "tail"),
         ([0], [1.0], "linear", "1/(1+t)", "2 to"),
+        # a 400-digit integer from a document: OverflowError before
+        ([0, 10**400], [1.0, 1.0], "linear", "1/(1+t)", "t[1]: an integer of 401 digits"),
+        ([0, 1], [1.0, -(10**400)], "linear", "1/(1+t)", "c[1]: an integer of 401 digits"),
     ],
+    ids=str,
 )
 def test_a_malformed_schedule_is_refused_naming_the_field(t, c, interp, tail, needle):
     with pytest.raises(InputError, match=None) as err:

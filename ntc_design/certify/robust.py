@@ -63,7 +63,7 @@ from typing import Any
 import numpy as np
 
 from ..design import ProtocolDesign
-from ..errors import InputError, require_radius
+from ..errors import InputError, format_seconds, require_radius, warn_user
 from ..linalg import require_dense
 from ..model import Topology
 from ..rows import Table, fmt
@@ -73,6 +73,21 @@ from .robust_search import abscissa, climb, offset_of
 #: Robust LMIs are solved up to this Nd (dense P; the S-procedure adds Σ rank(W_e) rows).
 ROBUST_MAX_ND = 40  # dense LMIs up to here (one solve took 2.4 s at Nd = 36, 92 s at 75)
 DEFAULT_RADIUS = 0.05
+#: The work model of :func:`robust_seconds`, measured on a loaded 2-core machine: a
+#: decay LMI with m unknowns (P and the τ_e) about DECAY_SECONDS·m² (8.1 s at Nd = 39,
+#: m = 794), the offset SDP (Y and the λ_e) OFFSET_SECONDS·m² (49 s at m = 3198), the
+#: Riccati brackets RICCATI_SECONDS·(Nd)³ (19 s at Nd = 120, 68 s at 198), the sparse
+#: ones SPARSE_SECONDS per weight entry (N + E)·d² (62 s at N = 10⁵, d = 3), each plus
+#: BASE_SECONDS (the realisation searches, the certificate's check).
+DECAY_SECONDS = 1.3e-5
+OFFSET_SECONDS = 5.5e-6
+RICCATI_SECONDS = 1.2e-5
+SPARSE_SECONDS = 3.5e-5
+BASE_SECONDS = 5.0
+#: A robust run estimated longer than LONG_SECONDS says how long before it starts; one
+#: longer than MAX_SECONDS is refused.
+LONG_SECONDS = 60.0
+MAX_SECONDS = 3600.0
 
 
 # -- the uncertain edges ---------------------------------------------------------------
@@ -319,7 +334,17 @@ def uncertain_edges(top: Topology) -> UncertainEdges:
     keep = np.flatnonzero(ea.sign != 0)
     keep = keep[np.lexsort((ea.cols[keep], ea.rows[keep]))]  # canonical: by (to, from)
     w = ea.abs_w[keep]
-    bounds = [channel_bound(x) for x in w]
+    # a strictly diagonally dominant W whose Gershgorin margin clears the channel floor is
+    # nonsingular (Lévy–Desplanques) with every LDLᵀ pivot ≥ λ_min ≥ the margin: W̄ = W and
+    # every column a pivot, with no rational elimination (the usual weight, diagonal or
+    # dominant; 1e−10 covers the rounding of the d − 1 off-diagonal sums)
+    dg = np.abs(np.diagonal(w, axis1=1, axis2=2))
+    off = np.abs(w).sum(axis=2) - dg
+    scale = np.abs(w).max(axis=(1, 2)) if w.size else np.zeros(0)
+    margin = (dg - off * (1 + 1e-10)).min(axis=1) if w.size else np.zeros(0)
+    dominant = margin > 2 * CHANNEL_FLOOR * scale
+    every = tuple(range(top.dim))
+    bounds = [(x, every) if ok else channel_bound(x) for x, ok in zip(w, dominant, strict=True)]
     return UncertainEdges(
         ea.rows[keep].astype(np.int64),
         ea.cols[keep].astype(np.int64),
@@ -658,6 +683,83 @@ def _proven_by(method: str) -> str:
     return "LMI"
 
 
+def robust_seconds(
+    design: ProtocolDesign, bisection_steps: int = 3, margin: bool = True
+) -> tuple[float, str]:
+    """The estimated time of :func:`robust` before it starts (the model of
+    :data:`DECAY_SECONDS` and its peers; within a factor of a few): what is solved, by
+    size.
+
+    Parameters
+    ----------
+    design : ProtocolDesign
+        The nominal design.
+    bisection_steps : int, optional
+        As for :func:`robust`.
+    margin : bool, optional
+        Whether the margin bracket is computed too.
+
+    Returns
+    -------
+    (float, str)
+        Seconds, and what they are spent on.
+    """
+    top = design.topology
+    nd_ = top.nd
+    if nd_ > ROBUST_MAX_ND:
+        from .robust_are import RICCATI_MAX_ND
+
+        entries = (top.n + int(top.edge_arrays.rows.size)) * top.dim**2
+        sparse = SPARSE_SECONDS * entries
+        if nd_ > RICCATI_MAX_ND:
+            return BASE_SECONDS + sparse, f"sparse bounds over {entries:.3g} weight entries"
+        return (
+            BASE_SECONDS + sparse + RICCATI_SECONDS * nd_**3,
+            f"Riccati searches on N·d = {nd_}",
+        )
+    ed = uncertain_edges(top)
+    rank = sum(len(p) for p in ed.pivots)
+    m_decay = nd_ * (nd_ + 1) // 2 + ed.m
+    m_offset = nd_ * (nd_ + rank + 1) + ed.m + 1
+    solves = (1 + bisection_steps) * (2 if margin else 1)  # the first fraction, bisection
+    seconds = BASE_SECONDS + solves * DECAY_SECONDS * m_decay**2 + OFFSET_SECONDS * m_offset**2
+    return seconds, (
+        f"about {solves} decay LMIs of {m_decay} unknowns and an offset SDP of {m_offset}, "
+        f"dense, on N·d = {nd_}"
+    )
+
+
+def check_robust_work(
+    design: ProtocolDesign, bisection_steps: int = 3, margin: bool = True
+) -> None:
+    """Refuse a robust run estimated above :data:`MAX_SECONDS` (one line naming the size);
+    warn with the estimate above :data:`LONG_SECONDS`.
+
+    Parameters
+    ----------
+    design : ProtocolDesign
+        The nominal design.
+    bisection_steps : int, optional
+        As for :func:`robust`.
+    margin : bool, optional
+        Whether the margin bracket is computed too.
+
+    Raises
+    ------
+    InputError
+        The estimate exceeds :data:`MAX_SECONDS`.
+    """
+    seconds, what = robust_seconds(design, bisection_steps, margin)
+    line = f"robust: roughly {format_seconds(seconds)} ({what})"
+    if not seconds <= MAX_SECONDS:
+        raise InputError(
+            f"{line}, more than the limit of {format_seconds(MAX_SECONDS)}; the network is "
+            "too large for the robust brackets"
+        )
+    if seconds > LONG_SECONDS:
+        warn_user(f"{line}; Ctrl-C stops cleanly", UserWarning)
+
+
 def robust(
     design: ProtocolDesign,
     radius: float = DEFAULT_RADIUS,
@@ -702,7 +804,8 @@ def robust(
     Raises
     ------
     InputError
-        A bad radius, or a nominal −L_B that is not Hurwitz.
+        A bad radius, a nominal −L_B that is not Hurwitz, or work estimated above
+        :data:`MAX_SECONDS` (:func:`check_robust_work`).
 
     Examples
     --------
@@ -714,6 +817,7 @@ def robust(
     """
     t0 = time.perf_counter()
     rho = check_radius(radius)
+    check_robust_work(design, bisection_steps, margin)
     if design.topology.nd > ROBUST_MAX_ND:  # sparse bounds, tightened by Riccati if dense
         from .robust_are import RICCATI_MAX_ND
         from .robust_scale import robust_scale
@@ -909,11 +1013,13 @@ __all__ = [
     "channel_bound",
     "whitening_basis",
     "check_radius",
+    "check_robust_work",
     "radius_phrase",
     "radius_text",
     "pivot_columns",
     "realised_topology",
     "robust",
+    "robust_seconds",
     "robust_sweep",
     "uncertain_edges",
 ]

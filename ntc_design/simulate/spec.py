@@ -35,7 +35,16 @@ from typing import Any
 import numpy as np
 
 from ..design.digital import Digital
-from ..errors import MAX_SEED, InputError, quote, require_int, require_number, require_positive
+from ..errors import (
+    MAX_SEED,
+    InputError,
+    quote,
+    real_float,
+    require_horizon,
+    require_int,
+    require_number,
+    require_positive,
+)
 from ..exprtree import numeric_function
 from ..schedule import ScheduleGain, read_schedule, schedule_from_document
 from .noise import MAX_MAGNITUDE, NoiseModel, noise_from_document
@@ -88,7 +97,12 @@ def _check_vector(
             if isinstance(v, bool) or not isinstance(v, numbers.Real):
                 what = "a nested list" if isinstance(v, (list, tuple)) else repr(v)[:40]
                 raise InputError(f"{name}[{k}]: expected a number, got {what}")
-        arr = np.asarray(values, dtype=float).reshape(-1)
+        try:
+            arr = np.asarray(values, dtype=float).reshape(-1)
+        except OverflowError:  # an integer beyond the float range: name its entry
+            for k, v in enumerate(values):
+                real_float(f"{name}[{k}]", v)
+            raise  # pragma: no cover - one of them overflowed
     if arr.size > max_size:
         raise InputError(f"{name}: {arr.size} entries, more than the limit {max_size}")
     bad = ~np.isfinite(arr)
@@ -254,6 +268,13 @@ class Stepping:
         return float(self.h_max if self.h_max is not None else max(1.0, 100 * self.dt))
 
 
+#: The most paths (and paths per block, paths stored) a scenario may ask for: each path
+#: takes a step at least, and the budget refuses more than 1e13 path-steps
+#: (:data:`.budget.MAX_PATH_STEPS`); an integer beyond it (a 400-digit one, say) is no
+#: float for the estimates either.
+MAX_PATHS = 10**13
+
+
 @dataclass(frozen=True)
 class MonteCarlo:
     """Monte Carlo options: the number of sample ``paths``, the ``seed`` of the run's
@@ -271,10 +292,10 @@ class MonteCarlo:
     device: str = "cpu"  # or "gpu": the same paths on an NVIDIA GPU (.gpu)
 
     def __post_init__(self) -> None:
-        require_int("paths", self.paths, minimum=1)
+        require_int("paths", self.paths, minimum=1, maximum=MAX_PATHS)
         require_int("seed", self.seed, minimum=0, maximum=MAX_SEED)
-        require_int("block_size", self.block_size, minimum=1)
-        require_int("store_paths", self.store_paths, minimum=0)
+        require_int("block_size", self.block_size, minimum=1, maximum=MAX_PATHS)
+        require_int("store_paths", self.store_paths, minimum=0, maximum=MAX_PATHS)
         check_workers(self.workers)
         if self.rng not in ("xoshiro", "numpy"):
             raise InputError(f"rng: expected xoshiro or numpy, got {self.rng!r}")
@@ -359,6 +380,10 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
                 arr = np.asarray(f, dtype=float)
             except (TypeError, ValueError):
                 raise InputError("noise.f: expected a number or a d×d matrix") from None
+            except OverflowError:
+                raise InputError(
+                    "noise.f: an entry is beyond the float range (about 1.8e308)"
+                ) from None
             if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.size == 0:
                 raise InputError(
                     f"noise.f: expected a number or a square matrix, got shape {arr.shape}"
@@ -489,8 +514,7 @@ class SimulationSpec:
         if not np.any(th):
             raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
         object.__setattr__(self, "theta", th)
-        require_positive("T", self.T)
-        object.__setattr__(self, "T", float(self.T))
+        object.__setattr__(self, "T", require_horizon("T", self.T))
         require_positive("margin", self.margin)
         if self.delta is not None:
             require_positive("delta", self.delta)

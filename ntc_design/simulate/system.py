@@ -17,7 +17,9 @@ edge arrays; the matrices ``g`` (Nd×E), ``dmat`` (Ed×Nd, the edge
 differences) and ``wmat`` (Nd×Ed, |A_ij| into agent i) are built on request, sparse.
 
 The step-size guard (:func:`check_step_size`) uses every eigenvalue of L_B up to
-``DENSE_EIG_MAX_ND`` and, above it, ARPACK's largest- and smallest-modulus eigenvalues
+``DENSE_EIG_MAX_ND``; above it, every eigenvalue of each strongly connected component
+of at most that many rows (L_B is block triangular in them: a directed chain or tree
+costs O(E)) and ARPACK's largest- and smallest-modulus eigenvalues of the larger ones
 (a Gershgorin bound if ARPACK does not converge).
 """
 
@@ -243,44 +245,120 @@ def grounded_laplacian_sparse(des: ProtocolDesign) -> sp.csr_matrix:
     return out
 
 
+def component_eigenvalues(lap_b: sp.csr_matrix) -> tuple[np.ndarray, sp.csr_matrix | None]:
+    """Every eigenvalue of the diagonal blocks of ``lap_b``'s strongly connected components
+    of at most ``DENSE_EIG_MAX_ND`` rows, and the largest component left (None when none
+    is larger).
+
+    A matrix permuted to block triangular form (its components in topological order) has
+    the eigenvalues of its diagonal blocks; a directed chain or tree is all 1×1 or d×d
+    blocks, whose eigenvalues cost O(E) in all. ARPACK on such a non-normal matrix (one
+    Jordan-like block) needed thousands of restarts: 400 s did not finish at N = 10⁵.
+
+    Parameters
+    ----------
+    lap_b : scipy.sparse.csr_matrix
+        L_B, Nd×Nd.
+
+    Returns
+    -------
+    (numpy.ndarray, scipy.sparse.csr_matrix or None)
+        The eigenvalues (complex) of the small components' blocks, and the submatrix of
+        the components above ``DENSE_EIG_MAX_ND`` rows, block diagonal (for ARPACK).
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    nd_ = lap_b.shape[0]
+    _, label = connected_components(lap_b, directed=True, connection="strong")
+    size = np.bincount(label)
+    order = np.argsort(label, kind="stable")
+    start = np.concatenate([[0], np.cumsum(size)])
+    pos = np.empty(nd_, dtype=np.int64)  # a row's place within its component
+    pos[order] = np.arange(nd_) - start[label[order]]
+    coo = lap_b.tocoo()
+    inside = label[coo.row] == label[coo.col]
+    rows, cols, vals = coo.row[inside], coo.col[inside], coo.data[inside]
+    parts: list[np.ndarray] = []
+    for s in np.unique(size):
+        if s > DENSE_EIG_MAX_ND:
+            continue
+        comps = np.flatnonzero(size == s)
+        slot = np.full(size.size, -1, dtype=np.int64)
+        slot[comps] = np.arange(comps.size)
+        per_chunk = max(1, DENSE_EIG_MAX_ND**2 // int(s) ** 2)  # the dense memory of before
+        on = slot[label[rows]] >= 0
+        r, c, v = rows[on], cols[on], vals[on]
+        k = slot[label[r]]
+        for lo in range(0, comps.size, per_chunk):
+            hi = min(comps.size, lo + per_chunk)
+            blocks = np.zeros((hi - lo, int(s), int(s)))
+            sel = (k >= lo) & (k < hi)
+            blocks[k[sel] - lo, pos[r[sel]], pos[c[sel]]] = v[sel]
+            parts.append(np.linalg.eigvals(blocks).ravel() if s > 1 else blocks.ravel())
+    big = np.flatnonzero(size[label] > DENSE_EIG_MAX_ND)
+    rest = lap_b[big][:, big].tocsr() if big.size else None
+    lam = np.concatenate(parts) if parts else np.zeros(0)
+    return lam.astype(complex), rest
+
+
 def _eig_bounds(lap_b: sp.csr_matrix) -> Spectrum:
     """ρ(L_B), min over eigenvalues of 2·Re λ/|λ|², min Re λ, and the method."""
     nd_ = lap_b.shape[0]
     if nd_ == 0:
         return Spectrum(0.0, np.inf, np.inf, "empty")
     if nd_ <= DENSE_EIG_MAX_ND:
-        lam = np.linalg.eigvals(lap_b.toarray())
-        method = "all eigenvalues"
-    else:
-        from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
+        return _bounds(np.linalg.eigvals(lap_b.toarray()), "all eigenvalues")
+    small, rest = component_eigenvalues(lap_b)
+    if rest is None:
+        return _bounds(small, "all eigenvalues, block by strongly connected component")
+    found, method = _arpack(rest)
+    if found is None:
+        return _gershgorin(lap_b)
+    if small.size:
+        method += f" of the components above {DENSE_EIG_MAX_ND} rows, all of the others'"
+    return _bounds(np.concatenate([small, found]), method)
 
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                big = eigs(lap_b, k=N_EIGS, which="LM", return_eigenvectors=False, tol=1e-6)
-                # shift-invert at 0; the smallest eigenvalues of a large network cluster
-                # (many naive agents at one value), which a default Krylov space of 2k+1
-                # resolves only after ~10⁴ iterations (400 s at N = 10⁴): 40 vectors
-                small = eigs(
-                    lap_b,
-                    k=N_EIGS,
-                    sigma=0.0,
-                    which="LM",
-                    return_eigenvectors=False,
-                    tol=1e-3,  # a guard's estimate: 61 s at 1e-6, 1 s at 1e-3 (N = 10⁴)
-                    ncv=min(nd_ - 1, max(2 * N_EIGS + 1, 40)),
-                    maxiter=2000,
-                )
-            lam = np.concatenate([big, small])
-            method = f"ARPACK: {N_EIGS} largest- and {N_EIGS} smallest-modulus eigenvalues"
-        except (ArpackNoConvergence, ArpackError, RuntimeError):
-            # Gershgorin: ρ <= max row sum; every Re λ >= min_i (a_ii − Σ_{j≠i}|a_ij|)
-            absl = abs(lap_b)
-            rho = float(absl.sum(axis=1).max())
-            dg = lap_b.diagonal()
-            lo = float(np.min(2 * dg - np.asarray(absl.sum(axis=1)).ravel()))
-            bound = 2 * lo / rho**2 if lo > 0 else 0.0
-            return Spectrum(rho, bound, lo, "Gershgorin discs (ARPACK did not converge)")
+
+def _arpack(lap_b: sp.csr_matrix) -> tuple[np.ndarray | None, str]:
+    """ARPACK's ``N_EIGS`` largest- and smallest-modulus eigenvalues (None when it does
+    not converge)."""
+    from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
+
+    nd_ = lap_b.shape[0]
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            big = eigs(lap_b, k=N_EIGS, which="LM", return_eigenvectors=False, tol=1e-6)
+            # shift-invert at 0; the smallest eigenvalues of a large network cluster
+            # (many naive agents at one value), which a default Krylov space of 2k+1
+            # resolves only after ~10⁴ iterations (400 s at N = 10⁴): 40 vectors
+            small = eigs(
+                lap_b,
+                k=N_EIGS,
+                sigma=0.0,
+                which="LM",
+                return_eigenvectors=False,
+                tol=1e-3,  # a guard's estimate: 61 s at 1e-6, 1 s at 1e-3 (N = 10⁴)
+                ncv=min(nd_ - 1, max(2 * N_EIGS + 1, 40)),
+                maxiter=2000,
+            )
+    except (ArpackNoConvergence, ArpackError, RuntimeError):
+        return None, ""
+    lam = np.concatenate([big, small])
+    return lam, f"ARPACK: {N_EIGS} largest- and {N_EIGS} smallest-modulus eigenvalues"
+
+
+def _gershgorin(lap_b: sp.csr_matrix) -> Spectrum:
+    """ρ <= max row sum; every Re λ >= min_i (a_ii − Σ_{j≠i}|a_ij|)."""
+    absl = abs(lap_b)
+    rho = float(absl.sum(axis=1).max())
+    dg = lap_b.diagonal()
+    lo = float(np.min(2 * dg - np.asarray(absl.sum(axis=1)).ravel()))
+    bound = 2 * lo / rho**2 if lo > 0 else 0.0
+    return Spectrum(rho, bound, lo, "Gershgorin discs (ARPACK did not converge)")
+
+
+def _bounds(lam: np.ndarray, method: str) -> Spectrum:
     rho = float(np.max(np.abs(lam)))
     # |1 − c h λ| < 1 for every eigenvalue λ of L_B  <=>  c h < 2 Re λ / |λ|²
     with np.errstate(divide="ignore", invalid="ignore"):

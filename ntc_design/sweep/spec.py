@@ -108,6 +108,25 @@ def _check_key(src: Path, where: str, key: Any, base_doc: dict) -> str:
     return key
 
 
+def _check_value(src: Path, where: str, value: Any) -> None:
+    """Refuse an integer that the results table cannot hold (a 64-bit column; a
+    400-digit integer is no float either), anywhere inside a swept value."""
+    stack = [(where, value)]
+    while stack:
+        at, v = stack.pop()
+        if isinstance(v, int) and not isinstance(v, bool) and not -(2**63) <= v < 2**63:
+            digits = len(str(abs(v)))
+            raise _err(
+                src,
+                at,
+                f"an integer of {digits} digits is beyond the 64-bit integers of the results table",
+            )
+        if isinstance(v, dict):
+            stack.extend((f"{at}.{k}", x) for k, x in v.items())
+        elif isinstance(v, list):
+            stack.extend((f"{at}[{i}]", x) for i, x in enumerate(v))
+
+
 def _check_conflicts(src: Path, where: str, keys) -> None:
     ks = set(keys)
     for k in ks:
@@ -181,6 +200,7 @@ def load_sweep(path: str | Path) -> Sweep:
                 raise _err(src, f"grid.{k}", "expected a non-empty list of values")
             if len(vals) > MAX_VALUES:
                 raise _err(src, f"grid.{k}", f"{len(vals)} values; at most {MAX_VALUES}")
+            _check_value(src, f"grid.{k}", vals)
             n *= len(vals)
         if n > MAX_POINTS:
             raise _err(src, "grid", f"{n} points; at most {MAX_POINTS} in one sweep")
@@ -200,6 +220,7 @@ def load_sweep(path: str | Path) -> Sweep:
                 raise _err(src, f"points[{i}]", "expected a non-empty {field: value} mapping")
             for k in p:
                 seen[_check_key(src, f"points[{i}]", k, base_doc)] = None
+                _check_value(src, f"points[{i}].{k}", p[k])
             _check_conflicts(src, f"points[{i}]", p)
         keys = tuple(seen)
         _check_conflicts(src, "points", keys)

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, require_positive
+from ..errors import InputError, require_horizon, require_positive
 from ..gain import GainAnalysis
 from ..model import TimeVaryingTopology
 from ..rows import Table, fmt, verdict
@@ -40,6 +40,7 @@ from .optimal import (
     MomentProblem,
     ScheduleProblem,
     ScheduleSolution,
+    check_max_gain,
     fit_power,
     optimise_schedule,
 )
@@ -215,7 +216,7 @@ class ScheduleTuneResult:
             (
                 "ratio to the schedule",
                 "1",
-                *(fmt(ms[k] / ms["optimal"]) for k in keys[1:]),
+                *(_ratio(ms[k], ms["optimal"]) for k in keys[1:]),
             ),
         ]
         if mc:
@@ -309,7 +310,7 @@ class ScheduleTuneResult:
         rows = []
         prev = None
         for lv in self.solution.levels:
-            change = "" if prev is None else f"{abs(lv.value - prev) / lv.value:.2e}"
+            change = "" if prev is None else f"{_relative(lv.value, prev):.2e}"
             rows.append(
                 (lv.pieces, fmt(lv.value), change, lv.evaluations, lv.steps, f"{lv.seconds:.1f}")
             )
@@ -597,6 +598,22 @@ def _schedule_delta(
     return delta
 
 
+def _relative(value: float, reference: float) -> float:
+    """|value − reference| / |reference|, 0 when both are 0 (an error of 0 is reached)."""
+    diff = abs(value - reference)
+    return 0.0 if diff == 0 else diff / max(abs(reference), 1e-300)
+
+
+def _ratio(value: float, reference: float) -> str:
+    """value / reference for the table, "—" when the reference is 0."""
+    return fmt(value / reference) if reference else "—"
+
+
+def _additive_noise(spec: SimulationSpec) -> bool:
+    """Whether any σ_ji is non-zero (Q ≠ 0: the error grows from ε = 0)."""
+    return bool(spec.noise.sigma) or any(spec.noise.sigma_edges.values())
+
+
 def tune_schedule(
     topology: AnyTopology,
     spec: SimulationSpec,
@@ -653,12 +670,8 @@ def tune_schedule(
         A bad horizon, bound or scenario (see :func:`check_schedule_scenario`).
     """
     t0 = time.perf_counter()
-    require_positive("horizon", horizon)
-    if not math.isfinite(float(horizon)):
-        raise InputError(f"horizon: expected a finite number, got {horizon!r}")
-    require_positive("--max-gain", max_gain)
-    if not math.isfinite(float(max_gain)) or max_gain > 1e6:
-        raise InputError(f"--max-gain: expected a number in (0, 1e6], got {max_gain!r}")
+    require_horizon("horizon", horizon)
+    check_max_gain(max_gain)
     if max_peak is not None:
         require_positive("--max-peak", max_peak)
     if eps is not None:
@@ -675,6 +688,11 @@ def tune_schedule(
     judge = objective_for(topology, spec, horizon, "exact")
     eps0 = obj.prepared(None)[0].eps0
     initial = float(eps0 @ eps0)
+    if initial == 0 and not _additive_noise(spec):
+        raise InputError(
+            "initial: x(0) = 1⊗θ and noise.sigma = 0: E Σ‖x_i(t) − θ‖² = 0 at every t for "
+            "every gain (the multiplicative noise vanishes at consensus); nothing to tune"
+        )
     if max_peak is not None and not max_peak > initial:
         raise InputError(
             f"--max-peak: {max_peak:g} is not above the initial error E Σ‖x_i(0) − θ‖² = "
@@ -724,7 +742,7 @@ def tune_schedule(
         "baseline": (BASELINE, None),
     }
     curves = {k: judge.curve(g, d, points=401) for k, (g, d) in gains.items()}
-    gap = abs(sol.value - curves["optimal"].final) / curves["optimal"].final
+    gap = _relative(sol.value, curves["optimal"].final)
     if gap > AGREE_RTOL:
         notes.append(
             f"the optimiser's value {sol.value:.6g} and the independent re-evaluation "

@@ -28,9 +28,16 @@ from ..design import design_topology
 from ..errors import InputError
 from ..schedule import ScheduleGain
 from ..simulate import SimulationSpec, simulate
+from ..simulate.budget import Estimate, exact_seconds, mc_seconds
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
 from ..simulate.digital import digital_moments
-from ..simulate.driver import AnyTopology, PreparedModes, prepare_modes, sampled_grid
+from ..simulate.driver import (
+    AnyTopology,
+    PreparedModes,
+    edge_count,
+    prepare_modes,
+    sampled_grid,
+)
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
 from ..simulate.spec import SaveAt
 from ..simulate.system import mode_system
@@ -182,6 +189,25 @@ class Objective:
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         raise NotImplementedError
 
+    def seconds(self, gain: AnyGain, accurate: bool = False) -> float | None:
+        """The estimated time of one evaluation of ``gain`` (capped as the evaluation
+        caps its work; a candidate refused before any work costs nothing), for the
+        estimate a tuning run makes before it starts.
+
+        Parameters
+        ----------
+        gain : PowerGain
+            The candidate.
+        accurate : bool, optional
+            The reported accuracy rather than the search's.
+
+        Returns
+        -------
+        float or None
+            Seconds (within a factor of a few), or None when not estimated.
+        """
+        return None
+
     def describe(self) -> str:
         """What the objective computes, for the result's ``method``.
 
@@ -264,6 +290,28 @@ class ExactObjective(Objective):
         rk4 = (rho_l * i1 + rho_q * i2) / (KAPPA if accurate else SEARCH_KAPPA)
         cay = i1 / (CAYLEY_DS_ACCURATE if accurate else CAYLEY_DS) + rho_g * i2 / KAPPA_NOISE
         return ("cayley", cay) if rk4 > CAYLEY_COST * cay else ("rk4", rk4)
+
+    def seconds(self, gain: AnyGain, accurate: bool = False) -> float | None:
+        """The estimated time of one evaluation: its RK4 (or Crank–Nicolson, each step
+        ``CAYLEY_COST`` dearer) steps at :func:`.simulate.budget.exact_seconds`; 0 above
+        the step cap (it scores +∞ unintegrated).
+
+        Parameters
+        ----------
+        gain : PowerGain
+            The candidate.
+        accurate : bool, optional
+            The reported accuracy rather than the search's.
+
+        Returns
+        -------
+        float
+        """
+        scheme, steps = self.plan(gain, None, accurate)
+        if not steps <= MAX_STEPS * (5 if accurate else 1):
+            return 0.0
+        cost = CAYLEY_COST if scheme == "cayley" else 1.0
+        return exact_seconds(steps * cost, self.topology.n * self.topology.dim)
 
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         scheme, steps = self.plan(gain, delta, accurate)
@@ -378,13 +426,37 @@ class ExpressionObjective(Objective):
             self._radius = generator_radius(mode_system(des, self.spec.noise, "t=0"))
         return self._radius
 
+    def _steps(self, gain: AnyGain) -> float:
+        rho_l, rho_q = self.radius()
+        i1, i2 = gain.integrals(self.horizon)
+        return (rho_l * i1 + rho_q * i2) / KAPPA
+
+    def seconds(self, gain: AnyGain, accurate: bool = False) -> float | None:
+        """The estimated time of one evaluation: its steps with A(t) and Lemma 1 made at
+        each (:func:`.simulate.budget.exact_seconds`); 0 above the step cap.
+
+        Parameters
+        ----------
+        gain : PowerGain
+            The candidate.
+        accurate : bool, optional
+            The reported accuracy rather than the search's (a larger step cap).
+
+        Returns
+        -------
+        float
+        """
+        steps = self._steps(gain)
+        if not steps <= MAX_STEPS * (5 if accurate else 1):
+            return 0.0
+        top = self.topology
+        return exact_seconds(steps, top.n * top.dim, agents_per_step=top.n)
+
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         if delta is not None:
             raise InputError("--tune-delta: a topology given as expressions of t takes δ(t)")
-        rho_l, rho_q = self.radius()
-        i1, i2 = gain.integrals(self.horizon)
-        steps = (rho_l * i1 + rho_q * i2) / KAPPA
-        if steps > MAX_STEPS * 5:
+        steps = self._steps(gain)
+        if steps > MAX_STEPS * (5 if accurate else 1):  # the search's cap is ExactObjective's
             raise InputError(f"{gain.text}: about {steps:.3g} steps at t = 0's radius; too stiff")
         t = np.linspace(0.0, self.horizon, points)
         spec = self.spec.replace(T=self.horizon, gain=gain, method="exact", save=_save_at(t))
@@ -417,6 +489,32 @@ class MonteCarloObjective(Objective):
             f"Monte Carlo ({self.spec.mc.paths} paths, seed {self.spec.mc.seed}, common random "
             "numbers): the optimum is statistical"
         )
+
+    def seconds(self, gain: AnyGain, accurate: bool = False) -> float | None:
+        """The estimated time of one evaluation: paths × T/dt path-steps at the Monte Carlo
+        kernel's rate (:func:`.simulate.budget.mc_seconds`).
+
+        Parameters
+        ----------
+        gain : PowerGain
+            The candidate (the grid is the scenario's: every candidate costs the same).
+        accurate : bool, optional
+            Unused.
+
+        Returns
+        -------
+        float
+        """
+        top, spec, st = self.topology, self.spec, self.spec.stepping
+        steps = self.horizon / st.dt
+        if st.kind == "intrinsic":  # h = min(ds / c(t), h_max): ∫c dt / ds steps at least
+            ds = st.ds if st.ds is not None else st.dt
+            h_max = st.h_max if st.h_max is not None else max(1.0, 100 * st.dt)
+            steps = max(gain.integrals(self.horizon)[0] / ds, self.horizon / h_max)
+        est = Estimate({}, steps, steps * spec.mc.paths)
+        edges = edge_count(top) * top.dim**2
+        implicit = spec.stepping.scheme == "implicit"
+        return mc_seconds(est, top.n * top.dim, edges, spec.mc.workers, implicit)
 
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         t = np.linspace(0.0, self.horizon, points if accurate else 2)

@@ -61,7 +61,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ..errors import InputError, format_bytes
+from ..errors import InputError, format_bytes, require_number
 from ..simulate.driver import PreparedModes
 from .family import PowerGain
 from .operators import MomentOperators
@@ -80,12 +80,41 @@ MAX_PIECES = 800
 REFINE_RTOL = 1e-3
 C_MIN = 1e-6
 DEFAULT_MAX_GAIN = 50.0
+#: The largest --max-gain accepted.
+MAX_MAX_GAIN = 1e6
 #: Stored stage derivatives above this many bytes are refused (the adjoint needs them).
 MAX_STORE = 2 * 2**30
 #: The peak constraint's aggregation parameter (on tr S / M): the aggregate exceeds the
 #: maximum by at most log(steps) / KS_RHO.
 KS_RHO = 2000.0
 BIG = 1e10
+
+
+def check_max_gain(max_gain: float) -> float:
+    """The upper bound on c(t): a number in (``C_MIN``, ``MAX_MAX_GAIN``] (the optimiser
+    searches log c in [log C_MIN, log max_gain], empty below C_MIN).
+
+    Parameters
+    ----------
+    max_gain : float
+        The bound given (``--max-gain``).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        One line naming --max-gain.
+    """
+    v = require_number("--max-gain", max_gain)
+    if not C_MIN < v <= MAX_MAX_GAIN:
+        raise InputError(
+            f"--max-gain: expected a number in ({C_MIN:g}, {MAX_MAX_GAIN:g}] (the optimiser "
+            f"searches c(t) in [{C_MIN:g}, --max-gain]), got {max_gain!r}"
+        )
+    return v
 
 
 class MomentProblem(Protocol):
@@ -711,7 +740,7 @@ def optimise_schedule(
         A plan too large for the adjoint's memory, or an optimum outside RK4's stable
         range.
     """
-    lo, hi = math.log(C_MIN), math.log(max_gain)
+    lo, hi = math.log(C_MIN), math.log(check_max_gain(max_gain))
     rows: list[Level] = []
     c_prev: Callable[..., Any] = start
     best: Solved | None = None
@@ -809,6 +838,8 @@ def fit_power(
 
 __all__ = [
     "C_MIN",
+    "MAX_MAX_GAIN",
+    "check_max_gain",
     "DEFAULT_MAX_GAIN",
     "Forward",
     "Level",

@@ -19,7 +19,7 @@ from typing import Any, cast
 import numpy as np
 
 from ..design.digital import Digital
-from ..errors import InputError, require_int, require_number
+from ..errors import InputError, require_horizon, require_int, require_number
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..rows import Table, fmt, verdict
 from ..simulate import SimulationSpec
@@ -260,9 +260,7 @@ def longest_safe_period(
     >>> 0 < r.period < 2
     True
     """
-    horizon = require_number("--horizon", horizon)
-    if not horizon > 0:
-        raise InputError(f"--horizon: must be a positive number, got {horizon!r}")
+    horizon = require_horizon("--horizon", horizon)
     delay = require_int("--delay", delay, minimum=0)
     tolerance = require_number("--tolerance", tolerance, minimum=0.0)
     if max_peak is not None and not require_number("--max-peak", max_peak) > 0:

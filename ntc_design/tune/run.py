@@ -18,10 +18,11 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from ..design import design_topology
-from ..errors import InputError, format_seconds, require_positive
+from ..errors import InputError, format_seconds, require_horizon, require_positive, warn_user
 from ..gain import analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..simulate import SimulationSpec
+from ..simulate.budget import LONG_RUN_SECONDS
 from ..simulate.driver import AnyTopology
 from .evidence import certify_tuned, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
@@ -40,6 +41,9 @@ MAX_EVALUATIONS = 160
 LANDSCAPE_SHAPE = (13, 9)
 LANDSCAPE_SHAPE_MC = (5, 4)
 LANDSCAPE_SPAN = 8.0
+#: A tuning run estimated to take longer than this is refused before it starts (one
+#: longer than ``LONG_RUN_SECONDS`` says how long, and goes on).
+MAX_TUNE_SECONDS = 3600.0
 
 
 def delta_range(topology: AnyTopology, theta) -> tuple[float, float, float]:
@@ -117,6 +121,69 @@ def _dimensions(
     return [Dimension(k, lo, hi, log=k in logs, points=points[k]) for k, (lo, hi) in box.items()]
 
 
+def tune_seconds(
+    obj: Objective, dims: list[Dimension], evaluations: int, landscape: bool
+) -> tuple[float, int, float] | None:
+    """The estimated time of a tuning run before it starts: the mean cost of an evaluation
+    over the search's coarse grid (:meth:`.objective.Objective.seconds`, closed-form
+    integrals of each candidate) times the evaluations of the search and the landscape,
+    plus the two curves at the reported accuracy.
+
+    Parameters
+    ----------
+    obj : Objective
+        The objective.
+    dims : list of Dimension
+        The searched box.
+    evaluations : int
+        The search's budget.
+    landscape : bool
+        Whether the contour map is evaluated too.
+
+    Returns
+    -------
+    (float, int, float) or None
+        Seconds in all, evaluations, seconds of a mean evaluation; None when the
+        objective gives no estimate.
+    """
+    box = {d.name: d.grid() for d in dims}
+    costs = [
+        obj.seconds(PowerGain(float(a), float(b), float(g)))
+        for a in box["a"]
+        for b in box["b"]
+        for g in box["gamma"]
+    ]
+    accurate = obj.seconds(BASELINE, accurate=True)
+    if accurate is None or any(c is None for c in costs):
+        return None
+    per = float(np.mean([c for c in costs if c is not None]))
+    shape = LANDSCAPE_SHAPE_MC if obj.statistical else LANDSCAPE_SHAPE
+    n = evaluations + (shape[0] * shape[1] if landscape else 0)
+    return n * per + 2 * accurate, n, per
+
+
+def _check_tune_work(
+    obj: Objective, dims: list[Dimension], evaluations: int, landscape: bool, horizon: float
+) -> None:
+    """Refuse a run estimated above :data:`MAX_TUNE_SECONDS`; warn with the estimate
+    above ``LONG_RUN_SECONDS``."""
+    got = tune_seconds(obj, dims, evaluations, landscape)
+    if got is None:
+        return
+    total, n, per = got
+    what = (
+        f"tuning for T = {horizon:g} takes roughly {format_seconds(total)} ({n} evaluations "
+        f"of {obj.name}, about {per:.3g} s each)"
+    )
+    if not total <= MAX_TUNE_SECONDS:
+        raise InputError(
+            f"--horizon: {what}, more than the limit of {format_seconds(MAX_TUNE_SECONDS)}; "
+            "a shorter --horizon or fewer --evaluations"
+        )
+    if total > LONG_RUN_SECONDS:
+        warn_user(f"--horizon: {what}; Ctrl-C stops cleanly", UserWarning)
+
+
 def tune_power(
     topology: AnyTopology,
     spec: SimulationSpec,
@@ -175,7 +242,7 @@ def tune_power(
         A bad horizon, requirement, ε, method or δ range; a scenario the objective
         refuses.
     """
-    require_positive("horizon", horizon)
+    require_horizon("horizon", horizon)
     gamma_range(require)
     if eps is not None:
         require_positive("eps", eps)
@@ -188,6 +255,7 @@ def tune_power(
     drange = delta_range(topology, spec.theta) if tune_delta else None
     obj = objective_for(topology, spec, horizon, method)
     dims = _dimensions(require, drange[:2] if drange else None, bounds)
+    _check_tune_work(obj, dims, max_evaluations, landscape, horizon)
 
     done = [0]
 

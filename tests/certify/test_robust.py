@@ -10,7 +10,7 @@ import ntc_design as nd
 from ntc_design.certify import verify
 from ntc_design.certify.kinds.robust import robust_certificate
 from ntc_design.certify.robust import robust
-from ntc_design.generate import random_network
+from ntc_design.generate import random_network, write_topology
 from ntc_design.paper import THETA  # the paper's θ, defined once
 from tests.conftest import ROOT
 from tests.support.robust import features, in_set, independent_lap_b, realised, sample
@@ -342,3 +342,59 @@ def test_a_weight_singular_by_rounding_is_certified_soundly_at_every_radius():
         for _ in range(100):
             a, o = features(des, sample(des, 0.05, rng, kind))
             assert a >= rep.decay.lower and o <= rep.offset.upper
+
+
+# -- issue 41, item 8: the work estimated before it starts ---------------------------------
+
+
+def test_the_dense_estimate_counts_what_robust_solves(g1):
+    """G1: P has 21·22/2 = 231 unknowns and 8 multipliers τ_e; the offset SDP's Y is
+    21 × (21 + 21 + 1) (21 channel columns: the weights' ranks 3, 2, 1 and five 3s) with
+    8 λ_e and γ."""
+    from ntc_design.certify import robust as rb
+
+    des = nd.design(g1, THETA, thresholds=False)
+    seconds, what = rb.robust_seconds(des)
+    assert "8 decay LMIs of 239 unknowns and an offset SDP of 912" in what
+    assert seconds == pytest.approx(
+        rb.BASE_SECONDS + 8 * rb.DECAY_SECONDS * 239**2 + rb.OFFSET_SECONDS * 912**2
+    )
+    assert rb.robust_seconds(des, margin=False)[1].startswith("about 4 decay LMIs")
+
+
+@pytest.mark.hostile
+def test_a_long_robust_run_says_how_long_before_any_solve(tmp_path, capsys, monkeypatch):
+    """N·d = 39 (13 agents, d = 3): about 2 min of SDPs; the estimate is printed before
+    the first one (the test stops there: no solve is made)."""
+    from ntc_design.certify import robust_lmi
+    from tests.cli_helpers import run_cli
+
+    def stop(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(robust_lmi, "solve_sdp", stop)
+    f = tmp_path / "n13.npz"
+    write_topology(random_network(13, 3, seed=0), f)
+    code, out, err = run_cli(["robust", f, "--theta", "1,2,-1"], capsys, monkeypatch)
+    assert code == 130, err
+    line = next(ln for ln in err.splitlines() if ln.startswith("warning: robust: roughly"))
+    assert "N·d = 39" in line and "794 unknowns" in line and "min" in line
+
+
+@pytest.mark.hostile
+def test_a_robust_run_over_the_limit_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    from ntc_design.certify import robust as rb
+    from ntc_design.certify import robust_scale
+    from tests.cli_helpers import assert_input_error
+
+    def never(*a, **k):
+        raise AssertionError("the sparse bounds ran")
+
+    monkeypatch.setattr(robust_scale, "robust_scale", never)
+    monkeypatch.setattr(rb, "SPARSE_SECONDS", 1.0)  # 1 s a weight entry: hours at N = 300
+    f = tmp_path / "n300.npz"
+    write_topology(random_network(300, 3, seed=0), f)
+    line = assert_input_error(
+        ["robust", f, "--theta", "1,2,-1"], capsys, monkeypatch, "robust: roughly", "limit"
+    )
+    assert "sparse bounds over" in line

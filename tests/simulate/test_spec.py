@@ -200,6 +200,22 @@ def test_spec_is_frozen_and_rechecked_on_replace():
             lambda: SimulationSpec.build(THETA, noise=NoiseModel(0.4, 0.3, {(1, 2): np.nan})),
             "noise.sigma_edges 1->2",
         ),
+        # issue 41, item 7: integers beyond the float range raised OverflowError, and a
+        # subnormal T halved to 0 in the gain's samples
+        (lambda: SimulationSpec.build([1, 10**400, 2]), "theta[1]: an integer of 401 digits"),
+        (lambda: SimulationSpec.build(THETA, T=10**400), "T: an integer of 401 digits"),
+        (lambda: SimulationSpec.build(THETA, T=5e-324), "T: 5e-324 is shorter than"),
+        (lambda: SimulationSpec.build(THETA, margin=10**400), "margin: an integer"),
+        (lambda: SimulationSpec.build(THETA, dt=10**400), "dt: an integer"),
+        (lambda: SimulationSpec.build(THETA, save_every=10**400), "save_every: an integer"),
+        (lambda: SimulationSpec.build(THETA, initial=[0, 10**400]), "initial[1]: an integer"),
+        (lambda: SimulationSpec.build(THETA, noise=NoiseModel(10**400)), "noise.sigma: an"),
+        (lambda: SimulationSpec.build(THETA, noise=NoiseModel(0.4, 10**400)), "noise.f: an"),
+        (lambda: SimulationSpec.build(THETA, noise=NoiseModel(0.4, [[10**400]])), "noise.f: an"),
+        (lambda: MonteCarlo(paths=10**400), "paths: must be at most"),
+        (lambda: MonteCarlo(block_size=10**400), "block_size: must be at most"),
+        (lambda: MonteCarlo(store_paths=10**400), "store_paths: must be at most"),
+        (lambda: UniformInitial(-(10**400), 1, 0), "initial.uniform"),
     ],
 )
 def test_option_objects_check_themselves(make, needle):

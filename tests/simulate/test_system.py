@@ -36,6 +36,7 @@ def test_guard_floor_by_dominance_is_below_every_real_part(implicit_net):
 def test_guard_falls_back_to_eigenvalues_when_dominance_fails(monkeypatch, implicit_net):
     des, _ = implicit_net
     monkeypatch.setattr(sysmod, "_dominance_floor", lambda s: -np.inf)
+    monkeypatch.setattr(sysmod, "DENSE_EIG_MAX_ND", 100)  # its largest component: 147 rows
     s = mode_system(des, NoiseModel())
     floor, how = s.implicit_floor
     assert "ARPACK" in how and floor == s.min_real > 0
@@ -48,6 +49,7 @@ def test_a_floor_within_rounding_of_zero_is_not_trusted(monkeypatch, implicit_ne
     blocks = implicit.diagonal_blocks(s0.lap_b, 3)
     mu_max = np.max(np.abs(np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1)))[:, 0]))
     monkeypatch.setattr(sysmod, "FLOOR_RTOL", 1.01 * floor / mu_max)
+    monkeypatch.setattr(sysmod, "DENSE_EIG_MAX_ND", 100)  # its largest component: 147 rows
     s = mode_system(des, NoiseModel())
     got, how = s.implicit_floor
     assert "ARPACK" in how and got == s.min_real
@@ -125,10 +127,11 @@ def test_stiff_network_is_refused_up_front_and_runs_implicitly():
     assert res.mc.mean[-1].sum() < 0.7 * res.mc.mean[0].sum()
 
 
-def test_guard_arpack_matches_dense_eigenvalues():
-    top = random_network(300, 3, seed=4)  # Nd = 900 > DENSE_EIG_MAX_ND: ARPACK
+def test_guard_arpack_matches_dense_eigenvalues(monkeypatch):
+    top = random_network(300, 3, seed=4)  # Nd = 900; strongly connected parts of <= 72 rows
     lap = design(top, [1, 2, -1], thresholds=False).grounded_laplacian_sparse()
     assert lap.shape[0] > DENSE_EIG_MAX_ND
+    monkeypatch.setattr(sysmod, "DENSE_EIG_MAX_ND", 50)  # ARPACK on the 72-row part
     spec = _eig_bounds(sp.csr_matrix(lap))
     rho, bound, min_re, method = spec.rho, spec.bound, spec.min_real, spec.method
     lam = np.linalg.eigvals(lap.toarray())
@@ -157,3 +160,88 @@ def test_cli_divergence_exits_1_and_keeps_partial_results(tmp_path, capsys, monk
     sc = write_scenario(tmp_path, gain="50*(1+t)^3", T=1.0, method="mc")
     assert_input_error(["simulate", sc, "--out", tmp_path / "o"], capsys, monkeypatch, "unstable")
     assert not (tmp_path / "o").exists()
+
+
+# -- issue 41, item 8: the step guard's eigenvalues linear in the edges ----------------------
+
+
+def chain_csv(path, n: int, d: int = 1):
+    """A directed chain 2 -> 3 -> … -> n with the pair 1 <-> 2 of G1 in front (agent 1
+    informed through its antagonistic in-edge): strongly connected parts of 1 and 2 agents."""
+    eye = ",".join("1.0" if i == j else "0.0" for i in range(d) for j in range(d))
+    neg = ",".join("-1.0" if i == j else "0.0" for i in range(d) for j in range(d))
+    cols = ",".join(f"a{i}{j}" for i in range(1, d + 1) for j in range(1, d + 1))
+    rows = [f"from,to,{cols}", f"2,1,{eye}", f"1,2,{neg}"]
+    rows += [f"{i},{i + 1},{eye}" for i in range(2, n)]
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    return path
+
+
+def test_component_eigenvalues_are_every_eigenvalue(monkeypatch):
+    """Block triangular by strongly connected components: the union of the diagonal
+    blocks' eigenvalues is the spectrum (against numpy on the whole matrix)."""
+    top = random_network(300, 3, seed=4)
+    lap = sp.csr_matrix(design(top, [1, 2, -1], thresholds=False).grounded_laplacian_sparse())
+    full = np.sort_complex(np.linalg.eigvals(lap.toarray()))
+    small, rest = sysmod.component_eigenvalues(lap)
+    assert rest is None and small.size == lap.shape[0]
+    got = np.sort_complex(small)
+    np.testing.assert_allclose(got.real, full.real, atol=1e-8 * np.abs(full).max())
+    np.testing.assert_allclose(np.abs(got), np.abs(full), atol=1e-8 * np.abs(full).max())
+    monkeypatch.setattr(sysmod, "DENSE_EIG_MAX_ND", 50)  # the 72-row part is left over
+    small, rest = sysmod.component_eigenvalues(lap)
+    assert rest is not None and rest.shape[0] == 72 and small.size == lap.shape[0] - 72
+    lam_rest = np.linalg.eigvals(rest.toarray())
+    both = np.sort_complex(np.concatenate([small, lam_rest]))
+    np.testing.assert_allclose(both.real, full.real, atol=1e-8 * np.abs(full).max())
+
+
+def test_a_directed_chain_takes_no_arpack_and_blocks_of_its_own_size(tmp_path, monkeypatch):
+    """The work counted: a 3,000-agent chain (Nd = 9,000 > DENSE_EIG_MAX_ND) gives its exact
+    spectrum without ARPACK (which needed thousands of restarts on such a Jordan-like
+    matrix: 400 s did not finish at N = 10⁵). Its diagonal weights decouple the three
+    coordinates: 8,994 components of one row (read off the diagonal) and three of two rows
+    (the 1 <-> 2 pair), which are the only matrices handed to eigvals, in one batch."""
+    import scipy.sparse.linalg as spla
+
+    def no_arpack(*a, **k):
+        raise AssertionError("ARPACK called on a chain")
+
+    sizes: list[tuple[int, ...]] = []
+    real_eigvals = np.linalg.eigvals
+
+    def counted(a):
+        sizes.append(np.shape(a))
+        return real_eigvals(a)
+
+    monkeypatch.setattr(spla, "eigs", no_arpack)
+    monkeypatch.setattr(np.linalg, "eigvals", counted)
+    top = nd.load(chain_csv(tmp_path / "chain.csv", 3000, 3))
+    des = nd.design(top, THETA, thresholds=False)
+    s = mode_system(des, NoiseModel())
+    assert s.nd == 9000 and "strongly connected" in s.eig_method
+    assert sizes == [(3, 2, 2)]
+    dense = np.linalg.eigvals(s.lap_b.toarray()[:12, :12])  # the 1 <-> 2 pair and agent 3
+    assert s.spectral_radius == pytest.approx(
+        max(np.abs(dense).max(), np.abs(s.lap_b.diagonal()).max())
+    )
+    assert s.min_real == pytest.approx(min(dense.real.min(), s.lap_b.diagonal()[12:].min()))
+
+
+def test_cli_simulates_a_chain_without_arpack(tmp_path, capsys, monkeypatch):
+    """ntc simulate of a chain CSV end to end (2 paths × 10 steps), no ARPACK call."""
+    import scipy.sparse.linalg as spla
+
+    from tests.cli_helpers import run_cli
+
+    monkeypatch.setattr(spla, "eigs", lambda *a, **k: pytest.fail("ARPACK called on a chain"))
+    chain_csv(tmp_path / "chain.csv", 2000)
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        "topology: chain.csv\ntheta: [1]\nnoise: {sigma: 0.4, f: 0.3}\nT: 0.01\ndt: 0.001\n"
+        "paths: 2\nsave_every: 0.005\nmethod: mc\nworkers: 1\n",
+        encoding="utf-8",
+    )
+    code, _, err = run_cli(["simulate", sc, "--out", tmp_path / "o"], capsys, monkeypatch)
+    assert code == 0, err
+    assert (tmp_path / "o" / "summary.json").is_file()

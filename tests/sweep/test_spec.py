@@ -37,6 +37,17 @@ from tests.support.distributed import SCENARIO, TOPOLOGY
         # a name that is not text used to be used as its repr
         ("name: [1]\nbase: sc.yaml\ngrid: {seed: [0]}\n", ["name", "expected text, got list"]),
         ("description: {a: 1}\nbase: sc.yaml\ngrid: {seed: [0]}\n", ["description", "text"]),
+        # issue 41, item 7: integers the results table cannot hold (ArrowInvalid and
+        # OverflowError escaped as internal errors)
+        (
+            "base: sc.yaml\ngrid: {margin: [0.1, " + "9" * 400 + "]}\n",
+            ["grid.margin[1]", "400 digits"],
+        ),
+        ("base: sc.yaml\ngrid: {paths: [" + "9" * 400 + "]}\n", ["grid.paths[0]", "64-bit"]),
+        (
+            "base: sc.yaml\npoints: [{noise: {sigma: " + str(2**64) + "}}]\n",
+            ["points[0].noise.sigma"],
+        ),
     ],
 )
 def test_bad_sweep_files(sweep_files, tmp_path, capsys, monkeypatch, body, needles):

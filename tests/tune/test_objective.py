@@ -74,3 +74,26 @@ def test_a_topology_given_as_expressions_of_t_is_tuned_by_its_exact_moments(exam
     assert res.method == "exact moments (A(t))" and not res.statistical
     assert res.ms_error_T["tuned"] <= res.ms_error_T["baseline"]
     assert res.ms_error_T["tuned"] == pytest.approx(again.exact.ms_error[-1].sum(), rel=1e-9)
+
+
+def test_a_stiff_candidate_on_expressions_of_t_is_not_integrated_while_searching(
+    examples, monkeypatch
+):
+    """The search's step cap is the exact objective's (MAX_STEPS): c(t) = 4.472(1 + t)^−0.51
+    on the time-varying G1 at T = 10 needs about 25,000 steps (21 s, to find its moments
+    grow without bound); it scores +∞ without a simulation. Its reported curve may take up
+    to 5·MAX_STEPS."""
+    from ntc_design.tune import objective
+    from ntc_design.tune.objective import MAX_STEPS, objective_for
+
+    top, spec, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
+    obj = objective_for(top, spec, 10.0)
+    gain = PowerGain(4.472, 1.0, 0.51)
+    assert MAX_STEPS < obj._steps(gain) < 5 * MAX_STEPS
+
+    def no_run(*a, **k):
+        raise AssertionError("simulated a candidate above the search's step cap")
+
+    monkeypatch.setattr(objective, "simulate", no_run)
+    assert obj.value(gain) == math.inf and "too stiff" in obj.skipped[gain.text]
+    assert obj.seconds(gain) == 0.0 and obj.seconds(gain, accurate=True) > 0

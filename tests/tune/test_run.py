@@ -162,3 +162,67 @@ def test_bad_bounds_are_refused(g1, theta, bounds, needle):
     spec = SimulationSpec.build(theta)
     with pytest.raises(nd.InputError, match=needle):
         tune(g1, spec, 1.0, bounds=bounds)
+
+
+# -- issue 41, item 8: a tuning run estimated before it starts ----------------------------
+
+
+def _no_evaluation(monkeypatch):
+    """Every objective evaluation stops the run (the estimate must come first)."""
+    from ntc_design.tune import objective
+
+    def stop(*a, **k):
+        raise KeyboardInterrupt
+
+    for cls in objective.OBJECTIVES.values():
+        monkeypatch.setattr(cls, "_curve", stop)
+
+
+@pytest.mark.hostile
+def test_monte_carlo_tuning_at_a_long_horizon_is_refused_before_any_run(
+    examples, capsys, monkeypatch
+):
+    """g1_tv at T = 10⁴ by Monte Carlo: 10⁷ steps × 1000 paths a candidate, 180 of them
+    (about a day): one line naming --horizon, nothing evaluated."""
+    _no_evaluation(monkeypatch)
+    sc = examples / "scenarios" / "g1_tv.yaml"
+    line = assert_input_error(
+        ["tune", sc, "--horizon", "1e4", "--method", "mc"], capsys, monkeypatch, "--horizon"
+    )
+    assert "180 evaluations of Monte Carlo" in line and "more than the limit of 60 min" in line
+
+
+@pytest.mark.hostile
+def test_a_long_tuning_run_says_how_long_before_the_first_evaluation(examples, capsys, monkeypatch):
+    """g1_tv at T = 10⁴ by its exact moments: minutes; the estimate is printed, then the
+    first evaluation (stopped here)."""
+    from tests.cli_helpers import run_cli
+
+    _no_evaluation(monkeypatch)
+    sc = examples / "scenarios" / "g1_tv.yaml"
+    code, _, err = run_cli(["tune", sc, "--horizon", "1e4"], capsys, monkeypatch)
+    assert code == 130, err
+    line = next(ln for ln in err.splitlines() if ln.startswith("warning: --horizon:"))
+    assert "tuning for T = 10000 takes roughly" in line
+    assert "277 evaluations of exact moments (A(t))" in line
+
+
+def test_the_estimate_is_the_mean_candidate_of_the_grid(examples):
+    """tune_seconds: the coarse grid's 60 candidates priced by their closed-form step
+    counts (a candidate above the step cap scores +∞ unintegrated, so costs nothing)."""
+    from ntc_design.tune.objective import MAX_STEPS, objective_for
+    from ntc_design.tune.run import _dimensions, tune_seconds
+
+    top, spec, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
+    obj = objective_for(top, spec, 1e4)
+    dims = _dimensions("both", None, None)
+    total, n, per = tune_seconds(obj, dims, 160, landscape=True)
+    assert n == 160 + 13 * 9
+    grid = [
+        PowerGain(a, b, g) for a in dims[0].grid() for b in dims[1].grid() for g in dims[2].grid()
+    ]
+    costs = [obj.seconds(g) for g in grid]
+    assert len(costs) == 60 and per == pytest.approx(np.mean(costs))
+    assert total == pytest.approx(n * per + 2 * obj.seconds(BASELINE, accurate=True))
+    stiff = [g for g in grid if obj._steps(g) > MAX_STEPS]
+    assert stiff and all(obj.seconds(g) == 0 for g in stiff)
