@@ -24,7 +24,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 
 ROOT = Path(__file__).resolve().parent.parent
 

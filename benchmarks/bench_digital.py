@@ -31,8 +31,8 @@ import numpy as np
 
 import ntc_design as nd
 from ntc_design.certify import certify
-from ntc_design.design.digital import Digital
-from ntc_design.generate import random_network
+from ntc_design.model.generate import random_network
+from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.digital import digital_grid, digital_moments
 from ntc_design.simulate.driver import make_gain, prepare_modes
@@ -112,8 +112,8 @@ def period_rows() -> None:
 
 
 def export_rows(g1, steps: int) -> None:
-    from ntc_design.design.agents import agent_law
     from ntc_design.export.run import export
+    from ntc_design.protocol.agents import agent_law
     from ntc_design.simulate.replay import replay
 
     cc = shutil.which("cc")

@@ -34,8 +34,8 @@ from pathlib import Path
 import cloudpickle
 import yaml
 
-from ntc_design.distributed import DaskEngine
 from ntc_design.sweep import load_sweep, run_point, run_sweep
+from ntc_design.sweep.engines import DaskEngine
 
 ROOT = Path(__file__).resolve().parent.parent
 SWEEP = ROOT / "examples" / "sweeps" / "g1_noise.yaml"

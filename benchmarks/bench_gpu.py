@@ -34,7 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_simulate import edge_design, problem, random_network  # noqa: E402
 
-from ntc_design.paper import THETA  # noqa: E402
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, mode_system, simulate  # noqa: E402
 from ntc_design.simulate.grid import build_grid  # noqa: E402
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run  # noqa: E402

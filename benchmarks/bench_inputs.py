@@ -1,7 +1,7 @@
 """How fast are the guarded readers: files, expressions and the gain analysis?
 
 1. A random topology file with E edges (3x3 weights, flow style) read by
-   :func:`ntc_design.documents.read_document` (libyaml events, an iterative composer with the
+   :func:`ntc_design.io.documents.read_document` (libyaml events, an iterative composer with the
    depth and alias limits, PyYAML's safe constructor), against ``yaml.safe_load`` (pure
    Python, the reader before issue 8) and ``yaml.load(..., CSafeLoader)`` (no limits).
 2. Hostile documents refused: billion laughs, 10⁵ levels of nesting, a 5000-digit integer.
@@ -26,10 +26,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ntc_design.documents import read_document
 from ntc_design.errors import InputError
-from ntc_design.expr import parse_expression
-from ntc_design.gain import analyse_gain
+from ntc_design.expr.symbolic import parse_expression
+from ntc_design.gain.conditions import analyse_gain
+from ntc_design.io.documents import read_document
 
 
 def topology_text(edges: int, agents: int, seed: int = 0) -> str:
@@ -103,8 +103,8 @@ def styles(n: int) -> None:
     """Three machine-written styles of an n-agent topology, each read five ways."""
     import json
 
-    from ntc_design import documents
-    from ntc_design.generate import random_network
+    from ntc_design.io import documents
+    from ntc_design.model.generate import random_network
 
     doc = random_network(n, 3, seed=0).to_dict()
     dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)

@@ -102,7 +102,7 @@ DENSE = (
 )
 IMPORT = "import ntc_design, ntc_design.certify"
 WARM_NUMBA = (
-    "import scipy.sparse as sp; from ntc_design.linalg import cholesky_fill; "
+    "import scipy.sparse as sp; from ntc_design.numerics.linalg import cholesky_fill; "
     "cholesky_fill(sp.csr_matrix([[2.0, 1.0], [1.0, 2.0]]))"
 )
 DENSE_SWITCHING = (
@@ -118,7 +118,7 @@ DENSE_SWITCHING = (
 )
 FILL = (
     "import sys, warnings, numpy as np; import ntc_design as nd; "
-    "from ntc_design.linalg import cholesky_fill; "
+    "from ntc_design.numerics.linalg import cholesky_fill; "
     "warnings.simplefilter('ignore'); "
     "d = nd.design(nd.load(sys.argv[1]), [1, 2, 3], thresholds=False); "
     "l = d.grounded_laplacian_sparse(); f = cholesky_fill((l + l.T).tocsr()); "
@@ -405,8 +405,8 @@ def switching(args, work: Path) -> None:
 
 WRITE_READ_FILES = (
     "import sys; from pathlib import Path; "
-    "from ntc_design.generate import random_network, write_topology; "
-    "from ntc_design.tablefiles import write_csv_edges; "
+    "from ntc_design.model.generate import random_network, write_topology; "
+    "from ntc_design.io.tablefiles import write_csv_edges; "
     "n, d, seed, work = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3]), Path(sys.argv[4]); "
     "top = random_network(n, d, seed=seed); ea = top.edge_arrays; "
     "write_topology(top, work / f'read{n}.npz'); "

@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 
 import ntc_design as nd
-from ntc_design.design import Decomposition, ProtocolDesign
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
+from ntc_design.protocol import Decomposition, ProtocolDesign
 from ntc_design.simulate import NoiseModel, mode_system, simulate
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.kernels import em_steps, kernel_arrays, numpy_step, tile_width

@@ -19,8 +19,9 @@ import numpy as np
 
 import ntc_design as nd
 from ntc_design.certify.time_varying import certify_lambda2
+from ntc_design.model.timevarying import from_document
+from ntc_design.protocol.timevarying import TimeVaryingDesign
 from ntc_design.simulate import NoiseModel, simulate
-from ntc_design.timevarying import TimeVaryingDesign, from_document
 
 ROOT = Path(__file__).resolve().parents[1]
 

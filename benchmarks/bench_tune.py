@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ntc_design.generate import random_network
+from ntc_design.model.generate import random_network
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.moments import MomentRhs
 from ntc_design.simulate.scenario import load_scenario

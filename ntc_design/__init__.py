@@ -16,8 +16,6 @@ T. Niu, B. Mao, X. Wu, T. Huang, arXiv:2602.11822.
 from __future__ import annotations
 
 import importlib
-import sys
-import types
 from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
@@ -27,24 +25,25 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "AssumptionWarning": "errors",
     "InputError": "errors",
-    "ProtocolDesign": "design",
-    "SwitchingDesign": "design",
+    "ProtocolDesign": "protocol",
+    "SwitchingDesign": "protocol",
     "SwitchingTopology": "model",
     "TimeVaryingTopology": "model",
     "Topology": "model",
-    "assumption2": "design",
-    "example_path": "paper",
-    "load": "loader",
-    "random_network": "generate",
+    "assumption2": "protocol",
+    "design": "protocol",
+    "example_path": "model.paper",
+    "load": "model.load",
+    "random_network": "model.generate",
 }
 
 if TYPE_CHECKING:
-    from .design import ProtocolDesign, SwitchingDesign, assumption2, design
     from .errors import AssumptionWarning, InputError
-    from .generate import random_network
-    from .loader import load
     from .model import SwitchingTopology, TimeVaryingTopology, Topology
-    from .paper import example_path
+    from .model.generate import random_network
+    from .model.load import load
+    from .model.paper import example_path
+    from .protocol import ProtocolDesign, SwitchingDesign, assumption2, design
 
 __all__ = [
     "AssumptionWarning",
@@ -60,36 +59,6 @@ __all__ = [
     "load",
     "random_network",
 ]
-
-
-class _Package(types.ModuleType):
-    """The package module: ``ntc_design.design`` is Lemma 1's :func:`~ntc_design.design.design`
-    (as it always was), although the subpackage of the same name binds itself here when
-    it is first imported."""
-
-    @property
-    def design(self):
-        override = self.__dict__.get("_design_override")
-        if override is not None:
-            return override
-        from .design.lemma1 import design
-
-        return design
-
-    @design.setter
-    def design(self, value) -> None:
-        # the import system binds the subpackage here when it is first imported: kept
-        # aside; anything else (a test's patch) replaces the function until deleted
-        if isinstance(value, types.ModuleType) and value.__name__ == f"{__name__}.design":
-            return
-        self.__dict__["_design_override"] = value
-
-    @design.deleter
-    def design(self) -> None:
-        self.__dict__.pop("_design_override", None)
-
-
-sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name: str):

@@ -4,7 +4,7 @@
   whose edge u -> v carries A_vu, agent v listening to u, as the d×d matrix under an
   attribute, default ``"weight"``; a scalar is accepted for d = 1). Round trips are exact.
 * files: :func:`save_topology` writes the topology-file form (YAML, or JSON by the
-  ``.json`` suffix) that :func:`ntc_design.loader.load` reads back exactly.
+  ``.json`` suffix) that :func:`ntc_design.model.load.load` reads back exactly.
 * python-control: :func:`design_statespace`, the noise-free protocol at c = 1 as a
   ``control.StateSpace`` with state x (Nd), input θ (d) and output x.
 * pandas: :func:`simulation_frame`, a simulation result as a tidy DataFrame.
@@ -23,16 +23,16 @@ import numpy as np
 import yaml
 
 from .errors import InputError
-from .files import jsonable
+from .io.files import jsonable
+from .io.outputs import write_atomic
 from .model import Topology
-from .outputs import write_atomic
 from .simulate.result import simulation_frame
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     import control
     import networkx as nx
 
-    from .design import ProtocolDesign
+    from .protocol import ProtocolDesign
 
 
 # ---------------------------------------------------------------------------- networkx
@@ -133,7 +133,7 @@ def topology_to_networkx(top: Topology, weight: str = "weight") -> nx.DiGraph:
 
 def save_topology(top: Topology, path: str | Path) -> Path:
     """Write the topology file (YAML, or JSON when the suffix is ``.json``) atomically;
-    :func:`ntc_design.loader.load` reads it back exactly (floats are written in full).
+    :func:`ntc_design.model.load.load` reads it back exactly (floats are written in full).
 
     Parameters
     ----------

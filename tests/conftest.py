@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
-from ntc_design import SwitchingTopology, Topology, paper
+from ntc_design import SwitchingTopology, Topology
+from ntc_design.model import paper
 
 # Every size check assumes the same memory on every machine (an 8 GB laptop's share), so a
 # refusal's wording and order never depend on what the machine has free.

@@ -7,13 +7,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from ntc_design import InputError, Topology, design, load, paper
+from ntc_design import InputError, Topology, load
+from ntc_design import protocol as design
 from ntc_design.interop import (
     design_statespace,
     save_topology,
     topology_from_networkx,
     topology_to_networkx,
 )
+from ntc_design.model import paper
 from tests.conftest import random_topology
 
 

@@ -8,7 +8,7 @@ symbolic, with a bounded time.
 
 import matplotlib.pyplot as plt
 
-from ntc_design.gain import analyse_gain
+from ntc_design.gain.conditions import analyse_gain
 from ntc_design.reports.figures import gain_figure
 
 for expr in ["1/(1+t)", "(1+t)^(-1/3)", "(1+t)^(-2)", "1/log(2+t)"]:

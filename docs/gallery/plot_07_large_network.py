@@ -9,7 +9,7 @@ component (nothing dense), then simulated with the implicit scheme for a few pat
 import matplotlib.pyplot as plt
 
 from ntc_design.certify import certify
-from ntc_design.generate import random_network
+from ntc_design.model.generate import random_network
 from ntc_design.reports.aggregate import degree_figure
 from ntc_design.simulate import simulate
 

@@ -3,7 +3,7 @@ theorem verdict. Certificate kinds live in :mod:`ntc_design.certify.kinds` (a ba
 one module per kind, and the registry :data:`KINDS`); :func:`verify` re-checks any kind
 through one path."""
 
-from ..gain import GainAnalysis, analyse_gain
+from ..gain.conditions import GainAnalysis, analyse_gain
 from .checks import About, Check, Verification
 from .claims import Claim, ClaimKind, Property
 from .format import DIGEST_NOTE, topology_hash, write_certificate

@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from ..design import ProtocolDesign, lemma1_delta
 from ..errors import InputError
-from ..linalg import RANGE_TEXT, out_of_range
 from ..model import Topology
+from ..numerics.linalg import RANGE_TEXT, out_of_range
+from ..protocol import ProtocolDesign, lemma1_delta
 from .checks import Check
 from .fields import need, number, vector
 
@@ -174,7 +174,7 @@ def margin_check(name: str, sub: dict, where: str, top: Topology, delta: float) 
     """Lemma 1's subject: δ = C + ΔC with a margin ΔC > 0 (read, never trusted: a
     certificate whose subject states ΔC <= 0 is not about a Lemma 1 design), and the
     stated δ re-derived from the subject's topology and ΔC as the design chooses it
-    (:func:`ntc_design.design.lemma1_delta`: C from Assumption 2's decomposition), so a
+    (:func:`ntc_design.protocol.lemma1_delta`: C from Assumption 2's decomposition), so a
     margin changed in the subject and re-sealed no longer verifies.
 
     Parameters

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import one_line
 from ..model import SwitchingTopology, Topology
-from ..rows import Table, verdict
+from ..present.rows import Table, verdict
 from .claims import PROPERTY_TEXT, Claim, Property
 from .format import DIGEST_NOTE, digest, document_hash, switching_hash, topology_hash
 
@@ -159,7 +159,7 @@ class Verification:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         rows = [
             (c.name, verdict(c.ok, word="ok" if c.ok else "FAILS"), c.detail) for c in self.checks
@@ -353,7 +353,7 @@ def verification_tables(doc: dict) -> list[Table]:
 
     Returns
     -------
-    list of ntc_design.rows.Table
+    list of ntc_design.present.rows.Table
     """
     tables = []
     ab = doc["certifies"]

@@ -18,12 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from ..design import ProtocolDesign
-from ..design.lemma1 import coupling_matrix
 from ..errors import InputError
-from ..files import parse_topology
-from ..linalg import DENSE_MAX_BYTES, RANGE_TEXT, DenseRefused, out_of_range
+from ..io.files import parse_topology
 from ..model import Topology, antagonistic_in_weight
+from ..numerics.linalg import DENSE_MAX_BYTES, RANGE_TEXT, DenseRefused, out_of_range
+from ..protocol import ProtocolDesign
+from ..protocol.lemma1 import coupling_matrix
 from ..rigorous.exact import (
     EXACT_MAX_N,
     Dyadic,

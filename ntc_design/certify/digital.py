@@ -1,6 +1,6 @@
 """The digital certificate's mathematics: from a Lyapunov matrix P of the continuous design,
 the gains for which the sampled (and delayed) recursion contracts in mean square, and the
-first step k₀ from which it does (:mod:`ntc_design.design.digital` states the recursion).
+first step k₀ from which it does (:mod:`ntc_design.protocol.digital` states the recursion).
 
 Notation: ‖x‖²_P = xᵀPx, M = P L + Lᵀ P, Q = Lᵀ P L, N = Σ_e G_eᵀ P G_e and
 γ = Σ_e g_eᵀ P g_e (every mode's L = L_B and edges), τ_k = h c_k, v_k = E‖e_k‖²_P.
@@ -57,7 +57,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import InputError
-from ..expr import parse_expression
+from ..expr.symbolic import parse_expression
 from ..rigorous.exact import Dyadic, PDProof, exact_affordable, exact_pd
 from ..rigorous.floatmat import FloatMat
 from .mu2 import T0_SCAN_END, mu2_t0, prove_below

@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..linalg import MAGNITUDE_EXP
+from ..io.outputs import write_atomic
 from ..model import Topology
-from ..outputs import write_atomic
+from ..numerics.linalg import MAGNITUDE_EXP
 
 FORMAT = "ntc-design/certificate"
 
@@ -44,7 +44,7 @@ MAX_CERT_BYTES = 256 * 2**20
 
 
 #: The magnitude range of every nonzero number entering a proof (the model's weight range,
-#: :data:`ntc_design.linalg.MAGNITUDE_EXP`).
+#: :data:`ntc_design.numerics.linalg.MAGNITUDE_EXP`).
 NUMBER_EXP = MAGNITUDE_EXP
 
 
@@ -330,7 +330,7 @@ def finish(doc: dict, method: str | None = None) -> dict:
 
 
 def write_certificate(doc: dict, path: str | Path, option: str = "--out") -> None:
-    """Write a certificate atomically (:func:`ntc_design.outputs.write_atomic`): a reader
+    """Write a certificate atomically (:func:`ntc_design.io.outputs.write_atomic`): a reader
     never sees a half-written file.
 
     Parameters

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from ..expr import compile_expression, parse_expression, symbol
+from ..expr.symbolic import compile_expression, parse_expression, symbol
 from ..rigorous.interval import bounds, enclose, t_ball
 
 T0_SCAN_END = 1e9
@@ -47,7 +47,7 @@ def mu2_t0(gain: Any, kappa: float) -> tuple[float | None, str]:
     Parameters
     ----------
     gain : str or sympy.Expr
-        c(t): text (parsed safely, :mod:`ntc_design.expr`), or a GainAnalysis's expression.
+        c(t): text (parsed safely, :mod:`ntc_design.expr.symbolic`), or a GainAnalysis's expression.
     kappa : float
         The level from :func:`mu2_threshold`.
 

@@ -8,15 +8,16 @@ from typing import Any
 
 import numpy as np
 
-from ..design import ProtocolDesign, SwitchingDesign, design
-from ..design.digital import Digital, DigitalDesign
 from ..errors import InputError
-from ..gain import GainAnalysis
+from ..gain.conditions import GainAnalysis
+from ..gain.schedule import ScheduleGain, analyse_any_gain
 from ..model import SwitchingTopology, Topology
-from ..paper import F_SCALE, SIGMA
-from ..rows import Table
-from ..schedule import ScheduleGain, analyse_any_gain
-from ..timevarying import ExpressionTopology, TimeVaryingDesign
+from ..model.paper import F_SCALE, SIGMA
+from ..model.timevarying import ExpressionTopology
+from ..present.rows import Table
+from ..protocol import ProtocolDesign, SwitchingDesign, design
+from ..protocol.digital import Digital, DigitalDesign
+from ..protocol.timevarying import TimeVaryingDesign
 from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
 from .format import digest
@@ -54,7 +55,7 @@ class CertifyResult:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         rows = [
             (row.label + (" (estimate)" if row.estimate else ""), row.value) for row in self.rows
@@ -79,7 +80,7 @@ class CertifyResult:
 
         Returns
         -------
-        tuple of ntc_design.rows.Table
+        tuple of ntc_design.present.rows.Table
         """
         conditions = (self.gain.table(),) if gain and self.gain is not None else ()
         return (
@@ -95,7 +96,7 @@ class CertifyResult:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         return theorem_table(self.theorems, assumption_notes(self.design))
 

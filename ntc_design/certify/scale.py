@@ -48,8 +48,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sparse
 
-from ..design import ProtocolDesign
-from ..linalg import (
+from ..model import Topology, block_coo
+from ..numerics.linalg import (
     CODE_SIGN,
     DENSE_MAX_BYTES,
     DenseRefused,
@@ -57,9 +57,9 @@ from ..linalg import (
     cholesky_fill,
     comparison_solve,
 )
-from ..model import Topology, block_coo
+from ..protocol import ProtocolDesign
+from ..protocol.thresholds import strong_components
 from ..rigorous.exact import U, gamma, rump_shift_value
-from ..thresholds import strong_components
 from .arrays import mode_subject, pack
 from .dense import prove_pd_expr
 from .format import FORMAT, VERSION, finish
@@ -396,7 +396,7 @@ def symmetric_part_bound(
     ``lap``: one sparse Cholesky factorisation (CHOLMOD) of ``A − cI`` succeeds, with A
     and E from :func:`shifted_symmetric_part` and c = :func:`rump_shift` (A, E). A
     success on the bit-identical A − cI earlier in the process is not factorised again
-    (:meth:`~ntc_design.linalg.SPDFamily.factor`, ``reuse``).
+    (:meth:`~ntc_design.numerics.linalg.SPDFamily.factor`, ``reuse``).
 
     Parameters
     ----------
@@ -415,7 +415,7 @@ def symmetric_part_bound(
     Raises
     ------
     InputError
-        The factorisation would not fit (:func:`~ntc_design.linalg.require_sparse_factor`).
+        The factorisation would not fit (:func:`~ntc_design.numerics.linalg.require_sparse_factor`).
     """
     return symmetric_part_factor(lap, err, shift, reuse=True)[0]
 
@@ -474,7 +474,7 @@ def prove_symmetric_part(lap: sparse.csr_matrix, err: sparse.csr_matrix) -> tupl
     Raises
     ------
     InputError
-        The factorisation would not fit (:func:`~ntc_design.linalg.require_sparse_factor`).
+        The factorisation would not fit (:func:`~ntc_design.numerics.linalg.require_sparse_factor`).
     """
     p = symmetric_part_bound(lap, err)
     return p.holds, p.detail

@@ -27,7 +27,7 @@ the estimate reported beside it: one factorisation per mode. Modes of Nd >=
 single-threaded), and ``verify`` does the same. ``verify`` factorises once per mode; ``ntc certify`` re-verifies its own
 certificate without factorising a bit-identical matrix again (``SPDFamily.factor``,
 ``reuse``). Each factorisation is preceded by a structural analysis
-(:func:`~ntc_design.linalg.cholesky_fill`) that refuses a factor above the memory or
+(:func:`~ntc_design.numerics.linalg.cholesky_fill`) that refuses a factor above the memory or
 work limits before it is computed. Fill grows with the symmetrised graph: on random
 networks (d = 3) a factorisation takes 0.05 s at N = 10⁴ and 16-20 s at N = 10⁵.
 """
@@ -41,10 +41,10 @@ from typing import Any
 
 import numpy as np
 
-from ..design import SwitchingDesign
 from ..errors import InputError
-from ..linalg import DenseRefused, SPDFamily, fork_map, proof_workers
 from ..model import Topology
+from ..numerics.linalg import DenseRefused, SPDFamily, fork_map, proof_workers
+from ..protocol import SwitchingDesign
 from .arrays import mode_subject
 from .claims import Claim, ClaimKind, Property
 from .fields import number
@@ -140,7 +140,7 @@ def _min_eig_estimate(
 
 
 def mode_processes(tops: list[Topology]) -> int:
-    """Processes to prove these modes in (:func:`~ntc_design.linalg.fork_map`): one per
+    """Processes to prove these modes in (:func:`~ntc_design.numerics.linalg.fork_map`): one per
     CPU, within memory, when one of them has Nd >= ``PARALLEL_MIN_ND``; else this one.
 
     Parameters

@@ -21,11 +21,11 @@ from typing import Any
 
 import sympy as sp
 
-from ..design import ProtocolDesign, SwitchingDesign, fix_notes
-from ..design.digital import DigitalDesign
 from ..errors import one_line
-from ..gain import CONDITION_LABELS, GainAnalysis
-from ..rows import Table, lines, verdict
+from ..gain.conditions import CONDITION_LABELS, GainAnalysis
+from ..present.rows import Table, lines, verdict
+from ..protocol import ProtocolDesign, SwitchingDesign, fix_notes
+from ..protocol.digital import DigitalDesign
 from .checks import Verification
 from .claims import Property
 from .mu2 import T0_SCAN_END
@@ -134,7 +134,7 @@ def theorem_table(
 
     Returns
     -------
-    ntc_design.rows.Table
+    ntc_design.present.rows.Table
     """
     rows = []
     for th in verdicts:

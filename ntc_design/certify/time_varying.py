@@ -40,24 +40,23 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from ..design import design_topology
 from ..errors import InputError
-from ..expr import symbol
-from ..gain import GainAnalysis
-from ..linalg import DEF_RTOL
+from ..expr.symbolic import symbol
+from ..gain.conditions import GainAnalysis
 from ..model import Topology
-from ..paper import F_SCALE, SIGMA
-from ..rigorous.exact import gamma
-from ..rigorous.interval import bounds, enclose, t_ball, upper
-from ..timevarying import (
-    ExpressionTopology,
+from ..model.enclosure import interval_mid_rad, sym_min_eig_lower
+from ..model.paper import F_SCALE, SIGMA
+from ..model.timevarying import ExpressionTopology
+from ..numerics.linalg import DEF_RTOL
+from ..protocol import design_topology
+from ..protocol.timevarying import (
     Lemma1Structure,
     grounded_laplacian_batch,
-    interval_mid_rad,
     lemma1_batch,
     lemma1_structure,
-    sym_min_eig_lower,
 )
+from ..rigorous.exact import gamma
+from ..rigorous.interval import bounds, enclose, t_ball, upper
 from .format import FORMAT, VERSION, finish
 from .mu2 import mu2_t0, mu2_threshold, noise_sigma_bar
 

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..gain.schedule import schedule_checks
 from ..model import SwitchingTopology, Topology
-from ..schedule import schedule_checks
-from ..timevarying import ExpressionTopology
+from ..model.timevarying import ExpressionTopology
 from .checks import (
     About,
     Check,

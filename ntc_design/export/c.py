@@ -1,4 +1,4 @@
-"""The agents' law (:mod:`ntc_design.design.agents`) as dependency-free C99:
+"""The agents' law (:mod:`ntc_design.protocol.agents`) as dependency-free C99:
 ``ntc_protocol.h`` (the types, the sizes, the functions), ``ntc_protocol.c`` (the tables,
 c(t), the schedule rule, the measurement and the agent's update) and ``ntc_replay.c`` (a
 program that reads x(0), K and the normals on stdin and prints x_K).
@@ -17,8 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import __version__
-from ..design.agents import AgentLaw, ModeLaw
-from ..exprcode import literal
+from ..expr.code import literal
+from ..protocol.agents import AgentLaw, ModeLaw
 
 #: The command the README gives (and the tests run).
 COMPILE = (

@@ -1,4 +1,4 @@
-"""The agents' law (:mod:`ntc_design.design.agents`) as one dependency-free Python module,
+"""The agents' law (:mod:`ntc_design.protocol.agents`) as one dependency-free Python module,
 ``ntc_protocol.py``: the tables, c(t), the schedule rule, the measurement, the agent's
 update and a replay (``python ntc_protocol.py < input``, the stdin and stdout of the C
 program :mod:`.c` writes). It uses only :mod:`math` and :mod:`sys`; every operation is the
@@ -14,8 +14,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import __version__
-from ..design.agents import AgentLaw
-from ..exprcode import PYTHON_HELPERS, literal
+from ..expr.code import PYTHON_HELPERS, literal
+from ..protocol.agents import AgentLaw
 
 FILES = ("ntc_protocol.py",)
 

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..design.agents import AgentLaw
 from ..errors import InputError
-from ..exprcode import literal
-from ..outputs import check_output_folder, output_folder
-from ..schedule import ScheduleGain
+from ..expr.code import literal
+from ..gain.schedule import ScheduleGain
+from ..io.outputs import check_output_folder, output_folder
+from ..protocol.agents import AgentLaw
 from ..simulate.replay import replay
 from .c import COMPILE, c_files
 from .python import python_files

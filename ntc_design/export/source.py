@@ -1,4 +1,4 @@
-"""What ``ntc export`` exports: the agents' law (:class:`~ntc_design.design.agents.AgentLaw`)
+"""What ``ntc export`` exports: the agents' law (:class:`~ntc_design.protocol.agents.AgentLaw`)
 of a certified design, from a scenario or from a certificate.
 
 - A scenario (YAML or JSON, :func:`~ntc_design.simulate.scenario.load_scenario`): its
@@ -32,14 +32,14 @@ from ..certify import KINDS, verify
 from ..certify.dense import DenseContext
 from ..certify.fields import vector
 from ..certify.format import FORMAT
-from ..design.agents import AgentLaw, agent_law, make_law, mode_law
-from ..design.digital import Digital, DigitalDesign
-from ..design.lemma1 import ProtocolDesign, SwitchingDesign
-from ..documents import read_document
 from ..errors import AssumptionWarning, InputError
+from ..gain.schedule import ScheduleGain, analyse_any_gain, schedule_from_document
+from ..io.documents import read_document
 from ..model import SwitchingTopology, Topology
-from ..paper import F_SCALE, SIGMA
-from ..schedule import ScheduleGain, analyse_any_gain, schedule_from_document
+from ..model.paper import F_SCALE, SIGMA
+from ..protocol.agents import AgentLaw, agent_law, make_law, mode_law
+from ..protocol.digital import Digital, DigitalDesign
+from ..protocol.lemma1 import ProtocolDesign, SwitchingDesign
 from ..simulate.noise import NoiseModel, noise_from_document
 from ..simulate.spec import SimulationSpec
 
@@ -109,7 +109,7 @@ def _digital(
 def _gain_option(gain: str | ScheduleGain | None) -> str | ScheduleGain | None:
     if gain is None or isinstance(gain, ScheduleGain):
         return gain
-    from ..schedule import gain_from_option
+    from ..gain.schedule import gain_from_option
 
     return gain_from_option(gain, "--gain")
 
@@ -157,7 +157,7 @@ def from_scenario(
         certificate does not verify or for which no theorem is guaranteed.
     """
     from ..certify import certify
-    from ..files import parse_scenario
+    from ..io.files import parse_scenario
     from ..simulate.scenario import load_scenario
 
     sc = parse_scenario(path)

@@ -10,7 +10,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from ..linalg import DEF_RTOL
+from ..numerics.linalg import DEF_RTOL
 from .topology import Topology
 
 
@@ -76,7 +76,7 @@ def in_degree_dominated_all(top: Topology) -> np.ndarray:
 def in_degree_dominated(top: Topology, i: int) -> bool:
     """Niu & Wu, Definition 4 (eq. (10)): agent i is in-degree-dominated when
     ``Σ_{j∈N_i}|A_ij| - Σ_{j∈N'_i}|A_ji| ⪰ 0`` (zero eigenvalues up to the tolerance of
-    :mod:`ntc_design.linalg`, relative to the norms of the two sums).
+    :mod:`ntc_design.numerics.linalg`, relative to the norms of the two sums).
 
     Parameters
     ----------

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import files
 from ..errors import InputError
-from ..rows import Table
+from ..io import files
+from ..present.rows import Table
 from .topology import Label, Topology
 
 
@@ -70,8 +70,8 @@ class SwitchingTopology:
 
         Parameters
         ----------
-        data : ntc_design.files.SwitchingData
-            As :func:`ntc_design.files.parse_switching` returns it.
+        data : ntc_design.io.files.SwitchingData
+            As :func:`ntc_design.io.files.parse_switching` returns it.
 
         Returns
         -------
@@ -119,7 +119,7 @@ class SwitchingTopology:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         rows: list[tuple] = [("agents N", self.n), ("state dimension d", self.dim)]
         rows += [(f"mode {k}", repr(m)) for k, m in self.modes.items()]

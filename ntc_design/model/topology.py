@@ -14,10 +14,10 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sparse
 
-from .. import files
-from ..edgelist import EdgeListData
 from ..errors import InputError
-from ..linalg import (
+from ..io import files
+from ..io.edgelist import EdgeListData
+from ..numerics.linalg import (
     CODE_DEFINITE,
     CODE_SIGN,
     DEF_CODES,
@@ -27,8 +27,8 @@ from ..linalg import (
     classify_codes,
     require_dense,
 )
-from ..rows import Table, set_text
-from ..svg import network_svg
+from ..present.rows import Table, set_text
+from ..present.svg import network_svg
 
 Label = files.Label
 _INDEF = 5  # code of Definiteness.INDEFINITE in linalg.DEF_CODES
@@ -70,7 +70,7 @@ class Topology:
     source: str | None = None
     fields: Mapping[tuple[int, int], str] = field(default_factory=dict, repr=False)
     #: Relative radius ρ_e of an edge's Loewner interval, where the file gives one (an
-    #: ``uncertainty:`` value; :mod:`ntc_design.certify.robust`). Not part of the nominal
+    #: ``uncertainty:`` value; :mod:`ntc_design.certify.robust.search`). Not part of the nominal
     #: network: left out of :meth:`to_dict` and of the topology hash.
     uncertainty: Mapping[tuple[int, int], float] = field(
         default_factory=dict, repr=False, compare=False
@@ -289,9 +289,9 @@ class Topology:
 
         Parameters
         ----------
-        data : ntc_design.files.TopologyData or ntc_design.edgelist.EdgeListData
-            As :func:`ntc_design.files.parse_topology` or
-            :func:`ntc_design.edgelist.read_npz` returns it.
+        data : ntc_design.io.files.TopologyData or ntc_design.io.edgelist.EdgeListData
+            As :func:`ntc_design.io.files.parse_topology` or
+            :func:`ntc_design.io.edgelist.read_npz` returns it.
 
         Returns
         -------
@@ -619,7 +619,7 @@ class Topology:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         ea = self._arrays
         counts = {c: int(np.sum(ea.codes == k)) for k, c in enumerate(DEF_CODES)}

@@ -18,11 +18,11 @@ from matplotlib.ticker import MaxNLocator
 
 from ..certify import KINDS, CertifyResult
 from ..certify.format import package_versions
-from ..design import ProtocolDesign, SwitchingDesign
 from ..model import Topology
-from ..rows import fmt
+from ..present.rows import fmt
+from ..protocol import ProtocolDesign, SwitchingDesign
+from ..protocol.thresholds import strong_components
 from ..simulate.result import MeanSquareBand
-from ..thresholds import strong_components
 from .figlist import Drawn, FigureSpec, render_figures
 from .figures import states_figure
 from .html import RunSection, Table, html_table

@@ -10,9 +10,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import NullFormatter
 
-from ..design.digital import Digital
 from ..errors import InputError
-from ..rows import fmt
+from ..present.rows import fmt
+from ..protocol.digital import Digital
 from ..simulate import SimulationSpec
 from ..simulate.digital import digital_moments
 from ..simulate.driver import make_gain, prepare_modes, sampled_grid

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import paper
-from ..design import SwitchingDesign, design
+from ..model import paper
+from ..protocol import SwitchingDesign, design
 from ..simulate import NoiseModel, simulate
 from . import figures, graph_figure, style
 from .reproduce import fine_paths

@@ -31,7 +31,7 @@ from matplotlib.artist import Artist
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from ..gain import parse_gain
+from ..gain.conditions import parse_gain
 from ..simulate import make_gain
 from ..simulate.result import MeanSquareBand
 from ..sweep.robust import study_radius_text
@@ -391,7 +391,7 @@ class CouplingCurve:
 def coupling_curve(des, points: int = 240) -> CouplingCurve:
     """Sample the decay rate ``−max Re λ(−L_B(δ))`` and ``λ_min(L_B + L_Bᵀ)`` over a
     logarithmic δ range around Lemma 1's δ and the critical couplings of ``des``
-    (a :class:`~ntc_design.design.ProtocolDesign`; without thresholds only δ is marked).
+    (a :class:`~ntc_design.protocol.ProtocolDesign`; without thresholds only δ is marked).
 
     Parameters
     ----------
@@ -611,7 +611,7 @@ def robust_figure(reports: Sequence, margin: tuple[float | None, float | None] |
     Parameters
     ----------
     reports : sequence of RobustReport
-        One per radius (:func:`ntc_design.certify.robust.robust_sweep`).
+        One per radius (:func:`ntc_design.certify.robust.search.robust_sweep`).
     margin : (float, float), optional
         The margin bracket (ρ_lower, ρ_upper), drawn as a band where stability is no
         longer proven.

@@ -12,8 +12,8 @@ import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, FancyArrowPatch
 
-from ..linalg import Definiteness, classify
 from ..model import Topology
+from ..numerics.linalg import Definiteness, classify
 from .style import BLUE, GREEN, ONE_COLUMN, RED, paper_style
 
 

@@ -1,6 +1,6 @@
 """The HTML face of the reports: the Jinja2 environment (autoescaped templates in
 ``templates/``), the cell, figure and section records the templates read, and the
-conversion of the presentation tables (:mod:`ntc_design.rows`) into them."""
+conversion of the presentation tables (:mod:`ntc_design.present.rows`) into them."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ from pathlib import Path
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 from markupsafe import Markup, escape
 
-from ..outputs import write_atomic
-from ..rows import Table as RowsTable
+from ..io.outputs import write_atomic
+from ..present.rows import Table as RowsTable
 from . import style
 
 # ------------------------------------------------------------------------- rendering
@@ -22,7 +22,7 @@ from . import style
 @dataclass(frozen=True)
 class Table:
     """A table for the templates: header texts and rows of cells; a cell is text (escaped by
-    the template) or the Markup of :meth:`ntc_design.rows.Cell.html` (:func:`html_table`)."""
+    the template) or the Markup of :meth:`ntc_design.present.rows.Cell.html` (:func:`html_table`)."""
 
     headers: tuple[str, ...]
     rows: list
@@ -30,7 +30,7 @@ class Table:
 
     def __post_init__(self) -> None:
         # a cell is text or Markup, never a value the template would print as Python
-        # (a dict, a bool, None): build such a cell as a ntc_design.rows.Cell
+        # (a dict, a bool, None): build such a cell as a ntc_design.present.rows.Cell
         for r in self.rows:
             for c in r:
                 if not isinstance(c, str):
@@ -124,7 +124,7 @@ def render(template: str, **context) -> str:
 
 
 def write_html(path: Path, text: str) -> None:
-    """Write atomically (:func:`ntc_design.outputs.write_atomic`: no temporary file is left
+    """Write atomically (:func:`ntc_design.io.outputs.write_atomic`: no temporary file is left
     when the write fails)."""
     write_atomic(path, text, option="report")
 
@@ -159,12 +159,12 @@ def figure_block(
 
 
 def html_table(t: RowsTable, table_id: str | None = None) -> Table:
-    """A presentation table (:mod:`ntc_design.rows`) for the templates: the same labels
-    and cells as the terminal, each cell rendered once by :meth:`ntc_design.rows.Cell.html`.
+    """A presentation table (:mod:`ntc_design.present.rows`) for the templates: the same labels
+    and cells as the terminal, each cell rendered once by :meth:`ntc_design.present.rows.Cell.html`.
 
     Parameters
     ----------
-    t : ntc_design.rows.Table
+    t : ntc_design.present.rows.Table
         The table.
     table_id : str, optional
         An ``id`` for the table element.

@@ -9,12 +9,12 @@ from pathlib import Path
 import numpy as np
 
 from ..certify import CertifyResult, certify, verify_file, write_certificate
-from ..design.digital import Digital
 from ..errors import InputError
-from ..rows import Cell, fmt, verdict
-from ..rows import Table as RowsTable
-from ..rows import matrix as rows_matrix
-from ..schedule import schedule_from_document
+from ..gain.schedule import schedule_from_document
+from ..present.rows import Cell, fmt, verdict
+from ..present.rows import Table as RowsTable
+from ..present.rows import matrix as rows_matrix
+from ..protocol.digital import Digital
 from ..simulate import SimulationDiverged, SimulationSpec, simulate
 from ..simulate.noise import noise_from_document
 from ..simulate.result import MeanSquareBand

@@ -17,19 +17,20 @@ from ntc_design.certify.format import package_versions
 
 from ..certify import CertifyResult, certify
 from ..certify.kinds.time_varying import time_varying_results
-from ..design import ProtocolDesign, SwitchingDesign
-from ..design.digital import Digital, DigitalDesign
 from ..errors import InputError
-from ..gain import T, limit_at_infinity, parse_gain
+from ..gain.conditions import T, limit_at_infinity, parse_gain
+from ..gain.schedule import ScheduleGain
+from ..io.outputs import check_output_file
 from ..model import SwitchingTopology, Topology
-from ..outputs import check_output_file
-from ..paper import F_SCALE
-from ..rows import fmt
-from ..schedule import ScheduleGain
+from ..model.paper import F_SCALE
+from ..model.timevarying import from_document
+from ..present.rows import fmt
+from ..protocol import ProtocolDesign, SwitchingDesign
+from ..protocol.digital import Digital, DigitalDesign
+from ..protocol.timevarying import TimeVaryingDesign
 from ..simulate.noise import noise_from_document
 from ..simulate.result import MeanSquareBand
 from ..sweep.robust import study_sentence
-from ..timevarying import TimeVaryingDesign, from_document
 from . import figures, graph_figure, style
 from .aggregate import AGGREGATE_ABOVE, aggregate_section
 from .digital import DigitalFacts, digital_drawings, digital_facts

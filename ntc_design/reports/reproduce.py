@@ -19,12 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import paper
-from ..files import jsonable
-from ..model import SwitchingTopology, Topology
-from ..outputs import write_atomic
-from ..rows import Table as RowsTable
-from ..rows import fmt, verdict
+from ..io.files import jsonable
+from ..io.outputs import write_atomic
+from ..model import SwitchingTopology, Topology, paper
+from ..present.rows import Table as RowsTable
+from ..present.rows import fmt, verdict
 from ..simulate import NoiseModel, simulate
 from ..simulate.scenario import write_outputs
 from .html import html_table, render, write_html

@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, format_bytes, one_line, require_number, require_positive
-from ..files import parse_topology
-from ..gain import parse_gain
+from ..gain.conditions import parse_gain
+from ..gain.schedule import ScheduleGain, schedule_from_document
+from ..io.files import parse_topology
 from ..model import SwitchingTopology, Topology
-from ..schedule import ScheduleGain, schedule_from_document
 from ..simulate.budget import MEMORY_FRACTION, available_memory
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")

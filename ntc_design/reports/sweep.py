@@ -16,8 +16,8 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from ..errors import InputError
-from ..outputs import check_output_file, write_atomic
-from ..rows import fmt
+from ..io.outputs import check_output_file, write_atomic
+from ..present.rows import fmt
 from .html import render
 from .style import MARKERS, TWO_COLUMN, agent_style, markevery, paper_style, save
 

@@ -1,5 +1,5 @@
 """The terminal face: the console the CLI prints to, presentation tables
-(:mod:`ntc_design.rows`) rendered with rich, and progress on stderr (a bar on a terminal,
+(:mod:`ntc_design.present.rows`) rendered with rich, and progress on stderr (a bar on a terminal,
 plain lines in a batch job)."""
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..errors import format_seconds, one_line
-from ..rows import Cell
-from ..rows import Table as RowsTable
+from ..present.rows import Cell
+from ..present.rows import Table as RowsTable
 
 PLAIN_EVERY = 10.0  # seconds between progress lines when stderr is not a terminal
 
@@ -88,7 +88,7 @@ def print_table(t: RowsTable) -> None:
 
     Parameters
     ----------
-    t : ntc_design.rows.Table
+    t : ntc_design.present.rows.Table
         The table.
     """
     if t.layout == "list":

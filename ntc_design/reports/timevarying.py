@@ -11,7 +11,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..timevarying import TimeVaryingDesign
+from ..protocol.timevarying import TimeVaryingDesign
 from . import style
 
 

@@ -20,10 +20,10 @@ from matplotlib.patches import Rectangle
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ..certify import write_certificate
-from ..files import ScenarioData, jsonable
-from ..outputs import output_folder
-from ..rows import Table, fmt
-from ..schedule import ScheduleGain
+from ..gain.schedule import ScheduleGain
+from ..io.files import ScenarioData, jsonable
+from ..io.outputs import output_folder
+from ..present.rows import Table, fmt
 from ..tune import ScheduleTuneResult, TuneResult, tuned_scenario
 from ..tune.family import BASELINE
 from . import style
@@ -334,7 +334,7 @@ TUNE_FILES = (
 def write_tune_outputs(
     result: TuneResult | ScheduleTuneResult, scenario: ScenarioData, out_dir: str | Path
 ) -> list[str]:
-    """Write a tuning's folder, all or nothing (:func:`ntc_design.outputs.output_folder`):
+    """Write a tuning's folder, all or nothing (:func:`ntc_design.io.outputs.output_folder`):
     ``tuned.yaml`` (the scenario with the tuned gain, T and any stepping it needs, its
     topology path relative to the folder), ``tune.json``, ``certificate.json`` and
     ``tune.html`` with its figures.
@@ -356,7 +356,7 @@ def write_tune_outputs(
     Raises
     ------
     InputError
-        The folder cannot receive the files (see :func:`ntc_design.outputs.output_folder`).
+        The folder cannot receive the files (see :func:`ntc_design.io.outputs.output_folder`).
     """
     sched = isinstance(result, ScheduleTuneResult)
     files = (

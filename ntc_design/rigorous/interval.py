@@ -1,6 +1,6 @@
 """Rigorous enclosures of expressions of t over a t-interval (ball arithmetic, python-flint).
 
-:func:`enclose` evaluates a sympy expression (built by :mod:`ntc_design.expr`, never user
+:func:`enclose` evaluates a sympy expression (built by :mod:`ntc_design.expr.symbolic`, never user
 text) in Arb ball arithmetic with t ranging over a closed interval [a, b]: the result is a
 ball guaranteed to contain the expression's value at every t in [a, b] (Arb's outward
 rounding; functions are evaluated on balls by their enclosure rules). A value that is not
@@ -20,7 +20,7 @@ import numpy as np
 import sympy as sp
 from flint import arb
 
-from ..expr import symbol
+from ..expr.symbolic import symbol
 
 _T = symbol("t")
 
@@ -94,7 +94,7 @@ def enclose(expr: sp.Expr, t: arb, cache: dict | None = None) -> arb:
     Parameters
     ----------
     expr : sympy.Expr
-        An expression of t built by :mod:`ntc_design.expr`.
+        An expression of t built by :mod:`ntc_design.expr.symbolic`.
     t : flint.arb
         The ball t ranges over (see :func:`t_ball`).
     cache : dict, optional

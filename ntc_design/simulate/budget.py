@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, format_bytes
-from ..memory import available_memory
+from ..numerics.memory import available_memory
 from .moments import KAPPA
 from .montecarlo import BATCH, XI_BYTES
 from .system import DENSE_EIG_MAX_ND, DENSE_LB_MAX_ND

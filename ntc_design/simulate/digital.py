@@ -1,4 +1,4 @@
-"""The digital protocol's recursion (:mod:`ntc_design.design.digital`): its time grid, its
+"""The digital protocol's recursion (:mod:`ntc_design.protocol.digital`): its time grid, its
 exact first and second moments, and a reference implementation fed given normals.
 
 Exact moments. With the augmented state z_k = (e_k, e_{k−1}, …, e_{k−D}), the recursion is
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..design.digital import Digital
 from ..errors import InputError, format_bytes
-from ..memory import available_memory
+from ..numerics.memory import available_memory
+from ..protocol.digital import Digital
 from .grid import TimeGrid
 from .moments import MOMENTS_MAX_ND, MomentRecorder, MomentRhs, Moments
 from .system import ModeSystem
@@ -59,7 +59,7 @@ def digital_grid(
     save_times : numpy.ndarray
         The save times asked for.
     step_mode : callable, optional
-        The mode index at each sample time t_k (:func:`~ntc_design.design.digital.step_modes`
+        The mode index at each sample time t_k (:func:`~ntc_design.protocol.digital.step_modes`
         for a switching schedule); None: one mode.
 
     Returns

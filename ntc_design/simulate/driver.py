@@ -18,11 +18,11 @@ from typing import TYPE_CHECKING, TypeAlias, TypeGuard, cast
 
 import numpy as np
 
-from ..design import ProtocolDesign, design_topology
-from ..design.digital import Digital, step_modes
 from ..errors import InputError, format_seconds, quote, warn_user
-from ..exprtree import numeric_function
+from ..expr.tree import numeric_function
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..protocol import ProtocolDesign, design_topology
+from ..protocol.digital import Digital, step_modes
 from .budget import (
     LONG_RUN_SECONDS,
     check_budget,
@@ -51,7 +51,7 @@ from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters,
 from .system import ModeSystem, check_step_size, mode_system
 
 if TYPE_CHECKING:
-    from ..timevarying import ExpressionTopology
+    from ..model.timevarying import ExpressionTopology
 
 # A string: ExpressionTopology's module loads SymPy, which a fixed topology does not need.
 AnyTopology: TypeAlias = "Topology | SwitchingTopology | TimeVaryingTopology | ExpressionTopology"
@@ -70,7 +70,7 @@ def is_expression_topology(topology: object) -> TypeGuard[ExpressionTopology]:
     -------
     bool
     """
-    mod = sys.modules.get("ntc_design.timevarying.topology")
+    mod = sys.modules.get("ntc_design.model.timevarying")
     return mod is not None and isinstance(topology, mod.ExpressionTopology)
 
 
@@ -332,7 +332,7 @@ def simulate(
         Called with path-steps done.
     engine : optional
         Runs the Monte Carlo blocks elsewhere: an object with ``run_mc(spec, progress)``
-        and ``describe()``, e.g. :class:`ntc_design.distributed.DaskEngine` or
+        and ``describe()``, e.g. :class:`ntc_design.sweep.engines.DaskEngine` or
         :class:`ntc_design.simulate.gpu.GpuEngine`. None: on ``workers`` local processes,
         or on the GPU with ``device="gpu"``. The result is the same either way (to
         rounding on the GPU).
@@ -647,7 +647,7 @@ def _step_mode(
     topology: Topology | SwitchingTopology | TimeVaryingTopology, pm: PreparedModes
 ) -> Callable[[np.ndarray], np.ndarray] | None:
     """The mode index at each sample time: the schedule's rule for a switching set
-    (:func:`~ntc_design.design.digital.step_modes`), the re-design segment for a sampled
+    (:func:`~ntc_design.protocol.digital.step_modes`), the re-design segment for a sampled
     A(t), None for one topology."""
     if isinstance(topology, SwitchingTopology):
         schedule = topology.schedule

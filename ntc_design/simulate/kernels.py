@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..linalg import numba_cache_dir
+from ..numerics.linalg import numba_cache_dir
 
 numba_cache_dir()  # before Numba reads its configuration: not into site-packages
 import hashlib  # noqa: E402

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, quote, require_number
-from ..paper import F_SCALE, SIGMA
+from ..model.paper import F_SCALE, SIGMA
 
 
 class StateNoise:
@@ -219,7 +219,7 @@ class NoiseModel:
     scalar s (f(x) = s·x), a d×d matrix F (f(x) = F x) or a callable acting on arrays of
     differences of shape (..., d) (it must satisfy Assumption 1: ‖f(x)‖ <= σ̄‖x‖)."""
 
-    sigma: float = SIGMA  # the paper's σ and f(x) = 0.3x, defined once in ntc_design.paper
+    sigma: float = SIGMA  # the paper's σ and f(x) = 0.3x, defined once in ntc_design.model.paper
     f: float | np.ndarray | Callable[[np.ndarray], np.ndarray] = F_SCALE
     sigma_edges: Mapping[tuple, float] = field(default_factory=dict)
 

@@ -1,5 +1,5 @@
 """The toolkit's reference for the exported agents: :func:`replay` runs THE AGENT LAW of
-:mod:`ntc_design.design.agents` on given normals, with the same operations in the same
+:mod:`ntc_design.protocol.agents` on given normals, with the same operations in the same
 order as the exported C and Python (NumPy vectorised over paths, agents and edges; each
 element's arithmetic is the scalar law's), so the three agree bit for bit.
 
@@ -18,8 +18,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..design.agents import AgentLaw
 from ..errors import InputError
+from ..protocol.agents import AgentLaw
 from .system import ModeSystem
 
 

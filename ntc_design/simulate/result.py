@@ -9,11 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from ..design import ProtocolDesign
-from ..design.lemma1 import DESIGN_KEYS
 from ..errors import quote
-from ..rows import Table, fmt
-from ..svg import curve_svg
+from ..present.rows import Table, fmt
+from ..present.svg import curve_svg
+from ..protocol import ProtocolDesign
+from ..protocol.lemma1 import DESIGN_KEYS
 from .digital import DigitalRun
 from .grid import TimeGrid
 from .moments import Moments
@@ -242,7 +242,7 @@ class SimulationResult:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         rows: list[tuple] = [("agents N", len(self.labels)), ("save times", self.save_times.size)]
         if self.save_times.size:

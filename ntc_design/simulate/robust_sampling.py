@@ -16,7 +16,7 @@ MAX_REALISATIONS = 1000
 class RobustSampling:
     """Weight realisations to simulate besides the nominal network (scenario key
     ``robust: {realizations: K, radius: ρ, seed: S}``): K draws from the Loewner set of
-    :mod:`ntc_design.certify.robust` (every edge's radius is its file's ``uncertainty:``,
+    :mod:`ntc_design.certify.robust.search` (every edge's radius is its file's ``uncertainty:``,
     else ``radius``), each run with the nominal protocol."""
 
     realizations: int = 10

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, blame
-from ..files import ScenarioData, jsonable, parse_scenario
-from ..loader import load
-from ..outputs import check_output_folder, json_text, output_folder
+from ..io.files import ScenarioData, jsonable, parse_scenario
+from ..io.outputs import check_output_folder, json_text, output_folder
+from ..model.load import load
 from .driver import AnyTopology
 from .result import TIDY_COLUMNS, tidy_columns
 from .spec import SimulationSpec
@@ -53,7 +53,7 @@ def load_scenario(
         Top-level scenario keys that replace the file's (``paths``, ``T``, ``dt``,
         ``seed``, ``method``, ...), checked exactly as the file's own.
     data : ScenarioData, optional
-        The file as :func:`ntc_design.files.parse_scenario` already read it (not read again).
+        The file as :func:`ntc_design.io.files.parse_scenario` already read it (not read again).
     flags : mapping of str to str, optional
         The flag that gave each override (``{"paths": "--paths"}``): an error about an
         override names it, not the file.
@@ -132,7 +132,7 @@ def write_outputs(
     res, out_dir: str | Path, extra: dict | None = None, files: dict[str, str] | None = None
 ) -> list[Path]:
     """Write summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz into
-    ``out_dir``, all or nothing (see :func:`ntc_design.outputs.output_folder`).
+    ``out_dir``, all or nothing (see :func:`ntc_design.io.outputs.output_folder`).
 
     Parameters
     ----------

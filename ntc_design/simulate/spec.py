@@ -34,7 +34,6 @@ from typing import Any
 
 import numpy as np
 
-from ..design.digital import Digital
 from ..errors import (
     MAX_SEED,
     InputError,
@@ -45,8 +44,9 @@ from ..errors import (
     require_number,
     require_positive,
 )
-from ..exprtree import numeric_function
-from ..schedule import ScheduleGain, read_schedule, schedule_from_document
+from ..expr.tree import numeric_function
+from ..gain.schedule import ScheduleGain, read_schedule, schedule_from_document
+from ..protocol.digital import Digital
 from .noise import MAX_MAGNITUDE, NoiseModel, noise_from_document
 from .robust_sampling import RobustSampling
 
@@ -488,7 +488,7 @@ class SimulationSpec:
         Weight realisations to simulate too (``ntc simulate`` runs them after the nominal
         network; :func:`ntc_design.sweep.robust.robust_study`).
     digital : Digital or None
-        The sampled protocol (period h, delay D; :mod:`ntc_design.design.digital`): the
+        The sampled protocol (period h, delay D; :mod:`ntc_design.protocol.digital`): the
         recursion is stepped every h instead of the continuous SAN; None: continuous.
     """
 

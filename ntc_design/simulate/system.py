@@ -33,9 +33,9 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from ..design import ProtocolDesign
 from ..errors import InputError
-from ..linalg import comparison_solve
+from ..numerics.linalg import comparison_solve
+from ..protocol import ProtocolDesign
 from .implicit import diagonal_blocks
 from .noise import NoiseModel
 

@@ -20,9 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..design import design_topology
 from ..errors import InputError
-from ..timevarying import ExpressionTopology, Lemma1Structure, TimeVaryingDesign
+from ..model.timevarying import ExpressionTopology
+from ..protocol import design_topology
+from ..protocol.timevarying import Lemma1Structure, TimeVaryingDesign
 from .budget import check_exact_work, check_gain, estimate_exact_steps, gain_samples
 from .grid import TimeGrid
 from .moments import KAPPA, MomentRecorder, Moments
@@ -421,7 +422,7 @@ def tv_designs(tv: ExpressionTopology, theta: np.ndarray, margin: float) -> dict
     Returns
     -------
     dict
-        One :class:`~ntc_design.design.ProtocolDesign`, keyed by the name at t = 0.
+        One :class:`~ntc_design.protocol.ProtocolDesign`, keyed by the name at t = 0.
     """
     return {
         f"{tv.name or 'topology'} at t=0": design_topology(

@@ -15,9 +15,9 @@ from distributed import get_worker
 from threadpoolctl import threadpool_limits
 
 from ..certify import certify
-from ..design import ProtocolDesign, SwitchingDesign
 from ..errors import InputError
-from ..files import jsonable
+from ..io.files import jsonable
+from ..protocol import ProtocolDesign, SwitchingDesign
 from ..simulate import SimulationDiverged, SimulationSpec, simulate
 from .spec import PointTask, topology_from_document
 

@@ -1,5 +1,5 @@
 """Simulation under weight uncertainty: K realisations drawn from the Loewner set of
-:mod:`ntc_design.certify.robust`, each run with the nominal protocol, beside the proven
+:mod:`ntc_design.certify.robust.search`, each run with the nominal protocol, beside the proven
 brackets at the same radii (scenario key ``robust: {realizations, radius, seed}``).
 
 **Draws.** Realisation k uses ``SeedSequence(seed, spawn_key=(k,))``: for every edge
@@ -23,17 +23,17 @@ from typing import Any
 
 import numpy as np
 
-from ..certify.robust import (
+from ..certify.robust.search import (
     abscissa,
     radius_text,
     realised_topology,
     robust,
     uncertain_edges,
 )
-from ..design import ProtocolDesign, design_topology
 from ..errors import InputError
 from ..model import Topology
-from ..rows import fmt
+from ..present.rows import fmt
+from ..protocol import ProtocolDesign, design_topology
 from ..simulate import SimulationSpec, simulate
 
 #: Each realisation's exact decay rate and offset need dense L_B(A') up to this Nd.
@@ -93,7 +93,7 @@ def draw_realisation(top: Topology, radii: np.ndarray, seed: int, k: int) -> Top
     top : Topology
         The nominal topology.
     radii : numpy.ndarray
-        ρ_e per uncertain edge (:class:`ntc_design.certify.robust.UncertainEdges` order).
+        ρ_e per uncertain edge (:class:`ntc_design.certify.robust.search.UncertainEdges` order).
     seed : int
         The study's seed.
     k : int
@@ -227,7 +227,7 @@ def study_sentence(study: dict) -> str:
 
 def study_radius_text(study: dict, short: bool = False) -> str:
     """The study's uncertainty set in words: ``ρ = 0.05``, or the per-edge radii with
-    their largest (:func:`ntc_design.certify.robust.radius_text`).
+    their largest (:func:`ntc_design.certify.robust.search.radius_text`).
 
     Parameters
     ----------

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..distributed import LocalEngine, engine_for
 from ..errors import InputError
 from ..simulate import SimulationSpec
+from .engines import LocalEngine, engine_for
 from .point import PointResult, PointRow, certify_key, certify_task, run_point
 from .spec import PointTask, Sweep, load_sweep
 from .store import load_point, save_point, write_manifest, write_tables
@@ -87,7 +87,7 @@ def run_sweep(
         workers. None: the points run here one after the other, each on ``workers`` local
         processes (the scenario's, or 2).
     engine
-        An engine (:mod:`ntc_design.distributed`) to use instead of ``scheduler``.
+        An engine (:mod:`ntc_design.sweep.engines`) to use instead of ``scheduler``.
     workers
         Local processes per point (without a scheduler).
     progress

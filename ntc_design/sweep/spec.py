@@ -12,9 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..documents import read_document
 from ..errors import InputError
-from ..files import jsonable, parse_switching, parse_topology, text_field
+from ..io.documents import read_document
+from ..io.files import jsonable, parse_switching, parse_topology, text_field
 from ..model import SwitchingTopology, Topology
 from ..simulate.scenario import load_scenario
 from ..simulate.spec import SCENARIO_KEYS

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..files import jsonable
-from ..outputs import atomic_path, write_atomic
+from ..io.files import jsonable
+from ..io.outputs import atomic_path, write_atomic
 from .point import ROW_FIELDS, PointResult, PointRow
 from .spec import FORMAT, Sweep
 

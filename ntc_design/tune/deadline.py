@@ -3,7 +3,7 @@ evidence a user needs to trust it.
 
 Steps: the best power law a·(b + t)^(−γ) (:func:`.run.tune_power`, polished by exact gradients; the schedule starts
 from and is compared with); the optimal schedule (:mod:`.optimal`); the schedule written
-as a :class:`~ntc_design.schedule.ScheduleGain` whose tail a·(1 + t)^(−1) meets it at T,
+as a :class:`~ntc_design.gain.schedule.ScheduleGain` whose tail a·(1 + t)^(−1) meets it at T,
 so Theorems 1 and 2 hold; every number re-evaluated independently by the tuner's exact
 objective (RK4 at κ = 0.2 or Crank–Nicolson, on its own grid); the three gains by Monte
 Carlo with common random numbers; the theorem conditions and the certificate of the
@@ -22,15 +22,15 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, require_horizon, require_positive
-from ..gain import GainAnalysis
+from ..gain.conditions import GainAnalysis
+from ..gain.schedule import ScheduleGain, analyse_schedule, join_tail
 from ..model import TimeVaryingTopology
-from ..rows import Table, fmt, verdict
-from ..schedule import ScheduleGain, analyse_schedule, join_tail
+from ..model.timevarying import ExpressionTopology
+from ..present.rows import Table, fmt, verdict
 from ..simulate import SimulationSpec, simulate
 from ..simulate.driver import AnyTopology, sampled_grid
 from ..simulate.result import Z95
 from ..simulate.spec import SaveAt
-from ..timevarying import ExpressionTopology
 from .evidence import certify_tuned, checked_spec, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import AnyGain, Curve, ExactObjective, objective_for
@@ -203,7 +203,7 @@ class ScheduleTuneResult:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         ms, pk, mc = self.ms_error_T, self.ms_error_peak, self.monte_carlo
         keys = ("optimal", "power", "baseline")
@@ -305,7 +305,7 @@ class ScheduleTuneResult:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         rows = []
         prev = None
@@ -328,7 +328,7 @@ class ScheduleTuneResult:
 
         Returns
         -------
-        list of ntc_design.rows.Table
+        list of ntc_design.present.rows.Table
         """
         return [self.table(), self.refinement_table()]
 

@@ -8,12 +8,12 @@ import numpy as np
 
 from ..certify import CertifyResult, certify
 from ..errors import InputError
+from ..gain.schedule import ScheduleGain
 from ..model import TimeVaryingTopology
-from ..schedule import ScheduleGain
+from ..model.timevarying import ExpressionTopology
 from ..simulate import SimulationSpec, simulate
 from ..simulate.driver import AnyTopology
 from ..simulate.spec import MonteCarlo, SaveAt, Stepping
-from ..timevarying import ExpressionTopology
 from .family import PowerGain
 
 #: What the written scenario switches to when its own Euler–Maruyama grid is unstable

@@ -24,9 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..design import design_topology
 from ..errors import InputError
-from ..schedule import ScheduleGain
+from ..gain.schedule import ScheduleGain
+from ..model.timevarying import ExpressionTopology
+from ..protocol import design_topology
 from ..simulate import SimulationSpec, simulate
 from ..simulate.budget import Estimate, exact_seconds, mc_seconds
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
@@ -41,7 +42,6 @@ from ..simulate.driver import (
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
 from ..simulate.spec import SaveAt
 from ..simulate.system import mode_system
-from ..timevarying import ExpressionTopology
 from .family import PowerGain
 
 #: A gain the objectives evaluate: a power law or a tabulated schedule (both give c(t),

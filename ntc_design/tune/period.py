@@ -18,10 +18,10 @@ from typing import Any, cast
 
 import numpy as np
 
-from ..design.digital import Digital
 from ..errors import InputError, require_horizon, require_int, require_number
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
-from ..rows import Table, fmt, verdict
+from ..present.rows import Table, fmt, verdict
+from ..protocol.digital import Digital
 from ..simulate import SimulationSpec
 from ..simulate.digital import digital_moments
 from ..simulate.driver import (
@@ -111,7 +111,7 @@ class SafePeriod:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         rows: list[tuple[Any, ...]] = [
             (fmt(p.period), fmt(p.final), fmt(p.peak), verdict(p.ok)) for p in self.curve

@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 
 from ..certify import CertifyResult
-from ..gain import GainAnalysis
-from ..rows import Table, fmt, verdict
+from ..gain.conditions import GainAnalysis
+from ..present.rows import Table, fmt, verdict
 from .family import BASELINE, PowerGain
 from .objective import Curve
 
@@ -142,7 +142,7 @@ class TuneResult:
 
         Returns
         -------
-        ntc_design.rows.Table
+        ntc_design.present.rows.Table
         """
         t, b, ms, te = self.tuned, self.baseline, self.ms_error_T, self.time_to_eps
         rows: list[tuple[Any, ...]] = [

@@ -5,7 +5,7 @@ E Σ_i ‖x_i(T) − θ‖², under the scenario's own noise, initial state and 
 switching or A(t))? The objective comes from :mod:`.objective` (exact moments, or Monte
 Carlo with common random numbers), the search from :mod:`.search`. The optimum is written
 with 4 significant digits and its numbers are recomputed for the written gain at the
-reported accuracy; its theorem conditions are analysed (:func:`ntc_design.gain.analyse_gain`)
+reported accuracy; its theorem conditions are analysed (:func:`ntc_design.gain.conditions.analyse_gain`)
 and the tuned design is certified (:func:`ntc_design.certify.certify`).
 """
 
@@ -17,10 +17,10 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from ..design import design_topology
 from ..errors import InputError, format_seconds, require_horizon, require_positive, warn_user
-from ..gain import analyse_gain
+from ..gain.conditions import analyse_gain
 from ..model import SwitchingTopology, Topology
+from ..protocol import design_topology
 from ..simulate import SimulationSpec
 from ..simulate.budget import LONG_RUN_SECONDS
 from ..simulate.driver import AnyTopology

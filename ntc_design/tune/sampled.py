@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..design.digital import Digital
 from ..errors import InputError, format_bytes
+from ..protocol.digital import Digital
 from ..simulate.digital import check_digital_moments
 from ..simulate.driver import PreparedModes
 from ..simulate.grid import TimeGrid

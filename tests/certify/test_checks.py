@@ -6,8 +6,8 @@ import pytest
 
 from ntc_design.certify import certify, verify
 from ntc_design.certify.format import topology_hash
-from ntc_design.generate import random_network
 from ntc_design.model import SwitchingTopology
+from ntc_design.model.generate import random_network
 from tests.cli_helpers import run_cli
 from tests.support.certificates import CERTS, _load, _write
 from tests.support.switching_scale import THETA_SW

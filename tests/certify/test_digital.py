@@ -9,8 +9,8 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.certify import digital as dg
-from ntc_design.design.digital import Digital
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
+from ntc_design.protocol.digital import Digital
 from ntc_design.rigorous.exact import Dyadic
 from ntc_design.rigorous.floatmat import FloatMat
 from ntc_design.simulate import NoiseModel

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from ntc_design.certify.format import document_hash, topology_hash
-from ntc_design.generate import random_network, write_topology
-from ntc_design.loader import load
 from ntc_design.model import Topology
+from ntc_design.model.generate import random_network, write_topology
+from ntc_design.model.load import load
 
 
 def _reference_hash(top):

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from ntc_design import paper
 from ntc_design.certify import certify
 from ntc_design.certify.dense import prove_hurwitz
 from ntc_design.certify.lyapunov import (
@@ -15,6 +14,7 @@ from ntc_design.certify.lyapunov import (
     decay_rate_lyapunov,
     lyapunov_solve,
 )
+from ntc_design.model import paper
 
 
 def test_g1_rate_is_the_eigenvalue_bound(paper_designs):

@@ -9,7 +9,7 @@ from scipy.optimize import brentq
 
 from ntc_design.certify.mu2 import T0_SCAN_END, mu2_t0, mu2_threshold, noise_sigma_bar
 from ntc_design.errors import InputError
-from ntc_design.expr import symbol
+from ntc_design.expr.symbolic import symbol
 
 PROVEN = "ball arithmetic on t0 <= t <= 1e9, c decreasing beyond (sympy)"
 NUMERICAL = "numerical (the ball-arithmetic proof did not close)"

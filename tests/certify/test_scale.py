@@ -11,12 +11,9 @@ import ntc_design as nd
 from ntc_design.certify import certify, verify
 from ntc_design.certify.scale import component_matrix, lap_b_blocks, symmetric_part_bound
 from ntc_design.errors import InputError
-from ntc_design.generate import random_network, write_topology
-from ntc_design.linalg import (
-    DenseRefused,
-    SPDFamily,
-)
 from ntc_design.model import Topology
+from ntc_design.model.generate import random_network, write_topology
+from ntc_design.numerics.linalg import DenseRefused, SPDFamily
 from tests.cli_helpers import run_cli
 from tests.support.scale import _methods
 from tests.support.switching_scale import THETA_SW

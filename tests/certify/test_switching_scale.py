@@ -8,9 +8,9 @@ import pytest
 
 from ntc_design.certify import certify, verify
 from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
-from ntc_design.design import design
 from ntc_design.errors import InputError
 from ntc_design.model import SwitchingTopology, Topology
+from ntc_design.protocol import design
 from tests.support.switching_scale import (
     THETA_SW,
     _count_numeric,
@@ -52,7 +52,7 @@ def test_factorisations_per_mode(big_switching, monkeypatch):
     """Issue 20: the issuer factorises twice per mode (the ℓ = 0 proof, which is also the
     eigensolver's inverse, then ℓ), ``certify`` re-verifies without factorising the same
     matrices again, and a fresh verify factorises once per mode."""
-    import ntc_design.linalg as la
+    import ntc_design.numerics.linalg as la
 
     la._PROVEN.clear()
     calls = _count_numeric(monkeypatch)
@@ -69,8 +69,8 @@ def test_a_mode_above_the_rate_proof_size_keeps_one_factorisation(big_switching,
     """Issue 20: above RATE_PROOF_MAX_FLOPS the second factorisation (ℓ > 0) is not made:
     ℓ = 0 is proven by the factor that serves the estimate, the estimate is still the
     dense eigenvalue, and the certificate verifies."""
-    from ntc_design import linalg
     from ntc_design.certify import switching_scale as ss
+    from ntc_design.numerics import linalg
 
     calls = []
     real = linalg.SPDFamily.factor
@@ -100,8 +100,8 @@ def test_big_modes_are_proven_in_parallel_with_the_same_certificate(big_switchin
     """Modes above PARALLEL_MIN_ND are proven in forked processes (certify and verify):
     the same proofs and numbers as in one process, and certify's own re-verification
     still reuses the children's factorisations (none repeated in the parent)."""
-    from ntc_design import linalg
     from ntc_design.certify import switching_scale as ss
+    from ntc_design.numerics import linalg
 
     des = design(big_switching, THETA_SW, thresholds=False)
     serial = switching_scale_certificate(des)

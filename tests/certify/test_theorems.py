@@ -6,7 +6,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.certify import certify
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from tests.cli_helpers import run_cli
 from tests.conftest import EXAMPLES, ROOT
 from tests.support.rows import _text
@@ -113,7 +113,7 @@ def test_each_violation_is_said_once_with_its_fix(tmp_path):
     violation (and each fix) is said once, under them, not in every verdict."""
     import warnings
 
-    from ntc_design.design.digital import Digital
+    from ntc_design.protocol.digital import Digital
 
     p = tmp_path / "coop.yaml"
     p.write_text(

@@ -6,8 +6,9 @@ import pytest
 from ntc_design.certify import certify
 from ntc_design.certify.time_varying import CertificationRefused, certify_lambda2
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA  # the paper's θ, defined once
-from ntc_design.timevarying import TimeVaryingDesign, from_document
+from ntc_design.model.paper import THETA
+from ntc_design.model.timevarying import from_document
+from ntc_design.protocol.timevarying import TimeVaryingDesign
 from tests.support.time_varying import small
 
 

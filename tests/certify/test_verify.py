@@ -9,8 +9,8 @@ import pytest
 
 from ntc_design.certify import certify, verify
 from ntc_design.certify.format import digest
-from ntc_design.paper import THETA  # the paper's θ, defined once
-from ntc_design.schedule import ScheduleGain
+from ntc_design.gain.schedule import ScheduleGain
+from ntc_design.model.paper import THETA
 from tests.cli_helpers import assert_input_error, run_cli
 from tests.support.certificates import CERTS, _load
 

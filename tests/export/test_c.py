@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design.agents import agent_law
-from ntc_design.design.digital import Digital
 from ntc_design.export.c import c_string, header, protocol
-from ntc_design.schedule import ScheduleGain, join_tail
+from ntc_design.gain.schedule import ScheduleGain, join_tail
+from ntc_design.protocol.agents import agent_law
+from ntc_design.protocol.digital import Digital
 from ntc_design.simulate.replay import replay
 from tests.conftest import X0
 from tests.support.export import CC, CFLAGS, build_c, needs_cc, normals_for, run_program

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design.agents import agent_law
-from ntc_design.design.digital import Digital
 from ntc_design.export.python import python_module
-from ntc_design.schedule import ScheduleGain, join_tail
+from ntc_design.gain.schedule import ScheduleGain, join_tail
+from ntc_design.protocol.agents import agent_law
+from ntc_design.protocol.digital import Digital
 from ntc_design.simulate.replay import replay
 from tests.conftest import X0
 from tests.support.export import normals_for, run_program, stdin_text, write_python

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design.agents import agent_law
-from ntc_design.design.digital import Digital
 from ntc_design.errors import InputError
 from ntc_design.export.source import from_certificate, from_scenario, is_certificate, load_source
-from ntc_design.schedule import ScheduleGain
+from ntc_design.gain.schedule import ScheduleGain
+from ntc_design.protocol.agents import agent_law
+from ntc_design.protocol.digital import Digital
 from tests.conftest import EXAMPLES, ROOT
 
 DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"

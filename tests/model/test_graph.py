@@ -7,7 +7,6 @@ import pytest
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import shortest_path
 
-from ntc_design.linalg import DEF_RTOL
 from ntc_design.model import Topology
 from ntc_design.model.graph import (
     antagonistic_in_weight,
@@ -16,6 +15,7 @@ from ntc_design.model.graph import (
     in_out_difference,
     positive_negative_reachable,
 )
+from ntc_design.numerics.linalg import DEF_RTOL
 from tests.conftest import random_topology
 
 SEEDS = range(6)

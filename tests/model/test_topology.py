@@ -7,12 +7,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import ntc_design as nd
-from ntc_design.files import parse_topology
-from ntc_design.linalg import Definiteness
+from ntc_design.io.files import parse_topology
 from ntc_design.model import (
     Topology,
     signed_laplacian,
 )
+from ntc_design.numerics.linalg import Definiteness
 from tests.conftest import random_topology
 from tests.support.model import seeds
 

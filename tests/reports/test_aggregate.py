@@ -14,7 +14,7 @@ from tests.support.figlist import _no_certify
 
 
 def test_the_aggregate_report_renders_from_its_facts_alone(tmp_path, capsys, monkeypatch):
-    from ntc_design.generate import random_network, write_topology
+    from ntc_design.model.generate import random_network, write_topology
 
     monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",)))
     top = random_network(aggregate.AGGREGATE_ABOVE + 2, 2, seed=11)
@@ -62,7 +62,7 @@ def test_report_on_a_switching_set_above_the_dense_size(tmp_path, capsys, monkey
     """Nd = 75 > 60: the certificate is switching-scale, its proven bounds are reported; 25
     agents (> AGGREGATE_ABOVE) give the aggregate report: quantiles, worst agents, the
     topology and spectrum pictures, no per-agent legend."""
-    from ntc_design.generate import random_network, write_topology
+    from ntc_design.model.generate import random_network, write_topology
 
     for k, seed in (("a", 3), ("b", 4)):
         t = random_network(25, 3, seed=seed)
@@ -89,7 +89,7 @@ def test_report_above_the_aggregate_size_in_the_fast_lane(tmp_path, capsys, monk
     """22 agents (> AGGREGATE_ABOVE): quantile curves, the final-error histogram, the
     topology and spectrum pictures, the worst agents named, no per-agent legend; the
     quantiles agree with the run's own per-agent table."""
-    from ntc_design.generate import random_network, write_topology
+    from ntc_design.model.generate import random_network, write_topology
     from ntc_design.reports.aggregate import AGGREGATE_ABOVE
 
     top = random_network(AGGREGATE_ABOVE + 2, 2, seed=11)

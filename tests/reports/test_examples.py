@@ -11,8 +11,8 @@ import pytest
 from matplotlib.colors import to_rgba
 from matplotlib.patches import Circle, FancyArrowPatch
 
-from ntc_design import paper
 from ntc_design.errors import AssumptionWarning
+from ntc_design.model import paper
 from ntc_design.reports import examples, style
 from ntc_design.simulate.result import MeanSquareBand
 from tests.conftest import X0

@@ -4,7 +4,7 @@ import matplotlib
 import numpy as np
 import pytest
 
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
 from ntc_design.reports import figures
 
 matplotlib.use("Agg")
@@ -50,7 +50,7 @@ def test_states_and_mean_square_figures_with_a_switching_timeline():
 def test_robust_figure_draws_each_bracket_end_it_is_given():
     from types import SimpleNamespace
 
-    from ntc_design.certify.robust import Bracket
+    from ntc_design.certify.robust.search import Bracket
 
     def rep(rho, a_lo, a_hi, o_lo, o_hi):
         return SimpleNamespace(

@@ -3,7 +3,7 @@
 import pandas as pd
 import pytest
 
-from ntc_design.rows import fmt
+from ntc_design.present.rows import fmt
 from tests.cli_helpers import assert_input_error, run_cli
 
 

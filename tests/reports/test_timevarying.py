@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
+from ntc_design.protocol.timevarying import TimeVaryingDesign
 from ntc_design.reports.timevarying import lambda_min_figure, weights_figure
-from ntc_design.timevarying import TimeVaryingDesign
 from tests.conftest import ROOT
 
 matplotlib.use("Agg")

@@ -14,11 +14,11 @@ from matplotlib.collections import PolyCollection
 import ntc_design as nd
 from ntc_design.certify import certify
 from ntc_design.errors import InputError
-from ntc_design.files import parse_scenario
-from ntc_design.gain import analyse_gain
+from ntc_design.gain.conditions import analyse_gain
+from ntc_design.gain.schedule import ScheduleGain, analyse_schedule
+from ntc_design.io.files import parse_scenario
 from ntc_design.reports import style
 from ntc_design.reports import tune as rt
-from ntc_design.schedule import ScheduleGain, analyse_schedule
 from ntc_design.tune import BASELINE, Landscape, PowerGain, ScheduleTuneResult, TuneResult
 from ntc_design.tune.objective import Curve
 from ntc_design.tune.optimal import Level, ScheduleSolution
@@ -391,7 +391,7 @@ def test_landscape_caption_says_what_the_legend_shows(power_analysis, land, hatc
 
 
 def fmt_b(b):
-    from ntc_design.rows import fmt
+    from ntc_design.present.rows import fmt
 
     return f"b = {fmt(b)}"
 

@@ -13,7 +13,7 @@ import pytest
 import sympy as sp
 from flint import arb
 
-from ntc_design.expr import parse_expression, symbol
+from ntc_design.expr.symbolic import parse_expression, symbol
 from ntc_design.rigorous.interval import NotEnclosable, bounds, enclose, lower, t_ball, upper
 
 T = symbol("t")

@@ -5,7 +5,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import simulate
 from ntc_design.simulate.budget import MAX_PATH_STEPS, check_budget, estimate
 from tests.conftest import ROOT

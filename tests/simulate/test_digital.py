@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design.digital import Digital
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
+from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.digital import digital_grid, digital_moments
 from ntc_design.simulate.kernels import em_steps
@@ -100,7 +100,7 @@ def test_exact_moments_match_the_dense_augmented_recursion(g1_issue, h, delay):
 
 
 def test_switching_moments_use_the_mode_of_each_sample(switching_set):
-    from ntc_design.design.digital import step_modes
+    from ntc_design.protocol.digital import step_modes
 
     names = list(switching_set.modes)
     designs = {k: nd.design(switching_set.modes[k], THETA, thresholds=False) for k in names}

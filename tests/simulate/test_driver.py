@@ -7,8 +7,8 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.errors import InputError
-from ntc_design.generate import random_network
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.generate import random_network
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import (
     SimulationSpec,
     simulate,

@@ -11,7 +11,7 @@ import sys
 import pytest
 
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate import gpu as gpu_mod
 from ntc_design.simulate.gpu import GpuEngine, check_supported

@@ -6,8 +6,8 @@ On numba-cuda's simulator unless NTC_GPU_TESTS=device (then larger: 1,000 steps)
 import numpy as np
 import pytest
 
-from ntc_design.paper import THETA
-from ntc_design.schedule import schedule_from_document
+from ntc_design.gain.schedule import schedule_from_document
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import MonteCarloSpec, NoiseModel, build_grid, montecarlo, simulate
 from ntc_design.simulate.driver import prepare_modes
 from ntc_design.simulate.gpu import GpuEngine

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import simulate
 from tests.conftest import X0
 from tests.support.simulate import assert_mc_matches_exact, em_exact
@@ -11,7 +11,7 @@ from tests.support.simulate import assert_mc_matches_exact, em_exact
 def test_save_times_on_switching_instants_keep_their_paths():
     """save_every equal to the dwell: save times within rounding of a switching instant are
     still recorded (they were once left as zeros)."""
-    from ntc_design import paper
+    from ntc_design.model import paper
     from ntc_design.simulate import simulate
 
     res = simulate(

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
 import ntc_design as nd
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, implicit, simulate
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.implicit import ImplicitSolver, SolverCache, ch_key

@@ -5,7 +5,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import ntc_design as nd
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import (
     NoiseModel,
     moments,

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design.agents import agent_law
-from ntc_design.design.digital import Digital
 from ntc_design.errors import InputError
-from ntc_design.schedule import ScheduleGain, join_tail
+from ntc_design.gain.schedule import ScheduleGain, join_tail
+from ntc_design.protocol.agents import agent_law
+from ntc_design.protocol.digital import Digital
 from ntc_design.simulate.driver import make_gain
 from ntc_design.simulate.noise import NoiseModel
 from ntc_design.simulate.replay import kernel_normals, kernel_replay, replay
@@ -42,7 +42,7 @@ def _schedule():
 
 def scalar_law(law, x_init, normals, steps):
     """THE AGENT LAW written out as plain loops over floats (the module docstring of
-    ntc_design.design.agents), independently of the vectorised replay."""
+    ntc_design.protocol.agents), independently of the vectorised replay."""
     n, d = law.n, law.dim
     h, lag = law.digital.period, law.digital.delay
     sqrth = math.sqrt(h)

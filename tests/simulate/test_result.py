@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 
 import ntc_design as nd
-from ntc_design import paper
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model import paper
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import (
     NoiseModel,
     SimulationDiverged,

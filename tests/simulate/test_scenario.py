@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import simulate
 from ntc_design.simulate.scenario import write_outputs
 from tests.cli_helpers import run_cli

@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 
 import ntc_design as nd
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA  # the paper's θ, defined once
-from ntc_design.schedule import ScheduleGain
+from ntc_design.gain.schedule import ScheduleGain
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import (
     MonteCarlo,
     NoiseModel,

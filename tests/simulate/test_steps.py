@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, simulate
 from tests.conftest import X0
 

@@ -5,9 +5,9 @@ import pytest
 import scipy.sparse as sp
 
 import ntc_design as nd
-from ntc_design.design import design
-from ntc_design.generate import random_network
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.generate import random_network
+from ntc_design.model.paper import THETA
+from ntc_design.protocol import design
 from ntc_design.simulate import NoiseModel, implicit, simulate, system
 from ntc_design.simulate import system as sysmod
 from ntc_design.simulate.grid import build_grid

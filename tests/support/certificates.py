@@ -14,13 +14,14 @@ from ntc_design.certify.kinds import IssueOptions
 from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
 from ntc_design.certify.kinds.robust import robust_certificate
 from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
-from ntc_design.certify.robust import robust
-from ntc_design.design import design
-from ntc_design.design.digital import Digital
-from ntc_design.gain import analyse_gain
-from ntc_design.generate import random_network
-from ntc_design.paper import THETA  # the paper's θ, defined once
-from ntc_design.timevarying import TimeVaryingDesign, from_document
+from ntc_design.certify.robust.search import robust
+from ntc_design.gain.conditions import analyse_gain
+from ntc_design.model.generate import random_network
+from ntc_design.model.paper import THETA
+from ntc_design.model.timevarying import from_document
+from ntc_design.protocol import design
+from ntc_design.protocol.digital import Digital
+from ntc_design.protocol.timevarying import TimeVaryingDesign
 from tests.conftest import ROOT
 
 CERTS = ROOT / "certificates"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel
 from ntc_design.simulate.system import mode_system
 

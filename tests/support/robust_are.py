@@ -5,10 +5,10 @@ import warnings
 import pytest
 
 import ntc_design as nd
-from ntc_design.certify.robust import robust
-from ntc_design.certify.robust_scale import robust_scale
-from ntc_design.generate import random_network
-from ntc_design.paper import THETA
+from ntc_design.certify.robust.scale import robust_scale
+from ntc_design.certify.robust.search import robust
+from ntc_design.model.generate import random_network
+from ntc_design.model.paper import THETA
 
 
 @pytest.fixture(scope="session")

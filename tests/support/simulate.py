@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel
 from ntc_design.simulate.moments import em_moments
 from ntc_design.simulate.system import mode_system

@@ -6,9 +6,9 @@ import pytest
 
 from ntc_design.certify.format import digest, document_hash
 from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
-from ntc_design.design import design
-from ntc_design.generate import random_network
 from ntc_design.model import SwitchingTopology, Topology
+from ntc_design.model.generate import random_network
+from ntc_design.protocol import design
 
 THETA_SW = [1.0, -2.0, 0.5]
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, SimulationSpec
 
 X0 = np.linspace(-3, 3, 21)

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design import design_topology
 from ntc_design.errors import InputError
-from ntc_design.generate import random_network
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.generate import random_network
+from ntc_design.model.paper import THETA
+from ntc_design.protocol import design_topology
 from ntc_design.simulate import SimulationSpec
 from ntc_design.simulate.robust_sampling import RobustSampling
 from ntc_design.sweep.robust import (

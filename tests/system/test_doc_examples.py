@@ -13,12 +13,12 @@ from tests.conftest import ROOT
 ENTRY_POINTS = [
     getattr(importlib.import_module(m), f)
     for m, f in (
-        ("ntc_design.loader", "load"),
-        ("ntc_design.design.lemma1", "design"),
+        ("ntc_design.model.load", "load"),
+        ("ntc_design.protocol.lemma1", "design"),
         ("ntc_design.certify.result", "certify"),
         ("ntc_design.certify.verify", "verify"),
         ("ntc_design.simulate.driver", "simulate"),
-        ("ntc_design.generate", "random_network"),
+        ("ntc_design.model.generate", "random_network"),
     )
 ]
 

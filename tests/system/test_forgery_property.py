@@ -23,12 +23,13 @@ import pytest
 from ntc_design.certify import KINDS, verify
 from ntc_design.certify.arrays import topology_from_subject
 from ntc_design.certify.format import digest, document_hash, topology_hash
-from ntc_design.design import design
 from ntc_design.errors import InputError
-from ntc_design.files import parse_topology
-from ntc_design.generate import random_network
+from ntc_design.io.files import parse_topology
 from ntc_design.model import Topology
-from ntc_design.timevarying import TimeVaryingDesign, from_document
+from ntc_design.model.generate import random_network
+from ntc_design.model.timevarying import from_document
+from ntc_design.protocol import design
+from ntc_design.protocol.timevarying import TimeVaryingDesign
 from tests.conftest import ROOT
 
 hostile = pytest.mark.hostile
@@ -655,7 +656,7 @@ def honest_all(honest) -> dict[str, dict]:
     Riccati decay and margin, the offset with the equation eliminated); built for the
     slow lane only."""
     from ntc_design.certify.kinds.robust import robust_certificate
-    from ntc_design.certify.robust import robust
+    from ntc_design.certify.robust.search import robust
 
     mid = design(random_network(14, 3, seed=4), [1.0, 2.0, -1.0], 0.1, thresholds=False)
     with warnings.catch_warnings():

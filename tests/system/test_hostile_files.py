@@ -18,10 +18,10 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ntc_design.documents import MAX_FILE_BYTES, read_document
 from ntc_design.errors import InputError
-from ntc_design.expr import parse_expression, symbol
-from ntc_design.loader import load
+from ntc_design.expr.symbolic import parse_expression, symbol
+from ntc_design.io.documents import MAX_FILE_BYTES, read_document
+from ntc_design.model.load import load
 from tests.cli_helpers import assert_input_error
 from tests.conftest import ROOT
 
@@ -741,8 +741,8 @@ def test_weights_outside_the_magnitude_range_are_refused(
 
 def test_the_magnitude_range_is_the_certificates():
     from ntc_design.certify.format import NUMBER_EXP
-    from ntc_design.linalg import MAGNITUDE_EXP, out_of_range
     from ntc_design.model import Topology
+    from ntc_design.numerics.linalg import MAGNITUDE_EXP, out_of_range
 
     assert NUMBER_EXP == MAGNITUDE_EXP == 250
     edge = 2.0**MAGNITUDE_EXP  # the bounds themselves are accepted

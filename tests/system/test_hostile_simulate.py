@@ -434,7 +434,7 @@ def test_read_only_out_folder(tmp_path, capsys, monkeypatch, how):
     # through what the check asks (the permission bits, then creating a folder there)
     import errno
 
-    from ntc_design import outputs
+    from ntc_design.io import outputs
 
     ro = tmp_path / "ro"
     ro.mkdir()

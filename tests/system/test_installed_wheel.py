@@ -83,7 +83,7 @@ def installed(tmp_path_factory):
 def test_the_wheel_finds_its_examples_outside_the_checkout(installed):
     python, _, away = installed
     code = (
-        "import ntc_design as nd, ntc_design.paper as p; "
+        "import ntc_design as nd, ntc_design.model.paper as p; "
         "print(nd.__file__); print(nd.example_path('g1.yaml')); "
         "print(nd.load(nd.example_path('g1.yaml')).n); "
         "print(len(p.example_files()))"
@@ -96,7 +96,7 @@ def test_the_wheel_finds_its_examples_outside_the_checkout(installed):
     assert Path(module).is_relative_to(venv) and Path(g1).is_relative_to(venv)
     assert Path(g1).read_bytes() == (ROOT / "examples" / "g1.yaml").read_bytes()
     assert int(n) == 7
-    from ntc_design.paper import example_files
+    from ntc_design.model.paper import example_files
 
     assert int(count) == len(example_files()) == 15
 

@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from ntc_design import linalg
 from ntc_design.errors import InputError
+from ntc_design.numerics import linalg
 from tests.cli_helpers import run_cli
 from tests.conftest import EXAMPLES
 

@@ -15,7 +15,7 @@ import scipy.io as sio
 import ntc_design as nd
 from ntc_design.certify import verify
 from ntc_design.certify.format import digest, document_hash
-from ntc_design.edgelist import write_npz
+from ntc_design.io.edgelist import write_npz
 from ntc_design.simulate.scenario import output_bytes, stored_paths
 from tests.cli_helpers import assert_input_error, run_cli
 from tests.conftest import EXAMPLES, ROOT
@@ -61,7 +61,7 @@ def test_generate_refuses_at_once(tmp_path, capsys, monkeypatch, args, needles):
 
 
 def test_generate_size_estimate_bounds_the_edges():
-    from ntc_design.generate import generation_size, random_network
+    from ntc_design.model.generate import generation_size, random_network
 
     for family in ("random", "ring", "grid", "small-world", "scale-free"):
         top = random_network(300, 2, seed=1, family=family)
@@ -176,7 +176,7 @@ def test_a_gallery_script_runs_outside_the_checkout(tmp_path):
 
 
 def test_large_runs_keep_the_paths_of_the_worst_agents():
-    from ntc_design.generate import random_network
+    from ntc_design.model.generate import random_network
     from ntc_design.simulate import simulate
 
     top = random_network(40, 2, seed=3)
@@ -216,7 +216,7 @@ def test_short_window_caution_is_given_by_both_reports():
 
 def test_mu_picture_is_a_log_quantile_plot_with_the_smallest_marked():
     from ntc_design.certify import scale_certificate
-    from ntc_design.generate import random_network
+    from ntc_design.model.generate import random_network
     from ntc_design.reports.aggregate import certificate_picture
 
     top = random_network(60, 2, seed=2)
@@ -539,7 +539,7 @@ def test_labels_are_kept_as_written_when_unambiguous(tmp_path):
 
 
 def test_check_summarises_a_large_network(tmp_path, capsys, monkeypatch):
-    from ntc_design.generate import random_network, write_topology
+    from ntc_design.model.generate import random_network, write_topology
 
     net = tmp_path / "net.npz"
     top = random_network(400, 2, seed=5)
@@ -591,7 +591,7 @@ def test_a_resealed_non_positive_margin_does_not_verify(margin):
 
 def test_scale_certificates_check_the_margin():
     from ntc_design.certify import scale_certificate
-    from ntc_design.generate import random_network
+    from ntc_design.model.generate import random_network
 
     des = nd.design(random_network(30, 2, seed=4), [1.0, -1.0], thresholds=False)
     cert = scale_certificate(des)
@@ -667,7 +667,7 @@ def test_a_mat_of_junk_tags_is_left_to_loadmat_at_once(tmp_path, capsys, monkeyp
     p = tmp_path / "junk.mat"
     head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + b"\0" * 8 + struct.pack("<H", 0x0100) + b"IM"
     p.write_bytes(head + b"\0" * 5_000_000)  # 625,000 zero tags: not one is a variable
-    from ntc_design.tablefiles import _mat_inflated_bytes
+    from ntc_design.io.tablefiles import _mat_inflated_bytes
 
     _mat_inflated_bytes(p, 2**30)  # returns at the first tag (no loop over the file)
     assert_input_error(["check", p], capsys, monkeypatch, str(p))
@@ -690,7 +690,7 @@ def test_progress_shows_file_text_as_text_on_a_terminal(capsys):
 
 def test_the_package_design_can_be_patched(monkeypatch):
     import ntc_design as pkg
-    from ntc_design.design import lemma1
+    from ntc_design.protocol import lemma1
 
     def fake(*a, **k):
         return "fake"
@@ -699,7 +699,7 @@ def test_the_package_design_can_be_patched(monkeypatch):
     assert pkg.design is fake
     monkeypatch.undo()
     assert pkg.design is lemma1.design
-    import ntc_design.design  # noqa: F401 - binding the subpackage keeps the function
+    import ntc_design.protocol
 
     assert pkg.design is lemma1.design
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.design import SwitchingDesign
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
+from ntc_design.protocol import SwitchingDesign
 
 
 def test_g1_design_matches_paper(examples):
@@ -98,7 +98,7 @@ def test_g3_breaks_assumption2_but_gives_the_papers_delta(examples):
 
 
 def test_builtin_paper_topologies_match_example_files(examples):
-    from ntc_design import paper
+    from ntc_design.model import paper
 
     for name, build in (("g1", paper.g1), ("g2", paper.g2), ("g3", paper.g3)):
         a, b = build(), nd.load(examples / f"{name}.yaml")

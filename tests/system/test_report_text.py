@@ -141,7 +141,7 @@ def test_a_robust_study_report(tmp_path, capsys, monkeypatch):
 def test_a_report_above_the_aggregate_and_dense_sizes(tmp_path, capsys, monkeypatch):
     # quantiles over the agents, a hurwitz-scale certificate (its methods), the critical
     # couplings not computed (their note)
-    from ntc_design.generate import random_network, write_topology
+    from ntc_design.model.generate import random_network, write_topology
     from ntc_design.reports.aggregate import AGGREGATE_ABOVE
 
     write_topology(random_network(AGGREGATE_ABOVE + 2, 3, seed=3), tmp_path / "net.yaml")
@@ -189,8 +189,8 @@ def test_a_tune_report_of_a_gain_schedule(tmp_path):
 
     import ntc_design as nd
     from ntc_design.certify import certify
+    from ntc_design.gain.schedule import ScheduleGain, analyse_schedule
     from ntc_design.reports.tune import write_tune_report
-    from ntc_design.schedule import ScheduleGain, analyse_schedule
     from ntc_design.tune import BASELINE, PowerGain, ScheduleTuneResult
     from ntc_design.tune.objective import Curve
     from ntc_design.tune.optimal import Level, ScheduleSolution

@@ -55,7 +55,7 @@ def test_check_of_a_fixed_topology_loads_no_sympy_or_optimiser():
     )
     mods = loaded_after(code)
     assert heavy_in(mods) == ["scipy.sparse"]  # the graph's reachability needs csgraph
-    assert "scipy.optimize" not in mods and "ntc_design.thresholds" not in mods
+    assert "scipy.optimize" not in mods and "ntc_design.protocol.thresholds" not in mods
 
 
 def test_a_monte_carlo_simulation_loads_no_sympy_and_one_kernel(tmp_path):
@@ -87,7 +87,7 @@ def test_a_monte_carlo_simulation_loads_no_sympy_and_one_kernel(tmp_path):
 
 
 def test_certify_of_a_fixed_topology_loads_no_optimiser():
-    # the critical couplings' roots by brent_root (ntc_design.roots), not scipy.optimize
+    # the critical couplings' roots by brent_root (ntc_design.numerics.roots), not scipy.optimize
     code = (
         "import contextlib, io\n"
         "sys.argv = ['ntc', 'certify', 'examples/g1.yaml', '--theta', '1,2,-1', '--gain', "
@@ -97,15 +97,15 @@ def test_certify_of_a_fixed_topology_loads_no_optimiser():
         "    main()"
     )
     mods = loaded_after(code)
-    assert "ntc_design.roots" in mods and "ntc_design.thresholds" in mods
+    assert "ntc_design.numerics.roots" in mods and "ntc_design.protocol.thresholds" in mods
     assert "scipy.optimize" not in mods and "cvxpy" not in mods
 
 
 def test_the_lazy_names_are_the_same_objects():
     import ntc_design as nd
-    from ntc_design.design import lemma1
     from ntc_design.errors import AssumptionWarning
     from ntc_design.model import Topology
+    from ntc_design.protocol import lemma1
 
     assert nd.design is lemma1.design and nd.Topology is Topology
     assert nd.AssumptionWarning is AssumptionWarning
@@ -120,7 +120,7 @@ def test_the_lazy_names_are_the_same_objects():
 
 @pytest.fixture
 def compiled(monkeypatch):
-    from ntc_design import documents
+    from ntc_design.io import documents
 
     monkeypatch.setattr(documents, "COMPILED_YAML_MIN_CHARS", 200)  # small texts take the path
     return documents
@@ -132,7 +132,7 @@ def test_every_style_reads_as_pyyaml_reads_it(compiled, tmp_path, style):
 
     import yaml
 
-    from ntc_design.generate import random_network
+    from ntc_design.model.generate import random_network
 
     doc = random_network(60, 2, seed=1).to_dict()
     text = {
@@ -260,7 +260,7 @@ def test_the_program_exits_with_its_code_and_every_line_written(tmp_path):
 def test_the_ordinary_exit_is_kept_while_a_thread_lives():
     import threading
 
-    from ntc_design.outputs import exit_process
+    from ntc_design.io.outputs import exit_process
 
     stop = threading.Event()
     t = threading.Thread(target=stop.wait)
@@ -296,7 +296,8 @@ def test_the_program_notes_ctrl_c_and_keeps_an_ignored_one_ignored(ignored):
         "import signal, sys\n"
         + ("signal.signal(signal.SIGINT, signal.SIG_IGN)\n" if ignored else "")
         + ("" if ignored else "signal.signal(signal.SIGINT, signal.default_int_handler)\n")
-        + "from ntc_design import cli, errors\n"
+        + "from ntc_design import errors\n"
+        + "from ntc_design.cli import main as cli\n"
         "cli.main = lambda: print(signal.getsignal(signal.SIGINT) is errors.note_interrupt,"
         " signal.getsignal(signal.SIGINT) is signal.SIG_IGN)\n"
         "cli.run()\n"

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from ntc_design.schedule import read_schedule
+from ntc_design.gain.schedule import read_schedule
 from tests.cli_helpers import run_cli
 from tests.support.tune_schedule import X0
 

@@ -7,7 +7,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, SimulationSpec, simulate
 from ntc_design.simulate.spec import SaveAt
 from ntc_design.tune import tune

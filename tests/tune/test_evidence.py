@@ -5,8 +5,8 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.errors import InputError
+from ntc_design.gain.schedule import ScheduleGain
 from ntc_design.model import TimeVaryingTopology, Topology
-from ntc_design.schedule import ScheduleGain
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.tune import evidence
 from ntc_design.tune.evidence import IMPLICIT, certify_tuned, checked_spec, stable_stepping

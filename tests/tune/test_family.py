@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import quad
 
 import ntc_design as nd
-from ntc_design.gain import gain_function
+from ntc_design.gain.conditions import gain_function
 from ntc_design.tune import PowerGain
 
 # -- the family ---------------------------------------------------------------------------

@@ -9,7 +9,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.system import mode_system
 from ntc_design.tune.period import longest_safe_period, period_curve

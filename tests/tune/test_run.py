@@ -11,7 +11,7 @@ from scipy.optimize import minimize
 
 import ntc_design as nd
 from ntc_design.certify import verify
-from ntc_design.gain import analyse_gain
+from ntc_design.gain.conditions import analyse_gain
 from ntc_design.simulate import SimulationSpec
 from ntc_design.simulate.scenario import load_scenario
 from ntc_design.tune import (

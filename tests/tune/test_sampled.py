@@ -5,8 +5,8 @@ the optimal sampled schedule through ``tune``."""
 import numpy as np
 import pytest
 
-from ntc_design.design.digital import Digital
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
+from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.digital import digital_moments
 from ntc_design.simulate.driver import make_gain, prepare_modes, sampled_grid

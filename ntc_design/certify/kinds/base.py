@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from ...errors import InputError
-from ...paper import F_SCALE, SIGMA
+from ...model.paper import F_SCALE, SIGMA
 from ..checks import Check
 from ..claims import Claim, Property
 from ..fields import finite_number
@@ -28,7 +28,7 @@ from ..format import RESULT_RTOL
 from ..theorems import TheoremVerdict
 
 if TYPE_CHECKING:  # the gain layer loads SymPy: only certify() builds an analysis
-    from ...gain import GainAnalysis
+    from ...gain.conditions import GainAnalysis
 
 _MISSING = object()
 
@@ -436,7 +436,7 @@ class IssueOptions:
     Attributes
     ----------
     gain : GainAnalysis or None
-        c(t), analysed (:func:`ntc_design.schedule.analyse_any_gain`).
+        c(t), analysed (:func:`ntc_design.gain.schedule.analyse_any_gain`).
     noise_sigma : float
         σ of the additive noise.
     noise_f : float or array_like

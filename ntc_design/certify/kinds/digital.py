@@ -1,5 +1,5 @@
 """Kinds ``digital`` and ``digital_switching``: a ``hurwitz`` or ``switching`` certificate
-whose design runs as the sampled protocol (period h, delay D; :mod:`ntc_design.design.digital`),
+whose design runs as the sampled protocol (period h, delay D; :mod:`ntc_design.protocol.digital`),
 with the proof that the sampled recursion contracts in mean square from step k₀ on
 (:mod:`ntc_design.certify.digital` states the mathematics).
 
@@ -18,12 +18,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...design.digital import Digital, DigitalDesign
 from ...errors import InputError
-from ...linalg import RANGE_TEXT, out_of_range
+from ...gain.schedule import ScheduleGain
+from ...numerics.linalg import RANGE_TEXT, out_of_range
+from ...protocol.digital import Digital, DigitalDesign
 from ...rigorous.exact import Dyadic, exact_affordable
 from ...rigorous.floatmat import FloatMat
-from ...schedule import ScheduleGain
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..digital import (

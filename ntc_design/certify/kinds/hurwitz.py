@@ -8,8 +8,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...design import ProtocolDesign
 from ...errors import InputError
+from ...protocol import ProtocolDesign
 from ..claims import Property, derive_claims
 from ..dense import DENSE_CERT_MAX_ND, eig_bound, min_eig, mode_subject, require_lmi
 from ..fields import need, number

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from ...design import ProtocolDesign
 from ...errors import InputError
+from ...protocol import ProtocolDesign
 from ..arrays import read_array_mode, unpack
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property

@@ -1,5 +1,5 @@
 """Kind ``robust``: one topology whose weights are known within a relative Loewner radius ρ
-(:mod:`ntc_design.certify.robust`). It certifies the margin (−L_B(A') Hurwitz for every
+(:mod:`ntc_design.certify.robust.search`). It certifies the margin (−L_B(A') Hurwitz for every
 realisation within ρ_lower), and where proven the decay bound α_lower and the consensus
 offset bound √γ at ρ. ``ntc verify`` rebuilds every S-procedure matrix exactly (dyadic
 rationals: P, the multipliers, ρ and α are doubles, the channel bases are the weights' own
@@ -15,17 +15,20 @@ from typing import Any
 
 import numpy as np
 
-from ...design import ProtocolDesign
-from ...design.lemma1 import coupling_matrix
 from ...errors import InputError
 from ...model import Topology
+from ...protocol import ProtocolDesign
+from ...protocol.lemma1 import coupling_matrix
 from ...rigorous.exact import Dyadic, PDProof, exact_affordable, exact_pd, verified_float_pd
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import PROVERS, DenseContext, DenseMode, mode_subject
 from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
-from ..robust import (
+from ..robust.are import RICCATI_MAX_ND, RiccatiSearch
+from ..robust.lmi import active_columns, perturbed
+from ..robust.offset import OffsetSearch, input_float
+from ..robust.search import (
     DEFAULT_RADIUS,
     ROBUST_MAX_ND,
     RobustReport,
@@ -36,9 +39,6 @@ from ..robust import (
     robust,
     uncertain_edges,
 )
-from ..robust_are import RICCATI_MAX_ND, RiccatiSearch
-from ..robust_lmi import active_columns, perturbed
-from ..robust_offset import OffsetSearch, input_float
 from ..theorems import TheoremVerdict
 from .base import (
     CertificateKind,
@@ -64,7 +64,7 @@ def _radii(x: Any, m: int, where: str) -> np.ndarray:
 
 
 def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
-    """The ``robust`` certificate of a report of :func:`ntc_design.certify.robust.robust`.
+    """The ``robust`` certificate of a report of :func:`ntc_design.certify.robust.search.robust`.
 
     Parameters
     ----------
@@ -84,7 +84,7 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
     ------
     InputError
         A report of the sparse path alone (above
-        :data:`ntc_design.certify.robust_are.RICCATI_MAX_ND`).
+        :data:`ntc_design.certify.robust.are.RICCATI_MAX_ND`).
     """
     d = rep.design
     name = name or d.topology.name or "topology"
@@ -249,7 +249,7 @@ def _pd(m: Dyadic) -> PDProof:
 
 
 def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float, radius):
-    """Ψ of the decay S-procedure, exactly (see :func:`ntc_design.certify.robust_lmi.decay_matrix`).
+    """Ψ of the decay S-procedure, exactly (see :func:`ntc_design.certify.robust.lmi.decay_matrix`).
 
     Parameters
     ----------
@@ -297,7 +297,7 @@ def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float,
 
 def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     """Γ of the offset S-procedure, exactly (see
-    :func:`ntc_design.certify.robust_lmi.offset_matrix`).
+    :func:`ntc_design.certify.robust.lmi.offset_matrix`).
 
     Parameters
     ----------
@@ -432,7 +432,7 @@ class RobustKind(CertificateKind):
         return False  # issued on request (ntc robust), never in place of a nominal kind
 
     def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
-        """The certificate of :func:`ntc_design.certify.robust.robust` at the options'
+        """The certificate of :func:`ntc_design.certify.robust.search.robust` at the options'
         radius.
 
         Parameters
@@ -654,13 +654,13 @@ def _edge_names(st: _State) -> list[str] | None:
 
 def _set_text(st: _State) -> str:
     """The subject's uncertainty set in a check's detail: ``ρ = 0.05``, or the per-edge
-    radii named by edge (:func:`ntc_design.certify.robust.radius_text`)."""
+    radii named by edge (:func:`ntc_design.certify.robust.search.radius_text`)."""
     return radius_text(st.radii.tolist(), st.radius, edges=_edge_names(st))
 
 
 def _prove_lmi(claim: Claim, st: _State) -> Check:
     """A decay or margin claim: Ψ(P, τ) ≻ 0 exactly up to the LMI's size; past it, P ≻ 0,
-    τ > 0 and the Schur form M(P, τ) ≻ 0 of :mod:`ntc_design.certify.robust_are` by
+    τ > 0 and the Schur form M(P, τ) ≻ 0 of :mod:`ntc_design.certify.robust.are` by
     verified Cholesky with every rounding bounded, L_B's own included."""
     mode, src = st.mode, st.dense.source
     small = mode.top.nd <= ROBUST_MAX_ND
@@ -697,7 +697,7 @@ def _prove_lmi(claim: Claim, st: _State) -> Check:
 
 def _prove_offset_float(claim: Claim, st: _State) -> Check:
     """An offset claim past the LMI's size: G_e G_eᵀ ≻ W_e and Γ(γ, λ) ≻ 0 with the
-    witnesses G and Y rebuilt from the subject (:mod:`ntc_design.certify.robust_offset`),
+    witnesses G and Y rebuilt from the subject (:mod:`ntc_design.certify.robust.offset`),
     every rounding bounded; the premise (every L_B(A') invertible) is the decay claim."""
     mode, src = st.mode, st.dense.source
     if mode.top.nd > RICCATI_MAX_ND:  # certificates are issued up to this size

@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...design import SwitchingDesign
+from ...protocol import SwitchingDesign
 from ..claims import Property, derive_claims
 from ..dense import DENSE_CERT_MAX_ND, min_eig, mode_subject
 from ..format import FORMAT, VERSION, finish, scheduled_modes, switching_hash, topology_hash

@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from ...design import SwitchingDesign
 from ...errors import InputError
-from ...linalg import fork_map
+from ...numerics.linalg import fork_map
+from ...protocol import SwitchingDesign
 from ..arrays import read_array_mode
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property

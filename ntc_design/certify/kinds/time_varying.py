@@ -15,7 +15,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ...errors import InputError
-from ...timevarying import ExpressionTopology, TimeVaryingDesign, from_document, lemma1_structure
+from ...model.timevarying import ExpressionTopology, from_document
+from ...protocol.timevarying import TimeVaryingDesign, lemma1_structure
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..fields import matrix, need, number, vector

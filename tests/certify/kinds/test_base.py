@@ -20,7 +20,7 @@ from ntc_design.certify.kinds.base import (
     number_text,
 )
 from ntc_design.errors import InputError
-from ntc_design.paper import F_SCALE, SIGMA
+from ntc_design.model.paper import F_SCALE, SIGMA
 
 
 class _Stub(CertificateKind):

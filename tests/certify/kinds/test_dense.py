@@ -6,7 +6,7 @@ import pytest
 import ntc_design as nd
 from ntc_design.certify import hurwitz_certificate, switching_certificate, verify
 from ntc_design.certify.format import digest
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from tests.cli_helpers import run_cli
 from tests.conftest import ROOT
 from tests.support.certificates import _load, _write

@@ -10,9 +10,9 @@ import pytest
 
 from ntc_design.certify import certify, verify
 from ntc_design.certify.format import digest, document_hash
-from ntc_design.design.digital import Digital
 from ntc_design.errors import InputError
-from ntc_design.paper import THETA
+from ntc_design.model.paper import THETA
+from ntc_design.protocol.digital import Digital
 from tests.cli_helpers import assert_input_error, run_cli
 
 
@@ -140,7 +140,7 @@ def test_switching_schedule_is_certified_with_one_p(switching_set):
 def test_digital_needs_a_gain_and_a_dense_network(g1):
     with pytest.raises(InputError, match="--gain: the digital certificate needs the gain"):
         certify(g1, THETA, digital=Digital(0.1))
-    from ntc_design.generate import random_network
+    from ntc_design.model.generate import random_network
 
     big = random_network(25, 3, seed=1)
     with pytest.raises(InputError, match=r"--period: .* N·d <= 60, this network has N·d = 75"):

@@ -7,7 +7,7 @@ import scipy.linalg as sla
 
 import ntc_design as nd
 from ntc_design.certify import certify, hurwitz_certificate, verify
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 from tests.support.certificates import _load
 
 

@@ -9,12 +9,9 @@ import pytest
 import ntc_design as nd
 from ntc_design.certify import certify, verify
 from ntc_design.certify.format import digest
-from ntc_design.design import (
-    AssumptionWarning,
-    design,
-)
-from ntc_design.generate import random_network, write_topology
 from ntc_design.model import Topology
+from ntc_design.model.generate import random_network, write_topology
+from ntc_design.protocol import AssumptionWarning, design
 from tests.cli_helpers import assert_input_error, run_cli
 from tests.support.scale import _methods
 from tests.support.switching_scale import THETA_SW, _refresh

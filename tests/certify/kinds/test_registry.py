@@ -8,9 +8,9 @@ from ntc_design.certify.claims import Property
 from ntc_design.certify.dense import DENSE_CERT_MAX_ND
 from ntc_design.certify.kinds.base import CertificateKind
 from ntc_design.certify.kinds.registry import KINDS, kind_for
-from ntc_design.generate import random_network
 from ntc_design.model import SwitchingTopology
-from ntc_design.timevarying import TimeVaryingDesign
+from ntc_design.model.generate import random_network
+from ntc_design.protocol.timevarying import TimeVaryingDesign
 
 THETA3 = [1.0, 2.0, -1.0]
 

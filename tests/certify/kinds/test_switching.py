@@ -5,7 +5,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.certify import switching_certificate, verify
-from ntc_design.paper import THETA  # the paper's θ, defined once
+from ntc_design.model.paper import THETA
 
 
 def test_switching_set_symmetric_parts_and_common_p(examples):

@@ -6,10 +6,10 @@ import pytest
 
 from ntc_design.certify import certify, verify
 from ntc_design.certify.kinds.switching import switching_certificate
-from ntc_design.design import design
 from ntc_design.errors import InputError
-from ntc_design.generate import random_network
 from ntc_design.model import SwitchingTopology, Topology
+from ntc_design.model.generate import random_network
+from ntc_design.protocol import design
 from tests.support.switching_scale import THETA_SW, _dense_sym_min, _refresh
 
 
@@ -59,7 +59,7 @@ def test_a_failing_mode_is_never_certified(big_switching):
     assert prem.holds is False and prem.detail.startswith(f"fails by {-lam:.6g}")
 
 
-@pytest.mark.filterwarnings("ignore::ntc_design.design.AssumptionWarning")
+@pytest.mark.filterwarnings("ignore::ntc_design.protocol.AssumptionWarning")
 def test_an_agent_nothing_reaches_is_never_certified():
     a = random_network(25, 3, seed=4)
     ea = a.edge_arrays

@@ -70,7 +70,7 @@ def test_cli_certify_json_and_verify(tmp_path, capsys, monkeypatch):
 @pytest.fixture(scope="module")
 def small_tv_cert():
     from ntc_design.certify import certify
-    from ntc_design.timevarying import from_document
+    from ntc_design.model.timevarying import from_document
 
     doc = small({"1->2": {"diag": ["-1 - 0.5*sin(t)", -2]}}, {"period": "2*pi"})
     res = certify(from_document(doc, "t.yaml"), [1.0, 2.0], gain="1/(1+t)")

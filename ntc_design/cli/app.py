@@ -1,0 +1,194 @@
+"""The ``ntc`` program's shared ground: the typer app every command registers on, the
+option types several commands share, and the helpers they use (the command line as typed,
+JSON output, comma-separated vectors). Nothing here imports the library's layers."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .. import __version__
+from ..errors import InputError
+
+# Everything else loads in the command that needs it: `ntc --help` and a mistyped option
+# answer without importing NumPy, SciPy, SymPy or the library's layers.
+
+
+def _flag_type(original):
+    """A flag (``--json``, ``--help``, ``--tune-delta``) takes no value: its help line
+    shows no type (this typer prints ``<bool>`` for it)."""
+
+    def display_type_rich(self, ctx):
+        if getattr(self, "is_flag", False) and not getattr(self, "count", False):
+            return None
+        return original(self, ctx)
+
+    return display_type_rich
+
+
+def _usage_name(self) -> str:
+    """An argument in the usage line as click writes it, ``FILE`` (``[FILE]`` when
+    optional), not this typer's ``{file}`` (which reads as a placeholder to fill in)."""
+    name = self.metavar if self.metavar is not None else self.name.upper()
+    name = name if self.required else f"[{name}]"
+    return name + ("..." if self.nargs != 1 else "")
+
+
+def _error_hint(self, ctx: object = None) -> str:
+    """``Missing argument 'FILE'``: the argument named as the usage line names it."""
+    return f"'{self.metavar or self.name.upper()}'"
+
+
+with contextlib.suppress(AttributeError):  # another typer: its own rendering stays
+    typer.core.TyperOption.display_type_rich = _flag_type(  # type: ignore[method-assign]
+        typer.core.TyperOption.display_type_rich
+    )
+if hasattr(typer.core.TyperArgument, "_usage_display_name"):  # typer >= 0.2x braces it
+    typer.core.TyperArgument._usage_display_name = _usage_name  # type: ignore[method-assign]
+    typer.core.TyperArgument.get_error_hint = _error_hint  # type: ignore[method-assign]
+
+app = typer.Typer(
+    add_completion=True,
+    pretty_exceptions_enable=False,
+    no_args_is_help=True,
+    rich_markup_mode="markdown",  # paragraphs of a docstring reflow to the terminal
+    help="Certify, design and validate non-trivial consensus protocols on signed "
+    "matrix-weighted networks with compound measurement noise.",
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        print(f"ntc {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="Print the version.", metavar=""
+        ),
+    ] = False,
+) -> None:
+    """Certify, design and validate non-trivial consensus protocols on signed
+    matrix-weighted networks with compound measurement noise."""
+
+
+FileArg = Annotated[
+    Path,
+    typer.Argument(
+        help="A topology, switching or time-varying topology file (YAML or JSON), an edge "
+        "list (.csv, .npz) or a MATLAB block matrix (.mat)."
+    ),
+]
+# a flag takes no value: no metavar (click would print <bool>)
+JsonOpt = Annotated[bool, typer.Option("--json", help="Machine-readable JSON output.", metavar="")]
+SchedulerOpt = Annotated[
+    str | None,
+    typer.Option(
+        help="Run on a Dask cluster: the scheduler's address, e.g. tcp://10.0.0.5:8786 "
+        "(start one with `dask scheduler` and `dask worker ADDRESS`). Default: this machine."
+    ),
+]
+
+
+def parse_vector(text: str, field: str) -> list[float]:
+    """``"1,2,-1"`` -> ``[1.0, 2.0, -1.0]``; one clear error otherwise."""
+    try:
+        vals = [float(x) for x in text.replace(" ", "").strip("[]").split(",") if x != ""]
+    except ValueError:
+        raise InputError(f"{field}: expected comma-separated numbers, got {text!r}") from None
+    if not vals:
+        raise InputError(f"{field}: expected comma-separated numbers, got {text!r}")
+    return vals
+
+
+PeriodOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--period",
+        help="The digital protocol's sampling period h: agents sample every h and hold their "
+        "input (overrides the scenario's digital block).",
+    ),
+]
+DelayOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--delay",
+        help="The digital protocol's measurement delay D, in samples (with --period or the "
+        "scenario's digital block; default 0).",
+    ),
+]
+
+
+def digital_option(
+    period: float | None, delay: int | None, given: object = None, horizon: object = None
+) -> dict | None:
+    """The ``digital`` block from ``--period`` and ``--delay`` over a scenario's own
+    (``given``), checked with the flags named in errors.
+
+    Parameters
+    ----------
+    period : float or None
+        ``--period``.
+    delay : int or None
+        ``--delay``.
+    given : mapping or None
+        The scenario's ``digital`` block, if any.
+    horizon : float, optional
+        T (a period longer than it is refused, naming ``--period``).
+
+    Returns
+    -------
+    dict or None
+        ``{period, delay}``, or None when neither the flags nor the scenario ask for one.
+
+    Raises
+    ------
+    InputError
+        A bad flag value (naming the flag), or ``--delay`` without a period.
+    """
+    from ..protocol.digital import Digital
+
+    if period is None and delay is None:
+        return None
+    base = dict(given) if isinstance(given, dict) else {}
+    if period is None and "period" not in base:
+        raise InputError("--delay: needs --period (or a digital block in the scenario)")
+    try:
+        dg = Digital(
+            period if period is not None else base["period"],
+            delay if delay is not None else base.get("delay", 0),
+        )
+        if isinstance(horizon, (int, float)) and not isinstance(horizon, bool) and horizon > 0:
+            dg.steps(float(horizon))
+    except InputError as exc:
+        text = str(exc)
+        for field, flag in (("digital.period", "--period"), ("digital.delay", "--delay")):
+            if text.startswith(field) and (period if flag == "--period" else delay) is not None:
+                text = flag + text[len(field) :]
+        raise InputError(text) from None
+    return dg.to_dict()
+
+
+ARGS: list[str] = []  # this invocation's arguments (set by main)
+
+
+def command_line() -> str:
+    """This invocation as a shell command (``ntc`` and its arguments, quoted), whether
+    ``main`` read them from ``sys.argv`` or was given them."""
+    import shlex
+
+    return shlex.join(["ntc", *ARGS])
+
+
+def json_text(obj) -> str:
+    from ..io.files import jsonable
+
+    return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)

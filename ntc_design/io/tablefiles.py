@@ -1,0 +1,483 @@
+"""Topologies made elsewhere: CSV edge lists and MATLAB block matrices.
+
+**CSV** (``.csv``): a header row ``from, to, a11, a12, …, add`` (the d² entries of A_ij row
+by row, d from the number of columns), then one edge per row. An edge from j to i carries
+A_ij, as in the YAML files. Labels are integers or strings; the agents are the labels in
+the order they first appear. Read by pandas' C parser, bounded like every file (size, rows,
+numbers); an error names the row (the header is row 1).
+
+**MATLAB** (``.mat``, read by :func:`scipy.io.loadmat`): a variable ``A``, the
+(N·d) × (N·d) block matrix (dense or sparse) whose block (i, j) is A_ij, a scalar ``dim``
+and optionally ``labels`` (a cell array of strings). A non-zero block (i, j) with i ≠ j is
+the edge j → i; a diagonal block must be zero (no self-loops). :func:`write_mat` writes
+arrays for MATLAB (what ``ProtocolDesign.to_mat`` uses).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import re
+import stat
+import struct
+import warnings
+import zlib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sparse
+
+from ..errors import InputError, format_bytes
+from ..numerics.memory import available_memory
+from .edgelist import (
+    MAX_AGENTS,
+    MAX_DIM,
+    MAX_EDGES,
+    EdgeListData,
+    check_label_spellings,
+    label_from_text,
+)
+from .outputs import atomic_path
+
+MAX_CSV_BYTES = 2 * 2**30  # a 10⁶-agent edge list with d = 3 is about 120 MB
+MAX_MAT_BYTES = 2 * 2**30  # the file, and what its variables inflate to
+CSV_MAX_DIM = 100  # 10⁴ weight columns; larger weights belong in .npz or .mat
+MAX_HEADER_CHARS = 2**20
+
+
+def _bounded(p: Path, limit: float) -> Path:
+    """The file, refused in one line when it cannot be read, is not a regular file (a
+    folder, ``/dev/zero``, a FIFO: no end, or no size to bound) or is larger than
+    ``limit``."""
+    try:
+        st = os.stat(p)
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise InputError(f"{p}: is a folder, expected a topology file")
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(f"{p}: not a regular file (a device, pipe or socket)")
+    if st.st_size > limit:
+        raise InputError(f"{p}: {st.st_size / 2**30:.1f} GiB; at most {limit / 2**30:.0f} GiB")
+    return p
+
+
+def _no_nul(p: Path) -> None:
+    """Refuse a NUL byte (the CSV parser ends a field at one: ``1\\0`` would read as 1),
+    naming its row."""
+    rows, chunk_size = 1, 2**24
+    with open(p, "rb") as fh:
+        while chunk := fh.read(chunk_size):
+            k = chunk.find(b"\0")
+            if k >= 0:
+                row = rows + chunk.count(b"\n", 0, k)
+                raise InputError(f"{p}: row {row}: a NUL byte")
+            rows += chunk.count(b"\n")
+
+
+def _mat_inflated_bytes(p: Path, limit: float) -> None:
+    """Refuse a MATLAB 5 file whose compressed variables inflate to more than ``limit``
+    bytes (a 3 MB file of zeros can hold a 3 GB matrix), counted by inflating in bounded
+    chunks and keeping nothing."""
+    with open(p, "rb") as fh:
+        head = fh.read(128)
+        if len(head) < 128 or head[126:128] not in (b"IM", b"MI"):
+            return  # not MATLAB 5 (v4 is never compressed; loadmat refuses the rest)
+        order = "<" if head[126:128] == b"IM" else ">"
+        total = 0.0
+        while tag := fh.read(8):
+            if len(tag) < 8:
+                return
+            kind, nbytes = struct.unpack(order + "II", tag)
+            if kind not in (14, 15):  # not a top-level variable: loadmat refuses the file
+                return
+            if kind == 14:  # miMATRIX, stored as it is
+                total += nbytes
+                fh.seek(nbytes + (-nbytes % 8), os.SEEK_CUR)
+            else:
+                z, left = zlib.decompressobj(), nbytes
+                while left > 0 and not z.eof:
+                    data = fh.read(min(left, 2**20))
+                    if not data:
+                        break
+                    left -= len(data)
+                    while data:
+                        try:
+                            total += len(z.decompress(data, 2**24))
+                        except zlib.error as exc:
+                            raise InputError(
+                                f"{p}: not a readable MATLAB file (a compressed variable: {exc})"
+                            ) from None
+                        data = z.unconsumed_tail
+                        if total > limit:
+                            break
+                    if total > limit:
+                        break
+                fh.seek(left, os.SEEK_CUR)
+            if total > limit:
+                raise InputError(
+                    f"{p}: its variables inflate to more than {format_bytes(limit)} (from a "
+                    f"{format_bytes(os.path.getsize(p))} file), the limit here; store a large "
+                    "network as a sparse A or as .npz"
+                )
+
+
+def _labels_in_order(
+    src: np.ndarray, dst: np.ndarray, where: Path
+) -> tuple[tuple, np.ndarray, np.ndarray]:
+    """Labels in order of first appearance (row by row, from before to) and the 0-based
+    index of each end."""
+    both = np.empty(2 * src.size, dtype=object)
+    both[0::2], both[1::2] = src, dst
+    uniq, first, inv = np.unique(both.astype(str), return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")  # position of each label by first appearance
+    rank = np.empty(order.size, dtype=np.int64)
+    rank[order] = np.arange(order.size)
+    idx = rank[inv]
+    check_label_spellings((str(u) for u in uniq), f"{where}: from/to")
+    labels = tuple(label_from_text(str(uniq[k])) for k in order)
+    return labels, idx[1::2], idx[0::2]
+
+
+def _long_row(p: Path, fields: int) -> str:
+    """The first row with more fields than the header (read again, only on this error)."""
+    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+        for k, row in enumerate(csv.reader(fh), 1):
+            if len(row) > fields:
+                return f"row {k}: {len(row)} fields, the header has {fields}"
+    return "a row is longer than the header"
+
+
+def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
+    """(header, the weight columns, d) from row 1, refused unless it is from, to, a11 … add."""
+    with open(p, encoding="utf-8", errors="replace") as fh:
+        line = fh.readline(MAX_HEADER_CHARS + 1)
+    if len(line) > MAX_HEADER_CHARS:
+        raise InputError(
+            f"{p}: row 1: the header is longer than {MAX_HEADER_CHARS} characters "
+            f"(at most d = {CSV_MAX_DIM} in a CSV file; use .npz or .mat for larger weights)"
+        )
+    header = [h.strip() for h in line.rstrip("\n\r").split(",")]
+    if len(header) < 3 or header[:2] != ["from", "to"]:
+        raise InputError(f"{p}: row 1: the header must start with from, to (then a11 … add)")
+    k = len(header) - 2 - (header[-1] == "uncertainty")
+    d = int(round(k**0.5))
+    if d * d != k:
+        raise InputError(f"{p}: row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)")
+    if d > CSV_MAX_DIM:
+        raise InputError(
+            f"{p}: row 1: d = {d}; a CSV file holds at most d = {CSV_MAX_DIM} "
+            "(use .npz or .mat for larger weights)"
+        )
+    want = [f"a{r}{c}" if d < 10 else f"a{r}_{c}" for r in range(1, d + 1) for c in range(1, d + 1)]
+    if header[2 : 2 + k] != want:
+        raise InputError(
+            f"{p}: row 1: weight columns must be {', '.join(want[:4])}{' …' if k > 4 else ''}"
+        )
+    return header, want, d
+
+
+def read_csv_edges(path: str | Path) -> EdgeListData:
+    """Read a CSV edge list (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.csv`` file.
+
+    Returns
+    -------
+    EdgeListData
+        Labels in order of first appearance, d and the edge arrays.
+
+    Raises
+    ------
+    InputError
+        An unreadable or oversized file, a wrong header, a ragged row, a value that is not a
+        finite number, more rows or agents than the limits, an edge listed twice; the
+        message names the row.
+    """
+    import pandas as pd
+
+    p = _bounded(Path(path), MAX_CSV_BYTES)
+    header, want, d = _csv_header(p)
+    _no_nul(p)
+    k = d * d
+    as_text: dict[str, Any] = dict.fromkeys(
+        ["from", "to"] + (["uncertainty"] if header[-1] == "uncertainty" else []), str
+    )
+    try:
+        with warnings.catch_warnings():
+            # pandas only warns when a row is longer than the header: that is an error here
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            common = {
+                "keep_default_na": False,
+                "index_col": False,  # an extra field is an error, never an index column
+                "header": 0,
+                "names": header,  # stripped: "from , to , a11" names the columns from, to, a11
+                "skipinitialspace": True,
+                "nrows": MAX_EDGES + 1,
+                "engine": "c",
+            }
+            try:  # numbers parsed in C; only a file with a bad number is read again as text
+                table = pd.read_csv(
+                    p, dtype={**as_text, **dict.fromkeys(want, "float64")}, **common
+                )
+            except ValueError:
+                table = pd.read_csv(p, dtype={**as_text, **dict.fromkeys(want, str)}, **common)
+    except pd.errors.ParserWarning:
+        raise InputError(f"{p}: {_long_row(p, len(header))}") from None
+    except pd.errors.ParserError as exc:
+        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", str(exc))
+        what = (
+            f"row {m.group(2)}: {m.group(3)} fields, the header has {m.group(1)}"
+            if m
+            else "not a CSV table"
+        )
+        raise InputError(f"{p}: {what}") from None
+    except (UnicodeDecodeError, ValueError, OSError) as exc:
+        raise InputError(f"{p}: not a readable CSV table ({exc.__class__.__name__})") from None
+    e = len(table)
+    if e > MAX_EDGES:
+        raise InputError(f"{p}: more than {MAX_EDGES} rows")
+    src = table["from"].to_numpy(dtype=str)
+    dst = table["to"].to_numpy(dtype=str)
+    for name, col in (("from", src), ("to", dst)):
+        empty = np.flatnonzero(np.char.str_len(np.char.strip(col)) == 0)
+        if empty.size:
+            raise InputError(f"{p}: row {empty[0] + 2}: '{name}' is empty")
+    if all(table[c].dtype == np.float64 for c in want):
+        w = table[want].to_numpy(dtype=float).ravel()
+        vals = None
+    else:
+        vals = table[want].to_numpy(dtype=str)
+        w = pd.to_numeric(pd.Series(vals.ravel()), errors="coerce").to_numpy(dtype=float)
+    bad = np.flatnonzero(~np.isfinite(w))
+    if bad.size:
+        r, c = divmod(int(bad[0]), k)
+        text = str(vals[r, c]).strip() if vals is not None else str(w[bad[0]])
+        what = "is empty (a short row?)" if not text else f"= {text!r} is not a finite number"
+        raise InputError(f"{p}: row {r + 2}: {want[c]} {what}")
+    labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst), p)
+    if len(labels) > MAX_AGENTS:
+        raise InputError(f"{p}: {len(labels)} agents; at most {MAX_AGENTS}")
+    key = rows.astype(np.int64) * len(labels) + cols
+    order = np.argsort(key, kind="stable")
+    dup = np.flatnonzero(np.diff(key[order]) == 0)
+    if dup.size:
+        r = int(order[dup[0] + 1])
+        raise InputError(f"{p}: row {r + 2}: edge {src[r]}->{dst[r]} is listed twice")
+    unc = _csv_uncertainty(table, p) if "uncertainty" in as_text else None
+    return EdgeListData(p.stem, d, labels, rows, cols, w.reshape(e, d, d), str(p), unc)
+
+
+def _csv_uncertainty(table, p: Path) -> np.ndarray:
+    """The optional ``uncertainty`` column: per row a radius in [0, 1), or empty (none)."""
+    vals = np.char.strip(table["uncertainty"].to_numpy(dtype=str))
+    out = np.full(vals.size, np.nan)
+    for r in np.flatnonzero(np.char.str_len(vals) > 0).tolist():
+        try:
+            v = float(vals[r])
+        except ValueError:
+            v = math.nan
+        if not (math.isfinite(v) and 0 <= v < 1):
+            raise InputError(
+                f"{p}: row {r + 2}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "
+                "number in [0, 1) (or empty)"
+            )
+        out[r] = v
+    return out
+
+
+def write_csv_edges(path: str | Path, labels, dim: int, rows, cols, w) -> None:
+    """Write an edge list as CSV (the format :func:`read_csv_edges` reads), atomically.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    labels : sequence
+        The agent labels.
+    dim : int
+        d.
+    rows, cols : numpy.ndarray
+        0-based target and source of each edge.
+    w : numpy.ndarray
+        The weights, (E, d, d).
+    """
+    import pandas as pd
+
+    lab = np.array([str(x) for x in labels], dtype=object)
+    # rows ordered so that the agents first appear in label order where the edges allow it
+    # (the reader numbers agents by first appearance)
+    rows, cols, w = np.asarray(rows), np.asarray(cols), np.asarray(w, dtype=float)
+    order = np.lexsort((np.minimum(rows, cols), cols > rows, np.maximum(rows, cols)))
+    rows, cols, w = rows[order], cols[order], w[order]
+    cols_w = [
+        f"a{r}{c}" if dim < 10 else f"a{r}_{c}"
+        for r in range(1, dim + 1)
+        for c in range(1, dim + 1)
+    ]
+    frame = pd.DataFrame(w.reshape(len(rows), dim * dim), columns=cols_w)
+    frame.insert(0, "to", lab[np.asarray(rows)])
+    frame.insert(0, "from", lab[np.asarray(cols)])
+    with atomic_path(Path(path)) as tmp:
+        frame.to_csv(tmp, index=False)  # shortest round-trip reprs: exact on reading
+
+
+def _mat_labels(raw: Any, n: int, p: Path) -> tuple:
+    if raw is None:
+        return tuple(range(1, n + 1))
+    arr = np.asarray(raw)
+    if arr.dtype == object:
+        items = [np.asarray(x).ravel() for x in arr.ravel()]
+        if not all(x.dtype.kind == "U" and x.size == 1 for x in items):
+            raise InputError(f"{p}: labels: expected a cell array of strings")
+        out = [str(x[0]) for x in items]
+    elif arr.dtype.kind == "U":
+        out = [str(x).strip() for x in arr.ravel()]
+    else:
+        raise InputError(f"{p}: labels: expected a cell array of strings, got {arr.dtype}")
+    if len(out) != n:
+        raise InputError(f"{p}: labels: {len(out)} labels for {n} agents")
+    if len(set(out)) != n:
+        raise InputError(f"{p}: labels: agent labels must be unique")
+    check_label_spellings(out, f"{p}: labels")
+    return tuple(label_from_text(x) for x in out)
+
+
+def _scalar_text(a: np.ndarray) -> str:
+    return (
+        repr(a.ravel()[0].item()) if a.size == 1 and a.dtype.kind in "fiu" else f"shape {a.shape}"
+    )
+
+
+def read_mat(path: str | Path) -> EdgeListData:
+    """Read a MATLAB block matrix (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.mat`` file (MATLAB 5 to 7.2).
+
+    Returns
+    -------
+    EdgeListData
+        Labels, d and the edges (non-zero off-diagonal blocks).
+
+    Raises
+    ------
+    InputError
+        An unreadable or oversized file, a missing or wrongly typed ``A``/``dim``/``labels``
+        (a struct or an object array where a matrix belongs), a size that d does not divide,
+        a non-finite entry, or a non-zero diagonal block.
+    """
+    from scipy.io import loadmat
+
+    p = _bounded(Path(path), MAX_MAT_BYTES)
+    # loadmat holds the inflated variables, then A is copied to triplets: a third of the
+    # memory share every size check allows
+    _mat_inflated_bytes(p, min(MAX_MAT_BYTES, available_memory() / 6))
+    try:
+        doc = loadmat(p, variable_names=["A", "dim", "labels", "uncertainty"], mat_dtype=False)
+    except Exception as exc:  # noqa: BLE001 - whatever a malformed file raises inside scipy
+        raise InputError(f"{p}: not a readable MATLAB file ({exc.__class__.__name__})") from None
+    for key in ("A", "dim"):
+        if key not in doc:
+            raise InputError(f"{p}: {key}: missing")
+    a = doc["A"]
+    if not sparse.issparse(a):
+        a = np.asarray(a)
+        if a.dtype.kind not in "fiub" or a.dtype.names is not None:
+            raise InputError(
+                f"{p}: A: expected a numeric matrix, got {'a struct' if a.dtype.names else a.dtype}"
+            )
+    dim_a = np.asarray(doc["dim"])
+    if (
+        dim_a.dtype.kind not in "fiu"
+        or dim_a.size != 1
+        or not np.isfinite(dim_a.ravel()[0])
+        or float(dim_a.ravel()[0]) != int(dim_a.ravel()[0])
+    ):
+        raise InputError(f"{p}: dim: expected one integer, got {_scalar_text(dim_a)}")
+    d = int(dim_a.ravel()[0])
+    if not 1 <= d <= MAX_DIM:
+        raise InputError(f"{p}: dim: must be in 1..{MAX_DIM}, got {d}")
+    if a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] % d:
+        raise InputError(
+            f"{p}: A: expected a square (N·d)×(N·d) matrix, got shape {a.shape} with dim = {d}"
+        )
+    n = a.shape[0] // d
+    if not 1 <= n <= MAX_AGENTS:
+        raise InputError(f"{p}: A: {n} agents; at most {MAX_AGENTS}")
+    coo = sparse.coo_matrix(a, dtype=float)
+    if not np.all(np.isfinite(coo.data)):
+        k = int(np.flatnonzero(~np.isfinite(coo.data))[0])
+        raise InputError(f"{p}: A({coo.row[k] + 1}, {coo.col[k] + 1}): not a finite number")
+    nz = coo.data != 0
+    bi, bj = coo.row[nz] // d, coo.col[nz] // d
+    self_loop = np.flatnonzero(bi == bj)
+    if self_loop.size:
+        i = int(bi[self_loop[0]])
+        raise InputError(f"{p}: A: diagonal block ({i + 1}, {i + 1}) is not zero (a self-loop)")
+    labels = _mat_labels(doc.get("labels"), n, p)
+    pairs = np.unique(bi.astype(np.int64) * n + bj)
+    if pairs.size > MAX_EDGES:
+        raise InputError(f"{p}: A: more than {MAX_EDGES} edges")
+    rows, cols = pairs // n, pairs % n
+    w = np.zeros((pairs.size, d, d))
+    at = np.searchsorted(pairs, bi.astype(np.int64) * n + bj)  # each entry's edge
+    np.add.at(w, (at, coo.row[nz] % d, coo.col[nz] % d), coo.data[nz])
+    unc = _mat_uncertainty(doc.get("uncertainty"), n, rows, cols, p)
+    return EdgeListData(p.stem, d, labels, rows, cols, w, str(p), unc)
+
+
+def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
+    """The ``uncertainty`` variable: an N×N matrix whose (i, j) entry is edge j -> i's
+    radius ρ (0 or NaN: none given); a value where there is no edge is refused."""
+    if u is None:
+        return None
+    a = np.asarray(u.toarray() if hasattr(u, "toarray") else u)
+    if a.dtype.kind not in "fiu" or a.shape != (n, n):
+        raise InputError(
+            f"{p}: uncertainty: expected a numeric {n}×{n} matrix (one radius per edge)"
+        )
+    a = a.astype(float)
+    has = ~np.isnan(a) & (a != 0)
+    edge = np.zeros((n, n), dtype=bool)
+    edge[rows, cols] = True
+    stray = np.argwhere(has & ~edge)
+    if stray.size:
+        i, j = (int(x) + 1 for x in stray[0])
+        raise InputError(f"{p}: uncertainty({i}, {j}): uncertainty on a missing edge")
+    vals = a[rows, cols]
+    bad = np.flatnonzero(has[rows, cols] & ~((vals >= 0) & (vals < 1)))
+    if bad.size:
+        k = int(bad[0])
+        raise InputError(
+            f"{p}: uncertainty({rows[k] + 1}, {cols[k] + 1}): the radius must be in [0, 1), "
+            f"got {vals[k]:g}"
+        )
+    return np.where(has[rows, cols], vals, np.nan)
+
+
+def write_mat(path: str | Path, arrays: dict[str, Any]) -> None:
+    """Write variables to a MATLAB file, atomically (nothing half-written).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.mat`` file.
+    arrays : dict
+        Variable name to array (sparse matrices stay sparse; lists of strings become cell
+        arrays).
+    """
+    from scipy.io import savemat
+
+    with atomic_path(Path(path)) as tmp, open(tmp, "wb") as fh:
+        savemat(fh, arrays, do_compression=True, oned_as="column")
+
+
+__all__ = ["read_csv_edges", "read_mat", "write_csv_edges", "write_mat"]

@@ -1,0 +1,58 @@
+"""The memory every size check assumes: ``NTC_AVAILABLE_MEMORY`` when it is set (so a
+check gives the same answer on every machine), else what the machine has free. The
+simulation budget, the network generator, the table readers and the number of parallel
+proofs (:func:`ntc_design.numerics.linalg.proof_workers`) read it here."""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+
+from ..errors import InputError
+
+MEMORY_ENV = "NTC_AVAILABLE_MEMORY"  # set: the memory every size check assumes (bytes)
+_UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+
+
+def available_memory() -> float:
+    """Memory available now: the value of the environment variable ``NTC_AVAILABLE_MEMORY``
+    when it is set (bytes, or with a binary suffix: ``8G``, ``512M``), so that the size
+    checks give the same answer on every machine (the test suite sets it: an 8 GB laptop
+    and a 64 GB server refuse the same runs); else MemAvailable from /proc/meminfo.
+
+    Returns
+    -------
+    float
+        Bytes: the environment's value, else MemAvailable, else the physical memory
+        from os.sysconf, else 4 GiB.
+
+    Raises
+    ------
+    InputError
+        ``NTC_AVAILABLE_MEMORY`` is not a positive size.
+    """
+    pinned = os.environ.get(MEMORY_ENV)
+    if pinned is not None:
+        m = re.fullmatch(r"\s*([0-9]+(?:\.[0-9]+)?)\s*([KMGT]?)(?:i?B)?\s*", pinned, re.I)
+        value = float(m.group(1)) * _UNITS[m.group(2).upper()] if m else 0.0
+        if not value > 0 or not math.isfinite(value):
+            raise InputError(
+                f"{MEMORY_ENV}: expected a positive size such as 8G or 8589934592, "
+                f"got {pinned[:40]!r}"
+            )
+        return value
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 4.0 * 2**30
+
+
+__all__ = ["MEMORY_ENV", "available_memory"]

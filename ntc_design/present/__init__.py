@@ -1,0 +1,1 @@
+"""ntc_design.present."""

@@ -1,0 +1,462 @@
+"""The digital protocol as code an agent runs: each agent's tables (per mode) and THE AGENT
+LAW, defined here once; the exported C and Python (:mod:`ntc_design.export`) and the
+toolkit's reference (:func:`ntc_design.simulate.replay.replay`) implement it with the same
+operations in the same order, so all three agree bit for bit.
+
+The model (:mod:`ntc_design.protocol.digital`): period h, delay D, t_k = k·h (the double
+product), c_k = c(t_k), the mode of step k by :func:`~ntc_design.protocol.digital.step_modes`
+at t_k, the initial state held before the start. In x coordinates
+
+    x_{k+1} = x_k + h c_k (u − L_B x_{k−D}) + c_k √h Σ_e (g_e ξ_{k,e,1} + G_e x_{k−D} ξ_{k,e,2}),
+
+u = (Δ⊗I)·blockdiag(|B_i|)·x0, g_e = e_i ⊗ σ_e|A_ij| 1_d, G_e x = e_i ⊗ |A_ij| F (x_j − x_i)
+for edge e = (j → i), F the d×d matrix of f(x) = F x.
+
+**File edge order.** A mode's edges in the order of its topology's ``weights`` mapping
+(the order of the file, or of a certificate's subject), leaving out zero weights
+(sgn A_ij = 0). (The simulator's :class:`~ntc_design.simulate.system.ModeSystem` sorts its
+edges, :attr:`Topology.edges`; :attr:`ModeLaw.sorted_index` maps one to the other.)
+Agent i's in-edges ("slots") are the edges into i, in file order.
+
+**The measurement** of in-neighbour j (edge e = j → i) at step k, from the state D samples
+old, xd = x_{k−D}, with the edge's two normals z1 (additive) and z2 (multiplicative)::
+
+    diff[b] = xd_j[b] − xd_i[b]
+    fd[a]   = F[a][0]*diff[0];  fd[a] += F[a][b]*diff[b]  for b = 1 … d−1
+    m[a]    = s_e*xd_j[a] − xd_i[a] + (sigma_e*z1 + fd[a]*z2) / sqrth
+
+(s_e = sgn A_ij = ±1, sigma_e the edge's σ, sqrth = √h as a constant). With h c |A_ij|
+this is the edge's share of the drift and of the noise above.
+
+**The update** of agent i, with hc = h*c_k::
+
+    acc = u_i[a]                                   (0.0 for an uninformed agent)
+    acc -= bd_i[a][b]*xd_i[b]   for b = 0 … d−1    (informed agents; bd_i = δ·|B_i|)
+    acc += W_e[a][b]*m_e[b]     for each slot e in file order, for b = 0 … d−1 (W_e = |A_ij|)
+    x_next[a] = x_i[a] + hc*acc
+
+for a = 0 … d−1, where x_i is the agent's current state x_k. Summed over the edges, in
+exact arithmetic, this is the recursion above.
+
+:class:`AgentLaw` holds what that needs: per mode (:class:`ModeLaw`) the edges in file order
+with their sources, signs, |A_ij| and σ_e, per agent δ·|B_i| and u_i, and the period, the
+delay, F, the gain (:class:`~ntc_design.gain.code.GainCode`) and the schedule.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..gain.code import GainCode
+from ..gain.schedule import ScheduleGain
+from ..model import Label, Topology
+from .digital import Digital, step_modes
+from .lemma1 import ProtocolDesign, SwitchingDesign, input_vector
+
+
+def file_edges(top: Topology) -> list[tuple[int, int]]:
+    """The edges (i, j), j → i, in file order: the topology's ``weights`` mapping in its
+    insertion order, without zero weights.
+
+    Parameters
+    ----------
+    top : Topology
+        The topology.
+
+    Returns
+    -------
+    list of (int, int)
+    """
+    return [(i, j) for i, j in top.weights if top.sign(i, j) != 0]
+
+
+@dataclass(frozen=True, eq=False)
+class ModeLaw:
+    """One mode's tables, edges in file order (:func:`file_edges`).
+
+    Attributes
+    ----------
+    name : str
+        The mode.
+    dst, src : numpy.ndarray
+        (E,) agent i and agent j of edge e = j → i.
+    sign : numpy.ndarray
+        (E,) sgn A_ij, ±1.0.
+    weight : numpy.ndarray
+        (E, d, d) ``|A_ij|``.
+    sigma : numpy.ndarray
+        (E,) the additive noise σ_e of the edge's measurement.
+    informed : tuple of int
+        The informed agents (0-based).
+    delta : float
+        δ (δ_i on the informed agents).
+    bd : numpy.ndarray
+        (N, d, d) ``δ·|B_i|`` (zero blocks for the uninformed).
+    u : numpy.ndarray
+        (N, d) ``u_i = δ|B_i|x0`` (zero for the uninformed).
+    sorted_index : numpy.ndarray
+        (E,) where edge e sits in :attr:`Topology.edges` (the simulator's order).
+    """
+
+    name: str
+    dst: np.ndarray
+    src: np.ndarray
+    sign: np.ndarray
+    weight: np.ndarray
+    sigma: np.ndarray
+    informed: tuple[int, ...]
+    delta: float
+    bd: np.ndarray
+    u: np.ndarray
+    sorted_index: np.ndarray
+
+    @property
+    def n_edges(self) -> int:
+        """E, the mode's edges."""
+        return int(self.dst.size)
+
+    def in_edges(self, i: int) -> list[int]:
+        """Agent i's slots: the edges into i (their file-order indices, in order).
+
+        Parameters
+        ----------
+        i : int
+            0-based agent.
+
+        Returns
+        -------
+        list of int
+        """
+        return np.flatnonzero(self.dst == i).tolist()
+
+    @cached_property
+    def slots(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """Slot by slot: (the agents with an s-th in-edge, those edges), s = 0, 1, …; an
+        agent appears at most once per slot (the vectorised replay adds slot by slot)."""
+        n = self.bd.shape[0]
+        by_agent: list[list[int]] = [[] for _ in range(n)]
+        for e, i in enumerate(self.dst.tolist()):
+            by_agent[i].append(e)
+        width = max((len(x) for x in by_agent), default=0)
+        out = []
+        for s in range(width):
+            agents = [i for i in range(n) if len(by_agent[i]) > s]
+            out.append(
+                (
+                    np.array(agents, dtype=np.int64),
+                    np.array([by_agent[i][s] for i in agents], dtype=np.int64),
+                )
+            )
+        return tuple(out)
+
+    @property
+    def max_in_degree(self) -> int:
+        """The most in-edges of one agent."""
+        return len(self.slots)
+
+
+def _noise_matrix(f: Any, d: int) -> np.ndarray:
+    """F of f(x) = F x: s·I for a number s (as the simulator's ScalarNoise), a d×d matrix."""
+    if callable(f):
+        raise InputError("noise.f: a Python function cannot be exported; give a number or a matrix")
+    arr = np.asarray(f, dtype=float)
+    if arr.ndim == 0:
+        return float(arr) * np.eye(d)
+    if arr.shape != (d, d):
+        raise InputError(f"noise.f: expected a scalar or a {d}x{d} matrix, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError("noise.f: an entry is not finite")
+    return arr.copy()
+
+
+def mode_law(
+    name: str,
+    top: Topology,
+    informed: Sequence[int],
+    b: Mapping[int, np.ndarray],
+    delta: float,
+    x0: np.ndarray,
+    sigma: float,
+    sigma_edges: Mapping[tuple, float] | None = None,
+) -> ModeLaw:
+    """One mode's tables from its design's numbers.
+
+    Parameters
+    ----------
+    name : str
+        The mode.
+    top : Topology
+        Its topology (the file order of its ``weights``).
+    informed : sequence of int
+        The informed agents (0-based).
+    b : mapping of int to numpy.ndarray
+        B_i of the informed agents.
+    delta : float
+        δ.
+    x0 : numpy.ndarray
+        Lemma 1's x0 = k1·θ (d numbers).
+    sigma : float
+        σ of every edge without its own.
+    sigma_edges : mapping, optional
+        (from label, to label) → σ of that edge (as ``noise.sigma_edges``).
+
+    Returns
+    -------
+    ModeLaw
+
+    Raises
+    ------
+    InputError
+        A per-edge σ names an edge that is not in the mode.
+    """
+    d, n = top.dim, top.n
+    edges = file_edges(top)
+    lab = top.labels
+    sig_by = {(str(a), str(c)): float(s) for (a, c), s in (sigma_edges or {}).items()}
+    known = {(str(lab[j]), str(lab[i])) for i, j in edges}
+    for key in sig_by:
+        if key not in known:
+            raise InputError(f"noise.sigma_edges: no edge {key[0]}->{key[1]} in {name}")
+    position = {e: k for k, e in enumerate(top.edges)}
+    e_n = len(edges)
+    bd = np.zeros((n, d, d))
+    for i in informed:
+        bd[i] = delta * np.asarray(b[i], dtype=float)
+    u = input_vector(top, {i: np.asarray(b[i], dtype=float) for i in informed}, delta, x0)
+    return ModeLaw(
+        name=name,
+        dst=np.array([i for i, _ in edges], dtype=np.int64),
+        src=np.array([j for _, j in edges], dtype=np.int64),
+        sign=np.array([float(top.sign(i, j)) for i, j in edges]),
+        weight=np.array([top.abs_weight(i, j) for i, j in edges], dtype=float).reshape(e_n, d, d),
+        sigma=np.array(
+            [sig_by.get((str(lab[j]), str(lab[i])), float(sigma)) for i, j in edges], dtype=float
+        ),
+        informed=tuple(sorted(int(i) for i in informed)),
+        delta=float(delta),
+        bd=bd,
+        u=np.asarray(u, dtype=float).reshape(n, d),
+        sorted_index=np.array([position[e] for e in edges], dtype=np.int64),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class AgentLaw:
+    """Everything the agents of a digital protocol run (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+        The network's name.
+    labels : tuple
+        The agents' labels.
+    dim : int
+        d.
+    theta : numpy.ndarray
+        θ.
+    modes : tuple of ModeLaw
+        The modes (one for a fixed topology).
+    schedule : tuple of (str, float)
+        The switching schedule's (mode, duration) pairs; empty for one mode.
+    digital : Digital
+        h and D.
+    noise_f : numpy.ndarray
+        F (d×d).
+    gain : GainCode
+        c(t).
+    """
+
+    name: str
+    labels: tuple[Label, ...]
+    dim: int
+    theta: np.ndarray
+    modes: tuple[ModeLaw, ...]
+    schedule: tuple[tuple[str, float], ...]
+    digital: Digital
+    noise_f: np.ndarray
+    gain: GainCode
+
+    @property
+    def n(self) -> int:
+        """N, the agents."""
+        return len(self.labels)
+
+    @property
+    def sqrt_period(self) -> float:
+        """√h (the constant the measurement divides by)."""
+        return math.sqrt(self.digital.period)
+
+    @property
+    def mode_names(self) -> list[str]:
+        """The modes' names, in the order the indices refer to."""
+        return [m.name for m in self.modes]
+
+    @property
+    def schedule_period(self) -> float:
+        """The schedule's period, the plain sum of its durations (as :func:`step_modes`)."""
+        return float(sum(float(d) for _, d in self.schedule))
+
+    @property
+    def schedule_ends(self) -> list[float]:
+        """The cumulative ends of the schedule's entries (as :func:`step_modes`)."""
+        return np.cumsum([float(d) for _, d in self.schedule]).tolist()
+
+    @property
+    def schedule_modes(self) -> list[int]:
+        """The mode index of each schedule entry."""
+        names = self.mode_names
+        return [names.index(m) for m, _ in self.schedule]
+
+    def step_modes(self, steps: int) -> np.ndarray:
+        """The mode of each step k = 0 … K−1 (:func:`step_modes` at t_k = k·h).
+
+        Parameters
+        ----------
+        steps : int
+            K.
+
+        Returns
+        -------
+        numpy.ndarray
+            (K,) mode indices.
+        """
+        if not self.schedule:
+            return np.zeros(steps, dtype=np.int64)
+        t = np.arange(steps, dtype=float) * self.digital.period
+        return step_modes(self.schedule, t, self.mode_names)
+
+    def normals_per_step(self, steps: int) -> np.ndarray:
+        """2·E of each step's mode: the normals step k consumes.
+
+        Parameters
+        ----------
+        steps : int
+            K.
+
+        Returns
+        -------
+        numpy.ndarray
+            (K,) counts.
+        """
+        counts = np.array([2 * m.n_edges for m in self.modes], dtype=np.int64)
+        return counts[self.step_modes(steps)]
+
+
+def agent_law(
+    design: ProtocolDesign | SwitchingDesign,
+    digital: Digital,
+    gain: str | ScheduleGain,
+    sigma: float,
+    f: Any,
+    sigma_edges: Mapping[tuple, float] | None = None,
+) -> AgentLaw:
+    """The agents' law of a Lemma 1 design (one per mode for a switching set).
+
+    Parameters
+    ----------
+    design : ProtocolDesign or SwitchingDesign
+        The design.
+    digital : Digital
+        h and D.
+    gain : str or ScheduleGain
+        c(t).
+    sigma : float
+        σ of every edge without its own.
+    f : float or array_like
+        f(x) = F x: a number s (F = s·I) or F.
+    sigma_edges : mapping, optional
+        (from label, to label) → σ.
+
+    Returns
+    -------
+    AgentLaw
+
+    Raises
+    ------
+    InputError
+        A callable gain or f, a per-edge σ on a missing edge, or F of the wrong shape.
+    """
+    if isinstance(design, SwitchingDesign):
+        designs = dict(design.modes)
+        schedule = tuple((str(m), float(t)) for m, t in design.switching.schedule)
+        src = design.switching.source
+        name = Path(src).stem if src else "switching"
+    else:
+        designs = {design.topology.name or "topology": design}
+        schedule = ()
+        name = design.topology.name or "topology"
+    first = next(iter(designs.values()))
+    modes = tuple(
+        mode_law(k, des.topology, des.informed, des.B, des.delta, des.x0, sigma, sigma_edges)
+        for k, des in designs.items()
+    )
+    return make_law(name, first.topology, first.theta, modes, schedule, digital, gain, f)
+
+
+def make_law(
+    name: str,
+    top: Topology,
+    theta: np.ndarray,
+    modes: Sequence[ModeLaw],
+    schedule: Sequence[tuple[str, float]],
+    digital: Digital,
+    gain: str | ScheduleGain | GainCode,
+    f: Any,
+) -> AgentLaw:
+    """An :class:`AgentLaw` from its modes' tables (a design's or a certificate's).
+
+    Parameters
+    ----------
+    name : str
+        The network's name.
+    top : Topology
+        A mode's topology (the agents and d).
+    theta : numpy.ndarray
+        θ.
+    modes : sequence of ModeLaw
+        The modes.
+    schedule : sequence of (str, float)
+        The schedule (empty for one mode).
+    digital : Digital
+        h and D.
+    gain : str, ScheduleGain or GainCode
+        c(t).
+    f : float or array_like
+        f(x) = F x.
+
+    Returns
+    -------
+    AgentLaw
+
+    Raises
+    ------
+    InputError
+        A callable gain or f, F of the wrong shape, a schedule naming an unknown mode.
+    """
+    names = [m.name for m in modes]
+    for k, (m, _) in enumerate(schedule):
+        if m not in names:
+            raise InputError(f"schedule[{k}]: unknown mode {m!r}")
+    code = gain if isinstance(gain, GainCode) else GainCode.of(gain)
+    return AgentLaw(
+        name=str(name),
+        labels=tuple(top.labels),
+        dim=top.dim,
+        theta=np.asarray(theta, dtype=float).copy(),
+        modes=tuple(modes),
+        schedule=tuple((str(m), float(t)) for m, t in schedule),
+        digital=digital,
+        noise_f=_noise_matrix(f, top.dim),
+        gain=code,
+    )
+
+
+__all__ = ["AgentLaw", "ModeLaw", "agent_law", "file_edges", "make_law", "mode_law"]

@@ -1,0 +1,359 @@
+"""Tests of :mod:`ntc_design.cli.commands`."""
+
+import copy
+import json
+
+import pytest
+
+import ntc_design as nd
+from ntc_design.certify import verify
+from tests.cli_helpers import assert_input_error, run_cli
+
+
+def test_certify_out_is_written_only_on_success(tmp_path, examples, capsys, monkeypatch):
+    out = tmp_path / "c.json"
+    assert_input_error(
+        ["certify", examples / "g1.yaml", "--theta", "0,0,0", "--out", out],
+        capsys,
+        monkeypatch,
+        "theta",
+    )
+    assert not out.exists()
+    code, _, err = run_cli(
+        ["certify", examples / "g1.yaml", "--theta", "1,2,-1", "--out", out], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert verify(json.loads(out.read_text())).valid
+    doc = copy.deepcopy(json.loads(out.read_text()))
+    assert verify(doc).method == "exact-rational"
+
+
+@pytest.mark.parametrize(
+    "expr, code", [("1/(1+t)", 0), ("(1+t)^(-1/3)", 0), ("(1+t)^(-2)", 1), ("exp(-t)", 1)]
+)
+def test_gain_exit_code_says_whether_a_theorem_applies(expr, code, capsys, monkeypatch):
+    got, out, _ = run_cli(["gain", expr], capsys, monkeypatch)
+    assert got == code, out
+    got, out, _ = run_cli(["gain", expr, "--json"], capsys, monkeypatch)
+    assert got == code and (json.loads(out)["mean_square"] is True) == (code == 0)
+
+
+@pytest.mark.parametrize(
+    "command", ["certify", "simulate", "sweep", "gain", "report", "design", "export"]
+)
+def test_help_ends_with_an_example(command, capsys, monkeypatch):
+    code, out, _ = run_cli([command, "--help"], capsys, monkeypatch)
+    assert code == 0
+    assert f"Example: ntc {command}" in " ".join(out.split())
+    # flags take no value: no <bool> metavar on ours (typer's own --help keeps it)
+    assert [ln for ln in out.splitlines() if "<bool>" in ln and "--help" not in ln] == []
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        "check",
+        "design",
+        "generate",
+        "gain",
+        "certify",
+        "verify",
+        "simulate",
+        "sweep",
+        "report",
+        "reproduce",
+        "export",
+    ],
+)
+def test_every_command_with_a_result_has_json(command, capsys, monkeypatch):
+    code, out, _ = run_cli([command, "--help"], capsys, monkeypatch)
+    assert code == 0 and "--json" in out
+
+
+def test_generate_json(tmp_path, capsys, monkeypatch):
+    code, out, err = run_cli(
+        ["generate", "--n", "12", "--d", "2", "--out", tmp_path / "g.npz", "--json"],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 0, err
+    doc = json.loads(out)
+    top = nd.load(tmp_path / "g.npz")
+    assert (
+        (doc["N"], doc["d"], doc["edges"])
+        == (top.n, top.dim, len(top.weights))
+        == (12, 2, doc["edges"])
+    )
+
+
+@pytest.mark.hostile
+def test_out_above_the_dense_size_is_refused_before_work(tmp_path, capsys, monkeypatch):
+    from ntc_design.model.generate import random_network
+
+    p = tmp_path / "big.yaml"
+    import yaml
+
+    p.write_text(yaml.safe_dump(random_network(70, 3, seed=1).to_dict()))  # Nd = 210
+    from ntc_design.certify.robust.are import RICCATI_MAX_ND
+
+    args = ["robust", p, "--theta", "1,2,-1", "--out", tmp_path / "c.json"]
+    needle = f"--out: a robust certificate is issued up to Nd = {RICCATI_MAX_ND}"
+    assert_input_error(args, capsys, monkeypatch, needle)
+    assert not (tmp_path / "c.json").exists()
+
+
+# -- ntc export ---------------------------------------------------------------------------
+
+
+def test_export_writes_the_folder(tmp_path, examples, capsys, monkeypatch):
+    out = tmp_path / "g1-c"
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--lang", "c"]
+    code, text, err = run_cli(
+        [*args, "--out", out, "--period", "0.1", "--delay", "1"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert "exported G1 (7 agents, d = 3, 1 mode(s); h = 0.1, D = 1, c(t) = 1/(1+t)) as c" in text
+    assert (out / "ntc_protocol.c").is_file() and (out / "README.txt").is_file()
+    code, text, err = run_cli(
+        ["export", examples.parent / "certificates" / "g1.json", "--lang", "python",
+         "--out", tmp_path / "py", "--period", "0.05", "--gain", "2/(2+t)", "--json"],
+        capsys, monkeypatch,
+    )  # fmt: skip
+    doc = json.loads(text)
+    assert code == 0 and doc["ok"] and doc["kind"] == "certificate (hurwitz)"
+    assert doc["period"] == 0.05 and doc["delay"] == 0 and doc["gain"] == "2/(2+t)"
+    assert doc["files"] == [
+        "ntc_protocol.py",
+        "README.txt",
+        "example_input.txt",
+        "example_output.txt",
+    ]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, needles",
+    [
+        (["--period", "0"], ["--period: must be a positive number"]),
+        (["--period", "-0.1"], ["--period: must be a positive number"]),
+        (["--period", "nan"], ["--period: must be finite"]),
+        (["--period", "inf"], ["--period: must be finite"]),
+        (["--period", "11"], ["--period: h = 11 is longer than the horizon T = 10"]),
+        (["--period", "0.1", "--delay", "-1"], ["--delay: must be an integer >= 0"]),
+        (["--period", "0.1", "--delay", "1.5"], ["--delay", "integer"]),
+        (["--period", "0.1", "--lang", "fortran"], ["--lang: expected one of c, python"]),
+        ([], ["--period:", "g1_deadline.yaml has no digital block"]),
+        (["--period", "0.1", "--gain", "1"], ["g1_deadline.yaml: no theorem is guaranteed"]),
+        (["--period", "0.1", "--gain", "__import__('os')"], ["gain: "]),
+    ],
+)
+def test_export_refusals_write_nothing(tmp_path, examples, capsys, monkeypatch, extra, needles):
+    out = tmp_path / "o"
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", out, *extra]
+    assert_input_error(args, capsys, monkeypatch, *needles)
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.hostile
+def test_export_refuses_a_certificate_that_does_not_verify(tmp_path, examples, capsys, monkeypatch):
+    doc = json.loads((examples.parent / "certificates" / "g1.json").read_text())
+    doc["subject"]["modes"]["G1"]["x0"][0] += 1.0
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    out = tmp_path / "o"
+    args = ["export", bad, "--out", out, "--period", "0.1"]
+    assert_input_error(args, capsys, monkeypatch, str(bad), "the certificate does not verify")
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+def test_export_refuses_a_folder_with_other_files(tmp_path, examples, capsys, monkeypatch):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "mine.txt").write_text("x")
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", out, "--period", "0.1"]
+    assert_input_error(args, capsys, monkeypatch, "--out:", "holds other files ('mine.txt')")
+    assert [p.name for p in out.iterdir()] == ["mine.txt"]
+
+
+def test_examples_lists_and_copies_the_bundled_files(tmp_path, capsys, monkeypatch):
+    from ntc_design.model.paper import example_files, example_path
+
+    code, out, err = run_cli(["examples"], capsys, monkeypatch)
+    assert code == 0, err
+    assert f"the bundled examples are in {example_path()}:" in out
+    assert [ln.strip() for ln in out.splitlines()[1:-1]] == example_files()
+    code, out, err = run_cli(
+        ["examples", "--copy", tmp_path / "mine", "--json"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["files"] == example_files() and doc["copied_to"] == str(tmp_path / "mine")
+    assert (
+        sorted(
+            p.relative_to(tmp_path / "mine").as_posix()
+            for p in (tmp_path / "mine").rglob("*")
+            if p.is_file()
+        )
+        == example_files()
+    )
+    # the copy is a user's to run, as the checkout's examples are
+    code, _, err = run_cli(
+        ["design", tmp_path / "mine" / "g1.yaml", "--theta", "1,2,-1"], capsys, monkeypatch
+    )
+    assert code == 0, err
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("as_json", [False, True])
+@pytest.mark.parametrize(
+    "make, needle",
+    [
+        (lambda p: (p.mkdir(), (p / "notes.txt").write_text("mine")), "the folder is not empty"),
+        (lambda p: p.write_text("mine"), "exists and is not a folder"),
+    ],
+    ids=["non-empty folder", "a file"],
+)
+def test_examples_copy_refuses_to_overwrite(tmp_path, capsys, monkeypatch, make, needle, as_json):
+    dest = tmp_path / "dest"
+    make(dest)
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    args = ["examples", "--copy", dest, *(["--json"] if as_json else [])]
+    assert_input_error(args, capsys, monkeypatch, f"{dest}: {needle}")
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("as_json", [False, True], ids=["text", "json"])
+@pytest.mark.parametrize(
+    "exc, code, message",
+    [
+        (
+            ValueError("too many values to unpack (expected 1)"),
+            1,
+            "internal error (ValueError: too many values to unpack (expected 1)); re-run with "
+            "NTC_DEBUG=1 for the traceback",
+        ),
+        (
+            MemoryError(),
+            2,
+            "out of memory: the input asks for more memory than the machine has",
+        ),
+        (PermissionError(13, "Permission denied", "x.json"), 2, "'x.json': Permission denied"),
+        (KeyboardInterrupt(), 130, "interrupted"),
+    ],
+    ids=["internal", "memory", "os", "interrupt"],
+)
+def test_every_error_exit_is_one_line_and_json_under_json(
+    exc, code, message, as_json, capsys, monkeypatch, tmp_path
+):
+    import ntc_design.certify
+
+    def fails(*_args, **_kwargs):
+        raise exc
+
+    monkeypatch.setattr(ntc_design.certify, "verify_file", fails)
+    monkeypatch.delenv("NTC_DEBUG", raising=False)
+    args = ["verify", tmp_path / "c.json", *(["--json"] if as_json else [])]
+    got, out, err = run_cli(args, capsys, monkeypatch)
+    assert (got, err) == (code, f"error: {message}\n")
+    if as_json:  # a script reading stdout gets JSON for every error exit
+        assert json.loads(out) == {"ok": False, "error": message, "exit_code": code}
+    else:
+        assert out == ""
+
+
+def test_robust_and_verify_name_the_per_edge_radii(tmp_path, capsys, monkeypatch):
+    from tests.support.robust import TRI, TRI_SET
+
+    (tmp_path / "tri.yaml").write_text(TRI, encoding="utf-8")
+    out = tmp_path / "c.json"
+    code, text, err = run_cli(
+        ["robust", tmp_path / "tri.yaml", "--theta", "1", "--out", out], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert text.splitlines()[0] == f"tri: robust brackets for {TRI_SET}"
+    code, shown, err = run_cli(["verify", out], capsys, monkeypatch)
+    assert code == 0, err
+    assert shown.count(f"for {TRI_SET})") == 2  # the decay and the offset, beside them
+    for said in (text, shown):
+        assert "at ρ = 0.5" not in said and "ρ = 0.5)" not in said
+
+
+@pytest.mark.parametrize("radius", ["0", "0.05"])
+def test_robust_proves_brackets_where_certify_proves_the_nominal_case(
+    radius, tmp_path, capsys, monkeypatch
+):
+    # the issue's network: a weight v vᵀ whose kernel rounding lost left every bracket
+    # end unproven, ρ = 0 included; at ρ = 0 the LMI is the nominal Lyapunov inequality
+    net, out = tmp_path / "g.yaml", tmp_path / "c.json"
+    args = ["generate", "--n", "6", "--d", "2", "--seed", "11", "--out", net]
+    assert run_cli(args, capsys, monkeypatch)[0] == 0
+    assert run_cli(["certify", net, "--theta", "1,-1"], capsys, monkeypatch)[0] == 0
+    code, text, err = run_cli(
+        ["robust", net, "--theta", "1,-1", "--radius", radius, "--out", out, "--json"],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["valid"] is True
+    # ρ = 0: the nominal rate to 0.005/2³ (robust's docstring); ρ = 0.05: 0.558354 here
+    floor = (1 - 0.005 / 8) * (1 - 1e-12) if radius == "0" else 0.9
+    assert doc["decay"]["lower"] >= floor * doc["nominal_decay"]
+    assert doc["offset"]["upper"] is not None and doc["margin"]["lower"] > 0.5
+    code, text, err = run_cli(["verify", out], capsys, monkeypatch)
+    assert code == 0 and "VALID" in text, err
+
+
+# -- a network with no informed agent: nothing can be designed --------------------------
+
+COOPERATIVE = """name: coop
+dim: 2
+agents: 3
+edges:
+  - {from: 1, to: 2, weight: {diag: [1, 1]}}
+  - {from: 2, to: 3, weight: {diag: [1, 2]}}
+  - {from: 3, to: 1, weight: {diag: [2, 1]}}
+"""
+
+
+@pytest.mark.parametrize("extra", [[], ["--json"], ["--out", "design.json"]])
+def test_design_without_an_informed_agent_exits_1_with_the_fix(
+    tmp_path, capsys, monkeypatch, extra
+):
+    p = tmp_path / "coop.yaml"
+    p.write_text(COOPERATIVE, encoding="utf-8")
+    extra = [str(tmp_path / x) if x.endswith(".json") else x for x in extra]
+    code, out, err = run_cli(["design", p, "--theta", "21,42", *extra], capsys, monkeypatch)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == 1 and len(lines) == 1, err
+    assert lines[0].startswith("not designed: the network has no informed agent")
+    assert "an antagonistic edge (A_ij negative definite) into an agent makes it informed" in err
+    assert not (tmp_path / "design.json").exists()  # nothing designed, nothing written
+    if "--json" in extra:
+        assert json.loads(out)["informed"] == []
+    else:
+        # the rate is L's, exactly 0 (L(1⊗v) = 0), not rounding noise such as 8.9e-17
+        assert "best decay rate" in out and "e-1" not in out.split("best decay rate")[1][:60]
+
+
+def test_switching_design_names_the_mode_without_an_informed_agent(
+    tmp_path, capsys, monkeypatch, examples
+):
+    (tmp_path / "coop.yaml").write_text(COOPERATIVE, encoding="utf-8")
+    sw = tmp_path / "sw.yaml"
+    sw.write_text(
+        "modes:\n  a: coop.yaml\n  b: coop.yaml\nschedule:\n  - {mode: a, duration: 1}\n"
+        "  - {mode: b, duration: 1}\n",
+        encoding="utf-8",
+    )
+    code, _, err = run_cli(["design", sw, "--theta", "1,2"], capsys, monkeypatch)
+    assert code == 1 and "not designed: mode(s) a, b have no informed agent" in err
+
+
+def test_design_with_informed_agents_still_exits_0(examples, capsys, monkeypatch):
+    code, _, err = run_cli(
+        ["design", examples / "g3.yaml", "--theta", "1,2,-1"], capsys, monkeypatch
+    )
+    assert code == 0, err  # Assumption 2 fails in G3, but U is not empty: a design exists

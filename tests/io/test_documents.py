@@ -1,0 +1,64 @@
+"""Tests of :mod:`ntc_design.io.documents`."""
+
+import json
+
+import pytest
+
+from ntc_design.errors import InputError
+from ntc_design.io import documents
+from ntc_design.io.documents import read_document, type_name
+
+
+def test_yaml_and_json_read_to_the_same_mapping(tmp_path):
+    doc = {"dim": 2, "agents": [1, "b"], "edges": [{"from": 1, "to": "b", "weight": [[1, 0]]}]}
+    (tmp_path / "a.json").write_text(json.dumps(doc), encoding="utf-8")
+    (tmp_path / "a.yaml").write_text(
+        "dim: 2\nagents: [1, b]\nedges:\n  - {from: 1, to: b, weight: [[1, 0]]}\n",
+        encoding="utf-8",
+    )
+    assert read_document(tmp_path / "a.json") == read_document(tmp_path / "a.yaml") == doc
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "name, text, needle",
+    [
+        ("list.yaml", "- 1\n- 2\n", "expected a mapping at the top level, got list"),
+        ("empty.yaml", "", "the file is empty"),
+        ("null.yaml", "~\n", "expected a mapping at the top level, got nothing"),
+        ("bad.json", "{", "not valid JSON"),
+        ("bad.yaml", "a: [1\n", "not valid YAML"),
+    ],
+)
+def test_a_document_that_is_not_a_mapping_is_one_line_naming_the_file(tmp_path, name, text, needle):
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(InputError) as exc:
+        read_document(p)
+    msg = str(exc.value)
+    assert msg.startswith(str(p)) and needle in msg and "\n" not in msg
+
+
+@pytest.mark.hostile
+def test_the_limits_are_refused_before_the_document_is_built(tmp_path, monkeypatch):
+    deep = tmp_path / "deep.json"
+    deep.write_text(
+        '{"a": ' + "[" * (documents.MAX_DEPTH + 1) + "]" * (documents.MAX_DEPTH + 1) + "}"
+    )
+    with pytest.raises(InputError, match="nest"):
+        read_document(deep)
+    # aliases counted expanded: 4 × 4 × 4 = 64 nodes from a few lines
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text("a: &a [1, 1, 1, 1]\nb: &b [*a, *a, *a, *a]\nc: [*b, *b, *b, *b]\n")
+    monkeypatch.setattr(documents, "MAX_EXPANDED_NODES", 50)
+    with pytest.raises(InputError, match=str(bomb)):
+        read_document(bomb)
+    monkeypatch.setattr(documents, "MAX_FILE_BYTES", 10)
+    with pytest.raises(InputError, match=str(deep)):
+        read_document(deep)
+
+
+def test_type_name_says_what_a_value_is():
+    assert [type_name(x) for x in (None, 1, "a", [1], {"k": 1})] == [
+        "nothing", "int", "str", "list", "dict",
+    ]  # fmt: skip
