@@ -28,9 +28,9 @@ from pathlib import Path
 import ntc_design as nd
 from ntc_design.certify import verify
 from ntc_design.certify.kinds.robust import robust_certificate
+from ntc_design.certify.robust import robust
 from ntc_design.certify.robust.are import RICCATI_MAX_ND
 from ntc_design.certify.robust.scale import robust_scale
-from ntc_design.certify.robust.search import robust
 from ntc_design.model.generate import random_network
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -12,8 +12,8 @@ import numpy as np
 
 import ntc_design as nd
 from ntc_design.certify import certify
-from ntc_design.reports.timevarying import lambda_min_figure
 from ntc_design.protocol.timevarying import TimeVaryingDesign
+from ntc_design.reports.timevarying import lambda_min_figure
 
 # the bundled examples, wherever the package is installed (no checkout needed)
 EXAMPLES = nd.example_path()

@@ -13,7 +13,7 @@ import warnings
 import matplotlib.pyplot as plt
 
 import ntc_design as nd
-from ntc_design.certify.robust.search import robust, robust_sweep
+from ntc_design.certify.robust import robust, robust_sweep
 from ntc_design.reports.figures import robust_figure
 
 EXAMPLES = nd.example_path()

@@ -11,7 +11,7 @@ from .kinds import KINDS, CertificateKind, kind_for
 from .kinds.hurwitz import hurwitz_certificate
 from .kinds.hurwitz_scale import scale_certificate
 from .kinds.switching import switching_certificate
-from .result import CertifyResult, certify
+from .result import CertifyResult, RobustResult, certify, certify_robust
 from .theorems import Premise, TheoremVerdict
 from .verify import verify, verify_file
 
@@ -21,6 +21,7 @@ __all__ = [
     "About",
     "CertificateKind",
     "CertifyResult",
+    "RobustResult",
     "Check",
     "Claim",
     "ClaimKind",
@@ -31,6 +32,7 @@ __all__ = [
     "Verification",
     "analyse_gain",
     "certify",
+    "certify_robust",
     "hurwitz_certificate",
     "kind_for",
     "scale_certificate",

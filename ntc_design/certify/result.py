@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +24,14 @@ from .checks import Check, Verification
 from .dense import DENSE_CERT_MAX_ND
 from .format import digest
 from .kinds import KINDS, IssueOptions, ResultRow, kind_for
+from .robust import (
+    DEFAULT_RADIUS,
+    RobustDesign,
+    RobustReport,
+    check_radius,
+    check_robust_work,
+    robust,
+)
 from .theorems import GUARANTEE_WORD, TheoremVerdict, assumption_notes, theorem_table
 from .verify import verify
 
@@ -278,7 +288,101 @@ def _digital_design(des: Any, digital: Digital, gain, sigma, f, sigma_edges) -> 
     return out
 
 
+@dataclass(frozen=True)
+class RobustResult:
+    """The brackets of :func:`certify_robust` with their certificate, issued through the
+    registry like every kind, and its verification; both None where no certificate is
+    issued (past the dense proofs' reach, or no margin radius proven: the sparse bounds
+    are then proven in this process only).
+
+    Parameters
+    ----------
+    report : RobustReport
+        The three brackets.
+    certificate : dict or None
+        The ``robust`` certificate.
+    verification : Verification or None
+        Its verification (exact or verified-float arithmetic).
+    """
+
+    report: RobustReport
+    certificate: dict | None
+    verification: Verification | None
+
+    @property
+    def valid(self) -> bool:
+        """The certificate verifies; without one, whether a margin radius is proven."""
+        if self.verification is not None:
+            return self.verification.valid
+        return self.certificate is None and self.report.margin.lower is not None
+
+
+def certify_robust(
+    topology: Topology,
+    theta,
+    radius: float = DEFAULT_RADIUS,
+    margin: float = 0.1,
+    starts: int = 6,
+    seed: int = 0,
+) -> RobustResult:
+    """Design (Lemma 1), bracket the decay, offset and margin when every weight is known
+    only within its relative radius (:func:`ntc_design.certify.robust.robust`), issue the
+    ``robust`` certificate through the registry and re-verify it, as :func:`certify` does
+    for the nominal kinds.
+
+    Parameters
+    ----------
+    topology : Topology
+        One fixed topology (its ``uncertainty:`` radii per edge, where given).
+    theta : sequence of float
+        The target consensus state θ ≠ 0.
+    radius : float, optional
+        ρ in [0, 1) for every edge without a radius of its own.
+    margin : float, optional
+        ΔC > 0: δ = C + ΔC.
+    starts, seed : int, optional
+        The realisation searches' random starts and their seed.
+
+    Returns
+    -------
+    RobustResult
+
+    Raises
+    ------
+    InputError
+        A bad θ, radius or margin (named as the field: ``radius: ...``), a topology that is
+        not one fixed network, or work estimated past an hour.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> res = certify_robust(nd.load("examples/g1.yaml"), [1, 2, -1], radius=0.02, starts=1)
+    >>> res.valid, res.certificate["kind"]
+    (True, 'robust')
+    """
+    rho = check_radius(radius, "radius")
+    if not isinstance(topology, Topology):
+        raise InputError(
+            "topology: robust needs one fixed topology (not a switching or time-varying one)"
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the certificate says whether Assumption 2 holds
+        des = design(topology, theta, margin, thresholds=False)
+    assert isinstance(des, ProtocolDesign)  # a fixed topology's design
+    check_robust_work(des)  # the estimate, before the work (a warning line past a minute)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # solver chatter; the verification decides
+        rd = RobustDesign(robust(des, rho, starts=starts, seed=seed))
+        if not any(k.accepts(rd) for k in KINDS.values()):
+            return RobustResult(rd.report, None, None)
+        cert = kind_for(rd).issue(rd)
+        ver = verify(json.loads(json.dumps(cert)), "the robust certificate")
+    return RobustResult(rd.report, cert, ver)
+
+
 __all__ = [
     "CertifyResult",
+    "RobustResult",
     "certify",
+    "certify_robust",
 ]

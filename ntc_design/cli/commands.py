@@ -4,7 +4,6 @@ registered on the app, in ``ntc --help`` order, by :mod:`ntc_design.cli.main`.""
 
 from __future__ import annotations
 
-import json
 import re
 import sys
 import warnings
@@ -13,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..errors import AssumptionWarning, InputError, one_line
+from ..errors import AssumptionWarning, InputError, blame, one_line
 from .app import (
     DelayOpt,
     FileArg,
@@ -370,6 +369,10 @@ def verify(
         print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
+#: The library's fields that ntc robust's flags give (an error about one names the flag).
+ROBUST_FLAGS = {"radius": "--radius", "theta": "--theta", "margin": "--margin"}
+
+
 def robust(
     file: FileArg,
     theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
@@ -386,45 +389,28 @@ def robust(
     """Decay, consensus-offset and margin brackets when every weight is known only within
     (1−ρ)|A| ⪯ |A'| ⪯ (1+ρ)|A|: a proven end and a realisation attaining the other. Exit 0
     when the certificate verifies, 1 when not."""
-    from ..certify import verify, write_certificate
-    from ..certify.kinds.robust import robust_certificate
+    from ..certify import certify_robust, write_certificate
     from ..certify.robust.are import RICCATI_MAX_ND
-    from ..certify.robust.search import check_radius, check_robust_work
-    from ..certify.robust.search import robust as run
     from ..io.outputs import check_output_file
     from ..model import Topology
     from ..model.load import load
-    from ..protocol import ProtocolDesign, design
     from ..reports.terminal import print_table
 
     th = parse_vector(theta, "--theta")
-    rho = check_radius(radius)
     if out_path is not None:
         check_output_file(out_path, "--out")
     top = load(file)
-    if not isinstance(top, Topology):
-        raise InputError(
-            f"{file}: robust needs one fixed topology (not a switching or time-varying one)"
-        )
-    dense = top.nd <= RICCATI_MAX_ND
+    dense = not isinstance(top, Topology) or top.nd <= RICCATI_MAX_ND
     if out_path is not None and not dense:
         raise InputError(
             f"--out: a robust certificate is issued up to Nd = {RICCATI_MAX_ND} (this network: "
             f"Nd = {top.nd}); without --out the sparse bounds are proven and printed"
         )
-    doc, ver = None, None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the certificate says whether Assumption 2 holds
-        des = design(top, th, margin, thresholds=False)
-    assert isinstance(des, ProtocolDesign)  # a fixed topology's design
-    check_robust_work(des)  # the estimate, before the work (a warning line past a minute)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # solver chatter; the verification decides
-        rep = run(des, rho)
-        if dense and rep.proofs.get("margin") is not None:
-            doc = robust_certificate(rep)
-            ver = verify(json.loads(json.dumps(doc)), "the robust certificate")
-    ok = ver.valid if ver is not None else rep.margin.lower is not None
+    try:
+        res = certify_robust(top, th, radius, margin)
+    except InputError as exc:  # the library names fields; here they are flags
+        raise blame(exc, None, {**ROBUST_FLAGS, "topology": str(file)}) from None
+    rep, doc, ver, ok = res.report, res.certificate, res.verification, res.valid
     if out_path is not None and doc is None:
         ok = False  # asked for a certificate; none to write (the reason is printed below)
     if out_path is not None and doc is not None and ok:

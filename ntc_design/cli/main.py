@@ -11,24 +11,35 @@ import typer
 
 from ..errors import AssumptionWarning, InputError, interrupt_seen, note_interrupt, one_line
 from ..io.outputs import exit_process
-from . import commands, runs
 from .app import ARGS, app
+from .commands import (
+    certify,
+    check,
+    design_cmd,
+    examples,
+    export_cmd,
+    gain,
+    generate,
+    robust,
+    verify,
+)
+from .runs import report, reproduce, simulate, sweep, tune
 
 # fmt: off
-app.command(epilog="Example: ntc check examples/g1.yaml")(commands.check)
-app.command("design", epilog="Example: ntc design examples/g1.yaml --theta 1,2,-1")(commands.design_cmd)
-app.command(epilog="Example: ntc generate --n 1000 --d 3 --out runs/net.npz")(commands.generate)
-app.command(epilog="Example: ntc gain '1/(1+t)'")(commands.gain)
-app.command(epilog="Example: ntc certify examples/g1.yaml --theta 1,2,-1 --gain '1/(1+t)' --out runs/g1.json")(commands.certify)
-app.command(epilog="Example: ntc verify runs/g1.json --topology examples/g1.yaml --theta 1,2,-1")(commands.verify)
-app.command(epilog="Example: ntc robust examples/g1.yaml --theta 1,2,-1 --radius 0.05")(commands.robust)
-app.command("export", epilog="Example: ntc export examples/scenarios/g1_deadline.yaml --lang c --out runs/g1-c " "--period 0.1 --delay 1")(commands.export_cmd)
-app.command(epilog="Example: ntc examples --copy my-examples")(commands.examples)
-app.command(epilog="Example: ntc simulate examples/scenarios/g1_fixed.yaml --out runs/g1 --paths 200")(runs.simulate)
-app.command(epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --eps 1.5 --out runs/g1-tuned")(runs.tune)
-app.command(epilog="Example: ntc sweep examples/sweeps/g1_noise.yaml --out runs/g1_noise")(runs.sweep)
-app.command(epilog="Example: ntc report runs/g1")(runs.report)
-app.command(epilog="Example: ntc reproduce paper --out runs/paper")(runs.reproduce)
+app.command(epilog="Example: ntc check examples/g1.yaml")(check)
+app.command("design", epilog="Example: ntc design examples/g1.yaml --theta 1,2,-1")(design_cmd)
+app.command(epilog="Example: ntc generate --n 1000 --d 3 --out runs/net.npz")(generate)
+app.command(epilog="Example: ntc gain '1/(1+t)'")(gain)
+app.command(epilog="Example: ntc certify examples/g1.yaml --theta 1,2,-1 --gain '1/(1+t)' --out runs/g1.json")(certify)
+app.command(epilog="Example: ntc verify runs/g1.json --topology examples/g1.yaml --theta 1,2,-1")(verify)
+app.command(epilog="Example: ntc robust examples/g1.yaml --theta 1,2,-1 --radius 0.05")(robust)
+app.command("export", epilog="Example: ntc export examples/scenarios/g1_deadline.yaml --lang c --out runs/g1-c --period 0.1 --delay 1")(export_cmd)
+app.command(epilog="Example: ntc examples --copy my-examples")(examples)
+app.command(epilog="Example: ntc simulate examples/scenarios/g1_fixed.yaml --out runs/g1 --paths 200")(simulate)
+app.command(epilog="Example: ntc tune examples/scenarios/g1_fixed.yaml --eps 1.5 --out runs/g1-tuned")(tune)
+app.command(epilog="Example: ntc sweep examples/sweeps/g1_noise.yaml --out runs/g1_noise")(sweep)
+app.command(epilog="Example: ntc report runs/g1")(report)
+app.command(epilog="Example: ntc reproduce paper --out runs/paper")(reproduce)
 # fmt: on
 
 

@@ -183,7 +183,7 @@ def _examples_root() -> Path:
         return bundled
     if bundled is not None and not isinstance(bundled, Path) and _has_examples(bundled):
         return _extracted(bundled)  # a zip or another loader: the files, copied out once
-    checkout = Path(__file__).resolve().parent.parent / "examples"  # a checkout (editable)
+    checkout = Path(__file__).resolve().parents[2] / "examples"  # a checkout (editable)
     if (checkout / "g1.yaml").is_file():
         return checkout
     raise InputError("example_path: the bundled examples are not installed with this package")

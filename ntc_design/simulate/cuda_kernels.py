@@ -46,7 +46,7 @@ import numpy as np
 from numba import cuda as _cuda
 from numba import float64, uint64
 
-from .rng import LAYERS
+from .ziggurat import LAYERS
 
 # the device dialect (threadIdx, local and shared arrays) is not Python as a type checker
 # reads it: typed as Any

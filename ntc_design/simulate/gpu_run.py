@@ -18,7 +18,8 @@ import numpy as np
 
 from .grid import TimeGrid
 from .montecarlo import BATCH, XI_BYTES, PartialStats, merge
-from .rng import ZIG_R, ZIG_X, path_states
+from .rng import path_states
+from .ziggurat import ZIG_R, ZIG_X
 
 FUSED_MAX_STATE = 256  # slots·N·d of a thread-per-path state (local memory); to tune on a GPU
 FUSED_MAX_DRAW = 512  # normals a thread keeps per step in the fused kernel
@@ -270,10 +271,10 @@ class Chunk:
         save = run.sched.saves.get(k)
         if save is None and k not in run.sched.checks:
             return True
-        from . import cuda_kernels as ck
+        from .cuda_kernels import check_kernel, stats_kernel, sum_kernel  # numba-cuda: on a GPU
 
         row0, cells = (k % run.ring) * run.nd, run.nd * self.p
-        ck.check_kernel()[_blocks(cells, ROW_THREADS), min(ROW_THREADS, cells)](
+        check_kernel()[_blocks(cells, ROW_THREADS), min(ROW_THREADS, cells)](
             self.x, row0, run.nd, self.bad
         )
         code = int(self.bad.copy_to_host()[0])
@@ -289,12 +290,12 @@ class Chunk:
             return False
         if save is not None:
             tn = min(THREADS, run.n)
-            ck.stats_kernel()[(_blocks(run.n, tn), self.groups), tn](
+            stats_kernel()[(_blocks(run.n, tn), self.groups), tn](
                 self.x, row0, run.theta, run.n, run.d, self.ppt, self.part,
                 self.stored, self.n_store, save,
             )  # fmt: skip
             q = self.part.shape[1]
-            ck.sum_kernel()[_blocks(q, THREADS), min(THREADS, q)](
+            sum_kernel()[_blocks(q, THREADS), min(THREADS, q)](
                 self.part, self.groups, self.acc, save
             )
             self.valid = save + 1
@@ -308,17 +309,17 @@ class Chunk:
         k_from, k_to : int
             Grid indices.
         """
-        from . import cuda_kernels as ck
+        from .cuda_kernels import draw_kernel, fused_kernel, step_kernel  # numba-cuda: on a GPU
 
         run, p = self.run, self.p
         if not run.sparse:
-            kern = ck.fused_kernel(run.nd, run.ring, run.m_draw, run.modes.d3)
+            kern = fused_kernel(run.nd, run.ring, run.m_draw, run.modes.d3)
             kern[_blocks(p, THREADS), min(THREADS, p)](
                 self.x, self.st, k_from, k_to, run.ch, run.cs, run.mode, *run.dev[:13],
                 run.d, run.zx, run.zr,
             )  # fmt: skip
             return
-        draw, step = ck.draw_kernel(), ck.step_kernel(run.modes.d3)
+        draw, step = draw_kernel(), step_kernel(run.modes.d3)
         dv = run.dev
         cells = run.nd * p
         for k in range(k_from, k_to):

@@ -14,7 +14,7 @@ import numpy as np
 
 from .gpu_run import DeviceRun, ModeArrays, Schedule, run_chunks
 from .montecarlo import PartialStats
-from .timevarying import TimeVaryingMonteCarloSpec, TimeVaryingSystem, _batch_size
+from .timevarying import TimeVaryingMonteCarloSpec, TimeVaryingSystem, batch_size
 
 
 def batch_modes(sys_: TimeVaryingSystem, ts: np.ndarray) -> ModeArrays:
@@ -84,7 +84,7 @@ def run_time_varying(cuda, spec: TimeVaryingMonteCarloSpec, layout: str, progres
         Merged over the CPU's blocks.
     """
     sys_, grid = spec.system, spec.grid
-    batch = _batch_size(sys_)
+    batch = batch_size(sys_)
     sched = Schedule.of(grid, spec.gain, batch)
     k_total = grid.n_steps
     # step k uses mode k − k0 of its batch [k0, k0 + batch): batches start at multiples

@@ -24,7 +24,7 @@ import math  # noqa: E402
 
 import numba  # noqa: E402
 
-from .rng import LAYERS, ZIG_R, ZIG_X  # noqa: E402
+from .ziggurat import LAYERS, ZIG_R, ZIG_X  # noqa: E402
 
 # -- the generator of .rng: xoshiro256** and Doornik's ziggurat -------------------------
 

@@ -138,7 +138,9 @@ def time_varying_system(des: TimeVaryingDesign, noise: NoiseModel) -> TimeVaryin
     return TimeVaryingSystem(des, dmat, sig, fmat, term.function, live)
 
 
-def _batch_size(sys_: TimeVaryingSystem) -> int:
+def batch_size(sys_: TimeVaryingSystem) -> int:
+    """The paths integrated together: BATCH, fewer where their states would pass
+    MAX_BATCH_BYTES."""
     nd_ = sys_.structure.n * sys_.structure.d
     per = 8 * nd_ * (2 * nd_ + 2 * sys_.n_edges * sys_.structure.d + sys_.n_edges)
     return int(max(1, min(BATCH, MAX_BATCH_BYTES // max(per, 1))))
@@ -201,7 +203,7 @@ def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> Par
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     if 0 in save_at and not stats.record(x, save_at[0]):
         return stats.result()
-    batch = _batch_size(sys_)
+    batch = batch_size(sys_)
     xi = np.empty((batch, p, 2 * ne))
     compiled = sys_.f is None  # a linear f: the compiled edge kernel of the fixed case
     if compiled:
@@ -546,6 +548,7 @@ def simulate_expression(
 
 __all__ = [
     "TimeVaryingMonteCarloSpec",
+    "batch_size",
     "simulate_expression",
     "TimeVaryingSystem",
     "exact_moments_tv",

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from ..certify.robust.search import (
+from ..certify.robust import (
     abscissa,
     radius_text,
     realised_topology,

@@ -50,7 +50,7 @@ def test_states_and_mean_square_figures_with_a_switching_timeline():
 def test_robust_figure_draws_each_bracket_end_it_is_given():
     from types import SimpleNamespace
 
-    from ntc_design.certify.robust.search import Bracket
+    from ntc_design.certify.robust import Bracket
 
     def rep(rho, a_lo, a_hi, o_lo, o_hi):
         return SimpleNamespace(

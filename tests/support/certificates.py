@@ -14,7 +14,7 @@ from ntc_design.certify.kinds import IssueOptions
 from ntc_design.certify.kinds.hurwitz_scale import scale_certificate
 from ntc_design.certify.kinds.robust import robust_certificate
 from ntc_design.certify.kinds.switching_scale import switching_scale_certificate
-from ntc_design.certify.robust.search import robust
+from ntc_design.certify.robust import robust
 from ntc_design.gain.conditions import analyse_gain
 from ntc_design.model.generate import random_network
 from ntc_design.model.paper import THETA

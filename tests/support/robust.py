@@ -11,7 +11,7 @@ import pytest
 import ntc_design as nd
 from ntc_design.certify import verify
 from ntc_design.certify.format import finish
-from ntc_design.certify.robust.search import robust
+from ntc_design.certify.robust import robust
 from ntc_design.model.paper import THETA
 from tests.conftest import ROOT
 

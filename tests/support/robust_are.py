@@ -5,8 +5,8 @@ import warnings
 import pytest
 
 import ntc_design as nd
+from ntc_design.certify.robust import robust
 from ntc_design.certify.robust.scale import robust_scale
-from ntc_design.certify.robust.search import robust
 from ntc_design.model.generate import random_network
 from ntc_design.model.paper import THETA
 

@@ -656,7 +656,7 @@ def honest_all(honest) -> dict[str, dict]:
     Riccati decay and margin, the offset with the equation eliminated); built for the
     slow lane only."""
     from ntc_design.certify.kinds.robust import robust_certificate
-    from ntc_design.certify.robust.search import robust
+    from ntc_design.certify.robust import robust
 
     mid = design(random_network(14, 3, seed=4), [1.0, 2.0, -1.0], 0.1, thresholds=False)
     with warnings.catch_warnings():

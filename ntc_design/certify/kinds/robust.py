@@ -17,26 +17,29 @@ import numpy as np
 
 from ...errors import InputError
 from ...model import Topology
-from ...protocol import ProtocolDesign
 from ...protocol.lemma1 import coupling_matrix
-from ...rigorous.exact import Dyadic, PDProof, exact_affordable, exact_pd, verified_float_pd
+from ...rigorous.exact import Dyadic
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
 from ..dense import PROVERS, DenseContext, DenseMode, mode_subject
 from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
 from ..robust.are import RICCATI_MAX_ND, RiccatiSearch
-from ..robust.lmi import active_columns, perturbed
+from ..robust.exact import (
+    exact_channels,
+    gamma_exact,
+    prove_pd,
+    psi_exact,
+)
 from ..robust.offset import OffsetSearch, input_float
-from ..robust.search import (
-    DEFAULT_RADIUS,
+from ..robust import (
     ROBUST_MAX_ND,
+    RobustDesign,
     RobustReport,
     abscissa,
     check_radius,
     radius_phrase,
     radius_text,
-    robust,
     uncertain_edges,
 )
 from ..theorems import TheoremVerdict
@@ -201,186 +204,6 @@ def _claims(props: tuple[Property, ...], mode: str, st: _Stated) -> tuple[Claim,
     return tuple(out)
 
 
-# -- exact assembly ------------------------------------------------------------------------
-
-
-def _dy(x: float) -> Dyadic:
-    return Dyadic.of(float(x))
-
-
-def _blocks(rows: list[list[Dyadic]]) -> Dyadic:
-    """A block matrix of Dyadics, exactly (over the largest exponent)."""
-    e = max(b.exp for r in rows for b in r)
-    return Dyadic(np.vstack([np.hstack([b.num * (1 << (e - b.exp)) for b in r]) for r in rows]), e)
-
-
-@dataclass(frozen=True, eq=False)
-class _Channel:
-    ewv: Dyadic  # E_i W V (Nd × r)
-    dwd: Dyadic  # D W Dᵀ (Nd × Nd)
-    vwv: Dyadic  # Vᵀ W V (r × r)
-
-
-def _exact_channels(top: Topology) -> list[_Channel]:
-    ed = uncertain_edges(top)
-    n, d = top.nd, top.dim
-    out = []
-    for e in range(ed.m):
-        i, j = int(ed.dst[e]) * d, int(ed.src[e]) * d
-        w = Dyadic.of(ed.channel_w[e])  # W̄_e, as the issuer's (robust.channel_bound)
-        v = Dyadic.of(ed.basis(e))
-        sel = np.zeros((n, d), dtype=object)
-        sel[i : i + d] = np.eye(d, dtype=np.int64).astype(object)
-        dm = sel.copy()
-        dm[j : j + d] -= int(ed.s[e]) * np.eye(d, dtype=np.int64).astype(object)
-        sel_d, dm_d = Dyadic(sel, 0), Dyadic(dm, 0)
-        wv = w @ v
-        out.append(_Channel(sel_d @ wv, dm_d @ w @ dm_d.T, v.T @ wv))
-    return out
-
-
-def _pd(m: Dyadic) -> PDProof:
-    """Sylvester's criterion when affordable, else Rump's test on the correctly rounded
-    floats (each entry within u·|x| + 2⁻¹⁰⁷⁴ of the exact one)."""
-    if exact_affordable(m.num.shape[0], m.bits):
-        return exact_pd(m)
-    f = m.to_float()
-    return verified_float_pd(f, np.abs(f) * 2.0**-53 + 2.0**-1074)
-
-
-def psi_exact(lap: Dyadic, ch: list[_Channel], p: np.ndarray, tau, alpha: float, radius):
-    """Ψ of the decay S-procedure, exactly (see :func:`ntc_design.certify.robust.lmi.decay_matrix`).
-
-    Parameters
-    ----------
-    lap : Dyadic
-        L_B exactly.
-    ch : list
-        The exact channels of the topology's edges.
-    p : numpy.ndarray
-        P.
-    tau : sequence of float
-        τ_e.
-    alpha : float
-        α.
-    radius : sequence of float
-        ρ_e per edge.
-
-    Returns
-    -------
-    Dyadic
-        On the edges of radius ρ_e > 0: an edge of radius 0 is not perturbed and has no
-        channel (Ψ of a certificate that lists one is its principal submatrix).
-    """
-    pd_ = Dyadic.of(p)
-    top = (
-        pd_ @ lap + lap.T @ pd_ - pd_.scale(_dy(2.0 * alpha)) if alpha else pd_ @ lap + lap.T @ pd_
-    )
-    offs, diag = [], []
-    for t, q, c in zip(tau, radius, ch, strict=True):
-        if not q > 0:
-            continue
-        top = top - c.dwd.scale(_dy(t) @ _dy(q) @ _dy(q))
-        offs.append(pd_ @ c.ewv)
-        diag.append(c.vwv.scale(_dy(t)))
-    if not offs:
-        return top
-    sizes = [o.num.shape[1] for o in offs]
-    rows = [[top] + offs]
-    for k, dk in enumerate(diag):
-        row = [offs[k].T]
-        for m, sz in enumerate(sizes):
-            row.append(dk if m == k else Dyadic(np.zeros((sizes[k], sz), dtype=object), 0))
-        rows.append(row)
-    return _blocks(rows)
-
-
-def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
-    """Γ of the offset S-procedure, exactly (see
-    :func:`ntc_design.certify.robust.lmi.offset_matrix`).
-
-    Parameters
-    ----------
-    lap : Dyadic
-        L_B exactly.
-    ch : list
-        The exact channels.
-    target : numpy.ndarray
-        1⊗θ.
-    r0 : Dyadic
-        u − L_B(1⊗θ) exactly (a column).
-    gamma : float
-        γ.
-    lam : sequence of float
-        λ_e.
-    y : numpy.ndarray
-        Finsler's multiplier.
-    radius : sequence of float
-        ρ_e per edge.
-
-    Returns
-    -------
-    Dyadic
-
-    Raises
-    ------
-    InputError
-        Y is not Nd × (Nd + Σ rank W̄_e + 1).
-
-    Notes
-    -----
-    Γ is built on ξ = (z, η_e of the edges of radius ρ_e > 0, 1): an edge of radius 0 is
-    not perturbed and has no channel (the columns of Y for it are not used; Γ of a
-    certificate that uses them is a principal submatrix of its own).
-    """
-    n = lap.num.shape[0]
-    sizes = [c.vwv.num.shape[0] for c in ch]
-    k = n + sum(sizes) + 1
-    yd = Dyadic.of(y)
-    if yd.num.shape != (n, k):
-        raise InputError(f"matrices.Y: expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}")
-    active = perturbed(np.asarray(radius, dtype=float), len(ch))
-    yd = Dyadic(yd.num[:, active_columns(n, sizes, active)], yd.exp)
-    ch = [ch[e] for e in active]
-    lam = [lam[e] for e in active]
-    radius = [radius[e] for e in active]
-    sizes = [sizes[e] for e in active]
-    c_ = Dyadic.of(np.asarray(target, dtype=float).reshape(n, 1))
-    zz = Dyadic(np.zeros((n, n), dtype=object), 0)
-    zc = Dyadic(np.zeros((n, 1), dtype=object), 0)
-    cc = _dy(gamma)
-    eye = Dyadic(np.eye(n, dtype=np.int64).astype(object), 0)
-    zz = zz - eye
-    diag = []
-    for le, rho, c in zip(lam, radius, ch, strict=True):
-        q = c.dwd.scale(_dy(rho) @ _dy(rho) @ _dy(le))
-        qc = q @ c_
-        zz = zz - q
-        zc = zc - qc
-        cc = cc - c_.T @ qc
-        diag.append(c.vwv.scale(_dy(le)))
-    rows: list[list[Dyadic]] = []
-
-    def zeros(a: int, b: int) -> Dyadic:
-        return Dyadic(np.zeros((a, b), dtype=object), 0)
-
-    rows.append([zz] + [zeros(n, s) for s in sizes] + [zc])
-    for kk, dk in enumerate(diag):
-        rows.append(
-            [zeros(sizes[kk], n)]
-            + [dk if m == kk else zeros(sizes[kk], s) for m, s in enumerate(sizes)]
-            + [zeros(sizes[kk], 1)]
-        )
-    rows.append([zc.T] + [zeros(1, s) for s in sizes] + [cc])
-    g = _blocks(rows)
-    a = _blocks([[lap] + [c.ewv for c in ch] + [zeros(n, 1) - r0]])
-    ay = a.T @ yd
-    return g + ay + ay.T
-
-
-# -- the kind ------------------------------------------------------------------------------
-
-
 @dataclass(frozen=True, eq=False)
 class _State:
     dense: DenseContext
@@ -429,18 +252,22 @@ class RobustKind(CertificateKind):
     method = "exact-rational, or verified-float past the LMI size"
 
     def accepts(self, design: Any) -> bool:
-        return False  # issued on request (ntc robust), never in place of a nominal kind
+        # brackets whose margin search proved a radius, within the dense proofs' reach
+        return (
+            isinstance(design, RobustDesign)
+            and design.design.topology.nd <= RICCATI_MAX_ND
+            and design.report.proofs.get("margin") is not None
+        )
 
     def issue(self, design: Any, options: IssueOptions | None = None) -> dict:
-        """The certificate of :func:`ntc_design.certify.robust.search.robust` at the options'
-        radius.
+        """The certificate of a robust design's brackets (the proofs its report holds).
 
         Parameters
         ----------
-        design : ProtocolDesign
-            The nominal design.
+        design : RobustDesign
+            The nominal design with its brackets (:func:`ntc_design.certify.robust.robust`).
         options : IssueOptions, optional
-            Its ``radius`` (None: 0.05), ``starts`` and ``seed`` are used.
+            Unused: the radius and the searches are the report's.
 
         Returns
         -------
@@ -449,13 +276,11 @@ class RobustKind(CertificateKind):
         Raises
         ------
         InputError
-            A bad radius, a network too large, or a nominal −L_B that is not Hurwitz.
+            Not a robust design, or one whose margin search proved no radius.
         """
-        if not isinstance(design, ProtocolDesign):
-            raise InputError("robust: expected the design of one fixed topology")
-        o = options or IssueOptions()
-        radius = DEFAULT_RADIUS if o.radius is None else o.radius
-        return robust_certificate(robust(design, radius, starts=o.starts, seed=o.seed))
+        if not isinstance(design, RobustDesign):
+            raise InputError("robust: expected a RobustDesign (the brackets of robust())")
+        return robust_certificate(design.report)
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
         return ()
@@ -512,7 +337,7 @@ class RobustKind(CertificateKind):
             return _prove_offset_float(claim, st)
         if not mode.in_range or mode.exact is None:
             return Check(claim.id, False, "L_B is out of range or too large for the exact test")
-        ch = _exact_channels(mode.top)
+        ch = exact_channels(mode.top)
         # the offset's premise (every L_B(A') invertible) is the decay claim, derived with it
         if st.gamma is None or st.y is None:
             return Check(claim.id, False, "results.offset.gamma or matrices.Y is missing", claim)
@@ -526,7 +351,7 @@ class RobustKind(CertificateKind):
         target = np.tile(mode.theta, mode.top.n)
         u = _input_exact(mode)
         r0 = u - mode.exact @ Dyadic.of(target.reshape(n, 1))
-        proof = _pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radii))
+        proof = prove_pd(gamma_exact(mode.exact, ch, target, r0, st.gamma, lam, y, st.radii))
         st.dense.methods.add(proof.method)
         at = _set_text(st)
         return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail} ({at})", claim)
@@ -679,7 +504,7 @@ def _prove_lmi(claim: Claim, st: _State) -> Check:
     rad = st.radii if claim.prop is Property.ROBUST_DECAY else np.full(ed.m, radius)
     if small:
         assert mode.exact is not None  # checked above
-        proof = _pd(psi_exact(mode.exact, _exact_channels(mode.top), p, tau, claim.alpha, rad))
+        proof = prove_pd(psi_exact(mode.exact, exact_channels(mode.top), p, tau, claim.alpha, rad))
         ok, how = proof.holds, f"{proof.method}: {proof.detail}"
         st.dense.methods.add(proof.method)
     elif mode.top.nd > RICCATI_MAX_ND:  # certificates are issued up to this size

@@ -26,14 +26,11 @@ rounding included; ``ntc verify`` re-checks a certificate's (P, τ) the same way
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...rigorous.exact import gamma, verified_float_pd, within_span
-
-if TYPE_CHECKING:
-    from .search import UncertainEdges
+from .problem import UncertainEdges
 
 #: Past the robust LMI's size and up to here, decay and margin are proven by the Riccati
 #: search (each equation is a 2Nd-dimensional Schur decomposition: 0.6 s at Nd = 150).

@@ -6,12 +6,9 @@ matrices exactly (:mod:`.kinds.robust`)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:  # the problem data is built by .robust, which imports this module
-    from .search import _Problem
+from .problem import Problem
 
 
 def load_cvxpy():
@@ -57,8 +54,8 @@ def solve_sdp(prob) -> bool:
     return False
 
 
-def _channels(
-    p: _Problem, scale: float = 1.0, normalise: bool = False
+def channels(
+    p: Problem, scale: float = 1.0, normalise: bool = False
 ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per edge: (E_i W V as Nd×r, D W Dᵀ as Nd×Nd, Vᵀ W V as r×r), with W divided by
     ``scale`` and V the pivot columns (normalised to unit length if asked). Any basis of range(W)
@@ -172,15 +169,15 @@ def perturbed(radius: float | np.ndarray, m: int) -> tuple[int, ...]:
     return tuple(int(e) for e in np.flatnonzero(r > 0))
 
 
-class _DecayLMI:
+class DecayLMI:
     """The decay LMI with α and ρ² as parameters (cvxpy DPP), built once for each set of
     perturbed edges (:func:`perturbed`): each bisection step only re-solves."""
 
-    def __init__(self, p: _Problem, ch) -> None:
+    def __init__(self, p: Problem, ch) -> None:
         self.p, self.ch = p, ch
         # solved on (L_B, W)/s with s = max|L_B|: the same P, τ prove the unscaled LMI
         self.scale = float(np.max(np.abs(p.lap_b))) or 1.0
-        self.ch_s = _channels(p, self.scale, normalise=True)
+        self.ch_s = channels(p, self.scale, normalise=True)
         self._built: dict[tuple[int, ...], tuple] = {}
 
     def _build(self, active: tuple[int, ...]) -> tuple:
@@ -308,7 +305,7 @@ def offset_matrix(
     return g
 
 
-def _offset_sdp(p: _Problem, ch_all, radius) -> tuple[float, np.ndarray, np.ndarray] | None:
+def offset_sdp(p: Problem, ch_all, radius) -> tuple[float, np.ndarray, np.ndarray] | None:
     """γ, λ, Y with Γ ≻ 0 (floats, a strict margin), or None; the channels of the edges
     of radius 0 are left out (:func:`perturbed`): their λ_e and columns of Y are 0."""
     cp = load_cvxpy()
@@ -369,7 +366,7 @@ def _offset_sdp(p: _Problem, ch_all, radius) -> tuple[float, np.ndarray, np.ndar
 FRACTIONS = (0.995, 0.97, 0.9, 0.75, 0.5, 0.25, 0.0)
 
 
-def _descend(test, top: float, steps: int, floor: float = 0.0):
+def descend(test, top: float, steps: int, floor: float = 0.0):
     """The largest value in [floor, top] found to pass ``test`` (None: not even floor)."""
     hi = top
     for f in FRACTIONS:

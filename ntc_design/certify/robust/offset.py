@@ -30,16 +30,15 @@ verify`` rebuilds them from γ, λ and the subject, and proves Γ ≻ 0 again.
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...rigorous.exact import gamma as gamma_k
 from ...rigorous.exact import verified_float_pd, within_span
+from ..dense import lap_b_float
 from .are import edge_sum
-
-if TYPE_CHECKING:
-    from .search import UncertainEdges
+from .lmi import load_cvxpy, solve_sdp
+from .problem import UncertainEdges, uncertain_edges
 
 #: The reduced SDP's matrix is Σ d + 1 square with one variable per edge; past this many
 #: rows the interior-point solve grows past half a minute (2.9 s at 166 rows, 8.5 s at
@@ -147,9 +146,6 @@ def offset_search(des, lap: tuple[np.ndarray, np.ndarray] | None = None) -> Offs
     -------
     OffsetSearch
     """
-    from ..dense import lap_b_float
-    from .search import uncertain_edges
-
     top = des.topology
     lap = lap or lap_b_float(top, des.B, des.delta)
     u = input_float(top, des.B, des.delta, des.theta)
@@ -425,7 +421,6 @@ class OffsetSearch:
         -------
         (float, numpy.ndarray) or None
         """
-        from .lmi import load_cvxpy, solve_sdp
 
         rad = np.broadcast_to(np.asarray(radius, dtype=float), (self.m,)).copy()
         if self.rows > OFFSET_MAX_ROWS or self.m == 0:

@@ -6,12 +6,10 @@ random starts."""
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:  # the problem data is built by .robust, which imports this module
-    from .search import _Problem
+from .problem import Problem
 
 SHRINK = 1.0 - 1e-9  # realisations are drawn this far inside the set (rounding)
 
@@ -37,12 +35,12 @@ def abscissa(lap: np.ndarray) -> float:
     return float(np.min(np.linalg.eigvals(lap).real))
 
 
-def offset_of(p: _Problem, lap: np.ndarray) -> float:
+def offset_of(p: Problem, lap: np.ndarray) -> float:
     """‖x* − 1⊗θ‖₂ for the realisation whose L_B is ``lap`` (∞ when it is singular).
 
     Parameters
     ----------
-    p : _Problem
+    p : Problem
         The nominal data.
     lap : numpy.ndarray
         L_B(A').
@@ -58,7 +56,7 @@ def offset_of(p: _Problem, lap: np.ndarray) -> float:
     return float(np.linalg.norm(x - p.target))
 
 
-def _grad_decay(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
+def _grad_decay(p: Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
     """min Re λ and its gradient in each E_e (symmetric), from the eigenvector pair."""
     import scipy.linalg as sla
 
@@ -77,7 +75,7 @@ def _grad_decay(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
     return float(lam[k].real), g
 
 
-def _grad_offset(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
+def _grad_offset(p: Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
     """½‖x* − 1⊗θ‖² and its gradient in each E_e."""
     lap = p.lap(es)
     xs = np.linalg.solve(lap, p.u)
@@ -92,13 +90,13 @@ def _grad_offset(p: _Problem, es: np.ndarray) -> tuple[float, np.ndarray]:
     return 0.5 * float(z @ z), g
 
 
-def climb(p: _Problem, radii, objective: str, starts: int, seed: int) -> np.ndarray:
+def climb(p: Problem, radii, objective: str, starts: int, seed: int) -> np.ndarray:
     """Projected gradient search for the worst E (decay: lowest abscissa; offset: largest
     offset), from the nominal point, ± vertices and random starts.
 
     Parameters
     ----------
-    p : _Problem
+    p : Problem
         The nominal data.
     radii : float or numpy.ndarray
         ρ, or ρ_e per edge.

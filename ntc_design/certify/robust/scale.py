@@ -40,8 +40,9 @@ from ...numerics.linalg import comparison_solve
 from ...protocol import ProtocolDesign
 from ...rigorous.exact import U, gamma
 from ..scale import BlockData, dominance_holds, edge_norm_bounds, prove_mu, rate_estimate
-from .are import RICCATI_MAX_ND
-from .search import Bracket, Realisation, RobustReport, uncertain_edges
+from .are import RICCATI_MAX_ND, RiccatiSearch
+from .problem import Bracket, Realisation, UncertainEdges, channel_bound, uncertain_edges
+from .report import RobustReport
 
 MARGIN_STEPS = 12
 #: A component that dominance does not prove is given to the Riccati search on its own
@@ -351,8 +352,6 @@ def component_riccati(des: ProtocolDesign, comp: np.ndarray, c: int):
         The search on the block (L_B's block and its rounding bound built from the
         weights), and the number of uncertain edges into it.
     """
-    from .are import RiccatiSearch
-    from .search import UncertainEdges, channel_bound
 
     top = des.topology
     ea, d = top.edge_arrays, top.dim

@@ -52,23 +52,30 @@ the same S-procedure with the equation eliminated (:mod:`.robust_offset`).
 
 from __future__ import annotations
 
-import functools
 import math
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass, field
-from fractions import Fraction
 from typing import Any
 
 import numpy as np
 
 from ...errors import InputError, format_seconds, require_radius, warn_user
-from ...model import Topology
-from ...numerics.linalg import require_dense
-from ...present.rows import Table, fmt
 from ...protocol import ProtocolDesign
-from .lmi import _channels, _DecayLMI, _descend, _offset_sdp
+from ..dense import lap_b_float
+from .are import RICCATI_MAX_ND, RiccatiSearch
+from .lmi import DecayLMI, channels, descend, offset_sdp
+from .offset import offset_search
+from .problem import (
+    Bracket,
+    Problem,
+    Realisation,
+    dense_problem,
+    uncertain_edges,
+)
 from .realise import abscissa, climb, offset_of
+from .report import RobustReport
+from .scale import robust_scale
+
+check_radius = require_radius  # the one radius check (errors.require_radius)
 
 #: Robust LMIs are solved up to this Nd (dense P; the S-procedure adds Σ rank(W_e) rows).
 ROBUST_MAX_ND = 40  # dense LMIs up to here (one solve took 2.4 s at Nd = 36, 92 s at 75)
@@ -90,597 +97,15 @@ LONG_SECONDS = 60.0
 MAX_SECONDS = 3600.0
 
 
-# -- the uncertain edges ---------------------------------------------------------------
-
-
-@dataclass(frozen=True, eq=False)
-class UncertainEdges:
-    """The listed non-zero weights as the robust bounds use them: edge e = (src → dst),
-    sign ``s``, ``W = |A_e|``, the matrix ``W̄_e`` the S-procedure's channels bound the
-    change by (:func:`channel_bound`: W itself unless W is singular only by rounding) and
-    ``V`` (the pivot columns of W̄, a basis of its range)."""
-
-    dst: np.ndarray
-    src: np.ndarray
-    s: np.ndarray
-    w: np.ndarray  # (m, d, d)
-    pivots: tuple[tuple[int, ...], ...]  # of the channel matrix W̄
-    bound: np.ndarray | None = None  # W̄ (m, d, d); None: W̄ = W
-
-    @property
-    def channel_w(self) -> np.ndarray:
-        """W̄_e for every edge (m, d, d): what the channels use (:func:`channel_bound`)."""
-        return self.w if self.bound is None else self.bound
-
-    @property
-    def m(self) -> int:
-        """The number of uncertain edges."""
-        return int(self.dst.size)
-
-    def radii(self, top: Topology, default: float) -> np.ndarray:
-        """ρ_e per edge: the topology file's ``uncertainty:``, else ``default``.
-
-        Parameters
-        ----------
-        top : Topology
-            The topology these edges are of.
-        default : float
-            ρ for an edge without a value of its own.
-
-        Returns
-        -------
-        numpy.ndarray
-        """
-        unc = top.uncertainty
-        return np.array(
-            [unc.get((int(i), int(j)), default) for i, j in zip(self.dst, self.src, strict=True)]
-        )
-
-    def labels(self, top: Topology) -> list[str]:
-        """Each edge as ``from→to`` with the topology's agent labels.
-
-        Parameters
-        ----------
-        top : Topology
-            The topology these edges are of.
-
-        Returns
-        -------
-        list of str
-        """
-        lab = top.labels
-        return [f"{lab[int(j)]}→{lab[int(i)]}" for i, j in zip(self.dst, self.src, strict=True)]
-
-    def basis(self, e: int) -> np.ndarray:
-        """V_e: the pivot columns of W̄_e (d × rank); where W̄_e = W_e + ηI, a whitening
-        basis (:func:`whitening_basis`).
-
-        Parameters
-        ----------
-        e : int
-            The edge.
-
-        Returns
-        -------
-        numpy.ndarray
-        """
-        return self._bases[e]
-
-    @functools.cached_property
-    def _bases(self) -> tuple[np.ndarray, ...]:
-        # where W̄ = W + ηI (channel_bound), a whitening basis: VᵀW̄V ≈ I, so the block
-        # τ VᵀW̄V is as well conditioned as the solver needs (any basis of the range gives
-        # a congruent Ψ)
-        out = []
-        for e in range(self.m):
-            if self.bound is not None and not np.array_equal(self.bound[e], self.w[e]):
-                out.append(whitening_basis(self.bound[e]))
-            else:
-                out.append(self.channel_w[e][:, list(self.pivots[e])])
-        return tuple(out)
-
-
-#: A weight's magnitude W is kept as the channels' bound when the exact LDLᵀ of its
-#: principal block on the pivot columns has every pivot >= this × max|W| (so the block
-#: τ VᵀWV of Ψ is well conditioned); else it is singular or indefinite only by rounding (a
-#: rank-deficient weight written in floating point: its kernel lost in the last bits), and
-#: the channels use W̄ = W + ηI, η the power of two >= this × max|W|.
-CHANNEL_FLOOR = 2.0**-20
-
-
-def channel_bound(w: np.ndarray) -> tuple[np.ndarray, tuple[int, ...]]:
-    """The matrix W̄ that the S-procedure's channels bound a weight's change by, and its
-    pivot columns.
-
-    The set is every |A'| = W + Δ with −ρW̄ ⪯ Δ ⪯ ρW̄. For a weight whose magnitude W is
-    well conditioned on its range, W̄ = W: the set of the module docstring. Otherwise
-    W̄ = W + ηI (each diagonal entry rounded, never below W's): W̄ ⪰ W, so the set holds
-    the documented one and every bound proven for it holds there too, while τVᵀW̄V ≻ 0
-    stays within a solver's reach (with W itself, Ψ ≻ 0 would need VᵀWV ≻ 0, which a
-    weight singular or indefinite by 1e−18 does not have, and nothing is proven at any
-    radius, ρ = 0 included). Decided in exact arithmetic, so issuer and verifier agree.
-
-    Parameters
-    ----------
-    w : numpy.ndarray
-        W = |A_e| (d × d, non-zero).
-
-    Returns
-    -------
-    tuple of (numpy.ndarray, tuple of int)
-        W̄ and its pivot columns (:func:`pivot_columns`).
-
-    Examples
-    --------
-    >>> channel_bound(np.diag([2.0, 0.0]))[1]  # an exact kernel is kept: one channel
-    (0,)
-    >>> wb, piv = channel_bound(np.array([[1.0, 1.0], [1.0, 1.0 + 2.0**-52]]))
-    >>> piv, bool(wb[0, 0] > 1.0)  # singular by rounding: W + ηI, two channels
-    ((0, 1), True)
-    """
-    w = np.asarray(w, dtype=float)
-    piv = pivot_columns(w)
-    scale = float(np.max(np.abs(w)))
-    floor = Fraction(CHANNEL_FLOOR) * Fraction(scale)
-    block = [[Fraction(float(w[i, j])) for j in piv] for i in piv]
-    for k in range(len(block)):  # LDLᵀ without pivoting: every pivot well above 0
-        if block[k][k] < floor:
-            break
-        for i in range(k + 1, len(block)):
-            f = block[i][k] / block[k][k]
-            block[i] = [a - f * b for a, b in zip(block[i], block[k], strict=True)]
-    else:
-        return w, piv
-    eta = 2.0 ** math.ceil(math.log2(CHANNEL_FLOOR * scale))
-    wb = w + eta * np.eye(w.shape[0])  # rounding keeps each diagonal entry >= W's
-    return wb, pivot_columns(wb)
-
-
-def whitening_basis(w: np.ndarray) -> np.ndarray:
-    """V = L⁻ᵀ D^(−1/2) from the exact LDLᵀ of a positive definite W (so VᵀWV ≈ I), each
-    entry correctly rounded: the same doubles on every machine, as issuer and verifier
-    need. The identity when W is not positive definite (nothing can be proven with it).
-
-    Parameters
-    ----------
-    w : numpy.ndarray
-        A symmetric d×d matrix of doubles.
-
-    Returns
-    -------
-    numpy.ndarray
-        d × d.
-
-    Examples
-    --------
-    >>> v = whitening_basis(np.array([[4.0, 2.0], [2.0, 2.0]]))
-    >>> np.allclose(v.T @ np.array([[4.0, 2.0], [2.0, 2.0]]) @ v, np.eye(2))
-    True
-    """
-    d = w.shape[0]
-    a = [[Fraction(float(x)) for x in r] for r in np.asarray(w, dtype=float)]
-    low = [[Fraction(int(i == j)) for j in range(d)] for i in range(d)]
-    piv: list[Fraction] = []
-    for k in range(d):
-        pk = a[k][k] - sum(low[k][j] ** 2 * piv[j] for j in range(k))
-        if pk <= 0:
-            return np.eye(d)
-        piv.append(pk)
-        for i in range(k + 1, d):
-            s = a[i][k] - sum(low[i][j] * low[k][j] * piv[j] for j in range(k))
-            low[i][k] = s / pk
-    inv = [[Fraction(int(i == j)) for j in range(d)] for i in range(d)]  # L⁻¹, forward
-    for i in range(d):
-        for j in range(i):
-            inv[i][j] = -sum((low[i][k] * inv[k][j] for k in range(j, i)), Fraction(0))
-    # V[i][j] = (L⁻ᵀ)[i][j] / √D_j = L⁻¹[j][i] / √D_j
-    return np.array(
-        [[float(inv[j][i]) / math.sqrt(float(piv[j])) for j in range(d)] for i in range(d)]
-    )
-
-
-def pivot_columns(w: np.ndarray) -> tuple[int, ...]:
-    """The pivot columns of a matrix of doubles, found in exact rational arithmetic: a
-    basis of its column space chosen among its own columns (so the basis is exact).
-
-    Parameters
-    ----------
-    w : numpy.ndarray
-        A d×d matrix of doubles.
-
-    Returns
-    -------
-    tuple of int
-        Column indices, ascending.
-
-    Examples
-    --------
-    >>> pivot_columns(np.diag([1.0, 0.0, 2.0]))
-    (0, 2)
-    """
-    rows = [[Fraction(float(x)) for x in r] for r in np.asarray(w, dtype=float)]
-    n_rows, n_cols = len(rows), len(rows[0]) if rows else 0
-    piv: list[int] = []
-    r = 0
-    for c in range(n_cols):
-        k = next((i for i in range(r, n_rows) if rows[i][c] != 0), None)
-        if k is None:
-            continue
-        rows[r], rows[k] = rows[k], rows[r]
-        for i in range(r + 1, n_rows):
-            f = rows[i][c] / rows[r][c]
-            if f:
-                rows[i] = [a - f * b for a, b in zip(rows[i], rows[r], strict=True)]
-        piv.append(c)
-        r += 1
-    return tuple(piv)
-
-
-def uncertain_edges(top: Topology) -> UncertainEdges:
-    """The topology's non-zero weights as :class:`UncertainEdges` (zero weights carry no
-    uncertainty: their interval is {0}), ordered by (receiving agent, sending agent): the
-    order of a certificate's multipliers and realisations.
-
-    Parameters
-    ----------
-    top : Topology
-        The nominal topology.
-
-    Returns
-    -------
-    UncertainEdges
-    """
-    ea = top._arrays
-    keep = np.flatnonzero(ea.sign != 0)
-    keep = keep[np.lexsort((ea.cols[keep], ea.rows[keep]))]  # canonical: by (to, from)
-    w = ea.abs_w[keep]
-    # a strictly diagonally dominant W whose Gershgorin margin clears the channel floor is
-    # nonsingular (Lévy–Desplanques) with every LDLᵀ pivot ≥ λ_min ≥ the margin: W̄ = W and
-    # every column a pivot, with no rational elimination (the usual weight, diagonal or
-    # dominant; 1e−10 covers the rounding of the d − 1 off-diagonal sums)
-    dg = np.abs(np.diagonal(w, axis1=1, axis2=2))
-    off = np.abs(w).sum(axis=2) - dg
-    scale = np.abs(w).max(axis=(1, 2)) if w.size else np.zeros(0)
-    margin = (dg - off * (1 + 1e-10)).min(axis=1) if w.size else np.zeros(0)
-    dominant = margin > 2 * CHANNEL_FLOOR * scale
-    every = tuple(range(top.dim))
-    bounds = [(x, every) if ok else channel_bound(x) for x, ok in zip(w, dominant, strict=True)]
-    return UncertainEdges(
-        ea.rows[keep].astype(np.int64),
-        ea.cols[keep].astype(np.int64),
-        ea.sign[keep].astype(float),
-        w,
-        tuple(piv for _, piv in bounds),
-        np.array([b for b, _ in bounds]).reshape(w.shape),
-    )
-
-
-check_radius = require_radius  # the one radius check (errors.require_radius)
-
-#: Per-edge radii named in a statement (the rest counted).
-RADII_SHOWN = 8
-
-
-def radius_text(
-    radii: Sequence[float],
-    radius: float,
-    short: bool = False,
-    edges: Sequence[str] | None = None,
-) -> str:
-    """The uncertainty set as a statement names it: ``ρ = 0.05`` when every edge has the
-    same radius, else ``the per-edge radii (max 0.5; 1→2: 0.02, 2→3: 0.5, 3→1: 0.02)``: a
-    bound proven for per-edge radii is not one for every weight at the largest of them.
-
-    Parameters
-    ----------
-    radii : sequence of float
-        ρ_e per uncertain edge (:attr:`RobustReport.radii`; empty: no uncertain edge).
-    radius : float
-        The largest (ρ itself when every edge has the same).
-    short : bool, optional
-        Leave the list of ρ_e out (a figure's title).
-    edges : sequence of str, optional
-        The edges' names (:meth:`UncertainEdges.labels`), in the order of ``radii``;
-        without them the radii are listed as ``ρ_e = 0.02, 0.5, …``.
-
-    Returns
-    -------
-    str
-    """
-    vals = [float(r) for r in radii]
-    if len(set(vals)) <= 1:
-        return f"ρ = {radius:.6g}"
-    if short:
-        return f"the per-edge radii (max {radius:.6g})"
-    if edges is not None and len(edges) == len(vals):
-        shown = ", ".join(
-            f"{e}: {r:.6g}" for e, r in list(zip(edges, vals, strict=True))[:RADII_SHOWN]
-        )
-    else:
-        shown = "ρ_e = " + ", ".join(f"{r:.6g}" for r in vals[:RADII_SHOWN])
-    more = f", …; {len(vals)} edges" if len(vals) > RADII_SHOWN else ""
-    return f"the per-edge radii (max {radius:.6g}; {shown}{more})"
-
-
-def radius_phrase(radii: Sequence[float], radius: float, edges: Sequence[str] | None = None) -> str:
-    """What a proven number holds for: ``at ρ = 0.05``, or ``for the per-edge radii (max
-    0.5; …)`` (:func:`radius_text`).
-
-    Parameters
-    ----------
-    radii : sequence of float
-        ρ_e per uncertain edge.
-    radius : float
-        The largest.
-    edges : sequence of str, optional
-        The edges' names, in the order of ``radii``.
-
-    Returns
-    -------
-    str
-    """
-    text = radius_text(radii, radius, edges=edges)
-    return f"at {text}" if text.startswith("ρ = ") else f"for {text}"
-
-
-# -- realisations ----------------------------------------------------------------------
-
-
-def _sqrtm_psd(w: np.ndarray) -> np.ndarray:
-    lam, q = np.linalg.eigh(0.5 * (w + w.T))
-    return (q * np.sqrt(np.clip(lam, 0, None))) @ q.T
-
-
-@dataclass(frozen=True, eq=False)
-class _Problem:
-    """The nominal data every bound and search uses (dense)."""
-
-    design: ProtocolDesign
-    edges: UncertainEdges
-    lap_b: np.ndarray
-    u: np.ndarray
-    target: np.ndarray  # 1⊗θ
-    f: np.ndarray  # (m, d, d): W_e^{1/2}
-
-    @property
-    def r0(self) -> np.ndarray:
-        """u − L_B(1⊗θ): zero in exact arithmetic up to the rounding of x0 = k1·θ."""
-        return self.u - self.lap_b @ self.target
-
-    @property
-    def n(self) -> int:
-        return int(self.lap_b.shape[0])
-
-    @property
-    def d(self) -> int:
-        return int(self.design.topology.dim)
-
-    def delta_l(self, deltas: np.ndarray) -> np.ndarray:
-        """Σ_e E_i Δ_e D_eᵀ for the weight changes Δ_e (m, d, d)."""
-        d, out = self.d, np.zeros((self.n, self.n))
-        ed = self.edges
-        for k in range(ed.m):
-            i, j = int(ed.dst[k]) * d, int(ed.src[k]) * d
-            out[i : i + d, i : i + d] += deltas[k]
-            out[i : i + d, j : j + d] -= ed.s[k] * deltas[k]
-        return out
-
-    def deltas(self, es: np.ndarray) -> np.ndarray:
-        return np.einsum("kab,kbc,kcd->kad", self.f, es, self.f)
-
-    def lap(self, es: np.ndarray) -> np.ndarray:
-        return self.lap_b + self.delta_l(self.deltas(es))
-
-    def weights(self, es: np.ndarray) -> np.ndarray:
-        """The realised A'_e = s_e (W_e + F E F), symmetrised."""
-        a = self.edges.w + self.deltas(es)
-        a = 0.5 * (a + np.transpose(a, (0, 2, 1)))
-        return self.edges.s[:, None, None] * a
-
-
-def _problem(des: ProtocolDesign) -> _Problem:
-    top = des.topology
-    require_dense(top.nd, "robust brackets")
-    ed = uncertain_edges(top)
-    lap_b = des.grounded_laplacian()
-    return _Problem(
-        des,
-        ed,
-        lap_b,
-        des.input_vector(),
-        np.tile(des.theta, top.n),
-        np.array([_sqrtm_psd(w) for w in ed.w]).reshape(ed.w.shape),
-    )
-
-
-@dataclass(frozen=True)
-class Realisation:
-    """A point of the uncertainty set: its radius, the realised weights (edge order of
-    :class:`UncertainEdges`) and what it attains."""
-
-    radius: float
-    weights: np.ndarray
-    value: float
-
-    def edges(self, top: Topology, edges: UncertainEdges) -> list[dict]:
-        """The realisation as topology-file edges ``{from, to, weight}``.
-
-        Parameters
-        ----------
-        top : Topology
-            The nominal topology (labels).
-        edges : UncertainEdges
-            Its uncertain edges.
-
-        Returns
-        -------
-        list of dict
-        """
-        lab = top.labels
-        return [
-            {"from": lab[int(j)], "to": lab[int(i)], "weight": a.tolist()}
-            for i, j, a in zip(edges.dst, edges.src, self.weights, strict=True)
-        ]
-
-
-def realised_topology(top: Topology, edges: UncertainEdges, weights: np.ndarray) -> Topology:
-    """The nominal topology with the uncertain edges' weights replaced.
-
-    Parameters
-    ----------
-    top : Topology
-        The nominal topology.
-    edges : UncertainEdges
-        Its uncertain edges.
-    weights : numpy.ndarray
-        (m, d, d) realised weights.
-
-    Returns
-    -------
-    Topology
-    """
-    w = dict(top.weights)
-    for i, j, a in zip(edges.dst, edges.src, weights, strict=True):
-        w[(int(i), int(j))] = np.asarray(a, dtype=float)
-    return Topology(top.labels, top.dim, w, name=top.name)
-
-
 # -- the brackets ----------------------------------------------------------------------------
 
 
-def _worst(p: _Problem, rad: np.ndarray, objective: str, starts: int, seed: int) -> Realisation:
+def _worst(p: Problem, rad: np.ndarray, objective: str, starts: int, seed: int) -> Realisation:
     """The realisation :func:`.robust_search.climb` finds, with what it attains (min Re λ, or the offset)."""
     es = climb(p, rad, objective, starts, seed)
     lap = p.lap(es)
     value = abscissa(lap) if objective == "decay" else offset_of(p, lap)
     return Realisation(float(np.max(rad, initial=0.0)), p.weights(es), value)
-
-
-@dataclass(frozen=True)
-class Bracket:
-    """A certified end and a realisation attaining the other end (``lower <= upper``)."""
-
-    lower: float | None
-    upper: float | None
-    realisation: Realisation | None
-    certified: str  # "lower" or "upper": which end is proven
-    method: str
-
-
-@dataclass(frozen=True)
-class RobustReport:
-    """The three brackets at one radius, with the matrices that prove the certified ends
-    (``lmi``: P, τ for the decay and margin LMIs; γ, λ, Y for the offset)."""
-
-    design: ProtocolDesign
-    radius: float  # the largest ρ_e (ρ itself when every edge has the same)
-    radii: tuple[float, ...]  # ρ_e per uncertain edge (UncertainEdges order)
-    nominal_decay: float
-    decay: Bracket
-    offset: Bracket
-    margin: Bracket
-    proofs: dict = field(repr=False)
-    seconds: float = 0.0
-
-    def table(self, title: str | None = None) -> Table:
-        """The three brackets as the table every face shows.
-
-        Parameters
-        ----------
-        title : str, optional
-            The table's title.
-
-        Returns
-        -------
-        ntc_design.present.rows.Table
-        """
-
-        num = functools.partial(fmt, digits=6)  # None shows as "—"
-        top = self.design.topology
-        d, o, m = (_proven_by(b.method) for b in (self.decay, self.offset, self.margin))
-        rows = [
-            ("decay rate min Re λ(L_B(A'))", num(self.decay.lower), num(self.decay.upper),
-             f"lower proven ({d}); upper attained by a realisation"),
-            ("consensus offset ‖x* − 1⊗θ‖₂", num(self.offset.lower), num(self.offset.upper),
-             f"upper proven ({o}); lower attained by a realisation"),
-            ("margin radius ρ", num(self.margin.lower), num(self.margin.upper),
-             f"lower proven ({m} at α = 0); upper: a destabilising realisation"),
-        ]  # fmt: skip
-        ed = uncertain_edges(top)
-        antag = int(np.sum(ed.s < 0))
-        notes: tuple[str, ...] = (
-            f"nominal decay rate {self.nominal_decay:.6g}; the protocol (informed agents, B_i, "
-            f"δ = {self.design.delta:.6g}, x0) is kept at its nominal design",
-            f"only the {antag} antagonistic weight(s) move the consensus point "
-            "(D_eᵀ(1⊗θ) = 0 on cooperative edges)",
-        )
-        if len(set(self.radii)) > 1:  # what each bracket is about, said where it differs
-            notes += (
-                "the decay and offset brackets hold for the per-edge radii; the margin radius "
-                "is one ρ on every edge",
-            )
-        phrase = radius_phrase(self.radii, self.radius, ed.labels(top))
-        return Table.build(
-            title or f"{top.name or 'topology'}: robust brackets {phrase}",
-            ("bracket", "lower", "upper", "which end is proven"),
-            rows,
-            notes,
-        )
-
-    def to_dict(self) -> dict:
-        """The report in the ``--json`` form: radius, decay, offset and margin, each
-        realisation as topology-file edges.
-
-        Returns
-        -------
-        dict
-        """
-        top = self.design.topology
-        ed = uncertain_edges(top)
-
-        def real(b: Bracket) -> list[dict] | None:
-            return None if b.realisation is None else b.realisation.edges(top, ed)
-
-        uniform = len(set(self.radii)) <= 1
-        return {
-            "radius": self.radius if uniform else list(self.radii),
-            "nominal_decay": self.nominal_decay,
-            "decay": {
-                "lower": self.decay.lower,
-                "upper": self.decay.upper,
-                "realization": real(self.decay),
-                "method": self.decay.method,
-            },
-            "offset": {
-                "lower": self.offset.lower,
-                "upper": self.offset.upper,
-                "realization": real(self.offset),
-                "method": self.offset.method,
-            },
-            "margin": {
-                "lower": self.margin.lower,
-                "upper": self.margin.upper,
-                "destabilizing": real(self.margin),
-                "realization_radius": None
-                if self.margin.realisation is None
-                else self.margin.realisation.radius,
-                "method": self.margin.method,
-            },
-        }
-
-
-def _proven_by(method: str) -> str:
-    """A short name for the method that proves a bracket's end (the table's last column)."""
-    for key, name in (
-        ("Riccati", "Riccati search"),
-        ("comparison", "comparison bound"),
-        ("dominance", "block dominance"),
-        ("Finsler", "S-procedure"),
-        ("eliminated", "S-procedure, reduced"),
-    ):
-        if key in method:
-            return name
-    return "LMI"
 
 
 def robust_seconds(
@@ -707,8 +132,6 @@ def robust_seconds(
     top = design.topology
     nd_ = top.nd
     if nd_ > ROBUST_MAX_ND:
-        from .are import RICCATI_MAX_ND
-
         entries = (top.n + int(top.edge_arrays.rows.size)) * top.dim**2
         sparse = SPARSE_SECONDS * entries
         if nd_ > RICCATI_MAX_ND:
@@ -819,14 +242,11 @@ def robust(
     rho = check_radius(radius)
     check_robust_work(design, bisection_steps, margin)
     if design.topology.nd > ROBUST_MAX_ND:  # sparse bounds, tightened by Riccati if dense
-        from .are import RICCATI_MAX_ND
-        from .scale import robust_scale
-
         rep = robust_scale(design, rho)
         if design.topology.nd <= RICCATI_MAX_ND:
             rep = _riccati_brackets(rep, rho, starts, seed, bisection_steps, margin, t0)
         return rep
-    p = _problem(design)
+    p = dense_problem(design)
     rad = p.edges.radii(design.topology, rho)
     rmax = float(np.max(rad, initial=0.0))
     alpha0 = abscissa(p.lap_b)
@@ -835,11 +255,11 @@ def robust(
             f"robust: the nominal −L_B is not Hurwitz (min Re λ(L_B) = {alpha0:.6g}); "
             "certify the nominal design first"
         )
-    ch = _channels(p)
-    lmi = _DecayLMI(p, ch)
+    ch = channels(p)
+    lmi = DecayLMI(p, ch)
     # decay: the realisation first, so that the bisection runs below what it attains
     wd = _worst(p, rad, "decay", starts, seed)
-    a_lo, dec = _descend(lambda a: lmi(a, rad), max(wd.value, 0.0), bisection_steps)
+    a_lo, dec = descend(lambda a: lmi(a, rad), max(wd.value, 0.0), bisection_steps)
     decay = Bracket(
         a_lo if dec is not None else None,
         wd.value,
@@ -849,7 +269,7 @@ def robust(
         "by projected gradient on the eigenvalue",
     )
     # offset
-    off = _offset_sdp(p, ch, rad) if dec is not None else None  # x* exists: decay proven
+    off = offset_sdp(p, ch, rad) if dec is not None else None  # x* exists: decay proven
     wo = _worst(p, rad, "offset", starts, seed + 1)
     offset = Bracket(
         wo.value,
@@ -862,7 +282,7 @@ def robust(
     # margin
     destab = _destabilising(p, rmax, starts, seed + 2) if margin else None
     r_top = 1.0 if destab is None else destab.radius
-    r_lo, mar = _descend(lambda r: lmi(0.0, r), r_top, bisection_steps) if margin else (0.0, None)
+    r_lo, mar = descend(lambda r: lmi(0.0, r), r_top, bisection_steps) if margin else (0.0, None)
     margin_b = Bracket(
         r_lo if mar is not None else None,
         None if destab is None else destab.radius,
@@ -917,12 +337,9 @@ def _riccati_brackets(
     and margin lower ends by the Riccati search (:mod:`.robust_are`, proven in the
     process), the attained ends by the dense searches; each end keeps the better of the
     two methods, and says which."""
-    from ..dense import lap_b_float
-    from .are import RiccatiSearch
-    from .offset import offset_search
 
     des = rep.design
-    p = _problem(des)
+    p = dense_problem(des)
     rad = p.edges.radii(des.topology, rho)
     rmax = float(np.max(rad, initial=0.0))
     lap = lap_b_float(des.topology, des.B, des.delta)
@@ -935,7 +352,7 @@ def _riccati_brackets(
     dec = rep.decay
     if dec.upper is None or wd.value < dec.upper:
         dec = Bracket(dec.lower, wd.value, wd, "lower", dec.method)
-    a_lo, got = _descend(lambda a: search(a, rad), max(float(dec.upper or 0.0), 0.0), steps)
+    a_lo, got = descend(lambda a: search(a, rad), max(float(dec.upper or 0.0), 0.0), steps)
     if got is not None:  # kept for the certificate even when dominance proves more
         proofs.update(decay=got, alpha=a_lo)
     if got is not None and (dec.lower is None or a_lo > dec.lower):
@@ -960,7 +377,7 @@ def _riccati_brackets(
         destab = _destabilising(p, rmax, starts, seed + 2)
         if destab is not None and (mar.upper is None or destab.radius < mar.upper):
             mar = Bracket(mar.lower, destab.radius, destab, "lower", mar.method)
-        r_lo, got_m = _descend(lambda r: search(0.0, r), float(mar.upper or 1.0), steps)
+        r_lo, got_m = descend(lambda r: search(0.0, r), float(mar.upper or 1.0), steps)
         if got_m is not None:
             proofs.update(margin=got_m, margin_radius=r_lo)
         if got_m is not None and (mar.lower is None or r_lo > mar.lower):
@@ -973,7 +390,7 @@ def _riccati_brackets(
     )  # fmt: skip
 
 
-def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisation | None:
+def _destabilising(p: Problem, r_lo: float, starts: int, seed: int) -> Realisation | None:
     """The smallest radius (bisection in [r_lo, 1)) at which the eigenvalue search finds a
     realisation with min Re λ <= 0; else the all-vanishing realisation at ρ = 1 when it is
     not Hurwitz; None when neither."""
@@ -1002,24 +419,14 @@ def _destabilising(p: _Problem, r_lo: float, starts: int, seed: int) -> Realisat
 
 
 __all__ = [
+    "BASE_SECONDS",
     "DEFAULT_RADIUS",
+    "LONG_SECONDS",
+    "MAX_SECONDS",
     "ROBUST_MAX_ND",
-    "Bracket",
-    "Realisation",
-    "RobustReport",
-    "UncertainEdges",
-    "abscissa",
-    "CHANNEL_FLOOR",
-    "channel_bound",
-    "whitening_basis",
     "check_radius",
     "check_robust_work",
-    "radius_phrase",
-    "radius_text",
-    "pivot_columns",
-    "realised_topology",
     "robust",
     "robust_seconds",
     "robust_sweep",
-    "uncertain_edges",
 ]

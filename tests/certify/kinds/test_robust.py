@@ -177,13 +177,13 @@ def test_per_edge_radii_are_stated_as_the_per_edge_set(tri_robust):
 def test_exact_psi_and_gamma_leave_out_the_edges_of_radius_zero(g1_robust):
     # an edge of radius 0 is not perturbed: its channel's rows are left out, which keeps
     # a certificate that listed them valid (Ψ and Γ are then principal submatrices)
-    from ntc_design.certify.kinds.robust import _exact_channels, gamma_exact, psi_exact
+    from ntc_design.certify.robust.exact import exact_channels, gamma_exact, psi_exact
     from ntc_design.certify.robust.lmi import active_columns
     from ntc_design.rigorous.exact import Dyadic
 
     des, rep = g1_robust
     top = des.topology
-    ch = _exact_channels(top)
+    ch = exact_channels(top)
     m, n = len(ch), top.nd
     sizes = [c.vwv.num.shape[0] for c in ch]
     rng = np.random.default_rng(4)

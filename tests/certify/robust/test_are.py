@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from ntc_design.certify.dense import lap_b_float
+from ntc_design.certify.robust import ROBUST_MAX_ND
+from ntc_design.certify.robust.problem import dense_problem
 from ntc_design.certify.robust.are import RICCATI_MAX_ND, RiccatiSearch
-from ntc_design.certify.robust.search import ROBUST_MAX_ND, _problem
 from tests.support.robust import features, in_set, realised, sample
 
 
@@ -40,7 +41,7 @@ def test_the_riccati_ends_are_sound_and_within_the_targets(mid_robust):
 
 def test_a_proof_is_refused_when_any_premise_fails(mid_robust):
     des, rep, _ = mid_robust
-    p = _problem(des)
+    p = dense_problem(des)
     search = RiccatiSearch(*lap_b_float(des.topology, des.B, des.delta), p.edges, p.d)
     rad = np.full(search.m, 0.05)
     got = search(0.5 * rep.decay.lower, rad)

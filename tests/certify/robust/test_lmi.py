@@ -18,7 +18,7 @@ from ntc_design.certify.robust.lmi import (
     offset_matrix,
     solve_sdp,
 )
-from ntc_design.certify.robust.search import _problem, uncertain_edges
+from ntc_design.certify.robust.problem import dense_problem, uncertain_edges
 from ntc_design.model import Topology
 from ntc_design.model.generate import random_network
 from tests.support.robust import features, independent_lap_b, sample
@@ -38,7 +38,7 @@ def _min_eig(m):
 def prob():
     """3 agents, d = 2, one cooperative and two antagonistic edges."""
     top = random_network(3, 2, seed=0, p_negative=0.5, extra=1.0)
-    return _problem(nd.design(top, THETA, thresholds=False))
+    return dense_problem(nd.design(top, THETA, thresholds=False))
 
 
 @pytest.fixture(scope="module")

@@ -14,9 +14,9 @@ from ntc_design.certify.robust.offset import (
     input_float,
     offset_search,
 )
+from ntc_design.certify.robust.problem import dense_problem
 from ntc_design.certify.robust.realise import climb as _climb
 from ntc_design.certify.robust.realise import offset_of as _offset
-from ntc_design.certify.robust.search import _problem
 from ntc_design.model.generate import random_network
 from ntc_design.model.paper import THETA
 from ntc_design.protocol.lemma1 import coupling_matrix
@@ -128,7 +128,7 @@ def test_the_bound_is_sound_and_within_the_target(mid):
     rng = np.random.default_rng(np.random.SeedSequence(11))
     seen = [features(des, sample(des, 0.05, rng, "vertex" if k % 2 else "random"))[1]
             for k in range(30)]  # fmt: skip
-    p = _problem(des)
+    p = dense_problem(des)
     climbed = _offset(p, p.lap(_climb(p, rad, "offset", 3, 5)))
     assert max(seen) <= climbed <= bound
     assert bound / climbed < 1.5  # the target; measured 1.007
@@ -138,7 +138,7 @@ def test_the_bound_is_sound_and_within_the_target(mid):
 
 def test_a_proof_is_refused_when_any_premise_fails(mid):
     des, s, rad, (gam, lam) = mid
-    p = _problem(des)
+    p = dense_problem(des)
     climbed = _offset(p, p.lap(_climb(p, rad, "offset", 3, 5)))
     assert not s.proven(0.99 * climbed**2, lam, rad)  # below an attained offset
     assert not s.proven(gam, np.zeros_like(lam), rad)

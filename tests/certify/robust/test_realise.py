@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
+from ntc_design.certify.robust.problem import dense_problem
 from ntc_design.certify.robust.realise import (
     SHRINK,
     _grad_decay,
@@ -16,7 +17,6 @@ from ntc_design.certify.robust.realise import (
     climb,
     offset_of,
 )
-from ntc_design.certify.robust.search import _problem
 from ntc_design.model.generate import random_network
 
 THETA = [1.0, -2.0]
@@ -35,7 +35,7 @@ def _sym(rng, m, d, scale):
 def prob():
     """3 agents, d = 2, one cooperative and two antagonistic edges (the offset moves)."""
     top = random_network(3, 2, seed=0, p_negative=0.5, extra=1.0)
-    p = _problem(nd.design(top, THETA, thresholds=False))
+    p = dense_problem(nd.design(top, THETA, thresholds=False))
     assert p.edges.m == 3 and set(p.edges.s) == {1.0, -1.0}
     return p
 

@@ -7,9 +7,9 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.certify.kinds.robust import robust_certificate
+from ntc_design.certify.robust import robust
 from ntc_design.certify.robust import scale as rs
 from ntc_design.certify.robust.are import RICCATI_MAX_ND
-from ntc_design.certify.robust.search import robust
 from ntc_design.model.generate import random_network
 from ntc_design.model.paper import THETA
 from tests.support.robust import features, in_set, realised, sample

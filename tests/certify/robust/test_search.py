@@ -9,7 +9,7 @@ import pytest
 import ntc_design as nd
 from ntc_design.certify import verify
 from ntc_design.certify.kinds.robust import robust_certificate
-from ntc_design.certify.robust.search import robust
+from ntc_design.certify.robust import robust
 from ntc_design.model.generate import random_network, write_topology
 from ntc_design.model.paper import THETA
 from tests.conftest import ROOT
@@ -196,7 +196,7 @@ def test_the_table_names_the_method_of_each_proven_end(mid_robust):
     ],
 )
 def test_radius_text_names_one_radius_or_the_per_edge_radii(radii, radius, kw, text):
-    from ntc_design.certify.robust.search import radius_phrase, radius_text
+    from ntc_design.certify.robust import radius_phrase, radius_text
 
     assert radius_text(radii, radius, **kw) == text
     edges = kw.get("edges")
@@ -241,7 +241,7 @@ def robust_uniform_title(des):
 
 
 def test_channel_bound_keeps_a_well_conditioned_weight_and_an_exact_kernel():
-    from ntc_design.certify.robust.search import channel_bound
+    from ntc_design.certify.robust import channel_bound
 
     for w, piv in (
         (np.array([[2.0, 0.5], [0.5, 1.0]]), (0, 1)),
@@ -257,7 +257,7 @@ def test_channel_bound_of_a_weight_singular_by_rounding(det_sign):
     # v vᵀ in floating point: exactly, full rank with a determinant of ±1e−20 or so
     from fractions import Fraction
 
-    from ntc_design.certify.robust.search import CHANNEL_FLOOR, channel_bound, whitening_basis
+    from ntc_design.certify.robust import CHANNEL_FLOOR, channel_bound, whitening_basis
 
     rng = np.random.default_rng(5)
     while True:
@@ -281,7 +281,7 @@ def test_channel_bound_of_a_weight_singular_by_rounding(det_sign):
 
 
 def test_whitening_basis_is_the_identity_without_positive_definiteness():
-    from ntc_design.certify.robust.search import whitening_basis
+    from ntc_design.certify.robust import whitening_basis
 
     np.testing.assert_array_equal(whitening_basis(np.diag([1.0, -1.0])), np.eye(2))
     np.testing.assert_array_equal(whitening_basis(np.diag([1.0, 0.0])), np.eye(2))
@@ -324,7 +324,7 @@ def test_at_radius_zero_the_brackets_are_the_nominal_figures(n, d, theta, seed):
 def test_a_weight_singular_by_rounding_is_certified_soundly_at_every_radius():
     # seed 11's weight 6→3 is v vᵀ rounded (determinant −6.5e−20 exactly): brackets at
     # ρ = 0.05 now, each proven end respected by sampled realisations of the set
-    from ntc_design.certify.robust.search import uncertain_edges
+    from ntc_design.certify.robust import uncertain_edges
 
     top = random_network(6, 2, seed=11)
     ed = uncertain_edges(top)
