@@ -195,3 +195,15 @@ def test_sentences_are_split_as_a_reader_would():
 def test_no_readme_sentence_is_over_40_words():
     long = [s for s in _sentences(README) if len(s.split()) > 40]
     assert not long, "\n\n".join(f"{len(s.split())} words: {s}" for s in long)
+
+
+@pytest.mark.parametrize(
+    "page", [p for p in PAGES[1:] if p.stem != "index"], ids=lambda p: p.stem
+)  # fmt: skip
+def test_each_guide_page_leads_with_what_you_get_and_one_command(page):
+    lines = page.read_text(encoding="utf-8").splitlines()
+    assert lines[0].startswith("# ") and lines[2].startswith("**What you get.**"), lines[:3]
+    lead = "\n".join(lines[2:]).split("\n```bash\n", 1)
+    assert "\n\n" not in lead[0], "the example follows the lead paragraph"
+    command = lead[1].split("\n```", 1)[0].splitlines()
+    assert len(command) == 1 and command[0].startswith(("ntc ", "python ")), command
