@@ -52,3 +52,39 @@ def test_npz_round_trip_and_cli(tmp_path, capsys, monkeypatch):
     )
     assert code == 0 and "50" in out
     assert assumption2(nd.load(tmp_path / "g.npz")).holds
+
+
+@pytest.mark.parametrize("n, m", [(2, 1), (3, 2), (50, 1), (400, 3)])
+def test_preferential_attachment_is_the_sequential_process(n, m):
+    # the same uniforms replayed one edge at a time: each target is a uniform entry of the
+    # list of every earlier edge's two ends (degree-proportional), appended as it goes
+    from ntc_design.model.generate import preferential_attachment
+
+    u, v = preferential_attachment(n, m, np.random.default_rng(7))
+    m0 = min(m, n - 1)
+    ends = [x for i in range(m0) for x in (i + 1, i)]
+    draws = np.random.default_rng(7).random(max(0, n - m0 - 1) * m)
+    want_u, want_v = list(range(1, m0 + 1)), list(range(m0))
+    k = 0
+    for t in range(m0 + 1, n):
+        count = len(ends)
+        for _ in range(m):
+            target = ends[int(draws[k] * count)]
+            k += 1
+            want_u.append(t)
+            want_v.append(target)
+            ends += [t, target]
+    assert u.tolist() == want_u and v.tolist() == want_v
+    assert np.all(v < u)  # every edge joins a later agent to an earlier one: connected
+
+
+@pytest.mark.parametrize("family", ["small-world", "scale-free"])
+def test_generated_families_are_connected_and_satisfy_assumption_2(family):
+    top = random_network(300, 2, seed=4, family=family)
+    assert assumption2(top).holds
+    import scipy.sparse as sp
+    from scipy.sparse import csgraph
+
+    ea = top.edge_arrays
+    g = sp.coo_matrix((np.ones(ea.rows.size), (ea.rows, ea.cols)), shape=(top.n, top.n))
+    assert csgraph.connected_components(g, directed=False)[0] == 1
