@@ -54,7 +54,7 @@ def _cli_reference(app) -> None:
     """docs/cli_commands.rst from ``ntc COMMAND --help`` itself, so that it never drifts."""
     from typer.testing import CliRunner
 
-    from ntc_design.cli.main import app as ntc
+    from ntc_design.cli.program import app as ntc
 
     runner = CliRunner()
     names = [c.name or c.callback.__name__ for c in ntc.registered_commands]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import math
 import numbers
 import os
@@ -413,7 +414,55 @@ def require_radius(value, name: str = "--radius", below_one: bool = True) -> flo
     return r
 
 
+#: The optional extras (pyproject.toml) and what each brings: the core install certifies,
+#: designs, simulates, tunes, bounds robustly and reports without them.
+EXTRAS = {
+    "tables": "pandas and PyArrow (sweep tables, data frames)",
+    "cluster": "Dask distributed (sweeps and Monte Carlo on a cluster)",
+    "interop": "networkx (graphs in and out)",
+}
+
+
+def optional_module(name: str, extra: str, what: str) -> types.ModuleType:
+    """An optional dependency, imported; one line naming the extra that brings it when it
+    is not installed.
+
+    Parameters
+    ----------
+    name : str
+        The module (``pandas``, ``distributed``).
+    extra : str
+        The extra of :data:`EXTRAS` that installs it.
+    what : str
+        What needs it (``ntc sweep``), the start of the message.
+
+    Returns
+    -------
+    types.ModuleType
+
+    Raises
+    ------
+    InputError
+        It is not installed (exit code 2 at the command line).
+
+    Examples
+    --------
+    >>> optional_module("math", "tables", "a test").sqrt(4.0)
+    2.0
+    """
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        top = name.split(".", 1)[0]
+        raise InputError(
+            f"{what} needs {top}, which the core install leaves out: "
+            f'pip install "ntc-design[{extra}]"'
+        ) from None
+
+
 __all__ = [
+    "EXTRAS",
+    "optional_module",
     "MAX_SEED",
     "MIN_HORIZON",
     "AssumptionWarning",

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import yaml
 
-from .errors import InputError
+from .errors import InputError, optional_module
 from .io.files import jsonable
 from .io.outputs import write_atomic
 from .model import Topology
@@ -70,7 +70,7 @@ def topology_from_networkx(
         Not a simple directed graph, a missing or non-numeric attribute, a weight of the
         wrong shape; the message names the edge.
     """
-    import networkx as nx
+    nx = optional_module("networkx", "interop", "from_networkx")
 
     if not isinstance(graph, nx.DiGraph) or graph.is_multigraph():
         raise InputError(
@@ -119,7 +119,7 @@ def topology_to_networkx(top: Topology, weight: str = "weight") -> nx.DiGraph:
     -------
     networkx.DiGraph
     """
-    import networkx as nx
+    nx = optional_module("networkx", "interop", "to_networkx")
 
     g = nx.DiGraph(dim=top.dim, name=top.name)
     g.add_nodes_from(top.labels)

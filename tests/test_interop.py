@@ -7,8 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from ntc_design import InputError, Topology, load
-from ntc_design import protocol as design
+from ntc_design import InputError, Topology, design, load
 from ntc_design.interop import (
     design_statespace,
     save_topology,

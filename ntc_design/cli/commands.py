@@ -1,6 +1,6 @@
 """The commands about a network and its certificates (check, design, generate, gain,
 certify, verify, robust, export, examples): parse, call the library, print. They are
-registered on the app, in ``ntc --help`` order, by :mod:`ntc_design.cli.main`."""
+registered on the app, in ``ntc --help`` order, by :mod:`ntc_design.cli.program`."""
 
 from __future__ import annotations
 

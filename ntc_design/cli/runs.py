@@ -473,12 +473,13 @@ def sweep(
     results.parquet, curves.parquet and points/. Exit 1 when some point failed."""
     from ..reports.terminal import out, sweep_progress
     from ..sweep import load_sweep, run_sweep
+    from ..sweep.store import tables_module
 
+    pd = tables_module()  # the extra, before any work
     sw = load_sweep(sweep_file)
     callback, ctx = sweep_progress()
     with ctx:
         res = run_sweep(sw, out_dir, scheduler=scheduler, workers=workers, progress=callback)
-    import pandas as pd
 
     table = pd.read_csv(out_dir / "results.csv")
     failed = table[table["error"].notna()]

@@ -24,6 +24,8 @@ from ..io.outputs import check_output_folder, output_folder
 from ..protocol.agents import AgentLaw
 from ..simulate.replay import replay
 from .c import COMPILE, c_files
+from .c import FILES as C_FILES
+from .python import FILES as PY_FILES
 from .python import python_files
 from .source import ExportSource, load_source
 
@@ -308,8 +310,6 @@ def replaceable(lang: str | None = None) -> tuple[str, ...]:
     -------
     tuple of str
     """
-    from .c import FILES as C_FILES
-    from .python import FILES as PY_FILES
 
     code: Sequence[str] = {"c": C_FILES, "python": PY_FILES}.get(lang or "", (*C_FILES, *PY_FILES))
     return (*code, "README.txt", *EXAMPLES, "ntc_replay")

@@ -28,19 +28,21 @@ from typing import Any
 
 import numpy as np
 
-from ..certify import KINDS, verify
+from ..certify import KINDS, certify, verify
 from ..certify.dense import DenseContext
 from ..certify.fields import vector
 from ..certify.format import FORMAT
 from ..errors import AssumptionWarning, InputError
-from ..gain.schedule import ScheduleGain, analyse_any_gain, schedule_from_document
+from ..gain.schedule import ScheduleGain, analyse_any_gain, gain_from_option, schedule_from_document
 from ..io.documents import read_document
+from ..io.files import parse_scenario
 from ..model import SwitchingTopology, Topology
 from ..model.paper import F_SCALE, SIGMA
 from ..protocol.agents import AgentLaw, agent_law, make_law, mode_law
 from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.lemma1 import ProtocolDesign, SwitchingDesign
 from ..simulate.noise import NoiseModel, noise_from_document
+from ..simulate.scenario import load_scenario
 from ..simulate.spec import SimulationSpec
 
 #: A scenario's horizon when it gives none (the simulator's default).
@@ -109,7 +111,6 @@ def _digital(
 def _gain_option(gain: str | ScheduleGain | None) -> str | ScheduleGain | None:
     if gain is None or isinstance(gain, ScheduleGain):
         return gain
-    from ..gain.schedule import gain_from_option
 
     return gain_from_option(gain, "--gain")
 
@@ -156,9 +157,6 @@ def from_scenario(
         A bad file or value; a topology that is neither fixed nor switching; a design whose
         certificate does not verify or for which no theorem is guaranteed.
     """
-    from ..certify import certify
-    from ..io.files import parse_scenario
-    from ..simulate.scenario import load_scenario
 
     sc = parse_scenario(path)
     src = sc.source

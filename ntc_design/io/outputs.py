@@ -361,16 +361,16 @@ def exit_process(code: str | int | None) -> None:
         The exit code (``sys.exit``'s argument).
     """
     import atexit
+    import multiprocessing as mp
     import sys
     import threading
 
-    mp = sys.modules.get("multiprocessing")
     if (
         not isinstance(code, int)
         or sys.getprofile() is not None  # a profiler (python -m cProfile) writes at exit
         or sys.gettrace() is not None  # so does a coverage tracer
         or threading.active_count() > 1
-        or (mp is not None and mp.active_children())
+        or mp.active_children()
     ):
         sys.exit(code)
     try:

@@ -16,7 +16,7 @@ from .graph import (
     in_out_difference,
     positive_negative_reachable,
 )
-from .switching import SwitchingTopology, TimeVaryingTopology
+from .switching import ExpressionFamily, SwitchingTopology, TimeVaryingTopology
 from .topology import (
     EdgeArrays,
     Label,
@@ -27,6 +27,7 @@ from .topology import (
 )
 
 __all__ = [
+    "ExpressionFamily",
     "EdgeArrays",
     "Label",
     "SwitchingTopology",

@@ -15,6 +15,14 @@ from ..present.rows import Table
 from .topology import Label, Topology
 
 
+class ExpressionFamily:
+    """The base of a topology whose weights are expressions of t
+    (:class:`ntc_design.model.timevarying.ExpressionTopology`): what code that must not load
+    SymPy for the other topologies tests against."""
+
+    __slots__ = ()
+
+
 @dataclass(frozen=True, eq=False)
 class SwitchingTopology:
     """Modes (topologies over the same agents and d) and a periodic schedule of

@@ -18,7 +18,7 @@ from ..io.documents import read_document
 from ..io.tvfiles import ExprWeight, TimeVaryingData, parse_time_varying
 from ..numerics.linalg import Definiteness, classify, is_symmetric
 from ..rigorous.interval import bounds, enclose, t_ball
-from . import Label, Topology
+from . import ExpressionFamily, Label, Topology
 from .enclosure import SignProof
 
 
@@ -40,7 +40,7 @@ class ExprEdge:
 
 
 @dataclass(frozen=True, eq=False)
-class ExpressionTopology:
+class ExpressionTopology(ExpressionFamily):
     """A topology whose weights are expressions of t, each of one sign class for every t.
 
     ``domain`` is where the weights are given and the proofs hold: one period

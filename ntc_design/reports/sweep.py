@@ -18,6 +18,7 @@ from matplotlib.ticker import MaxNLocator
 from ..errors import InputError
 from ..io.outputs import check_output_file, write_atomic
 from ..present.rows import fmt
+from ..sweep.store import tables_module
 from .html import render
 from .style import MARKERS, TWO_COLUMN, agent_style, markevery, paper_style, save
 
@@ -75,7 +76,7 @@ def is_sweep_dir(directory: str | Path) -> bool:
 
 
 def _load(d: Path):
-    import pandas as pd
+    pd = tables_module()
 
     for name in ("sweep.json", "results.csv", "results.parquet", "curves.parquet"):
         if not (d / name).is_file():
@@ -103,7 +104,7 @@ def _check_results_csv(path: Path, res) -> None:
     """results.csv, which the report links as the sweep's data, must be the table of
     results.parquet (the same columns and points): an empty or damaged copy is refused
     rather than linked."""
-    import pandas as pd
+    pd = tables_module()
 
     try:
         csv = pd.read_csv(path)
@@ -280,13 +281,8 @@ def _cell(v) -> str:
         return fmt(bool(v))
     if isinstance(v, (np.floating, float)):
         return fmt(float(v), 5)
-    try:
-        import pandas as pd
-
-        if v is pd.NA:
-            return "—"
-    except ImportError:  # pragma: no cover
-        pass
+    if type(v).__name__ == "NAType":  # pandas' missing value (a table read back)
+        return "—"
     return str(v)
 
 

@@ -11,7 +11,6 @@ moments (:func:`.moments.exact_moments`).
 from __future__ import annotations
 
 import os
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, TypeAlias, TypeGuard, cast
@@ -20,7 +19,7 @@ import numpy as np
 
 from ..errors import InputError, format_seconds, quote, warn_user
 from ..expr.tree import numeric_function
-from ..model import SwitchingTopology, TimeVaryingTopology, Topology
+from ..model import ExpressionFamily, SwitchingTopology, TimeVaryingTopology, Topology
 from ..protocol import ProtocolDesign, design_topology
 from ..protocol.digital import Digital, step_modes
 from .budget import (
@@ -58,8 +57,8 @@ AnyTopology: TypeAlias = "Topology | SwitchingTopology | TimeVaryingTopology | E
 
 
 def is_expression_topology(topology: object) -> TypeGuard[ExpressionTopology]:
-    """Whether ``topology`` is an :class:`~ntc_design.timevarying.ExpressionTopology`,
-    without importing its module (and SymPy) when no such topology was ever made.
+    """Whether ``topology`` is an :class:`~ntc_design.model.timevarying.ExpressionTopology`
+    (by its base in :mod:`ntc_design.model`: SymPy is not loaded for the other topologies).
 
     Parameters
     ----------
@@ -70,8 +69,7 @@ def is_expression_topology(topology: object) -> TypeGuard[ExpressionTopology]:
     -------
     bool
     """
-    mod = sys.modules.get("ntc_design.model.timevarying")
-    return mod is not None and isinstance(topology, mod.ExpressionTopology)
+    return isinstance(topology, ExpressionFamily)
 
 
 MAX_SEGMENTS = 10_000_000  # switching segments on [0, T]

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import importlib.util
 import os
-import sys
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -70,11 +69,6 @@ def load_cuda() -> Any:
             f"installed with the gpu extra: {INSTALL}); or use device: cpu"
         )
     if sim:
-        if "numba.cuda" in sys.modules and not _simulating(sys.modules["numba.cuda"]):
-            raise InputError(
-                f"device: {SIMULATOR_ENV}=1 was set after numba.cuda was imported in this "
-                "process; set it before starting Python"
-            )
         os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
         from numba.core import config  # numba's, which numba-cuda reads, read at import
 
@@ -88,6 +82,11 @@ def load_cuda() -> Any:
         ) from None
     if _simulating(cuda):
         return cuda
+    if sim:  # numba.cuda was imported before the variable was set: it keeps the device
+        raise InputError(
+            f"device: {SIMULATOR_ENV}=1 was set after numba.cuda was imported in this "
+            "process; set it before starting Python"
+        )
     if not cuda.is_available():
         raise InputError(f"device: gpu: {_why_unavailable()}; use device: cpu")
     from numba.cuda.cudadrv import nvvm

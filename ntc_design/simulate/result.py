@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import quote
+from ..errors import optional_module, quote
 from ..present.rows import Table, fmt
 from ..present.svg import curve_svg
 from ..protocol import ProtocolDesign
@@ -341,7 +341,7 @@ def simulation_frame(res: SimulationResult):
         ``lo``, ``hi`` (its 95% band) and ``exact`` (the exact moment curve); a column
         that was not computed is NaN.
     """
-    import pandas as pd
+    pd = optional_module("pandas", "tables", "a data frame of the result")
 
     return pd.DataFrame(tidy_columns(res), columns=list(TIDY_COLUMNS))
 

@@ -13,8 +13,9 @@ import numpy as np
 from ..errors import InputError, blame
 from ..io.files import ScenarioData, jsonable, parse_scenario
 from ..io.outputs import check_output_folder, json_text, output_folder
+from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..model.load import load
-from .driver import AnyTopology
+from .driver import AnyTopology, edge_count
 from .result import TIDY_COLUMNS, tidy_columns
 from .spec import SimulationSpec
 
@@ -266,8 +267,6 @@ def result_output_bytes(res, topology) -> float:
     float
         Bytes.
     """
-    from ..model import SwitchingTopology, TimeVaryingTopology, Topology
-    from .driver import edge_count
 
     known = (Topology, SwitchingTopology, TimeVaryingTopology)
     structure = topology if isinstance(topology, known) else topology.structure  # A(t) as text

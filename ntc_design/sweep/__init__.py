@@ -23,27 +23,60 @@ Modules: :mod:`.spec` (the file and its points), :mod:`.point` (one point and it
 row), :mod:`.store` (point files and tables), :mod:`.run` (the driver).
 """
 
-from .point import (
-    ROW_FIELDS,
-    CertificationRow,
-    PointResult,
-    PointRow,
-    certify_key,
-    certify_task,
-    run_point,
-)
-from .run import SweepOutcome, SweepProgress, run_sweep
-from .spec import (
-    FORMAT,
-    MAX_POINTS,
-    MAX_VALUES,
-    PointTask,
-    Sweep,
-    load_sweep,
-    point_hash,
-    topology_from_document,
-)
-from .store import load_point, save_point, write_manifest, write_tables
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+# loaded on first use (PEP 562): the Monte Carlo engines (:mod:`.engines`) are used by
+# ntc simulate without the sweep's tables, certification and cluster client
+_EXPORTS = {
+    "ROW_FIELDS": "point",
+    "CertificationRow": "point",
+    "PointResult": "point",
+    "PointRow": "point",
+    "certify_key": "point",
+    "certify_task": "point",
+    "run_point": "point",
+    "SweepOutcome": "run",
+    "SweepProgress": "run",
+    "run_sweep": "run",
+    "FORMAT": "spec",
+    "MAX_POINTS": "spec",
+    "MAX_VALUES": "spec",
+    "PointTask": "spec",
+    "Sweep": "spec",
+    "load_sweep": "spec",
+    "point_hash": "spec",
+    "topology_from_document": "spec",
+    "load_point": "store",
+    "save_point": "store",
+    "write_manifest": "store",
+    "write_tables": "store",
+}
+
+if TYPE_CHECKING:
+    from .point import (
+        ROW_FIELDS,
+        CertificationRow,
+        PointResult,
+        PointRow,
+        certify_key,
+        certify_task,
+        run_point,
+    )
+    from .run import SweepOutcome, SweepProgress, run_sweep
+    from .spec import (
+        FORMAT,
+        MAX_POINTS,
+        MAX_VALUES,
+        PointTask,
+        Sweep,
+        load_sweep,
+        point_hash,
+        topology_from_document,
+    )
+    from .store import load_point, save_point, write_manifest, write_tables
 
 __all__ = [
     "FORMAT",
@@ -69,3 +102,15 @@ __all__ = [
     "write_manifest",
     "write_tables",
 ]
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

@@ -22,7 +22,7 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from ..errors import InputError
+from ..errors import InputError, optional_module
 from ..simulate.montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
 from ..simulate.spec import check_workers
 
@@ -90,8 +90,7 @@ class TaskProgress:
             return
         self._last = now
         try:
-            from distributed import get_worker
-
+            get_worker = optional_module("distributed", "cluster", "a Dask worker").get_worker
             get_worker().log_event(self.topic, (self.key, int(done), int(total)))
         except ValueError:  # not inside a worker: nobody to tell
             pass
@@ -219,7 +218,7 @@ class DaskEngine:
             When the address is malformed, no scheduler answers within
             :data:`CONNECT_TIMEOUT` seconds, or what answers is not a Dask scheduler.
         """
-        from distributed import Client
+        Client = optional_module("distributed", "cluster", "--scheduler").Client
 
         if not isinstance(address, str) or not address.strip() or len(address) > 1000:
             raise InputError("--scheduler: expected an address such as tcp://127.0.0.1:8786")
@@ -292,7 +291,7 @@ class DaskEngine:
         PartialStats
             Merged in block order: the same as a local run.
         """
-        from distributed import as_completed
+        as_completed = optional_module("distributed", "cluster", "--scheduler").as_completed
 
         blocks = list(range(spec.n_blocks))
         k = self.blocks_per_chunk
@@ -341,7 +340,7 @@ class DaskEngine:
             ``(key, result, None)``, or ``(key, None, error)`` when the cluster gave up on
             a task (e.g. its workers kept dying).
         """
-        from distributed import wait
+        wait = optional_module("distributed", "cluster", "--scheduler").wait
 
         topic = f"ntc-progress-{uuid.uuid4().hex[:12]}"
         events: queue.SimpleQueue = queue.SimpleQueue()

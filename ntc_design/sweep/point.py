@@ -11,11 +11,10 @@ from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
 import numpy as np
-from distributed import get_worker
 from threadpoolctl import threadpool_limits
 
 from ..certify import certify
-from ..errors import InputError
+from ..errors import InputError, optional_module
 from ..io.files import jsonable
 from ..protocol import ProtocolDesign, SwitchingDesign
 from ..simulate import SimulationDiverged, SimulationSpec, simulate
@@ -299,7 +298,11 @@ def run_point(
 def _worker_name(remote: bool) -> str:
     if remote:
         try:
-            return get_worker().address
+            return (
+                optional_module("distributed", "cluster", "a sweep on a cluster")
+                .get_worker()
+                .address
+            )
         except ValueError:
             pass
     return f"local:{socket.gethostname()}"

@@ -15,7 +15,7 @@ from ..simulate import SimulationSpec
 from .engines import LocalEngine, engine_for
 from .point import PointResult, PointRow, certify_key, certify_task, run_point
 from .spec import PointTask, Sweep, load_sweep
-from .store import load_point, save_point, write_manifest, write_tables
+from .store import load_point, save_point, tables_module, write_manifest, write_tables
 
 
 @dataclass
@@ -100,8 +100,10 @@ def run_sweep(
     Raises
     ------
     InputError
-        A malformed sweep file or an unreachable scheduler (before anything is written).
+        A malformed sweep file, an unreachable scheduler or the ``tables`` extra missing
+        (before anything is written).
     """
+    tables_module()  # pandas and PyArrow write the tables at the end: checked first
     sw = sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():

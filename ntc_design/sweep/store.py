@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
+from ..errors import optional_module
 from ..io.files import jsonable
 from ..io.outputs import atomic_path, write_atomic
 from .point import ROW_FIELDS, PointResult, PointRow
@@ -129,6 +129,13 @@ def _cell(v: Any) -> Any:
     return json.dumps(jsonable(v))
 
 
+def tables_module():
+    """pandas, with PyArrow for its Parquet files: the ``tables`` extra, or one line
+    naming it."""
+    optional_module("pyarrow", "tables", "a sweep's tables")
+    return optional_module("pandas", "tables", "a sweep's tables")
+
+
 def write_tables(sweep: Sweep, out_dir: Path, results: dict[str, PointResult]) -> list[Path]:
     """``results.csv``, ``results.parquet`` (one row per point, in sweep order: the swept
     keys as named in the file, then :data:`ROW_FIELDS`) and ``curves.parquet`` (long form:
@@ -147,7 +154,13 @@ def write_tables(sweep: Sweep, out_dir: Path, results: dict[str, PointResult]) -
     -------
     list of pathlib.Path
         The files written.
+
+    Raises
+    ------
+    InputError
+        pandas or PyArrow is not installed (the ``tables`` extra).
     """
+    pd = tables_module()
     rows, curves = [], []
     for task in sweep.tasks():
         res = results.get(task.point)

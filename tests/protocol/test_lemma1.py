@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.io import loadmat
 
 import ntc_design as nd
-from ntc_design.model import Topology
+from ntc_design.model import Topology, paper
 from ntc_design.model.generate import random_network
 from ntc_design.present.rows import fmt
 from ntc_design.protocol import AssumptionWarning
@@ -47,8 +47,8 @@ def _by_definition(top, theta: np.ndarray, delta: float):
 
 
 NETWORKS = [
-    ("G1", lambda: nd.paper.g1()),
-    ("G2", lambda: nd.paper.g2()),
+    ("G1", lambda: paper.g1()),
+    ("G2", lambda: paper.g2()),
     *[
         (f"{fam}-{seed}", lambda fam=fam, seed=seed: random_network(12, 2, seed, fam))
         for fam in ("random", "ring", "small-world", "scale-free")

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
+from ntc_design.model import paper
 from ntc_design.model.generate import random_network
 from ntc_design.numerics.linalg import DEF_CODES
 from ntc_design.protocol import design
@@ -211,7 +212,7 @@ def test_delta_s_is_where_the_symmetric_part_turns_positive(seed):
 
 
 def test_best_rate_is_the_largest_abscissa_over_delta():
-    des = _design(nd.paper.g1())
+    des = _design(paper.g1())
     th = des.thresholds
     grid = np.geomspace(1e-2, 1e3, 400)
     rates = np.array([-_alpha(des, x) for x in grid])

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import ntc_design as nd
+from ntc_design.io import files
 from ntc_design.model import paper
 from ntc_design.model.paper import THETA
 from ntc_design.simulate import (
@@ -84,7 +84,7 @@ def test_divergence_names_time_and_agent_and_keeps_results(g1):
 def test_one_path_has_no_band(g1):
     res = simulate(g1, THETA, T=0.1, paths=1, save_every=0.05, workers=1, method="mc")
     assert np.all(np.isnan(res.mc.lo)) and np.all(np.isnan(res.mc.hi))
-    summ = json.loads(json.dumps(nd.files.jsonable(res.summary())))
+    summ = json.loads(json.dumps(files.jsonable(res.summary())))
     assert all(v == [None, None] for v in summ["final_ms_error_mc_band"].values())
     assert summ["sample_paths"]["final_error_norm_spread"] is None
     two = simulate(g1, THETA, T=0.1, paths=2, save_every=0.05, workers=1, method="mc")

@@ -1,10 +1,10 @@
 """The public API documents its interface in numpydoc form, and the docs cite the paper by its
 printed numbers.
 
-Modelled on python-control's ``control/tests/docstrings_test.py``, but stricter: a public
-function (every name in an ``__all__`` of ``ntc_design`` or one of its modules; in a module
-without ``__all__`` every name it defines without a leading underscore; and the public
-methods of the public classes) must have
+Modelled on python-control's ``control/tests/docstrings_test.py``. A function of the public
+API (every name the ``__all__`` of ``ntc_design`` or of one of its packages exports, and the
+public methods of those classes; a method that overrides a documented one may inherit its
+docstring) must have
 
 * a summary line;
 * a ``Parameters`` section naming every parameter of its signature, and no parameter it does
@@ -16,7 +16,9 @@ methods of the public classes) must have
   ``require_*`` validators, readers, parsers).
 
 Public classes need a docstring; their properties need one too (a property is read as an
-attribute, so no sections are asked of it).
+attribute, so no sections are asked of it). Every other name a module exports (its
+``__all__``, or what it defines without a leading underscore) needs a summary line: what a
+reader of the module needs, without sections that repeat the signature.
 """
 
 from __future__ import annotations
@@ -61,33 +63,47 @@ def _ours(obj) -> bool:
     return getattr(obj, "__module__", "").split(".")[0] == "ntc_design"
 
 
-def _public_api():
-    """(qualified name, kind, object) for every documented function, class, method and
-    property: the names in a module's ``__all__`` (in a module without one, every name it
-    defines without a leading underscore) plus the public members of those classes."""
-    seen: dict[int, tuple[str, str, object]] = {}
+def _exported(mod) -> list[str]:
+    if hasattr(mod, "__all__"):
+        return list(mod.__all__)
+    # no __all__: every name without an underscore that the module defines
+    return [
+        a
+        for a, o in vars(mod).items()
+        if not a.startswith("_") and getattr(o, "__module__", None) == mod.__name__
+    ]
 
-    def add(name, kind, obj):
-        seen.setdefault(id(obj), (name, kind, obj))
+
+def _inherits_doc(cls, name: str, member) -> bool:
+    """An override without a docstring of its own, of a documented method of a base."""
+    if getattr(member, "__doc__", None):
+        return False
+    return any(getattr(getattr(base, name, None), "__doc__", None) for base in cls.__mro__[1:])
+
+
+def _public_api():
+    """(qualified name, kind, object, tier) for every documented function, class, method
+    and property: tier ``api`` for what a package's ``__all__`` exports (and the public
+    members of those classes), ``module`` for the rest of the modules' exports."""
+    seen: dict[int, tuple[str, str, object, str]] = {}
+
+    def add(name, kind, obj, tier):
+        old = seen.get(id(obj))
+        if old is None or (tier == "api" and old[3] != "api"):
+            seen[id(obj)] = (name, kind, obj, tier)
 
     for modname in _modules():
         mod = importlib.import_module(modname)
-        if hasattr(mod, "__all__"):
-            names = list(mod.__all__)
-        else:  # no __all__: every name without an underscore that the module defines
-            names = [
-                a
-                for a, o in vars(mod).items()
-                if not a.startswith("_") and getattr(o, "__module__", None) == modname
-            ]
-        for attr in names:
+        package = hasattr(mod, "__path__")
+        for attr in _exported(mod):
             obj = getattr(mod, attr)
             if not _ours(obj):
                 continue
+            tier = "api" if package else "module"
             if inspect.isfunction(obj):
-                add(f"{obj.__module__}.{obj.__qualname__}", "function", obj)
+                add(f"{obj.__module__}.{obj.__qualname__}", "function", obj, tier)
             elif inspect.isclass(obj):
-                add(f"{obj.__module__}.{obj.__qualname__}", "class", obj)
+                add(f"{obj.__module__}.{obj.__qualname__}", "class", obj, tier)
                 for mname, member in vars(obj).items():
                     if mname.startswith("_"):
                         continue
@@ -95,15 +111,25 @@ def _public_api():
                     if isinstance(member, (classmethod, staticmethod)):
                         member = member.__func__
                     if inspect.isfunction(member):
-                        add(qual, "function", member)
+                        if not _inherits_doc(obj, mname, member):
+                            add(qual, "function", member, tier)
                     elif isinstance(member, property) and member.fget is not None:
-                        add(qual, "property", member.fget)
+                        add(qual, "property", member.fget, tier)
     return sorted(seen.values(), key=lambda t: t[0])
 
 
 API = _public_api()
-FUNCTIONS = [pytest.param(obj, id=name) for name, kind, obj in API if kind == "function"]
-OTHERS = [pytest.param(obj, id=name) for name, kind, obj in API if kind != "function"]
+FUNCTIONS = [
+    pytest.param(obj, id=name)
+    for name, kind, obj, tier in API
+    if kind == "function" and tier == "api"
+]
+MODULE_FUNCTIONS = [
+    pytest.param(obj, id=name)
+    for name, kind, obj, tier in API
+    if kind == "function" and tier == "module"
+]
+OTHERS = [pytest.param(obj, id=name) for name, kind, obj, _ in API if kind != "function"]
 
 
 def sections(doc: str) -> dict[str, list[str]]:
@@ -281,10 +307,16 @@ def test_public_class_or_property_has_a_docstring(obj):
     assert _own_doc(obj)
 
 
+@pytest.mark.parametrize("fn", MODULE_FUNCTIONS)
+def test_a_module_export_has_a_summary_line(fn):
+    doc = inspect.getdoc(fn) or ""
+    assert doc.strip() and not SECTION.match(doc), "no summary line"
+
+
 def test_the_checked_api_is_the_whole_api():
     # the package, certify/ and simulate/ export their layers; a silently empty walk would
     # pass every test above
-    names = {name for name, _, _ in API}
+    names = {name for name, kind, _, tier in API if tier == "api"}
     assert len(FUNCTIONS) >= 200
     for must in (
         "ntc_design.protocol.lemma1.design",

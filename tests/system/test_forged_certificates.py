@@ -16,6 +16,7 @@ from ntc_design.certify import hurwitz_certificate, switching_certificate, verif
 from ntc_design.certify.claims import Property, derive_claims
 from ntc_design.certify.format import digest, document_hash
 from ntc_design.errors import InputError
+from ntc_design.io import files
 from ntc_design.rigorous.exact import exact_affordable
 from tests.cli_helpers import run_cli
 from tests.conftest import ROOT
@@ -515,7 +516,7 @@ def _independently_true(doc, ver):
     from the subject's topology, θ and δ, and the eigenvalues of the re-derived L_B."""
     for m in ver.about.modes:
         sub = doc["subject"]["modes"][m.name]
-        top = nd.Topology.from_data(nd.files.parse_topology(sub["topology"]))
+        top = nd.Topology.from_data(files.parse_topology(sub["topology"]))
         d = nd.design(top, sub["theta"], delta=sub["delta"], thresholds=False)
         assert [str(x) for x in sub["informed"]] == [str(top.labels[i]) for i in d.informed]
         assert sub["k1"] == d.k1 and sub["x0"] == d.x0.tolist()

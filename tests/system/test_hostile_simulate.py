@@ -169,7 +169,7 @@ BAD_FIELDS = [
     ("paths", 2.0, ["paths"]),
     ("paths", "10", ["paths"]),
     ("paths", True, ["paths"]),
-    ("paths", 10**30, ["paths", "path-steps"]),
+    ("paths", 10**30, ["paths", "at most"]),
     ("seed", -1, ["seed"]),
     ("seed", 1.5, ["seed"]),
     ("seed", 1.0, ["seed"]),

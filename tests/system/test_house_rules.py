@@ -71,3 +71,133 @@ def test_every_part_of_the_package_is_in_one_layer():
     }
     assert sorted(parts - set(named)) == []
     assert len(named) == len(set(named))  # no part in two layers
+
+
+# -- the import graph: no circles, no private names, no probing ----------------------------
+
+
+def _module_name(p: Path) -> str:
+    parts = p.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports() -> list[tuple[str, str, int, bool, list[str]]]:
+    """(module, imported module, line, inside a function, names) for every import of the
+    package by the package: top-level, ``TYPE_CHECKING`` and function-level alike."""
+    files = {_module_name(p): p for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts}
+    out = []
+    for mod, path in files.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        base = mod if path.name == "__init__.py" else mod.rsplit(".", 1)[0]
+        inside: set[int] = set()
+        for fn in ast.walk(tree):
+            if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                inside.update(id(n) for n in ast.walk(fn) if n is not fn)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                targets = [(a.name, []) for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                parts = base.split(".")
+                head = parts[: len(parts) - node.level + 1] if node.level else []
+                target = ".".join(head + ([node.module] if node.module else []))
+                names = [a.name for a in node.names]
+                # ``from . import x`` of a submodule imports the submodule
+                subs = [f"{target}.{n}" for n in names if f"{target}.{n}" in files]
+                targets = [(s, []) for s in subs] or [(target, names)]
+            else:
+                continue
+            for target, names in targets:
+                while target and target not in files:
+                    target = target.rpartition(".")[0]
+                if target and target != mod:
+                    out.append((mod, target, node.lineno, id(node) in inside, names))
+    return out
+
+
+IMPORTS = _imports()
+
+
+def test_no_import_cycle_among_modules():
+    graph: dict[str, set[str]] = {}
+    for a, b, *_ in IMPORTS:
+        graph.setdefault(a, set()).add(b)
+    state: dict[str, int] = {}  # 1: on the path, 2: done
+    cycles = []
+
+    def visit(v: str, path: list[str]) -> None:
+        state[v] = 1
+        for w in sorted(graph.get(v, ())):
+            if state.get(w) == 1:
+                cycles.append(path[path.index(w) :] + [w])
+            elif w not in state:
+                visit(w, [*path, w])
+        state[v] = 2
+
+    for v in sorted(graph):
+        if v not in state:
+            visit(v, [v])
+    assert len(IMPORTS) > 500  # the walk found the package
+    assert cycles == []
+
+
+def test_no_private_name_is_imported_from_another_module():
+    private = [
+        f"{a}:{line} imports {n} from {b}"
+        for a, b, line, _, names in IMPORTS
+        for n in names
+        if n.startswith("_") and not n.startswith("__")
+    ]
+    assert private == []
+
+
+def test_no_module_decides_by_what_is_already_imported():
+    probes = [
+        str(p.relative_to(ROOT))
+        for p in PACKAGE.rglob("*.py")
+        if "sys.modules" in p.read_text(encoding="utf-8")
+    ]
+    assert probes == []
+
+
+#: Why a module imports another inside a function rather than at its top (start-up time:
+#: what a command loads only when it needs it). The CLI does so throughout: ``ntc --help``
+#: and a mistyped option answer without loading the layers.
+LAZY = {
+    # Numba compiles (or loads from its cache) the kernels when their module is imported
+    ("ntc_design.simulate.montecarlo", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.rng", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.replay", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.timevarying", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.gpu_run", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.montecarlo", "ntc_design.simulate.rng"): "Numba kernels",
+    # numba-cuda is imported only on a GPU (or its simulator)
+    ("ntc_design.simulate.gpu_run", "ntc_design.simulate.cuda_kernels"): "numba-cuda",
+    ("ntc_design.simulate.gpu", "ntc_design.simulate.gpu_run"): "numba-cuda",
+    ("ntc_design.simulate.gpu", "ntc_design.simulate.gpu_timevarying"): "numba-cuda",
+    # SymPy loads only for expressions of t and the gain conditions
+    ("ntc_design.model.load", "ntc_design.model.timevarying"): "SymPy",
+    ("ntc_design.io.readers", "ntc_design.io.tvfiles"): "SymPy",
+    ("ntc_design.simulate.driver", "ntc_design.simulate.timevarying"): "SymPy",
+    ("ntc_design.gain.schedule", "ntc_design.gain.conditions"): "SymPy",
+    # the certify package loads the gain conditions (SymPy) for a table of checks
+    ("ntc_design.reports.terminal", "ntc_design.certify.checks"): "SymPy",
+}
+
+
+def test_imports_inside_functions_have_a_named_reason():
+    lazy = {
+        (a, b) for a, b, _, inside, _ in IMPORTS if inside and not a.startswith("ntc_design.cli")
+    }
+    assert sorted(lazy - set(LAZY)) == []  # a new one: hoist it, or name its reason here
+    assert sorted(set(LAZY) - lazy) == []  # a reason for nothing: remove it
+
+
+def test_the_top_level_is_few_modules_and_no_module_is_long():
+    top = [p.name for p in PACKAGE.glob("*.py")]
+    assert len(top) <= 12, top
+    long = {
+        str(p.relative_to(PACKAGE)): n
+        for p in PACKAGE.rglob("*.py")
+        if (n := len(p.read_text(encoding="utf-8").splitlines())) > 800
+    }
+    assert long == {}

@@ -297,7 +297,7 @@ def test_the_program_notes_ctrl_c_and_keeps_an_ignored_one_ignored(ignored):
         + ("signal.signal(signal.SIGINT, signal.SIG_IGN)\n" if ignored else "")
         + ("" if ignored else "signal.signal(signal.SIGINT, signal.default_int_handler)\n")
         + "from ntc_design import errors\n"
-        + "from ntc_design.cli import main as cli\n"
+        + "from ntc_design.cli import program as cli\n"
         "cli.main = lambda: print(signal.getsignal(signal.SIGINT) is errors.note_interrupt,"
         " signal.getsignal(signal.SIGINT) is signal.SIG_IGN)\n"
         "cli.run()\n"

@@ -24,14 +24,6 @@ from ..claims import Claim, ClaimKind, Property
 from ..dense import PROVERS, DenseContext, DenseMode, mode_subject
 from ..fields import need, number
 from ..format import FORMAT, VERSION, finish
-from ..robust.are import RICCATI_MAX_ND, RiccatiSearch
-from ..robust.exact import (
-    exact_channels,
-    gamma_exact,
-    prove_pd,
-    psi_exact,
-)
-from ..robust.offset import OffsetSearch, input_float
 from ..robust import (
     ROBUST_MAX_ND,
     RobustDesign,
@@ -42,6 +34,14 @@ from ..robust import (
     radius_text,
     uncertain_edges,
 )
+from ..robust.are import RICCATI_MAX_ND, RiccatiSearch
+from ..robust.exact import (
+    exact_channels,
+    gamma_exact,
+    prove_pd,
+    psi_exact,
+)
+from ..robust.offset import OffsetSearch, input_float
 from ..theorems import TheoremVerdict
 from .base import (
     CertificateKind,

@@ -16,6 +16,7 @@ from .problem import uncertain_edges
 
 
 def dyadic(x: float) -> Dyadic:
+    """A float as an exact dyadic number."""
     return Dyadic.of(float(x))
 
 
@@ -27,12 +28,15 @@ def block_matrix(rows: list[list[Dyadic]]) -> Dyadic:
 
 @dataclass(frozen=True, eq=False)
 class ExactChannel:
+    """One uncertain edge's channel matrices, exactly."""
+
     ewv: Dyadic  # E_i W V (Nd × r)
     dwd: Dyadic  # D W Dᵀ (Nd × Nd)
     vwv: Dyadic  # Vᵀ W V (r × r)
 
 
 def exact_channels(top: Topology) -> list[ExactChannel]:
+    """Every uncertain edge's channel (E_i W̄ V, D W̄ Dᵀ, Vᵀ W̄ V), as the issuer forms it."""
     ed = uncertain_edges(top)
     n, d = top.nd, top.dim
     out = []

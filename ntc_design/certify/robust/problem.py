@@ -375,10 +375,12 @@ class Problem:
 
     @property
     def n(self) -> int:
+        """N·d."""
         return int(self.lap_b.shape[0])
 
     @property
     def d(self) -> int:
+        """The weights' dimension d."""
         return int(self.design.topology.dim)
 
     def delta_l(self, deltas: np.ndarray) -> np.ndarray:
@@ -392,9 +394,11 @@ class Problem:
         return out
 
     def deltas(self, es: np.ndarray) -> np.ndarray:
+        """Δ_e = F_e E_e F_e for the normalised changes E_e (m, d, d)."""
         return np.einsum("kab,kbc,kcd->kad", self.f, es, self.f)
 
     def lap(self, es: np.ndarray) -> np.ndarray:
+        """L_B(A') of the realisation with normalised changes E_e."""
         return self.lap_b + self.delta_l(self.deltas(es))
 
     def weights(self, es: np.ndarray) -> np.ndarray:
@@ -405,6 +409,7 @@ class Problem:
 
 
 def dense_problem(des: ProtocolDesign) -> Problem:
+    """The dense nominal data of a design (refused past the dense size)."""
     top = des.topology
     require_dense(top.nd, "robust brackets")
     ed = uncertain_edges(top)

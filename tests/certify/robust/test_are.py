@@ -5,8 +5,8 @@ import pytest
 
 from ntc_design.certify.dense import lap_b_float
 from ntc_design.certify.robust import ROBUST_MAX_ND
-from ntc_design.certify.robust.problem import dense_problem
 from ntc_design.certify.robust.are import RICCATI_MAX_ND, RiccatiSearch
+from ntc_design.certify.robust.problem import dense_problem
 from tests.support.robust import features, in_set, realised, sample
 
 
