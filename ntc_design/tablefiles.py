@@ -237,8 +237,8 @@ def _labels_in_order(
     rank = np.empty(order.size, dtype=np.int64)
     rank[order] = np.arange(order.size)
     idx = rank[inv]
-    check_label_spellings((str(u) for u in uniq), f"{where}: from/to")
-    labels = tuple(label_from_text(str(uniq[k])) for k in order)
+    texts = check_label_spellings([str(u) for u in uniq], f"{where}: from/to")
+    labels = tuple(label_from_text(texts[k]) for k in order)
     return labels, idx[1::2], idx[0::2]
 
 
@@ -445,8 +445,7 @@ def _mat_labels(raw: Any, n: int, p: Path) -> tuple:
         raise InputError(f"{p}: labels: {len(out)} labels for {n} agents")
     if len(set(out)) != n:
         raise InputError(f"{p}: labels: agent labels must be unique")
-    check_label_spellings(out, f"{p}: labels")
-    return tuple(label_from_text(x) for x in out)
+    return tuple(label_from_text(x) for x in check_label_spellings(out, f"{p}: labels"))
 
 
 def _scalar_text(a: np.ndarray) -> str:
