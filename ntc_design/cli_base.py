@@ -12,7 +12,7 @@ from typing import Annotated
 import typer
 
 from . import __version__
-from .errors import InputError
+from .errors import INT_TEXT, NUMBER_TEXT, InputError, number_from_text, number_rule
 
 # Everything else loads in the command that needs it: `ntc --help` and a mistyped option
 # answer without importing NumPy, SciPy, SymPy or the library's layers.
@@ -50,6 +50,33 @@ with contextlib.suppress(AttributeError):  # another typer: its own rendering st
 if hasattr(typer.core.TyperArgument, "_usage_display_name"):  # typer >= 0.2x braces it
     typer.core.TyperArgument._usage_display_name = _usage_name  # type: ignore[method-assign]
     typer.core.TyperArgument.get_error_hint = _error_hint  # type: ignore[method-assign]
+
+
+def _ascii_numbers(original):
+    """Every number flag (``--radius``, ``--seed``, …) read in ASCII numerals only: typer
+    parses them by pydantic, which reads ``0_05`` as 5.0 (Python's number syntax)."""
+
+    def build(number_class, **kwargs):
+        adapter = original(number_class, **kwargs)
+        pattern = INT_TEXT if number_class is int else NUMBER_TEXT
+        if kwargs.get("min") is not None or kwargs.get("max") is not None or kwargs.get("clamp"):
+            return adapter  # not used by ntc's flags: typer's own bounds stay as they are
+        from pydantic import BeforeValidator, TypeAdapter
+
+        def check(value):
+            if isinstance(value, str) and not pattern.fullmatch(value):
+                raise ValueError(f"{value[:40]!r} is not a number {number_rule(value)}")
+            return value
+
+        return TypeAdapter(Annotated[number_class, BeforeValidator(check)])
+
+    return build
+
+
+with contextlib.suppress(AttributeError, ImportError):  # another typer: its own parsing
+    import typer._adapters as _adapters
+
+    _adapters._build_number_adapter = _ascii_numbers(_adapters._build_number_adapter)
 
 app = typer.Typer(
     add_completion=True,
@@ -100,10 +127,14 @@ SchedulerOpt = Annotated[
 
 def parse_vector(text: str, field: str) -> list[float]:
     """``"1,2,-1"`` -> ``[1.0, 2.0, -1.0]``; one clear error otherwise."""
-    try:
-        vals = [float(x) for x in text.replace(" ", "").strip("[]").split(",") if x != ""]
-    except ValueError:
-        raise InputError(f"{field}: expected comma-separated numbers, got {text!r}") from None
+    parts = [x for x in text.replace(" ", "").strip("[]").split(",") if x != ""]
+    if not all(NUMBER_TEXT.fullmatch(x) for x in parts):
+        bad = next(x for x in parts if not NUMBER_TEXT.fullmatch(x))
+        raise InputError(
+            f"{field}: expected comma-separated numbers, got {text!r} ({bad[:40]!r} is not a "
+            f"number {number_rule(bad)})"
+        )
+    vals = [number_from_text(x, field) for x in parts]
     if not vals:
         raise InputError(f"{field}: expected comma-separated numbers, got {text!r}")
     return vals

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import re
 import sys
 import types
 import warnings
@@ -64,6 +65,59 @@ def _show(value) -> str:
             return f"an integer of {digits} digits"
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+#: A number as text: ASCII digits only, no underscores (Python's float() and int(), and
+#: pydantic for typed flags, read "0_05" as 5.0 and "٣" as 3).
+NUMBER_TEXT = re.compile(
+    r"\s*[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf(?:inity)?|nan)\s*",
+    re.IGNORECASE | re.ASCII,
+)
+INT_TEXT = re.compile(r"\s*[+-]?[0-9]+\s*", re.ASCII)
+
+
+def number_from_text(text: str, name: str) -> float:
+    """A number written as text (a flag's value, a table cell), in ASCII numerals only.
+
+    Parameters
+    ----------
+    text : str
+        The text.
+    name : str
+        The flag or field named in the message.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Anything but an optional sign, ASCII digits, a decimal point and an exponent
+        (or inf, nan): ``0_05``, ``٣``, ``３`` are refused, not read as 5, 3, 3.
+    """
+    if not NUMBER_TEXT.fullmatch(text):
+        raise InputError(f"{name}: {text[:40]!r} is not a number {number_rule(text)}")
+    return float(text)
+
+
+def number_rule(text: str) -> str:
+    """Why a text is not a number, for a message: what it holds that is not allowed.
+
+    Parameters
+    ----------
+    text : str
+        The text refused.
+
+    Returns
+    -------
+    str
+    """
+    if "_" in text:
+        return "(write it without underscores: ASCII digits, a point, an exponent)"
+    if not text.isascii():
+        return "(write it in ASCII digits 0-9)"
+    return "(ASCII digits, a point, an exponent)"
 
 
 def real_float(name: str, value) -> float:
@@ -414,7 +468,9 @@ def require_radius(value, name: str = "--radius", below_one: bool = True) -> flo
 
 
 __all__ = [
+    "INT_TEXT",
     "MAX_SEED",
+    "NUMBER_TEXT",
     "MIN_HORIZON",
     "AssumptionWarning",
     "blame",
@@ -424,6 +480,8 @@ __all__ = [
     "format_seconds",
     "interrupt_seen",
     "note_interrupt",
+    "number_from_text",
+    "number_rule",
     "one_line",
     "quote",
     "real_float",

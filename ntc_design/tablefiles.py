@@ -37,7 +37,7 @@ from .edgelist import (
     check_label_spellings,
     label_from_text,
 )
-from .errors import InputError, format_bytes
+from .errors import NUMBER_TEXT, InputError, format_bytes
 from .memory import available_memory
 from .outputs import atomic_path
 
@@ -251,6 +251,16 @@ def _long_row(p: Path, fields: int) -> str:
     return "a row is longer than the header"
 
 
+def _short_row(p: Path, fields: int) -> str | None:
+    """The first row with fewer fields than the header, or None (read again, only when
+    the last column has a gap: pandas fills a short row's missing fields, NaN or "")."""
+    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+        for k, row in enumerate(csv.reader(fh), 1):
+            if row and len(row) < fields:  # a blank line is skipped by the parser too
+                return f"row {k}: {len(row)} fields, the header has {fields} (a short row)"
+    return None
+
+
 def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
     """(header, the weight columns, d) from row 1, refused unless it is from, to, a11 … add."""
     with open(p, encoding="utf-8", errors="replace") as fh:
@@ -343,6 +353,10 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     e = len(table)
     if e > MAX_EDGES:
         raise InputError(f"{p}: more than {MAX_EDGES} rows")
+    last = table[header[-1]]  # a short row leaves NaN in a number column, "" in a text one
+    gap = last.isna().any() or (last.dtype != np.float64 and bool((last == "").any()))
+    if gap and (short := _short_row(p, len(header))):
+        raise InputError(f"{p}: {short}")
     src = table["from"].to_numpy(dtype=str)
     dst = table["to"].to_numpy(dtype=str)
     for name, col in (("from", src), ("to", dst)):
@@ -379,10 +393,8 @@ def _csv_uncertainty(table, p: Path) -> np.ndarray:
     vals = np.char.strip(table["uncertainty"].to_numpy(dtype=str))
     out = np.full(vals.size, np.nan)
     for r in np.flatnonzero(np.char.str_len(vals) > 0).tolist():
-        try:
-            v = float(vals[r])
-        except ValueError:
-            v = math.nan
+        text = str(vals[r])
+        v = float(text) if NUMBER_TEXT.fullmatch(text) else math.nan  # ASCII numerals only
         if not (math.isfinite(v) and 0 <= v < 1):
             raise InputError(
                 f"{p}: row {r + 2}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "

@@ -108,3 +108,30 @@ def test_a_horizon_below_the_time_grids_resolution_is_refused(value):
 def test_the_shortest_horizon_is_accepted():
     assert require_horizon("T", MIN_HORIZON) == MIN_HORIZON
     assert require_horizon("T", 3) == 3.0 and isinstance(require_horizon("T", 3), float)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "text, why",
+    [
+        ("0_05", "without underscores"),
+        ("1_000", "without underscores"),
+        ("\u0663", "ASCII digits 0-9"),
+        ("\uff13.5", "ASCII digits 0-9"),
+        ("0x10", "ASCII digits, a point"),
+        ("", "ASCII digits, a point"),
+    ],
+)
+def test_number_from_text_takes_ascii_numerals_only(text, why):
+    from ntc_design.errors import number_from_text
+
+    with pytest.raises(InputError, match="--radius: ") as err:
+        number_from_text(text, "--radius")
+    assert why in str(err.value)
+
+
+@pytest.mark.parametrize("text, value", [("0.05", 0.05), (" -1e3 ", -1000.0), (".5", 0.5)])
+def test_number_from_text_reads_plain_numbers(text, value):
+    from ntc_design.errors import number_from_text
+
+    assert number_from_text(text, "x") == value

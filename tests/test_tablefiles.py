@@ -78,7 +78,23 @@ def test_csv_round_trip_of_a_random_network(tmp_path):
 
 
 CSV_BAD = [
-    (HEADER + "1,2,1,0,0,0,1,0,0,0\n", ["row 2", "a33", "empty"]),  # a short row
+    (HEADER + "1,2,1,0,0,0,1,0,0,0\n", ["row 2: 10 fields, the header has 11", "short"]),
+    # issue 41 item 9 (c): a short row whose missing field is the optional radius
+    (
+        HEADER[:-1] + ",uncertainty\n1,2,1,0,0,0,1,0,0,0,1,0.1\n2,3,1,0,0,0,1,0,0,0,1\n",
+        ["row 3: 11 fields, the header has 12 (a short row)"],
+    ),
+    ("from,to,a11\n1,2,-1\n\n2,3\n", ["row 4: 2 fields, the header has 3"]),
+    # issue 41 items 9 (d), 14 (b): numbers in ASCII numerals, no underscores
+    ("from,to,a11\n1,2,\u0663\n", ["row 2", "a11 = '\u0663' is not a finite number"]),
+    ("from,to,a11\n1,2,\uff13\n", ["row 2", "a11 = '\uff13' is not a finite number"]),
+    ("from,to,a11\n1,2,0_5\n", ["row 2", "a11 = '0_5' is not a finite number"]),
+    (
+        "from,to,a11,uncertainty\n1,2,-1,\u0660.\u0661\n",
+        ["row 2", "uncertainty = '\u0660.\u0661'", "[0, 1)"],
+    ),
+    ("from,to,a11,uncertainty\n1,2,-1,0_1\n", ["row 2", "uncertainty = '0_1'"]),
+    ("from,to,a11,uncertainty\n1,2,-1,\uff10.\uff11\n", ["row 2", "uncertainty = "]),
     (HEADER + "1,2,1,0,0,0,1,0,0,0,1,9\n", ["row 2", "12 fields", "11"]),  # a long one
     (HEADER + "1,2,1,0,0,0,1,0,0,0,1\n2,1,nan,0,0,0,1,0,0,0,1\n", ["row 3", "a11", "finite"]),
     (HEADER + "1,2,1,0,0,0,x,0,0,0,1\n", ["row 2", "a22", "'x'"]),
@@ -94,7 +110,7 @@ CSV_BAD = [
 @pytest.mark.parametrize("text, needles", CSV_BAD)
 def test_hostile_csv_is_one_line(text, needles, tmp_path, capsys, monkeypatch):
     f = tmp_path / "bad.csv"
-    f.write_text(text)
+    f.write_text(text, encoding="utf-8")
     assert_input_error(["check", f], capsys, monkeypatch, str(f), *needles)
 
 
@@ -260,3 +276,10 @@ def test_mat_bound_counts_declared_sizes_not_a_fixed_cap(tmp_path, monkeypatch):
     _mat_inflated_bytes(f, 8 * 2**20)  # fits: no error
     with pytest.raises(nd.InputError, match=r"needs 7\.6 MiB once loaded"):
         _mat_inflated_bytes(f, 7 * 2**20)
+
+
+def test_csv_blank_lines_and_empty_radii_are_not_short_rows(tmp_path):
+    f = tmp_path / "ok.csv"
+    f.write_text("from,to,a11,uncertainty\n1,2,-0.5,\n\n2,3,0.5,0.125\n", encoding="utf-8")
+    top = nd.load(f)
+    assert top.labels == (1, 2, 3) and top.uncertainty == {(2, 1): 0.125}
