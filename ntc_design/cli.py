@@ -20,6 +20,7 @@ from .cli_base import (
     PeriodOpt,
     app,
     digital_option,
+    flags_named,
     json_text,
     parse_vector,
 )
@@ -120,7 +121,8 @@ def design_cmd(
     if isinstance(top, ExpressionTopology):
         from .timevarying import TimeVaryingDesign
 
-        tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
+        with flags_named(theta="--theta"):
+            tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
         if as_json:
             print(json_text(tv.to_dict()))
         else:
@@ -130,7 +132,8 @@ def design_cmd(
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
-        res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
+        with flags_named(theta="--theta"):
+            res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
     modes = res.modes if isinstance(res, SwitchingDesign) else {None: res}
     uninformed = [k for k, d in modes.items() if not d.has_informed_agents]
     # nothing designed is nothing written
@@ -307,7 +310,7 @@ def certify(
     sampled = digital_option(period, delay)
     if out_path is not None:
         check_output_file(out_path, "--out")
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), flags_named(theta="--theta"):
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
             load(file),
@@ -426,7 +429,8 @@ def robust(
     doc, ver = None, None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the certificate says whether Assumption 2 holds
-        des = design(top, th, margin, thresholds=False)
+        with flags_named(theta="--theta"):
+            des = design(top, th, margin, thresholds=False)
     assert isinstance(des, ProtocolDesign)  # a fixed topology's design
     check_robust_work(des)  # the estimate, before the work (a warning line past a minute)
     with warnings.catch_warnings():

@@ -12,7 +12,7 @@ from typing import Annotated
 import typer
 
 from . import __version__
-from .errors import INT_TEXT, NUMBER_TEXT, InputError, number_from_text, number_rule
+from .errors import INT_TEXT, NUMBER_TEXT, InputError, blame, number_from_text, number_rule
 
 # Everything else loads in the command that needs it: `ntc --help` and a mistyped option
 # answer without importing NumPy, SciPy, SymPy or the library's layers.
@@ -123,6 +123,32 @@ SchedulerOpt = Annotated[
         "(start one with `dask scheduler` and `dask worker ADDRESS`). Default: this machine."
     ),
 ]
+
+
+@contextlib.contextmanager
+def flags_named(**flags: str):
+    """Errors of the library about a field a flag gave name the flag: ``theta: x0
+    overflows`` from :func:`ntc_design.design` is ``--theta: x0 overflows`` (the user
+    typed --theta, not a field called theta).
+
+    Parameters
+    ----------
+    **flags : str
+        Field -> flag, e.g. ``theta="--theta"``.
+
+    Yields
+    ------
+    None
+
+    Raises
+    ------
+    InputError
+        The error inside, its field renamed to the flag.
+    """
+    try:
+        yield
+    except InputError as exc:
+        raise blame(exc, None, flags) from None
 
 
 def parse_vector(text: str, field: str) -> list[float]:

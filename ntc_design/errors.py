@@ -183,6 +183,37 @@ def require_theta(theta, dim: int):
     return th
 
 
+def require_x0(theta, k1) -> None:
+    """Refuse a θ whose Lemma 1 state x0 = k1·θ overflows (k1 = 1 + 2/δ > 1: a θ near the
+    float range passes :func:`require_theta`, then x0 is infinite and only a certificate
+    check far downstream named it, as ``subject.modes.G1.x0``).
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        θ (finite).
+    k1 : float or numpy.ndarray
+        k1, one value or one per instant.
+
+    Raises
+    ------
+    InputError
+        ``theta: ...``, saying the largest |θ_i| that fits.
+    """
+    import numpy as np
+
+    th, k = np.abs(np.asarray(theta, dtype=float)), float(np.max(k1))
+    with np.errstate(over="ignore"):
+        if np.all(np.isfinite(th * k)):
+            return
+    top = float(np.max(th))
+    raise InputError(
+        f"theta: x0 = k1·θ overflows: |θ| up to {top:.4g} times k1 = 1 + 2/δ = {k:.6g} is "
+        f"beyond the float range (about 1.8e308); every |θ_i| must be below "
+        f"{np.finfo(float).max / k:.4g}"
+    )
+
+
 def require_positive(name: str, value, integer: bool = False) -> None:
     """Raise InputError unless ``value`` is a finite positive number (an integer if asked).
 
@@ -490,6 +521,7 @@ __all__ = [
     "require_number",
     "require_positive",
     "require_radius",
+    "require_x0",
 ]
 
 

@@ -2,6 +2,7 @@
 
 import warnings
 
+import numpy as np
 import pytest
 
 import ntc_design as nd
@@ -135,3 +136,17 @@ def test_number_from_text_reads_plain_numbers(text, value):
     from ntc_design.errors import number_from_text
 
     assert number_from_text(text, "x") == value
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "theta, k1, bound",
+    [([1.7e308, 1.0], 1.27609, "1.409e+308"), ([-1e308, 1.0], [1.0, 2.0], "8.988e+307")],
+)
+def test_require_x0_refuses_an_overflowing_target(theta, k1, bound):
+    from ntc_design.errors import require_x0
+
+    with pytest.raises(InputError, match=r"^theta: x0 = k1·θ overflows") as err:
+        require_x0(np.asarray(theta), np.asarray(k1))
+    assert f"must be below {bound}" in str(err.value)
+    require_x0(np.asarray([1e300, 1.0]), np.asarray(k1))  # fits: no error
