@@ -65,7 +65,11 @@ def _ascii_numbers(original):
 
         def check(value):
             if isinstance(value, str) and not pattern.fullmatch(value):
-                raise ValueError(f"{value[:40]!r} is not a number {number_rule(value)}")
+                rule = number_rule(value)
+                if number_class is int:  # '1.5' to --delay: an integer is what is missing
+                    rule = rule if "_" in value or not value.isascii() else "(digits 0-9)"
+                    raise ValueError(f"{value[:40]!r} is not an integer {rule}")
+                raise ValueError(f"{value[:40]!r} is not a number {rule}")
             return value
 
         return TypeAdapter(Annotated[number_class, BeforeValidator(check)])
