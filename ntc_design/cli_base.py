@@ -7,7 +7,7 @@ from __future__ import annotations
 import contextlib
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -72,7 +72,8 @@ def _ascii_numbers(original):
                 raise ValueError(f"{value[:40]!r} is not a number {rule}")
             return value
 
-        return TypeAdapter(Annotated[number_class, BeforeValidator(check)])
+        checked: Any = Annotated[number_class, BeforeValidator(check)]  # a runtime type
+        return TypeAdapter(checked)
 
     return build
 
