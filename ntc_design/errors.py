@@ -6,6 +6,7 @@ import importlib
 import math
 import numbers
 import os
+import re
 import sys
 import types
 import warnings
@@ -65,6 +66,59 @@ def _show(value) -> str:
             return f"an integer of {digits} digits"
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+#: A number as text: ASCII digits only, no underscores (Python's float() and int(), and
+#: pydantic for typed flags, read "0_05" as 5.0 and "٣" as 3).
+NUMBER_TEXT = re.compile(
+    r"\s*[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf(?:inity)?|nan)\s*",
+    re.IGNORECASE | re.ASCII,
+)
+INT_TEXT = re.compile(r"\s*[+-]?[0-9]+\s*", re.ASCII)
+
+
+def number_from_text(text: str, name: str) -> float:
+    """A number written as text (a flag's value, a table cell), in ASCII numerals only.
+
+    Parameters
+    ----------
+    text : str
+        The text.
+    name : str
+        The flag or field named in the message.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Anything but an optional sign, ASCII digits, a decimal point and an exponent
+        (or inf, nan): ``0_05``, ``٣``, ``３`` are refused, not read as 5, 3, 3.
+    """
+    if not NUMBER_TEXT.fullmatch(text):
+        raise InputError(f"{name}: {text[:40]!r} is not a number {number_rule(text)}")
+    return float(text)
+
+
+def number_rule(text: str) -> str:
+    """Why a text is not a number, for a message: what it holds that is not allowed.
+
+    Parameters
+    ----------
+    text : str
+        The text refused.
+
+    Returns
+    -------
+    str
+    """
+    if "_" in text:
+        return "(write it without underscores: ASCII digits, a point, an exponent)"
+    if not text.isascii():
+        return "(write it in ASCII digits 0-9)"
+    return "(ASCII digits, a point, an exponent)"
 
 
 def real_float(name: str, value) -> float:
@@ -128,6 +182,37 @@ def require_theta(theta, dim: int):
     if not np.any(th):
         raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
     return th
+
+
+def require_x0(theta, k1) -> None:
+    """Refuse a θ whose Lemma 1 state x0 = k1·θ overflows (k1 = 1 + 2/δ > 1: a θ near the
+    float range passes :func:`require_theta`, then x0 is infinite and only a certificate
+    check far downstream named it, as ``subject.modes.G1.x0``).
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        θ (finite).
+    k1 : float or numpy.ndarray
+        k1, one value or one per instant.
+
+    Raises
+    ------
+    InputError
+        ``theta: ...``, saying the largest |θ_i| that fits.
+    """
+    import numpy as np
+
+    th, k = np.abs(np.asarray(theta, dtype=float)), float(np.max(k1))
+    with np.errstate(over="ignore"):
+        if np.all(np.isfinite(th * k)):
+            return
+    top = float(np.max(th))
+    raise InputError(
+        f"theta: x0 = k1·θ overflows: |θ| up to {top:.4g} times k1 = 1 + 2/δ = {k:.6g} is "
+        f"beyond the float range (about 1.8e308); every |θ_i| must be below "
+        f"{np.finfo(float).max / k:.4g}"
+    )
 
 
 def require_positive(name: str, value, integer: bool = False) -> None:
@@ -462,8 +547,10 @@ def optional_module(name: str, extra: str, what: str) -> types.ModuleType:
 
 __all__ = [
     "EXTRAS",
+    "INT_TEXT",
     "optional_module",
     "MAX_SEED",
+    "NUMBER_TEXT",
     "MIN_HORIZON",
     "AssumptionWarning",
     "blame",
@@ -473,6 +560,8 @@ __all__ = [
     "format_seconds",
     "interrupt_seen",
     "note_interrupt",
+    "number_from_text",
+    "number_rule",
     "one_line",
     "quote",
     "real_float",
@@ -481,6 +570,7 @@ __all__ = [
     "require_number",
     "require_positive",
     "require_radius",
+    "require_x0",
 ]
 
 

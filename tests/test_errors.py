@@ -2,6 +2,7 @@
 
 import warnings
 
+import numpy as np
 import pytest
 
 import ntc_design as nd
@@ -108,3 +109,44 @@ def test_a_horizon_below_the_time_grids_resolution_is_refused(value):
 def test_the_shortest_horizon_is_accepted():
     assert require_horizon("T", MIN_HORIZON) == MIN_HORIZON
     assert require_horizon("T", 3) == 3.0 and isinstance(require_horizon("T", 3), float)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "text, why",
+    [
+        ("0_05", "without underscores"),
+        ("1_000", "without underscores"),
+        ("\u0663", "ASCII digits 0-9"),
+        ("\uff13.5", "ASCII digits 0-9"),
+        ("0x10", "ASCII digits, a point"),
+        ("", "ASCII digits, a point"),
+    ],
+)
+def test_number_from_text_takes_ascii_numerals_only(text, why):
+    from ntc_design.errors import number_from_text
+
+    with pytest.raises(InputError, match="--radius: ") as err:
+        number_from_text(text, "--radius")
+    assert why in str(err.value)
+
+
+@pytest.mark.parametrize("text, value", [("0.05", 0.05), (" -1e3 ", -1000.0), (".5", 0.5)])
+def test_number_from_text_reads_plain_numbers(text, value):
+    from ntc_design.errors import number_from_text
+
+    assert number_from_text(text, "x") == value
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "theta, k1, bound",
+    [([1.7e308, 1.0], 1.27609, "1.409e+308"), ([-1e308, 1.0], [1.0, 2.0], "8.988e+307")],
+)
+def test_require_x0_refuses_an_overflowing_target(theta, k1, bound):
+    from ntc_design.errors import require_x0
+
+    with pytest.raises(InputError, match=r"^theta: x0 = k1·θ overflows") as err:
+        require_x0(np.asarray(theta), np.asarray(k1))
+    assert f"must be below {bound}" in str(err.value)
+    require_x0(np.asarray([1e300, 1.0]), np.asarray(k1))  # fits: no error

@@ -7,12 +7,12 @@ from __future__ import annotations
 import contextlib
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from .. import __version__
-from ..errors import InputError
+from ..errors import INT_TEXT, NUMBER_TEXT, InputError, blame, number_from_text, number_rule
 
 # Everything else loads in the command that needs it: `ntc --help` and a mistyped option
 # answer without importing NumPy, SciPy, SymPy or the library's layers.
@@ -50,6 +50,38 @@ with contextlib.suppress(AttributeError):  # another typer: its own rendering st
 if hasattr(typer.core.TyperArgument, "_usage_display_name"):  # typer >= 0.2x braces it
     typer.core.TyperArgument._usage_display_name = _usage_name  # type: ignore[method-assign]
     typer.core.TyperArgument.get_error_hint = _error_hint  # type: ignore[method-assign]
+
+
+def _ascii_numbers(original):
+    """Every number flag (``--radius``, ``--seed``, …) read in ASCII numerals only: typer
+    parses them by pydantic, which reads ``0_05`` as 5.0 (Python's number syntax)."""
+
+    def build(number_class, **kwargs):
+        adapter = original(number_class, **kwargs)
+        pattern = INT_TEXT if number_class is int else NUMBER_TEXT
+        if kwargs.get("min") is not None or kwargs.get("max") is not None or kwargs.get("clamp"):
+            return adapter  # not used by ntc's flags: typer's own bounds stay as they are
+        from pydantic import BeforeValidator, TypeAdapter
+
+        def check(value):
+            if isinstance(value, str) and not pattern.fullmatch(value):
+                rule = number_rule(value)
+                if number_class is int:  # '1.5' to --delay: an integer is what is missing
+                    rule = rule if "_" in value or not value.isascii() else "(digits 0-9)"
+                    raise ValueError(f"{value[:40]!r} is not an integer {rule}")
+                raise ValueError(f"{value[:40]!r} is not a number {rule}")
+            return value
+
+        checked: Any = Annotated[number_class, BeforeValidator(check)]  # a runtime type
+        return TypeAdapter(checked)
+
+    return build
+
+
+with contextlib.suppress(AttributeError, ImportError):  # another typer: its own parsing
+    import typer._adapters as _adapters
+
+    _adapters._build_number_adapter = _ascii_numbers(_adapters._build_number_adapter)
 
 app = typer.Typer(
     add_completion=True,
@@ -98,12 +130,42 @@ SchedulerOpt = Annotated[
 ]
 
 
+@contextlib.contextmanager
+def flags_named(**flags: str):
+    """Errors of the library about a field a flag gave name the flag: ``theta: x0
+    overflows`` from :func:`ntc_design.design` is ``--theta: x0 overflows`` (the user
+    typed --theta, not a field called theta).
+
+    Parameters
+    ----------
+    **flags : str
+        Field -> flag, e.g. ``theta="--theta"``.
+
+    Yields
+    ------
+    None
+
+    Raises
+    ------
+    InputError
+        The error inside, its field renamed to the flag.
+    """
+    try:
+        yield
+    except InputError as exc:
+        raise blame(exc, None, flags) from None
+
+
 def parse_vector(text: str, field: str) -> list[float]:
     """``"1,2,-1"`` -> ``[1.0, 2.0, -1.0]``; one clear error otherwise."""
-    try:
-        vals = [float(x) for x in text.replace(" ", "").strip("[]").split(",") if x != ""]
-    except ValueError:
-        raise InputError(f"{field}: expected comma-separated numbers, got {text!r}") from None
+    parts = [x for x in text.replace(" ", "").strip("[]").split(",") if x != ""]
+    if not all(NUMBER_TEXT.fullmatch(x) for x in parts):
+        bad = next(x for x in parts if not NUMBER_TEXT.fullmatch(x))
+        raise InputError(
+            f"{field}: expected comma-separated numbers, got {text!r} ({bad[:40]!r} is not a "
+            f"number {number_rule(bad)})"
+        )
+    vals = [number_from_text(x, field) for x in parts]
     if not vals:
         raise InputError(f"{field}: expected comma-separated numbers, got {text!r}")
     return vals

@@ -19,6 +19,7 @@ from .app import (
     JsonOpt,
     PeriodOpt,
     digital_option,
+    flags_named,
     json_text,
     parse_vector,
 )
@@ -115,7 +116,8 @@ def design_cmd(
     if isinstance(top, ExpressionTopology):
         from ..protocol.timevarying import TimeVaryingDesign
 
-        tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
+        with flags_named(theta="--theta"):
+            tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
         if as_json:
             print(json_text(tv.to_dict()))
         else:
@@ -125,7 +127,8 @@ def design_cmd(
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
-        res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
+        with flags_named(theta="--theta"):
+            res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
     modes = res.modes if isinstance(res, SwitchingDesign) else {None: res}
     uninformed = [k for k, d in modes.items() if not d.has_informed_agents]
     # nothing designed is nothing written
@@ -297,7 +300,7 @@ def certify(
     sampled = digital_option(period, delay)
     if out_path is not None:
         check_output_file(out_path, "--out")
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), flags_named(theta="--theta"):
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
             load(file),

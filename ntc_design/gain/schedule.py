@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import re
+import stat
 from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
@@ -52,7 +53,8 @@ MAX_BYTES = 16 * 2**20
 MAX_VALUE = 1e6
 #: The tail must meet the table's last value to this relative tolerance.
 JOIN_RTOL = 1e-9
-_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d{1,3})?")
+#: ASCII digits only: \d alone also matches "٣" and "３", which float() reads as 3.
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d{1,3})?", re.ASCII)
 
 
 def _number(text: str, where: str) -> float:
@@ -292,15 +294,25 @@ def read_schedule(
         ``FILE: line K: what is wrong``, or a missing tail.
     """
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{field}.schedule: no such file {str(p)!r}")
-    if p.stat().st_size > MAX_BYTES:
+    try:
+        st = p.stat()  # stat, never open: opening a FIFO waits for a writer
+    except OSError as exc:
+        what = "no such file" if isinstance(exc, FileNotFoundError) else "cannot read"
+        raise InputError(f"{field}.schedule: {what} {str(p)!r}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise InputError(f"{field}.schedule: {str(p)!r} is a directory, not a schedule file")
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(
+            f"{field}.schedule: {str(p)!r} is not a regular file (a FIFO, device or socket)"
+        )
+    if st.st_size > MAX_BYTES:
         raise InputError(f"{p}: larger than {MAX_BYTES // 2**20} MB")
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
     meta: dict[str, str] = {}
+    where: dict[str, int] = {}  # the line of each comment field
     ts: list[float] = []
     cs: list[float] = []
     header = False
@@ -311,7 +323,13 @@ def read_schedule(
         if line.startswith("#"):
             key, sep, value = line[1:].partition(":")
             if sep and key.strip() in ("tail", "interpolation"):
+                if key.strip() in meta:  # a second one: which would apply is a guess
+                    raise InputError(
+                        f"{p}: line {k}: a second '# {key.strip()}:' line (line {where[key.strip()]} "
+                        "gave one already)"
+                    )
                 meta[key.strip()] = value.strip()
+                where[key.strip()] = k
             continue
         if not header:
             if [x.strip().lower() for x in line.split(",")] != ["t", "c"]:

@@ -43,6 +43,7 @@ MAX_EXPANDED_NODES = 20_000_000
 COMPILED_YAML_MIN_CHARS = 1 << 20
 
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser where present
+_NUMBER_TAGS = ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float")
 
 
 def read_document(path: str | Path) -> dict[str, Any]:
@@ -222,6 +223,12 @@ def _compose(loader: Any, p: Path) -> Any:
                 tag = resolved.get(key)
                 if tag is None:
                     tag = resolved[key] = loader.resolve(scalar, ev.value, ev.implicit)
+                    if "_" in ev.value and tag in _NUMBER_TAGS:  # YAML 1.1: 0_05 is 5
+                        raise InputError(
+                            f"{p}: line {ev.start_mark.line + 1}: {ev.value[:40]!r} is a number "
+                            "with underscores (YAML 1.1 reads 0_05 as 5, 1_0 as 10); write it "
+                            "without them"
+                        )
             node = scalar(tag, ev.value, ev.start_mark, ev.end_mark, style=ev.style)
             if ev.anchor is not None:
                 anchors[ev.anchor] = node

@@ -22,6 +22,7 @@ the array.
 from __future__ import annotations
 
 import re
+import unicodedata
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -64,26 +65,59 @@ def label_from_text(text: str) -> int | str:
     return int(text) if _CANONICAL_INT.fullmatch(text) else text
 
 
-def check_label_spellings(texts, what: str) -> None:
-    """Refuse two spellings of one number among agent labels (``1`` and ``01``, ``+1``,
-    ``-0``/``0``, ``١``): read as integers they would be the same agent; as written they
-    are two. A user who meant two agents renames one; either way it is bad input.
+def _spelled(t: str) -> str:
+    """A label for a message: as written, with its code points when they are not ASCII
+    (``'é' (U+0065 U+0301)``: two labels that print alike read apart)."""
+    if t.isascii():
+        return repr(t)
+    return f"{t!r} ({' '.join(f'U+{ord(c):04X}' for c in t[:12])})"
+
+
+def check_label_spellings(texts, what: str) -> tuple:
+    """The agent labels as every reader keeps them: text in Unicode NFC (``"e\\u0301"``
+    is ``"é"``), after refusing labels that look the same but are different agents: a
+    label with surrounding spaces (``"a "`` beside ``"a"``), two labels equal in NFC, and
+    two spellings of one number (``1`` and ``01``, ``+1``, ``-0``/``0``, ``١``: read as
+    integers they would be the same agent; as written they are two). A user who meant
+    two agents renames one; either way it is bad input. The one check of every reader
+    (YAML, time-varying YAML, CSV, ``.npz``, ``.mat``).
 
     Parameters
     ----------
-    texts : iterable of str
-        The distinct labels as written.
+    texts : iterable of int or str
+        The distinct labels as written (integers pass as they are).
     what : str
         The file and field, for the message.
+
+    Returns
+    -------
+    tuple
+        The labels in the given order, text in NFC.
 
     Raises
     ------
     InputError
-        Naming both spellings.
+        Naming both labels (or the one with surrounding spaces).
     """
+    out = []
+    forms: dict[str, str] = {}  # NFC, spaces stripped -> the label as written
     seen: dict[int, str] = {}
     for t in texts:
-        t = str(t)
+        if not isinstance(t, str):
+            out.append(t)
+            continue
+        n = t if t.isascii() else unicodedata.normalize("NFC", t)
+        key = n.strip()
+        if key in forms and forms[key] != t:
+            how = "surrounding spaces" if forms[key].strip() == t.strip() else "Unicode form"
+            raise InputError(
+                f"{what}: labels {_spelled(forms[key])} and {_spelled(t)} differ only by "
+                f"{how}: they look like one agent; write each agent's label one way"
+            )
+        forms[key] = t
+        if key != n:
+            raise InputError(f"{what}: label {t!r} has surrounding spaces (write it as {key!r})")
+        out.append(n)
         if len(t) > 40 or not _NUMBER_LIKE.fullmatch(t):
             continue
         try:
@@ -96,6 +130,7 @@ def check_label_spellings(texts, what: str) -> None:
                 "write each agent's label one way (or use names that are not numbers)"
             )
         seen.setdefault(v, t)
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -183,7 +218,7 @@ def read_npz(path: str | Path) -> EdgeListData:
             if len({str(x) for x in labels}) != n:
                 raise bad("labels", "agent labels must be unique")
             if labels_a.dtype.kind == "U":
-                check_label_spellings(labels, f"{src}: labels")
+                labels = check_label_spellings(labels, f"{src}: labels")
             cols, rows, w = arrs["from"], arrs["to"], arrs["weights"]
             name = None
             if "name" in keys:

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from itertools import chain
 from pathlib import Path
 from typing import Any
+from unicodedata import normalize
 
 import numpy as np
 
@@ -286,8 +287,7 @@ def parse_labels(agents: Any, source: str | None) -> tuple[Label, ...]:
             raise field_error(
                 source, "agents", f"duplicated label(s) {', '.join(_q(k) for k in dup[:5])}"
             )
-        check_label_spellings(counts, f"{source or 'topology'}: agents")
-        return tuple(labels)
+        return check_label_spellings(labels, f"{source or 'topology'}: agents")
     raise field_error(source, "agents", "expected a positive count or a non-empty list of labels")
 
 
@@ -413,7 +413,10 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
                     source, f"edges[{k}].{end}", f"expected an agent label, got {_show(lab)}"
                 )
         field = f"edge {_q(e['from'])}->{_q(e['to'])}"
-        j, i = str(e["from"]), str(e["to"])
+        j, i = (
+            normalize("NFC", str(e["from"])),
+            normalize("NFC", str(e["to"])),
+        )  # the labels are kept in NFC
         for end, lab in (("from", j), ("to", i)):
             if lab not in by_key:
                 raise field_error(source, field, f"unknown agent label {_show(lab)} in '{end}'")

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sparse
 
-from ..errors import InputError, format_bytes
+from ..errors import NUMBER_TEXT, InputError, format_bytes
 from ..numerics.memory import available_memory
 from .edgelist import (
     MAX_AGENTS,
@@ -42,7 +42,7 @@ from .edgelist import (
 from .outputs import atomic_path
 
 MAX_CSV_BYTES = 2 * 2**30  # a 10⁶-agent edge list with d = 3 is about 120 MB
-MAX_MAT_BYTES = 2 * 2**30  # the file, and what its variables inflate to
+MAX_MAT_BYTES = 2 * 2**30  # the file (what its variables need is bounded by the memory)
 CSV_MAX_DIM = 100  # 10⁴ weight columns; larger weights belong in .npz or .mat
 MAX_HEADER_CHARS = 2**20
 
@@ -77,51 +77,152 @@ def _no_nul(p: Path) -> None:
             rows += chunk.count(b"\n")
 
 
+#: What loadmat makes of each MATLAB class, bytes per element (4: char, as numpy's UCS-4;
+#: 6 to 15: double, single, int8, uint8, int16, uint16, int32, uint32, int64, uint64).
+_MAT_ITEM_BYTES = {4: 4, 6: 8, 7: 4, 8: 1, 9: 1, 10: 2, 11: 2, 12: 4, 13: 4, 14: 8, 15: 8}
+_MAT_CLASSES = {1: "cell", 2: "struct", 3: "object", 4: "char", 5: "sparse", 6: "double"}
+#: The variables read_mat loads (loadmat skips the others without inflating them).
+_MAT_VARIABLES = ("A", "dim", "labels", "uncertainty")
+#: A variable's tags, flags, dimensions and name come first: this much inflated output is
+#: enough to read them (a name is at most 63 characters, MATLAB's limit; dimensions few).
+_MAT_HEAD = 4096
+
+
+def _mat_subelement(buf: bytes, pos: int, order: str) -> tuple[int, bytes, int] | None:
+    """(type, data, next position) of the MATLAB 5 data element at ``pos`` (the small
+    format packs type and size in one word), or None past the end of ``buf``."""
+    if pos + 8 > len(buf):
+        return None
+    word, nbytes = struct.unpack(order + "II", buf[pos : pos + 8])
+    if word >> 16:  # small data element: 2-byte size, 2-byte type, up to 4 bytes of data
+        size = word >> 16
+        return word & 0xFFFF, buf[pos + 4 : pos + 4 + size], pos + 8
+    end = pos + 8 + nbytes
+    if end > len(buf):
+        return None
+    return word, buf[pos + 8 : end], end + (-nbytes % 8)
+
+
+def _mat_header(head: bytes, order: str) -> tuple[str, int, int, tuple[int, ...], int] | None:
+    """(name, class, nzmax, dimensions, declared element bytes) of a variable from the
+    first bytes of its miMATRIX element, or None when they are not there."""
+    if len(head) < 8:
+        return None
+    kind, total = struct.unpack(order + "II", head[:8])
+    if kind != 14:
+        return None
+    flags = _mat_subelement(head, 8, order)
+    dims = flags and _mat_subelement(head, flags[2], order)
+    name = dims and _mat_subelement(head, dims[2], order)
+    if not (flags and dims and name) or len(flags[1]) < 8:
+        return None
+    word, nzmax = struct.unpack(order + "II", flags[1][:8])
+    count = len(dims[1]) // 4
+    shape = struct.unpack(order + f"{count}i", dims[1][: 4 * count])
+    return name[1].decode("latin-1"), word & 0xFF | (word & 0x800) << 8, nzmax, shape, total
+
+
+def _mat_memory(cls: int, nzmax: int, shape: tuple[int, ...], total: int) -> float:
+    """The bytes loadmat allocates for a variable, from its declared class and sizes (the
+    stored data may be of a smaller type: a double matrix of zeros is stored as bytes)."""
+    complex_ = 2 if cls & 0x80000 else 1
+    cls &= 0xFF
+    if cls == 5:  # sparse: values and row indices per non-zero, a pointer per column
+        cols = shape[1] if len(shape) > 1 else 1
+        return float(nzmax) * (8 * complex_ + 8) + (max(cols, 0) + 1) * 8.0
+    if cls in _MAT_ITEM_BYTES:
+        return float(math.prod(max(x, 0) for x in shape)) * _MAT_ITEM_BYTES[cls] * complex_
+    # a cell, struct or object: a numpy object per element, about 3x its stored header
+    return 3.0 * total
+
+
 def _mat_inflated_bytes(p: Path, limit: float) -> None:
-    """Refuse a MATLAB 5 file whose compressed variables inflate to more than ``limit``
-    bytes (a 3 MB file of zeros can hold a 3 GB matrix), counted by inflating in bounded
-    chunks and keeping nothing."""
+    """Refuse a MATLAB 5 file whose variables, as loaded, need more than ``limit`` bytes by
+    their declared classes and dimensions (a 1.7 MB file of zeros can declare a 1.8 GB
+    matrix), read from each variable's header before its data is inflated; a variable that
+    inflates past its declared size, or declares more than its class and dimensions
+    hold, is refused as corrupt. Only the variables :func:`read_mat` loads count; the
+    others are skipped as loadmat skips them."""
     with open(p, "rb") as fh:
         head = fh.read(128)
         if len(head) < 128 or head[126:128] not in (b"IM", b"MI"):
             return  # not MATLAB 5 (v4 is never compressed; loadmat refuses the rest)
         order = "<" if head[126:128] == b"IM" else ">"
-        total = 0.0
+        need = 0.0
         while tag := fh.read(8):
             if len(tag) < 8:
                 return
             kind, nbytes = struct.unpack(order + "II", tag)
             if kind not in (14, 15):  # not a top-level variable: loadmat refuses the file
                 return
-            if kind == 14:  # miMATRIX, stored as it is
-                total += nbytes
-                fh.seek(nbytes + (-nbytes % 8), os.SEEK_CUR)
-            else:
-                z, left = zlib.decompressobj(), nbytes
-                while left > 0 and not z.eof:
-                    data = fh.read(min(left, 2**20))
-                    if not data:
-                        break
-                    left -= len(data)
-                    while data:
+            start = fh.tell()
+            z = zlib.decompressobj() if kind == 15 else None
+            out = bytearray(tag if z is None else b"")
+            left = nbytes
+            while len(out) < _MAT_HEAD and left > 0:  # the header: a bounded prefix
+                data = fh.read(min(left, 2**16))
+                if not data:
+                    break
+                left -= len(data)
+                if z is None:
+                    out += data
+                    continue
+                try:
+                    out += z.decompress(data, _MAT_HEAD)
+                    while z.unconsumed_tail and len(out) < _MAT_HEAD:
+                        out += z.decompress(z.unconsumed_tail, _MAT_HEAD)
+                except zlib.error as exc:
+                    raise InputError(
+                        f"{p}: not a readable MATLAB file (a compressed variable: {exc})"
+                    ) from None
+                if z.unconsumed_tail:
+                    break  # the header is in: the rest is data
+            info = _mat_header(bytes(out), order)
+            if info is None and len(out) >= _MAT_HEAD:  # loadmat would read on: refuse
+                raise InputError(
+                    f"{p}: not a readable MATLAB file (a variable's header is longer than "
+                    f"{_MAT_HEAD} bytes)"
+                )
+            if info is not None and info[0] in _MAT_VARIABLES:
+                name, cls, nzmax, shape, total = info
+                mem = _mat_memory(cls, nzmax, shape, total)
+                if cls & 0xFF in _MAT_ITEM_BYTES or cls & 0xFF == 5:
+                    if total > mem + _MAT_HEAD:
+                        raise InputError(
+                            f"{p}: {name}: declares {format_bytes(total)} of data for a "
+                            f"{'×'.join(map(str, shape))} array of {format_bytes(mem)} "
+                            "(a corrupt MATLAB file)"
+                        )
+                need += mem
+                if need > limit:
+                    what = _MAT_CLASSES.get(cls & 0xFF, "numeric")
+                    raise InputError(
+                        f"{p}: {name}: a {'×'.join(map(str, shape))} {what} array needs "
+                        f"{format_bytes(mem)} once loaded (from a "
+                        f"{format_bytes(os.path.getsize(p))} file), more than the "
+                        f"{format_bytes(limit)} allowed here (a sixth of the memory available, "
+                        "NTC_AVAILABLE_MEMORY); store a large network as a sparse A or as .npz"
+                    )
+                if z is not None:  # inflate the rest, counting: never past what it declares
+                    got = len(out)
+                    while not z.eof:
+                        data = z.unconsumed_tail or fh.read(min(left, 2**20))
+                        if not z.unconsumed_tail:
+                            left -= len(data)
+                        if not data:
+                            break
                         try:
-                            total += len(z.decompress(data, 2**24))
+                            got += len(z.decompress(data, 2**20))
                         except zlib.error as exc:
                             raise InputError(
                                 f"{p}: not a readable MATLAB file (a compressed variable: {exc})"
                             ) from None
-                        data = z.unconsumed_tail
-                        if total > limit:
-                            break
-                    if total > limit:
-                        break
-                fh.seek(left, os.SEEK_CUR)
-            if total > limit:
-                raise InputError(
-                    f"{p}: its variables inflate to more than {format_bytes(limit)} (from a "
-                    f"{format_bytes(os.path.getsize(p))} file), the limit here; store a large "
-                    "network as a sparse A or as .npz"
-                )
+                        if got > total + 8:
+                            raise InputError(
+                                f"{p}: {name}: inflates past the {format_bytes(total)} it "
+                                "declares (a corrupt MATLAB file)"
+                            )
+            fh.seek(start + nbytes + (-nbytes % 8 if kind == 14 else 0))
 
 
 def _labels_in_order(
@@ -136,8 +237,8 @@ def _labels_in_order(
     rank = np.empty(order.size, dtype=np.int64)
     rank[order] = np.arange(order.size)
     idx = rank[inv]
-    check_label_spellings((str(u) for u in uniq), f"{where}: from/to")
-    labels = tuple(label_from_text(str(uniq[k])) for k in order)
+    texts = check_label_spellings([str(u) for u in uniq], f"{where}: from/to")
+    labels = tuple(label_from_text(texts[k]) for k in order)
     return labels, idx[1::2], idx[0::2]
 
 
@@ -148,6 +249,16 @@ def _long_row(p: Path, fields: int) -> str:
             if len(row) > fields:
                 return f"row {k}: {len(row)} fields, the header has {fields}"
     return "a row is longer than the header"
+
+
+def _short_row(p: Path, fields: int) -> str | None:
+    """The first row with fewer fields than the header, or None (read again, only when
+    the last column has a gap: pandas fills a short row's missing fields, NaN or "")."""
+    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+        for k, row in enumerate(csv.reader(fh), 1):
+            if row and len(row) < fields:  # a blank line is skipped by the parser too
+                return f"row {k}: {len(row)} fields, the header has {fields} (a short row)"
+    return None
 
 
 def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
@@ -242,6 +353,10 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     e = len(table)
     if e > MAX_EDGES:
         raise InputError(f"{p}: more than {MAX_EDGES} rows")
+    last = table[header[-1]]  # a short row leaves NaN in a number column, "" in a text one
+    gap = last.isna().any() or (last.dtype != np.float64 and bool((last == "").any()))
+    if gap and (short := _short_row(p, len(header))):
+        raise InputError(f"{p}: {short}")
     src = table["from"].to_numpy(dtype=str)
     dst = table["to"].to_numpy(dtype=str)
     for name, col in (("from", src), ("to", dst)):
@@ -278,10 +393,8 @@ def _csv_uncertainty(table, p: Path) -> np.ndarray:
     vals = np.char.strip(table["uncertainty"].to_numpy(dtype=str))
     out = np.full(vals.size, np.nan)
     for r in np.flatnonzero(np.char.str_len(vals) > 0).tolist():
-        try:
-            v = float(vals[r])
-        except ValueError:
-            v = math.nan
+        text = str(vals[r])
+        v = float(text) if NUMBER_TEXT.fullmatch(text) else math.nan  # ASCII numerals only
         if not (math.isfinite(v) and 0 <= v < 1):
             raise InputError(
                 f"{p}: row {r + 2}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "
@@ -344,8 +457,7 @@ def _mat_labels(raw: Any, n: int, p: Path) -> tuple:
         raise InputError(f"{p}: labels: {len(out)} labels for {n} agents")
     if len(set(out)) != n:
         raise InputError(f"{p}: labels: agent labels must be unique")
-    check_label_spellings(out, f"{p}: labels")
-    return tuple(label_from_text(x) for x in out)
+    return tuple(label_from_text(x) for x in check_label_spellings(out, f"{p}: labels"))
 
 
 def _scalar_text(a: np.ndarray) -> str:
@@ -377,9 +489,9 @@ def read_mat(path: str | Path) -> EdgeListData:
     from scipy.io import loadmat
 
     p = _bounded(Path(path), MAX_MAT_BYTES)
-    # loadmat holds the inflated variables, then A is copied to triplets: a third of the
-    # memory share every size check allows
-    _mat_inflated_bytes(p, min(MAX_MAT_BYTES, available_memory() / 6))
+    # loadmat holds the variables, then A is copied to triplets: a third of the memory
+    # share every size check allows, by what the variables declare (not by a fixed cap)
+    _mat_inflated_bytes(p, available_memory() / 6)
     try:
         doc = loadmat(p, variable_names=["A", "dim", "labels", "uncertainty"], mat_dtype=False)
     except Exception as exc:  # noqa: BLE001 - whatever a malformed file raises inside scipy
@@ -436,7 +548,8 @@ def read_mat(path: str | Path) -> EdgeListData:
 
 def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
     """The ``uncertainty`` variable: an N×N matrix whose (i, j) entry is edge j -> i's
-    radius ρ (0 or NaN: none given); a value where there is no edge is refused."""
+    radius ρ (0: none given); a value where there is no edge is refused, and so is NaN
+    (as in YAML and CSV: it used to read as none given, the --radius in its place)."""
     if u is None:
         return None
     a = np.asarray(u.toarray() if hasattr(u, "toarray") else u)
@@ -445,7 +558,14 @@ def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
             f"{p}: uncertainty: expected a numeric {n}×{n} matrix (one radius per edge)"
         )
     a = a.astype(float)
-    has = ~np.isnan(a) & (a != 0)
+    nan = np.argwhere(np.isnan(a))
+    if nan.size:
+        i, j = (int(x) + 1 for x in nan[0])
+        raise InputError(
+            f"{p}: uncertainty({i}, {j}): NaN is not a radius (0 for none given, then "
+            "--radius applies)"
+        )
+    has = a != 0
     edge = np.zeros((n, n), dtype=bool)
     edge[rows, cols] = True
     stray = np.argwhere(has & ~edge)
@@ -460,7 +580,7 @@ def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
             f"{p}: uncertainty({rows[k] + 1}, {cols[k] + 1}): the radius must be in [0, 1), "
             f"got {vals[k]:g}"
         )
-    return np.where(has[rows, cols], vals, np.nan)
+    return np.where(has[rows, cols], vals, np.nan)  # NaN here: none given, for the caller
 
 
 def write_mat(path: str | Path, arrays: dict[str, Any]) -> None:

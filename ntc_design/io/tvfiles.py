@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
+from unicodedata import normalize
 
 import numpy as np
 import sympy as sp
@@ -268,7 +269,10 @@ def parse_time_varying(doc: dict[str, Any], source: str | None = None) -> TimeVa
     for k, e in enumerate(edges_doc):
         if not isinstance(e, dict) or set(e) != {"from", "to", "weight"}:
             raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
-        j, i = str(e["from"]), str(e["to"])
+        j, i = (
+            normalize("NFC", str(e["from"])),
+            normalize("NFC", str(e["to"])),
+        )  # the labels are kept in NFC
         field = f"edge {j}->{i}"
         for end, lab in (("from", j), ("to", i)):
             if lab not in by_key:

@@ -310,6 +310,18 @@ def numbers_read_differently(text: str) -> bool:
         signed &= ~(word[np.maximum(lead - 2, 0)] | (p2 == 46)) | (lead < 2)
         if np.any(free1 | signed):
             return True
+    # an underscore between digits in a number (not in a word such as n1_2): yaml-rs and
+    # PyYAML both read 0_05 as 5; the composer refuses it, naming the line
+    u_at = np.flatnonzero((b[1:-1] == 95) & digit[:-2] & digit[2:]) + 1
+    if u_at.size:
+        back = u_at[:, None] - np.arange(1, _WINDOW + 1)[None, :]
+        ch = b[np.maximum(back, 0)]
+        inside = (back >= 0) & (((ch >= 48) & (ch <= 57)) | (ch == 46) | (ch == 95))
+        length = np.cumprod(inside, axis=1).astype(bool).sum(axis=1)
+        start = u_at - length - 1  # the character before the number's digits
+        led_by_word = (start >= 0) & word[np.maximum(start, 0)]
+        if np.any(~led_by_word | (length >= _WINDOW)):
+            return True
     # an exponent (d e [+-]? d) whose mantissa has no dot since the number began
     e_at = np.flatnonzero((low[1:-1] == 101) & digit[:-2] & (digit[2:] | sign[2:])) + 1
     if e_at.size:

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sparse
 
-from ..errors import require_positive, require_theta, warn_user
+from ..errors import require_positive, require_theta, require_x0, warn_user
 from ..io.tablefiles import write_mat
 from ..model import SwitchingTopology, Topology, block_coo
 from ..numerics.linalg import require_dense
@@ -537,6 +537,7 @@ def design_topology(
     ant = top.degree_sums[2]
     b = {i: ant[i].copy() for i in informed}
     k1 = 1.0 + 2.0 / dl
+    require_x0(th, k1)
     x0 = k1 * th
     u = input_vector(top, b, dl, x0)
     res, crit = _residual_and_thresholds(top, b, dl, u, th, thresholds, notes)

@@ -10,7 +10,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import require_theta
+from ..errors import require_theta, require_x0
 from ..model import antagonistic_in_weight, positive_negative_reachable
 from ..model.timevarying import ExpressionTopology
 from ..numerics.linalg import DEF_RTOL, pd
@@ -243,6 +243,7 @@ def lemma1_batch(
         holds[:] = False
         dl = np.full(k_n, float(margin))
     k1 = 1.0 + 2.0 / dl
+    require_x0(np.asarray(theta, dtype=float), k1)
     x0 = k1[:, None] * np.asarray(theta, dtype=float)[None, :]
     bfull = np.zeros((k_n, n, d, d))
     inf = list(st.informed)

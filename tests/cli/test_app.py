@@ -45,3 +45,37 @@ def test_json_text_writes_numpy_values_as_json():
 def test_version_is_printed_and_exits_zero(capsys, monkeypatch):
     code, out, _ = run_cli(["--version"], capsys, monkeypatch)
     assert code == 0 and out.strip() == f"ntc {__version__}"
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "args, needles",
+    [
+        # typed flags: typer parses them by pydantic, which read 0_05 as 5.0
+        (["robust", "G1", "--theta", "1,2,-1", "--radius", "0_05"], ["--radius", "'0_05'"]),
+        (["robust", "G1", "--theta", "1,2,-1", "--radius", "0.0_5"], ["--radius", "underscores"]),
+        (["robust", "G1", "--theta", "1,2,-1", "--radius", "\u0660.\u0665"], ["--radius", "ASCII"]),
+        (["certify", "G1", "--theta", "1,2,-1", "--margin", "1_0"], ["--margin", "'1_0'"]),
+        (["generate", "--n", "1_0", "--d", "2", "--out", "OUT"], ["--n", "'1_0'"]),
+        (["generate", "--n", "\uff11\uff10", "--d", "2", "--out", "OUT"], ["--n", "ASCII"]),
+        # text vectors
+        (["certify", "G1", "--theta", "1,2,-1_0"], ["--theta", "'-1_0'", "underscores"]),
+        (["certify", "G1", "--theta", "1,2,\u0663"], ["--theta", "ASCII digits"]),
+    ],
+    ids=lambda v: " ".join(v[-2:]) if isinstance(v, list) and len(v) > 3 else None,
+)
+def test_number_flags_take_ascii_numerals_only(args, needles, tmp_path, capsys, monkeypatch):
+    from tests.cli_helpers import assert_input_error
+    from tests.conftest import EXAMPLES
+
+    args = [{"G1": EXAMPLES / "g1.yaml", "OUT": tmp_path / "n.npz"}.get(a, a) for a in args]
+    assert_input_error(args, capsys, monkeypatch, *needles)
+    assert not (tmp_path / "n.npz").exists()
+
+
+@pytest.mark.parametrize("text", ["0.05", " 5e-2", "+.5", "1E+2", "7"])
+def test_number_flags_still_read_plain_numbers(text):
+    from typer import _adapters  # patched by cli_base: the ASCII check before pydantic's
+
+    adapter = _adapters._build_number_adapter(float, min=None, max=None, clamp=None)
+    assert adapter.validate_python(text) == float(text)

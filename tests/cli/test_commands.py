@@ -3,11 +3,13 @@
 import copy
 import json
 
+import numpy as np
 import pytest
 
 import ntc_design as nd
 from ntc_design.certify import verify
 from tests.cli_helpers import assert_input_error, run_cli
+from tests.conftest import EXAMPLES
 
 
 def test_certify_out_is_written_only_on_success(tmp_path, examples, capsys, monkeypatch):
@@ -357,3 +359,30 @@ def test_design_with_informed_agents_still_exits_0(examples, capsys, monkeypatch
         ["design", examples / "g3.yaml", "--theta", "1,2,-1"], capsys, monkeypatch
     )
     assert code == 0, err  # Assumption 2 fails in G3, but U is not empty: a design exists
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("command", ["design", "certify", "robust"])
+def test_theta_that_overflows_x0_names_the_flag(command, capsys, monkeypatch):
+    from tests.cli_helpers import assert_input_error
+
+    # k1 = 1 + 2/δ = 1.27609 for G1: 1.7e308·k1 is beyond the float range (it passed as
+    # θ, then the certificate check named 'subject.modes.G1.x0')
+    args = [command, EXAMPLES / "g1.yaml", "--theta", "1.7e308,2,-1"]
+    args += ["--radius", "0.01"] if command == "robust" else []
+    line = assert_input_error(
+        args,
+        capsys,
+        monkeypatch,
+        "error: --theta: x0 = k1·θ overflows",
+        "k1 = 1 + 2/δ = 1.27609",
+        "every |θ_i| must be below 1.409e+308",
+    )
+    assert "subject" not in line
+
+
+def test_theta_just_below_the_x0_bound_designs(capsys, monkeypatch):
+    import ntc_design as nd
+
+    d = nd.design(nd.load(EXAMPLES / "g1.yaml"), [1.4e308, 2, -1])
+    assert np.isfinite(d.x0).all() and d.x0[0] == pytest.approx(1.4e308 * d.k1)

@@ -125,3 +125,54 @@ def test_schedule_checks_say_the_tail_conditions_in_words(c, tail, ok, words):
     name, holds, detail = schedule_checks({"t": [0, 1], "c": c, "tail": tail})[-1]
     assert (name, holds) == ("gain schedule: tail admissible", ok)
     assert detail == f"{words} ({tail})"
+
+
+def _schedule_path(tmp_path, kind: str):
+    """A ``--gain`` schedule path that is not a readable table: a folder, a FIFO (opening
+    it would wait for a writer), a device, or a file with a fault on a named line."""
+    import os
+
+    p = tmp_path / "s.csv"
+    if kind == "folder":
+        p.mkdir()
+    elif kind == "fifo":
+        os.mkfifo(p)
+    elif kind == "device":
+        p.symlink_to("/dev/null")
+    elif kind == "two-tails":
+        p.write_text("# tail: 1/(1+t)\n# tail: 2/(1+t)\nt,c\n0,1\n1,0.5\n", encoding="utf-8")
+    elif kind == "arabic-digit":
+        p.write_text("# tail: 1/(1+t)\nt,c\n0,1\n\u0661,0.5\n", encoding="utf-8")
+    elif kind == "full-width-digit":
+        p.write_text("# tail: 1/(1+t)\nt,c\n0,1\n1,0.\uff15\n", encoding="utf-8")
+    return p
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "kind, needles",
+    [
+        ("missing", ["--gain.schedule: no such file"]),
+        ("folder", ["--gain.schedule:", "is a directory"]),
+        ("fifo", ["--gain.schedule:", "is not a regular file"]),
+        ("device", ["--gain.schedule:", "is not a regular file"]),
+        ("two-tails", ["line 2: a second '# tail:' line (line 1 gave one already)"]),
+        ("arabic-digit", ["line 4: t: expected a number, got '\u0661'"]),
+        ("full-width-digit", ["line 4: c: expected a number"]),
+    ],
+    ids=lambda v: v if isinstance(v, str) else None,
+)
+def test_cli_schedule_file_faults_named(kind, needles, tmp_path, capsys, monkeypatch):
+    from tests.conftest import EXAMPLES
+
+    p = _schedule_path(tmp_path, kind)
+    args = ["certify", EXAMPLES / "g1.yaml", "--theta", "1,2,-1", "--gain", p]
+    line = assert_input_error(args, capsys, monkeypatch, str(p), *needles)
+    assert "no such file" not in line or kind == "missing"
+
+
+def test_one_tail_line_reads(tmp_path):
+    p = tmp_path / "s.csv"
+    p.write_text("# tail: 0.5/(1+t)\n# interpolation: linear\nt,c\n0,1\n1,0.25\n", encoding="utf-8")
+    g = read_schedule(p)
+    assert g.tail == "0.5/(1+t)" and g.c.tolist() == [1.0, 0.25]

@@ -62,3 +62,26 @@ def test_type_name_says_what_a_value_is():
     assert [type_name(x) for x in (None, 1, "a", [1], {"k": 1})] == [
         "nothing", "int", "str", "list", "dict",
     ]  # fmt: skip
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("value", ["0_05", "-1_0", "1_000.5", "1_000"])
+@pytest.mark.parametrize("big", [False, True], ids=["small", "compiled-reader-size"])
+def test_yaml_numbers_with_underscores_are_refused(value, big, tmp_path):
+    # YAML 1.1 (PyYAML) and yaml-rs (past COMPILED_YAML_MIN_CHARS) read 0_05 as 5, -1_0
+    # as -10; a label such as n1_2 stays text (the last line)
+    pad = "# " + "x" * 78 + "\n"
+    f = tmp_path / "u.yaml"
+    f.write_text(
+        f"a: 1\nb: {value}\nc: n1_2\n"
+        + (pad * (documents.COMPILED_YAML_MIN_CHARS // 80 + 1) if big else ""),
+        encoding="utf-8",
+    )
+    with pytest.raises(InputError, match=f"line 2: '{value}' is a number with underscores"):
+        read_document(f)
+
+
+def test_yaml_text_with_underscores_stays_text(tmp_path):
+    f = tmp_path / "u.yaml"
+    f.write_text('a: "0_05"\nb: my_name\nc: 0.05\nd: n1_2\n', encoding="utf-8")
+    assert read_document(f) == {"a": "0_05", "b": "my_name", "c": 0.05, "d": "n1_2"}

@@ -52,3 +52,78 @@ def test_bad_npz_gives_one_line(tmp_path, capsys, monkeypatch):
     w[3, 0, 1] += 1.0
     np.savez(asym, **(good | {"weights": w}))
     assert_input_error(["check", asym], capsys, monkeypatch, "not symmetric")
+
+
+NFC_E, NFD_E = "\u00e9", "e\u0301"  # "é" as one code point and as e + combining accent
+
+
+def _label_files(tmp_path, first: str, second: str):
+    """The same two-agent network with labels ``first`` and ``second`` (edge first ->
+    second) in each format that carries labels: YAML, CSV, .npz and .mat."""
+    import json
+
+    from ntc_design.io.edgelist import write_npz
+    from scipy.io import savemat
+
+    yml = tmp_path / "net.yaml"  # JSON is YAML: the labels exactly as written
+    yml.write_text(
+        json.dumps(
+            {
+                "dim": 1,
+                "agents": [first, second],
+                "edges": [{"from": first, "to": second, "weight": [[-1]]}],
+            }
+        ),
+        encoding="utf-8",
+    )
+    csv = tmp_path / "net.csv"
+    csv.write_text(f"from,to,a11\n{first},x,-1\nx,{second},1\n", encoding="utf-8")
+    npz = tmp_path / "net.npz"
+    write_npz(npz, [first, second], 1, np.array([1]), np.array([0]), -np.ones((1, 1, 1)))
+    mat = tmp_path / "net.mat"
+    labels = np.array([first, second], dtype=object)
+    savemat(mat, {"A": np.array([[0.0, 0], [-1, 0]]), "dim": 1.0, "labels": labels})
+    return {"yaml": yml, "csv": csv, "npz": npz, "mat": mat}
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "fmt, first, second, needles",
+    [
+        (fmt, NFC_E, NFD_E, ["U+00E9", "U+0065 U+0301", "differ only by Unicode form"])
+        for fmt in ("yaml", "csv", "npz", "mat")
+    ]
+    + [
+        (fmt, "a", "a ", ["'a'", "'a '", "differ only by surrounding spaces"])
+        for fmt in ("yaml", "npz", "mat")  # CSV fields are stripped: "a " is the agent a
+    ]
+    + [
+        (fmt, "b", " a", ["label ' a' has surrounding spaces", "write it as 'a'"])
+        for fmt in ("yaml", "npz", "mat")
+    ],
+    ids=lambda v: v if isinstance(v, str) and v.isascii() and v.strip() == v else None,
+)
+def test_look_alike_labels_are_refused(fmt, first, second, needles, tmp_path, capsys, monkeypatch):
+    f = _label_files(tmp_path, first, second)[fmt]
+    assert_input_error(["check", f], capsys, monkeypatch, str(f), *needles)
+
+
+@pytest.mark.parametrize("fmt", ["yaml", "csv", "npz", "mat"])
+def test_labels_are_kept_in_nfc(fmt, tmp_path):
+    import ntc_design as nd
+
+    top = nd.load(_label_files(tmp_path, NFD_E, "z")[fmt])
+    assert NFC_E in top.labels and NFD_E not in top.labels  # one agent, spelled in NFC
+
+
+def test_yaml_edges_find_an_nfc_label_written_in_nfd(tmp_path):
+    import ntc_design as nd
+
+    f = tmp_path / "net.yaml"
+    f.write_text(
+        f'{{"dim": 1, "agents": ["{NFC_E}", "z"], '
+        f'"edges": [{{"from": "{NFD_E}", "to": "z", "weight": [[-1]]}}]}}',
+        encoding="utf-8",
+    )
+    top = nd.load(f)
+    assert top.labels == (NFC_E, "z") and len(top.edges) == 1

@@ -78,7 +78,23 @@ def test_csv_round_trip_of_a_random_network(tmp_path):
 
 
 CSV_BAD = [
-    (HEADER + "1,2,1,0,0,0,1,0,0,0\n", ["row 2", "a33", "empty"]),  # a short row
+    (HEADER + "1,2,1,0,0,0,1,0,0,0\n", ["row 2: 10 fields, the header has 11", "short"]),
+    # issue 41 item 9 (c): a short row whose missing field is the optional radius
+    (
+        HEADER[:-1] + ",uncertainty\n1,2,1,0,0,0,1,0,0,0,1,0.1\n2,3,1,0,0,0,1,0,0,0,1\n",
+        ["row 3: 11 fields, the header has 12 (a short row)"],
+    ),
+    ("from,to,a11\n1,2,-1\n\n2,3\n", ["row 4: 2 fields, the header has 3"]),
+    # issue 41 items 9 (d), 14 (b): numbers in ASCII numerals, no underscores
+    ("from,to,a11\n1,2,\u0663\n", ["row 2", "a11 = '\u0663' is not a finite number"]),
+    ("from,to,a11\n1,2,\uff13\n", ["row 2", "a11 = '\uff13' is not a finite number"]),
+    ("from,to,a11\n1,2,0_5\n", ["row 2", "a11 = '0_5' is not a finite number"]),
+    (
+        "from,to,a11,uncertainty\n1,2,-1,\u0660.\u0661\n",
+        ["row 2", "uncertainty = '\u0660.\u0661'", "[0, 1)"],
+    ),
+    ("from,to,a11,uncertainty\n1,2,-1,0_1\n", ["row 2", "uncertainty = '0_1'"]),
+    ("from,to,a11,uncertainty\n1,2,-1,\uff10.\uff11\n", ["row 2", "uncertainty = "]),
     (HEADER + "1,2,1,0,0,0,1,0,0,0,1,9\n", ["row 2", "12 fields", "11"]),  # a long one
     (HEADER + "1,2,1,0,0,0,1,0,0,0,1\n2,1,nan,0,0,0,1,0,0,0,1\n", ["row 3", "a11", "finite"]),
     (HEADER + "1,2,1,0,0,0,x,0,0,0,1\n", ["row 2", "a22", "'x'"]),
@@ -94,7 +110,7 @@ CSV_BAD = [
 @pytest.mark.parametrize("text, needles", CSV_BAD)
 def test_hostile_csv_is_one_line(text, needles, tmp_path, capsys, monkeypatch):
     f = tmp_path / "bad.csv"
-    f.write_text(text)
+    f.write_text(text, encoding="utf-8")
     assert_input_error(["check", f], capsys, monkeypatch, str(f), *needles)
 
 
@@ -127,6 +143,14 @@ def _mat(path, **variables):
             {"A": np.zeros((4, 4)), "dim": 2.0, "labels": np.array([1.0, 2.0])},
             ["labels", "strings"],
         ),
+        (
+            {
+                "A": np.array([[0.0, -1.0], [0.0, 0.0]]),
+                "dim": 1.0,
+                "uncertainty": np.array([[0.0, np.nan], [0.0, 0.0]]),
+            },
+            ["uncertainty(1, 2)", "NaN is not a radius"],
+        ),
     ],
     ids=[
         "no-A",
@@ -140,6 +164,7 @@ def _mat(path, **variables):
         "huge",
         "dup-labels",
         "num-labels",
+        "nan-radius",
     ],
 )
 def test_hostile_mat_is_one_line(variables, needles, tmp_path, capsys, monkeypatch):
@@ -152,3 +177,109 @@ def test_not_a_mat_file_is_one_line(tmp_path, capsys, monkeypatch):
     f = tmp_path / "x.mat"
     f.write_bytes(b"MATLAB 5.0 MAT-file" + b"\x00" * 200)
     assert_input_error(["check", f], capsys, monkeypatch, str(f), "not a readable MATLAB file")
+
+
+def _mat_variable(name: str, cls: int, shape, data: bytes, declared: int | None = None) -> bytes:
+    """One compressed MATLAB 5 variable (miCOMPRESSED around miMATRIX) of class ``cls``
+    and dimensions ``shape`` holding ``data`` as miUINT8; ``declared`` overrides the
+    miMATRIX size (a lying header)."""
+    import struct
+    import zlib
+
+    def element(kind: int, payload: bytes) -> bytes:
+        return struct.pack("<II", kind, len(payload)) + payload + b"\0" * (-len(payload) % 8)
+
+    body = (
+        element(6, struct.pack("<II", cls, 0))  # array flags: the class, nzmax 0
+        + element(5, struct.pack(f"<{len(shape)}i", *shape))
+        + element(1, name.encode())
+        + element(2, data)
+    )
+    size = len(body) if declared is None else declared
+    packed = zlib.compress(struct.pack("<II", 14, size) + body)
+    return struct.pack("<II", 15, len(packed)) + packed
+
+
+def _mat_file(path, *variables: bytes):
+    import struct
+
+    head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + b"\0" * 8 + struct.pack("<H", 0x0100) + b"IM"
+    path.write_bytes(head + b"".join(variables))
+    return path
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "variables, memory, needles",
+    [
+        # the issue's file: a double A declared 15000×15000 (1.8 GB loaded) from a tiny file
+        (
+            [_mat_variable("A", 6, (15000, 15000), b"\0" * 4096)],
+            "6G",
+            ["A: a 15000×15000 double array needs 1.7 GiB once loaded", "the 1.0 GiB allowed"],
+        ),
+        # the bound follows the memory: 7.6 MiB of doubles past a sixth of 30M
+        (
+            [_mat_variable("A", 6, (1000, 1000), b"\0" * 64)],
+            "30M",
+            ["A: a 1000×1000 double array needs 7.6 MiB", "the 5.0 MiB allowed"],
+        ),
+        # two variables read_mat loads: their sum counts (4 MiB + 4 MiB past 7 MiB)
+        (
+            [
+                _mat_variable("A", 6, (724, 724), b"\0" * 64),
+                _mat_variable("uncertainty", 6, (724, 724), b"\0" * 64),
+            ],
+            "42M",
+            ["uncertainty: a 724×724 double array needs 4.0 MiB", "the 7.0 MiB allowed"],
+        ),
+        # a header that declares more data than its class and shape hold
+        (
+            [_mat_variable("A", 6, (2, 2), b"\0" * 64, declared=50_000)],
+            "6G",
+            ["A: declares 48.8 KiB of data for a 2×2 array of 32 B", "corrupt"],
+        ),
+        # data that inflates past what the header declares
+        (
+            [_mat_variable("A", 8, (10_000, 10_000), b"\0" * 200_000, declared=100)],
+            "6G",
+            ["A: inflates past the 100 B it declares", "corrupt"],
+        ),
+    ],
+    ids=["bomb-1.8GB", "by-memory", "summed", "declares-more", "inflates-more"],
+)
+def test_hostile_mat_sizes_refused_before_loading(
+    variables, memory, needles, tmp_path, capsys, monkeypatch
+):
+    import scipy.io
+
+    monkeypatch.setenv("NTC_AVAILABLE_MEMORY", memory)
+
+    def no_load(*args, **kwargs):  # refused before loadmat allocates anything
+        raise AssertionError("loadmat called")
+
+    monkeypatch.setattr(scipy.io, "loadmat", no_load)
+    f = _mat_file(tmp_path / "bomb.mat", *variables)
+    assert f.stat().st_size < 10_000
+    assert_input_error(["check", f], capsys, monkeypatch, str(f), *needles)
+
+
+def test_mat_bound_counts_declared_sizes_not_a_fixed_cap(tmp_path, monkeypatch):
+    from ntc_design.io.tablefiles import _mat_inflated_bytes
+
+    # 1000×1000 doubles: 7.6 MiB loaded; a skipped variable (not one read_mat loads) is free
+    f = _mat_file(
+        tmp_path / "m.mat",
+        _mat_variable("A", 6, (1000, 1000), b"\0" * 64),
+        _mat_variable("other", 6, (10**5, 10**5), b"\0" * 64),
+    )
+    _mat_inflated_bytes(f, 8 * 2**20)  # fits: no error
+    with pytest.raises(nd.InputError, match=r"needs 7\.6 MiB once loaded"):
+        _mat_inflated_bytes(f, 7 * 2**20)
+
+
+def test_csv_blank_lines_and_empty_radii_are_not_short_rows(tmp_path):
+    f = tmp_path / "ok.csv"
+    f.write_text("from,to,a11,uncertainty\n1,2,-0.5,\n\n2,3,0.5,0.125\n", encoding="utf-8")
+    top = nd.load(f)
+    assert top.labels == (1, 2, 3) and top.uncertainty == {(2, 1): 0.125}

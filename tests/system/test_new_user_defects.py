@@ -315,7 +315,13 @@ def test_a_mat_decompression_bomb_is_refused_before_inflating(tmp_path, capsys, 
     p = tmp_path / "bomb.mat"
     sio.savemat(p, {"A": np.zeros((1500, 1500)), "dim": 1.0}, do_compression=True)
     assert p.stat().st_size < 100_000  # 18 MB of zeros in a small file
-    assert_input_error(["check", p], capsys, monkeypatch, "inflate to more than 10.0 MiB")
+    assert_input_error(
+        ["check", p],
+        capsys,
+        monkeypatch,
+        "A: a 1500×1500 double array needs 17.2 MiB",
+        "10.0 MiB allowed",
+    )
 
 
 def test_switching_files_take_csv_and_mat_modes(tmp_path):

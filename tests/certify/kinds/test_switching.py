@@ -23,3 +23,13 @@ def test_switching_set_symmetric_parts_and_common_p(examples):
     assert cert["results"]["common_lyapunov"]["structure"] == "identity"
     ids = [c["id"] for c in cert["claims"]]
     assert "P_common ≻ 0" in ids and sum("P_common·L_B" in i for i in ids) == 3
+
+
+def test_weight_bound_is_the_largest_entry_of_any_mode(examples):
+    from ntc_design.certify.kinds.switching import weight_bound
+
+    sd = nd.design(nd.load(examples / "switching.yaml"), THETA)
+    loop = max(
+        float(np.max(np.abs(a))) for m in sd.switching.modes.values() for a in m.weights.values()
+    )
+    assert weight_bound(sd) == loop > 0  # from the (E, d, d) arrays, no loop over edges
