@@ -120,13 +120,13 @@ def simulate(
     from ..reports.terminal import Progress, out
     from ..simulate import SimulationDiverged
     from ..simulate import simulate as run
+    from ..simulate.options import MonteCarlo, check_workers
     from ..simulate.scenario import (
         check_output,
         load_scenario,
         result_output_bytes,
         write_outputs,
     )
-    from ..simulate.spec import MonteCarlo, check_workers
     from ..sweep.engines import DaskEngine
 
     given = {
@@ -602,7 +602,7 @@ def reproduce(
         raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
     from ..errors import MAX_SEED, require_int, require_positive
     from ..io.outputs import check_output_folder
-    from ..simulate.spec import check_workers
+    from ..simulate.options import check_workers
 
     # each flag checked and named before the run (not as the scenario field it becomes)
     require_positive("--horizon", t_end)

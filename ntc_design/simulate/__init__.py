@@ -6,16 +6,9 @@ from .implicit import ImplicitSolver, SolverCache
 from .moments import Moments, exact_moments
 from .montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
 from .noise import NoiseModel
+from .options import MonteCarlo, Noise, SaveAt, Stepping, UniformInitial
 from .result import SimulationDiverged, SimulationResult, path_spread
-from .spec import (
-    SCENARIO_KEYS,
-    MonteCarlo,
-    Noise,
-    SaveAt,
-    SimulationSpec,
-    Stepping,
-    UniformInitial,
-)
+from .spec import SCENARIO_KEYS, SimulationSpec
 from .system import ModeSystem, mode_system
 
 __all__ = [

@@ -19,8 +19,8 @@ LAYERS = 1024
 # R (the base layer's edge) and V (every layer's area), solved to 25 digits so that the
 # layers close at 0: Σ-construction x_1 = R, x_{i+1} = f⁻¹(V/x_i + f(x_i)), f(0) reached
 # at layer 1023 exactly (f(x) = exp(−x²/2)).
-_R = "4.038849846109504522714423"
-_V = "0.001226324646353088072885371"
+R_TEXT = "4.038849846109504522714423"
+V_TEXT = "0.001226324646353088072885371"
 
 
 def exact_tables(digits: int = 40) -> list:
@@ -42,7 +42,7 @@ def exact_tables(digits: int = 40) -> list:
     from mpmath import mp, mpf  # sympy's dependency; only for this check
 
     with mp.workdps(digits):
-        r, v = mpf(_R), mpf(_V)
+        r, v = mpf(R_TEXT), mpf(V_TEXT)
         x = [v / mp.exp(-r * r / 2), r]
         for _ in range(2, LAYERS):
             x.append(mp.sqrt(-2 * mp.log(v / x[-1] + mp.exp(-(x[-1] ** 2) / 2))))
@@ -401,4 +401,4 @@ ZIG_X = np.array(
 ZIG_R = ZIG_X[1:] / ZIG_X[:-1]
 
 
-__all__ = ["LAYERS", "ZIG_R", "ZIG_X", "exact_tables"]
+__all__ = ["LAYERS", "R_TEXT", "V_TEXT", "ZIG_R", "ZIG_X", "exact_tables"]

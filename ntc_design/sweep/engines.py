@@ -24,7 +24,7 @@ from typing import Any
 
 from ..errors import InputError, optional_module
 from ..simulate.montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
-from ..simulate.spec import check_workers
+from ..simulate.options import check_workers
 
 RETRIES = 3  # re-runs of a task that raised (a lost worker is re-scheduled regardless)
 CONNECT_TIMEOUT = 30.0  # seconds to reach a scheduler (generous: a loaded scheduler is slow)

@@ -13,7 +13,7 @@ from ..errors import InputError
 from ..simulate import SimulationSpec
 from ..simulate.driver import AnyTopology
 from .deadline import CHECK_PATHS, ScheduleTuneResult, tune_schedule
-from .optimal import DEFAULT_MAX_GAIN
+from .problem import DEFAULT_MAX_GAIN
 from .result import TuneResult
 from .run import MAX_EVALUATIONS, tune_power
 

@@ -13,7 +13,7 @@ from ..model import TimeVaryingTopology
 from ..model.timevarying import ExpressionTopology
 from ..simulate import SimulationSpec, simulate
 from ..simulate.driver import AnyTopology
-from ..simulate.spec import MonteCarlo, SaveAt, Stepping
+from ..simulate.options import MonteCarlo, SaveAt, Stepping
 from .family import PowerGain
 
 #: What the written scenario switches to when its own Euler–Maruyama grid is unstable

@@ -40,7 +40,7 @@ from ..simulate.driver import (
     sampled_grid,
 )
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
-from ..simulate.spec import SaveAt
+from ..simulate.options import SaveAt
 from ..simulate.system import mode_system
 from .family import PowerGain
 

@@ -62,8 +62,9 @@ def _label_files(tmp_path, first: str, second: str):
     second) in each format that carries labels: YAML, CSV, .npz and .mat."""
     import json
 
-    from ntc_design.io.edgelist import write_npz
     from scipy.io import savemat
+
+    from ntc_design.io.edgelist import write_npz
 
     yml = tmp_path / "net.yaml"  # JSON is YAML: the labels exactly as written
     yml.write_text(

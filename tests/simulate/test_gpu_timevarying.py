@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from ntc_design.simulate.gpu_timevarying import batch_modes
+from ntc_design.simulate.options import MonteCarlo
 from ntc_design.simulate.scenario import load_scenario
-from ntc_design.simulate.spec import MonteCarlo
 from ntc_design.simulate.timevarying import TimeVaryingDesign, time_varying_system
 from tests.conftest import EXAMPLES
 from tests.support.gpu import REL_TOL, cpu_and_gpu, relative_gap, sizes

@@ -9,13 +9,13 @@ import pytest
 import ntc_design as nd
 from ntc_design.certify.robust.lmi import (
     FRACTIONS,
-    _channels,
-    _DecayLMI,
-    _descend,
-    _offset_sdp,
+    DecayLMI,
+    channels,
     decay_matrix,
+    descend,
     load_cvxpy,
     offset_matrix,
+    offset_sdp,
     solve_sdp,
 )
 from ntc_design.certify.robust.problem import dense_problem, uncertain_edges
@@ -54,7 +54,7 @@ def semi():
             (3, 1, -np.diag([0.0, 3.0])),
         ],
     )
-    # _channels reads only the sizes and the edges
+    # channels reads only the sizes and the edges
     return SimpleNamespace(n=6, d=2, edges=uncertain_edges(top))
 
 
@@ -95,7 +95,7 @@ def test_solve_sdp_reports_failure(case):
 def test_channels_against_their_definition(semi):
     ed = semi.edges
     assert ed.pivots == ((1,), (0,), (0, 1), (0,))  # a basis of range(W) among W's columns
-    got = _channels(semi)
+    got = channels(semi)
     for e, (ewv, dwd, vwv) in enumerate(got):
         i, j, s, w = int(ed.dst[e]), int(ed.src[e]), ed.s[e], ed.w[e]
         v = w[:, list(ed.pivots[e])]
@@ -107,9 +107,9 @@ def test_channels_against_their_definition(semi):
 
 
 def test_channels_scaled_and_normalised(semi):
-    raw = _channels(semi)
+    raw = channels(semi)
     for (e1, q1, v1), (e2, q2, v2), e in zip(
-        raw, _channels(semi, 4.0, normalise=True), range(semi.edges.m), strict=True
+        raw, channels(semi, 4.0, normalise=True), range(semi.edges.m), strict=True
     ):
         v = semi.edges.basis(e)
         t = np.diag(1 / np.linalg.norm(v, axis=0))  # unit columns: V → V·T
@@ -128,7 +128,7 @@ def test_decay_matrix_without_channels_is_the_lyapunov_form():
 
 
 def test_decay_matrix_blocks(semi):
-    ch = _channels(semi)
+    ch = channels(semi)
     rng = _rng(2)
     lap = rng.normal(size=(6, 6))
     m = rng.normal(size=(6, 6))
@@ -156,9 +156,9 @@ def test_decay_matrix_is_congruent_for_any_basis_and_scale(prob):
     rng = _rng(3)
     m = rng.normal(size=(prob.n, prob.n))
     p, tau = m @ m.T + np.eye(prob.n), rng.uniform(0.5, 2.0, prob.edges.m)
-    raw = decay_matrix(prob.lap_b, _channels(prob), p, tau, 0.4, 0.2)
+    raw = decay_matrix(prob.lap_b, channels(prob), p, tau, 0.4, 0.2)
     s = 3.0
-    scaled = decay_matrix(prob.lap_b / s, _channels(prob, s, normalise=True), p, tau, 0.4 / s, 0.2)
+    scaled = decay_matrix(prob.lap_b / s, channels(prob, s, normalise=True), p, tau, 0.4 / s, 0.2)
     norms = np.concatenate(
         [np.linalg.norm(prob.edges.basis(e), axis=0) for e in range(prob.edges.m)]
     )
@@ -176,11 +176,11 @@ def _nominal_rate(p):
 def test_a_decay_certificate_holds_on_every_sampled_realisation(prob):
     alpha0 = _nominal_rate(prob)
     alpha, rho = 0.5 * alpha0, 0.1
-    got = _DecayLMI(prob, _channels(prob))(alpha, rho)
+    got = DecayLMI(prob, channels(prob))(alpha, rho)
     assert got is not None
     p, tau = got
     assert _min_eig(p) > 0.99 and np.all(tau >= 0)
-    assert _min_eig(decay_matrix(prob.lap_b, _channels(prob), p, tau, alpha, rho)) > 0
+    assert _min_eig(decay_matrix(prob.lap_b, channels(prob), p, tau, alpha, rho)) > 0
     des, rng = prob.design, _rng(4)
     for k in range(16):
         w = sample(des, rho, rng, "vertex" if k % 2 else "interior")
@@ -192,7 +192,7 @@ def test_a_decay_certificate_holds_on_every_sampled_realisation(prob):
 
 
 def test_no_decay_certificate_beyond_the_nominal_rate(prob):
-    lmi = _DecayLMI(prob, _channels(prob))
+    lmi = DecayLMI(prob, channels(prob))
     # the nominal weights are in the set: no α above their rate can be proven
     assert lmi(1.01 * _nominal_rate(prob), 0.0) is None
     assert lmi(1.01 * _nominal_rate(prob), 0.05) is None
@@ -204,7 +204,7 @@ def test_no_decay_certificate_beyond_the_nominal_rate(prob):
 
 
 def test_offset_matrix_without_multipliers(prob):
-    ch = _channels(prob)
+    ch = channels(prob)
     r = sum(c[0].shape[1] for c in ch)
     k = prob.n + r + 1
     g = offset_matrix(
@@ -219,7 +219,7 @@ def test_offset_matrix_without_multipliers(prob):
 def test_offset_form_on_a_realisation(prob):
     """On ξ = (z, η, 1) of a realisation, the Finsler term vanishes and ξᵀΓξ is
     γ − ‖z‖² − Σ λ_e (ρ²‖D_eᵀx*‖²_W − η_eᵀVᵀWVη_e)."""
-    ch, ed, d, rho = _channels(prob), prob.edges, prob.d, 0.3
+    ch, ed, d, rho = channels(prob), prob.edges, prob.d, 0.3
     rng = _rng(5)
     x = rng.normal(size=(ed.m, d, d))
     es = np.array([rho * 0.9 * q / np.linalg.norm(q, 2) for q in x + np.transpose(x, (0, 2, 1))])
@@ -248,8 +248,8 @@ def test_offset_form_on_a_realisation(prob):
 
 def test_an_offset_certificate_bounds_every_sampled_realisation(prob):
     rho = 0.1
-    ch = _channels(prob)
-    got = _offset_sdp(prob, ch, rho)
+    ch = channels(prob)
+    got = offset_sdp(prob, ch, rho)
     assert got is not None
     gam, lam, y = got
     assert np.all(lam >= 0)
@@ -267,9 +267,9 @@ def test_no_certificate_once_every_weight_may_vanish(prob):
     # singular as some agent is uninformed, so neither margin nor offset can be bounded
     gone = prob.lap(-np.broadcast_to(np.eye(prob.d), (prob.edges.m, prob.d, prob.d)))
     assert np.min(np.abs(np.linalg.eigvals(gone))) < 1e-12
-    ch = _channels(prob)
-    assert _DecayLMI(prob, ch)(0.0, 1.0) is None
-    assert _offset_sdp(prob, ch, 1.0) is None
+    ch = channels(prob)
+    assert DecayLMI(prob, ch)(0.0, 1.0) is None
+    assert offset_sdp(prob, ch, 1.0) is None
 
 
 # -- the descent to the best verified value -------------------------------------------------
@@ -288,7 +288,7 @@ class _Counted:
 
 def test_descend_brackets_the_largest_passing_value():
     test = _Counted(0.63)
-    lo, best = _descend(test, 1.0, steps=8)
+    lo, best = descend(test, 1.0, steps=8)
     # 0.995, 0.97, 0.9, 0.75 fail and 0.5 passes: then 8 bisections of [0.5, 0.75]
     assert test.calls[:5] == [0.995, 0.97, 0.9, 0.75, 0.5]
     assert len(test.calls) == 5 + 8
@@ -297,16 +297,16 @@ def test_descend_brackets_the_largest_passing_value():
 
 def test_descend_from_a_floor():
     test = _Counted(0.7)
-    lo, best = _descend(test, 1.0, steps=0, floor=0.6)
+    lo, best = descend(test, 1.0, steps=0, floor=0.6)
     assert test.calls[:2] == pytest.approx([0.6 + 0.995 * 0.4, 0.6 + 0.97 * 0.4])
     assert 0.6 <= lo <= 0.7 and best == ("ok", lo)
 
 
 def test_descend_when_the_top_passes_or_nothing_does():
-    lo, best = _descend(_Counted(10.0), 2.0, steps=3)
+    lo, best = descend(_Counted(10.0), 2.0, steps=3)
     assert 0.995 * 2.0 < lo <= 2.0 and best is not None
     test = _Counted(-1.0)
-    assert _descend(test, 2.0, steps=5, floor=0.5) == (0.5, None)
+    assert descend(test, 2.0, steps=5, floor=0.5) == (0.5, None)
     assert len(test.calls) == len(FRACTIONS)  # the floor itself was tried last
     assert test.calls[-1] == 0.5
 
@@ -334,7 +334,7 @@ def test_active_columns_keep_z_the_kept_channels_and_the_last():
 
 def test_at_radius_zero_psi_is_the_nominal_lyapunov_form(semi):
     # no edge is perturbed: Ψ is P(L_B − αI) + (L_B − αI)ᵀP whatever the multipliers
-    ch = _channels(semi)
+    ch = channels(semi)
     n = semi.n
     rng = _rng(3)
     lap = rng.normal(size=(n, n))
