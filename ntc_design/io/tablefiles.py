@@ -3,7 +3,7 @@
 **CSV** (``.csv``): a header row ``from, to, a11, a12, …, add`` (the d² entries of A_ij row
 by row, d from the number of columns), then one edge per row. An edge from j to i carries
 A_ij, as in the YAML files. Labels are integers or strings; the agents are the labels in
-the order they first appear. Read by pandas' C parser, bounded like every file (size, rows,
+the order they first appear. Read by NumPy's C reader, bounded like every file (size, rows,
 numbers); an error names the row (the header is row 1).
 
 **MATLAB** (``.mat``, read by :func:`scipy.io.loadmat`): a variable ``A``, the
@@ -242,23 +242,38 @@ def _labels_in_order(
     return labels, idx[1::2], idx[0::2]
 
 
-def _long_row(p: Path, fields: int) -> str:
-    """The first row with more fields than the header (read again, only on this error)."""
-    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
-        for k, row in enumerate(csv.reader(fh), 1):
-            if len(row) > fields:
-                return f"row {k}: {len(row)} fields, the header has {fields}"
-    return "a row is longer than the header"
+def _rows_and_fields(p: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(line number, fields) of every non-blank line after the header: commas counted in
+    the bytes, vectorised; a file with quotes (a label holding a comma) by the csv module."""
+    data = np.fromfile(p, dtype=np.uint8)
+    if np.any(data == ord('"')):
+        with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+            got = [(k, len(row)) for k, row in enumerate(csv.reader(fh), 1) if row and k > 1]
+        arr = np.array(got, dtype=np.int64).reshape(-1, 2)
+        return arr[:, 0], arr[:, 1]
+    ends = np.flatnonzero(data == ord("\n"))
+    if data.size and data[-1] != ord("\n"):
+        ends = np.append(ends, data.size)  # a last line without its newline
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    commas = np.concatenate([[0], np.cumsum(data == ord(","))])
+    blank = np.isin(data, (ord(" "), ord("\t"), ord("\r")), invert=True)
+    filled = np.concatenate([[0], np.cumsum(blank)])
+    fields = commas[ends] - commas[starts] + 1
+    keep = filled[ends] - filled[starts] > 0  # a blank line is skipped, as by the reader
+    line = np.arange(1, ends.size + 1)
+    keep[0] = False  # the header
+    return line[keep], fields[keep]
 
 
-def _short_row(p: Path, fields: int) -> str | None:
-    """The first row with fewer fields than the header, or None (read again, only when
-    the last column has a gap: pandas fills a short row's missing fields, NaN or "")."""
-    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
-        for k, row in enumerate(csv.reader(fh), 1):
-            if row and len(row) < fields:  # a blank line is skipped by the parser too
-                return f"row {k}: {len(row)} fields, the header has {fields} (a short row)"
-    return None
+def _csv_columns(p: Path, cols: list[int], dtype, rows: int) -> np.ndarray:
+    """Columns of the data rows by NumPy's C reader (quotes honoured, no comments)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # "no data": a header-only file
+        out = np.loadtxt(
+            p, delimiter=",", skiprows=1, usecols=cols, dtype=dtype, ndmin=2, comments=None,
+            quotechar='"', encoding="utf-8", max_rows=rows,
+        )  # fmt: skip
+    return out.reshape(-1, len(cols))
 
 
 def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
@@ -310,71 +325,44 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
         finite number, more rows or agents than the limits, an edge listed twice; the
         message names the row.
     """
-    import pandas as pd
-
     p = _bounded(Path(path), MAX_CSV_BYTES)
     header, want, d = _csv_header(p)
     _no_nul(p)
     k = d * d
-    as_text: dict[str, Any] = dict.fromkeys(
-        ["from", "to"] + (["uncertainty"] if header[-1] == "uncertainty" else []), str
-    )
-    try:
-        with warnings.catch_warnings():
-            # pandas only warns when a row is longer than the header: that is an error here
-            warnings.simplefilter("error", pd.errors.ParserWarning)
-            common = {
-                "keep_default_na": False,
-                "index_col": False,  # an extra field is an error, never an index column
-                "header": 0,
-                "names": header,  # stripped: "from , to , a11" names the columns from, to, a11
-                "skipinitialspace": True,
-                "nrows": MAX_EDGES + 1,
-                "engine": "c",
-            }
-            try:  # numbers parsed in C; only a file with a bad number is read again as text
-                table = pd.read_csv(
-                    p, dtype={**as_text, **dict.fromkeys(want, "float64")}, **common
-                )
-            except ValueError:
-                table = pd.read_csv(p, dtype={**as_text, **dict.fromkeys(want, str)}, **common)
-    except pd.errors.ParserWarning:
-        raise InputError(f"{p}: {_long_row(p, len(header))}") from None
-    except pd.errors.ParserError as exc:
-        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", str(exc))
-        what = (
-            f"row {m.group(2)}: {m.group(3)} fields, the header has {m.group(1)}"
-            if m
-            else "not a CSV table"
-        )
-        raise InputError(f"{p}: {what}") from None
-    except (UnicodeDecodeError, ValueError, OSError) as exc:
-        raise InputError(f"{p}: not a readable CSV table ({exc.__class__.__name__})") from None
-    e = len(table)
+    lines, fields = _rows_and_fields(p)
+    e = lines.size
     if e > MAX_EDGES:
         raise InputError(f"{p}: more than {MAX_EDGES} rows")
-    last = table[header[-1]]  # a short row leaves NaN in a number column, "" in a text one
-    gap = last.isna().any() or (last.dtype != np.float64 and bool((last == "").any()))
-    if gap and (short := _short_row(p, len(header))):
-        raise InputError(f"{p}: {short}")
-    src = table["from"].to_numpy(dtype=str)
-    dst = table["to"].to_numpy(dtype=str)
+    wrong = np.flatnonzero(fields != len(header))
+    if wrong.size:
+        r = int(wrong[0])
+        short = " (a short row)" if fields[r] < len(header) else ""
+        raise InputError(
+            f"{p}: row {lines[r]}: {fields[r]} fields, the header has {len(header)}{short}"
+        )
+    has_unc = header[-1] == "uncertainty"
+    try:
+        text = _csv_columns(p, [0, 1] + ([len(header) - 1] if has_unc else []), str, e)
+        # numbers by the C reader: ASCII numerals only, no underscores
+        w = _csv_columns(p, list(range(2, 2 + k)), np.float64, e).ravel()
+    except (UnicodeDecodeError, ValueError, OSError) as exc:
+        m = re.search(
+            r"could not convert string '(.*)' to float64 at row (\d+), column (\d+)", str(exc)
+        )
+        if m is None:
+            raise InputError(f"{p}: not a readable CSV table ({exc.__class__.__name__})") from None
+        r, c, got = int(m.group(2)), int(m.group(3)) - 3, m.group(1).strip()
+        what = f"= {got[:30]!r} is not a finite number" if got else "is empty (a short row?)"
+        raise InputError(f"{p}: row {lines[r]}: {want[c]} {what}") from None
+    src, dst = text[:, 0], text[:, 1]
     for name, col in (("from", src), ("to", dst)):
         empty = np.flatnonzero(np.char.str_len(np.char.strip(col)) == 0)
         if empty.size:
-            raise InputError(f"{p}: row {empty[0] + 2}: '{name}' is empty")
-    if all(table[c].dtype == np.float64 for c in want):
-        w = table[want].to_numpy(dtype=float).ravel()
-        vals = None
-    else:
-        vals = table[want].to_numpy(dtype=str)
-        w = pd.to_numeric(pd.Series(vals.ravel()), errors="coerce").to_numpy(dtype=float)
+            raise InputError(f"{p}: row {lines[empty[0]]}: '{name}' is empty")
     bad = np.flatnonzero(~np.isfinite(w))
     if bad.size:
         r, c = divmod(int(bad[0]), k)
-        text = str(vals[r, c]).strip() if vals is not None else str(w[bad[0]])
-        what = "is empty (a short row?)" if not text else f"= {text!r} is not a finite number"
-        raise InputError(f"{p}: row {r + 2}: {want[c]} {what}")
+        raise InputError(f"{p}: row {lines[r]}: {want[c]} = {w[bad[0]]!r} is not a finite number")
     labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst), p)
     if len(labels) > MAX_AGENTS:
         raise InputError(f"{p}: {len(labels)} agents; at most {MAX_AGENTS}")
@@ -383,21 +371,21 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     dup = np.flatnonzero(np.diff(key[order]) == 0)
     if dup.size:
         r = int(order[dup[0] + 1])
-        raise InputError(f"{p}: row {r + 2}: edge {src[r]}->{dst[r]} is listed twice")
-    unc = _csv_uncertainty(table, p) if "uncertainty" in as_text else None
+        raise InputError(f"{p}: row {lines[r]}: edge {src[r]}->{dst[r]} is listed twice")
+    unc = _csv_uncertainty(text[:, 2], lines, p) if has_unc else None
     return EdgeListData(p.stem, d, labels, rows, cols, w.reshape(e, d, d), str(p), unc)
 
 
-def _csv_uncertainty(table, p: Path) -> np.ndarray:
+def _csv_uncertainty(column: np.ndarray, lines: np.ndarray, p: Path) -> np.ndarray:
     """The optional ``uncertainty`` column: per row a radius in [0, 1), or empty (none)."""
-    vals = np.char.strip(table["uncertainty"].to_numpy(dtype=str))
+    vals = np.char.strip(column.astype(str))
     out = np.full(vals.size, np.nan)
     for r in np.flatnonzero(np.char.str_len(vals) > 0).tolist():
         text = str(vals[r])
         v = float(text) if NUMBER_TEXT.fullmatch(text) else math.nan  # ASCII numerals only
         if not (math.isfinite(v) and 0 <= v < 1):
             raise InputError(
-                f"{p}: row {r + 2}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "
+                f"{p}: row {lines[r]}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "
                 "number in [0, 1) (or empty)"
             )
         out[r] = v
@@ -420,8 +408,6 @@ def write_csv_edges(path: str | Path, labels, dim: int, rows, cols, w) -> None:
     w : numpy.ndarray
         The weights, (E, d, d).
     """
-    import pandas as pd
-
     lab = np.array([str(x) for x in labels], dtype=object)
     # rows ordered so that the agents first appear in label order where the edges allow it
     # (the reader numbers agents by first appearance)
@@ -433,11 +419,14 @@ def write_csv_edges(path: str | Path, labels, dim: int, rows, cols, w) -> None:
         for r in range(1, dim + 1)
         for c in range(1, dim + 1)
     ]
-    frame = pd.DataFrame(w.reshape(len(rows), dim * dim), columns=cols_w)
-    frame.insert(0, "to", lab[np.asarray(rows)])
-    frame.insert(0, "from", lab[np.asarray(cols)])
-    with atomic_path(Path(path)) as tmp:
-        frame.to_csv(tmp, index=False)  # shortest round-trip reprs: exact on reading
+    flat = w.reshape(len(rows), dim * dim).tolist()
+    with atomic_path(Path(path)) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+        out = csv.writer(fh, lineterminator="\n")
+        out.writerow(["from", "to", *cols_w])
+        # repr: the shortest text that reads back as the same double
+        out.writerows(
+            [f, t, *map(repr, ws)] for f, t, ws in zip(lab[cols], lab[rows], flat, strict=True)
+        )
 
 
 def _mat_labels(raw: Any, n: int, p: Path) -> tuple:

@@ -430,8 +430,9 @@ class ResultsAudit:
 class IssueOptions:
     """What a kind may use when it issues a certificate, typed and built once by
     :func:`ntc_design.certify.certify`: the gain analysed once (its expression and its
-    conditions, never parsed again), the noise, how the rate is found, and the robust
-    kind's radius and searches. A kind reads the fields it needs and ignores the others.
+    conditions, never parsed again), the noise and how the rate is found. A kind reads the
+    fields it needs and ignores the others (the robust kind's radius and searches are its
+    design's: :class:`ntc_design.certify.robust.RobustDesign`).
 
     Attributes
     ----------
@@ -443,21 +444,12 @@ class IssueOptions:
         f of the state-dependent noise (a scale, or a d×d matrix).
     rate_method : str
         ``"lyapunov"`` or ``"lmi"`` (the fixed kind's decay rate).
-    radius : float or None
-        The robust kind's ρ (None: its default).
-    starts : int
-        The robust kind's random starts of the realisation searches.
-    seed : int
-        Their seed.
     """
 
     gain: GainAnalysis | None = None
     noise_sigma: float = SIGMA
     noise_f: Any = F_SCALE
     rate_method: str = "lyapunov"
-    radius: float | None = None
-    starts: int = 6
-    seed: int = 0
 
 
 class CertificateKind(ABC):
