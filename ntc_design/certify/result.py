@@ -318,7 +318,7 @@ class RobustResult:
 
 
 def certify_robust(
-    topology: Topology,
+    topology: Topology | SwitchingTopology | ExpressionTopology,
     theta,
     radius: float = DEFAULT_RADIUS,
     margin: float = 0.1,
@@ -333,7 +333,8 @@ def certify_robust(
     Parameters
     ----------
     topology : Topology
-        One fixed topology (its ``uncertainty:`` radii per edge, where given).
+        One fixed topology (its ``uncertainty:`` radii per edge, where given); another kind
+        is refused.
     theta : sequence of float
         The target consensus state θ ≠ 0.
     radius : float, optional

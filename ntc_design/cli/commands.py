@@ -403,8 +403,7 @@ def robust(
     if out_path is not None:
         check_output_file(out_path, "--out")
     top = load(file)
-    dense = not isinstance(top, Topology) or top.nd <= RICCATI_MAX_ND
-    if out_path is not None and not dense:
+    if out_path is not None and isinstance(top, Topology) and top.nd > RICCATI_MAX_ND:
         raise InputError(
             f"--out: a robust certificate is issued up to Nd = {RICCATI_MAX_ND} (this network: "
             f"Nd = {top.nd}); without --out the sparse bounds are proven and printed"
@@ -424,17 +423,17 @@ def robust(
         print_table(rep.table())
         if ver is not None:
             print(f"certificate: {'valid' if ver.valid else 'NOT valid'} ({ver.method})")
-            res = doc["results"] if doc is not None else {}
+            results = doc["results"] if doc is not None else {}
             kept = [
-                f"{label} {res[key]['lower']:.6g}"
+                f"{label} {results[key]['lower']:.6g}"
                 for key, label, shown in (("decay", "α", rep.decay.lower),
                                           ("margin", "ρ", rep.margin.lower))
-                if key in res and shown is not None and res[key]["lower"] < shown
+                if key in results and shown is not None and results[key]["lower"] < shown
             ]  # fmt: skip
             if kept:
                 print(f"the certificate carries {', '.join(kept)} (what it re-proves); the "
                       "printed lower ends are proven here by block dominance")  # fmt: skip
-        elif dense:
+        elif rep.design.topology.nd <= RICCATI_MAX_ND:
             print("no certificate: the search for one proved no margin radius (a bound "
                   "above, if any, is proven in this process only)")  # fmt: skip
         else:
