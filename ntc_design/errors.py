@@ -504,7 +504,7 @@ def require_radius(value, name: str = "--radius", below_one: bool = True) -> flo
 EXTRAS = {
     "tables": "pandas and PyArrow (sweep tables, data frames)",
     "cluster": "Dask distributed (sweeps and Monte Carlo on a cluster)",
-    "interop": "networkx (graphs in and out)",
+    "interop": "networkx and python-control (graphs and state-space models in and out)",
 }
 
 

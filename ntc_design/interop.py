@@ -183,9 +183,12 @@ def design_statespace(des: ProtocolDesign) -> control.StateSpace:
     control.StateSpace
         A = −L_B, B = k1·δ·[B_i for informed i, 0 otherwise] (Nd×d), C = I_Nd, D = 0;
         states, inputs and outputs named ``x[agent,k]`` and ``theta[k]``.
+    Raises
+    ------
+    InputError
+        python-control is not installed (the ``interop`` extra).
     """
-    import control
-
+    control = optional_module("control", "interop", "design_statespace")
     top, d = des.topology, des.topology.dim
     b_in = np.zeros((top.nd, d))
     for i, bi in des.B.items():

@@ -23,7 +23,7 @@ Example::
 Expressions are parsed by :func:`ntc_design.expr.symbolic.parse_expression` (a whitelist over
 Python's syntax tree; nothing is evaluated). This module only reads and checks the form;
 whether every weight keeps one sign class for every t is proven in
-:mod:`ntc_design.timevarying`.
+:mod:`ntc_design.model.timevarying`.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ def load(path: str | Path) -> Topology | SwitchingTopology | ExpressionTopology:
     Returns
     -------
     Topology or SwitchingTopology or ExpressionTopology
-        A time-varying file gives an :class:`~ntc_design.timevarying.ExpressionTopology`,
+        A time-varying file gives an :class:`~ntc_design.model.timevarying.ExpressionTopology`,
         or the fixed :class:`Topology` when every weight is a constant expression.
 
     Raises

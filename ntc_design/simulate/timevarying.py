@@ -3,7 +3,7 @@ re-evaluated at every Euler–Maruyama step and inside the moment equations (Niu
 eq. (5) with a time-varying G(t)).
 
 Per batch of steps the weights are evaluated by the compiled expressions and Lemma 1 by
-:func:`ntc_design.timevarying.lemma1_batch` (batched Cholesky/eigenvalues), giving for each
+:func:`ntc_design.protocol.timevarying.lemma1_batch` (batched Cholesky/eigenvalues), giving for each
 step the drift matrix −L_B(t)ᵀ, the input u(t) = (Δ(t)⊗I)B(t)x0(t), the additive-noise
 directions G(t) and the multiplicative weights |A_ij(t)|; the step itself is the fixed
 topology's (one matrix product for drift and edge differences). The moment equations
