@@ -183,6 +183,7 @@ def design_statespace(des: ProtocolDesign) -> control.StateSpace:
     control.StateSpace
         A = −L_B, B = k1·δ·[B_i for informed i, 0 otherwise] (Nd×d), C = I_Nd, D = 0;
         states, inputs and outputs named ``x[agent,k]`` and ``theta[k]``.
+
     Raises
     ------
     InputError

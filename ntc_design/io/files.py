@@ -28,6 +28,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass
 from itertools import chain
 from pathlib import Path
@@ -343,6 +344,71 @@ def parse_uncertainty(value: Any, source: str | None, field: str) -> float:
     return require_radius(value, f"{source}: {field}" if source else field)
 
 
+def edge_entries(
+    edges_doc: list, by_key: dict[str, Label], source: str | None, optional: frozenset
+) -> Iterator[tuple[int, dict, str, Label, Label]]:
+    """The edges of an ``edges`` list as every topology format checks them, once: each a
+    mapping of ``from``, ``to``, ``weight`` (and the ``optional`` keys), its ends known
+    labels (compared in NFC), no self-loop, no edge twice.
+
+    Parameters
+    ----------
+    edges_doc : list
+        The document's ``edges``.
+    by_key : dict of str to label
+        The agents by their text (NFC).
+    source : str or None
+        The file, for messages.
+    optional : frozenset of str
+        The keys an edge may carry besides from, to and weight.
+
+    Yields
+    ------
+    tuple of (int, dict, str, label, label)
+        The index, the mapping, its name in messages (``edge a->b``), from and to.
+
+    Raises
+    ------
+    InputError
+        The first edge that is not one, naming it.
+    """
+    seen: set[tuple[str, str]] = set()
+    for k, e in enumerate(edges_doc):
+        if not isinstance(e, dict):
+            raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
+        if e.keys() - optional != EDGE_KEYS:
+            # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
+            extra = sorted(set(e) - EDGE_KEYS - optional, key=str)
+            if extra:
+                raise field_error(
+                    source,
+                    f"edges[{k}]",
+                    f"unknown field {_show(extra[0])}{_close(extra[0], EDGE_KEYS)}",
+                )
+            missing = sorted(EDGE_KEYS - set(e))
+            raise field_error(source, f"edges[{k}]", f"missing {', '.join(missing)}")
+        for end in ("from", "to"):
+            lab = e[end]
+            if isinstance(lab, bool) or not isinstance(lab, (int, str)):
+                raise field_error(
+                    source, f"edges[{k}].{end}", f"expected an agent label, got {_show(lab)}"
+                )
+        field = f"edge {_q(e['from'])}->{_q(e['to'])}"
+        j, i = (
+            normalize("NFC", str(e["from"])),
+            normalize("NFC", str(e["to"])),
+        )  # the labels are kept in NFC
+        for end, lab in (("from", j), ("to", i)):
+            if lab not in by_key:
+                raise field_error(source, field, f"unknown agent label {_show(lab)} in '{end}'")
+        if i == j:
+            raise field_error(source, field, "self-loop (an agent cannot listen to itself)")
+        if (j, i) in seen:
+            raise field_error(source, field, "duplicated edge")
+        seen.add((j, i))
+        yield k, e, field, by_key[j], by_key[i]
+
+
 def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyData:
     """Validate a topology mapping (see the module docstring for the form).
 
@@ -390,45 +456,12 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
     if not isinstance(edges_doc, list):
         raise field_error(source, "edges", "expected a list of {from, to, weight}")
     edges: list[EdgeData] = []
-    seen: set[tuple[str, str]] = set()
     batch = _weights_at_once(edges_doc, dim)
-    for k, e in enumerate(edges_doc):
-        if not isinstance(e, dict):
-            raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
-        if e.keys() - EDGE_OPTIONAL != EDGE_KEYS:
-            # an unknown key first: a misspelt 'wieght' is the cause of the missing 'weight'
-            extra = sorted(set(e) - EDGE_KEYS - EDGE_OPTIONAL, key=str)
-            if extra:
-                raise field_error(
-                    source,
-                    f"edges[{k}]",
-                    f"unknown field {_show(extra[0])}{_close(extra[0], EDGE_KEYS)}",
-                )
-            missing = sorted(EDGE_KEYS - set(e))
-            raise field_error(source, f"edges[{k}]", f"missing {', '.join(missing)}")
-        for end in ("from", "to"):
-            lab = e[end]
-            if isinstance(lab, bool) or not isinstance(lab, (int, str)):
-                raise field_error(
-                    source, f"edges[{k}].{end}", f"expected an agent label, got {_show(lab)}"
-                )
-        field = f"edge {_q(e['from'])}->{_q(e['to'])}"
-        j, i = (
-            normalize("NFC", str(e["from"])),
-            normalize("NFC", str(e["to"])),
-        )  # the labels are kept in NFC
-        for end, lab in (("from", j), ("to", i)):
-            if lab not in by_key:
-                raise field_error(source, field, f"unknown agent label {_show(lab)} in '{end}'")
-        if i == j:
-            raise field_error(source, field, "self-loop (an agent cannot listen to itself)")
-        if (j, i) in seen:
-            raise field_error(source, field, "duplicated edge")
-        seen.add((j, i))
+    for k, e, field, j, i in edge_entries(edges_doc, by_key, source, EDGE_OPTIONAL):
         w = batch[k] if batch is not None else parse_weight(e["weight"], dim, source, field, named)
         unc = e.get("uncertainty")
         rho = None if unc is None else parse_uncertainty(unc, source, f"{field}: uncertainty")
-        edges.append(EdgeData(by_key[j], by_key[i], w, field, rho))
+        edges.append(EdgeData(j, i, w, field, rho))
     name = doc.get("name")
     default = doc.get("uncertainty")
     return TopologyData(
@@ -599,6 +632,7 @@ def parse_scenario(path: str | Path) -> ScenarioData:
 
 __all__ = [
     "EdgeData",
+    "edge_entries",
     "ScenarioData",
     "SwitchingData",
     "TopologyData",

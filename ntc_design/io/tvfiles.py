@@ -30,7 +30,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
-from unicodedata import normalize
 
 import numpy as np
 import sympy as sp
@@ -40,6 +39,7 @@ from .documents import type_name
 from .files import (
     TOPOLOGY_KEYS,
     Label,
+    edge_entries,
     field_error,
     has_text,
     is_time_varying,
@@ -265,25 +265,9 @@ def parse_time_varying(doc: dict[str, Any], source: str | None = None) -> TimeVa
     if not isinstance(edges_doc, list):
         raise field_error(source, "edges", "expected a list of {from, to, weight}")
     edges: list[ExprEdgeData] = []
-    seen: set[tuple[str, str]] = set()
-    for k, e in enumerate(edges_doc):
-        if not isinstance(e, dict) or set(e) != {"from", "to", "weight"}:
-            raise field_error(source, f"edges[{k}]", "expected a mapping {from, to, weight}")
-        j, i = (
-            normalize("NFC", str(e["from"])),
-            normalize("NFC", str(e["to"])),
-        )  # the labels are kept in NFC
-        field = f"edge {j}->{i}"
-        for end, lab in (("from", j), ("to", i)):
-            if lab not in by_key:
-                raise field_error(source, field, f"unknown agent label {lab!r} in '{end}'")
-        if i == j:
-            raise field_error(source, field, "self-loop (an agent cannot listen to itself)")
-        if (j, i) in seen:
-            raise field_error(source, field, "duplicated edge")
-        seen.add((j, i))
+    for _, e, field, j, i in edge_entries(edges_doc, by_key, source, frozenset()):
         w = parse_expr_weight(e["weight"], dim, source, field, named)
-        edges.append(ExprEdgeData(by_key[j], by_key[i], w, field))
+        edges.append(ExprEdgeData(j, i, w, field))
     period = _time_constant(doc["period"], source, "period") if "period" in doc else None
     after = (
         _time_constant(doc["constant_after"], source, "constant_after")

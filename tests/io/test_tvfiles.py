@@ -196,7 +196,7 @@ def test_string_labels_and_no_matrices():
         ({"edges": [3]}, "edges[0]: expected a mapping {from, to, weight}"),
         (
             {"edges": [{"from": 1, "to": 2, "weight": "t", "uncertainty": 0.1}]},
-            "edges[0]: expected a mapping {from, to, weight}",
+            "edges[0]: unknown field 'uncertainty'",
         ),
         ({"edges": [{"from": 1, "to": 9, "weight": "t"}]}, "edge 1->9: unknown agent label '9'"),
         ({"edges": [{"from": 0, "to": 2, "weight": "t"}]}, "unknown agent label '0' in 'from'"),
