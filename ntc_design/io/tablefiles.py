@@ -255,11 +255,14 @@ def _rows_and_fields(p: Path) -> tuple[np.ndarray, np.ndarray]:
     if data.size and data[-1] != ord("\n"):
         ends = np.append(ends, data.size)  # a last line without its newline
     starts = np.concatenate([[0], ends[:-1] + 1])
-    commas = np.concatenate([[0], np.cumsum(data == ord(","))])
-    blank = np.isin(data, (ord(" "), ord("\t"), ord("\r")), invert=True)
-    filled = np.concatenate([[0], np.cumsum(blank)])
-    fields = commas[ends] - commas[starts] + 1
-    keep = filled[ends] - filled[starts] > 0  # a blank line is skipped, as by the reader
+    # commas per line: each comma's line by its position among the line ends
+    commas = np.flatnonzero(data == ord(","))
+    fields = np.bincount(np.searchsorted(ends, commas), minlength=ends.size) + 1
+    keep = np.ones(ends.size, dtype=bool)
+    for k in np.flatnonzero(fields == 1).tolist():  # no comma: blank, or a wrong row
+        if np.any(data[starts[k] : ends[k]] > ord(" ")):
+            break  # a wrong row is reported; what follows it does not matter
+        keep[k] = False  # a blank line is skipped, as by the reader
     line = np.arange(1, ends.size + 1)
     keep[0] = False  # the header
     return line[keep], fields[keep]
