@@ -132,8 +132,8 @@ def _cell(v: Any) -> Any:
 def tables_module():
     """pandas, with PyArrow for its Parquet files: the ``tables`` extra, or one line
     naming it."""
-    optional_module("pyarrow", "tables", "a sweep's tables")
-    return optional_module("pandas", "tables", "a sweep's tables")
+    optional_module("pyarrow", "tables", "a sweep")
+    return optional_module("pandas", "tables", "a sweep")
 
 
 def write_tables(sweep: Sweep, out_dir: Path, results: dict[str, PointResult]) -> list[Path]:

@@ -24,6 +24,7 @@ from ntc_design.numerics.linalg import (
     numba_cache_dir,
     require_dense,
 )
+from tests.conftest import ROOT
 from tests.support.model import seeds
 from tests.support.switching_scale import THETA_SW, _count_numeric
 
@@ -38,9 +39,8 @@ def test_numba_caches_in_the_users_cache_folder_not_beside_the_sources(tmp_path)
         "import ntc_design as nd; from ntc_design.simulate import simulate; "
         "simulate(nd.load('examples/g1.yaml'), [1, 2, -1], T=0.01, paths=2, method='mc', workers=1)"
     )
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     r = subprocess.run(
-        [sys.executable, "-c", code], cwd=root, env=env, capture_output=True, text=True, timeout=300
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=300
     )
     assert r.returncode == 0, r.stderr[-2000:]
     cached = list((tmp_path / "cache" / "ntc-design" / "numba").rglob("*.nbi"))

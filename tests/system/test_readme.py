@@ -126,9 +126,9 @@ def test_the_generated_figures_page_is_the_rendering_of_figures_json():
     assert len(keys) == len(set(keys))
     for e in FIGURES["figures"]:  # each names the benchmark that re-measures it
         assert (ROOT / "benchmarks" / e["by"].split()[0]).is_file(), e
-    assert "re-measured" in next(
-        e["what"] for e in FIGURES["figures"] if e["key"] == "install_size"
-    )
+    size = next(e["figure"] for e in FIGURES["figures"] if e["key"] == "install_size")
+    # the core install, at most 60 % of the 1,307 MB it was (.ci/installed_wheel re-measures)
+    assert int(re.search(r"\((\d+) MB", size).group(1)) <= 784
     benchmarks = (ROOT / "docs" / "guide" / "benchmarks.md").read_text(encoding="utf-8")
     assert "```{include} ../_generated/figures.md" in benchmarks
 
