@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import ast
 import decimal
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
@@ -440,6 +441,23 @@ def numeric_function(
     >>> f([0.0, 1.0]).tolist()
     [1.0, 0.25]
     """
+    if not isinstance(text, str):  # refused in one line by the parser, never cached
+        return _numeric_function(text, field, tuple(variables))
+    return _cached_function(text, field, tuple(variables))
+
+
+@functools.lru_cache(maxsize=256)
+def _cached_function(
+    text: str, field: str, variables: tuple[str, ...]
+) -> Callable[..., np.ndarray]:
+    # a run reads its gain once: the scenario's check, the simulator and the reports share
+    # the function (pure: the same text gives the same values)
+    return _numeric_function(text, field, variables)
+
+
+def _numeric_function(
+    text: object, field: str, variables: tuple[str, ...]
+) -> Callable[..., np.ndarray]:
     src, tree = syntax_tree(text, field)
     builder = _NumericBuilder(src, field, list(variables))
     value, approx = builder.build_tree(tree)
