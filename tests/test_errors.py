@@ -7,6 +7,7 @@ import pytest
 
 import ntc_design as nd
 from ntc_design.errors import (
+    EXTRAS,
     MIN_HORIZON,
     InputError,
     one_line,
@@ -150,3 +151,16 @@ def test_require_x0_refuses_an_overflowing_target(theta, k1, bound):
         require_x0(np.asarray(theta), np.asarray(k1))
     assert f"must be below {bound}" in str(err.value)
     require_x0(np.asarray([1e300, 1.0]), np.asarray(k1))  # fits: no error
+
+
+@pytest.mark.parametrize("extra", sorted(EXTRAS))
+def test_a_missing_optional_module_names_its_extra(extra):
+    from ntc_design.errors import optional_module
+
+    with pytest.raises(InputError) as exc:
+        optional_module("ntc_design_no_such_module.sub", extra, "ntc sweep")
+    assert str(exc.value) == (
+        "ntc sweep needs ntc_design_no_such_module, which the core install leaves out: "
+        f'pip install "ntc-design[{extra}]"'
+    )
+    assert optional_module("json", extra, "x").dumps([1]) == "[1]"  # installed: the module
