@@ -201,3 +201,10 @@ def test_the_top_level_is_few_modules_and_no_module_is_long():
         if (n := len(p.read_text(encoding="utf-8").splitlines())) > 800
     }
     assert long == {}
+
+
+def test_an_unregistered_marker_is_an_error():
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    options = config["tool"]["pytest"]["ini_options"]
+    assert "--strict-markers" in options["addopts"].split()
+    assert sorted(m.split(":")[0] for m in options["markers"]) == ["hostile", "slow"]
