@@ -102,14 +102,20 @@ def test_defaults_of_the_optional_methods():
 
 def test_issue_options_are_typed_keywords_with_the_paper_defaults():
     opts = IssueOptions()
-    assert (opts.gain, opts.radius, opts.rate_method) == (None, None, "lyapunov")
+    assert (opts.gain, opts.rate_method) == (None, "lyapunov")
     assert opts.noise_sigma == SIGMA and opts.noise_f == F_SCALE
-    assert (opts.starts, opts.seed) == (6, 0)
-    assert IssueOptions(radius=0.2, seed=3).radius == 0.2
+    assert IssueOptions(rate_method="lmi", noise_sigma=0.2).noise_sigma == 0.2
+    # the robust kind's radius and searches are its design's (RobustDesign), not options
+    assert {f.name for f in dataclasses.fields(IssueOptions)} == {
+        "gain",
+        "noise_sigma",
+        "noise_f",
+        "rate_method",
+    }
     with pytest.raises(TypeError):
         IssueOptions(None)  # keywords only: a positional value would be ambiguous
     with pytest.raises(dataclasses.FrozenInstanceError):
-        opts.seed = 1  # type: ignore[misc]
+        opts.rate_method = "lmi"  # type: ignore[misc]
 
 
 # -- readings and rows -------------------------------------------------------------------
