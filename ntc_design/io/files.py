@@ -29,6 +29,7 @@ import difflib
 import math
 from collections import Counter
 from collections.abc import Iterator
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from itertools import chain
 from pathlib import Path
@@ -345,7 +346,7 @@ def parse_uncertainty(value: Any, source: str | None, field: str) -> float:
 
 
 def edge_entries(
-    edges_doc: list, by_key: dict[str, Label], source: str | None, optional: frozenset
+    edges_doc: list, by_key: dict[str, Label], source: str | None, optional: AbstractSet[str]
 ) -> Iterator[tuple[int, dict, str, Label, Label]]:
     """The edges of an ``edges`` list as every topology format checks them, once: each a
     mapping of ``from``, ``to``, ``weight`` (and the ``optional`` keys), its ends known
@@ -359,7 +360,7 @@ def edge_entries(
         The agents by their text (NFC).
     source : str or None
         The file, for messages.
-    optional : frozenset of str
+    optional : set of str
         The keys an edge may carry besides from, to and weight.
 
     Yields
