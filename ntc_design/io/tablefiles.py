@@ -64,19 +64,6 @@ def _bounded(p: Path, limit: float) -> Path:
     return p
 
 
-def _no_nul(p: Path) -> None:
-    """Refuse a NUL byte (the CSV parser ends a field at one: ``1\\0`` would read as 1),
-    naming its row."""
-    rows, chunk_size = 1, 2**24
-    with open(p, "rb") as fh:
-        while chunk := fh.read(chunk_size):
-            k = chunk.find(b"\0")
-            if k >= 0:
-                row = rows + chunk.count(b"\n", 0, k)
-                raise InputError(f"{p}: row {row}: a NUL byte")
-            rows += chunk.count(b"\n")
-
-
 #: What loadmat makes of each MATLAB class, bytes per element (4: char, as numpy's UCS-4;
 #: 6 to 15: double, single, int8, uint8, int16, uint16, int32, uint32, int64, uint64).
 _MAT_ITEM_BYTES = {4: 4, 6: 8, 7: 4, 8: 1, 9: 1, 10: 2, 11: 2, 12: 4, 13: 4, 14: 8, 15: 8}
@@ -244,8 +231,14 @@ def _labels_in_order(
 
 def _rows_and_fields(p: Path) -> tuple[np.ndarray, np.ndarray]:
     """(line number, fields) of every non-blank line after the header: commas counted in
-    the bytes, vectorised; a file with quotes (a label holding a comma) by the csv module."""
+    the bytes, vectorised; a file with quotes (a label holding a comma) by the csv module.
+    A NUL byte is refused, naming its row (the C reader would end a field at it: ``1\\0``
+    would read as 1)."""
     data = np.fromfile(p, dtype=np.uint8)
+    nul = np.flatnonzero(data == 0)
+    if nul.size:
+        row = int(np.count_nonzero(data[: nul[0]] == ord("\n"))) + 1
+        raise InputError(f"{p}: row {row}: a NUL byte")
     if np.any(data == ord('"')):
         with open(p, encoding="utf-8", errors="replace", newline="") as fh:
             got = [(k, len(row)) for k, row in enumerate(csv.reader(fh), 1) if row and k > 1]
@@ -330,7 +323,6 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     """
     p = _bounded(Path(path), MAX_CSV_BYTES)
     header, want, d = _csv_header(p)
-    _no_nul(p)
     k = d * d
     lines, fields = _rows_and_fields(p)
     e = lines.size
