@@ -546,6 +546,8 @@ def optional_module(name: str, extra: str, what: str) -> types.ModuleType:
 
 
 __all__ = [
+    "LONG_WORK_SECONDS",
+    "check_work",
     "EXTRAS",
     "INT_TEXT",
     "optional_module",
@@ -594,6 +596,41 @@ def warn_user(message: str, category: type[Warning]) -> None:
         frame = frame.f_back
         level += 1
     warnings.warn(message, category, stacklevel=level)
+
+
+#: Work estimated longer than this says so before it starts (one warning line).
+LONG_WORK_SECONDS = 60.0
+
+
+def check_work(seconds: float, what: str, limit: float, instead: str) -> None:
+    """Refuse work estimated past ``limit`` in one line; past :data:`LONG_WORK_SECONDS`,
+    say the estimate before it starts.
+
+    Parameters
+    ----------
+    seconds : float
+        The estimate.
+    what : str
+        What the work is and how long it takes, the message's start (``--horizon: tuning
+        for T = 1e4 takes roughly 2 h``).
+    limit : float
+        The longest work accepted, in seconds.
+    instead : str
+        What to do instead, said when it is refused.
+
+    Raises
+    ------
+    InputError
+        The estimate is above ``limit`` (or not a number).
+
+    Examples
+    --------
+    >>> check_work(5.0, "a test: roughly 5 s", 3600.0, "a smaller one")
+    """
+    if not seconds <= limit:
+        raise InputError(f"{what}, more than the limit of {format_seconds(limit)}; {instead}")
+    if seconds > LONG_WORK_SECONDS:
+        warn_user(f"{what}; Ctrl-C stops cleanly", UserWarning)
 
 
 # -- interrupts that Python may lose ---------------------------------------------------------

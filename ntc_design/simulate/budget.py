@@ -348,7 +348,6 @@ def estimate(
 # solves. Only for the estimate a long run prints before it starts (:func:`mc_seconds`).
 MC_ENTRIES_PER_SECOND = 8e8
 IMPLICIT_SLOWDOWN = 5.0
-LONG_RUN_SECONDS = 60.0  # a run estimated longer than this says so before it starts
 
 
 def mc_seconds(est: Estimate, nd: int, edge_entries: int, workers: int, implicit: bool) -> float:

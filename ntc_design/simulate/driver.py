@@ -17,13 +17,12 @@ from typing import TYPE_CHECKING, TypeAlias, TypeGuard, cast
 
 import numpy as np
 
-from ..errors import InputError, format_seconds, quote, warn_user
+from ..errors import LONG_WORK_SECONDS, InputError, format_seconds, quote, warn_user
 from ..expr.tree import numeric_function
 from ..model import ExpressionFamily, SwitchingTopology, TimeVaryingTopology, Topology
 from ..protocol import ProtocolDesign, design_topology
 from ..protocol.digital import Digital, step_modes
 from .budget import (
-    LONG_RUN_SECONDS,
     check_budget,
     check_exact_work,
     check_gain,
@@ -266,7 +265,7 @@ def _check_size(
         est, nd, edge_count(topology) * topology.dim**2, workers, st.scheme == "implicit"
     )
     # the estimate is the CPU kernel's: a GPU's rate is not known here
-    if spec.method != "exact" and spec.mc.device == "cpu" and secs > LONG_RUN_SECONDS:
+    if spec.method != "exact" and spec.mc.device == "cpu" and secs > LONG_WORK_SECONDS:
         warn_user(
             f"paths: {est.path_steps:.3g} path-steps ({spec.mc.paths} paths × "
             f"{est.steps:.3g} steps) on N·d = {nd}: roughly {format_seconds(secs)} with "

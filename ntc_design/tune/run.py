@@ -17,12 +17,11 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from ..errors import InputError, format_seconds, require_horizon, require_positive, warn_user
+from ..errors import InputError, check_work, format_seconds, require_horizon, require_positive
 from ..gain.conditions import analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..protocol import design_topology
 from ..simulate import SimulationSpec
-from ..simulate.budget import LONG_RUN_SECONDS
 from ..simulate.driver import AnyTopology
 from .evidence import certify_tuned, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
@@ -42,7 +41,7 @@ LANDSCAPE_SHAPE = (13, 9)
 LANDSCAPE_SHAPE_MC = (5, 4)
 LANDSCAPE_SPAN = 8.0
 #: A tuning run estimated to take longer than this is refused before it starts (one
-#: longer than ``LONG_RUN_SECONDS`` says how long, and goes on).
+#: longer than ``errors.LONG_WORK_SECONDS`` says how long, and goes on).
 MAX_TUNE_SECONDS = 3600.0
 
 
@@ -166,7 +165,7 @@ def _check_tune_work(
     obj: Objective, dims: list[Dimension], evaluations: int, landscape: bool, horizon: float
 ) -> None:
     """Refuse a run estimated above :data:`MAX_TUNE_SECONDS`; warn with the estimate
-    above ``LONG_RUN_SECONDS``."""
+    above ``errors.LONG_WORK_SECONDS``."""
     got = tune_seconds(obj, dims, evaluations, landscape)
     if got is None:
         return
@@ -175,13 +174,9 @@ def _check_tune_work(
         f"tuning for T = {horizon:g} takes roughly {format_seconds(total)} ({n} evaluations "
         f"of {obj.name}, about {per:.3g} s each)"
     )
-    if not total <= MAX_TUNE_SECONDS:
-        raise InputError(
-            f"--horizon: {what}, more than the limit of {format_seconds(MAX_TUNE_SECONDS)}; "
-            "a shorter --horizon or fewer --evaluations"
-        )
-    if total > LONG_RUN_SECONDS:
-        warn_user(f"--horizon: {what}; Ctrl-C stops cleanly", UserWarning)
+    check_work(
+        total, f"--horizon: {what}", MAX_TUNE_SECONDS, "a shorter --horizon or fewer --evaluations"
+    )
 
 
 def tune_power(

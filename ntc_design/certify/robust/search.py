@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import InputError, format_seconds, require_radius, warn_user
+from ...errors import InputError, check_work, format_seconds, require_radius
 from ...protocol import ProtocolDesign
 from ..dense import lap_b_float
 from .are import RICCATI_MAX_ND, RiccatiSearch
@@ -91,9 +91,8 @@ OFFSET_SECONDS = 5.5e-6
 RICCATI_SECONDS = 1.2e-5
 SPARSE_SECONDS = 3.5e-5
 BASE_SECONDS = 5.0
-#: A robust run estimated longer than LONG_SECONDS says how long before it starts; one
-#: longer than MAX_SECONDS is refused.
-LONG_SECONDS = 60.0
+#: A robust run estimated longer than MAX_SECONDS is refused (one longer than a minute
+#: says how long before it starts: errors.check_work).
 MAX_SECONDS = 3600.0
 
 
@@ -156,7 +155,7 @@ def check_robust_work(
     design: ProtocolDesign, bisection_steps: int = 3, margin: bool = True
 ) -> None:
     """Refuse a robust run estimated above :data:`MAX_SECONDS` (one line naming the size);
-    warn with the estimate above :data:`LONG_SECONDS`.
+    warn with the estimate above :data:`ntc_design.errors.LONG_WORK_SECONDS`.
 
     Parameters
     ----------
@@ -174,13 +173,7 @@ def check_robust_work(
     """
     seconds, what = robust_seconds(design, bisection_steps, margin)
     line = f"robust: roughly {format_seconds(seconds)} ({what})"
-    if not seconds <= MAX_SECONDS:
-        raise InputError(
-            f"{line}, more than the limit of {format_seconds(MAX_SECONDS)}; the network is "
-            "too large for the robust brackets"
-        )
-    if seconds > LONG_SECONDS:
-        warn_user(f"{line}; Ctrl-C stops cleanly", UserWarning)
+    check_work(seconds, line, MAX_SECONDS, "the network is too large for the robust brackets")
 
 
 def robust(
@@ -421,7 +414,6 @@ def _destabilising(p: Problem, r_lo: float, starts: int, seed: int) -> Realisati
 __all__ = [
     "BASE_SECONDS",
     "DEFAULT_RADIUS",
-    "LONG_SECONDS",
     "MAX_SECONDS",
     "ROBUST_MAX_ND",
     "check_radius",
