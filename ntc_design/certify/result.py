@@ -314,7 +314,7 @@ class RobustResult:
         """The certificate verifies; without one, whether a margin radius is proven."""
         if self.verification is not None:
             return self.verification.valid
-        return self.certificate is None and self.report.margin.lower is not None
+        return self.report.margin.lower is not None
 
 
 def certify_robust(
