@@ -16,6 +16,7 @@ from ..gain.schedule import ScheduleGain, analyse_any_gain
 from ..model import SwitchingTopology, Topology
 from ..model.paper import F_SCALE, SIGMA
 from ..model.timevarying import ExpressionTopology
+from ..numerics.linalg import RANGE_TEXT, out_of_range
 from ..present.rows import Table
 from ..protocol import ProtocolDesign, SwitchingDesign, design
 from ..protocol.digital import Digital, DigitalDesign
@@ -274,6 +275,14 @@ def _digital_design(des: Any, digital: Digital, gain, sigma, f, sigma_edges) -> 
             "--period: the digital certificate is for a fixed or switching topology, not one "
             "given as expressions of t"
         )
+    # a value no certificate can state (the subnormal 5e-324) is refused before any work
+    for flag, value in (
+        ("--noise-sigma", sigma),
+        ("--noise-f", f),
+        *(("sigma_edges", v) for v in (sigma_edges or {}).values()),
+    ):
+        if not callable(value) and out_of_range(np.asarray(value, dtype=float)):
+            raise InputError(f"{flag}: {value!r} has {RANGE_TEXT}"[:200])
     out = DigitalDesign(des, digital, gain, float(sigma), f, dict(sigma_edges or {}))
     if not any(k.accepts(out) for k in KINDS.values()):
         nd_ = (

@@ -44,7 +44,7 @@ from .format import (
     scheduled_modes,
     switching_hash,
 )
-from .kinds.base import CertificateKind, Reading, ResultsAudit, Subject
+from .kinds.base import COMMON_FIELDS, CertificateKind, Reading, ResultsAudit, Subject
 from .kinds.registry import KINDS
 
 
@@ -65,6 +65,70 @@ def _theta_check(reading: Reading) -> Check:
         else f"modes differ: {sorted(thetas)}"
     )
     return Check("θ ≠ 0, one for every mode", ok, detail)
+
+
+#: The fields of a subject's topology (dense and sparse forms, a time-varying one), of one
+#: of its edges, and of a schedule entry.
+TOPOLOGY_FIELDS = frozenset(
+    {"name", "dim", "agents", "edges", "from", "to", "weights", "matrices", "period"}
+)
+EDGE_FIELDS = frozenset({"from", "to", "weight"})
+SCHEDULE_FIELDS = frozenset({"mode", "duration"})
+
+
+def _only(doc: Any, known: frozenset[str], where: str) -> None:
+    """Refuse a field no reader checks (one line naming it): what verify does not prove is
+    not in a certificate."""
+    if not isinstance(doc, dict):
+        return  # the reader names the wrong type
+    unknown = sorted(str(k) for k in doc if k not in known)
+    if unknown:
+        raise InputError(
+            f"{where}{unknown[0]}: unknown field (known: {', '.join(sorted(known))})"[:300]
+        )
+
+
+def known_fields(kind: CertificateKind, doc: dict, source: str) -> None:
+    """Refuse a certificate with a field its kind does not read: at the top level, in the
+    subject, in each mode, its topology, its edges and the schedule's entries.
+
+    Parameters
+    ----------
+    kind : CertificateKind
+        The certificate's kind.
+    doc : dict
+        The certificate.
+    source : str
+        Its name, for messages.
+
+    Raises
+    ------
+    InputError
+        An unknown field, named.
+    """
+    _only(doc, COMMON_FIELDS | kind.fields, f"{source}: ")
+    subject = doc.get("subject")
+    _only(subject, kind.subject_fields, f"{source}: subject.")
+    if not isinstance(subject, dict):
+        return
+    tops = []
+    if "topology" in kind.subject_fields:
+        tops.append((subject.get("topology"), f"{source}: subject.topology"))
+    modes = subject.get("modes")
+    if isinstance(modes, dict):
+        for name, mode in modes.items():
+            where = f"{source}: subject.modes.{name}"
+            _only(mode, kind.mode_fields, f"{where}.")
+            if isinstance(mode, dict):
+                tops.append((mode.get("topology"), f"{where}.topology"))
+    for top, where in tops:
+        _only(top, TOPOLOGY_FIELDS, f"{where}.")
+        edges = top.get("edges") if isinstance(top, dict) else None
+        for k, e in enumerate(edges if isinstance(edges, list) else []):
+            _only(e, EDGE_FIELDS, f"{where}.edges[{k}].")
+    schedule = subject.get("schedule")
+    for k, e in enumerate(schedule if isinstance(schedule, list) else []):
+        _only(e, SCHEDULE_FIELDS, f"{source}: subject.schedule[{k}].")
 
 
 def _subject(
@@ -205,6 +269,7 @@ def verify(
         return kind_or_refusal
     kind = kind_or_refusal
     doc_subject = need(doc, "subject", dict, source)
+    known_fields(kind, doc, source)
     stated = need(doc, "digest", str, source)
     listed = need(doc, "claims", list, source)
     listed_props = need(doc, "certifies", list, source)
@@ -352,4 +417,4 @@ def verify_file(
     return verify(doc, str(p), topology, theta)
 
 
-__all__ = ["verify", "verify_file"]
+__all__ = ["known_fields", "verify", "verify_file"]

@@ -38,10 +38,11 @@ from ..io.documents import read_document
 from ..io.files import parse_scenario
 from ..model import SwitchingTopology, Topology
 from ..model.paper import F_SCALE, SIGMA
+from ..numerics.linalg import RANGE_TEXT, out_of_range
 from ..protocol.agents import AgentLaw, agent_law, make_law, mode_law
 from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.lemma1 import ProtocolDesign, SwitchingDesign
-from ..simulate.noise import NoiseModel, noise_from_document
+from ..simulate.noise import NoiseModel
 from ..simulate.scenario import load_scenario
 from ..simulate.spec import SimulationSpec
 
@@ -80,18 +81,22 @@ class ExportSource:
 def _digital(
     period: float | None, delay: int | None, given: Any, horizon: float | None, where: str
 ) -> Digital:
-    """h and D: the arguments over a block ``given`` (a scenario's or a subject's), errors
-    naming the option for an argument and the block for the file's value."""
-    base = dict(given) if isinstance(given, dict) else {}
-    if period is None and "period" not in base:
+    """h and D: the arguments over a scenario's ``digital:`` block (read as simulate reads
+    it: an unknown field is refused), errors naming the option for an argument and the
+    block for the file's value."""
+    if given is not None and not isinstance(given, dict):
+        raise InputError(f"{where}: digital: expected {{period: h, delay: D}}")
+    base = dict(given or {})
+    if period is not None:
+        base["period"] = period
+    if delay is not None:
+        base["delay"] = delay
+    if "period" not in base:
         raise InputError(
             f"--period: {where} has no digital block (period h, delay D); give --period"
         )
     try:
-        dg = Digital(
-            period if period is not None else base["period"],
-            delay if delay is not None else base.get("delay", 0),
-        )
+        dg = Digital.from_document(base)
         if horizon is not None:
             dg.steps(horizon)
     except InputError as exc:
@@ -102,6 +107,9 @@ def _digital(
         ):
             if text.startswith(field):
                 text = (flag + text[len(field) :]) if value is not None else f"{where}: {text}"
+                break
+        else:
+            text = f"{where}: {text}"
         raise InputError(text) from None
     if not math.isfinite(dg.period):
         raise InputError(f"--period: must be a finite number, got {dg.period!r}")
@@ -187,41 +195,16 @@ def from_scenario(
         )
     if not isinstance(spec.gain, (str, ScheduleGain)):
         raise InputError(f"{src}: gain: a Python function cannot be exported")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", AssumptionWarning)  # the verdict says it
-        f_cert = spec.noise.f if not callable(spec.noise.f) else 0.0
-        res = certify(
-            top,
-            spec.theta,
-            spec.margin,
-            spec.gain,
-            spec.delta,
-            noise_sigma=spec.noise.sigma,
-            noise_f=f_cert,
-            digital=dg,
-            sigma_edges={(str(a), str(b)): v for (a, b), v in spec.noise.sigma_edges.items()},
-        )
-    if not res.verification.valid:
-        failed = "; ".join(c.name for c in res.verification.failed)[:300]
-        raise InputError(
-            f"{src}: the design's certificate ({res.certificate['kind']}) does not verify "
-            f"({failed}); nothing exported"
-        )
-    if not res.proven:
-        raise InputError(
-            f"{src}: no theorem is guaranteed for this design and gain (ntc certify says "
-            "why); nothing exported"
-        )
-    design = res.design.base if isinstance(res.design, DigitalDesign) else res.design
-    if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
-        raise InputError(f"{src}: topology: this design cannot be exported")
-    law = agent_law(
-        design,
-        dg,
+    _check_noise("--sigma" if sigma is not None else f"{src}: noise.sigma", spec.noise.sigma)
+    law, res = _certified_law(
+        top,
+        spec.theta,
+        spec.margin,
+        spec.delta,
         spec.gain,
-        spec.noise.sigma,
-        spec.noise.f,
-        spec.noise.sigma_edges,
+        spec.noise,
+        dg,
+        src,
     )
     if isinstance(top, Topology):
         law = _named(law, top.name or Path(src).stem)
@@ -229,6 +212,65 @@ def from_scenario(
     return ExportSource(
         law, src, "scenario", np.asarray(x_init, dtype=float), spec.T, (_certified(res),)
     )
+
+
+def _check_noise(where: str, sigma: Any, f: Any = None) -> None:
+    """Refuse a σ or f that no certificate can state (a nonzero magnitude outside
+    [2^-250, 2^250], e.g. the subnormal 5e-324), before any work."""
+    for value in (sigma, f):
+        if value is None or callable(value):
+            continue
+        if out_of_range(np.asarray(value, dtype=float)):
+            raise InputError(f"{where}: {value!r} has {RANGE_TEXT}"[:200])
+
+
+def _certified_law(
+    top: Topology | SwitchingTopology,
+    theta: Any,
+    margin: float,
+    delta: float | None,
+    gain: str | ScheduleGain,
+    noise: NoiseModel,
+    dg: Digital,
+    src: str,
+) -> tuple[AgentLaw, Any]:
+    """Certify the sampled protocol (period h, delay D, the gain and the noise) of Lemma 1's
+    design and give its agents' law; refused unless the certificate verifies and its
+    sampled theorems are guaranteed (nothing is exported unproven)."""
+    _check_noise(f"{src}: noise", noise.sigma, None if callable(noise.f) else noise.f)
+    for value in noise.sigma_edges.values():
+        _check_noise(f"{src}: noise.sigma_edges", value)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AssumptionWarning)  # the verdict says it
+        f_cert = noise.f if not callable(noise.f) else 0.0
+        res = certify(
+            top,
+            theta,
+            margin,
+            gain,
+            delta,
+            noise_sigma=noise.sigma,
+            noise_f=f_cert,
+            digital=dg,
+            sigma_edges={(str(a), str(b)): v for (a, b), v in noise.sigma_edges.items()},
+        )
+    if not res.verification.valid:
+        failed = "; ".join(c.name for c in res.verification.failed)[:300]
+        raise InputError(
+            f"{src}: the design's certificate ({res.certificate['kind']}) does not verify "
+            f"({failed}); nothing exported"
+        )
+    sampled = [t for t in res.theorems if t.sampled]
+    if not res.proven or not sampled or not any(t.guaranteed for t in sampled):
+        raise InputError(
+            f"{src}: no theorem is guaranteed for the sampled protocol at h = {dg.period:g}, "
+            f"D = {dg.delay} with this gain (ntc certify --period says why); nothing exported"
+        )
+    design = res.design.base if isinstance(res.design, DigitalDesign) else res.design
+    if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
+        raise InputError(f"{src}: topology: this design cannot be exported")
+    law = agent_law(design, dg, gain, noise.sigma, noise.f, noise.sigma_edges)
+    return law, res
 
 
 def _named(law: AgentLaw, name: str) -> AgentLaw:
@@ -261,6 +303,24 @@ def _number(flag: str, value: Any, minimum: float | None = None) -> float:
     return v
 
 
+def _same(flag: str, given: Any, certified: Any, src: str) -> None:
+    """Refuse an option that differs from the value the certificate proves (equal is fine)."""
+    if given is None:
+        return
+    a = np.asarray(given, dtype=float)
+    b = np.asarray(certified, dtype=float)
+    if a.shape != b.shape or not np.array_equal(a, b):
+        shown = certified if np.ndim(certified) == 0 else np.asarray(certified).tolist()
+        raise InputError(
+            f"{flag}: {given!r} differs from the certified value {shown!r} ({src}); "
+            "the certificate proves only its own protocol: drop the option or certify anew"[:300]
+        )
+
+
+def _digital_gain(given: Any, where: str) -> str | ScheduleGain:
+    return given if isinstance(given, str) else schedule_from_document(given, where)
+
+
 def from_certificate(
     path: str | Path,
     period: float | None = None,
@@ -270,18 +330,25 @@ def from_certificate(
     f: float | None = None,
     doc: dict | None = None,
 ) -> ExportSource:
-    """The agents' law of a certificate's design, once the certificate verifies.
+    """The agents' law of a certificate's design, from its verified reading only.
+
+    A ``digital`` or ``digital_switching`` certificate proves the sampled protocol: h, D,
+    the gain and the noise are its subject's as verify read them, and an option that differs
+    from one of them is refused. A continuous one (``hurwitz``, ``switching``) proves
+    nothing sampled: its design (the subject's topologies, θ, margin and δ) is certified as
+    the sampled protocol at ``period`` first, as a scenario is, and refused unless the
+    sampled theorems are guaranteed.
 
     Parameters
     ----------
     path : str or Path
         The certificate (JSON).
     period, delay : float, int, optional
-        h and D (``period`` required unless the subject states a ``digital`` block).
+        h and D (``period`` required for a continuous certificate).
     gain : str or ScheduleGain, optional
-        c(t) (default: the certificate's, else 1/(1+t)).
+        c(t) of a continuous certificate (default: its tabulated schedule, else 1/(1+t)).
     sigma, f : float, optional
-        The noise (default: the subject's, else the paper's σ = 0.4, f = 0.3).
+        The noise of a continuous certificate (default: the paper's σ = 0.4, f = 0.3).
     doc : dict, optional
         The certificate already read.
 
@@ -292,8 +359,9 @@ def from_certificate(
     Raises
     ------
     InputError
-        A malformed certificate, one that does not verify, a kind without dense modes, a
-        missing period, or a gain whose conditions do not hold.
+        A malformed certificate (an unknown field included), one that does not verify, a
+        kind without dense modes, an option that differs from a certified value, a missing
+        period, or a sampled protocol without a guaranteed theorem.
     """
     src = str(path)
     doc = read_document(path) if doc is None else doc
@@ -302,45 +370,49 @@ def from_certificate(
         failed = "; ".join(c.name for c in ver.failed)[:300]
         raise InputError(f"{src}: the certificate does not verify ({failed}); nothing exported")
     kind = KINDS[str(doc["kind"])]
-    reading = kind.read(doc, src)
+    reading = kind.read(doc, src)  # the reading verify proved things about
     if not isinstance(reading.state, DenseContext):
         raise InputError(
             f"{src}: kind: a {kind.name} certificate cannot be exported (its subject has no "
-            "dense modes; the hurwitz and switching kinds can)"
+            "dense modes; the hurwitz, switching and digital kinds can)"
         )
-    subject = doc["subject"]
-    modes_doc = subject["modes"]
-    dg = _digital(period, delay, subject.get("digital"), None, f"{src}: subject")
-    sampled = subject.get("digital") if isinstance(subject.get("digital"), dict) else {}
-    stated = doc.get("gain", subject.get("gain", sampled.get("gain")))
-    if stated is not None and gain is not None:
-        raise InputError(f"--gain: the certificate states its gain ({src}: gain); drop --gain")
-    if stated is not None:
-        g: str | ScheduleGain = (
-            stated if isinstance(stated, str) else schedule_from_document(stated, f"{src}: gain")
-        )
-    else:
-        g = _gain_option(gain) or "1/(1+t)"
-    _check_gain(g, "--gain" if gain is not None else f"{src}: gain")
-    noise_doc = subject.get("noise", sampled.get("noise"))
-    if noise_doc is not None:
-        noise = noise_from_document(noise_doc)
-    else:
-        noise = NoiseModel(sigma=SIGMA, f=F_SCALE)
-    noise = NoiseModel(
-        sigma=noise.sigma if sigma is None else _number("--sigma", sigma, 0.0),
-        f=noise.f if f is None else _number("--f", f),
-        sigma_edges=noise.sigma_edges,
-    )
     ctx: DenseContext = reading.state
+    schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
+    first = next(iter(ctx.modes.values()))
+    sampled = ctx.digital
+    if sampled is None:
+        return _continuous(doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f)
+    if ctx.stated is None:
+        raise InputError(
+            f"{src}: the certificate does not prove the sampled protocol "
+            "(results.digital.stopped); nothing exported"
+        )
+    _same("--period", period, sampled.period, src)
+    _same("--delay", delay, sampled.delay, src)
+    _same("--sigma", sigma, sampled.sigma, src)
+    if f is not None and not np.array_equal(_number("--f", f) * np.eye(first.top.dim), sampled.f):
+        fs = sampled.f
+        shown = fs[0, 0] if np.array_equal(fs, fs[0, 0] * np.eye(len(fs))) else "a matrix F"
+        _same("--f", f, shown, src)
+    g = _digital_gain(sampled.gain, f"{src}: subject.digital.gain")
+    if gain is not None:
+        given = _gain_option(gain)
+        text = given.text if isinstance(given, ScheduleGain) else given
+        stated = g.text if isinstance(g, ScheduleGain) else g
+        if text != stated:
+            raise InputError(
+                f"--gain: {text!r} differs from the certified gain {stated!r} ({src}); drop --gain"[
+                    :300
+                ]
+            )
+    _check_gain(g, f"{src}: subject.digital.gain")
+    dg = Digital(sampled.period, sampled.delay)
     modes = []
     for name, m in ctx.modes.items():
-        x0 = vector(modes_doc[name]["x0"], m.top.dim, f"{src}: subject.modes.{name}.x0")
+        x0 = vector(doc["subject"]["modes"][name]["x0"], m.top.dim, f"{src}: x0")  # verified
         modes.append(
-            mode_law(name, m.top, sorted(m.b), m.b, m.delta, x0, noise.sigma, noise.sigma_edges)
+            mode_law(name, m.top, sorted(m.b), m.b, m.delta, x0, sampled.sigma, sampled.sigma_edges)
         )
-    first = next(iter(ctx.modes.values()))
-    schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
     law = make_law(
         first.top.name or Path(src).stem,
         first.top,
@@ -349,12 +421,72 @@ def from_certificate(
         schedule,
         dg,
         g,
-        noise.f,
+        sampled.f,
     )
-    notes = (f"certificate: {kind.name}, valid ({ver.method})",)
+    notes = (f"certificate: {kind.name}, valid ({ver.method}); the sampled protocol proven",)
     return ExportSource(
         law, src, f"certificate ({kind.name})", np.zeros(law.n * law.dim), None, notes
     )
+
+
+def _continuous(
+    doc: dict,
+    ctx: DenseContext,
+    schedule: tuple,
+    src: str,
+    kind: str,
+    period: float | None,
+    delay: int | None,
+    gain: str | ScheduleGain | None,
+    sigma: float | None,
+    f: float | None,
+) -> ExportSource:
+    """A continuous certificate's design certified as the sampled protocol first."""
+    dg = _digital(period, delay, None, None, f"{src} (a {kind} certificate)")
+    stated = doc.get("gain")  # a tabulated schedule whose conditions verify derived
+    if stated is not None and gain is not None:
+        raise InputError(f"--gain: the certificate states its gain ({src}: gain); drop --gain")
+    g: str | ScheduleGain = (
+        schedule_from_document(stated, f"{src}: gain")
+        if stated is not None
+        else (_gain_option(gain) or "1/(1+t)")
+    )
+    _check_gain(g, "--gain" if gain is not None else f"{src}: gain")
+    noise = NoiseModel(
+        sigma=SIGMA if sigma is None else _number("--sigma", sigma, 0.0),
+        f=F_SCALE if f is None else _number("--f", f),
+    )
+    _check_noise("--sigma" if sigma is not None else "noise", noise.sigma, noise.f)
+    tops = {name: m.top for name, m in ctx.modes.items()}
+    first_name, first = next(iter(ctx.modes.items()))
+    margin = float(doc["subject"]["modes"][first_name]["margin"])
+    deltas = {m.delta for m in ctx.modes.values()}
+    top: Topology | SwitchingTopology = (
+        SwitchingTopology(tops, tuple(schedule), source=src) if schedule else first.top
+    )
+    law, res = _certified_law(
+        top,
+        first.theta,
+        margin,
+        deltas.pop() if len(deltas) == 1 else None,
+        g,
+        noise,
+        dg,
+        src,
+    )
+    for ml in law.modes:  # the design re-derived must be the certificate's
+        m = ctx.modes.get(ml.name)
+        if m is None or ml.delta != m.delta or sorted(ml.informed) != sorted(m.b):
+            raise InputError(
+                f"{src}: subject.modes.{ml.name}: Lemma 1's design of its topology is not the "
+                "certificate's (δ or the informed agents differ); nothing exported"
+            )
+    law = _named(law, first.top.name or Path(src).stem)
+    notes = (
+        f"certificate: {kind}, valid (continuous); the sampled protocol certified here",
+        _certified(res),
+    )
+    return ExportSource(law, src, f"certificate ({kind})", np.zeros(law.n * law.dim), None, notes)
 
 
 def is_certificate(doc: Any) -> bool:

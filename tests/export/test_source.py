@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
+from ntc_design.certify import verify
 from ntc_design.errors import InputError
 from ntc_design.export.source import from_certificate, from_scenario, is_certificate, load_source
 from ntc_design.gain.schedule import ScheduleGain
@@ -155,7 +156,9 @@ def test_a_certificate_that_does_not_verify_is_refused(tmp_path):
 
 @pytest.mark.hostile
 def test_certificate_option_refusals(tmp_path):
-    with pytest.raises(InputError, match=r"^--period: .*g1.json: subject has no digital block"):
+    with pytest.raises(
+        InputError, match=r"^--period: .*g1.json \(a hurwitz certificate\) has no digital block"
+    ):
         from_certificate(CERTS / "g1.json")
     with pytest.raises(InputError, match=r"^--gain: c\(t\) = 1 does not satisfy"):
         from_certificate(CERTS / "g1.json", period=0.1, gain="1")
@@ -172,13 +175,14 @@ def test_a_kind_without_dense_modes_is_refused(g1_robust, tmp_path):
         from_certificate(tmp_path / "r.json", period=0.1, doc=doc)
 
 
-def _sealed(tmp_path, **subject):
-    """certificates/g1.json with more subject fields (as a digital certificate states
-    them), its digests sealed again: it still verifies."""
+def _sealed(tmp_path, name="g1.json", top=None, **subject):
+    """A certificate with more fields (top-level ``top``, subject ``subject``), its digests
+    sealed again as a forger would."""
     from ntc_design.certify.format import finish
 
-    doc = json.loads((CERTS / "g1.json").read_text())
+    doc = json.loads((CERTS / name).read_text())
     doc["subject"].update(subject)
+    doc.update(top or {})
     for key in ("digest", "subject_digest", "versions"):
         doc.pop(key, None)
     p = tmp_path / "sealed.json"
@@ -186,20 +190,121 @@ def _sealed(tmp_path, **subject):
     return p
 
 
-def test_a_subject_that_states_period_gain_and_noise(tmp_path):
-    p = _sealed(
-        tmp_path,
-        digital={"period": 0.05, "delay": 1},
-        gain="2/(2+t)",
-        noise={"sigma": 0.2, "f": 0.1, "sigma_edges": [{"from": 5, "to": 6, "sigma": 0.7}]},
-    )
-    law = load_source(p).law
-    assert law.digital == Digital(0.05, 1) and law.gain.label == "2/(2+t)"
-    assert sorted(set(law.modes[0].sigma.tolist())) == [0.2, 0.7]
-    assert (law.noise_f == 0.1 * np.eye(3)).all()
-    assert load_source(p, period=0.02, sigma=0.3).law.digital == Digital(0.02, 1)
-    with pytest.raises(InputError, match=r"^--gain: the certificate states its gain"):
-        load_source(p, gain="1/(1+t)")
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "name, top, subject, field",
+    [
+        ("g1_digital.json", {"gain": "50/(1+t)"}, {}, "gain"),
+        ("g1_digital.json", {}, {"gain": "50/(1+t)"}, "subject.gain"),
+        ("g1_digital.json", {}, {"noise": {"sigma": 0.0}}, "subject.noise"),
+        ("g1.json", {}, {"digital": {"period": 0.05, "delay": 1}}, "subject.digital"),
+        ("g1.json", {"note": 1}, {}, "note: unknown field"),
+        ("switching.json", {}, {"gain": "2/(2+t)"}, "subject.gain: unknown field"),
+    ],
+)
+def test_a_resealed_certificate_with_an_added_field_is_refused(tmp_path, name, top, subject, field):
+    # verify refuses it, and so export: nothing is read that verify did not prove
+    p = _sealed(tmp_path, name, top, **subject)
+    doc = json.loads(p.read_text())
+    for call in (lambda: verify(doc, "sealed.json"), lambda: load_source(p, period=0.1)):
+        with pytest.raises(InputError) as err:
+            call()
+        msg = str(err.value)
+        assert "\n" not in msg and "sealed.json" in msg and field in msg, msg
+
+
+def test_a_digital_certificate_exports_what_it_proves():
+    doc = json.loads((CERTS / "g1_digital.json").read_text())
+    sub = doc["subject"]["digital"]
+    src = load_source(CERTS / "g1_digital.json")
+    law = src.law
+    assert law.digital == Digital(sub["period"], sub["delay"]) == Digital(0.1, 1)
+    assert law.gain.label == sub["gain"] == "1/(1+t)"
+    assert law.modes[0].sigma.tolist() == [sub["noise"]["sigma"]] * 8
+    assert (law.noise_f == sub["noise"]["f"] * np.eye(3)).all()
+    assert "sampled protocol proven" in src.notes[0]
+    # equal options are fine
+    same = load_source(CERTS / "g1_digital.json", period=0.1, delay=1, sigma=0.4, f=0.3)
+    assert same.law.digital == law.digital
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "kwargs, needle",
+    [
+        ({"period": 0.5}, "--period: 0.5 differs from the certified value 0.1"),
+        ({"delay": 0}, "--delay: 0 differs from the certified value 1"),
+        ({"sigma": 0.2}, "--sigma: 0.2 differs from the certified value 0.4"),
+        ({"f": 0.25}, "--f: 0.25 differs from the certified value"),
+        ({"gain": "50/(1+t)"}, "--gain: '50/(1+t)' differs from the certified gain '1/(1+t)'"),
+    ],
+)
+def test_an_option_that_differs_from_the_proof_is_refused(kwargs, needle):
+    with pytest.raises(InputError) as err:
+        load_source(CERTS / "g1_digital.json", **kwargs)
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(needle) and "g1_digital.json" in msg, msg
+
+
+def test_a_continuous_certificate_is_certified_sampled_first():
+    # g1.json proves the continuous protocol only: the sampled one is certified here
+    src = load_source(CERTS / "g1.json", period=0.1, delay=1)
+    assert "the sampled protocol certified here" in src.notes[0]
+    assert "for the sampled one (contracting from step k₀ = 3032)" in src.notes[1]
+    # at h = 0.5 the h = 0.1 proof does not hold; certified anew at h = 0.5, it does
+    assert "(contracting from step k₀ = 13)" in load_source(CERTS / "g1.json", period=0.5).notes[1]
+
+
+@pytest.mark.hostile
+def test_a_continuous_certificate_whose_sampled_protocol_is_unproven_is_refused(monkeypatch):
+    # a sampled protocol whose theorems are not guaranteed (here: every sampled verdict
+    # turned undetermined) exports nothing, whatever the continuous certificate proves
+    import dataclasses
+    import types
+
+    import ntc_design.export.source as source
+
+    real = source.certify
+
+    def unproven(*args, **kwargs):
+        res = real(*args, **kwargs)
+        theorems = tuple(
+            types.SimpleNamespace(theorem=t.theorem, sampled=True, guaranteed=None)
+            if t.sampled
+            else t
+            for t in res.theorems
+        )
+        return dataclasses.replace(res, theorems=theorems)
+
+    monkeypatch.setattr(source, "certify", unproven)
+    with pytest.raises(InputError) as err:
+        load_source(CERTS / "g1.json", period=0.5)
+    msg = str(err.value)
+    assert "\n" not in msg and "no theorem is guaranteed for the sampled protocol" in msg, msg
+    assert "h = 0.5" in msg and "nothing exported" in msg
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("value", [5e-324, 1e-300])
+def test_a_subnormal_sigma_is_refused_up_front(value):
+    for call in (
+        lambda: from_scenario(DEADLINE, period=0.1, sigma=value),
+        lambda: load_source(CERTS / "g1.json", period=0.1, sigma=value),
+    ):
+        with pytest.raises(InputError) as err:
+            call()
+        msg = str(err.value)
+        assert msg.startswith("--sigma: ") and repr(value) in msg and "\n" not in msg, msg
+
+
+@pytest.mark.hostile
+def test_an_unknown_digital_key_is_refused_as_simulate_does(tmp_path):
+    p = _scenario(tmp_path, "digital: {period: 0.1, delya: 1}\n")
+    with pytest.raises(InputError) as err:
+        from_scenario(p)
+    assert str(err.value).startswith(f"{p}: digital.delya: unknown field"), str(err.value)
+    with pytest.raises(InputError, match=r"digital.delya: unknown field"):
+        from_scenario(p, period=0.1, delay=1)  # the options do not hide it
 
 
 @pytest.mark.hostile

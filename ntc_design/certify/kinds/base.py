@@ -452,6 +452,28 @@ class IssueOptions:
     rate_method: str = "lyapunov"
 
 
+#: The top-level fields of every kind's certificates (``gain``: a tabulated schedule, whose
+#: conditions verify derives; ``verification_method``: the kinds that state it).
+COMMON_FIELDS = frozenset(
+    {
+        "format",
+        "version",
+        "kind",
+        "certifies",
+        "size",
+        "subject",
+        "claims",
+        "results",
+        "solver",
+        "subject_digest",
+        "versions",
+        "digest",
+        "verification_method",
+        "gain",
+    }
+)
+
+
 class CertificateKind(ABC):
     """A kind of certificate. Subclass it in one module, give it the class attributes,
     implement the abstract methods and add an instance to
@@ -471,6 +493,13 @@ class CertificateKind(ABC):
         Whether its subject is a schedule of modes.
     method : str
         How verify proves its claims (for ``Verification.method``).
+    fields : frozenset of str
+        The top-level fields its certificates may hold besides :data:`COMMON_FIELDS`
+        (verify refuses any other: a field no reader checks is never trusted).
+    subject_fields : frozenset of str
+        The fields its ``subject`` may hold.
+    mode_fields : frozenset of str
+        The fields of each ``subject.modes`` entry (kinds with modes).
     """
 
     name: ClassVar[str]
@@ -479,6 +508,11 @@ class CertificateKind(ABC):
     required: ClassVar[frozenset[Property]]
     switching: ClassVar[bool]
     method: ClassVar[str]
+    fields: ClassVar[frozenset[str]] = frozenset({"matrices"})
+    subject_fields: ClassVar[frozenset[str]] = frozenset({"modes"})
+    mode_fields: ClassVar[frozenset[str]] = frozenset(
+        {"topology", "topology_hash", "theta", "margin", "delta", "k1", "x0", "informed", "B"}
+    )
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         # an override without a docstring inherits the base's (as Sphinx's autodoc does)
@@ -743,6 +777,7 @@ class CertificateKind(ABC):
 
 
 __all__ = [
+    "COMMON_FIELDS",
     "CertificateKind",
     "IssueOptions",
     "ResultRow",

@@ -93,6 +93,14 @@ def _gain_document(gain: Any) -> Any:
     raise InputError("gain: the digital certificate needs c(t) as an expression or a schedule")
 
 
+def _only(doc: Any, known: tuple[str, ...], where: str) -> None:
+    """Refuse a field this reader does not read, naming it."""
+    if isinstance(doc, dict):
+        unknown = sorted(str(k) for k in doc if k not in known)
+        if unknown:
+            raise InputError(f"{where}.{unknown[0]}: unknown field (known: {', '.join(known)})")
+
+
 def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
     """Parse ``subject.digital``.
 
@@ -116,6 +124,7 @@ def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
     """
     where = f"{source}: subject.digital"
     sub = need(need(doc, "subject", dict, source), "digital", dict, f"{source}: subject")
+    _only(sub, ("period", "delay", "gain", "noise"), where)
     try:
         dg = Digital(sub.get("period"), sub.get("delay"))
     except InputError as exc:
@@ -132,6 +141,9 @@ def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
     elif not isinstance(gain, str):
         raise InputError(f"{where}.gain: expected an expression in t or a schedule")
     noise = need(sub, "noise", dict, where)
+    _only(noise, ("sigma", "f", "sigma_edges"), f"{where}.noise")
+    if isinstance(gain, dict):
+        _only(gain, ("t", "c", "interpolation", "tail"), f"{where}.gain")
     sigma = number(need(noise, "sigma", (int, float), f"{where}.noise"), f"{where}.noise.sigma")
     if sigma < 0:
         raise InputError(f"{where}.noise.sigma: must be >= 0")
@@ -144,6 +156,7 @@ def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
     edges: dict = {}
     for k, e in enumerate(need(noise, "sigma_edges", list, f"{where}.noise")):
         w = f"{where}.noise.sigma_edges[{k}]"
+        _only(e, ("from", "to", "sigma"), w)
         if (
             not isinstance(e, dict)
             or not isinstance(e.get("from"), str)
@@ -448,6 +461,7 @@ class DigitalKind(_DigitalMixin, HurwitzKind):
     properties = (Property.HURWITZ, Property.DECAY_RATE, MS)
     required = frozenset({Property.HURWITZ})
     base_name = "hurwitz"
+    subject_fields = frozenset({"modes", "digital"})
 
     def accepts(self, design: Any) -> bool:
         return isinstance(design, DigitalDesign) and HurwitzKind.accepts(self, design.base)
@@ -462,6 +476,7 @@ class DigitalSwitchingKind(_DigitalMixin, SwitchingKind):
     properties = (Property.SYMMETRIC_PART, Property.COMMON_LYAPUNOV, MS)
     required = frozenset({Property.SYMMETRIC_PART})
     base_name = "switching"
+    subject_fields = frozenset({"modes", "schedule", "switching_hash", "digital"})
 
     def accepts(self, design: Any) -> bool:
         return isinstance(design, DigitalDesign) and SwitchingKind.accepts(self, design.base)

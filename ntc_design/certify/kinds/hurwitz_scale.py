@@ -112,6 +112,8 @@ class HurwitzScaleKind(CertificateKind):
     required = frozenset({Property.HURWITZ})
     switching = False
     method = "verified-float (component-wise)"
+    fields = frozenset({"components"})
+    mode_fields = frozenset({"topology", "theta", "margin", "delta", "informed"})
 
     def accepts(self, design: Any) -> bool:
         return isinstance(design, ProtocolDesign) and design.topology.nd > DENSE_CERT_MAX_ND

@@ -250,6 +250,8 @@ class RobustKind(CertificateKind):
     required = frozenset({Property.ROBUST_MARGIN})
     switching = False
     method = "exact-rational, or verified-float past the LMI size"
+    fields = frozenset({"matrices", "realizations"})
+    subject_fields = frozenset({"modes", "radius"})
 
     def accepts(self, design: Any) -> bool:
         # brackets whose margin search proved a radius, within the dense proofs' reach

@@ -124,6 +124,7 @@ class SwitchingKind(DenseKind):
     required = frozenset({Property.SYMMETRIC_PART})
     switching = True
     method = "exact-rational"
+    subject_fields = frozenset({"modes", "schedule", "switching_hash"})
 
     def accepts(self, design: Any) -> bool:
         return isinstance(design, SwitchingDesign) and switching_nd(design) <= DENSE_CERT_MAX_ND

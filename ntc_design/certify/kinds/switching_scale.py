@@ -66,6 +66,9 @@ class SwitchingScaleKind(CertificateKind):
     required = frozenset({Property.SYMMETRIC_PART})
     switching = True
     method = "verified-float (sparse Cholesky per mode)"
+    fields = frozenset({"proofs"})
+    subject_fields = frozenset({"modes", "schedule", "switching_hash"})
+    mode_fields = frozenset({"topology", "theta", "margin", "delta", "informed"})
 
     def accepts(self, design: Any) -> bool:
         return isinstance(design, SwitchingDesign) and switching_nd(design) > DENSE_CERT_MAX_ND

@@ -106,6 +106,9 @@ class TimeVaryingKind(CertificateKind):
     required = frozenset({Property.UNIFORM_SYMMETRIC_PART})
     switching = False
     method = "interval"
+    fields = frozenset({"intervals"})
+    subject_fields = frozenset({"topology", "theta", "margin", "noise", "gain"})
+    mode_fields = frozenset()
 
     def accepts(self, design: Any) -> bool:
         return isinstance(design, TimeVaryingDesign)
