@@ -17,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import __version__
+from ..errors import InputError
 from ..expr.code import literal
 from ..protocol.agents import AgentLaw, ModeLaw
 
@@ -212,22 +213,34 @@ def _comment(text: str) -> str:
     return s.replace("*/", "* /").replace("/*", "/ *")[:200]
 
 
+#: The C rule computes (k mod P)·step in 64 bits: P below 2^31 ticks keeps it exact.
+MAX_TICKS = 2**31
+
+
 def _mode_rule(law: AgentLaw) -> str:
     if not law.schedule:
         return "int ntc_mode_at(long k)\n{\n    (void)k;\n    return 0;\n}\n"
+    tk = law.schedule_ticks
+    if tk.period >= MAX_TICKS:
+        raise InputError(
+            f"schedule: h and the durations as decimals need {tk.period:.3g} ticks of 1/{tk.unit} s "
+            f"per period (the C rule's limit is 2^31); give h and the durations with fewer "
+            "decimals"
+        )
     s = len(law.schedule)
-    return f"""/* the schedule: (mode, duration) {len(law.schedule)} entries, period P = the sum of the
-   durations; step k runs the entry whose cumulative end first exceeds
-   tau = t_k - floor(t_k / P) P (a switching instant belongs to the next entry) */
+    return f"""/* the schedule: (mode, duration) {s} entries, decided exactly in integer ticks of
+   1/{tk.unit} s: h and every duration are their decimals, t_k = k h and the switching
+   instants fall on ticks. Step k runs the entry whose cumulative end first exceeds
+   tau = t_k mod P (a switching instant belongs to the next entry), as the toolkit does. */
 #define NTC_SCHEDULE {s}
-static const double ntc_schedule_period = {literal(law.schedule_period)};
-static const double ntc_schedule_ends[NTC_SCHEDULE] = {_vec(law.schedule_ends)};
+static const long long ntc_ticks_step = {tk.step}LL;   /* h mod P, in ticks */
+static const long long ntc_ticks_period = {tk.period}LL; /* P, in ticks */
+static const long long ntc_schedule_ends[NTC_SCHEDULE] = {{{", ".join(f"{e}LL" for e in tk.ends)}}};
 static const int ntc_schedule_mode[NTC_SCHEDULE] = {{{", ".join(str(m) for m in law.schedule_modes)}}};
 
 int ntc_mode_at(long k)
 {{
-    const double t = ntc_time(k);
-    const double tau = t - floor(t / ntc_schedule_period) * ntc_schedule_period;
+    const long long tau = ((long long)k % ntc_ticks_period) * ntc_ticks_step % ntc_ticks_period;
     int s = 0;
     while (s < NTC_SCHEDULE - 1 && !(tau < ntc_schedule_ends[s])) s++;
     return ntc_schedule_mode[s];

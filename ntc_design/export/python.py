@@ -121,16 +121,19 @@ def _doc(text: str) -> str:
 def _mode_rule(law: AgentLaw) -> str:
     if not law.schedule:
         return 'def mode_at(k):\n    """The mode of step k."""\n    return 0\n'
-    return f'''SCHEDULE_PERIOD = {literal(law.schedule_period)}
-SCHEDULE_ENDS = {_vec(law.schedule_ends)}
+    tk = law.schedule_ticks
+    return f'''# the schedule decided exactly in integer ticks of 1/{tk.unit} s (h and the durations as
+# their decimals): t_k = k h and the switching instants fall on ticks
+TICKS_STEP = {tk.step}  # h mod P, in ticks
+TICKS_PERIOD = {tk.period}  # P, in ticks
+SCHEDULE_ENDS = {tuple(tk.ends)!r}
 SCHEDULE_MODE = {tuple(law.schedule_modes)!r}
 
 
 def mode_at(k):
     """The mode of step k: the schedule entry whose cumulative end first exceeds
-    tau = t_k - floor(t_k / P) P (P the sum of the durations)."""
-    t = time_of(k)
-    tau = t - float(math.floor(t / SCHEDULE_PERIOD)) * SCHEDULE_PERIOD
+    tau = t_k mod P (a switching instant belongs to the next entry), in exact integers."""
+    tau = k % TICKS_PERIOD * TICKS_STEP % TICKS_PERIOD
     s = 0
     while s < len(SCHEDULE_ENDS) - 1 and not tau < SCHEDULE_ENDS[s]:
         s += 1

@@ -22,6 +22,7 @@ from ..expr.code import literal
 from ..gain.schedule import ScheduleGain
 from ..io.outputs import check_output_folder, output_folder
 from ..protocol.agents import AgentLaw
+from ..protocol.digital import decimal_fraction
 from ..simulate.replay import replay
 from .c import COMPILE, c_files
 from .c import FILES as C_FILES
@@ -196,9 +197,13 @@ def readme(src: ExportSource, lang: str) -> str:
     sched = (
         [
             "Schedule (mode, duration), repeated with period P = "
-            f"{literal(law.schedule_period)}: " + ", ".join(f"{m} {d:g}" for m, d in law.schedule),
+            f"{literal(law.schedule_period)}: " + ", ".join(f"{m} {d!r}" for m, d in law.schedule),
             "Step k runs the mode of the entry whose cumulative end first exceeds",
-            "tau = t_k - floor(t_k / P) * P (a switching instant belongs to the next entry).",
+            "tau = t_k mod P (a switching instant belongs to the next entry), decided exactly:",
+            "h and the durations are the decimals written above (0.1 is 1/10), so the code",
+            f"counts integer ticks of 1/{law.schedule_ticks.unit} s (h = "
+            f"{decimal_fraction(law.digital.period) * law.schedule_ticks.unit} ticks, "
+            f"P = {law.schedule_ticks.period} ticks).",
         ]
         if law.schedule
         else []

@@ -5,7 +5,7 @@ operations in the same order, so all three agree bit for bit.
 
 The model (:mod:`ntc_design.protocol.digital`): period h, delay D, t_k = k·h (the double
 product), c_k = c(t_k), the mode of step k by :func:`~ntc_design.protocol.digital.step_modes`
-at t_k, the initial state held before the start. In x coordinates
+(exact: t_k = k·h against the schedule, h and the durations as their decimals), the initial state held before the start. In x coordinates
 
     x_{k+1} = x_k + h c_k (u − L_B x_{k−D}) + c_k √h Σ_e (g_e ξ_{k,e,1} + G_e x_{k−D} ξ_{k,e,2}),
 
@@ -58,7 +58,7 @@ from ..errors import InputError
 from ..gain.code import GainCode
 from ..gain.schedule import ScheduleGain
 from ..model import Label, Topology
-from .digital import Digital, step_modes
+from .digital import Digital, ScheduleTicks, step_modes
 from .lemma1 import ProtocolDesign, SwitchingDesign, input_vector
 
 
@@ -310,6 +310,12 @@ class AgentLaw:
         return np.cumsum([float(d) for _, d in self.schedule]).tolist()
 
     @property
+    def schedule_ticks(self) -> ScheduleTicks:
+        """The schedule and h on one integer clock (:class:`ScheduleTicks`), the exact
+        rule of :func:`step_modes` that the exported code runs."""
+        return ScheduleTicks.of(self.schedule, self.digital.period)
+
+    @property
     def schedule_modes(self) -> list[int]:
         """The mode index of each schedule entry."""
         names = self.mode_names
@@ -331,7 +337,7 @@ class AgentLaw:
         if not self.schedule:
             return np.zeros(steps, dtype=np.int64)
         t = np.arange(steps, dtype=float) * self.digital.period
-        return step_modes(self.schedule, t, self.mode_names)
+        return step_modes(self.schedule, t, self.mode_names, self.digital.period)
 
     def normals_per_step(self, steps: int) -> np.ndarray:
         """2·E of each step's mode: the normals step k consumes.

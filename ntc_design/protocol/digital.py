@@ -19,8 +19,11 @@ exported code share).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
+from itertools import accumulate
 from typing import Any
 
 import numpy as np
@@ -242,22 +245,109 @@ class DigitalDesign:
         return {**self.base.to_dict(), "digital": self.digital.to_dict()}
 
 
+def decimal_fraction(x: float) -> Fraction:
+    """The exact rational of a number's shortest decimal (``repr``): 0.1 is 1/10, the
+    value the user wrote, not the double nearest to it.
+
+    Parameters
+    ----------
+    x : float
+        A finite number.
+
+    Returns
+    -------
+    fractions.Fraction
+
+    Examples
+    --------
+    >>> decimal_fraction(0.013)
+    Fraction(13, 1000)
+    """
+    return Fraction(repr(float(x)))
+
+
+@dataclass(frozen=True)
+class ScheduleTicks:
+    """A periodic schedule and a sampling period on one integer clock of 1/L seconds: h,
+    every duration and so every switching instant are their decimals
+    (:func:`decimal_fraction`), L their common denominator, so t_k = k·h and the instants
+    are compared exactly.
+
+    Attributes
+    ----------
+    unit : int
+        L (a tick is 1/L s).
+    step : int
+        h in ticks, reduced modulo the period (k·h mod P is k·step mod P).
+    period : int
+        P, the schedule's period, in ticks.
+    ends : tuple of int
+        The cumulative ends of the entries, in ticks (the last is P).
+    """
+
+    unit: int
+    step: int
+    period: int
+    ends: tuple[int, ...]
+
+    @classmethod
+    def of(cls, schedule: Sequence[tuple[str, float]], period: float) -> ScheduleTicks:
+        """The ticks of a schedule sampled every ``period`` seconds.
+
+        Parameters
+        ----------
+        schedule : sequence of (str, float)
+            (mode, duration) pairs.
+        period : float
+            h.
+
+        Returns
+        -------
+        ScheduleTicks
+        """
+        h = decimal_fraction(period)
+        ds = [decimal_fraction(d) for _, d in schedule]
+        unit = math.lcm(h.denominator, *(d.denominator for d in ds))
+        ends = tuple(accumulate(int(d * unit) for d in ds))
+        return cls(unit, int(h * unit) % ends[-1], ends[-1], ends)
+
+    def tau(self, steps: np.ndarray) -> np.ndarray:
+        """τ_k = k·h mod P in ticks, exactly (int64 while P < 2^31, Python integers past it).
+
+        Parameters
+        ----------
+        steps : numpy.ndarray
+            k (integers >= 0).
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        k = np.asarray(steps, dtype=np.int64)
+        if self.period < 2**31:  # (k mod P)·step < 2^62: no overflow
+            return (k % self.period) * self.step % self.period
+        return np.array([int(x) * self.step % self.period for x in k.tolist()], dtype=object)
+
+
 def step_modes(
-    schedule: Sequence[tuple[str, float]], times: np.ndarray, names: Sequence[str]
+    schedule: Sequence[tuple[str, float]], times: np.ndarray, names: Sequence[str], period: float
 ) -> np.ndarray:
-    """The mode of each sample time on a periodic schedule: with τ = t − ⌊t / P⌋·P (P the
-    schedule's period, the plain sum of its durations) the first entry whose cumulative
-    end exceeds τ (a switching instant belongs to the next mode). The simulator, the
-    certificate and the exported code use this one rule at t_k = k·h.
+    """The mode of each sample t_k = k·h on a periodic schedule, decided exactly: h and the
+    durations are their decimals (0.1 is 1/10; :class:`ScheduleTicks`), τ = t_k mod P
+    and the step runs the first entry whose cumulative end exceeds τ (a switching instant
+    belongs to the next mode). The simulator, the replay and the exported code use this one
+    rule (the exported code in integer ticks).
 
     Parameters
     ----------
     schedule : sequence of (str, float)
         The schedule's (mode, duration) pairs in order.
     times : numpy.ndarray
-        The sample times t_k = k·h.
+        The sample times t_k = k·h (as doubles; k = round(t_k / h)).
     names : sequence of str
         The modes, in the order the indices refer to.
+    period : float
+        h.
 
     Returns
     -------
@@ -267,17 +357,26 @@ def step_modes(
     Examples
     --------
     >>> t = np.arange(6) * 0.25
-    >>> step_modes([("a", 0.5), ("b", 0.5)], t, ["a", "b"]).tolist()
+    >>> step_modes([("a", 0.5), ("b", 0.5)], t, ["a", "b"], 0.25).tolist()
     [0, 0, 1, 1, 0, 0]
     """
-    durations = [float(d) for _, d in schedule]
-    period = float(sum(durations))  # as SwitchingTopology.period sums them
-    ends = np.cumsum(durations)
-    t = np.asarray(times, dtype=float)
-    tau = t - np.floor(t / period) * period
-    slot = np.minimum(np.searchsorted(ends, tau, side="right"), len(durations) - 1)
+    ticks = ScheduleTicks.of(schedule, period)
+    k = np.rint(np.asarray(times, dtype=float) / float(period)).astype(np.int64)
+    tau = ticks.tau(k)
+    slot = np.searchsorted(
+        np.array(ticks.ends, dtype=object if tau.dtype == object else np.int64), tau, side="right"
+    )
+    slot = np.minimum(slot, len(ticks.ends) - 1)
     index = np.array([list(names).index(m) for m, _ in schedule], dtype=np.int64)
     return index[slot]
 
 
-__all__ = ["MAX_DELAY", "MAX_STEPS", "Digital", "DigitalDesign", "step_modes"]
+__all__ = [
+    "MAX_DELAY",
+    "MAX_STEPS",
+    "Digital",
+    "DigitalDesign",
+    "ScheduleTicks",
+    "decimal_fraction",
+    "step_modes",
+]

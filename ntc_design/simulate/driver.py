@@ -545,7 +545,10 @@ def _simulate_modes(
     systems, segments, notes, n, d = pm.systems, pm.segments, pm.notes, pm.n, pm.d
     if spec.digital is not None:
         grid, more = digital_grid(
-            spec.digital, spec.T, spec.save.resolve(spec.T), _step_mode(topology, pm)
+            spec.digital,
+            spec.T,
+            spec.save.resolve(spec.T),
+            _step_mode(topology, pm, spec.digital.period),
         )
         notes.extend(more)
         check_gain(cfun, gain_text, grid.t[:-1])
@@ -637,18 +640,18 @@ def sampled_grid(
     if is_expression_topology(topology):
         raise InputError("digital: a topology given as expressions of t is not sampled")
     fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
-    return digital_grid(digital, t_end, save_times, _step_mode(fixed, pm))[0]
+    return digital_grid(digital, t_end, save_times, _step_mode(fixed, pm, digital.period))[0]
 
 
 def _step_mode(
-    topology: Topology | SwitchingTopology | TimeVaryingTopology, pm: PreparedModes
+    topology: Topology | SwitchingTopology | TimeVaryingTopology, pm: PreparedModes, period: float
 ) -> Callable[[np.ndarray], np.ndarray] | None:
     """The mode index at each sample time: the schedule's rule for a switching set
     (:func:`~ntc_design.protocol.digital.step_modes`), the re-design segment for a sampled
     A(t), None for one topology."""
     if isinstance(topology, SwitchingTopology):
         schedule = topology.schedule
-        return lambda t: step_modes(schedule, t, pm.names)
+        return lambda t: step_modes(schedule, t, pm.names, period)
     if isinstance(topology, TimeVaryingTopology):
         starts = np.array([a for a, _, _ in pm.segments])
         index = np.array([m for _, _, m in pm.segments], dtype=np.int64)

@@ -4,6 +4,7 @@ the same normals (G1 with D = 0 and 2, the switching schedule with every mode sa
 schedule-table gain), and its replay program refuses malformed input."""
 
 import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -162,3 +163,54 @@ def test_a_gain_that_is_not_finite_stops_the_replay(g1_design, tmp_path):
     exe = build_c(tmp_path, law)
     res = run_program(exe, law, X0, 20, normals_for(law, 20), expect=1)
     assert "c(t) = inf is not finite at step 10" in res.stderr
+
+
+def _exact_modes(law, steps):
+    """The mode of t_k = k·h, h and the durations exact fractions of their decimals."""
+    from fractions import Fraction
+
+    h = Fraction(repr(law.digital.period))
+    ds = [Fraction(repr(d)) for _, d in law.schedule]
+    period = sum(ds)
+    out = []
+    for k in range(steps):
+        tau = (k * h) % period
+        ends = [sum(ds[: s + 1]) for s in range(len(ds))]
+        pick = next(s for s, e in enumerate(ends) if tau < e)
+        out.append(law.mode_names.index(law.schedule[pick][0]))
+    return out
+
+
+@needs_cc
+@pytest.mark.parametrize("h, steps", [(0.1, 1000), (0.013, 2000)])
+def test_the_switching_rule_is_exact_in_the_toolkit_c_and_python(sw_design, tmp_path, h, steps):
+    # the paper's set, G2 G2 G1 G3 G3 with Δt = 0.02 (P = 0.1): h = P and h = 0.013 hit
+    # the switching instants exactly; every implementation decides them as exact fractions
+    law = agent_law(sw_design, Digital(h, 0), "1/(1+t)", 0.4, 0.3)
+    truth = _exact_modes(law, steps)
+    assert law.step_modes(steps).tolist() == truth
+    if h == 0.1:
+        assert set(truth) == {law.mode_names.index("G2")}
+    build_c(tmp_path, law)
+    probe = tmp_path / "modes.c"
+    probe.write_text(
+        '#include <stdio.h>\n#include "ntc_protocol.h"\nint main(void)\n{\n    long k;\n'
+        f'    for (k = 0; k < {steps}; k++) printf("%d\\n", ntc_mode_at(k));\n'
+        "    return 0;\n}\n"
+    )
+    cmd = [CC, *CFLAGS, "-o", "modes", "modes.c", "ntc_protocol.c", "-lm"]
+    res = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    out = subprocess.run([str(tmp_path / "modes")], capture_output=True, text=True).stdout
+    assert [int(w) for w in out.split()] == truth
+    from tests.support.export import write_python
+
+    write_python(tmp_path / "py", law)
+    code = (
+        "import sys; sys.path.insert(0, sys.argv[1]); import ntc_protocol as p; "
+        f"print(*[p.mode_at(k) for k in range({steps})])"
+    )
+    res = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path / "py")], capture_output=True, text=True
+    )
+    assert [int(w) for w in res.stdout.split()] == truth, res.stderr

@@ -91,12 +91,13 @@ def test_switching_steps_follow_the_shared_rule(switching_set, theta):
     k = 300
     t = np.arange(k) * 0.013
     names = list(switching_set.modes)
-    assert (law.step_modes(k) == step_modes(switching_set.schedule, t, names)).all()
+    assert (law.step_modes(k) == step_modes(switching_set.schedule, t, names, 0.013)).all()
     assert set(law.step_modes(k).tolist()) == {0, 1, 2}  # every mode is sampled
     edges = np.array([m.n_edges for m in law.modes])
     assert (law.normals_per_step(k) == 2 * edges[law.step_modes(k)]).all()
     assert law.schedule_period == float(sum(d for _, d in switching_set.schedule))
     assert law.schedule_ends == np.cumsum([d for _, d in switching_set.schedule]).tolist()
+    assert law.schedule_ticks.ends == (20, 40, 60, 80, 100) and law.schedule_ticks.step == 13
     assert [law.mode_names[m] for m in law.schedule_modes] == [m for m, _ in law.schedule]
 
 

@@ -1,12 +1,20 @@
 """Tests of :mod:`ntc_design.protocol.digital`: the sampled protocol's options and the mode
 each sample uses on a switching schedule."""
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 
 from ntc_design import SwitchingTopology
 from ntc_design.errors import InputError
-from ntc_design.protocol.digital import MAX_DELAY, Digital, step_modes
+from ntc_design.protocol.digital import (
+    MAX_DELAY,
+    Digital,
+    ScheduleTicks,
+    decimal_fraction,
+    step_modes,
+)
 
 
 def test_steps_round_t_over_h_and_say_when_t_is_not_a_whole_number_of_periods():
@@ -66,17 +74,56 @@ def test_the_block_round_trips():
     assert Digital.from_document({"period": 1}).delay == 0
 
 
-def test_step_modes_agree_with_the_schedule_at_every_sample(switching_set):
-    """The rule is SwitchingTopology.mode_at at t_k = k·h (the switching instants, which
-    belong to the next mode, included: h = 0.01 hits every one of G2 G2 G1 G3 G3 × 0.02)."""
+def _exact_truth(schedule, names, h, steps):
+    """The mode of t_k = k·h with h and the durations as exact fractions of their decimals,
+    written out: τ = t_k − ⌊t_k / P⌋·P, the first entry whose end exceeds τ."""
+    hq = Fraction(repr(h))
+    ds = [Fraction(repr(d)) for _, d in schedule]
+    period = sum(ds)
+    out = []
+    for k in range(steps):
+        t = k * hq
+        tau = t - (t // period) * period
+        end, pick = Fraction(0), len(ds) - 1
+        for s, d in enumerate(ds):
+            end += d
+            if tau < end:
+                pick = s
+                break
+        out.append(names.index(schedule[pick][0]))
+    return out
+
+
+def test_step_modes_are_the_exact_schedule_at_every_sample(switching_set):
+    """The rule at t_k = k·h in exact arithmetic (the switching instants, which belong to
+    the next mode, included: h = 0.01 and 0.013 hit them, h = 0.1 = P hits the start)."""
     sw: SwitchingTopology = switching_set
     names = list(sw.modes)
-    for h in (0.01, 0.013, 0.05):
-        t = np.arange(400) * h
-        got = step_modes(sw.schedule, t, names)
-        want = [names.index(sw.mode_at(float(x))) for x in t]
-        assert got.tolist() == want
+    for h, steps in ((0.01, 400), (0.013, 2000), (0.05, 400), (0.1, 1000)):
+        got = step_modes(sw.schedule, np.arange(steps) * h, names, h)
+        assert got.tolist() == _exact_truth(sw.schedule, names, h, steps), h
+    # h = P = 0.1: every step starts the period, so G2 runs at every one
+    assert set(step_modes(sw.schedule, np.arange(1000) * 0.1, names, 0.1).tolist()) == {
+        names.index("G2")
+    }
+    # h = 0.013: the doubles' τ = t − ⌊t/P⌋P put some instants on the wrong side; the
+    # exact rule does not (the issue counted 44 of 2,000 steps)
+    t = np.arange(2000) * 0.013
+    tau = t - np.floor(t / 0.1) * 0.1
+    ends = np.cumsum([d for _, d in sw.schedule])
+    old = np.minimum(np.searchsorted(ends, tau, "right"), 4)
+    index = np.array([names.index(m) for m, _ in sw.schedule])
+    assert int((index[old] != step_modes(sw.schedule, t, names, 0.013)).sum()) > 0
     # every mode of the schedule is visited at h = 0.01
-    assert set(step_modes(sw.schedule, np.arange(10) * 0.01, names).tolist()) == set(
+    assert set(step_modes(sw.schedule, np.arange(10) * 0.01, names, 0.01).tolist()) == set(
         names.index(m) for m, _ in sw.schedule
     )
+
+
+def test_schedule_ticks_past_int64_use_exact_integers():
+    sch = [("a", 0.1 / 3), ("b", 0.05)]  # 17 decimals: P = 8.3e15 ticks
+    tk = ScheduleTicks.of(sch, 0.013)
+    assert tk.period == 8333333333333333 and tk.unit == 10**17
+    got = step_modes(sch, np.arange(300) * 0.013, ["a", "b"], 0.013)
+    assert got.tolist() == _exact_truth(sch, ["a", "b"], 0.013, 300)
+    assert decimal_fraction(0.1) == Fraction(1, 10)

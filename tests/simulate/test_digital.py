@@ -108,7 +108,7 @@ def test_switching_moments_use_the_mode_of_each_sample(switching_set):
     h, delay = 0.013, 1
     dg = Digital(h, delay)
     grid, _ = digital_grid(
-        dg, 1.0, np.array([1.0]), lambda t: step_modes(switching_set.schedule, t, names)
+        dg, 1.0, np.array([1.0]), lambda t: step_modes(switching_set.schedule, t, names, h)
     )
     eps0 = X0_LIN - np.tile(THETA, 7)
     got = digital_moments(systems, grid, lambda t: 2 / (1 + t), eps0, 7, 3, delay)

@@ -28,8 +28,18 @@ __all__ = [
 
 CC = shutil.which("cc")
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler 'cc' on this machine")
-# exactly what the task asks of the build: C99, no FMA contraction, every warning an error
-CFLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-Werror"]
+# exactly what the task asks of the build: C99, no FMA contraction, every warning (the
+# pedantic and the conversion ones included) an error
+CFLAGS = [
+    "-std=c99",
+    "-O2",
+    "-ffp-contract=off",
+    "-Wall",
+    "-Wextra",
+    "-Werror",
+    "-pedantic",
+    "-Wconversion",
+]
 
 
 def write_files(folder: Path, files: dict[str, str]) -> Path:
