@@ -11,13 +11,15 @@ steps of seeded normals, and the state the toolkit's
 
 from __future__ import annotations
 
+import os
+import stat
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, one_line
 from ..expr.code import literal
 from ..gain.schedule import ScheduleGain
 from ..io.outputs import check_output_folder, output_folder
@@ -304,7 +306,9 @@ def files_for(src: ExportSource, lang: str) -> dict[str, str]:
 
 
 def replaceable(lang: str | None = None) -> tuple[str, ...]:
-    """The files an earlier export leaves in a folder (which a new one replaces).
+    """The names an export may leave in a folder (which a new one replaces, when its
+    manifest lists them): the files it writes and ``ntc_replay``, which the README's
+    build command makes.
 
     Parameters
     ----------
@@ -318,6 +322,95 @@ def replaceable(lang: str | None = None) -> tuple[str, ...]:
 
     code: Sequence[str] = {"c": C_FILES, "python": PY_FILES}.get(lang or "", (*C_FILES, *PY_FILES))
     return (*code, "README.txt", *EXAMPLES, "ntc_replay")
+
+
+#: The file in an export's folder that lists what the export wrote: a later export
+#: replaces only regular files listed there (and the manifest itself).
+MANIFEST = ".ntc-export-manifest"
+MANIFEST_BYTES = 65_536
+
+
+def manifest_text(files: Sequence[str]) -> str:
+    """The manifest of an export: the names it wrote, one a line, and ``ntc_replay``
+    (built from them by the README's command).
+
+    Parameters
+    ----------
+    files : sequence of str
+        The files written.
+
+    Returns
+    -------
+    str
+    """
+    names = [*files, *(["ntc_replay"] if "ntc_replay.c" in files else [])]
+    head = "# written by ntc export; a later ntc export into this folder replaces only these"
+    return "\n".join([head, *names]) + "\n"
+
+
+def _listed(folder: Path) -> set[str]:
+    """The names the folder's manifest lists that an export can write (nothing when there is
+    no manifest: then no file is an earlier export's)."""
+    path = folder / MANIFEST
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return set()
+    except OSError as exc:
+        raise InputError(f"--out: cannot read {one_line(str(path))!r} ({exc.strerror})") from None
+    if not stat.S_ISREG(st.st_mode) or st.st_size > MANIFEST_BYTES:
+        raise InputError(
+            f"--out: {one_line(str(path))!r} is not an export's manifest (not a regular file, "
+            "or too large); choose a new folder"
+        )
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return set()
+    lines = {line.strip() for line in text.splitlines() if not line.startswith("#")}
+    return lines & set(replaceable())
+
+
+def check_export_folder(out: str | Path) -> Path:
+    """Check, before any work, that ``out`` can take an export without losing user data:
+    new, empty, or holding only regular files that an earlier export's manifest lists.
+
+    Parameters
+    ----------
+    out : str or Path
+        The folder.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        Anything else in it (a folder or pipe named like an output, an unlisted file): one
+        line naming it; nothing is written.
+    """
+    p = check_output_folder(out, None)
+    if not p.is_dir():
+        return p
+    listed = _listed(p)
+    shown = repr(one_line(str(p)))
+    try:
+        entries = sorted(os.scandir(p), key=lambda e: e.name)
+    except OSError as exc:
+        raise InputError(f"--out: cannot read {shown} ({exc.strerror})") from None
+    for e in entries:
+        if e.name != MANIFEST and e.name not in listed:
+            raise InputError(
+                f"--out: {shown} holds {one_line(e.name)!r}, which no earlier export wrote "
+                f"(its {MANIFEST} does not list it); nothing written, choose a new folder"
+            )
+        if not e.is_file(follow_symlinks=False):
+            raise InputError(
+                f"--out: {shown} holds {one_line(e.name)!r}, which is not a regular file (a "
+                "folder, pipe or link); nothing written, choose a new folder"
+            )
+    return p
 
 
 def export(
@@ -360,26 +453,33 @@ def export(
     """
     if lang not in LANGUAGES:
         raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
-    check_output_folder(out, replaceable())
+    check_export_folder(out)
     src = load_source(path, period, delay, gain, sigma, f)
     texts = files_for(src, lang)
-    with output_folder(out, replaceable()) as tmp:
+    check_export_folder(out)  # again: the folder may have changed during the work
+    # written into a new folder that then replaces ``out`` whole (all or nothing); what it
+    # replaces is only files an earlier export wrote (checked just above)
+    with output_folder(out, None) as tmp:
         for name, text in texts.items():
             (tmp / name).write_text(text, encoding="utf-8")
+        (tmp / MANIFEST).write_text(manifest_text(list(texts)), encoding="utf-8")
     return ExportResult(Path(out), tuple(texts), src)
 
 
 __all__ = [
     "EXAMPLES",
+    "MANIFEST",
     "EXAMPLE_SEED",
     "EXAMPLE_STEPS",
     "LANGUAGES",
     "MAX_NUMBERS",
     "ExportResult",
+    "check_export_folder",
     "example",
     "export",
     "files_for",
     "read_state",
+    "manifest_text",
     "readme",
     "replaceable",
     "state_text",

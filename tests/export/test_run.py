@@ -28,11 +28,14 @@ def test_the_folder(c_export):
     names = sorted(p.name for p in c_export.folder.iterdir())
     assert (
         names
-        == sorted(c_export.files)
+        == sorted([*c_export.files, run.MANIFEST])
         == sorted(
-            ["ntc_protocol.h", "ntc_protocol.c", "ntc_replay.c", "README.txt"] + list(run.EXAMPLES)
+            ["ntc_protocol.h", "ntc_protocol.c", "ntc_replay.c", "README.txt", run.MANIFEST]
+            + list(run.EXAMPLES)
         )
     )
+    listed = (c_export.folder / run.MANIFEST).read_text().splitlines()[1:]
+    assert listed == [*c_export.files, "ntc_replay"]
     text = (c_export.folder / "README.txt").read_text()
     for needle in (
         "cc -std=c99 -O2 -ffp-contract=off",
@@ -101,7 +104,7 @@ def test_refusals_write_nothing(tmp_path, monkeypatch):
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "notes.txt").write_text("keep")
-    with pytest.raises(InputError, match=r"^--out: .* holds other files \('notes.txt'\)"):
+    with pytest.raises(InputError, match=r"^--out: .* holds 'notes.txt', which no earlier export"):
         export(DEADLINE, "c", mine, period=0.1)
     assert [p.name for p in mine.iterdir()] == ["notes.txt"]
     monkeypatch.setattr(run, "MAX_NUMBERS", 100)
@@ -110,3 +113,70 @@ def test_refusals_write_nothing(tmp_path, monkeypatch):
     with pytest.raises(InputError, match=r"^output: expected 21 numbers, got 2"):
         read_state("1 2", 21)
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["mine"]
+
+
+def _tree(folder):
+    return sorted(
+        (str(p.relative_to(folder)), p.read_text() if p.is_file() else None)
+        for p in folder.rglob("*")
+        if not p.is_fifo()
+    )
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("case", ["folder", "fifo", "unlisted", "forged-manifest", "link"])
+def test_an_export_never_deletes_user_data(tmp_path, case):
+    import os
+
+    out = tmp_path / "out"
+    out.mkdir()
+    if case == "folder":  # a folder named like an output, a user's file inside
+        (out / "README.txt").mkdir()
+        (out / "README.txt" / "mine.txt").write_text("keep")
+        needle = "'README.txt', which no earlier export wrote"
+    elif case == "fifo":
+        os.mkfifo(out / "ntc_protocol.c")
+        needle = "'ntc_protocol.c', which no earlier export wrote"
+    elif case == "unlisted":  # a file named like an output, but no manifest lists it
+        (out / "README.txt").write_text("my notes")
+        needle = "'README.txt', which no earlier export wrote"
+    elif case == "forged-manifest":  # a manifest may list only an export's own names
+        (out / run.MANIFEST).write_text("# x\nmine.txt\n")
+        (out / "mine.txt").write_text("keep")
+        needle = "'mine.txt', which no earlier export wrote"
+    else:  # an output's name listed, but a link to the user's file
+        (tmp_path / "mine.txt").write_text("keep")
+        (out / run.MANIFEST).write_text("# x\nREADME.txt\n")
+        (out / "README.txt").symlink_to(tmp_path / "mine.txt")
+        needle = "'README.txt', which is not a regular file"
+    before = _tree(out)
+    with pytest.raises(InputError) as err:
+        export(DEADLINE, "c", out, period=0.1)
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith("--out: ") and needle in msg, msg
+    assert _tree(out) == before and sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["out", *(["mine.txt"] if case == "link" else [])]
+    )
+    assert (tmp_path / "mine.txt").read_text() == "keep" if case == "link" else True
+
+
+def test_an_earlier_export_and_its_build_are_replaced(tmp_path):
+    out = tmp_path / "out"
+    export(DEADLINE, "c", out, period=0.1)
+    (out / "ntc_replay").write_bytes(b"built")  # what the README's command makes
+    again = export(DEADLINE, "python", out, period=0.1)
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted([*again.files, run.MANIFEST]) and "ntc_replay" not in names
+
+
+@pytest.mark.hostile
+def test_the_cli_refuses_a_folder_in_one_line(tmp_path, capsys, monkeypatch):
+    from tests.cli_helpers import assert_input_error
+
+    out = tmp_path / "out"
+    (out / "README.txt").mkdir(parents=True)
+    (out / "README.txt" / "mine.txt").write_text("keep")
+    args = ["export", DEADLINE, "--out", out, "--period", "0.1"]
+    assert_input_error(args, capsys, monkeypatch, "--out: ", "which no earlier export wrote")
+    assert (out / "README.txt" / "mine.txt").read_text() == "keep"
+    assert sorted(p.name for p in out.iterdir()) == ["README.txt"]
