@@ -497,13 +497,15 @@ def export_cmd(
         )
         return
     for note in res.source.notes:
-        print(note)
+        print(one_line(note))
+    # the network's name and the folder are the user's text: one line, escapes shown
     print(
-        f"exported {law.name} ({law.n} agents, d = {law.dim}, {len(law.modes)} mode(s); "
-        f"h = {law.digital.period:g}, D = {law.digital.delay}, c(t) = {law.gain.label}) "
-        f"as {lang} to {res.folder}: {', '.join(res.files)}"
+        f"exported {one_line(law.name)} ({law.n} agents, d = {law.dim}, {len(law.modes)} "
+        f"mode(s); h = {law.digital.period:g}, D = {law.digital.delay}, c(t) = "
+        f"{one_line(law.gain.label)}) as {lang} to {one_line(str(res.folder))}: "
+        f"{', '.join(res.files)}"
     )
-    print(f"build and check: see {res.folder / 'README.txt'}")
+    print(f"build and check: see {one_line(str(res.folder / 'README.txt'))}")
 
 
 def examples(

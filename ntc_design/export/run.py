@@ -143,17 +143,22 @@ def _edges_text(law: AgentLaw, most: int = 40) -> list[str]:
     out = []
     lab = law.labels
     for ml in law.modes:
-        names = [f"{lab[int(j)]}->{lab[int(i)]}" for i, j in zip(ml.dst, ml.src, strict=True)]
+        names = [
+            f"{one_line(lab[int(j)])}->{one_line(lab[int(i)])}"
+            for i, j in zip(ml.dst, ml.src, strict=True)
+        ]
         shown = ", ".join(names[:most]) + (
             f", … ({len(names)} in all)" if len(names) > most else ""
         )
-        out.append(f"  mode {ml.name!r} ({ml.n_edges} edges): {shown or 'none'}")
+        out.append(f"  mode {one_line(repr(ml.name))} ({ml.n_edges} edges): {shown or 'none'}")
     return out
 
 
 def readme(src: ExportSource, lang: str) -> str:
     """``README.txt``: what the folder holds, how to build and run it, the stdin format and
-    the law.
+    the law. User text (the names, the labels, the file's path) is written by
+    :func:`~ntc_design.errors.one_line`: a newline or an escape sequence in it stays on its
+    line as an escape, so it cannot add a line or reach a terminal.
 
     Parameters
     ----------
@@ -199,7 +204,8 @@ def readme(src: ExportSource, lang: str) -> str:
     sched = (
         [
             "Schedule (mode, duration), repeated with period P = "
-            f"{literal(law.schedule_period)}: " + ", ".join(f"{m} {d!r}" for m, d in law.schedule),
+            f"{literal(law.schedule_period)}: "
+            + ", ".join(f"{one_line(m)} {d!r}" for m, d in law.schedule),
             "Step k runs the mode of the entry whose cumulative end first exceeds",
             "tau = t_k mod P (a switching instant belongs to the next entry), decided exactly:",
             "h and the durations are the decimals written above (0.1 is 1/10), so the code",
@@ -211,10 +217,11 @@ def readme(src: ExportSource, lang: str) -> str:
         else []
     )
     lines = [
-        f"Digital protocol of {law.name}, exported by ntc export from {src.source} ({src.kind}).",
-        *src.notes,
+        f"Digital protocol of {one_line(law.name)}, exported by ntc export from "
+        f"{one_line(src.source)} ({src.kind}).",
+        *(one_line(n) for n in src.notes),
         "",
-        f"Agents N = {law.n} (labels {', '.join(str(a) for a in law.labels[:20])}"
+        f"Agents N = {law.n} (labels {', '.join(one_line(a) for a in law.labels[:20])}"
         + (", …" if law.n > 20 else "")
         + f"), state dimension d = {law.dim}, theta = {law.theta.tolist()}.",
         f"Period h = {literal(law.digital.period)}, delay D = {law.digital.delay} samples, "

@@ -180,3 +180,36 @@ def test_the_cli_refuses_a_folder_in_one_line(tmp_path, capsys, monkeypatch):
     assert_input_error(args, capsys, monkeypatch, "--out: ", "which no earlier export wrote")
     assert (out / "README.txt" / "mine.txt").read_text() == "keep"
     assert sorted(p.name for p in out.iterdir()) == ["README.txt"]
+
+
+@pytest.mark.hostile
+def test_names_and_labels_are_escaped_on_the_terminal_and_in_the_readme(
+    tmp_path, capsys, monkeypatch
+):
+    import json
+
+    from tests.cli_helpers import run_cli
+
+    evil = "a\nBuild and check (a C99 compiler; no library but libm):\n  rm -rf ~"
+    top = {
+        "name": "net\x1b[2J\x1b]0;owned\x07\u202e",
+        "dim": 1,
+        "agents": [evil, "b"],
+        "edges": [{"from": "b", "to": evil, "weight": -1}, {"from": evil, "to": "b", "weight": 1}],
+    }
+    (tmp_path / "t.json").write_text(json.dumps(top))
+    sc = tmp_path / "s.yaml"
+    sc.write_text(f"topology: {tmp_path / 't.json'}\ntheta: [1]\nT: 5\n")
+    out = tmp_path / "out"
+    code, stdout, err = run_cli(
+        ["export", sc, "--out", out, "--period", "0.1"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    for bad in ("\x1b", "\x07", "\u202e"):
+        assert bad not in stdout and bad not in (out / "README.txt").read_text()
+    assert "net\\x1b[2J" in stdout
+    text = (out / "README.txt").read_text()
+    starts = [ln for ln in text.splitlines() if ln.startswith("Build and check")]
+    assert len(starts) == 1  # the label's newline did not plant a second section
+    assert not any(ln.strip() == "rm -rf ~" for ln in text.splitlines())
+    assert "a\\nBuild and check" in text
