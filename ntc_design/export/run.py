@@ -28,6 +28,7 @@ from ..protocol.digital import decimal_fraction
 from ..simulate.replay import replay
 from .c import COMPILE, c_files
 from .c import FILES as C_FILES
+from .checks import check_emitted_gain
 from .python import FILES as PY_FILES
 from .python import python_files
 from .source import ExportSource, load_source
@@ -285,6 +286,29 @@ def _size_check(law: AgentLaw) -> None:
         )
 
 
+#: The steps whose gain is checked when the source states no horizon (a certificate).
+CHECK_STEPS = 10_000
+
+
+def gain_steps(src: ExportSource) -> int:
+    """The steps of the horizon whose emitted gain is checked
+    (:func:`~ntc_design.export.checks.check_emitted_gain`): K = round(T/h) of a scenario,
+    :data:`CHECK_STEPS` for a certificate (it states no horizon).
+
+    Parameters
+    ----------
+    src : ExportSource
+        What is exported.
+
+    Returns
+    -------
+    int
+    """
+    if src.horizon is None:
+        return CHECK_STEPS
+    return src.law.digital.steps(src.horizon)[0]
+
+
 def files_for(src: ExportSource, lang: str) -> dict[str, str]:
     """Every file of the export, by name.
 
@@ -307,6 +331,7 @@ def files_for(src: ExportSource, lang: str) -> dict[str, str]:
     if lang not in LANGUAGES:
         raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
     _size_check(src.law)
+    check_emitted_gain(src.law, gain_steps(src), f"{src.source}: gain")
     code = c_files(src.law) if lang == "c" else python_files(src.law)
     inp, out = example(src)
     return {**code, "README.txt": readme(src, lang), EXAMPLES[0]: inp, EXAMPLES[1]: out}
@@ -474,6 +499,7 @@ def export(
 
 
 __all__ = [
+    "CHECK_STEPS",
     "EXAMPLES",
     "MANIFEST",
     "EXAMPLE_SEED",
@@ -485,6 +511,7 @@ __all__ = [
     "example",
     "export",
     "files_for",
+    "gain_steps",
     "read_state",
     "manifest_text",
     "readme",
