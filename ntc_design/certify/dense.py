@@ -125,8 +125,15 @@ def mode_subject(d: ProtocolDesign) -> dict:
     dict
     """
     lab = d.topology.labels
+    top = d.topology.to_dict()
+    # the edges in the topology file's order (its weights mapping's), so that an export of
+    # the certificate lists them as an export of the file does (the hash sorts them itself)
+    top["edges"] = [
+        {"from": lab[j], "to": lab[i], "weight": np.asarray(a).tolist()}
+        for (i, j), a in d.topology.weights.items()
+    ]
     return {
-        "topology": d.topology.to_dict(),
+        "topology": top,
         "topology_hash": topology_hash(d.topology),
         "theta": d.theta.tolist(),
         "margin": d.lemma1_margin,

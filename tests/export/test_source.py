@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.certify import verify
+from ntc_design.certify import certify, verify
 from ntc_design.errors import InputError
 from ntc_design.export.source import from_certificate, from_scenario, is_certificate, load_source
 from ntc_design.gain.schedule import ScheduleGain
@@ -318,3 +318,27 @@ def test_the_option_replaces_a_file_period_that_would_be_refused(tmp_path):
     with pytest.raises(InputError, match=r"s.yaml: digital.period: h = 20 is longer"):
         from_scenario(p)
     assert from_scenario(p, period=0.1).law.digital == Digital(0.1, 1)
+
+
+def _order(law, m=0):
+    ml = law.modes[m]
+    return [(law.labels[j], law.labels[i]) for i, j in zip(ml.dst, ml.src, strict=True)]
+
+
+def test_a_certificate_and_its_scenario_list_the_edges_in_the_file_order(tmp_path):
+    top = nd.load(EXAMPLES / "g1.yaml")
+    file_order = [(top.labels[j], top.labels[i]) for i, j in top.weights]
+    assert file_order[:3] == [(2, 1), (1, 2), (5, 6)]  # not the sorted (2,1), (1,2), (6,2)
+    scenario = from_scenario(DEADLINE, period=0.1, delay=1).law
+    shipped = load_source(CERTS / "g1_digital.json").law
+    fresh = certify(top, [1, 2, -1], gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
+    p = tmp_path / "fresh.json"
+    p.write_text(json.dumps(fresh))
+    issued = load_source(p).law
+    assert _order(scenario) == _order(shipped) == _order(issued) == file_order
+    assert (scenario.modes[0].weight == issued.modes[0].weight).all()
+    # the switching set: each mode in its own file's order
+    sw = load_source(CERTS / "switching.json", period=0.013).law
+    for m, name in enumerate(sw.mode_names):
+        t = nd.load(EXAMPLES / f"{name.lower()}.yaml")
+        assert _order(sw, m) == [(t.labels[j], t.labels[i]) for i, j in t.weights]
