@@ -269,7 +269,6 @@ def verify(
         return kind_or_refusal
     kind = kind_or_refusal
     doc_subject = need(doc, "subject", dict, source)
-    known_fields(kind, doc, source)
     stated = need(doc, "digest", str, source)
     listed = need(doc, "claims", list, source)
     listed_props = need(doc, "certifies", list, source)
@@ -282,6 +281,7 @@ def verify(
             f"{len(modes_doc)} modes"
         )
 
+    known_fields(kind, doc, source)  # a field no reader checks is refused, never trusted
     reading = kind.read(doc, source)
     checks += reading.checks
     checks.append(_theta_check(reading))

@@ -77,13 +77,15 @@ def _in_array(mi: int, ml: ModeLaw, i: int) -> tuple[str, str]:
     ) + "\n};\n", name
 
 
-def header(law: AgentLaw) -> str:
+def header(law: AgentLaw, agent: int | None = None) -> str:
     """``ntc_protocol.h``.
 
     Parameters
     ----------
     law : AgentLaw
         The agents' law.
+    agent : int, optional
+        Only this agent's tables (0-based; ``ntc export --agent``).
 
     Returns
     -------
@@ -102,6 +104,8 @@ def header(law: AgentLaw) -> str:
 #define NTC_DELAY {law.digital.delay}        /* D: a measurement is D samples old */
 #define NTC_MAX_IN {max_in}       /* the most in-edges of one agent, in any mode */
 #define NTC_MAX_EDGES {max_e}    /* the most edges of one mode */
+#define NTC_AGENTS {law.n if agent is None else 1}       /* agents whose tables are here (1: ntc export --agent) */
+#define NTC_SELF {-1 if agent is None else agent}         /* that one agent's index (-1: every agent) */
 
 /* One in-edge e = (j -> i) of an agent, in its mode's file order. */
 typedef struct {{
@@ -125,8 +129,18 @@ typedef struct {{
 typedef struct {{
     const char *name;
     int n_edges;                 /* E: step k of this mode reads 2E normals */
-    ntc_agent agents[NTC_N];
+    ntc_agent agents[NTC_AGENTS]; /* agents[i] (with --agent: agents[0], agent NTC_SELF) */
 }} ntc_mode;
+
+/* One agent, embedded: its state and its own delay line, in static memory (no malloc).
+   line[k mod (D+1)] holds x_i(k); line[(k+1) mod (D+1)] holds x_i(k-D) (x_i(0) before the
+   start), which step k reads and then overwrites with x_i(k+1). */
+typedef struct {{
+    int agent;                         /* i, 0-based */
+    int slot;                          /* its index into ntc_mode.agents */
+    long k;                            /* the next step */
+    double line[NTC_DELAY + 1][NTC_D]; /* the delay line */
+}} ntc_agent_state;
 
 extern const double ntc_period;                     /* h */
 extern const double ntc_sqrt_period;                /* sqrt(h) */
@@ -148,6 +162,22 @@ void ntc_measure(const ntc_in_edge *e, const double *xd_i, const double *xd_j,
    measurements m (n_in rows of d, in its in-edges' order), with c = c(t_k) */
 void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
                       const double *xd_i, const double *m, double *x_next);
+
+/* Start agent i (0-based) at x_i(0) (d numbers); 0, or -1 for an agent whose tables are
+   not here. */
+int ntc_agent_init(ntc_agent_state *s, int agent, const double *x0);
+/* The agent's mode at its next step k (index into ntc_modes) and its in-edges there:
+   the measurements step k needs, one per in-edge in this order. */
+int ntc_agent_mode(const ntc_agent_state *s);
+const ntc_agent *ntc_agent_law(const ntc_agent_state *s);
+/* x_i(k), its state now, and x_i(k-D), the delayed state a measurement is formed from. */
+const double *ntc_agent_x(const ntc_agent_state *s);
+const double *ntc_agent_delayed(const ntc_agent_state *s);
+/* Step k -> k+1 from the measurements m (n_in rows of d, in the in-edges' order of
+   ntc_agent_law(s); ntc_measure forms one from states and normals, a sensor delivers it
+   on hardware). Returns the mode used, or -1 (nothing changed) when c(t_k) is not
+   finite. */
+int ntc_agent_step(ntc_agent_state *s, const double *m);
 
 #endif
 """
@@ -248,13 +278,15 @@ int ntc_mode_at(long k)
 """
 
 
-def protocol(law: AgentLaw) -> str:
+def protocol(law: AgentLaw, agent: int | None = None) -> str:
     """``ntc_protocol.c``: the tables and the functions.
 
     Parameters
     ----------
     law : AgentLaw
         The agents' law.
+    agent : int, optional
+        Only this agent's tables (0-based).
 
     Returns
     -------
@@ -277,7 +309,7 @@ def protocol(law: AgentLaw) -> str:
     modes = []
     for mi, ml in enumerate(law.modes):
         agents = []
-        for i in range(law.n):
+        for i in range(law.n) if agent is None else [agent]:
             arr, name = _in_array(mi, ml, i)
             if arr:
                 parts.append(arr)
@@ -296,6 +328,7 @@ def protocol(law: AgentLaw) -> str:
     parts.append(_gain(law))
     parts.append("double ntc_time(long k)\n{\n    return (double)k * ntc_period;\n}\n")
     parts.append(_mode_rule(law))
+    parts.append(AGENT_API)
     parts.append(
         """void ntc_measure(const ntc_in_edge *e, const double *xd_i, const double *xd_j,
                  double z1, double z2, double *m)
@@ -327,6 +360,55 @@ void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
 """
     )
     return "\n".join(parts)
+
+
+AGENT_API = """int ntc_agent_init(ntc_agent_state *s, int agent, const double *x0)
+{
+    int r, b;
+    if (agent < 0 || agent >= NTC_N || (NTC_SELF >= 0 && agent != NTC_SELF)) return -1;
+    s->agent = agent;
+    s->slot = NTC_SELF >= 0 ? 0 : agent;
+    s->k = 0;
+    for (r = 0; r <= NTC_DELAY; r++)
+        for (b = 0; b < NTC_D; b++) s->line[r][b] = x0[b];  /* held before the start */
+    return 0;
+}
+
+int ntc_agent_mode(const ntc_agent_state *s)
+{
+    return ntc_mode_at(s->k);
+}
+
+const ntc_agent *ntc_agent_law(const ntc_agent_state *s)
+{
+    return &ntc_modes[ntc_mode_at(s->k)].agents[s->slot];
+}
+
+const double *ntc_agent_x(const ntc_agent_state *s)
+{
+    return s->line[s->k % (NTC_DELAY + 1)];
+}
+
+const double *ntc_agent_delayed(const ntc_agent_state *s)
+{
+    return s->line[(s->k + 1) % (NTC_DELAY + 1)];
+}
+
+int ntc_agent_step(ntc_agent_state *s, const double *m)
+{
+    const int mode = ntc_mode_at(s->k);
+    const double c = ntc_gain(ntc_time(s->k));
+    double *xd = s->line[(s->k + 1) % (NTC_DELAY + 1)];
+    double next[NTC_D];
+    int b;
+    if (!isfinite(c)) return -1;
+    ntc_agent_update(&ntc_modes[mode].agents[s->slot], c, s->line[s->k % (NTC_DELAY + 1)], xd,
+                     m, next);
+    for (b = 0; b < NTC_D; b++) xd[b] = next[b];  /* x_i(k+1) replaces x_i(k-D) */
+    s->k++;
+    return mode;
+}
+"""
 
 
 REPLAY = """/* ntc_replay.c: replays the exported protocol on given normals. Generated by ntc-design.
@@ -410,20 +492,35 @@ int main(void)
 """
 
 
-def c_files(law: AgentLaw) -> dict[str, str]:
-    """The three C files, by name.
+def c_files(law: AgentLaw, agent: int | None = None) -> dict[str, str]:
+    """The C files, by name.
 
     Parameters
     ----------
     law : AgentLaw
         The agents' law.
+    agent : int, optional
+        Only this agent's tables (0-based): the header and the source, no replay program
+        (it runs every agent).
 
     Returns
     -------
     dict of str to str
-        ``ntc_protocol.h``, ``ntc_protocol.c``, ``ntc_replay.c``.
+        ``ntc_protocol.h``, ``ntc_protocol.c`` and (every agent) ``ntc_replay.c``.
     """
-    return {"ntc_protocol.h": header(law), "ntc_protocol.c": protocol(law), "ntc_replay.c": REPLAY}
+    out = {"ntc_protocol.h": header(law, agent), "ntc_protocol.c": protocol(law, agent)}
+    if agent is None:
+        out["ntc_replay.c"] = REPLAY
+    return out
 
 
-__all__ = ["COMPILE", "FILES", "c_files", "c_string", "header", "protocol"]
+__all__ = [
+    "AGENT_API",
+    "COMPILE",
+    "FILES",
+    "MAX_TICKS",
+    "c_files",
+    "c_string",
+    "header",
+    "protocol",
+]

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.export.c import c_string, header, protocol
+from ntc_design.export.c import c_files, c_string, header, protocol
 from ntc_design.gain.schedule import ScheduleGain, join_tail
 from ntc_design.protocol.agents import agent_law
 from ntc_design.protocol.digital import Digital
@@ -214,3 +214,116 @@ def test_the_switching_rule_is_exact_in_the_toolkit_c_and_python(sw_design, tmp_
         [sys.executable, "-c", code, str(tmp_path / "py")], capture_output=True, text=True
     )
     assert [int(w) for w in res.stdout.split()] == truth, res.stderr
+
+
+AGENT_MAIN = r"""#include <stdio.h>
+#include "ntc_protocol.h"
+/* the replay through the embedding API: N agent states, each its own delay line */
+static ntc_agent_state st[NTC_N];
+static double z[2 * NTC_MAX_EDGES + 1];
+static double m[NTC_N][NTC_MAX_IN * NTC_D + 1];
+int main(void)
+{
+    double x0[NTC_D];
+    long K, k;
+    int i, b, s;
+    for (i = 0; i < NTC_N; i++) {
+        for (b = 0; b < NTC_D; b++)
+            if (scanf("%lf", &x0[b]) != 1) return 2;
+        if (ntc_agent_init(&st[i], i, x0) != 0) return 3;
+    }
+    if (scanf("%ld", &K) != 1) return 2;
+    for (k = 0; k < K; k++) {
+        const ntc_mode *md = &ntc_modes[ntc_agent_mode(&st[0])];
+        for (s = 0; s < 2 * md->n_edges; s++)
+            if (scanf("%lf", &z[s]) != 1) return 2;
+        for (i = 0; i < NTC_N; i++) {  /* every measurement from the delayed states first */
+            const ntc_agent *ag = ntc_agent_law(&st[i]);
+            for (s = 0; s < ag->n_in; s++) {
+                const ntc_in_edge *e = &ag->in[s];
+                ntc_measure(e, ntc_agent_delayed(&st[i]), ntc_agent_delayed(&st[e->from]),
+                            z[2 * e->edge], z[2 * e->edge + 1], m[i] + s * NTC_D);
+            }
+        }
+        for (i = 0; i < NTC_N; i++)
+            if (ntc_agent_step(&st[i], m[i]) < 0) return 1;
+    }
+    for (i = 0; i < NTC_N; i++) {
+        for (b = 0; b < NTC_D; b++) printf(b ? " %.17g" : "%.17g", ntc_agent_x(&st[i])[b]);
+        printf("\n");
+    }
+    return 0;
+}
+"""
+
+
+@needs_cc
+@pytest.mark.parametrize("which", ["g1", "switching"])
+def test_the_agent_api_reproduces_the_replay_bit_for_bit(g1_design, sw_design, tmp_path, which):
+    from tests.support.export import write_files
+
+    law = (
+        agent_law(g1_design, Digital(0.05, 2), "1/(1+t)", 0.4, 0.3)
+        if which == "g1"
+        else agent_law(sw_design, Digital(0.013, 1), "1/(1+t)", 0.4, 0.3)
+    )
+    write_files(tmp_path, c_files(law))
+    (tmp_path / "agents.c").write_text(AGENT_MAIN)
+    cmd = [CC, *CFLAGS, "-o", "agents", "agents.c", "ntc_protocol.c", "-lm"]
+    res = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    steps = 400
+    z = normals_for(law, steps, seed=3)
+    got = run_program(tmp_path / "agents", law, X0, steps, z)
+    want = replay(law, X0, z, steps)
+    assert (got == want).all() and np.max(np.abs(got - X0)) > 0.1
+
+
+@needs_cc
+def test_one_agents_tables_compile_and_step_as_in_the_full_export(g1_design, tmp_path):
+    # agent 2 (0-based; label 3) alone: its tables only, the same step as the full export
+    law = agent_law(g1_design, Digital(0.1, 1), "1/(1+t)", 0.4, 0.3)
+    files = c_files(law, agent=2)
+    assert sorted(files) == ["ntc_protocol.c", "ntc_protocol.h"]
+    assert "#define NTC_AGENTS 1" in files["ntc_protocol.h"]
+    assert "#define NTC_SELF 2" in files["ntc_protocol.h"]
+    assert protocol(law).count("ntc_in_m0_a") > files["ntc_protocol.c"].count("ntc_in_m0_a") > 0
+    probe = r"""#include <stdio.h>
+#include "ntc_protocol.h"
+int main(void)
+{
+    ntc_agent_state s;
+    static const double x0[NTC_D] = {1.0, -2.0, 0.5};
+    double m[NTC_MAX_IN * NTC_D + 1];
+    int j;
+    if (NTC_SELF >= 0 && ntc_agent_init(&s, 0, x0) != -1) return 3;  /* not its agent */
+    if (ntc_agent_init(&s, 2, x0) != 0) return 4;
+    for (j = 0; j < NTC_MAX_IN * NTC_D; j++) m[j] = 0.25 * (double)(j + 1);
+    if (ntc_agent_step(&s, m) != 0) return 5;
+    printf("%.17g %.17g %.17g\n", ntc_agent_x(&s)[0], ntc_agent_x(&s)[1], ntc_agent_x(&s)[2]);
+    return 0;
+}
+"""
+    outs = []
+    for name, agent in (("one", 2), ("all", None)):
+        folder = tmp_path / name
+        from tests.support.export import write_files
+
+        write_files(folder, c_files(law, agent=agent))
+        (folder / "probe.c").write_text(probe)
+        cmd = [CC, *CFLAGS, "-o", "probe", "probe.c", "ntc_protocol.c", "-lm"]
+        res = subprocess.run(cmd, cwd=folder, capture_output=True, text=True)
+        assert res.returncode == 0, res.stderr
+        run = subprocess.run([str(folder / "probe")], capture_output=True, text=True)
+        assert run.returncode == 0, run.returncode
+        outs.append(run.stdout)
+    assert outs[0] == outs[1] and len(outs[0].split()) == 3
+    # the same numbers as the law written out: x + h c (u − δ|B| x + Σ W m)
+    ml = law.modes[0]
+    x = np.array([1.0, -2.0, 0.5])
+    acc = ml.u[2] - ml.bd[2] @ x if 2 in ml.informed else np.zeros(3)
+    mm = 0.25 * np.arange(1, 3 * len(ml.in_edges(2)) + 1).reshape(-1, 3)
+    for s, e in enumerate(ml.in_edges(2)):
+        acc = acc + ml.weight[e] @ mm[s]
+    want = x + 0.1 * 1.0 * acc
+    assert np.allclose([float(w) for w in outs[0].split()], want, rtol=1e-14, atol=1e-14)
