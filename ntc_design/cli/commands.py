@@ -468,6 +468,12 @@ def export_cmd(
     noise_f: Annotated[
         float | None, typer.Option("--f", help="f(x) = f·x (default: the file's, else 0.3).")
     ] = None,
+    agent: Annotated[
+        str | None,
+        typer.Option(
+            "--agent", help="One agent's label: its tables only (C; for its own program)."
+        ),
+    ] = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Write the code each agent runs (the digital protocol of a certified design) as
@@ -476,7 +482,7 @@ def export_cmd(
     certified (or the certificate verified) first; nothing is written when it is not."""
     from ..export.run import export
 
-    res = export(file, lang, out_dir, period, delay, gain, sigma, noise_f)
+    res = export(file, lang, out_dir, period, delay, gain, sigma, noise_f, agent)
     law = res.source.law
     if as_json:
         print(

@@ -155,9 +155,36 @@ def _edges_text(law: AgentLaw, most: int = 40) -> list[str]:
     return out
 
 
-def readme(src: ExportSource, lang: str) -> str:
+#: How an agent on hardware forms its measurements (README.txt, C exports).
+EMBEDDING = [
+    "Embedding one agent (ntc_protocol.h; static memory, no malloc, the delay line inside):",
+    "",
+    "  static ntc_agent_state s;",
+    "  ntc_agent_init(&s, i, x_i0);              /* i: 0-based index of its label in ntc_labels */",
+    "  every h seconds (step k = s.k):",
+    "    const ntc_agent *ag = ntc_agent_law(&s); /* its mode's in-edges at step k */",
+    "    for q = 0 .. ag->n_in - 1: fill m[q*d .. q*d+d-1] for in-edge ag->in[q] (below)",
+    "    ntc_agent_step(&s, m);                   /* -1: c(t_k) not finite, nothing done */",
+    "    apply ntc_agent_x(&s), the new state x_i(k+1)",
+    "",
+    "The measurement of in-edge e = j -> i (j = ag->in[q].from) is in the units of the",
+    "state x and theta (metres for positions, say; h in the time unit of c(t), seconds):",
+    "  m = sign_e * x_j(t_{k-D}) - x_i(t_{k-D})     (sign_e = ag->in[q].sign = sgn A_ij)",
+    "taken D samples late (D = NTC_DELAY). A relative-position sensor on agent i gives",
+    "r = x_j - x_i (the neighbour's position relative to its own, same units); with",
+    "xd = ntc_agent_delayed(&s), the agent's own state at t_{k-D}:",
+    "  cooperative edge (sign +1):   m[a] = r[a]",
+    "  antagonistic edge (sign -1):  m[a] = -r[a] - 2 xd[a]",
+    "all d components in the state's order. The sensor's own noise is the measurement",
+    "noise; ntc_measure (used by the replay) adds the model's (sigma_e z1 + F(x_j - x_i) z2)",
+    "/ sqrt(h) from given normals instead.",
+]
+
+
+def readme(src: ExportSource, lang: str, agent: int | None = None) -> str:
     """``README.txt``: what the folder holds, how to build and run it, the stdin format and
-    the law. User text (the names, the labels, the file's path) is written by
+    the law; for C, how an agent is embedded and forms its measurements from a
+    relative-position sensor. User text (the names, the labels, the file's path) is written by
     :func:`~ntc_design.errors.one_line`: a newline or an escape sequence in it stays on its
     line as an escape, so it cannot add a line or reach a terminal.
 
@@ -167,6 +194,8 @@ def readme(src: ExportSource, lang: str) -> str:
         What is exported.
     lang : str
         ``c`` or ``python``.
+    agent : int, optional
+        The one agent whose tables are exported (``--agent``).
 
     Returns
     -------
@@ -188,9 +217,19 @@ def readme(src: ExportSource, lang: str) -> str:
             "",
             "-ffp-contract=off keeps the compiler from fusing a multiply and an add (FMA): every",
             "operation then rounds as in the toolkit, and the output is the same to the last bit.",
-            "On a device, call ntc_gain(ntc_time(k)), ntc_mode_at(k) and, per agent, ntc_measure",
-            "(what a sensor delivers; on hardware it is measured) and ntc_agent_update",
-            "(ntc_protocol.h).",
+            "",
+            *EMBEDDING,
+        ]
+        if lang == "c" and agent is None
+        else [
+            f"The tables of agent {one_line(law.labels[agent or 0])} only (index {agent}, "
+            "ntc export --agent): no replay program",
+            "and no example, which run every agent. Compile ntc_protocol.c with the agent's",
+            "own program (a C99 compiler; no library but libm):",
+            "",
+            "  cc -std=c99 -O2 -ffp-contract=off -Wall -Wextra -c ntc_protocol.c",
+            "",
+            *EMBEDDING,
         ]
         if lang == "c"
         else [
@@ -309,7 +348,35 @@ def gain_steps(src: ExportSource) -> int:
     return src.law.digital.steps(src.horizon)[0]
 
 
-def files_for(src: ExportSource, lang: str) -> dict[str, str]:
+def agent_index(law: AgentLaw, label: str | None) -> int | None:
+    """The 0-based index of the agent ``--agent`` names (its label as text), or None.
+
+    Parameters
+    ----------
+    law : AgentLaw
+        The agents' law.
+    label : str or None
+        The label.
+
+    Returns
+    -------
+    int or None
+
+    Raises
+    ------
+    InputError
+        No agent has that label.
+    """
+    if label is None:
+        return None
+    for i, a in enumerate(law.labels):
+        if str(a) == str(label):
+            return i
+    shown = ", ".join(one_line(a) for a in law.labels[:10]) + (", …" if law.n > 10 else "")
+    raise InputError(f"--agent: no agent is labelled {one_line(repr(label))} (labels: {shown})")
+
+
+def files_for(src: ExportSource, lang: str, agent: str | None = None) -> dict[str, str]:
     """Every file of the export, by name.
 
     Parameters
@@ -318,6 +385,9 @@ def files_for(src: ExportSource, lang: str) -> dict[str, str]:
         What is exported.
     lang : str
         ``c`` or ``python``.
+    agent : str, optional
+        One agent's label: its tables only (C; no replay program and no example, which
+        run every agent).
 
     Returns
     -------
@@ -326,12 +396,18 @@ def files_for(src: ExportSource, lang: str) -> dict[str, str]:
     Raises
     ------
     InputError
-        An unknown language, tables too large, or c(t) not finite on the example's steps.
+        An unknown language or agent, one agent's tables asked of Python, tables too
+        large, or an emitted gain that is not the analysed one.
     """
     if lang not in LANGUAGES:
         raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
+    if agent is not None and lang != "c":
+        raise InputError("--agent: one agent's tables are emitted in C only (--lang c)")
+    index = agent_index(src.law, agent)
     _size_check(src.law)
     check_emitted_gain(src.law, gain_steps(src), f"{src.source}: gain")
+    if index is not None:
+        return {**c_files(src.law, index), "README.txt": readme(src, lang, index)}
     code = c_files(src.law) if lang == "c" else python_files(src.law)
     inp, out = example(src)
     return {**code, "README.txt": readme(src, lang), EXAMPLES[0]: inp, EXAMPLES[1]: out}
@@ -454,6 +530,7 @@ def export(
     gain: str | ScheduleGain | None = None,
     sigma: float | None = None,
     f: float | None = None,
+    agent: str | None = None,
 ) -> ExportResult:
     """Export a scenario's or a certificate's certified design as code, into ``out`` (all
     or nothing: refused before any work when ``out`` holds other files).
@@ -472,6 +549,8 @@ def export(
         c(t).
     sigma, f : float, optional
         The noise's σ and f.
+    agent : str, optional
+        One agent's label: its tables only (C).
 
     Returns
     -------
@@ -485,9 +564,11 @@ def export(
     """
     if lang not in LANGUAGES:
         raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
+    if agent is not None and lang != "c":
+        raise InputError("--agent: one agent's tables are emitted in C only (--lang c)")
     check_export_folder(out)
     src = load_source(path, period, delay, gain, sigma, f)
-    texts = files_for(src, lang)
+    texts = files_for(src, lang, agent)
     check_export_folder(out)  # again: the folder may have changed during the work
     # written into a new folder that then replaces ``out`` whole (all or nothing); what it
     # replaces is only files an earlier export wrote (checked just above)
@@ -510,6 +591,7 @@ __all__ = [
     "check_export_folder",
     "example",
     "export",
+    "agent_index",
     "files_for",
     "gain_steps",
     "read_state",

@@ -213,3 +213,77 @@ def test_names_and_labels_are_escaped_on_the_terminal_and_in_the_readme(
     assert len(starts) == 1  # the label's newline did not plant a second section
     assert not any(ln.strip() == "rm -rf ~" for ln in text.splitlines())
     assert "a\\nBuild and check" in text
+
+
+def test_one_agents_export_and_its_readme(tmp_path):
+    out = tmp_path / "one"
+    res = export(DEADLINE, "c", out, period=0.1, delay=1, agent="3")
+    assert sorted(res.files) == ["README.txt", "ntc_protocol.c", "ntc_protocol.h"]
+    assert "#define NTC_SELF 2" in (out / "ntc_protocol.h").read_text()
+    text = (out / "README.txt").read_text()
+    for needle in (
+        "The tables of agent 3 only (index 2, ntc export --agent)",
+        "antagonistic edge (sign -1):  m[a] = -r[a] - 2 xd[a]",
+        "in the units of the",
+        "ntc_agent_init(&s, i, x_i0)",
+    ):
+        assert needle in text, needle
+    # the full export documents the same embedding
+    full = export(DEADLINE, "c", tmp_path / "all", period=0.1, delay=1)
+    assert "relative-position sensor" in (full.folder / "README.txt").read_text()
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "lang, agent, needle",
+    [
+        ("c", "99", "--agent: no agent is labelled '99' (labels: 1, 2, 3"),
+        ("python", "3", "--agent: one agent's tables are emitted in C only"),
+    ],
+)
+def test_a_bad_agent_is_refused(tmp_path, capsys, monkeypatch, lang, agent, needle):
+    from tests.cli_helpers import assert_input_error
+
+    out = tmp_path / "o"
+    args = ["export", DEADLINE, "--out", out, "--period", "0.1", "--lang", lang, "--agent", agent]
+    assert_input_error(args, capsys, monkeypatch, needle)
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, needle",
+    [
+        (["--period", "0.5"], "--period: 0.5 differs from the certified value 0.1"),
+        (["--sigma", "5e-324"], "--sigma: 5e-324 differs from the certified value 0.4"),
+        (["--f", "0.3", "--delay", "2"], "--delay: 2 differs from the certified value 1"),
+    ],
+)
+def test_the_cli_refuses_an_option_that_differs_from_the_proof(
+    tmp_path, capsys, monkeypatch, extra, needle
+):
+    from tests.cli_helpers import assert_input_error
+
+    out = tmp_path / "o"
+    args = ["export", ROOT / "certificates" / "g1_digital.json", "--out", out, *extra]
+    assert_input_error(args, capsys, monkeypatch, needle)
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+def test_the_cli_refuses_a_resealed_certificate_with_an_added_gain(tmp_path, capsys, monkeypatch):
+    import json
+
+    from ntc_design.certify.format import finish
+    from tests.cli_helpers import assert_input_error
+
+    doc = json.loads((ROOT / "certificates" / "g1_digital.json").read_text())
+    doc["gain"] = "50/(1+t)"
+    for key in ("digest", "subject_digest", "versions"):
+        doc.pop(key)
+    p = tmp_path / "forged.json"
+    p.write_text(json.dumps(finish(doc)))
+    out = tmp_path / "o"
+    assert_input_error(["verify", p], capsys, monkeypatch, "forged.json: gain")
+    assert_input_error(["export", p, "--out", out], capsys, monkeypatch, "forged.json: gain")
+    assert not out.exists()
