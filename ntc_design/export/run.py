@@ -145,7 +145,7 @@ def _edges_text(law: AgentLaw, most: int = 40) -> list[str]:
     lab = law.labels
     for ml in law.modes:
         names = [
-            f"{one_line(lab[int(j)])}->{one_line(lab[int(i)])}"
+            f"{one_line(str(lab[int(j)]))}->{one_line(str(lab[int(i)]))}"
             for i, j in zip(ml.dst, ml.src, strict=True)
         ]
         shown = ", ".join(names[:most]) + (
@@ -222,7 +222,7 @@ def readme(src: ExportSource, lang: str, agent: int | None = None) -> str:
         ]
         if lang == "c" and agent is None
         else [
-            f"The tables of agent {one_line(law.labels[agent or 0])} only (index {agent}, "
+            f"The tables of agent {one_line(str(law.labels[agent or 0]))} only (index {agent}, "
             "ntc export --agent): no replay program",
             "and no example, which run every agent. Compile ntc_protocol.c with the agent's",
             "own program (a C99 compiler; no library but libm):",
@@ -261,7 +261,7 @@ def readme(src: ExportSource, lang: str, agent: int | None = None) -> str:
         f"{one_line(src.source)} ({src.kind}).",
         *(one_line(n) for n in src.notes),
         "",
-        f"Agents N = {law.n} (labels {', '.join(one_line(a) for a in law.labels[:20])}"
+        f"Agents N = {law.n} (labels {', '.join(one_line(str(a)) for a in law.labels[:20])}"
         + (", …" if law.n > 20 else "")
         + f"), state dimension d = {law.dim}, theta = {law.theta.tolist()}.",
         f"Period h = {literal(law.digital.period)}, delay D = {law.digital.delay} samples, "
@@ -372,7 +372,7 @@ def agent_index(law: AgentLaw, label: str | None) -> int | None:
     for i, a in enumerate(law.labels):
         if str(a) == str(label):
             return i
-    shown = ", ".join(one_line(a) for a in law.labels[:10]) + (", …" if law.n > 10 else "")
+    shown = ", ".join(one_line(str(a)) for a in law.labels[:10]) + (", …" if law.n > 10 else "")
     raise InputError(f"--agent: no agent is labelled {one_line(repr(label))} (labels: {shown})")
 
 
@@ -572,7 +572,7 @@ def export(
     check_export_folder(out)  # again: the folder may have changed during the work
     # written into a new folder that then replaces ``out`` whole (all or nothing); what it
     # replaces is only files an earlier export wrote (checked just above)
-    with output_folder(out, None) as tmp:
+    with output_folder(out, (*replaceable(), MANIFEST)) as tmp:
         for name, text in texts.items():
             (tmp / name).write_text(text, encoding="utf-8")
         (tmp / MANIFEST).write_text(manifest_text(list(texts)), encoding="utf-8")
