@@ -174,7 +174,9 @@ def test_export_refuses_a_folder_with_other_files(tmp_path, examples, capsys, mo
     out.mkdir()
     (out / "mine.txt").write_text("x")
     args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", out, "--period", "0.1"]
-    assert_input_error(args, capsys, monkeypatch, "--out:", "holds other files ('mine.txt')")
+    assert_input_error(
+        args, capsys, monkeypatch, "--out:", "holds 'mine.txt', which no earlier export wrote"
+    )
     assert [p.name for p in out.iterdir()] == ["mine.txt"]
 
 
