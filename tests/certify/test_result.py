@@ -23,3 +23,23 @@ def test_terminal_and_html_show_the_kinds_rows(file, tmp_path, capsys, monkeypat
     for row in res.rows:
         assert f"{row.label}: {row.value}" in out
         assert (row.label, row.value) in html
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "kwargs, needle",
+    [
+        ({"noise_sigma": 5e-324}, "--noise-sigma: 5e-324 has a nonzero |entry| outside"),
+        ({"noise_f": 1e300}, "--noise-f: 1e+300 has a nonzero |entry| outside"),
+    ],
+)
+def test_a_noise_no_certificate_can_state_is_refused_up_front(g1, kwargs, needle):
+    # the subnormal σ once gave a certificate that failed its own well-formedness check
+    from ntc_design.certify import certify
+    from ntc_design.errors import InputError
+    from ntc_design.model.paper import THETA
+    from ntc_design.protocol.digital import Digital
+
+    with pytest.raises(InputError) as err:
+        certify(g1, THETA, gain="1/(1+t)", digital=Digital(0.1, 1), **kwargs)
+    assert str(err.value).startswith(needle) and "\n" not in str(err.value)

@@ -105,3 +105,69 @@ def test_certificate_with_a_schedule_verifies_and_forgeries_fail(g1):
         ver = verify(forged)
         assert not ver.valid, field
         assert any(not c.ok and c.name.startswith("gain schedule") for c in ver.checks)
+
+
+def _every_kind(g1_robust, big_cert):
+    """A certificate of every registered kind (shipped, or issued here small)."""
+    import ntc_design as nd
+    from ntc_design.certify import scale_certificate
+    from ntc_design.certify.kinds.registry import KINDS
+    from ntc_design.certify.kinds.robust import robust_certificate
+    from ntc_design.model.generate import random_network
+    from ntc_design.protocol.digital import Digital
+
+    docs = {
+        name: json.loads((CERTS / f"{name}.json").read_text())
+        for name in ("g1", "switching", "g1_tv", "g1_digital")
+    }
+    sw_digital = certify(
+        nd.load(CERTS.parent / "examples" / "switching.yaml"),
+        THETA,
+        gain="1/(1+t)",
+        digital=Digital(0.013, 0),
+    )
+    docs["digital_switching"] = sw_digital.certificate
+    top = random_network(30, 2, seed=2, family="scale-free")
+    docs["hurwitz_scale"] = scale_certificate(nd.design(top, [1.0, -1.0], thresholds=False))
+    docs["switching_scale"] = big_cert
+    docs["robust"] = robust_certificate(g1_robust[1])
+    docs = {k: json.loads(json.dumps(v)) for k, v in docs.items()}
+    assert {d["kind"] for d in docs.values()} == set(KINDS)
+    return docs
+
+
+def _resealed(doc):
+    from ntc_design.certify.format import finish
+
+    doc = json.loads(json.dumps(doc))
+    for key in ("digest", "subject_digest", "versions"):
+        doc.pop(key, None)
+    method = doc.pop("verification_method", None)
+    return finish(doc, method)
+
+
+@pytest.mark.hostile
+@pytest.mark.slow
+def test_every_kind_refuses_a_field_it_does_not_read(g1_robust, big_cert):
+    from ntc_design.errors import InputError
+
+    for name, doc in _every_kind(g1_robust, big_cert).items():
+        assert verify(json.loads(json.dumps(doc)), name).valid, name
+        places = [("top", "note"), ("subject", "gain2")]
+        if "modes" in doc["subject"]:
+            places.append(("mode", "noise"))
+        if "digital" in doc["subject"]:
+            places.append(("digital", "loss"))
+        for where, field in places:
+            forged = json.loads(json.dumps(doc))
+            target = {
+                "top": forged,
+                "subject": forged["subject"],
+                "mode": next(iter(forged["subject"].get("modes", {}).values()), None),
+                "digital": forged["subject"].get("digital"),
+            }[where]
+            target[field] = 1
+            with pytest.raises(InputError) as err:
+                verify(_resealed(forged), name)
+            msg = str(err.value)
+            assert f"{field}: unknown field" in msg and "\n" not in msg, (name, msg)
