@@ -35,9 +35,11 @@ def _edge_matrices(s):
     return out
 
 
-def dense_digital(systems, modes, h, delay, k_steps, eps0, gain):
+def dense_digital(systems, modes, h, delay, k_steps, eps0, gain, part=0.0):
     """Z_{k+1} = A_k Z_k A_kᵀ + h c² E₀(Σ g gᵀ + G Z_DD Gᵀ)E₀ᵀ on the augmented state,
-    with A_k written out as a dense block companion matrix: (E‖e_K‖², peak)."""
+    with A_k written out as a dense block companion matrix, K = ``k_steps`` whole steps
+    then, with ``part`` s > 0, the held input for s (h → s in A_K, noise factor s²/h):
+    (E‖e(T)‖², peak)."""
     nd_ = systems[0].nd
     w = (delay + 1) * nd_
     z = np.tile(eps0, delay + 1)
@@ -45,17 +47,18 @@ def dense_digital(systems, modes, h, delay, k_steps, eps0, gain):
     edges = [_edge_matrices(s) for s in systems]
     laps = [s.lap_b.toarray() for s in systems]
     peak = np.trace(zz[:nd_, :nd_])
-    for k in range(k_steps):
+    for k in range(k_steps + (part > 0)):
         c = gain(k * h)
+        dt, var = (h, h) if k < k_steps else (part, part * part / h)
         a = np.zeros((w, w))
         a[:nd_, :nd_] = np.eye(nd_)
-        a[:nd_, delay * nd_ :] -= h * c * laps[modes[k]]
+        a[:nd_, delay * nd_ :] -= dt * c * laps[modes[k]]
         for b in range(delay):
             a[(b + 1) * nd_ : (b + 2) * nd_, b * nd_ : (b + 1) * nd_] = np.eye(nd_)
         sdd = zz[delay * nd_ :, delay * nd_ :]
         noise = sum(np.outer(g, g) + gm @ sdd @ gm.T for g, gm in edges[modes[k]])
         zz = a @ zz @ a.T
-        zz[:nd_, :nd_] += h * c * c * noise
+        zz[:nd_, :nd_] += var * c * c * noise
         peak = max(peak, np.trace(zz[:nd_, :nd_]))
     return np.trace(zz[:nd_, :nd_]), peak
 
@@ -114,7 +117,11 @@ def test_switching_moments_use_the_mode_of_each_sample(switching_set):
     got = digital_moments(systems, grid, lambda t: 2 / (1 + t), eps0, 7, 3, delay)
     modes = grid.mode.tolist()
     assert len(set(modes)) == 3  # every mode is sampled
-    want, peak = dense_digital(systems, modes, h, delay, grid.n_steps, eps0, lambda t: 2 / (1 + t))
+    k_full, part = dg.steps(1.0)  # 76 whole steps and 0.012 of one
+    assert k_full == 76 and part == pytest.approx(0.012) and grid.n_steps == 77
+    want, peak = dense_digital(
+        systems, modes, h, delay, k_full, eps0, lambda t: 2 / (1 + t), part=part
+    )
     assert float(got.moments.ms_error[-1].sum()) == pytest.approx(want, rel=1e-12)
     assert got.peak == pytest.approx(peak, rel=1e-12)
 
@@ -181,11 +188,18 @@ def test_a_digital_run_reports_the_peak_and_the_continuous_error(g1):
     assert rows["sampling"] == "period h = 0.1, delay D = 1, K = 100"
 
 
-def test_save_times_move_to_the_nearest_sample():
-    grid, notes = digital_grid(Digital(0.3), 1.0, np.array([0.0, 0.4, 0.5, 1.0]))
-    assert grid.t[-1] == pytest.approx(0.9) and grid.n_steps == 3
-    assert grid.save_steps.tolist() == [0, 1, 2, 3]
-    assert notes and "not a whole number of periods" in notes[0]
+def test_save_times_move_to_the_nearest_grid_point_and_the_run_ends_at_t():
+    grid, notes = digital_grid(Digital(0.3), 1.0, np.array([0.0, 0.4, 0.5, 0.94, 0.96, 1.0]))
+    assert grid.t.tolist() == pytest.approx([0.0, 0.3, 0.6, 0.9, 1.0]) and grid.t[-1] == 1.0
+    assert grid.n_steps == 4 and not notes
+    assert grid.save_steps.tolist() == [0, 1, 2, 3, 4]  # 0.94 -> 0.9, 0.96 -> T
+    # the partial step's noise acts s = 0.1 of the period 0.3: factor s²/h
+    assert grid.noise_h() == pytest.approx([0.3, 0.3, 0.3, 0.01 / 0.3])
+    kept, _ = digital_grid(Digital(0.3), 1.0, np.array([0.45, 0.6 + 1e-12, 0.95]), between=True)
+    assert kept.save_times.tolist() == pytest.approx([0.0, 0.45, 0.6, 0.95, 1.0])
+    assert kept.save_steps.tolist() == [0, 1, 2, 3, 4]
+    whole, _ = digital_grid(Digital(0.25), 1.0, np.array([1.0]))
+    assert whole.n_steps == 4 and whole.noise_last is None
 
 
 @pytest.mark.hostile
