@@ -11,8 +11,8 @@ Search: the exact moments (:func:`ntc_design.simulate.digital.digital_moments`) 
 ``SCAN_POINTS`` periods spaced geometrically from T/``SCAN_STEPS`` up to T; the last period
 before the first that fails is refined by bisection against that failure to a relative
 ``RTOL``. Then the answer is verified on a dense grid below it: the periods
-T/(K + j/``PER_SAMPLE``) for every K from ⌊T/h⌋ up to ``VERIFY_SPAN``·T/h (so every
-sample added, and points between), the geometric scan below those, and, between two
+T/(K + j/``PER_SAMPLE``) for every K from ⌊T/h⌋ up to ``VERIFY_SPAN``·T/h (at most
+``VERIFY_SAMPLES`` samples: every sample added near the answer, and points between), the geometric scan below those, and, between two
 neighbours where the curve may cross a bound (a margin under ``NEAR_FLOOR`` plus
 ``WIGGLE`` times their difference), up to ``REFINE_LEVELS`` bisections. A period
 of the grid that fails shortens the answer to the largest period of the grid below it
@@ -52,9 +52,11 @@ RTOL = 1e-3
 GROWTH_STOP = 1e8
 #: The continuous design diverges, too, when E‖e(T)‖² ends this many times its start.
 FINAL_GROWTH = 1e4
-#: The verification: periods T/(K + j/PER_SAMPLE) for K from ⌊T/h⌋ to VERIFY_SPAN·T/h.
+#: The verification: periods T/(K + j/PER_SAMPLE) for K from ⌊T/h⌋ to VERIFY_SPAN·T/h,
+#: at most VERIFY_SAMPLES samples (each period costs K steps: the work grows as K²).
 PER_SAMPLE = 4
 VERIFY_SPAN = 1.5
+VERIFY_SAMPLES = 40
 #: Neighbours are bisected (up to REFINE_LEVELS times) where the curve may cross a bound
 #: between them: a margin below NEAR_FLOOR plus WIGGLE times the change between them.
 NEAR_FLOOR = 0.005
@@ -497,7 +499,8 @@ def _verify(
     """The answer checked on the dense grid below ``top`` (see the module): the largest
     period of the grid below its first failure, and the grid's evidence."""
     k0 = max(1, math.floor(horizon / top * (1 + 1e-12)))
-    k1 = max(k0 + 1, min(math.ceil(VERIFY_SPAN * horizon / top), SCAN_STEPS))
+    k1 = min(math.ceil(VERIFY_SPAN * horizon / top), SCAN_STEPS, k0 + VERIFY_SAMPLES)
+    k1 = max(k0 + 1, k1)
     dense = [horizon / (k + j / PER_SAMPLE) for k in range(k0, k1 + 1) for j in range(PER_SAMPLE)]
     lowest = min(dense)
     grid = sorted(
