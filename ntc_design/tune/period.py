@@ -298,7 +298,7 @@ def period_curve(
     periods: np.ndarray,
     stop_above: float | None = None,
 ) -> list[tuple[float, float]]:
-    """(E Σ‖x_i(K h) − θ‖², peak) of the sampled recursion at each period, exactly.
+    """(E Σ‖x_i(T) − θ‖², its peak over [0, T]) of the sampled protocol at each period, exactly.
 
     Parameters
     ----------
@@ -354,7 +354,7 @@ def longest_safe_period(
     tolerance : float, optional
         E Σ‖x_i(T) − θ‖² <= (1 + tolerance)·(the continuous design's).
     max_peak : float, optional
-        sup_k E Σ‖x_i(kh) − θ‖² <= max_peak.
+        sup_{t <= T} E Σ‖x_i(t) − θ‖² <= max_peak.
     points : int, optional
         Periods scanned.
 
