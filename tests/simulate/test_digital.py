@@ -321,3 +321,18 @@ def test_a_step_writes_one_state_whatever_the_delay(g1_issue):
     changed = np.flatnonzero(np.any(x != before, axis=0))
     slot = (7 + 1) % (delay + 1)
     assert changed.min() >= 21 * slot and changed.max() < 21 * (slot + 1)
+
+
+def test_exact_runs_report_save_times_between_samples_and_monte_carlo_the_samples(g1):
+    """h = 0.3, T = 2, a save every 0.5: exact moments alone at 0.5, 1, 1.5 (between
+    samples, the held input there) and T; with Monte Carlo the nearest samples."""
+    kw = dict(T=2.0, initial=X0_LIN, noise=NOISE, digital={"period": 0.3}, save_every=0.5)
+    exact = simulate(g1, THETA, method="exact", **kw)
+    both = simulate(g1, THETA, method="both", paths=20, **kw)
+    assert exact.save_times.tolist() == [0.0, 0.5, 1.0, 1.5, 2.0]
+    assert both.save_times.tolist() == pytest.approx([0.0, 0.6, 0.9, 1.5, 2.0])
+    des = nd.design(g1, THETA, thresholds=False)
+    s, eps0 = mode_system(des, NOISE), X0_LIN - np.tile(THETA, 7)
+    want = _dense_at(s, 0.3, 0, eps0, lambda t: 1 / (1 + t), [0.5, 1.0, 1.5, 2.0])
+    np.testing.assert_allclose(exact.exact.ms_error[1:].sum(axis=1), want, rtol=1e-11)
+    assert both.exact.ms_error[-1].sum() == pytest.approx(want[-1], rel=1e-12)
