@@ -108,7 +108,11 @@ def period_rows() -> None:
         t0 = time.perf_counter()
         r = longest_safe_period(top, spec, 10.0, delay=d, tolerance=0.1)
         sec = time.perf_counter() - t0
-        print(f"  D = {d}: h = {r.period:.4g} in {sec:.2f} s ({len(r.curve)} periods evaluated)")
+        ev = r.evidence.periods if r.evidence is not None else 0
+        print(
+            f"  D = {d}: h = {r.period:.4g} in {sec:.2f} s ({len(r.curve)} periods scanned "
+            f"and bisected, {ev} verified up to h)"
+        )
 
 
 def export_rows(g1, steps: int) -> None:

@@ -442,6 +442,11 @@ def _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as
             if horizon is None and text.startswith("--horizon:"):
                 text = "T" + text[len("--horizon") :]
             raise InputError(text if text.startswith("--") else f"{sc.source}: {text}") from None
+    if res.diverged is not None:  # one line, no period: nothing is safe against it
+        if as_json:
+            print(json_text(res.to_dict()))
+        print(f"{sc.source}: {res.diverged}", file=sys.stderr)
+        raise typer.Exit(1)
     doc = res.to_dict()
     if out_dir is not None:
         with output_folder(out_dir, ("period.json",)) as tmp:

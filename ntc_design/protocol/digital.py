@@ -9,7 +9,14 @@ two per edge (the additive and the multiplicative one),
 
 where g_e and G_e are the additive and multiplicative noise terms of edge e exactly as in
 the continuous model, and before the start the initial state is held (e_{−j} = e_0).
-D = 0 is the Euler–Maruyama step at dt = h. A run to T takes K = round(T/h) steps.
+D = 0 is the Euler–Maruyama step at dt = h. Between samples an agent integrates its held
+input, x(t) = x_k + (t − kh)·u_k (u_k with its noise), so the protocol is defined at every
+time: a run to T takes K = ⌊T/h⌋ whole steps and, when s = T − K·h > 0, a partial one,
+
+    e(T) = e_K − s c_K L_B e_{K−D} + (s/√h) c_K Σ_e ( g_e ξ_{K,e,1} + G_e e_{K−D} ξ_{K,e,2} ),
+
+with the normals step K would draw (T within :data:`WHOLE_RTOL` of a whole number of
+periods counts as one).
 
 :class:`Digital` is that option, validated on construction (the pattern of diffrax's
 ``SaveAt``); :func:`step_modes` is the mode each step uses on a switching schedule (the
@@ -33,7 +40,7 @@ from ..present.rows import Table
 
 #: The largest delay D in samples (the augmented state holds D + 1 copies of the state).
 MAX_DELAY = 10_000
-#: The most steps K = round(T/h) a digital run may take.
+#: The most steps K = ⌊T/h⌋ a digital run may take.
 MAX_STEPS = 10**9
 #: T is a whole number of periods when |K·h − T| <= this times T.
 WHOLE_RTOL = 1e-9
@@ -53,9 +60,10 @@ class Digital:
     Examples
     --------
     >>> Digital(0.1, 1).steps(10.0)
-    (100, None)
-    >>> Digital(0.3).steps(1.0)[0]
-    3
+    (100, 0.0)
+    >>> k, s = Digital(0.3).steps(1.0)
+    >>> k, round(s, 12)
+    (3, 0.1)
     """
 
     period: float
@@ -98,9 +106,10 @@ class Digital:
             raise InputError("digital.period: missing")
         return cls(doc["period"], doc.get("delay", 0))
 
-    def steps(self, t_end: float) -> tuple[int, str | None]:
-        """K = round(T/h), the steps of a run to T, and a note when T is not a whole
-        number of periods.
+    def steps(self, t_end: float) -> tuple[int, float]:
+        """K = ⌊T/h⌋, the whole steps of a run to T, and s = T − K·h in [0, h), the
+        partial step of the held input that ends it at T (0 when T is a whole number of
+        periods within :data:`WHOLE_RTOL`, K = round(T/h) then).
 
         Parameters
         ----------
@@ -109,7 +118,8 @@ class Digital:
 
         Returns
         -------
-        (int, str or None)
+        (int, float)
+            K and s.
 
         Raises
         ------
@@ -126,13 +136,10 @@ class Digital:
                 "raise the period or shorten T"
             )
         k = max(1, round(ratio))
-        note = None
-        if abs(k * h - t_end) > WHOLE_RTOL * t_end:
-            note = (
-                f"T = {t_end:g} is not a whole number of periods h = {h:g}: the run takes "
-                f"K = round(T/h) = {k} steps, to t = K·h = {k * h:g}"
-            )
-        return k, note
+        if abs(k * h - t_end) <= WHOLE_RTOL * t_end:
+            return k, 0.0
+        k = max(1, math.floor(ratio))
+        return k, min(max(t_end - k * h, 0.0), h)
 
     def to_dict(self) -> dict:
         """The block as a scenario writes it.

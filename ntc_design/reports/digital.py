@@ -67,7 +67,7 @@ class DigitalFacts:
         ]
         if self.sampled is not None:
             rows += [
-                ("sampled: Σ_i E‖x_i(K·h) − θ‖² (exact)", fmt(float(self.sampled[-1]))),
+                ("sampled: Σ_i E‖x_i(T) − θ‖² (exact)", fmt(float(self.sampled[-1]))),
                 ("sampled: peak over the samples", fmt(float(np.max(self.sampled)))),
             ]
         if self.k0 is not None:

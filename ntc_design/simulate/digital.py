@@ -46,9 +46,13 @@ def digital_grid(
     t_end: float,
     save_times: np.ndarray,
     step_mode: Callable[[np.ndarray], np.ndarray] | None = None,
+    between: bool = False,
 ) -> tuple[TimeGrid, list[str]]:
-    """The sampling grid t_k = k·h, k = 0 … K (K = round(T/h)), the mode of each step and
-    the save times moved to the nearest sample (0 and K·h always among them).
+    """The sampling grid t_k = k·h, k = 0 … K (K = ⌊T/h⌋), and T after a last partial
+    step when T is not a whole number of periods (:meth:`Digital.steps`); the mode of each
+    step; the save times moved to the nearest grid point (0 and T always among them), or,
+    with ``between``, kept where they are (between samples: the exact moments evaluate the
+    held input there; a Monte Carlo run records at grid points only).
 
     Parameters
     ----------
@@ -61,28 +65,45 @@ def digital_grid(
     step_mode : callable, optional
         The mode index at each sample time t_k (:func:`~ntc_design.protocol.digital.step_modes`
         for a switching schedule); None: one mode.
+    between : bool, optional
+        Keep save times between samples (``save_steps``: the sample at or before each).
 
     Returns
     -------
     (TimeGrid, list of str)
-        The grid and notes (T not a whole number of periods).
+        The grid and notes (none today: the run ends at T).
 
     Raises
     ------
     InputError
         h > T, or too many steps.
     """
-    k_steps, note = digital.steps(t_end)
+    k_full, part = digital.steps(t_end)
     h = digital.period
-    t = np.arange(k_steps + 1, dtype=float) * h
+    t = np.arange(k_full + 1, dtype=float) * h
+    if part > 0:
+        t = np.append(t, t_end)
+    k_steps = t.size - 1
     modes = (
         np.asarray(step_mode(t[:-1]), dtype=np.int64)
         if step_mode is not None
         else np.zeros(k_steps, dtype=np.int64)
     )
-    idx = np.rint(np.clip(np.asarray(save_times, dtype=float), 0.0, None) / h)
-    steps = np.unique(np.concatenate([[0, k_steps], np.clip(idx, 0, k_steps).astype(np.int64)]))
-    return TimeGrid(t, modes, steps, t[steps]), [note] if note else []
+    asked = np.clip(np.asarray(save_times, dtype=float), 0.0, t[-1])
+    noise_last = part * part / h if part > 0 else None
+    if between:
+        # a save time within rounding of a grid point is that point (no sliver offset)
+        hi = np.clip(np.searchsorted(t, asked), 1, k_steps)
+        near = np.where(t[hi] - asked < asked - t[hi - 1], hi, hi - 1)
+        asked = np.where(np.abs(t[near] - asked) <= 1e-9 * h, t[near], asked)
+        saves = np.unique(np.concatenate([[0.0, t[-1]], asked]))
+        at = np.clip(np.searchsorted(t, saves, side="right") - 1, 0, k_steps)
+        return TimeGrid(t, modes, at, saves, noise_last), []
+    idx = np.clip(np.rint(asked / h), 0, k_full)
+    if part > 0:  # past the last sample: T when nearer to it
+        idx = np.where(asked > k_full * h + 0.5 * part, k_steps, idx)
+    steps = np.unique(np.concatenate([[0, k_steps], idx.astype(np.int64)]))
+    return TimeGrid(t, modes, steps, t[steps], noise_last), []
 
 
 def digital_moments_bytes(nd_: int, delay: int) -> float:
@@ -148,7 +169,8 @@ def check_digital_moments(nd_: int, delay: int, k_steps: int) -> None:
 @dataclass(frozen=True)
 class DigitalMoments:
     """The digital recursion's exact moments at the save times, with the peak of
-    E‖e_k‖² = Σ_i E‖x_i(kh) − θ‖² over every step k = 0 … K and when it happened."""
+    E‖e(t)‖² = Σ_i E‖x_i(t) − θ‖² over [0, T] (at a sample or at T: convex between
+    samples) and when it happened."""
 
     moments: Moments
     peak: float
@@ -166,13 +188,16 @@ class DigitalRun:
     delay : int
         D.
     steps : int
-        K = round(T/h).
+        K = ⌊T/h⌋, the whole steps.
     ms_error_peak : float or None
-        max over k = 0 … K of the exact E‖e_k‖² (None without exact moments).
+        The largest exact E‖e(t)‖² over [0, T] (None without exact moments).
     peak_time : float or None
-        t_k at the peak.
+        When (a sample, or T).
     continuous_final_ms_error : float or None
-        The continuous design's exact Σ_i E‖x_i − θ‖² at K·h.
+        The continuous design's exact Σ_i E‖x_i − θ‖² at T.
+    partial_step : float
+        s = T − K·h, the last partial step of the held input (0: T is a whole number
+        of periods).
     """
 
     period: float
@@ -181,6 +206,7 @@ class DigitalRun:
     ms_error_peak: float | None = None
     peak_time: float | None = None
     continuous_final_ms_error: float | None = None
+    partial_step: float = 0.0
 
     def to_dict(self) -> dict:
         """The summary's ``digital`` block.
@@ -196,7 +222,19 @@ class DigitalRun:
             "ms_error_peak": self.ms_error_peak,
             "peak_time": self.peak_time,
             "continuous_final_ms_error": self.continuous_final_ms_error,
+            "partial_step": self.partial_step,
         }
+
+
+def _held(
+    zz: np.ndarray, m: np.ndarray, f: MomentRhs, tau: float, q: float, nd_: int, lo: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One move of the held input: the first block's mean and second moment after
+    e ← e − τ L e_{−D} + noise of variance factor q (c²h for a whole step, c²s²/h for a
+    part s of one), and E[e_new z_oldᵀ] (the delay line's new cross moments)."""
+    r = zz[:nd_, :] - tau * (f.l @ zz[lo:, :])  # E[e_{k+1} z_kᵀ]
+    top = r[:, :nd_] - tau * (f.l @ r[:, lo:].T).T + q * f.noise(zz[lo:, lo:])
+    return m[:nd_] - tau * (f.l @ m[lo:]), 0.5 * (top + top.T), r
 
 
 def digital_moments(
@@ -210,7 +248,14 @@ def digital_moments(
     abort_above: float | None = None,
 ) -> DigitalMoments:
     """Exact moments of the sampled, delayed recursion from a deterministic start (the
-    initial state held for k < 0).
+    initial state held for k < 0), the held input included: the last partial step of a
+    run to T that is not a whole number of periods, and save times between samples (a
+    grid of :func:`digital_grid` with ``between``), at t_k + s from Z_k by the same step
+    with τ = c_k s and noise factor c_k² s²/h.
+
+    The peak is the largest E‖e(t)‖² over every grid point, T included: between samples
+    E‖e(t_k + s)‖² = a + b s + c s² with c = c_k² (tr L Z_DD Lᵀ + tr 𝓝(Z_DD)/h) >= 0,
+    convex in s, so its largest value on a step is at an end of it.
 
     Parameters
     ----------
@@ -249,19 +294,31 @@ def digital_moments(
     nxt = np.empty_like(zz)
     c_all = np.asarray(gain(grid.t[:-1]), dtype=float) * np.ones(k_steps)
     h_all = np.diff(grid.t)
+    q_all = grid.noise_h()
+    period = float(grid.t[1] - grid.t[0]) if k_steps else 1.0  # a whole step comes first
     rec = MomentRecorder(grid.save_times, n, d)
-    save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
-    if 0 in save_at:
-        rec.put(save_at[0], m[:nd_], zz[:nd_, :nd_])
+    save_at: dict[int, list[int]] = {}
+    for i, k in enumerate(grid.save_steps):
+        save_at.setdefault(int(k), []).append(i)
+
+    def record(k: int) -> None:
+        for i in save_at.get(k, ()):
+            part = float(grid.save_times[i] - grid.t[k])
+            if part > 0 and k < k_steps:  # between samples: the held input for s
+                c = float(c_all[k])
+                f = rhs[grid.mode[k]]
+                m0, top, _ = _held(zz, m, f, c * part, c * c * part * part / period, nd_, lo)
+                rec.put(i, m0, top)
+            else:
+                rec.put(i, m[:nd_], zz[:nd_, :nd_])
+            rec.k = i + 1
+
+    record(0)
     peak, peak_k = float(np.trace(zz[:nd_, :nd_])), 0
     for k in range(k_steps):
         f = rhs[grid.mode[k]]
-        c, h = float(c_all[k]), float(h_all[k])
-        tau = c * h
-        r = zz[:nd_, :] - tau * (f.l @ zz[lo:, :])  # E[e_{k+1} z_kᵀ]
-        top = r[:, :nd_] - tau * (f.l @ r[:, lo:].T).T + (c * c * h) * f.noise(zz[lo:, lo:])
-        nxt[:nd_, :nd_] = 0.5 * (top + top.T)
-        m0 = m[:nd_] - tau * (f.l @ m[lo:])
+        c = float(c_all[k])
+        m0, nxt[:nd_, :nd_], r = _held(zz, m, f, c * float(h_all[k]), c * c * q_all[k], nd_, lo)
         if delay:
             nxt[:nd_, nd_:] = r[:, :lo]
             nxt[nd_:, :nd_] = r[:, :lo].T
@@ -276,9 +333,7 @@ def digital_moments(
             rec.ms[rec.k :] = np.inf
             rec.means[rec.k :] = np.nan
             return DigitalMoments(rec.result(zz[:nd_, :nd_], k + 1), math.inf, float(grid.t[k + 1]))
-        if k + 1 in save_at:
-            rec.put(save_at[k + 1], m[:nd_], zz[:nd_, :nd_])
-            rec.k = save_at[k + 1] + 1
+        record(k + 1)
     return DigitalMoments(rec.result(zz[:nd_, :nd_].copy(), k_steps), peak, float(grid.t[peak_k]))
 
 

@@ -544,11 +544,13 @@ def _simulate_modes(
     pm = prepare_modes(topology, spec, cfun, workers, protocol)
     systems, segments, notes, n, d = pm.systems, pm.segments, pm.notes, pm.n, pm.d
     if spec.digital is not None:
+        # exact moments alone are exact between samples too; Monte Carlo records at samples
         grid, more = digital_grid(
             spec.digital,
             spec.T,
             spec.save.resolve(spec.T),
             _step_mode(topology, pm, spec.digital.period),
+            between=spec.method == "exact",
         )
         notes.extend(more)
         check_gain(cfun, gain_text, grid.t[:-1])
@@ -598,7 +600,9 @@ def _simulate_modes(
         return dm.moments
 
     exact, exact_stats = run_exact(spec, notes, moments)
-    summary = digital_summary(spec.digital, grid, found[0] if found else None, pm, cfun)
+    summary = digital_summary(
+        spec.digital, grid, found[0] if found else None, pm, cfun, t_end=spec.T
+    )
     runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
     return finish_run(
         tuple(topology.labels), pm.theta, grid, pm.designs, params, spec, runs, notes, summary
@@ -665,10 +669,11 @@ def digital_summary(
     found: DigitalMoments | None,
     pm: PreparedModes,
     cfun: Callable,
+    t_end: float | None = None,
 ) -> DigitalRun:
-    """What a digital run reports beside its curves: the period, the delay, K, the peak of
-    the exact E‖e_k‖² and the continuous design's exact final error at the same time
-    K·h (None where the exact moments did not run).
+    """What a digital run reports beside its curves: the period, the delay, K, the last
+    partial step, the peak of the exact E‖e(t)‖² over [0, T] and the continuous design's
+    exact error at T (None where the exact moments did not run).
 
     Parameters
     ----------
@@ -682,20 +687,26 @@ def digital_summary(
         The modes (for the continuous moments).
     cfun : callable
         Vectorised c(t).
+    t_end : float, optional
+        T (default: the grid's end); the continuous design's moments are taken there.
 
     Returns
     -------
     DigitalRun
     """
-    t_end = float(grid.t[-1])
+    horizon = float(grid.t[-1]) if t_end is None else float(t_end)
+    # the continuous moments end at the modes' horizon: never past it (K·h rounding)
+    horizon = min(horizon, float(pm.segments[-1][1]))
     continuous = None
     if found is not None:
-        cont = pm.moments(cfun, np.array([0.0, t_end]))
+        cont = pm.moments(cfun, np.array([0.0, horizon]))
         continuous = float(cont.ms_error[-1].sum())
+    k_full, part = digital.steps(horizon)
     return DigitalRun(
         period=digital.period,
         delay=digital.delay,
-        steps=grid.n_steps,
+        steps=k_full,
+        partial_step=part,
         ms_error_peak=found.peak if found is not None else None,
         peak_time=found.peak_time if found is not None else None,
         continuous_final_ms_error=continuous,

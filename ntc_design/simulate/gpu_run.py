@@ -212,7 +212,8 @@ class Schedule:
         saves = {int(k): i for i, k in enumerate(grid.save_steps)}
         stops = np.array(sorted((checks | set(saves)) - {0}), dtype=np.int64)
         mode = grid.mode.astype(np.int64) if grid.mode.size else np.zeros(k_total, np.int64)
-        return cls(grid, c_all * h_all, c_all * np.sqrt(h_all), mode, stops, frozenset(checks), saves)  # fmt: skip
+        cs = c_all * np.sqrt(grid.noise_h())  # a sampled run's last partial step: s/√h
+        return cls(grid, c_all * h_all, cs, mode, stops, frozenset(checks), saves)
 
 
 def check_batch(paths: int, e_max: int) -> int:

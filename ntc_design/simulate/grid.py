@@ -23,6 +23,9 @@ class TimeGrid:
     mode: np.ndarray  # K: mode index of each step [t_k, t_{k+1})
     save_steps: np.ndarray  # grid indices of the save times
     save_times: np.ndarray
+    # the sampled protocol's last step when T is not a whole number of periods: a partial
+    # step s = T − K·h of the held input, whose noise has variance s²/h (not s)
+    noise_last: float | None = None
 
     @property
     def h(self) -> np.ndarray:
@@ -33,6 +36,23 @@ class TimeGrid:
     def n_steps(self) -> int:
         """The number of steps K."""
         return self.t.size - 1
+
+    def noise_h(self) -> np.ndarray:
+        """The variance factor of each step's noise: h_k, except a sampled protocol's
+        last partial step s (its held noise, drawn for a whole period h, acts for s
+        seconds: (s/√h)², :func:`.digital.digital_grid`).
+
+        Returns
+        -------
+        numpy.ndarray
+            K factors; c_k·√(factor) scales step k's normals.
+        """
+        h = self.h
+        if self.noise_last is None or h.size == 0:
+            return h
+        h = h.copy()
+        h[-1] = self.noise_last
+        return h
 
 
 def build_grid(

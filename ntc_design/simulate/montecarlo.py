@@ -314,7 +314,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
     h_all = np.diff(grid.t)
     ch_all = c_all * h_all
-    cs_all = c_all * np.sqrt(h_all)
+    cs_all = c_all * np.sqrt(grid.noise_h())  # a sampled run's last partial step: s/√h
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     ends = _run_ends(grid)
     if 0 in save_at and not stats.record(now(0), save_at[0]):

@@ -266,9 +266,10 @@ class SimulationResult:
                 )
         dg = self.digital
         if dg is not None:
-            rows.append(
-                ("sampling", f"period h = {dg.period:g}, delay D = {dg.delay}, K = {dg.steps}")
-            )
+            ks = f"K = {dg.steps}"
+            if dg.partial_step > 0:  # the run ends at T with part of a period
+                ks += f" and a partial step of {dg.partial_step:.6g}"
+            rows.append(("sampling", f"period h = {dg.period:g}, delay D = {dg.delay}, {ks}"))
             if dg.ms_error_peak is not None:
                 rows.append(("peak of Σ_i E‖x_i − θ‖² (exact, sampled)", dg.ms_error_peak))
             if dg.continuous_final_ms_error is not None:

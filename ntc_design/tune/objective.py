@@ -354,7 +354,7 @@ def _one(t):
 class DigitalObjective(ExactObjective):
     """The exact moments of the sampled, delayed recursion (:func:`.simulate.digital.
     digital_moments`; the scenario's ``digital`` block): what the digital protocol's
-    agents reach at the deadline, with K = round(T/h) steps and no integration error."""
+    agents reach at the deadline, with K = ⌊T/h⌋ steps and a partial one to T (the held input), no integration error."""
 
     name = "exact moments of the sampled recursion"
 

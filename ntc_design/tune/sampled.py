@@ -75,6 +75,11 @@ class SampledScheduleProblem:
             )
         self.grid = grid
         self.horizon = float(grid.t[-1])
+        # each step's τ/c and noise factor: h, h; a last partial step s: s, s²/h
+        self.hs = np.full(grid.n_steps, self.h)
+        self.qs = np.full(grid.n_steps, self.h)
+        if grid.noise_last is not None:
+            self.hs[-1], self.qs[-1] = float(grid.h[-1]), grid.noise_last
         self.rhs = [MomentRhs(s, n, d) for s in prepared.systems]
         self.laps = [
             np.asarray(r.l.toarray() if hasattr(r.l, "toarray") else r.l) for r in self.rhs
@@ -85,7 +90,7 @@ class SampledScheduleProblem:
         self.evaluations = 0
 
     def node_times(self, pieces: int) -> np.ndarray:
-        """The K + 1 node times of K equal pieces of [0, K·h].
+        """The K + 1 node times of K equal pieces of [0, T].
 
         Parameters
         ----------
@@ -171,12 +176,12 @@ class SampledScheduleProblem:
                     zs[j] = zz
                 lap, r = self.laps[plan.mode[j]], self.rhs[plan.mode[j]]
                 cc = float(ck[j])
-                tau = self.h * cc
+                tau = self.hs[j] * cc
                 rr = zz[:n, :] - tau * (lap @ zz[lo:, :])
                 top = (
                     rr[:, :n]
                     - tau * (rr[:, lo:] @ lap.T)
-                    + (self.h * cc * cc) * r.noise(zz[lo:, lo:])
+                    + (self.qs[j] * cc * cc) * r.noise(zz[lo:, lo:])
                 )
                 nxt = np.empty_like(zz)
                 nxt[:n, :n] = 0.5 * (top + top.T)
@@ -212,7 +217,7 @@ class SampledScheduleProblem:
         """
         zs, ck = fwd.stages, fwd.gains[:, 0]
         assert zs is not None, "forward(..., store=True) keeps what the adjoint needs"
-        n, lo, h = self.nd, self.delay * self.nd, self.h
+        n, lo = self.nd, self.delay * self.nd
         steps = plan.steps
         if sources is None:
             sources = np.zeros(steps)
@@ -225,6 +230,7 @@ class SampledScheduleProblem:
             lam[:n, :n] += sources[j] * eye  # ∂ tr (Z_{j+1})₀₀ / ∂Z_{j+1}
             lap, r = self.laps[plan.mode[j]], self.rhs[plan.mode[j]]
             cc = float(ck[j])
+            h, q = float(self.hs[j]), float(self.qs[j])
             tau = h * cc
             zz = zs[j]
             # A = S − τ E₀ L E_Dᵀ (S the shift): A Z, for ∂/∂c
@@ -232,7 +238,7 @@ class SampledScheduleProblem:
             az[:n, :] -= tau * (lap @ zz[lo:, :])
             # ∂/∂c: 2⟨Λ, (∂A/∂c) Z Aᵀ⟩ + ⟨Λ₀₀, 2hc (Q + 𝓐₂(Z_DD))⟩, ∂A/∂c = −h E₀ L E_Dᵀ
             m1 = lam[:, :n] @ lap  # Λ E₀ L  (w × n)
-            dc[j] = -2 * h * float(np.sum(m1 * az[:, lo:])) + 2 * h * cc * float(
+            dc[j] = -2 * h * float(np.sum(m1 * az[:, lo:])) + 2 * q * cc * float(
                 np.sum(lam[:n, :n] * r.noise(zz[lo:, lo:]))
             )
             # Λ_j = Aᵀ Λ A + h c² E_D 𝓐₂*(Λ₀₀) E_Dᵀ
@@ -240,7 +246,7 @@ class SampledScheduleProblem:
             la[:, lo:] -= tau * m1  # Λ A
             new = _shift_t(la, n, lo)  # Sᵀ (Λ A)
             new[lo:, :] -= tau * (lap.T @ la[:n, :])  # − τ E_D Lᵀ E₀ᵀ (Λ A)
-            new[lo:, lo:] += (h * cc * cc) * self._adjoint_noise(r, lam[:n, :n])
+            new[lo:, lo:] += (q * cc * cc) * self._adjoint_noise(r, lam[:n, :n])
             lam = 0.5 * (new + new.T)
         out = np.zeros(plan.nodes)
         th = plan.theta[:, 0]

@@ -17,11 +17,19 @@ from ntc_design.protocol.digital import (
 )
 
 
-def test_steps_round_t_over_h_and_say_when_t_is_not_a_whole_number_of_periods():
-    assert Digital(0.1, 2).steps(10.0) == (100, None)
-    k, note = Digital(0.3).steps(1.0)
-    assert k == 3 and "K = round(T/h) = 3" in note and "t = K·h = 0.9" in note
-    assert Digital(0.4).steps(1.0)[0] == 2  # round(2.5) -> 2 (half to even)
+def test_steps_are_the_whole_periods_and_the_partial_step_that_ends_at_t():
+    assert Digital(0.1, 2).steps(10.0) == (100, 0.0)
+    k, part = Digital(0.3).steps(1.0)
+    assert k == 3 and part == pytest.approx(0.1, rel=1e-12)
+    k, part = Digital(0.4).steps(1.0)  # ⌊2.5⌋ whole steps, half a period more
+    assert k == 2 and part == pytest.approx(0.2, rel=1e-12)
+    k, part = Digital(0.0956).steps(10.0)  # the period: 104 steps and 0.0576
+    assert k == 104 and part == pytest.approx(10.0 - 104 * 0.0956, rel=1e-12)
+    # T within WHOLE_RTOL of a whole number of periods is one (no sliver step)
+    assert Digital(10.0 / 3).steps(10.0 * (1 + 1e-12)) == (3, 0.0)
+    assert Digital(10.0 / 3).steps(10.0 * (1 - 1e-12)) == (3, 0.0)
+    k, part = Digital(0.1).steps(9.9999)
+    assert k == 99 and part == pytest.approx(0.0999, rel=1e-9)
 
 
 @pytest.mark.hostile

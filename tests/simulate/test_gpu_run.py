@@ -199,3 +199,41 @@ def test_a_digital_run_on_the_gpu_equals_the_cpu_run(g1):
     cpu = simulate(g1, [1, 2, -1], **kw)
     gpu = simulate(g1, [1, 2, -1], device="gpu", **kw)
     assert relative_gap(cpu.mc.mean, gpu.mc.mean) <= 1e-12
+
+
+def _numpy_held(x_init, s, grid, c, h, delay, seed, paths, bp) -> np.ndarray:
+    """The sampled protocol in NumPy to T, the held input written out: whole steps, then
+    x(T) = x_K + s·u_K with the normals step K draws (c_K·s and c_K·s/√h on them)."""
+    out = []
+    for b in range(-(-paths // bp)):
+        p = min(bp, paths - b * bp)
+        st = path_states(seed, b, p)
+        ring = [np.tile(x_init, (p, 1)) for _ in range(delay + 1)]  # x_k, …, x_{k−D}
+        for k in range(grid.n_steps):
+            dt = grid.t[k + 1] - grid.t[k]
+            root = np.sqrt(h) if k < grid.n_steps - 1 else dt / np.sqrt(h)
+            xi = normals(st, 2 * s.n_edges)
+            y = ring[-1].copy()
+            numpy_step(y, xi, c[k] * dt, c[k] * root, s)
+            ring = [ring[0] + (y - ring[-1]), *ring[:-1]]
+        out.append(ring[0])
+    return np.concatenate(out)
+
+
+def test_a_digital_run_ending_between_samples_is_the_cpus_and_the_held_input(g1):
+    """T = 0.27 with h = 0.05: five samples and a partial step of 0.02 on both kernels,
+    the same paths, and both the held input written out in NumPy."""
+    kw = dict(
+        T=0.27, paths=4, seed=5, initial=X0, method="mc", save_every=0.09, noise=NOISE,
+        digital={"period": 0.05, "delay": 1}, store_paths=4, gain="1/(1+t)",
+    )  # fmt: skip
+    cpu = simulate(g1, THETA, **kw)
+    gpu = simulate(g1, THETA, device="gpu", **kw)
+    assert cpu.grid.t[-1] == 0.27 and cpu.grid.n_steps == 6 and cpu.save_times[-1] == 0.27
+    _agree(cpu, gpu)
+    spec = SimulationSpec.build(THETA, noise=NOISE, initial=X0, T=0.27)
+    pm = prepare_modes(g1, spec, lambda t: 1 / (1 + t))
+    c = 1 / (1 + cpu.grid.t[:-1])
+    want = _numpy_held(pm.x_init, pm.systems[0], cpu.grid, c, 0.05, 1, 5, 4, 2)
+    assert relative_gap(want, cpu.mc.paths[:, -1]) <= 1e-11
+    assert relative_gap(want, gpu.mc.paths[:, -1]) <= REL_TOL

@@ -23,11 +23,13 @@ def parts(g1):
     return spec, prepare_modes(g1, spec.replace(method="exact"), gain)
 
 
-@pytest.mark.parametrize("delay", [0, 2])
-def test_value_and_adjoint(g1, parts, delay):
+@pytest.mark.parametrize(("h", "delay"), [(0.1, 0), (0.1, 2), (0.13, 1)])
+def test_value_and_adjoint(g1, parts, h, delay):
+    """h = 0.13: 15 samples and the held input's partial step of 0.05 to T = 2."""
     spec, pm = parts
-    dg = Digital(0.1, delay)
+    dg = Digital(h, delay)
     grid = sampled_grid(g1, pm, dg, 2.0, np.array([2.0]))
+    assert grid.t[-1] == 2.0 and (grid.noise_last is not None) == (h == 0.13)
     prob = SampledScheduleProblem(pm, grid, dg)
     nodes = prob.node_times(5)
     c = 1 / (1 + nodes) + 0.1 * np.sin(np.arange(6))
