@@ -355,6 +355,8 @@ def blame(
         return InputError(text)
     head = field.split(".", 1)[0].split("[", 1)[0]
     if sep and flags and head in flags:
+        # advice in the file's words is given in the flag's: "use device: cpu" -> "use --device cpu"
+        rest = re.sub(rf"\buse {re.escape(head)}: ", f"use {flags[head]} ", rest)
         return InputError(f"{flags[head]}{field[len(head) :]}: {rest}")
     if sep and fields and head in fields:
         text = f"{fields[head]}{field[len(head) :]}: {rest}"

@@ -70,6 +70,11 @@ def test_quote_and_one_line():
         ("--period: too long", {"digital": "--period"}, None, None, "--period: too long"),
         # a parameter the file gave (no flag): the file's name for it
         ("horizon: must be positive", {}, {"horizon": "T"}, None, "s.yaml: T: must be positive"),
+        # advice in the file's words, given where the user typed a flag: in the flag's
+        ("device: gpu: no driver; use device: cpu", {"device": "--device"}, None, None,
+         "--device: gpu: no driver; use --device cpu"),
+        ("device: gpu: no driver; use device: cpu", {}, None, None,
+         "s.yaml: device: gpu: no driver; use device: cpu"),
     ],
 )  # fmt: skip
 def test_blame_names_the_flag_or_the_file(message, flags, fields, values, want):

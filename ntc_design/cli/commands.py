@@ -12,16 +12,18 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..errors import AssumptionWarning, InputError, blame, one_line
+from ..errors import AssumptionWarning, InputError, blame, one_line, require_number
 from .app import (
     DelayOpt,
     FileArg,
     JsonOpt,
     PeriodOpt,
     digital_option,
+    flag_renamed,
     flags_named,
     json_text,
     parse_vector,
+    renamed_flag,
 )
 
 if TYPE_CHECKING:
@@ -195,11 +197,19 @@ def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Pat
 
 
 def generate(
-    n: Annotated[int, typer.Option("--n", help="Number of agents N (>= 2).")],
     out_path: Annotated[
         Path, typer.Option("--out", help="Output file: .npz (compact), .json or .yaml.")
     ],
-    d: Annotated[int, typer.Option("--d", help="State dimension d.")] = 3,
+    agents: Annotated[
+        int | None, typer.Option("--agents", help="Number of agents N (>= 2; required).")
+    ] = None,
+    dim: Annotated[int | None, typer.Option("--dim", help="State dimension d (default 3).")] = None,
+    old_n: Annotated[
+        int | None, typer.Option("--n", hidden=True, help="Deprecated: --agents.")
+    ] = None,
+    old_d: Annotated[
+        int | None, typer.Option("--d", hidden=True, help="Deprecated: --dim.")
+    ] = None,
     seed: Annotated[int, typer.Option(help="Seed (numpy SeedSequence).")] = 0,
     family: Annotated[
         str, typer.Option(help="random, ring, grid, small-world or scale-free.")
@@ -209,6 +219,12 @@ def generate(
 ) -> None:
     """Write a random directed signed matrix-weighted network that satisfies Assumption 2
     by construction (seeded; see ntc_design.model.generate)."""
+    # the names of the other commands' help (N agents, dimension d); --n/--d still work
+    n_flag, n = renamed_flag("--n", old_n, "--agents", agents)
+    d_flag, d = renamed_flag("--d", old_d, "--dim", dim)
+    if n is None:
+        raise InputError("--agents: missing: the number of agents N (e.g. --agents 1000)")
+    d = 3 if d is None else d
     from ..io.outputs import check_output_file
     from ..model.generate import TOPOLOGY_SUFFIXES, random_network, write_topology
     from ..reports.terminal import Progress, out
@@ -216,7 +232,10 @@ def generate(
     check_output_file(out_path, "--out", TOPOLOGY_SUFFIXES)  # before the work
     with Progress("ntc generate") as prog:
         prog.stage(f"drawing {n} agents ({family})")
-        top = random_network(n, d, seed, family, p_negative=p_negative)
+        with flags_named(
+            n=n_flag, d=d_flag, family="--family", p_negative="--p-negative", seed="--seed"
+        ):
+            top = random_network(n, d, seed, family, p_negative=p_negative)
         prog.stage(f"writing {len(top.weights)} edges to {one_line(str(out_path))}")
         write_topology(top, out_path)
     if as_json:
@@ -461,12 +480,22 @@ def export_cmd(
             "1/(1+t))."
         ),
     ] = None,
-    sigma: Annotated[
+    noise_sigma: Annotated[
         float | None,
-        typer.Option("--sigma", help="Additive noise σ (default: the file's, else 0.4)."),
+        typer.Option(
+            "--noise-sigma",
+            help="Additive noise intensity σ on every edge (default: the file's, else 0.4).",
+        ),
     ] = None,
     noise_f: Annotated[
-        float | None, typer.Option("--f", help="f(x) = f·x (default: the file's, else 0.3).")
+        float | None,
+        typer.Option("--noise-f", help="f(x) = f·x (default: the file's, else 0.3)."),
+    ] = None,
+    old_sigma: Annotated[
+        float | None, typer.Option("--sigma", hidden=True, help="Deprecated: --noise-sigma.")
+    ] = None,
+    old_f: Annotated[
+        float | None, typer.Option("--f", hidden=True, help="Deprecated: --noise-f.")
     ] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -474,9 +503,18 @@ def export_cmd(
     dependency-free C99 or Python, with a replay program that reads x(0), K and the
     normals on stdin and prints x_K, bit for bit as the toolkit's replay. The design is
     certified (or the certificate verified) first; nothing is written when it is not."""
+    # one vocabulary with ntc certify; the old spellings still work, with a note
+    # (each value checked before the imports and the certificate)
+    sigma_flag, noise_sigma = renamed_flag(
+        "--sigma", old_sigma, "--noise-sigma", noise_sigma, _non_negative
+    )
+    f_flag, noise_f = renamed_flag("--f", old_f, "--noise-f", noise_f, require_number)
     from ..export.run import export
 
-    res = export(file, lang, out_dir, period, delay, gain, sigma, noise_f)
+    try:
+        res = export(file, lang, out_dir, period, delay, gain, noise_sigma, noise_f)
+    except InputError as exc:  # the library's names for the noise flags
+        raise flag_renamed(exc, {"--sigma": sigma_flag, "--f": f_flag}) from None
     law = res.source.law
     if as_json:
         print(
@@ -504,6 +542,10 @@ def export_cmd(
         f"as {lang} to {res.folder}: {', '.join(res.files)}"
     )
     print(f"build and check: see {res.folder / 'README.txt'}")
+
+
+def _non_negative(flag: str, value: float) -> float:
+    return require_number(flag, value, minimum=0.0)
 
 
 def examples(

@@ -21,6 +21,7 @@ from .app import (
     PeriodOpt,
     SchedulerOpt,
     command_line,
+    digital_flags_named,
     digital_option,
     json_text,
 )
@@ -551,11 +552,14 @@ def report(
             raise InputError("--period: applies to a run's report, not a sweep's")
         out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
         return
-    path = write_report(
-        directory,
-        interactive=interactive,
-        digital=Digital.from_document(sampled) if sampled is not None else None,
-    )
+    try:
+        path = write_report(
+            directory,
+            interactive=interactive,
+            digital=Digital.from_document(sampled) if sampled is not None else None,
+        )
+    except InputError as exc:  # h > T, too many steps, the delay's memory: name the flag
+        raise digital_flags_named(exc, period, delay) from None
     if as_json:
         figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
         print(

@@ -74,7 +74,7 @@ def test_every_command_with_a_result_has_json(command, capsys, monkeypatch):
 
 def test_generate_json(tmp_path, capsys, monkeypatch):
     code, out, err = run_cli(
-        ["generate", "--n", "12", "--d", "2", "--out", tmp_path / "g.npz", "--json"],
+        ["generate", "--agents", "12", "--dim", "2", "--out", tmp_path / "g.npz", "--json"],
         capsys,
         monkeypatch,
     )
@@ -86,6 +86,40 @@ def test_generate_json(tmp_path, capsys, monkeypatch):
         == (top.n, top.dim, len(top.weights))
         == (12, 2, doc["edges"])
     )
+
+
+@pytest.mark.parametrize(
+    "flags",
+    [["--agents", "7", "--dim", "2"], ["--n", "7", "--d", "2"]],
+    ids=["names", "old names"],
+)
+def test_generate_names_agents_and_dimension(tmp_path, capsys, monkeypatch, flags):
+    code, _, err = run_cli(["generate", *flags, "--out", tmp_path / "g.npz"], capsys, monkeypatch)
+    top = nd.load(tmp_path / "g.npz")
+    assert code == 0 and (top.n, top.dim) == (7, 2)
+    notes = [ln for ln in err.splitlines() if ln.startswith("note:")]
+    assert notes == (
+        [] if flags[0] == "--agents" else
+        ["note: --n is deprecated; it is --agents", "note: --d is deprecated; it is --dim"]
+    )  # fmt: skip
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "flags, needle",
+    [
+        ([], "--agents: missing"),
+        (["--agents", "1"], "--agents: a network needs at least 2 agents"),
+        (["--agents", "5", "--seed", "-1"], "--seed: must be a non-negative integer"),
+        (["--agents", "5", "--p-negative", "2"], "--p-negative: must be in [0, 1]"),
+        (["--agents", "5", "--n", "5"], "--n: the old spelling of --agents"),
+    ],
+)
+def test_generate_refusals_name_the_flag(tmp_path, capsys, monkeypatch, flags, needle):
+    assert_input_error(
+        ["generate", *flags, "--out", tmp_path / "g.npz"], capsys, monkeypatch, needle
+    )
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.hostile
@@ -178,6 +212,56 @@ def test_export_refuses_a_folder_with_other_files(tmp_path, examples, capsys, mo
     assert [p.name for p in out.iterdir()] == ["mine.txt"]
 
 
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, needle",
+    [
+        (["--noise-f", "inf"], "--noise-f: must be finite, got inf"),
+        (["--f", "inf"], "--f: must be finite, got inf"),  # the old spelling, named as typed
+        (["--noise-sigma", "-1"], "--noise-sigma: must be >= 0, got -1"),
+        (["--noise-sigma", "nan"], "--noise-sigma: must be finite"),
+        (["--sigma", "0.4", "--noise-sigma", "0.4"], "--sigma: the old spelling of --noise-sigma"),
+    ],
+)
+def test_export_noise_flags_are_checked_first(
+    tmp_path, examples, capsys, monkeypatch, extra, needle
+):
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", tmp_path / "o"]
+    assert_input_error([*args, "--period", "0.1", *extra], capsys, monkeypatch, needle)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_export_noise_flags_share_certifys_names(capsys, monkeypatch):
+    import re
+
+    helps = {}
+    for command in ("certify", "export"):
+        _, text, _ = run_cli([command, "--help"], capsys, monkeypatch)
+        helps[command] = set(re.findall(r"--noise-[a-z]+|--sigma\b|--f\b", text))
+    assert helps["export"] == helps["certify"] == {"--noise-sigma", "--noise-f"}
+
+
+def test_export_reads_the_old_noise_spellings_with_a_note(tmp_path, examples, capsys, monkeypatch):
+    seen = {}
+
+    def fake_export(file, lang, out, period, delay, gain, sigma, f):
+        seen.update(sigma=sigma, f=f)
+        raise nd.InputError("--sigma: stands for the library's name of the flag")
+
+    monkeypatch.setattr("ntc_design.export.run.export", fake_export)
+    sc = examples / "scenarios" / "g1_deadline.yaml"
+    base = ["export", sc, "--out", tmp_path / "o", "--period", "0.1"]
+    code, _, err = run_cli([*base, "--sigma", "0.5", "--f", "0.2"], capsys, monkeypatch)
+    assert seen == {"sigma": 0.5, "f": 0.2} and code == 2
+    assert err.splitlines()[:2] == [
+        "note: --sigma is deprecated; it is --noise-sigma",
+        "note: --f is deprecated; it is --noise-f",
+    ]
+    assert err.splitlines()[2].startswith("error: --sigma: stands for")
+    code, _, err = run_cli([*base, "--noise-sigma", "0.5"], capsys, monkeypatch)
+    assert err.strip() == "error: --noise-sigma: stands for the library's name of the flag"
+
+
 def test_examples_lists_and_copies_the_bundled_files(tmp_path, capsys, monkeypatch):
     from ntc_design.model.paper import example_files, example_path
 
@@ -249,7 +333,7 @@ def test_robust_proves_brackets_where_certify_proves_the_nominal_case(
     # the network: a weight v vᵀ whose kernel rounding lost left every bracket
     # end unproven, ρ = 0 included; at ρ = 0 the LMI is the nominal Lyapunov inequality
     net, out = tmp_path / "g.yaml", tmp_path / "c.json"
-    args = ["generate", "--n", "6", "--d", "2", "--seed", "11", "--out", net]
+    args = ["generate", "--agents", "6", "--dim", "2", "--seed", "11", "--out", net]
     assert run_cli(args, capsys, monkeypatch)[0] == 0
     assert run_cli(["certify", net, "--theta", "1,-1"], capsys, monkeypatch)[0] == 0
     code, text, err = run_cli(

@@ -48,10 +48,10 @@ def scenario(tmp_path, **over):
 @pytest.mark.parametrize(
     "args, needles",
     [
-        (["--n", "10000000"], ["n:", "1000000"]),
-        (["--n", "100", "--d", "1001"], ["d:", "1000"]),
-        (["--n", "1000000", "--d", "100"], ["n:", "memory"]),  # 6 GiB pinned: ~2 TiB asked
-        (["--n", "100", "--family", "nope"], ["family"]),
+        (["--agents", "10000000"], ["--agents:", "1000000"]),
+        (["--agents", "100", "--dim", "1001"], ["--dim:", "1000"]),
+        (["--agents", "1000000", "--dim", "100"], ["--agents:", "memory"]),  # 6 GiB pinned
+        (["--agents", "100", "--family", "nope"], ["--family:"]),
     ],
 )
 def test_generate_refuses_at_once(tmp_path, capsys, monkeypatch, args, needles):
@@ -482,7 +482,7 @@ def test_landscape_marks_what_scored_infinity_and_the_baseline_only_on_its_slice
     [
         ["certify", G1, "--theta", "1,2,-1"],
         ["design", G1, "--theta", "1,2,-1"],
-        ["generate", "--n", "20"],
+        ["generate", "--agents", "20"],
     ],
 )
 def test_out_that_is_a_fifo_is_refused_and_left_alone(tmp_path, capsys, monkeypatch, args):
