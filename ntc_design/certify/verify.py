@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..gain.schedule import schedule_checks
+from ..io.documents import check_text
 from ..model import SwitchingTopology, Topology
 from ..model.timevarying import ExpressionTopology
 from .checks import (
@@ -349,6 +350,7 @@ def verify_file(
         raise InputError(f"{p}: nested too deeply") from None
     except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
         raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
+    check_text(doc, str(p))  # a lone surrogate (a label, a name) cannot be shown or written
     return verify(doc, str(p), topology, theta)
 
 
