@@ -148,24 +148,16 @@ def design_cmd(
     _exit_if_uninformed(uninformed, out_path)
 
 
-def _exit_if_uninformed(modes: list, out_path: Path | None) -> None:
+def _exit_if_uninformed(modes: list, out_path: Path | None, verb: str = "designed") -> None:
     """Exit 1 when a design (a mode's, or None for the only one) has no informed agent:
     L_B = L then does not depend on δ and nothing draws the agents to θ, so Lemma 1
     designs nothing (one line on stderr, with the fix)."""
+    from ..protocol.lemma1 import no_informed_agent_text
+
     if not modes:
         return
-    where = (
-        f"mode(s) {', '.join(one_line(str(k)) for k in modes)} have"
-        if modes != [None]
-        else "the network has"
-    )
     kept = f"; nothing written to {one_line(str(out_path))}" if out_path is not None else ""
-    print(
-        f"not designed: {where} no informed agent (U is empty), so L_B = L does not depend "
-        "on δ and Lemma 1 cannot bring the agents to θ; an antagonistic edge (A_ij negative "
-        f"definite) into an agent makes it informed{kept}",
-        file=sys.stderr,
-    )
+    print(f"not {verb}: {no_informed_agent_text(modes)}{kept}", file=sys.stderr)
     raise typer.Exit(1)
 
 
@@ -312,6 +304,7 @@ def certify(
     from ..io.outputs import check_output_file
     from ..model.load import load
     from ..protocol.digital import Digital
+    from ..protocol.lemma1 import uninformed_modes
 
     th = parse_vector(theta, "--theta")
     if rate_method not in ("lyapunov", "lmi"):  # before any work
@@ -319,10 +312,15 @@ def certify(
     sampled = digital_option(period, delay)
     if out_path is not None:
         check_output_file(out_path, "--out")
+    top = load(file)
+    uninformed = uninformed_modes(top)
+    if uninformed and as_json:  # nothing to certify: said as ntc design says it
+        print(json_text({"ok": False, "proven": False, "informed": []}))
+    _exit_if_uninformed(uninformed, out_path, "certified")
     with warnings.catch_warnings(), flags_named(theta="--theta"):
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
-            load(file),
+            top,
             th,
             margin,
             gain_from_option(gain, "--gain"),

@@ -40,7 +40,12 @@ from ..model import SwitchingTopology, Topology
 from ..model.paper import F_SCALE, SIGMA
 from ..protocol.agents import AgentLaw, agent_law, make_law, mode_law
 from ..protocol.digital import Digital, DigitalDesign
-from ..protocol.lemma1 import ProtocolDesign, SwitchingDesign
+from ..protocol.lemma1 import (
+    ProtocolDesign,
+    SwitchingDesign,
+    no_informed_agent_text,
+    uninformed_modes,
+)
 from ..simulate.noise import NoiseModel, noise_from_document
 from ..simulate.scenario import load_scenario
 from ..simulate.spec import SimulationSpec
@@ -172,6 +177,10 @@ def from_scenario(
         raise InputError(
             f"{src}: topology: only a fixed topology or a switching set can be exported "
             f"(got {type(top).__name__})"
+        )
+    if uninformed_modes(top):  # said as ntc design says it, not as a failed inequality
+        raise InputError(
+            f"{src}: {no_informed_agent_text(uninformed_modes(top))}; nothing exported"
         )
     g = _gain_option(gain)
     if g is not None:

@@ -398,6 +398,35 @@ def test_switching_design_names_the_mode_without_an_informed_agent(
     assert code == 1 and "not designed: mode(s) a, b have no informed agent" in err
 
 
+@pytest.mark.parametrize("extra", [[], ["--json"], ["--period", "0.1"]])
+def test_certify_without_an_informed_agent_says_so_with_the_fix(
+    tmp_path, capsys, monkeypatch, extra
+):
+    p = tmp_path / "coop.yaml"
+    p.write_text(COOPERATIVE, encoding="utf-8")
+    out = tmp_path / "c.json"
+    args = ["certify", p, "--theta", "1,2", "--gain", "1/(1+t)", "--out", out, *extra]
+    code, text, err = run_cli(args, capsys, monkeypatch)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == 1 and len(lines) == 1, err  # no "warning: Matrix is exactly singular"
+    assert lines[0].startswith("not certified: the network has no informed agent (U is empty)")
+    assert "an antagonistic edge (A_ij negative definite) into an agent makes it informed" in err
+    assert lines[0].endswith(f"; nothing written to {out}") and not out.exists()
+    if "--json" in extra:
+        assert json.loads(text) == {"ok": False, "proven": False, "informed": []}
+
+
+@pytest.mark.hostile
+def test_export_without_an_informed_agent_says_so_with_the_fix(tmp_path, capsys, monkeypatch):
+    (tmp_path / "coop.yaml").write_text(COOPERATIVE, encoding="utf-8")
+    sc = tmp_path / "sc.yaml"
+    sc.write_text("topology: coop.yaml\ntheta: [1, 2]\ngain: 1/(1+t)\nT: 2\n", encoding="utf-8")
+    args = ["export", sc, "--out", tmp_path / "o", "--period", "0.1"]
+    line = assert_input_error(args, capsys, monkeypatch, "the network has no informed agent")
+    assert "makes it informed; nothing exported" in line and "P_lyapunov" not in line
+    assert not (tmp_path / "o").exists()
+
+
 def test_design_with_informed_agents_still_exits_0(examples, capsys, monkeypatch):
     code, _, err = run_cli(
         ["design", examples / "g3.yaml", "--theta", "1,2,-1"], capsys, monkeypatch
