@@ -354,10 +354,12 @@ def blame(
     if sep and field.startswith("--"):
         return InputError(text)
     head = field.split(".", 1)[0].split("[", 1)[0]
-    if sep and flags and head in flags:
+    # a flag for that very field (digital.delay: --delay), else for its block (digital)
+    key = (field if field in flags else head if head in flags else None) if flags else None
+    if sep and flags and key is not None:
         # advice in the file's words is given in the flag's: "use device: cpu" -> "use --device cpu"
-        rest = re.sub(rf"\buse {re.escape(head)}: ", f"use {flags[head]} ", rest)
-        return InputError(f"{flags[head]}{field[len(head) :]}: {rest}")
+        rest = re.sub(rf"\buse {re.escape(key)}: ", f"use {flags[key]} ", rest)
+        return InputError(f"{flags[key]}{field[len(key) :]}: {rest}")
     if sep and fields and head in fields:
         text = f"{fields[head]}{field[len(head) :]}: {rest}"
     given = [

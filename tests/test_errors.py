@@ -73,6 +73,9 @@ def test_quote_and_one_line():
         # advice in the file's words, given where the user typed a flag: in the flag's
         ("device: gpu: no driver; use device: cpu", {"device": "--device"}, None, None,
          "--device: gpu: no driver; use --device cpu"),
+        # a flag for the very field, beside the flag for its block
+        ("digital.delay: too long", {"digital": "--period", "digital.delay": "--delay"}, None,
+         None, "--delay: too long"),
         ("device: gpu: no driver; use device: cpu", {}, None, None,
          "s.yaml: device: gpu: no driver; use device: cpu"),
     ],

@@ -148,6 +148,8 @@ def simulate(
             period, delay, sc.document.get("digital"), overrides.get("T", sc.document.get("T"))
         )
     flags = {k: f for k, f in SIMULATE_FLAGS.items() if k in overrides}
+    given_digital = (("period", period), ("delay", delay))
+    flags.update({f"digital.{k}": f"--{k}" for k, v in given_digital if v is not None})
     top, spec, sc = load_scenario(scenario, overrides, sc, flags)
     # summary.json records the command as typed: the report's re-run line keeps the overrides
     recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}

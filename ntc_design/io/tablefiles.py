@@ -187,8 +187,9 @@ def _mat_inflated_bytes(p: Path, limit: float) -> None:
                         f"{p}: {name}: a {'×'.join(map(str, shape))} {what} array needs "
                         f"{format_bytes(mem)} once loaded (from a "
                         f"{format_bytes(os.path.getsize(p))} file), more than the "
-                        f"{format_bytes(limit)} allowed here (a sixth of the memory available, "
-                        "NTC_AVAILABLE_MEMORY); store a large network as a sparse A or as .npz"
+                        f"{format_bytes(limit)} allowed here (a sixth of the memory available: "
+                        "free, within ulimit -v, or NTC_AVAILABLE_MEMORY); store a large "
+                        "network as a sparse A or as .npz"
                     )
                 if z is not None:  # inflate the rest, counting: never past what it declares
                     got = len(out)
