@@ -121,7 +121,7 @@ def test_check_stepping_says_what_simulate_says_before_any_path(g1):
     from ntc_design.simulate import SimulationSpec
     from ntc_design.simulate.driver import check_stepping, simulate
 
-    ok = SimulationSpec.build([1, 2, -1], T=1.0, dt=1e-3, paths=2, workers=1)
+    ok = SimulationSpec.build([1, 2, -1], T=1.0, dt=1e-3, paths=2, workers=1, method="mc")
     got = check_stepping(g1, ok)
     # G1's mean-square limit of c·h at c = 1 is 0.0573 (check_step_size's documented value)
     assert got is not None and got.ratio == pytest.approx(1e-3 / 0.0573, rel=2e-3)
