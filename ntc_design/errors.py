@@ -60,6 +60,9 @@ def one_line(text: str) -> str:
 
 
 def _show(value) -> str:
+    # a NumPy scalar as the number it is (inf, 3), not its repr (np.float64(inf))
+    if type(value).__module__ == "numpy" and isinstance(value, numbers.Real):
+        value = int(value) if isinstance(value, numbers.Integral) else float(value)
     if isinstance(value, numbers.Integral) and not isinstance(value, bool):
         digits = len(str(abs(int(value))))
         if digits > 40:  # a 400-digit integer: its size, not its digits

@@ -172,3 +172,17 @@ def test_a_missing_optional_module_names_its_extra(extra):
         f'pip install "ntc-design[{extra}]"'
     )
     assert optional_module("json", extra, "x").dumps([1]) == "[1]"  # installed: the module
+
+
+@pytest.mark.hostile
+def test_a_numpy_number_is_shown_as_the_number_not_its_repr():
+    import numpy as np
+
+    for value, shown in (
+        (np.float64("inf"), "inf"),
+        (np.float32("nan"), "nan"),
+        (np.int64(-3), "-3"),
+    ):
+        with pytest.raises(InputError) as info:
+            require_number("x", value, minimum=0)
+        assert str(info.value).endswith(f"got {shown}") and "np." not in str(info.value)

@@ -24,6 +24,7 @@ from ..gain.schedule import schedule_checks
 from ..io.documents import check_text
 from ..model import SwitchingTopology, Topology
 from ..model.timevarying import ExpressionTopology
+from ..present.rows import counted
 from .checks import (
     About,
     Check,
@@ -215,7 +216,7 @@ def verify(
         # before the kind reads a subject it takes to be one topology (a kind edited)
         raise InputError(
             f"{source}: kind {kind.name!r} is about one topology, but subject.modes lists "
-            f"{len(modes_doc)} modes"
+            f"{counted(len(modes_doc), 'mode')}"
         )
 
     reading = kind.read(doc, source)

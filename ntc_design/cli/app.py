@@ -328,6 +328,89 @@ def flag_renamed(exc: InputError, names: dict[str, str]) -> InputError:
     return InputError(text)
 
 
+def require_file(path: Path | None, hint: str = "") -> None:
+    """A file the command reads, refused at once when it does not exist (before the
+    library's layers are imported: seconds on a loaded machine); a folder or a device is
+    left to the reader, which says what it is.
+
+    Parameters
+    ----------
+    path : Path or None
+        The file (None: not given).
+    hint : str, optional
+        Added to the message (``; expected a certificate ...``).
+
+    Raises
+    ------
+    InputError
+        ``PATH: no such file``.
+    """
+    if path is None:
+        return
+    try:
+        missing = not path.exists()  # a dangling link is missing too
+    except (OSError, ValueError):  # a name the reader refuses in its own words
+        return
+    if missing:
+        raise InputError(f"{path}: no such file{hint}")
+
+
+def check_theta_length(file: Path, theta: list[float]) -> None:
+    """A ``--theta`` of the wrong length refused before the library loads, where the file
+    states d: a YAML or JSON topology (up to 1 MiB, read twice at most) with a top-level
+    ``dim``. Anything else is left to the library, which checks it after reading.
+
+    Parameters
+    ----------
+    file : Path
+        The topology file.
+    theta : list of float
+        ``--theta``.
+
+    Raises
+    ------
+    InputError
+        ``--theta: expected d numbers (the state dimension d), got n``.
+    """
+    from ..io.documents import read_document  # YAML and NumPy only
+
+    try:
+        small = file.suffix.lower() in (".yaml", ".yml", ".json") and file.stat().st_size < 2**20
+        dim = read_document(file).get("dim") if small else None
+    except (InputError, OSError, ValueError):  # the library says it when it reads the file
+        return
+    if type(dim) is int and dim > 0 and len(theta) != dim:
+        raise InputError(
+            f"--theta: expected {dim} numbers (the state dimension d), got {len(theta)}"
+        )
+
+
+def check_digital_flags(period: float | None, delay: int | None) -> None:
+    """``--period`` and ``--delay`` on their own (h > 0 and finite, D an integer in range),
+    before any file or library layer is read.
+
+    Parameters
+    ----------
+    period : float or None
+        ``--period``.
+    delay : int or None
+        ``--delay``.
+
+    Raises
+    ------
+    InputError
+        Naming the flag.
+    """
+    if period is None and delay is None:
+        return
+    from ..protocol.digital import Digital  # NumPy only
+
+    try:
+        Digital(period if period is not None else 1.0, delay if delay is not None else 0)
+    except InputError as exc:
+        raise digital_flags_named(exc, period, delay) from None
+
+
 ARGS: list[str] = []  # this invocation's arguments (set by main)
 
 

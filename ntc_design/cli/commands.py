@@ -18,12 +18,15 @@ from .app import (
     FileArg,
     JsonOpt,
     PeriodOpt,
+    check_digital_flags,
+    check_theta_length,
     digital_option,
     flag_renamed,
     flags_named,
     json_text,
     parse_vector,
     renamed_flag,
+    require_file,
 )
 
 if TYPE_CHECKING:
@@ -47,6 +50,7 @@ def check(
 ) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition
     (above 50 agents a summary, unless --full)."""
+    require_file(file)  # trivially bad input before the library's layers load
     from ..model import SwitchingTopology, Topology
     from ..model.load import load
     from ..protocol import (
@@ -103,17 +107,20 @@ def design_cmd(
 ) -> None:
     """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S. Exit 1 when
     nothing can be designed (no informed agent: no antagonistic edge into any agent)."""
+    from ..io.outputs import check_output_file
+
+    th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
+    require_file(file)
+    check_theta_length(file, th)
+    if out_path is not None:
+        check_output_file(out_path, "--out", (".mat", ".json"))
     import numpy as np
 
-    from ..io.outputs import check_output_file
     from ..model.load import load
     from ..model.timevarying import ExpressionTopology
     from ..protocol import SwitchingDesign, design
     from ..reports.terminal import out, print_table
 
-    th = parse_vector(theta, "--theta")
-    if out_path is not None:
-        check_output_file(out_path, "--out", (".mat", ".json"))
     top = load(file)
     if isinstance(top, ExpressionTopology):
         from ..protocol.timevarying import TimeVaryingDesign
@@ -298,20 +305,23 @@ def certify(
     Exit 0 when one is (the sampled ones with --period; or, without --gain, when the
     certificate is valid), 1 when none is; --out is written only when the certificate is
     valid."""
+    from ..io.outputs import check_output_file
+
+    th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
+    if rate_method not in ("lyapunov", "lmi"):  # before any work
+        raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
+    sampled = digital_option(period, delay)
+    require_file(file)
+    check_theta_length(file, th)
+    if out_path is not None:
+        check_output_file(out_path, "--out")
     from ..certify import certify as run
     from ..certify import write_certificate
     from ..gain.schedule import gain_from_option
-    from ..io.outputs import check_output_file
     from ..model.load import load
     from ..protocol.digital import Digital
     from ..protocol.lemma1 import uninformed_modes
 
-    th = parse_vector(theta, "--theta")
-    if rate_method not in ("lyapunov", "lmi"):  # before any work
-        raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
-    sampled = digital_option(period, delay)
-    if out_path is not None:
-        check_output_file(out_path, "--out")
     top = load(file)
     uninformed = uninformed_modes(top)
     if uninformed and as_json:  # nothing to certify: said as ntc design says it
@@ -369,12 +379,15 @@ def verify(
 ) -> None:
     """Re-check a certificate without an SDP solver, deriving what must be proven from its
     kind. Exit 0 valid, 1 invalid (names what fails), 2 malformed."""
+    # trivially bad input before the library loads
+    th = parse_vector(theta, "--theta") if theta is not None else None
+    require_file(cert, "; expected a certificate (the JSON file ntc certify --out writes)")
+    require_file(topology)  # (a θ of another length: not the certificate's, exit 1)
     from ..certify import verify_file
     from ..model.load import load
     from ..reports.terminal import print_verification
 
     top = load(topology) if topology is not None else None
-    th = parse_vector(theta, "--theta") if theta is not None else None
     ver = verify_file(cert, top, th)
     doc = ver.to_dict()
     if as_json:
@@ -409,16 +422,19 @@ def robust(
     """Decay, consensus-offset and margin brackets when every weight is known only within
     (1−ρ)|A| ⪯ |A'| ⪯ (1+ρ)|A|: a proven end and a realisation attaining the other. Exit 0
     when the certificate verifies, 1 when not."""
+    from ..io.outputs import check_output_file
+
+    th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
+    require_file(file)
+    check_theta_length(file, th)
+    if out_path is not None:
+        check_output_file(out_path, "--out")
     from ..certify import certify_robust, write_certificate
     from ..certify.robust.are import RICCATI_MAX_ND
-    from ..io.outputs import check_output_file
     from ..model import Topology
     from ..model.load import load
     from ..reports.terminal import print_table
 
-    th = parse_vector(theta, "--theta")
-    if out_path is not None:
-        check_output_file(out_path, "--out")
     top = load(file)
     if out_path is not None and isinstance(top, Topology) and top.nd > RICCATI_MAX_ND:
         raise InputError(
@@ -507,7 +523,10 @@ def export_cmd(
         "--sigma", old_sigma, "--noise-sigma", noise_sigma, _non_negative
     )
     f_flag, noise_f = renamed_flag("--f", old_f, "--noise-f", noise_f, require_number)
+    check_digital_flags(period, delay)
+    require_file(file)
     from ..export.run import export
+    from ..present.rows import counted
 
     try:
         res = export(file, lang, out_dir, period, delay, gain, noise_sigma, noise_f)
@@ -535,7 +554,8 @@ def export_cmd(
     for note in res.source.notes:
         print(note)
     print(
-        f"exported {law.name} ({law.n} agents, d = {law.dim}, {len(law.modes)} mode(s); "
+        f"exported {law.name} ({counted(law.n, 'agent')}, d = {law.dim}, "
+        f"{counted(len(law.modes), 'mode')}; "
         f"h = {law.digital.period:g}, D = {law.digital.delay}, c(t) = {law.gain.label}) "
         f"as {lang} to {res.folder}: {', '.join(res.files)}"
     )

@@ -358,7 +358,8 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     bad = np.flatnonzero(~np.isfinite(w))
     if bad.size:
         r, c = divmod(int(bad[0]), k)
-        raise InputError(f"{p}: row {lines[r]}: {want[c]} = {w[bad[0]]!r} is not a finite number")
+        got = float(w[bad[0]])  # inf, nan: not NumPy's repr (np.float64(inf))
+        raise InputError(f"{p}: row {lines[r]}: {want[c]} = {got!r} is not a finite number")
     labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst), p)
     if len(labels) > MAX_AGENTS:
         raise InputError(f"{p}: {len(labels)} agents; at most {MAX_AGENTS}")

@@ -148,7 +148,7 @@ def test_export_writes_the_folder(tmp_path, examples, capsys, monkeypatch):
         [*args, "--out", out, "--period", "0.1", "--delay", "1"], capsys, monkeypatch
     )
     assert code == 0, err
-    assert "exported G1 (7 agents, d = 3, 1 mode(s); h = 0.1, D = 1, c(t) = 1/(1+t)) as c" in text
+    assert "exported G1 (7 agents, d = 3, 1 mode; h = 0.1, D = 1, c(t) = 1/(1+t)) as c" in text
     assert (out / "ntc_protocol.c").is_file() and (out / "README.txt").is_file()
     code, text, err = run_cli(
         ["export", examples.parent / "certificates" / "g1.json", "--lang", "python",
@@ -297,8 +297,9 @@ def test_examples_lists_and_copies_the_bundled_files(tmp_path, capsys, monkeypat
     [
         (lambda p: (p.mkdir(), (p / "notes.txt").write_text("mine")), "the folder is not empty"),
         (lambda p: p.write_text("mine"), "exists and is not a folder"),
+        (lambda p: p.symlink_to(p.parent / "gone"), "a link to "),
     ],
-    ids=["non-empty folder", "a file"],
+    ids=["non-empty folder", "a file", "a dangling link"],
 )
 def test_examples_copy_refuses_to_overwrite(tmp_path, capsys, monkeypatch, make, needle, as_json):
     dest = tmp_path / "dest"

@@ -316,3 +316,14 @@ def test_a_mat_inflating_past_the_process_limit_is_refused(tmp_path, capsys, mon
 
     allowed = float(re.search(r"more than the ([0-9.]+) MiB allowed", line).group(1))
     assert 600 < allowed <= 4 * 1024 / 6  # a sixth of the 4 GiB left (less what was mapped since)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("value, shown", [("inf", "inf"), ("-inf", "-inf"), ("nan", "nan")])
+def test_a_csv_weight_that_is_not_finite_is_shown_as_written(
+    tmp_path, capsys, monkeypatch, value, shown
+):
+    p = tmp_path / "w.csv"
+    p.write_text(f"from,to,a11\n1,2,{value}\n2,1,-1\n", encoding="utf-8")
+    line = assert_input_error(["check", p], capsys, monkeypatch, f"a11 = {shown} is not a finite")
+    assert "np." not in line and "float64" not in line
