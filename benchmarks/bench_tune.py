@@ -65,6 +65,8 @@ def case(name, top, spec, horizon, evaluations, landscape):
         f"{res.tuned.text:<24} {ms['tuned']:.4g} vs baseline {ms['baseline']:.4g} "
         f"(×{ms['baseline'] / ms['tuned']:.2f})  certified: {res.certified}  [{res.method}]"
     )
+    st = res.stage_seconds  # where the time went (the step check: spectra, no path drawn)
+    print(f"{'':<22} {'; '.join(f'{k} {v:.2f} s' for k, v in st.items())}")
     return res
 
 
