@@ -60,6 +60,9 @@ def one_line(text: str) -> str:
 
 
 def _show(value) -> str:
+    # a NumPy scalar as the number it is (inf, 3), not its repr (np.float64(inf))
+    if type(value).__module__ == "numpy" and isinstance(value, numbers.Real):
+        value = int(value) if isinstance(value, numbers.Integral) else float(value)
     if isinstance(value, numbers.Integral) and not isinstance(value, bool):
         digits = len(str(abs(int(value))))
         if digits > 40:  # a 400-digit integer: its size, not its digits
@@ -354,8 +357,12 @@ def blame(
     if sep and field.startswith("--"):
         return InputError(text)
     head = field.split(".", 1)[0].split("[", 1)[0]
-    if sep and flags and head in flags:
-        return InputError(f"{flags[head]}{field[len(head) :]}: {rest}")
+    # a flag for that very field (digital.delay: --delay), else for its block (digital)
+    key = (field if field in flags else head if head in flags else None) if flags else None
+    if sep and flags and key is not None:
+        # advice in the file's words is given in the flag's: "use device: cpu" -> "use --device cpu"
+        rest = re.sub(rf"\buse {re.escape(key)}: ", f"use {flags[key]} ", rest)
+        return InputError(f"{flags[key]}{field[len(key) :]}: {rest}")
     if sep and fields and head in fields:
         text = f"{fields[head]}{field[len(head) :]}: {rest}"
     given = [

@@ -70,6 +70,14 @@ def test_quote_and_one_line():
         ("--period: too long", {"digital": "--period"}, None, None, "--period: too long"),
         # a parameter the file gave (no flag): the file's name for it
         ("horizon: must be positive", {}, {"horizon": "T"}, None, "s.yaml: T: must be positive"),
+        # advice in the file's words, given where the user typed a flag: in the flag's
+        ("device: gpu: no driver; use device: cpu", {"device": "--device"}, None, None,
+         "--device: gpu: no driver; use --device cpu"),
+        # a flag for the very field, beside the flag for its block
+        ("digital.delay: too long", {"digital": "--period", "digital.delay": "--delay"}, None,
+         None, "--delay: too long"),
+        ("device: gpu: no driver; use device: cpu", {}, None, None,
+         "s.yaml: device: gpu: no driver; use device: cpu"),
     ],
 )  # fmt: skip
 def test_blame_names_the_flag_or_the_file(message, flags, fields, values, want):
@@ -164,3 +172,17 @@ def test_a_missing_optional_module_names_its_extra(extra):
         f'pip install "ntc-design[{extra}]"'
     )
     assert optional_module("json", extra, "x").dumps([1]) == "[1]"  # installed: the module
+
+
+@pytest.mark.hostile
+def test_a_numpy_number_is_shown_as_the_number_not_its_repr():
+    import numpy as np
+
+    for value, shown in (
+        (np.float64("inf"), "inf"),
+        (np.float32("nan"), "nan"),
+        (np.int64(-3), "-3"),
+    ):
+        with pytest.raises(InputError) as info:
+            require_number("x", value, minimum=0)
+        assert str(info.value).endswith(f"got {shown}") and "np." not in str(info.value)

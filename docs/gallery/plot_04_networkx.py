@@ -7,11 +7,14 @@ for d = 1; the topology is validated like a file.
 """
 
 import matplotlib.pyplot as plt
-import networkx as nx
 
 import ntc_design as nd
+from ntc_design.errors import optional_module
 from ntc_design.interop import topology_from_networkx
 from ntc_design.reports.graph_figure import topology_figure
+
+# networkx comes with the interop extra: without it, one line says which to install
+nx = optional_module("networkx", "interop", "this example")
 
 g = nx.DiGraph()
 g.add_weighted_edges_from(

@@ -21,8 +21,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..gain.schedule import schedule_checks
+from ..io.documents import check_text
 from ..model import SwitchingTopology, Topology
 from ..model.timevarying import ExpressionTopology
+from ..present.rows import counted
 from .checks import (
     About,
     Check,
@@ -278,7 +280,7 @@ def verify(
         # before the kind reads a subject it takes to be one topology (a kind edited)
         raise InputError(
             f"{source}: kind {kind.name!r} is about one topology, but subject.modes lists "
-            f"{len(modes_doc)} modes"
+            f"{counted(len(modes_doc), 'mode')}"
         )
 
     known_fields(kind, doc, source)  # a field no reader checks is refused, never trusted
@@ -414,6 +416,7 @@ def verify_file(
         raise InputError(f"{p}: nested too deeply") from None
     except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
         raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
+    check_text(doc, str(p))  # a lone surrogate (a label, a name) cannot be shown or written
     return verify(doc, str(p), topology, theta)
 
 

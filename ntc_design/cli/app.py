@@ -6,8 +6,11 @@ from __future__ import annotations
 
 import contextlib
 import json
+import re
+import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 import typer
 
@@ -231,12 +234,181 @@ def digital_option(
         if isinstance(horizon, (int, float)) and not isinstance(horizon, bool) and horizon > 0:
             dg.steps(float(horizon))
     except InputError as exc:
-        text = str(exc)
-        for field, flag in (("digital.period", "--period"), ("digital.delay", "--delay")):
-            if text.startswith(field) and (period if flag == "--period" else delay) is not None:
-                text = flag + text[len(field) :]
-        raise InputError(text) from None
+        raise digital_flags_named(exc, period, delay) from None
     return dg.to_dict()
+
+
+def digital_flags_named(exc: InputError, period: object, delay: object) -> InputError:
+    """An error about ``digital.period`` or ``digital.delay`` naming ``--period`` or
+    ``--delay`` where that flag was given.
+
+    Parameters
+    ----------
+    exc : InputError
+        The library's error.
+    period, delay : object
+        ``--period`` and ``--delay`` (None: not given; the field keeps its name).
+
+    Returns
+    -------
+    InputError
+        The error to raise.
+    """
+    text = str(exc)
+    for field, flag, given in (
+        ("digital.period", "--period", period),
+        ("digital.delay", "--delay", delay),
+    ):
+        if text.startswith(field) and given is not None:
+            text = flag + text[len(field) :]
+    return InputError(text)
+
+
+_V = TypeVar("_V")  # a flag's value type
+
+
+def renamed_flag(
+    old: str,
+    old_value: _V | None,
+    new: str,
+    new_value: _V | None,
+    check: Callable[[str, Any], object] | None = None,
+) -> tuple[str, _V | None]:
+    """A flag given under its deprecated spelling (``--sigma`` for ``--noise-sigma``): its
+    value, checked, then a note on stderr; both spellings at once are refused.
+
+    Parameters
+    ----------
+    old, new : str
+        The deprecated and the current spelling.
+    old_value, new_value : object
+        Their values (None: not given).
+    check : callable, optional
+        ``check(flag, value)`` raises :class:`InputError` for a bad value (named as typed),
+        before the note: a refusal stays one line.
+
+    Returns
+    -------
+    (str, object)
+        The spelling the user typed (errors name it) and the value.
+
+    Raises
+    ------
+    InputError
+        Both spellings given, or what ``check`` raises.
+    """
+    flag, value = (new, new_value) if old_value is None else (old, old_value)
+    if old_value is not None and new_value is not None:
+        raise InputError(f"{old}: the old spelling of {new}; give {new} only")
+    if check is not None and value is not None:
+        check(flag, value)
+    if flag == old:
+        print(f"note: {old} is deprecated; it is {new}", file=sys.stderr)
+    return flag, value
+
+
+def flag_renamed(exc: InputError, names: dict[str, str]) -> InputError:
+    """The library's error with the flags it names spelt as the user typed them
+    (``--sigma: …`` is ``--noise-sigma: …``).
+
+    Parameters
+    ----------
+    exc : InputError
+        The library's error.
+    names : dict of str to str
+        The library's spelling -> the user's.
+
+    Returns
+    -------
+    InputError
+    """
+    text = str(exc)
+    for name, typed in names.items():
+        text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", typed, text)
+    return InputError(text)
+
+
+def require_file(path: Path | None, hint: str = "") -> None:
+    """A file the command reads, refused at once when it does not exist (before the
+    library's layers are imported: seconds on a loaded machine); a folder or a device is
+    left to the reader, which says what it is.
+
+    Parameters
+    ----------
+    path : Path or None
+        The file (None: not given).
+    hint : str, optional
+        Added to the message (``; expected a certificate ...``).
+
+    Raises
+    ------
+    InputError
+        ``PATH: no such file``.
+    """
+    if path is None:
+        return
+    try:
+        missing = not path.exists()  # a dangling link is missing too
+    except (OSError, ValueError):  # a name the reader refuses in its own words
+        return
+    if missing:
+        raise InputError(f"{path}: no such file{hint}")
+
+
+def check_theta_length(file: Path, theta: list[float]) -> None:
+    """A ``--theta`` of the wrong length refused before the library loads, where the file
+    states d: a YAML or JSON topology (up to 1 MiB, read twice at most) with a top-level
+    ``dim``. Anything else is left to the library, which checks it after reading.
+
+    Parameters
+    ----------
+    file : Path
+        The topology file.
+    theta : list of float
+        ``--theta``.
+
+    Raises
+    ------
+    InputError
+        ``--theta: expected d numbers (the state dimension d), got n``.
+    """
+    from ..io.documents import read_document  # YAML and NumPy only
+
+    try:
+        small = file.suffix.lower() in (".yaml", ".yml", ".json") and file.stat().st_size < 2**20
+        dim = read_document(file).get("dim") if small else None
+    except (InputError, OSError, ValueError):  # the library says it when it reads the file
+        return
+    if type(dim) is int and dim > 0 and len(theta) != dim:
+        raise InputError(
+            f"--theta: expected {dim} numbers (the state dimension d), got {len(theta)}"
+        )
+
+
+def check_digital_flags(period: float | None, delay: int | None) -> None:
+    """``--period`` and ``--delay`` on their own (h > 0 and finite, D an integer in range),
+    before any file or library layer is read.
+
+    Parameters
+    ----------
+    period : float or None
+        ``--period``.
+    delay : int or None
+        ``--delay``.
+
+    Raises
+    ------
+    InputError
+        Naming the flag.
+    """
+    if period is None and delay is None:
+        return
+    from ..protocol.digital import Digital  # NumPy only
+
+    try:
+        Digital(period if period is not None else 1.0, delay if delay is not None else 0)
+    except InputError as exc:
+        raise digital_flags_named(exc, period, delay) from None
 
 
 ARGS: list[str] = []  # this invocation's arguments (set by main)

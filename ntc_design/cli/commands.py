@@ -12,16 +12,21 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..errors import AssumptionWarning, InputError, blame, one_line
+from ..errors import AssumptionWarning, InputError, blame, one_line, require_number
 from .app import (
     DelayOpt,
     FileArg,
     JsonOpt,
     PeriodOpt,
+    check_digital_flags,
+    check_theta_length,
     digital_option,
+    flag_renamed,
     flags_named,
     json_text,
     parse_vector,
+    renamed_flag,
+    require_file,
 )
 
 if TYPE_CHECKING:
@@ -45,6 +50,7 @@ def check(
 ) -> None:
     """Edge classes, U, Ω_i, in-degree-domination and the Assumption 2 decomposition
     (above 50 agents a summary, unless --full)."""
+    require_file(file)  # trivially bad input before the library's layers load
     from ..model import SwitchingTopology, Topology
     from ..model.load import load
     from ..protocol import (
@@ -101,17 +107,20 @@ def design_cmd(
 ) -> None:
     """Lemma 1 protocol parameters with the critical couplings δ_H and δ_S. Exit 1 when
     nothing can be designed (no informed agent: no antagonistic edge into any agent)."""
+    from ..io.outputs import check_output_file
+
+    th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
+    require_file(file)
+    check_theta_length(file, th)
+    if out_path is not None:
+        check_output_file(out_path, "--out", (".mat", ".json"))
     import numpy as np
 
-    from ..io.outputs import check_output_file
     from ..model.load import load
     from ..model.timevarying import ExpressionTopology
     from ..protocol import SwitchingDesign, design
     from ..reports.terminal import out, print_table
 
-    th = parse_vector(theta, "--theta")
-    if out_path is not None:
-        check_output_file(out_path, "--out", (".mat", ".json"))
     top = load(file)
     if isinstance(top, ExpressionTopology):
         from ..protocol.timevarying import TimeVaryingDesign
@@ -146,24 +155,16 @@ def design_cmd(
     _exit_if_uninformed(uninformed, out_path)
 
 
-def _exit_if_uninformed(modes: list, out_path: Path | None) -> None:
+def _exit_if_uninformed(modes: list, out_path: Path | None, verb: str = "designed") -> None:
     """Exit 1 when a design (a mode's, or None for the only one) has no informed agent:
     L_B = L then does not depend on δ and nothing draws the agents to θ, so Lemma 1
     designs nothing (one line on stderr, with the fix)."""
+    from ..protocol.lemma1 import no_informed_agent_text
+
     if not modes:
         return
-    where = (
-        f"mode(s) {', '.join(one_line(str(k)) for k in modes)} have"
-        if modes != [None]
-        else "the network has"
-    )
     kept = f"; nothing written to {one_line(str(out_path))}" if out_path is not None else ""
-    print(
-        f"not designed: {where} no informed agent (U is empty), so L_B = L does not depend "
-        "on δ and Lemma 1 cannot bring the agents to θ; an antagonistic edge (A_ij negative "
-        f"definite) into an agent makes it informed{kept}",
-        file=sys.stderr,
-    )
+    print(f"not {verb}: {no_informed_agent_text(modes)}{kept}", file=sys.stderr)
     raise typer.Exit(1)
 
 
@@ -195,11 +196,19 @@ def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Pat
 
 
 def generate(
-    n: Annotated[int, typer.Option("--n", help="Number of agents N (>= 2).")],
     out_path: Annotated[
         Path, typer.Option("--out", help="Output file: .npz (compact), .json or .yaml.")
     ],
-    d: Annotated[int, typer.Option("--d", help="State dimension d.")] = 3,
+    agents: Annotated[
+        int | None, typer.Option("--agents", help="Number of agents N (>= 2; required).")
+    ] = None,
+    dim: Annotated[int | None, typer.Option("--dim", help="State dimension d (default 3).")] = None,
+    old_n: Annotated[
+        int | None, typer.Option("--n", hidden=True, help="Deprecated: --agents.")
+    ] = None,
+    old_d: Annotated[
+        int | None, typer.Option("--d", hidden=True, help="Deprecated: --dim.")
+    ] = None,
     seed: Annotated[int, typer.Option(help="Seed (numpy SeedSequence).")] = 0,
     family: Annotated[
         str, typer.Option(help="random, ring, grid, small-world or scale-free.")
@@ -209,6 +218,12 @@ def generate(
 ) -> None:
     """Write a random directed signed matrix-weighted network that satisfies Assumption 2
     by construction (seeded; see ntc_design.model.generate)."""
+    # the names of the other commands' help (N agents, dimension d); --n/--d still work
+    n_flag, n = renamed_flag("--n", old_n, "--agents", agents)
+    d_flag, d = renamed_flag("--d", old_d, "--dim", dim)
+    if n is None:
+        raise InputError("--agents: missing: the number of agents N (e.g. --agents 1000)")
+    d = 3 if d is None else d
     from ..io.outputs import check_output_file
     from ..model.generate import TOPOLOGY_SUFFIXES, random_network, write_topology
     from ..reports.terminal import Progress, out
@@ -216,7 +231,10 @@ def generate(
     check_output_file(out_path, "--out", TOPOLOGY_SUFFIXES)  # before the work
     with Progress("ntc generate") as prog:
         prog.stage(f"drawing {n} agents ({family})")
-        top = random_network(n, d, seed, family, p_negative=p_negative)
+        with flags_named(
+            n=n_flag, d=d_flag, family="--family", p_negative="--p-negative", seed="--seed"
+        ):
+            top = random_network(n, d, seed, family, p_negative=p_negative)
         prog.stage(f"writing {len(top.weights)} edges to {one_line(str(out_path))}")
         write_topology(top, out_path)
     if as_json:
@@ -287,23 +305,32 @@ def certify(
     Exit 0 when one is (the sampled ones with --period; or, without --gain, when the
     certificate is valid), 1 when none is; --out is written only when the certificate is
     valid."""
-    from ..certify import certify as run
-    from ..certify import write_certificate
-    from ..gain.schedule import gain_from_option
     from ..io.outputs import check_output_file
-    from ..model.load import load
-    from ..protocol.digital import Digital
 
-    th = parse_vector(theta, "--theta")
+    th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
     if rate_method not in ("lyapunov", "lmi"):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
     sampled = digital_option(period, delay)
+    require_file(file)
+    check_theta_length(file, th)
     if out_path is not None:
         check_output_file(out_path, "--out")
+    from ..certify import certify as run
+    from ..certify import write_certificate
+    from ..gain.schedule import gain_from_option
+    from ..model.load import load
+    from ..protocol.digital import Digital
+    from ..protocol.lemma1 import uninformed_modes
+
+    top = load(file)
+    uninformed = uninformed_modes(top)
+    if uninformed and as_json:  # nothing to certify: said as ntc design says it
+        print(json_text({"ok": False, "proven": False, "informed": []}))
+    _exit_if_uninformed(uninformed, out_path, "certified")
     with warnings.catch_warnings(), flags_named(theta="--theta"):
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
-            load(file),
+            top,
             th,
             margin,
             gain_from_option(gain, "--gain"),
@@ -352,12 +379,15 @@ def verify(
 ) -> None:
     """Re-check a certificate without an SDP solver, deriving what must be proven from its
     kind. Exit 0 valid, 1 invalid (names what fails), 2 malformed."""
+    # trivially bad input before the library loads
+    th = parse_vector(theta, "--theta") if theta is not None else None
+    require_file(cert, "; expected a certificate (the JSON file ntc certify --out writes)")
+    require_file(topology)  # (a θ of another length: not the certificate's, exit 1)
     from ..certify import verify_file
     from ..model.load import load
     from ..reports.terminal import print_verification
 
     top = load(topology) if topology is not None else None
-    th = parse_vector(theta, "--theta") if theta is not None else None
     ver = verify_file(cert, top, th)
     doc = ver.to_dict()
     if as_json:
@@ -392,16 +422,19 @@ def robust(
     """Decay, consensus-offset and margin brackets when every weight is known only within
     (1−ρ)|A| ⪯ |A'| ⪯ (1+ρ)|A|: a proven end and a realisation attaining the other. Exit 0
     when the certificate verifies, 1 when not."""
+    from ..io.outputs import check_output_file
+
+    th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
+    require_file(file)
+    check_theta_length(file, th)
+    if out_path is not None:
+        check_output_file(out_path, "--out")
     from ..certify import certify_robust, write_certificate
     from ..certify.robust.are import RICCATI_MAX_ND
-    from ..io.outputs import check_output_file
     from ..model import Topology
     from ..model.load import load
     from ..reports.terminal import print_table
 
-    th = parse_vector(theta, "--theta")
-    if out_path is not None:
-        check_output_file(out_path, "--out")
     top = load(file)
     if out_path is not None and isinstance(top, Topology) and top.nd > RICCATI_MAX_ND:
         raise InputError(
@@ -461,12 +494,22 @@ def export_cmd(
             "1/(1+t))."
         ),
     ] = None,
-    sigma: Annotated[
+    noise_sigma: Annotated[
         float | None,
-        typer.Option("--sigma", help="Additive noise σ (default: the file's, else 0.4)."),
+        typer.Option(
+            "--noise-sigma",
+            help="Additive noise intensity σ on every edge (default: the file's, else 0.4).",
+        ),
     ] = None,
     noise_f: Annotated[
-        float | None, typer.Option("--f", help="f(x) = f·x (default: the file's, else 0.3).")
+        float | None,
+        typer.Option("--noise-f", help="f(x) = f·x (default: the file's, else 0.3)."),
+    ] = None,
+    old_sigma: Annotated[
+        float | None, typer.Option("--sigma", hidden=True, help="Deprecated: --noise-sigma.")
+    ] = None,
+    old_f: Annotated[
+        float | None, typer.Option("--f", hidden=True, help="Deprecated: --noise-f.")
     ] = None,
     agent: Annotated[
         str | None,
@@ -480,9 +523,21 @@ def export_cmd(
     dependency-free C99 or Python, with a replay program that reads x(0), K and the
     normals on stdin and prints x_K, bit for bit as the toolkit's replay. The design is
     certified (or the certificate verified) first; nothing is written when it is not."""
+    # one vocabulary with ntc certify; the old spellings still work, with a note
+    # (each value checked before the imports and the certificate)
+    sigma_flag, noise_sigma = renamed_flag(
+        "--sigma", old_sigma, "--noise-sigma", noise_sigma, _non_negative
+    )
+    f_flag, noise_f = renamed_flag("--f", old_f, "--noise-f", noise_f, require_number)
+    check_digital_flags(period, delay)
+    require_file(file)
     from ..export.run import export
+    from ..present.rows import counted
 
-    res = export(file, lang, out_dir, period, delay, gain, sigma, noise_f, agent)
+    try:
+        res = export(file, lang, out_dir, period, delay, gain, noise_sigma, noise_f, agent)
+    except InputError as exc:  # the library's names for the noise flags
+        raise flag_renamed(exc, {"--sigma": sigma_flag, "--f": f_flag}) from None
     law = res.source.law
     if as_json:
         print(
@@ -506,12 +561,16 @@ def export_cmd(
         print(one_line(note))
     # the network's name and the folder are the user's text: one line, escapes shown
     print(
-        f"exported {one_line(law.name)} ({law.n} agents, d = {law.dim}, {len(law.modes)} "
-        f"mode(s); h = {law.digital.period:g}, D = {law.digital.delay}, c(t) = "
-        f"{one_line(law.gain.label)}) as {lang} to {one_line(str(res.folder))}: "
-        f"{', '.join(res.files)}"
+        f"exported {one_line(law.name)} ({counted(law.n, 'agent')}, d = {law.dim}, "
+        f"{counted(len(law.modes), 'mode')}; h = {law.digital.period:g}, "
+        f"D = {law.digital.delay}, c(t) = {one_line(law.gain.label)}) as {lang} to "
+        f"{one_line(str(res.folder))}: {', '.join(res.files)}"
     )
     print(f"build and check: see {one_line(str(res.folder / 'README.txt'))}")
+
+
+def _non_negative(flag: str, value: float) -> float:
+    return require_number(flag, value, minimum=0.0)
 
 
 def examples(

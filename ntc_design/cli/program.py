@@ -28,7 +28,7 @@ from .runs import report, reproduce, simulate, sweep, tune
 # fmt: off
 app.command(epilog="Example: ntc check examples/g1.yaml")(check)
 app.command("design", epilog="Example: ntc design examples/g1.yaml --theta 1,2,-1")(design_cmd)
-app.command(epilog="Example: ntc generate --n 1000 --d 3 --out runs/net.npz")(generate)
+app.command(epilog="Example: ntc generate --agents 1000 --dim 3 --out runs/net.npz")(generate)
 app.command(epilog="Example: ntc gain '1/(1+t)'")(gain)
 app.command(epilog="Example: ntc certify examples/g1.yaml --theta 1,2,-1 --gain '1/(1+t)' --out runs/g1.json")(certify)
 app.command(epilog="Example: ntc verify runs/g1.json --topology examples/g1.yaml --theta 1,2,-1")(verify)

@@ -14,15 +14,25 @@ from typing import Annotated, Any
 
 import typer
 
-from ..errors import AssumptionWarning, InputError, blame, one_line, require_horizon
+from ..errors import (
+    NUMBER_TEXT,
+    AssumptionWarning,
+    InputError,
+    blame,
+    one_line,
+    require_horizon,
+)
 from .app import (
     DelayOpt,
     JsonOpt,
     PeriodOpt,
     SchedulerOpt,
+    check_digital_flags,
     command_line,
+    digital_flags_named,
     digital_option,
     json_text,
+    require_file,
 )
 
 OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
@@ -115,6 +125,10 @@ def simulate(
     """Monte Carlo Euler–Maruyama and exact mean-square curves for a scenario; writes
     summary.json, ms_error.csv (wide), ms_error_long.csv (tidy) and paths.npz to --out (all
     or nothing)."""
+    if horizon is not None:  # trivially bad input before the library's layers load
+        require_horizon("--horizon", horizon)
+    check_digital_flags(period, delay)
+    require_file(scenario)
     from ..errors import format_bytes
     from ..io.files import parse_scenario
     from ..reports.terminal import Progress, out
@@ -122,6 +136,7 @@ def simulate(
     from ..simulate import simulate as run
     from ..simulate.options import MonteCarlo, check_workers
     from ..simulate.scenario import (
+        REPLACEABLE,
         check_output,
         load_scenario,
         result_output_bytes,
@@ -139,14 +154,14 @@ def simulate(
         "device": device,
     }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
-    if horizon is not None:
-        require_horizon("--horizon", horizon)
     sc = parse_scenario(scenario)
     if period is not None or delay is not None:
         overrides["digital"] = digital_option(
             period, delay, sc.document.get("digital"), overrides.get("T", sc.document.get("T"))
         )
     flags = {k: f for k, f in SIMULATE_FLAGS.items() if k in overrides}
+    given_digital = (("period", period), ("delay", delay))
+    flags.update({f"digital.{k}": f"--{k}" for k, v in given_digital if v is not None})
     top, spec, sc = load_scenario(scenario, overrides, sc, flags)
     # summary.json records the command as typed: the report's re-run line keeps the overrides
     recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}
@@ -154,6 +169,8 @@ def simulate(
         check_workers(workers, "--workers")
         spec = spec.replace(mc=MonteCarlo(**{**spec.mc.__dict__, "workers": workers}))
     check_output(out_dir)  # before the run, not after it
+    if any((out_dir / name).is_file() for name in REPLACEABLE):  # said, not done in silence
+        print(f"note: replacing the run in {one_line(str(out_dir))}", file=sys.stderr)
     # "" is a malformed address (refused by connect), not "no scheduler"
     engine = DaskEngine.connect(scheduler) if scheduler is not None else None
     with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
@@ -329,6 +346,16 @@ def tune(
     best schedule c(t) instead. Prints the tuned gain beside 1/(1 + t). Exit 0 when the
     tuned gain satisfies the required theorems and its design's certificate verifies, 1
     otherwise."""
+    schedule = _schedule_option(schedule, family)
+    if horizon is not None:  # trivially bad input before the library's layers load
+        require_horizon("--horizon", horizon)
+    value: float | None = None  # --period as a number (ASCII numerals, as every number flag)
+    if period not in (None, "auto"):
+        if not NUMBER_TEXT.fullmatch(period):
+            raise InputError(f"--period: expected a number or auto, got {period[:40]!r}")
+        value = float(period)
+        check_digital_flags(value, delay)
+    require_file(scenario)
     from ..io.files import parse_scenario
     from ..io.outputs import check_output_folder
     from ..reports.terminal import Progress, out, print_table
@@ -336,9 +363,6 @@ def tune(
     from ..simulate.scenario import load_scenario
     from ..tune import tune as run
 
-    schedule = _schedule_option(schedule, family)
-    if horizon is not None:
-        require_horizon("--horizon", horizon)
     sc0 = parse_scenario(scenario)
     # the flags given (an error about one names it); the deadline defaults to the file's T
     given = {"horizon": horizon, "eps": eps, "max_gain": max_gain, "check_paths": check_paths}
@@ -353,10 +377,6 @@ def tune(
         return
     overrides: dict[str, Any] = {}
     if period is not None or delay is not None:
-        try:
-            value = float(period) if period is not None else None
-        except ValueError:
-            raise InputError(f"--period: expected a number or auto, got {period!r}") from None
         t_doc = horizon if horizon is not None else sc0.document.get("T")
         overrides["digital"] = digital_option(value, delay, sc0.document.get("digital"), t_doc)
     top, spec, sc = load_scenario(scenario, overrides, sc0, {"digital": "--period"})
@@ -476,6 +496,7 @@ def sweep(
     """Design, certify and simulate every point of a sweep (a grid or a list of points over
     a base scenario); points already in --out are reused. Writes results.csv,
     results.parquet, curves.parquet and points/. Exit 1 when some point failed."""
+    require_file(sweep_file)  # before the library's layers load
     from ..reports.terminal import out, sweep_progress
     from ..sweep import load_sweep, run_sweep
     from ..sweep.store import tables_module
@@ -545,22 +566,25 @@ def report(
     (figures also in DIR/figures). A run of the digital protocol (or --period, --delay)
     adds its digital section: the error and the peak against the period for delays 0, 1
     and 2, the certified k₀ and the continuous curve beside the sampled one."""
+    sampled = digital_option(period, delay)  # before the library's layers load
     from ..protocol.digital import Digital
     from ..reports.report import write_report
     from ..reports.sweep import is_sweep_dir, write_sweep_report
     from ..reports.terminal import out
 
-    sampled = digital_option(period, delay)
     if is_sweep_dir(directory):
         if sampled is not None:
             raise InputError("--period: applies to a run's report, not a sweep's")
         out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
         return
-    path = write_report(
-        directory,
-        interactive=interactive,
-        digital=Digital.from_document(sampled) if sampled is not None else None,
-    )
+    try:
+        path = write_report(
+            directory,
+            interactive=interactive,
+            digital=Digital.from_document(sampled) if sampled is not None else None,
+        )
+    except InputError as exc:  # h > T, too many steps, the delay's memory: name the flag
+        raise digital_flags_named(exc, period, delay) from None
     if as_json:
         figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
         print(

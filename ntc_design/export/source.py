@@ -41,7 +41,12 @@ from ..model.paper import F_SCALE, SIGMA
 from ..numerics.linalg import RANGE_TEXT, out_of_range
 from ..protocol.agents import AgentLaw, agent_law, make_law, mode_law
 from ..protocol.digital import Digital, DigitalDesign
-from ..protocol.lemma1 import ProtocolDesign, SwitchingDesign
+from ..protocol.lemma1 import (
+    ProtocolDesign,
+    SwitchingDesign,
+    no_informed_agent_text,
+    uninformed_modes,
+)
 from ..simulate.noise import NoiseModel
 from ..simulate.scenario import load_scenario
 from ..simulate.spec import SimulationSpec
@@ -181,6 +186,10 @@ def from_scenario(
             f"{src}: topology: only a fixed topology or a switching set can be exported "
             f"(got {type(top).__name__})"
         )
+    if uninformed_modes(top):  # said as ntc design says it, not as a failed inequality
+        raise InputError(
+            f"{src}: {no_informed_agent_text(uninformed_modes(top))}; nothing exported"
+        )
     g = _gain_option(gain)
     if g is not None:
         spec = spec.replace(gain=g)
@@ -299,7 +308,8 @@ def _number(flag: str, value: Any, minimum: float | None = None) -> float:
         raise InputError(f"{flag}: expected a number, got {value!r}")
     v = float(value)
     if not math.isfinite(v) or (minimum is not None and v < minimum):
-        raise InputError(f"{flag}: expected a finite number >= {minimum:g}, got {v!r}"[:200])
+        bound = "" if minimum is None else f" >= {minimum:g}"
+        raise InputError(f"{flag}: expected a finite number{bound}, got {v!r}"[:200])
     return v
 
 

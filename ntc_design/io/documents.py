@@ -6,6 +6,7 @@ PyYAML does. What the document means is the business of :mod:`ntc_design.io.file
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -117,7 +118,50 @@ def read_document(path: str | Path) -> dict[str, Any]:
         raise InputError(f"{p}: a value that cannot be read ({_one_line(str(exc))})") from None
     if not isinstance(doc, dict):
         raise InputError(f"{p}: expected a mapping at the top level, got {type_name(doc)}")
+    if _SURROGATE_ESCAPE.search(text):
+        check_text(doc, str(p))
     return doc
+
+
+#: An escape that can write a surrogate code point (JSON's \uD800, YAML's \U0000D800 too):
+#: only a text holding one is walked for strings that are not Unicode text.
+_SURROGATE_ESCAPE = re.compile(r"\\(?:u|U0000)[dD][89a-fA-F]")
+
+
+def check_text(doc: Any, source: str) -> None:
+    """Refuse a document with a string that is not Unicode text (a lone surrogate, which
+    JSON's and YAML's escapes can write): it cannot be printed, encoded in UTF-8 or
+    written to a file, so every later step would fail on it.
+
+    Parameters
+    ----------
+    doc : any
+        The document as read.
+    source : str
+        The file (named in the message).
+
+    Raises
+    ------
+    InputError
+        ``SOURCE: FIELD: a string that is not Unicode text (a lone surrogate, \\ud800)``.
+    """
+    stack: list[tuple[Any, str]] = [(doc, "")]
+    while stack:
+        x, where = stack.pop()
+        items = x.items() if isinstance(x, dict) else enumerate(x) if isinstance(x, list) else ()
+        for k, v in items:
+            field = f"{where}[{k}]" if isinstance(x, list) else f"{where}.{k}" if where else str(k)
+            for s in (k, v):
+                if isinstance(s, str) and not s.isascii():
+                    bad = next((c for c in s if "\ud800" <= c <= "\udfff"), None)
+                    if bad is not None:
+                        shown = field.encode("utf-8", "backslashreplace").decode("ascii")
+                        raise InputError(
+                            f"{source}: {shown}: a string that is not Unicode text (a lone "
+                            f"surrogate, \\u{ord(bad):04x})"
+                        )
+            if isinstance(v, (dict, list)):
+                stack.append((v, field))
 
 
 def _one_line(msg: str, n: int = 80) -> str:
@@ -274,4 +318,11 @@ def _compose(loader: Any, p: Path) -> Any:
             return root
 
 
-__all__ = ["MAX_DEPTH", "MAX_EXPANDED_NODES", "MAX_FILE_BYTES", "read_document", "type_name"]
+__all__ = [
+    "MAX_DEPTH",
+    "MAX_EXPANDED_NODES",
+    "MAX_FILE_BYTES",
+    "check_text",
+    "read_document",
+    "type_name",
+]

@@ -187,8 +187,9 @@ def _mat_inflated_bytes(p: Path, limit: float) -> None:
                         f"{p}: {name}: a {'×'.join(map(str, shape))} {what} array needs "
                         f"{format_bytes(mem)} once loaded (from a "
                         f"{format_bytes(os.path.getsize(p))} file), more than the "
-                        f"{format_bytes(limit)} allowed here (a sixth of the memory available, "
-                        "NTC_AVAILABLE_MEMORY); store a large network as a sparse A or as .npz"
+                        f"{format_bytes(limit)} allowed here (a sixth of the memory available: "
+                        "free, within ulimit -v, or NTC_AVAILABLE_MEMORY); store a large "
+                        "network as a sparse A or as .npz"
                     )
                 if z is not None:  # inflate the rest, counting: never past what it declares
                     got = len(out)
@@ -357,7 +358,8 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     bad = np.flatnonzero(~np.isfinite(w))
     if bad.size:
         r, c = divmod(int(bad[0]), k)
-        raise InputError(f"{p}: row {lines[r]}: {want[c]} = {w[bad[0]]!r} is not a finite number")
+        got = float(w[bad[0]])  # inf, nan: not NumPy's repr (np.float64(inf))
+        raise InputError(f"{p}: row {lines[r]}: {want[c]} = {got!r} is not a finite number")
     labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst), p)
     if len(labels) > MAX_AGENTS:
         raise InputError(f"{p}: {len(labels)} agents; at most {MAX_AGENTS}")

@@ -270,6 +270,11 @@ def copy_examples(dest: str | Path) -> list[Path]:
     import shutil
 
     dest = Path(dest)
+    if dest.is_symlink() and not dest.exists():  # mkdir would say "File exists"
+        raise InputError(
+            f"{dest}: a link to {str(dest.readlink())!r}, which does not exist (give a new or "
+            "empty folder, or the folder the link should name)"
+        )
     if dest.exists() and not dest.is_dir():
         raise InputError(f"{dest}: exists and is not a folder (give a new or empty folder)")
     if dest.is_dir() and any(dest.iterdir()):

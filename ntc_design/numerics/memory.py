@@ -1,5 +1,6 @@
 """The memory every size check assumes: ``NTC_AVAILABLE_MEMORY`` when it is set (so a
-check gives the same answer on every machine), else what the machine has free. The
+check gives the same answer on every machine), else what the machine has free; never more
+than the process may still map under its own limit (``ulimit -v``, RLIMIT_AS). The
 simulation budget, the network generator, the table readers and the number of parallel
 proofs (:func:`ntc_design.numerics.linalg.proof_workers`) read it here."""
 
@@ -19,19 +20,62 @@ def available_memory() -> float:
     """Memory available now: the value of the environment variable ``NTC_AVAILABLE_MEMORY``
     when it is set (bytes, or with a binary suffix: ``8G``, ``512M``), so that the size
     checks give the same answer on every machine (the test suite sets it: an 8 GB laptop
-    and a 64 GB server refuse the same runs); else MemAvailable from /proc/meminfo.
+    and a 64 GB server refuse the same runs); else MemAvailable from /proc/meminfo. Either
+    way no more than the process's own limit leaves (:func:`address_space_left`): under
+    ``ulimit -v 4G`` a run that needs 5 GB is refused, not killed half-way.
 
     Returns
     -------
     float
-        Bytes: the environment's value, else MemAvailable, else the physical memory
-        from os.sysconf, else 4 GiB.
+        Bytes: the smaller of the address space left under RLIMIT_AS and the
+        environment's value, else MemAvailable, else the physical memory from os.sysconf,
+        else 4 GiB.
 
     Raises
     ------
     InputError
         ``NTC_AVAILABLE_MEMORY`` is not a positive size.
     """
+    return min(_machine_memory(), address_space_left())
+
+
+def address_space_left() -> float:
+    """What the process may still map under its soft RLIMIT_AS (``ulimit -v``): the limit
+    less the address space it holds now (VmSize), at least one byte; infinity without a
+    limit (or where the platform has none).
+
+    Returns
+    -------
+    float
+        Bytes.
+    """
+    try:
+        import resource  # POSIX only
+    except ImportError:  # pragma: no cover - Windows
+        return math.inf
+    try:
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ValueError, OSError):  # pragma: no cover - a platform without RLIMIT_AS
+        return math.inf
+    if soft == resource.RLIM_INFINITY or soft < 0:
+        return math.inf
+    return max(float(soft) - _address_space_used(), 1.0)
+
+
+def _address_space_used() -> float:
+    """VmSize of this process (what RLIMIT_AS counts), 0 where /proc does not say."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmSize:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return 0.0
+
+
+def _machine_memory() -> float:
+    """The pinned size, else what the machine has free (see :func:`available_memory`)."""
     pinned = os.environ.get(MEMORY_ENV)
     if pinned is not None:
         m = re.fullmatch(r"\s*([0-9]+(?:\.[0-9]+)?)\s*([KMGT]?)(?:i?B)?\s*", pinned, re.I)
@@ -55,4 +99,4 @@ def available_memory() -> float:
         return 4.0 * 2**30
 
 
-__all__ = ["MEMORY_ENV", "available_memory"]
+__all__ = ["MEMORY_ENV", "address_space_left", "available_memory"]

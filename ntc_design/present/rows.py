@@ -24,6 +24,30 @@ import numpy as np
 VERDICT_TEXT = {True: "yes", False: "no", None: "undetermined"}
 
 
+def counted(n: int, noun: str, plural: str | None = None) -> str:
+    """A count with its noun in the right number: ``1 agent``, ``2 agents``.
+
+    Parameters
+    ----------
+    n : int
+        The count.
+    noun : str
+        The singular (``agent``, ``mode``).
+    plural : str, optional
+        The plural (default: the singular with an ``s``).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> counted(1, "agent"), counted(0, "agent"), counted(2, "mode")
+    ('1 agent', '0 agents', '2 modes')
+    """
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def fmt(x: Any, digits: int = 4) -> str:
     """A number (or a list of numbers, a bool, None) as shown to a user.
 
@@ -409,6 +433,7 @@ __all__ = [
     "Table",
     "VERDICT_TEXT",
     "cell",
+    "counted",
     "fmt",
     "lines",
     "matrix",

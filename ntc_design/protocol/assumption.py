@@ -15,7 +15,7 @@ from scipy.sparse import csgraph
 from ..errors import AssumptionWarning, one_line
 from ..model import Topology, antagonistic_in_weight, in_degree_dominated_all, in_out_difference
 from ..numerics.linalg import pd_batch
-from ..present.rows import Table, set_text, verdict
+from ..present.rows import Table, counted, set_text, verdict
 
 #: What makes each kind of violating agent admissible (one of them suffices).
 FIX_NOT_DOMINATED = (
@@ -430,7 +430,16 @@ def structure_tables(rep: dict, title: str, most: int = 10) -> list[Table]:
         notes: list[str] = []
     else:
         vs = rep["violations"]
-        rows = [("Assumption 2", verdict(False, f"({len(vs)} agents violate it)", word="fails"))]
+        rows = [
+            (
+                "Assumption 2",
+                verdict(
+                    False,
+                    f"({counted(len(vs), 'agent')} violate{'s' if len(vs) == 1 else ''} it)",
+                    word="fails",
+                ),
+            )
+        ]
         rows += [(f"agent {lab(v['agent'])}", lab(v["reason"])) for v in vs[:most]]
         notes = [f"{len(vs) - most} more (--json lists them all)"] if len(vs) > most else []
         notes += _fix_lines([(v["agent"], v.get("fix", "")) for v in vs])

@@ -7,17 +7,21 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sparse
 
-from ..errors import require_positive, require_theta, require_x0, warn_user
+from ..errors import one_line, require_positive, require_theta, require_x0, warn_user
 from ..io.tablefiles import write_mat
 from ..model import SwitchingTopology, Topology, block_coo
 from ..numerics.linalg import require_dense
 from ..present.rows import Table, matrix, set_text, verdict
 from .assumption import AssumptionWarning, Decomposition, assumption2, fix_notes
 from .thresholds import CriticalCouplings, critical_couplings, critical_couplings_sparse
+
+if TYPE_CHECKING:
+    from ..model.timevarying import ExpressionTopology
 
 #: Up to this Nd the critical couplings are computed densely (exact Kronecker pencil /
 #: eigenvalue scans, :func:`critical_couplings`); above it by the sparse method
@@ -709,6 +713,52 @@ def design(
     return design_topology(topology, theta, margin, delta, thresholds)
 
 
+def uninformed_modes(top: Topology | SwitchingTopology | ExpressionTopology) -> list:
+    """The modes with no informed agent (U empty; None stands for a fixed topology's only
+    one), found from the edge signs before any design or proof.
+
+    Parameters
+    ----------
+    top : Topology, SwitchingTopology or ExpressionTopology
+        The network (a time-varying one: its ``structure``, whose classes are fixed).
+
+    Returns
+    -------
+    list
+        Mode names, ``[None]`` for a fixed topology without one, ``[]`` when every mode has
+        an informed agent.
+    """
+    if isinstance(top, SwitchingTopology):
+        return [k for k, m in top.modes.items() if not m.antagonised]
+    fixed = top if isinstance(top, Topology) else top.structure
+    return [None] if not fixed.antagonised else []
+
+
+def no_informed_agent_text(modes: list) -> str:
+    """Why nothing can be designed, certified or exported when :func:`uninformed_modes`
+    found modes, with the fix: one line.
+
+    Parameters
+    ----------
+    modes : list
+        What :func:`uninformed_modes` returned (not empty).
+
+    Returns
+    -------
+    str
+    """
+    where = (
+        f"mode(s) {', '.join(one_line(str(k)) for k in modes)} have"
+        if modes != [None]
+        else "the network has"
+    )
+    return (
+        f"{where} no informed agent (U is empty), so L_B = L does not depend on δ and Lemma 1 "
+        "cannot bring the agents to θ; an antagonistic edge (A_ij negative definite) into an "
+        "agent makes it informed"
+    )
+
+
 __all__ = [
     "ProtocolDesign",
     "SwitchingDesign",
@@ -717,4 +767,6 @@ __all__ = [
     "design_topology",
     "lemma1_c",
     "lemma1_delta",
+    "no_informed_agent_text",
+    "uninformed_modes",
 ]

@@ -25,6 +25,7 @@ import scipy.linalg as sla
 
 from ..numerics.linalg import DenseRefused, SPDFamily, require_sparse_factor
 from ..numerics.roots import brent_root
+from ..present.rows import counted
 
 KRON_MAX = 40
 REL = 1e-12
@@ -462,8 +463,8 @@ def critical_couplings_sparse(lap, d, dim: int) -> CriticalCouplings:
     sizes = np.bincount(comp, minlength=ncomp)
     intervals, skipped = _component_hurwitz_sets(lap, d, dim, comp, sizes, notes)
     method = (
-        f"per strongly connected component ({ncomp} components, largest "
-        f"{int(sizes.max())} agents; one-agent blocks exact, others by a dense log-scan of α(δ) "
+        f"per strongly connected component ({counted(ncomp, 'component')}, largest "
+        f"{counted(int(sizes.max()), 'agent')}; one-agent blocks exact, others by a dense log-scan of α(δ) "
         f"up to Nd = {COMPONENT_DENSE_MAX_ND}); δ_S by sparse-Cholesky bisection"
     )
     if skipped:

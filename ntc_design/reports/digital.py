@@ -242,22 +242,35 @@ def digital_drawings(f: DigitalFacts | None) -> list[Drawn]:
     """
     if f is None:
         return []
-    return [
-        Drawn(
-            "digital_periods",
-            "digital-periods",
-            "The sampled protocol's exact error at T (left) and its peak (right) against the "
-            "period h, for delays of 0, 1 and 2 samples, beside the continuous design.",
-            period_figure(f),
-        ),
-        Drawn(
-            "digital_curve",
-            "digital-curve",
-            "The continuous design's exact Σ_i E‖x_i − θ‖² beside the sampled recursion's, "
-            "with the step from which the sampled recursion is certified to contract.",
-            curve_figure(f),
-        ),
-    ]
+    drawn = []
+    # a log scale needs a positive value: curves not computed (the section's note says
+    # why) are not drawn
+    if _positive(*f.final.values(), *f.peak.values()):
+        drawn.append(
+            Drawn(
+                "digital_periods",
+                "digital-periods",
+                "The sampled protocol's exact error at T (left) and its peak (right) against "
+                "the period h, for delays of 0, 1 and 2 samples, beside the continuous design.",
+                period_figure(f),
+            )
+        )
+    if _positive(f.continuous, *([f.sampled] if f.sampled is not None else [])):
+        drawn.append(
+            Drawn(
+                "digital_curve",
+                "digital-curve",
+                "The continuous design's exact Σ_i E‖x_i − θ‖² beside the sampled recursion's, "
+                "with the step from which the sampled recursion is certified to contract.",
+                curve_figure(f),
+            )
+        )
+    return drawn
+
+
+def _positive(*curves: np.ndarray) -> bool:
+    """Some curve has a finite positive value (a log axis can show it)."""
+    return any(bool(np.any(np.isfinite(c) & (c > 0))) for c in curves)
 
 
 __all__ = [

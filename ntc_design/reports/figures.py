@@ -32,6 +32,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from ..gain.conditions import parse_gain
+from ..present.rows import counted
 from ..simulate import make_gain
 from ..simulate.result import MeanSquareBand
 from ..sweep.robust import study_radius_text
@@ -239,7 +240,13 @@ def states_figure(
         ]
         if len(shown) < n:
             handles.append(
-                Line2D([], [], color="0.75", lw=0.5, label=f"the other {n - len(shown)} agents")
+                Line2D(
+                    [],
+                    [],
+                    color="0.75",
+                    lw=0.5,
+                    label=f"the other {counted(n - len(shown), 'agent')}",
+                )
             )
         handles.append(
             Line2D(

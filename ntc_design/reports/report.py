@@ -28,6 +28,8 @@ from ..present.rows import fmt
 from ..protocol import ProtocolDesign, SwitchingDesign
 from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.timevarying import TimeVaryingDesign
+from ..simulate.digital import check_digital_moments
+from ..simulate.moments import MOMENTS_MAX_ND
 from ..simulate.noise import noise_from_document
 from ..simulate.result import MeanSquareBand
 from ..sweep.robust import study_sentence
@@ -644,6 +646,29 @@ def run_section(
     return section, summary
 
 
+def check_report_digital(run: RunData, digital: Digital) -> None:
+    """Refuse a period and delay the run's report cannot show, before anything is written:
+    a period longer than the run's horizon, too many steps, or the delayed recursion's
+    exact moments past the memory or work limits.
+
+    Parameters
+    ----------
+    run : RunData
+        The run.
+    digital : Digital
+        The sampled protocol asked for.
+
+    Raises
+    ------
+    InputError
+        Naming ``digital.period`` or ``digital.delay``.
+    """
+    k_steps, _ = digital.steps(float(run.t[-1]))
+    nd_ = len(run.labels) * run.theta.size
+    if nd_ <= MOMENTS_MAX_ND:  # larger runs report no exact curves (the aggregate report)
+        check_digital_moments(nd_, digital.delay, k_steps)
+
+
 def write_report(
     directory: str | Path, interactive: bool = False, digital: Digital | None = None
 ) -> Path:
@@ -669,10 +694,12 @@ def write_report(
     Raises
     ------
     InputError
-        A missing or unreadable output file (named).
+        A missing or unreadable output file (named), or a period and delay the run's
+        report cannot show (:func:`check_report_digital`).
     """
     run = load_run(directory)
     if digital is not None:  # certified and reported for this period and delay
+        check_report_digital(run, digital)  # before the certificate and figures are written
         params = {**run.summary["parameters"], "digital": digital.to_dict()}
         run = replace(run, summary={**run.summary, "parameters": params})
     # the interactive page has its own name: it never replaces the static report
@@ -704,6 +731,7 @@ __all__ = [
     "RUN_FIGURES",
     "RunData",
     "RunFacts",
+    "check_report_digital",
     "load_run",
     "render_run",
     "run_facts",

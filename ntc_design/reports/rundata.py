@@ -19,6 +19,7 @@ from ..gain.conditions import parse_gain
 from ..gain.schedule import ScheduleGain, schedule_from_document
 from ..io.files import parse_topology
 from ..model import SwitchingTopology, Topology
+from ..present.rows import counted
 from ..simulate.budget import MEMORY_FRACTION, available_memory
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
@@ -306,7 +307,7 @@ def _check_run(run: RunData) -> None:
     if run.labels != labels:
         raise bad(
             "labels",
-            f"{len(run.labels)} agents {_few(run.labels)}, summary.json's topology has "
+            f"{counted(len(run.labels), 'agent')} {_few(run.labels)}, summary.json's topology has "
             f"{len(labels)} {_few(labels)} (files from different runs?)",
             npz_file,
         )

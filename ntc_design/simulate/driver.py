@@ -46,7 +46,7 @@ from .montecarlo import MonteCarloSpec
 from .result import SimulationResult
 from .spec import SimulationSpec
 from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters, spec_grid
-from .system import ModeSystem, check_step_size, mode_system
+from .system import ModeSystem, StepCheck, check_step_size, mode_system
 
 if TYPE_CHECKING:
     from ..model.timevarying import ExpressionTopology
@@ -385,6 +385,49 @@ def simulate(
         return simulate_expression(topology, spec, cfun, gain_text, workers, progress, gpu)
     fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)  # not A(t)
     return _simulate_modes(fixed, spec, cfun, gain_text, workers, progress, engine, protocol)
+
+
+def check_stepping(topology: AnyTopology, spec: SimulationSpec) -> StepCheck | None:
+    """The step-size guard :func:`simulate` applies to a Monte Carlo run of ``spec``
+    before any path, alone: the designs and their spectra (once), the grid of the spec's
+    stepping, c on it and :func:`.system.check_step_size`. No path is drawn and no kernel
+    compiled, so a caller choosing a stable scheme pays for eigenvalues, not for a run.
+
+    Parameters
+    ----------
+    topology : Topology, SwitchingTopology, TimeVaryingTopology or ExpressionTopology
+        The network.
+    spec : SimulationSpec
+        The run (its stepping and scheme; ``method`` is taken as ``mc``).
+
+    Returns
+    -------
+    StepCheck or None
+        The guard's outcome; None where this guard does not decide alone (the sampled
+        protocol has no step to choose; a topology given as expressions of t is checked
+        by its own simulator: run it).
+
+    Raises
+    ------
+    InputError
+        The step is unstable for the scheme (as :func:`simulate` says it), or the spec
+        is refused before the guard.
+    """
+    if spec.digital is not None or is_expression_topology(topology):
+        return None
+    if spec.theta.size != topology.dim:
+        raise InputError(
+            f"theta: expected {topology.dim} numbers (the state dimension d), got {spec.theta.size}"
+        )
+    cfun, gain_text = make_gain(spec.gain)
+    fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
+    pm = prepare_modes(fixed, spec.replace(method="mc"), cfun)
+    grid = spec_grid(spec, cfun, pm.segments)
+    c_grid = check_gain(cfun, gain_text, grid.t[:-1])
+    check = check_step_size(pm.systems, grid, c_grid, spec.stepping.scheme)
+    if check.warning:  # as the run would warn
+        warn_user(check.warning, UserWarning)
+    return check
 
 
 def device_engine(spec: SimulationSpec, engine):

@@ -12,7 +12,7 @@ from ..gain.schedule import ScheduleGain
 from ..model import TimeVaryingTopology
 from ..model.timevarying import ExpressionTopology
 from ..simulate import SimulationSpec, simulate
-from ..simulate.driver import AnyTopology
+from ..simulate.driver import AnyTopology, check_stepping
 from ..simulate.options import MonteCarlo, SaveAt, Stepping
 from .family import PowerGain
 
@@ -23,8 +23,10 @@ IMPLICIT = {"stepping": "intrinsic", "scheme": "implicit"}
 
 def checked_spec(topology: AnyTopology, spec: SimulationSpec) -> tuple[SimulationSpec, str | None]:
     """``spec`` when its Euler–Maruyama step-size guard passes, else the same spec with
-    the drift-implicit scheme on intrinsic steps, and why (one two-path run each: the
-    guard refuses before any path is drawn).
+    the drift-implicit scheme on intrinsic steps, and why: at most two evaluations of the
+    guard (:func:`ntc_design.simulate.driver.check_stepping`: the spectra once per scheme,
+    no path drawn); a topology given as expressions of t, whose guard is its simulator's,
+    is probed by a two-path run instead.
 
     Parameters
     ----------
@@ -45,8 +47,14 @@ def checked_spec(topology: AnyTopology, spec: SimulationSpec) -> tuple[Simulatio
     """
     probe = MonteCarlo(paths=2, seed=0, workers=1)
     save = SaveAt(times=np.array([0.0, spec.T]))
+
+    def check(s: SimulationSpec) -> None:
+        s = s.replace(mc=probe, save=save)
+        if check_stepping(topology, s) is None:  # no guard without a run here
+            simulate(topology, spec=s)
+
     try:
-        simulate(topology, spec=spec.replace(mc=probe, save=save))
+        check(spec)
         return spec, None
     except InputError as exc:
         if "unstable" not in str(exc):
@@ -56,7 +64,7 @@ def checked_spec(topology: AnyTopology, spec: SimulationSpec) -> tuple[Simulatio
         stepping=Stepping(kind="intrinsic", dt=spec.stepping.dt, scheme="implicit"),
         mc=MonteCarlo(**{**spec.mc.__dict__, "device": "cpu"}),  # sparse LU: on the CPU
     )
-    simulate(topology, spec=implicit.replace(mc=probe, save=save))
+    check(implicit)
     return implicit, why
 
 

@@ -271,6 +271,7 @@ def tune_power(
         base["delta"] = min(max(drange[2], drange[0]), drange[1])
     inside = all(d.lo <= base[d.name] <= d.hi for d in dims)
     trace = search(fun, dims, [base] if inside else [], max_evaluations=max_evaluations)
+    stages = {"search": time.perf_counter() - t0}  # what took the time, said in the note
     (best, value) = trace.best
     if not math.isfinite(value):
         raise InputError(
@@ -291,25 +292,38 @@ def tune_power(
     tuned = PowerGain(p["a"], p["b"], p["gamma"]).rounded()
     delta = float(f"{p['delta']:.4g}") if "delta" in p else None
     say = progress or (lambda text, transient=False: None)
+
+    def stage(name: str, since: float) -> None:
+        stages[name] = time.perf_counter() - since
+
+    t1 = time.perf_counter()
     say("the tuned and baseline curves at the reported accuracy")
     curves = {
         "tuned": obj.curve(tuned, delta),
         "baseline": obj.curve(BASELINE, None),
     }
+    stage("final curves", t1)
     if curves["tuned"].final > curves["baseline"].final:
         notes.append(
             "the baseline is better than every candidate found at T (a flat or noisy objective)"
         )
     if obj.skipped:
         notes.append(f"{len(obj.skipped)} candidate(s) scored +∞ (too stiff or overflowing)")
+    t1 = time.perf_counter()
     say("a stable Euler–Maruyama step for the tuned gain")
     stepping = stable_stepping(topology, spec, tuned, delta, horizon, notes)
+    stage("step check", t1)
+    t1 = time.perf_counter()
     if landscape:
         say("the landscape around the optimum (the contour map)")
     land = _landscape(obj, tuned, delta, dims) if landscape else None
+    if landscape:
+        stage("landscape", t1)
+    t1 = time.perf_counter()
     say("the theorem conditions and the certificate of the tuned design")
     analysis = analyse_gain(tuned.text)
     cert = certify_tuned(topology, spec, tuned, delta, notes) if certificate else None
+    stage("theorems and certificate", t1)
     return TuneResult(
         tuned=tuned,
         baseline=BASELINE,
@@ -327,6 +341,7 @@ def tune_power(
         landscape=land,
         notes=tuple(notes),
         stepping=stepping,
+        stage_seconds=stages,
     )
 
 

@@ -56,8 +56,11 @@ def test_version_is_printed_and_exits_zero(capsys, monkeypatch):
         (["robust", "G1", "--theta", "1,2,-1", "--radius", "0.0_5"], ["--radius", "underscores"]),
         (["robust", "G1", "--theta", "1,2,-1", "--radius", "\u0660.\u0665"], ["--radius", "ASCII"]),
         (["certify", "G1", "--theta", "1,2,-1", "--margin", "1_0"], ["--margin", "'1_0'"]),
-        (["generate", "--n", "1_0", "--d", "2", "--out", "OUT"], ["--n", "'1_0'"]),
-        (["generate", "--n", "\uff11\uff10", "--d", "2", "--out", "OUT"], ["--n", "ASCII"]),
+        (["generate", "--agents", "1_0", "--dim", "2", "--out", "OUT"], ["--agents", "'1_0'"]),
+        (
+            ["generate", "--agents", "\uff11\uff10", "--dim", "2", "--out", "OUT"],
+            ["--agents", "ASCII"],
+        ),
         # text vectors
         (["certify", "G1", "--theta", "1,2,-1_0"], ["--theta", "'-1_0'", "underscores"]),
         (["certify", "G1", "--theta", "1,2,\u0663"], ["--theta", "ASCII digits"]),

@@ -74,7 +74,7 @@ def test_every_command_with_a_result_has_json(command, capsys, monkeypatch):
 
 def test_generate_json(tmp_path, capsys, monkeypatch):
     code, out, err = run_cli(
-        ["generate", "--n", "12", "--d", "2", "--out", tmp_path / "g.npz", "--json"],
+        ["generate", "--agents", "12", "--dim", "2", "--out", tmp_path / "g.npz", "--json"],
         capsys,
         monkeypatch,
     )
@@ -86,6 +86,40 @@ def test_generate_json(tmp_path, capsys, monkeypatch):
         == (top.n, top.dim, len(top.weights))
         == (12, 2, doc["edges"])
     )
+
+
+@pytest.mark.parametrize(
+    "flags",
+    [["--agents", "7", "--dim", "2"], ["--n", "7", "--d", "2"]],
+    ids=["names", "old names"],
+)
+def test_generate_names_agents_and_dimension(tmp_path, capsys, monkeypatch, flags):
+    code, _, err = run_cli(["generate", *flags, "--out", tmp_path / "g.npz"], capsys, monkeypatch)
+    top = nd.load(tmp_path / "g.npz")
+    assert code == 0 and (top.n, top.dim) == (7, 2)
+    notes = [ln for ln in err.splitlines() if ln.startswith("note:")]
+    assert notes == (
+        [] if flags[0] == "--agents" else
+        ["note: --n is deprecated; it is --agents", "note: --d is deprecated; it is --dim"]
+    )  # fmt: skip
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "flags, needle",
+    [
+        ([], "--agents: missing"),
+        (["--agents", "1"], "--agents: a network needs at least 2 agents"),
+        (["--agents", "5", "--seed", "-1"], "--seed: must be a non-negative integer"),
+        (["--agents", "5", "--p-negative", "2"], "--p-negative: must be in [0, 1]"),
+        (["--agents", "5", "--n", "5"], "--n: the old spelling of --agents"),
+    ],
+)
+def test_generate_refusals_name_the_flag(tmp_path, capsys, monkeypatch, flags, needle):
+    assert_input_error(
+        ["generate", *flags, "--out", tmp_path / "g.npz"], capsys, monkeypatch, needle
+    )
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.hostile
@@ -114,7 +148,7 @@ def test_export_writes_the_folder(tmp_path, examples, capsys, monkeypatch):
         [*args, "--out", out, "--period", "0.1", "--delay", "1"], capsys, monkeypatch
     )
     assert code == 0, err
-    assert "exported G1 (7 agents, d = 3, 1 mode(s); h = 0.1, D = 1, c(t) = 1/(1+t)) as c" in text
+    assert "exported G1 (7 agents, d = 3, 1 mode; h = 0.1, D = 1, c(t) = 1/(1+t)) as c" in text
     assert (out / "ntc_protocol.c").is_file() and (out / "README.txt").is_file()
     code, text, err = run_cli(
         ["export", examples.parent / "certificates" / "g1.json", "--lang", "python",
@@ -180,6 +214,56 @@ def test_export_refuses_a_folder_with_other_files(tmp_path, examples, capsys, mo
     assert [p.name for p in out.iterdir()] == ["mine.txt"]
 
 
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, needle",
+    [
+        (["--noise-f", "inf"], "--noise-f: must be finite, got inf"),
+        (["--f", "inf"], "--f: must be finite, got inf"),  # the old spelling, named as typed
+        (["--noise-sigma", "-1"], "--noise-sigma: must be >= 0, got -1"),
+        (["--noise-sigma", "nan"], "--noise-sigma: must be finite"),
+        (["--sigma", "0.4", "--noise-sigma", "0.4"], "--sigma: the old spelling of --noise-sigma"),
+    ],
+)
+def test_export_noise_flags_are_checked_first(
+    tmp_path, examples, capsys, monkeypatch, extra, needle
+):
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", tmp_path / "o"]
+    assert_input_error([*args, "--period", "0.1", *extra], capsys, monkeypatch, needle)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_export_noise_flags_share_certifys_names(capsys, monkeypatch):
+    import re
+
+    helps = {}
+    for command in ("certify", "export"):
+        _, text, _ = run_cli([command, "--help"], capsys, monkeypatch)
+        helps[command] = set(re.findall(r"--noise-[a-z]+|--sigma\b|--f\b", text))
+    assert helps["export"] == helps["certify"] == {"--noise-sigma", "--noise-f"}
+
+
+def test_export_reads_the_old_noise_spellings_with_a_note(tmp_path, examples, capsys, monkeypatch):
+    seen = {}
+
+    def fake_export(file, lang, out, period, delay, gain, sigma, f):
+        seen.update(sigma=sigma, f=f)
+        raise nd.InputError("--sigma: stands for the library's name of the flag")
+
+    monkeypatch.setattr("ntc_design.export.run.export", fake_export)
+    sc = examples / "scenarios" / "g1_deadline.yaml"
+    base = ["export", sc, "--out", tmp_path / "o", "--period", "0.1"]
+    code, _, err = run_cli([*base, "--sigma", "0.5", "--f", "0.2"], capsys, monkeypatch)
+    assert seen == {"sigma": 0.5, "f": 0.2} and code == 2
+    assert err.splitlines()[:2] == [
+        "note: --sigma is deprecated; it is --noise-sigma",
+        "note: --f is deprecated; it is --noise-f",
+    ]
+    assert err.splitlines()[2].startswith("error: --sigma: stands for")
+    code, _, err = run_cli([*base, "--noise-sigma", "0.5"], capsys, monkeypatch)
+    assert err.strip() == "error: --noise-sigma: stands for the library's name of the flag"
+
+
 def test_examples_lists_and_copies_the_bundled_files(tmp_path, capsys, monkeypatch):
     from ntc_design.model.paper import example_files, example_path
 
@@ -215,8 +299,9 @@ def test_examples_lists_and_copies_the_bundled_files(tmp_path, capsys, monkeypat
     [
         (lambda p: (p.mkdir(), (p / "notes.txt").write_text("mine")), "the folder is not empty"),
         (lambda p: p.write_text("mine"), "exists and is not a folder"),
+        (lambda p: p.symlink_to(p.parent / "gone"), "a link to "),
     ],
-    ids=["non-empty folder", "a file"],
+    ids=["non-empty folder", "a file", "a dangling link"],
 )
 def test_examples_copy_refuses_to_overwrite(tmp_path, capsys, monkeypatch, make, needle, as_json):
     dest = tmp_path / "dest"
@@ -251,7 +336,7 @@ def test_robust_proves_brackets_where_certify_proves_the_nominal_case(
     # the network: a weight v vᵀ whose kernel rounding lost left every bracket
     # end unproven, ρ = 0 included; at ρ = 0 the LMI is the nominal Lyapunov inequality
     net, out = tmp_path / "g.yaml", tmp_path / "c.json"
-    args = ["generate", "--n", "6", "--d", "2", "--seed", "11", "--out", net]
+    args = ["generate", "--agents", "6", "--dim", "2", "--seed", "11", "--out", net]
     assert run_cli(args, capsys, monkeypatch)[0] == 0
     assert run_cli(["certify", net, "--theta", "1,-1"], capsys, monkeypatch)[0] == 0
     code, text, err = run_cli(
@@ -314,6 +399,35 @@ def test_switching_design_names_the_mode_without_an_informed_agent(
     )
     code, _, err = run_cli(["design", sw, "--theta", "1,2"], capsys, monkeypatch)
     assert code == 1 and "not designed: mode(s) a, b have no informed agent" in err
+
+
+@pytest.mark.parametrize("extra", [[], ["--json"], ["--period", "0.1"]])
+def test_certify_without_an_informed_agent_says_so_with_the_fix(
+    tmp_path, capsys, monkeypatch, extra
+):
+    p = tmp_path / "coop.yaml"
+    p.write_text(COOPERATIVE, encoding="utf-8")
+    out = tmp_path / "c.json"
+    args = ["certify", p, "--theta", "1,2", "--gain", "1/(1+t)", "--out", out, *extra]
+    code, text, err = run_cli(args, capsys, monkeypatch)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == 1 and len(lines) == 1, err  # no "warning: Matrix is exactly singular"
+    assert lines[0].startswith("not certified: the network has no informed agent (U is empty)")
+    assert "an antagonistic edge (A_ij negative definite) into an agent makes it informed" in err
+    assert lines[0].endswith(f"; nothing written to {out}") and not out.exists()
+    if "--json" in extra:
+        assert json.loads(text) == {"ok": False, "proven": False, "informed": []}
+
+
+@pytest.mark.hostile
+def test_export_without_an_informed_agent_says_so_with_the_fix(tmp_path, capsys, monkeypatch):
+    (tmp_path / "coop.yaml").write_text(COOPERATIVE, encoding="utf-8")
+    sc = tmp_path / "sc.yaml"
+    sc.write_text("topology: coop.yaml\ntheta: [1, 2]\ngain: 1/(1+t)\nT: 2\n", encoding="utf-8")
+    args = ["export", sc, "--out", tmp_path / "o", "--period", "0.1"]
+    line = assert_input_error(args, capsys, monkeypatch, "the network has no informed agent")
+    assert "makes it informed; nothing exported" in line and "P_lyapunov" not in line
+    assert not (tmp_path / "o").exists()
 
 
 def test_design_with_informed_agents_still_exits_0(examples, capsys, monkeypatch):

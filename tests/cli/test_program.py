@@ -38,6 +38,7 @@ def test_every_error_exit_is_one_line_and_json_under_json(
 
     monkeypatch.setattr(ntc_design.certify, "verify_file", fails)
     monkeypatch.delenv("NTC_DEBUG", raising=False)
+    (tmp_path / "c.json").write_text("{}")  # a missing one is refused before verify_file
     args = ["verify", tmp_path / "c.json", *(["--json"] if as_json else [])]
     got, out, err = run_cli(args, capsys, monkeypatch)
     assert (got, err) == (code, f"error: {message}\n")

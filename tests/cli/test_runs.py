@@ -327,3 +327,19 @@ def test_reproduce_refuses_a_subnormal_horizon_before_any_run(tmp_path, capsys, 
     args = ["reproduce", "paper", "--out", out, "--horizon", "5e-324"]
     assert_input_error(args, capsys, monkeypatch, "--horizon", "shortest horizon")
     assert not out.exists()
+
+
+def test_simulate_says_when_it_replaces_an_earlier_run(tmp_path, capsys, monkeypatch):
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        f"topology: {ROOT / 'examples' / 'g1.yaml'}\ntheta: [1, 2, -1]\ngain: '1/(1+t)'\n"
+        "T: 0.2\npaths: 4\nsave_every: 0.1\nworkers: 1\nmethod: exact\n"
+    )
+    out = tmp_path / "r"
+    notes = []
+    for seed in ("1", "2"):
+        code, _, err = run_cli(["simulate", sc, "--out", out, "--seed", seed], capsys, monkeypatch)
+        assert code == 0, err
+        notes.append([ln for ln in err.splitlines() if ln.startswith("note: replacing")])
+    assert notes == [[], [f"note: replacing the run in {out}"]]
+    assert json.loads((out / "summary.json").read_text())["parameters"]["seed"] == 2

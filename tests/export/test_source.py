@@ -135,8 +135,8 @@ def test_an_uncertified_design_is_refused(tmp_path):
     p.write_text(f"topology: {top}\ntheta: [1]\nT: 5\n")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        with pytest.raises(
-            InputError, match=r"s.yaml: the design's certificate .* does not verify"
+        with pytest.raises(  # said as ntc design says it (#47 item 11), not P L + Lᵀ P
+            InputError, match=r"s.yaml: the network has no informed agent .* makes it informed"
         ):
             from_scenario(p, period=0.1)
 

@@ -85,3 +85,42 @@ def test_yaml_text_with_underscores_stays_text(tmp_path):
     f = tmp_path / "u.yaml"
     f.write_text('a: "0_05"\nb: my_name\nc: 0.05\nd: n1_2\n', encoding="utf-8")
     assert read_document(f) == {"a": "0_05", "b": "my_name", "c": 0.05, "d": "n1_2"}
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "name, text, field",
+    [
+        ("t.json", '{"agents": [1, "\\ud800"]}', "agents[1]"),
+        ("t.json", '{"name": "G\\udfff", "dim": 1}', "name"),
+        ("t.yaml", '{"agents": [1, "\\ud800"]}', "agents[1]"),  # JSON text in a YAML file
+    ],
+)
+def test_a_lone_surrogate_is_refused_naming_the_field(tmp_path, name, text, field):
+    from ntc_design.io.documents import read_document
+
+    p = tmp_path / name
+    p.write_text(text, encoding="ascii")
+    with pytest.raises(InputError) as info:
+        read_document(p)
+    assert str(info.value).startswith(f"{p}: {field}: a string that is not Unicode text")
+    str(info.value).encode("utf-8")  # the message itself can be printed
+
+
+def test_a_surrogate_pair_and_an_escaped_backslash_are_text(tmp_path):
+    from ntc_design.io.documents import read_document
+
+    p = tmp_path / "t.json"
+    p.write_text('{"name": "\\ud83d\\ude00", "path": "C:\\\\ud800"}', encoding="ascii")
+    assert read_document(p) == {"name": "\U0001f600", "path": "C:\\ud800"}
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("text", ['agents: [1, "\\ud800"]\n', 'name: "\\U0000DBFF"\n'])
+def test_a_yaml_surrogate_escape_is_refused_by_the_yaml_reader(tmp_path, text):
+    from ntc_design.io.documents import read_document
+
+    p = tmp_path / "t.yaml"
+    p.write_text(text, encoding="ascii")
+    with pytest.raises(InputError, match="invalid Unicode character escape"):
+        read_document(p)

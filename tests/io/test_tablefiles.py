@@ -283,3 +283,49 @@ def test_csv_blank_lines_and_empty_radii_are_not_short_rows(tmp_path):
     f.write_text("from,to,a11,uncertainty\n1,2,-0.5,\n\n2,3,0.5,0.125\n", encoding="utf-8")
     top = nd.load(f)
     assert top.labels == (1, 2, 3) and top.uncertainty == {(2, 1): 0.125}
+
+
+@pytest.mark.hostile
+def test_a_mat_inflating_past_the_process_limit_is_refused(tmp_path, capsys, monkeypatch):
+    # 2.3 GB declared by a small file: the machine's 64 GiB would hold it, a 4 GiB ulimit -v
+    # (RLIMIT_AS) would not: the cap is a sixth of what the process may still map
+    import resource
+
+    import scipy.io
+
+    from ntc_design.io.tablefiles import read_mat
+    from ntc_design.numerics import memory
+
+    monkeypatch.setenv("NTC_AVAILABLE_MEMORY", "64G")
+    f = _mat_file(tmp_path / "big.mat", _mat_variable("A", 6, (17_000, 17_000), b"\0" * 4096))
+    assert f.stat().st_size < 10_000
+
+    def loaded(*args, **kwargs):
+        raise RuntimeError("loadmat reached")
+
+    monkeypatch.setattr(scipy.io, "loadmat", loaded)
+    with pytest.raises(nd.InputError, match=r"\(RuntimeError\)$"):  # 2.2 GiB < 64 GiB / 6: read
+        read_mat(f)
+    soft = int(memory._address_space_used() + 4 * 2**30)
+    monkeypatch.setattr(resource, "getrlimit", lambda which: (soft, resource.RLIM_INFINITY))
+    line = assert_input_error(
+        ["check", f], capsys, monkeypatch, "A: a 17000×17000 double array needs 2.2 GiB",
+        "ulimit -v",
+    )  # fmt: skip
+    import re
+
+    allowed = float(re.search(r"more than the ([0-9.]+) MiB allowed", line).group(1))
+    assert (
+        600 < allowed <= round(4 * 1024 / 6, 1)
+    )  # a sixth of the 4 GiB left, less what was mapped since
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("value, shown", [("inf", "inf"), ("-inf", "-inf"), ("nan", "nan")])
+def test_a_csv_weight_that_is_not_finite_is_shown_as_written(
+    tmp_path, capsys, monkeypatch, value, shown
+):
+    p = tmp_path / "w.csv"
+    p.write_text(f"from,to,a11\n1,2,{value}\n2,1,-1\n", encoding="utf-8")
+    line = assert_input_error(["check", p], capsys, monkeypatch, f"a11 = {shown} is not a finite")
+    assert "np." not in line and "float64" not in line

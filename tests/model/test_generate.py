@@ -46,7 +46,7 @@ def test_npz_round_trip_and_cli(tmp_path, capsys, monkeypatch):
         assert back.labels == top.labels and back.weights.keys() == top.weights.keys()
         assert all(np.array_equal(back.weights[k], top.weights[k]) for k in top.weights)
     code, out, _ = run_cli(
-        ["generate", "--n", 50, "--d", 2, "--seed", 3, "--out", tmp_path / "g.npz"],
+        ["generate", "--agents", 50, "--dim", 2, "--seed", 3, "--out", tmp_path / "g.npz"],
         capsys,
         monkeypatch,
     )

@@ -69,3 +69,23 @@ def test_notebook_representations_show_the_terminal_numbers(g1, switching_set, t
         assert len(repr(obj)) < 300 and "array(" not in repr(obj), repr(obj)
     assert "<svg" in g1._repr_html_() and "<svg" in run._repr_html_()  # the network, the curves
     assert repr(g1) == "Topology('G1', N=7, d=3, 8 edges (3 antagonistic), U={2, 3})"
+
+
+def test_counted_says_one_agent_not_one_agents(tmp_path, capsys, monkeypatch):
+    from ntc_design.present.rows import counted
+    from tests.cli_helpers import run_cli
+
+    assert [counted(n, "agent") for n in (0, 1, 2)] == ["0 agents", "1 agent", "2 agents"]
+    assert (
+        counted(1, "matrix", "matrices") == "1 matrix"
+        and counted(3, "matrix", "matrices") == "3 matrices"
+    )
+    # agent 3 alone is neither informed nor in-degree-dominated (in 1 < out 5)
+    p = tmp_path / "one.yaml"
+    p.write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 2, to: 1, weight: -1}\n"
+        "  - {from: 1, to: 2, weight: -1}\n  - {from: 1, to: 3, weight: 1}\n"
+        "  - {from: 3, to: 1, weight: 5}\n"
+    )
+    _, out, _ = run_cli(["check", p], capsys, monkeypatch)
+    assert "Assumption 2: fails (1 agent violates it)" in out and "1 agents" not in out

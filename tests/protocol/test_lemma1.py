@@ -185,3 +185,24 @@ def test_the_note_on_critical_couplings_not_computed_reads_as_a_sentence(
         "ntc design --thresholds computes them, as does the thresholds option of design in Python)"
     )
     assert "herentc" not in note and "=True" not in note
+
+
+def test_uninformed_modes_are_those_whose_design_has_no_informed_agent(g1):
+    import warnings
+
+    from ntc_design.model import SwitchingTopology
+    from ntc_design.protocol.lemma1 import no_informed_agent_text, uninformed_modes
+
+    w = np.eye(2)
+    coop = Topology(("a", "b", "c"), 2, {(1, 0): w, (2, 1): w, (0, 2): w})
+    assert uninformed_modes(coop) == [None] and uninformed_modes(g1) == []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AssumptionWarning)
+        # the same answer as the design's U, found without designing
+        assert not nd.design(coop, [1, 2]).has_informed_agents
+        assert nd.design(g1, [1, 2, -1]).has_informed_agents
+    neg = Topology(("a", "b", "c"), 2, {(1, 0): -w, (2, 1): w, (0, 2): w})
+    sw = SwitchingTopology({"x": coop, "y": neg}, (("x", 1.0), ("y", 1.0)))
+    assert uninformed_modes(sw) == ["x"]
+    assert no_informed_agent_text(["x"]).startswith("mode(s) x have no informed agent")
+    assert no_informed_agent_text([None]).startswith("the network has no informed agent")

@@ -97,3 +97,38 @@ def test_report_period_adds_the_section_to_a_continuous_run(g1, tmp_path, capsys
     # without --period, a continuous run's report has none
     code, _, _ = run_cli(["report", out], capsys, monkeypatch)
     assert code == 0 and 'id="run-digital"' not in (out / "report.html").read_text()
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    ("flags", "needle"),
+    [
+        (["--period", "5"], "--period: h = 5 is longer than the horizon T = 3"),
+        (["--period", "1e-300"], "--period: T/h = 3e+300 steps exceed the limit"),
+        (["--period", "0.1", "--delay", "10000"], "--delay: the exact moments of the delayed"),
+    ],
+)
+def test_report_refuses_a_period_or_delay_before_writing_anything(
+    digital_run, tmp_path, capsys, monkeypatch, flags, needle
+):
+    import shutil
+
+    from tests.cli_helpers import assert_input_error
+
+    out = tmp_path / "run"
+    shutil.copytree(digital_run[1], out)
+    before = sorted(p.name for p in out.iterdir())
+    assert_input_error(["report", out, *flags], capsys, monkeypatch, needle)
+    assert sorted(p.name for p in out.iterdir()) == before  # no certificate, no figures
+
+
+def test_curves_that_are_not_computed_are_not_drawn_on_a_log_scale(digital_run):
+    from dataclasses import replace
+
+    run = load_run(digital_run[1])
+    f = digital_facts(run, {})
+    nan = {d: np.full(f.periods.size, np.nan) for d in DELAYS}
+    none = replace(f, final=nan, peak=nan, continuous=np.full(f.t.size, np.nan), sampled=None)
+    assert digital_drawings(none) == []
+    kept = replace(f, final=nan, peak=nan)  # the curves over time are still shown
+    assert [d.stem for d in digital_drawings(kept)] == ["digital_curve"]

@@ -113,3 +113,23 @@ def test_workers_capped_at_the_machine(g1):
     assert any("workers: 4096 asked" in n for n in res.notes)
     one = simulate(g1, THETA, T=0.05, paths=4, block_size=2, save_every=0.05, workers=1)
     assert np.array_equal(res.mc.mean, one.mc.mean)
+
+
+def test_check_stepping_says_what_simulate_says_before_any_path(g1):
+    from ntc_design.errors import InputError
+    from ntc_design.protocol.digital import Digital
+    from ntc_design.simulate import SimulationSpec
+    from ntc_design.simulate.driver import check_stepping, simulate
+
+    ok = SimulationSpec.build([1, 2, -1], T=1.0, dt=1e-3, paths=2, workers=1, method="mc")
+    got = check_stepping(g1, ok)
+    # G1's mean-square limit of c·h at c = 1 is 0.0573 (check_step_size's documented value)
+    assert got is not None and got.ratio == pytest.approx(1e-3 / 0.0573, rel=2e-3)
+    assert got.warning is None
+    bad = ok.replace(gain="200/(1+t)")  # c(0)·h = 0.2 past 2/ρ(L_B) = 0.137
+    with pytest.raises(InputError) as guard:
+        check_stepping(g1, bad)
+    with pytest.raises(InputError) as run:
+        simulate(g1, spec=bad)
+    assert str(guard.value) == str(run.value) and "unstable" in str(guard.value)
+    assert check_stepping(g1, ok.replace(digital=Digital(0.1))) is None  # no step to choose

@@ -596,7 +596,13 @@ def test_certify_exits_1_and_writes_nothing_when_nothing_is_proven(
     args = ["certify", top, "--theta", "1", "--out", out] + (["--gain", gain] if gain else [])
     code, _, err = run_cli(args, capsys, monkeypatch)
     assert code == 1, err
-    assert "Traceback" not in err and "not proven" in err
+    # no informed agent at all: said as ntc design says it (issue 47, item 11)
+    why = (
+        "not certified: the network has no informed agent"
+        if name == "empty graph"
+        else "not proven"
+    )
+    assert "Traceback" not in err and why in err
     assert not out.exists() and list(tmp_path.iterdir()) == [top]  # no stray temporary file
 
 
@@ -674,3 +680,31 @@ def test_a_switching_certificate_relabelled_robust_names_the_field(capsys, monke
     msg = f"{p}: kind 'robust' is about one topology, but subject.modes lists 3 modes"
     assert (code, err) == (2, f"error: {msg}\n")
     assert json.loads(out) == {"ok": False, "error": msg, "exit_code": 2}
+
+
+@hostile
+@pytest.mark.parametrize("command", ["verify", "export"])
+def test_a_lone_surrogate_label_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch, command):
+    # a re-sealed certificate whose agent 7 is a lone surrogate: not text, so nothing can
+    # print it or write it (export crashed on encoding it to UTF-8)
+    from ntc_design.certify.dense import topology_hash
+    from ntc_design.model import Topology
+
+    doc = json.loads((CERTS / "g1_digital.json").read_text())
+    mode = doc["subject"]["modes"]["G1"]
+    top = mode["topology"]
+    top["agents"] = ["\ud800" if a == 7 else a for a in top["agents"]]
+    for e in top["edges"]:
+        e.update({k: "\ud800" for k in ("from", "to") if e[k] == 7})
+    mode["topology_hash"] = topology_hash(Topology.from_data(files.parse_topology(top)))
+    cert = tmp_path / "c.json"
+    cert.write_text(json.dumps(redigest(doc)), encoding="ascii")
+    assert verify(json.loads(cert.read_text())).valid  # re-sealed: the proofs still hold
+    args = [command, cert] + (["--out", tmp_path / "o"] if command == "export" else [])
+    code, out, err = run_cli(args, capsys, monkeypatch)
+    assert code == 2 and out == "" and "Traceback" not in err
+    assert err.splitlines() == [
+        f"error: {cert}: subject.modes.G1.topology.edges[7].to: a string that is not Unicode "
+        "text (a lone surrogate, \\ud800)"
+    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.json"]

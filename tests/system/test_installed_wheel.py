@@ -120,7 +120,7 @@ def test_the_readme_first_command_and_examples_copy_from_the_wheel(installed):
     assert got.returncode == 0, got.stderr
 
 
-@pytest.mark.parametrize("script", ["plot_02_switching.py", "plot_08_verify.py"])
+@pytest.mark.parametrize("script", ["plot_02_switching.py", "plot_09_verify.py"])
 def test_gallery_examples_run_from_the_wheel(installed, script):
     # every gallery script is run so by .ci/run; two here (a few seconds each)
     python, _, away = installed

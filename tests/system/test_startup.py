@@ -319,3 +319,52 @@ def test_output_lost_at_exit_is_a_failure_not_a_success():
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 1, err
     assert b"Traceback" not in err
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["certify", "nope.yaml", "--theta", "1,2,-1"], "nope.yaml: no such file"),
+        (["certify", "examples/g1.yaml", "--theta", "1,2"], "--theta: expected 3 numbers"),
+        (["certify", "examples/g1.yaml", "--theta", "1,2,-1", "--period", "0"], "--period:"),
+        (["design", "examples/g1.yaml", "--theta", "1"], "--theta: expected 3 numbers"),
+        (["robust", "examples/g1.yaml", "--theta", "1,2,3,4"], "--theta: expected 3 numbers"),
+        (["check", "nope.yaml"], "nope.yaml: no such file"),
+        (["verify", "nope.json"], "nope.json: no such file; expected a certificate"),
+        (["simulate", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
+        (["simulate", "examples/scenarios/g1_fixed.yaml", "--out", "OUT", "--period", "0"],
+         "--period: must be a positive number"),
+        (["tune", "examples/scenarios/g1_fixed.yaml", "--period", "0"], "--period: must be"),
+        (["tune", "nope.yaml"], "nope.yaml: no such file"),
+        (["export", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
+        (["export", "examples/scenarios/g1_deadline.yaml", "--out", "OUT", "--delay", "-1"],
+         "--delay: must be an integer >= 0"),
+        (["report", "OUT", "--period", "0"], "--period: must be a positive number"),
+        (["sweep", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
+    ],
+)  # fmt: skip
+def test_trivially_bad_input_is_refused_before_the_heavy_imports(tmp_path, argv, needle):
+    # a missing file, --period 0, a θ of the wrong length: refused in one line before the
+    # library's layers (SciPy's sparse matrices, SymPy, Numba, the optimisers) are imported
+    argv = [str(tmp_path / "out") if a == "OUT" else a for a in argv]
+    code = (
+        "import contextlib, io\n"
+        f"sys.argv = ['ntc', *{argv!r}]\n"
+        "from ntc_design.cli import main\n"
+        "err = io.StringIO()\n"
+        "with contextlib.suppress(SystemExit), contextlib.redirect_stderr(err):\n    main()\n"
+        "print(json.dumps(err.getvalue()))"
+    )
+    probe = f"import sys, json\n{code}\nprint(json.dumps(sorted(sys.modules)))"
+    out = (
+        subprocess.run(
+            [sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True
+        )
+        .stdout.strip()
+        .splitlines()
+    )
+    err, mods = json.loads(out[-2]), set(json.loads(out[-1]))
+    assert err.startswith("error: ") and needle in err and err.count("\n") == 1, err
+    assert heavy_in(mods) == [] and "ntc_design.model.topology" not in mods
+    assert not (tmp_path / "out").exists()

@@ -216,3 +216,25 @@ def test_certify_tuned_turns_a_refusal_into_a_note(pair_topology):
     sp = SimulationSpec.build([1.0, 2.0])  # θ of dimension 2 for a d = 1 network
     assert certify_tuned(pair_topology, sp, PowerGain(1.0, 1.0, 1.0), None, notes) is None
     assert notes == ["no certificate: theta: expected 1 numbers (the state dimension d), got 2"]
+
+
+def test_the_step_search_evaluates_the_guard_at_most_twice_and_runs_no_path(
+    pair_topology, spec, delta0, monkeypatch
+):
+    # the step for the tuned gain is derived from the spectra (one guard per scheme), not
+    # from a Monte Carlo probe: counted by spying on the guard and the simulator
+    from ntc_design.simulate import driver, steps
+
+    guards, runs = [], []
+    real_guard = driver.check_step_size
+    monkeypatch.setattr(
+        driver, "check_step_size", lambda *a, **k: guards.append(a[3]) or real_guard(*a, **k)
+    )
+    monkeypatch.setattr(evidence, "simulate", lambda *a, **k: runs.append(a) or None)
+    monkeypatch.setattr(steps, "run_monte_carlo", lambda *a, **k: runs.append(a) or None)
+    stable = PowerGain(0.5 * explicit_limit(delta0) / DT, 1.0, 1.0)
+    assert stable_stepping(pair_topology, spec, stable, None, 1.0, []) == {}
+    assert guards == ["explicit"] and runs == []
+    unstable = PowerGain(1.5 * explicit_limit(delta0) / DT, 1.0, 1.0)
+    assert stable_stepping(pair_topology, spec, unstable, None, 1.0, []) == IMPLICIT
+    assert guards == ["explicit", "explicit", "implicit"] and runs == []

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
+from ...present.rows import counted
 from ...protocol import ProtocolDesign
 from ..arrays import read_array_mode, unpack
 from ..checks import Check
@@ -242,7 +243,7 @@ class HurwitzScaleKind(CertificateKind):
         ok = bool(ok_mu.all() and nu_ok.all() and dom[idx].all())
         count = int(np.sum(st.methods == "dominance"))
         detail = (
-            f"{count} component(s), {idx.size} agents: μ_i, ν_ij proven (batched shifted "
+            f"{counted(count, 'component')}, {counted(idx.size, 'agent')}: μ_i, ν_ij proven (batched shifted "
             "Cholesky), M v > 0 with rounding bounded"
             if ok
             else f"fails at agent {st.top.labels[idx[np.argmin(ok_mu & dom[idx])]]}"

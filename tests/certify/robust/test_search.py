@@ -179,7 +179,7 @@ OFFSET_TOL_AT_ZERO = 1e-4
 @pytest.mark.parametrize("n, d, theta", [(6, 2, [1.0, -1.0]), (5, 3, [1.0, 2.0, -1.0])])
 @pytest.mark.parametrize("seed", range(16))
 def test_at_radius_zero_the_brackets_are_the_nominal_figures(n, d, theta, seed):
-    # ntc generate --n 6 --d 2 --seed 11 once gave no bracket end at any radius (a weight
+    # ntc generate --agents 6 --dim 2 --seed 11 once gave no bracket end at any radius (a weight
     # v vᵀ whose kernel rounding had lost: VᵀWV not positive definite)
     from ntc_design.certify import certify
 
