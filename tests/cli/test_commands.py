@@ -246,7 +246,7 @@ def test_export_noise_flags_share_certifys_names(capsys, monkeypatch):
 def test_export_reads_the_old_noise_spellings_with_a_note(tmp_path, examples, capsys, monkeypatch):
     seen = {}
 
-    def fake_export(file, lang, out, period, delay, gain, sigma, f):
+    def fake_export(file, lang, out, period, delay, gain, sigma, f, agent=None):
         seen.update(sigma=sigma, f=f)
         raise nd.InputError("--sigma: stands for the library's name of the flag")
 

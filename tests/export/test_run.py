@@ -255,8 +255,8 @@ def test_a_bad_agent_is_refused(tmp_path, capsys, monkeypatch, lang, agent, need
     "extra, needle",
     [
         (["--period", "0.5"], "--period: 0.5 differs from the certified value 0.1"),
-        (["--sigma", "5e-324"], "--sigma: 5e-324 differs from the certified value 0.4"),
-        (["--f", "0.3", "--delay", "2"], "--delay: 2 differs from the certified value 1"),
+        (["--noise-sigma", "5e-324"], "--noise-sigma: 5e-324 differs from the certified value 0.4"),
+        (["--noise-f", "0.3", "--delay", "2"], "--delay: 2 differs from the certified value 1"),
     ],
 )
 def test_the_cli_refuses_an_option_that_differs_from_the_proof(
