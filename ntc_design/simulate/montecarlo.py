@@ -22,6 +22,7 @@ number of blocks per chunk. The chunk interface (:func:`run_chunk`: block indice
 from __future__ import annotations
 
 import multiprocessing as mp
+import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
@@ -163,14 +164,15 @@ class _Stepper:
 
 def prepare(spec: MonteCarloSpec) -> None:
     """Compile (or load from numba's cache) the kernel for this spec's array types in this
-    process, so that forked workers inherit it instead of each compiling it.
+    process, so that forked workers inherit it instead of each compiling it. When the
+    kernel is not in Numba's cache (a first run), say so first in one line on stderr.
 
     Parameters
     ----------
     spec : MonteCarloSpec
         The run (a spec with its own ``run_block`` needs nothing).
     """
-    from .kernels import em_steps, em_steps_rng, fill_normals
+    from .kernels import fill_normals, kernel_cached, warm_kernel
 
     # only what the run calls: each kernel loaded from the cache costs about 0.1 s
     systems = getattr(spec, "systems", ())  # a spec with its own run_block has none
@@ -183,15 +185,24 @@ def prepare(spec: MonteCarloSpec) -> None:
     for s in systems:
         if s.f is None:
             st = _Stepper(s, False)
-            x = np.zeros((0, s.nd * (delay + 1)))
-            one = np.ones(1)
-            if fused:
-                states = np.zeros((0, 4), np.uint64)
-                em_steps_rng(x, states, 2, 0, 1, one, one, *st.args, True, 1, delay, 0)
-            else:
-                xi = np.zeros((1, 0, 2 * s.n_edges))
-                em_steps(x, xi, 0, 1, one, one, *st.args, True, 1, delay, 0)
+            width = s.nd * (delay + 1)
+            if not kernel_cached(fused, width, st.args, delay):
+                compiling_notice()
+            warm_kernel(fused, width, st.args, delay)
             return
+
+
+COMPILE_SECONDS = 3  # CPU seconds to compile one kernel specialisation (bench_startup.py)
+
+
+def compiling_notice() -> None:
+    """Say on stderr, in one line, that the kernel is being compiled (a first run, or a
+    new specialisation), and about how long it takes."""
+    print(
+        f"note: compiling the simulation kernels once, about {COMPILE_SECONDS} s",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 class BlockStats:
