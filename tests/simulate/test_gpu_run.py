@@ -30,6 +30,12 @@ def _agree(cpu, gpu) -> float:
     for a, b in ((cpu.mc.mean, gpu.mc.mean), (cpu.mc.mean_state, gpu.mc.mean_state)):
         np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(gpu.mc.hi, cpu.mc.hi, rtol=1e-9)
+    np.testing.assert_allclose(gpu.mc.lo, cpu.mc.lo, rtol=1e-9)
+    # every path starts at X0: a band of width 0 on both (Chan's merge on the device too)
+    assert np.array_equal(gpu.mc.hi[0], gpu.mc.mean[0]) and np.array_equal(
+        gpu.mc.lo[0], gpu.mc.mean[0]
+    )
+    assert np.array_equal(cpu.mc.hi[0], cpu.mc.mean[0])
     assert gpu.stats.engine["engine"] == "gpu"
     return gap
 
