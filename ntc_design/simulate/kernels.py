@@ -43,12 +43,12 @@ if hashlib.sha256(_ZX.tobytes()).hexdigest()[:16] != "9a7bfc00fed5c342":  # prag
     raise RuntimeError("rng.ZIG_X changed: update the digest in kernels.py")
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _rotl(x, k):
     return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _next(s0, s1, s2, s3):
     """xoshiro256**: (word, new state), the state in four locals (registers)."""
     result = _rotl(s1 * np.uint64(5), 7) * np.uint64(9)
@@ -65,14 +65,14 @@ def _next(s0, s1, s2, s3):
 TO_UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _unit(w):
     """The top 53 bits of ``w`` as a double in [0, 1): converted through int64, which is
     one instruction (uint64 to double is several, and was 5x slower here)."""
     return np.int64(w >> np.uint64(11)) * TO_UNIT
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _slow(i, u, s0, s1, s2, s3):
     """The ziggurat's rare branches (about 1 % of draws), kept out of the hot loop: the
     base layer's tail beyond R, or the wedge test of layer i. Returns (done, z, state)."""
@@ -91,7 +91,7 @@ def _slow(i, u, s0, s1, s2, s3):
     return f1 + _unit(w) * (f0 - f1) < 1.0, x, s0, s1, s2, s3
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def ziggurat_slow(i, u, s0, s1, s2, s3):
     """The draw after the fast test failed for word (layer ``i``, uniform ``u``): the tail
     or the wedge, then new words until one is accepted. Returns (z, state)."""
@@ -106,7 +106,7 @@ def ziggurat_slow(i, u, s0, s1, s2, s3):
             return u * _ZX[i], s0, s1, s2, s3
 
 
-@numba.njit(nogil=True)
+@numba.njit(nogil=True, error_model="numpy")
 def _draw_lanes(s0, s1, s2, s3, zt, wl, c2):
     """The next ``len(zt)`` normals of each lane's stream (lane q's state in s0[q] … s3[q]),
     scaled: ``zt[e, q] = c2 · z``. One pass
@@ -146,7 +146,7 @@ def _draw_lanes(s0, s1, s2, s3, zt, wl, c2):
                     zt[e, q] = c2 * z
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def fill_normals(states, out):
     """``out[k, q, e]``: path q's normals in its stream order (step k, then e), for the
     kernels that take the normals as an array (the callable-f step, the implicit scheme,
@@ -204,7 +204,7 @@ def tile_width(p: int, nd: int) -> int:
     return int(max(1, min(p, TILE_MAX, max(TILE_MIN, TILE_BYTES // (16 * max(nd, 1))))))
 
 
-@numba.njit(nogil=True)
+@numba.njit(nogil=True, error_model="numpy")
 def _drift_noise_d3(xt, off, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, drift):
     """dx = c1·(u − L_B x) + Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e) for d = 3, on a tile,
     with x the rows ``off`` … ``off`` + Nd − 1 of ``xt``: L_B by 3×3 blocks (block-CSR
@@ -250,7 +250,7 @@ def _drift_noise_d3(xt, off, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, g
             dx[io + 2, q] += g2 * z1 + (k20 * d0 + k21 * d1 + k22 * d2) * z2
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _em_core(
     x, xi, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
     src, dst, kmat, gvec, drift, tile, delay, k_base,

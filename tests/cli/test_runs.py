@@ -359,3 +359,24 @@ def test_reproduce_refuses_a_subnormal_horizon_before_any_run(tmp_path, capsys, 
     args = ["reproduce", "paper", "--out", out, "--horizon", "5e-324"]
     assert_input_error(args, capsys, monkeypatch, "--horizon", "shortest horizon")
     assert not out.exists()
+
+
+@pytest.mark.slow  # a first run compiles the kernel into an empty cache (~3 s of CPU)
+def test_a_first_simulation_says_once_that_it_compiles(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+    said = []
+    for run in ("first", "second"):
+        args = ["simulate", sc, "--paths", "4", "--T", "0.01", "--method", "mc"]
+        r = subprocess.run(
+            [sys.executable, "-m", "ntc_design", *map(str, args), "--out", str(tmp_path / run)],
+            env=env, cwd=ROOT, capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+        assert r.returncode == 0, r.stderr[-2000:]
+        said.append([ln for ln in r.stderr.splitlines() if "compiling" in ln])
+    # the first run: one line before it compiles; the second loads the kernel and is silent
+    assert said == [["note: compiling the simulation kernels once, about 3 s"], []], said
