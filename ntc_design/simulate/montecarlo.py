@@ -239,14 +239,14 @@ def prepare(spec: MonteCarloSpec) -> None:
             return
 
 
-COMPILE_SECONDS = 3  # CPU seconds to compile one kernel specialisation (bench_startup.py)
+COMPILE_SECONDS = 3  # CPU seconds to compile the fused kernel here (3.0-3.8 s; bench_startup.py)
 
 
 def compiling_notice() -> None:
     """Say on stderr, in one line, that the kernel is being compiled (a first run, or a
     new specialisation), and about how long it takes."""
     print(
-        f"note: compiling the simulation kernels once, about {COMPILE_SECONDS} s",
+        f"note: compiling the simulation kernels once, about {COMPILE_SECONDS} s of CPU",
         file=sys.stderr,
         flush=True,
     )

@@ -379,4 +379,4 @@ def test_a_first_simulation_says_once_that_it_compiles(tmp_path):
         assert r.returncode == 0, r.stderr[-2000:]
         said.append([ln for ln in r.stderr.splitlines() if "compiling" in ln])
     # the first run: one line before it compiles; the second loads the kernel and is silent
-    assert said == [["note: compiling the simulation kernels once, about 3 s"], []], said
+    assert said == [["note: compiling the simulation kernels once, about 3 s of CPU"], []], said
