@@ -104,7 +104,7 @@ modes = (a2(i8), a1(i8), a1(f8), a2(i8), a1(i8), a3(f8), a2(f8), a1(i8), a1(i8))
 kernels = [(ck.draw_kernel(), (a2(u8), a2(f8), i8, f8, a1(f8), a1(f8))),
            (ck.check_kernel(), (a2(f8), i8, i8, a1(i8))),
            (ck.stats_kernel(), (a2(f8), i8, a1(f8), i8, i8, i8, a2(f8), a3(f8), i8, i8)),
-           (ck.sum_kernel(), (a2(f8), i8, a2(f8), i8))]
+           (ck.sum_kernel(), (a2(f8), i8, a2(f8), i8, i8, i8, i8))]
 for d3 in (True, False):
     kernels.append((ck.fused_kernel(21, 3, 16, d3), (a2(f8), a2(u8), i8, i8, a1(f8), a1(f8),
         a1(i8), *modes, a1(i8), a1(i8), a3(f8), a2(f8), i8, a1(f8), a1(f8))))
