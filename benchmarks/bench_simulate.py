@@ -17,7 +17,14 @@ V1 = V); δ comes out large (hundreds), so L_B is stiff and the explicit step is
 at half the guard's limit. The design is computed here from the edge arrays (the dense
 design layer does not reach N = 10,000).
 
-Run: python benchmarks/bench_simulate.py [--paper] [--skip-large]
+The kernel against the previous release: the fused kernel's path-steps per second of CPU
+on one core (G1, 1000 paths) beside :data:`PREVIOUS_RELEASE`, the same figure measured with
+the release before the digital protocol and the GPU work, so that a drop shows as a ratio
+below 1. With ``--previous DIR`` (a checkout of that commit, e.g. ``git worktree add
+/tmp/old 9a16b0f``) both trees are measured here, in alternating fresh processes (the
+machine may be shared: medians of the rounds).
+
+Run: python benchmarks/bench_simulate.py [--paper] [--skip-large] [--previous DIR]
 """
 
 from __future__ import annotations
@@ -42,6 +49,90 @@ from ntc_design.simulate.system import check_step_size
 ROOT = Path(__file__).resolve().parent.parent
 
 CORES = min(2, os.cpu_count() or 1)
+
+# The fused kernel of the release before the digital protocol and the GPU work, measured as
+# kernel_rate() measures it (CPU time, one core, G1, 1000 paths), alternating with this
+# tree's in one shell on the shared 2-core machine of figures.json (issue 47: the delay
+# ring's slice had made today's 1.07-1.14e7, 1.7x slower; after the fix 1.89-2.03e7).
+PREVIOUS_RELEASE = {"commit": "9a16b0f", "kernel_path_steps_per_s": 1.95e7, "date": "2026-11-28"}
+
+# One tree's kernel rate in a fresh process (works with the previous release's API too):
+# path-steps per second of CPU time, the median of three runs of 2,000 steps.
+KERNEL_PROBE = """
+import statistics, sys, time
+from pathlib import Path
+import numpy as np
+import ntc_design as nd
+try:
+    from ntc_design.model.paper import THETA
+except ImportError:
+    from ntc_design.paper import THETA
+from ntc_design.simulate import NoiseModel, mode_system
+from ntc_design.simulate.kernels import em_steps_rng, kernel_arrays, tile_width
+from ntc_design.simulate.rng import NormalSource
+root = Path(nd.__file__).resolve().parent.parent
+des = nd.design(nd.load(root / "examples" / "g1.yaml"), THETA, thresholds=False)
+s = mode_system(des, NoiseModel(0.4, 0.3))
+args, p, k = kernel_arrays(s), 1000, int(sys.argv[1])
+c = 1.0 / (1.0 + np.arange(k) * 1e-3)
+ch, cs = c * 1e-3, c * np.sqrt(1e-3)
+src = NormalSource("xoshiro", 0, 0, p)
+x0 = np.zeros((p, s.nd))  # every path from 0 (x(0) = 0, as the paper)
+x = x0.copy()
+em_steps_rng(x, src.states, 2 * s.n_edges, 0, 10, ch, cs, *args, True, tile_width(p, s.nd))
+rates = []
+for _ in range(3):
+    x = x0.copy()
+    t0 = time.process_time()
+    em_steps_rng(x, src.states, 2 * s.n_edges, 0, k, ch, cs, *args, True, tile_width(p, s.nd))
+    rates.append(k * p / (time.process_time() - t0))
+print(statistics.median(rates))
+"""
+
+
+def kernel_rate(tree: Path = ROOT, steps: int = 2000) -> float:
+    """The fused kernel's path-steps per second of CPU time on one core (G1, 1000 paths), in
+    a fresh process importing ``tree`` (this checkout, or another commit's)."""
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    r = subprocess.run(
+        [sys.executable, "-c", KERNEL_PROBE, str(steps)],
+        env=env, cwd=tree, capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    return float(r.stdout.split()[-1])
+
+
+def against_previous(previous: Path | None, rounds: int = 5) -> None:
+    """Print this tree's kernel rate beside the stored previous release's, and with
+    ``previous`` (a checkout) both measured here in alternating rounds."""
+    import statistics
+
+    kernel_rate(ROOT, 20)  # compile or load both first
+    ref = PREVIOUS_RELEASE["kernel_path_steps_per_s"]
+    print(
+        f"\nfused kernel, one core, G1, 1000 paths (path-steps per CPU second), vs {PREVIOUS_RELEASE['commit']}:"
+    )
+    if previous is None:
+        now = statistics.median(kernel_rate() for _ in range(3))
+        print(f"{'this tree':<40} {now:>11.3g}")
+        print(f"{'previous release, stored':<40} {ref:>11.3g}   this tree is {now / ref:.2f}x")
+        return
+    kernel_rate(previous, 20)
+    ours, theirs = [], []
+    for _ in range(rounds):
+        ours.append(kernel_rate())
+        theirs.append(kernel_rate(previous))
+    a, b = statistics.median(ours), statistics.median(theirs)
+    print(
+        f"{'this tree (median of ' + str(rounds) + ' alternated)':<40} {a:>11.3g}   ({min(ours):.3g}-{max(ours):.3g})"
+    )
+    print(f"{'previous release, here':<40} {b:>11.3g}   ({min(theirs):.3g}-{max(theirs):.3g})")
+    print(f"{'previous release, stored':<40} {ref:>11.3g}")
+    print(
+        f"this tree is {a / b:.2f}x the previous release measured here, {a / ref:.2f}x the stored figure"
+    )
 
 
 def problem():
@@ -370,7 +461,16 @@ def main() -> None:
         "--paper", action="store_true", help="also run the paper-sized T = 100 (1e8 path-steps)"
     )
     ap.add_argument("--skip-large", action="store_true", help="skip N = 1,000 and 10,000")
+    ap.add_argument(
+        "--previous", type=Path, help="a checkout of the previous release, measured beside this"
+    )
+    ap.add_argument(
+        "--kernel-only", action="store_true", help="only the kernel against the previous release"
+    )
     args = ap.parse_args()
+    if args.kernel_only:
+        against_previous(args.previous)
+        return
     top, des, x0 = problem()
     g1s = mode_system(des, NoiseModel())
     floor = rng_floor()
@@ -425,6 +525,8 @@ def main() -> None:
     var = [step_variants(s, k_n=64 if s.nd < 100 else 4) for _, s in cases]
     for key in var[0]:
         print(f"{key:<24}" + "".join(f"{v[key]:>14.3g}" for v in var))
+
+    against_previous(args.previous)
 
     t0 = time.perf_counter()
     simulate(top, THETA, T=100.0, initial=x0, method="exact", save_every=0.1)

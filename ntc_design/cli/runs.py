@@ -134,6 +134,7 @@ def simulate(
     from ..reports.terminal import Progress, out
     from ..simulate import SimulationDiverged
     from ..simulate import simulate as run
+    from ..simulate.driver import device_engine
     from ..simulate.options import MonteCarlo, check_workers
     from ..simulate.scenario import (
         REPLACEABLE,
@@ -172,10 +173,16 @@ def simulate(
     if any((out_dir / name).is_file() for name in REPLACEABLE):  # said, not done in silence
         print(f"note: replacing the run in {one_line(str(out_dir))}", file=sys.stderr)
     # "" is a malformed address (refused by connect), not "no scheduler"
-    engine = DaskEngine.connect(scheduler) if scheduler is not None else None
+    dask = DaskEngine.connect(scheduler) if scheduler is not None else None
+    try:  # the device before any progress line: a refusal is the only line printed
+        engine = device_engine(spec, dask)
+    except InputError as exc:
+        if dask is not None:
+            dask.close()
+        raise blame(exc, sc.source, flags, values=overrides) from None
     with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
-        if engine is not None:
-            stack.callback(engine.close)
+        if dask is not None:
+            stack.callback(dask.close)
         prog.stage(f"simulating {scenario}")
         try:
             res = run(

@@ -316,7 +316,7 @@ def estimate(
     }
     if mc:
         b = float(min(block_size, paths))
-        stats = F8 * saves * (2 * n + nd_)
+        stats = F8 * saves * (3 * n + nd_)  # Σ, spread and centre per agent; Σx
         k = float(min(store_paths, paths))
         parts["Monte Carlo blocks"] = (
             "block_size",

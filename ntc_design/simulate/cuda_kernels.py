@@ -354,9 +354,12 @@ def check_kernel():
 
 @cache
 def stats_kernel():
-    """Per agent i and group of ``ppt`` paths: Σ‖x_i − θ‖², Σ‖x_i − θ‖⁴ and Σx_i over the
-    group, into ``part[group]`` (2N + Nd sums: the N of each, then the Nd); the first
-    ``n_store`` paths copied into ``stored[save]``.
+    """Per agent i and group of ``ppt`` paths: Σ‖x_i − θ‖², the sum of squared deviations of
+    ‖x_i − θ‖² from the group's mean, that mean, and Σx_i over the group, into
+    ``part[group]`` (3N + Nd numbers: the N of each, then the Nd); the first ``n_store``
+    paths copied into ``stored[save]``. The mean is the first path's value plus the mean
+    offset from it, the deviations a second pass (as the CPU's
+    :func:`.montecarlo.centred_spread`): equal paths give a spread of exactly 0.
     ``kernel[(⌈N/threads⌉, groups), threads](x, row0, theta, n, d, ppt, part, stored,
     n_store, save)``.
 
@@ -364,6 +367,14 @@ def stats_kernel():
     -------
     numba.cuda kernel
     """
+
+    @cuda.jit(device=True)
+    def err2(x, r0, theta, d, q):
+        e2 = 0.0
+        for c in range(d):
+            v = x[r0 + c, q] - theta[c]
+            e2 += v * v
+        return e2
 
     @cuda.jit
     def kernel(x, row0, theta, n, d, ppt, part, stored, n_store, save):
@@ -375,22 +386,26 @@ def stats_kernel():
         q0 = gy * ppt
         q1 = min(q0 + ppt, p)
         r0 = row0 + i * d
+        base = err2(x, r0, theta, d, q0)
         s1 = 0.0
-        s2 = 0.0
+        off = 0.0
         for q in range(q0, q1):
-            e2 = 0.0
-            for c in range(d):
-                v = x[r0 + c, q] - theta[c]
-                e2 += v * v
+            e2 = err2(x, r0, theta, d, q)
             s1 += e2
-            s2 += e2 * e2
+            off += e2 - base
+        mean = base + off / (q1 - q0)
+        m2 = 0.0
+        for q in range(q0, q1):
+            dev = err2(x, r0, theta, d, q) - mean
+            m2 += dev * dev
         part[gy, i] = s1
-        part[gy, n + i] = s2
+        part[gy, n + i] = m2
+        part[gy, 2 * n + i] = mean
         for c in range(d):
             sx = 0.0
             for q in range(q0, q1):
                 sx += x[r0 + c, q]
-            part[gy, 2 * n + i * d + c] = sx
+            part[gy, 3 * n + i * d + c] = sx
         for q in range(q0, min(q1, n_store)):
             for c in range(d):
                 stored[save, q, i * d + c] = x[r0 + c, q]
@@ -400,8 +415,11 @@ def stats_kernel():
 
 @cache
 def sum_kernel():
-    """``acc[save, j] += Σ_g part[g, j]`` in group order (one thread per sum j).
-    ``kernel[blocks, threads](part, groups, acc, save)``.
+    """``acc[save]`` from the groups' ``part`` rows in group order (one thread per column
+    j): the sums added; for agent i (j = N + i) the groups' spreads and means merged by
+    Chan's update (:func:`.montecarlo.merge_spread`), the group of ``ppt`` paths g holding
+    min(ppt, p − g·ppt) of the chunk's ``p``. ``kernel[blocks, threads](part, groups, acc,
+    save, n, ppt, p)``.
 
     Returns
     -------
@@ -409,9 +427,23 @@ def sum_kernel():
     """
 
     @cuda.jit
-    def kernel(part, groups, acc, save):
+    def kernel(part, groups, acc, save, n, ppt, p):
         j = cuda.grid(1)
-        if j >= part.shape[1]:
+        if j >= part.shape[1] or (2 * n <= j < 3 * n):
+            return
+        if n <= j < 2 * n:
+            cnt = 0.0
+            mean = 0.0
+            m2 = 0.0
+            for g in range(groups):
+                nb = float(min(ppt, p - g * ppt))
+                tot = cnt + nb
+                delta = part[g, j + n] - mean
+                mean = mean + delta * (nb / tot)
+                m2 = m2 + part[g, j] + delta * delta * (cnt * nb / tot)
+                cnt = tot
+            acc[save, j] = m2
+            acc[save, j + n] = mean
             return
         s = 0.0
         for g in range(groups):

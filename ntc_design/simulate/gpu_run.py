@@ -242,7 +242,7 @@ class Chunk:
         self.run, self.g0, self.p = run, g0, p
         self.x = cu.to_device(np.tile(run.x_init[:, None], (run.ring, p)))
         self.st = cu.to_device(np.ascontiguousarray(states.T))
-        n_saves, q = run.sched.grid.save_steps.size, 2 * run.n + nd
+        n_saves, q = run.sched.grid.save_steps.size, 3 * run.n + nd
         self.acc = cu.to_device(np.zeros((max(n_saves, 1), q)))
         self.n_store = max(0, min(run.store_paths - g0, p))
         self.stored = cu.to_device(np.zeros((max(n_saves, 1), max(self.n_store, 1), nd)))
@@ -297,7 +297,7 @@ class Chunk:
             )  # fmt: skip
             q = self.part.shape[1]
             sum_kernel()[_blocks(q, THREADS), min(THREADS, q)](
-                self.part, self.groups, self.acc, save
+                self.part, self.groups, self.acc, save, run.n, self.ppt, self.p
             )
             self.valid = save + 1
         return True
@@ -350,7 +350,8 @@ class Chunk:
         acc = self.acc.copy_to_host()[:n_saves]
         stored = self.stored.copy_to_host()[:n_saves, : self.n_store]
         return PartialStats(
-            blocks, self.p, acc[:, :n], acc[:, n : 2 * n], acc[:, 2 * n :],
+            blocks, self.p, acc[:, :n], acc[:, n : 2 * n], acc[:, 2 * n : 3 * n],
+            acc[:, 3 * n :],
             np.ascontiguousarray(stored.transpose(1, 0, 2)),
             list(range(self.g0, self.g0 + self.n_store)), self.failure, self.valid,
         )  # fmt: skip

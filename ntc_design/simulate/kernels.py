@@ -14,6 +14,8 @@ parallelism (and the results do not depend on their number).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..numerics.linalg import numba_cache_dir
@@ -41,12 +43,12 @@ if hashlib.sha256(_ZX.tobytes()).hexdigest()[:16] != "9a7bfc00fed5c342":  # prag
     raise RuntimeError("rng.ZIG_X changed: update the digest in kernels.py")
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _rotl(x, k):
     return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _next(s0, s1, s2, s3):
     """xoshiro256**: (word, new state), the state in four locals (registers)."""
     result = _rotl(s1 * np.uint64(5), 7) * np.uint64(9)
@@ -63,14 +65,14 @@ def _next(s0, s1, s2, s3):
 TO_UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _unit(w):
     """The top 53 bits of ``w`` as a double in [0, 1): converted through int64, which is
     one instruction (uint64 to double is several, and was 5x slower here)."""
     return np.int64(w >> np.uint64(11)) * TO_UNIT
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def _slow(i, u, s0, s1, s2, s3):
     """The ziggurat's rare branches (about 1 % of draws), kept out of the hot loop: the
     base layer's tail beyond R, or the wedge test of layer i. Returns (done, z, state)."""
@@ -89,7 +91,7 @@ def _slow(i, u, s0, s1, s2, s3):
     return f1 + _unit(w) * (f0 - f1) < 1.0, x, s0, s1, s2, s3
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def ziggurat_slow(i, u, s0, s1, s2, s3):
     """The draw after the fast test failed for word (layer ``i``, uniform ``u``): the tail
     or the wedge, then new words until one is accepted. Returns (z, state)."""
@@ -104,7 +106,7 @@ def ziggurat_slow(i, u, s0, s1, s2, s3):
             return u * _ZX[i], s0, s1, s2, s3
 
 
-@numba.njit(nogil=True)
+@numba.njit(nogil=True, error_model="numpy")
 def _draw_lanes(s0, s1, s2, s3, zt, wl, c2):
     """The next ``len(zt)`` normals of each lane's stream (lane q's state in s0[q] … s3[q]),
     scaled: ``zt[e, q] = c2 · z``. One pass
@@ -144,7 +146,7 @@ def _draw_lanes(s0, s1, s2, s3, zt, wl, c2):
                     zt[e, q] = c2 * z
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def fill_normals(states, out):
     """``out[k, q, e]``: path q's normals in its stream order (step k, then e), for the
     kernels that take the normals as an array (the callable-f step, the implicit scheme,
@@ -202,12 +204,15 @@ def tile_width(p: int, nd: int) -> int:
     return int(max(1, min(p, TILE_MAX, max(TILE_MIN, TILE_BYTES // (16 * max(nd, 1))))))
 
 
-@numba.njit(nogil=True)
-def _drift_noise_d3(xt, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, drift):
-    """dx = c1·(u − L_B xt) + Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e) for d = 3, on a tile:
-    L_B by 3×3 blocks (block-CSR bptr, bind, bdata), one pass over the tile per block and
-    per edge."""
-    nd, w = xt.shape
+@numba.njit(nogil=True, error_model="numpy")
+def _drift_noise_d3(xt, off, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, drift):
+    """dx = c1·(u − L_B x) + Σ_e (g_e ξ1_e + K_e (x_j − x_i) ξ2_e) for d = 3, on a tile,
+    with x the rows ``off`` … ``off`` + Nd − 1 of ``xt``: L_B by 3×3 blocks (block-CSR
+    bptr, bind, bdata), one pass over the tile per block and per edge. The rows are
+    indexed from ``off``, not sliced: a slice of ``xt`` is a non-contiguous array to Numba,
+    whose strided loads kept these loops scalar (the delay ring's view made G1's kernel
+    1.7x slower)."""
+    nd, w = dx.shape
     ne = src.size
     for i in range(nd // 3):
         r = 3 * i
@@ -219,7 +224,7 @@ def _drift_noise_d3(xt, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, 
         if not drift:
             continue
         for bb in range(bptr[i], bptr[i + 1]):
-            jo = 3 * bind[bb]
+            jo = off + 3 * bind[bb]
             l00, l01, l02 = c1 * bdata[bb, 0, 0], c1 * bdata[bb, 0, 1], c1 * bdata[bb, 0, 2]
             l10, l11, l12 = c1 * bdata[bb, 1, 0], c1 * bdata[bb, 1, 1], c1 * bdata[bb, 1, 2]
             l20, l21, l22 = c1 * bdata[bb, 2, 0], c1 * bdata[bb, 2, 1], c1 * bdata[bb, 2, 2]
@@ -229,36 +234,45 @@ def _drift_noise_d3(xt, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, 
                 dx[r + 1, q] -= l10 * y0 + l11 * y1 + l12 * y2
                 dx[r + 2, q] -= l20 * y0 + l21 * y1 + l22 * y2
     for e in range(ne):
-        io, jo = 3 * dst[e], 3 * src[e]
+        io, jo = 3 * dst[e], off + 3 * src[e]
+        xo = off + io
         k00, k01, k02 = kmat[e, 0, 0], kmat[e, 0, 1], kmat[e, 0, 2]
         k10, k11, k12 = kmat[e, 1, 0], kmat[e, 1, 1], kmat[e, 1, 2]
         k20, k21, k22 = kmat[e, 2, 0], kmat[e, 2, 1], kmat[e, 2, 2]
         g0, g1, g2 = gvec[e, 0], gvec[e, 1], gvec[e, 2]
         for q in range(w):
-            d0 = xt[jo, q] - xt[io, q]
-            d1 = xt[jo + 1, q] - xt[io + 1, q]
-            d2 = xt[jo + 2, q] - xt[io + 2, q]
+            d0 = xt[jo, q] - xt[xo, q]
+            d1 = xt[jo + 1, q] - xt[xo + 1, q]
+            d2 = xt[jo + 2, q] - xt[xo + 2, q]
             z1, z2 = zt[e, q], zt[ne + e, q]
             dx[io, q] += g0 * z1 + (k00 * d0 + k01 * d1 + k02 * d2) * z2
             dx[io + 1, q] += g1 * z1 + (k10 * d0 + k11 * d1 + k12 * d2) * z2
             dx[io + 2, q] += g2 * z1 + (k20 * d0 + k21 * d1 + k22 * d2) * z2
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _em_core(
     x, xi, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
     src, dst, kmat, gvec, drift, tile, delay, k_base,
 ):  # fmt: skip
     """:func:`em_steps` and :func:`em_steps_rng` in one body: the normals are read from
-    ``xi`` when ``states`` is empty, else drawn here from the paths' xoshiro streams. For
-    d = 3 (the paper's examples) one loop over the tile does a whole 3×3 block of L_B or a
-    whole edge, its nine coefficients in registers: a third of the memory traffic of the
-    general loops (one per nonzero), 1.2x faster on G1; the sums are the same up to rounding.
+    ``xi``, or drawn here from the paths' xoshiro streams ``states`` (exactly one of the
+    two is None). For d = 3 (the paper's examples) ``bdata`` holds L_B's 3×3 blocks and
+    ``data`` is None: one loop over the tile does a whole block of L_B or a whole edge, its
+    nine coefficients in registers, a third of the memory traffic of the general loops
+    (one per nonzero; ``data`` given, ``bdata`` None), 1.2x faster on G1; the sums are the
+    same up to rounding.
+
+    The branches test only ``arg is not None``: Numba prunes a branch on an argument typed
+    None before typing it, so a run compiles (and caches) only the specialisation it calls
+    (issue 47: every branch was compiled, 5 s of CPU on a first run).
 
     With ``delay`` D > 0 a row of ``x`` is a ring of D + 1 states of the sampled protocol
     (:mod:`.digital`): x_j in slot j mod (D + 1), where j = ``k_base`` + k counts the steps
     from the start; the drift and the noise are taken at x_{j−D}, the slot that x_{j+1}
-    (= x_j + the increment) then overwrites, so a step costs the same whatever D."""
+    (= x_j + the increment) then overwrites, so a step costs the same whatever D. The
+    slots are row offsets into the tile (``nxt``), never slices: a slice is a
+    non-contiguous array to Numba and kept the inner loops scalar (1.7x slower on G1)."""
     p, width = x.shape
     ring = delay + 1
     nd = width // ring
@@ -274,26 +288,28 @@ def _em_core(
         zt = np.empty((max(2 * ne, m_draw), w))  # rows past 2·E: drawn, not used
         df = np.empty((d, w))
         mb = np.empty(w)
-        st = np.empty((4, w if states.shape[0] else 0), dtype=np.uint64)
-        for q in range(st.shape[1]):
-            for c in range(4):
-                st[c, q] = states[q0 + q, c]
+        st = np.empty((4, w), dtype=np.uint64)
+        if states is not None:
+            for q in range(w):
+                for c in range(4):
+                    st[c, q] = states[q0 + q, c]
         wl = np.empty(w, dtype=np.uint64)
         for k in range(k_from, k_to):
             c1 = ch[k]
             c2 = cs[k]
             cur = ((k_base + k) % ring) * nd
-            nxt = ((k_base + k + 1) % ring) * nd  # x_{j−D}'s slot, then x_{j+1}'s
-            xd = xt[nxt : nxt + nd, :]  # the state the feedback measures: x_{j−D}
-            if states.shape[0] == 0:
+            nxt = ((k_base + k + 1) % ring) * nd  # x_{j−D}'s slot (measured), then x_{j+1}'s
+            if states is not None:
+                _draw_lanes(st[0], st[1], st[2], st[3], zt, wl, c2)
+            if xi is not None:
                 for q in range(w):
                     for e in range(2 * ne):
                         zt[e, q] = c2 * xi[k, q0 + q, e]
-            if states.shape[0]:
-                _draw_lanes(st[0], st[1], st[2], st[3], zt, wl, c2)
-            if d == 3:
-                _drift_noise_d3(xd, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, drift)
-            else:
+            if bdata is not None:
+                _drift_noise_d3(
+                    xt, nxt, dx, zt, c1, bptr, bind, bdata, u, src, dst, kmat, gvec, drift
+                )
+            if data is not None:
                 for r in range(nd):
                     ur = c1 * u[r]
                     for q in range(w):
@@ -301,15 +317,16 @@ def _em_core(
                     if drift:
                         for b in range(indptr[r], indptr[r + 1]):
                             a = c1 * data[b]
-                            jc = indices[b]
+                            jc = nxt + indices[b]
                             for q in range(w):
-                                dx[r, q] -= a * xd[jc, q]
+                                dx[r, q] -= a * xt[jc, q]
                 for e in range(ne):
                     io = dst[e] * d
-                    jo = src[e] * d
+                    jo = nxt + src[e] * d
+                    xo = nxt + io
                     for c in range(d):
                         for q in range(w):
-                            df[c, q] = xd[jo + c, q] - xd[io + c, q]
+                            df[c, q] = xt[jo + c, q] - xt[xo + c, q]
                     for a in range(d):
                         for q in range(w):
                             mb[q] = 0.0
@@ -320,18 +337,23 @@ def _em_core(
                         ga = gvec[e, a]
                         for q in range(w):
                             dx[io + a, q] += ga * zt[e, q] + mb[q] * zt[ne + e, q]
-            for r in range(nd):
-                for q in range(w):
-                    xt[nxt + r, q] = xt[cur + r, q] + dx[r, q]
+            if ring == 1:  # D = 0: in place (no aliasing for LLVM to rule out at run time)
+                for r in range(nd):
+                    for q in range(w):
+                        xt[r, q] += dx[r, q]
+            else:
+                for r in range(nd):
+                    for q in range(w):
+                        xt[nxt + r, q] = xt[cur + r, q] + dx[r, q]
         for q in range(w):
             for r in range(width):
                 x[q0 + q, r] = xt[r, q]
-        for q in range(st.shape[1]):
-            for c in range(4):
-                states[q0 + q, c] = st[c, q]
+        if states is not None:
+            for q in range(w):
+                for c in range(4):
+                    states[q0 + q, c] = st[c, q]
 
 
-@numba.njit(cache=True, nogil=True)
 def em_steps(
     x, xi, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat,
     gvec, drift, tile, delay=0, k_base=0,
@@ -345,15 +367,34 @@ def em_steps(
     scheme solves for it). Paths go ``tile`` at a time, transposed to (Nd, tile); every
     innermost loop runs over the tile (no array views inside: they cost per nonzero). With
     ``delay`` D > 0 each row is the ring of D + 1 states of :func:`_em_core` (``k_base``: the
-    steps taken before ``ch[0]``)."""
+    steps taken before ``ch[0]``).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (p, (D + 1)·Nd) float64, updated in place.
+    xi : numpy.ndarray
+        (K, p, >= 2E) float64: the normals of each step and path.
+    k_from, k_to : int
+        The steps to take (indices into ``ch``, ``cs`` and ``xi``).
+    ch, cs : numpy.ndarray
+        c(t_k)·h and c(t_k)·√h per step.
+    indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec : numpy.ndarray
+        :func:`kernel_arrays` of the mode.
+    drift : bool
+        Include −L_B x.
+    tile : int
+        Paths integrated together (:func:`tile_width`).
+    delay, k_base : int, optional
+        The ring's D and the steps taken before ``ch[0]``.
+    """
+    data, bdata = _one_layout(data, bdata, gvec)
     _em_core(
-        x, xi, np.zeros((0, 4), dtype=np.uint64), 0, k_from, k_to, ch, cs,
-        indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay,
-        k_base,
+        x, xi, None, 0, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
+        src, dst, kmat, gvec, drift, tile, delay, k_base,
     )  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True)
 def em_steps_rng(
     x, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u,
     src, dst, kmat, gvec, drift, tile, delay=0, k_base=0,
@@ -361,11 +402,91 @@ def em_steps_rng(
     """:func:`em_steps` with the normals drawn in the kernel, path by path from its
     xoshiro256** state ``states[path]`` (the same numbers as :func:`fill_normals` gives
     the array kernel; ``m_draw`` >= 2·E per step, the rest drawn and dropped), so no array of
-    normals is written or read."""
+    normals is written or read.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (p, (D + 1)·Nd) float64, updated in place.
+    states : numpy.ndarray
+        (p, 4) uint64 xoshiro256** states, updated in place.
+    m_draw : int
+        Normals drawn per path and step.
+    k_from, k_to, ch, cs, indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay, k_base
+        As for :func:`em_steps`.
+    """
+    data, bdata = _one_layout(data, bdata, gvec)
     _em_core(
-        x, np.zeros((1, 1, 1)), states, m_draw, k_from, k_to, ch, cs, indptr,
-        indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec, drift, tile, delay, k_base,
+        x, None, states, m_draw, k_from, k_to, ch, cs, indptr, indices, data, bptr, bind,
+        bdata, u, src, dst, kmat, gvec, drift, tile, delay, k_base,
     )  # fmt: skip
+
+
+def _one_layout(data, bdata, gvec):
+    """(None, the 3×3 blocks) when d = 3, else (L_B's CSR values, None): the argument
+    typed None selects the kernel's loops."""
+    return (None, bdata) if gvec.shape[1] == 3 else (data, None)
+
+
+def _warm_args(fused: bool, width: int, arrays) -> tuple:
+    """:func:`_em_core`'s arguments for no path and one step, of the types a run passes."""
+    indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec = arrays
+    one = np.ones(1)
+    xi = None if fused else np.zeros((1, 0, 2 * src.size))
+    states = np.zeros((0, 4), np.uint64) if fused else None
+    data, bdata = _one_layout(data, bdata, gvec)
+    return (
+        np.zeros((0, width)), xi, states, 2 if fused else 0, 0, 1, one, one, indptr, indices,
+        data, bptr, bind, bdata, u, src, dst, kmat, gvec, True, 1,
+    )  # fmt: skip
+
+
+def warm_kernel(fused: bool, width: int, arrays, delay: int = 0) -> None:
+    """Compile, or load from Numba's cache, the kernel a run of this mode calls (no path is
+    integrated), so that forked workers inherit it.
+
+    Parameters
+    ----------
+    fused : bool
+        Normals drawn in the kernel (:func:`em_steps_rng`), else read (:func:`em_steps`).
+    width : int
+        (D + 1)·N·d: a row of the state.
+    arrays : tuple
+        :func:`kernel_arrays` of the mode.
+    delay : int, optional
+        The ring's D.
+    """
+    core: Any = _em_core
+    core(*_warm_args(fused, width, arrays), delay, 0)
+
+
+def kernel_cached(fused: bool, width: int, arrays, delay: int = 0) -> bool:
+    """Whether :func:`warm_kernel` will find its kernel compiled in this process or in
+    Numba's cache (the index file of :func:`_em_core` lists its signature, for this source
+    and machine), so that a run can say before it compiles. Nothing is compiled or loaded:
+    the index is read, about a millisecond. When Numba's cache cannot be read as expected
+    (another Numba version), True: nothing to say rather than a false warning.
+
+    Parameters
+    ----------
+    fused, width, arrays, delay
+        As for :func:`warm_kernel`.
+
+    Returns
+    -------
+    bool
+    """
+    core: Any = _em_core
+    args = (*_warm_args(fused, width, arrays), delay, 0)
+    sig = tuple(numba.typeof(a) for a in args)
+    if sig in core.overloads:
+        return True
+    try:  # Numba's own cache key: the signature, the machine and the function's bytecode
+        cache = core._cache
+        key = cache._index_key(sig, core.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except Exception:  # pragma: no cover - a Numba whose cache is laid out otherwise
+        return True
 
 
 # (indptr, indices, data, bptr, bind, bdata, u, src, dst, kmat, gvec)

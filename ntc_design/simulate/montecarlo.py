@@ -22,6 +22,7 @@ number of blocks per chunk. The chunk interface (:func:`run_chunk`: block indice
 from __future__ import annotations
 
 import multiprocessing as mp
+import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
@@ -75,17 +76,64 @@ class MonteCarloSpec:
 
 @dataclass
 class PartialStats:
-    """Sums over some paths at the save times (mergeable)."""
+    """Sums over some paths at the save times (mergeable). The spread of ‖x_i − θ‖² is
+    kept as the sum of squared deviations from these paths' own mean (``m2``, beside that
+    mean, ``centre``), merged by Chan's update (:func:`merge_spread`): a sum of fourth
+    powers less a square lost the digits of a narrow band (3e-7 wide for identical paths)."""
 
     blocks: list[int]
     count: int
     sq: np.ndarray  # (S, N) Σ ‖x_i − θ‖²
-    sq2: np.ndarray  # (S, N) Σ ‖x_i − θ‖⁴
+    m2: np.ndarray  # (S, N) Σ (‖x_i − θ‖² − centre)²
+    centre: np.ndarray  # (S, N) the mean of ‖x_i − θ‖² over these paths
     state: np.ndarray  # (S, Nd) Σ x
     stored: np.ndarray  # (k, S, Nd) stored paths (global indices 0..k-1)
     stored_index: list[int] = field(default_factory=list)
     failure: dict | None = None  # {"t", "agent", "path", "save_index"} on NaN/overflow
     valid_saves: int = 0  # save points computed for every path in these blocks
+
+
+def centred_spread(e2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mean of each column of ``e2`` and the sum of squared deviations from it, in two
+    passes: the mean taken as the first row plus the mean offset from it, so that equal
+    values give exactly their value and a spread of exactly 0.
+
+    Parameters
+    ----------
+    e2 : numpy.ndarray
+        (p, N), p >= 1 paths.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The (N,) mean and the (N,) sum of squared deviations.
+    """
+    base = e2[0]
+    mean = base + (e2 - base).sum(axis=0) / e2.shape[0]
+    dev = e2 - mean
+    return mean, np.einsum("pn,pn->n", dev, dev)
+
+
+def merge_spread(n_a, mean_a, m2_a, n_b, mean_b, m2_b):
+    """Chan, Golub and LeVeque's merge of two sets' (count, mean, sum of squared
+    deviations): the mean moves by δ·n_b/n and the sum gains δ²·n_a·n_b/n, δ = mean_b −
+    mean_a. Sets with equal means (identical paths) merge with δ = 0: the spread stays 0.
+
+    Parameters
+    ----------
+    n_a, n_b : int
+        The sets' counts (n_a + n_b >= 1).
+    mean_a, mean_b, m2_a, m2_b : numpy.ndarray or float
+        Their means and sums of squared deviations.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The union's mean and sum of squared deviations.
+    """
+    n = n_a + n_b
+    delta = mean_b - mean_a
+    return mean_a + delta * (n_b / n), m2_a + m2_b + delta * delta * (n_a * n_b / n)
 
 
 def _first_bad(x: np.ndarray, d: int) -> tuple[int, int] | None:
@@ -163,14 +211,15 @@ class _Stepper:
 
 def prepare(spec: MonteCarloSpec) -> None:
     """Compile (or load from numba's cache) the kernel for this spec's array types in this
-    process, so that forked workers inherit it instead of each compiling it.
+    process, so that forked workers inherit it instead of each compiling it. When the
+    kernel is not in Numba's cache (a first run), say so first in one line on stderr.
 
     Parameters
     ----------
     spec : MonteCarloSpec
         The run (a spec with its own ``run_block`` needs nothing).
     """
-    from .kernels import em_steps, em_steps_rng, fill_normals
+    from .kernels import fill_normals, kernel_cached, warm_kernel
 
     # only what the run calls: each kernel loaded from the cache costs about 0.1 s
     systems = getattr(spec, "systems", ())  # a spec with its own run_block has none
@@ -183,15 +232,24 @@ def prepare(spec: MonteCarloSpec) -> None:
     for s in systems:
         if s.f is None:
             st = _Stepper(s, False)
-            x = np.zeros((0, s.nd * (delay + 1)))
-            one = np.ones(1)
-            if fused:
-                states = np.zeros((0, 4), np.uint64)
-                em_steps_rng(x, states, 2, 0, 1, one, one, *st.args, True, 1, delay, 0)
-            else:
-                xi = np.zeros((1, 0, 2 * s.n_edges))
-                em_steps(x, xi, 0, 1, one, one, *st.args, True, 1, delay, 0)
+            width = s.nd * (delay + 1)
+            if not kernel_cached(fused, width, st.args, delay):
+                compiling_notice()
+            warm_kernel(fused, width, st.args, delay)
             return
+
+
+COMPILE_SECONDS = 3  # CPU seconds to compile the fused kernel here (3.0-3.8 s; bench_startup.py)
+
+
+def compiling_notice() -> None:
+    """Say on stderr, in one line, that the kernel is being compiled (a first run, or a
+    new specialisation), and about how long it takes."""
+    print(
+        f"note: compiling the simulation kernels once, about {COMPILE_SECONDS} s of CPU",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 class BlockStats:
@@ -205,7 +263,8 @@ class BlockStats:
         self.b, self.p0, self.p, self.d, self.n = b, p0, p, spec.dim, spec.n_agents
         self.save_times, self.t = grid.save_times, grid.t
         self.sq = np.zeros((s_n, self.n))
-        self.sq2 = np.zeros((s_n, self.n))
+        self.m2 = np.zeros((s_n, self.n))
+        self.centre = np.zeros((s_n, self.n))
         self.state = np.zeros((s_n, nd_))
         self.n_store = max(0, min(spec.store_paths - p0, p))
         self.stored = np.zeros((self.n_store, s_n, nd_))
@@ -243,7 +302,7 @@ class BlockStats:
         e = (x - self.theta_t).reshape(self.p, self.n, self.d)
         e2 = np.einsum("pnd,pnd->pn", e, e)
         self.sq[i] = e2.sum(axis=0)
-        self.sq2[i] = (e2 * e2).sum(axis=0)
+        self.centre[i], self.m2[i] = centred_spread(e2)
         self.state[i] = x.sum(axis=0)
         if self.n_store:
             self.stored[:, i] = x[: self.n_store]
@@ -280,8 +339,8 @@ class BlockStats:
         """
         idx = list(range(self.p0, self.p0 + self.n_store))
         return PartialStats(
-            [self.b], self.p, self.sq, self.sq2, self.state, self.stored, idx, self.failure,
-            self.valid,
+            [self.b], self.p, self.sq, self.m2, self.centre, self.state, self.stored, idx,
+            self.failure, self.valid,
         )  # fmt: skip
 
 
@@ -394,11 +453,13 @@ def merge(parts: Sequence[PartialStats]) -> PartialStats:
     """
     parts = sorted(parts, key=lambda q: q.blocks[0])
     first = parts[0]
-    sq, sq2, state = first.sq.copy(), first.sq2.copy(), first.state.copy()
-    for q in parts[1:]:
+    sq, state = first.sq.copy(), first.state.copy()
+    count, centre, m2 = first.count, first.centre.copy(), first.m2.copy()
+    for q in parts[1:]:  # in block order, one at a time: the same sums for any chunking
         sq += q.sq
-        sq2 += q.sq2
         state += q.state
+        centre, m2 = merge_spread(count, centre, m2, q.count, q.centre, q.m2)
+        count += q.count
     stored = np.concatenate([q.stored for q in parts], axis=0)
     idx = [i for q in parts for i in q.stored_index]
     fails = [q.failure for q in parts if q.failure is not None]
@@ -406,9 +467,10 @@ def merge(parts: Sequence[PartialStats]) -> PartialStats:
     valid = min(q.valid_saves for q in parts)
     return PartialStats(
         [b for q in parts for b in q.blocks],
-        sum(q.count for q in parts),
+        count,
         sq,
-        sq2,
+        m2,
+        centre,
         state,
         stored,
         idx,

@@ -406,7 +406,7 @@ def mc_summary(part: PartialStats) -> MonteCarloCurves:
     if p < 2:
         lo = hi = np.full_like(mean, np.nan)
     else:
-        var = np.maximum(part.sq2 / p - mean**2, 0.0) * (p / (p - 1))
+        var = part.m2 / (p - 1)  # Chan's merged squared deviations: >= 0, 0 for equal paths
         half = Z95 * np.sqrt(var / p)
         lo, hi = np.maximum(mean - half, 0.0), mean + half
     return MonteCarloCurves(

@@ -100,6 +100,38 @@ def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch, tmp_
 
 
 @pytest.mark.hostile
+def test_the_gpu_refusal_comes_before_any_progress_line(tmp_path, capsys, monkeypatch):
+    # a loaded machine, made certain: the heartbeat prints as soon as a progress starts (as
+    # if 5 s had gone by in the imports), and this machine has no GPU
+    import ntc_design.reports.terminal as terminal
+    import ntc_design.simulate.driver as driver
+    from ntc_design.errors import InputError
+
+    class AtOnce(terminal.Progress):
+        def __enter__(self):
+            super().__enter__()
+            self._line("simulating")
+            return self
+
+    def no_gpu():
+        raise InputError("device: gpu: no NVIDIA driver on this machine; use device: cpu")
+
+    monkeypatch.setattr(terminal, "Progress", AtOnce)
+    monkeypatch.setattr(driver, "load_cuda", no_gpu)
+    sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+    args = ["simulate", sc, "--device", "gpu", "--paths", "8", "--T", "0.05"]
+    code, out, err = run_cli([*args, "--out", tmp_path / "o"], capsys, monkeypatch)
+    lines = [ln for ln in err.splitlines() if ln.strip()]  # every line, the heartbeat's too
+    assert code == 2 and out == "" and len(lines) == 1, err
+    assert lines[0].startswith("error: --device: gpu") and "no NVIDIA driver" in lines[0]
+    assert not (tmp_path / "o").exists()
+    code, _, err = run_cli(
+        [*args[:2], "--paths", "8", "--T", "0.05", "--out", tmp_path / "c"], capsys, monkeypatch
+    )
+    assert code == 0 and "simulating" in err  # the progress itself is as before
+
+
+@pytest.mark.hostile
 def test_simulate_on_a_gpu_without_one_is_one_line_and_exit_2(tmp_path):
     # a fresh process without numba-cuda's simulator: the machine as it is
     import os
@@ -343,3 +375,24 @@ def test_simulate_says_when_it_replaces_an_earlier_run(tmp_path, capsys, monkeyp
         notes.append([ln for ln in err.splitlines() if ln.startswith("note: replacing")])
     assert notes == [[], [f"note: replacing the run in {out}"]]
     assert json.loads((out / "summary.json").read_text())["parameters"]["seed"] == 2
+
+
+@pytest.mark.slow  # a first run compiles the kernel into an empty cache (~3 s of CPU)
+def test_a_first_simulation_says_once_that_it_compiles(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    sc = EXAMPLES / "scenarios" / "g1_fixed.yaml"
+    said = []
+    for run in ("first", "second"):
+        args = ["simulate", sc, "--paths", "4", "--T", "0.01", "--method", "mc"]
+        r = subprocess.run(
+            [sys.executable, "-m", "ntc_design", *map(str, args), "--out", str(tmp_path / run)],
+            env=env, cwd=ROOT, capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+        assert r.returncode == 0, r.stderr[-2000:]
+        said.append([ln for ln in r.stderr.splitlines() if "compiling" in ln])
+    # the first run: one line before it compiles; the second loads the kernel and is silent
+    assert said == [["note: compiling the simulation kernels once, about 3 s of CPU"], []], said

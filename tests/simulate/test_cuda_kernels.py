@@ -66,20 +66,23 @@ def test_statistics_are_numpy_sums_over_the_paths(cuda_device):
     x = rng.normal(size=(2 * n * d, p))  # slot 1 holds the state
     theta = np.array([0.5, -1.0])
     groups = -(-p // ppt)
-    part = cu.device_array((groups, 2 * n + n * d))
-    acc = cu.to_device(np.zeros((2, 2 * n + n * d)))
+    part = cu.device_array((groups, 3 * n + n * d))
+    acc = cu.to_device(np.zeros((2, 3 * n + n * d)))
     stored = cu.to_device(np.zeros((2, n_store, n * d)))
     xd = cu.to_device(x)
     ck.stats_kernel()[(1, groups), n](
         xd, n * d, cu.to_device(theta), n, d, ppt, part, stored, n_store, 1
     )
-    ck.sum_kernel()[1, part.shape[1]](part, groups, acc, 1)
+    ck.sum_kernel()[1, part.shape[1]](part, groups, acc, 1, n, ppt, p)
     got = acc.copy_to_host()
     e = (x[n * d :].T - np.tile(theta, n)).reshape(p, n, d)
     e2 = (e * e).sum(axis=2)
     np.testing.assert_allclose(got[1, :n], e2.sum(axis=0), rtol=1e-13)
-    np.testing.assert_allclose(got[1, n : 2 * n], (e2 * e2).sum(axis=0), rtol=1e-13)
-    np.testing.assert_allclose(got[1, 2 * n :], x[n * d :].sum(axis=1), rtol=1e-13)
+    # the squared deviations from the mean of all p paths (groups of 3, 3 and 1 merged)
+    dev = e2 - e2.mean(axis=0)
+    np.testing.assert_allclose(got[1, n : 2 * n], (dev * dev).sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(got[1, 2 * n : 3 * n], e2.mean(axis=0), rtol=1e-14)
+    np.testing.assert_allclose(got[1, 3 * n :], x[n * d :].sum(axis=1), rtol=1e-13)
     assert not got[0].any()  # another save slot: untouched
     np.testing.assert_array_equal(stored.copy_to_host()[1], x[n * d :, :n_store].T)
 
@@ -101,7 +104,7 @@ modes = (a2(i8), a1(i8), a1(f8), a2(i8), a1(i8), a3(f8), a2(f8), a1(i8), a1(i8))
 kernels = [(ck.draw_kernel(), (a2(u8), a2(f8), i8, f8, a1(f8), a1(f8))),
            (ck.check_kernel(), (a2(f8), i8, i8, a1(i8))),
            (ck.stats_kernel(), (a2(f8), i8, a1(f8), i8, i8, i8, a2(f8), a3(f8), i8, i8)),
-           (ck.sum_kernel(), (a2(f8), i8, a2(f8), i8))]
+           (ck.sum_kernel(), (a2(f8), i8, a2(f8), i8, i8, i8, i8))]
 for d3 in (True, False):
     kernels.append((ck.fused_kernel(21, 3, 16, d3), (a2(f8), a2(u8), i8, i8, a1(f8), a1(f8),
         a1(i8), *modes, a1(i8), a1(i8), a3(f8), a2(f8), i8, a1(f8), a1(f8))))

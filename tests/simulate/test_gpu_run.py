@@ -30,6 +30,12 @@ def _agree(cpu, gpu) -> float:
     for a, b in ((cpu.mc.mean, gpu.mc.mean), (cpu.mc.mean_state, gpu.mc.mean_state)):
         np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(gpu.mc.hi, cpu.mc.hi, rtol=1e-9)
+    np.testing.assert_allclose(gpu.mc.lo, cpu.mc.lo, rtol=1e-9)
+    # every path starts at X0: a band of width 0 on both (Chan's merge on the device too)
+    assert np.array_equal(gpu.mc.hi[0], gpu.mc.mean[0]) and np.array_equal(
+        gpu.mc.lo[0], gpu.mc.mean[0]
+    )
+    assert np.array_equal(cpu.mc.hi[0], cpu.mc.mean[0])
     assert gpu.stats.engine["engine"] == "gpu"
     return gap
 
@@ -157,10 +163,10 @@ def test_delayed_recursion_against_the_cpu_kernel(g1, delay):
         p0, p = b * bp, min(bp, spec.paths - b * bp)
         x = np.tile(spec.x_init, (p, delay + 1))  # the CPU kernel's ring: x_j in slot j mod (D+1)
         args = (
-            x, np.zeros((1, 1, 1)), path_states(spec.seed, b, p), 2 * s.n_edges, 0,
+            x, path_states(spec.seed, b, p), 2 * s.n_edges, 0,
             grid.n_steps, c * h, c * np.sqrt(h), *kernel_arrays(s), True, p,
         )  # fmt: skip
-        kernels._em_core(*args, delay=delay, k_base=0)
+        kernels.em_steps_rng(*args, delay=delay, k_base=0)
         slot = (grid.n_steps % (delay + 1)) * s.nd
         assert relative_gap(x[:, slot : slot + s.nd], gpu.stored[p0 : p0 + p, -1]) <= REL_TOL
 

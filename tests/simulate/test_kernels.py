@@ -107,3 +107,50 @@ def test_fused_kernel_draws_the_array_kernels_numbers(g1, theta):
     em_steps(xa, xi, 0, k, ch, cs, *st.args, True, 8)
     em_steps_rng(xb, states, 2 * s.n_edges, 0, k, ch, cs, *st.args, True, 16)
     np.testing.assert_array_equal(xa, xb)  # tile widths 8 and 16: the same bits
+
+
+_CACHE_PROBE = """
+import json, sys
+import ntc_design as nd
+from ntc_design.model.paper import THETA
+from ntc_design.simulate import NoiseModel
+from ntc_design.simulate import kernels
+from ntc_design.simulate.system import mode_system
+s = mode_system(nd.design(nd.load("examples/g1.yaml"), THETA, thresholds=False), NoiseModel())
+args = kernels.kernel_arrays(s)
+before = [kernels.kernel_cached(f, s.nd, args) for f in (True, False)]
+loaded = len(kernels._em_core.overloads)
+if sys.argv[1] == "warm":
+    kernels.warm_kernel(True, s.nd, args)
+print(json.dumps([before, loaded, kernels.kernel_cached(True, s.nd, args)]))
+"""
+
+
+def _probe(cache, what):
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    r = subprocess.run(
+        [sys.executable, "-c", _CACHE_PROBE, what],
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr[-2000:]
+    return json.loads(r.stdout.splitlines()[-1])
+
+
+def test_a_cold_cache_is_seen_from_numbas_index_without_compiling(tmp_path):
+    # an empty cache folder: neither specialisation is there, and asking compiled nothing
+    assert _probe(tmp_path, "ask") == [[False, False], 0, False]
+    assert list(tmp_path.rglob("*.nb*")) == []
+
+
+@pytest.mark.slow  # compiles the fused kernel into an empty cache (~3 s of CPU)
+def test_a_compiled_kernel_is_found_in_the_index_by_the_next_process(tmp_path):
+    assert _probe(tmp_path, "warm") == [[False, False], 0, True]
+    # a new process: the fused kernel is in the index (nothing loaded yet), the array one not
+    assert _probe(tmp_path, "ask") == [[True, False], 0, True]

@@ -71,9 +71,56 @@ def test_same_seed_identical_across_workers_and_chunks(g1):
     b = run(spec, workers=2, blocks_per_chunk=1)
     c = run(spec, workers=2, blocks_per_chunk=2)
     for other in (b, c):
-        assert np.array_equal(a.sq, other.sq) and np.array_equal(a.sq2, other.sq2)
+        assert np.array_equal(a.sq, other.sq) and np.array_equal(a.m2, other.m2)
+        assert np.array_equal(a.centre, other.centre)
         assert np.array_equal(a.state, other.state) and np.array_equal(a.stored, other.stored)
     d = run(_spec(g1), workers=1)
     assert np.array_equal(a.sq, d.sq)
     e = run(MonteCarloSpec(**{**spec.__dict__, "seed": 12}), workers=1)
     assert not np.array_equal(a.sq, e.sq)
+
+
+def test_merged_spread_is_the_exact_spread_of_all_paths():
+    # values far from 0 with a spread of about 1: Σx² − (Σx)²/n loses every digit there
+    from fractions import Fraction
+
+    from ntc_design.simulate.montecarlo import PartialStats, centred_spread, merge
+
+    rng = np.random.default_rng(np.random.SeedSequence(5))
+    values = 1e8 + rng.standard_normal((261, 2))
+    parts, start = [], 0
+    for b, k in enumerate((1, 7, 250, 3)):  # uneven blocks, a single path among them
+        chunk = values[start : start + k]
+        centre, m2 = centred_spread(chunk)
+        z = np.zeros((1, 2))
+        parts.append(
+            PartialStats([b], k, chunk.sum(0)[None], m2[None], centre[None], z, np.zeros((0, 1, 2)))
+        )
+        start += k
+    got = merge(parts[::-1])  # merged in block order whatever the order given
+    for c in range(2):
+        col = [Fraction(v) for v in values[:, c]]
+        mu = sum(col) / len(col)
+        exact = float(sum((v - mu) ** 2 for v in col))
+        # to the digits the data have: 1e8's ulp is 1.5e-8, the block means' δ carry it
+        assert abs(got.m2[0, c] - exact) <= 1e-9 * exact, (got.m2[0, c], exact)
+        assert abs(got.centre[0, c] - float(mu)) <= 2e-16 * float(mu)
+        naive = float(np.sum(values[:, c] ** 2) - np.sum(values[:, c]) ** 2 / len(col))
+        assert abs(naive - exact) > 1e-3 * exact  # what the old sums gave: no digit right
+
+
+def test_identical_paths_have_a_zero_width_band_and_bands_do_not_depend_on_workers(g1):
+    from ntc_design.simulate import simulate
+
+    kw = dict(
+        T=0.2, dt=1e-3, paths=37, seed=3, initial=X0, save_every=0.1, method="mc", block_size=8
+    )
+    a = simulate(g1, THETA, workers=1, **kw)
+    b = simulate(g1, THETA, workers=2, **kw)
+    # t = 0: every path starts at X0, so the band is the mean itself (it was 3e-7 wide)
+    assert np.array_equal(a.mc.lo[0], a.mc.mean[0]) and np.array_equal(a.mc.hi[0], a.mc.mean[0])
+    assert np.all(a.mc.hi[1:] - a.mc.lo[1:] > 1e-6 * a.mc.mean[1:])  # the noise spreads them
+    for name in ("mean", "lo", "hi"):
+        np.testing.assert_array_equal(getattr(a.mc, name), getattr(b.mc, name))
+    again = simulate(g1, THETA, workers=1, **kw)
+    np.testing.assert_array_equal(again.mc.hi, a.mc.hi)
