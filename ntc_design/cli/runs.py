@@ -18,6 +18,8 @@ from ..errors import AssumptionWarning, InputError, blame, one_line, require_hor
 from .app import (
     DelayOpt,
     JsonOpt,
+    LossOpt,
+    LossPolicyOpt,
     PeriodOpt,
     SchedulerOpt,
     command_line,
@@ -109,6 +111,8 @@ def simulate(
     ] = None,
     period: PeriodOpt = None,
     delay: DelayOpt = None,
+    loss: LossOpt = None,
+    loss_policy: LossPolicyOpt = None,
     scheduler: SchedulerOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -142,9 +146,14 @@ def simulate(
     if horizon is not None:
         require_horizon("--horizon", horizon)
     sc = parse_scenario(scenario)
-    if period is not None or delay is not None:
+    if period is not None or delay is not None or loss is not None or loss_policy is not None:
         overrides["digital"] = digital_option(
-            period, delay, sc.document.get("digital"), overrides.get("T", sc.document.get("T"))
+            period,
+            delay,
+            sc.document.get("digital"),
+            overrides.get("T", sc.document.get("T")),
+            loss,
+            loss_policy,
         )
     flags = {k: f for k, f in SIMULATE_FLAGS.items() if k in overrides}
     top, spec, sc = load_scenario(scenario, overrides, sc, flags)

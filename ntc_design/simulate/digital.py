@@ -173,6 +173,9 @@ class DigitalRun:
         t_k at the peak.
     continuous_final_ms_error : float or None
         The continuous design's exact Σ_i E‖x_i − θ‖² at K·h.
+    loss : dict or None
+        On lossy links (:mod:`.loss_run`): ``policy``, ``p`` and ``offset``
+        (‖lim E x − 1⊗θ‖); None without loss.
     """
 
     period: float
@@ -181,6 +184,7 @@ class DigitalRun:
     ms_error_peak: float | None = None
     peak_time: float | None = None
     continuous_final_ms_error: float | None = None
+    loss: dict | None = None
 
     def to_dict(self) -> dict:
         """The summary's ``digital`` block.
@@ -196,6 +200,7 @@ class DigitalRun:
             "ms_error_peak": self.ms_error_peak,
             "peak_time": self.peak_time,
             "continuous_final_ms_error": self.continuous_final_ms_error,
+            **({"loss": self.loss} if self.loss is not None else {}),
         }
 
 

@@ -171,6 +171,10 @@ G1_FIXED = EXAMPLES / "scenarios" / "g1_fixed.yaml"
         ("simulate", ["--device", "tpu"], "--device: expected cpu or gpu"),
         ("simulate", ["--paths", "100000000000"], "--paths: 1.01e+15 path-steps"),
         ("simulate", ["--period", "20"], "--period: h = 20 is longer than the horizon"),
+        ("simulate", ["--period", "0.1", "--loss", "1.5"], "--loss: a loss probability must"),
+        ("simulate", ["--period", "0.1", "--loss", "nan"], "--loss: a loss probability must"),
+        ("simulate", ["--loss", "0.1"], "--loss: needs --period"),
+        ("simulate", ["--period", "0.1", "--loss-policy", "drop"], "--loss-policy: unknown"),
         # the file's dt breaks a limit because of the flag: the file is named, with the flag
         ("simulate", ["--horizon", "1e12"], "g1_fixed.yaml: dt: the run would need"),
         ("tune", ["--horizon", "-1"], "--horizon: must be a positive number"),
@@ -326,4 +330,32 @@ def test_reproduce_refuses_a_subnormal_horizon_before_any_run(tmp_path, capsys, 
     out = tmp_path / "p"
     args = ["reproduce", "paper", "--out", out, "--horizon", "5e-324"]
     assert_input_error(args, capsys, monkeypatch, "--horizon", "shortest horizon")
+    assert not out.exists()
+
+
+def test_simulate_on_lossy_links_reports_the_offset(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "o"
+    args = ["simulate", G1_FIXED, "--out", out, "--period", "0.1", "--loss", "0.1"]
+    code, text, err = run_cli(
+        [*args, "--method", "exact", "--horizon", "2", "--json"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    doc = json.loads(text)
+    block = doc["digital"]["loss"]
+    assert block["policy"] == "skip" and block["p"] == 0.1
+    assert block["offset"] == pytest.approx(0.1433, abs=1e-3)
+    assert any("‖x* − 1⊗θ‖ = 0.1433" in n for n in doc["notes"])
+
+
+@pytest.mark.hostile
+def test_a_bad_loss_in_the_scenario_names_the_file_and_field(tmp_path, capsys, monkeypatch):
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 2\n"
+        "digital: {period: 0.1, loss: 2}\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "o"
+    line = assert_input_error(["simulate", sc, "--out", out], capsys, monkeypatch)
+    assert "sc.yaml" in line and "digital.loss" in line
     assert not out.exists()
