@@ -327,8 +327,21 @@ def tune(
     delay: DelayOpt = None,
     tolerance: Annotated[
         float,
-        typer.Option(help="--period auto: allowed relative excess over the continuous error."),
+        typer.Option(
+            help="--period auto / --loss auto: allowed relative excess over the continuous "
+            "(or lossless sampled) error."
+        ),
     ] = 0.1,
+    loss: Annotated[
+        str | None,
+        typer.Option(
+            "--loss",
+            help="'auto': find the largest uniform message loss whose exact error at T, and "
+            "every smaller loss's, stays within --tolerance of the lossless sampled "
+            "protocol's (at --period or the scenario's digital period).",
+        ),
+    ] = None,
+    loss_policy: LossPolicyOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Tune the gain c(t) = a·(b + t)^(−γ) (and with --tune-delta the coupling δ) to bring
@@ -357,6 +370,11 @@ def tune(
         for name, value in (("--max-gain", max_gain), ("--check-paths", check_paths)):
             if value is not None:
                 raise InputError(f"{name}: applies to --schedule optimal")
+    if loss is not None or loss_policy is not None:
+        _tune_loss(
+            scenario, sc0, horizon, period, delay, loss, loss_policy, tolerance, out_dir, as_json
+        )
+        return
     if period == "auto":
         _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json)
         return
@@ -406,6 +424,60 @@ def tune(
     if not res.certified:
         msg = "not proven: the tuned design is not certified for the required theorems"
         print(msg, file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _tune_loss(
+    scenario, sc0, horizon, period, delay, loss, policy, tolerance, out_dir, as_json
+) -> None:
+    """``ntc tune --loss auto``: the largest tolerable loss, its curve, loss.json."""
+    from ..io.outputs import check_output_folder, output_folder
+    from ..protocol.digital import Digital
+    from ..reports.terminal import Progress, out, print_table
+    from ..simulate.scenario import load_scenario
+    from ..tune.loss import largest_tolerable_loss
+
+    if loss != "auto":
+        raise InputError(f"--loss: expected auto (the largest tolerable loss), got {loss!r:.40}")
+    if period == "auto":
+        raise InputError("--period: give a number with --loss auto (the loss is tuned at one h)")
+    try:
+        h = float(period) if period is not None else None
+    except ValueError:
+        raise InputError(f"--period: expected a number, got {period!r:.40}") from None
+    given = sc0.document.get("digital")
+    t_doc = horizon if horizon is not None else sc0.document.get("T")
+    block = digital_option(h, delay, given, t_doc, None, policy)
+    if block is None:
+        if not isinstance(given, dict):
+            raise InputError("--loss: needs --period (or a digital block in the scenario)")
+        block = dict(given)
+    dg = Digital.from_document(block)
+    top, spec, sc = load_scenario(scenario, None, sc0)
+    if out_dir is not None:
+        check_output_folder(out_dir, ("loss.json",))
+    with warnings.catch_warnings(), Progress("ntc tune") as prog:
+        warnings.simplefilter("ignore", AssumptionWarning)
+        prog.stage(f"the largest tolerable loss of {scenario} ({dg.policy}, h = {dg.period:g})")
+        deadline = spec.T if horizon is None else horizon
+        try:
+            res = largest_tolerable_loss(top, spec, deadline, dg, dg.policy, tolerance)
+        except InputError as exc:
+            text = str(exc)
+            raise InputError(text if text.startswith("--") else f"{sc.source}: {text}") from None
+    doc = res.to_dict()
+    if out_dir is not None:
+        with output_folder(out_dir, ("loss.json",)) as tmp:
+            (tmp / "loss.json").write_text(json_text(doc) + "\n", encoding="utf-8")
+        doc["out"] = str(out_dir)
+    if as_json:
+        print(json_text(doc))
+    else:
+        print_table(res.table())
+        if out_dir is not None:
+            out.print(f"written to {out_dir}: loss.json")
+    if res.loss is None:
+        print("not found: no positive loss keeps the error within the tolerance", file=sys.stderr)
         raise typer.Exit(1)
 
 

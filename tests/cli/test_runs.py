@@ -359,3 +359,33 @@ def test_a_bad_loss_in_the_scenario_names_the_file_and_field(tmp_path, capsys, m
     line = assert_input_error(["simulate", sc, "--out", out], capsys, monkeypatch)
     assert "sc.yaml" in line and "digital.loss" in line
     assert not out.exists()
+
+
+def test_tune_finds_the_largest_tolerable_loss(tmp_path, capsys, monkeypatch):
+    sc = EXAMPLES / "scenarios" / "g1_deadline.yaml"
+    out = tmp_path / "o"
+    args = ["tune", sc, "--loss", "auto", "--period", "0.1", "--out", out, "--json"]
+    code, text, err = run_cli(args, capsys, monkeypatch)
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["loss"] == pytest.approx(0.096, abs=1e-3) and doc["policy"] == "skip"
+    assert doc["curve"][0]["loss"] == 0.0 and doc["curve"][0]["ok"]
+    assert json.loads((out / "loss.json").read_text(encoding="utf-8"))["loss"] == doc["loss"]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, line",
+    [
+        (["--loss", "0.2", "--period", "0.1"], "--loss: expected auto"),
+        (["--loss", "auto", "--period", "auto"], "--period: give a number with --loss auto"),
+        (["--loss", "auto"], "--loss: needs --period"),
+        (["--loss", "auto", "--period", "0.1", "--loss-policy", "x"], "--loss-policy: unknown"),
+        (["--loss", "auto", "--period", "0.1", "--tolerance", "-1"], "--tolerance: must be >= 0"),
+    ],
+)
+def test_tune_loss_refuses_bad_flags(tmp_path, capsys, monkeypatch, extra, line):
+    out = tmp_path / "o"
+    got = assert_input_error(["tune", G1_FIXED, "--out", out, *extra], capsys, monkeypatch)
+    assert got.removeprefix("error: ").startswith(line), got
+    assert not out.exists()
