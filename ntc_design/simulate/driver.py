@@ -42,7 +42,7 @@ from .digital import (
 from .gpu import GpuEngine, load_cuda
 from .grid import TimeGrid
 from .loss_mc import lossy_mc_spec
-from .loss_run import loss_plan
+from .loss_run import loss_plan, topology_losses
 from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec
 from .result import SimulationResult
@@ -562,7 +562,12 @@ def _simulate_modes(
             _step_size_guard(systems, grid, c_grid, notes, spec.stepping.scheme)
     spec.noise.term.check(d, systems[0].n_edges)
     lossy = loss_plan(
-        spec.digital, systems, pm.theta, isinstance(topology, Topology), None, spec.mc.device
+        spec.digital,
+        systems,
+        pm.theta,
+        isinstance(topology, Topology),
+        topology_losses(topology),
+        spec.mc.device,
     )
     if lossy is not None and spec.method != "mc" and spec.noise.linear:
         lossy.check(spec.digital.delay if spec.digital is not None else 0)

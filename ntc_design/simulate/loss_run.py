@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..model import Topology
 from ..protocol.digital import Digital
 from ..protocol.loss import edge_losses
 from .digital import DigitalMoments
@@ -114,6 +115,25 @@ class LossPlan:
         return loss_note(self.policy, self.loss, self.offsets[-1], norm)
 
 
+def topology_losses(topology: object) -> dict[tuple[str, str], float]:
+    """A topology file's per-edge ``loss:`` values keyed by (from, to) labels (none for
+    anything but one fixed topology).
+
+    Parameters
+    ----------
+    topology : object
+        The run's network.
+
+    Returns
+    -------
+    dict of (str, str) to float
+    """
+    if not isinstance(topology, Topology):
+        return {}
+    lab = topology.labels
+    return {(str(lab[j]), str(lab[i])): float(v) for (i, j), v in topology.loss.items()}
+
+
 def loss_plan(
     digital: Digital | None,
     systems: list[ModeSystem],
@@ -166,4 +186,4 @@ def loss_plan(
     return LossPlan(s, p, digital.policy, np.asarray(theta, dtype=float))
 
 
-__all__ = ["LossPlan", "loss_plan"]
+__all__ = ["LossPlan", "loss_plan", "topology_losses"]

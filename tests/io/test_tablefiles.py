@@ -283,3 +283,24 @@ def test_csv_blank_lines_and_empty_radii_are_not_short_rows(tmp_path):
     f.write_text("from,to,a11,uncertainty\n1,2,-0.5,\n\n2,3,0.5,0.125\n", encoding="utf-8")
     top = nd.load(f)
     assert top.labels == (1, 2, 3) and top.uncertainty == {(2, 1): 0.125}
+
+
+def test_csv_carries_the_losses_beside_the_radii(tmp_path):
+    (tmp_path / "t.csv").write_text("from,to,a11,loss\n2,1,-1,0.2\n3,2,2,\n")
+    assert nd.load(tmp_path / "t.csv").loss == {(1, 0): 0.2}
+    (tmp_path / "u.csv").write_text("from,to,a11,uncertainty,loss\n2,1,-1,0.02,\n3,2,2,,0.4\n")
+    top = nd.load(tmp_path / "u.csv")
+    assert top.uncertainty == {(1, 0): 0.02} and top.loss == {
+        (0, 2): 0.4
+    }  # labels by first appearance: 2, 1, 3
+    (tmp_path / "v.csv").write_text("from,to,a11,loss,uncertainty\n2,1,-1,0.1,0.03\n")
+    top = nd.load(tmp_path / "v.csv")
+    assert top.uncertainty == {(1, 0): 0.03} and top.loss == {(1, 0): 0.1}
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("bad", ["1", "-0.1", "nan", "often"])
+def test_a_bad_csv_loss_names_the_row(tmp_path, bad):
+    (tmp_path / "t.csv").write_text(f"from,to,a11,loss\n2,1,-1,{bad}\n")
+    with pytest.raises(nd.InputError, match=r"t\.csv: row 2: loss = .*a loss probability"):
+        nd.load(tmp_path / "t.csv")

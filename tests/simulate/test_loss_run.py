@@ -54,3 +54,35 @@ def test_a_plan_refuses_what_it_does_not_model(g1_system):
         loss_plan(lossy, [g1_system], THETA, True, None, "gpu")
     with pytest.raises(InputError, match=r"^digital\.loss: no edge 1->1"):
         loss_plan(lossy, [g1_system], THETA, True, {("1", "1"): 0.2})
+
+
+def test_a_topology_files_edge_losses_drive_the_run(tmp_path, g1_system):
+    from ntc_design.model.load import load
+    from ntc_design.simulate import simulate
+    from ntc_design.simulate.loss import loss_moments
+    from ntc_design.simulate.loss_run import topology_losses
+    from tests.conftest import EXAMPLES
+
+    text = (EXAMPLES / "g1.yaml").read_text(encoding="utf-8")
+    text = text.replace(
+        "- {from: 6, to: 3, weight: {matrix: A12, scale: -0.1}}",
+        "- {from: 6, to: 3, weight: {matrix: A12, scale: -0.1}, loss: 0.4}",
+    )
+    (tmp_path / "g1.yaml").write_text(text, encoding="utf-8")
+    top = load(tmp_path / "g1.yaml")
+    assert topology_losses(top) == {("6", "3"): 0.4}
+    assert topology_losses(object()) == {}
+    x0 = np.linspace(-3, 3, 21)
+    res = simulate(
+        top, THETA, gain="1/(1+t)", noise=NoiseModel(0.4, 0.3), T=1.0, initial=x0.tolist(),
+        method="exact", digital=Digital(0.1, 0, 0.1), save_every=1.0,
+    )  # fmt: skip
+    s = g1_system
+    lab = s.labels
+    p = np.array(
+        [0.4 if (str(lab[j]), str(lab[i])) == ("6", "3") else 0.1 for i, j in zip(s.dst, s.src)]
+    )
+    grid, _ = digital_grid(Digital(0.1), 1.0, np.array([1.0]))
+    want = loss_moments(s, grid, lambda t: 1 / (1 + t), x0 - np.tile(THETA, 7), THETA, 0, p, "skip")
+    assert res.exact.ms_error[-1] == pytest.approx(want.moments.ms_error[-1], rel=1e-12)
+    assert res.summary()["digital"]["loss"]["p"] == 0.4
