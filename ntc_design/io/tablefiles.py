@@ -383,9 +383,13 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     if dup.size:
         r = int(order[dup[0] + 1])
         raise InputError(f"{p}: row {lines[r]}: edge {src[r]}->{dst[r]} is listed twice")
-    col = {name: 2 + m for m, name in enumerate(extra)}
-    unc = _csv_uncertainty(text[:, col["uncertainty"]], lines, p) if "uncertainty" in col else None
-    lost = _csv_loss(text[:, col["loss"]], lines, p) if "loss" in col else None
+    place = {name: 2 + m for m, name in enumerate(extra)}
+    unc = (
+        _csv_uncertainty(text[:, place["uncertainty"]], lines, p)
+        if "uncertainty" in place
+        else None
+    )
+    lost = _csv_loss(text[:, place["loss"]], lines, p) if "loss" in place else None
     return EdgeListData(p.stem, d, labels, rows, cols, w.reshape(e, d, d), str(p), unc, lost)
 
 
