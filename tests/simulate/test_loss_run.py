@@ -80,7 +80,10 @@ def test_a_topology_files_edge_losses_drive_the_run(tmp_path, g1_system):
     s = g1_system
     lab = s.labels
     p = np.array(
-        [0.4 if (str(lab[j]), str(lab[i])) == ("6", "3") else 0.1 for i, j in zip(s.dst, s.src)]
+        [
+            0.4 if (str(lab[j]), str(lab[i])) == ("6", "3") else 0.1
+            for i, j in zip(s.dst, s.src, strict=True)
+        ]
     )
     grid, _ = digital_grid(Digital(0.1), 1.0, np.array([1.0]))
     want = loss_moments(s, grid, lambda t: 1 / (1 + t), x0 - np.tile(THETA, 7), THETA, 0, p, "skip")
