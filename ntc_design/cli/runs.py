@@ -615,18 +615,21 @@ def report(
     ] = False,
     period: PeriodOpt = None,
     delay: DelayOpt = None,
+    loss: LossOpt = None,
+    loss_policy: LossPolicyOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Turn a simulation or sweep output directory into one self-contained report.html
     (figures also in DIR/figures). A run of the digital protocol (or --period, --delay)
     adds its digital section: the error and the peak against the period for delays 0, 1
-    and 2, the certified k₀ and the continuous curve beside the sampled one."""
+    and 2, the certified k₀ and the continuous curve beside the sampled one; with a loss
+    (--loss, or the run's digital.loss), the lossy-link section."""
     from ..protocol.digital import Digital
     from ..reports.report import write_report
     from ..reports.sweep import is_sweep_dir, write_sweep_report
     from ..reports.terminal import out
 
-    sampled = digital_option(period, delay)
+    sampled = digital_option(period, delay, None, None, loss, loss_policy)
     if is_sweep_dir(directory):
         if sampled is not None:
             raise InputError("--period: applies to a run's report, not a sweep's")

@@ -389,3 +389,11 @@ def test_tune_loss_refuses_bad_flags(tmp_path, capsys, monkeypatch, extra, line)
     got = assert_input_error(["tune", G1_FIXED, "--out", out, *extra], capsys, monkeypatch)
     assert got.removeprefix("error: ").startswith(line), got
     assert not out.exists()
+
+
+@pytest.mark.hostile
+def test_report_loss_flags_are_checked(tmp_path, capsys, monkeypatch):
+    line = assert_input_error(["report", tmp_path, "--loss", "2"], capsys, monkeypatch)
+    assert line.startswith("error: --loss: a loss probability")
+    line = assert_input_error(["report", tmp_path, "--loss", "0.1"], capsys, monkeypatch)
+    assert line.startswith("error: --loss: needs --period")
