@@ -41,7 +41,7 @@ from .digital import (
 )
 from .gpu import GpuEngine, load_cuda
 from .grid import TimeGrid
-from .loss_mc import lossy_mc_spec
+from .loss_mc import LossMonteCarloSpec, lossy_mc_spec
 from .loss_run import loss_plan, topology_losses
 from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec
@@ -591,14 +591,12 @@ def _simulate_modes(
         rng=spec.mc.rng,
         delay=spec.digital.delay if spec.digital is not None else 0,
     )
-    part, mc_stats = run_monte_carlo(
-        spec,
-        mspec if lossy is None or spec.method == "exact" else lossy_mc_spec(mspec, lossy),
-        workers,
-        progress,
-        engine,
-        notes,
-    )
+    runner: MonteCarloSpec | LossMonteCarloSpec = mspec
+    if lossy is not None and spec.method != "exact":  # lossy links run their own blocks
+        on_gpu = isinstance(engine, GpuEngine)
+        runner = lossy_mc_spec(mspec, lossy, "gpu" if on_gpu else "cpu")
+        workers, engine = (1, None) if on_gpu else (workers, engine)
+    part, mc_stats = run_monte_carlo(spec, runner, workers, progress, engine, notes)
     if spec.digital is None:
         exact, exact_stats = run_exact(spec, notes, lambda: pm.moments(cfun, grid.save_times))
         runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)

@@ -53,6 +53,8 @@ class LossMonteCarloSpec:
         Paths per block (at most) and paths stored.
     rng : str
         ``xoshiro`` (drawn in the kernel) or ``numpy``.
+    device : str
+        ``cpu`` (:mod:`.loss_kernels`) or ``gpu`` (:mod:`.loss_cuda`, the same streams).
     """
 
     system: ModeSystem
@@ -70,6 +72,7 @@ class LossMonteCarloSpec:
     block_size: int = 500
     store_paths: int = 10
     rng: str = "xoshiro"
+    device: str = "cpu"
 
     @property
     def block_paths(self) -> int:
@@ -191,10 +194,18 @@ class LossMonteCarloSpec:
             k = k0
             while k < k0 + kb:
                 stop = min(next(c for c in cuts if c > k), k0 + kb)
-                loss_steps(  # type: ignore[call-arg]
-                    x, held, states, xi, uni, 2 * ne, k - k0, stop - k0, ch, cs, rh, *arrays,
-                    code, tile, self.delay, k0,
-                )  # fmt: skip
+                if self.device == "gpu":
+                    from .loss_cuda import gpu_loss_steps  # numba-cuda: only on a GPU
+
+                    gpu_loss_steps(
+                        x, held, states, 2 * ne, k - k0, stop - k0, ch, cs, rh, arrays, code,
+                        self.delay, k0,
+                    )  # fmt: skip
+                else:
+                    loss_steps(  # type: ignore[call-arg]
+                        x, held, states, xi, uni, 2 * ne, k - k0, stop - k0, ch, cs, rh,
+                        *arrays, code, tile, self.delay, k0,
+                    )  # fmt: skip
                 k = stop
                 if k in save_at and not stats.record(now(k), save_at[k]):
                     return stats.result()
@@ -205,7 +216,7 @@ class LossMonteCarloSpec:
         return stats.result()
 
 
-def lossy_mc_spec(mspec: MonteCarloSpec, plan) -> LossMonteCarloSpec:
+def lossy_mc_spec(mspec: MonteCarloSpec, plan, device: str = "cpu") -> LossMonteCarloSpec:
     """The lossless run's spec on lossy links.
 
     Parameters
@@ -214,6 +225,8 @@ def lossy_mc_spec(mspec: MonteCarloSpec, plan) -> LossMonteCarloSpec:
         The lossless spec (one mode).
     plan : LossPlan
         The losses and the policy (:mod:`.loss_run`).
+    device : str, optional
+        ``cpu`` or ``gpu``.
 
     Returns
     -------
@@ -243,6 +256,7 @@ def lossy_mc_spec(mspec: MonteCarloSpec, plan) -> LossMonteCarloSpec:
         block_size=mspec.block_size,
         store_paths=mspec.store_paths,
         rng=mspec.rng,
+        device=device,
     )
 
 

@@ -157,7 +157,7 @@ def loss_plan(
     per_edge : mapping of (str, str) to float, optional
         Per-edge losses keyed by (from, to) labels (the topology file's ``loss:``).
     device : str, optional
-        Where the Monte Carlo runs (lossy links run on the CPU kernel).
+        Where the Monte Carlo runs (kept for the caller; both devices run lossy links).
 
     Returns
     -------
@@ -166,8 +166,8 @@ def loss_plan(
     Raises
     ------
     InputError
-        Lossy links on a switching set or a sampled A(t) or on a GPU, or a per-edge loss on
-        a missing edge.
+        Lossy links on a switching set or a sampled A(t), or a per-edge loss on a missing
+        edge.
     """
     if digital is None or not (digital.lossy or per_edge):
         return None
@@ -176,8 +176,6 @@ def loss_plan(
             "digital.loss: lossy links are modelled on one fixed topology (not a switching "
             "set or a sampled A(t))"
         )
-    if device == "gpu":
-        raise InputError("device: lossy links run on the CPU kernel; use device: cpu")
     s = systems[0]
     edges = list(zip(s.dst.tolist(), s.src.tolist(), strict=True))
     p = edge_losses(edges, s.labels, digital.loss, per_edge, "digital.loss")

@@ -56,7 +56,16 @@ def test_the_paths_do_not_depend_on_the_workers(g1):
 
 @pytest.mark.hostile
 def test_lossy_links_refuse_what_they_do_not_model(g1, switching_set):
-    with pytest.raises(InputError, match=r"^device: lossy links run on the CPU"):
-        _run(g1, "skip", device="gpu")
     with pytest.raises(InputError, match=r"^digital\.loss: lossy links are modelled on one"):
         _run(switching_set, "skip", T=1.0)
+
+
+def test_the_gpu_runs_the_same_paths(g1, cuda_device):
+    from tests.support.gpu import REL_TOL, relative_gap
+
+    opts = {"paths": 4, "T": 0.3, "save_every": 0.1, "method": "mc", "workers": 1}
+    cpu = _run(g1, "hold", **opts)
+    gpu = _run(g1, "hold", device="gpu", **opts)
+    assert relative_gap(cpu.mc.mean, gpu.mc.mean) <= REL_TOL
+    with pytest.raises(InputError, match=r"^rng: numpy stays on the CPU"):
+        _run(g1, "skip", device="gpu", rng="numpy", **opts)

@@ -50,8 +50,7 @@ def test_a_plan_refuses_what_it_does_not_model(g1_system):
     lossy = Digital(0.1, 0, 0.1)
     with pytest.raises(InputError, match=r"^digital\.loss: lossy links are modelled on one"):
         loss_plan(lossy, [g1_system, g1_system], THETA, False)
-    with pytest.raises(InputError, match=r"^device: "):
-        loss_plan(lossy, [g1_system], THETA, True, None, "gpu")
+    assert loss_plan(lossy, [g1_system], THETA, True, None, "gpu") is not None
     with pytest.raises(InputError, match=r"^digital\.loss: no edge 1->1"):
         loss_plan(lossy, [g1_system], THETA, True, {("1", "1"): 0.2})
 
