@@ -244,6 +244,11 @@ class DigitalDesign:
             for label, value in (
                 ("sampling period h", self.digital.period),
                 ("measurement delay D (samples)", self.digital.delay),
+                *(
+                    (("message loss p", self.digital.loss), ("lost messages", self.digital.policy))
+                    if self.digital.lossy
+                    else ()
+                ),
             )
         ]
         return Table.build(base.title, base.columns, [*base.rows, *extra], base.notes, base.layout)

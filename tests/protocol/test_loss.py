@@ -75,3 +75,16 @@ def test_the_digital_block_reads_and_writes_loss_and_policy():
 def test_a_bad_digital_block_names_the_field(doc, field):
     with pytest.raises(InputError, match=rf"^{field}: "):
         Digital.from_document(doc)
+
+
+def test_a_lossy_design_shows_its_loss_in_its_table(g1):
+    import ntc_design as nd
+    from ntc_design.model.paper import THETA
+    from ntc_design.protocol.digital import DigitalDesign
+
+    des = nd.design(g1, THETA, thresholds=False)
+    rows = DigitalDesign(des, Digital(0.1, 0, 0.2, "hold"), "1/(1+t)").table().rows
+    labels = [r[0].text for r in rows]
+    assert labels[-2:] == ["message loss p", "lost messages"]
+    plain = DigitalDesign(des, Digital(0.1), "1/(1+t)").table().rows
+    assert "message loss p" not in [r[0].text for r in plain]
