@@ -75,3 +75,5 @@ def test_the_report_has_the_lossy_section(lossy_run):
     text = re.sub("<[^>]+>", " ", html[html.index('id="run-loss"') :][:5000])
     assert "certified: E‖x − x*‖² contracts from step k₀ = 19" in text
     assert (out / "figures" / "run_loss_curves.svg").is_file()
+    digital = re.sub("<[^>]+>", " ", html[html.index('id="run-digital"') :][:3000])
+    assert "These curves are without message loss" in digital
