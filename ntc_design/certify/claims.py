@@ -66,6 +66,8 @@ class ClaimKind(StrEnum):
     DIGITAL_LEVEL = "digital_level"  # ρ(κ) <= 1/2 (D > 0)
     DIGITAL_ADDITIVE = "digital_additive"  # γ >= Σ_e g_eᵀ P g_e
     DIGITAL_T0 = "digital_t0"  # c(t) < κ for every t >= t₀
+    LOSS_MS = "loss_ms"  # the mean-square inequality over the arrivals (digital_loss)
+    LOSS_OFFSET = "loss_offset"  # ‖x* − 1⊗θ‖ by an exact solve (digital_loss, skip)
 
 
 #: The statements of the digital kinds' claims ({m}: the mode).
@@ -76,6 +78,8 @@ DIGITAL_CLAIM_TEXT = {
     ClaimKind.DIGITAL_LEVEL: "ρ(κ) <= 1/2 (the delayed bound)",
     ClaimKind.DIGITAL_ADDITIVE: "γ >= Σ_e g_eᵀ·P_d·g_e in every mode",
     ClaimKind.DIGITAL_T0: "c(t) < κ for every t >= t₀",
+    ClaimKind.LOSS_MS: "(P_l·L̄({m}) + L̄({m})ᵀ·P_l − α·P_l) − κ·(h·(L̄ᵀ·P_l·L̄ + 2Σ_e v_e·L_eᵀ·P_l·L_e) + μ·Σ_e E[m_e²]·G_eᵀ·P_l·G_e) ≻ 0 over the arrivals",
+    ClaimKind.LOSS_OFFSET: "the mean's limit x* (L̄ x* = u) is at the stated ‖x* − 1⊗θ‖, by an exact rational solve",
 }
 
 #: The statements of the time-varying kind's claims (their certificates list exactly these).

@@ -191,9 +191,31 @@ DelayOpt = Annotated[
     ),
 ]
 
+LossOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--loss",
+        help="The probability p in [0, 1) that a message is lost, on every edge at every "
+        "step (the digital protocol; overrides the scenario's digital.loss).",
+    ),
+]
+LossPolicyOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--loss-policy",
+        help="What an agent does with a lost message: skip (leave the term out), rescale "
+        "(divide the received terms by 1 − p) or hold (reuse the last one received).",
+    ),
+]
+
 
 def digital_option(
-    period: float | None, delay: int | None, given: object = None, horizon: object = None
+    period: float | None,
+    delay: int | None,
+    given: object = None,
+    horizon: object = None,
+    loss: float | None = None,
+    policy: str | None = None,
 ) -> dict | None:
     """The ``digital`` block from ``--period`` and ``--delay`` over a scenario's own
     (``given``), checked with the flags named in errors.
@@ -208,11 +230,16 @@ def digital_option(
         The scenario's ``digital`` block, if any.
     horizon : float, optional
         T (a period longer than it is refused, naming ``--period``).
+    loss : float or None, optional
+        ``--loss``.
+    policy : str or None, optional
+        ``--loss-policy``.
 
     Returns
     -------
     dict or None
-        ``{period, delay}``, or None when neither the flags nor the scenario ask for one.
+        ``{period, delay}`` (with ``loss`` and ``policy`` when set), or None when
+        neither the flags nor the scenario ask for one.
 
     Raises
     ------
@@ -220,16 +247,24 @@ def digital_option(
         A bad flag value (naming the flag), or ``--delay`` without a period.
     """
     from ..protocol.digital import Digital
+    from ..protocol.loss import require_loss, require_policy
 
-    if period is None and delay is None:
+    if loss is not None:
+        require_loss("--loss", loss)
+    if policy is not None:
+        require_policy("--loss-policy", policy)
+    if period is None and delay is None and loss is None and policy is None:
         return None
     base = dict(given) if isinstance(given, dict) else {}
     if period is None and "period" not in base:
-        raise InputError("--delay: needs --period (or a digital block in the scenario)")
+        flag = "--delay" if delay is not None else "--loss" if loss is not None else "--loss-policy"
+        raise InputError(f"{flag}: needs --period (or a digital block in the scenario)")
     try:
         dg = Digital(
             period if period is not None else base["period"],
             delay if delay is not None else base.get("delay", 0),
+            loss if loss is not None else base.get("loss", 0.0),
+            policy if policy is not None else base.get("policy", "skip"),
         )
         if isinstance(horizon, (int, float)) and not isinstance(horizon, bool) and horizon > 0:
             dg.steps(float(horizon))

@@ -17,6 +17,8 @@ from .app import (
     DelayOpt,
     FileArg,
     JsonOpt,
+    LossOpt,
+    LossPolicyOpt,
     PeriodOpt,
     check_digital_flags,
     check_theta_length,
@@ -296,6 +298,8 @@ def certify(
     ] = "lyapunov",
     period: PeriodOpt = None,
     delay: DelayOpt = None,
+    loss: LossOpt = None,
+    loss_policy: LossPolicyOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
@@ -310,7 +314,7 @@ def certify(
     th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
     if rate_method not in ("lyapunov", "lmi"):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
-    sampled = digital_option(period, delay)
+    sampled = digital_option(period, delay, None, None, loss, loss_policy)
     require_file(file)
     check_theta_length(file, th)
     if out_path is not None:

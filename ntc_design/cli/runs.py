@@ -25,6 +25,8 @@ from ..errors import (
 from .app import (
     DelayOpt,
     JsonOpt,
+    LossOpt,
+    LossPolicyOpt,
     PeriodOpt,
     SchedulerOpt,
     check_digital_flags,
@@ -119,6 +121,8 @@ def simulate(
     ] = None,
     period: PeriodOpt = None,
     delay: DelayOpt = None,
+    loss: LossOpt = None,
+    loss_policy: LossPolicyOpt = None,
     scheduler: SchedulerOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -156,9 +160,14 @@ def simulate(
     }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
     sc = parse_scenario(scenario)
-    if period is not None or delay is not None:
+    if period is not None or delay is not None or loss is not None or loss_policy is not None:
         overrides["digital"] = digital_option(
-            period, delay, sc.document.get("digital"), overrides.get("T", sc.document.get("T"))
+            period,
+            delay,
+            sc.document.get("digital"),
+            overrides.get("T", sc.document.get("T")),
+            loss,
+            loss_policy,
         )
     flags = {k: f for k, f in SIMULATE_FLAGS.items() if k in overrides}
     given_digital = (("period", period), ("delay", delay))
@@ -342,8 +351,21 @@ def tune(
     delay: DelayOpt = None,
     tolerance: Annotated[
         float,
-        typer.Option(help="--period auto: allowed relative excess over the continuous error."),
+        typer.Option(
+            help="--period auto / --loss auto: allowed relative excess over the continuous "
+            "(or lossless sampled) error."
+        ),
     ] = 0.1,
+    loss: Annotated[
+        str | None,
+        typer.Option(
+            "--loss",
+            help="'auto': find the largest uniform message loss whose exact error at T, and "
+            "every smaller loss's, stays within --tolerance of the lossless sampled "
+            "protocol's (at --period or the scenario's digital period).",
+        ),
+    ] = None,
+    loss_policy: LossPolicyOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Tune the gain c(t) = a·(b + t)^(−γ) (and with --tune-delta the coupling δ) to bring
@@ -379,6 +401,11 @@ def tune(
         for name, value in (("--max-gain", max_gain), ("--check-paths", check_paths)):
             if value is not None:
                 raise InputError(f"{name}: applies to --schedule optimal")
+    if loss is not None or loss_policy is not None:
+        _tune_loss(
+            scenario, sc0, horizon, period, delay, loss, loss_policy, tolerance, out_dir, as_json
+        )
+        return
     if period == "auto":
         _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json)
         return
@@ -424,6 +451,60 @@ def tune(
     if not res.certified:
         msg = "not proven: the tuned design is not certified for the required theorems"
         print(msg, file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _tune_loss(
+    scenario, sc0, horizon, period, delay, loss, policy, tolerance, out_dir, as_json
+) -> None:
+    """``ntc tune --loss auto``: the largest tolerable loss, its curve, loss.json."""
+    from ..io.outputs import check_output_folder, output_folder
+    from ..protocol.digital import Digital
+    from ..reports.terminal import Progress, out, print_table
+    from ..simulate.scenario import load_scenario
+    from ..tune.loss import largest_tolerable_loss
+
+    if loss != "auto":
+        raise InputError(f"--loss: expected auto (the largest tolerable loss), got {loss!r:.40}")
+    if period == "auto":
+        raise InputError("--period: give a number with --loss auto (the loss is tuned at one h)")
+    try:
+        h = float(period) if period is not None else None
+    except ValueError:
+        raise InputError(f"--period: expected a number, got {period!r:.40}") from None
+    given = sc0.document.get("digital")
+    t_doc = horizon if horizon is not None else sc0.document.get("T")
+    block = digital_option(h, delay, given, t_doc, None, policy)
+    if block is None:
+        if not isinstance(given, dict):
+            raise InputError("--loss: needs --period (or a digital block in the scenario)")
+        block = dict(given)
+    dg = Digital.from_document(block)
+    top, spec, sc = load_scenario(scenario, None, sc0)
+    if out_dir is not None:
+        check_output_folder(out_dir, ("loss.json",))
+    with warnings.catch_warnings(), Progress("ntc tune") as prog:
+        warnings.simplefilter("ignore", AssumptionWarning)
+        prog.stage(f"the largest tolerable loss of {scenario} ({dg.policy}, h = {dg.period:g})")
+        deadline = spec.T if horizon is None else horizon
+        try:
+            res = largest_tolerable_loss(top, spec, deadline, dg, dg.policy, tolerance)
+        except InputError as exc:
+            text = str(exc)
+            raise InputError(text if text.startswith("--") else f"{sc.source}: {text}") from None
+    doc = res.to_dict()
+    if out_dir is not None:
+        with output_folder(out_dir, ("loss.json",)) as tmp:
+            (tmp / "loss.json").write_text(json_text(doc) + "\n", encoding="utf-8")
+        doc["out"] = str(out_dir)
+    if as_json:
+        print(json_text(doc))
+    else:
+        print_table(res.table())
+        if out_dir is not None:
+            out.print(f"written to {out_dir}: loss.json")
+    if res.loss is None:
+        print("not found: no positive loss keeps the error within the tolerance", file=sys.stderr)
         raise typer.Exit(1)
 
 
@@ -567,13 +648,18 @@ def report(
     ] = False,
     period: PeriodOpt = None,
     delay: DelayOpt = None,
+    loss: LossOpt = None,
+    loss_policy: LossPolicyOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Turn a simulation or sweep output directory into one self-contained report.html
     (figures also in DIR/figures). A run of the digital protocol (or --period, --delay)
     adds its digital section: the error and the peak against the period for delays 0, 1
-    and 2, the certified k₀ and the continuous curve beside the sampled one."""
-    sampled = digital_option(period, delay)  # before the library's layers load
+    and 2, the certified k₀ and the continuous curve beside the sampled one; with a loss
+    (--loss, or the run's digital.loss), the lossy-link section."""
+    sampled = digital_option(
+        period, delay, None, None, loss, loss_policy
+    )  # before the library loads
     from ..protocol.digital import Digital
     from ..reports.report import write_report
     from ..reports.sweep import is_sweep_dir, write_sweep_report

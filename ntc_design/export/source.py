@@ -100,6 +100,11 @@ def _digital(
         raise InputError(
             f"--period: {where} has no digital block (period h, delay D); give --period"
         )
+    if base.get("loss") not in (None, 0, 0.0):  # a lossy scenario or a digital_loss subject
+        raise InputError(
+            f"{where}: digital.loss: the exported code does not model lost messages yet; "
+            "export the protocol without loss"
+        )
     try:
         dg = Digital.from_document(base)
         if horizon is not None:

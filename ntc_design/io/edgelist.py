@@ -145,6 +145,7 @@ class EdgeListData:
     w: np.ndarray
     source: str | None
     uncertainty: np.ndarray | None = None  # per edge ρ_e (NaN: none), from a CSV column or MAT
+    loss: np.ndarray | None = None  # per edge p_e (NaN: none), from a CSV column
 
 
 def read_npz(path: str | Path) -> EdgeListData:

@@ -55,6 +55,7 @@ class EdgeData:
     weight: np.ndarray
     field: str  # e.g. "edge 2->1", for error messages
     uncertainty: float | None = None  # this edge's relative radius ρ_e, when given
+    loss: float | None = None  # this edge's message loss p_e (the digital protocol), when given
 
 
 @dataclass(frozen=True)
@@ -318,7 +319,7 @@ def _weights_at_once(edges_doc: Any, dim: int) -> list[np.ndarray] | None:
 
 TOPOLOGY_KEYS = {"name", "description", "dim", "agents", "matrices", "edges", "uncertainty"}
 EDGE_KEYS = {"from", "to", "weight"}
-EDGE_OPTIONAL = {"uncertainty"}
+EDGE_OPTIONAL = {"uncertainty", "loss"}
 
 
 def parse_uncertainty(value: Any, source: str | None, field: str) -> float:
@@ -343,6 +344,37 @@ def parse_uncertainty(value: Any, source: str | None, field: str) -> float:
         Not a finite number in [0, 1).
     """
     return require_radius(value, f"{source}: {field}" if source else field)
+
+
+def parse_edge_loss(value: Any, source: str | None, field: str) -> float:
+    """An edge's message loss probability p_e (the digital protocol): a finite number in
+    [0, 1).
+
+    Parameters
+    ----------
+    value : Any
+        The value as read.
+    source : str or None
+        The file, for messages.
+    field : str
+        The field, for messages.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Not a finite number in [0, 1).
+    """
+    where = f"{source}: {field}" if source else field
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"{where}: expected a loss probability in [0, 1), got {_show(value)}")
+    v = float(value)
+    if not (math.isfinite(v) and 0.0 <= v < 1.0):
+        raise InputError(f"{where}: a loss probability must be finite and in [0, 1), got {v!r}")
+    return v
 
 
 def edge_entries(
@@ -462,7 +494,9 @@ def parse_topology(doc: dict[str, Any], source: str | None = None) -> TopologyDa
         w = batch[k] if batch is not None else parse_weight(e["weight"], dim, source, field, named)
         unc = e.get("uncertainty")
         rho = None if unc is None else parse_uncertainty(unc, source, f"{field}: uncertainty")
-        edges.append(EdgeData(j, i, w, field, rho))
+        lost = e.get("loss")
+        p_e = None if lost is None else parse_edge_loss(lost, source, f"{field}: loss")
+        edges.append(EdgeData(j, i, w, field, rho, p_e))
     name = doc.get("name")
     default = doc.get("uncertainty")
     return TopologyData(

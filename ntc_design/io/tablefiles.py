@@ -273,6 +273,21 @@ def _csv_columns(p: Path, cols: list[int], dtype, rows: int) -> np.ndarray:
     return out.reshape(-1, len(cols))
 
 
+#: Optional columns after the weights, in either order: an edge's radius and its loss.
+CSV_EXTRA_COLUMNS = ("uncertainty", "loss")
+
+
+def _trailing(header: list[str]) -> list[str]:
+    """The optional columns (:data:`CSV_EXTRA_COLUMNS`) at the end of the header."""
+    out: list[str] = []
+    for name in reversed(header[2:]):
+        if name in CSV_EXTRA_COLUMNS and name not in out:
+            out.insert(0, name)
+        else:
+            break
+    return out
+
+
 def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
     """(header, the weight columns, d) from row 1, refused unless it is from, to, a11 … add."""
     with open(p, encoding="utf-8", errors="replace") as fh:
@@ -285,7 +300,7 @@ def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
     header = [h.strip() for h in line.rstrip("\n\r").split(",")]
     if len(header) < 3 or header[:2] != ["from", "to"]:
         raise InputError(f"{p}: row 1: the header must start with from, to (then a11 … add)")
-    k = len(header) - 2 - (header[-1] == "uncertainty")
+    k = len(header) - 2 - len(_trailing(header))
     d = int(round(k**0.5))
     if d * d != k:
         raise InputError(f"{p}: row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)")
@@ -336,9 +351,10 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
         raise InputError(
             f"{p}: row {lines[r]}: {fields[r]} fields, the header has {len(header)}{short}"
         )
-    has_unc = header[-1] == "uncertainty"
+    extra = _trailing(header)
+    at = {name: len(header) - len(extra) + m for m, name in enumerate(extra)}
     try:
-        text = _csv_columns(p, [0, 1] + ([len(header) - 1] if has_unc else []), str, e)
+        text = _csv_columns(p, [0, 1] + list(at.values()), str, e)
         # numbers by the C reader: ASCII numerals only, no underscores
         w = _csv_columns(p, list(range(2, 2 + k)), np.float64, e).ravel()
     except (UnicodeDecodeError, ValueError, OSError) as exc:
@@ -369,8 +385,30 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     if dup.size:
         r = int(order[dup[0] + 1])
         raise InputError(f"{p}: row {lines[r]}: edge {src[r]}->{dst[r]} is listed twice")
-    unc = _csv_uncertainty(text[:, 2], lines, p) if has_unc else None
-    return EdgeListData(p.stem, d, labels, rows, cols, w.reshape(e, d, d), str(p), unc)
+    place = {name: 2 + m for m, name in enumerate(extra)}
+    unc = (
+        _csv_uncertainty(text[:, place["uncertainty"]], lines, p)
+        if "uncertainty" in place
+        else None
+    )
+    lost = _csv_loss(text[:, place["loss"]], lines, p) if "loss" in place else None
+    return EdgeListData(p.stem, d, labels, rows, cols, w.reshape(e, d, d), str(p), unc, lost)
+
+
+def _csv_loss(column: np.ndarray, lines: np.ndarray, p: Path) -> np.ndarray:
+    """The optional ``loss`` column: per row a message loss in [0, 1), or empty (none)."""
+    vals = np.char.strip(column.astype(str))
+    out = np.full(vals.size, np.nan)
+    for r in np.flatnonzero(np.char.str_len(vals) > 0).tolist():
+        text = str(vals[r])
+        v = float(text) if NUMBER_TEXT.fullmatch(text) else math.nan  # ASCII numerals only
+        if not (math.isfinite(v) and 0 <= v < 1):
+            raise InputError(
+                f"{p}: row {lines[r]}: loss = {text[:30]!r}: a loss probability must be a "
+                "number in [0, 1) (or empty)"
+            )
+        out[r] = v
+    return out
 
 
 def _csv_uncertainty(column: np.ndarray, lines: np.ndarray, p: Path) -> np.ndarray:

@@ -75,6 +75,10 @@ class Topology:
     uncertainty: Mapping[tuple[int, int], float] = field(
         default_factory=dict, repr=False, compare=False
     )
+    #: Message loss p_e of an edge in the digital protocol, where the file gives one (a
+    #: ``loss:`` value; :mod:`ntc_design.protocol.loss`). Not part of the nominal network:
+    #: left out of :meth:`to_dict` and of the topology hash.
+    loss: Mapping[tuple[int, int], float] = field(default_factory=dict, repr=False, compare=False)
     _arrays: EdgeArrays = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -148,6 +152,9 @@ class Topology:
                         "uncertainty on a zero weight (its interval is {0}; remove the value)",
                     )
                 )
+        for key in self.loss:
+            if key not in self.weights:
+                raise InputError(self._where(self.edge_field(*key), "loss on a missing edge"))
         object.__setattr__(self, "weights", {k: w[m] for m, k in enumerate(keys)})
         object.__setattr__(self, "_arrays", EdgeArrays(rows, cols, w, codes))
 
@@ -238,6 +245,7 @@ class Topology:
         name: str | None = None,
         source: str | None = None,
         uncertainty: np.ndarray | None = None,
+        loss: np.ndarray | None = None,
     ) -> Topology:
         """Build from arrays: edge k is ``cols[k] -> rows[k]`` (0-based agent indices)
         with weight ``weights[k] = A_{rows[k], cols[k]}``.
@@ -258,6 +266,8 @@ class Topology:
             The file it came from, for messages.
         uncertainty : numpy.ndarray, optional
             Per edge, the relative radius ρ_e of its weight (NaN: none given).
+        loss : numpy.ndarray, optional
+            Per edge, its message loss p_e in the digital protocol (NaN: none given).
 
         Returns
         -------
@@ -281,7 +291,13 @@ class Topology:
         if uncertainty is not None:
             u = np.asarray(uncertainty, dtype=float)
             unc = {keys[k]: float(u[k]) for k in np.flatnonzero(~np.isnan(u)).tolist()}
-        return cls(tuple(labels), dim, mapping, name=name, source=source, uncertainty=unc)
+        lost: dict[tuple[int, int], float] = {}
+        if loss is not None:
+            lv = np.asarray(loss, dtype=float)
+            lost = {keys[k]: float(lv[k]) for k in np.flatnonzero(~np.isnan(lv)).tolist()}
+        return cls(
+            tuple(labels), dim, mapping, name=name, source=source, uncertainty=unc, loss=lost
+        )
 
     @classmethod
     def from_data(cls, data) -> Topology:
@@ -308,9 +324,10 @@ class Topology:
                 data.name,
                 data.source,
                 data.uncertainty,
+                data.loss,
             )
         index = {str(a): k for k, a in enumerate(data.labels)}
-        weights, fields, unc = {}, {}, {}
+        weights, fields, unc, lost = {}, {}, {}, {}
         for e in data.edges:
             key = (index[str(e.target)], index[str(e.source)])
             weights[key] = e.weight
@@ -318,7 +335,9 @@ class Topology:
             rho = e.uncertainty if e.uncertainty is not None else data.uncertainty
             if rho is not None and (e.uncertainty is not None or np.any(e.weight)):
                 unc[key] = rho  # a file-wide default skips zero weights
-        return cls(data.labels, data.dim, weights, data.name, data.source, fields, unc)
+            if getattr(e, "loss", None) is not None:
+                lost[key] = e.loss
+        return cls(data.labels, data.dim, weights, data.name, data.source, fields, unc, lost)
 
     # -- basic accessors ----------------------------------------------------------
     @property

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..errors import InputError, require_int, require_number
 from ..present.rows import Table
+from .loss import POLICIES, require_loss, require_policy
 
 #: The largest delay D in samples (the augmented state holds D + 1 copies of the state).
 MAX_DELAY = 10_000
@@ -56,6 +57,11 @@ class Digital:
         The sampling period h > 0.
     delay : int
         The measurement delay D >= 0, in samples.
+    loss : float
+        The probability p in [0, 1) that a message is lost (every edge, each step,
+        independently; :mod:`.loss`).
+    policy : str
+        What an agent does with a lost message: ``skip``, ``rescale`` or ``hold``.
 
     Examples
     --------
@@ -68,6 +74,8 @@ class Digital:
 
     period: float
     delay: int = 0
+    loss: float = 0.0
+    policy: str = "skip"
 
     def __post_init__(self) -> None:
         h = require_number("digital.period", self.period)
@@ -76,10 +84,17 @@ class Digital:
         object.__setattr__(self, "period", h)
         d = require_int("digital.delay", self.delay, minimum=0, maximum=MAX_DELAY)
         object.__setattr__(self, "delay", d)
+        object.__setattr__(self, "loss", require_loss("digital.loss", self.loss))
+        object.__setattr__(self, "policy", require_policy("digital.policy", self.policy))
+
+    @property
+    def lossy(self) -> bool:
+        """Whether messages may be lost (p > 0)."""
+        return self.loss > 0.0
 
     @classmethod
     def from_document(cls, doc: Any) -> Digital:
-        """A scenario's ``digital: {period: h, delay: D}`` block.
+        """A scenario's ``digital: {period: h, delay: D, loss: p, policy: P}`` block.
 
         Parameters
         ----------
@@ -99,12 +114,15 @@ class Digital:
             return doc
         if not isinstance(doc, Mapping):
             raise InputError("digital: expected {period: h, delay: D}")
-        unknown = sorted(str(k) for k in set(doc) - {"period", "delay"})
+        known = ("period", "delay", "loss", "policy")
+        unknown = sorted(str(k) for k in set(doc) - set(known))
         if unknown:
-            raise InputError(f"digital.{unknown[0]}: unknown field (known: period, delay)")
+            raise InputError(f"digital.{unknown[0]}: unknown field (known: {', '.join(known)})")
         if "period" not in doc:
             raise InputError("digital.period: missing")
-        return cls(doc["period"], doc.get("delay", 0))
+        return cls(
+            doc["period"], doc.get("delay", 0), doc.get("loss", 0.0), doc.get("policy", "skip")
+        )
 
     def steps(self, t_end: float) -> tuple[int, float]:
         """K = ⌊T/h⌋, the whole steps of a run to T, and s = T − K·h in [0, h), the
@@ -147,9 +165,13 @@ class Digital:
         Returns
         -------
         dict
-            ``period`` and ``delay``.
+            ``period`` and ``delay``, and ``loss`` and ``policy`` when messages may be
+            lost or the policy is not the default (a lossless block reads as before).
         """
-        return {"period": self.period, "delay": self.delay}
+        out: dict = {"period": self.period, "delay": self.delay}
+        if self.lossy or self.policy != POLICIES[0]:
+            out.update(loss=self.loss, policy=self.policy)
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,6 +254,11 @@ class DigitalDesign:
             for label, value in (
                 ("sampling period h", self.digital.period),
                 ("measurement delay D (samples)", self.digital.delay),
+                *(
+                    (("message loss p", self.digital.loss), ("lost messages", self.digital.policy))
+                    if self.digital.lossy
+                    else ()
+                ),
             )
         ]
         return Table.build(base.title, base.columns, [*base.rows, *extra], base.notes, base.layout)

@@ -138,6 +138,10 @@ def digital_facts(run: RunData, certificate: dict) -> DigitalFacts | None:
         grid = sampled_grid(top, pm, dg, t_end, run.t)
         dm = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, dg.delay)
         t_s, sampled = grid.save_times, dm.moments.ms_error.sum(axis=1)
+        if dg.lossy:  # the curves here are the lossless recursion's
+            note = (
+                "These curves are without message loss; the Lossy links section has the lossy ones."
+            )
     except InputError as exc:
         note = f"the period curves are not computed: {exc}"
         cont = np.full(run.t.size, np.nan)

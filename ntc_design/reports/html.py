@@ -80,6 +80,9 @@ class RunSection:
     digital: Table | None = None  # the sampled protocol (a digital run)
     digital_figures: list = field(default_factory=list)
     digital_note: str = ""
+    loss: Table | None = None  # lossy links (a digital run that loses messages)
+    loss_figures: list = field(default_factory=list)
+    loss_text: str = ""
 
     def toc(self) -> dict:
         sub = [
@@ -93,6 +96,7 @@ class RunSection:
             ("final", "Final errors"),
             ("robust", "Weights within ρ"),
             ("digital", "Digital protocol"),
+            ("loss", "Lossy links"),
             ("data", "Data files"),
             ("parameters", "Parameters"),
         ]
@@ -102,6 +106,8 @@ class RunSection:
             sub = [x for x in sub if x[0] != "robust"]
         if self.digital is None:
             sub = [x for x in sub if x[0] != "digital"]
+        if self.loss is None:
+            sub = [x for x in sub if x[0] != "loss"]
         return {
             "id": self.key,
             "title": self.title,

@@ -44,6 +44,7 @@ from .html import (
     render,
     write_html,
 )
+from .loss import LossFacts, loss_drawings, loss_facts
 from .parts import (
     certificate_tables,
     certify_run,
@@ -207,6 +208,7 @@ class RunFacts:
     robust: Table | None
     robust_note: str
     digital: DigitalFacts | None = None  # a run of the sampled protocol
+    loss: LossFacts | None = None  # a run of the sampled protocol on lossy links
 
     @property
     def cert_res(self) -> CertifyResult:
@@ -270,6 +272,7 @@ def run_facts(run: RunData, base: Path, fine: dict | None = None) -> RunFacts:
         rob,
         rob_note,
         digital_facts(run, res.certificate),
+        loss_facts(run, res.certificate),
     )
 
 
@@ -492,6 +495,10 @@ def _digital(f: RunFacts, gid: str | None) -> list[Drawn]:
     return digital_drawings(f.digital)
 
 
+def _loss(f: RunFacts, gid: str | None) -> list[Drawn]:
+    return loss_drawings(f.loss)
+
+
 #: The run report's figures, in order: one function each, drawing from :class:`RunFacts`.
 RUN_FIGURES = (
     FigureSpec("coupling", style.TWO_COLUMN, _coupling),
@@ -503,6 +510,7 @@ RUN_FIGURES = (
     FigureSpec("gain", style.TWO_COLUMN, _gain),
     FigureSpec("robust", style.ONE_COLUMN, _robust, interactive=False),
     FigureSpec("digital", style.TWO_COLUMN, _digital, interactive=False),
+    FigureSpec("loss", style.TWO_COLUMN, _loss, interactive=False),
 )
 
 
@@ -578,6 +586,9 @@ def render_run(
         digital=facts.digital.table() if facts.digital is not None else None,
         digital_figures=figs["digital"],
         digital_note=facts.digital.note if facts.digital is not None else "",
+        loss=facts.loss.table() if facts.loss is not None else None,
+        loss_figures=figs["loss"],
+        loss_text=(f"{facts.loss.certified}. {facts.loss.note}".strip() if facts.loss else ""),
     )
 
 

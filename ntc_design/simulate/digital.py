@@ -198,6 +198,9 @@ class DigitalRun:
     partial_step : float
         s = T − K·h, the last partial step of the held input (0: T is a whole number
         of periods).
+    loss : dict or None
+        On lossy links (:mod:`.loss_run`): ``policy``, ``p`` and ``offset``
+        (‖lim E x − 1⊗θ‖); None without loss.
     """
 
     period: float
@@ -207,6 +210,7 @@ class DigitalRun:
     peak_time: float | None = None
     continuous_final_ms_error: float | None = None
     partial_step: float = 0.0
+    loss: dict | None = None
 
     def to_dict(self) -> dict:
         """The summary's ``digital`` block.
@@ -223,6 +227,7 @@ class DigitalRun:
             "peak_time": self.peak_time,
             "continuous_final_ms_error": self.continuous_final_ms_error,
             "partial_step": self.partial_step,
+            **({"loss": self.loss} if self.loss is not None else {}),
         }
 
 

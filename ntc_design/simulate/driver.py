@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, TypeAlias, TypeGuard, cast
 
 import numpy as np
@@ -41,6 +41,8 @@ from .digital import (
 )
 from .gpu import GpuEngine, load_cuda
 from .grid import TimeGrid
+from .loss_mc import LossMonteCarloSpec, lossy_mc_spec
+from .loss_run import loss_plan, topology_losses
 from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec
 from .result import SimulationResult
@@ -607,6 +609,16 @@ def _simulate_modes(
         if spec.method != "exact":
             _step_size_guard(systems, grid, c_grid, notes, spec.stepping.scheme)
     spec.noise.term.check(d, systems[0].n_edges)
+    lossy = loss_plan(
+        spec.digital,
+        systems,
+        pm.theta,
+        isinstance(topology, Topology),
+        topology_losses(topology),
+        spec.mc.device,
+    )
+    if lossy is not None and spec.method != "mc" and spec.noise.linear:
+        lossy.check(spec.digital.delay if spec.digital is not None else 0)
     params = run_parameters(spec, pm.theta, gain_text, pm.x_init, workers, grid, pm.names)
     if isinstance(topology, SwitchingTopology):
         params["schedule"] = [{"mode": m, "duration": t} for m, t in topology.schedule]
@@ -627,7 +639,12 @@ def _simulate_modes(
         rng=spec.mc.rng,
         delay=spec.digital.delay if spec.digital is not None else 0,
     )
-    part, mc_stats = run_monte_carlo(spec, mspec, workers, progress, engine, notes)
+    runner: MonteCarloSpec | LossMonteCarloSpec = mspec
+    if lossy is not None and spec.method != "exact":  # lossy links run their own blocks
+        on_gpu = isinstance(engine, GpuEngine)
+        runner = lossy_mc_spec(mspec, lossy, "gpu" if on_gpu else "cpu")
+        workers, engine = (1, None) if on_gpu else (workers, engine)
+    part, mc_stats = run_monte_carlo(spec, runner, workers, progress, engine, notes)
     if spec.digital is None:
         exact, exact_stats = run_exact(spec, notes, lambda: pm.moments(cfun, grid.save_times))
         runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
@@ -638,7 +655,10 @@ def _simulate_modes(
     delay = spec.digital.delay
 
     def moments() -> Moments:
-        dm = digital_moments(systems, grid, cfun, pm.eps0, n, d, delay)
+        if lossy is not None:
+            dm = lossy.moments(grid, cfun, pm.eps0, delay)
+        else:
+            dm = digital_moments(systems, grid, cfun, pm.eps0, n, d, delay)
         found.append(dm)
         return dm.moments
 
@@ -646,6 +666,9 @@ def _simulate_modes(
     summary = digital_summary(
         spec.digital, grid, found[0] if found else None, pm, cfun, t_end=spec.T
     )
+    if lossy is not None:
+        summary = replace(summary, loss=lossy.block())
+        notes.extend(n for n in [lossy.note(pm.n)] if n)
     runs = Runs(part=part, exact=exact, mc_stats=mc_stats, exact_stats=exact_stats)
     return finish_run(
         tuple(topology.labels), pm.theta, grid, pm.designs, params, spec, runs, notes, summary

@@ -203,6 +203,10 @@ G1_FIXED = EXAMPLES / "scenarios" / "g1_fixed.yaml"
         ("simulate", ["--device", "tpu"], "--device: expected cpu or gpu"),
         ("simulate", ["--paths", "100000000000"], "--paths: 1.01e+15 path-steps"),
         ("simulate", ["--period", "20"], "--period: h = 20 is longer than the horizon"),
+        ("simulate", ["--period", "0.1", "--loss", "1.5"], "--loss: a loss probability must"),
+        ("simulate", ["--period", "0.1", "--loss", "nan"], "--loss: a loss probability must"),
+        ("simulate", ["--loss", "0.1"], "--loss: needs --period"),
+        ("simulate", ["--period", "0.1", "--loss-policy", "drop"], "--loss-policy: unknown"),
         # the file's dt breaks a limit because of the flag: the file is named, with the flag
         ("simulate", ["--horizon", "1e12"], "g1_fixed.yaml: dt: the run would need"),
         ("tune", ["--horizon", "-1"], "--horizon: must be a positive number"),
@@ -396,3 +400,69 @@ def test_a_first_simulation_says_once_that_it_compiles(tmp_path):
         said.append([ln for ln in r.stderr.splitlines() if "compiling" in ln])
     # the first run: one line before it compiles; the second loads the kernel and is silent
     assert said == [["note: compiling the simulation kernels once, about 3 s of CPU"], []], said
+
+
+def test_simulate_on_lossy_links_reports_the_offset(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "o"
+    args = ["simulate", G1_FIXED, "--out", out, "--period", "0.1", "--loss", "0.1"]
+    code, text, err = run_cli(
+        [*args, "--method", "exact", "--horizon", "2", "--json"], capsys, monkeypatch
+    )
+    assert code == 0, err
+    doc = json.loads(text)
+    block = doc["digital"]["loss"]
+    assert block["policy"] == "skip" and block["p"] == 0.1
+    assert block["offset"] == pytest.approx(0.1433, abs=1e-3)
+    assert any("‖x* − 1⊗θ‖ = 0.1433" in n for n in doc["notes"])
+
+
+@pytest.mark.hostile
+def test_a_bad_loss_in_the_scenario_names_the_file_and_field(tmp_path, capsys, monkeypatch):
+    sc = tmp_path / "sc.yaml"
+    sc.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 2\n"
+        "digital: {period: 0.1, loss: 2}\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "o"
+    line = assert_input_error(["simulate", sc, "--out", out], capsys, monkeypatch)
+    assert "sc.yaml" in line and "digital.loss" in line
+    assert not out.exists()
+
+
+def test_tune_finds_the_largest_tolerable_loss(tmp_path, capsys, monkeypatch):
+    sc = EXAMPLES / "scenarios" / "g1_deadline.yaml"
+    out = tmp_path / "o"
+    args = ["tune", sc, "--loss", "auto", "--period", "0.1", "--out", out, "--json"]
+    code, text, err = run_cli(args, capsys, monkeypatch)
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["loss"] == pytest.approx(0.096, abs=1e-3) and doc["policy"] == "skip"
+    assert doc["curve"][0]["loss"] == 0.0 and doc["curve"][0]["ok"]
+    assert json.loads((out / "loss.json").read_text(encoding="utf-8"))["loss"] == doc["loss"]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, line",
+    [
+        (["--loss", "0.2", "--period", "0.1"], "--loss: expected auto"),
+        (["--loss", "auto", "--period", "auto"], "--period: give a number with --loss auto"),
+        (["--loss", "auto"], "--loss: needs --period"),
+        (["--loss", "auto", "--period", "0.1", "--loss-policy", "x"], "--loss-policy: unknown"),
+        (["--loss", "auto", "--period", "0.1", "--tolerance", "-1"], "--tolerance: must be >= 0"),
+    ],
+)
+def test_tune_loss_refuses_bad_flags(tmp_path, capsys, monkeypatch, extra, line):
+    out = tmp_path / "o"
+    got = assert_input_error(["tune", G1_FIXED, "--out", out, *extra], capsys, monkeypatch)
+    assert got.removeprefix("error: ").startswith(line), got
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+def test_report_loss_flags_are_checked(tmp_path, capsys, monkeypatch):
+    line = assert_input_error(["report", tmp_path, "--loss", "2"], capsys, monkeypatch)
+    assert line.startswith("error: --loss: a loss probability")
+    line = assert_input_error(["report", tmp_path, "--loss", "0.1"], capsys, monkeypatch)
+    assert line.startswith("error: --loss: needs --period")

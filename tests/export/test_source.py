@@ -118,6 +118,11 @@ def test_load_source_tells_the_two_apart():
         ("digital: {period: -1}\n", {}, ["s.yaml: digital.period: must be a positive number"]),
         ("gain: '1'\n", {"period": 0.1}, ["no theorem is guaranteed", "nothing exported"]),
         ("", {"period": 0.1, "sigma": -1.0}, ["--sigma: expected a finite number >= 0"]),
+        (
+            "digital: {period: 0.1, loss: 0.1}\n",
+            {},
+            ["s.yaml", "digital.loss: the exported code does not model lost messages yet"],
+        ),
     ],
 )
 def test_scenario_refusals(tmp_path, extra, kwargs, needles):

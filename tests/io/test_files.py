@@ -188,3 +188,29 @@ def test_weights_read_at_once_or_one_by_one(weights, message):
         for a, b in zip(got, one, strict=True)
     )
     assert got[0].base is None  # each weight owns its numbers
+
+
+def test_an_edge_carries_its_loss(tmp_path):
+    p = tmp_path / "t.yaml"
+    p.write_text(
+        "dim: 1\nagents: [1, 2, 3]\nedges:\n  - {from: 2, to: 1, weight: [[-1]], loss: 0.25}\n"
+        "  - {from: 3, to: 2, weight: [[2]]}\n"
+    )
+    top = load(p)
+    assert top.loss == {(0, 1): 0.25}
+    assert "loss" not in json.dumps(top.to_dict())
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "content, needle",
+    [
+        ("dim: 1\nagents: [1, 2]\nedges:\n  - {from: 2, to: 1, weight: [[1]], loss: 1.0}\n", "edge 2->1: loss: a loss probability must be finite and in [0, 1)"),
+        ("dim: 1\nagents: [1, 2]\nedges:\n  - {from: 2, to: 1, weight: [[1]], loss: .nan}\n", "edge 2->1: loss: a loss probability"),
+        ("dim: 1\nagents: [1, 2]\nedges:\n  - {from: 2, to: 1, weight: [[1]], loss: high}\n", "edge 2->1: loss: expected a loss probability"),
+    ],
+)  # fmt: skip
+def test_a_bad_edge_loss_is_one_line_exit_2(tmp_path, content, needle, capsys, monkeypatch):
+    p = tmp_path / "t.yaml"
+    p.write_text(content)
+    assert_input_error(["check", p], capsys, monkeypatch, needle, str(p))

@@ -329,3 +329,24 @@ def test_a_csv_weight_that_is_not_finite_is_shown_as_written(
     p.write_text(f"from,to,a11\n1,2,{value}\n2,1,-1\n", encoding="utf-8")
     line = assert_input_error(["check", p], capsys, monkeypatch, f"a11 = {shown} is not a finite")
     assert "np." not in line and "float64" not in line
+
+
+def test_csv_carries_the_losses_beside_the_radii(tmp_path):
+    (tmp_path / "t.csv").write_text("from,to,a11,loss\n2,1,-1,0.2\n3,2,2,\n")
+    assert nd.load(tmp_path / "t.csv").loss == {(1, 0): 0.2}
+    (tmp_path / "u.csv").write_text("from,to,a11,uncertainty,loss\n2,1,-1,0.02,\n3,2,2,,0.4\n")
+    top = nd.load(tmp_path / "u.csv")
+    assert top.uncertainty == {(1, 0): 0.02} and top.loss == {
+        (0, 2): 0.4
+    }  # labels by first appearance: 2, 1, 3
+    (tmp_path / "v.csv").write_text("from,to,a11,loss,uncertainty\n2,1,-1,0.1,0.03\n")
+    top = nd.load(tmp_path / "v.csv")
+    assert top.uncertainty == {(1, 0): 0.03} and top.loss == {(1, 0): 0.1}
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("bad", ["1", "-0.1", "nan", "often"])
+def test_a_bad_csv_loss_names_the_row(tmp_path, bad):
+    (tmp_path / "t.csv").write_text(f"from,to,a11,loss\n2,1,-1,{bad}\n")
+    with pytest.raises(nd.InputError, match=r"t\.csv: row 2: loss = .*a loss probability"):
+        nd.load(tmp_path / "t.csv")

@@ -3,10 +3,12 @@
 import json
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import ntc_design as nd
+from ntc_design.errors import InputError
 from ntc_design.io.files import parse_topology
 from ntc_design.model import (
     Topology,
@@ -77,3 +79,13 @@ def test_json_round_trip(seed, n, d):
         np.testing.assert_array_equal(back.weights[k], a)
     assert back.classes == top.classes
     np.testing.assert_array_equal(back.laplacian(), top.laplacian())
+
+
+@pytest.mark.hostile
+def test_a_loss_on_a_missing_edge_is_refused():
+    w = np.ones((1, 1, 1))
+    assert Topology.from_arrays([1, 2], 1, [0], [1], w, loss=np.array([np.nan])).loss == {}
+    with pytest.raises(InputError, match=r"loss on a missing edge"):
+        Topology((1, 2), 1, {(0, 1): np.ones((1, 1))}, loss={(1, 0): 0.2})
+    top = Topology.from_arrays([1, 2], 1, [0], [1], w, loss=np.array([0.3]))
+    assert top.loss == {(0, 1): 0.3}

@@ -81,12 +81,15 @@ def honest_certificates() -> dict[str, dict]:
         rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
     g1t = nd.load(ROOT / "examples" / "g1.yaml")
     dig = certify(g1t, theta3, gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
+    lossy = Digital(0.1, 0, 0.1)  # lossy links, skip: the contraction and the offset
+    digl = certify(g1t, theta3, gain="1/(1+t)", digital=lossy).certificate
     with pytest.warns(Warning):  # G3 fails Assumption 2
         sw_top = nd.load(ROOT / "examples" / "switching.yaml")
         digsw = certify(sw_top, theta3, gain="1/(1+t)", digital=Digital(0.013, 0)).certificate
     out = {
         "digital": json.loads(json.dumps(dig)),
         "digital_switching": json.loads(json.dumps(digsw)),
+        "digital_loss": json.loads(json.dumps(digl)),
         "robust": rob,
         "hurwitz": g1,
         "switching": sw,

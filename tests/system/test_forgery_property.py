@@ -518,6 +518,72 @@ def _truth_digital(doc: dict) -> list[str]:
     return bad
 
 
+def _truth_digital_loss(doc: dict) -> list[str]:
+    """The hurwitz truth without the lossy section, then the inequality over the arrivals
+    rebuilt here from the weights (L_e, G_e, the factors of skip and rescale from their
+    definitions), c(t) = 1/(1+t) sampled beyond t₀, k₀ = ⌈t₀/h⌉ and the offset by a dense
+    solve of (L_B − Σ p_e L_e) e* = Σ p_e L_e (1⊗θ)."""
+    base = copy.deepcopy(doc)
+    base["kind"] = "hurwitz"
+    base["claims"] = [c for c in doc["claims"] if c.get("property") != "digital_mean_square"]
+    base["certifies"] = [p for p in doc["certifies"] if p != "digital_mean_square"]
+    base["matrices"]["P"].pop("loss", None)
+    bad = _truth_dense(base)
+    sub, res = doc["subject"]["digital"], doc["results"]["digital"]
+    if "digital_mean_square" not in doc["certifies"]:
+        return bad + ([] if set(res) == {"stopped"} else ["numbers of an uncertified section"])
+    h, policy = sub["period"], sub["loss"]["policy"]
+    if sub["delay"] != 0 or policy not in ("skip", "rescale"):
+        return [*bad, "delay or policy"]
+    ((name, m),) = doc["subject"]["modes"].items()
+    top = Topology.from_data(parse_topology(m["topology"], name))
+    d, n = top.dim, top.n * top.dim
+    f = sub["noise"]["f"]
+    fm = np.asarray(f, dtype=float) * np.eye(d) if not isinstance(f, list) else np.array(f)
+    lab = [str(x) for x in top.labels]
+    loss = {(lab.index(e["to"]), lab.index(e["from"])): e["p"] for e in sub["loss"]["edges"]}
+    p = np.array(doc["matrices"]["P"]["loss"])
+    al, kap, t0 = res["alpha"], res["kappa"], res["t0"]
+    if not (_pos(p) and al > 0 and kap > 0):
+        return [*bad, "P, α or κ"]
+    lap = _lap_b(top, m["delta"])
+    lbar, s, nbar, rhs = lap.copy(), np.zeros((n, n)), np.zeros((n, n)), np.zeros(n)
+    target = np.tile(np.array(m["theta"], dtype=float), top.n)
+    for (i, j), a in top.weights.items():
+        w = _sign(a) * a
+        le = np.zeros((n, n))
+        le[i * d : i * d + d, i * d : i * d + d] = w
+        le[i * d : i * d + d, j * d : j * d + d] = -a
+        pe = loss.get((i, j), 0.0)
+        q = 1 - pe
+        var, sq = (q * (1 - q), q) if policy == "skip" else ((1 - q) / q, 1 / q)
+        if policy == "skip":
+            lbar -= pe * le
+            rhs += pe * le @ target
+        s += var * le.T @ p @ le
+        gm = np.zeros((n, n))
+        gm[i * d : i * d + d, j * d : j * d + d] += w @ fm
+        gm[i * d : i * d + d, i * d : i * d + d] -= w @ fm
+        nbar += sq * gm.T @ p @ gm
+    mu = 2 if policy == "skip" else 1
+    mm = p @ lbar + lbar.T @ p
+    if not _pos(mm - al * p - kap * (h * (lbar.T @ p @ lbar + 2 * s) + mu * nbar)):
+        bad.append("mean-square inequality over the arrivals")
+    if sub["gain"] != "1/(1+t)":
+        bad.append("gain")
+    elif not np.all(1 / (1 + (t0 + np.concatenate([[0.0], np.geomspace(1e-9, 1e9, 3000)]))) < kap):
+        bad.append("t₀")
+    if res["k0"] != math.ceil(t0 / h - 1e-12):
+        bad.append("k₀")
+    if res["p_max"] != max(loss.values(), default=0.0):
+        bad.append("p_max")
+    if policy == "skip":
+        off = float(np.linalg.norm(np.linalg.solve(lbar, rhs)))
+        if not _close(res["offset"], off, 1e-8, 1e-14):
+            bad.append("offset")
+    return bad
+
+
 def _truth_margin(doc: dict, honest_doc: dict) -> list[str]:
     """A stated ΔC must give the stated δ = C + ΔC. C depends on the topology only: the
     honest certificate's δ − ΔC for the same mode and topology (a mode whose topology was
@@ -545,6 +611,8 @@ def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
     margin = _truth_margin(doc, honest_doc)
     if kind.startswith("robust"):
         return margin + _truth_robust(doc)
+    if kind == "digital_loss":
+        return margin + _truth_digital_loss(doc)
     if kind.startswith("digital"):
         return margin + _truth_digital(doc)
     if doc.get("certifies") != honest_doc["certifies"] and kind not in ("hurwitz", "switching"):
@@ -635,6 +703,7 @@ def _careful(doc):
 
 KIND_OF = {
     "digital": "digital",
+    "digital_loss": "digital_loss",
     "digital_switching": "digital_switching",
     "robust": "robust",
     "robust-riccati": "robust",
@@ -647,7 +716,7 @@ KIND_OF = {
 }
 
 
-STRIDE = {"robust-riccati": 4, "digital": 3, "digital_switching": 4}
+STRIDE = {"robust-riccati": 4, "digital": 3, "digital_loss": 3, "digital_switching": 4}
 
 
 @pytest.fixture(scope="module")

@@ -169,6 +169,9 @@ LAZY = {
     ("ntc_design.simulate.replay", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.timevarying", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.gpu_run", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.loss_mc", "ntc_design.simulate.loss_kernels"): "Numba kernels",
+    ("ntc_design.simulate.loss_mc", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.loss_mc", "ntc_design.simulate.loss_cuda"): "numba-cuda",
     ("ntc_design.simulate.montecarlo", "ntc_design.simulate.rng"): "Numba kernels",
     # numba-cuda is imported only on a GPU (or its simulator)
     ("ntc_design.simulate.gpu_run", "ntc_design.simulate.cuda_kernels"): "numba-cuda",

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from .base import CertificateKind
 from .digital import DigitalKind, DigitalSwitchingKind
+from .digital_loss import DigitalLossKind
 from .hurwitz import HurwitzKind
 from .hurwitz_scale import HurwitzScaleKind
 from .robust import RobustKind
@@ -24,6 +25,7 @@ KINDS: dict[str, CertificateKind] = {
         SwitchingScaleKind(),
         TimeVaryingKind(),
         RobustKind(),
+        DigitalLossKind(),
         DigitalKind(),
         DigitalSwitchingKind(),
     )

@@ -35,6 +35,7 @@ def test_every_kind_is_registered_under_its_own_name():
         "time_varying",
         "robust",
         "digital",
+        "digital_loss",
         "digital_switching",
     }
     assert all(isinstance(k, CertificateKind) for k in KINDS.values())
