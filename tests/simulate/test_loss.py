@@ -173,9 +173,10 @@ def test_exact_moments_equal_the_enumeration_of_every_arrival_pattern(tiny, poli
 
 
 @pytest.mark.parametrize("delay", [0, 1])
-def test_without_loss_every_policy_is_the_lossless_recursion(g1_sys, delay):
+@pytest.mark.parametrize("t_end", [3.0, 3.04])  # 3.04: a last partial step of 0.04
+def test_without_loss_every_policy_is_the_lossless_recursion(g1_sys, delay, t_end):
     s, eps0, _ = g1_sys
-    grid, _ = digital_grid(Digital(0.1, delay), 3.0, np.array([1.0, 3.0]))
+    grid, _ = digital_grid(Digital(0.1, delay), t_end, np.array([1.0, t_end]))
     want = digital_moments([s], grid, gain, eps0, 7, 3, delay)
     for policy in POLICIES:
         got = loss_moments(s, grid, gain, eps0, THETA, delay, np.zeros(s.n_edges), policy)
