@@ -66,6 +66,10 @@ class ClaimKind(StrEnum):
     DIGITAL_LEVEL = "digital_level"  # ρ(κ) <= 1/2 (D > 0)
     DIGITAL_ADDITIVE = "digital_additive"  # γ >= Σ_e g_eᵀ P g_e
     DIGITAL_T0 = "digital_t0"  # c(t) < κ for every t >= t₀
+    DIGITAL_DL_FORM = "digital_delay_line_form"  # S, T_j ≻ 0 and the R_j decrease (D > 0)
+    DIGITAL_DL_STEP = "digital_delay_line_step"  # G(κ) ⪰ 0 for one mode (D > 0)
+    DIGITAL_GROWTH = "digital_growth"  # (1/c)' < g from t₀ on, c(t₀) > 0 (D > 0)
+    DIGITAL_DL_ADDITIVE = "digital_delay_line_additive"  # γ' >= γ(S) + Σ_j γ(T_j)
 
 
 #: The statements of the digital kinds' claims ({m}: the mode).
@@ -76,6 +80,11 @@ DIGITAL_CLAIM_TEXT = {
     ClaimKind.DIGITAL_LEVEL: "ρ(κ) <= 1/2 (the delayed bound)",
     ClaimKind.DIGITAL_ADDITIVE: "γ >= Σ_e g_eᵀ·P_d·g_e in every mode",
     ClaimKind.DIGITAL_T0: "c(t) < κ for every t >= t₀",
+    ClaimKind.DIGITAL_DL_FORM: "S ≻ 0, T_j ≻ 0, R_j − R_{{j+1}} ≻ 0 and "
+    "(1 − αhκ)R_j − (1 + ghκ)R_{{j+1}} − hκT_j ≻ 0 (the delay line's functional)",
+    ClaimKind.DIGITAL_DL_STEP: "G_{m}(κ) ≻ 0: the delay line's step inequality for every c in (0, κ]",
+    ClaimKind.DIGITAL_GROWTH: "(1/c)'(t) < g for every t >= t₀ and c(t₀) > 0",
+    ClaimKind.DIGITAL_DL_ADDITIVE: "γ' >= Σ_e g_eᵀ·(S + Σ_j T_j)·g_e in every mode",
 }
 
 #: The statements of the time-varying kind's claims (their certificates list exactly these).
