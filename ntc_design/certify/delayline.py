@@ -47,6 +47,7 @@ the least over a schedule's modes. Informational: it is not a claim.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -559,7 +560,9 @@ def plan_delay_line(
     def feasible(cv: float) -> bool:
         c.value, c2.value = cv, cv * cv
         try:
-            prob.solve(solver=cp.CLARABEL)
+            with warnings.catch_warnings():  # an inaccurate solve counts as infeasible
+                warnings.simplefilter("ignore")
+                prob.solve(solver=cp.CLARABEL)
         except (cp.SolverError, ArithmeticError, ValueError):
             return False
         return prob.status == cp.OPTIMAL

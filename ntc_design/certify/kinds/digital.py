@@ -421,9 +421,12 @@ class _DigitalMixin:
     def _delay_line_matrices(ctx: Any) -> Any:
         # S, R_j, T_j of a delay-line certificate (None: an entry out of range)
         delay = ctx.digital.delay
-        s = ctx.p(P_NAME)
-        rs = [ctx.p(f"{P_NAME}_R{j}") for j in range(delay)]
-        ts = [ctx.p(f"{P_NAME}_T{j}") for j in range(delay)]
+        try:  # a matrix missing (a forged delay) fails the claim
+            s = ctx.p(P_NAME)
+            rs = [ctx.p(f"{P_NAME}_R{j}") for j in range(delay)]
+            ts = [ctx.p(f"{P_NAME}_T{j}") for j in range(delay)]
+        except InputError:
+            return None
         if s is None or any(x is None for x in rs + ts):
             return None
         return s, rs, ts

@@ -39,7 +39,10 @@ def test_issue_and_verify_with_and_without_delay(g1_d0, g1_d1):
         assert "digital_mean_square" in doc["certifies"]
         res = doc["results"]["digital"]
         assert res["k0"] == math.ceil(res["t0"] / 0.1 - 1e-12) + delay
-        assert ("beta" in res) == (delay > 0)
+        # D > 0: the delay line's functional (κ = 66 % of c_true) beat the Razumikhin bound
+        assert res.get("bound") == ("delay_line" if delay else None)
+        assert ("g" in res) == (delay > 0) and "beta" not in res
+        assert 0 < res["kappa"] < res["c_true"]
         assert (
             doc["subject"]["digital"]["period"] == 0.1
             and doc["subject"]["digital"]["delay"] == delay
@@ -60,8 +63,8 @@ def test_issue_and_verify_with_and_without_delay(g1_d0, g1_d1):
         (("results", "digital", "t0"), lambda v: v * 0.9),
         (("results", "digital", "k0"), lambda v: v - 1),
         (("results", "digital", "gamma"), lambda v: v * 0.99),
-        (("results", "digital", "beta"), lambda v: v * 0.5),
-        (("results", "digital", "ell2"), lambda v: v * 0.5),
+        (("results", "digital", "g"), lambda v: v * 0.5),
+        (("results", "digital", "c_true"), lambda v: v * 0.5),
         (("subject", "digital", "period"), lambda v: v * 2),
         (("subject", "digital", "delay"), lambda v: v + 1),
         (("subject", "digital", "noise", "sigma"), lambda v: v * 3),
@@ -103,6 +106,8 @@ def test_a_forged_matrix_and_a_dropped_claim_are_rejected(g1_d1):
         (lambda d: d["subject"]["digital"]["noise"].update(sigma=-1), "noise.sigma: must be >= 0"),
         (lambda d: d["subject"]["digital"].pop("noise"), "subject.digital: missing field 'noise'"),
         (lambda d: d["results"]["digital"].pop("kappa"), "results.digital: missing field 'kappa'"),
+        (lambda d: d["results"]["digital"].update(bound="razumikhin"), "missing field 'beta'"),
+        (lambda d: d["results"]["digital"].update(bound="other"), "results.digital.bound"),
     ],
 )
 def test_malformed_digital_fields_name_the_field(g1_d1, edit, message):
