@@ -61,7 +61,14 @@ from ..expr.symbolic import parse_expression, symbol
 from ..rigorous.exact import Dyadic
 from ..rigorous.floatmat import FloatMat
 from ..rigorous.interval import bounds, enclose, t_ball
-from .digital import EdgeNoise, additive_energy, noise_matrix, noise_operator
+from .digital import (
+    DigitalPlan,
+    EdgeNoise,
+    additive_energy,
+    ms_matrix,
+    noise_matrix,
+    noise_operator,
+)
 from .mu2 import T0_SCAN_END, prove_below
 
 #: The margin the SDP keeps in every inequality (relative to S ⪰ I), so that the stated
@@ -589,6 +596,78 @@ def plan_delay_line(
     return pl if holds_in_floats(pl, laps, noises, d, h) else None
 
 
+def plan_no_delay(
+    laps: Sequence[np.ndarray],
+    noises: Sequence[Sequence[EdgeNoise]],
+    d: int,
+    h: float,
+    c_hi: float,
+) -> DigitalPlan | None:
+    """D = 0 with a free P: the largest κ <= c_hi found with (PL + LᵀP − αP) −
+    κ(hLᵀPL + N(P)) ⪰ 0 for every mode (affine in κ with a PSD slope, so κ proves every
+    c in (0, κ]); bisection with Clarabel, then checked in verified floats.
+
+    Parameters
+    ----------
+    laps : sequence of numpy.ndarray
+        L_B of every mode used.
+    noises : sequence of sequence of EdgeNoise
+        Every mode's edges.
+    d : int
+        The state dimension.
+    h : float
+        The period.
+    c_hi : float
+        The top of the bisection (c_true).
+
+    Returns
+    -------
+    DigitalPlan or None
+    """
+    import cvxpy as cp
+
+    mu = _decay(laps)
+    if not (mu > 0 and c_hi > 0):
+        return None
+    alpha = ALPHA_SHARE * mu
+    n = laps[0].shape[0]
+    eye = np.eye(n)
+    p = cp.Variable((n, n), symmetric=True)
+    kap = cp.Parameter(nonneg=True)
+    cons = [p >> eye]
+    for lap, edges in zip(laps, noises, strict=True):
+        op = noise_operator(edges, n, d)
+        nm = cp.reshape(op @ cp.vec(p, order="C"), (n, n), order="C")
+        m = p @ lap + lap.T @ p - alpha * p - kap * (h * lap.T @ p @ lap + nm)
+        cons.append(0.5 * (m + m.T) >> MARGIN * eye)
+    prob = cp.Problem(cp.Minimize(0), cons)
+    lo, best = 0.0, None
+    hi = c_hi
+    for _ in range(KAPPA_STEPS + 2):
+        mid = 0.5 * (lo + hi)
+        kap.value = mid
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                prob.solve(solver=cp.CLARABEL)
+        except (cp.SolverError, ArithmeticError, ValueError):
+            hi = mid
+            continue
+        if prob.status == cp.OPTIMAL:
+            lo, best = mid, 0.5 * (np.array(p.value) + np.array(p.value).T)
+        else:
+            hi = mid
+    if best is None:
+        return None
+    for lap, edges in zip(laps, noises, strict=True):
+        pm = FloatMat.of(best)
+        nm = noise_matrix(pm, edges, d, False)
+        if not ms_matrix(pm, FloatMat.of(lap), nm, alpha, lo, h).positive_definite().holds:
+            return None
+    gamma = max(float(additive_energy(best, e, d)) for e in noises) * (1 + 1e-12)
+    return DigitalPlan(best, alpha, lo, gamma, source="an SDP for P (Clarabel)")
+
+
 def holds_in_floats(
     pl: DelayLinePlan,
     laps: Sequence[np.ndarray],
@@ -635,6 +714,7 @@ __all__ = [
     "holds_in_floats",
     "ms_limit",
     "plan_delay_line",
+    "plan_no_delay",
     "prove_growth",
     "spectral_radius",
     "step_blocks",

@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.certify import certify, delayline as dl, digital as dg, verify
+from ntc_design.certify import certify, verify
+from ntc_design.certify import delayline as dl
+from ntc_design.certify import digital as dg
 from ntc_design.model.generate import random_network
 from ntc_design.model.paper import THETA
 from ntc_design.protocol.digital import Digital
@@ -80,9 +82,7 @@ def test_step_matrix_is_the_written_out_expectation(g1_lap, delay):
         exact = dl.step_matrix(s, rs, ts, lap, edges, 3, 0.2, c, g, h, exact=True).to_float()
         assert np.allclose(exact, want, rtol=1e-9, atol=1e-9 * np.max(np.abs(want)))
     # the additive constant: γ(S) + Σ γ(T_j) from g_e
-    gam = sum(
-        float(_dense_g(e, n, 3)[1] @ (s + sum(ts)) @ _dense_g(e, n, 3)[1]) for e in edges
-    )
+    gam = sum(float(_dense_g(e, n, 3)[1] @ (s + sum(ts)) @ _dense_g(e, n, 3)[1]) for e in edges)
     assert float(dl.delay_line_gamma(s, ts, edges, 3)) == pytest.approx(gam, rel=1e-12)
 
 
@@ -164,7 +164,9 @@ def _moments_check(doc, h, delay, z0s, steps=400):
             nz[:n, :n] += h * c[k] ** 2 * sum(ge @ zd @ ge.T + np.outer(g, g) for ge, g in gs)
             zz = 0.5 * (nz + nz.T)
         for k in range(k0, k0 + steps):
-            add = h * (c[k] ** 2 * gam(s) + sum(c[k - 1 - j] ** 2 * gam(ts[j]) for j in range(delay)))
+            add = h * (
+                c[k] ** 2 * gam(s) + sum(c[k - 1 - j] ** 2 * gam(ts[j]) for j in range(delay))
+            )
             bound = (1 - alpha * h * c[k]) * vt[k][0] + add
             assert vt[k + 1][0] <= bound * (1 + 1e-9), (k, vt[k + 1][0], bound)
             assert vt[k][1] <= vt[k][0] * (1 + 1e-9)

@@ -32,6 +32,7 @@ from ..delayline import (
     growth_bound,
     ms_limit,
     plan_delay_line,
+    plan_no_delay,
     prove_growth,
     step_matrix,
 )
@@ -294,6 +295,10 @@ class _DigitalMixin:
         }
         pl = plan(laps, noises, d, dg.period, dg.delay, fixed)
         c_true, c_how = ms_limit(laps, noises, d, dg.period, dg.delay)
+        if not dg.delay and c_true is not None and laps[0].shape[0] <= DELAY_LINE_MAX_ORDER:
+            free = plan_no_delay(laps, noises, d, dg.period, c_true)  # a free P
+            if free is not None and (pl is None or free.kappa > pl.kappa):
+                pl = free
         t0, how = gain_t0(gain_doc, pl.kappa) if pl is not None else (None, "")
         dl = self._delay_line(laps, noises, d, dg.period, dg.delay, gain_doc, c_true)
         dl_t0: tuple[float | None, str] = (None, "")
@@ -312,7 +317,7 @@ class _DigitalMixin:
             return finish(doc)
         res: dict[str, Any]
         if dl is not None and dl_t0[0] is not None:
-            t0, how = dl_t0
+            t0, how = float(dl_t0[0]), dl_t0[1]
             doc["matrices"]["P"][P_NAME] = dl.s.tolist()
             for j, (r, t) in enumerate(zip(dl.rs, dl.ts, strict=True)):
                 doc["matrices"]["P"][f"{P_NAME}_R{j}"] = r.tolist()
@@ -326,6 +331,7 @@ class _DigitalMixin:
             res.update(P_from=pl.source, alpha=pl.alpha, kappa=pl.kappa, gamma=pl.gamma)
             if dg.delay:
                 res["beta"], res["ell2"] = pl.beta, pl.ell2
+        assert t0 is not None
         res.update(t0=t0, t0_proof=how, k0=first_step(t0, dg.period, dg.delay))
         if c_true is not None:
             res["c_true"] = c_true
