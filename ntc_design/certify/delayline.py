@@ -148,9 +148,13 @@ def step_blocks(
     c2: Any,
     g: float,
     h: float,
+    name: Callable[[Any], Any] | None = None,
 ) -> Any:
     """G(c) of the module docstring in the given arithmetic (c² passed separately so that
-    cvxpy sees a parameter; in exact arithmetic c2 is None and c·c is used)."""
+    cvxpy sees a parameter; in exact arithmetic c2 is None and c·c is used). ``name`` turns
+    an expression used in many blocks into one (an SDP variable equal to it: K and SL
+    appear (D+1)² times, and dense copies would make the solver's matrix dense)."""
+    own = name or (lambda x: x)
 
     def cc(x: Any) -> Any:
         return ops.mul(c, ops.mul(c, x)) if c2 is None else ops.mul(c2, x)
@@ -158,8 +162,8 @@ def step_blocks(
     sg = s + ops.mul(g, r0)
     lt = lap.T
     k = ops.mul(c, ops.mul(h, lt @ (r0 @ lap)) + noise(r0))
-    k = k + cc(ops.mul(h, ops.mul(h, lt @ (sg @ lap)) + noise(sg)))
-    sl = s @ lap
+    k = own(k + cc(ops.mul(h, ops.mul(h, lt @ (sg @ lap)) + noise(sg))))
+    sl = own(s @ lap)
     chsl = ops.mul(c, ops.mul(h, sl))
     top = ops.mul(c, ops.mul(h, sl + sl.T - ops.mul(alpha, s))) - k
     cross = k - chsl
@@ -559,7 +563,12 @@ def plan_delay_line(
         def noise(x: Any, op: Any = op) -> Any:
             return cp.reshape(op @ cp.vec(x, order="C"), (n, n), order="C")
 
-        gm = step_blocks(ops, s, rs[0], ts, lap, noise, alpha, c, c2, g, h)
+        def name(x: Any) -> Any:
+            v = cp.Variable(x.shape)
+            cons.append(v == x)
+            return v
+
+        gm = step_blocks(ops, s, rs[0], ts, lap, noise, alpha, c, c2, g, h, name)
         margin = MARGIN * (np.diag(scale) + h * c * np.diag(1.0 - scale))
         cons.append(0.5 * (gm + gm.T) - margin >> 0)
     prob = cp.Problem(cp.Minimize(0), cons)

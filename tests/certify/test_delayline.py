@@ -217,3 +217,13 @@ def test_the_certified_inequality_holds_on_the_exact_moments(g1_delay_line):
     zs = [random_line, np.outer(top, top) * 100, np.outer(held, held)]
     worst = _moments_check(doc, 0.1, delay, zs, steps=150)
     assert 0 < worst <= 1 + 1e-9
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [1, 2])
+def test_a_generated_network_meets_the_target(delay):
+    top = random_network(4, 2, seed=1)
+    doc = certify(top, [1.0, -1.0], gain="1/(1+t)", digital=Digital(0.1, delay)).certificate
+    res = doc["results"]["digital"]
+    assert res["bound"] == "delay_line" and verify(json.loads(json.dumps(doc))).valid
+    assert 0.5 * res["c_true"] <= res["kappa"] < res["c_true"]
