@@ -153,7 +153,34 @@ def step_blocks(
     """G(c) of the module docstring in the given arithmetic (c² passed separately so that
     cvxpy sees a parameter; in exact arithmetic c2 is None and c·c is used). ``name`` turns
     an expression used in many blocks into one (an SDP variable equal to it: K and SL
-    appear (D+1)² times, and dense copies would make the solver's matrix dense)."""
+    appear (D+1)² times, and dense copies would make the solver's matrix dense).
+
+    Parameters
+    ----------
+    ops : _Ops
+        The arithmetic.
+    s, r0 : matrix in that arithmetic
+        S and R_0.
+    ts : sequence of matrices
+        T_0 … T_{D−1}.
+    lap : matrix
+        L_B.
+    noise : callable
+        X ↦ N(X) = Σ_e G_eᵀ X G_e in that arithmetic.
+    alpha : float
+        α.
+    c, c2 : float, cvxpy parameter or None
+        The gain and its square (None: c·c).
+    g, h : float
+        The growth bound of 1/c and the period.
+    name : callable, optional
+        Turns a repeated expression into one (cvxpy).
+
+    Returns
+    -------
+    matrix
+        G(c), ((D+1)·n)².
+    """
     own = name or (lambda x: x)
 
     def cc(x: Any) -> Any:

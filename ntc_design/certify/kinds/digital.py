@@ -4,8 +4,12 @@ with the proof that the sampled recursion contracts in mean square from step k�
 (:mod:`ntc_design.certify.digital` states the mathematics).
 
 The subject adds ``digital: {period, delay, gain, noise}``; the matrices add ``P.digital``;
-``results.digital`` states α, κ, γ (and β, ℓ² for D > 0), t₀ and k₀. Every one of them is
-proven by a derived claim (k₀ = ⌈t₀/h⌉ + D recomputed exactly). When no level can be
+``results.digital`` states α, κ, γ, t₀ and k₀. For D > 0 ``results.digital.bound`` says
+which functional proves the contraction: ``delay_line`` (:mod:`..delayline`: the matrices
+add ``P.digital_R<j>`` and ``P.digital_T<j>``, the results the growth bound g of 1/c and
+γ' as ``gamma``) or ``razumikhin`` (β, ℓ²; absent in older certificates). Every one of
+them is proven by a derived claim (k₀ = ⌈t₀/h⌉ + D recomputed exactly); ``c_true``, the
+mean-square limit shown beside κ, is an estimate checked only against the proven κ. When no level can be
 certified (no P gives α > 0, or the gain never stays below κ) the certificate certifies the
 continuous properties only and ``results.digital.stopped`` says where it stopped.
 """
