@@ -187,3 +187,21 @@ def test_cli_bad_period_or_delay(extra, needle, capsys, monkeypatch, examples, t
     args = ["certify", examples / "g1.yaml", "--theta", "1,2,-1", "--gain", "1/(1+t)", "--out", out]
     assert_input_error([*args, *extra], capsys, monkeypatch, needle)
     assert not out.exists()
+
+
+def test_the_razumikhin_bound_is_kept_and_an_older_certificate_verifies(g1, monkeypatch):
+    """Where the delay line's SDP is not tried (here: forced off) the Razumikhin bound is
+    issued, and the same certificate as an earlier release wrote it (no ``bound``, no
+    ``c_true``) still verifies; a forged level is still rejected."""
+    from ntc_design.certify.kinds import digital as kd
+
+    monkeypatch.setattr(kd, "DELAY_LINE_MAX_ORDER", 0)
+    doc = certify(g1, THETA, gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
+    res = doc["results"]["digital"]
+    assert res["bound"] == "razumikhin" and "beta" in res and res["k0"] == 3032
+    old = json.loads(json.dumps(doc))
+    for key in ("bound", "c_true", "c_true_how"):
+        old["results"]["digital"].pop(key)
+    assert verify(_reseal(old)).valid
+    old["results"]["digital"]["kappa"] *= 1.01
+    assert not verify(_reseal(old)).valid
