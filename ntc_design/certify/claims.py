@@ -68,6 +68,10 @@ class ClaimKind(StrEnum):
     DIGITAL_T0 = "digital_t0"  # c(t) < κ for every t >= t₀
     LOSS_MS = "loss_ms"  # the mean-square inequality over the arrivals (digital_loss)
     LOSS_OFFSET = "loss_offset"  # ‖x* − 1⊗θ‖ by an exact solve (digital_loss, skip)
+    DIGITAL_DL_FORM = "digital_delay_line_form"  # S, T_j ≻ 0 and the R_j decrease (D > 0)
+    DIGITAL_DL_STEP = "digital_delay_line_step"  # G(κ) ⪰ 0 for one mode (D > 0)
+    DIGITAL_GROWTH = "digital_growth"  # (1/c)' < g from t₀ on, c(t₀) > 0 (D > 0)
+    DIGITAL_DL_ADDITIVE = "digital_delay_line_additive"  # γ' >= γ(S) + Σ_j γ(T_j)
 
 
 #: The statements of the digital kinds' claims ({m}: the mode).
@@ -80,6 +84,11 @@ DIGITAL_CLAIM_TEXT = {
     ClaimKind.DIGITAL_T0: "c(t) < κ for every t >= t₀",
     ClaimKind.LOSS_MS: "(P_l·L̄({m}) + L̄({m})ᵀ·P_l − α·P_l) − κ·(h·(L̄ᵀ·P_l·L̄ + 2Σ_e v_e·L_eᵀ·P_l·L_e) + μ·Σ_e E[m_e²]·G_eᵀ·P_l·G_e) ≻ 0 over the arrivals",
     ClaimKind.LOSS_OFFSET: "the mean's limit x* (L̄ x* = u) is at the stated ‖x* − 1⊗θ‖, by an exact rational solve",
+    ClaimKind.DIGITAL_DL_FORM: "S ≻ 0, T_j ≻ 0, R_j − R_{{j+1}} ≻ 0 and "
+    "(1 − αhκ)R_j − (1 + ghκ)R_{{j+1}} − hκT_j ≻ 0 (the delay line's functional)",
+    ClaimKind.DIGITAL_DL_STEP: "G_{m}(κ) ≻ 0: the delay line's step inequality for every c in (0, κ]",
+    ClaimKind.DIGITAL_GROWTH: "(1/c)'(t) < g for every t >= t₀ and c(t₀) > 0",
+    ClaimKind.DIGITAL_DL_ADDITIVE: "γ' >= Σ_e g_eᵀ·(S + Σ_j T_j)·g_e in every mode",
 }
 
 #: The statements of the time-varying kind's claims (their certificates list exactly these).

@@ -42,7 +42,7 @@ def test_a_scenario_gives_its_certified_design(tmp_path):
     assert src.initial.tolist() == np.linspace(-3, 3, 21).round(1).tolist()
     assert src.horizon == 10.0 and src.kind == "scenario" and law.name == "G1"
     assert "digital certificate valid" in src.notes[0] and "Theorem 1, 2" in src.notes[0]
-    assert "for the sampled one (contracting from step k₀ = 3032)" in src.notes[0]
+    assert "for the sampled one (contracting from step k₀ = 24)" in src.notes[0]
 
 
 def test_the_digital_block_and_the_noise_are_read_and_overridden(tmp_path):

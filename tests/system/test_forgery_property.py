@@ -472,6 +472,8 @@ def _truth_digital(doc: dict) -> list[str]:
     f = sub["noise"]["f"]
     sched = doc["subject"].get("schedule")
     used = list(dict.fromkeys(x["mode"] for x in sched)) if sched else list(doc["subject"]["modes"])
+    if res.get("bound") == "delay_line":
+        return bad + _truth_delay_line(doc, used)
     p = np.array(doc["matrices"]["P"]["digital"])
     al, kap, gam, t0 = res["alpha"], res["kappa"], res["gamma"], res["t0"]
     if not (_pos(p) and al > 0 and kap > 0):
@@ -581,6 +583,76 @@ def _truth_digital_loss(doc: dict) -> list[str]:
         off = float(np.linalg.norm(np.linalg.solve(lbar, rhs)))
         if not _close(res["offset"], off, 1e-8, 1e-14):
             bad.append("offset")
+    return bad
+
+
+def _truth_delay_line(doc: dict, used: list) -> list[str]:
+    """The delay line's inequalities written out from x_{k+1} = A(τ)x_k + Bν (dense
+    blocks), at c = κ and the stated g, G_e and g_e from the weights; (1/c)' = 1 < g,
+    c(t) < κ beyond t₀, k₀ = ⌈t₀/h⌉ + D and c_true >= κ."""
+    bad: list[str] = []
+    sub, res = doc["subject"]["digital"], doc["results"]["digital"]
+    h, dl = sub["period"], sub["delay"]
+    mats = doc["matrices"]["P"]
+    s = np.array(mats["digital"])
+    rs = [np.array(mats[f"digital_R{j}"]) for j in range(dl)]
+    ts = [np.array(mats[f"digital_T{j}"]) for j in range(dl)]
+    al, kap, gam, t0, g = (res[k] for k in ("alpha", "kappa", "gamma", "t0", "g"))
+    if not (al > 0 and kap > 0 and g > 1 and _pos(s) and all(_pos(t) for t in ts)):
+        return ["S, T, α, κ or g"]
+    n = s.shape[0]
+    rn = [*rs, np.zeros((n, n))]
+    tau = h * kap
+    for j in range(dl):
+        if not _pos(rs[j] - rn[j + 1]) or not _pos(
+            (1 - al * tau) * rs[j] - (1 + g * tau) * rn[j + 1] - tau * ts[j]
+        ):
+            bad.append(f"R_{j} decrease")
+    own = {(e["from"], e["to"]): e["sigma"] for e in sub["noise"]["sigma_edges"]}
+    f = sub["noise"]["f"]
+    m = n * (dl + 1)
+    blk = [np.zeros((n, m)) for _ in range(dl + 1)]
+    for b in range(dl + 1):
+        blk[b][:, b * n : (b + 1) * n] = np.eye(n)
+    ey = blk[0] - sum(blk[1:])
+    for k in used:
+        md = doc["subject"]["modes"][k]
+        top = Topology.from_data(parse_topology(md["topology"], k))
+        d = top.dim
+        fm = np.asarray(f, dtype=float) * np.eye(d) if not isinstance(f, list) else np.array(f)
+        lap = _lap_b(top, md["delta"])
+        gms, energy = [], 0.0
+        for (i, j), a in top.weights.items():
+            w = _sign(a) * a
+            gm = np.zeros((n, n))
+            gm[i * d : i * d + d, j * d : j * d + d] += w @ fm
+            gm[i * d : i * d + d, i * d : i * d + d] -= w @ fm
+            gms.append(gm)
+            gv = np.zeros(n)
+            sig = own.get((str(top.labels[j]), str(top.labels[i])), sub["noise"]["sigma"])
+            gv[i * d : i * d + d] = sig * w.sum(axis=1)
+            energy += gv @ (s + sum(ts)) @ gv
+        a = blk[0].T @ (blk[0] - tau * lap @ ey) + blk[1].T @ (-tau * lap @ ey)
+        for j in range(1, dl):
+            a += blk[j + 1].T @ blk[j]
+        wt = 1 / tau + g
+        wp = blk[0].T @ s @ blk[0] + sum(wt * blk[j + 1].T @ rs[j] @ blk[j + 1] for j in range(dl))
+        lhs = a.T @ wp @ a + h * kap**2 * ey.T @ sum(x.T @ (s + wt * rs[0]) @ x for x in gms) @ ey
+        rhs = (1 - al * tau) * blk[0].T @ s @ blk[0]
+        for j in range(dl):
+            rhs += blk[j + 1].T @ (((1 + g * tau) * rn[j + 1] + tau * ts[j]) / tau) @ blk[j + 1]
+        if not _pos(rhs - lhs):
+            bad.append(f"{k}: step inequality")
+        if not energy <= gam * (1 + 1e-12):
+            bad.append(f"{k}: γ'")
+    if sub["gain"] != "1/(1+t)":
+        bad.append("gain")
+    elif not np.all(1 / (1 + (t0 + np.concatenate([[0.0], np.geomspace(1e-9, 1e9, 3000)]))) < kap):
+        bad.append("t₀")
+    if res["k0"] != math.ceil(t0 / h - 1e-12) + dl:
+        bad.append("k₀")
+    if "c_true" in res and not res["c_true"] >= kap * (1 - 1e-9):
+        bad.append("c_true")
     return bad
 
 

@@ -4,8 +4,12 @@ with the proof that the sampled recursion contracts in mean square from step k�
 (:mod:`ntc_design.certify.digital` states the mathematics).
 
 The subject adds ``digital: {period, delay, gain, noise}``; the matrices add ``P.digital``;
-``results.digital`` states α, κ, γ (and β, ℓ² for D > 0), t₀ and k₀. Every one of them is
-proven by a derived claim (k₀ = ⌈t₀/h⌉ + D recomputed exactly). When no level can be
+``results.digital`` states α, κ, γ, t₀ and k₀. For D > 0 ``results.digital.bound`` says
+which functional proves the contraction: ``delay_line`` (:mod:`..delayline`: the matrices
+add ``P.digital_R<j>`` and ``P.digital_T<j>``, the results the growth bound g of 1/c and
+γ' as ``gamma``) or ``razumikhin`` (β, ℓ²; absent in older certificates). Every one of
+them is proven by a derived claim (k₀ = ⌈t₀/h⌉ + D recomputed exactly); ``c_true``, the
+mean-square limit shown beside κ, is an estimate checked only against the proven κ. When no level can be
 certified (no P gives α > 0, or the gain never stays below κ) the certificate certifies the
 continuous properties only and ``results.digital.stopped`` says where it stopped.
 """
@@ -26,6 +30,16 @@ from ...rigorous.exact import Dyadic, exact_affordable
 from ...rigorous.floatmat import FloatMat
 from ..checks import Check
 from ..claims import Claim, ClaimKind, Property
+from ..delayline import (
+    delay_line_gamma,
+    form_matrices,
+    growth_bound,
+    ms_limit,
+    plan_delay_line,
+    plan_no_delay,
+    prove_growth,
+    step_matrix,
+)
 from ..digital import (
     additive_energy,
     edge_noises,
@@ -58,6 +72,10 @@ from .switching import SwitchingKind
 
 P_NAME = "digital"
 MS = Property.DIGITAL_MEAN_SQUARE
+#: The bounds a delayed certificate may use (``results.digital.bound``; absent: Razumikhin).
+DELAY_LINE, RAZUMIKHIN = "delay_line", "razumikhin"
+#: The largest (D+1)·Nd for which the delay line's SDP is tried at issue.
+DELAY_LINE_MAX_ORDER = 200
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,6 +101,8 @@ class Stated:
     t0: float
     beta: float | None
     ell2: float | None
+    bound: str = RAZUMIKHIN
+    g: float | None = None
 
 
 def _gain_document(gain: Any) -> Any:
@@ -179,17 +199,25 @@ def _stated(doc: dict, source: str, delay: int) -> Stated:
     def num(key: str) -> float:
         return number(need(res, key, (int, float), where), f"{where}.{key}")
 
+    bound = res.get("bound", RAZUMIKHIN) if delay else RAZUMIKHIN
+    if bound not in (DELAY_LINE, RAZUMIKHIN):
+        raise InputError(f"{where}.bound: expected {DELAY_LINE!r} or {RAZUMIKHIN!r}")
+    raz = bool(delay) and bound == RAZUMIKHIN
     return Stated(
         num("alpha"),
         num("kappa"),
         num("gamma"),
         num("t0"),
-        num("beta") if delay else None,
-        num("ell2") if delay else None,
+        num("beta") if raz else None,
+        num("ell2") if raz else None,
+        bound,
+        num("g") if bound == DELAY_LINE else None,
     )
 
 
-def digital_claims(modes: tuple[str, ...], delay: int) -> tuple[Claim, ...]:
+def digital_claims(
+    modes: tuple[str, ...], delay: int, bound: str = RAZUMIKHIN
+) -> tuple[Claim, ...]:
     """The claims the sampled contraction needs for the scheduled modes.
 
     Parameters
@@ -198,11 +226,23 @@ def digital_claims(modes: tuple[str, ...], delay: int) -> tuple[Claim, ...]:
         The modes the schedule uses (the one mode of a fixed topology).
     delay : int
         D.
+    bound : str, optional
+        For D > 0: ``"razumikhin"`` or ``"delay_line"``
+        (:mod:`ntc_design.certify.delayline`).
 
     Returns
     -------
     tuple of Claim
     """
+    if delay and bound == DELAY_LINE:
+        dl = [Claim(ClaimKind.DIGITAL_DL_FORM, MS, p=P_NAME)]
+        dl += [Claim(ClaimKind.DIGITAL_DL_STEP, MS, mode=m, p=P_NAME) for m in modes]
+        dl += [
+            Claim(ClaimKind.DIGITAL_DL_ADDITIVE, MS, p=P_NAME),
+            Claim(ClaimKind.DIGITAL_GROWTH, MS),
+            Claim(ClaimKind.DIGITAL_T0, MS),
+        ]
+        return tuple(dl)
     out = [Claim(ClaimKind.PD, MS, p=P_NAME)]
     out += [Claim(ClaimKind.DIGITAL_MS, MS, mode=m, p=P_NAME) for m in modes]
     if delay:
@@ -271,8 +311,19 @@ class _DigitalMixin:
             "noise": design.noise_document(),
         }
         pl = plan(laps, noises, d, dg.period, dg.delay, fixed)
+        c_true, c_how = ms_limit(laps, noises, d, dg.period, dg.delay)
+        if not dg.delay and c_true is not None and laps[0].shape[0] <= DELAY_LINE_MAX_ORDER:
+            free = plan_no_delay(laps, noises, d, dg.period, c_true)  # a free P
+            if free is not None and (pl is None or free.kappa > pl.kappa):
+                pl = free
         t0, how = gain_t0(gain_doc, pl.kappa) if pl is not None else (None, "")
-        if pl is None or t0 is None:
+        dl = self._delay_line(laps, noises, d, dg.period, dg.delay, gain_doc, c_true)
+        dl_t0: tuple[float | None, str] = (None, "")
+        if dl is not None and (pl is None or t0 is None or dl.kappa > pl.kappa):
+            dl_t0 = gain_t0(gain_doc, dl.kappa)
+            if dl_t0[0] is not None and prove_growth(gain_doc, dl.g, dl_t0[0])[0] is not True:
+                dl_t0 = (None, "")
+        if t0 is None and dl_t0[0] is None:
             why = (
                 "no Lyapunov matrix gives α > 0 for every mode"
                 if pl is None
@@ -281,24 +332,43 @@ class _DigitalMixin:
             doc["results"]["digital"] = {"stopped": why}
             doc.pop("digest", None)
             return finish(doc)
-        doc["matrices"]["P"][P_NAME] = pl.p.tolist()
-        res: dict[str, Any] = {
-            "P_from": pl.source,
-            "alpha": pl.alpha,
-            "kappa": pl.kappa,
-            "gamma": pl.gamma,
-            "t0": t0,
-            "t0_proof": how,
-            "k0": first_step(t0, dg.period, dg.delay),
-        }
-        if dg.delay:
-            res["beta"], res["ell2"] = pl.beta, pl.ell2
+        res: dict[str, Any]
+        if dl is not None and dl_t0[0] is not None:
+            t0, how = float(dl_t0[0]), dl_t0[1]
+            doc["matrices"]["P"][P_NAME] = dl.s.tolist()
+            for j, (r, t) in enumerate(zip(dl.rs, dl.ts, strict=True)):
+                doc["matrices"]["P"][f"{P_NAME}_R{j}"] = r.tolist()
+                doc["matrices"]["P"][f"{P_NAME}_T{j}"] = t.tolist()
+            res = {"bound": DELAY_LINE, "P_from": "the delay line's SDP (Clarabel)"}
+            res.update(alpha=dl.alpha, kappa=dl.kappa, gamma=dl.gamma, g=dl.g)
+        else:
+            assert pl is not None and t0 is not None
+            doc["matrices"]["P"][P_NAME] = pl.p.tolist()
+            res = {"bound": RAZUMIKHIN} if dg.delay else {}
+            res.update(P_from=pl.source, alpha=pl.alpha, kappa=pl.kappa, gamma=pl.gamma)
+            if dg.delay:
+                res["beta"], res["ell2"] = pl.beta, pl.ell2
+        assert t0 is not None
+        res.update(t0=t0, t0_proof=how, k0=first_step(t0, dg.period, dg.delay))
+        if c_true is not None:
+            res["c_true"] = c_true
+        res["c_true_how"] = c_how
         doc["results"]["digital"] = res
         doc["certifies"] = [*doc["certifies"], MS.value]
-        claims = digital_claims(tuple(modes), dg.delay)
+        claims = digital_claims(tuple(modes), dg.delay, res.get("bound", RAZUMIKHIN))
         doc["claims"] = [*doc["claims"], *(c.to_dict() for c in claims)]
         doc.pop("digest", None)
         return finish(doc)
+
+    @staticmethod
+    def _delay_line(
+        laps: list, noises: list, d: int, h: float, delay: int, gain: Any, c_true: float | None
+    ) -> Any:
+        # the delay line's functional (D >= 1, an expression gain, a size the SDP affords)
+        if not delay or c_true is None or laps[0].shape[0] * (delay + 1) > DELAY_LINE_MAX_ORDER:
+            return None
+        g = growth_bound(gain)
+        return None if g is None else plan_delay_line(laps, noises, d, h, delay, g, c_true)
 
     # -------------------------------------------------------------- verifying
     def read(self, doc: dict, source: str) -> Reading:
@@ -317,7 +387,9 @@ class _DigitalMixin:
         base = tuple(p for p in properties if p is not MS)
         out = self._base.claims(base, subject, reading, alpha)
         if MS in properties:
-            out = (*out, *digital_claims(subject.scheduled, reading.state.digital.delay))
+            st = reading.state.stated
+            bound = st.bound if st is not None else RAZUMIKHIN
+            out = (*out, *digital_claims(subject.scheduled, reading.state.digital.delay, bound))
         return out
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
@@ -331,6 +403,26 @@ class _DigitalMixin:
             ok, how = prove_gain_below(dg.gain, st.kappa, st.t0)
             return Check(
                 claim.id, ok is True, f"interval: {how} (κ = {st.kappa!r}, t₀ = {st.t0!r})", claim
+            )
+        if claim.kind is ClaimKind.DIGITAL_GROWTH:
+            ok, how = prove_growth(dg.gain, st.g, st.t0)
+            return Check(claim.id, ok is True, f"interval: {how}", claim)
+        if claim.kind in (ClaimKind.DIGITAL_DL_FORM, ClaimKind.DIGITAL_DL_STEP):
+            return self._prove_delay_line(claim, subject, ctx)
+        if claim.kind is ClaimKind.DIGITAL_DL_ADDITIVE:
+            mats = self._delay_line_matrices(ctx)
+            if mats is None:
+                return Check(claim.id, False, f"matrices.P has {RANGE_TEXT}", claim)
+            worst = max(
+                delay_line_gamma(
+                    mats[0], mats[2], edge_noises(m.top, dg.f, dg.sigma, dg.sigma_edges), m.top.dim
+                )
+                for k, m in ctx.modes.items()
+                if k in subject.scheduled
+            )
+            ok = Fraction(st.gamma) >= worst
+            return Check(
+                claim.id, ok, f"exact fractions: γ(S) + Σ γ(T_j) = {float(worst):.10g}", claim
             )
         if claim.kind is ClaimKind.DIGITAL_LEVEL:
             ok, how = level_holds(st.kappa, st.alpha, st.beta, st.ell2, dg.period, dg.delay)
@@ -347,6 +439,72 @@ class _DigitalMixin:
             ok = Fraction(st.gamma) >= worst
             return Check(claim.id, ok, f"exact fractions: Σ g_eᵀPg_e = {float(worst):.10g}", claim)
         return self._prove_matrix(claim, ctx, p)
+
+    @staticmethod
+    def _delay_line_matrices(ctx: Any) -> Any:
+        # S, R_j, T_j of a delay-line certificate (None: an entry out of range)
+        delay = ctx.digital.delay
+        try:  # a matrix missing (a forged delay) fails the claim
+            s = ctx.p(P_NAME)
+            rs = [ctx.p(f"{P_NAME}_R{j}") for j in range(delay)]
+            ts = [ctx.p(f"{P_NAME}_T{j}") for j in range(delay)]
+        except InputError:
+            return None
+        if s is None or any(x is None for x in rs + ts):
+            return None
+        return s, rs, ts
+
+    def _prove_delay_line(self, claim: Claim, subject: Subject, ctx: Any) -> Check:
+        dg, st = ctx.digital, ctx.stated
+        mats = self._delay_line_matrices(ctx)
+        nums = [st.alpha, st.kappa, st.g, dg.period]
+        if mats is None or any(out_of_range(x) for x in nums):
+            return Check(claim.id, False, f"matrices.P or α, κ, g have {RANGE_TEXT}", claim)
+        if not (st.alpha > 0 and st.kappa > 0 and st.g >= 0):
+            return Check(claim.id, False, "α, κ must be > 0 and g >= 0", claim)
+        s, rs, ts = mats
+        if claim.kind is ClaimKind.DIGITAL_DL_FORM:
+
+            def build(exact: bool) -> list:
+                return form_matrices(s, rs, ts, st.alpha, st.kappa, st.g, dg.period, exact)
+
+            exact = exact_affordable(s.shape[0], 4 * max(Dyadic.of(m).bits for m in [s, *rs, *ts]))
+            details = []
+            for name, m in build(exact):
+                proof = prove_psd(m)
+                ctx.methods.add(proof.method)
+                if not proof.holds:
+                    return Check(claim.id, False, f"{name}: {proof.method}: {proof.detail}", claim)
+                details.append(name)
+            return Check(
+                claim.id,
+                True,
+                f"{'exact' if exact else 'verified floats'}: {', '.join(details)} ≻ 0",
+                claim,
+            )
+        mode = ctx.modes.get(claim.mode or "")
+        if mode is None or claim.mode not in subject.scheduled:
+            return Check(
+                claim.id, False, f"the certificate does not describe mode {claim.mode!r}", claim
+            )
+        if not mode.in_range:
+            return Check(claim.id, False, f"mode {mode.name} has {RANGE_TEXT}", claim)
+        edges = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
+
+        def step(exact: bool) -> Any:
+            lap = mode.exact if exact else FloatMat.of(mode.lap, mode.err)
+            return step_matrix(
+                s, rs, ts, lap, edges, mode.top.dim, st.alpha, st.kappa, st.g, dg.period, exact
+            )
+
+        m = step(True) if mode.exact is not None else None
+        proof = (
+            prove_psd(m)
+            if m is not None and exact_affordable(m.num.shape[0], m.bits)
+            else (prove_psd(step(False)))
+        )
+        ctx.methods.add(proof.method)
+        return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail}", claim)
 
     def _prove_matrix(self, claim: Claim, ctx: Any, p: np.ndarray) -> Check:
         mode = ctx.modes.get(claim.mode or "")
@@ -402,8 +560,17 @@ class _DigitalMixin:
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
-        for key in ("alpha", "kappa", "gamma", "t0") + (("beta", "ell2") if dg.delay else ()):
+        st = ctx.stated
+        extra: tuple[str, ...] = ()
+        if dg.delay:
+            extra = ("g",) if st.bound == DELAY_LINE else ("beta", "ell2")
+        for key in ("alpha", "kappa", "gamma", "t0", *extra):
             audit.proven(("digital", key))
+        # c_true (the second-moment map's stability limit) is shown beside κ, not claimed:
+        # an estimate, bounded below by the proven κ (the inequality at a constant gain c <= κ
+        # makes that map contract)
+        if "c_true" in (doc.get("results", {}).get("digital") or {}):
+            audit.estimate(("digital", "c_true"), st.kappa, None)
         audit.exact(("digital", "k0"), first_step(ctx.stated.t0, dg.period, dg.delay))
 
     # -------------------------------------------------------------- presenting
@@ -412,20 +579,34 @@ class _DigitalMixin:
         r = results.get("digital") or {}
         if "stopped" in r:
             return (*base, ResultRow("sampled protocol", f"not certified: {r['stopped']}"))
-        extra = (
-            f", β = {number_text(r.get('beta'))}, ℓ² = {number_text(r.get('ell2'))}"
-            if "beta" in r
-            else ""
-        )
-        return (
-            *base,
+        if r.get("bound") == DELAY_LINE:
+            extra = f", g = {number_text(r.get('g'))} (the delay line's functional)"
+        elif "beta" in r:
+            extra = (
+                f", β = {number_text(r.get('beta'))}, ℓ² = {number_text(r.get('ell2'))} "
+                "(the Razumikhin bound)"
+            )
+        else:
+            extra = ""
+        rows = [
             ResultRow(
                 "sampled protocol",
                 f"contracts in mean square from step k₀ = {r.get('k0')} (t₀ = {number_text(r.get('t0'))}): "
                 f"c(t) < κ = {number_text(r.get('kappa'))} from t₀ on; α = {number_text(r.get('alpha'))}, "
                 f"γ = {number_text(r.get('gamma'))}{extra}; P from {r.get('P_from')}",
-            ),
-        )
+            )
+        ]
+        ct, kap = r.get("c_true"), r.get("kappa")
+        if isinstance(ct, (int, float)) and isinstance(kap, (int, float)) and ct > 0:
+            rows.append(
+                ResultRow(
+                    "mean-square limit",
+                    f"κ = {kap:.4g} ({100 * kap / ct:.0f} % of the mean-square limit "
+                    f"c_true = {ct:.4g}, the largest constant gain at which the sampled "
+                    "second-moment map contracts; estimated, not a claim)",
+                )
+            )
+        return (*base, *rows)
 
     def stated(
         self, properties: tuple[Property, ...], reading: Reading

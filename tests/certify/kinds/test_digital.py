@@ -39,7 +39,10 @@ def test_issue_and_verify_with_and_without_delay(g1_d0, g1_d1):
         assert "digital_mean_square" in doc["certifies"]
         res = doc["results"]["digital"]
         assert res["k0"] == math.ceil(res["t0"] / 0.1 - 1e-12) + delay
-        assert ("beta" in res) == (delay > 0)
+        # D > 0: the delay line's functional (κ = 66 % of c_true) beat the Razumikhin bound
+        assert res.get("bound") == ("delay_line" if delay else None)
+        assert ("g" in res) == (delay > 0) and "beta" not in res
+        assert 0 < res["kappa"] < res["c_true"]
         assert (
             doc["subject"]["digital"]["period"] == 0.1
             and doc["subject"]["digital"]["delay"] == delay
@@ -47,8 +50,10 @@ def test_issue_and_verify_with_and_without_delay(g1_d0, g1_d1):
         assert verify(json.loads(json.dumps(doc))).valid
         sampled = [t for t in r.theorems if t.sampled]
         assert [t.theorem for t in sampled] == [1, 2] and all(t.guaranteed for t in sampled)
-    # without a delay the contraction starts where the exact recursion stops growing
-    assert g1_d0.certificate["results"]["digital"]["k0"] == 12
+    # without a delay a free P (an SDP) proves κ = 0.99 c_true: the contraction starts at
+    # k₀ = 4 (t = 0.4, where the exact error of the sampled recursion peaks)
+    r0 = g1_d0.certificate["results"]["digital"]
+    assert r0["k0"] == 4 and r0["kappa"] >= 0.95 * r0["c_true"]
 
 
 @pytest.mark.hostile
@@ -60,8 +65,8 @@ def test_issue_and_verify_with_and_without_delay(g1_d0, g1_d1):
         (("results", "digital", "t0"), lambda v: v * 0.9),
         (("results", "digital", "k0"), lambda v: v - 1),
         (("results", "digital", "gamma"), lambda v: v * 0.99),
-        (("results", "digital", "beta"), lambda v: v * 0.5),
-        (("results", "digital", "ell2"), lambda v: v * 0.5),
+        (("results", "digital", "g"), lambda v: v * 0.5),
+        (("results", "digital", "c_true"), lambda v: v * 0.5),
         (("subject", "digital", "period"), lambda v: v * 2),
         (("subject", "digital", "delay"), lambda v: v + 1),
         (("subject", "digital", "noise", "sigma"), lambda v: v * 3),
@@ -103,6 +108,8 @@ def test_a_forged_matrix_and_a_dropped_claim_are_rejected(g1_d1):
         (lambda d: d["subject"]["digital"]["noise"].update(sigma=-1), "noise.sigma: must be >= 0"),
         (lambda d: d["subject"]["digital"].pop("noise"), "subject.digital: missing field 'noise'"),
         (lambda d: d["results"]["digital"].pop("kappa"), "results.digital: missing field 'kappa'"),
+        (lambda d: d["results"]["digital"].update(bound="razumikhin"), "missing field 'beta'"),
+        (lambda d: d["results"]["digital"].update(bound="other"), "results.digital.bound"),
     ],
 )
 def test_malformed_digital_fields_name_the_field(g1_d1, edit, message):
@@ -155,7 +162,8 @@ def test_cli_certify_period_writes_a_certificate_ntc_verify_accepts(
     code, text, err = run_cli([*args, "--period", "0.1", "--out", out], capsys, monkeypatch)
     assert code == 0, err
     assert "Theorem 1 (mean square, sampled: h = 0.1, D = 0): guaranteed" in text
-    assert "from step k₀ = 12" in text
+    assert "from step k₀ = 4" in text
+    assert "of the mean-square limit c_true = 0.7735" in text
     code, text, err = run_cli(["verify", out], capsys, monkeypatch)
     assert code == 0 and "VALID" in text
     code, text, _ = run_cli([*args, "--period", "0.1", "--json"], capsys, monkeypatch)
@@ -179,3 +187,21 @@ def test_cli_bad_period_or_delay(extra, needle, capsys, monkeypatch, examples, t
     args = ["certify", examples / "g1.yaml", "--theta", "1,2,-1", "--gain", "1/(1+t)", "--out", out]
     assert_input_error([*args, *extra], capsys, monkeypatch, needle)
     assert not out.exists()
+
+
+def test_the_razumikhin_bound_is_kept_and_an_older_certificate_verifies(g1, monkeypatch):
+    """Where the delay line's SDP is not tried (here: forced off) the Razumikhin bound is
+    issued, and the same certificate as an earlier release wrote it (no ``bound``, no
+    ``c_true``) still verifies; a forged level is still rejected."""
+    from ntc_design.certify.kinds import digital as kd
+
+    monkeypatch.setattr(kd, "DELAY_LINE_MAX_ORDER", 0)
+    doc = certify(g1, THETA, gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
+    res = doc["results"]["digital"]
+    assert res["bound"] == "razumikhin" and "beta" in res and res["k0"] == 3032
+    old = json.loads(json.dumps(doc))
+    for key in ("bound", "c_true", "c_true_how"):
+        old["results"]["digital"].pop(key)
+    assert verify(_reseal(old)).valid
+    old["results"]["digital"]["kappa"] *= 1.01
+    assert not verify(_reseal(old)).valid
