@@ -243,7 +243,10 @@ def gain(
 
 def certify(
     file: FileArg,
-    theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
+    theta: Annotated[
+        str | None,
+        typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1 (a scenario's by default)."),
+    ] = None,
     margin: Annotated[float, typer.Option(help="ΔC > 0: δ = C + ΔC.")] = 0.1,
     gain: Annotated[
         str | None,
@@ -278,6 +281,16 @@ def certify(
     ] = "lyapunov",
     period: PeriodOpt = None,
     delay: DelayOpt = None,
+    deadline: Annotated[
+        str | None,
+        typer.Option(
+            "--deadline",
+            is_flag=False,
+            flag_value="",
+            help="With a scenario: also prove E Σ‖x_i(T) − θ‖² <= B_T and its peak over "
+            "[0, T] (--deadline T overrides the scenario's T; bare --deadline uses it).",
+        ),
+    ] = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
@@ -294,25 +307,39 @@ def certify(
     from ..model.load import load
     from ..protocol.digital import Digital
 
-    th = parse_vector(theta, "--theta")
     if rate_method not in ("lyapunov", "lmi"):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
-    sampled = digital_option(period, delay)
+    scenario = _deadline_scenario(file, deadline, period, delay) if deadline is not None else None
+    if scenario is not None:
+        top, th, margin, gain_opt, noise_sigma, noise_f, sampled, section = scenario
+        th = parse_vector(theta, "--theta") if theta is not None else th
+    else:
+        if theta is None:
+            raise InputError("--theta: missing (the target consensus state, e.g. 1,2,-1)")
+        th, top, gain_opt = parse_vector(theta, "--theta"), None, gain_from_option(gain, "--gain")
+        sampled = digital_option(period, delay)
     if out_path is not None:
         check_output_file(out_path, "--out")
     with warnings.catch_warnings(), flags_named(theta="--theta"):
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
-            load(file),
+            top if top is not None else load(file),
             th,
             margin,
-            gain_from_option(gain, "--gain"),
+            gain_opt,
             noise_sigma=noise_sigma,
             noise_f=noise_f,
             rate_method=rate_method,
             digital=Digital.from_document(sampled) if sampled is not None else None,
         )
+    figures = None
+    if scenario is not None and res.verification.valid:
+        from ..certify.deadline_subject import add_deadline
+
+        figures = add_deadline(res.certificate, section)
     doc = res.to_dict()  # every step that can fail runs before anything is written
+    if figures is not None:
+        doc["deadline"] = figures.to_dict()
     written = out_path is not None and res.verification.valid
     if out_path is not None and written:
         write_certificate(res.certificate, out_path)
@@ -326,6 +353,56 @@ def certify(
         if out_path is None or written:
             print("not proven: no theorem is guaranteed", file=sys.stderr)
         raise typer.Exit(1)
+
+
+def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
+    """``ntc certify SCENARIO --deadline [T]``: the scenario's topology, θ, ΔC, gain,
+    noise, digital block and the certificate's ``subject.deadline`` (one line naming the
+    missing field or the flag)."""
+    import numpy as np
+
+    from ..errors import number_from_text
+    from ..io.files import parse_scenario
+    from ..simulate.scenario import load_scenario
+
+    sc = parse_scenario(file)
+    overrides: dict = {}
+    if deadline != "":
+        overrides["T"] = number_from_text(deadline, "--deadline")
+        if not overrides["T"] > 0:
+            raise InputError(f"--deadline: T must be > 0, got {deadline!r}")
+    elif "T" not in sc.document:
+        raise InputError(
+            f"{sc.source}: T: missing (--deadline needs the deadline; or --deadline T)"
+        )
+    if sc.document.get("initial") is None:
+        raise InputError(f"{sc.source}: initial: missing (--deadline needs the initial state)")
+    t_doc = overrides.get("T", sc.document.get("T"))
+    sampled = digital_option(period, delay, sc.document.get("digital"), t_doc)
+    top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
+    n, d = top.n, top.dim
+    x0, _ = spec.initial_state(n, d)
+    noise = spec.noise
+    if callable(noise.f):
+        raise InputError(f"{sc.source}: noise.f: --deadline needs f(x) = f·x or F x")
+    f = np.asarray(noise.f, dtype=float)
+    section = {
+        "T": float(spec.T),
+        "period": sampled["period"] if sampled else None,
+        "delay": sampled["delay"] if sampled else 0,
+        "gain": spec.gain if isinstance(spec.gain, str) else spec.gain.to_document(),
+        "noise": {
+            "sigma": float(noise.sigma),
+            "f": float(f) if f.ndim == 0 else f.tolist(),
+            "sigma_edges": [
+                {"from": str(a), "to": str(b), "sigma": float(v)}
+                for (a, b), v in noise.sigma_edges.items()
+            ],
+        },
+        "initial": {"x0": [float(v) for v in x0]},
+    }
+    f_opt = float(f) if f.ndim == 0 else f
+    return top, list(spec.theta), spec.margin, spec.gain, noise.sigma, f_opt, sampled, section
 
 
 def _print_certify(res, written: Path | None) -> None:
