@@ -1016,16 +1016,7 @@ def build_problem(
     gain = GainBalls(section.get("gain"))
     nd_ = n * d
     if period is not None:
-        k_steps = deadline_steps(t_end, period)[0] + 1
-        w = (delay + 1) * nd_
-        secs = k_steps * 6.0 * w**3 * ARB_FLOP_SECONDS
-        check_work(
-            secs,
-            f"--deadline: the proven moments take K = {k_steps} steps of a {w}×{w} ball "
-            f"recursion (N·d = {nd_}, D = {delay}), roughly {secs:.3g} s",
-            MAX_SECONDS,
-            "raise the period, lower the delay or shorten T",
-        )
+        check_sampled_work(nd_, t_end, period, delay)
     built = tuple(
         deadline_mode(lap, err, edge_noises(top, f, sigma, edges), d, exact)
         for top, lap, err, exact in modes.values()
@@ -1050,6 +1041,37 @@ def build_problem(
             "shorten T or use --period",
         )
     return pb
+
+
+def check_sampled_work(nd_: int, t_end: float, period: float, delay: int) -> None:
+    """Refuse, before anything starts, a sampled recursion past :data:`MAX_SECONDS`
+    (about 6 products of ((D+1)·Nd)² ball matrices a step), in one line naming
+    ``--deadline``.
+
+    Parameters
+    ----------
+    nd_ : int
+        N·d.
+    t_end, period : float
+        T and h.
+    delay : int
+        D.
+
+    Raises
+    ------
+    InputError
+        The estimate is past the limit.
+    """
+    k_steps = deadline_steps(t_end, period)[0] + 1
+    w = (delay + 1) * nd_
+    secs = k_steps * 6.0 * w**3 * ARB_FLOP_SECONDS
+    check_work(
+        secs,
+        f"--deadline: the proven moments take K = {k_steps} steps of a {w}×{w} ball "
+        f"recursion (N·d = {nd_}, D = {delay}), roughly {secs:.3g} s",
+        MAX_SECONDS,
+        "raise the period, lower the delay or shorten T",
+    )
 
 
 def deadline_bound(pb: DeadlineProblem) -> DeadlineBound:

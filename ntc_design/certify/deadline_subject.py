@@ -20,6 +20,12 @@ from .kinds.base import Reading, ResultsAudit, number_text
 from .kinds.registry import KINDS
 
 
+#: A stated bound may exceed the one re-derived by this share (a later version that
+#: encloses more tightly keeps older certificates valid), not more: the figures belong to
+#: the subject's initial state, gain and T.
+FIGURE_SLACK = 0.05
+
+
 @dataclass(frozen=True)
 class DeadlineProof:
     """What verify proved about ``subject.deadline``: its checks and the bound."""
@@ -133,8 +139,14 @@ def audit_deadline(audit: ResultsAudit, proof: DeadlineProof) -> None:
     if b is None:
         return
     audit.exact(("deadline", "T"), b.t_end)
-    audit.bound(("deadline", "ms_error_bound"), b.ms_error_bound, "upper")
-    audit.bound(("deadline", "peak_bound"), b.peak_bound, "upper")
+    for key, value in (("ms_error_bound", b.ms_error_bound), ("peak_bound", b.peak_bound)):
+        audit.bound(("deadline", key), value, "upper")
+        got = audit.get("deadline", key)
+        if isinstance(got, (int, float)) and got > (1 + FIGURE_SLACK) * value:
+            audit.fail(
+                f"deadline.{key}: {got!r} is more than {FIGURE_SLACK:.0%} above the bound "
+                f"proven for this subject ({value:.10g}): not this subject's figure"
+            )
     audit.estimate(("deadline", "peak_time"), 0.0, b.t_end)
 
 
@@ -160,4 +172,11 @@ def deadline_text(results: dict) -> str | None:
     )
 
 
-__all__ = ["DeadlineProof", "add_deadline", "audit_deadline", "deadline_text", "prove_deadline"]
+__all__ = [
+    "FIGURE_SLACK",
+    "DeadlineProof",
+    "add_deadline",
+    "audit_deadline",
+    "deadline_text",
+    "prove_deadline",
+]

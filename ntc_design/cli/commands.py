@@ -285,8 +285,6 @@ def certify(
         str | None,
         typer.Option(
             "--deadline",
-            is_flag=False,
-            flag_value="",
             help="With a scenario: also prove E Σ‖x_i(T) − θ‖² <= B_T and its peak over "
             "[0, T] (--deadline T overrides the scenario's T; bare --deadline uses it).",
         ),
@@ -381,6 +379,10 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     sampled = digital_option(period, delay, sc.document.get("digital"), t_doc)
     top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
     n, d = top.n, top.dim
+    if sampled:  # before the certificate: its own work is bounded by the same steps
+        from ..certify.deadline import check_sampled_work
+
+        check_sampled_work(top.n * top.dim, float(spec.T), sampled["period"], sampled["delay"])
     x0, _ = spec.initial_state(n, d)
     noise = spec.noise
     if callable(noise.f):
