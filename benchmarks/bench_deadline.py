@@ -18,7 +18,8 @@ import warnings
 
 import numpy as np
 
-from ntc_design.certify.deadline import build_problem, deadline_bound
+from ntc_design.certify.deadline import deadline_bound
+from ntc_design.certify.deadline_subject import build_problem
 from ntc_design.model.paper import example_path
 from ntc_design.protocol import design
 from ntc_design.protocol.digital import Digital

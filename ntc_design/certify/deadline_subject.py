@@ -8,22 +8,205 @@ subject, never a stated matrix (:mod:`ntc_design.certify.deadline` has the mathe
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
-from ..errors import InputError
+import numpy as np
+
+from ..errors import InputError, check_work
+from ..rigorous.exact import Dyadic
 from .checks import Check
-from .deadline import DeadlineBound, build_problem, deadline_bound
+from .deadline import (
+    MAX_SECONDS,
+    DeadlineBound,
+    DeadlineProblem,
+    check_sampled_work,
+    continuous_work,
+    deadline_bound,
+    deadline_mode,
+)
+from .deadline_gain import GainBalls
 from .dense import DenseContext
-from .fields import parse_schedule
+from .digital import edge_noises
+from .fields import matrix, need, number, parse_schedule
 from .format import finish
 from .kinds.base import Reading, ResultsAudit, number_text
 from .kinds.registry import KINDS
-
 
 #: A stated bound may exceed the one re-derived by this share (a later version that
 #: encloses more tightly keeps older certificates valid), not more: the figures belong to
 #: the subject's initial state, gain and T.
 FIGURE_SLACK = 0.05
+
+
+def initial_moment(initial: dict, theta: np.ndarray, n: int, source: str = "initial") -> np.ndarray:
+    """E[e(0) e(0)ᵀ] from ``{x0: [...]}`` (a given state) or ``{mean: [...], variance:
+    [...]}`` (a distribution with independent components: its exact second moment).
+
+    Parameters
+    ----------
+    initial : dict
+        The subject's ``deadline.initial``.
+    theta : numpy.ndarray
+        θ.
+    n : int
+        N.
+    source : str, optional
+        Where it is written, for messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        Nd × Nd.
+
+    Raises
+    ------
+    InputError
+        A missing field or a wrong size, naming it.
+    """
+    nd_ = n * theta.size
+    if not isinstance(initial, dict):
+        raise InputError(f"{source}: expected {{x0: [...]}} or {{mean: [...], variance: [...]}}")
+    key = "x0" if "x0" in initial else "mean"
+    mean = np.asarray(
+        [number(v, f"{source}.{key}") for v in need(initial, key, list, source)], dtype=float
+    )
+    var = (
+        np.asarray(
+            [number(v, f"{source}.variance") for v in need(initial, "variance", list, source)],
+            dtype=float,
+        )
+        if key == "mean"
+        else np.zeros(nd_)
+    )
+    if mean.size != nd_ or var.size != nd_:
+        raise InputError(f"{source}.{key}: expected N·d = {nd_} numbers")
+    if np.any(var < 0):
+        raise InputError(f"{source}.variance: must be >= 0")
+    e = mean - np.tile(theta, n)
+    return np.outer(e, e) + np.diag(var)
+
+
+def noise_parts(noise: Any, d: int, source: str) -> tuple[np.ndarray, float, dict]:
+    """F (d×d), σ and the per-edge σ from a ``{sigma, f, sigma_edges}`` document.
+
+    Parameters
+    ----------
+    noise : dict
+        The document.
+    d : int
+        The state dimension.
+    source : str
+        Where it is written.
+
+    Returns
+    -------
+    (numpy.ndarray, float, dict)
+
+    Raises
+    ------
+    InputError
+        A missing or malformed field.
+    """
+    if not isinstance(noise, dict):
+        raise InputError(f"{source}: expected {{sigma, f, sigma_edges}}")
+    sigma = number(need(noise, "sigma", (int, float), source), f"{source}.sigma")
+    f_raw = need(noise, "f", (int, float, list), source)
+    f = (
+        matrix(f_raw, d, f"{source}.f")
+        if isinstance(f_raw, list)
+        else number(f_raw, f"{source}.f") * np.eye(d)
+    )
+    edges = {}
+    for k, e in enumerate(noise.get("sigma_edges", [])):
+        if not isinstance(e, dict) or not all(isinstance(e.get(x), str) for x in ("from", "to")):
+            raise InputError(f"{source}.sigma_edges[{k}]: expected {{from, to, sigma}}")
+        edges[(e["from"], e["to"])] = number(e.get("sigma"), f"{source}.sigma_edges[{k}].sigma")
+    if sigma < 0 or any(v < 0 for v in edges.values()):
+        raise InputError(f"{source}.sigma: must be >= 0")
+    return f, sigma, edges
+
+
+def build_problem(
+    modes: dict[str, tuple[Any, np.ndarray, np.ndarray, Dyadic | None]],
+    schedule: Sequence[tuple[str, float]] | None,
+    section: dict,
+    theta: np.ndarray,
+    source: str = "deadline",
+) -> DeadlineProblem:
+    """The problem from the modes (topology, L_B, its error bound) and a ``deadline``
+    section (``T``, ``period``, ``delay``, ``gain``, ``noise``, ``initial``).
+
+    Parameters
+    ----------
+    modes : dict of str to (Topology, numpy.ndarray, numpy.ndarray, Dyadic or None)
+        Each mode's topology, L_B, an entrywise bound on L_B's error and L_B exactly
+        (None when not affordable).
+    schedule : sequence of (str, float) or None
+        The periodic schedule (None: one mode).
+    section : dict
+        The deadline section (as a certificate's subject states it).
+    theta : numpy.ndarray
+        θ.
+    source : str, optional
+        Where the section is written, for messages.
+
+    Returns
+    -------
+    DeadlineProblem
+
+    Raises
+    ------
+    InputError
+        A missing or malformed field, or work past the limit (naming ``--deadline``).
+    """
+    if not isinstance(section, dict):
+        raise InputError(f"{source}: expected an object")
+    t_end = number(need(section, "T", (int, float), source), f"{source}.T")
+    if not t_end > 0:
+        raise InputError(f"{source}.T: must be > 0")
+    period = section.get("period")
+    if period is not None:
+        period = number(period, f"{source}.period")
+        if not 0 < period <= t_end:
+            raise InputError(f"{source}.period: must be in (0, T]")
+    delay = section.get("delay", 0)
+    if not isinstance(delay, int) or isinstance(delay, bool) or not 0 <= delay <= 10_000:
+        raise InputError(f"{source}.delay: expected an integer D >= 0")
+    first = next(iter(modes.values()))[0]  # the agents and d of every mode
+    n, d = first.n, first.dim
+    f, sigma, edges = noise_parts(section.get("noise"), d, f"{source}.noise")
+    names = tuple(modes)
+    moment0 = initial_moment(section.get("initial"), theta, n, f"{source}.initial")
+    gain = GainBalls(section.get("gain"))
+    nd_ = n * d
+    if period is not None:
+        check_sampled_work(nd_, t_end, period, delay)
+    built = tuple(
+        deadline_mode(lap, err, edge_noises(top, f, sigma, edges), d, exact)
+        for top, lap, err, exact in modes.values()
+    )
+    pb = DeadlineProblem(
+        built,
+        names,
+        tuple(schedule) if schedule is not None else None,
+        gain,
+        t_end,
+        period,
+        delay,
+        moment0,
+    )
+    if period is None:
+        secs = continuous_work(pb)
+        check_work(
+            secs,
+            f"--deadline: the enclosure of the moment equations (N·d = {nd_}, T = {t_end:g}) "
+            f"takes roughly {secs:.3g} s",
+            MAX_SECONDS,
+            "shorten T or use --period",
+        )
+    return pb
 
 
 @dataclass(frozen=True)

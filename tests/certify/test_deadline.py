@@ -8,13 +8,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from ntc_design.certify.deadline import (
-    GainBalls,
-    build_problem,
-    deadline_bound,
-    deadline_steps,
-    initial_moment,
-)
+from ntc_design.certify.deadline import deadline_bound, deadline_steps
+from ntc_design.certify.deadline_subject import build_problem, initial_moment
 from ntc_design.certify.digital import edge_noises
 from ntc_design.protocol import design
 from ntc_design.rigorous.exact import Dyadic
@@ -156,14 +151,3 @@ def test_initial_distribution_uses_its_second_moment(theta):
     m = initial_moment({"mean": [1.0] * 6, "variance": [3.0] * 6}, theta, 2)
     e = np.ones(6) - np.tile(theta, 2)
     np.testing.assert_allclose(m, np.outer(e, e) + 3.0 * np.eye(6))
-
-
-def test_schedule_gain_series_is_its_interpolation():
-    from flint import arb
-
-    g = GainBalls(
-        {"t": [0, 1, 2], "c": [1.0, 0.5, 0.25], "interpolation": "linear", "tail": "1/(1+t)"}
-    )
-    c = g.series(arb(0.5), 3)
-    assert float(c[0].mid()) == pytest.approx(0.75) and float(c[1].mid()) == pytest.approx(-0.5)
-    assert float(g.value(arb(3.0)).mid()) == pytest.approx(0.25)  # the tail after the table
