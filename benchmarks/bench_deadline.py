@@ -26,6 +26,7 @@ from ntc_design.protocol.digital import Digital
 from ntc_design.rigorous.exact import Dyadic
 from ntc_design.simulate import simulate
 from ntc_design.simulate.scenario import load_scenario
+from ntc_design.simulate.spec import SaveAt
 
 
 def main() -> None:
@@ -34,7 +35,7 @@ def main() -> None:
     t_end = 2.0 if ap.parse_args().quick else 10.0
     warnings.simplefilter("ignore")
     top, spec, _ = load_scenario(example_path() / "scenarios" / "g1_deadline.yaml")
-    spec = spec.replace(T=t_end, method="exact", save_every=0.01, paths=0)
+    spec = spec.replace(T=t_end, method="exact", save=SaveAt(every=0.01))
     des = design(top, spec.theta, spec.margin)
     lap = des.grounded_laplacian()
     x0, _ = spec.initial_state(top.n, top.dim)
