@@ -322,10 +322,10 @@ def _mode(
     if edges:
         blocks = [km * _ball_matrix(w) for km, w in zip(kmats, w_rows, strict=True)]
         w_ball = arb_mat(len(edges) * d, nd_)
-        for k, b in enumerate(blocks):
+        for k, blk in enumerate(blocks):
             for a in range(d):
                 for c in range(nd_):
-                    w_ball[k * d + a, c] = b[a, c]
+                    w_ball[k * d + a, c] = blk[a, c]
     q = arb_mat(nd_, nd_)
     for e, g in zip(edges, gs, strict=True):
         for a in range(d):

@@ -40,7 +40,7 @@ from .kinds.registry import KINDS
 FIGURE_SLACK = 0.05
 
 
-def initial_moment(initial: dict, theta: np.ndarray, n: int, source: str = "initial") -> np.ndarray:
+def initial_moment(initial: Any, theta: np.ndarray, n: int, source: str = "initial") -> np.ndarray:
     """E[e(0) e(0)ᵀ] from ``{x0: [...]}`` (a given state) or ``{mean: [...], variance:
     [...]}`` (a distribution with independent components: its exact second moment).
 
