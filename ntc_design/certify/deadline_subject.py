@@ -8,6 +8,7 @@ subject, never a stated matrix (:mod:`ntc_design.certify.deadline` has the mathe
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -260,6 +261,30 @@ def add_deadline(doc: dict, section: dict) -> DeadlineBound:
     doc.pop("digest", None)
     finish(doc, doc.get("verification_method"))
     return bound
+
+
+def continuous_figures(doc: dict) -> DeadlineBound:
+    """The continuous design's figures for a certificate's ``subject.deadline`` (the same
+    T, gain, noise and initial state, no period): what the sampled ones are compared with.
+
+    Parameters
+    ----------
+    doc : dict
+        A certificate with ``subject.deadline``.
+
+    Returns
+    -------
+    DeadlineBound
+
+    Raises
+    ------
+    InputError
+        As :func:`add_deadline`.
+    """
+    probe = copy.deepcopy(doc)
+    probe["subject"]["deadline"] = {**doc["subject"]["deadline"], "period": None, "delay": 0}
+    reading = KINDS[doc["kind"]].read(probe, "certificate")
+    return _bound(probe, reading, "certificate")
 
 
 def prove_deadline(doc: dict, reading: Reading, source: str) -> DeadlineProof:

@@ -330,14 +330,18 @@ def certify(
             rate_method=rate_method,
             digital=Digital.from_document(sampled) if sampled is not None else None,
         )
-    figures = None
+    figures = continuous = None
     if scenario is not None and res.verification.valid:
-        from ..certify.deadline_subject import add_deadline
+        from ..certify.deadline_subject import add_deadline, continuous_figures
 
         figures = add_deadline(res.certificate, section)
+        if section["period"] is not None:  # beside the continuous design's
+            continuous = continuous_figures(res.certificate)
     doc = res.to_dict()  # every step that can fail runs before anything is written
     if figures is not None:
         doc["deadline"] = figures.to_dict()
+    if continuous is not None:
+        doc["deadline"]["continuous"] = continuous.to_dict()
     written = out_path is not None and res.verification.valid
     if out_path is not None and written:
         write_certificate(res.certificate, out_path)
@@ -345,6 +349,8 @@ def certify(
         print(json_text(doc))
     else:
         _print_certify(res, out_path if written else None)
+        if figures is not None and continuous is not None:
+            _print_beside(figures, continuous, file)
     if out_path is not None and not written:
         print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
     if not res.proven:
@@ -408,6 +414,23 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     }
     f_opt = float(f) if f.ndim == 0 else f
     return top, list(spec.theta), spec.margin, spec.gain, noise.sigma, f_opt, sampled, section
+
+
+def _print_beside(sampled, continuous, file: Path) -> None:
+    """The sampled figures beside the continuous design's, and one warning line when the
+    period costs more than 10 % at T or 10× at the peak."""
+    print(
+        f"proven at T = {sampled.t_end:g}: sampled E Σ‖x_i(T) − θ‖² <= "
+        f"{sampled.ms_error_bound:.7g} (peak <= {sampled.peak_bound:.7g}); continuous design "
+        f"<= {continuous.ms_error_bound:.7g} (peak <= {continuous.peak_bound:.7g})"
+    )
+    ratio, peak = sampled.ms_error / continuous.ms_error, sampled.peak / continuous.peak
+    if ratio > 1.1 or peak > 10.0:
+        print(
+            f"warning: the period costs {ratio:.3g}× the continuous error at T and {peak:.3g}× "
+            f"its peak; find the longest safe period with: ntc tune {file} --period auto",
+            file=sys.stderr,
+        )
 
 
 def _print_certify(res, written: Path | None) -> None:

@@ -384,3 +384,14 @@ def test_certify_deadline_json_states_the_figures(tmp_path, examples, capsys, mo
     figures = json.loads(text)["deadline"]
     assert figures["T"] == 1.05 and figures["peak_bound"] >= figures["ms_error_bound"] > 0
     assert verify(json.loads(out.read_text())).valid
+
+
+@pytest.mark.slow
+def test_certify_period_warns_beside_the_continuous_figures(examples, capsys, monkeypatch):
+    scen = examples / "scenarios" / "g1_deadline.yaml"
+    code, out, err = run_cli(["certify", scen, "--period", "5", "--deadline"], capsys, monkeypatch)
+    assert code == 0
+    line = next(ln for ln in out.splitlines() if ln.startswith("proven at T = 10"))
+    assert "continuous design <= 2.91" in line
+    warnings_ = [ln for ln in err.splitlines() if ln.startswith("warning:")]
+    assert len(warnings_) == 1 and "ntc tune" in warnings_[0] and "--period auto" in warnings_[0]
