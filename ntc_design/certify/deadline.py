@@ -720,7 +720,9 @@ def continuous_bound(pb: DeadlineProblem) -> DeadlineBound:
         ctx.prec = old
 
 
-def check_sampled_work(nd_: int, t_end: float, period: float, delay: int) -> None:
+def check_sampled_work(
+    nd_: int, t_end: float, period: float, delay: int, limit: float | None = None
+) -> None:
     """Refuse, before anything starts, a sampled recursion past :data:`MAX_SECONDS`
     (about 6 products of ((D+1)·Nd)² ball matrices a step), in one line naming
     ``--deadline``.
@@ -733,6 +735,8 @@ def check_sampled_work(nd_: int, t_end: float, period: float, delay: int) -> Non
         T and h.
     delay : int
         D.
+    limit : float, optional
+        The longest work accepted (default :data:`MAX_SECONDS`).
 
     Raises
     ------
@@ -746,7 +750,7 @@ def check_sampled_work(nd_: int, t_end: float, period: float, delay: int) -> Non
         secs,
         f"--deadline: the proven moments take K = {k_steps} steps of a {w}×{w} ball "
         f"recursion (N·d = {nd_}, D = {delay}), roughly {secs:.3g} s",
-        MAX_SECONDS,
+        MAX_SECONDS if limit is None else limit,
         "raise the period, lower the delay or shorten T",
     )
 

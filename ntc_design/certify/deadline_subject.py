@@ -135,6 +135,7 @@ def build_problem(
     section: dict,
     theta: np.ndarray,
     source: str = "deadline",
+    limit: float | None = None,
 ) -> DeadlineProblem:
     """The problem from the modes (topology, L_B, its error bound) and a ``deadline``
     section (``T``, ``period``, ``delay``, ``gain``, ``noise``, ``initial``).
@@ -152,6 +153,8 @@ def build_problem(
         θ.
     source : str, optional
         Where the section is written, for messages.
+    limit : float, optional
+        Refuse work estimated past this many seconds (default :data:`MAX_SECONDS`).
 
     Returns
     -------
@@ -183,7 +186,7 @@ def build_problem(
     gain = GainBalls(section.get("gain"))
     nd_ = n * d
     if period is not None:
-        check_sampled_work(nd_, t_end, period, delay)
+        check_sampled_work(nd_, t_end, period, delay, limit)
     built = tuple(
         deadline_mode(lap, err, edge_noises(top, f, sigma, edges), d, exact)
         for top, lap, err, exact in modes.values()
@@ -204,7 +207,7 @@ def build_problem(
             secs,
             f"--deadline: the enclosure of the moment equations (N·d = {nd_}, T = {t_end:g}) "
             f"takes roughly {secs:.3g} s",
-            MAX_SECONDS,
+            MAX_SECONDS if limit is None else limit,
             "shorten T or use --period",
         )
     return pb
@@ -218,7 +221,7 @@ class DeadlineProof:
     bound: DeadlineBound | None
 
 
-def _bound(doc: dict, reading: Reading, source: str) -> DeadlineBound:
+def _bound(doc: dict, reading: Reading, source: str, limit: float | None = None) -> DeadlineBound:
     ctx = reading.state
     if not isinstance(ctx, DenseContext):
         raise InputError(
@@ -229,11 +232,12 @@ def _bound(doc: dict, reading: Reading, source: str) -> DeadlineBound:
     schedule = parse_schedule(subject, f"{source}: subject") if "schedule" in subject else None
     modes = {k: (m.top, m.lap, m.err, m.exact) for k, m in ctx.modes.items()}
     theta = next(iter(reading.modes.values())).theta
-    pb = build_problem(modes, schedule, subject["deadline"], theta, f"{source}: subject.deadline")
+    where = f"{source}: subject.deadline"
+    pb = build_problem(modes, schedule, subject["deadline"], theta, where, limit)
     return deadline_bound(pb)
 
 
-def add_deadline(doc: dict, section: dict) -> DeadlineBound:
+def add_deadline(doc: dict, section: dict, limit: float | None = None) -> DeadlineBound:
     """Add the deadline figures to a certificate (in place) and seal it again.
 
     Parameters
@@ -244,6 +248,8 @@ def add_deadline(doc: dict, section: dict) -> DeadlineBound:
         ``subject.deadline``: ``T``, ``period`` (None: continuous), ``delay``, ``gain``,
         ``noise`` ``{sigma, f, sigma_edges}`` and ``initial`` (``{x0}`` or ``{mean,
         variance}``).
+    limit : float, optional
+        Refuse work estimated past this many seconds (default :data:`MAX_SECONDS`).
 
     Returns
     -------
@@ -256,7 +262,7 @@ def add_deadline(doc: dict, section: dict) -> DeadlineBound:
     """
     doc["subject"]["deadline"] = section
     reading = KINDS[doc["kind"]].read(doc, "certificate")
-    bound = _bound(doc, reading, "certificate")
+    bound = _bound(doc, reading, "certificate", limit)
     doc["results"]["deadline"] = bound.to_dict()
     doc.pop("digest", None)
     finish(doc, doc.get("verification_method"))

@@ -309,7 +309,7 @@ def tune_power(
     land = _landscape(obj, tuned, delta, dims) if landscape else None
     say("the theorem conditions and the certificate of the tuned design")
     analysis = analyse_gain(tuned.text)
-    cert = certify_tuned(topology, spec, tuned, delta, notes) if certificate else None
+    cert = certify_tuned(topology, spec, tuned, delta, notes, horizon) if certificate else None
     return TuneResult(
         tuned=tuned,
         baseline=BASELINE,
