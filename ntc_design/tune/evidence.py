@@ -4,6 +4,8 @@ certificate of the tuned design (:func:`certify_tuned`)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..certify import CertifyResult, certify
@@ -173,6 +175,31 @@ def certify_tuned(
     return res
 
 
+def proven_text(cert: CertifyResult | None) -> str:
+    """``", proven ≤ B_T"`` (B_T rounded up to 6 significant digits) when the tuned
+    certificate carries the deadline figures, else ``""``.
+
+    Parameters
+    ----------
+    cert : CertifyResult or None
+        The tuned design's certificate.
+
+    Returns
+    -------
+    str
+    """
+    if cert is None or not cert.verification.valid:
+        return ""
+    fig = cert.certificate.get("results", {}).get("deadline")
+    if not isinstance(fig, dict) or not isinstance(fig.get("ms_error_bound"), (int, float)):
+        return ""
+    b = float(fig["ms_error_bound"])
+    if not (math.isfinite(b) and b > 0):
+        return ""
+    scale = 10.0 ** (math.floor(math.log10(b)) - 5)
+    return f", proven ≤ {math.ceil(b / scale) * scale:.6g}"
+
+
 #: The tuned certificate's deadline figures are proven when estimated within this (s).
 DEADLINE_SECONDS = 120.0
 
@@ -212,4 +239,11 @@ def _add_deadline(res, spec, tuned, deadline: float, notes: list[str]) -> None:
         notes.append(f"no proven figures at the deadline: {exc}")
 
 
-__all__ = ["DEADLINE_SECONDS", "IMPLICIT", "certify_tuned", "checked_spec", "stable_stepping"]
+__all__ = [
+    "DEADLINE_SECONDS",
+    "IMPLICIT",
+    "certify_tuned",
+    "proven_text",
+    "checked_spec",
+    "stable_stepping",
+]

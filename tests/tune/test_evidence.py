@@ -216,3 +216,17 @@ def test_certify_tuned_turns_a_refusal_into_a_note(pair_topology):
     sp = SimulationSpec.build([1.0, 2.0])  # θ of dimension 2 for a d = 1 network
     assert certify_tuned(pair_topology, sp, PowerGain(1.0, 1.0, 1.0), None, notes) is None
     assert notes == ["no certificate: theta: expected 1 numbers (the state dimension d), got 2"]
+
+
+def test_proven_text_rounds_the_bound_up():
+    from types import SimpleNamespace
+
+    from ntc_design.tune.evidence import proven_text
+
+    def cert(bound, valid=True):
+        doc = {"results": {"deadline": {"ms_error_bound": bound}}}
+        return SimpleNamespace(verification=SimpleNamespace(valid=valid), certificate=doc)
+
+    assert proven_text(cert(0.83251234)) == ", proven ≤ 0.832513"
+    assert proven_text(cert(15.816133)) == ", proven ≤ 15.8162"
+    assert proven_text(cert(1.0, valid=False)) == "" and proven_text(None) == ""
