@@ -22,6 +22,7 @@ from ..protocol import ProtocolDesign, SwitchingDesign, design
 from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.timevarying import TimeVaryingDesign
 from .checks import Check, Verification
+from .deadline_subject import deadline_text
 from .dense import DENSE_CERT_MAX_ND
 from .format import digest
 from .kinds import KINDS, IssueOptions, ResultRow, kind_for
@@ -59,7 +60,10 @@ class CertifyResult:
     @property
     def rows(self) -> tuple[ResultRow, ...]:
         """What the certificate reports, as rows (the same on every face)."""
-        return KINDS[self.certificate["kind"]].rows(self.certificate["results"])
+        results = self.certificate["results"]
+        line = deadline_text(results)  # the figures at the deadline, when stated
+        extra = (ResultRow("proven at the deadline", line),) if line is not None else ()
+        return (*KINDS[self.certificate["kind"]].rows(results), *extra)
 
     def results_table(self) -> Table:
         """What the certificate reports (its kind's rows), as every face shows it.

@@ -36,6 +36,7 @@ from .checks import (
     scheduled_described,
 )
 from .claims import Property
+from .deadline_subject import audit_deadline, prove_deadline
 from .fields import need, parse_schedule
 from .format import (
     FORMAT,
@@ -304,12 +305,15 @@ def verify(
         proof = kind.prove(c, subject, reading)
         checks += proof if isinstance(proof, list) else [proof]
 
+    deadline = prove_deadline(doc, reading, source)  # the figures at T, when stated
+    checks += deadline.checks
     if "gain" in doc:  # a tabulated schedule: its conditions derived here, never read
         checks += [
             Check(name, ok, detail) for name, ok, detail in schedule_checks(doc["gain"], source)
         ]
     audit = ResultsAudit(doc.get("results"), source)
     kind.audit(audit, doc, subject, reading, alpha)
+    audit_deadline(audit, deadline)
     checks.append(audit.check())
     about = _about(kind, props, subject, alpha if Property.DECAY_RATE in props else None)
     about = replace(about, stated=kind.stated(props, reading))

@@ -263,7 +263,10 @@ def gain(
 
 def certify(
     file: FileArg,
-    theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
+    theta: Annotated[
+        str | None,
+        typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1 (a scenario's by default)."),
+    ] = None,
     margin: Annotated[float, typer.Option(help="ΔC > 0: δ = C + ΔC.")] = 0.1,
     gain: Annotated[
         str | None,
@@ -300,6 +303,14 @@ def certify(
     delay: DelayOpt = None,
     loss: LossOpt = None,
     loss_policy: LossPolicyOpt = None,
+    deadline: Annotated[
+        str | None,
+        typer.Option(
+            "--deadline",
+            help="With a scenario: also prove E Σ‖x_i(T) − θ‖² <= B_T and its peak over "
+            "[0, T] (--deadline T overrides the scenario's T; bare --deadline uses it).",
+        ),
+    ] = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Certify the Lemma 1 design (Lyapunov equation + LMI, or per-mode L_B + L_Bᵀ ≻ 0 and a
@@ -311,12 +322,14 @@ def certify(
     valid."""
     from ..io.outputs import check_output_file
 
-    th = parse_vector(theta, "--theta")  # trivially bad input before the library loads
+    # trivially bad input before the library loads
+    th = parse_vector(theta, "--theta") if theta is not None else None
     if rate_method not in ("lyapunov", "lmi"):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
     sampled = digital_option(period, delay, None, None, loss, loss_policy)
     require_file(file)
-    check_theta_length(file, th)
+    if th is not None and deadline is None:  # a scenario (--deadline) gives its own θ
+        check_theta_length(file, th)
     if out_path is not None:
         check_output_file(out_path, "--out")
     from ..certify import certify as run
@@ -326,7 +339,16 @@ def certify(
     from ..protocol.digital import Digital
     from ..protocol.lemma1 import uninformed_modes
 
-    top = load(file)
+    if deadline is not None and (loss is not None or loss_policy is not None):
+        raise InputError("--loss: lossy links are not certified at a deadline (drop --deadline)")
+    scenario = _deadline_scenario(file, deadline, period, delay) if deadline is not None else None
+    if scenario is not None:
+        top, th_file, margin, gain_opt, noise_sigma, noise_f, sampled, section = scenario
+        th = th if th is not None else th_file
+    else:
+        if th is None:
+            raise InputError("--theta: missing (the target consensus state, e.g. 1,2,-1)")
+        top, gain_opt = load(file), gain_from_option(gain, "--gain")
     uninformed = uninformed_modes(top)
     if uninformed and as_json:  # nothing to certify: said as ntc design says it
         print(json_text({"ok": False, "proven": False, "informed": []}))
@@ -337,13 +359,24 @@ def certify(
             top,
             th,
             margin,
-            gain_from_option(gain, "--gain"),
+            gain_opt,
             noise_sigma=noise_sigma,
             noise_f=noise_f,
             rate_method=rate_method,
             digital=Digital.from_document(sampled) if sampled is not None else None,
         )
+    figures = continuous = None
+    if scenario is not None and res.verification.valid:
+        from ..certify.deadline_subject import add_deadline, continuous_figures
+
+        figures = add_deadline(res.certificate, section)
+        if section["period"] is not None:  # beside the continuous design's
+            continuous = continuous_figures(res.certificate)
     doc = res.to_dict()  # every step that can fail runs before anything is written
+    if figures is not None:
+        doc["deadline"] = figures.to_dict()
+    if continuous is not None:
+        doc["deadline"]["continuous"] = continuous.to_dict()
     written = out_path is not None and res.verification.valid
     if out_path is not None and written:
         write_certificate(res.certificate, out_path)
@@ -351,12 +384,88 @@ def certify(
         print(json_text(doc))
     else:
         _print_certify(res, out_path if written else None)
+        if figures is not None and continuous is not None:
+            _print_beside(figures, continuous, file)
     if out_path is not None and not written:
         print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
     if not res.proven:
         if out_path is None or written:
             print("not proven: no theorem is guaranteed", file=sys.stderr)
         raise typer.Exit(1)
+
+
+def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
+    """``ntc certify SCENARIO --deadline [T]``: the scenario's topology, θ, ΔC, gain,
+    noise, digital block and the certificate's ``subject.deadline`` (one line naming the
+    missing field or the flag)."""
+    import numpy as np
+
+    from ..errors import number_from_text
+    from ..io.files import parse_scenario
+    from ..simulate.scenario import load_scenario
+
+    sc = parse_scenario(file)
+    overrides: dict = {}
+    if deadline != "":
+        overrides["T"] = number_from_text(deadline, "--deadline")
+        if not overrides["T"] > 0:
+            raise InputError(f"--deadline: T must be > 0, got {deadline!r}")
+    elif "T" not in sc.document:
+        raise InputError(
+            f"{sc.source}: T: missing (--deadline needs the deadline; or --deadline T)"
+        )
+    if sc.document.get("initial") is None:
+        raise InputError(f"{sc.source}: initial: missing (--deadline needs the initial state)")
+    t_doc = overrides.get("T", sc.document.get("T"))
+    sampled = digital_option(period, delay, sc.document.get("digital"), t_doc)
+    top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
+    n, d = top.n, top.dim
+    if sampled:  # before the certificate: its own work is bounded by the same steps
+        from ..certify.deadline import check_sampled_work
+
+        check_sampled_work(top.n * top.dim, float(spec.T), sampled["period"], sampled["delay"])
+    x0, _ = spec.initial_state(n, d)
+    noise = spec.noise
+    gain_doc = spec.gain if isinstance(spec.gain, str) else getattr(spec.gain, "to_document", None)
+    if gain_doc is None:
+        raise InputError(f"{sc.source}: gain: --deadline needs c(t) as an expression or a schedule")
+    if callable(noise.f):
+        raise InputError(f"{sc.source}: noise.f: --deadline needs f(x) = f·x or F x")
+    f = np.asarray(noise.f, dtype=float)
+    section = {
+        "T": float(spec.T),
+        "period": sampled["period"] if sampled else None,
+        "delay": sampled["delay"] if sampled else 0,
+        "gain": gain_doc if isinstance(gain_doc, str) else gain_doc(),
+        "noise": {
+            "sigma": float(noise.sigma),
+            "f": float(f) if f.ndim == 0 else f.tolist(),
+            "sigma_edges": [
+                {"from": str(a), "to": str(b), "sigma": float(v)}
+                for (a, b), v in noise.sigma_edges.items()
+            ],
+        },
+        "initial": {"x0": [float(v) for v in x0]},
+    }
+    f_opt = float(f) if f.ndim == 0 else f
+    return top, list(spec.theta), spec.margin, spec.gain, noise.sigma, f_opt, sampled, section
+
+
+def _print_beside(sampled, continuous, file: Path) -> None:
+    """The sampled figures beside the continuous design's, and one warning line when the
+    period costs more than 10 % at T or 10× at the peak."""
+    print(
+        f"proven at T = {sampled.t_end:g}: sampled E Σ‖x_i(T) − θ‖² <= "
+        f"{sampled.ms_error_bound:.7g} (peak <= {sampled.peak_bound:.7g}); continuous design "
+        f"<= {continuous.ms_error_bound:.7g} (peak <= {continuous.peak_bound:.7g})"
+    )
+    ratio, peak = sampled.ms_error / continuous.ms_error, sampled.peak / continuous.peak
+    if ratio > 1.1 or peak > 10.0:
+        print(
+            f"warning: the period costs {ratio:.3g}× the continuous error at T and {peak:.3g}× "
+            f"its peak; find the longest safe period with: ntc tune {file} --period auto",
+            file=sys.stderr,
+        )
 
 
 def _print_certify(res, written: Path | None) -> None:

@@ -53,6 +53,7 @@ def _argv(args: list[str]) -> list[str]:
     is a value, not an option. Option values are taken as they are by click; a positional
     one (a minus sign followed by a digit, ``(`` or ``.``) is moved after ``--`` at the end
     (every command has at most one such positional argument)."""
+    args = _bare_deadline(args)
     if "--" in args:
         return list(args)
     rest: list[str] = []
@@ -66,6 +67,19 @@ def _argv(args: list[str]) -> list[str]:
 
 
 _FLAGS = {"--json", "--help", "--version"}  # options that take no value
+
+
+def _bare_deadline(args: list[str]) -> list[str]:
+    """``--deadline`` takes an optional value (T): bare (last, or before an option or a
+    file), it is given the empty value, which means the scenario's T."""
+    out = list(args)
+    for k in range(len(out) - 1, -1, -1):
+        if out[k] != "--deadline":
+            continue
+        nxt = out[k + 1] if k + 1 < len(out) else None
+        if nxt is None or not (nxt[:1].isdigit() or nxt[:1] in ".+-" and nxt[1:2].isdigit()):
+            out.insert(k + 1, "")
+    return out
 
 
 def _error_exit(message: str, args: list[str], code: int = 2) -> int:

@@ -393,7 +393,7 @@ def tune_schedule(
                 "Monte Carlo misses the exact value for " + ", ".join(missed) + " (Euler–"
                 "Maruyama bias at the scenario's dt, or a 1 % chance per gain)"
             )
-    cert = certify_tuned(topology, spec, schedule, delta, notes) if certificate else None
+    cert = certify_tuned(topology, spec, schedule, delta, notes, horizon) if certificate else None
     dg = spec.digital
     method = (
         (

@@ -4,6 +4,8 @@ certificate of the tuned design (:func:`certify_tuned`)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..certify import CertifyResult, certify
@@ -126,8 +128,10 @@ def certify_tuned(
     tuned: PowerGain | ScheduleGain,
     delta: float | None,
     notes: list[str],
+    deadline: float | None = None,
 ) -> CertifyResult | None:
-    """The certificate of the tuned design, or None with a note when none applies.
+    """The certificate of the tuned design, or None with a note when none applies; with a
+    deadline it also carries the proven figures at T (:mod:`ntc_design.certify.deadline`).
 
     Parameters
     ----------
@@ -141,6 +145,9 @@ def certify_tuned(
         The tuned δ (None: the scenario's).
     notes : list of str
         Where a missing certificate is explained.
+    deadline : float, optional
+        T: add ``subject.deadline`` and ``results.deadline`` (a note says why not, when
+        they cannot be proven within :data:`DEADLINE_SECONDS`).
 
     Returns
     -------
@@ -157,7 +164,7 @@ def certify_tuned(
         f = 0.0  # only the time-varying certificate uses the noise
     f_bound = float(np.linalg.norm(np.atleast_2d(np.asarray(f, dtype=float)), 2))
     try:
-        return certify(
+        res = certify(
             topology,
             spec.theta,
             spec.margin,
@@ -171,6 +178,80 @@ def certify_tuned(
     except InputError as exc:
         notes.append(f"no certificate: {exc}")
         return None
+    if deadline is not None and res.verification.valid:
+        _add_deadline(res, spec, tuned, deadline, notes)
+    return res
 
 
-__all__ = ["IMPLICIT", "certify_tuned", "checked_spec", "stable_stepping"]
+def proven_text(cert: CertifyResult | None) -> str:
+    """``", proven ≤ B_T"`` (B_T rounded up to 6 significant digits) when the tuned
+    certificate carries the deadline figures, else ``""``.
+
+    Parameters
+    ----------
+    cert : CertifyResult or None
+        The tuned design's certificate.
+
+    Returns
+    -------
+    str
+    """
+    if cert is None or not cert.verification.valid:
+        return ""
+    fig = cert.certificate.get("results", {}).get("deadline")
+    if not isinstance(fig, dict) or not isinstance(fig.get("ms_error_bound"), (int, float)):
+        return ""
+    b = float(fig["ms_error_bound"])
+    if not (math.isfinite(b) and b > 0):
+        return ""
+    scale = 10.0 ** (math.floor(math.log10(b)) - 5)
+    return f", proven ≤ {math.ceil(b / scale) * scale:.6g}"
+
+
+#: The tuned certificate's deadline figures are proven when estimated within this (s).
+DEADLINE_SECONDS = 120.0
+
+
+def _add_deadline(res, spec, tuned, deadline: float, notes: list[str]) -> None:
+    """The proven figures at the deadline in the tuned certificate (a note when not)."""
+    from ..certify.deadline_subject import add_deadline
+
+    f = np.asarray(spec.noise.f, dtype=float) if not callable(spec.noise.f) else None
+    top = res.design.base if hasattr(res.design, "digital") else res.design
+    modes = getattr(top, "modes", None)
+    first = next(iter(modes.values())) if modes else top
+    n, d = first.topology.n, first.topology.dim
+    x0, _ = spec.initial_state(n, d)
+    dg = spec.digital
+    section = {
+        "T": float(deadline),
+        "period": dg.period if dg is not None else None,
+        "delay": dg.delay if dg is not None else 0,
+        "gain": tuned.text if isinstance(tuned, PowerGain) else tuned.to_document(),
+        "noise": {
+            "sigma": float(spec.noise.sigma),
+            "f": None if f is None else (float(f) if f.ndim == 0 else f.tolist()),
+            "sigma_edges": [
+                {"from": str(a), "to": str(b), "sigma": float(v)}
+                for (a, b), v in spec.noise.sigma_edges.items()
+            ],
+        },
+        "initial": {"x0": [float(v) for v in x0]},
+    }
+    try:
+        if f is None:
+            raise InputError("f: a linear f(x) = F x is needed")
+        add_deadline(res.certificate, section, DEADLINE_SECONDS)
+    except (InputError, KeyError, TypeError) as exc:
+        res.certificate["subject"].pop("deadline", None)
+        notes.append(f"no proven figures at the deadline: {exc}")
+
+
+__all__ = [
+    "DEADLINE_SECONDS",
+    "IMPLICIT",
+    "certify_tuned",
+    "proven_text",
+    "checked_spec",
+    "stable_stepping",
+]

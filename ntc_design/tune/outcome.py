@@ -9,6 +9,7 @@ from typing import Any
 from ..gain.conditions import GainAnalysis
 from ..gain.schedule import ScheduleGain
 from ..present.rows import Table, fmt, verdict
+from .evidence import proven_text
 from .family import PowerGain
 from .objective import AnyGain, Curve
 from .optimal import ScheduleSolution
@@ -181,7 +182,8 @@ class ScheduleTuneResult:
             ("gain c(t)", "schedule (see c(t))", self.power.text, self.baseline.text),
             (
                 f"E Σ‖x_i(T) − θ‖², T = {fmt(self.horizon)} (exact)",
-                *(fmt(ms[k]) for k in keys),
+                fmt(ms["optimal"]) + proven_text(self.certificate),
+                *(fmt(ms[k]) for k in keys[1:]),
             ),
             (
                 "ratio to the schedule",

@@ -10,6 +10,7 @@ import numpy as np
 from ..certify import CertifyResult
 from ..gain.conditions import GainAnalysis
 from ..present.rows import Table, fmt, verdict
+from .evidence import proven_text
 from .family import BASELINE, PowerGain
 from .objective import Curve
 
@@ -160,7 +161,7 @@ class TuneResult:
         rows.append(
             (
                 f"E Σ‖x_i(T) − θ‖², T = {fmt(self.horizon)}",
-                fmt(ms["tuned"]) + self._band("tuned"),
+                fmt(ms["tuned"]) + self._band("tuned") + proven_text(self.certificate),
                 fmt(ms["baseline"]) + self._band("baseline"),
             )
         )

@@ -322,7 +322,7 @@ def tune_power(
     t1 = time.perf_counter()
     say("the theorem conditions and the certificate of the tuned design")
     analysis = analyse_gain(tuned.text)
-    cert = certify_tuned(topology, spec, tuned, delta, notes) if certificate else None
+    cert = certify_tuned(topology, spec, tuned, delta, notes, horizon) if certificate else None
     stage("theorems and certificate", t1)
     return TuneResult(
         tuned=tuned,

@@ -462,3 +462,52 @@ def test_theta_just_below_the_x0_bound_designs(capsys, monkeypatch):
 
     d = nd.design(nd.load(EXAMPLES / "g1.yaml"), [1.4e308, 2, -1])
     assert np.isfinite(d.x0).all() and d.x0[0] == pytest.approx(1.4e308 * d.k1)
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(("drop", "field"), [("initial", "initial: missing"), ("T", "T: missing")])
+def test_certify_deadline_names_the_missing_field(
+    tmp_path, examples, capsys, monkeypatch, drop, field
+):
+    src = (examples / "scenarios" / "g1_deadline.yaml").read_text()
+    text = "\n".join(ln for ln in src.splitlines() if not ln.startswith(f"{drop}:"))
+    scen = tmp_path / "s.yaml"
+    scen.write_text(text.replace("../g1.yaml", str(examples / "g1.yaml")))
+    out = tmp_path / "c.json"
+    assert_input_error(["certify", scen, "--deadline", "--out", out], capsys, monkeypatch, field)
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (["--period", "1e-6", "--deadline"], "--deadline: the proven moments take"),
+        (["--deadline", "-1"], "--deadline: T must be > 0"),
+    ],
+)
+def test_certify_deadline_refusals(examples, capsys, monkeypatch, extra, needle):
+    scen = examples / "scenarios" / "g1_deadline.yaml"
+    assert_input_error(["certify", scen, *extra], capsys, monkeypatch, needle)
+
+
+def test_certify_deadline_json_states_the_figures(tmp_path, examples, capsys, monkeypatch):
+    scen = examples / "scenarios" / "g1_deadline.yaml"
+    out = tmp_path / "c.json"
+    args = ["certify", scen, "--period", "0.1", "--delay", "1", "--deadline", "1.05"]
+    code, text, _ = run_cli([*args, "--out", out, "--json"], capsys, monkeypatch)
+    assert code == 0
+    figures = json.loads(text)["deadline"]
+    assert figures["T"] == 1.05 and figures["peak_bound"] >= figures["ms_error_bound"] > 0
+    assert verify(json.loads(out.read_text())).valid
+
+
+@pytest.mark.slow
+def test_certify_period_warns_beside_the_continuous_figures(examples, capsys, monkeypatch):
+    scen = examples / "scenarios" / "g1_deadline.yaml"
+    code, out, err = run_cli(["certify", scen, "--period", "5", "--deadline"], capsys, monkeypatch)
+    assert code == 0
+    line = next(ln for ln in out.splitlines() if ln.startswith("proven at T = 10"))
+    assert "continuous design <= 2.91" in line
+    warnings_ = [ln for ln in err.splitlines() if ln.startswith("warning:")]
+    assert len(warnings_) == 1 and "ntc tune" in warnings_[0] and "--period auto" in warnings_[0]

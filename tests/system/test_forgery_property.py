@@ -1,4 +1,4 @@
-"""Forgery property test over all eight certificate kinds.
+"""Forgery property test over all eight certificate kinds (and the deadline figures).
 
 Every field of an honest certificate of each kind is mutated (numbers scaled, negated,
 zeroed; strings and nulls replaced; list entries dropped; keys deleted and added), the
@@ -656,6 +656,67 @@ def _truth_delay_line(doc: dict, used: list) -> list[str]:
     return bad
 
 
+def _truth_deadline(doc: dict) -> list[str]:
+    """The dense truth without the deadline, then the sampled protocol's E‖e‖² at every
+    sample and at T (the partial step: (s/√h)·c_K·ξ) in a written-out float recursion of
+    the augmented moments from the subject's x(0), σ, f, h, D and T: the stated B_T and
+    B_peak must be at or above it, T the subject's, the peak's time within [0, T]."""
+    bad = _truth_dense(doc)
+    sec, res = doc["subject"]["deadline"], doc["results"]["deadline"]
+    if sec["gain"] != "1/(1+t)" or sec["noise"].get("sigma_edges"):
+        return [*bad, "gain or σ per edge"]
+    (mode,) = doc["subject"]["modes"].values()
+    top = Topology.from_data(parse_topology(mode["topology"], "m"))
+    lap, d, n = _lap_b(top, mode["delta"]), top.dim, top.n * top.dim
+    theta = np.array(mode["theta"], dtype=float)
+    e0 = np.array(sec["initial"]["x0"], dtype=float) - np.tile(theta, top.n)
+    h, dl, t_end = sec.get("period"), sec.get("delay", 0), sec["T"]
+    gs = []
+    for (i, j), a in top.weights.items():
+        w = _sign(a) * a
+        gm, g = np.zeros((n, n)), np.zeros(n)
+        gm[i * d : i * d + d, j * d : j * d + d] += w @ (sec["noise"]["f"] * np.eye(d))
+        gm[i * d : i * d + d, i * d : i * d + d] -= w @ (sec["noise"]["f"] * np.eye(d))
+        g[i * d : i * d + d] = sec["noise"]["sigma"] * w.sum(axis=1)
+        gs.append((gm, g))
+    if h is None:  # the continuous moment equations, by SciPy's DOP853
+        from scipy.integrate import solve_ivp
+
+        def rhs(t, y):
+            sm, c = y.reshape(n, n), 1 / (1 + t)
+            noise = sum(np.outer(g, g) + gm @ sm @ gm.T for gm, g in gs)
+            return (-c * (lap @ sm + sm @ lap.T) + c * c * noise).ravel()
+
+        sol = solve_ivp(rhs, (0, t_end), np.outer(e0, e0).ravel(), "DOP853", rtol=1e-11, atol=1e-11)
+        values = list(np.einsum("iit->t", sol.y.reshape(n, n, -1)))
+        h, dl = t_end, -1  # no sampled steps below
+    big = (max(dl, 0) + 1) * n
+    z = np.tile(np.outer(e0, e0), (max(dl, 0) + 1, max(dl, 0) + 1))
+    m = np.zeros((big, big))
+    m[:n, :n] = np.eye(n)
+    m[n:, :-n] = np.eye(big - n)
+    k_full = math.floor(t_end / h + 1e-9) if dl >= 0 else -1
+    values = [np.trace(z[:n, :n])] if dl >= 0 else values
+    for k in range(k_full + 1):
+        c, zdd = 1 / (1 + k * h), z[-n:, -n:]
+        noise = sum(np.outer(g, g) + gm @ zdd @ gm.T for gm, g in gs)
+        s = min(h, t_end - k * h)
+        if s <= 1e-9 * t_end:
+            break
+        step = m.copy()
+        step[:n, -n:] -= s * c * lap
+        z = step @ z @ step.T
+        z[:n, :n] += s * s / h * c * c * noise
+        values.append(np.trace(z[:n, :n]))
+    if not _at_least(res["ms_error_bound"], values[-1], 1e-9, 0.0):
+        bad.append("B_T")
+    if not _at_least(res["peak_bound"], max(values), 1e-9, 0.0):
+        bad.append("B_peak")
+    if res["T"] != t_end or not 0 <= res["peak_time"] <= t_end:
+        bad.append("T or the peak's time")
+    return bad
+
+
 def _truth_margin(doc: dict, honest_doc: dict) -> list[str]:
     """A stated ΔC must give the stated δ = C + ΔC. C depends on the topology only: the
     honest certificate's δ − ΔC for the same mode and topology (a mode whose topology was
@@ -687,6 +748,8 @@ def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
         return margin + _truth_digital_loss(doc)
     if kind.startswith("digital"):
         return margin + _truth_digital(doc)
+    if kind == "hurwitz-deadline":
+        return margin + _truth_deadline(doc)
     if doc.get("certifies") != honest_doc["certifies"] and kind not in ("hurwitz", "switching"):
         return ["certifies"]
     if kind in ("hurwitz", "switching"):
@@ -785,10 +848,17 @@ KIND_OF = {
     "hurwitz-scale-g1": "hurwitz-scale",
     "switching-scale": "switching-scale",
     "time_varying": "time_varying",
+    "hurwitz-deadline": "hurwitz",
 }
 
 
-STRIDE = {"robust-riccati": 4, "digital": 3, "digital_loss": 3, "digital_switching": 4}
+STRIDE = {
+    "robust-riccati": 4,
+    "digital": 3,
+    "digital_loss": 3,
+    "digital_switching": 4,
+    "hurwitz-deadline": 3,
+}
 
 
 @pytest.fixture(scope="module")
@@ -805,7 +875,29 @@ def honest_all(honest) -> dict[str, dict]:
         doc = json.loads(json.dumps(robust_certificate(robust(mid, 0.05, starts=1))))
     assert doc["certifies"] == ["robust_margin", "robust_decay", "robust_offset"]
     assert verify(copy.deepcopy(doc)).valid and truth("robust", doc, doc) == []
-    return {**honest, "robust-riccati": doc}
+    return {**honest, "robust-riccati": doc, "hurwitz-deadline": _deadline_certificate(honest)}
+
+
+def _deadline_certificate(honest) -> dict:
+    """G1's hurwitz certificate with the sampled figures at T = 0.45 (h = 0.1, D = 0: a
+    partial step at the end)."""
+    from ntc_design.certify.deadline_subject import add_deadline
+
+    doc = copy.deepcopy(honest["hurwitz"])
+    (mode,) = doc["subject"]["modes"].values()
+    n = len(mode["topology"]["agents"]) * len(mode["theta"])
+    section = {
+        "T": 0.45,
+        "period": 0.1,
+        "delay": 0,
+        "gain": "1/(1+t)",
+        "noise": {"sigma": 0.4, "f": 0.3, "sigma_edges": []},
+        "initial": {"x0": np.linspace(-3.0, 3.0, n).tolist()},
+    }
+    add_deadline(doc, section)
+    doc = json.loads(json.dumps(doc))
+    assert verify(copy.deepcopy(doc)).valid and truth("hurwitz-deadline", doc, doc) == []
+    return doc
 
 
 @hostile

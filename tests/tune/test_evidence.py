@@ -238,3 +238,17 @@ def test_the_step_search_evaluates_the_guard_at_most_twice_and_runs_no_path(
     unstable = PowerGain(1.5 * explicit_limit(delta0) / DT, 1.0, 1.0)
     assert stable_stepping(pair_topology, spec, unstable, None, 1.0, []) == IMPLICIT
     assert guards == ["explicit", "explicit", "implicit"] and runs == []
+
+
+def test_proven_text_rounds_the_bound_up():
+    from types import SimpleNamespace
+
+    from ntc_design.tune.evidence import proven_text
+
+    def cert(bound, valid=True):
+        doc = {"results": {"deadline": {"ms_error_bound": bound}}}
+        return SimpleNamespace(verification=SimpleNamespace(valid=valid), certificate=doc)
+
+    assert proven_text(cert(0.83251234)) == ", proven ≤ 0.832513"
+    assert proven_text(cert(15.816133)) == ", proven ≤ 15.8162"
+    assert proven_text(cert(1.0, valid=False)) == "" and proven_text(None) == ""
