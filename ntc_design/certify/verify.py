@@ -114,6 +114,14 @@ def known_fields(kind: CertificateKind, doc: dict, source: str) -> None:
     _only(subject, kind.subject_fields, f"{source}: subject.")
     if not isinstance(subject, dict):
         return
+    sampled = subject.get("digital")
+    if "gain" in doc and isinstance(sampled, dict) and doc["gain"] != sampled.get("gain"):
+        # the sampled proofs read subject.digital.gain only: another schedule at the top
+        # level would verify its own conditions and read as certified
+        raise InputError(
+            f"{source}: gain: differs from subject.digital.gain, the gain the sampled "
+            "protocol is proven for (a digital certificate states one gain)"
+        )
     tops = []
     if "topology" in kind.subject_fields:
         tops.append((subject.get("topology"), f"{source}: subject.topology"))

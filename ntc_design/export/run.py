@@ -499,10 +499,14 @@ def check_export_folder(out: str | Path) -> Path:
         line naming it; nothing is written.
     """
     p = check_output_folder(out, None)
+    shown = repr(one_line(str(p)))
+    if p.is_symlink():  # the swap would replace the link itself and leave a stray ".old" one
+        raise InputError(
+            f"--out: {shown} is a link; give the folder it points to (nothing written)"
+        )
     if not p.is_dir():
         return p
     listed = _listed(p)
-    shown = repr(one_line(str(p)))
     try:
         entries = sorted(os.scandir(p), key=lambda e: e.name)
     except OSError as exc:

@@ -313,8 +313,8 @@ def _number(flag: str, value: Any, minimum: float | None = None) -> float:
         raise InputError(f"{flag}: expected a number, got {value!r}")
     v = float(value)
     if not math.isfinite(v) or (minimum is not None and v < minimum):
-        bound = "" if minimum is None else f" >= {minimum:g}"
-        raise InputError(f"{flag}: expected a finite number{bound}, got {v!r}"[:200])
+        at_least = "" if minimum is None else f" >= {minimum:g}"
+        raise InputError(f"{flag}: expected a finite number{at_least}, got {v!r}"[:200])
     return v
 
 
@@ -325,11 +325,14 @@ def _same(flag: str, given: Any, certified: Any, src: str) -> None:
     a = np.asarray(given, dtype=float)
     b = np.asarray(certified, dtype=float)
     if a.shape != b.shape or not np.array_equal(a, b):
-        shown = certified if np.ndim(certified) == 0 else np.asarray(certified).tolist()
-        raise InputError(
-            f"{flag}: {given!r} differs from the certified value {shown!r} ({src}); "
-            "the certificate proves only its own protocol: drop the option or certify anew"[:300]
-        )
+        _differs(flag, given, b.tolist(), src)  # plain numbers, not NumPy reprs
+
+
+def _differs(flag: str, given: Any, shown: Any, src: str) -> None:
+    raise InputError(
+        f"{flag}: {given!r} differs from the certified value {shown!r} ({src}); "
+        "the certificate proves only its own protocol: drop the option or certify anew"[:300]
+    )
 
 
 def _digital_gain(given: Any, where: str) -> str | ScheduleGain:
@@ -404,11 +407,12 @@ def from_certificate(
         )
     _same("--period", period, sampled.period, src)
     _same("--delay", delay, sampled.delay, src)
-    _same("--sigma", sigma, sampled.sigma, src)
-    if f is not None and not np.array_equal(_number("--f", f) * np.eye(first.top.dim), sampled.f):
-        fs = sampled.f
-        shown = fs[0, 0] if np.array_equal(fs, fs[0, 0] * np.eye(len(fs))) else "a matrix F"
-        _same("--f", f, shown, src)
+    if sigma is not None:
+        _same("--sigma", _number("--sigma", sigma, 0.0), sampled.sigma, src)
+    fs = sampled.f
+    if f is not None and not np.array_equal(_number("--f", f) * np.eye(first.top.dim), fs):
+        scalar = np.array_equal(fs, fs[0, 0] * np.eye(len(fs)))
+        _differs("--f", float(f), float(fs[0, 0]) if scalar else fs.tolist(), src)
     g = _digital_gain(sampled.gain, f"{src}: subject.digital.gain")
     if gain is not None:
         given = _gain_option(gain)

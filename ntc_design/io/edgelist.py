@@ -106,6 +106,10 @@ def check_label_spellings(texts, what: str) -> tuple:
         if not isinstance(t, str):
             out.append(t)
             continue
+        if not t.isascii() and any("\ud800" <= c <= "\udfff" for c in t):
+            # a lone surrogate (JSON's "\ud800") is no character: it cannot be printed,
+            # written to a file or emitted as code
+            raise InputError(f"{what}: label {t!r} holds a lone surrogate (not a character)")
         n = t if t.isascii() else unicodedata.normalize("NFC", t)
         key = n.strip()
         if key in forms and forms[key] != t:

@@ -171,3 +171,26 @@ def test_every_kind_refuses_a_field_it_does_not_read(g1_robust, big_cert):
                 verify(_resealed(forged), name)
             msg = str(err.value)
             assert f"{field}: unknown field" in msg and "\n" not in msg, (name, msg)
+
+
+@pytest.mark.hostile
+def test_a_digital_certificate_with_another_top_level_gain_is_refused():
+    # a re-sealed g1_digital.json with a schedule table at the top level verified VALID
+    # (its own conditions checked) though the sampled proofs read subject.digital.gain only
+    from ntc_design.errors import InputError
+
+    doc = json.loads((CERTS / "g1_digital.json").read_text())
+    table = {"t": [0, 1, 2], "c": [50, 40, 10], "interpolation": "linear", "tail": "30/(1+t)"}
+    with pytest.raises(InputError) as err:
+        verify(_resealed({**doc, "gain": table}), "forged.json")
+    msg = str(err.value)
+    assert msg.startswith("forged.json: gain: differs from subject.digital.gain"), msg
+    # the same schedule at both places (as ntc certify writes a tabulated gain) is fine
+    import ntc_design as nd
+    from ntc_design.protocol.digital import Digital
+
+    g = ScheduleGain([0.0, 1.0, 2.0], [1.0, 0.5, 1.0], "linear", "3/(1+t)", "gain")
+    top = nd.load(CERTS.parent / "examples" / "g1.yaml")
+    res = certify(top, THETA, gain=g, digital=Digital(0.1, 0))
+    assert res.certificate["gain"] == res.certificate["subject"]["digital"]["gain"]
+    assert verify(res.certificate).valid

@@ -215,6 +215,41 @@ def test_names_and_labels_are_escaped_on_the_terminal_and_in_the_readme(
     assert "a\\nBuild and check" in text
 
 
+@pytest.mark.hostile
+def test_a_lone_surrogate_label_is_one_line_and_nothing_written(tmp_path, capsys, monkeypatch):
+    from tests.cli_helpers import assert_input_error
+
+    (tmp_path / "t.json").write_text(
+        '{"dim": 1, "agents": ["\\ud800a", "b"], "edges": [{"from": "b", "to": "\\ud800a", '
+        '"weight": -1}, {"from": "\\ud800a", "to": "b", "weight": 1}]}'
+    )
+    sc = tmp_path / "s.yaml"
+    sc.write_text(f"topology: {tmp_path / 't.json'}\ntheta: [1]\nT: 5\n")
+    out = tmp_path / "out"
+    args = ["export", sc, "--out", out, "--period", "0.1"]
+    assert_input_error(args, capsys, monkeypatch, "t.json", "lone surrogate")
+    assert not out.exists()
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("target", ["empty", "dangling"])
+def test_an_out_folder_given_as_a_link_is_refused(tmp_path, capsys, monkeypatch, target):
+    from tests.cli_helpers import assert_input_error
+
+    real = tmp_path / "real"
+    if target == "empty":
+        real.mkdir()
+    link = tmp_path / "link"
+    link.symlink_to(real)
+    args = ["export", DEADLINE, "--out", link, "--period", "0.1"]
+    assert_input_error(args, capsys, monkeypatch, "--out: ", "link")
+    # the link and its target are as they were, and no stray swap folder or link is left
+    assert link.is_symlink() and (real.is_dir() if target == "empty" else not real.exists())
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link"] + (["real"] * (target == "empty"))
+    if target == "empty":
+        assert list(real.iterdir()) == []
+
+
 def test_one_agents_export_and_its_readme(tmp_path):
     out = tmp_path / "one"
     res = export(DEADLINE, "c", out, period=0.1, delay=1, agent="3")

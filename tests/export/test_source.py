@@ -251,6 +251,58 @@ def test_an_option_that_differs_from_the_proof_is_refused(kwargs, needle):
     assert "\n" not in msg and msg.startswith(needle) and "g1_digital.json" in msg, msg
 
 
+@pytest.mark.hostile
+@pytest.mark.parametrize("path", ["g1_digital.json", "g1.json", "deadline"])
+@pytest.mark.parametrize(
+    "kwargs, needle",
+    [
+        ({"f": float("inf")}, "--f: expected a finite number, got inf"),
+        ({"f": float("nan")}, "--f: expected a finite number, got nan"),
+        ({"sigma": float("nan")}, "--sigma: expected a finite number >= 0, got nan"),
+        ({"sigma": float("-inf")}, "--sigma: expected a finite number >= 0, got -inf"),
+    ],
+)
+def test_a_non_finite_noise_option_is_one_line_on_every_route(path, kwargs, needle):
+    # --f inf was an internal error (formatting a missing minimum), exit 1, on all three
+    # routes; a NaN σ on a certificate was "nan differs from the certified value"
+    src = DEADLINE if path == "deadline" else CERTS / path
+    with pytest.raises(InputError) as err:
+        load_source(src, period=0.1, **kwargs)
+    msg = str(err.value)
+    assert msg == needle, msg
+
+
+@pytest.mark.hostile
+def test_a_differing_f_names_plain_numbers_and_a_certified_matrix(tmp_path):
+    with pytest.raises(InputError) as err:
+        load_source(CERTS / "g1_digital.json", f=0.30000000000000004)
+    assert str(err.value).startswith(
+        "--f: 0.30000000000000004 differs from the certified value 0.3 ("
+    ), str(err.value)  # not np.float64(0.3)
+    # a certified matrix F against a scalar --f: refused naming the matrix (was a ValueError
+    # converting the text "a matrix F" to a number, an internal error)
+    doc = json.loads((CERTS / "g1_digital.json").read_text())
+    f_mat = [[0.3, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.3]]
+    doc["subject"]["digital"]["noise"]["f"] = f_mat
+    p = _sealed_doc(tmp_path, doc)
+    assert verify(json.loads(p.read_text()), "m.json").valid
+    with pytest.raises(InputError) as err:
+        load_source(p, f=0.3)
+    msg = str(err.value)
+    assert msg.startswith(f"--f: 0.3 differs from the certified value {f_mat!r} ("), msg
+
+
+def _sealed_doc(tmp_path, doc):
+    from ntc_design.certify.format import finish
+
+    doc = json.loads(json.dumps(doc))
+    for key in ("digest", "subject_digest", "versions"):
+        doc.pop(key, None)
+    p = tmp_path / "m.json"
+    p.write_text(json.dumps(finish(doc)))
+    return p
+
+
 def test_a_continuous_certificate_is_certified_sampled_first():
     # g1.json proves the continuous protocol only: the sampled one is certified here
     src = load_source(CERTS / "g1.json", period=0.1, delay=1)

@@ -109,6 +109,22 @@ def test_look_alike_labels_are_refused(fmt, first, second, needles, tmp_path, ca
     assert_input_error(["check", f], capsys, monkeypatch, str(f), *needles)
 
 
+@pytest.mark.hostile
+def test_a_lone_surrogate_label_is_refused(tmp_path, capsys, monkeypatch):
+    # JSON's "\ud800" reads as a lone surrogate: no character, it reached ntc export's C
+    # emitter as an internal error (UnicodeEncodeError, exit 1)
+    import json
+
+    f = tmp_path / "net.yaml"
+    net = {
+        "dim": 1,
+        "agents": ["\ud800a", "b"],
+        "edges": [{"from": "b", "to": "\ud800a", "weight": -1}],
+    }
+    f.write_text(json.dumps(net))  # ASCII: the surrogate as the escape \ud800
+    assert_input_error(["check", f], capsys, monkeypatch, str(f), "holds a lone surrogate")
+
+
 @pytest.mark.parametrize("fmt", ["yaml", "csv", "npz", "mat"])
 def test_labels_are_kept_in_nfc(fmt, tmp_path):
     import ntc_design as nd
