@@ -111,7 +111,9 @@ def known_fields(kind: CertificateKind, doc: dict, source: str) -> None:
     """
     _only(doc, COMMON_FIELDS | kind.fields, f"{source}: ")
     subject = doc.get("subject")
-    _only(subject, kind.subject_fields, f"{source}: subject.")
+    # the deadline section is read by the shared path (prove_deadline), for every kind: a
+    # kind it cannot bound is refused there
+    _only(subject, kind.subject_fields | {"deadline"}, f"{source}: subject.")
     if not isinstance(subject, dict):
         return
     sampled = subject.get("digital")
