@@ -243,10 +243,6 @@ class RunSummary:
         for key in ("theta", "margin", "gain"):
             if key not in p:
                 raise InputError(f"parameters.{key}: missing field 'parameters.{key}'")
-        if not isinstance(p["theta"], list) or not p["theta"]:
-            raise InputError("parameters.theta: expected a list of numbers")
-        if not isinstance(p["gain"], (str, Mapping)):
-            raise InputError("parameters.gain: expected an expression in t (text) or a schedule")
         for key in ("noise", "time_varying"):
             if p.get(key) is not None and not isinstance(p[key], Mapping):
                 raise InputError(f"parameters.{key}: expected a mapping")
