@@ -12,11 +12,8 @@ from matplotlib.ticker import NullFormatter
 
 from ..errors import InputError
 from ..present.rows import fmt
-from ..protocol.digital import Digital
-from ..simulate import SimulationSpec
 from ..simulate.digital import digital_moments
 from ..simulate.driver import make_gain, prepare_modes, sampled_grid
-from ..simulate.noise import noise_from_document
 from ..tune.period import period_curve
 from .figlist import Drawn
 from .html import Table
@@ -99,27 +96,17 @@ def digital_facts(run: RunData, certificate: dict) -> DigitalFacts | None:
     Raises
     ------
     InputError
-        A malformed ``digital`` block in the run's parameters.
+        A malformed topology in the run.
     """
-    p = run.summary["parameters"]
-    block = p.get("digital")
-    if block is None:
+    dg = run.digital
+    if dg is None:
         return None
-    dg = Digital.from_document(block)
     t_end = float(run.t[-1])
     res = certificate.get("results", {}).get("digital", {})
     stopped = (
         res.get("stopped", "the certificate is not of a digital kind") if "k0" not in res else ""
     )
-    noise = noise_from_document(p.get("noise"))
-    spec = SimulationSpec.build(
-        p["theta"],
-        margin=p["margin"],
-        delta=p.get("delta"),
-        gain=run.gain,
-        noise=noise,
-        initial=p["initial"],
-    )
+    spec = run.design_spec()
     top = run.topology()
     periods = np.unique(
         np.append(

@@ -14,10 +14,8 @@ from ..model import Topology
 from ..present.rows import fmt
 from ..protocol.digital import Digital
 from ..protocol.loss import POLICIES
-from ..simulate import SimulationSpec
 from ..simulate.driver import make_gain, prepare_modes, sampled_grid
 from ..simulate.loss import loss_moments
-from ..simulate.noise import noise_from_document
 from .figlist import Drawn
 from .html import Table
 from .rundata import RunData
@@ -76,12 +74,8 @@ def loss_facts(run: RunData, certificate: dict) -> LossFacts | None:
     -------
     LossFacts or None
     """
-    p = run.summary["parameters"]
-    block = p.get("digital")
-    if block is None:
-        return None
-    dg = Digital.from_document(block)
-    if not dg.lossy:
+    dg = run.digital
+    if dg is None or not dg.lossy:
         return None
     res = certificate.get("results", {}).get("digital", {})
     if certificate.get("kind") != "digital_loss":
@@ -102,14 +96,7 @@ def loss_facts(run: RunData, certificate: dict) -> LossFacts | None:
     try:
         if not isinstance(top, Topology):
             raise InputError("lossy links are modelled on one fixed topology")
-        spec = SimulationSpec.build(
-            p["theta"],
-            margin=p["margin"],
-            delta=p.get("delta"),
-            gain=run.gain,
-            noise=noise_from_document(p.get("noise")),
-            initial=p["initial"],
-        )
+        spec = run.design_spec()
         t_end = float(run.t[-1])
         gain = make_gain(run.gain)[0]
         pm = prepare_modes(top, spec.replace(T=t_end, method="exact"), gain)

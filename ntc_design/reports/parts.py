@@ -14,9 +14,7 @@ from ..gain.schedule import schedule_from_document
 from ..present.rows import Cell, fmt, verdict
 from ..present.rows import Table as RowsTable
 from ..present.rows import matrix as rows_matrix
-from ..protocol.digital import Digital
-from ..simulate import SimulationDiverged, SimulationSpec, simulate
-from ..simulate.noise import noise_from_document
+from ..simulate import MonteCarlo, SaveAt, SimulationDiverged, SimulationSpec, simulate
 from ..simulate.result import MeanSquareBand
 from .html import Table, html_table, rel
 from .rundata import RunData
@@ -39,21 +37,22 @@ def certify_run(run: RunData) -> CertifyResult:
     InputError
         A malformed topology, θ or gain in the run.
     """
-    p = run.summary["parameters"]
-    if p.get("digital") is None:
-        return certify(run.topology(), p["theta"], p["margin"], run.gain)
-    noise = noise_from_document(p.get("noise"))
+    spec = run.spec
+    theta = spec.theta.tolist()
+    if run.digital is None:
+        return certify(run.topology(), theta, spec.margin, run.gain)
+    noise = spec.noise
     if not noise.linear:
         raise InputError(f"{run.path}: the digital certificate needs a linear f")
     return certify(
         run.topology(),
-        p["theta"],
-        p["margin"],
+        theta,
+        spec.margin,
         run.gain,
-        delta=p.get("delta"),
+        delta=spec.delta,
         noise_sigma=noise.sigma,
         noise_f=noise.f,
-        digital=Digital.from_document(p["digital"]),
+        digital=run.digital,
         sigma_edges={(str(a), str(b)): v for (a, b), v in noise.sigma_edges.items()},
     )
 
@@ -296,28 +295,28 @@ def companion_paths(run: RunData, top) -> dict | None:
         ``{"t", "paths"}``; None when the run cannot be repeated from its summary (a
         callable gain or noise) or the paths would cost more than COMPANION_MAX_STEPS.
     """
-    p = run.summary["parameters"]
-    keys = (
-        "theta",
-        "margin",
-        "gain",
-        "T",
-        "dt",
-        "stepping",
-        "ds",
-        "scheme",
-        "noise",
-        "initial",
-        "seed",
-    )
-    doc = {k: p[k] for k in keys if p.get(k) is not None}
-    steps = float(doc.get("T", 0)) / float(doc.get("dt") or doc.get("ds") or 1.0)
+    s = run.spec
+    if callable(s.noise.f):  # the run's f is not recorded
+        return None
+    steps = s.T / (s.stepping.dt or s.stepping.ds or 1.0)
     if 2 * steps > COMPANION_MAX_STEPS:
         return None
-    doc.update(paths=2, store_paths=2, block_size=2, method="mc", workers=1)
-    doc["save_every"] = float(doc["T"]) / FINE_POINTS
+    # the run's scenario, continuous, two paths finely saved (the run's seed, the default rng)
+    mc = MonteCarlo(paths=2, store_paths=2, block_size=2, workers=1, seed=s.mc.seed)
+    spec = SimulationSpec(
+        theta=s.theta,
+        T=s.T,
+        margin=s.margin,
+        gain=s.gain,
+        noise=s.noise,
+        initial=s.initial,
+        save=SaveAt(every=s.T / FINE_POINTS),
+        stepping=s.stepping,
+        mc=mc,
+        method="mc",
+    )
     try:
-        res = simulate(top, SimulationSpec.from_document(doc))
+        res = simulate(top, spec)
     except (InputError, SimulationDiverged):
         return None
     return {"t": res.save_times, "paths": res.mc.paths} if res.mc is not None else None

@@ -30,7 +30,6 @@ from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.timevarying import TimeVaryingDesign
 from ..simulate.digital import check_digital_moments
 from ..simulate.moments import MOMENTS_MAX_ND
-from ..simulate.noise import noise_from_document
 from ..simulate.result import MeanSquareBand
 from ..sweep.robust import study_sentence
 from . import figures, graph_figure, style
@@ -176,9 +175,12 @@ def _time_varying(run: RunData, p: dict) -> TimeVaryingFacts | None:
     if not isinstance(tvp, dict) or not isinstance(tvp.get("topology"), dict):
         return None
     tv = from_document(tvp["topology"], f"{run.path}/summary.json: time_varying")
-    noise = noise_from_document(p.get("noise"))  # the simulation's own reading and defaults
+    spec = run.spec  # the noise as the simulation read it, with its defaults
+    noise = spec.noise
     f = noise.f if isinstance(noise.f, (int, float, np.ndarray)) else F_SCALE
-    res = certify(tv, p["theta"], p["margin"], run.gain, noise_sigma=noise.sigma, noise_f=f)
+    res = certify(
+        tv, spec.theta.tolist(), spec.margin, run.gain, noise_sigma=noise.sigma, noise_f=f
+    )
     r = time_varying_results(res.certificate)
     assert isinstance(res.design, TimeVaryingDesign)  # certify() of an ExpressionTopology
     return TimeVaryingFacts(
@@ -712,7 +714,7 @@ def write_report(
     if digital is not None:  # certified and reported for this period and delay
         check_report_digital(run, digital)  # before the certificate and figures are written
         params = {**run.summary["parameters"], "digital": digital.to_dict()}
-        run = replace(run, summary={**run.summary, "parameters": params})
+        run = replace(run, summary={**run.summary, "parameters": params}, asked=digital)
     # the interactive page has its own name: it never replaces the static report
     name = "report_interactive.html" if interactive else "report.html"
     check_output_file(run.path / name, "report")  # before the certificate and figures

@@ -9,32 +9,48 @@ import io
 import json
 import shlex
 import zipfile
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, format_bytes, one_line, require_number, require_positive
-from ..gain.conditions import parse_gain
-from ..gain.schedule import ScheduleGain, schedule_from_document
+from ..errors import (
+    InputError,
+    format_bytes,
+    one_line,
+    require_int,
+    require_number,
+    require_positive,
+)
+from ..gain.schedule import ScheduleGain
 from ..io.files import parse_topology
 from ..model import SwitchingTopology, Topology
 from ..present.rows import counted
+from ..protocol.digital import Digital
+from ..protocol.loss import require_loss, require_policy
 from ..simulate.budget import MEMORY_FRACTION, available_memory
+from ..simulate.digital import DigitalRun
+from ..simulate.spec import SimulationSpec
 
 REQUIRED = ("summary.json", "ms_error.csv", "paths.npz")
 
 
 @dataclass
 class RunData:
-    """A simulation run as ``ntc report`` reads it: summary.json, the curves table and the
-    paths, checked against each other once by :func:`load_run`."""
+    """A simulation run as ``ntc report`` reads it: summary.json (as read, and through its
+    types: :class:`RunSummary`), the curves table and the paths, checked against each other
+    once by :func:`load_run`."""
 
     path: Path
     summary: dict
     t: np.ndarray
     table: dict[str, np.ndarray]
     npz: dict[str, np.ndarray]
+    record: RunSummary
+    #: The sampled protocol reported instead of the run's own (``ntc report --period``).
+    asked: Digital | None = field(default=None)
 
     @property
     def labels(self) -> list[str]:
@@ -42,11 +58,40 @@ class RunData:
         return [str(a) for a in self.npz["labels"]]
 
     @property
+    def spec(self) -> SimulationSpec:
+        """The run's spec, read back from its recorded parameters."""
+        return self.record.spec
+
+    @property
+    def digital(self) -> Digital | None:
+        """The sampled protocol the report shows: the one asked for, else the run's own
+        (None: a continuous run)."""
+        return self.asked if self.asked is not None else self.record.spec.digital
+
+    @property
     def gain(self) -> str | ScheduleGain:
-        """The run's gain: its expression, or the schedule it recorded (checked by
-        :func:`load_run`)."""
-        g = self.summary["parameters"]["gain"]
-        return schedule_from_document(g, "parameters.gain") if isinstance(g, dict) else g
+        """The run's gain: its expression, or the schedule it recorded."""
+        g = self.record.spec.gain
+        assert isinstance(g, (str, ScheduleGain))  # a document's gain is never a callable
+        return g
+
+    def design_spec(self) -> SimulationSpec:
+        """The spec of the run's design alone (θ, ΔC, δ, the gain, the noise and x(0), the
+        other options at their defaults): what the report's exact curves re-run.
+
+        Returns
+        -------
+        SimulationSpec
+        """
+        s = self.record.spec
+        return SimulationSpec(
+            theta=s.theta,
+            margin=s.margin,
+            delta=s.delta,
+            gain=s.gain,
+            noise=s.noise,
+            initial=s.initial,
+        )
 
     @property
     def path_agents(self) -> np.ndarray:
@@ -68,52 +113,17 @@ class RunData:
     @property
     def theta(self) -> np.ndarray:
         """The target θ of the run."""
-        return np.asarray(self.summary["parameters"]["theta"], dtype=float)
+        return self.record.spec.theta
 
     def topology(self) -> Topology | SwitchingTopology:
-        """The run's topology (or switching set), rebuilt from summary.json.
+        """The run's topology (or switching set), read from summary.json by
+        :class:`RunSummary` (a run over a time-varying topology is refused there).
 
         Returns
         -------
         Topology or SwitchingTopology
-
-        Raises
-        ------
-        InputError
-            A malformed topology or schedule, or a run over a time-varying topology.
         """
-        where = f"{self.path}/summary.json"
-        tops = {}
-        for k, v in self.summary["topologies"].items():
-            if not isinstance(v, dict):
-                raise InputError(
-                    f"{where}: topologies.{k}: expected a topology; {_rerun(self.path)}"
-                )
-            tops[k] = Topology.from_data(parse_topology(v, f"{where}: topologies.{k}"))
-        sched = self.summary["parameters"].get("schedule")
-        if sched is not None:  # a switching run: [{mode, duration}, ...] over the topologies
-            ok = isinstance(sched, list) and all(
-                isinstance(s, dict)
-                and isinstance(s.get("mode"), str)
-                and isinstance(s.get("duration"), (int, float))
-                and not isinstance(s.get("duration"), bool)
-                for s in sched
-            )
-            if not ok:
-                raise InputError(
-                    f"{where}: parameters.schedule: expected a list of {{mode, duration}}; "
-                    f"{_rerun(self.path)}"
-                )
-            return SwitchingTopology(
-                tops,
-                tuple((s["mode"], float(s["duration"])) for s in sched),
-                source=f"{where}: parameters",
-            )
-        if len(tops) != 1:
-            raise InputError(
-                f"{self.path}: a run over a topology given as functions of t has no single topology to certify"
-            )
-        return next(iter(tops.values()))
+        return self.record.topology
 
     def ms(self, kind: str) -> np.ndarray | None:
         """The per-agent E‖x_i − θ‖² curves of one kind.
@@ -132,6 +142,236 @@ class RunData:
         if not all(c in self.table for c in cols):
             return None
         return np.column_stack([self.table[c] for c in cols])
+
+
+#: The recorded parameters that the run's spec reads back; the others are what the run
+#: resolved (``modes``, ``schedule``, the count of ``save_times``, A(t)'s ``time_varying``).
+SPEC_KEYS = (
+    "theta",
+    "margin",
+    "delta",
+    "gain",
+    "noise",
+    "initial",
+    "T",
+    "dt",
+    "stepping",
+    "ds",
+    "scheme",
+    "method",
+    "resample",
+    "digital",
+    "paths",
+    "seed",
+    "block_size",
+    "store_paths",
+    "workers",
+    "rng",
+    "device",
+    "save_every",
+)
+
+
+def _unrecorded_f(x: np.ndarray) -> np.ndarray:
+    """A run's callable f (recorded as ``"callable"``): not linear, and never evaluated."""
+    raise InputError("noise.f: the run's f was a Python callable, which summary.json does not hold")
+
+
+@dataclass(frozen=True, eq=False)
+class RunSummary:
+    """summary.json read back through its types: the run's :class:`SimulationSpec` (its
+    recorded parameters, checked by :meth:`SimulationSpec.from_document`), its topology or
+    switching set, and the blocks a report reads.
+
+    Attributes
+    ----------
+    spec : SimulationSpec
+        θ, ΔC, δ, the gain, the noise (a callable f as a stand-in that is not linear),
+        x(0), T, the stepping, the method, the Monte Carlo options and the digital protocol.
+    topology : Topology or SwitchingTopology
+        The run's network (a switching set with its schedule).
+    scenario : str or None
+        The scenario file the run was made from.
+    sample_paths : dict
+        The spread of the sample paths (numbers under :data:`SPREAD_KEYS` and
+        ``late_window`` when ``stored``).
+    digital : DigitalRun or None
+        A digital run's figures (period, delay, K, the partial step, the peak, the loss).
+    """
+
+    spec: SimulationSpec
+    topology: Topology | SwitchingTopology
+    scenario: str | None
+    sample_paths: dict
+    digital: DigitalRun | None
+
+    @classmethod
+    def from_document(cls, doc: Any, source: str | None = None) -> RunSummary:
+        """Read a parsed summary.json.
+
+        Parameters
+        ----------
+        doc : Any
+            The document as parsed.
+        source : str, optional
+            The file name that prefixes error messages.
+
+        Returns
+        -------
+        RunSummary
+
+        Raises
+        ------
+        InputError
+            ``SOURCE: FIELD: what is wrong``.
+        """
+        try:
+            return cls._read(doc)
+        except InputError as exc:
+            if source:
+                raise InputError(f"{source}: {exc}") from None
+            raise
+
+    @classmethod
+    def _read(cls, doc: Any) -> RunSummary:
+        if not isinstance(doc, Mapping):
+            raise InputError("expected a mapping")
+        for key in ("parameters", "topologies"):
+            if not isinstance(doc.get(key), Mapping) or not doc[key]:
+                raise InputError(f"{key}: missing field '{key}' (a mapping)")
+        p = doc["parameters"]
+        for key in ("theta", "margin", "gain"):
+            if key not in p:
+                raise InputError(f"parameters.{key}: missing field 'parameters.{key}'")
+        for key in ("noise", "time_varying"):
+            if p.get(key) is not None and not isinstance(p[key], Mapping):
+                raise InputError(f"parameters.{key}: expected a mapping")
+        for key in ("run", "sample_paths"):
+            if not isinstance(doc.get(key, {}), Mapping):
+                raise InputError(f"{key}: expected a mapping")
+        scenario = doc.get("scenario")
+        if scenario is not None and not isinstance(scenario, str):
+            raise InputError("scenario: expected a file name")
+        sp_ = dict(doc.get("sample_paths", {}))
+        if sp_.get("stored"):
+            window = sp_.get("late_window")
+            numbers = [sp_.get(k) for k in SPREAD_KEYS] + (
+                window if isinstance(window, list) else []
+            )
+            if not (isinstance(window, list) and len(window) == 2) or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) for v in numbers
+            ):
+                raise InputError(
+                    f"sample_paths: expected numbers {', '.join(SPREAD_KEYS)}, late_window"
+                )
+        try:
+            spec = SimulationSpec.from_document(_spec_document(p))
+        except InputError as exc:
+            raise InputError(f"parameters.{exc}") from None
+        if isinstance(p.get("noise"), Mapping) and p["noise"].get("f") == "callable":
+            spec = spec.replace(noise=replace(spec.noise, f=_unrecorded_f))
+        top = _topology(doc["topologies"], p)
+        if spec.theta.size != top.dim:
+            raise InputError(
+                f"parameters.theta: {spec.theta.size} numbers, the topology has d = {top.dim}"
+            )
+        return cls(spec, top, scenario, sp_, _digital_run(doc.get("digital")))
+
+
+def _spec_document(p: Mapping[str, Any]) -> dict[str, Any]:
+    """The recorded parameters as a scenario document: the noise's per-edge σ back from
+    ``{"a->b": σ}`` to ``[{from, to, sigma}]``, a callable f left out (the caller puts
+    :func:`_unrecorded_f` in its place)."""
+    doc = {k: p[k] for k in SPEC_KEYS if p.get(k) is not None}
+    noise = doc.get("noise")
+    if isinstance(noise, Mapping):
+        noise = dict(noise)
+        edges = noise.get("sigma_edges")
+        if isinstance(edges, Mapping):
+            pairs = [(str(k).partition("->"), v) for k, v in edges.items()]
+            if any(not arrow for (_, arrow, _), _ in pairs):
+                raise InputError("noise.sigma_edges: expected keys 'FROM->TO'")
+            noise["sigma_edges"] = [{"from": a, "to": b, "sigma": v} for (a, _, b), v in pairs]
+        if noise.get("f") == "callable":  # read as the default, then replaced (_read)
+            noise.pop("f")
+        doc["noise"] = noise
+    if "save_every" not in doc and isinstance(p.get("T"), (int, float)):
+        doc["save_every"] = p["T"]  # the run saved at listed times: only their count is kept
+    return doc
+
+
+def _topology(tops_doc: Mapping[str, Any], p: Mapping[str, Any]) -> Topology | SwitchingTopology:
+    """The run's topology or switching set from ``topologies`` and ``parameters.schedule``."""
+    tops = {}
+    for k, v in tops_doc.items():
+        if not isinstance(v, dict):
+            raise InputError(f"topologies.{k}: expected a topology")
+        tops[k] = Topology.from_data(parse_topology(v, f"topologies.{k}"))
+    sched = p.get("schedule")
+    if sched is not None:  # a switching run: [{mode, duration}, ...] over the topologies
+        ok = isinstance(sched, list) and all(
+            isinstance(s, dict)
+            and isinstance(s.get("mode"), str)
+            and isinstance(s.get("duration"), (int, float))
+            and not isinstance(s.get("duration"), bool)
+            for s in sched
+        )
+        if not ok:
+            raise InputError("parameters.schedule: expected a list of {mode, duration}")
+        return SwitchingTopology(
+            tops,
+            tuple((s["mode"], float(s["duration"])) for s in sched),
+            source="parameters",
+        )
+    if len(tops) != 1:
+        raise InputError(
+            "topologies: a run over a topology given as functions of t has no single topology "
+            "to certify"
+        )
+    return next(iter(tops.values()))
+
+
+def _digital_run(doc: Any) -> DigitalRun | None:
+    """A digital run's ``digital`` block (what :meth:`DigitalRun.to_dict` wrote)."""
+    if doc is None:
+        return None
+    if not isinstance(doc, Mapping):
+        raise InputError("digital: expected a mapping")
+    for key in ("period", "delay", "steps"):
+        if key not in doc:
+            raise InputError(f"digital.{key}: missing")
+    # the exact figures may be ±inf or NaN on a diverging run (written as such): numbers
+    optional = {
+        key: _optional_number(f"digital.{key}", doc.get(key))
+        for key in ("ms_error_peak", "peak_time", "continuous_final_ms_error")
+    }
+    loss = doc.get("loss")
+    if loss is not None:
+        if not isinstance(loss, Mapping):
+            raise InputError("digital.loss: expected {policy, p, offset}")
+        require_policy("digital.loss.policy", loss.get("policy"))
+        require_loss("digital.loss.p", loss.get("p"))
+        _optional_number("digital.loss.offset", loss.get("offset"))
+        loss = dict(loss)
+    require_positive("digital.period", doc["period"])
+    return DigitalRun(
+        period=float(doc["period"]),
+        delay=require_int("digital.delay", doc["delay"], minimum=0),
+        steps=require_int("digital.steps", doc["steps"], minimum=1),
+        partial_step=require_number(
+            "digital.partial_step", doc.get("partial_step", 0.0), minimum=0.0
+        ),
+        loss=loss,
+        **optional,
+    )
+
+
+def _optional_number(name: str, value: Any) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"{name}: expected a number, got {type(value).__name__}")
+    return float(value)
 
 
 MAX_TEXT_BYTES = 256 * 2**20  # summary.json / ms_error.csv larger than this are refused
@@ -213,14 +453,6 @@ def load_run(directory: str | Path) -> RunData:
         raise InputError(
             f"{d}/summary.json: not valid JSON ({exc.__class__.__name__}); {_rerun(d)}"
         ) from None
-    if not isinstance(summary, dict):
-        raise InputError(f"{d}/summary.json: expected a mapping; {_rerun(d)}")
-    for key in ("parameters", "topologies"):
-        if not isinstance(summary.get(key), dict) or not summary[key]:
-            raise InputError(f"{d}/summary.json: missing field '{key}'; {_rerun(d)}")
-    for key in ("theta", "margin", "gain"):
-        if key not in summary["parameters"]:
-            raise InputError(f"{d}/summary.json: missing field 'parameters.{key}'; {_rerun(d)}")
     rows = list(csv.reader(io.StringIO(_read_text(d / "ms_error.csv", d))))
     if len(rows) < 2:
         raise InputError(f"{d}/ms_error.csv: no data rows; {_rerun(d)}")
@@ -246,62 +478,26 @@ def load_run(directory: str | Path) -> RunData:
             f"{d}: paths.npz has {npz['t'].shape[0]} save times, ms_error.csv {data.shape[0]} "
             f"(files from different runs?); {_rerun(d)}"
         )
+    try:
+        record = RunSummary.from_document(summary, f"{d}/summary.json")
+    except InputError as exc:
+        raise InputError(f"{exc}; {_rerun(d)}") from None
     table = {h: data[:, k] for k, h in enumerate(header)}
-    run = RunData(d, summary, table["t"], table, npz)
-    _check_run(run)
+    run = RunData(d, summary, table["t"], table, npz, record)
+    _check_files(run)
     return run
 
 
-def _check_run(run: RunData) -> None:
-    """The fields of summary.json and paths.npz that the report reads, checked against each
-    other before anything is written (certificate, figures, report.html): a damaged run, or
-    files from different runs, is one line naming the file and the field rather than a
-    TypeError or a failed reshape halfway through the figures."""
+def _check_files(run: RunData) -> None:
+    """paths.npz and ms_error.csv against the checked summary (:class:`RunSummary`): files
+    from different runs, or a damaged archive, are one line naming the file and the field
+    rather than a TypeError or a failed reshape halfway through the figures."""
     d = run.path
-    where = f"{d}/summary.json"
 
-    def bad(field: str, what: str, file: str = where) -> InputError:
+    def bad(field: str, what: str, file: str) -> InputError:
         return InputError(f"{file}: {field}: {what}; {_rerun(d)}")
 
-    p = run.summary["parameters"]
-    theta = p["theta"]
-    if not isinstance(theta, list) or not theta:
-        raise bad("parameters.theta", "expected a list of numbers")
-    try:
-        for k, v in enumerate(theta):
-            require_number(f"parameters.theta[{k}]", v)
-        require_positive("parameters.margin", p["margin"])
-    except InputError as exc:
-        raise InputError(f"{where}: {exc}; {_rerun(d)}") from None
-    if isinstance(p["gain"], dict):  # a tabulated schedule, checked whole
-        try:
-            schedule_from_document(p["gain"], "parameters.gain")
-        except InputError as exc:
-            raise InputError(f"{where}: {exc}; {_rerun(d)}") from None
-    elif not isinstance(p["gain"], str):
-        raise bad("parameters.gain", "expected an expression in t (text) or a schedule")
-    else:
-        try:
-            parse_gain(p["gain"])
-        except InputError as exc:  # "gain: ..." from the parser
-            raise InputError(f"{where}: parameters.{exc}; {_rerun(d)}") from None
-    for key in ("noise", "time_varying"):
-        if p.get(key) is not None and not isinstance(p[key], dict):
-            raise bad(f"parameters.{key}", "expected a mapping")
-    for key in ("run", "sample_paths"):
-        if not isinstance(run.summary.get(key, {}), dict):
-            raise bad(key, "expected a mapping")
-    if not isinstance(run.summary.get("scenario", ""), str):
-        raise bad("scenario", "expected a file name")
-    sp_ = run.summary.get("sample_paths", {})
-    if sp_.get("stored"):
-        window = sp_.get("late_window")
-        numbers = [sp_.get(k) for k in SPREAD_KEYS] + (window if isinstance(window, list) else [])
-        if not (isinstance(window, list) and len(window) == 2) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in numbers
-        ):
-            raise bad("sample_paths", f"expected numbers {', '.join(SPREAD_KEYS)}, late_window")
-    top = run.topology()
+    top = run.record.topology
     labels = [str(a) for a in top.labels]
     npz_file = f"{d}/paths.npz"
     if run.labels != labels:
@@ -311,8 +507,6 @@ def _check_run(run: RunData) -> None:
             f"{len(labels)} {_few(labels)} (files from different runs?)",
             npz_file,
         )
-    if len(theta) != top.dim:
-        raise bad("parameters.theta", f"{len(theta)} numbers, the topology has d = {top.dim}")
     if np.asarray(run.npz["theta"]).shape != (top.dim,):
         raise bad(
             "theta", f"shape {np.asarray(run.npz['theta']).shape}, expected ({top.dim},)", npz_file
@@ -362,4 +556,4 @@ def _few(labels: list[str]) -> str:
     return f"[{shown}]"
 
 
-__all__ = ["RunData", "load_run"]
+__all__ = ["RunData", "RunSummary", "load_run"]

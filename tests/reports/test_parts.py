@@ -36,12 +36,6 @@ def cert(run):
     return parts.certify_run(run)
 
 
-def with_parameters(run, **changes):
-    summary = copy.deepcopy(run.summary)
-    summary["parameters"].update(changes)
-    return dataclasses.replace(run, summary=summary)
-
-
 # -- certify_run, certificate_tables ---------------------------------------------------------
 
 
@@ -244,10 +238,15 @@ def test_companion_paths_repeat_the_runs_scenario_finely(run, pair_topology):
     np.testing.assert_array_equal(again["paths"], paths)
 
 
+def with_spec(run, **changes):
+    record = dataclasses.replace(run.record, spec=run.spec.replace(**changes))
+    return dataclasses.replace(run, record=record)
+
+
 def test_companion_paths_none_when_too_costly_or_not_repeatable(run, pair_topology):
     # 2 paths × T/dt steps over the budget
     steps = parts.COMPANION_MAX_STEPS / 2 + 100
-    assert parts.companion_paths(with_parameters(run, T=steps * 0.01), pair_topology) is None
-    assert (
-        parts.companion_paths(with_parameters(run, gain="log(t"), pair_topology) is None
-    )  # refused
+    assert parts.companion_paths(with_spec(run, T=steps * 0.01), pair_topology) is None
+    # a callable f is recorded as "callable": the run cannot be repeated from its summary
+    noise = NoiseModel(0.5, lambda x: 0.2 * x)
+    assert parts.companion_paths(with_spec(run, noise=noise), pair_topology) is None

@@ -570,7 +570,7 @@ MISMATCHED = [
     ),
     ("theta-text", _set_param("theta", "x"), "summary.json", ["parameters.theta", "list"]),
     ("theta-short", _set_param("theta", [1.0]), "summary.json", ["parameters.theta", "d = 3"]),
-    ("margin", _set_param("margin", [1]), "summary.json", ["parameters.margin", "positive"]),
+    ("margin", _set_param("margin", [1]), "summary.json", ["parameters.margin", "number"]),
     ("gain-list", _set_param("gain", ["t"]), "summary.json", ["parameters.gain", "expression"]),
     ("gain-text", _set_param("gain", "x"), "summary.json", ["parameters.gain", "variable t"]),
     ("noise", _set_param("noise", "x"), "summary.json", ["parameters.noise", "mapping"]),
