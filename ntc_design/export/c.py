@@ -311,6 +311,7 @@ def protocol(law: AgentLaw, agent: int | None = None) -> str:
         f"/* ntc_protocol.c: the digital protocol exported by ntc-design {__version__}\n"
         f"   (h = {literal(law.digital.period)}, D = {law.digital.delay}). Generated. */",
         "#include <math.h>",
+        "#include <stddef.h>",
         '#include "ntc_protocol.h"',
         "",
         f"const double ntc_period = {literal(law.digital.period)};",
