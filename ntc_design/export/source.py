@@ -498,7 +498,7 @@ def from_certificate(
         g,
         sampled.f,
     )
-    if losses:
+    if losses and ls is not None:
         law = lossy_law(law, losses, ls.policy)
     notes = (f"certificate: {kind.name}, valid ({ver.method}); the sampled protocol proven",)
     return ExportSource(

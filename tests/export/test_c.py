@@ -334,7 +334,10 @@ def _lossy(design, policy, delay=0, h=0.05):
 
     law = agent_law(design, Digital(h, delay), "1/(1+t)", 0.4, 0.3)
     ml = law.modes[0]
-    losses = {(int(i), int(j)): 0.1 + 0.1 * (k % 3) for k, (i, j) in enumerate(zip(ml.dst, ml.src))}
+    losses = {
+        (int(i), int(j)): 0.1 + 0.1 * (k % 3)
+        for k, (i, j) in enumerate(zip(ml.dst, ml.src, strict=True))
+    }
     return lossy_law(law, losses, policy)
 
 

@@ -128,7 +128,9 @@ def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
 
     base = agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3)
     ml = base.modes[0]
-    law = lossy_law(base, {(int(i), int(j)): 0.25 for i, j in zip(ml.dst, ml.src)}, policy)
+    law = lossy_law(
+        base, {(int(i), int(j)): 0.25 for i, j in zip(ml.dst, ml.src, strict=True)}, policy
+    )
     cmd = write_python(tmp_path, law)
     steps = 200
     z, chi = normals_for(law, steps, 7), arrivals_for(law, steps, 7)

@@ -206,7 +206,7 @@ def test_the_lossy_law_is_the_written_out_recursion(g1_design, policy):
     e = law.modes[0].n_edges
     losses = {
         (int(i), int(j)): 0.1 + 0.05 * (k % 3)
-        for k, (i, j) in enumerate(zip(law.modes[0].dst, law.modes[0].src))
+        for k, (i, j) in enumerate(zip(law.modes[0].dst, law.modes[0].src, strict=True))
     }
     lossy = lossy_law(law, losses, policy)
     steps = 300
