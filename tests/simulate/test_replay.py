@@ -258,3 +258,47 @@ def test_arrival_flags_other_than_0_or_1_are_refused(g1_design, flags, needle):
             steps,
             arrivals=chi,
         )
+
+
+@pytest.mark.parametrize("policy", ["skip", "rescale"])
+def test_the_lossy_law_is_the_monte_carlo_kernels_step(g1_design, policy):
+    # the compiled lossy kernel (its own arithmetic order) fed the same normals and
+    # arrivals: the law agrees to rounding, so both drop (skip) or rescale the same terms
+    from ntc_design.protocol.agents import lossy_law
+    from ntc_design.simulate.digital import digital_grid
+    from ntc_design.simulate.loss_kernels import POLICY_CODES, loss_steps
+    from ntc_design.simulate.loss_mc import LossMonteCarloSpec
+
+    h, steps, paths = 0.05, 200, 3
+    law0 = agent_law(g1_design, Digital(h), "1/(1+t)", 0.4, 0.3)
+    ml = law0.modes[0]
+    e = ml.n_edges
+    p_file = np.linspace(0.05, 0.4, e)
+    law = lossy_law(
+        law0, {(int(i), int(j)): float(p) for i, j, p in zip(ml.dst, ml.src, p_file, strict=True)},
+        policy,
+    )  # fmt: skip
+    p_sorted = np.empty(e)
+    p_sorted[ml.sorted_index] = p_file
+    rng = np.random.default_rng(11)
+    z = rng.standard_normal((paths, 2 * e * steps))
+    chi = (rng.random((paths, e * steps)) < 0.7).astype(np.int64)
+    want = replay(law, np.tile(X0, (paths, 1)), z, steps, arrivals=chi)
+    s = mode_system(g1_design, NOISE)
+    grid, _ = digital_grid(Digital(h), h * steps, np.array([h * steps]))
+    spec = LossMonteCarloSpec(
+        s, grid, lambda t: 1 / (1 + t), g1_design.theta, X0, 7, 3, paths, 1, p_sorted, policy, 0
+    )
+    xi = kernel_normals(law, z, steps)
+    uni = np.empty((steps, paths, e))
+    flags = chi.reshape(paths, steps, e).transpose(1, 0, 2)
+    uni[:, :, ml.sorted_index] = np.where(flags == 1, 0.0, 1.0 - 1e-12)  # below 1 − p_e or not
+    c = 1 / (1 + np.arange(steps) * h)
+    ch, cs, rh = c * h, c * np.sqrt(h), np.full(steps, 1 / np.sqrt(h))
+    x = np.tile(X0, (paths, 1))
+    empty = np.zeros((0, 4), np.uint64)
+    loss_steps(x, spec.initial_held(paths), empty, xi, uni, 2 * e, 0, steps, ch, cs, rh,
+               *spec.kernel_arrays(), POLICY_CODES[policy], 2, 0, 0)  # fmt: skip
+    scale = np.max(np.abs(want))
+    assert np.allclose(x, want, rtol=1e-11, atol=1e-11 * scale)
+    assert np.max(np.abs(want - replay(law0, np.tile(X0, (paths, 1)), z, steps))) > 1e-3
