@@ -276,9 +276,13 @@ def kernel_replay(
     Raises
     ------
     InputError
-        Normals of the wrong size, or systems that do not match the law's modes.
+        Normals of the wrong size, systems that do not match the law's modes, or a lossy
+        law (this kernel has no lost messages; :mod:`.loss_kernels` has).
     """
     from .kernels import em_steps, kernel_arrays, tile_width
+
+    if law.lossy:
+        raise InputError("law: kernel_replay runs the lossless kernel; the law is lossy")
 
     if len(systems) != len(law.modes):
         raise InputError(f"systems: {len(systems)} given for {len(law.modes)} modes")

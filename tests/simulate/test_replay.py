@@ -302,3 +302,12 @@ def test_the_lossy_law_is_the_monte_carlo_kernels_step(g1_design, policy):
     scale = np.max(np.abs(want))
     assert np.allclose(x, want, rtol=1e-11, atol=1e-11 * scale)
     assert np.max(np.abs(want - replay(law0, np.tile(X0, (paths, 1)), z, steps))) > 1e-3
+
+
+@pytest.mark.hostile
+def test_the_lossless_kernel_replay_refuses_a_lossy_law(g1_design):
+    from ntc_design.protocol.agents import lossy_law
+
+    law = lossy_law(agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3), {}, "skip")
+    with pytest.raises(InputError, match="^law: kernel_replay runs the lossless kernel"):
+        kernel_replay(law, [mode_system(g1_design, NOISE)], make_gain("1/(1+t)"), X0, [], 0)
