@@ -1,7 +1,8 @@
 """The agents' law (:mod:`ntc_design.protocol.agents`) as dependency-free C99:
 ``ntc_protocol.h`` (the types, the sizes, the functions), ``ntc_protocol.c`` (the tables,
 c(t), the schedule rule, the measurement and the agent's update) and ``ntc_replay.c`` (a
-program that reads x(0), K and the normals on stdin and prints x_K).
+program that reads x(0), K and the normals, and on lossy links each step's arrival
+flags after its normals, on stdin and prints x_K).
 
 Every number is written with ``%.17g`` (it reads back to the same double), every
 operation in the law's order; compiled with ``cc -std=c99 -O2 -ffp-contract=off`` (no

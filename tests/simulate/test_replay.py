@@ -1,6 +1,8 @@
 """Tests of :mod:`ntc_design.simulate.replay`: the toolkit's reference for the exported
 agents against an independent scalar loop of the law (bit for bit) and against the
-simulator's compiled kernel (to rounding, 1e-12 relative over 1000 steps)."""
+simulator's compiled kernel (to rounding, 1e-12 relative over 1000 steps); on lossy links
+(skip, rescale) against a written-out recursion and the lossy Monte Carlo kernel, and flags
+other than 0 or 1 refused."""
 
 import math
 import warnings
