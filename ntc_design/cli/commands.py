@@ -630,6 +630,8 @@ def export_cmd(
             "--agent", help="One agent's label: its tables only (C; for its own program)."
         ),
     ] = None,
+    loss: LossOpt = None,
+    loss_policy: LossPolicyOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Write the code each agent runs (the digital protocol of a certified design) as
@@ -643,12 +645,20 @@ def export_cmd(
     )
     f_flag, noise_f = renamed_flag("--f", old_f, "--noise-f", noise_f, require_number)
     check_digital_flags(period, delay)
+    from ..protocol.loss import require_loss, require_policy
+
+    if loss is not None:
+        require_loss("--loss", loss)
+    if loss_policy is not None:
+        require_policy("--loss-policy", loss_policy)
     require_file(file)
     from ..export.run import export
     from ..present.rows import counted
 
     try:
-        res = export(file, lang, out_dir, period, delay, gain, noise_sigma, noise_f, agent)
+        res = export(
+            file, lang, out_dir, period, delay, gain, noise_sigma, noise_f, agent, loss, loss_policy
+        )
     except InputError as exc:  # the library's names for the noise flags
         raise flag_renamed(exc, {"--sigma": sigma_flag, "--f": f_flag}) from None
     law = res.source.law
@@ -666,6 +676,7 @@ def export_cmd(
                     "gain": law.gain.label,
                     "agents": law.n,
                     "modes": [m.name for m in law.modes],
+                    "loss_policy": law.policy,
                 }
             )
         )

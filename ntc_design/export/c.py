@@ -1,7 +1,8 @@
 """The agents' law (:mod:`ntc_design.protocol.agents`) as dependency-free C99:
 ``ntc_protocol.h`` (the types, the sizes, the functions), ``ntc_protocol.c`` (the tables,
 c(t), the schedule rule, the measurement and the agent's update) and ``ntc_replay.c`` (a
-program that reads x(0), K and the normals on stdin and prints x_K).
+program that reads x(0), K and the normals, and on lossy links each step's arrival
+flags after its normals, on stdin and prints x_K).
 
 Every number is written with ``%.17g`` (it reads back to the same double), every
 operation in the law's order; compiled with ``cc -std=c99 -O2 -ffp-contract=off`` (no
@@ -69,12 +70,16 @@ def _in_array(mi: int, ml: ModeLaw, i: int) -> tuple[str, str]:
     name = f"ntc_in_m{mi}_a{i}"
     rows = [
         f"    {{{int(ml.src[e])}, {e}, {literal(ml.sign[e])}, {literal(ml.sigma[e])}, "
-        f"{_mat(ml.weight[e])}}}"
+        f"{_mat(ml.weight[e])}, {literal(1.0 if ml.keep is None else ml.keep[e])}}}"
         for e in edges
     ]
     return f"static const ntc_in_edge {name}[{len(edges)}] = {{\n" + ",\n".join(
         rows
     ) + "\n};\n", name
+
+
+#: NTC_POLICY: how the agents treat a lost message.
+_POLICY_CODE = {None: 0, "skip": 1, "rescale": 2}
 
 
 def header(law: AgentLaw, agent: int | None = None) -> str:
@@ -106,6 +111,7 @@ def header(law: AgentLaw, agent: int | None = None) -> str:
 #define NTC_MAX_EDGES {max_e}    /* the most edges of one mode */
 #define NTC_AGENTS {law.n if agent is None else 1}       /* agents whose tables are here (1: ntc export --agent) */
 #define NTC_SELF {-1 if agent is None else agent}         /* that one agent's index (-1: every agent) */
+#define NTC_POLICY {_POLICY_CODE[law.policy]}       /* lost messages: 0 none (lossless), 1 skip, 2 rescale */
 
 /* One in-edge e = (j -> i) of an agent, in its mode's file order. */
 typedef struct {{
@@ -114,6 +120,7 @@ typedef struct {{
     double sign;                 /* sgn(A_ij): +1 or -1 */
     double sigma;                /* sigma_e: the measurement's additive noise (replay) */
     double weight[NTC_D][NTC_D]; /* |A_ij| */
+    double keep;                 /* 1 - p_e: the probability that its message arrives */
 }} ntc_in_edge;
 
 /* One agent's law in one mode. */
@@ -162,6 +169,12 @@ void ntc_measure(const ntc_in_edge *e, const double *xd_i, const double *xd_j,
    measurements m (n_in rows of d, in its in-edges' order), with c = c(t_k) */
 void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
                       const double *xd_i, const double *m, double *x_next);
+/* the same on lossy links: arrived[s] is 1 when in-edge s's message arrived at this step,
+   0 when it was lost (n_in flags in its in-edges' order; NULL: every one arrived). A lost
+   message adds nothing; under rescale (NTC_POLICY 2) a received one counts m / keep. */
+void ntc_agent_update_arrived(const ntc_agent *agent, double c, const double *x_i,
+                              const double *xd_i, const double *m, const int *arrived,
+                              double *x_next);
 
 /* Start agent i (0-based) at x_i(0) (d numbers); 0, or -1 for an agent whose tables are
    not here. */
@@ -178,6 +191,9 @@ const double *ntc_agent_delayed(const ntc_agent_state *s);
    on hardware). Returns the mode used, or -1 (nothing changed) when c(t_k) is not
    finite. */
 int ntc_agent_step(ntc_agent_state *s, const double *m);
+/* The same on lossy links with the in-edges' arrival flags (n_in, 1 arrived, 0 lost; NULL:
+   every one arrived): a lost message's row of m is not read. */
+int ntc_agent_step_arrived(ntc_agent_state *s, const double *m, const int *arrived);
 
 #endif
 """
@@ -296,6 +312,7 @@ def protocol(law: AgentLaw, agent: int | None = None) -> str:
         f"/* ntc_protocol.c: the digital protocol exported by ntc-design {__version__}\n"
         f"   (h = {literal(law.digital.period)}, D = {law.digital.delay}). Generated. */",
         "#include <math.h>",
+        "#include <stddef.h>",
         '#include "ntc_protocol.h"',
         "",
         f"const double ntc_period = {literal(law.digital.period)};",
@@ -343,19 +360,38 @@ def protocol(law: AgentLaw, agent: int | None = None) -> str:
     }
 }
 
-void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
-                      const double *xd_i, const double *m, double *x_next)
+void ntc_agent_update_arrived(const ntc_agent *agent, double c, const double *x_i,
+                              const double *xd_i, const double *m, const int *arrived,
+                              double *x_next)
 {
     const double hc = ntc_period * c;
     int a, b, s;
+#if NTC_POLICY == 0
+    (void)arrived;  /* lossless: every message arrives */
+#endif
     for (a = 0; a < NTC_D; a++) {
         double acc = agent->u[a];
         if (agent->informed)
             for (b = 0; b < NTC_D; b++) acc -= agent->bd[a][b] * xd_i[b];
-        for (s = 0; s < agent->n_in; s++)
-            for (b = 0; b < NTC_D; b++) acc += agent->in[s].weight[a][b] * m[s * NTC_D + b];
+        for (s = 0; s < agent->n_in; s++) {
+#if NTC_POLICY != 0
+            if (arrived && !arrived[s]) continue;  /* lost: its term and its noise left out */
+#endif
+            for (b = 0; b < NTC_D; b++)
+#if NTC_POLICY == 2
+                acc += agent->in[s].weight[a][b] * (m[s * NTC_D + b] / agent->in[s].keep);
+#else
+                acc += agent->in[s].weight[a][b] * m[s * NTC_D + b];
+#endif
+        }
         x_next[a] = x_i[a] + hc * acc;
     }
+}
+
+void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
+                      const double *xd_i, const double *m, double *x_next)
+{
+    ntc_agent_update_arrived(agent, c, x_i, xd_i, m, NULL, x_next);
 }
 """
     )
@@ -396,14 +432,19 @@ const double *ntc_agent_delayed(const ntc_agent_state *s)
 
 int ntc_agent_step(ntc_agent_state *s, const double *m)
 {
+    return ntc_agent_step_arrived(s, m, NULL);
+}
+
+int ntc_agent_step_arrived(ntc_agent_state *s, const double *m, const int *arrived)
+{
     const int mode = ntc_mode_at(s->k);
     const double c = ntc_gain(ntc_time(s->k));
     double *xd = s->line[(s->k + 1) % (NTC_DELAY + 1)];
     double next[NTC_D];
     int b;
     if (!isfinite(c)) return -1;
-    ntc_agent_update(&ntc_modes[mode].agents[s->slot], c, s->line[s->k % (NTC_DELAY + 1)], xd,
-                     m, next);
+    ntc_agent_update_arrived(&ntc_modes[mode].agents[s->slot], c,
+                             s->line[s->k % (NTC_DELAY + 1)], xd, m, arrived, next);
     for (b = 0; b < NTC_D; b++) xd[b] = next[b];  /* x_i(k+1) replaces x_i(k-D) */
     s->k++;
     return mode;
@@ -414,8 +455,10 @@ int ntc_agent_step(ntc_agent_state *s, const double *m)
 REPLAY = """/* ntc_replay.c: replays the exported protocol on given normals. Generated by ntc-design.
    stdin (whitespace-separated): x(0) as N*d numbers agent by agent, the number of
    steps K, then for every step k the 2E normals of the edges of its mode in file order
-   (each edge's additive xi1, then its multiplicative xi2). stdout: x_K, one agent per
-   line, %.17g. Exit 2 on malformed input, 1 when c(t_k) is not finite. */
+   (each edge's additive xi1, then its multiplicative xi2) and, on lossy links
+   (NTC_POLICY != 0), after them the E arrival flags of the same edges in the same order
+   (1 arrived, 0 lost). stdout: x_K, one agent per line, %.17g. Exit 2 on malformed
+   input, 1 when c(t_k) is not finite. */
 #include <ctype.h>
 #include <math.h>
 #include <stdio.h>
@@ -440,9 +483,12 @@ int main(void)
     double *next = malloc(sizeof(double) * (size_t)nd);
     double *z = malloc(sizeof(double) * (size_t)(2 * NTC_MAX_EDGES + 1));
     double *m = malloc(sizeof(double) * (size_t)(NTC_MAX_IN * NTC_D + 1));
+    int *chi = malloc(sizeof(int) * (size_t)(NTC_MAX_EDGES + 1));
+    int *got = malloc(sizeof(int) * (size_t)(NTC_MAX_IN + 1));
+    char tok[8];
     long K, k, r, q;
     int i, s, ch;
-    if (!ring || !next || !z || !m) {
+    if (!ring || !next || !z || !m || !chi || !got) {
         fprintf(stderr, "ntc_replay: out of memory\\n");
         return 2;
     }
@@ -461,15 +507,22 @@ int main(void)
         }
         for (q = 0; q < 2L * md->n_edges; q++)
             if (scanf("%lf", &z[q]) != 1) return fail("expected 2E normals", k);
+        for (q = 0; q < (NTC_POLICY != 0 ? (long)md->n_edges : 0L); q++) {
+            if (scanf("%7s", tok) != 1) return fail("expected E arrival flags (0 or 1)", k);
+            if (strcmp(tok, "0") == 0) chi[q] = 0;
+            else if (strcmp(tok, "1") == 0) chi[q] = 1;
+            else return fail("an arrival flag is not 0 or 1", k);
+        }
         for (i = 0; i < NTC_N; i++) {
             const ntc_agent *ag = &md->agents[i];
             for (s = 0; s < ag->n_in; s++) {
                 const ntc_in_edge *e = &ag->in[s];
                 ntc_measure(e, xd + (long)i * NTC_D, xd + (long)e->from * NTC_D,
                             z[2 * e->edge], z[2 * e->edge + 1], m + s * NTC_D);
+                got[s] = NTC_POLICY != 0 ? chi[e->edge] : 1;
             }
-            ntc_agent_update(ag, c, now + (long)i * NTC_D, xd + (long)i * NTC_D, m,
-                             next + (long)i * NTC_D);
+            ntc_agent_update_arrived(ag, c, now + (long)i * NTC_D, xd + (long)i * NTC_D, m,
+                                     got, next + (long)i * NTC_D);
         }
         memcpy(xd, next, sizeof(double) * (size_t)nd);  /* x_{k+1} replaces x_{k-D} */
     }
@@ -487,6 +540,8 @@ int main(void)
     free(next);
     free(z);
     free(m);
+    free(chi);
+    free(got);
     return 0;
 }
 """

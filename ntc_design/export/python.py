@@ -37,10 +37,11 @@ def _tables(law: AgentLaw) -> str:
         f"SQRT_PERIOD = {literal(law.sqrt_period)}  # sqrt(h)",
         f"NOISE_F = {_mat(law.noise_f)}  # F of f(x) = F x",
         f"LABELS = {tuple(str(a) for a in law.labels)!r}",
+        f"POLICY = {law.policy!r}  # lost messages: None (lossless), 'skip' or 'rescale'",
         "",
         "# MODES[m]: (name, E, agents); an agent: (informed, delta_i, delta_i |B_i|, u_i,",
         "# in-edges in file order); an in-edge: (j, its index e in file order, sgn A_ij,",
-        "# sigma_e, |A_ij|)",
+        "# sigma_e, |A_ij|, keep_e = 1 - p_e)",
         "MODES = (",
     ]
     for ml in law.modes:
@@ -49,7 +50,7 @@ def _tables(law: AgentLaw) -> str:
             inf = i in ml.informed
             ins = ", ".join(
                 f"({int(ml.src[e])}, {e}, {literal(ml.sign[e])}, {literal(ml.sigma[e])}, "
-                f"{_mat(ml.weight[e])})"
+                f"{_mat(ml.weight[e])}, {literal(1.0 if ml.keep is None else ml.keep[e])})"
                 for e in ml.in_edges(i)
             )
             lines.append(
@@ -160,9 +161,11 @@ def measure(edge, xd_i, xd_j, z1, z2):
     return m
 
 
-def agent_update(agent, c, x_i, xd_i, m):
+def agent_update(agent, c, x_i, xd_i, m, arrived=None):
     """The agent's next state from its state, its delayed state and its measurements
-    (one list of d per in-edge, in its in-edges' order), with c = c(t_k)."""
+    (one list of d per in-edge, in its in-edges' order), with c = c(t_k). On lossy links
+    ``arrived[s]`` is 1 when in-edge s's message arrived, 0 when lost (None: every one
+    arrived): a lost message adds nothing; under rescale a received one counts m / keep."""
     informed, _, bd, u, inputs = agent
     hc = PERIOD * c
     out = []
@@ -172,16 +175,25 @@ def agent_update(agent, c, x_i, xd_i, m):
             for b in range(DIM):
                 acc -= bd[a][b] * xd_i[b]
         for s, edge in enumerate(inputs):
+            if POLICY is not None and arrived is not None and not arrived[s]:
+                continue  # lost: its term and its noise left out
             w, ms = edge[4][a], m[s]
-            for b in range(DIM):
-                acc += w[b] * ms[b]
+            if POLICY == "rescale":
+                keep = edge[5]
+                for b in range(DIM):
+                    acc += w[b] * (ms[b] / keep)
+            else:
+                for b in range(DIM):
+                    acc += w[b] * ms[b]
         out.append(x_i[a] + hc * acc)
     return out
 
 
-def replay(x0, steps, normals):
+def replay(x0, steps, normals, arrivals=None):
     """x_K from x(0) (N lists of d), K and an iterator over the normals (step by step,
-    each edge of the step's mode in file order: its xi1, then its xi2)."""
+    each edge of the step's mode in file order: its xi1, then its xi2); on lossy links an
+    iterator over the arrival flags (after each step's normals, E flags 0 or 1 in the
+    same edge order)."""
     ring = [[list(x) for x in x0] for _ in range(DELAY + 1)]
     for k in range(steps):
         name, n_edges, agents = MODES[mode_at(k)]
@@ -189,12 +201,14 @@ def replay(x0, steps, normals):
         if not math.isfinite(c):
             raise ArithmeticError(f"c(t) = {c!r} is not finite at step {k}")
         z = [next(normals) for _ in range(2 * n_edges)]
+        chi = [next(arrivals) for _ in range(n_edges)] if POLICY is not None else None
         now = ring[k % (DELAY + 1)]
         xd = ring[(k + 1) % (DELAY + 1)]
         nxt = []
         for i, agent in enumerate(agents):
             m = [measure(e, xd[i], xd[e[0]], z[2 * e[1]], z[2 * e[1] + 1]) for e in agent[4]]
-            nxt.append(agent_update(agent, c, now[i], xd[i], m))
+            got = [chi[e[1]] for e in agent[4]] if chi is not None else None
+            nxt.append(agent_update(agent, c, now[i], xd[i], m, got))
         ring[(k + 1) % (DELAY + 1)] = nxt
     return ring[steps % (DELAY + 1)]
 
@@ -225,11 +239,22 @@ def main():
             used[0] += 1
             yield float(w)
 
+    def arrivals():
+        for w in rest:
+            used[0] += 1
+            if w not in ("0", "1"):
+                raise KeyError(w)
+            yield w == "1"
+
     x0 = [flat[i * DIM : (i + 1) * DIM] for i in range(N)]
     try:
-        x = replay(x0, steps, normals())
+        x = replay(x0, steps, normals(), arrivals())
+    except KeyError:
+        print("ntc_protocol: stdin: an arrival flag is not 0 or 1", file=sys.stderr)
+        return 2
     except (StopIteration, RuntimeError, ValueError):
-        print("ntc_protocol: stdin: expected 2E normals for every step", file=sys.stderr)
+        what = "2E normals and E arrival flags" if POLICY is not None else "2E normals"
+        print(f"ntc_protocol: stdin: expected {what} for every step", file=sys.stderr)
         return 2
     except ArithmeticError as exc:
         print(f"ntc_protocol: {exc}", file=sys.stderr)
@@ -259,13 +284,14 @@ def python_module(law: AgentLaw) -> str:
     -------
     str
     """
+    flags = ",\nthen the E arrival flags of the same edges (1 arrived, 0 lost)" if law.lossy else ""
     head = f'''"""The digital protocol exported by ntc-design {__version__} (h = {literal(law.digital.period)},
 D = {law.digital.delay}): a generated, dependency-free module.
 
 Run ``python ntc_protocol.py < input``: stdin holds x(0) (N*d numbers, agent by agent),
 the number of steps K, then for every step the 2E normals of its mode's edges in file
-order (each edge's additive xi1, then its multiplicative xi2); stdout gets x_K, one agent
-per line, %.17g. README.txt describes the law.
+order (each edge's additive xi1, then its multiplicative xi2){flags};
+stdout gets x_K, one agent per line, %.17g. README.txt describes the law.
 """
 
 import math

@@ -43,9 +43,10 @@ MAX_NUMBERS = 20_000_000
 EXAMPLES = ("example_input.txt", "example_output.txt")
 
 
-def stdin_text(x_init, steps: int, normals) -> str:
+def stdin_text(x_init, steps: int, normals, law: AgentLaw | None = None, arrivals=None) -> str:
     """The input of an exported program: x(0), K and the normals, each number written so
-    that it reads back to the same double.
+    that it reads back to the same double; on lossy links each step's E arrival flags
+    (``0``/``1``) after its 2E normals.
 
     Parameters
     ----------
@@ -55,6 +56,10 @@ def stdin_text(x_init, steps: int, normals) -> str:
         K.
     normals : array_like
         The normals in the programs' order.
+    law : AgentLaw, optional
+        The law (the steps' edge counts; needed with ``arrivals``).
+    arrivals : array_like, optional
+        The arrival flags (0 or 1), step by step.
 
     Returns
     -------
@@ -62,8 +67,18 @@ def stdin_text(x_init, steps: int, normals) -> str:
     """
     x = " ".join(repr(float(v)) for v in np.asarray(x_init, dtype=float).ravel())
     z = np.asarray(normals, dtype=float).ravel().tolist()
-    rows = [" ".join(repr(v) for v in z[k : k + 8]) for k in range(0, len(z), 8)]
-    return "\n".join([x, str(int(steps)), *rows]) + "\n"
+    if arrivals is None or law is None:
+        rows = [" ".join(repr(v) for v in z[k : k + 8]) for k in range(0, len(z), 8)]
+        return "\n".join([x, str(int(steps)), *rows]) + "\n"
+    flags = np.asarray(arrivals).ravel().astype(np.int64).tolist()
+    out = [x, str(int(steps))]
+    e_z = np.concatenate([[0], np.cumsum(law.normals_per_step(steps))]).tolist()
+    e_f = np.concatenate([[0], np.cumsum(law.flags_per_step(steps))]).tolist()
+    for k in range(steps):
+        zk = z[e_z[k] : e_z[k + 1]]
+        out += [" ".join(repr(v) for v in zk[j : j + 8]) for j in range(0, len(zk), 8)]
+        out.append(" ".join(str(v) for v in flags[e_f[k] : e_f[k + 1]]))
+    return "\n".join(out) + "\n"
 
 
 def state_text(x, d: int) -> str:
@@ -135,9 +150,50 @@ def example(src: ExportSource) -> tuple[str, str]:
     if src.horizon is not None:
         steps = min(steps, law.digital.steps(src.horizon)[0])
     count = int(law.normals_per_step(steps).sum())
-    z = np.random.default_rng(EXAMPLE_SEED).standard_normal(count)
-    x = replay(law, src.initial, z, steps)
-    return stdin_text(src.initial, steps, z), state_text(x, law.dim)
+    rng = np.random.default_rng(EXAMPLE_SEED)
+    z = rng.standard_normal(count)
+    if not law.lossy:
+        x = replay(law, src.initial, z, steps)
+        return stdin_text(src.initial, steps, z), state_text(x, law.dim)
+    keep = np.concatenate(
+        [np.zeros(0)]
+        + [np.asarray(law.modes[int(m)].keep, dtype=float) for m in law.step_modes(steps)]
+    )
+    chi = (rng.random(keep.size) < keep).astype(np.int64)  # arrives with probability 1 − p_e
+    x = replay(law, src.initial, z, steps, arrivals=chi)
+    return stdin_text(src.initial, steps, z, law, chi), state_text(x, law.dim)
+
+
+def _loss_stdin(law: AgentLaw) -> list[str]:
+    if not law.lossy:
+        return []
+    return [
+        "  Lossy links: after the 2E normals of step k, its E arrival flags, one per edge",
+        "  in the same file order (below): 1 the message arrived, 0 it was lost (only the",
+        "  words 0 and 1; anything else is refused, exit 2).",
+    ]
+
+
+def _loss_law(law: AgentLaw) -> list[str]:
+    if not law.lossy:
+        return []
+    keep = sorted({float(v) for m in law.modes for v in np.asarray(m.keep).tolist()})
+    shown = ", ".join(literal(v) for v in keep[:8]) + (", …" if len(keep) > 8 else "")
+    rescale = law.policy == "rescale"
+    return [
+        "",
+        f"Lossy links, policy {law.policy} (compiled in; keep_e = 1 - p_e: {shown}):",
+        "  an in-edge whose message is lost at step k (flag 0) adds nothing: its term and",
+        "  its noise are left out"
+        + (
+            "; a received one adds |A_ij|[a][b] (m_e[b] / keep_e) (rescale: the mean"
+            " drift unbiased)."
+            if rescale
+            else " (skip: the mean converges to x*, the certificate's offset)."
+        ),
+        "  C: ntc_agent_step_arrived(&s, m, arrived) with arrived[q] = 1 or 0 for in-edge",
+        "  ag->in[q] (ntc_agent_step: every message arrived). Python: agent_update(..., arrived).",
+    ]
 
 
 def _edges_text(law: AgentLaw, most: int = 40) -> list[str]:
@@ -275,6 +331,7 @@ def readme(src: ExportSource, lang: str, agent: int | None = None) -> str:
         "  K: the number of steps;",
         "  then for k = 0 .. K-1 the 2E normals of step k: for each edge of the mode of",
         "  step k, in file order (below), its additive xi1, then its multiplicative xi2.",
+        *_loss_stdin(law),
         "stdout: x_K, one agent per line, d numbers each, printed with %.17g.",
         "",
         "The model (t_k = k*h, c_k = c(t_k), e = x - 1 (x) theta, the state held before t = 0):",
@@ -288,8 +345,10 @@ def readme(src: ExportSource, lang: str, agent: int | None = None) -> str:
         "  acc = u_i[a];  informed: acc -= (delta |B_i|)[a][b] xd_i[b] for b in order",
         "  for each in-edge in file order, for b in order: acc += |A_ij|[a][b] m_e[b]",
         "  x_next[a] = x_i[a] + hc acc",
+        *_loss_law(law),
         "",
-        "Edges in file order (the order of the normals):",
+        "Edges in file order (the order of the normals"
+        + (" and of the arrival flags):" if law.lossy else "):"),
         *_edges_text(law),
         "",
     ]
@@ -535,6 +594,8 @@ def export(
     sigma: float | None = None,
     f: float | None = None,
     agent: str | None = None,
+    loss: float | None = None,
+    policy: str | None = None,
 ) -> ExportResult:
     """Export a scenario's or a certificate's certified design as code, into ``out`` (all
     or nothing: refused before any work when ``out`` holds other files).
@@ -555,6 +616,8 @@ def export(
         The noise's σ and f.
     agent : str, optional
         One agent's label: its tables only (C).
+    loss, policy : float, str, optional
+        p on every edge and the policy for a lost message (``--loss``, ``--loss-policy``).
 
     Returns
     -------
@@ -571,7 +634,7 @@ def export(
     if agent is not None and lang != "c":
         raise InputError("--agent: one agent's tables are emitted in C only (--lang c)")
     check_export_folder(out)
-    src = load_source(path, period, delay, gain, sigma, f)
+    src = load_source(path, period, delay, gain, sigma, f, loss, policy)
     texts = files_for(src, lang, agent)
     check_export_folder(out)  # again: the folder may have changed during the work
     # written into a new folder that then replaces ``out`` whole (all or nothing); what it

@@ -39,7 +39,7 @@ from ..io.files import parse_scenario
 from ..model import SwitchingTopology, Topology
 from ..model.paper import F_SCALE, SIGMA
 from ..numerics.linalg import RANGE_TEXT, out_of_range
-from ..protocol.agents import AgentLaw, agent_law, make_law, mode_law
+from ..protocol.agents import AgentLaw, agent_law, lossy_law, make_law, mode_law
 from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.lemma1 import (
     ProtocolDesign,
@@ -84,11 +84,17 @@ class ExportSource:
 
 
 def _digital(
-    period: float | None, delay: int | None, given: Any, horizon: float | None, where: str
+    period: float | None,
+    delay: int | None,
+    given: Any,
+    horizon: float | None,
+    where: str,
+    loss: float | None = None,
+    policy: str | None = None,
 ) -> Digital:
-    """h and D: the arguments over a scenario's ``digital:`` block (read as simulate reads
-    it: an unknown field is refused), errors naming the option for an argument and the
-    block for the file's value."""
+    """h, D, p and the policy: the arguments over a scenario's ``digital:`` block (read as
+    simulate reads it: an unknown field is refused), errors naming the option for an
+    argument and the block for the file's value."""
     if given is not None and not isinstance(given, dict):
         raise InputError(f"{where}: digital: expected {{period: h, delay: D}}")
     base = dict(given or {})
@@ -96,14 +102,13 @@ def _digital(
         base["period"] = period
     if delay is not None:
         base["delay"] = delay
+    if loss is not None:
+        base["loss"] = loss
+    if policy is not None:
+        base["policy"] = policy
     if "period" not in base:
         raise InputError(
             f"--period: {where} has no digital block (period h, delay D); give --period"
-        )
-    if base.get("loss") not in (None, 0, 0.0):  # a lossy scenario or a digital_loss subject
-        raise InputError(
-            f"{where}: digital.loss: the exported code does not model lost messages yet; "
-            "export the protocol without loss"
         )
     try:
         dg = Digital.from_document(base)
@@ -114,6 +119,8 @@ def _digital(
         for field, flag, value in (
             ("digital.period", "--period", period),
             ("digital.delay", "--delay", delay),
+            ("digital.loss", "--loss", loss),
+            ("digital.policy", "--loss-policy", policy),
         ):
             if text.startswith(field):
                 text = (flag + text[len(field) :]) if value is not None else f"{where}: {text}"
@@ -151,8 +158,12 @@ def from_scenario(
     gain: str | ScheduleGain | None = None,
     sigma: float | None = None,
     f: float | None = None,
+    loss: float | None = None,
+    policy: str | None = None,
 ) -> ExportSource:
-    """The agents' law of a scenario's certified Lemma 1 design.
+    """The agents' law of a scenario's certified Lemma 1 design (on lossy links when its
+    ``digital:`` block or its topology's edges give a loss: the ``digital_loss``
+    certificate, D = 0 with ``skip`` or ``rescale``).
 
     Parameters
     ----------
@@ -164,6 +175,10 @@ def from_scenario(
         c(t) instead of the scenario's (a ``.csv`` name is a schedule file).
     sigma, f : float, optional
         The noise's σ and f instead of the scenario's.
+    loss : float, optional
+        p on every edge instead of the scenario's ``digital.loss``.
+    policy : str, optional
+        The policy for a lost message instead of the scenario's.
 
     Returns
     -------
@@ -173,7 +188,8 @@ def from_scenario(
     ------
     InputError
         A bad file or value; a topology that is neither fixed nor switching; a design whose
-        certificate does not verify or for which no theorem is guaranteed.
+        certificate does not verify or for which no theorem is guaranteed; lossy links
+        with ``hold``, a delay or a switching set (not proven).
     """
 
     sc = parse_scenario(path)
@@ -184,7 +200,7 @@ def from_scenario(
         horizon = None  # the scenario's own check names it
     # the options replace the file's block before the scenario is checked (a period of the
     # file's that the option overrides is not refused)
-    dg = _digital(period, delay, given, horizon, src)
+    dg = _digital(period, delay, given, horizon, src, loss, policy)
     top, spec, _ = load_scenario(path, {"digital": dg.to_dict()}, sc)
     if not isinstance(top, (Topology, SwitchingTopology)):
         raise InputError(
@@ -250,7 +266,9 @@ def _certified_law(
 ) -> tuple[AgentLaw, Any]:
     """Certify the sampled protocol (period h, delay D, the gain and the noise) of Lemma 1's
     design and give its agents' law; refused unless the certificate verifies and its
-    sampled theorems are guaranteed (nothing is exported unproven)."""
+    sampled theorems are guaranteed (nothing is exported unproven); on lossy links the
+    ``digital_loss`` certificate, and the law with each edge's 1 − p_e and the policy."""
+    losses = _losses(top, dg, src)
     _check_noise(f"{src}: noise", noise.sigma, None if callable(noise.f) else noise.f)
     for value in noise.sigma_edges.values():
         _check_noise(f"{src}: noise.sigma_edges", value)
@@ -284,7 +302,40 @@ def _certified_law(
     if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
         raise InputError(f"{src}: topology: this design cannot be exported")
     law = agent_law(design, dg, gain, noise.sigma, noise.f, noise.sigma_edges)
+    if losses:
+        if res.certificate["kind"] != "digital_loss":  # the lossy proof, nothing weaker
+            raise InputError(f"{src}: lossy links are not certified; nothing exported")
+        law = lossy_law(law, losses, dg.policy)
     return law, res
+
+
+def _unproven(policy: str, delay: int, where: str) -> None:
+    """Refuse lossy links that no certificate proves (``hold``, or a delay), in one line."""
+    if policy == "hold" or delay:
+        what = "the hold policy" if policy == "hold" else f"a delay D = {delay}"
+        raise InputError(
+            f"{where}: lossy links with {what} are not proven (the digital_loss certificate "
+            "covers D = 0 with skip or rescale); nothing exported"
+        )
+
+
+def _losses(top: Topology | SwitchingTopology, dg: Digital, src: str) -> dict:
+    """p_e of every edge (i, j) of a lossy design (its own ``loss:`` over the uniform
+    one), empty when every message arrives; refused when not proven."""
+    if isinstance(top, SwitchingTopology):
+        lossy = dg.lossy or any(getattr(t, "loss", None) for t in top.modes.values())
+        if lossy:
+            raise InputError(
+                f"{src}: lossy links are certified for one topology (digital_loss), not a "
+                "switching set; nothing exported"
+            )
+        return {}
+    own = dict(getattr(top, "loss", {}) or {})
+    losses = {k: float(own.get(k, dg.loss)) for k in top.edges}
+    if not any(p > 0 for p in losses.values()):
+        return {}
+    _unproven(dg.policy, dg.delay, src)
+    return losses
 
 
 def _named(law: AgentLaw, name: str) -> AgentLaw:
@@ -347,6 +398,8 @@ def from_certificate(
     sigma: float | None = None,
     f: float | None = None,
     doc: dict | None = None,
+    loss: float | None = None,
+    policy: str | None = None,
 ) -> ExportSource:
     """The agents' law of a certificate's design, from its verified reading only.
 
@@ -369,6 +422,9 @@ def from_certificate(
         The noise of a continuous certificate (default: the paper's σ = 0.4, f = 0.3).
     doc : dict, optional
         The certificate already read.
+    loss, policy : float, str, optional
+        p and the policy: a ``digital_loss`` certificate's are its verified reading's
+        (an option that differs is refused); a continuous one is certified on lossy links.
 
     Returns
     -------
@@ -399,7 +455,11 @@ def from_certificate(
     first = next(iter(ctx.modes.values()))
     sampled = ctx.digital
     if sampled is None:
-        return _continuous(doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f)
+        return _continuous(
+            doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f, loss, policy
+        )
+    ls = getattr(ctx, "loss", None) if kind.name == "digital_loss" else None
+    losses = _certified_losses(ls, sampled.delay, loss, policy, src)
     if ctx.stated is None:
         raise InputError(
             f"{src}: the certificate does not prove the sampled protocol "
@@ -442,10 +502,42 @@ def from_certificate(
         g,
         sampled.f,
     )
+    if losses and ls is not None:
+        law = lossy_law(law, losses, ls.policy)
     notes = (f"certificate: {kind.name}, valid ({ver.method}); the sampled protocol proven",)
     return ExportSource(
         law, src, f"certificate ({kind.name})", np.zeros(law.n * law.dim), None, notes
     )
+
+
+def _certified_losses(
+    ls: Any, delay: int, loss: float | None, policy: str | None, src: str
+) -> dict:
+    """A sampled certificate's p_e by edge (empty: lossless), from its verified reading
+    only: ``--loss``/``--loss-policy`` that differ are refused, as is what it does not prove."""
+    if ls is None:
+        if loss is not None and loss != 0:
+            raise InputError(
+                f"--loss: {loss!r} differs from the certified protocol ({src}), which has no "
+                "lost messages; drop the option or certify anew"[:300]
+            )
+        return {}
+    if policy is not None and policy != ls.policy:
+        raise InputError(
+            f"--loss-policy: {policy!r} differs from the certified policy {ls.policy!r} ({src}); "
+            "drop the option or certify anew"[:300]
+        )
+    values = sorted(set(ls.losses.values()))
+    if loss is not None and values != [loss]:
+        shown = values[0] if len(values) == 1 else "per-edge losses"
+        raise InputError(
+            f"--loss: {loss!r} differs from the certified {shown!r} ({src}); "
+            "drop the option or certify anew"[:300]
+        )
+    if not any(p > 0 for p in ls.losses.values()):
+        return {}
+    _unproven(ls.policy, delay, src)
+    return dict(ls.losses)
 
 
 def _continuous(
@@ -459,9 +551,11 @@ def _continuous(
     gain: str | ScheduleGain | None,
     sigma: float | None,
     f: float | None,
+    loss: float | None = None,
+    policy: str | None = None,
 ) -> ExportSource:
     """A continuous certificate's design certified as the sampled protocol first."""
-    dg = _digital(period, delay, None, None, f"{src} (a {kind} certificate)")
+    dg = _digital(period, delay, None, None, f"{src} (a {kind} certificate)", loss, policy)
     stated = doc.get("gain")  # a tabulated schedule whose conditions verify derived
     if stated is not None and gain is not None:
         raise InputError(f"--gain: the certificate states its gain ({src}: gain); drop --gain")
@@ -530,6 +624,8 @@ def load_source(
     gain: str | ScheduleGain | None = None,
     sigma: float | None = None,
     f: float | None = None,
+    loss: float | None = None,
+    policy: str | None = None,
 ) -> ExportSource:
     """A scenario's or a certificate's agents' law (:func:`from_scenario`,
     :func:`from_certificate`), told apart by the file's content.
@@ -544,6 +640,8 @@ def load_source(
         c(t).
     sigma, f : float, optional
         The noise's σ and f.
+    loss, policy : float, str, optional
+        p on every edge and the policy for a lost message.
 
     Returns
     -------
@@ -556,8 +654,8 @@ def load_source(
     """
     doc = read_document(path)
     if is_certificate(doc):
-        return from_certificate(path, period, delay, gain, sigma, f, doc=doc)
-    return from_scenario(path, period, delay, gain, sigma, f)
+        return from_certificate(path, period, delay, gain, sigma, f, doc, loss, policy)
+    return from_scenario(path, period, delay, gain, sigma, f, loss, policy)
 
 
 __all__ = [

@@ -38,6 +38,13 @@ this is the edge's share of the drift and of the noise above.
 for a = 0 … d−1, where x_i is the agent's current state x_k. Summed over the edges, in
 exact arithmetic, this is the recursion above.
 
+**Lossy links** (:mod:`.loss`; :attr:`AgentLaw.policy` ``skip`` or ``rescale``): each in-edge
+has an arrival flag χ_e ∈ {0, 1} at each step and keep_e = 1 − p_e (the double 1.0 − p_e).
+A slot whose message is lost (χ_e = 0) adds nothing (its term and its noise are left out);
+under ``rescale`` a received slot adds ``|A_ij|[a][b]*(m_e[b]/keep_e)`` instead (the mean
+drift unbiased). With every flag 1 and keep_e = 1, this is the lossless law bit for bit.
+``hold`` is not part of the exported law (no certificate proves it).
+
 :class:`AgentLaw` holds what that needs: per mode (:class:`ModeLaw`) the edges in file order
 with their sources, signs, |A_ij| and σ_e, per agent δ·|B_i| and u_i, and the period, the
 delay, F, the gain (:class:`~ntc_design.gain.code.GainCode`) and the schedule.
@@ -47,7 +54,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -60,6 +67,7 @@ from ..gain.schedule import ScheduleGain
 from ..model import Label, Topology
 from .digital import Digital, ScheduleTicks, step_modes
 from .lemma1 import ProtocolDesign, SwitchingDesign, input_vector
+from .loss import require_loss
 
 
 def file_edges(top: Topology) -> list[tuple[int, int]]:
@@ -104,6 +112,9 @@ class ModeLaw:
         (N, d) ``u_i = δ|B_i|x0`` (zero for the uninformed).
     sorted_index : numpy.ndarray
         (E,) where edge e sits in :attr:`Topology.edges` (the simulator's order).
+    keep : numpy.ndarray or None
+        (E,) 1 − p_e, the probability that the edge's message arrives (lossy links;
+        None: every message arrives).
     """
 
     name: str
@@ -117,6 +128,7 @@ class ModeLaw:
     bd: np.ndarray
     u: np.ndarray
     sorted_index: np.ndarray
+    keep: np.ndarray | None = None
 
     @property
     def n_edges(self) -> int:
@@ -272,6 +284,9 @@ class AgentLaw:
         F (d×d).
     gain : GainCode
         c(t).
+    policy : str or None
+        What an agent does with a lost message (``skip`` or ``rescale``) on lossy links;
+        None: every message arrives.
     """
 
     name: str
@@ -283,6 +298,12 @@ class AgentLaw:
     digital: Digital
     noise_f: np.ndarray
     gain: GainCode
+    policy: str | None = None
+
+    @property
+    def lossy(self) -> bool:
+        """Whether the agents take an arrival flag per in-edge at each step."""
+        return self.policy is not None
 
     @property
     def n(self) -> int:
@@ -354,6 +375,23 @@ class AgentLaw:
         """
         counts = np.array([2 * m.n_edges for m in self.modes], dtype=np.int64)
         return counts[self.step_modes(steps)]
+
+    def flags_per_step(self, steps: int) -> np.ndarray:
+        """E of each step's mode: the arrival flags step k reads (none when lossless).
+
+        Parameters
+        ----------
+        steps : int
+            K.
+
+        Returns
+        -------
+        numpy.ndarray
+            (K,) counts.
+        """
+        if not self.lossy:
+            return np.zeros(steps, dtype=np.int64)
+        return self.normals_per_step(steps) // 2
 
 
 def agent_law(
@@ -465,4 +503,53 @@ def make_law(
     )
 
 
-__all__ = ["AgentLaw", "ModeLaw", "agent_law", "file_edges", "make_law", "mode_law"]
+#: The policies the exported law runs (``hold`` has no certificate).
+LAW_POLICIES = ("skip", "rescale")
+
+
+def lossy_law(law: AgentLaw, losses: Mapping[tuple[int, int], float], policy: str) -> AgentLaw:
+    """The law on lossy links: each mode's keep_e = 1 − p_e (file order) and the policy.
+
+    Parameters
+    ----------
+    law : AgentLaw
+        The lossless law.
+    losses : mapping of (int, int) to float
+        p_e by edge (i, j), j → i; an edge without one has p = 0.
+    policy : str
+        ``skip`` or ``rescale``.
+
+    Returns
+    -------
+    AgentLaw
+
+    Raises
+    ------
+    InputError
+        Another policy, or a p outside [0, 1).
+    """
+    if policy not in LAW_POLICIES:
+        raise InputError(
+            f"digital.policy: {policy!r} is not exported (the exported law runs "
+            f"{' or '.join(LAW_POLICIES)})"
+        )
+    modes = []
+    for ml in law.modes:
+        p = [
+            require_loss("digital.loss", losses.get((int(i), int(j)), 0.0))
+            for i, j in zip(ml.dst.tolist(), ml.src.tolist(), strict=True)
+        ]
+        modes.append(replace(ml, keep=np.array([1.0 - v for v in p], dtype=float)))
+    return replace(law, modes=tuple(modes), policy=policy)
+
+
+__all__ = [
+    "LAW_POLICIES",
+    "AgentLaw",
+    "ModeLaw",
+    "agent_law",
+    "file_edges",
+    "lossy_law",
+    "make_law",
+    "mode_law",
+]

@@ -9,6 +9,10 @@ step's mode in file order, its additive ξ1 then its multiplicative ξ2 (2·E pe
 (:func:`~ntc_design.simulate.kernels.em_steps`: ξ1 of the sorted edges, then their ξ2),
 and :func:`kernel_replay` runs that kernel on them: the simulator and the law agree to
 rounding (1e-12 relative over 1000 steps of G1, in the tests).
+
+On lossy links (:attr:`AgentLaw.lossy`) each step also reads E arrival flags (0 or 1), one
+per edge of its mode in file order; the exported programs read them from stdin after the
+step's 2E normals, :func:`replay` takes them as a separate array.
 """
 
 from __future__ import annotations
@@ -41,6 +45,31 @@ def _normals(law: AgentLaw, normals, steps: int, paths: int) -> tuple[np.ndarray
     return z, offsets
 
 
+def _arrivals(law: AgentLaw, arrivals, steps: int, paths: int) -> tuple[np.ndarray, np.ndarray]:
+    """The arrival flags as (paths, F) booleans and each step's offset; F and the values
+    (0 or 1 only) checked."""
+    counts = law.flags_per_step(steps)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    if not law.lossy:
+        if arrivals is not None:
+            raise InputError("arrivals: the law is lossless; it reads no arrival flags")
+        return np.ones((paths, 0), dtype=bool), offsets
+    if arrivals is None:
+        raise InputError(
+            f"arrivals: the law runs on lossy links ({law.policy}); give E flags per step"
+        )
+    a = np.asarray(arrivals)
+    a = a.reshape(1, -1) if a.ndim == 1 else a
+    if a.ndim != 2 or a.shape[0] != paths or a.shape[1] != offsets[-1]:
+        raise InputError(
+            f"arrivals: {steps} steps need {int(offsets[-1])} flags per path (1 per edge of "
+            f"each step's mode), got shape {a.shape}"
+        )
+    if a.dtype.kind not in "biuf" or not np.all((a == 0) | (a == 1)):
+        raise InputError("arrivals: an arrival flag is not 0 or 1")
+    return a == 1, offsets
+
+
 def _states(law: AgentLaw, x_init) -> tuple[np.ndarray, bool]:
     x = np.asarray(x_init, dtype=float)
     nd_ = law.n * law.dim
@@ -59,6 +88,7 @@ class _Mode:
         self.src, self.dst = ml.src, ml.dst
         self.sign = ml.sign[None, :, None]
         self.sigma = ml.sigma[None, :, None]
+        self.keep = None if ml.keep is None else ml.keep[None, :, None]
         self.u = ml.u
         self.informed = np.array(ml.informed, dtype=np.int64)
         self.bd = [ml.bd[self.informed][None, :, :, b] for b in range(d)]
@@ -74,6 +104,7 @@ def replay(
     normals,
     steps: int,
     record: bool = False,
+    arrivals=None,
 ) -> np.ndarray:
     """Run the agents' law for K steps on given normals (the exported programs' order).
 
@@ -89,6 +120,9 @@ def replay(
         K.
     record : bool, optional
         Return every state x_0 … x_K, not only the last.
+    arrivals : array_like, optional
+        On lossy links (and only there): the arrival flags, 0 or 1, Σ_k E_{mode(k)} per
+        path, step by step, each step's edges in file order: (F,) or (P, F).
 
     Returns
     -------
@@ -98,7 +132,8 @@ def replay(
     Raises
     ------
     InputError
-        A state or normals of the wrong size, a negative K, or c(t_k) not finite.
+        A state, normals or flags of the wrong size, a flag other than 0 or 1, a negative
+        K, or c(t_k) not finite.
     """
     if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
         raise InputError(f"steps: expected an integer K >= 0, got {steps!r}")
@@ -106,6 +141,8 @@ def replay(
     x, single = _states(law, x_init)
     paths, n, d = x.shape
     z, offsets = _normals(law, normals, steps, paths)
+    chi, flag_at = _arrivals(law, arrivals, steps, paths)
+    rescale = law.policy == "rescale"
     modes = law.step_modes(steps)
     prepared: dict[int, _Mode] = {}
     h = law.digital.period
@@ -134,6 +171,9 @@ def replay(
         for b in range(1, d):
             fd = fd + f[None, None, :, b] * diff[:, :, b, None]
         m = (md.sign * xj - xi) + (md.sigma * z1 + fd * z2) / sqrth
+        if rescale:  # a received measurement over keep_e = 1 − p_e
+            m = m / md.keep
+        got = chi[:, flag_at[k] : flag_at[k + 1], None] if law.lossy else None
         acc = np.broadcast_to(md.u, (paths, n, d)).copy()
         if md.informed.size:
             xdi = xd[:, md.informed, :]
@@ -144,8 +184,13 @@ def replay(
         for agents, edges, wb in md.slots:
             me = m[:, edges, :]
             part = acc[:, agents, :]
-            for b in range(d):
-                part = part + wb[b] * me[:, :, None, b]
+            if got is None:
+                for b in range(d):
+                    part = part + wb[b] * me[:, :, None, b]
+            else:  # a lost message adds nothing (the law's `continue`)
+                arrived = got[:, edges, :]
+                for b in range(d):
+                    part = np.where(arrived, part + wb[b] * me[:, :, None, b], part)
             acc[:, agents, :] = part
         ring[(k + 1) % (lag + 1)] = now + hc * acc
         if record:
@@ -231,9 +276,13 @@ def kernel_replay(
     Raises
     ------
     InputError
-        Normals of the wrong size, or systems that do not match the law's modes.
+        Normals of the wrong size, systems that do not match the law's modes, or a lossy
+        law (this kernel has no lost messages; :mod:`.loss_kernels` has).
     """
     from .kernels import em_steps, kernel_arrays, tile_width
+
+    if law.lossy:
+        raise InputError("law: kernel_replay runs the lossless kernel; the law is lossy")
 
     if len(systems) != len(law.modes):
         raise InputError(f"systems: {len(systems)} given for {len(law.modes)} modes")

@@ -191,6 +191,42 @@ def test_export_refusals_write_nothing(tmp_path, examples, capsys, monkeypatch, 
 
 
 @pytest.mark.hostile
+@pytest.mark.parametrize(
+    "extra, needles",
+    [
+        (["--loss", "1"], ["--loss: a loss probability must be finite and in [0, 1)"]),
+        (["--loss", "nan"], ["--loss: a loss probability must be finite"]),
+        (["--loss", "0.1", "--loss-policy", "drop"], ["--loss-policy: unknown policy 'drop'"]),
+        (
+            ["--loss", "0.1", "--loss-policy", "hold"],
+            ["lossy links with the hold policy are not proven", "nothing exported"],
+        ),
+        (
+            ["--loss", "0.1", "--delay", "1"],
+            ["lossy links with a delay D = 1 are not proven", "nothing exported"],
+        ),
+    ],
+)
+def test_export_loss_refusals_write_nothing(
+    tmp_path, examples, capsys, monkeypatch, extra, needles
+):
+    out = tmp_path / "o"
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", out]
+    assert_input_error([*args, "--period", "0.1", *extra], capsys, monkeypatch, *needles)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_export_on_lossy_links(tmp_path, examples, capsys, monkeypatch):
+    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--out", tmp_path / "c"]
+    extra = ["--period", "0.1", "--loss", "0.1", "--loss-policy", "rescale", "--json"]
+    code, text, err = run_cli([*args, *extra], capsys, monkeypatch)
+    doc = json.loads(text)
+    assert code == 0 and doc["loss_policy"] == "rescale", err
+    assert "#define NTC_POLICY 2" in (tmp_path / "c" / "ntc_protocol.h").read_text()
+
+
+@pytest.mark.hostile
 def test_export_refuses_a_certificate_that_does_not_verify(tmp_path, examples, capsys, monkeypatch):
     doc = json.loads((examples.parent / "certificates" / "g1.json").read_text())
     doc["subject"]["modes"]["G1"]["x0"][0] += 1.0
@@ -246,7 +282,9 @@ def test_export_noise_flags_share_certifys_names(capsys, monkeypatch):
 def test_export_reads_the_old_noise_spellings_with_a_note(tmp_path, examples, capsys, monkeypatch):
     seen = {}
 
-    def fake_export(file, lang, out, period, delay, gain, sigma, f, agent=None):
+    def fake_export(
+        file, lang, out, period, delay, gain, sigma, f, agent=None, loss=None, policy=None
+    ):
         seen.update(sigma=sigma, f=f)
         raise nd.InputError("--sigma: stands for the library's name of the flag")
 

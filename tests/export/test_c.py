@@ -17,7 +17,7 @@ from ntc_design.protocol.agents import agent_law
 from ntc_design.protocol.digital import Digital
 from ntc_design.simulate.replay import replay
 from tests.conftest import X0
-from tests.support.export import CC, CFLAGS, build_c, needs_cc, normals_for, run_program
+from tests.support.export import CC, CFLAGS, build_c, needs_cc, normals_for, run_program, stdin_text
 
 
 @pytest.fixture(scope="module")
@@ -327,3 +327,94 @@ int main(void)
         acc = acc + ml.weight[e] @ mm[s]
     want = x + 0.1 * 1.0 * acc
     assert np.allclose([float(w) for w in outs[0].split()], want, rtol=1e-14, atol=1e-14)
+
+
+def _lossy(design, policy, delay=0, h=0.05):
+    from ntc_design.protocol.agents import lossy_law
+
+    law = agent_law(design, Digital(h, delay), "1/(1+t)", 0.4, 0.3)
+    ml = law.modes[0]
+    losses = {
+        (int(i), int(j)): 0.1 + 0.1 * (k % 3)
+        for k, (i, j) in enumerate(zip(ml.dst, ml.src, strict=True))
+    }
+    return lossy_law(law, losses, policy)
+
+
+@needs_cc
+@pytest.mark.parametrize("policy", ["skip", "rescale"])
+def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
+    from tests.support.export import arrivals_for
+
+    law = _lossy(g1_design, policy)
+    assert f"#define NTC_POLICY {1 if policy == 'skip' else 2}" in header(law)
+    exe = build_c(tmp_path, law)
+    steps = 500
+    z, chi = normals_for(law, steps, 2), arrivals_for(law, steps, 2)
+    assert 0 < chi.sum() < chi.size
+    got = run_program(exe, law, X0, steps, z, arrivals=chi)
+    want = replay(law, X0, z, steps, arrivals=chi)
+    assert (got == want).all(), np.max(np.abs(got - want))
+    assert (
+        np.max(
+            np.abs(
+                want
+                - replay(agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3), X0, z, steps)
+            )
+        )
+        > 1e-3
+    )
+
+
+AGENT_LOSSY = (
+    AGENT_MAIN.replace(
+        "static double z[2 * NTC_MAX_EDGES + 1];",
+        "static double z[2 * NTC_MAX_EDGES + 1];\nstatic int chi[NTC_MAX_EDGES + 1];\nstatic int got[NTC_N][NTC_MAX_IN + 1];",
+    )
+    .replace(
+        '            if (scanf("%lf", &z[s]) != 1) return 2;\n',
+        '            if (scanf("%lf", &z[s]) != 1) return 2;\n        for (s = 0; s < md->n_edges; s++)\n            if (scanf("%d", &chi[s]) != 1) return 2;\n',
+    )
+    .replace(
+        "z[2 * e->edge], z[2 * e->edge + 1], m[i] + s * NTC_D);\n",
+        "z[2 * e->edge], z[2 * e->edge + 1], m[i] + s * NTC_D);\n                got[i][s] = chi[e->edge];\n",
+    )
+    .replace("ntc_agent_step(&st[i], m[i])", "ntc_agent_step_arrived(&st[i], m[i], got[i])")
+)
+
+
+@needs_cc
+@pytest.mark.parametrize("policy", ["skip", "rescale"])
+def test_the_agent_api_on_lossy_links_reproduces_the_replay(g1_design, tmp_path, policy):
+    from tests.support.export import arrivals_for, write_files
+
+    assert AGENT_LOSSY.count("chi") == 3 and "ntc_agent_step_arrived" in AGENT_LOSSY
+    law = _lossy(g1_design, policy)
+    write_files(tmp_path, c_files(law))
+    (tmp_path / "agents.c").write_text(AGENT_LOSSY)
+    cmd = [CC, *CFLAGS, "-o", "agents", "agents.c", "ntc_protocol.c", "-lm"]
+    res = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    steps = 300
+    z, chi = normals_for(law, steps, seed=4), arrivals_for(law, steps, 4)
+    got = run_program(tmp_path / "agents", law, X0, steps, z, arrivals=chi)
+    assert (got == replay(law, X0, z, steps, arrivals=chi)).all()
+
+
+@needs_cc
+@pytest.mark.hostile
+@pytest.mark.parametrize("bad", ["2", "0.5", "1.0", "-1", "x"])
+def test_the_replay_program_refuses_a_flag_other_than_0_or_1(g1_design, tmp_path, bad):
+    from tests.support.export import arrivals_for
+
+    law = _lossy(g1_design, "skip")
+    exe = build_c(tmp_path, law)
+    steps = 3
+    z, chi = normals_for(law, steps), arrivals_for(law, steps)
+    text = stdin_text(X0, steps, z, law, chi).rstrip("\n").split("\n")
+    text[-1] = " ".join([bad, *text[-1].split()[1:]])  # the last step's first flag
+    res = run_program(exe, law, X0, steps, z, expect=2, text="\n".join(text) + "\n")
+    assert res.stderr.strip() == "ntc_replay: stdin: an arrival flag is not 0 or 1 (step 2)"
+    short = stdin_text(X0, steps, z, law, chi).rsplit(" ", 1)[0]
+    res = run_program(exe, law, X0, steps, z, expect=2, text=short)
+    assert "expected E arrival flags (0 or 1) (step 2)" in res.stderr

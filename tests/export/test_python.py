@@ -119,3 +119,25 @@ def test_a_gain_that_is_not_finite_stops_the_replay(g1_design, tmp_path):
     law = agent_law(g1_design, Digital(0.1), "1/(1-t)", 0.4, 0.3)
     res = run_program(write_python(tmp_path, law), law, X0, 20, normals_for(law, 20), expect=1)
     assert "c(t) = inf is not finite at step 10" in res.stderr
+
+
+@pytest.mark.parametrize("policy", ["skip", "rescale"])
+def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
+    from ntc_design.protocol.agents import lossy_law
+    from tests.support.export import arrivals_for
+
+    base = agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3)
+    ml = base.modes[0]
+    law = lossy_law(
+        base, {(int(i), int(j)): 0.25 for i, j in zip(ml.dst, ml.src, strict=True)}, policy
+    )
+    cmd = write_python(tmp_path, law)
+    steps = 200
+    z, chi = normals_for(law, steps, 7), arrivals_for(law, steps, 7)
+    got = run_program(cmd, law, X0, steps, z, arrivals=chi)
+    want = replay(law, X0, z, steps, arrivals=chi)
+    assert (got == want).all() and np.max(np.abs(want - replay(base, X0, z, steps))) > 1e-3
+    text = stdin_text(X0, steps, z, law, chi).rstrip("\n").split("\n")
+    text[-1] = " ".join(["0.5", *text[-1].split()[1:]])
+    res = run_program(cmd, law, X0, steps, z, expect=2, text="\n".join(text) + "\n")
+    assert res.stderr.strip() == "ntc_protocol: stdin: an arrival flag is not 0 or 1"

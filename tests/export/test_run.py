@@ -322,3 +322,30 @@ def test_the_cli_refuses_a_resealed_certificate_with_an_added_gain(tmp_path, cap
     assert_input_error(["verify", p], capsys, monkeypatch, "forged.json: gain")
     assert_input_error(["export", p, "--out", out], capsys, monkeypatch, "forged.json: gain")
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_a_lossy_export_reproduces_its_example_and_documents_the_flags(tmp_path):
+    scen = tmp_path / "s.yaml"
+    scen.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 5\n"
+        "digital: {period: 0.1, loss: 0.1, policy: skip}\n"
+    )
+    res = export(scen, "python", tmp_path / "py")
+    folder = res.folder
+    inp = (folder / "example_input.txt").read_text()
+    lines = inp.strip().split("\n")
+    e = res.source.law.modes[0].n_edges
+    flags = lines[2 + -(-2 * e // 8)].split()  # step 0's flags after its 2E normals
+    assert len(flags) == e and set(flags) <= {"0", "1"} and "0" in inp.split("\n", 2)[2].split()
+    cmd = [sys.executable, str(folder / "ntc_protocol.py")]
+    out = subprocess.run(cmd, input=inp, capture_output=True, text=True).stdout
+    assert out == (folder / "example_output.txt").read_text()
+    readme = (folder / "README.txt").read_text()
+    assert "after the 2E normals of step k, its E arrival flags, one per edge" in readme
+    assert "in the same file order (below): 1 the message arrived, 0 it was lost" in readme
+    assert "Lossy links, policy skip (compiled in; keep_e = 1 - p_e: " in readme
+    assert "Edges in file order (the order of the normals and of the arrival flags):" in readme
+    with pytest.raises(InputError, match="lossy links with the hold policy are not proven"):
+        export(scen, "c", tmp_path / "c", policy="hold")
+    assert not (tmp_path / "c").exists()

@@ -119,10 +119,17 @@ def test_load_source_tells_the_two_apart():
         ("gain: '1'\n", {"period": 0.1}, ["no theorem is guaranteed", "nothing exported"]),
         ("", {"period": 0.1, "sigma": -1.0}, ["--sigma: expected a finite number >= 0"]),
         (
-            "digital: {period: 0.1, loss: 0.1}\n",
+            "digital: {period: 0.1, loss: 0.1, policy: hold}\n",
             {},
-            ["s.yaml", "digital.loss: the exported code does not model lost messages yet"],
+            ["s.yaml: lossy links with the hold policy are not proven", "nothing exported"],
         ),
+        (
+            "digital: {period: 0.1, delay: 1, loss: 0.1}\n",
+            {},
+            ["s.yaml: lossy links with a delay D = 1 are not proven", "nothing exported"],
+        ),
+        ("", {"period": 0.1, "loss": 1.5}, ["--loss: a loss probability must be finite"]),
+        ("", {"period": 0.1, "loss": 0.1, "policy": "drop"}, ["--loss-policy: unknown policy"]),
     ],
 )
 def test_scenario_refusals(tmp_path, extra, kwargs, needles):
@@ -399,3 +406,35 @@ def test_a_certificate_and_its_scenario_list_the_edges_in_the_file_order(tmp_pat
     for m, name in enumerate(sw.mode_names):
         t = nd.load(EXAMPLES / f"{name.lower()}.yaml")
         assert _order(sw, m) == [(t.labels[j], t.labels[i]) for i, j in t.weights]
+
+
+@pytest.mark.slow
+def test_a_lossy_scenario_and_its_certificate_export_the_certified_losses(tmp_path):
+    import ntc_design.certify as cz
+    from ntc_design.io.documents import read_document
+
+    src = from_scenario(_scenario(tmp_path, "digital: {period: 0.1, loss: 0.2, policy: rescale}\n"))
+    assert src.law.policy == "rescale" and "digital_loss certificate valid" in src.notes[0]
+    assert np.array_equal(src.law.modes[0].keep, np.full(src.law.modes[0].n_edges, 1.0 - 0.2))
+    # the certificate's own reading: p_e and the policy; a flag that differs is refused
+    res = cz.certify(
+        nd.load(EXAMPLES / "g1.yaml"), [1, 2, -1], 0.1, "1/(1+t)", None, noise_sigma=0.4,
+        noise_f=0.3, digital=Digital(0.1, 0, 0.2, "skip"),
+    )  # fmt: skip
+    cert = tmp_path / "loss.json"
+    cert.write_text(json.dumps(res.certificate))
+    assert read_document(cert)["kind"] == "digital_loss"
+    law = from_certificate(cert).law
+    assert law.policy == "skip" and np.all(law.modes[0].keep == 1.0 - 0.2)
+    assert from_certificate(cert, loss=0.2, policy="skip").law.policy == "skip"
+    for kw, needle in (
+        ({"loss": 0.1}, "--loss: 0.1 differs from the certified 0.2"),
+        (
+            {"policy": "rescale"},
+            "--loss-policy: 'rescale' differs from the certified policy 'skip'",
+        ),
+    ):
+        with pytest.raises(InputError, match=needle):
+            from_certificate(cert, **kw)
+    with pytest.raises(InputError, match="--loss: 0.3 differs from the certified protocol"):
+        from_certificate(CERTS / "g1_digital.json", loss=0.3)

@@ -1,6 +1,8 @@
 """Tests of :mod:`ntc_design.simulate.replay`: the toolkit's reference for the exported
 agents against an independent scalar loop of the law (bit for bit) and against the
-simulator's compiled kernel (to rounding, 1e-12 relative over 1000 steps)."""
+simulator's compiled kernel (to rounding, 1e-12 relative over 1000 steps); on lossy links
+(skip, rescale) against a written-out recursion and the lossy Monte Carlo kernel, and flags
+other than 0 or 1 refused."""
 
 import math
 import warnings
@@ -173,3 +175,141 @@ def test_refusals(g1_design):
         replay(bad, X0, np.zeros(48), 3)
     with pytest.raises(InputError, match=r"systems: 2 given for 1 modes"):
         kernel_replay(law, [None, None], make_gain("1")[0], X0, np.zeros(48), 3)
+
+
+def _lossy_loop(law, x0, z, chi, steps):
+    """The lossy law written out edge by edge with dense products (a different order)."""
+    ml = law.modes[0]
+    n, d = law.n, law.dim
+    h = law.digital.period
+    x = np.asarray(x0, dtype=float).reshape(n, d).copy()
+    zz = z.reshape(steps, ml.n_edges, 2)
+    cc = chi.reshape(steps, ml.n_edges)
+    for k in range(steps):
+        c = 1.0 / (1.0 + k * h)
+        drift = ml.u - np.einsum("iab,ib->ia", ml.bd, x)
+        for e in range(ml.n_edges):
+            if not cc[k, e]:
+                continue
+            i, j = int(ml.dst[e]), int(ml.src[e])
+            noise = ml.sigma[e] * zz[k, e, 0] + law.noise_f @ (x[j] - x[i]) * zz[k, e, 1]
+            m = ml.sign[e] * x[j] - x[i] + noise / math.sqrt(h)
+            scale = 1.0 / ml.keep[e] if law.policy == "rescale" else 1.0
+            drift[i] += scale * (ml.weight[e] @ m)
+        x = x + h * c * drift
+    return x.ravel()
+
+
+@pytest.mark.parametrize("policy", ["skip", "rescale"])
+def test_the_lossy_law_is_the_written_out_recursion(g1_design, policy):
+    from ntc_design.protocol.agents import lossy_law
+
+    law = agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3)
+    e = law.modes[0].n_edges
+    losses = {
+        (int(i), int(j)): 0.1 + 0.05 * (k % 3)
+        for k, (i, j) in enumerate(zip(law.modes[0].dst, law.modes[0].src, strict=True))
+    }
+    lossy = lossy_law(law, losses, policy)
+    steps = 300
+    z = np.random.default_rng(5).standard_normal(2 * e * steps)
+    chi = (np.random.default_rng(6).random(e * steps) < 0.8).astype(int)
+    assert 0 < chi.sum() < chi.size
+    got = replay(lossy, X0, z, steps, arrivals=chi)
+    want = _lossy_loop(lossy, X0, z, chi, steps)
+    assert np.allclose(got, want, rtol=1e-12, atol=1e-12 * np.max(np.abs(want)))
+    assert np.max(np.abs(got - replay(law, X0, z, steps))) > 1e-3  # the losses matter
+    # every message arriving at p = 0: the lossless law, bit for bit
+    none = lossy_law(law, {}, policy)
+    assert np.array_equal(
+        replay(none, X0, z, steps, arrivals=np.ones(e * steps)), replay(law, X0, z, steps)
+    )
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize(
+    "flags, needle",
+    [
+        ("half", "arrivals: an arrival flag is not 0 or 1"),
+        ("two", "arrivals: an arrival flag is not 0 or 1"),
+        ("nan", "arrivals: an arrival flag is not 0 or 1"),
+        ("short", "flags per path"),
+        ("none", "give E flags per step"),
+    ],
+)
+def test_arrival_flags_other_than_0_or_1_are_refused(g1_design, flags, needle):
+    from ntc_design.protocol.agents import lossy_law
+
+    law = lossy_law(agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3), {}, "skip")
+    e, steps = law.modes[0].n_edges, 4
+    chi = np.ones(e * steps)
+    arr = {
+        "half": np.where(np.arange(chi.size) == 3, 0.5, chi),
+        "two": chi * 2,
+        "nan": chi * np.nan,
+        "short": chi[:-1],
+        "none": None,
+    }[flags]
+    with pytest.raises(InputError, match=needle):
+        replay(law, X0, np.zeros(2 * e * steps), steps, arrivals=arr)
+    with pytest.raises(InputError, match="lossless; it reads no arrival flags"):
+        replay(
+            agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3),
+            X0,
+            np.zeros(2 * e * steps),
+            steps,
+            arrivals=chi,
+        )
+
+
+@pytest.mark.parametrize("policy", ["skip", "rescale"])
+def test_the_lossy_law_is_the_monte_carlo_kernels_step(g1_design, policy):
+    # the compiled lossy kernel (its own arithmetic order) fed the same normals and
+    # arrivals: the law agrees to rounding, so both drop (skip) or rescale the same terms
+    from ntc_design.protocol.agents import lossy_law
+    from ntc_design.simulate.digital import digital_grid
+    from ntc_design.simulate.loss_kernels import POLICY_CODES, loss_steps
+    from ntc_design.simulate.loss_mc import LossMonteCarloSpec
+
+    h, steps, paths = 0.05, 200, 3
+    law0 = agent_law(g1_design, Digital(h), "1/(1+t)", 0.4, 0.3)
+    ml = law0.modes[0]
+    e = ml.n_edges
+    p_file = np.linspace(0.05, 0.4, e)
+    law = lossy_law(
+        law0, {(int(i), int(j)): float(p) for i, j, p in zip(ml.dst, ml.src, p_file, strict=True)},
+        policy,
+    )  # fmt: skip
+    p_sorted = np.empty(e)
+    p_sorted[ml.sorted_index] = p_file
+    rng = np.random.default_rng(11)
+    z = rng.standard_normal((paths, 2 * e * steps))
+    chi = (rng.random((paths, e * steps)) < 0.7).astype(np.int64)
+    want = replay(law, np.tile(X0, (paths, 1)), z, steps, arrivals=chi)
+    s = mode_system(g1_design, NOISE)
+    grid, _ = digital_grid(Digital(h), h * steps, np.array([h * steps]))
+    spec = LossMonteCarloSpec(
+        s, grid, lambda t: 1 / (1 + t), g1_design.theta, X0, 7, 3, paths, 1, p_sorted, policy, 0
+    )
+    xi = kernel_normals(law, z, steps)
+    uni = np.empty((steps, paths, e))
+    flags = chi.reshape(paths, steps, e).transpose(1, 0, 2)
+    uni[:, :, ml.sorted_index] = np.where(flags == 1, 0.0, 1.0 - 1e-12)  # below 1 − p_e or not
+    c = 1 / (1 + np.arange(steps) * h)
+    ch, cs, rh = c * h, c * np.sqrt(h), np.full(steps, 1 / np.sqrt(h))
+    x = np.tile(X0, (paths, 1))
+    empty = np.zeros((0, 4), np.uint64)
+    loss_steps(x, spec.initial_held(paths), empty, xi, uni, 2 * e, 0, steps, ch, cs, rh,
+               *spec.kernel_arrays(), POLICY_CODES[policy], 2, 0, 0)  # fmt: skip
+    scale = np.max(np.abs(want))
+    assert np.allclose(x, want, rtol=1e-11, atol=1e-11 * scale)
+    assert np.max(np.abs(want - replay(law0, np.tile(X0, (paths, 1)), z, steps))) > 1e-3
+
+
+@pytest.mark.hostile
+def test_the_lossless_kernel_replay_refuses_a_lossy_law(g1_design):
+    from ntc_design.protocol.agents import lossy_law
+
+    law = lossy_law(agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3), {}, "skip")
+    with pytest.raises(InputError, match="^law: kernel_replay runs the lossless kernel"):
+        kernel_replay(law, [mode_system(g1_design, NOISE)], make_gain("1/(1+t)"), X0, [], 0)

@@ -16,6 +16,7 @@ from ntc_design.export.run import read_state, stdin_text
 __all__ = [
     "CC",
     "CFLAGS",
+    "arrivals_for",
     "build_c",
     "needs_cc",
     "normals_for",
@@ -65,12 +66,19 @@ def write_python(folder: Path, law) -> list[str]:
     return [sys.executable, str(folder / "ntc_protocol.py")]
 
 
-def run_program(cmd, law, x_init, steps, normals, expect=0):
-    """Run an exported program on x(0), K and the normals; x_K (or the completed process
-    when the exit code is not 0)."""
+def arrivals_for(law, steps, seed=0):
+    """Arrival flags (0 or 1), each edge's message arriving with probability 1 − p_e."""
+    keep = np.concatenate([np.zeros(0)] + [law.modes[int(m)].keep for m in law.step_modes(steps)])
+    return (np.random.default_rng(seed + 1000).random(keep.size) < keep).astype(np.int64)
+
+
+def run_program(cmd, law, x_init, steps, normals, expect=0, arrivals=None, text=None):
+    """Run an exported program on x(0), K and the normals (and the arrival flags on lossy
+    links; ``text``: this stdin instead); x_K (or the completed process when the exit code
+    is not 0)."""
     res = subprocess.run(
         cmd if isinstance(cmd, list) else [str(cmd)],
-        input=stdin_text(x_init, steps, normals),
+        input=text if text is not None else stdin_text(x_init, steps, normals, law, arrivals),
         capture_output=True,
         text=True,
         timeout=120,
