@@ -385,7 +385,7 @@ def certify(
     else:
         _print_certify(res, out_path if written else None)
         if figures is not None and continuous is not None:
-            _print_beside(figures, continuous, file)
+            _print_beside(figures, continuous, file, section.get("delay") or 0)
     if out_path is not None and not written:
         print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
     if not res.proven:
@@ -451,9 +451,10 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     return top, list(spec.theta), spec.margin, spec.gain, noise.sigma, f_opt, sampled, section
 
 
-def _print_beside(sampled, continuous, file: Path) -> None:
+def _print_beside(sampled, continuous, file: Path, delay: int = 0) -> None:
     """The sampled figures beside the continuous design's, and one warning line when the
-    period costs more than 10 % at T or 10× at the peak."""
+    period costs more than 10 % at T or 10× at the peak, naming the longest period that
+    keeps both (the search of ``ntc tune --period auto``, with its dense verification)."""
     print(
         f"proven at T = {sampled.t_end:g}: sampled E Σ‖x_i(T) − θ‖² <= "
         f"{sampled.ms_error_bound:.7g} (peak <= {sampled.peak_bound:.7g}); continuous design "
@@ -463,9 +464,29 @@ def _print_beside(sampled, continuous, file: Path) -> None:
     if ratio > 1.1 or peak > 10.0:
         print(
             f"warning: the period costs {ratio:.3g}× the continuous error at T and {peak:.3g}× "
-            f"its peak; find the longest safe period with: ntc tune {file} --period auto",
+            f"its peak; {_safe_period_text(file, sampled.t_end, delay, 10.0 * continuous.peak)}",
             file=sys.stderr,
         )
+
+
+def _safe_period_text(file: Path, t_end: float, delay: int, max_peak: float) -> str:
+    """The longest safe period (within 10 % at T, the peak within 10× the continuous one),
+    or where to find it when the search cannot run."""
+    from ..simulate.scenario import load_scenario
+    from ..tune.period import longest_safe_period
+
+    hint = f"find the longest safe period with: ntc tune {file} --period auto"
+    try:
+        top, spec, _ = load_scenario(file, {"T": t_end})
+        safe = longest_safe_period(top, spec, t_end, delay=delay, max_peak=max_peak)
+    except InputError:
+        return hint
+    if safe.period is None:
+        return "no period keeps the error within 10 % at T and the peak within 10× (" + hint + ")"
+    return (
+        f"the longest safe period is h = {safe.period:.4g} (every h up to it keeps the error "
+        f"within 10 % at T and the peak within 10×; ntc tune {file} --period auto)"
+    )
 
 
 def _print_certify(res, written: Path | None) -> None:

@@ -548,4 +548,8 @@ def test_certify_period_warns_beside_the_continuous_figures(examples, capsys, mo
     line = next(ln for ln in out.splitlines() if ln.startswith("proven at T = 10"))
     assert "continuous design <= 2.91" in line
     warnings_ = [ln for ln in err.splitlines() if ln.startswith("warning:")]
-    assert len(warnings_) == 1 and "ntc tune" in warnings_[0] and "--period auto" in warnings_[0]
+    assert len(warnings_) == 1 and "--period auto" in warnings_[0]
+    # the longest safe period named: within 10 % at T (alone 0.1744 on G1, docs/guide) and
+    # the peak within 10× the continuous one (119.7), which binds first here
+    safe = float(warnings_[0].split("longest safe period is h = ")[1].split()[0])
+    assert 0.12 < safe < 0.1745
