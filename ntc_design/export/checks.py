@@ -17,8 +17,9 @@ times t_k = k·h and the analysed expression in ball arithmetic at 200 bits
 
 A schedule's table is emitted as its doubles, by the analysed interpolation rule: only its
 tail is compared, every value is range-checked. The samples are every step up to
-:data:`MAX_SAMPLES`; past that the first half of them and the other half spread evenly to
-the horizon.
+:data:`MAX_SAMPLES`; past that the first half of them and the other half spread
+geometrically to the horizon (a rounding that sets in late, e.g. exp(t − 1100) − exp(t −
+1100) absorbing 1/(1+t) from t ≈ 1,140 on, is met at every later sample).
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ PRECISION = 200
 
 def sample_steps(steps: int) -> np.ndarray:
     """The steps k whose gain is checked: all of 0 … K−1 up to :data:`MAX_SAMPLES`, else
-    the first half of them and the rest spread evenly to K−1.
+    the first half of them and the rest spread geometrically to K−1.
 
     Parameters
     ----------
@@ -62,7 +63,7 @@ def sample_steps(steps: int) -> np.ndarray:
     if steps <= MAX_SAMPLES:
         return np.arange(steps, dtype=np.int64)
     half = MAX_SAMPLES // 2
-    spread = np.linspace(half, steps - 1, MAX_SAMPLES - half).round().astype(np.int64)
+    spread = np.geomspace(half, steps - 1, MAX_SAMPLES - half).round().astype(np.int64)
     return np.unique(np.concatenate([np.arange(half, dtype=np.int64), spread]))
 
 

@@ -384,14 +384,16 @@ def _size_check(law: AgentLaw) -> None:
         )
 
 
-#: The steps whose gain is checked when the source states no horizon (a certificate).
-CHECK_STEPS = 10_000
+#: The time up to which the emitted gain is checked when the source states no horizon
+#: (a certificate): about 32 years of samples, sampled as :func:`.checks.sample_steps` says.
+CHECK_HORIZON = 1e9
 
 
 def gain_steps(src: ExportSource) -> int:
     """The steps of the horizon whose emitted gain is checked
-    (:func:`~ntc_design.export.checks.check_emitted_gain`): K = round(T/h) of a scenario,
-    :data:`CHECK_STEPS` for a certificate (it states no horizon).
+    (:func:`~ntc_design.export.checks.check_emitted_gain`): the K whole steps of a
+    scenario's horizon, those up to :data:`CHECK_HORIZON` for a certificate (it states
+    no horizon).
 
     Parameters
     ----------
@@ -403,7 +405,7 @@ def gain_steps(src: ExportSource) -> int:
     int
     """
     if src.horizon is None:
-        return CHECK_STEPS
+        return max(1, min(int(CHECK_HORIZON / src.law.digital.period), 10**15))
     return src.law.digital.steps(src.horizon)[0]
 
 
@@ -647,7 +649,7 @@ def export(
 
 
 __all__ = [
-    "CHECK_STEPS",
+    "CHECK_HORIZON",
     "EXAMPLES",
     "MANIFEST",
     "EXAMPLE_SEED",

@@ -46,6 +46,16 @@ def test_the_samples():
     assert (np.diff(k) > 0).all() and k[MAX_SAMPLES // 2 - 1] == MAX_SAMPLES // 2 - 1
 
 
+def test_a_rounding_that_sets_in_late_is_met(g1_law):
+    # exp(t − 1100) − exp(t − 1100) absorbs 1/(1+t) from t ≈ 1,140 on: the samples of a
+    # certificate's horizon (10^10 steps of 0.1 s) spread geometrically, so many fall there
+    k = sample_steps(10**10)
+    assert (k * 0.1 > 1200).sum() > 1000
+    law = replace(g1_law, gain=GainCode.of("1/(1+t)+exp(t-1100)-exp(t-1100)"))
+    with pytest.raises(InputError, match="gain"):
+        check_emitted_gain(law, 10**10)
+
+
 @pytest.mark.parametrize("gain", ["1/(1+t)", "exp(-t)*sin(t)^2+1/(1+t)", "(1+t)^(-0.6)"])
 def test_a_faithful_gain_passes(g1_law, gain):
     law = replace(g1_law, gain=GainCode.of(gain))
