@@ -1,12 +1,23 @@
 import os
 from pathlib import Path
 
-import numpy as np
-import pytest
-from hypothesis import settings
+# One BLAS/LAPACK thread per test process, the CLI subprocesses included (they inherit the
+# environment): two pytest-xdist workers already fill a 2-core machine, and OpenBLAS's
+# spinning threads on a busy core made a 21×21 LU solve 1,000× slower (the Crank–Nicolson
+# moments test: 104 s against 2 s on a loaded machine). Results do not depend on it.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-from ntc_design import SwitchingTopology, Topology
-from ntc_design.model import paper
+import numpy as np  # noqa: E402 - after the thread settings, which numpy reads on import
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+from ntc_design import SwitchingTopology, Topology  # noqa: E402
+from ntc_design.model import paper  # noqa: E402
+
+# numpy may have been loaded before this file (a plugin): the limit applied to it as well
+threadpool_limits(limits=1, user_api="blas")
 
 # Every size check assumes the same memory on every machine (an 8 GB laptop's share), so a
 # refusal's wording and order never depend on what the machine has free.

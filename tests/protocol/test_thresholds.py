@@ -200,7 +200,8 @@ def test_delta_h_is_where_hurwitz_starts(seed):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_delta_s_is_where_the_symmetric_part_turns_positive(seed):
-    des = _design(random_network(15, 2, seed, "random"))
+    # 10 agents: the Kronecker pencil is 400×400, not 900×900 (11× fewer flops, CI time)
+    des = _design(random_network(10, 2, seed, "random"))
     ds = des.thresholds.symmetric
     assert ds is not None
     if ds > 0:

@@ -23,6 +23,7 @@ from ntc_design.protocol import design
 from ntc_design.protocol.digital import Digital
 from ntc_design.protocol.timevarying import TimeVaryingDesign
 from tests.conftest import ROOT
+from tests.support.shared import once_per_run
 
 CERTS = ROOT / "certificates"
 
@@ -57,11 +58,15 @@ def _tv_topology() -> dict:
 
 
 @pytest.fixture(scope="session")
-def honest_certificates() -> dict[str, dict]:
+def honest_certificates(tmp_path_factory) -> dict[str, dict]:
     """One honest certificate of every kind (two of hurwitz-scale; the digital kinds with and
     without a delay), each verified: the
     forgery property test mutates them, the kind-swap test relabels them. Copy before
-    editing."""
+    editing. Built once per run (about 15 s), whichever xdist worker asks first."""
+    return once_per_run(tmp_path_factory, "honest_certificates", _honest_certificates)
+
+
+def _honest_certificates() -> dict[str, dict]:
     g1 = _load("g1.json")
     sw = _load("switching.json")
     theta3 = [1.0, 2.0, -1.0]

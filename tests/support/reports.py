@@ -7,14 +7,21 @@ from pathlib import Path
 import pytest
 
 from ntc_design.reports.reproduce import reproduce_paper
+from tests.support.shared import once_per_run
 
 
 @pytest.fixture(scope="session")
 def paper_run(tmp_path_factory):
-    """The paper's Section 5 at its settings (1000 paths, ds = dt = 1e-3, T = 100)."""
-    out = tmp_path_factory.mktemp("paper")
-    path, ok, wall = reproduce_paper(out)
-    return out, path, ok, wall
+    """The paper's Section 5 at its settings (1000 paths, ds = dt = 1e-3, T = 100): run once
+    per test run, whichever xdist worker asks first (the others read its folder)."""
+
+    def build():
+        out = tmp_path_factory.mktemp("paper")
+        path, ok, wall = reproduce_paper(out)
+        return [str(out), str(path), ok, wall]
+
+    out, path, ok, wall = once_per_run(tmp_path_factory, "paper_run", build)
+    return Path(out), Path(path), ok, wall
 
 
 def _links(path: Path) -> tuple[list[str], set[str]]:

@@ -31,6 +31,7 @@ from ntc_design.model.timevarying import from_document
 from ntc_design.protocol import design
 from ntc_design.protocol.timevarying import TimeVaryingDesign
 from tests.conftest import ROOT
+from tests.support.shared import once_per_run
 
 hostile = pytest.mark.hostile
 SKIP_KEYS = {"digest", "subject_digest", "versions"}
@@ -861,11 +862,7 @@ STRIDE = {
 }
 
 
-@pytest.fixture(scope="module")
-def honest_all(honest) -> dict[str, dict]:
-    """Besides ``honest``, a robust certificate past the LMI's size (N = 14, d = 3:
-    Riccati decay and margin, the offset with the equation eliminated); built for the
-    slow lane only."""
+def _riccati_certificate() -> dict:
     from ntc_design.certify.kinds.robust import robust_certificate
     from ntc_design.certify.robust import robust
 
@@ -875,6 +872,15 @@ def honest_all(honest) -> dict[str, dict]:
         doc = json.loads(json.dumps(robust_certificate(robust(mid, 0.05, starts=1))))
     assert doc["certifies"] == ["robust_margin", "robust_decay", "robust_offset"]
     assert verify(copy.deepcopy(doc)).valid and truth("robust", doc, doc) == []
+    return doc
+
+
+@pytest.fixture(scope="module")
+def honest_all(honest, tmp_path_factory) -> dict[str, dict]:
+    """Besides ``honest``, a robust certificate past the LMI's size (N = 14, d = 3:
+    Riccati decay and margin, the offset with the equation eliminated); built for the
+    slow lane only, once per run (tests/support/shared.py)."""
+    doc = once_per_run(tmp_path_factory, "riccati_certificate", _riccati_certificate)
     return {**honest, "robust-riccati": doc, "hurwitz-deadline": _deadline_certificate(honest)}
 
 
