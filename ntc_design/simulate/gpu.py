@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import InputError, one_line
-from .montecarlo import PartialStats
+from .montecarlo import MonteCarloSpec, PartialStats, PathBlocks
 
 SIMULATOR_ENV = "NTC_CUDA_SIMULATOR"
 INSTALL = "pip install 'ntc-design[gpu]'"
@@ -220,7 +220,7 @@ class GpuEngine:
             # small grids (the statistics of few agents, the simulator's few paths) are
             # by design, not a user's concern
             warnings.simplefilter("ignore", NumbaPerformanceWarning)
-            if hasattr(spec, "systems"):
+            if isinstance(spec, MonteCarloSpec):
                 from .gpu_run import run_modes
 
                 return run_modes(cuda, spec, self.layout, progress)
@@ -229,7 +229,7 @@ class GpuEngine:
             return run_time_varying(cuda, spec, self.layout, progress)
 
 
-def check_supported(spec) -> None:
+def check_supported(spec: PathBlocks) -> None:
     """Refuse, in one line naming the field, a run the GPU kernels do not do.
 
     Parameters
@@ -242,14 +242,13 @@ def check_supported(spec) -> None:
     InputError
         ``rng: numpy``, ``scheme: implicit`` or a callable f.
     """
-    if getattr(spec, "rng", "xoshiro") != "xoshiro":
+    if spec.rng != "xoshiro":
         raise InputError(
             "rng: numpy stays on the CPU (device: gpu draws xoshiro256** normals in the kernel)"
         )
-    if getattr(spec, "scheme", "explicit") != "explicit":
+    if spec.scheme != "explicit":
         raise InputError("scheme: implicit runs on the CPU only (device: cpu)")
-    systems = getattr(spec, "systems", None) or (getattr(spec, "system", None),)
-    if any(s is not None and s.f is not None for s in systems):
+    if spec.callable_f():
         raise InputError("noise.f: a callable f runs on the CPU only (device: cpu)")
 
 

@@ -85,7 +85,7 @@ def run_time_varying(cuda, spec: TimeVaryingMonteCarloSpec, layout: str, progres
     """
     sys_, grid = spec.system, spec.grid
     batch = batch_size(sys_)
-    sched = Schedule.of(grid, spec.gain, batch)
+    sched = Schedule.of(grid, spec.steps, batch)
     k_total = grid.n_steps
     # step k uses mode k − k0 of its batch [k0, k0 + batch): batches start at multiples
     sched = Schedule(
@@ -111,7 +111,7 @@ def run_time_varying(cuda, spec: TimeVaryingMonteCarloSpec, layout: str, progres
             if not chunk.at(k):
                 return
 
-    return run_chunks(run, spec, spec.block_size, progress, go)
+    return run_chunks(run, spec, spec.block_paths, progress, go)
 
 
 __all__ = ["batch_modes", "run_time_varying"]

@@ -26,12 +26,13 @@ import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from ..errors import interrupt_seen
-from .grid import TimeGrid
+from .grid import StepGains, TimeGrid
 from .implicit import SolverCache
 from .system import ModeSystem
 
@@ -40,8 +41,92 @@ XI_BYTES = 16 * 2**20  # bound on the buffer of normals of one batch
 MIN_BLOCKS = 2  # paths are split into at least this many blocks (both cores busy)
 
 
+class PathBlocks:
+    """What every Monte Carlo spec shares (fixed modes, A(t), lossy links): one rule for
+    the blocks of paths, and the steps' c·h and c·√h computed once per run from the
+    gain on its grid. A subclass has ``grid``, ``gain``, ``paths`` and ``block_size``."""
+
+    grid: TimeGrid
+    gain: Callable[[np.ndarray], np.ndarray]
+    paths: int
+    seed: int
+    block_size: int
+    rng: str
+    # a spec without these fields runs the explicit scheme with no delay
+    scheme: str = "explicit"
+    delay: int = 0
+
+    def mode_systems(self) -> tuple[ModeSystem, ...]:
+        """The modes whose compiled kernel :func:`prepare` loads before the workers fork
+        (none: a spec whose blocks bring their own kernel).
+
+        Returns
+        -------
+        tuple of ModeSystem
+        """
+        return ()
+
+    def callable_f(self) -> bool:
+        """Whether a mode's f is a callable (the GPU needs a linear one).
+
+        Returns
+        -------
+        bool
+        """
+        return any(s.f is not None for s in self.mode_systems())
+
+    def run_block(self, b: int, progress=None) -> PartialStats:
+        """Integrate block b of the paths.
+
+        Parameters
+        ----------
+        b : int
+            The block (its streams from the b-th child of the seed).
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        PartialStats
+        """
+        raise NotImplementedError
+
+    def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+        """Integrate several blocks, in order.
+
+        Parameters
+        ----------
+        blocks : sequence of int
+            Block indices.
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        list of PartialStats
+        """
+        return [self.run_block(b, progress) for b in blocks]
+
+    @property
+    def block_paths(self) -> int:
+        """Paths per block: ``block_size``, or fewer so that there are at least
+        MIN_BLOCKS blocks (a function of ``paths`` only, never of the workers)."""
+        return max(1, min(self.block_size, -(-self.paths // MIN_BLOCKS)))
+
+    @property
+    def n_blocks(self) -> int:
+        """The number of blocks of :attr:`block_paths` paths."""
+        return -(-self.paths // self.block_paths)
+
+    @cached_property
+    def steps(self) -> StepGains:
+        """c_k·h_k and c_k·√h_k on the grid (computed on first use, then kept: every
+        block of the run, and a forked worker, reads the same arrays)."""
+        return StepGains.of(self.grid, self.gain(self.grid.t[:-1]))
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
-class MonteCarloSpec:
+class MonteCarloSpec(PathBlocks):
     """Everything a Monte Carlo run needs: the mode systems, the grid, c(t), θ, the
     initial state, the path count and seed (block b draws from the seed's b-th child),
     the block size, how many paths to store and the step scheme."""
@@ -62,16 +147,48 @@ class MonteCarloSpec:
     rng: str = "xoshiro"  # per-path streams drawn in the kernel (.rng), or "numpy"
     delay: int = 0  # the sampled protocol's D: feedback and noise at x_{k−D} (.digital)
 
-    @property
-    def block_paths(self) -> int:
-        """Paths per block: ``block_size``, or fewer so that there are at least
-        MIN_BLOCKS blocks (a function of ``paths`` only, never of the workers)."""
-        return max(1, min(self.block_size, -(-self.paths // MIN_BLOCKS)))
+    def mode_systems(self) -> tuple[ModeSystem, ...]:
+        """The mode systems (:meth:`PathBlocks.mode_systems`).
 
-    @property
-    def n_blocks(self) -> int:
-        """The number of blocks of :attr:`block_paths` paths."""
-        return -(-self.paths // self.block_paths)
+        Returns
+        -------
+        tuple of ModeSystem
+        """
+        return self.systems
+
+    def run_block(self, b: int, progress=None) -> PartialStats:
+        """Integrate block b of the paths (:meth:`PathBlocks.run_block`).
+
+        Parameters
+        ----------
+        b : int
+            The block.
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        PartialStats
+        """
+        return _run_block(self, b, progress)
+
+    def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+        """Integrate several blocks with one set of steppers (the implicit solvers are
+        built once).
+
+        Parameters
+        ----------
+        blocks : sequence of int
+            Block indices.
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        list of PartialStats
+        """
+        steppers = _steppers(self)
+        return [_run_block(self, b, progress, steppers) for b in blocks]
 
 
 @dataclass
@@ -209,26 +326,26 @@ class _Stepper:
             x[...] = solver(ch[k]).solve(x.T).T
 
 
-def prepare(spec: MonteCarloSpec) -> None:
+def prepare(spec: PathBlocks) -> None:
     """Compile (or load from numba's cache) the kernel for this spec's array types in this
     process, so that forked workers inherit it instead of each compiling it. When the
     kernel is not in Numba's cache (a first run), say so first in one line on stderr.
 
     Parameters
     ----------
-    spec : MonteCarloSpec
-        The run (a spec with its own ``run_block`` needs nothing).
+    spec : PathBlocks
+        The run (a spec whose blocks bring their own kernel needs nothing).
     """
     from .kernels import fill_normals, kernel_cached, warm_kernel
 
     # only what the run calls: each kernel loaded from the cache costs about 0.1 s
-    systems = getattr(spec, "systems", ())  # a spec with its own run_block has none
-    xoshiro = getattr(spec, "rng", "xoshiro") == "xoshiro"
-    explicit = getattr(spec, "scheme", "explicit") == "explicit"
+    systems = spec.mode_systems()
+    xoshiro = spec.rng == "xoshiro"
+    explicit = spec.scheme == "explicit"
     fused = xoshiro and explicit and bool(systems) and all(s.f is None for s in systems)
     if xoshiro and not fused:
         fill_normals(np.zeros((0, 4), np.uint64), np.zeros((1, 0, 1)))
-    delay = getattr(spec, "delay", 0)
+    delay = spec.delay
     for s in systems:
         if s.f is None:
             st = _Stepper(s, False)
@@ -357,7 +474,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     p = min(bp, spec.paths - p0)
     from .rng import NormalSource
 
-    src = NormalSource(getattr(spec, "rng", "xoshiro"), spec.seed, b, p)
+    src = NormalSource(spec.rng, spec.seed, b, p)
     stats = BlockStats(spec, b, p0, p)
     nd_ = spec.x_init.size
     # the sampled protocol holds the initial state for k < 0: every slot of the ring
@@ -370,10 +487,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
 
     e_max = max(s.n_edges for s in spec.systems)
     steppers = steppers if steppers is not None else _steppers(spec)
-    c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
-    h_all = np.diff(grid.t)
-    ch_all = c_all * h_all
-    cs_all = c_all * np.sqrt(grid.noise_h())  # a sampled run's last partial step: s/√h
+    ch_all, cs_all = spec.steps.ch, spec.steps.cs
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     ends = _run_ends(grid)
     if 0 in save_at and not stats.record(now(0), save_at[0]):
@@ -409,17 +523,16 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     return stats.result()
 
 
-def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> list[PartialStats]:
-    """Integrate the given blocks.
+def run_chunk(spec: PathBlocks, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+    """Integrate the given blocks (:meth:`PathBlocks.run_blocks`).
 
-    A spec with its own ``run_block`` (time-varying topologies) integrates itself.
     Overflow is detected and reported by the kernel (``failure``), so NumPy's floating
     point warnings are silenced here.
 
     Parameters
     ----------
-    spec : MonteCarloSpec
-        The run.
+    spec : PathBlocks
+        The run (fixed modes, A(t) or lossy links).
     blocks : sequence of int
         Block indices.
     progress : callable(done, total), optional
@@ -430,12 +543,8 @@ def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> lis
     list of PartialStats
         One per block (combine them with :func:`merge`).
     """
-    block = getattr(spec, "run_block", None)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        if block is not None:
-            return [block(b, progress) for b in blocks]
-        steppers = _steppers(spec)
-        return [_run_block(spec, b, progress, steppers) for b in blocks]
+        return spec.run_blocks(blocks, progress)
 
 
 def merge(parts: Sequence[PartialStats]) -> PartialStats:
@@ -487,7 +596,7 @@ def merge(parts: Sequence[PartialStats]) -> PartialStats:
 # error) the parent cancels what is queued, terminates the workers and re-raises, so an
 # interrupt takes effect within a fraction of a second instead of at the end of the run.
 
-_SPEC: MonteCarloSpec | None = None
+_SPEC: PathBlocks | None = None
 _COUNTER: Any = None  # a multiprocessing Value, made with the fork context
 
 
@@ -546,7 +655,7 @@ def _terminate(ex: ProcessPoolExecutor) -> None:
 
 
 def run(
-    spec: MonteCarloSpec,
+    spec: PathBlocks,
     workers: int = 2,
     blocks_per_chunk: int = 1,
     progress: Callable[[int, int], None] | None = None,
@@ -555,7 +664,7 @@ def run(
 
     Parameters
     ----------
-    spec : MonteCarloSpec
+    spec : PathBlocks
         The run.
     workers : int
         Processes (capped by the caller at the machine's CPUs).

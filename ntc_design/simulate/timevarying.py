@@ -27,7 +27,7 @@ from ..protocol.timevarying import Lemma1Structure, TimeVaryingDesign
 from .budget import check_exact_work, check_gain, estimate_exact_steps, gain_samples
 from .grid import TimeGrid
 from .moments import KAPPA, MomentRecorder, Moments
-from .montecarlo import BlockStats, PartialStats
+from .montecarlo import BlockStats, PartialStats, PathBlocks
 from .noise import NoiseModel
 from .rng import NormalSource
 from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters, spec_grid
@@ -147,7 +147,7 @@ def batch_size(sys_: TimeVaryingSystem) -> int:
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
-class TimeVaryingMonteCarloSpec:
+class TimeVaryingMonteCarloSpec(PathBlocks):
     """What :func:`ntc_design.simulate.montecarlo.run` needs; ``run_block`` integrates one
     block of paths (same seeding and statistics as the fixed-topology blocks)."""
 
@@ -163,11 +163,6 @@ class TimeVaryingMonteCarloSpec:
     block_size: int = 500
     store_paths: int = 10
     rng: str = "xoshiro"  # the generator of :mod:`.rng` (or "numpy")
-
-    @property
-    def n_blocks(self) -> int:
-        """The number of blocks of ``block_size`` paths."""
-        return -(-self.paths // self.block_size)
 
     def run_block(self, b: int, progress=None) -> PartialStats:
         """Integrate block b of the paths.
@@ -186,20 +181,27 @@ class TimeVaryingMonteCarloSpec:
         """
         return _run_block_tv(self, b, progress)
 
+    def callable_f(self) -> bool:
+        """Whether f is a callable (the GPU needs a linear one).
+
+        Returns
+        -------
+        bool
+        """
+        return self.system.f is not None
+
 
 def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> PartialStats:
     grid, sys_ = spec.grid, spec.system
     nd_, d = spec.x_init.size, spec.dim
-    p0 = b * spec.block_size
-    p = min(spec.block_size, spec.paths - p0)
+    bp = spec.block_paths
+    p0 = b * bp
+    p = min(bp, spec.paths - p0)
     normals = NormalSource(spec.rng, spec.seed, b, p)
     stats = BlockStats(spec, b, p0, p)
     x = np.tile(spec.x_init, (p, 1))
     ne = sys_.n_edges
-    c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
-    h_all = np.diff(grid.t)
-    ch_all = c_all * h_all
-    cs_all = c_all * np.sqrt(h_all)
+    ch_all, cs_all = spec.steps.ch, spec.steps.cs
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
     if 0 in save_at and not stats.record(x, save_at[0]):
         return stats.result()

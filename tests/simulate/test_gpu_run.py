@@ -12,6 +12,7 @@ from ntc_design.simulate import MonteCarloSpec, NoiseModel, build_grid, montecar
 from ntc_design.simulate.driver import prepare_modes
 from ntc_design.simulate.gpu import GpuEngine
 from ntc_design.simulate.gpu_run import ModeArrays, Schedule, check_batch
+from ntc_design.simulate.grid import StepGains
 from ntc_design.simulate.kernels import kernel_arrays, numpy_step
 from ntc_design.simulate.rng import normals, path_states
 from ntc_design.simulate.spec import SimulationSpec
@@ -188,7 +189,7 @@ def test_mode_arrays_list_each_agents_edges_in_ascending_order(switching_set):
 
 def test_schedule_stops_at_the_cpus_checks_and_saves():
     grid = build_grid(1.0, 0.01, [0.0, 0.25, 1.0])
-    sched = Schedule.of(grid, lambda t: 1 / (1 + t), 40)
+    sched = Schedule.of(grid, StepGains.of(grid, 1 / (1 + grid.t[:-1])), 40)
     assert sched.stops.tolist() == [25, 40, 80, 100]
     assert sched.saves == {0: 0, 25: 1, 100: 2}
     np.testing.assert_allclose(sched.ch, np.diff(grid.t) / (1 + grid.t[:-1]))

@@ -5,6 +5,7 @@ whole-program checks live in ``tests/system/``, shared helpers in ``tests/suppor
 every part of the package sits in one layer of the import contract."""
 
 import ast
+import re
 import tomllib
 from pathlib import Path
 
@@ -155,6 +156,18 @@ def test_no_module_decides_by_what_is_already_imported():
         str(p.relative_to(ROOT))
         for p in PACKAGE.rglob("*.py")
         if "sys.modules" in p.read_text(encoding="utf-8")
+    ]
+    assert probes == []
+
+
+def test_no_spec_is_told_apart_by_its_attributes():
+    """A Monte Carlo spec says what it is by its type and methods (PathBlocks), never
+    by which attributes it happens to have."""
+    probes = [
+        f"{p.relative_to(ROOT)}:{i}"
+        for p in PACKAGE.rglob("*.py")
+        for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if re.search(r"\b(get|has)attr\((m?spec|self\.spec)\b", line)
     ]
     assert probes == []
 
