@@ -3,6 +3,7 @@
 from .driver import make_gain, simulate
 from .grid import TimeGrid, build_grid
 from .implicit import ImplicitSolver, SolverCache
+from .modes import FixedModes
 from .moments import Moments, exact_moments
 from .montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
 from .noise import NoiseModel
@@ -13,6 +14,7 @@ from .system import ModeSystem, mode_system
 
 __all__ = [
     "SCENARIO_KEYS",
+    "FixedModes",
     "ImplicitSolver",
     "ModeSystem",
     "MonteCarlo",

@@ -43,6 +43,7 @@ from .gpu import GpuEngine, load_cuda
 from .grid import TimeGrid
 from .loss_mc import LossMonteCarloSpec, lossy_mc_spec
 from .loss_run import loss_plan, topology_losses
+from .modes import FixedModes
 from .moments import KAPPA, Moments, check_moments_size, exact_moments, generator_radius
 from .montecarlo import MonteCarloSpec
 from .result import SimulationResult
@@ -623,7 +624,7 @@ def _simulate_modes(
     if isinstance(topology, SwitchingTopology):
         params["schedule"] = [{"mode": m, "duration": t} for m, t in topology.schedule]
     mspec = MonteCarloSpec(
-        systems=tuple(systems),
+        modes=FixedModes(tuple(systems)),
         grid=grid,
         gain=cfun,
         theta=pm.theta,

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .grid import StepGains, TimeGrid
-from .montecarlo import BATCH, XI_BYTES, MonteCarloSpec, PartialStats, merge
+from .modes import BATCH, XI_BYTES
+from .montecarlo import MonteCarloSpec, PartialStats, merge
 from .rng import path_states
 from .ziggurat import ZIG_R, ZIG_X
 
@@ -421,7 +422,7 @@ def run_chunks(run: DeviceRun, spec, block_paths: int, progress, go) -> PartialS
     ----------
     run : DeviceRun
         The run's shared arrays.
-    spec : MonteCarloSpec or TimeVaryingMonteCarloSpec
+    spec : PathBlocks
         Paths, seed.
     block_paths : int
         The CPU's paths per block (a path's stream depends on its block).
@@ -480,7 +481,7 @@ def run_modes(cuda, spec: MonteCarloSpec, layout: str, progress) -> PartialStats
     PartialStats
         Merged over the CPU's blocks.
     """
-    modes = ModeArrays.of_systems(spec.systems)
+    modes = ModeArrays.of_systems(spec.mode_systems())
     bp = spec.block_paths
     sched = Schedule.of(spec.grid, spec.steps, check_batch(bp, modes.e_max))
     run = DeviceRun(cuda, spec, modes, sched, layout, spec.delay)

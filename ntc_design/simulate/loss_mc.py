@@ -17,9 +17,8 @@ import numpy as np
 from ..errors import InputError
 from .grid import TimeGrid
 from .loss import edge_terms
+from .modes import BATCH, XI_BYTES
 from .montecarlo import (
-    BATCH,
-    XI_BYTES,
     BlockStats,
     MonteCarloSpec,
     PartialStats,
@@ -234,7 +233,7 @@ def lossy_mc_spec(mspec: MonteCarloSpec, plan, device: str = "cpu") -> LossMonte
     InputError
         A callable f (the compiled kernel needs a linear one).
     """
-    s = mspec.systems[0]
+    s = mspec.mode_systems()[0]
     if s.f is not None:
         raise InputError("noise.f: lossy links need a linear f (f·x or F x) in the Monte Carlo")
     return LossMonteCarloSpec(

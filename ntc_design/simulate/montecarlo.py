@@ -33,11 +33,9 @@ import numpy as np
 
 from ..errors import interrupt_seen
 from .grid import StepGains, TimeGrid
-from .implicit import SolverCache
+from .modes import ModeSource, Stepper
 from .system import ModeSystem
 
-BATCH = 64  # steps whose normals are drawn at once (fewer when they would pass XI_BYTES)
-XI_BYTES = 16 * 2**20  # bound on the buffer of normals of one batch
 MIN_BLOCKS = 2  # paths are split into at least this many blocks (both cores busy)
 
 
@@ -127,11 +125,12 @@ class PathBlocks:
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class MonteCarloSpec(PathBlocks):
-    """Everything a Monte Carlo run needs: the mode systems, the grid, c(t), θ, the
+    """Everything a Monte Carlo run needs: the modes (:class:`.modes.FixedModes`, or
+    A(t) as expressions: :class:`.timevarying.ExpressionModes`), the grid, c(t), θ, the
     initial state, the path count and seed (block b draws from the seed's b-th child),
     the block size, how many paths to store and the step scheme."""
 
-    systems: tuple[ModeSystem, ...]
+    modes: ModeSource
     grid: TimeGrid
     gain: Callable[[np.ndarray], np.ndarray]
     theta: np.ndarray
@@ -148,13 +147,22 @@ class MonteCarloSpec(PathBlocks):
     delay: int = 0  # the sampled protocol's D: feedback and noise at x_{k−D} (.digital)
 
     def mode_systems(self) -> tuple[ModeSystem, ...]:
-        """The mode systems (:meth:`PathBlocks.mode_systems`).
+        """The mode systems (:meth:`.modes.ModeSource.kernel_systems`).
 
         Returns
         -------
         tuple of ModeSystem
         """
-        return self.systems
+        return self.modes.kernel_systems()
+
+    def callable_f(self) -> bool:
+        """Whether f is a callable (:meth:`.modes.ModeSource.callable_f`).
+
+        Returns
+        -------
+        bool
+        """
+        return self.modes.callable_f()
 
     def run_block(self, b: int, progress=None) -> PartialStats:
         """Integrate block b of the paths (:meth:`PathBlocks.run_block`).
@@ -187,7 +195,7 @@ class MonteCarloSpec(PathBlocks):
         -------
         list of PartialStats
         """
-        steppers = _steppers(self)
+        steppers = self.modes.steppers(self.scheme == "implicit", self.delay)
         return [_run_block(self, b, progress, steppers) for b in blocks]
 
 
@@ -262,70 +270,6 @@ def _first_bad(x: np.ndarray, d: int) -> tuple[int, int] | None:
     return int(row), int(col // d)
 
 
-def _run_ends(grid: TimeGrid) -> np.ndarray:
-    """``ends[k]``: the first grid index after k where a run of steps must stop (a save
-    point, or a step of another mode); each run has one mode and records at its end."""
-    k_total = grid.n_steps
-    cut = np.zeros(k_total + 1, dtype=bool)
-    cut[grid.save_steps] = True
-    cut[k_total] = True
-    if k_total > 1:
-        cut[1:k_total][grid.mode[1:] != grid.mode[:-1]] = True
-    where = np.flatnonzero(cut)
-    return where[
-        np.searchsorted(where, np.arange(k_total + 1), side="right").clip(max=where.size - 1)
-    ]
-
-
-class _Stepper:
-    """One mode's arrays for the kernels, and the implicit scheme's solvers (one per
-    distinct c·h: with intrinsic stepping c·h = ds except next to events), kept for every
-    block of a chunk."""
-
-    def __init__(self, s: ModeSystem, implicit: bool, delay: int = 0):
-        self.s, self.delay = s, delay
-        self.compiled = s.f is None
-        if self.compiled:
-            from .kernels import kernel_arrays
-
-            self.args = kernel_arrays(s)
-        self.solver = SolverCache(s.lap_b, s.dim) if implicit else None
-
-    @property
-    def fused(self) -> bool:
-        """Whether the kernel draws its own normals (compiled and explicit)."""
-        return self.compiled and self.solver is None
-
-    def advance_drawing(self, x, states, m_draw, k_from, k_to, ch, cs, k_base=0) -> None:
-        """:meth:`advance` with the normals drawn in the kernel from ``states`` (``m_draw``
-        per path and step, the widest mode's 2·E, so every mode consumes the same)."""
-        from .kernels import em_steps_rng, tile_width
-
-        tile = tile_width(x.shape[0], x.shape[1])
-        em_steps_rng(
-            x, states, m_draw, k_from, k_to, ch, cs, *self.args, True, tile, self.delay, k_base
-        )
-
-    def advance(self, x, xi, k_from, k_to, ch, cs, k_base=0) -> None:
-        from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
-
-        tile = tile_width(x.shape[0], x.shape[1])
-        if self.solver is None:
-            if self.compiled:
-                em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile, self.delay, k_base)
-            else:
-                for k in range(k_from, k_to):
-                    numpy_step(x, xi[k], ch[k], cs[k], self.s, delay=self.delay, step=k_base + k)
-            return
-        solver = self.solver
-        for k in range(k_from, k_to):
-            if self.compiled:
-                em_steps(x, xi, k, k + 1, ch, cs, *self.args, False, tile)
-            else:
-                numpy_step(x, xi[k], ch[k], cs[k], self.s, drift=False)
-            x[...] = solver(ch[k]).solve(x.T).T
-
-
 def prepare(spec: PathBlocks) -> None:
     """Compile (or load from numba's cache) the kernel for this spec's array types in this
     process, so that forked workers inherit it instead of each compiling it. When the
@@ -348,7 +292,7 @@ def prepare(spec: PathBlocks) -> None:
     delay = spec.delay
     for s in systems:
         if s.f is None:
-            st = _Stepper(s, False)
+            st = Stepper(s, False)
             width = s.nd * (delay + 1)
             if not kernel_cached(fused, width, st.args, delay):
                 compiling_notice()
@@ -461,12 +405,6 @@ class BlockStats:
         )  # fmt: skip
 
 
-def _steppers(spec: MonteCarloSpec) -> list[_Stepper]:
-    """One stepper per mode, shared by the blocks of a chunk (the implicit solvers are
-    built once)."""
-    return [_Stepper(s, spec.scheme == "implicit", spec.delay) for s in spec.systems]
-
-
 def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> PartialStats:
     grid = spec.grid
     bp = spec.block_paths
@@ -485,18 +423,20 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
         slot = (k % ring) * nd_
         return x[:, slot : slot + nd_]
 
-    e_max = max(s.n_edges for s in spec.systems)
-    steppers = steppers if steppers is not None else _steppers(spec)
+    modes = spec.modes
+    e_max = modes.e_max()
+    if steppers is None:
+        steppers = modes.steppers(spec.scheme == "implicit", spec.delay)
     ch_all, cs_all = spec.steps.ch, spec.steps.cs
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
-    ends = _run_ends(grid)
+    ends = modes.ends(grid)
     if 0 in save_at and not stats.record(now(0), save_at[0]):
         return stats.result()
     # the normals of step k are rows (p, 2·e_max) drawn in step order: the batch size
     # changes how many are drawn per call, not which (Generator fills sequentially)
-    batch = int(np.clip(XI_BYTES // (8 * p * max(2 * e_max, 1)), 1, BATCH))
+    batch = modes.batch(p)
     # xoshiro with compiled explicit steps: the kernel draws, no array of normals at all
-    fused = src.states is not None and all(st.fused for st in steppers)
+    fused = src.states is not None and modes.fusable and all(st.fused for st in steppers)
     xi = np.empty((0 if fused else batch, p, 2 * e_max))
     k_total = grid.n_steps
     for k0 in range(0, k_total, batch):
@@ -504,15 +444,15 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
         if not fused:
             src.fill(xi[:kb])
         ch, cs = ch_all[k0 : k0 + kb], cs_all[k0 : k0 + kb]
+        step_by, mode = modes.for_batch(steppers, grid, k0, kb)
         k = k0
         while k < k0 + kb:
             stop = min(int(ends[k]), k0 + kb)
+            st = step_by[mode[k - k0]]
             if fused:
-                steppers[grid.mode[k]].advance_drawing(
-                    x, src.states, 2 * e_max, k - k0, stop - k0, ch, cs, k0
-                )
+                st.advance_drawing(x, src.states, 2 * e_max, k - k0, stop - k0, ch, cs, k0)
             else:
-                steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs, k0)
+                st.advance(x, xi, k - k0, stop - k0, ch, cs, k0)
             k = stop
             if k in save_at and not stats.record(now(k), save_at[k]):
                 return stats.result()

@@ -180,7 +180,7 @@ LAZY = {
     ("ntc_design.simulate.montecarlo", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.rng", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.replay", "ntc_design.simulate.kernels"): "Numba kernels",
-    ("ntc_design.simulate.timevarying", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.modes", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.gpu_run", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.loss_mc", "ntc_design.simulate.loss_kernels"): "Numba kernels",
     ("ntc_design.simulate.loss_mc", "ntc_design.simulate.kernels"): "Numba kernels",
