@@ -15,8 +15,8 @@ from ..present.rows import fmt
 from ..protocol.digital import Digital
 from ..simulate import SimulationSpec
 from ..simulate.digital import digital_moments
-from ..simulate.driver import make_gain, prepare_modes, sampled_grid
 from ..simulate.noise import noise_from_document
+from ..simulate.prepare import make_gain, prepare_modes, sampled_grid
 from ..tune.period import period_curve
 from .figlist import Drawn
 from .html import Table

@@ -15,9 +15,9 @@ from ..present.rows import fmt
 from ..protocol.digital import Digital
 from ..protocol.loss import POLICIES
 from ..simulate import SimulationSpec
-from ..simulate.driver import make_gain, prepare_modes, sampled_grid
 from ..simulate.loss import loss_moments
 from ..simulate.noise import noise_from_document
+from ..simulate.prepare import make_gain, prepare_modes, sampled_grid
 from .figlist import Drawn
 from .html import Table
 from .rundata import RunData

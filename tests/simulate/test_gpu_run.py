@@ -16,11 +16,11 @@ from ntc_design.simulate import (
     montecarlo,
     simulate,
 )
-from ntc_design.simulate.driver import prepare_modes
 from ntc_design.simulate.gpu import GpuEngine
 from ntc_design.simulate.gpu_run import ModeArrays, Schedule, check_batch
 from ntc_design.simulate.grid import StepGains
 from ntc_design.simulate.kernels import kernel_arrays, numpy_step
+from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.simulate.rng import normals, path_states
 from ntc_design.simulate.spec import SimulationSpec
 from tests.conftest import X0
