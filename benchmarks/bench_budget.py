@@ -64,7 +64,7 @@ def _topology(kind: str):
 
 
 def _child(case: dict, conn) -> None:
-    import ntc_design.simulate.driver as drv
+    import ntc_design.simulate.prepare as drv
     from ntc_design.simulate import simulate
 
     captured = {}

@@ -35,7 +35,7 @@ from ntc_design.model.generate import random_network
 from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.digital import digital_grid, digital_moments
-from ntc_design.simulate.driver import make_gain, prepare_modes
+from ntc_design.simulate.prepare import make_gain, prepare_modes
 from ntc_design.simulate.spec import SimulationSpec
 from ntc_design.tune.period import longest_safe_period
 

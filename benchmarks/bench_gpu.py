@@ -37,6 +37,7 @@ from bench_simulate import edge_design, problem, random_network  # noqa: E402
 from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, mode_system, simulate  # noqa: E402
 from ntc_design.simulate.grid import build_grid  # noqa: E402
+from ntc_design.simulate.modes import FixedModes  # noqa: E402
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run  # noqa: E402
 from ntc_design.simulate.system import check_step_size  # noqa: E402
 
@@ -94,7 +95,7 @@ def large_spec(system: tuple, paths: int, steps: int) -> MonteCarloSpec:
     s, des, dt, x0 = system
     grid = build_grid(steps * dt, dt, [0.0, steps * dt])
     return MonteCarloSpec(
-        systems=(s,), grid=grid, gain=lambda t: 1.0 / (1.0 + np.asarray(t, dtype=float)),
+        modes=FixedModes((s,)), grid=grid, gain=lambda t: 1.0 / (1.0 + np.asarray(t, dtype=float)),
         theta=des.theta, x_init=x0, n_agents=s.n_agents, dim=s.dim, paths=paths, seed=0,
         block_size=500, store_paths=0,
     )  # fmt: skip

@@ -21,7 +21,7 @@ import numpy as np
 import ntc_design as nd
 from ntc_design.model.generate import random_network
 from ntc_design.simulate import NoiseModel, SimulationSpec
-from ntc_design.simulate.driver import prepare_modes
+from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.tune import tune
 from ntc_design.tune.problem import ScheduleProblem
 

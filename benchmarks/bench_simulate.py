@@ -43,6 +43,7 @@ from ntc_design.protocol import Decomposition, ProtocolDesign
 from ntc_design.simulate import NoiseModel, mode_system, simulate
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.kernels import em_steps, kernel_arrays, numpy_step, tile_width
+from ntc_design.simulate.modes import FixedModes
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run
 from ntc_design.simulate.system import check_step_size
 
@@ -389,7 +390,7 @@ def large_case(
     grid = build_grid(steps * dt, dt, [0.0, steps * dt])
     x0 = np.tile(des.x0 * 0 + THETA[: top.dim], n) + 0.5
     spec = MonteCarloSpec(
-        systems=(s,), grid=grid, gain=gain, theta=des.theta, x_init=x0, n_agents=n,
+        modes=FixedModes((s,)), grid=grid, gain=gain, theta=des.theta, x_init=x0, n_agents=n,
         dim=top.dim, paths=paths, seed=0, block_size=500, store_paths=0, rng=rng,
     )  # fmt: skip
     t0 = time.perf_counter()
@@ -407,7 +408,7 @@ def large_case(
     # the implicit scheme at a step 20× the explicit limit (one sparse LU, reused)
     ig = build_grid(steps * 20 * dt, 20 * dt, [0.0, steps * 20 * dt])
     ispec = MonteCarloSpec(
-        systems=(s,), grid=ig, gain=lambda t: np.ones_like(np.asarray(t, float)),
+        modes=FixedModes((s,)), grid=ig, gain=lambda t: np.ones_like(np.asarray(t, float)),
         theta=des.theta, x_init=x0, n_agents=n, dim=top.dim, paths=paths, seed=0,
         block_size=500, store_paths=0, scheme="implicit", rng=rng,
     )  # fmt: skip

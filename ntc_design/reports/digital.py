@@ -13,7 +13,7 @@ from matplotlib.ticker import NullFormatter
 from ..errors import InputError
 from ..present.rows import fmt
 from ..simulate.digital import digital_moments
-from ..simulate.driver import make_gain, prepare_modes, sampled_grid
+from ..simulate.prepare import make_gain, prepare_modes, sampled_grid
 from ..tune.period import period_curve
 from .figlist import Drawn
 from .html import Table

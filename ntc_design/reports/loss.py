@@ -14,8 +14,8 @@ from ..model import Topology
 from ..present.rows import fmt
 from ..protocol.digital import Digital
 from ..protocol.loss import POLICIES
-from ..simulate.driver import make_gain, prepare_modes, sampled_grid
 from ..simulate.loss import loss_moments
+from ..simulate.prepare import make_gain, prepare_modes, sampled_grid
 from .figlist import Drawn
 from .html import Table
 from .rundata import RunData

@@ -31,8 +31,8 @@ import numpy as np
 
 from ..errors import InputError, format_bytes
 from ..numerics.memory import available_memory
+from .modes import BATCH, XI_BYTES
 from .moments import KAPPA
-from .montecarlo import BATCH, XI_BYTES
 from .system import DENSE_EIG_MAX_ND, DENSE_LB_MAX_ND
 
 MEMORY_FRACTION = 0.5  # refuse a run that needs more than this share of available memory

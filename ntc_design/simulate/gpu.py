@@ -1,7 +1,7 @@
 """Monte Carlo on an NVIDIA GPU (``device: gpu``): the device check and the engine.
 
 :class:`GpuEngine` runs a :class:`.montecarlo.MonteCarloSpec` (a fixed topology, a
-switching set or a sampled A(t)) or a :class:`.timevarying.TimeVaryingMonteCarloSpec`
+switching set or a sampled A(t)) or one of A(t) as expressions (:class:`.timevarying.ExpressionModes`)
 (A(t) given as expressions) with the kernels of :mod:`.cuda_kernels` and returns the
 same :class:`.montecarlo.PartialStats` as the CPU: the paths are split into the CPU's
 blocks and each block's paths are seeded from the same xoshiro256** states
@@ -30,7 +30,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import InputError, one_line
-from .montecarlo import PartialStats
+from .modes import FixedModes
+from .montecarlo import MonteCarloSpec, PartialStats, PathBlocks
 
 SIMULATOR_ENV = "NTC_CUDA_SIMULATOR"
 INSTALL = "pip install 'ntc-design[gpu]'"
@@ -195,7 +196,7 @@ class GpuEngine:
 
         Parameters
         ----------
-        spec : MonteCarloSpec or TimeVaryingMonteCarloSpec
+        spec : MonteCarloSpec
             The run (explicit scheme, xoshiro normals, a linear f).
         progress : callable(done, total), optional
             Called with path-steps done.
@@ -220,7 +221,7 @@ class GpuEngine:
             # small grids (the statistics of few agents, the simulator's few paths) are
             # by design, not a user's concern
             warnings.simplefilter("ignore", NumbaPerformanceWarning)
-            if hasattr(spec, "systems"):
+            if isinstance(spec, MonteCarloSpec) and isinstance(spec.modes, FixedModes):
                 from .gpu_run import run_modes
 
                 return run_modes(cuda, spec, self.layout, progress)
@@ -229,12 +230,12 @@ class GpuEngine:
             return run_time_varying(cuda, spec, self.layout, progress)
 
 
-def check_supported(spec) -> None:
+def check_supported(spec: PathBlocks) -> None:
     """Refuse, in one line naming the field, a run the GPU kernels do not do.
 
     Parameters
     ----------
-    spec : MonteCarloSpec or TimeVaryingMonteCarloSpec
+    spec : PathBlocks
         The run.
 
     Raises
@@ -242,14 +243,13 @@ def check_supported(spec) -> None:
     InputError
         ``rng: numpy``, ``scheme: implicit`` or a callable f.
     """
-    if getattr(spec, "rng", "xoshiro") != "xoshiro":
+    if spec.rng != "xoshiro":
         raise InputError(
             "rng: numpy stays on the CPU (device: gpu draws xoshiro256** normals in the kernel)"
         )
-    if getattr(spec, "scheme", "explicit") != "explicit":
+    if spec.scheme != "explicit":
         raise InputError("scheme: implicit runs on the CPU only (device: cpu)")
-    systems = getattr(spec, "systems", None) or (getattr(spec, "system", None),)
-    if any(s is not None and s.f is not None for s in systems):
+    if spec.callable_f():
         raise InputError("noise.f: a callable f runs on the CPU only (device: cpu)")
 
 

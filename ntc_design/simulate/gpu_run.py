@@ -16,8 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .grid import TimeGrid
-from .montecarlo import BATCH, XI_BYTES, PartialStats, merge
+from .grid import StepGains, TimeGrid
+from .modes import BATCH, XI_BYTES
+from .montecarlo import MonteCarloSpec, PartialStats, merge
 from .rng import path_states
 from .ziggurat import ZIG_R, ZIG_X
 
@@ -189,15 +190,15 @@ class Schedule:
     saves: dict  # grid index -> save slot
 
     @classmethod
-    def of(cls, grid: TimeGrid, gain: Callable, batch: int) -> Schedule:
+    def of(cls, grid: TimeGrid, steps: StepGains, batch: int) -> Schedule:
         """The schedule of a grid with the CPU's check batch.
 
         Parameters
         ----------
         grid : TimeGrid
             The run's grid.
-        gain : callable
-            Vectorised c(t).
+        steps : StepGains
+            The steps' c·h and c·√h (the spec's, as the CPU blocks read them).
         batch : int
             Steps between the CPU's checks.
 
@@ -206,14 +207,11 @@ class Schedule:
         Schedule
         """
         k_total = grid.n_steps
-        c_all = np.asarray(gain(grid.t[:-1]), dtype=float) * np.ones(k_total)
-        h_all = np.diff(grid.t)
         checks = set(range(batch, k_total, batch)) | {k_total}
         saves = {int(k): i for i, k in enumerate(grid.save_steps)}
         stops = np.array(sorted((checks | set(saves)) - {0}), dtype=np.int64)
         mode = grid.mode.astype(np.int64) if grid.mode.size else np.zeros(k_total, np.int64)
-        cs = c_all * np.sqrt(grid.noise_h())  # a sampled run's last partial step: s/√h
-        return cls(grid, c_all * h_all, cs, mode, stops, frozenset(checks), saves)
+        return cls(grid, steps.ch, steps.cs, mode, stops, frozenset(checks), saves)
 
 
 def check_batch(paths: int, e_max: int) -> int:
@@ -424,7 +422,7 @@ def run_chunks(run: DeviceRun, spec, block_paths: int, progress, go) -> PartialS
     ----------
     run : DeviceRun
         The run's shared arrays.
-    spec : MonteCarloSpec or TimeVaryingMonteCarloSpec
+    spec : PathBlocks
         Paths, seed.
     block_paths : int
         The CPU's paths per block (a path's stream depends on its block).
@@ -463,7 +461,7 @@ def run_chunks(run: DeviceRun, spec, block_paths: int, progress, go) -> PartialS
     return merge(parts)
 
 
-def run_modes(cuda, spec, layout: str, progress) -> PartialStats:
+def run_modes(cuda, spec: MonteCarloSpec, layout: str, progress) -> PartialStats:
     """Every path of a :class:`.montecarlo.MonteCarloSpec` (fixed, switching or sampled
     modes; ``delay`` D >= 0 when the spec has one) on the device.
 
@@ -483,10 +481,10 @@ def run_modes(cuda, spec, layout: str, progress) -> PartialStats:
     PartialStats
         Merged over the CPU's blocks.
     """
-    modes = ModeArrays.of_systems(spec.systems)
+    modes = ModeArrays.of_systems(spec.mode_systems())
     bp = spec.block_paths
-    sched = Schedule.of(spec.grid, spec.gain, check_batch(bp, modes.e_max))
-    run = DeviceRun(cuda, spec, modes, sched, layout, int(getattr(spec, "delay", 0)))
+    sched = Schedule.of(spec.grid, spec.steps, check_batch(bp, modes.e_max))
+    run = DeviceRun(cuda, spec, modes, sched, layout, spec.delay)
     return run_chunks(run, spec, bp, progress, lambda ch, tick: drive(ch, sched, tick))
 
 

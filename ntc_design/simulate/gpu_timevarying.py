@@ -1,5 +1,5 @@
 """A(t) given as expressions on the GPU: Lemma 1 and the weights are evaluated on the host
-for each batch of steps, as the CPU does (:func:`.timevarying._run_block_tv`: batched
+for each batch of steps, as the CPU does (:class:`.timevarying.ExpressionModes`: batched
 Cholesky and eigenvalues, which a GPU thread per path would repeat for every path), and
 the batch's matrices go to the device as one "mode" per step (L_B(t) dense, u(t), K_e(t),
 g_e(t)); the device integrates every path through them with the fixed topology's kernels.
@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from .gpu_run import DeviceRun, ModeArrays, Schedule, run_chunks
-from .montecarlo import PartialStats
-from .timevarying import TimeVaryingMonteCarloSpec, TimeVaryingSystem, batch_size
+from .montecarlo import MonteCarloSpec, PartialStats
+from .timevarying import ExpressionModes, TimeVaryingSystem, batch_size
 
 
 def batch_modes(sys_: TimeVaryingSystem, ts: np.ndarray) -> ModeArrays:
@@ -34,45 +34,19 @@ def batch_modes(sys_: TimeVaryingSystem, ts: np.ndarray) -> ModeArrays:
     ModeArrays
     """
     st = sys_.structure
-    n, d = st.n, st.d
-    nd = n * d
-    b_t = sys_.design.at(ts)
-    lap = b_t.lap_b(st).reshape(ts.size, -1)
-    u = b_t.input_vector()
-    absw = b_t.abs_w[:, sys_.live]
-    kmat = absw @ sys_.fmat
-    gvec = sys_.sigma[None, :, None] * absw.sum(axis=3)
-    src = np.ascontiguousarray(st.jj[sys_.live], dtype=np.int64)
-    dst = np.ascontiguousarray(st.ii[sys_.live], dtype=np.int64)
-    indptr = np.arange(0, nd * nd + 1, nd, dtype=np.int64)
-    indices = np.tile(np.arange(nd, dtype=np.int64), nd)
-    if d == 3:
-        bptr = np.arange(0, n * n + 1, n, dtype=np.int64)
-        bind = np.tile(np.arange(n, dtype=np.int64), n)
-    else:
-        bptr, bind = np.zeros(1, np.int64), np.zeros(0, np.int64)
-    parts = []
-    for kk in range(ts.size):
-        blocks = (
-            lap[kk].reshape(n, 3, n, 3).transpose(0, 2, 1, 3).reshape(-1, 3, 3)
-            if d == 3
-            else np.zeros((0, 3, 3))
-        )
-        parts.append(
-            (indptr, indices, lap[kk], bptr, bind, blocks, u[kk], src, dst, kmat[kk], gvec[kk])
-        )
-    return ModeArrays.build(parts, n, d)
+    parts = ExpressionModes(sys_).step_arrays(ts)
+    return ModeArrays.build(parts, st.n, st.d)
 
 
-def run_time_varying(cuda, spec: TimeVaryingMonteCarloSpec, layout: str, progress) -> PartialStats:
+def run_time_varying(cuda, spec: MonteCarloSpec, layout: str, progress) -> PartialStats:
     """Every path of an A(t) run on the GPU (see the module docstring).
 
     Parameters
     ----------
     cuda : module
         ``numba.cuda``.
-    spec : TimeVaryingMonteCarloSpec
-        The run.
+    spec : MonteCarloSpec
+        The run (its modes :class:`.timevarying.ExpressionModes`).
     layout : str
         ``auto``, ``fused`` or ``sparse`` (:mod:`.gpu_run`).
     progress : callable(done, total) or None
@@ -83,9 +57,10 @@ def run_time_varying(cuda, spec: TimeVaryingMonteCarloSpec, layout: str, progres
     PartialStats
         Merged over the CPU's blocks.
     """
-    sys_, grid = spec.system, spec.grid
+    assert isinstance(spec.modes, ExpressionModes), "an A(t) run"
+    sys_, grid = spec.modes.system, spec.grid
     batch = batch_size(sys_)
-    sched = Schedule.of(grid, spec.gain, batch)
+    sched = Schedule.of(grid, spec.steps, batch)
     k_total = grid.n_steps
     # step k uses mode k − k0 of its batch [k0, k0 + batch): batches start at multiples
     sched = Schedule(
@@ -111,7 +86,7 @@ def run_time_varying(cuda, spec: TimeVaryingMonteCarloSpec, layout: str, progres
             if not chunk.at(k):
                 return
 
-    return run_chunks(run, spec, spec.block_size, progress, go)
+    return run_chunks(run, spec, spec.block_paths, progress, go)
 
 
 __all__ = ["batch_modes", "run_time_varying"]

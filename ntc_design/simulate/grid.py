@@ -55,6 +55,34 @@ class TimeGrid:
         return h
 
 
+@dataclass(frozen=True, eq=False)
+class StepGains:
+    """Each step's factors on a grid, computed once per run and shared by every block,
+    the CPU and the GPU: c_k·h_k (the drift) and c_k·√(noise factor) (the noise; a
+    sampled run's last partial step s has s/√h, :meth:`TimeGrid.noise_h`)."""
+
+    ch: np.ndarray  # (K,) c_k h_k
+    cs: np.ndarray  # (K,) c_k √h_k, or c_K s/√h on a sampled run's partial step
+
+    @classmethod
+    def of(cls, grid: TimeGrid, c: np.ndarray) -> StepGains:
+        """The factors of ``grid`` for the gain's values ``c`` at its step starts.
+
+        Parameters
+        ----------
+        grid : TimeGrid
+            The run's grid.
+        c : numpy.ndarray
+            c(t_k) at the K step starts (a scalar is broadcast).
+
+        Returns
+        -------
+        StepGains
+        """
+        c_all = np.asarray(c, dtype=float) * np.ones(grid.n_steps)
+        return cls(c_all * grid.h, c_all * np.sqrt(grid.noise_h()))
+
+
 def build_grid(
     t_end: float,
     dt: float,

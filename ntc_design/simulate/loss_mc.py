@@ -17,13 +17,19 @@ import numpy as np
 from ..errors import InputError
 from .grid import TimeGrid
 from .loss import edge_terms
-from .montecarlo import BATCH, MIN_BLOCKS, XI_BYTES, BlockStats, MonteCarloSpec, PartialStats
+from .modes import BATCH, XI_BYTES
+from .montecarlo import (
+    BlockStats,
+    MonteCarloSpec,
+    PartialStats,
+    PathBlocks,
+)
 from .rng import path_states
 from .system import ModeSystem
 
 
 @dataclass(frozen=True, eq=False)
-class LossMonteCarloSpec:
+class LossMonteCarloSpec(PathBlocks):
     """What :func:`.montecarlo.run` needs for lossy links; ``run_block`` integrates one
     block of paths.
 
@@ -73,16 +79,6 @@ class LossMonteCarloSpec:
     store_paths: int = 10
     rng: str = "xoshiro"
     device: str = "cpu"
-
-    @property
-    def block_paths(self) -> int:
-        """Paths per block, as :attr:`.montecarlo.MonteCarloSpec.block_paths`."""
-        return max(1, min(self.block_size, -(-self.paths // MIN_BLOCKS)))
-
-    @property
-    def n_blocks(self) -> int:
-        """The number of blocks."""
-        return -(-self.paths // self.block_paths)
 
     def kernel_arrays(self) -> tuple:
         """(gdiag, u, src, dst, signed, absw, kmat, gvec, q): the arrays
@@ -161,11 +157,9 @@ class LossMonteCarloSpec:
             return x[:, slot : slot + nd_]
 
         k_total = grid.n_steps
-        c_all = np.asarray(self.gain(grid.t[:-1]), dtype=float) * np.ones(k_total)
-        h_all = np.diff(grid.t)
         # a sampled run's last partial step s: the held noise of a period h, for s seconds
         root = np.sqrt(grid.noise_h())  # √h, or s/√h on the partial step
-        ch_all, cs_all, rh_all = c_all * h_all, c_all * root, root / h_all
+        ch_all, cs_all, rh_all = self.steps.ch, self.steps.cs, root / grid.h
         arrays = self.kernel_arrays()
         code = POLICY_CODES[self.policy]
         save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
@@ -239,7 +233,7 @@ def lossy_mc_spec(mspec: MonteCarloSpec, plan, device: str = "cpu") -> LossMonte
     InputError
         A callable f (the compiled kernel needs a linear one).
     """
-    s = mspec.systems[0]
+    s = mspec.mode_systems()[0]
     if s.f is not None:
         raise InputError("noise.f: lossy links need a linear f (f·x or F x) in the Monte Carlo")
     return LossMonteCarloSpec(

@@ -26,27 +26,111 @@ import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from ..errors import interrupt_seen
-from .grid import TimeGrid
-from .implicit import SolverCache
+from .grid import StepGains, TimeGrid
+from .modes import ModeSource, Stepper
 from .system import ModeSystem
 
-BATCH = 64  # steps whose normals are drawn at once (fewer when they would pass XI_BYTES)
-XI_BYTES = 16 * 2**20  # bound on the buffer of normals of one batch
 MIN_BLOCKS = 2  # paths are split into at least this many blocks (both cores busy)
 
 
+class PathBlocks:
+    """What every Monte Carlo spec shares (fixed modes, A(t), lossy links): one rule for
+    the blocks of paths, and the steps' c·h and c·√h computed once per run from the
+    gain on its grid. A subclass has ``grid``, ``gain``, ``paths`` and ``block_size``."""
+
+    grid: TimeGrid
+    gain: Callable[[np.ndarray], np.ndarray]
+    paths: int
+    seed: int
+    block_size: int
+    rng: str
+    # a spec without these fields runs the explicit scheme with no delay
+    scheme: str = "explicit"
+    delay: int = 0
+
+    def mode_systems(self) -> tuple[ModeSystem, ...]:
+        """The modes whose compiled kernel :func:`prepare` loads before the workers fork
+        (none: a spec whose blocks bring their own kernel).
+
+        Returns
+        -------
+        tuple of ModeSystem
+        """
+        return ()
+
+    def callable_f(self) -> bool:
+        """Whether a mode's f is a callable (the GPU needs a linear one).
+
+        Returns
+        -------
+        bool
+        """
+        return any(s.f is not None for s in self.mode_systems())
+
+    def run_block(self, b: int, progress=None) -> PartialStats:
+        """Integrate block b of the paths.
+
+        Parameters
+        ----------
+        b : int
+            The block (its streams from the b-th child of the seed).
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        PartialStats
+        """
+        raise NotImplementedError
+
+    def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+        """Integrate several blocks, in order.
+
+        Parameters
+        ----------
+        blocks : sequence of int
+            Block indices.
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        list of PartialStats
+        """
+        return [self.run_block(b, progress) for b in blocks]
+
+    @property
+    def block_paths(self) -> int:
+        """Paths per block: ``block_size``, or fewer so that there are at least
+        MIN_BLOCKS blocks (a function of ``paths`` only, never of the workers)."""
+        return max(1, min(self.block_size, -(-self.paths // MIN_BLOCKS)))
+
+    @property
+    def n_blocks(self) -> int:
+        """The number of blocks of :attr:`block_paths` paths."""
+        return -(-self.paths // self.block_paths)
+
+    @cached_property
+    def steps(self) -> StepGains:
+        """c_k·h_k and c_k·√h_k on the grid (computed on first use, then kept: every
+        block of the run, and a forked worker, reads the same arrays)."""
+        return StepGains.of(self.grid, self.gain(self.grid.t[:-1]))
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
-class MonteCarloSpec:
-    """Everything a Monte Carlo run needs: the mode systems, the grid, c(t), θ, the
+class MonteCarloSpec(PathBlocks):
+    """Everything a Monte Carlo run needs: the modes (:class:`.modes.FixedModes`, or
+    A(t) as expressions: :class:`.timevarying.ExpressionModes`), the grid, c(t), θ, the
     initial state, the path count and seed (block b draws from the seed's b-th child),
     the block size, how many paths to store and the step scheme."""
 
-    systems: tuple[ModeSystem, ...]
+    modes: ModeSource
     grid: TimeGrid
     gain: Callable[[np.ndarray], np.ndarray]
     theta: np.ndarray
@@ -62,16 +146,57 @@ class MonteCarloSpec:
     rng: str = "xoshiro"  # per-path streams drawn in the kernel (.rng), or "numpy"
     delay: int = 0  # the sampled protocol's D: feedback and noise at x_{k−D} (.digital)
 
-    @property
-    def block_paths(self) -> int:
-        """Paths per block: ``block_size``, or fewer so that there are at least
-        MIN_BLOCKS blocks (a function of ``paths`` only, never of the workers)."""
-        return max(1, min(self.block_size, -(-self.paths // MIN_BLOCKS)))
+    def mode_systems(self) -> tuple[ModeSystem, ...]:
+        """The mode systems (:meth:`.modes.ModeSource.kernel_systems`).
 
-    @property
-    def n_blocks(self) -> int:
-        """The number of blocks of :attr:`block_paths` paths."""
-        return -(-self.paths // self.block_paths)
+        Returns
+        -------
+        tuple of ModeSystem
+        """
+        return self.modes.kernel_systems()
+
+    def callable_f(self) -> bool:
+        """Whether f is a callable (:meth:`.modes.ModeSource.callable_f`).
+
+        Returns
+        -------
+        bool
+        """
+        return self.modes.callable_f()
+
+    def run_block(self, b: int, progress=None) -> PartialStats:
+        """Integrate block b of the paths (:meth:`PathBlocks.run_block`).
+
+        Parameters
+        ----------
+        b : int
+            The block.
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        PartialStats
+        """
+        return _run_block(self, b, progress)
+
+    def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+        """Integrate several blocks with one set of steppers (the implicit solvers are
+        built once).
+
+        Parameters
+        ----------
+        blocks : sequence of int
+            Block indices.
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        list of PartialStats
+        """
+        steppers = self.modes.steppers(self.scheme == "implicit", self.delay)
+        return [_run_block(self, b, progress, steppers) for b in blocks]
 
 
 @dataclass
@@ -145,93 +270,29 @@ def _first_bad(x: np.ndarray, d: int) -> tuple[int, int] | None:
     return int(row), int(col // d)
 
 
-def _run_ends(grid: TimeGrid) -> np.ndarray:
-    """``ends[k]``: the first grid index after k where a run of steps must stop (a save
-    point, or a step of another mode); each run has one mode and records at its end."""
-    k_total = grid.n_steps
-    cut = np.zeros(k_total + 1, dtype=bool)
-    cut[grid.save_steps] = True
-    cut[k_total] = True
-    if k_total > 1:
-        cut[1:k_total][grid.mode[1:] != grid.mode[:-1]] = True
-    where = np.flatnonzero(cut)
-    return where[
-        np.searchsorted(where, np.arange(k_total + 1), side="right").clip(max=where.size - 1)
-    ]
-
-
-class _Stepper:
-    """One mode's arrays for the kernels, and the implicit scheme's solvers (one per
-    distinct c·h: with intrinsic stepping c·h = ds except next to events), kept for every
-    block of a chunk."""
-
-    def __init__(self, s: ModeSystem, implicit: bool, delay: int = 0):
-        self.s, self.delay = s, delay
-        self.compiled = s.f is None
-        if self.compiled:
-            from .kernels import kernel_arrays
-
-            self.args = kernel_arrays(s)
-        self.solver = SolverCache(s.lap_b, s.dim) if implicit else None
-
-    @property
-    def fused(self) -> bool:
-        """Whether the kernel draws its own normals (compiled and explicit)."""
-        return self.compiled and self.solver is None
-
-    def advance_drawing(self, x, states, m_draw, k_from, k_to, ch, cs, k_base=0) -> None:
-        """:meth:`advance` with the normals drawn in the kernel from ``states`` (``m_draw``
-        per path and step, the widest mode's 2·E, so every mode consumes the same)."""
-        from .kernels import em_steps_rng, tile_width
-
-        tile = tile_width(x.shape[0], x.shape[1])
-        em_steps_rng(
-            x, states, m_draw, k_from, k_to, ch, cs, *self.args, True, tile, self.delay, k_base
-        )
-
-    def advance(self, x, xi, k_from, k_to, ch, cs, k_base=0) -> None:
-        from .kernels import em_steps, numpy_step, tile_width  # numba: only when simulating
-
-        tile = tile_width(x.shape[0], x.shape[1])
-        if self.solver is None:
-            if self.compiled:
-                em_steps(x, xi, k_from, k_to, ch, cs, *self.args, True, tile, self.delay, k_base)
-            else:
-                for k in range(k_from, k_to):
-                    numpy_step(x, xi[k], ch[k], cs[k], self.s, delay=self.delay, step=k_base + k)
-            return
-        solver = self.solver
-        for k in range(k_from, k_to):
-            if self.compiled:
-                em_steps(x, xi, k, k + 1, ch, cs, *self.args, False, tile)
-            else:
-                numpy_step(x, xi[k], ch[k], cs[k], self.s, drift=False)
-            x[...] = solver(ch[k]).solve(x.T).T
-
-
-def prepare(spec: MonteCarloSpec) -> None:
+def prepare(spec: PathBlocks) -> None:
     """Compile (or load from numba's cache) the kernel for this spec's array types in this
     process, so that forked workers inherit it instead of each compiling it. When the
     kernel is not in Numba's cache (a first run), say so first in one line on stderr.
 
     Parameters
     ----------
-    spec : MonteCarloSpec
-        The run (a spec with its own ``run_block`` needs nothing).
+    spec : PathBlocks
+        The run (a spec whose blocks bring their own kernel needs nothing).
     """
     from .kernels import fill_normals, kernel_cached, warm_kernel
 
     # only what the run calls: each kernel loaded from the cache costs about 0.1 s
-    systems = getattr(spec, "systems", ())  # a spec with its own run_block has none
-    xoshiro = getattr(spec, "rng", "xoshiro") == "xoshiro"
-    explicit = getattr(spec, "scheme", "explicit") == "explicit"
+    systems = spec.mode_systems()
+    xoshiro = spec.rng == "xoshiro"
+    explicit = spec.scheme == "explicit"
     fused = xoshiro and explicit and bool(systems) and all(s.f is None for s in systems)
     if xoshiro and not fused:
         fill_normals(np.zeros((0, 4), np.uint64), np.zeros((1, 0, 1)))
-    delay = getattr(spec, "delay", 0)
+    delay = spec.delay
     for s in systems:
         if s.f is None:
-            st = _Stepper(s, False)
+            st = Stepper(s, False)
             width = s.nd * (delay + 1)
             if not kernel_cached(fused, width, st.args, delay):
                 compiling_notice()
@@ -344,12 +405,6 @@ class BlockStats:
         )  # fmt: skip
 
 
-def _steppers(spec: MonteCarloSpec) -> list[_Stepper]:
-    """One stepper per mode, shared by the blocks of a chunk (the implicit solvers are
-    built once)."""
-    return [_Stepper(s, spec.scheme == "implicit", spec.delay) for s in spec.systems]
-
-
 def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> PartialStats:
     grid = spec.grid
     bp = spec.block_paths
@@ -357,7 +412,7 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     p = min(bp, spec.paths - p0)
     from .rng import NormalSource
 
-    src = NormalSource(getattr(spec, "rng", "xoshiro"), spec.seed, b, p)
+    src = NormalSource(spec.rng, spec.seed, b, p)
     stats = BlockStats(spec, b, p0, p)
     nd_ = spec.x_init.size
     # the sampled protocol holds the initial state for k < 0: every slot of the ring
@@ -368,21 +423,20 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
         slot = (k % ring) * nd_
         return x[:, slot : slot + nd_]
 
-    e_max = max(s.n_edges for s in spec.systems)
-    steppers = steppers if steppers is not None else _steppers(spec)
-    c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
-    h_all = np.diff(grid.t)
-    ch_all = c_all * h_all
-    cs_all = c_all * np.sqrt(grid.noise_h())  # a sampled run's last partial step: s/√h
+    modes = spec.modes
+    e_max = modes.e_max()
+    if steppers is None:
+        steppers = modes.steppers(spec.scheme == "implicit", spec.delay)
+    ch_all, cs_all = spec.steps.ch, spec.steps.cs
     save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
-    ends = _run_ends(grid)
+    ends = modes.ends(grid)
     if 0 in save_at and not stats.record(now(0), save_at[0]):
         return stats.result()
     # the normals of step k are rows (p, 2·e_max) drawn in step order: the batch size
     # changes how many are drawn per call, not which (Generator fills sequentially)
-    batch = int(np.clip(XI_BYTES // (8 * p * max(2 * e_max, 1)), 1, BATCH))
+    batch = modes.batch(p)
     # xoshiro with compiled explicit steps: the kernel draws, no array of normals at all
-    fused = src.states is not None and all(st.fused for st in steppers)
+    fused = src.states is not None and modes.fusable and all(st.fused for st in steppers)
     xi = np.empty((0 if fused else batch, p, 2 * e_max))
     k_total = grid.n_steps
     for k0 in range(0, k_total, batch):
@@ -390,15 +444,15 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
         if not fused:
             src.fill(xi[:kb])
         ch, cs = ch_all[k0 : k0 + kb], cs_all[k0 : k0 + kb]
+        step_by, mode = modes.for_batch(steppers, grid, k0, kb)
         k = k0
         while k < k0 + kb:
             stop = min(int(ends[k]), k0 + kb)
+            st = step_by[mode[k - k0]]
             if fused:
-                steppers[grid.mode[k]].advance_drawing(
-                    x, src.states, 2 * e_max, k - k0, stop - k0, ch, cs, k0
-                )
+                st.advance_drawing(x, src.states, 2 * e_max, k - k0, stop - k0, ch, cs, k0)
             else:
-                steppers[grid.mode[k]].advance(x, xi, k - k0, stop - k0, ch, cs, k0)
+                st.advance(x, xi, k - k0, stop - k0, ch, cs, k0)
             k = stop
             if k in save_at and not stats.record(now(k), save_at[k]):
                 return stats.result()
@@ -409,17 +463,16 @@ def _run_block(spec: MonteCarloSpec, b: int, progress=None, steppers=None) -> Pa
     return stats.result()
 
 
-def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> list[PartialStats]:
-    """Integrate the given blocks.
+def run_chunk(spec: PathBlocks, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+    """Integrate the given blocks (:meth:`PathBlocks.run_blocks`).
 
-    A spec with its own ``run_block`` (time-varying topologies) integrates itself.
     Overflow is detected and reported by the kernel (``failure``), so NumPy's floating
     point warnings are silenced here.
 
     Parameters
     ----------
-    spec : MonteCarloSpec
-        The run.
+    spec : PathBlocks
+        The run (fixed modes, A(t) or lossy links).
     blocks : sequence of int
         Block indices.
     progress : callable(done, total), optional
@@ -430,12 +483,8 @@ def run_chunk(spec: MonteCarloSpec, blocks: Sequence[int], progress=None) -> lis
     list of PartialStats
         One per block (combine them with :func:`merge`).
     """
-    block = getattr(spec, "run_block", None)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        if block is not None:
-            return [block(b, progress) for b in blocks]
-        steppers = _steppers(spec)
-        return [_run_block(spec, b, progress, steppers) for b in blocks]
+        return spec.run_blocks(blocks, progress)
 
 
 def merge(parts: Sequence[PartialStats]) -> PartialStats:
@@ -487,7 +536,7 @@ def merge(parts: Sequence[PartialStats]) -> PartialStats:
 # error) the parent cancels what is queued, terminates the workers and re-raises, so an
 # interrupt takes effect within a fraction of a second instead of at the end of the run.
 
-_SPEC: MonteCarloSpec | None = None
+_SPEC: PathBlocks | None = None
 _COUNTER: Any = None  # a multiprocessing Value, made with the fork context
 
 
@@ -546,7 +595,7 @@ def _terminate(ex: ProcessPoolExecutor) -> None:
 
 
 def run(
-    spec: MonteCarloSpec,
+    spec: PathBlocks,
     workers: int = 2,
     blocks_per_chunk: int = 1,
     progress: Callable[[int, int], None] | None = None,
@@ -555,7 +604,7 @@ def run(
 
     Parameters
     ----------
-    spec : MonteCarloSpec
+    spec : PathBlocks
         The run.
     workers : int
         Processes (capped by the caller at the machine's CPUs).

@@ -15,7 +15,7 @@ from ..io.files import ScenarioData, jsonable, parse_scenario
 from ..io.outputs import check_output_folder, json_text, output_folder
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..model.load import load
-from .driver import AnyTopology, edge_count
+from .prepare import AnyTopology, edge_count
 from .result import TIDY_COLUMNS, tidy_columns
 from .spec import SimulationSpec
 

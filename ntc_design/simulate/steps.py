@@ -123,7 +123,7 @@ def run_monte_carlo(
     ----------
     spec : SimulationSpec
         The run's options (``method``).
-    mspec : MonteCarloSpec or TimeVaryingMonteCarloSpec
+    mspec : PathBlocks
         What the kernels run.
     workers : int
         Local processes.

@@ -26,10 +26,10 @@ from ..protocol import design_topology
 from ..protocol.timevarying import Lemma1Structure, TimeVaryingDesign
 from .budget import check_exact_work, check_gain, estimate_exact_steps, gain_samples
 from .grid import TimeGrid
+from .modes import ModeSource, Stepper
 from .moments import KAPPA, MomentRecorder, Moments
-from .montecarlo import BlockStats, PartialStats
+from .montecarlo import MonteCarloSpec
 from .noise import NoiseModel
-from .rng import NormalSource
 from .steps import Runs, finish_run, run_exact, run_monte_carlo, run_parameters, spec_grid
 
 BATCH = 256  # steps whose matrices and normals are made at once (Lemma 1 per batch is ~6 ms)
@@ -146,130 +146,162 @@ def batch_size(sys_: TimeVaryingSystem) -> int:
     return int(max(1, min(BATCH, MAX_BATCH_BYTES // max(per, 1))))
 
 
-@dataclass(frozen=True, eq=False, kw_only=True)
-class TimeVaryingMonteCarloSpec:
-    """What :func:`ntc_design.simulate.montecarlo.run` needs; ``run_block`` integrates one
-    block of paths (same seeding and statistics as the fixed-topology blocks)."""
+class DenseStep(Stepper):
+    """One step of A(t) with a callable f: NumPy on the step's dense matrices."""
+
+    def __init__(self, sys_: TimeVaryingSystem, m1, gt, wt, u):
+        super().__init__(None, False)
+        self.compiled = False
+        self.sys, self.m1, self.gt, self.wt, self.u = sys_, m1, gt, wt, u
+
+    def advance(self, x, xi, k_from, k_to, ch, cs, k_base=0) -> None:
+        """Steps ``k_from .. k_to − 1`` of the batch (normals ``xi[k]``), in place."""
+        sys_, nd_ = self.sys, x.shape[1]
+        ne, d = sys_.n_edges, sys_.structure.d
+        for k in range(k_from, k_to):
+            y = x @ self.m1
+            drift = y[:, :nd_]
+            drift += self.u
+            diff = y[:, nd_:].reshape(x.shape[0], ne, d)
+            if sys_.f is not None:
+                diff = sys_.f(diff)
+            z = (diff * xi[k, :, ne : 2 * ne, None]).reshape(x.shape[0], ne * d)
+            noise = xi[k, :, :ne] @ self.gt
+            noise += z @ self.wt
+            x += ch[k] * drift + cs[k] * noise
+
+
+@dataclass(frozen=True, eq=False)
+class ExpressionModes(ModeSource):
+    """A(t) given as expressions: one mode per step, made for each batch of steps by the
+    compiled expressions and Lemma 1 (batched): the dense arrays of L_B(t) for the
+    compiled kernel (shared with the GPU, :func:`.gpu_timevarying.batch_modes`), or the
+    dense step matrices for a callable f."""
 
     system: TimeVaryingSystem
-    grid: TimeGrid
-    gain: Callable[[np.ndarray], np.ndarray]
-    theta: np.ndarray
-    x_init: np.ndarray
-    n_agents: int
-    dim: int
-    paths: int
-    seed: int
-    block_size: int = 500
-    store_paths: int = 10
-    rng: str = "xoshiro"  # the generator of :mod:`.rng` (or "numpy")
+    fusable = False  # the normals of a batch are drawn before its matrices are made
 
-    @property
-    def n_blocks(self) -> int:
-        """The number of blocks of ``block_size`` paths."""
-        return -(-self.paths // self.block_size)
-
-    def run_block(self, b: int, progress=None) -> PartialStats:
-        """Integrate block b of the paths.
-
-        Parameters
-        ----------
-        b : int
-            The block index (its normals come from the b-th child of the seed).
-        progress : callable(done, total), optional
-            Called with path-steps done.
+    def callable_f(self) -> bool:
+        """Whether f is a callable.
 
         Returns
         -------
-        PartialStats
-            The block's sums at the save times.
+        bool
         """
-        return _run_block_tv(self, b, progress)
+        return self.system.f is not None
 
+    def e_max(self) -> int:
+        """The live edges E.
 
-def _run_block_tv(spec: TimeVaryingMonteCarloSpec, b: int, progress=None) -> PartialStats:
-    grid, sys_ = spec.grid, spec.system
-    nd_, d = spec.x_init.size, spec.dim
-    p0 = b * spec.block_size
-    p = min(spec.block_size, spec.paths - p0)
-    normals = NormalSource(spec.rng, spec.seed, b, p)
-    stats = BlockStats(spec, b, p0, p)
-    x = np.tile(spec.x_init, (p, 1))
-    ne = sys_.n_edges
-    c_all = np.asarray(spec.gain(grid.t[:-1]), dtype=float) * np.ones(grid.n_steps)
-    h_all = np.diff(grid.t)
-    ch_all = c_all * h_all
-    cs_all = c_all * np.sqrt(h_all)
-    save_at = {int(k): i for i, k in enumerate(grid.save_steps)}
-    if 0 in save_at and not stats.record(x, save_at[0]):
-        return stats.result()
-    batch = batch_size(sys_)
-    xi = np.empty((batch, p, 2 * ne))
-    compiled = sys_.f is None  # a linear f: the compiled edge kernel of the fixed case
-    if compiled:
-        from .kernels import em_steps, tile_width
+        Returns
+        -------
+        int
+        """
+        return self.system.n_edges
 
+    def batch(self, paths: int) -> int:
+        """:func:`batch_size` (Lemma 1 per batch is the cost to share).
+
+        Parameters
+        ----------
+        paths : int
+            The block's paths (the batch does not depend on them).
+
+        Returns
+        -------
+        int
+        """
+        return batch_size(self.system)
+
+    def ends(self, grid: TimeGrid) -> np.ndarray:
+        """Every step is a mode of its own: a run is one step.
+
+        Parameters
+        ----------
+        grid : TimeGrid
+            The run's grid.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        return np.arange(1, grid.n_steps + 2)
+
+    def step_arrays(self, ts: np.ndarray) -> list:
+        """The compiled kernel's arrays at each time of ``ts``: L_B(t) as a dense CSR
+        pattern (its nonzeros move with t; Nd is small here) and, for d = 3, as dense
+        3×3 blocks, u(t), the edges, K_e(t) = |A_ij(t)| F and g_e(t) = σ_ji |A_ij(t)| 1.
+
+        Parameters
+        ----------
+        ts : numpy.ndarray
+            The steps' times.
+
+        Returns
+        -------
+        list of tuple
+            Per time, :func:`.kernels.kernel_arrays`' (indptr, indices, data, bptr,
+            bind, bdata, u, src, dst, kmat, gvec).
+        """
+        sys_ = self.system
         st = sys_.structure
+        n, d = st.n, st.d
+        nd_ = n * d
+        b_t = sys_.design.at(ts)
+        lap = np.ascontiguousarray(b_t.lap_b(st).reshape(ts.size, -1))
+        u = np.ascontiguousarray(b_t.input_vector())
+        absw = b_t.abs_w[:, sys_.live]
+        kmat = np.ascontiguousarray(absw @ sys_.fmat)  # K_e(t) = |A_ij(t)| F
+        gvec = np.ascontiguousarray(sys_.sigma[None, :, None] * absw.sum(axis=3))  # σ|A|1
         src = np.ascontiguousarray(st.jj[sys_.live], dtype=np.int64)
         dst = np.ascontiguousarray(st.ii[sys_.live], dtype=np.int64)
-        # L_B(t) as a dense CSR pattern: its nonzeros move with t, Nd is small here
         indptr = np.arange(0, nd_ * nd_ + 1, nd_, dtype=np.int64)
         indices = np.tile(np.arange(nd_, dtype=np.int64), nd_)
-        # and, for d = 3, as dense 3×3 blocks (the kernel's block loops)
-        n_ag, dd = nd_ // d, d
-        bptr = (
-            np.arange(0, n_ag * n_ag + 1, n_ag, dtype=np.int64)
-            if dd == 3
-            else np.zeros(1, np.int64)
-        )
-        bind = np.tile(np.arange(n_ag, dtype=np.int64), n_ag) if dd == 3 else np.zeros(0, np.int64)
-        tile = tile_width(p, nd_)
-    for k0 in range(0, grid.n_steps, batch):
-        kb = min(batch, grid.n_steps - k0)
-        normals.fill(xi[:kb])
-        if compiled:
-            b_t = sys_.design.at(grid.t[k0 : k0 + kb])
-            lap = np.ascontiguousarray(b_t.lap_b(st).reshape(kb, -1))
-            u = np.ascontiguousarray(b_t.input_vector())
-            absw = b_t.abs_w[:, sys_.live]
-            kmat = np.ascontiguousarray(absw @ sys_.fmat)  # K_e(t) = |A_ij(t)| F
-            gvec = np.ascontiguousarray(sys_.sigma[None, :, None] * absw.sum(axis=3))  # σ|A|1
-            ch_b, cs_b = ch_all[k0 : k0 + kb], cs_all[k0 : k0 + kb]
-            for kk in range(kb):
-                blocks = (
-                    np.ascontiguousarray(
-                        lap[kk].reshape(n_ag, 3, n_ag, 3).transpose(0, 2, 1, 3).reshape(-1, 3, 3)
-                    )
-                    if dd == 3
-                    else np.zeros((0, 3, 3))
+        if d == 3:
+            bptr = np.arange(0, n * n + 1, n, dtype=np.int64)
+            bind = np.tile(np.arange(n, dtype=np.int64), n)
+        else:
+            bptr, bind = np.zeros(1, np.int64), np.zeros(0, np.int64)
+        parts = []
+        for kk in range(ts.size):
+            blocks = (
+                np.ascontiguousarray(
+                    lap[kk].reshape(n, 3, n, 3).transpose(0, 2, 1, 3).reshape(-1, 3, 3)
                 )
-                em_steps(
-                    x, xi, kk, kk + 1, ch_b, cs_b, indptr, indices, lap[kk], bptr, bind, blocks,
-                    u[kk], src, dst, kmat[kk], gvec[kk], True, tile,
-                )  # fmt: skip
-                if k0 + kk + 1 in save_at and not stats.record(x, save_at[k0 + kk + 1]):
-                    return stats.result()
-        else:  # a callable f: NumPy steps on the dense step matrices
-            m1, gt, wt, u, _, _ = sys_.matrices(grid.t[k0 : k0 + kb])
-            for kk in range(kb):
-                k = k0 + kk
-                y = x @ m1[kk]
-                drift = y[:, :nd_]
-                drift += u[kk]
-                diff = y[:, nd_:].reshape(p, ne, d)
-                if sys_.f is not None:
-                    diff = sys_.f(diff)
-                z = (diff * xi[kk, :, ne : 2 * ne, None]).reshape(p, ne * d)
-                noise = xi[kk, :, :ne] @ gt[kk]
-                noise += z @ wt[kk]
-                x += ch_all[k] * drift + cs_all[k] * noise
-                if k + 1 in save_at and not stats.record(x, save_at[k + 1]):
-                    return stats.result()
-        if progress is not None:
-            progress(kb * p)
-        if not stats.check(x, k0 + kb):
-            return stats.result()
-    return stats.result()
+                if d == 3
+                else np.zeros((0, 3, 3))
+            )
+            parts.append(
+                (indptr, indices, lap[kk], bptr, bind, blocks, u[kk], src, dst, kmat[kk], gvec[kk])
+            )
+        return parts
+
+    def for_batch(
+        self, steppers: list[Stepper], grid: TimeGrid, k0: int, kb: int
+    ) -> tuple[list[Stepper], np.ndarray]:
+        """One stepper per step of the batch, from A(t) at its start.
+
+        Parameters
+        ----------
+        steppers : list of Stepper
+            Unused (the modes are made per batch).
+        grid : TimeGrid
+            The run's grid.
+        k0, kb : int
+            The batch.
+
+        Returns
+        -------
+        (list of Stepper, numpy.ndarray)
+        """
+        ts = grid.t[k0 : k0 + kb]
+        made: list[Stepper]
+        if self.system.f is None:  # a linear f: the compiled edge kernel of the fixed case
+            made = [Stepper.of_arrays(a) for a in self.step_arrays(ts)]
+        else:
+            m1, gt, wt, u, _, _ = self.system.matrices(ts)
+            made = [DenseStep(self.system, m1[i], gt[i], wt[i], u[i]) for i in range(kb)]
+        return made, np.arange(kb)
 
 
 def _noise_term(s: np.ndarray, q: np.ndarray, kmat: np.ndarray, ii, jj, n: int, d: int):
@@ -514,8 +546,8 @@ def simulate_expression(
     designs = tv_designs(tv, th, spec.margin)
     if spec.method != "exact":
         _step_guard(sys_, grid, c_grid, notes)
-    mspec = TimeVaryingMonteCarloSpec(
-        system=sys_,
+    mspec = MonteCarloSpec(
+        modes=ExpressionModes(sys_),
         grid=grid,
         gain=cfun,
         theta=th,
@@ -547,7 +579,8 @@ def simulate_expression(
 
 
 __all__ = [
-    "TimeVaryingMonteCarloSpec",
+    "DenseStep",
+    "ExpressionModes",
     "batch_size",
     "simulate_expression",
     "TimeVaryingSystem",

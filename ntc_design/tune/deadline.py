@@ -25,8 +25,8 @@ from ..gain.schedule import ScheduleGain, analyse_schedule, join_tail
 from ..model import TimeVaryingTopology
 from ..model.timevarying import ExpressionTopology
 from ..simulate import SimulationSpec, simulate
-from ..simulate.driver import AnyTopology, sampled_grid
 from ..simulate.options import SaveAt
+from ..simulate.prepare import AnyTopology, sampled_grid
 from ..simulate.result import Z95
 from .evidence import certify_tuned, checked_spec, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range

@@ -11,7 +11,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..simulate import SimulationSpec
-from ..simulate.driver import AnyTopology
+from ..simulate.prepare import AnyTopology
 from .deadline import CHECK_PATHS, ScheduleTuneResult, tune_schedule
 from .problem import DEFAULT_MAX_GAIN
 from .result import TuneResult

@@ -14,8 +14,9 @@ from ..gain.schedule import ScheduleGain
 from ..model import TimeVaryingTopology
 from ..model.timevarying import ExpressionTopology
 from ..simulate import SimulationSpec, simulate
-from ..simulate.driver import AnyTopology, check_stepping
+from ..simulate.driver import check_stepping
 from ..simulate.options import MonteCarlo, SaveAt, Stepping
+from ..simulate.prepare import AnyTopology
 from .family import PowerGain
 
 #: What the written scenario switches to when its own Euler–Maruyama grid is unstable

@@ -24,8 +24,8 @@ from ..present.rows import Table, fmt, verdict
 from ..protocol.digital import Digital
 from ..protocol.loss import require_policy
 from ..simulate import SimulationSpec
-from ..simulate.driver import make_gain, prepare_modes, sampled_grid
 from ..simulate.loss import loss_moments
+from ..simulate.prepare import make_gain, prepare_modes, sampled_grid
 
 #: The spacing of the dense scan of losses.
 STEP = 0.01

@@ -32,15 +32,15 @@ from ..simulate import SimulationSpec, simulate
 from ..simulate.budget import Estimate, exact_seconds, mc_seconds
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
 from ..simulate.digital import digital_moments
-from ..simulate.driver import (
+from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
+from ..simulate.options import SaveAt
+from ..simulate.prepare import (
     AnyTopology,
     PreparedModes,
     edge_count,
     prepare_modes,
     sampled_grid,
 )
-from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
-from ..simulate.options import SaveAt
 from ..simulate.system import mode_system
 from .family import PowerGain
 

@@ -35,7 +35,7 @@ from ..present.rows import Table, fmt, verdict
 from ..protocol.digital import Digital
 from ..simulate import SimulationSpec
 from ..simulate.digital import digital_moments
-from ..simulate.driver import (
+from ..simulate.prepare import (
     AnyTopology,
     is_expression_topology,
     make_gain,

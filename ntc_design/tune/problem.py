@@ -12,7 +12,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..errors import InputError, format_bytes
-from ..simulate.driver import PreparedModes
+from ..simulate.prepare import PreparedModes
 from .operators import MomentOperators
 
 #: The largest N·d optimised (dense operators of (Nd(Nd+1)/2)² entries; 60 → 1830).

@@ -22,7 +22,7 @@ from ..gain.conditions import analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..protocol import design_topology
 from ..simulate import SimulationSpec
-from ..simulate.driver import AnyTopology
+from ..simulate.prepare import AnyTopology
 from .evidence import certify_tuned, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Objective, objective_for

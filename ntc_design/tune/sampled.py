@@ -23,9 +23,9 @@ import numpy as np
 from ..errors import InputError, format_bytes
 from ..protocol.digital import Digital
 from ..simulate.digital import check_digital_moments
-from ..simulate.driver import PreparedModes
 from ..simulate.grid import TimeGrid
 from ..simulate.moments import MomentRhs
+from ..simulate.prepare import PreparedModes
 from .problem import BIG, MAX_STORE, Forward
 
 

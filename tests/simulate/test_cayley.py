@@ -5,7 +5,7 @@ import pytest
 
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.cayley import cayley_moments, noise_radius
-from ntc_design.simulate.driver import prepare_modes
+from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.simulate.scenario import load_scenario
 from ntc_design.tune import PowerGain
 

@@ -12,7 +12,7 @@ from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.digital import digital_grid, digital_moments
 from ntc_design.simulate.kernels import em_steps
-from ntc_design.simulate.montecarlo import _Stepper
+from ntc_design.simulate.modes import Stepper
 from ntc_design.simulate.system import mode_system
 
 X0_LIN = np.linspace(-3, 3, 21)  # the issue's x(0) on G1
@@ -185,7 +185,7 @@ def test_the_delayed_kernel_is_the_recursion_written_out(g1_issue, delay):
     """em_steps with a delay (a ring of D + 1 states) against a plain loop over a shift
     register (same normals)."""
     s, _ = g1_issue
-    st = _Stepper(s, False)
+    st = Stepper(s, False)
     lap, e_n = s.lap_b.toarray(), s.n_edges
     rng = np.random.default_rng(7)
     k_n, p, h = 40, 5, 0.1
@@ -311,7 +311,7 @@ def test_a_step_writes_one_state_whatever_the_delay(g1_issue):
     """The ring: a step of the delayed kernel writes x_{j+1} over x_{j−D}'s slot and leaves
     the other D states alone (a shift register would move all D + 1: work growing with D)."""
     s, _ = g1_issue
-    st = _Stepper(s, False)
+    st = Stepper(s, False)
     delay, p = 500, 3
     rng = np.random.default_rng(1)
     x = rng.normal(size=(p, 21 * (delay + 1)))

@@ -15,6 +15,7 @@ from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate import gpu as gpu_mod
 from ntc_design.simulate.gpu import GpuEngine, check_supported
+from ntc_design.simulate.montecarlo import PathBlocks
 from tests.conftest import ROOT, X0
 from tests.support.gpu import REL_TOL, relative_gap
 
@@ -52,11 +53,11 @@ def test_without_a_gpu_the_check_says_what_is_missing_in_one_line():
     [
         ({"rng": "numpy"}, "rng: numpy stays on the CPU"),
         ({"scheme": "implicit"}, "scheme: implicit runs on the CPU only"),
-        ({"systems": (type("S", (), {"f": abs})(),)}, "noise.f: a callable f"),
+        ({"mode_systems": lambda self: (type("S", (), {"f": abs})(),)}, "noise.f: a callable f"),
     ],
 )
 def test_what_the_gpu_does_not_run_is_refused_naming_the_field(attrs, field):
-    spec = type("Spec", (), {"rng": "xoshiro", "scheme": "explicit", "systems": (), **attrs})()
+    spec = type("Spec", (PathBlocks,), {"rng": "xoshiro", "scheme": "explicit", **attrs})()
     with pytest.raises(InputError, match=f"^{field}"):
         check_supported(spec)
 

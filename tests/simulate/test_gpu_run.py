@@ -8,11 +8,19 @@ import pytest
 
 from ntc_design.gain.schedule import schedule_from_document
 from ntc_design.model.paper import THETA
-from ntc_design.simulate import MonteCarloSpec, NoiseModel, build_grid, montecarlo, simulate
-from ntc_design.simulate.driver import prepare_modes
+from ntc_design.simulate import (
+    FixedModes,
+    MonteCarloSpec,
+    NoiseModel,
+    build_grid,
+    montecarlo,
+    simulate,
+)
 from ntc_design.simulate.gpu import GpuEngine
 from ntc_design.simulate.gpu_run import ModeArrays, Schedule, check_batch
+from ntc_design.simulate.grid import StepGains
 from ntc_design.simulate.kernels import kernel_arrays, numpy_step
+from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.simulate.rng import normals, path_states
 from ntc_design.simulate.spec import SimulationSpec
 from tests.conftest import X0
@@ -84,7 +92,7 @@ def _spec(g1, *, paths, t_end, dt, gain, block_size, seed=0, save_every=None):
     saves = np.arange(0, t_end + 1e-12, save_every or t_end)
     grid = build_grid(t_end, dt, saves, pm.segments)
     return MonteCarloSpec(
-        systems=tuple(pm.systems), grid=grid, gain=gain, theta=pm.theta, x_init=pm.x_init,
+        modes=FixedModes(tuple(pm.systems)), grid=grid, gain=gain, theta=pm.theta, x_init=pm.x_init,
         n_agents=pm.n, dim=pm.d, paths=paths, seed=seed, block_size=block_size,
         store_paths=paths,
     )  # fmt: skip
@@ -120,7 +128,7 @@ def test_a_divergence_is_reported_at_the_cpus_time_path_and_agent(g1):
 def _numpy_delayed(spec, delay: int) -> np.ndarray:
     """The digital recursion with delay D in NumPy (the CPU's normals, drawn by
     rng.normals in each path's stream order): every path's state after the last step."""
-    s = spec.systems[0]
+    s = spec.mode_systems()[0]
     grid, bp = spec.grid, spec.block_paths
     c = spec.gain(grid.t[:-1])
     h = np.diff(grid.t)
@@ -156,7 +164,7 @@ def test_delayed_recursion_against_the_cpu_kernel(g1, delay):
     spec = _spec(g1, paths=3, t_end=0.01, dt=1e-3, gain=lambda t: 1 / (1 + t), block_size=2)
     object.__setattr__(spec, "delay", delay)
     gpu = GpuEngine().run_mc(spec)
-    s, grid, bp = spec.systems[0], spec.grid, spec.block_paths
+    s, grid, bp = spec.mode_systems()[0], spec.grid, spec.block_paths
     c = spec.gain(grid.t[:-1])
     h = np.diff(grid.t)
     for b in range(spec.n_blocks):  # the CPU's blocks, each from its own seeds
@@ -188,7 +196,7 @@ def test_mode_arrays_list_each_agents_edges_in_ascending_order(switching_set):
 
 def test_schedule_stops_at_the_cpus_checks_and_saves():
     grid = build_grid(1.0, 0.01, [0.0, 0.25, 1.0])
-    sched = Schedule.of(grid, lambda t: 1 / (1 + t), 40)
+    sched = Schedule.of(grid, StepGains.of(grid, 1 / (1 + grid.t[:-1])), 40)
     assert sched.stops.tolist() == [25, 40, 80, 100]
     assert sched.saves == {0: 0, 25: 1, 100: 2}
     np.testing.assert_allclose(sched.ch, np.diff(grid.t) / (1 + grid.t[:-1]))

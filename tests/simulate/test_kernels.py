@@ -91,12 +91,12 @@ def test_sparse_step_applies_a_callable_f(g1):
 
 def test_fused_kernel_draws_the_array_kernels_numbers(g1, theta):
     from ntc_design.simulate.kernels import em_steps, em_steps_rng
-    from ntc_design.simulate.montecarlo import _Stepper
+    from ntc_design.simulate.modes import Stepper
     from ntc_design.simulate.noise import NoiseModel
     from ntc_design.simulate.system import mode_system
 
     s = mode_system(nd.design(g1, theta), NoiseModel(0.4, 0.3), "G1")
-    st = _Stepper(s, False)
+    st = Stepper(s, False)
     p, k = 37, 20
     ch, cs = np.full(k, 1e-3), np.full(k, math.sqrt(1e-3))
     x0 = np.random.default_rng(0).uniform(-3, 3, (p, s.nd))

@@ -1,5 +1,7 @@
 """Tests of :mod:`ntc_design.simulate.montecarlo`."""
 
+from dataclasses import replace
+
 import numpy as np
 
 import ntc_design as nd
@@ -7,10 +9,11 @@ from ntc_design.model.paper import THETA
 from ntc_design.simulate import (
     NoiseModel,
     kernels,
-    montecarlo,
+    modes,
 )
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.kernels import tile_width
+from ntc_design.simulate.modes import FixedModes
 from ntc_design.simulate.montecarlo import MonteCarloSpec, run, run_chunk
 from ntc_design.simulate.system import mode_system
 from tests.conftest import X0
@@ -21,7 +24,7 @@ def _kernel_spec(system_, paths, block=500, scheme="explicit", t_end=0.3, grid=N
     grid = grid or build_grid(t_end, 1e-3, np.arange(0, t_end + 1e-9, 0.1))
     gain = lambda t: 1.0 / (1.0 + t)  # noqa: E731
     return MonteCarloSpec(
-        systems=(system_,), grid=grid, gain=gain, theta=np.array(THETA, float), x_init=X0,
+        modes=FixedModes((system_,)), grid=grid, gain=gain, theta=np.array(THETA, float), x_init=X0,
         n_agents=7, dim=3, paths=paths, seed=11, block_size=block, store_paths=5, scheme=scheme,
     )  # fmt: skip
 
@@ -39,7 +42,7 @@ def test_batch_and_tile_sizes_do_not_change_results(g1_system, monkeypatch):
     _, s = g1_system
     spec = _kernel_spec(s, 40)
     ref = run_chunk(spec, [0, 1])
-    monkeypatch.setattr(montecarlo, "XI_BYTES", 8 * 20 * 16 * 3)  # 3 steps per batch
+    monkeypatch.setattr(modes, "XI_BYTES", 8 * 20 * 16 * 3)  # 3 steps per batch
     monkeypatch.setattr(kernels, "TILE_MIN", 3)  # tiles of 3 paths (and a last one of 2)
     monkeypatch.setattr(kernels, "TILE_MAX", 3)
     assert tile_width(20, 21) == 3
@@ -60,7 +63,7 @@ def _spec(g1, paths=1100, block=250):
     grid = build_grid(0.3, 1e-3, np.arange(0, 0.31, 0.1))
     gain = lambda t: 1.0 / (1.0 + t)  # noqa: E731
     return MonteCarloSpec(
-        systems=(sysm,), grid=grid, gain=gain, theta=des.theta, x_init=X0, n_agents=7, dim=3,
+        modes=FixedModes((sysm,)), grid=grid, gain=gain, theta=des.theta, x_init=X0, n_agents=7, dim=3,
         paths=paths, seed=11, block_size=block, store_paths=5,
     )  # fmt: skip
 
@@ -76,7 +79,7 @@ def test_same_seed_identical_across_workers_and_chunks(g1):
         assert np.array_equal(a.state, other.state) and np.array_equal(a.stored, other.stored)
     d = run(_spec(g1), workers=1)
     assert np.array_equal(a.sq, d.sq)
-    e = run(MonteCarloSpec(**{**spec.__dict__, "seed": 12}), workers=1)
+    e = run(replace(spec, seed=12), workers=1)
     assert not np.array_equal(a.sq, e.sq)
 
 

@@ -15,8 +15,8 @@ from ntc_design.errors import InputError
 from ntc_design.gain.schedule import ScheduleGain, join_tail
 from ntc_design.protocol.agents import agent_law
 from ntc_design.protocol.digital import Digital
-from ntc_design.simulate.driver import make_gain
 from ntc_design.simulate.noise import NoiseModel
+from ntc_design.simulate.prepare import make_gain
 from ntc_design.simulate.replay import kernel_normals, kernel_replay, replay
 from ntc_design.simulate.system import mode_system
 from tests.conftest import X0

@@ -5,6 +5,7 @@ whole-program checks live in ``tests/system/``, shared helpers in ``tests/suppor
 every part of the package sits in one layer of the import contract."""
 
 import ast
+import re
 import tomllib
 from pathlib import Path
 
@@ -159,6 +160,18 @@ def test_no_module_decides_by_what_is_already_imported():
     assert probes == []
 
 
+def test_no_spec_is_told_apart_by_its_attributes():
+    """A Monte Carlo spec says what it is by its type and methods (PathBlocks), never
+    by which attributes it happens to have."""
+    probes = [
+        f"{p.relative_to(ROOT)}:{i}"
+        for p in PACKAGE.rglob("*.py")
+        for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+        if re.search(r"\b(get|has)attr\((m?spec|self\.spec)\b", line)
+    ]
+    assert probes == []
+
+
 #: Why a module imports another inside a function rather than at its top (start-up time:
 #: what a command loads only when it needs it). The CLI does so throughout: ``ntc --help``
 #: and a mistyped option answer without loading the layers.
@@ -167,7 +180,7 @@ LAZY = {
     ("ntc_design.simulate.montecarlo", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.rng", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.replay", "ntc_design.simulate.kernels"): "Numba kernels",
-    ("ntc_design.simulate.timevarying", "ntc_design.simulate.kernels"): "Numba kernels",
+    ("ntc_design.simulate.modes", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.gpu_run", "ntc_design.simulate.kernels"): "Numba kernels",
     ("ntc_design.simulate.loss_mc", "ntc_design.simulate.loss_kernels"): "Numba kernels",
     ("ntc_design.simulate.loss_mc", "ntc_design.simulate.kernels"): "Numba kernels",

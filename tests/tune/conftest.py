@@ -2,7 +2,7 @@
 
 import pytest
 
-from ntc_design.simulate.driver import prepare_modes
+from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.tune.problem import ScheduleProblem
 
 

@@ -7,8 +7,8 @@ import pytest
 from ntc_design.errors import InputError
 from ntc_design.protocol.digital import Digital
 from ntc_design.simulate.digital import digital_grid, digital_moments
-from ntc_design.simulate.driver import make_gain, prepare_modes
 from ntc_design.simulate.loss import loss_moments
+from ntc_design.simulate.prepare import make_gain, prepare_modes
 from ntc_design.simulate.scenario import load_scenario
 from ntc_design.tune.loss import ATOL, STEP, largest_tolerable_loss
 from tests.conftest import EXAMPLES

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ntc_design.simulate.driver import prepare_modes
+from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.tune.operators import MomentOperators
 
 

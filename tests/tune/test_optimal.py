@@ -6,7 +6,7 @@ from scipy.linalg import expm
 from scipy.optimize import minimize
 
 from ntc_design.gain.schedule import ScheduleGain, join_tail
-from ntc_design.simulate.driver import prepare_modes
+from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.tune import BASELINE, ExactObjective, PowerGain
 from ntc_design.tune.optimal import optimise_schedule
 

@@ -9,7 +9,7 @@ from ntc_design.model.paper import THETA
 from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.digital import digital_moments
-from ntc_design.simulate.driver import make_gain, prepare_modes, sampled_grid
+from ntc_design.simulate.prepare import make_gain, prepare_modes, sampled_grid
 from ntc_design.tune import tune
 from ntc_design.tune.sampled import SampledScheduleProblem
 
