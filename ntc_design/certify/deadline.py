@@ -123,21 +123,32 @@ class DeadlineProblem:
         """N·d."""
         return self.modes[0].n * self.modes[0].d
 
-    def mode_at(self, times: np.ndarray) -> np.ndarray:
-        """The mode index at each time (:func:`~ntc_design.protocol.digital.step_modes`).
+    def mode_at(self, times: np.ndarray, period: float | None = None) -> np.ndarray:
+        """The mode index at each time: at the samples t_k = k·h by the exact rule the
+        simulator uses (:func:`~ntc_design.protocol.digital.step_modes`), else (a time
+        inside a segment between switching instants) by the cumulative durations.
 
         Parameters
         ----------
         times : numpy.ndarray
             Times.
+        period : float, optional
+            h, when the times are the samples k·h.
 
         Returns
         -------
         numpy.ndarray
         """
+        t = np.asarray(times, dtype=float)
         if self.schedule is None:
-            return np.zeros(len(times), dtype=np.int64)
-        return step_modes(self.schedule, np.asarray(times, dtype=float), list(self.names))
+            return np.zeros(len(t), dtype=np.int64)
+        if period is not None:
+            return step_modes(self.schedule, t, list(self.names), period)
+        ends = np.cumsum([float(dur) for _, dur in self.schedule])
+        slot = np.searchsorted(ends, np.mod(t, ends[-1]), side="right")
+        slot = np.minimum(slot, len(self.schedule) - 1)
+        index = {name: k for k, name in enumerate(self.names)}
+        return np.array([index[self.schedule[int(k)][0]] for k in slot], dtype=np.int64)
 
 
 @dataclass(frozen=True)
@@ -475,7 +486,7 @@ def _sampled(pb: DeadlineProblem, bits: int) -> DeadlineBound:
         le = [e0t * m.lap * ed for m in pb.modes]
         m0 = _ball_matrix(np.kron(np.ones((delay + 1, delay + 1)), pb.moment0))
         z = m0
-        modes = pb.mode_at(np.arange(k_full + 1, dtype=float) * h_f)
+        modes = pb.mode_at(np.arange(k_full + 1, dtype=float) * h_f, h_f)
         tr0 = (e0 * z * e0t).trace()
         peak_hi, peak_mid, peak_t = _upper(tr0), float(tr0.mid()), 0.0
         final = tr0

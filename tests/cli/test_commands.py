@@ -553,3 +553,28 @@ def test_certify_period_warns_beside_the_continuous_figures(examples, capsys, mo
     # the peak within 10× the continuous one (119.7), which binds first here
     safe = float(warnings_[0].split("longest safe period is h = ")[1].split()[0])
     assert 0.12 < safe < 0.1745
+
+
+@pytest.mark.slow  # a switching set certified, its sampled and continuous figures proven
+def test_certify_deadline_on_a_switching_schedule_bounds_the_exact_moments(
+    tmp_path, examples, capsys, monkeypatch
+):
+    scen = examples / "scenarios" / "switching.yaml"
+    out = tmp_path / "c.json"
+    args = ["certify", scen, "--period", "0.01", "--deadline", "2", "--out", out, "--json"]
+    code, text, _ = run_cli(args, capsys, monkeypatch)
+    assert code == 0
+    figures = json.loads(text)["deadline"]
+    assert verify(json.loads(out.read_text())).valid
+    sim = ["simulate", scen, "--T", "2", "--period", "0.01", "--method", "exact", "--json"]
+    code, text, _ = run_cli([*sim, "--out", tmp_path / "run"], capsys, monkeypatch)
+    assert code == 0
+    run = json.loads(text)
+    exact = sum(run["final_ms_error_exact"].values())
+    # the ball recursion encloses the float one: above it, within 1e-9 relative
+    # (the float figures rounded: 1e-12 relative below)
+    assert exact * (1 - 1e-12) <= figures["ms_error_bound"] <= exact * (1 + 1e-9)
+    peak = run["digital"]["ms_error_peak"]
+    assert peak * (1 - 1e-12) <= figures["peak_bound"] <= peak * (1 + 1e-9)
+    cont = run["digital"]["continuous_final_ms_error"]  # the Taylor enclosure: within 5 %
+    assert cont * (1 - 1e-9) <= figures["continuous"]["ms_error_bound"] <= 1.05 * cont
