@@ -426,7 +426,15 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
         check_sampled_work(top.n * top.dim, float(spec.T), sampled["period"], sampled["delay"])
     x0, _ = spec.initial_state(n, d)
     noise = spec.noise
-    gain_doc = spec.gain if isinstance(spec.gain, str) else getattr(spec.gain, "to_document", None)
+    from ..gain.schedule import ScheduleGain
+
+    gain_doc = (
+        spec.gain
+        if isinstance(spec.gain, str)
+        else spec.gain.to_document()
+        if isinstance(spec.gain, ScheduleGain)
+        else None
+    )
     if gain_doc is None:
         raise InputError(f"{sc.source}: gain: --deadline needs c(t) as an expression or a schedule")
     if callable(noise.f):
@@ -436,7 +444,7 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
         "T": float(spec.T),
         "period": sampled["period"] if sampled else None,
         "delay": sampled["delay"] if sampled else 0,
-        "gain": gain_doc if isinstance(gain_doc, str) else gain_doc(),
+        "gain": gain_doc,
         "noise": {
             "sigma": float(noise.sigma),
             "f": float(f) if f.ndim == 0 else f.tolist(),

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from ..certify import CertifyResult, certify
+from ..certify.deadline_subject import add_deadline
 from ..errors import InputError
 from ..gain.schedule import ScheduleGain
 from ..model import TimeVaryingTopology
@@ -215,7 +216,6 @@ DEADLINE_SECONDS = 120.0
 
 def _add_deadline(res, spec, tuned, deadline: float, notes: list[str]) -> None:
     """The proven figures at the deadline in the tuned certificate (a note when not)."""
-    from ..certify.deadline_subject import add_deadline
 
     f = np.asarray(spec.noise.f, dtype=float) if not callable(spec.noise.f) else None
     top = res.design.base if hasattr(res.design, "digital") else res.design

@@ -656,7 +656,7 @@ def test_report_refuses_a_decompression_bomb(tmp_path, capsys, monkeypatch, good
 
 ARGS = [
     (["design", G1], ["Missing option '--theta'", "ntc design --help"]),
-    (["certify", G1], ["Missing option '--theta'"]),
+    (["certify", G1], ["--theta: missing"]),
     (["design", G1, "--theta", "1,2,-1", "--bogus"], ["No such option: --bogus"]),
     (["check", G1, "--bogus"], ["No such option"]),
     (["simulate", "x.yaml", "--out", "o", "--bogus"], ["No such option"]),

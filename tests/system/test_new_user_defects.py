@@ -72,12 +72,12 @@ def test_generate_size_estimate_bounds_the_edges():
 
 def test_a_long_simulation_says_how_long_before_it_starts(tmp_path, capsys, monkeypatch):
     # 10⁹ path-steps on G1: weeks of work; stopped by the test right after the warning
-    from ntc_design.simulate import driver
+    from ntc_design.simulate import prepare
 
     def stop(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(driver, "mode_system", stop)  # after the size checks
+    monkeypatch.setattr(prepare, "mode_system", stop)  # after the size checks
     sc = scenario(tmp_path, paths=10**7, T=100.0, dt=0.001, method="mc")
     code, out, err = run_cli(["simulate", sc, "--out", tmp_path / "o"], capsys, monkeypatch)
     assert code == 130
