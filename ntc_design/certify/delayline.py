@@ -555,6 +555,9 @@ def largest_level(
     solve: Callable[[float], Any],
     reach: Callable[[Any, float], float],
     c_hi: float,
+    start: float = KAPPA_START,
+    steps: int = KAPPA_STEPS,
+    resolution: float = KAPPA_RESOLUTION,
 ) -> tuple[float, Any]:
     """The search for κ <= c_hi with few SDP solves: start at :data:`KAPPA_START`·c_hi;
     after a feasible solve the found matrices themselves are pushed as far as they hold
@@ -570,6 +573,9 @@ def largest_level(
         (matrices, c) ↦ the largest level in [c, c_hi] at which those matrices hold.
     c_hi : float
         The top (c_true).
+    start, steps, resolution : float, int, float
+        The first level as a share of c_hi, the most solves, the bracket's width at
+        which to stop (relative to c_hi).
 
     Returns
     -------
@@ -577,14 +583,14 @@ def largest_level(
         The level (0 and None when none was found) and its matrices.
     """
     lo, hi, best = 0.0, c_hi, None
-    mid, step = KAPPA_START * c_hi, KAPPA_STEP_UP
-    for _ in range(KAPPA_STEPS):
+    mid, step = start * c_hi, KAPPA_STEP_UP
+    for _ in range(steps):
         sol = solve(mid)
         if sol is not None:
             lo, best = max(mid, min(reach(sol, mid), hi)), sol
         else:
             hi, step = mid, 0.5 * step
-        if hi - lo <= KAPPA_RESOLUTION * c_hi:
+        if hi - lo <= resolution * c_hi:
             break
         mid = 0.5 * hi if best is None else min(lo * (1 + step), 0.5 * (lo + hi))
     return lo, best
@@ -811,7 +817,8 @@ def plan_no_delay(
 
         return _reach(lowest, k0, c_hi)
 
-    lo, best = largest_level(solve, reach, c_hi)
+    # small and cheap solves, and the free P reaches 90 % and more of c_true
+    lo, best = largest_level(solve, reach, c_hi, 0.9, KAPPA_STEPS + 3, 0.004)
     if best is None:
         return None
     for lap, edges in zip(laps, noises, strict=True):
