@@ -227,3 +227,27 @@ def test_a_generated_network_meets_the_target(delay):
     res = doc["results"]["digital"]
     assert res["bound"] == "delay_line" and verify(json.loads(json.dumps(doc))).valid
     assert 0.5 * res["c_true"] <= res["kappa"] < res["c_true"]
+
+
+@pytest.mark.parametrize("edge", [0.3, 0.57, 0.66, 0.97])
+def test_the_search_for_kappa_brackets_the_edge_within_its_resolution(edge):
+    # a made-up SDP feasible up to edge·c_hi, whose matrices reach halfway to the edge
+    c_hi, solved = 2.0, []
+
+    def solve(c):
+        solved.append(c)
+        return ("matrices", c) if c <= edge * c_hi else None
+
+    def reach(sol, c):
+        return c + 0.5 * (edge * c_hi - c)
+
+    lo, best = dl.largest_level(solve, reach, c_hi)
+    assert len(solved) <= dl.KAPPA_STEPS
+    assert best is not None and best[1] <= lo <= edge * c_hi
+    # within 15 % of the edge in four solves, wherever the edge is
+    assert lo >= 0.85 * edge * c_hi
+
+
+def test_the_search_for_kappa_finds_nothing_when_no_level_is_feasible():
+    lo, best = dl.largest_level(lambda c: None, lambda s, c: c, 1.0)
+    assert (lo, best) == (0.0, None)
