@@ -646,8 +646,9 @@ def plan_delay_line(
     g: float,
     c_hi: float,
 ) -> DelayLinePlan | None:
-    """S, R_j, T_j and the largest κ <= c_hi found (bisection with Clarabel, a margin
-    :data:`MARGIN` in every inequality), then checked in verified floats.
+    """S, R_j, T_j and the largest κ <= c_hi found (:func:`largest_level`: a few Clarabel
+    solves, a margin :data:`MARGIN` in every inequality, each found S, R_j, T_j pushed to the
+    largest level at which they hold), then checked in verified floats.
 
     Parameters
     ----------
@@ -664,7 +665,7 @@ def plan_delay_line(
     g : float
         The growth bound of 1/c.
     c_hi : float
-        The top of the bisection (c_true).
+        The top of the search (c_true).
 
     Returns
     -------
@@ -755,7 +756,8 @@ def plan_no_delay(
 ) -> DigitalPlan | None:
     """D = 0 with a free P: the largest κ <= c_hi found with (PL + LᵀP − αP) −
     κ(hLᵀPL + N(P)) ⪰ 0 for every mode (affine in κ with a PSD slope, so κ proves every
-    c in (0, κ]); bisection with Clarabel, then checked in verified floats.
+    c in (0, κ]); :func:`largest_level` from 0.9·c_hi with Clarabel, then checked in
+    verified floats.
 
     Parameters
     ----------
@@ -768,7 +770,7 @@ def plan_no_delay(
     h : float
         The period.
     c_hi : float
-        The top of the bisection (c_true).
+        The top of the search (c_true).
 
     Returns
     -------

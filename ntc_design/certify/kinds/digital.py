@@ -121,7 +121,7 @@ def _only(doc: Any, known: tuple[str, ...], where: str) -> None:
             raise InputError(f"{where}.{unknown[0]}: unknown field (known: {', '.join(known)})")
 
 
-def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
+def read_digital(doc: dict, source: str, d: int, extra: tuple[str, ...] = ()) -> DigitalSubject:
     """Parse ``subject.digital``.
 
     Parameters
@@ -132,6 +132,8 @@ def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
         Its name, for messages.
     d : int
         The state dimension.
+    extra : tuple of str, optional
+        Further fields a kind built on this one reads itself (``loss``).
 
     Returns
     -------
@@ -144,7 +146,7 @@ def read_digital(doc: dict, source: str, d: int) -> DigitalSubject:
     """
     where = f"{source}: subject.digital"
     sub = need(need(doc, "subject", dict, source), "digital", dict, f"{source}: subject")
-    _only(sub, ("period", "delay", "gain", "noise"), where)
+    _only(sub, ("period", "delay", "gain", "noise", *extra), where)
     try:
         dg = Digital(sub.get("period"), sub.get("delay"))
     except InputError as exc:

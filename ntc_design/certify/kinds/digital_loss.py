@@ -278,7 +278,7 @@ class DigitalLossKind(DigitalKind):
         reading = HurwitzKind.read(self, doc, source)
         ctx = reading.state
         mode = next(iter(ctx.modes.values()))
-        ctx.digital = read_digital(doc, source, mode.top.dim)
+        ctx.digital = read_digital(doc, source, mode.top.dim, ("loss",))
         ctx.loss = read_loss(doc, source, mode.top)
         ctx.stated = None
         if MS.value in doc.get("certifies", []):
