@@ -86,30 +86,6 @@ def test_step_matrix_is_the_written_out_expectation(g1_lap, delay):
     assert float(dl.delay_line_gamma(s, ts, edges, 3)) == pytest.approx(gam, rel=1e-12)
 
 
-def test_spectral_radius_matches_a_dense_kronecker_map():
-    top = random_network(3, 1, seed=2)
-    lap = nd.design(top, [1.0], thresholds=False).grounded_laplacian()
-    edges = dg.edge_noises(top, np.array([[0.3]]), 0.4)
-    n = lap.shape[0]
-    gms = [_dense_g(e, n, 1)[0] for e in edges]
-    for delay, h, c in [(0, 0.1, 0.5), (1, 0.1, 0.4), (2, 0.2, 0.3)]:
-        m = n * (delay + 1)
-        a = np.zeros((m, m))
-        a[:n, :n] = np.eye(n)
-        a[:n, m - n :] -= h * c * lap
-        a[n:, : m - n] += np.eye(m - n)
-        big = np.kron(a, a)
-        for ge in gms:
-            gh = np.zeros((m, m))
-            gh[:n, m - n :] = ge
-            big += h * c * c * np.kron(gh, gh)
-        want = np.max(np.abs(np.linalg.eigvals(big)))
-        assert dl.spectral_radius(lap, edges, 1, h, delay, c) == pytest.approx(want, rel=1e-8)
-    ct, _ = dl.ms_limit([lap], [edges], 1, 0.1, 1)
-    assert dl.spectral_radius(lap, edges, 1, 0.1, 1, ct * 0.999) < 1
-    assert dl.spectral_radius(lap, edges, 1, 0.1, 1, ct * 1.001) > 1
-
-
 def test_growth_bound_and_its_proof():
     assert dl.growth_bound("1/(1+t)") == pytest.approx(1.01, rel=1e-6)
     g = dl.growth_bound("2/(3+t)**0.8")  # (1/c)' = 0.4 (3+t)^(−0.2): largest at t = 0
