@@ -54,13 +54,13 @@ from fractions import Fraction
 from typing import Any
 
 import numpy as np
-import scipy.sparse.linalg as spla
 import sympy as sp
 
 from ..expr.symbolic import parse_expression, symbol
 from ..rigorous.exact import Dyadic
 from ..rigorous.floatmat import FloatMat
 from ..rigorous.interval import bounds, enclose, t_ball
+from .ctrue import CTRUE_MAX_ORDER, ms_limit, spectral_radius
 from .digital import (
     DigitalPlan,
     EdgeNoise,
@@ -74,12 +74,20 @@ from .mu2 import T0_SCAN_END, prove_below
 #: The margin the SDP keeps in every inequality (relative to S ⪰ I), so that the stated
 #: matrices pass the verified test.
 MARGIN = 1e-6
-#: Bisection steps on κ (resolution c_true / 2^steps).
-KAPPA_STEPS = 7
+#: The most SDP solves in the search for κ (each is most of a certificate's cost).
+KAPPA_STEPS = 4
+#: Where the search for κ starts, as a share of c_true (the functionals reach 55–70 %).
+KAPPA_START = 0.55
+#: The first step up from a feasible level, relative (halved after every infeasible one).
+KAPPA_STEP_UP = 0.12
+#: The search stops when the bracket is this narrow, relative to c_true.
+KAPPA_RESOLUTION = 0.02
+#: Clarabel's settings: infeasibility is declared at 1e-6 (half the iterations of the
+#: default 1e-8 at the edge of feasibility); a feasible answer is judged by its own
+#: matrices in floats (and the stated ones in verified floats), not by the status.
+SOLVER_OPTIONS = {"tol_infeas_abs": 1e-6, "tol_infeas_rel": 1e-6}
 #: α as a share of the slowest continuous decay min Re λ(L_B).
 ALPHA_SHARE = 0.4
-#: The most numbers the c_true iteration may hold ((D+1)·Nd)² × its Krylov vectors.
-CTRUE_MAX_ORDER = 600
 
 
 @dataclass(frozen=True)
@@ -396,133 +404,113 @@ def prove_growth(gain: Any, g: float, t0: float) -> tuple[bool | None, str]:
     return ok, f"(1/c)' < g = {g!r} from t₀ on: {how}; c(t₀) > 0"
 
 
-# -- c_true -----------------------------------------------------------------------------
-
-
-def _ms_map(lap: np.ndarray, gs: Sequence[np.ndarray], h: float, delay: int, c: float):
-    n = lap.shape[0]
-    m = n * (delay + 1)
-    tau = h * c
-
-    def apply(v: np.ndarray) -> np.ndarray:
-        z = v.reshape(m, m)
-        out = np.empty_like(z)
-        # A z: the first block row e_k − τ L e_{k−D}, then the shift
-        az = np.empty_like(z)
-        az[:n] = z[:n] - tau * (lap @ z[m - n :])
-        az[n:] = z[: m - n]
-        out[:, :n] = az[:, :n] - tau * (az[:, m - n :] @ lap.T)
-        out[:, n:] = az[:, : m - n]
-        zd = z[m - n :, m - n :]
-        out[:n, :n] += h * c * c * sum((ge @ zd @ ge.T for ge in gs), np.zeros((n, n)))
-        return out.ravel()
-
-    return apply, m
-
-
-def _dense_g(e: EdgeNoise, n: int, d: int) -> np.ndarray:
-    gm = np.zeros((n, n))
-    k = e.k
-    gm[e.i * d : e.i * d + d, e.j * d : e.j * d + d] += k
-    gm[e.i * d : e.i * d + d, e.i * d : e.i * d + d] -= k
-    return gm
-
-
-def spectral_radius(
-    lap: np.ndarray, edges: Sequence[EdgeNoise], d: int, h: float, delay: int, c: float
-) -> float:
-    """The spectral radius of the augmented second-moment map at the constant gain c.
-
-    Parameters
-    ----------
-    lap : numpy.ndarray
-        L_B.
-    edges : sequence of EdgeNoise
-        The mode's edges.
-    d : int
-        The state dimension.
-    h : float
-        The period.
-    delay : int
-        D.
-    c : float
-        The gain.
-
-    Returns
-    -------
-    float
-    """
-    n = lap.shape[0]
-    gs = [_dense_g(e, n, d) for e in edges]
-    apply, m = _ms_map(lap, gs, h, delay, c)
-    if m * m <= 400:
-        dense = np.column_stack([apply(col) for col in np.eye(m * m)])
-        return float(np.max(np.abs(np.linalg.eigvals(dense))))
-    op = spla.LinearOperator((m * m, m * m), matvec=apply, dtype=float)
-    vals = spla.eigs(op, k=3, which="LM", tol=1e-10, ncv=30, return_eigenvectors=False)
-    return float(np.max(np.abs(vals)))
-
-
-def ms_limit(
-    laps: Sequence[np.ndarray],
-    noises: Sequence[Sequence[EdgeNoise]],
-    d: int,
-    h: float,
-    delay: int,
-) -> tuple[float | None, str]:
-    """c_true: per mode the largest constant gain with spectral radius < 1 of the augmented
-    second-moment map (bisection to a relative 1e-4), the least over the modes.
-
-    Parameters
-    ----------
-    laps : sequence of numpy.ndarray
-        L_B of every mode used.
-    noises : sequence of sequence of EdgeNoise
-        Every mode's edges.
-    d : int
-        The state dimension.
-    h : float
-        The period.
-    delay : int
-        D.
-
-    Returns
-    -------
-    (float or None, str)
-        None (and why) past :data:`CTRUE_MAX_ORDER` or when the iteration fails.
-    """
-    m = laps[0].shape[0] * (delay + 1)
-    if m > CTRUE_MAX_ORDER:
-        return None, f"not computed: (D+1)·Nd = {m} > {CTRUE_MAX_ORDER}"
-    out = math.inf
-    try:
-        for lap, edges in zip(laps, noises, strict=True):
-
-            def stable(c: float, lap: np.ndarray = lap, edges: Any = edges) -> bool:
-                return spectral_radius(lap, edges, d, h, delay, c) < 1.0
-
-            hi = 1.0 / h
-            while stable(hi) and hi < 1e6:
-                hi *= 2.0
-            lo = 0.0
-            while hi - lo > 1e-4 * hi:
-                mid = 0.5 * (lo + hi)
-                if stable(mid):
-                    lo = mid
-                else:
-                    hi = mid
-            out = min(out, lo)
-    except (spla.ArpackNoConvergence, spla.ArpackError, np.linalg.LinAlgError):
-        return None, "not computed: the eigenvalue iteration did not converge"
-    how = "spectral radius of the augmented second-moment map < 1 (ARPACK), per mode, least"
-    return out, how
-
-
 # -- finding S, R, T --------------------------------------------------------------------
 
 
 def _decay(laps: Sequence[np.ndarray]) -> float:
     return min(float(np.min(np.linalg.eigvals(lap).real)) for lap in laps)
+
+
+def _reach(lowest: Callable[[float], float], lo: float, hi: float) -> float:
+    """The largest c in [lo, hi] with lowest(c) >= 0 (bisection to 1e-6 relative), for a
+    check whose set of good c is an interval from 0 (concave in c); lo is known good."""
+    if lowest(hi) >= 0:
+        return hi
+    for _ in range(40):
+        if hi - lo <= 1e-6 * hi:
+            break
+        mid = 0.5 * (lo + hi)
+        if lowest(mid) >= 0:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def largest_level(
+    solve: Callable[[float], Any],
+    reach: Callable[[Any, float], float],
+    c_hi: float,
+    start: float = KAPPA_START,
+    steps: int = KAPPA_STEPS,
+    resolution: float = KAPPA_RESOLUTION,
+) -> tuple[float, Any]:
+    """The search for κ <= c_hi with few SDP solves: start at :data:`KAPPA_START`·c_hi;
+    after a feasible solve the found matrices themselves are pushed as far as they hold
+    (``reach``, cheap eigenvalues), then a step up (:data:`KAPPA_STEP_UP`, halved after
+    every infeasible level); stop after :data:`KAPPA_STEPS` solves or when the bracket is
+    narrower than :data:`KAPPA_RESOLUTION`·c_hi.
+
+    Parameters
+    ----------
+    solve : callable
+        c ↦ the SDP's matrices at level c, or None when infeasible.
+    reach : callable
+        (matrices, c) ↦ the largest level in [c, c_hi] at which those matrices hold.
+    c_hi : float
+        The top (c_true).
+    start, steps, resolution : float, int, float
+        The first level as a share of c_hi, the most solves, the bracket's width at
+        which to stop (relative to c_hi).
+
+    Returns
+    -------
+    (float, matrices or None)
+        The level (0 and None when none was found) and its matrices.
+    """
+    lo, hi, best = 0.0, c_hi, None
+    mid, step = start * c_hi, KAPPA_STEP_UP
+    for _ in range(steps):
+        sol = solve(mid)
+        if sol is not None:
+            lo, best = max(mid, min(reach(sol, mid), hi)), sol
+        else:
+            hi, step = mid, 0.5 * step
+        if hi - lo <= resolution * c_hi:
+            break
+        mid = 0.5 * hi if best is None else min(lo * (1 + step), 0.5 * (lo + hi))
+    return lo, best
+
+
+def _sym(x: Any) -> np.ndarray:
+    a = np.array(x, dtype=float)
+    return 0.5 * (a + a.T)
+
+
+def _lowest_step(
+    sol: Any,
+    laps: Sequence[np.ndarray],
+    noises: Sequence[Sequence[EdgeNoise]],
+    d: int,
+    h: float,
+    alpha: float,
+    g: float,
+    c: float,
+) -> float:
+    """The least eigenvalue over the plan's inequalities for fixed S, R_j, T_j at level c
+    (floats): S, T_j, R_j − R_{j+1}, and, less the SDP's margin, the decrease at τ = hc
+    and G(c) per mode."""
+    s, rs, ts = sol
+    n = s.shape[0]
+    dd = len(rs)
+    rn = [*rs, np.zeros((n, n))]
+    fixed = [s, *ts, *(rs[j] - rn[j + 1] for j in range(dd))]  # ≻ 0 is all the proof needs
+    out = min(float(np.linalg.eigvalsh(m)[0]) for m in fixed)
+    for j in range(dd):
+        m = (1 - alpha * h * c) * rs[j] - (1 + g * h * c) * rn[j + 1] - h * c * ts[j]
+        out = min(out, float(np.linalg.eigvalsh(m)[0]) - MARGIN)
+    ops = _Ops("float")
+    scale = np.concatenate([np.full(n, h * c), np.ones(n * dd)]) * MARGIN
+    for lap, edges in zip(laps, noises, strict=True):
+        op = noise_operator(edges, n, d)
+
+        def noise(x: Any, op: Any = op) -> Any:
+            return (op @ np.ravel(x)).reshape(n, n)
+
+        gm = step_blocks(ops, s, rs[0], list(ts), lap, noise, alpha, c, c * c, g, h)
+        gm = 0.5 * (gm + gm.T) - np.diag(scale)
+        out = min(out, float(np.linalg.eigvalsh(gm)[0]))
+    return out
 
 
 def plan_delay_line(
@@ -534,8 +522,9 @@ def plan_delay_line(
     g: float,
     c_hi: float,
 ) -> DelayLinePlan | None:
-    """S, R_j, T_j and the largest κ <= c_hi found (bisection with Clarabel, a margin
-    :data:`MARGIN` in every inequality), then checked in verified floats.
+    """S, R_j, T_j and the largest κ <= c_hi found (:func:`largest_level`: a few Clarabel
+    solves, a margin :data:`MARGIN` in every inequality, each found S, R_j, T_j pushed to the
+    largest level at which they hold), then checked in verified floats.
 
     Parameters
     ----------
@@ -552,7 +541,7 @@ def plan_delay_line(
     g : float
         The growth bound of 1/c.
     c_hi : float
-        The top of the bisection (c_true).
+        The top of the search (c_true).
 
     Returns
     -------
@@ -600,33 +589,35 @@ def plan_delay_line(
         cons.append(0.5 * (gm + gm.T) - margin >> 0)
     prob = cp.Problem(cp.Minimize(0), cons)
 
-    def feasible(cv: float) -> bool:
+    def solve(cv: float) -> Any:
         c.value, c2.value = cv, cv * cv
         try:
-            with warnings.catch_warnings():  # an inaccurate solve counts as infeasible
+            with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                prob.solve(solver=cp.CLARABEL)
+                prob.solve(solver=cp.CLARABEL, **SOLVER_OPTIONS)
         except (cp.SolverError, ArithmeticError, ValueError):
-            return False
-        return prob.status == cp.OPTIMAL
+            return None
+        if prob.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
+            return None
+        sol = (
+            _sym(s.value),
+            tuple(_sym(r.value) for r in rs),
+            tuple(_sym(t.value) for t in ts),
+        )
+        # an inaccurate answer counts when its matrices hold at cv (floats)
+        ok = prob.status == cp.OPTIMAL or _lowest_step(sol, laps, noises, d, h, alpha, g, cv) >= 0
+        return sol if ok else None
 
-    lo, hi, best = 0.0, c_hi, None
-    for _ in range(KAPPA_STEPS):
-        mid = 0.5 * (lo + hi)
-        if feasible(mid):
-            lo = mid
-            best = (
-                np.array(s.value),
-                tuple(np.array(r.value) for r in rs),
-                tuple(np.array(t.value) for t in ts),
-            )
-        else:
-            hi = mid
+    def reach(sol: Any, c0: float) -> float:
+        def lowest(cv: float) -> float:
+            return _lowest_step(sol, laps, noises, d, h, alpha, g, cv)
+
+        return _reach(lowest, c0, c_hi)
+
+    lo, best = largest_level(solve, reach, c_hi)
     if best is None:
         return None
-    sv = 0.5 * (best[0] + best[0].T)
-    rv = tuple(0.5 * (x + x.T) for x in best[1])
-    tv = tuple(0.5 * (x + x.T) for x in best[2])
+    sv, rv, tv = best
     gamma = max(float(delay_line_gamma(sv, tv, e, d)) for e in noises) * (1 + 1e-12)
     pl = DelayLinePlan(sv, rv, tv, alpha, lo, g, gamma)
     return pl if holds_in_floats(pl, laps, noises, d, h) else None
@@ -641,7 +632,8 @@ def plan_no_delay(
 ) -> DigitalPlan | None:
     """D = 0 with a free P: the largest κ <= c_hi found with (PL + LᵀP − αP) −
     κ(hLᵀPL + N(P)) ⪰ 0 for every mode (affine in κ with a PSD slope, so κ proves every
-    c in (0, κ]); bisection with Clarabel, then checked in verified floats.
+    c in (0, κ]); :func:`largest_level` from 0.9·c_hi with Clarabel, then checked in
+    verified floats.
 
     Parameters
     ----------
@@ -654,7 +646,7 @@ def plan_no_delay(
     h : float
         The period.
     c_hi : float
-        The top of the bisection (c_true).
+        The top of the search (c_true).
 
     Returns
     -------
@@ -677,22 +669,34 @@ def plan_no_delay(
         m = p @ lap + lap.T @ p - alpha * p - kap * (h * lap.T @ p @ lap + nm)
         cons.append(0.5 * (m + m.T) >> MARGIN * eye)
     prob = cp.Problem(cp.Minimize(0), cons)
-    lo, best = 0.0, None
-    hi = c_hi
-    for _ in range(KAPPA_STEPS + 2):
-        mid = 0.5 * (lo + hi)
-        kap.value = mid
+
+    def solve(kv: float) -> Any:
+        kap.value = kv
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                prob.solve(solver=cp.CLARABEL)
+                prob.solve(solver=cp.CLARABEL, **SOLVER_OPTIONS)
         except (cp.SolverError, ArithmeticError, ValueError):
-            hi = mid
-            continue
-        if prob.status == cp.OPTIMAL:
-            lo, best = mid, 0.5 * (np.array(p.value) + np.array(p.value).T)
-        else:
-            hi = mid
+            return None
+        if prob.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
+            return None
+        pv = _sym(p.value)
+        return pv if prob.status == cp.OPTIMAL or reach(pv, 0.0) >= kv else None
+
+    def reach(pv: np.ndarray, k0: float) -> float:
+        parts = []
+        for lap, edges in zip(laps, noises, strict=True):
+            op = noise_operator(edges, n, d)
+            nm = (op @ pv.ravel()).reshape(n, n)
+            parts.append((pv @ lap + lap.T @ pv - alpha * pv, h * lap.T @ pv @ lap + nm))
+
+        def lowest(kv: float) -> float:
+            return min(float(np.linalg.eigvalsh(_sym(a - kv * b))[0]) - MARGIN for a, b in parts)
+
+        return _reach(lowest, k0, c_hi)
+
+    # small and cheap solves, and the free P reaches 90 % and more of c_true
+    lo, best = largest_level(solve, reach, c_hi, 0.9, KAPPA_STEPS + 3, 0.004)
     if best is None:
         return None
     for lap, edges in zip(laps, noises, strict=True):
@@ -741,17 +745,22 @@ def holds_in_floats(
 __all__ = [
     "ALPHA_SHARE",
     "CTRUE_MAX_ORDER",
+    "KAPPA_RESOLUTION",
+    "KAPPA_START",
     "KAPPA_STEPS",
+    "KAPPA_STEP_UP",
     "MARGIN",
     "DelayLinePlan",
     "delay_line_gamma",
     "form_matrices",
     "growth_bound",
     "holds_in_floats",
+    "largest_level",
     "ms_limit",
     "plan_delay_line",
     "plan_no_delay",
     "prove_growth",
+    "SOLVER_OPTIONS",
     "spectral_radius",
     "step_blocks",
     "step_matrix",

@@ -314,9 +314,9 @@ def test_a_continuous_certificate_is_certified_sampled_first():
     # g1.json proves the continuous protocol only: the sampled one is certified here
     src = load_source(CERTS / "g1.json", period=0.1, delay=1)
     assert "the sampled protocol certified here" in src.notes[0]
-    assert "for the sampled one (contracting from step k₀ = 3032)" in src.notes[1]
+    assert "for the sampled one (contracting from step k₀ = 24)" in src.notes[1]
     # at h = 0.5 the h = 0.1 proof does not hold; certified anew at h = 0.5, it does
-    assert "(contracting from step k₀ = 13)" in load_source(CERTS / "g1.json", period=0.5).notes[1]
+    assert "(contracting from step k₀ = 7)" in load_source(CERTS / "g1.json", period=0.5).notes[1]
 
 
 @pytest.mark.hostile
