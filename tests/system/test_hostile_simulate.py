@@ -756,7 +756,8 @@ def test_ctrl_c_with_two_workers_stops_promptly(tmp_path):
     finally:
         proc.kill()
     assert proc.returncode == 130, err
-    assert said_lines(err) == ["error: interrupted"], err  # a heartbeat line may come first
+    # a heartbeat line may come first; the note says the old run would be replaced
+    assert said_lines(err) == [f"note: replacing the run in {out}", "error: interrupted"], err
     assert sorted(os.listdir(out)) == ["paths.npz", "summary.json"]
     assert (out / "summary.json").read_text() == "old"
     assert sorted(os.listdir(tmp_path)) == ["o", "sc.json"]
