@@ -127,6 +127,13 @@ def _every_kind(g1_robust, big_cert):
         digital=Digital(0.013, 0),
     )
     docs["digital_switching"] = sw_digital.certificate
+    lossy = certify(
+        nd.load(CERTS.parent / "examples" / "g1.yaml"),
+        THETA,
+        gain="1/(1+t)",
+        digital=Digital(0.1, 0, 0.1, "skip"),
+    )
+    docs["digital_loss"] = lossy.certificate
     top = random_network(30, 2, seed=2, family="scale-free")
     docs["hurwitz_scale"] = scale_certificate(nd.design(top, [1.0, -1.0], thresholds=False))
     docs["switching_scale"] = big_cert
@@ -156,8 +163,8 @@ def test_every_kind_refuses_a_field_it_does_not_read(g1_robust, big_cert):
         places = [("top", "note"), ("subject", "gain2")]
         if "modes" in doc["subject"]:
             places.append(("mode", "noise"))
-        if "digital" in doc["subject"]:
-            places.append(("digital", "loss"))
+        if "digital" in doc["subject"]:  # digital_loss reads its loss there: another name
+            places.append(("digital", "loss" if "loss" not in doc["subject"]["digital"] else "p"))
         for where, field in places:
             forged = json.loads(json.dumps(doc))
             target = {
