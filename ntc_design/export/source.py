@@ -478,7 +478,7 @@ def from_certificate(
         given = _gain_option(gain)
         text = given.text if isinstance(given, ScheduleGain) else given
         stated = g.text if isinstance(g, ScheduleGain) else g
-        if text != stated:
+        if "".join(str(text).split()) != "".join(str(stated).split()):  # spaces mean nothing
             raise InputError(
                 f"--gain: {text!r} differs from the certified gain {stated!r} ({src}); drop --gain"[
                     :300

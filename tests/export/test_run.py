@@ -349,3 +349,18 @@ def test_a_lossy_export_reproduces_its_example_and_documents_the_flags(tmp_path)
     with pytest.raises(InputError, match="lossy links with the hold policy are not proven"):
         export(scen, "c", tmp_path / "c", policy="hold")
     assert not (tmp_path / "c").exists()
+
+
+def test_a_certified_gain_given_again_with_spaces_is_the_same_gain(tmp_path, capsys, monkeypatch):
+    # the certificate states 1/(1+t): the same text with spaces is no other gain, another is
+    from tests.cli_helpers import assert_input_error, run_cli
+
+    cert = ROOT / "certificates" / "g1_digital.json"
+    code, _, err = run_cli(
+        ["export", cert, "--out", tmp_path / "a", "--gain", " 1 / ( 1 + t ) "], capsys, monkeypatch
+    )
+    assert code == 0, err
+    assert (tmp_path / "a" / "ntc_protocol.c").exists()
+    args = ["export", cert, "--out", tmp_path / "b", "--gain", "2/(1+t)"]
+    assert_input_error(args, capsys, monkeypatch, "--gain: '2/(1+t)' differs")
+    assert not (tmp_path / "b").exists()
