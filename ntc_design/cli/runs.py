@@ -458,9 +458,9 @@ def _tune_loss(
     scenario, sc0, horizon, period, delay, loss, policy, tolerance, out_dir, as_json
 ) -> None:
     """``ntc tune --loss auto``: the largest tolerable loss, its curve, loss.json."""
-    from ..io.outputs import check_output_folder, output_folder
+    from ..io.outputs import check_output_folder
     from ..protocol.digital import Digital
-    from ..reports.terminal import Progress, out, print_table
+    from ..reports.terminal import Progress
     from ..simulate.scenario import load_scenario
     from ..tune.loss import largest_tolerable_loss
 
@@ -492,17 +492,7 @@ def _tune_loss(
         except InputError as exc:
             text = str(exc)
             raise InputError(text if text.startswith("--") else f"{sc.source}: {text}") from None
-    doc = res.to_dict()
-    if out_dir is not None:
-        with output_folder(out_dir, ("loss.json",)) as tmp:
-            (tmp / "loss.json").write_text(json_text(doc) + "\n", encoding="utf-8")
-        doc["out"] = str(out_dir)
-    if as_json:
-        print(json_text(doc))
-    else:
-        print_table(res.table())
-        if out_dir is not None:
-            out.print(f"written to {out_dir}: loss.json")
+    _write_and_show(res, out_dir, "loss.json", as_json)
     if res.loss is None:
         print("not found: no positive loss keeps the error within the tolerance", file=sys.stderr)
         raise typer.Exit(1)
@@ -526,8 +516,8 @@ def _schedule_option(schedule: str, family: str | None) -> str:
 
 def _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as_json) -> None:
     """``ntc tune --period auto``: the longest safe period, its curve, period.json."""
-    from ..io.outputs import check_output_folder, output_folder
-    from ..reports.terminal import Progress, out, print_table
+    from ..io.outputs import check_output_folder
+    from ..reports.terminal import Progress
     from ..simulate.scenario import load_scenario
     from ..tune.period import longest_safe_period
 
@@ -555,17 +545,7 @@ def _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as
             print(json_text(res.to_dict()))
         print(f"{sc.source}: {res.diverged}", file=sys.stderr)
         raise typer.Exit(1)
-    doc = res.to_dict()
-    if out_dir is not None:
-        with output_folder(out_dir, ("period.json",)) as tmp:
-            (tmp / "period.json").write_text(json_text(doc) + "\n", encoding="utf-8")
-        doc["out"] = str(out_dir)
-    if as_json:
-        print(json_text(doc))
-    else:
-        print_table(res.table())
-        if out_dir is not None:
-            out.print(f"written to {out_dir}: period.json")
+    _write_and_show(res, out_dir, "period.json", as_json)
     if res.period is None:
         print("not found: no period meets the bounds", file=sys.stderr)
         raise typer.Exit(1)
@@ -762,3 +742,22 @@ def reproduce(
         )
     if not ok:
         raise typer.Exit(1)
+
+
+def _write_and_show(res, out_dir: Path | None, name: str, as_json: bool) -> None:
+    """A search's result (``--loss auto``, ``--period auto``): its document into
+    ``out_dir/name`` when asked, then as JSON or as its table."""
+    from ..io.outputs import output_folder
+    from ..reports.terminal import out, print_table
+
+    doc = res.to_dict()
+    if out_dir is not None:
+        with output_folder(out_dir, (name,)) as tmp:
+            (tmp / name).write_text(json_text(doc) + "\n", encoding="utf-8")
+        doc["out"] = str(out_dir)
+    if as_json:
+        print(json_text(doc))
+    else:
+        print_table(res.table())
+        if out_dir is not None:
+            out.print(f"written to {out_dir}: {name}")
