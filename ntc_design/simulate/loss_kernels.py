@@ -190,6 +190,7 @@ def loss_steps(
         ut = np.empty((ne, w))
         df = np.empty((d, w))
         av = np.empty((d, w))
+        mb = np.empty(w)
         st = np.empty((4, w if drawing else 0), dtype=np.uint64)
         for qq in range(st.shape[1]):
             for c in range(4):
@@ -222,31 +223,38 @@ def loss_steps(
                 io = dst[e] * d
                 jo = src[e] * d
                 qe = q[e]
+                # lane loops innermost and branch-free (selects), coefficients hoisted:
+                # the sums keep the order of the recursion written out (bit for bit)
                 for c in range(d):
                     for qq in range(w):
                         df[c, qq] = xt[nxt + jo + c, qq] - xt[nxt + io + c, qq]
                 for a in range(d):
                     for qq in range(w):
                         av[a, qq] = 0.0
+                        mb[qq] = 0.0
                     for c in range(d):
-                        sa, aa = signed[e, a, c], absw[e, a, c]
+                        sa, aa, ka = signed[e, a, c], absw[e, a, c], kmat[e, a, c]
                         for qq in range(w):
                             av[a, qq] += sa * xt[nxt + jo + c, qq] - aa * xt[nxt + io + c, qq]
-                for a in range(d):
+                            mb[qq] += ka * df[c, qq]
                     ga = gvec[e, a]
-                    for qq in range(w):
-                        mb = 0.0
-                        for c in range(d):
-                            mb += kmat[e, a, c] * df[c, qq]
-                        nz = ga * zt[e, qq] + mb * zt[ne + e, qq]
-                        hit = ut[e, qq] < qe
-                        if policy == 2:
-                            if hit:
-                                yt[e * d + a, qq] = av[a, qq] + r2 * nz
-                            dx[io + a, qq] += c1 * yt[e * d + a, qq]
-                        elif hit:
+                    if policy == 2:
+                        ya = e * d + a
+                        for qq in range(w):
+                            nz = ga * zt[e, qq] + mb[qq] * zt[ne + e, qq]
+                            fresh = av[a, qq] + r2 * nz
+                            yt[ya, qq] = fresh if ut[e, qq] < qe else yt[ya, qq]
+                            dx[io + a, qq] += c1 * yt[ya, qq]
+                    elif policy == 1:
+                        for qq in range(w):
+                            nz = ga * zt[e, qq] + mb[qq] * zt[ne + e, qq]
+                            term = (c1 * av[a, qq] + c2 * nz) / qe
+                            dx[io + a, qq] += term if ut[e, qq] < qe else 0.0
+                    else:
+                        for qq in range(w):
+                            nz = ga * zt[e, qq] + mb[qq] * zt[ne + e, qq]
                             term = c1 * av[a, qq] + c2 * nz
-                            dx[io + a, qq] += term / qe if policy == 1 else term
+                            dx[io + a, qq] += term if ut[e, qq] < qe else 0.0
             for r in range(nd):
                 for qq in range(w):
                     xt[nxt + r, qq] = xt[cur + r, qq] + dx[r, qq]
