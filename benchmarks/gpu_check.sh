@@ -62,7 +62,7 @@ status=0
 NTC_GPU_TESTS=device timeout 180 $PY -m pytest -q -n 0 -p no:cacheprovider -o addopts="" \
   --durations=8 tests/simulate/test_cuda_kernels.py tests/simulate/test_gpu_run.py \
   tests/simulate/test_gpu_timevarying.py tests/simulate/test_gpu.py \
-  tests/simulate/test_loss_cuda.py \
+  tests/simulate/test_loss_cuda.py tests/simulate/test_loss_mc.py \
   tests/cli/test_runs.py::test_simulate_device_gpu_runs_where_the_fixture_says 2>&1 \
   | tee "$OUT/gpu_tests.log" || status=1
 

@@ -9,7 +9,7 @@ batch of steps, the normals (K, p, 2E) and then the uniforms (K, p, E).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,6 +127,27 @@ class LossMonteCarloSpec(PathBlocks):
         )
         return np.tile(y.reshape(-1), (p, 1))
 
+    def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+        """Integrate several blocks: on the CPU one after the other, on the GPU side by
+        side (:func:`.loss_cuda.run_loss_blocks`, the same numbers).
+
+        Parameters
+        ----------
+        blocks : sequence of int
+            Block indices.
+        progress : callable(int), optional
+            Called with path-steps done.
+
+        Returns
+        -------
+        list of PartialStats
+        """
+        if self.device == "gpu":
+            from .loss_cuda import run_loss_blocks  # numba-cuda: only on a GPU
+
+            return run_loss_blocks(self, blocks, progress)
+        return [self.run_block(b, progress) for b in blocks]
+
     def run_block(self, b: int, progress=None) -> PartialStats:
         """Integrate block b of the paths.
 
@@ -141,6 +162,8 @@ class LossMonteCarloSpec(PathBlocks):
         -------
         PartialStats
         """
+        if self.device == "gpu":
+            return self.run_blocks([b], progress)[0]
         from .loss_kernels import POLICY_CODES, loss_steps  # numba: only when simulating
 
         grid, bp = self.grid, self.block_paths
@@ -190,18 +213,10 @@ class LossMonteCarloSpec(PathBlocks):
             k = k0
             while k < k0 + kb:
                 stop = min(next(c for c in cuts if c > k), k0 + kb)
-                if self.device == "gpu":
-                    from .loss_cuda import gpu_loss_steps  # numba-cuda: only on a GPU
-
-                    gpu_loss_steps(
-                        x, held, states, 2 * ne, k - k0, stop - k0, ch, cs, rh, arrays, code,
-                        self.delay, k0,
-                    )  # fmt: skip
-                else:
-                    loss_steps(  # type: ignore[call-arg]
-                        x, held, states, xi, uni, 2 * ne, k - k0, stop - k0, ch, cs, rh,
-                        *arrays, code, tile, self.delay, k0,
-                    )  # fmt: skip
+                loss_steps(  # type: ignore[call-arg]
+                    x, held, states, xi, uni, 2 * ne, k - k0, stop - k0, ch, cs, rh,
+                    *arrays, code, tile, self.delay, k0,
+                )  # fmt: skip
                 k = stop
                 if k in save_at and not stats.record(now(k), save_at[k]):
                     return stats.result()
