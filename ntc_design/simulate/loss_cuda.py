@@ -105,10 +105,10 @@ class LossDevice:
 
     Parameters
     ----------
-    x : numpy.ndarray
-        (p, (D+1)·Nd) rings.
-    held : numpy.ndarray
-        (p, E·d) held measurements.
+    xt : numpy.ndarray
+        ((D+1)·Nd, p) rings, a path per column.
+    heldt : numpy.ndarray
+        (E·d, p) held measurements.
     states : numpy.ndarray
         (p, 4) uint64 xoshiro256** states.
     m_draw : int
@@ -124,13 +124,13 @@ class LossDevice:
         D and the steps taken before ``ch[0]``.
     """
 
-    def __init__(self, x, held, states, m_draw, ch, cs, rh, arrays, policy, delay, k_base):
-        p = x.shape[0]
+    def __init__(self, xt, heldt, states, m_draw, ch, cs, rh, arrays, policy, delay, k_base):
+        p = xt.shape[1]
         ne = arrays[2].shape[0]
-        nd = x.shape[1] // (delay + 1)
+        nd = xt.shape[0] // (delay + 1)
         self.p, self.m_draw, self.policy, self.delay, self.k_base = p, m_draw, policy, delay, k_base
-        self.x = cuda.to_device(np.ascontiguousarray(x.T))
-        self.held = cuda.to_device(np.ascontiguousarray(held.T))
+        self.x = cuda.to_device(np.ascontiguousarray(xt))
+        self.held = cuda.to_device(np.ascontiguousarray(heldt))
         self.states = cuda.to_device(np.ascontiguousarray(states))
         self.scratch = (
             cuda.device_array((max(m_draw, 2 * ne, 1), max(p, 1))),
@@ -157,13 +157,13 @@ class LossDevice:
         )  # fmt: skip
 
     def rings(self) -> np.ndarray:
-        """The rings, (p, (D+1)·Nd), on the host.
+        """The rings, ((D+1)·Nd, p), on the host.
 
         Returns
         -------
         numpy.ndarray
         """
-        return np.ascontiguousarray(self.x.copy_to_host().T)
+        return self.x.copy_to_host()
 
     def copy_back(self, x: np.ndarray, held: np.ndarray, states: np.ndarray) -> None:
         """Rings, held measurements and streams into the host arrays (in place).
@@ -173,7 +173,7 @@ class LossDevice:
         x, held, states : numpy.ndarray
             As given to the constructor.
         """
-        x[...] = self.rings()
+        x[...] = self.rings().T
         held[...] = self.held.copy_to_host().T
         states[...] = self.states.copy_to_host()
 
@@ -220,7 +220,7 @@ def gpu_loss_steps(
     """
     if x.shape[0] == 0 or k_to <= k_from:
         return
-    dev = LossDevice(x, held, states, m_draw, ch, cs, rh, arrays, policy, delay, k_base)
+    dev = LossDevice(x.T, held.T, states, m_draw, ch, cs, rh, arrays, policy, delay, k_base)
     dev.advance(k_from, k_to)
     dev.copy_back(x, held, states)
 
@@ -259,21 +259,22 @@ def run_loss_blocks(spec, blocks: Sequence[int], progress=None) -> list[PartialS
         parts.append((BlockStats(spec, b, p0, p), lo, lo + p))
         checks.append({min(k0 + batch, k_total) for k0 in range(0, k_total, batch)})
         lo += p
-    x = np.tile(spec.x_init, (lo, ring))
-    held = spec.initial_held(lo)
+    # the device's layout from the start: a path per column (no transpose of the whole)
+    xt = np.repeat(np.tile(spec.x_init, ring)[:, None], lo, axis=1)
+    heldt = np.repeat(spec.initial_held(1)[0][:, None], lo, axis=1)
     states = np.concatenate([path_states(spec.seed, st.b, st.p) for st, _, _ in parts])
     live = [True] * len(parts)
 
     def now(xs: np.ndarray, k: int, a: int, z: int) -> np.ndarray:
-        slot = (k % ring) * nd_
-        return xs[a:z, slot : slot + nd_]
+        slot = (k % ring) * nd_  # one block's states, (paths, Nd) as the CPU's
+        return np.ascontiguousarray(xs[slot : slot + nd_, a:z].T)
 
     if 0 in save_at:
         for j, (st, a, z) in enumerate(parts):
-            live[j] = st.record(now(x, 0, a, z), save_at[0])
+            live[j] = st.record(now(xt, 0, a, z), save_at[0])
     root = np.sqrt(grid.noise_h())  # √h, or s/√h on the partial step
     dev = LossDevice(
-        x, held, states, 2 * ne, spec.steps.ch, spec.steps.cs, root / grid.h,
+        xt, heldt, states, 2 * ne, spec.steps.ch, spec.steps.cs, root / grid.h,
         spec.kernel_arrays(), POLICY_CODES[spec.policy], spec.delay, 0,
     )  # fmt: skip
     cuts = sorted({*save_at, *set().union(*checks), k_total} - {0})

@@ -27,6 +27,10 @@ from .montecarlo import (
 from .rng import path_states
 from .system import ModeSystem
 
+#: Device memory for one chunk of lossy paths on the GPU (their rings, held measurements
+#: and draws; the host keeps a copy of the rings at each save and check point).
+GPU_CHUNK_BYTES = 512 * 2**20
+
 
 @dataclass(frozen=True, eq=False)
 class LossMonteCarloSpec(PathBlocks):
@@ -126,6 +130,21 @@ class LossMonteCarloSpec(PathBlocks):
             "eab,eb->ea", et.absw, x3[s.dst]
         )
         return np.tile(y.reshape(-1), (p, 1))
+
+    @property
+    def chunk_blocks(self) -> int:
+        """Blocks integrated together: 1 on the CPU; on the GPU as many as keep the
+        device's arrays of a chunk within :data:`GPU_CHUNK_BYTES` (one launch for all).
+
+        Returns
+        -------
+        int
+        """
+        if self.device != "gpu":
+            return 1
+        ne, width = self.system.n_edges, self.x_init.size * (self.delay + 1)
+        per_path = 8 * (width + ne * self.dim + 3 * ne + self.x_init.size + 4)
+        return max(1, GPU_CHUNK_BYTES // (per_path * self.block_paths))
 
     def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:
         """Integrate several blocks: on the CPU one after the other, on the GPU side by

@@ -106,6 +106,17 @@ class PathBlocks:
         return [self.run_block(b, progress) for b in blocks]
 
     @property
+    def chunk_blocks(self) -> int:
+        """Blocks one task integrates together (1; a GPU run takes many at once). The
+        result does not depend on it.
+
+        Returns
+        -------
+        int
+        """
+        return 1
+
+    @property
     def block_paths(self) -> int:
         """Paths per block: ``block_size``, or fewer so that there are at least
         MIN_BLOCKS blocks (a function of ``paths`` only, never of the workers)."""

@@ -91,3 +91,27 @@ def test_a_divergence_on_the_gpu_is_reported_at_the_cpus_time_path_and_agent(g1,
     assert gpu.failure == cpu.failure
     assert str(on_gpu.value) == str(on_cpu.value)
     assert relative_gap(cpu.mc.mean, gpu.mc.mean) <= REL_TOL  # the saves before it
+
+
+def test_a_gpu_chunk_takes_the_blocks_that_fit_its_memory(g1):
+    from dataclasses import replace
+
+    import ntc_design as nd
+    from ntc_design.simulate.digital import digital_grid
+    from ntc_design.simulate.loss_mc import GPU_CHUNK_BYTES, LossMonteCarloSpec
+    from ntc_design.simulate.system import mode_system
+
+    s = mode_system(nd.design(g1, THETA, thresholds=False), NoiseModel(0.4, 0.3))
+    grid, _ = digital_grid(Digital(0.1, 1), 1.0, np.array([1.0]))
+    loss = np.full(s.n_edges, 0.1)
+    base = LossMonteCarloSpec(
+        s, grid, lambda t: 1 / (1 + t), THETA, X0_LIN, 7, 3, 400_000, 1, loss, "skip", 1
+    )
+    assert base.chunk_blocks == 1  # the CPU: a block per task
+    gpu = replace(base, device="gpu")
+    ne = s.n_edges
+    per_path = 8 * (42 + ne * 3 + 3 * ne + 21 + 4)  # rings, held, draws, increments, stream
+    n = gpu.chunk_blocks
+    assert n > 1
+    assert n * gpu.block_paths * per_path <= GPU_CHUNK_BYTES
+    assert (n + 1) * gpu.block_paths * per_path > GPU_CHUNK_BYTES
