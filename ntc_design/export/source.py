@@ -189,7 +189,7 @@ def from_scenario(
     InputError
         A bad file or value; a topology that is neither fixed nor switching; a design whose
         certificate does not verify or for which no theorem is guaranteed; lossy links
-        with ``hold``, a delay or a switching set (not proven).
+        with ``hold`` or a switching set (not proven), or a delay the certificate does not prove.
     """
 
     sc = parse_scenario(path)
@@ -310,12 +310,12 @@ def _certified_law(
 
 
 def _unproven(policy: str, delay: int, where: str) -> None:
-    """Refuse lossy links that no certificate proves (``hold``, or a delay), in one line."""
-    if policy == "hold" or delay:
-        what = "the hold policy" if policy == "hold" else f"a delay D = {delay}"
+    """Refuse lossy links that no certificate proves (``hold``), in one line; a delay is
+    exported when the ``digital_loss`` certificate proves it (its delay line)."""
+    if policy == "hold":
         raise InputError(
-            f"{where}: lossy links with {what} are not proven (the digital_loss certificate "
-            "covers D = 0 with skip or rescale); nothing exported"
+            f"{where}: lossy links with the hold policy are not proven (the digital_loss "
+            "certificate covers skip and rescale); nothing exported"
         )
 
 
