@@ -127,20 +127,7 @@ class LossMonteCarloSpec(PathBlocks):
         )
         return np.tile(y.reshape(-1), (p, 1))
 
-    def run_block(self, b: int, progress=None) -> PartialStats:
-        """Integrate block b of the paths.
-
-        Parameters
-        ----------
-        b : int
-            The block (its streams from the b-th child of the seed).
-        progress : callable(int), optional
-            Called with path-steps done.
-
-        Returns
-        -------
-        PartialStats
-        """
+    def run_block(self, b: int, progress=None) -> PartialStats:  # doc: PathBlocks.run_block
         from .loss_kernels import POLICY_CODES, loss_steps  # numba: only when simulating
 
         grid, bp = self.grid, self.block_paths
