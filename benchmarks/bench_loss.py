@@ -27,6 +27,7 @@ from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.digital import digital_grid, digital_moments
 from ntc_design.simulate.loss import loss_moments
+from ntc_design.simulate.moments import PreparedModes
 from ntc_design.simulate.system import mode_system
 
 X0 = np.linspace(-3, 3, 21)
@@ -54,7 +55,8 @@ def main() -> None:
     def gain(t):
         return 1 / (1 + t)
 
-    base = best(lambda: digital_moments([s], grid, gain, eps0, 7, 3, 1))
+    modes = PreparedModes.of([s], eps0)
+    base = best(lambda: digital_moments(modes, grid, gain, 1))
     print(f"exact moments, G1, h = 0.1, D = 1, K = {grid.n_steps}")
     print(f"  lossless digital moments     {base:8.4f} s")
     loss = np.full(s.n_edges, 0.1)

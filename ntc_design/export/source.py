@@ -32,6 +32,8 @@ from ..certify import KINDS, certify, verify
 from ..certify.dense import DenseContext
 from ..certify.fields import vector
 from ..certify.format import FORMAT
+from ..certify.kinds.digital import DigitalContext, DigitalState
+from ..certify.kinds.digital_loss import LossState
 from ..errors import AssumptionWarning, InputError
 from ..gain.schedule import ScheduleGain, analyse_any_gain, gain_from_option, schedule_from_document
 from ..io.documents import read_document
@@ -453,14 +455,15 @@ def from_certificate(
     ctx: DenseContext = reading.state
     schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
     first = next(iter(ctx.modes.values()))
-    sampled = ctx.digital
-    if sampled is None:
+    if not isinstance(ctx, DigitalContext):
         return _continuous(
             doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f, loss, policy
         )
-    ls = getattr(ctx, "loss", None) if kind.name == "digital_loss" else None
+    state: DigitalState | LossState = ctx.digital
+    sampled = state.subject
+    ls = state.loss if isinstance(state, LossState) else None
     losses = _certified_losses(ls, sampled.delay, loss, policy, src)
-    if ctx.stated is None:
+    if state.stated is None:
         raise InputError(
             f"{src}: the certificate does not prove the sampled protocol "
             "(results.digital.stopped); nothing exported"

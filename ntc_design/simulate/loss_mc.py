@@ -167,20 +167,7 @@ class LossMonteCarloSpec(PathBlocks):
             return run_loss_blocks(self, blocks, progress)
         return [self.run_block(b, progress) for b in blocks]
 
-    def run_block(self, b: int, progress=None) -> PartialStats:
-        """Integrate block b of the paths.
-
-        Parameters
-        ----------
-        b : int
-            The block (its streams from the b-th child of the seed).
-        progress : callable(int), optional
-            Called with path-steps done.
-
-        Returns
-        -------
-        PartialStats
-        """
+    def run_block(self, b: int, progress=None) -> PartialStats:  # doc: PathBlocks.run_block
         if self.device == "gpu":
             return self.run_blocks([b], progress)[0]
         from .loss_kernels import POLICY_CODES, loss_steps  # numba: only when simulating

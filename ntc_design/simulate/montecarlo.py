@@ -175,20 +175,7 @@ class MonteCarloSpec(PathBlocks):
         """
         return self.modes.callable_f()
 
-    def run_block(self, b: int, progress=None) -> PartialStats:
-        """Integrate block b of the paths (:meth:`PathBlocks.run_block`).
-
-        Parameters
-        ----------
-        b : int
-            The block.
-        progress : callable(int), optional
-            Called with path-steps done.
-
-        Returns
-        -------
-        PartialStats
-        """
+    def run_block(self, b: int, progress=None) -> PartialStats:  # doc: PathBlocks.run_block
         return _run_block(self, b, progress)
 
     def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:

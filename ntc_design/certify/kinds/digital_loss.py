@@ -15,7 +15,7 @@ continuous properties only and ``results.digital.stopped`` says why.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Any
 
@@ -36,7 +36,7 @@ from ..loss import exact_offset, loss_edges, loss_ms_matrix, offset_value, plan_
 from ..theorems import TheoremVerdict, digital_verdicts
 from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, number_text
 from .dense import prove_dense
-from .digital import DigitalKind, read_digital
+from .digital import DigitalContext, DigitalKind, DigitalSubject, read_digital
 from .digital_loss_delay import DELAY_LINE, delayed_claims, issue_delayed, prove_delayed
 from .hurwitz import HurwitzKind
 
@@ -63,6 +63,16 @@ class LossStated:
     t0: float
     offset: float | None
     g: float | None = None  # the delay line's growth bound of 1/c (D >= 1)
+
+
+@dataclass(frozen=True, eq=False)
+class LossState:
+    """What ``digital_loss`` reads beside the ``hurwitz`` modes: ``subject.digital``, its
+    ``loss`` and ``results.digital``'s numbers (None: the sampled property not certified)."""
+
+    subject: DigitalSubject
+    loss: LossSubject
+    stated: LossStated | None
 
 
 def _gain_document(gain: Any) -> Any:
@@ -319,11 +329,10 @@ class DigitalLossKind(DigitalKind):
         Reading
         """
         reading = HurwitzKind.read(self, doc, source)
-        ctx = reading.state
-        mode = next(iter(ctx.modes.values()))
-        ctx.digital = read_digital(doc, source, mode.top.dim, ("loss",))
-        ctx.loss = read_loss(doc, source, mode.top)
-        ctx.stated = None
+        mode = next(iter(reading.state.modes.values()))
+        sampled = read_digital(doc, source, mode.top.dim, ("loss",))
+        loss = read_loss(doc, source, mode.top)
+        stated = None
         if MS.value in doc.get("certifies", []):
             res = need(need(doc, "results", dict, source), "digital", dict, f"{source}: results")
             where = f"{source}: results.digital"
@@ -331,10 +340,11 @@ class DigitalLossKind(DigitalKind):
             def num(key: str) -> float:
                 return number(need(res, key, (int, float), where), f"{where}.{key}")
 
-            off = num("offset") if ctx.loss.policy == "skip" else None
-            g = num("g") if ctx.digital.delay else None
-            ctx.stated = LossStated(num("alpha"), num("kappa"), num("t0"), off, g)
-        return reading
+            off = num("offset") if loss.policy == "skip" else None
+            g = num("g") if sampled.delay else None
+            stated = LossStated(num("alpha"), num("kappa"), num("t0"), off, g)
+        state = LossState(sampled, loss, stated)
+        return replace(reading, state=DigitalContext(reading.state, state))
 
     def claims(
         self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
@@ -359,17 +369,17 @@ class DigitalLossKind(DigitalKind):
         base = tuple(p for p in properties if p is not MS)
         out = HurwitzKind.claims(self, base, subject, reading, alpha)
         if MS in properties:
-            ctx = reading.state
-            if ctx.loss.policy == "hold":
+            ctx: DigitalContext[LossState] = reading.state
+            if ctx.digital.loss.policy == "hold":
                 raise InputError(
                     f"{ctx.source}: certifies: digital_mean_square on lossy links needs "
                     "skip or rescale"
                 )
             mode = next(iter(ctx.modes))
-            if ctx.digital.delay:
-                out = (*out, *delayed_claims(mode, ctx.loss.policy, P_NAME))
+            if ctx.digital.subject.delay:
+                out = (*out, *delayed_claims(mode, ctx.digital.loss.policy, P_NAME))
             else:
-                out = (*out, *loss_claims(mode, ctx.loss.policy))
+                out = (*out, *loss_claims(mode, ctx.digital.loss.policy))
         return out
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
@@ -392,8 +402,9 @@ class DigitalLossKind(DigitalKind):
             return HurwitzKind.prove(self, claim, subject, reading)
         if claim.kind is ClaimKind.PD:
             return prove_dense(claim, subject, reading)
-        ctx = reading.state
-        dg, st, ls = ctx.digital, ctx.stated, ctx.loss
+        ctx: DigitalContext[LossState] = reading.state
+        dg, st, ls = ctx.digital.subject, ctx.digital.stated, ctx.digital.loss
+        assert st is not None  # the sampled property's claims: its numbers were read
         if claim.kind is ClaimKind.DIGITAL_T0:
             ok, how = prove_gain_below(dg.gain, st.kappa, st.t0)
             return Check(
@@ -465,8 +476,8 @@ class DigitalLossKind(DigitalKind):
             The decay rate.
         """
         HurwitzKind.audit(self, audit, doc, subject, reading, alpha)
-        ctx = reading.state
-        if ctx.stated is None:
+        state: LossState = reading.state.digital
+        if state.stated is None:
             sec = audit.get("digital")
             if isinstance(sec, dict):
                 for key, v in sec.items():
@@ -474,17 +485,17 @@ class DigitalLossKind(DigitalKind):
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
-        for key in ("alpha", "kappa", "t0") + (("offset",) if ctx.loss.policy == "skip" else ()):
+        for key in ("alpha", "kappa", "t0") + (("offset",) if state.loss.policy == "skip" else ()):
             audit.proven(("digital", key))
-        dg = ctx.digital
+        dg = state.subject
         if dg.delay:
             audit.proven(("digital", "g"))
             # c_true on lossy links is shown beside κ, not claimed: the step inequality at a
             # constant c <= κ makes the lossy second-moment map contract, so it is >= κ
             if "c_true" in (doc.get("results", {}).get("digital") or {}):
-                audit.estimate(("digital", "c_true"), ctx.stated.kappa, None)
-        audit.exact(("digital", "k0"), first_step(ctx.stated.t0, dg.period, dg.delay))
-        audit.exact(("digital", "p_max"), max(ctx.loss.losses.values(), default=0.0))
+                audit.estimate(("digital", "c_true"), state.stated.kappa, None)
+        audit.exact(("digital", "k0"), first_step(state.stated.t0, dg.period, dg.delay))
+        audit.exact(("digital", "p_max"), max(state.loss.losses.values(), default=0.0))
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
         """What the certificate reports, as rows.
@@ -544,7 +555,8 @@ class DigitalLossKind(DigitalKind):
         tuple of (Property, str)
         """
         base = HurwitzKind.stated(self, properties, reading)
-        st, dg = reading.state.stated, reading.state.digital
+        state: LossState = reading.state.digital
+        st, dg = state.stated, state.subject
         if MS not in properties or st is None:
             return base
         k0 = first_step(st.t0, dg.period, dg.delay)
@@ -588,6 +600,7 @@ class DigitalLossKind(DigitalKind):
 
 __all__ = [
     "DigitalLossKind",
+    "LossState",
     "LossStated",
     "LossSubject",
     "design_losses",

@@ -139,7 +139,7 @@ def delayed_matrices(ctx: Any, p_name: str) -> Any:
     -------
     (numpy.ndarray, list, list) or None
     """
-    delay = ctx.digital.delay
+    delay = ctx.digital.subject.delay
     try:
         s = ctx.p(p_name)
         rs = [ctx.p(f"{p_name}_R{j}") for j in range(delay)]
@@ -176,7 +176,7 @@ def prove_delayed(
     -------
     Check
     """
-    dg, st = ctx.digital, ctx.stated
+    dg, st = ctx.digital.subject, ctx.digital.stated
     if claim.kind is ClaimKind.DIGITAL_GROWTH:
         ok, how = prove_growth(dg.gain, st.g, st.t0)
         return Check(claim.id, ok is True, f"interval: {how}", claim)
@@ -200,7 +200,7 @@ def prove_delayed(
         return Check(claim.id, True, f"{how}: {', '.join(names)} ≻ 0", claim)
     if not mode.in_range:
         return Check(claim.id, False, f"mode {mode.name} has {RANGE_TEXT}", claim)
-    d, pol = mode.top.dim, ctx.loss.policy
+    d, pol = mode.top.dim, ctx.digital.loss.policy
 
     def step(exact: bool) -> Any:
         lap = mode.exact if exact else FloatMat.of(mode.lap, mode.err)
