@@ -322,7 +322,7 @@ def assumption2(top: Topology) -> Decomposition:
     )
 
 
-#: Keys of the stable ``ntc design --json`` format (per mode for a switching file).
+#: Keys of the stable JSON format of ``ntc design`` (per mode for a switching file).
 
 
 def structure_report(top: Topology) -> dict:

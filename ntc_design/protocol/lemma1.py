@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 #: (:func:`~ntc_design.protocol.thresholds.critical_couplings_sparse`), which says what it computed.
 THRESHOLDS_MAX_ND = 200
 #: By default the critical couplings are computed up to this Nd; above it only when asked
-#: (``thresholds=True``, ``ntc design --thresholds``), and a note says so.
+#: (``thresholds=True``, the thresholds option of ``ntc design``), and a note says so.
 THRESHOLDS_DEFAULT_MAX_ND = 30_000
 
 

@@ -224,3 +224,43 @@ def test_an_unregistered_marker_is_an_error():
     options = config["tool"]["pytest"]["ini_options"]
     assert "--strict-markers" in options["addopts"].split()
     assert sorted(m.split(":")[0] for m in options["markers"]) == ["hostile", "slow"]
+
+
+#: A flag string (``--period``) as the before-stop hook finds it: after a quote, a
+#: parenthesis or a space.
+FLAG_TEXT = re.compile(r"[\"'( ]--[a-z][a-z-]+")
+
+#: Library modules allowed to write a flag string, each with its reason (none is a flag of
+#: ``ntc``: the command line maps the library's fields to its flags, ntc_design/cli/flags.py).
+FLAG_TEXT_ALLOWED: dict[str, str] = {
+    "ntc_design/certify/format.py": "not yet converted",
+    "ntc_design/certify/theorems.py": "not yet converted",
+    "ntc_design/certify/verify.py": "not yet converted",
+    "ntc_design/export/c.py": "not yet converted",
+    "ntc_design/export/run.py": "not yet converted",
+    "ntc_design/export/source.py": "not yet converted",
+    "ntc_design/io/outputs.py": "not yet converted",
+    "ntc_design/io/tablefiles.py": "not yet converted",
+    "ntc_design/model/generate.py": "not yet converted",
+    "ntc_design/protocol/assumption.py": "not yet converted",
+    "ntc_design/protocol/lemma1.py": "not yet converted",
+    "ntc_design/reports/examples.py": "not yet converted",
+    "ntc_design/reports/reproduce.py": "not yet converted",
+    "ntc_design/reports/rundata.py": "not yet converted",
+    "ntc_design/reports/sweep.py": "not yet converted",
+    "ntc_design/sweep/engines.py": "not yet converted",
+    "ntc_design/sweep/run.py": "not yet converted",
+}
+
+
+def test_no_library_module_names_a_command_line_flag():
+    """The library names its parameters and the scenario's fields (``digital.period``);
+    only ``ntc_design/cli`` knows the flags (errors.blame maps the one to the other)."""
+    flagged = {
+        str(p.relative_to(ROOT)).replace("\\", "/")
+        for p in PACKAGE.rglob("*.py")
+        if "cli" not in p.relative_to(PACKAGE).parts[:1]
+        and FLAG_TEXT.search(p.read_text(encoding="utf-8"))
+    }
+    assert sorted(flagged - set(FLAG_TEXT_ALLOWED)) == []  # name the field, not the flag
+    assert sorted(set(FLAG_TEXT_ALLOWED) - flagged) == []  # an exception for nothing: remove it
