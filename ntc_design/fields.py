@@ -32,12 +32,16 @@ class Option:
     quoted : bool, optional
         A text value is quoted in the library's words (``schedule="power"``); False: a
         number already written as text (``max_gain=50.0000``).
+    alias : str, optional
+        The library's words where they are not the field's name (``to_dict()`` for the
+        JSON output).
     """
 
     field: str
     value: object = None
     document: bool = False
     quoted: bool = True
+    alias: str | None = None
 
     def __str__(self) -> str:
         flag = None if self.document else _OPTION_WORDS.get().get(self.field)
@@ -51,6 +55,8 @@ class Option:
         str
             ``schedule="power"``, ``max_gain``, ``device: cpu`` (a document's field).
         """
+        if self.alias is not None:
+            return self.alias
         if self.value is None:
             return self.field
         if self.document:

@@ -132,7 +132,9 @@ DEPRECATED: dict[str, dict[str, str]] = {
 }
 
 
-def flags_of(command: str, given: Mapping[str, object] | None = None, **typed: str) -> dict:
+def flags_of(
+    command: str, given: Mapping[str, object] | None = None, /, **typed: str
+) -> dict[str, str]:
     """A command's map, narrowed to the fields whose flags were given.
 
     Parameters

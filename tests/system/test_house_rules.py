@@ -233,23 +233,18 @@ FLAG_TEXT = re.compile(r"[\"'( ]--[a-z][a-z-]+")
 #: Library modules allowed to write a flag string, each with its reason (none is a flag of
 #: ``ntc``: the command line maps the library's fields to its flags, ntc_design/cli/flags.py).
 FLAG_TEXT_ALLOWED: dict[str, str] = {
-    "ntc_design/certify/format.py": "not yet converted",
-    "ntc_design/certify/theorems.py": "not yet converted",
-    "ntc_design/certify/verify.py": "not yet converted",
-    "ntc_design/export/c.py": "not yet converted",
-    "ntc_design/export/run.py": "not yet converted",
-    "ntc_design/export/source.py": "not yet converted",
-    "ntc_design/io/outputs.py": "not yet converted",
-    "ntc_design/io/tablefiles.py": "not yet converted",
-    "ntc_design/model/generate.py": "not yet converted",
-    "ntc_design/protocol/assumption.py": "not yet converted",
-    "ntc_design/protocol/lemma1.py": "not yet converted",
-    "ntc_design/reports/examples.py": "not yet converted",
-    "ntc_design/reports/reproduce.py": "not yet converted",
-    "ntc_design/reports/rundata.py": "not yet converted",
-    "ntc_design/reports/sweep.py": "not yet converted",
-    "ntc_design/sweep/engines.py": "not yet converted",
-    "ntc_design/sweep/run.py": "not yet converted",
+    # text of the files an export writes (README.txt, ntc_protocol.h): which ntc command
+    # made them, the same bytes whoever calls export()
+    "ntc_design/export/c.py": "the emitted C header's comments name ntc export's option",
+    "ntc_design/export/run.py": "the emitted README.txt names ntc export's option",
+    # a command line of ntc, quoted whole: how to make the missing input, or the re-run line
+    # a report records (the same for every reader: a file's content, a user's next step)
+    "ntc_design/certify/verify.py": "how a certificate is made: ntc certify ... --out",
+    "ntc_design/reports/reproduce.py": "the recorded re-run line of ntc reproduce",
+    "ntc_design/reports/rundata.py": "the recorded re-run line of ntc simulate",
+    "ntc_design/reports/sweep.py": "how a sweep folder is made: ntc sweep ... --out",
+    # a script's own command line (python -m ntc_design.reports.examples), not ntc's
+    "ntc_design/reports/examples.py": "the example script's argparse options",
 }
 
 
