@@ -192,7 +192,7 @@ def number_from_text(text: str, name: str) -> float:
         (or inf, nan): ``0_05``, ``٣``, ``３`` are refused, not read as 5, 3, 3.
     """
     if not NUMBER_TEXT.fullmatch(text):
-        raise InputError(f"{name}: {text[:40]!r} is not a number {number_rule(text)}")
+        raise InputError(f"{text[:40]!r} is not a number {number_rule(text)}", field=name)
     return float(text)
 
 
@@ -239,7 +239,7 @@ def real_float(name: str, value) -> float:
         return float(value)
     except OverflowError:
         raise InputError(
-            f"{name}: {_show(value)} is beyond the float range (about 1.8e308)"
+            f"{_show(value)} is beyond the float range (about 1.8e308)", field=name
         ) from None
 
 
@@ -268,13 +268,15 @@ def require_theta(theta, dim: int):
     try:
         th = np.asarray(theta, dtype=float).reshape(-1)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(f"theta: expected {dim} numbers, got {theta!r}") from None
+        raise InputError(f"expected {dim} numbers, got {theta!r}", field="theta") from None
     if th.size != dim:
-        raise InputError(f"theta: expected {dim} numbers (the state dimension d), got {th.size}")
+        raise InputError(
+            f"expected {dim} numbers (the state dimension d), got {th.size}", field="theta"
+        )
     if not np.all(np.isfinite(th)):
-        raise InputError("theta: entries must be finite")
+        raise InputError("entries must be finite", field="theta")
     if not np.any(th):
-        raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
+        raise InputError("must be non-zero (the target of non-trivial consensus)", field="theta")
     return th
 
 
@@ -303,9 +305,10 @@ def require_x0(theta, k1) -> None:
             return
     top = float(np.max(th))
     raise InputError(
-        f"theta: x0 = k1·θ overflows: |θ| up to {top:.4g} times k1 = 1 + 2/δ = {k:.6g} is "
+        f"x0 = k1·θ overflows: |θ| up to {top:.4g} times k1 = 1 + 2/δ = {k:.6g} is "
         f"beyond the float range (about 1.8e308); every |θ_i| must be below "
-        f"{np.finfo(float).max / k:.4g}"
+        f"{np.finfo(float).max / k:.4g}",
+        field="theta",
     )
 
 
@@ -336,7 +339,7 @@ def require_positive(name: str, value, integer: bool = False) -> None:
         or value <= 0
     )
     if bad:
-        raise InputError(f"{name}: must be a positive number, got {_show(value)}")
+        raise InputError(f"must be a positive number, got {_show(value)}", field=name)
 
 
 def require_int(name: str, value, minimum: int = 0, maximum: int | None = None) -> int:
@@ -363,13 +366,13 @@ def require_int(name: str, value, minimum: int = 0, maximum: int | None = None) 
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         kind = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
-        raise InputError(f"{name}: must be {kind}, got {_show(value)}")
+        raise InputError(f"must be {kind}, got {_show(value)}", field=name)
     v = int(value)
     if v < minimum:
         kind = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
-        raise InputError(f"{name}: must be {kind}, got {v}")
+        raise InputError(f"must be {kind}, got {v}", field=name)
     if maximum is not None and v > maximum:
-        raise InputError(f"{name}: must be at most {maximum}, got {_show(v)}")
+        raise InputError(f"must be at most {maximum}, got {_show(v)}", field=name)
     return v
 
 
@@ -400,14 +403,14 @@ def require_number(
         When the value is not a finite number at least ``minimum`` (and within ``bound``).
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{name}: expected a number, got {_show(value)}")
+        raise InputError(f"expected a number, got {_show(value)}", field=name)
     v = real_float(name, value)
     if not math.isfinite(v):
-        raise InputError(f"{name}: must be finite, got {_show(value)}")
+        raise InputError(f"must be finite, got {_show(value)}", field=name)
     if minimum is not None and v < minimum:
-        raise InputError(f"{name}: must be >= {minimum:g}, got {_show(value)}")
+        raise InputError(f"must be >= {minimum:g}, got {_show(value)}", field=name)
     if bound is not None and abs(v) > bound:
-        raise InputError(f"{name}: must be at most {bound:g} in magnitude, got {_show(value)}")
+        raise InputError(f"must be at most {bound:g} in magnitude, got {_show(value)}", field=name)
     return v
 
 
@@ -556,8 +559,9 @@ def require_horizon(name: str, value) -> float:
     t = real_float(name, value)
     if t < MIN_HORIZON:
         raise InputError(
-            f"{name}: {_show(value)} is shorter than the shortest horizon {MIN_HORIZON:g} (the "
-            "time grids resolve instants to about 1e-14)"
+            f"{_show(value)} is shorter than the shortest horizon {MIN_HORIZON:g} (the "
+            "time grids resolve instants to about 1e-14)",
+            field=name,
         )
     return t
 
@@ -589,12 +593,12 @@ def require_radius(value, name: str = "radius", below_one: bool = True) -> float
         One line naming the field.
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{name}: expected a number, got {_show(value)}")
+        raise InputError(f"expected a number, got {_show(value)}", field=name)
     r = real_float(name, value)
     if not (math.isfinite(r) and r >= 0 and (r < 1 or not below_one)):
         limit = " and below 1 (at 1 a weight may vanish)" if below_one else ""
         raise InputError(
-            f"{name}: the radius must be a finite number >= 0{limit}, got {_show(value)}"
+            f"the radius must be a finite number >= 0{limit}, got {_show(value)}", field=name
         )
     return r
 
