@@ -18,8 +18,10 @@ class Option:
     value advised), which each reader writes in its own words.
 
     ``str()`` gives the library's words (``schedule="power"``, or ``device: cpu`` for a
-    document's field); the command line writes its flag instead (``--schedule power``,
-    see :meth:`InputError.text`).
+    document's field), or the flag while :func:`options_written_as` holds a map that has
+    the field (``--schedule power``: ``ntc`` holds its command's map while it runs one);
+    :meth:`ntc_design.errors.InputError.text` and :func:`ntc_design.errors.blame` write an
+    error's options with a map they are given.
 
     Attributes
     ----------
