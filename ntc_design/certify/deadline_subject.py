@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, check_work
+from ..errors import InputError, Option, check_work
 from ..rigorous.exact import Dyadic
 from .checks import Check
 from .deadline import (
@@ -205,10 +205,10 @@ def build_problem(
         secs = continuous_work(pb)
         check_work(
             secs,
-            f"--deadline: the enclosure of the moment equations (N·d = {nd_}, T = {t_end:g}) "
-            f"takes roughly {secs:.3g} s",
+            f"{Option('deadline')}: the enclosure of the moment equations (N·d = {nd_}, "
+            f"T = {t_end:g}) takes roughly {secs:.3g} s",
             MAX_SECONDS if limit is None else limit,
-            "shorten T or use --period",
+            f"shorten T or use {Option('period')}",
         )
     return pb
 

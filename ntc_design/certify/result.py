@@ -126,7 +126,7 @@ class CertifyResult:
         return f"CertifyResult({self.certificate['kind']}, {ver}; {verdicts or 'no gain given'})"
 
     def to_dict(self) -> dict:
-        """The result as a JSON-ready mapping (what ``ntc certify --json`` prints).
+        """The result as a JSON-ready mapping (what ``ntc certify`` prints as JSON).
 
         Returns
         -------
@@ -273,20 +273,23 @@ def certify(
 def _digital_design(des: Any, digital: Digital, gain, sigma, f, sigma_edges) -> DigitalDesign:
     """The design wrapped for a digital kind, or one line saying why it cannot be."""
     if gain is None:
-        raise InputError("--gain: the digital certificate needs the gain c(t)")
+        raise InputError("the digital certificate needs the gain c(t)", field="gain", option=True)
     if not isinstance(des, (ProtocolDesign, SwitchingDesign)):
         raise InputError(
-            "--period: the digital certificate is for a fixed or switching topology, not one "
-            "given as expressions of t"
+            "the digital certificate is for a fixed or switching topology, not one "
+            "given as expressions of t",
+            field="digital",
+            option=True,
         )
     # a value no certificate can state (the subnormal 5e-324) is refused before any work
-    for flag, value in (
-        ("--noise-sigma", sigma),
-        ("--noise-f", f),
+    for name, value in (
+        ("noise_sigma", sigma),
+        ("noise_f", f),
         *(("sigma_edges", v) for v in (sigma_edges or {}).values()),
     ):
         if not callable(value) and out_of_range(np.asarray(value, dtype=float)):
-            raise InputError(f"{flag}: {value!r} has {RANGE_TEXT}"[:200])
+            option = name != "sigma_edges"
+            raise InputError(f"{value!r} has {RANGE_TEXT}"[:180], field=name, option=option)
     out = DigitalDesign(des, digital, gain, float(sigma), f, dict(sigma_edges or {}))
     if not any(k.accepts(out) for k in KINDS.values()):
         nd_ = (
@@ -295,8 +298,10 @@ def _digital_design(des: Any, digital: Digital, gain, sigma, f, sigma_edges) -> 
             else des.topology.nd
         )
         raise InputError(
-            f"--period: the digital certificate needs a dense Lyapunov matrix: N·d <= "
-            f"{DENSE_CERT_MAX_ND}, this network has N·d = {nd_}"
+            f"the digital certificate needs a dense Lyapunov matrix: N·d <= "
+            f"{DENSE_CERT_MAX_ND}, this network has N·d = {nd_}",
+            field="digital",
+            option=True,
         )
     return out
 

@@ -23,13 +23,12 @@ from .app import (
     check_digital_flags,
     check_theta_length,
     digital_option,
-    flag_renamed,
-    flags_named,
     json_text,
     parse_vector,
     renamed_flag,
     require_file,
 )
+from .flags import FLAGS, flags_named, flags_of
 
 if TYPE_CHECKING:
     from ..protocol import ProtocolDesign, SwitchingDesign
@@ -127,7 +126,7 @@ def design_cmd(
     if isinstance(top, ExpressionTopology):
         from ..protocol.timevarying import TimeVaryingDesign
 
-        with flags_named(theta="--theta"):
+        with flags_named("design", "theta"):
             tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
         if as_json:
             print(json_text(tv.to_dict()))
@@ -138,7 +137,7 @@ def design_cmd(
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
-        with flags_named(theta="--theta"):
+        with flags_named("design", "theta"):
             res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
     modes = res.modes if isinstance(res, SwitchingDesign) else {None: res}
     uninformed = [k for k, d in modes.items() if not d.has_informed_agents]
@@ -233,9 +232,7 @@ def generate(
     check_output_file(out_path, "--out", TOPOLOGY_SUFFIXES)  # before the work
     with Progress("ntc generate") as prog:
         prog.stage(f"drawing {n} agents ({family})")
-        with flags_named(
-            n=n_flag, d=d_flag, family="--family", p_negative="--p-negative", seed="--seed"
-        ):
+        with flags_named("generate", "n", "d", "family", "p_negative", "seed", n=n_flag, d=d_flag):
             top = random_network(n, d, seed, family, p_negative=p_negative)
         prog.stage(f"writing {len(top.weights)} edges to {one_line(str(out_path))}")
         write_topology(top, out_path)
@@ -353,7 +350,7 @@ def certify(
     if uninformed and as_json:  # nothing to certify: said as ntc design says it
         print(json_text({"ok": False, "proven": False, "informed": []}))
     _exit_if_uninformed(uninformed, out_path, "certified")
-    with warnings.catch_warnings(), flags_named(theta="--theta"):
+    with warnings.catch_warnings(), flags_named("certify", "theta"):
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
             top,
@@ -544,10 +541,6 @@ def verify(
         print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
-#: The library's fields that ntc robust's flags give (an error about one names the flag).
-ROBUST_FLAGS = {"radius": "--radius", "theta": "--theta", "margin": "--margin"}
-
-
 def robust(
     file: FileArg,
     theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
@@ -586,7 +579,11 @@ def robust(
     try:
         res = certify_robust(top, th, radius, margin)
     except InputError as exc:  # the library names fields; here they are flags
-        raise blame(exc, None, {**ROBUST_FLAGS, "topology": str(file)}) from None
+        flags = {
+            **flags_of("robust", {"radius": 1, "theta": 1, "margin": 1}),
+            "topology": str(file),
+        }
+        raise blame(exc, None, flags, advice=FLAGS["robust"]) from None
     rep, doc, ver, ok = res.report, res.certificate, res.verification, res.valid
     if out_path is not None and doc is None:
         ok = False  # asked for a certificate; none to write (the reason is printed below)
@@ -689,7 +686,10 @@ def export_cmd(
             file, lang, out_dir, period, delay, gain, noise_sigma, noise_f, agent, loss, loss_policy
         )
     except InputError as exc:  # the library's names for the noise flags
-        raise flag_renamed(exc, {"--sigma": sigma_flag, "--f": f_flag}) from None
+        given = {"out": out_dir, "lang": lang, "period": period, "delay": delay, "gain": gain}
+        given |= {"sigma": noise_sigma, "f": noise_f, "agent": agent, "loss": loss}
+        flags = flags_of("export", {**given, "policy": loss_policy}, sigma=sigma_flag, f=f_flag)
+        raise blame(exc, None, flags, advice=FLAGS["export"]) from None
     law = res.source.law
     if as_json:
         print(

@@ -14,8 +14,8 @@ of a certified design, from a scenario or from a certificate.
   the arguments (``period`` is then required; the gain defaults to 1/(1+t), the noise to
   the paper's σ and f), and the gain must satisfy the conditions of Theorem 1.
 
-Messages name the command's options (``--period``, ``--delay``, ``--gain``) for the values
-given as arguments.
+Messages name the parameters (``period``, ``delay``, ``gain``) for the values given as
+arguments (the command line writes them as its flags), the file's fields for the file's.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from ..certify.fields import vector
 from ..certify.format import FORMAT
 from ..certify.kinds.digital import DigitalContext, DigitalState
 from ..certify.kinds.digital_loss import LossState
-from ..errors import AssumptionWarning, InputError
+from ..errors import AssumptionWarning, InputError, Option
 from ..gain.schedule import ScheduleGain, analyse_any_gain, gain_from_option, schedule_from_document
 from ..io.documents import read_document
 from ..io.files import parse_scenario
@@ -95,7 +95,7 @@ def _digital(
     policy: str | None = None,
 ) -> Digital:
     """h, D, p and the policy: the arguments over a scenario's ``digital:`` block (read as
-    simulate reads it: an unknown field is refused), errors naming the option for an
+    simulate reads it: an unknown field is refused), errors naming the parameter for an
     argument and the block for the file's value."""
     if given is not None and not isinstance(given, dict):
         raise InputError(f"{where}: digital: expected {{period: h, delay: D}}")
@@ -110,28 +110,23 @@ def _digital(
         base["policy"] = policy
     if "period" not in base:
         raise InputError(
-            f"--period: {where} has no digital block (period h, delay D); give --period"
+            f"{where} has no digital block (period h, delay D); give ",
+            Option("period"),
+            field="period",
+            option=True,
         )
     try:
         dg = Digital.from_document(base)
         if horizon is not None:
             dg.steps(horizon)
-    except InputError as exc:
-        text = str(exc)
-        for field, flag, value in (
-            ("digital.period", "--period", period),
-            ("digital.delay", "--delay", delay),
-            ("digital.loss", "--loss", loss),
-            ("digital.policy", "--loss-policy", policy),
-        ):
-            if text.startswith(field):
-                text = (flag + text[len(field) :]) if value is not None else f"{where}: {text}"
-                break
-        else:
-            text = f"{where}: {text}"
-        raise InputError(text) from None
+    except InputError as exc:  # a field an argument gave is that parameter, else the file's
+        args = {"period": period, "delay": delay, "loss": loss, "policy": policy}
+        name = (exc.field or "").removeprefix("digital.")
+        if (exc.field or "").startswith("digital.") and args.get(name) is not None:
+            raise InputError(*exc.parts, field=name, option=True) from None
+        raise InputError(f"{where}: {exc}") from None
     if not math.isfinite(dg.period):
-        raise InputError(f"--period: must be a finite number, got {dg.period!r}")
+        raise InputError(f"must be a finite number, got {dg.period!r}", field="period", option=True)
     return dg
 
 
@@ -139,7 +134,7 @@ def _gain_option(gain: str | ScheduleGain | None) -> str | ScheduleGain | None:
     if gain is None or isinstance(gain, ScheduleGain):
         return gain
 
-    return gain_from_option(gain, "--gain")
+    return gain_from_option(gain, "gain")
 
 
 def _check_gain(gain: str | ScheduleGain, where: str) -> None:
@@ -220,14 +215,14 @@ def from_scenario(
         noise = spec.noise
         spec = spec.replace(
             noise=NoiseModel(
-                sigma=noise.sigma if sigma is None else _number("--sigma", sigma, 0.0),
-                f=noise.f if f is None else _number("--f", f),
+                sigma=noise.sigma if sigma is None else _number("sigma", sigma, 0.0),
+                f=noise.f if f is None else _number("f", f),
                 sigma_edges=noise.sigma_edges,
             )
         )
     if not isinstance(spec.gain, (str, ScheduleGain)):
         raise InputError(f"{src}: gain: a Python function cannot be exported")
-    _check_noise("--sigma" if sigma is not None else f"{src}: noise.sigma", spec.noise.sigma)
+    _check_noise("sigma" if sigma is not None else f"{src}: noise.sigma", spec.noise.sigma)
     law, res = _certified_law(
         top,
         spec.theta,
@@ -298,7 +293,8 @@ def _certified_law(
     if not res.proven or not sampled or not any(t.guaranteed for t in sampled):
         raise InputError(
             f"{src}: no theorem is guaranteed for the sampled protocol at h = {dg.period:g}, "
-            f"D = {dg.delay} with this gain (ntc certify --period says why); nothing exported"
+            f"D = {dg.delay} with this gain (ntc certify "
+            f"{Option('period', alias='with a period')} says why); nothing exported"
         )
     design = res.design.base if isinstance(res.design, DigitalDesign) else res.design
     if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
@@ -361,30 +357,33 @@ def _certified(res: Any) -> str:
     )
 
 
-def _number(flag: str, value: Any, minimum: float | None = None) -> float:
+def _number(name: str, value: Any, minimum: float | None = None) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"{flag}: expected a number, got {value!r}")
+        raise InputError(f"expected a number, got {value!r}", field=name, option=True)
     v = float(value)
     if not math.isfinite(v) or (minimum is not None and v < minimum):
         at_least = "" if minimum is None else f" >= {minimum:g}"
-        raise InputError(f"{flag}: expected a finite number{at_least}, got {v!r}"[:200])
+        text = f"expected a finite number{at_least}, got {v!r}"[:180]
+        raise InputError(text, field=name, option=True)
     return v
 
 
-def _same(flag: str, given: Any, certified: Any, src: str) -> None:
+def _same(name: str, given: Any, certified: Any, src: str) -> None:
     """Refuse an option that differs from the value the certificate proves (equal is fine)."""
     if given is None:
         return
     a = np.asarray(given, dtype=float)
     b = np.asarray(certified, dtype=float)
     if a.shape != b.shape or not np.array_equal(a, b):
-        _differs(flag, given, b.tolist(), src)  # plain numbers, not NumPy reprs
+        _differs(name, given, b.tolist(), src)  # plain numbers, not NumPy reprs
 
 
-def _differs(flag: str, given: Any, shown: Any, src: str) -> None:
+def _differs(name: str, given: Any, shown: Any, src: str) -> None:
     raise InputError(
-        f"{flag}: {given!r} differs from the certified value {shown!r} ({src}); "
-        "the certificate proves only its own protocol: drop the option or certify anew"[:300]
+        f"{given!r} differs from the certified value {shown!r} ({src}); "
+        "the certificate proves only its own protocol: drop the option or certify anew"[:290],
+        field=name,
+        option=True,
     )
 
 
@@ -468,14 +467,14 @@ def from_certificate(
             f"{src}: the certificate does not prove the sampled protocol "
             "(results.digital.stopped); nothing exported"
         )
-    _same("--period", period, sampled.period, src)
-    _same("--delay", delay, sampled.delay, src)
+    _same("period", period, sampled.period, src)
+    _same("delay", delay, sampled.delay, src)
     if sigma is not None:
-        _same("--sigma", _number("--sigma", sigma, 0.0), sampled.sigma, src)
+        _same("sigma", _number("sigma", sigma, 0.0), sampled.sigma, src)
     fs = sampled.f
-    if f is not None and not np.array_equal(_number("--f", f) * np.eye(first.top.dim), fs):
+    if f is not None and not np.array_equal(_number("f", f) * np.eye(first.top.dim), fs):
         scalar = np.array_equal(fs, fs[0, 0] * np.eye(len(fs)))
-        _differs("--f", float(f), float(fs[0, 0]) if scalar else fs.tolist(), src)
+        _differs("f", float(f), float(fs[0, 0]) if scalar else fs.tolist(), src)
     g = _digital_gain(sampled.gain, f"{src}: subject.digital.gain")
     if gain is not None:
         given = _gain_option(gain)
@@ -483,9 +482,10 @@ def from_certificate(
         stated = g.text if isinstance(g, ScheduleGain) else g
         if "".join(str(text).split()) != "".join(str(stated).split()):  # spaces mean nothing
             raise InputError(
-                f"--gain: {text!r} differs from the certified gain {stated!r} ({src}); drop --gain"[
-                    :300
-                ]
+                f"{text!r} differs from the certified gain {stated!r} ({src}); drop "[:290],
+                Option("gain"),
+                field="gain",
+                option=True,
             )
     _check_gain(g, f"{src}: subject.digital.gain")
     dg = Digital(sampled.period, sampled.delay)
@@ -517,25 +517,31 @@ def _certified_losses(
     ls: Any, delay: int, loss: float | None, policy: str | None, src: str
 ) -> dict:
     """A sampled certificate's p_e by edge (empty: lossless), from its verified reading
-    only: ``--loss``/``--loss-policy`` that differ are refused, as is what it does not prove."""
+    only: a ``loss`` or ``policy`` that differs is refused, as is what it does not prove."""
     if ls is None:
         if loss is not None and loss != 0:
             raise InputError(
-                f"--loss: {loss!r} differs from the certified protocol ({src}), which has no "
-                "lost messages; drop the option or certify anew"[:300]
+                f"{loss!r} differs from the certified protocol ({src}), which has no "
+                "lost messages; drop the option or certify anew"[:290],
+                field="loss",
+                option=True,
             )
         return {}
     if policy is not None and policy != ls.policy:
         raise InputError(
-            f"--loss-policy: {policy!r} differs from the certified policy {ls.policy!r} ({src}); "
-            "drop the option or certify anew"[:300]
+            f"{policy!r} differs from the certified policy {ls.policy!r} ({src}); "
+            "drop the option or certify anew"[:290],
+            field="policy",
+            option=True,
         )
     values = sorted(set(ls.losses.values()))
     if loss is not None and values != [loss]:
         shown = values[0] if len(values) == 1 else "per-edge losses"
         raise InputError(
-            f"--loss: {loss!r} differs from the certified {shown!r} ({src}); "
-            "drop the option or certify anew"[:300]
+            f"{loss!r} differs from the certified {shown!r} ({src}); "
+            "drop the option or certify anew"[:290],
+            field="loss",
+            option=True,
         )
     if not any(p > 0 for p in ls.losses.values()):
         return {}
@@ -561,18 +567,23 @@ def _continuous(
     dg = _digital(period, delay, None, None, f"{src} (a {kind} certificate)", loss, policy)
     stated = doc.get("gain")  # a tabulated schedule whose conditions verify derived
     if stated is not None and gain is not None:
-        raise InputError(f"--gain: the certificate states its gain ({src}: gain); drop --gain")
+        raise InputError(
+            f"the certificate states its gain ({src}: gain); drop ",
+            Option("gain"),
+            field="gain",
+            option=True,
+        )
     g: str | ScheduleGain = (
         schedule_from_document(stated, f"{src}: gain")
         if stated is not None
         else (_gain_option(gain) or "1/(1+t)")
     )
-    _check_gain(g, "--gain" if gain is not None else f"{src}: gain")
+    _check_gain(g, "gain" if gain is not None else f"{src}: gain")
     noise = NoiseModel(
-        sigma=SIGMA if sigma is None else _number("--sigma", sigma, 0.0),
-        f=F_SCALE if f is None else _number("--f", f),
+        sigma=SIGMA if sigma is None else _number("sigma", sigma, 0.0),
+        f=F_SCALE if f is None else _number("f", f),
     )
-    _check_noise("--sigma" if sigma is not None else "noise", noise.sigma, noise.f)
+    _check_noise("sigma" if sigma is not None else "noise", noise.sigma, noise.f)
     tops = {name: m.top for name, m in ctx.modes.items()}
     first_name, first = next(iter(ctx.modes.items()))
     margin = float(doc["subject"]["modes"][first_name]["margin"])

@@ -3,7 +3,7 @@ closed form for t >= T.
 
 What :func:`ntc_design.tune.tune` returns with ``schedule="optimal"``, and a gain wherever
 one is accepted (a scenario's ``gain: {schedule: schedule.csv, tail: "…"}``,
-``ntc certify --gain schedule.csv``, ``simulate``). Theorems 1-4 ask of c only what
+``ntc certify`` with a schedule CSV as its gain, ``simulate``). Theorems 1-4 ask of c only what
 happens as t → ∞ (∫c = ∞, c → 0, ∫c² < ∞) besides c being continuous and non-negative
 (Niu & Wu, eqs. (13), (16)); a finite, non-negative table changes none of the integrals'
 convergence, so the theorems hold for the schedule exactly when

@@ -320,7 +320,7 @@ def _plain_log_ticks(ax) -> None:
     ax.xaxis.set_minor_formatter(NullFormatter())
 
 
-#: What ``ntc tune --out`` writes (an earlier tuning's folder may be replaced).
+#: What ``ntc tune`` writes to its output folder (an earlier tuning's folder may be replaced).
 TUNE_FILES = (
     "tuned.yaml",
     "schedule.csv",

@@ -17,7 +17,7 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import InputError, warn_user
+from ..errors import InputError, Option, warn_user
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..protocol import ProtocolDesign
 from ..protocol.digital import Digital
@@ -236,8 +236,10 @@ def device_engine(spec: SimulationSpec, engine):
         return engine
     if engine is not None:
         raise InputError(
-            "device: gpu runs the paths on this machine's GPU; it does not combine with a "
-            "scheduler (use device: cpu there)"
+            "gpu runs the paths on this machine's GPU; it does not combine with a scheduler (use ",
+            Option("device", "cpu", document=True),
+            " there)",
+            field="device",
         )
     load_cuda()
     return GpuEngine()

@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import (
     MAX_SEED,
     InputError,
+    Option,
     real_float,
     require_int,
     require_number,
@@ -275,8 +276,12 @@ class MonteCarlo:
             raise InputError(f"device: expected cpu or gpu, got {self.device!r}")
         if self.device == "gpu" and self.rng == "numpy":
             raise InputError(
-                "rng: numpy stays on the CPU (device: gpu draws xoshiro256** normals in the "
-                "kernel); use rng: xoshiro or device: cpu"
+                "numpy stays on the CPU (device: gpu draws xoshiro256** normals in the "
+                "kernel); use ",
+                Option("rng", "xoshiro", document=True),
+                " or ",
+                Option("device", "cpu", document=True),
+                field="rng",
             )
         for f in fields(self):
             if f.name not in ("rng", "device"):

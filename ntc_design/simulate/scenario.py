@@ -56,7 +56,7 @@ def load_scenario(
     data : ScenarioData, optional
         The file as :func:`ntc_design.io.files.parse_scenario` already read it (not read again).
     flags : mapping of str to str, optional
-        The flag that gave each override (``{"paths": "--paths"}``): an error about an
+        The command line's name for each override it gave (its flag): an error about an
         override names it, not the file.
 
     Returns

@@ -179,7 +179,7 @@ class SimulationSpec:
         ΔC > 0 of the Lemma 1 design (δ = C + ΔC).
     delta : float or None
         An explicit common coupling δ > 0 for every mode instead of C + ΔC (what
-        ``ntc tune --tune-delta`` writes); None: Lemma 1's.
+        ``ntc tune`` writes when it tunes δ); None: Lemma 1's.
     gain : str or callable
         c(t): an expression in t, or a vectorised callable.
     noise : NoiseModel

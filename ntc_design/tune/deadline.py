@@ -20,7 +20,7 @@ from functools import partial
 
 import numpy as np
 
-from ..errors import InputError, require_horizon, require_positive
+from ..errors import InputError, Option, require_horizon, require_positive
 from ..gain.schedule import ScheduleGain, analyse_schedule, join_tail
 from ..model import TimeVaryingTopology
 from ..model.timevarying import ExpressionTopology
@@ -69,8 +69,13 @@ def check_schedule_scenario(topology: AnyTopology, spec: SimulationSpec) -> None
     """
     if not spec.noise.linear:
         raise InputError(
-            "--schedule optimal: exact moments exist only for a linear f(x) = F·x; use "
-            "--schedule power --method mc (Monte Carlo with common random numbers)"
+            "exact moments exist only for a linear f(x) = F·x; use ",
+            Option("schedule", "power"),
+            " ",
+            Option("method", "mc"),
+            " (Monte Carlo with common random numbers)",
+            field="schedule",
+            value="optimal",
         )
     ScheduleProblem.check_size(topology.n * topology.dim)
 
@@ -307,7 +312,7 @@ def tune_schedule(
     require_horizon("horizon", horizon)
     check_max_gain(max_gain)
     if max_peak is not None:
-        require_positive("--max-peak", max_peak)
+        require_positive("max_peak", max_peak)
     if eps is not None:
         require_positive("eps", eps)
     if not isinstance(check_paths, int) or not 0 <= check_paths <= 100_000:
@@ -329,8 +334,9 @@ def tune_schedule(
         )
     if max_peak is not None and not max_peak > initial:
         raise InputError(
-            f"--max-peak: {max_peak:g} is not above the initial error E Σ‖x_i(0) − θ‖² = "
-            f"{initial:.6g}; no gain can keep below it"
+            f"{max_peak:g} is not above the initial error E Σ‖x_i(0) − θ‖² = "
+            f"{initial:.6g}; no gain can keep below it",
+            field="max_peak",
         )
 
     say("the best power law a·(b + t)^(−γ)")
@@ -359,7 +365,7 @@ def tune_schedule(
     notes.extend(sol.notes)
     if sol.binds:
         notes.append(
-            f"--max-gain {max_gain:g} binds on {len(sol.binds)} node(s) from t = {sol.binds[0]:g}: "
+            f"{Option('max_gain', max_gain)} binds on {len(sol.binds)} node(s) from t = {sol.binds[0]:g}: "
             "a larger bound would do better"
         )
     if max_peak is not None and sol.peak[0] > max_peak * (1 + AGREE_RTOL):

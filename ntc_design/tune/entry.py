@@ -9,7 +9,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ..errors import InputError, Option
 from ..simulate import SimulationSpec
 from ..simulate.prepare import AnyTopology
 from .deadline import CHECK_PATHS, ScheduleTuneResult, tune_schedule
@@ -106,12 +106,14 @@ def tune(
     True
     """
     if family != "power":
-        raise InputError(f"--family: only 'power' (a·(b + t)^(−γ)) is available, got {family!r}")
+        raise InputError(
+            f"only 'power' (a·(b + t)^(−γ)) is available, got {family!r}", field="family"
+        )
     if schedule not in SCHEDULES:
-        raise InputError(f"--schedule: expected power or optimal, got {schedule!r}")
+        raise InputError(f"expected power or optimal, got {schedule!r}", field="schedule")
     if schedule == "power":
         if max_peak is not None:
-            raise InputError("--max-peak: applies to --schedule optimal")
+            raise InputError("applies to ", Option("schedule", "optimal"), field="max_peak")
         return tune_power(
             topology,
             spec,
@@ -128,7 +130,13 @@ def tune(
         )
     if method not in ("auto", "exact"):
         raise InputError(
-            "--schedule optimal: uses exact moments (--method mc is for --schedule power)"
+            "uses exact moments (",
+            Option("method", "mc"),
+            " is for ",
+            Option("schedule", "power"),
+            ")",
+            field="schedule",
+            value="optimal",
         )
     return tune_schedule(
         topology,

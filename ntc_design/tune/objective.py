@@ -452,7 +452,7 @@ class ExpressionObjective(Objective):
 
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         if delta is not None:
-            raise InputError("--tune-delta: a topology given as expressions of t takes δ(t)")
+            raise InputError("a topology given as expressions of t takes δ(t)", field="tune_delta")
         steps = self._steps(gain)
         if steps > MAX_STEPS * (5 if accurate else 1):  # the search's cap is ExactObjective's
             raise InputError(f"{gain.text}: about {steps:.3g} steps at t = 0's radius; too stiff")

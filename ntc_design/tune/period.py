@@ -1,4 +1,4 @@
-"""The longest safe sampling period of the digital protocol (``ntc tune --period auto``):
+"""The longest safe sampling period of the digital protocol (``ntc tune`` with the period ``auto``):
 the largest h such that every period in (0, h] keeps the exact E Σ_i ‖x_i(T) − θ‖² of the
 sampled protocol within (1 + tolerance) of the continuous design's, and its peak
 sup_{t ≤ T} E Σ_i ‖x_i(t) − θ‖² within ``max_peak`` (when given). The protocol runs to T
@@ -246,7 +246,7 @@ class SafePeriod:
         )
 
     def to_dict(self) -> dict:
-        """What ``ntc tune --period auto --json`` prints.
+        """What ``ntc tune`` prints as JSON for the period ``auto``.
 
         Returns
         -------
@@ -272,12 +272,13 @@ def _prepared(topology: AnyTopology, spec: SimulationSpec, horizon: float):
     """The continuous design's modes and the gain, for every period."""
     if is_expression_topology(topology):
         raise InputError(
-            "--period: a topology given as expressions of t is not sampled by the digital "
-            "protocol; give it as a switching schedule or a fixed topology"
+            "a topology given as expressions of t is not sampled by the digital "
+            "protocol; give it as a switching schedule or a fixed topology",
+            field="period",
         )
     base = spec.replace(T=float(horizon), digital=None, method="exact")
     if not base.noise.linear:
-        raise InputError("--period: the exact moments need a linear f (a scalar or a matrix)")
+        raise InputError("the exact moments need a linear f (a scalar or a matrix)", field="period")
     gain = make_gain(base.gain)[0]
     fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
     return fixed, prepare_modes(fixed, base, gain), gain
@@ -376,11 +377,11 @@ def longest_safe_period(
     >>> 0 < r.period < 2
     True
     """
-    horizon = require_horizon("--horizon", horizon)
-    delay = require_int("--delay", delay, minimum=0)
-    tolerance = require_number("--tolerance", tolerance, minimum=0.0)
-    if max_peak is not None and not require_number("--max-peak", max_peak) > 0:
-        raise InputError(f"--max-peak: must be a positive number, got {max_peak!r}")
+    horizon = require_horizon("horizon", horizon)
+    delay = require_int("delay", delay, minimum=0)
+    tolerance = require_number("tolerance", tolerance, minimum=0.0)
+    if max_peak is not None and not require_number("max_peak", max_peak) > 0:
+        raise InputError(f"must be a positive number, got {max_peak!r}", field="max_peak")
     points = require_int("points", points, minimum=2, maximum=1000)
     fixed, pm, gain = _prepared(topology, spec, horizon)
     start = float(pm.eps0 @ pm.eps0)

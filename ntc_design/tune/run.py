@@ -17,7 +17,14 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from ..errors import InputError, check_work, format_seconds, require_horizon, require_positive
+from ..errors import (
+    InputError,
+    Option,
+    check_work,
+    format_seconds,
+    require_horizon,
+    require_positive,
+)
 from ..gain.conditions import analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..protocol import design_topology
@@ -76,18 +83,20 @@ def delta_range(topology: AnyTopology, theta) -> tuple[float, float, float]:
         what = "−L_B Hurwitz"
     else:
         raise InputError(
-            "--tune-delta: a topology given as functions of t takes Lemma 1's δ(t) at every t"
+            "a topology given as functions of t takes Lemma 1's δ(t) at every t",
+            field="tune_delta",
         )
     if any(c is None for c in crits):
-        raise InputError(f"--tune-delta: no δ gives {what} for every larger δ")
+        raise InputError(f"no δ gives {what} for every larger δ", field="tune_delta")
     lemma = max(d.delta for d in designs)
     crit = max(float(c) for c in crits if c is not None)
     lo = max(DELTA_CRIT_FACTOR * crit, DELTA_LOWER_FRACTION * lemma)
     hi = DELTA_UPPER * lemma
     if not lo < hi:
         raise InputError(
-            f"--tune-delta: the critical δ {crit:.4g} leaves no room below {hi:.4g} "
-            f"({DELTA_UPPER:g} × Lemma 1's δ)"
+            f"the critical δ {crit:.4g} leaves no room below {hi:.4g} "
+            f"({DELTA_UPPER:g} × Lemma 1's δ)",
+            field="tune_delta",
         )
     return lo, hi, lemma
 
@@ -174,9 +183,8 @@ def _check_tune_work(
         f"tuning for T = {horizon:g} takes roughly {format_seconds(total)} ({n} evaluations "
         f"of {obj.name}, about {per:.3g} s each)"
     )
-    check_work(
-        total, f"--horizon: {what}", MAX_TUNE_SECONDS, "a shorter --horizon or fewer --evaluations"
-    )
+    instead = f"a shorter {Option('horizon')} or fewer {Option('max_evaluations')}"
+    check_work(total, f"{Option('horizon')}: {what}", MAX_TUNE_SECONDS, instead)
 
 
 def tune_power(

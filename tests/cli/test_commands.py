@@ -286,7 +286,7 @@ def test_export_reads_the_old_noise_spellings_with_a_note(tmp_path, examples, ca
         file, lang, out, period, delay, gain, sigma, f, agent=None, loss=None, policy=None
     ):
         seen.update(sigma=sigma, f=f)
-        raise nd.InputError("--sigma: stands for the library's name of the flag")
+        raise nd.InputError("stands for the library's name of the flag", field="sigma")
 
     monkeypatch.setattr("ntc_design.export.run.export", fake_export)
     sc = examples / "scenarios" / "g1_deadline.yaml"

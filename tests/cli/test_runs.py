@@ -225,6 +225,13 @@ G1_FIXED = EXAMPLES / "scenarios" / "g1_fixed.yaml"
             "--max-gain: expected a number in (1e-06",
         ),
         ("tune", ["--schedule", "optimal", "--check-paths", "-1"], "--check-paths: expected"),
+        # the library names its parameters; the command line writes them as its flags
+        (
+            "tune",
+            ["--schedule", "optimal", "--method", "mc"],
+            "--schedule optimal: uses exact moments (--method mc is for --schedule power)",
+        ),
+        ("tune", ["--period", "auto", "--loss", "auto"], "--period: give a number with --loss"),
         ("tune", ["--period", "0.1", "--delay", "-1"], "--delay: must be an integer >= 0"),
         ("tune", ["--period", "auto", "--horizon", "-2"], "--horizon: must be a positive"),
         ("tune", ["--period", "auto", "--tolerance", "-1"], "--tolerance: must be >= 0"),

@@ -99,12 +99,12 @@ def test_stdin_and_state_texts_round_trip():
 @pytest.mark.hostile
 def test_refusals_write_nothing(tmp_path, monkeypatch):
     out = tmp_path / "o"
-    with pytest.raises(InputError, match=r"^--lang: expected one of c, python, got 'fortran'"):
+    with pytest.raises(InputError, match=r"^lang: expected one of c, python, got 'fortran'"):
         export(DEADLINE, "fortran", out, period=0.1)
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "notes.txt").write_text("keep")
-    with pytest.raises(InputError, match=r"^--out: .* holds 'notes.txt', which no earlier export"):
+    with pytest.raises(InputError, match=r"^out: .* holds 'notes.txt', which no earlier export"):
         export(DEADLINE, "c", mine, period=0.1)
     assert [p.name for p in mine.iterdir()] == ["notes.txt"]
     monkeypatch.setattr(run, "MAX_NUMBERS", 100)
@@ -153,7 +153,7 @@ def test_an_export_never_deletes_user_data(tmp_path, case):
     with pytest.raises(InputError) as err:
         export(DEADLINE, "c", out, period=0.1)
     msg = str(err.value)
-    assert "\n" not in msg and msg.startswith("--out: ") and needle in msg, msg
+    assert "\n" not in msg and msg.startswith("out: ") and needle in msg, msg
     assert _tree(out) == before and sorted(p.name for p in tmp_path.iterdir()) == sorted(
         ["out", *(["mine.txt"] if case == "link" else [])]
     )

@@ -112,12 +112,12 @@ def test_load_source_tells_the_two_apart():
 @pytest.mark.parametrize(
     "extra, kwargs, needles",
     [
-        ("", {}, ["--period:", "has no digital block"]),
-        ("", {"period": 6.0}, ["--period: h = 6 is longer than the horizon T = 5"]),
-        ("", {"period": 0.1, "delay": -1}, ["--delay: must be an integer >= 0"]),
+        ("", {}, ["period:", "has no digital block"]),
+        ("", {"period": 6.0}, ["period: h = 6 is longer than the horizon T = 5"]),
+        ("", {"period": 0.1, "delay": -1}, ["delay: must be an integer >= 0"]),
         ("digital: {period: -1}\n", {}, ["s.yaml: digital.period: must be a positive number"]),
         ("gain: '1'\n", {"period": 0.1}, ["no theorem is guaranteed", "nothing exported"]),
-        ("", {"period": 0.1, "sigma": -1.0}, ["--sigma: expected a finite number >= 0"]),
+        ("", {"period": 0.1, "sigma": -1.0}, ["sigma: expected a finite number >= 0"]),
         (
             "digital: {period: 0.1, loss: 0.1, policy: hold}\n",
             {},
@@ -128,8 +128,8 @@ def test_load_source_tells_the_two_apart():
             {},
             ["no theorem is guaranteed", "D = 9", "nothing exported"],
         ),
-        ("", {"period": 0.1, "loss": 1.5}, ["--loss: a loss probability must be finite"]),
-        ("", {"period": 0.1, "loss": 0.1, "policy": "drop"}, ["--loss-policy: unknown policy"]),
+        ("", {"period": 0.1, "loss": 1.5}, ["loss: a loss probability must be finite"]),
+        ("", {"period": 0.1, "loss": 0.1, "policy": "drop"}, ["policy: unknown policy"]),
     ],
 )
 def test_scenario_refusals(tmp_path, extra, kwargs, needles):
@@ -169,12 +169,12 @@ def test_a_certificate_that_does_not_verify_is_refused(tmp_path):
 @pytest.mark.hostile
 def test_certificate_option_refusals(tmp_path):
     with pytest.raises(
-        InputError, match=r"^--period: .*g1.json \(a hurwitz certificate\) has no digital block"
+        InputError, match=r"^period: .*g1.json \(a hurwitz certificate\) has no digital block"
     ):
         from_certificate(CERTS / "g1.json")
-    with pytest.raises(InputError, match=r"^--gain: c\(t\) = 1 does not satisfy"):
+    with pytest.raises(InputError, match=r"^gain: c\(t\) = 1 does not satisfy"):
         from_certificate(CERTS / "g1.json", period=0.1, gain="1")
-    with pytest.raises(InputError, match=r"^--f: expected a number"):
+    with pytest.raises(InputError, match=r"^f: expected a number"):
         from_certificate(CERTS / "g1.json", period=0.1, f="x")  # type: ignore[arg-type]
 
 
@@ -244,11 +244,11 @@ def test_a_digital_certificate_exports_what_it_proves():
 @pytest.mark.parametrize(
     "kwargs, needle",
     [
-        ({"period": 0.5}, "--period: 0.5 differs from the certified value 0.1"),
-        ({"delay": 0}, "--delay: 0 differs from the certified value 1"),
-        ({"sigma": 0.2}, "--sigma: 0.2 differs from the certified value 0.4"),
-        ({"f": 0.25}, "--f: 0.25 differs from the certified value"),
-        ({"gain": "50/(1+t)"}, "--gain: '50/(1+t)' differs from the certified gain '1/(1+t)'"),
+        ({"period": 0.5}, "period: 0.5 differs from the certified value 0.1"),
+        ({"delay": 0}, "delay: 0 differs from the certified value 1"),
+        ({"sigma": 0.2}, "sigma: 0.2 differs from the certified value 0.4"),
+        ({"f": 0.25}, "f: 0.25 differs from the certified value"),
+        ({"gain": "50/(1+t)"}, "gain: '50/(1+t)' differs from the certified gain '1/(1+t)'"),
     ],
 )
 def test_an_option_that_differs_from_the_proof_is_refused(kwargs, needle):
@@ -263,10 +263,10 @@ def test_an_option_that_differs_from_the_proof_is_refused(kwargs, needle):
 @pytest.mark.parametrize(
     "kwargs, needle",
     [
-        ({"f": float("inf")}, "--f: expected a finite number, got inf"),
-        ({"f": float("nan")}, "--f: expected a finite number, got nan"),
-        ({"sigma": float("nan")}, "--sigma: expected a finite number >= 0, got nan"),
-        ({"sigma": float("-inf")}, "--sigma: expected a finite number >= 0, got -inf"),
+        ({"f": float("inf")}, "f: expected a finite number, got inf"),
+        ({"f": float("nan")}, "f: expected a finite number, got nan"),
+        ({"sigma": float("nan")}, "sigma: expected a finite number >= 0, got nan"),
+        ({"sigma": float("-inf")}, "sigma: expected a finite number >= 0, got -inf"),
     ],
 )
 def test_a_non_finite_noise_option_is_one_line_on_every_route(path, kwargs, needle):
@@ -284,7 +284,7 @@ def test_a_differing_f_names_plain_numbers_and_a_certified_matrix(tmp_path):
     with pytest.raises(InputError) as err:
         load_source(CERTS / "g1_digital.json", f=0.30000000000000004)
     assert str(err.value).startswith(
-        "--f: 0.30000000000000004 differs from the certified value 0.3 ("
+        "f: 0.30000000000000004 differs from the certified value 0.3 ("
     ), str(err.value)  # not np.float64(0.3)
     # a certified matrix F against a scalar --f: refused naming the matrix (was a ValueError
     # converting the text "a matrix F" to a number, an internal error)
@@ -296,7 +296,7 @@ def test_a_differing_f_names_plain_numbers_and_a_certified_matrix(tmp_path):
     with pytest.raises(InputError) as err:
         load_source(p, f=0.3)
     msg = str(err.value)
-    assert msg.startswith(f"--f: 0.3 differs from the certified value {f_mat!r} ("), msg
+    assert msg.startswith(f"f: 0.3 differs from the certified value {f_mat!r} ("), msg
 
 
 def _sealed_doc(tmp_path, doc):
@@ -358,7 +358,7 @@ def test_a_subnormal_sigma_is_refused_up_front(value):
         with pytest.raises(InputError) as err:
             call()
         msg = str(err.value)
-        assert msg.startswith("--sigma: ") and repr(value) in msg and "\n" not in msg, msg
+        assert msg.startswith("sigma: ") and repr(value) in msg and "\n" not in msg, msg
 
 
 @pytest.mark.hostile
@@ -428,13 +428,13 @@ def test_a_lossy_scenario_and_its_certificate_export_the_certified_losses(tmp_pa
     assert law.policy == "skip" and np.all(law.modes[0].keep == 1.0 - 0.2)
     assert from_certificate(cert, loss=0.2, policy="skip").law.policy == "skip"
     for kw, needle in (
-        ({"loss": 0.1}, "--loss: 0.1 differs from the certified 0.2"),
+        ({"loss": 0.1}, "loss: 0.1 differs from the certified 0.2"),
         (
             {"policy": "rescale"},
-            "--loss-policy: 'rescale' differs from the certified policy 'skip'",
+            "policy: 'rescale' differs from the certified policy 'skip'",
         ),
     ):
         with pytest.raises(InputError, match=needle):
             from_certificate(cert, **kw)
-    with pytest.raises(InputError, match="--loss: 0.3 differs from the certified protocol"):
+    with pytest.raises(InputError, match="loss: 0.3 differs from the certified protocol"):
         from_certificate(CERTS / "g1_digital.json", loss=0.3)

@@ -148,12 +148,12 @@ def test_switching_schedule_is_certified_with_one_p(switching_set):
 
 @pytest.mark.hostile
 def test_digital_needs_a_gain_and_a_dense_network(g1):
-    with pytest.raises(InputError, match="--gain: the digital certificate needs the gain"):
+    with pytest.raises(InputError, match="^gain: the digital certificate needs the gain"):
         certify(g1, THETA, digital=Digital(0.1))
     from ntc_design.model.generate import random_network
 
     big = random_network(25, 3, seed=1)
-    with pytest.raises(InputError, match=r"--period: .* N·d <= 60, this network has N·d = 75"):
+    with pytest.raises(InputError, match=r"^digital: .* N·d <= 60, this network has N·d = 75"):
         certify(big, [1.0, 2.0, -1.0], gain="1/(1+t)", digital=Digital(0.1))
 
 
