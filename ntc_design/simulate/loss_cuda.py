@@ -22,6 +22,7 @@ from numba import cuda as _cuda
 from numba import float64, uint64
 
 from .cuda_kernels import ZR_SIZE, ZX_SIZE, load_tables, next_word, normal, unit
+from .loss_kernels import POLICY_CODES
 from .modes import BATCH, XI_BYTES
 from .montecarlo import BlockStats, PartialStats
 from .rng import path_states
@@ -245,8 +246,6 @@ def run_loss_blocks(spec, blocks: Sequence[int], progress=None) -> list[PartialS
     list of PartialStats
         One per block, in order.
     """
-    from .loss_kernels import POLICY_CODES  # numba: imported with the run
-
     grid, bp = spec.grid, spec.block_paths
     nd_, ne, ring = spec.x_init.size, spec.system.n_edges, spec.delay + 1
     k_total = grid.n_steps
