@@ -10,12 +10,15 @@ import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 
 from .. import __version__
 from ..errors import INT_TEXT, NUMBER_TEXT, InputError, blame, number_from_text, number_rule
+
+if TYPE_CHECKING:  # the annotation only: NumPy loads when a command asks for the protocol
+    from ..protocol.digital import Digital
 
 # Everything else loads in the command that needs it: `ntc --help` and a mistyped option
 # answer without importing NumPy, SciPy, SymPy or the library's layers.
@@ -216,9 +219,10 @@ def digital_option(
     horizon: object = None,
     loss: float | None = None,
     policy: str | None = None,
-) -> dict | None:
-    """The ``digital`` block from ``--period`` and ``--delay`` over a scenario's own
-    (``given``), checked with the flags named in errors.
+) -> Digital | None:
+    """The sampled protocol from ``--period`` and ``--delay`` over a scenario's own
+    ``digital`` block (``given``), checked with the flags named in errors: the one
+    :class:`~ntc_design.protocol.digital.Digital` the command passes on.
 
     Parameters
     ----------
@@ -229,7 +233,8 @@ def digital_option(
     given : mapping or None
         The scenario's ``digital`` block, if any.
     horizon : float, optional
-        T (a period longer than it is refused, naming ``--period``).
+        T, for a command whose run does not check h <= T itself (a period longer than it
+        is refused, naming ``--period``); a simulation's spec checks it.
     loss : float or None, optional
         ``--loss``.
     policy : str or None, optional
@@ -237,9 +242,8 @@ def digital_option(
 
     Returns
     -------
-    dict or None
-        ``{period, delay}`` (with ``loss`` and ``policy`` when set), or None when
-        neither the flags nor the scenario ask for one.
+    Digital or None
+        None when no flag asks for one.
 
     Raises
     ------
@@ -270,7 +274,7 @@ def digital_option(
             dg.steps(float(horizon))
     except InputError as exc:
         raise digital_flags_named(exc, period, delay) from None
-    return dg.to_dict()
+    return dg
 
 
 def digital_flags_named(exc: InputError, period: object, delay: object) -> InputError:

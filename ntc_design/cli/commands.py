@@ -336,7 +336,6 @@ def certify(
     from ..certify import write_certificate
     from ..gain.schedule import gain_from_option
     from ..model.load import load
-    from ..protocol.digital import Digital
     from ..protocol.lemma1 import uninformed_modes
 
     if deadline is not None and (loss is not None or loss_policy is not None):
@@ -363,7 +362,7 @@ def certify(
             noise_sigma=noise_sigma,
             noise_f=noise_f,
             rate_method=rate_method,
-            digital=Digital.from_document(sampled) if sampled is not None else None,
+            digital=sampled,
         )
     figures = continuous = None
     if scenario is not None and res.verification.valid:
@@ -420,10 +419,10 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     sampled = digital_option(period, delay, sc.document.get("digital"), t_doc)
     top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
     n, d = top.n, top.dim
-    if sampled:  # before the certificate: its own work is bounded by the same steps
+    if sampled is not None:  # before the certificate: its own work is bounded by the same steps
         from ..certify.deadline import check_sampled_work
 
-        check_sampled_work(top.n * top.dim, float(spec.T), sampled["period"], sampled["delay"])
+        check_sampled_work(top.n * top.dim, float(spec.T), sampled.period, sampled.delay)
     x0, _ = spec.initial_state(n, d)
     noise = spec.noise
     from ..gain.schedule import ScheduleGain
@@ -442,8 +441,8 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     f = np.asarray(noise.f, dtype=float)
     section = {
         "T": float(spec.T),
-        "period": sampled["period"] if sampled else None,
-        "delay": sampled["delay"] if sampled else 0,
+        "period": sampled.period if sampled is not None else None,
+        "delay": sampled.delay if sampled is not None else 0,
         "gain": gain_doc,
         "noise": {
             "sigma": float(noise.sigma),

@@ -160,19 +160,17 @@ def simulate(
     }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
     sc = parse_scenario(scenario)
-    if period is not None or delay is not None or loss is not None or loss_policy is not None:
-        overrides["digital"] = digital_option(
-            period,
-            delay,
-            sc.document.get("digital"),
-            overrides.get("T", sc.document.get("T")),
-            loss,
-            loss_policy,
-        )
+    # the flags over the file's block: one Digital, passed as itself (the spec checks h <= T)
+    sampled = digital_option(period, delay, sc.document.get("digital"), None, loss, loss_policy)
+    if sampled is not None:
+        overrides["digital"] = sampled.to_dict()  # as summary.json records the command
     flags = {k: f for k, f in SIMULATE_FLAGS.items() if k in overrides}
+    if period is None:  # the file's period: its errors name the file, not --period
+        flags.pop("digital", None)
     given_digital = (("period", period), ("delay", delay))
     flags.update({f"digital.{k}": f"--{k}" for k, v in given_digital if v is not None})
-    top, spec, sc = load_scenario(scenario, overrides, sc, flags)
+    passed = {**overrides, "digital": sampled} if sampled is not None else overrides
+    top, spec, sc = load_scenario(scenario, passed, sc, flags)
     # summary.json records the command as typed: the report's re-run line keeps the overrides
     recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}
     if workers is not None:
@@ -474,12 +472,11 @@ def _tune_loss(
         raise InputError(f"--period: expected a number, got {period!r:.40}") from None
     given = sc0.document.get("digital")
     t_doc = horizon if horizon is not None else sc0.document.get("T")
-    block = digital_option(h, delay, given, t_doc, None, policy)
-    if block is None:
+    dg = digital_option(h, delay, given, t_doc, None, policy)
+    if dg is None:
         if not isinstance(given, dict):
             raise InputError("--loss: needs --period (or a digital block in the scenario)")
-        block = dict(given)
-    dg = Digital.from_document(block)
+        dg = Digital.from_document(given)
     top, spec, sc = load_scenario(scenario, None, sc0)
     if out_dir is not None:
         check_output_folder(out_dir, ("loss.json",))
@@ -640,7 +637,6 @@ def report(
     sampled = digital_option(
         period, delay, None, None, loss, loss_policy
     )  # before the library loads
-    from ..protocol.digital import Digital
     from ..reports.report import write_report
     from ..reports.sweep import is_sweep_dir, write_sweep_report
     from ..reports.terminal import out
@@ -654,7 +650,7 @@ def report(
         path = write_report(
             directory,
             interactive=interactive,
-            digital=Digital.from_document(sampled) if sampled is not None else None,
+            digital=sampled,
         )
     except InputError as exc:  # h > T, too many steps, the delay's memory: name the flag
         raise digital_flags_named(exc, period, delay) from None

@@ -199,6 +199,9 @@ class SimulationSpec:
     digital : Digital or None
         The sampled protocol (period h, delay D; :mod:`ntc_design.protocol.digital`): the
         recursion is stepped every h instead of the continuous SAN; None: continuous.
+    digital_steps : (int, float) or None
+        K = ⌊T/h⌋ and the partial step s of the sampled protocol (:meth:`Digital.steps`),
+        decided once on construction (None: continuous).
     """
 
     theta: np.ndarray
@@ -215,6 +218,11 @@ class SimulationSpec:
     resample: float | None = None
     robust: RobustSampling | None = None
     digital: Digital | None = None
+    #: K and s of the sampled protocol to T (:meth:`Digital.steps`), decided once here:
+    #: the size check, the grid and the run's summary read them.
+    digital_steps: tuple[int, float] | None = field(
+        default=None, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         th = check_vector("theta", self.theta, bound=MAX_MAGNITUDE)
@@ -259,7 +267,8 @@ class SimulationSpec:
                     "digital: the sampled protocol steps every period h; stepping: intrinsic "
                     "and scheme: implicit do not apply to it"
                 )
-            self.digital.steps(self.T)  # h <= T and a bounded number of steps
+            # h <= T and a bounded number of steps
+            object.__setattr__(self, "digital_steps", self.digital.steps(self.T))
         if self.mc.device == "gpu":
             if self.stepping.scheme != "explicit":
                 raise InputError("scheme: implicit runs on the CPU only (device: cpu)")

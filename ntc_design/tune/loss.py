@@ -187,7 +187,7 @@ def largest_tolerable_loss(
     pm = prepare_modes(topology, base, gain)
     s = pm.systems[0]
     delay = digital.delay
-    grid = sampled_grid(topology, pm, Digital(digital.period, delay), t_end, np.array([t_end]))
+    grid = sampled_grid(topology, pm, digital, t_end, np.array([t_end]))  # h: its loss aside
 
     def run(p: float) -> tuple[float, float, float]:
         with np.errstate(all="ignore"):

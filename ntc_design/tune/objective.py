@@ -20,6 +20,7 @@ whose moments overflow, scores +∞ with the reason recorded: it is never the op
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,10 +29,11 @@ from ..errors import InputError
 from ..gain.schedule import ScheduleGain
 from ..model.timevarying import ExpressionTopology
 from ..protocol import design_topology
+from ..protocol.digital import Digital
 from ..simulate import SimulationSpec, simulate
 from ..simulate.budget import Estimate, exact_seconds, mc_seconds
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
-from ..simulate.digital import digital_moments
+from ..simulate.digital import DigitalMoments, digital_moments
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
 from ..simulate.options import SaveAt
 from ..simulate.prepare import (
@@ -367,17 +369,55 @@ class DigitalObjective(ExactObjective):
             and topology.n * topology.dim <= MOMENTS_MAX_ND
         )
 
+    def moments(
+        self,
+        gain: Callable[[np.ndarray], np.ndarray],
+        save_times: np.ndarray,
+        digital: Digital | None = None,
+        delta: float | None = None,
+        abort_above: float | None = None,
+    ) -> DigitalMoments:
+        """The exact moments of the sampled recursion to T under ``gain`` (what
+        :meth:`curve` reduces, and what ``ntc tune --period auto`` evaluates at each
+        period: the designs are prepared once, whatever h).
+
+        Parameters
+        ----------
+        gain : callable
+            c(t), vectorised (a candidate, or the scenario's gain).
+        save_times : numpy.ndarray
+            Where to record (moved to the nearest sample).
+        digital : Digital, optional
+            The period and delay (default: the scenario's ``digital`` block).
+        delta : float, optional
+            An explicit common δ (else the scenario's).
+        abort_above : float, optional
+            A run whose E‖e_k‖² passes this stops (its values +∞).
+
+        Returns
+        -------
+        DigitalMoments
+
+        Raises
+        ------
+        InputError
+            h > T, or moments too large for memory.
+        """
+        dg = digital if digital is not None else self.spec.digital
+        assert dg is not None  # see accepts
+        pm = self.prepared(delta)[0]
+        grid = sampled_grid(self.topology, pm, dg, self.horizon, save_times)
+        with np.errstate(all="ignore"):
+            return digital_moments(
+                pm.systems, grid, gain, pm.eps0, pm.n, pm.d, dg.delay, abort_above
+            )
+
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         pm = self.prepared(delta)[0]
-        dg = self.spec.digital
-        assert dg is not None  # see accepts
-        grid = sampled_grid(
-            self.topology, pm, dg, self.horizon, np.linspace(0, self.horizon, points)
-        )
         limit = None if accurate else GROWTH_LIMIT * max(float(pm.eps0 @ pm.eps0), 1.0)
-        with np.errstate(all="ignore"):
-            m = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, dg.delay, limit)
-        return Curve(grid.save_times, m.moments.ms_error.sum(axis=1))
+        save = np.linspace(0, self.horizon, points)
+        m = self.moments(gain, save, delta=delta, abort_above=limit)
+        return Curve(m.moments.t, m.moments.ms_error.sum(axis=1))
 
     def describe(self) -> str:
         """What the objective computes.

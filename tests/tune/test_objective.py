@@ -97,3 +97,44 @@ def test_a_stiff_candidate_on_expressions_of_t_is_not_integrated_while_searching
     monkeypatch.setattr(objective, "simulate", no_run)
     assert obj.value(gain) == math.inf and "too stiff" in obj.skipped[gain.text]
     assert obj.seconds(gain) == 0.0 and obj.seconds(gain, accurate=True) > 0
+
+
+def test_the_digital_objective_at_any_period_is_the_sampled_recursion(g1, theta):
+    """DigitalObjective.moments at a period other than the scenario's (what ``--period
+    auto`` evaluates) equals the recursion written out: e_{k+1} = e_k − h c_k L_B e_k
+    with the second moment propagated by hand (D = 0, one mode)."""
+    from ntc_design.protocol.digital import Digital
+    from ntc_design.tune.objective import DigitalObjective
+    from ntc_design.tune.period import period_curve
+
+    x0 = np.linspace(-1.0, 1.0, g1.n * g1.dim)
+    spec = SimulationSpec.build(
+        theta, noise=NoiseModel(0.4, 0.3), initial=x0, T=1.0, digital={"period": 0.5}
+    )
+    obj = DigitalObjective(g1, spec, 1.0)
+    gain = PowerGain(1.0, 1.0, 1.0)
+    h = 0.25  # not the scenario's 0.5
+    dm = obj.moments(gain, np.array([1.0]), Digital(h))
+    pm = obj.prepared(None)[0]
+    s = pm.systems[0]
+    n, d = s.n_agents, s.dim
+    lap = s.lap_b.toarray()
+    # edge j -> i: g_e = e_i ⊗ σ|A_ij| 1_d, G_e e = e_i ⊗ |A_ij| F (e_j − e_i)
+    gs, big_gs = [], []
+    for e, (i, j) in enumerate(zip(s.dst.tolist(), s.src.tolist(), strict=True)):
+        gv = np.zeros(n * d)
+        gv[i * d : (i + 1) * d] = s.g_edge[e]
+        sel = np.zeros((n, n))
+        sel[i, j], sel[i, i] = 1.0, -1.0
+        gs.append(gv)
+        big_gs.append(np.kron(sel, s.abs_w[e] @ s.fmat))
+    m = np.outer(pm.eps0, pm.eps0)
+    for k in range(4):
+        c = float(gain(np.array([k * h]))[0])
+        a = np.eye(n * d) - h * c * lap
+        noise = sum(np.outer(g, g) + big @ m @ big.T for g, big in zip(gs, big_gs, strict=True))
+        m = a @ m @ a.T + c * c * h * noise
+    assert dm.moments.ms_error[-1].sum() == pytest.approx(np.trace(m), rel=1e-10)
+    # the period search evaluates the same objective: its curve at h is this number
+    final, _ = period_curve(g1, spec.replace(gain=gain.text), 1.0, 0, np.array([h]))[0]
+    assert final == pytest.approx(np.trace(m), rel=1e-10)
