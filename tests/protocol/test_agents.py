@@ -116,9 +116,7 @@ def test_refusals(g1_design):
 
 
 @pytest.mark.hostile
-def test_a_topology_given_as_expressions_of_t_is_refused_by_one_check_everywhere(
-    g1, g1tv, theta
-):
+def test_a_topology_given_as_expressions_of_t_is_refused_by_one_check_everywhere(g1, g1tv, theta):
     """The digital protocol's refusal of A(t) is one function with one text: the
     simulator, the period search and the certificate say it alike (issue 48)."""
     from ntc_design.certify import certify
