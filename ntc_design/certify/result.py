@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import RateMethod
 from ..errors import InputError
 from ..gain.conditions import GainAnalysis
 from ..gain.schedule import ScheduleGain, analyse_any_gain
@@ -191,7 +192,7 @@ def certify(
     delta: float | None = None,
     noise_sigma: float = SIGMA,
     noise_f=F_SCALE,
-    rate_method: str = "lyapunov",
+    rate_method: RateMethod = "lyapunov",
     digital: Digital | None = None,
     sigma_edges: Mapping | None = None,
 ) -> CertifyResult:

@@ -255,8 +255,7 @@ def digital_option(
 
     if loss is not None:
         require_loss("--loss", loss)
-    if policy is not None:
-        require_policy("--loss-policy", policy)
+    checked = require_policy("--loss-policy", policy) if policy is not None else None
     if period is None and delay is None and loss is None and policy is None:
         return None
     base = dict(given) if isinstance(given, dict) else {}
@@ -268,7 +267,7 @@ def digital_option(
             period if period is not None else base["period"],
             delay if delay is not None else base.get("delay", 0),
             loss if loss is not None else base.get("loss", 0.0),
-            policy if policy is not None else base.get("policy", "skip"),
+            checked if checked is not None else base.get("policy", "skip"),
         )
         if isinstance(horizon, (int, float)) and not isinstance(horizon, bool) and horizon > 0:
             dg.steps(float(horizon))

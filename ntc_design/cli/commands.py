@@ -8,10 +8,11 @@ import re
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 
+from ..choices import RateMethod, choices
 from ..errors import AssumptionWarning, InputError, blame, one_line, require_number
 from .app import (
     DelayOpt,
@@ -324,7 +325,7 @@ def certify(
 
     # trivially bad input before the library loads
     th = parse_vector(theta, "--theta") if theta is not None else None
-    if rate_method not in ("lyapunov", "lmi"):  # before any work
+    if rate_method not in choices(RateMethod):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
     sampled = digital_option(period, delay, None, None, loss, loss_policy)
     require_file(file)
@@ -361,7 +362,7 @@ def certify(
             gain_opt,
             noise_sigma=noise_sigma,
             noise_f=noise_f,
-            rate_method=rate_method,
+            rate_method=cast("RateMethod", rate_method),  # checked above
             digital=sampled,
         )
     figures = continuous = None

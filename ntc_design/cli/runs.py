@@ -388,6 +388,7 @@ def tune(
     from ..reports.terminal import Progress, out, print_table
     from ..reports.tune import TUNE_FILES, write_tune_outputs
     from ..simulate.scenario import load_scenario
+    from ..tune import options_for
     from ..tune import tune as run
 
     sc0 = parse_scenario(scenario)
@@ -418,16 +419,14 @@ def tune(
         warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
         deadline = spec.T if horizon is None else horizon
         prog.stage(f"tuning {scenario} for T = {deadline:g}")
-        opts: dict[str, Any] = dict(
-            require=require, tune_delta=tune_delta, eps=eps, method=method, progress=prog.stage
-        )
-        if schedule == "optimal":  # the defaults of tune() where a flag is not given
+        opts: dict[str, Any] = dict(require=require, tune_delta=tune_delta, eps=eps)
+        if schedule == "optimal":  # the defaults of the options where a flag is not given
             opts["max_peak"] = max_peak
             opts.update({k: given[k] for k in ("max_gain", "check_paths") if given[k] is not None})
-        elif max_peak is not None:
-            raise InputError("--max-peak: applies to --schedule optimal")
+        else:
+            opts.update(max_evaluations=evaluations, max_peak=max_peak)
         try:
-            res = run(top, spec, deadline, max_evaluations=evaluations, schedule=schedule, **opts)
+            res = run(top, spec, deadline, options_for(schedule, method, **opts), prog.stage)
         except InputError as exc:
             raise blame(exc, sc.source, flags, fields) from None
     doc = res.to_dict()

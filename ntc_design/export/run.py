@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..choices import Language, choices
 from ..errors import InputError, one_line
 from ..expr.code import literal
 from ..gain.schedule import ScheduleGain
@@ -33,7 +34,7 @@ from .python import FILES as PY_FILES
 from .python import python_files
 from .source import ExportSource, load_source
 
-LANGUAGES = ("c", "python")
+LANGUAGES = choices(Language)
 #: Steps of the example input (fewer when the scenario's horizon has fewer).
 EXAMPLE_STEPS = 100
 #: The seed of the example's normals.

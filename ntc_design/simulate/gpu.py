@@ -29,13 +29,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..choices import Layout, choices
 from ..errors import InputError, one_line
 from .modes import FixedModes
 from .montecarlo import MonteCarloSpec, PartialStats, PathBlocks
 
 SIMULATOR_ENV = "NTC_CUDA_SIMULATOR"
 INSTALL = "pip install 'ntc-design[gpu]'"
-LAYOUTS = ("auto", "fused", "sparse")
+LAYOUTS = choices(Layout)
 
 
 def simulator_requested() -> bool:
@@ -170,7 +171,7 @@ class GpuEngine:
         state, else a thread per row and path), ``fused`` or ``sparse``.
     """
 
-    layout: str = "auto"
+    layout: Layout = "auto"
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:

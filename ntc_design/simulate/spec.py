@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import SimulateMethod, choices
 from ..errors import (
     InputError,
     quote,
@@ -146,7 +147,7 @@ SCENARIO_KEYS = (
     "digital",
 )
 OPTION_KEYS = tuple(k for k in SCENARIO_KEYS if k not in ("name", "description", "topology"))
-METHODS = ("mc", "exact", "both")
+METHODS = choices(SimulateMethod)
 MAX_GAIN_TEXT = 10_000
 
 
@@ -214,7 +215,7 @@ class SimulationSpec:
     save: SaveAt = field(default_factory=lambda: SaveAt(every=0.1))
     stepping: Stepping = field(default_factory=Stepping)
     mc: MonteCarlo = field(default_factory=MonteCarlo)
-    method: str = "both"
+    method: SimulateMethod = "both"
     resample: float | None = None
     robust: RobustSampling | None = None
     digital: Digital | None = None

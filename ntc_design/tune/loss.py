@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import LossPolicy
 from ..errors import InputError, require_horizon, require_number
 from ..model import Topology
 from ..present.rows import Table, fmt, verdict
@@ -145,7 +146,7 @@ def largest_tolerable_loss(
     spec: SimulationSpec,
     horizon: float,
     digital: Digital,
-    policy: str = "skip",
+    policy: LossPolicy = "skip",
     tolerance: float = 0.1,
 ) -> LossTuning:
     """The largest uniform loss whose exact error at T, and every smaller loss's, stays

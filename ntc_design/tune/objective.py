@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..choices import TuneMethod, choices
 from ..errors import InputError
 from ..gain.schedule import ScheduleGain
 from ..model.timevarying import ExpressionTopology
@@ -580,8 +581,27 @@ OBJECTIVES: dict[str, type[Objective]] = {
 }
 
 
+def check_method(method: object) -> None:
+    """Refuse an objective that is not one of ``auto``, ``exact`` or ``mc``.
+
+    Parameters
+    ----------
+    method : object
+        The method asked for.
+
+    Raises
+    ------
+    InputError
+        One line naming ``method`` (and why ``both`` is not one).
+    """
+    if method not in choices(TuneMethod):
+        # one objective per candidate: simulate's 'both' (the two curves) has no meaning here
+        why = " (tuning minimises one objective; both is simulate's)" if method == "both" else ""
+        raise InputError(f"method: expected auto, exact or mc, got {method!r}{why}")
+
+
 def objective_for(
-    topology: AnyTopology, spec: SimulationSpec, horizon: float, method: str = "auto"
+    topology: AnyTopology, spec: SimulationSpec, horizon: float, method: TuneMethod = "auto"
 ) -> Objective:
     """The objective for a scenario: the first of :data:`OBJECTIVES` that accepts it
     (``auto``), exact moments (``exact``) or Monte Carlo (``mc``).
@@ -606,10 +626,7 @@ def objective_for(
     InputError
         ``exact`` for a non-linear f or above the exact moments' size; an unknown method.
     """
-    if method not in ("auto", "exact", "mc"):
-        # one objective per candidate: simulate's 'both' (the two curves) has no meaning here
-        why = " (tuning minimises one objective; both is simulate's)" if method == "both" else ""
-        raise InputError(f"method: expected auto, exact or mc, got {method!r}{why}")
+    check_method(method)
     if method == "mc":
         return MonteCarloObjective(topology, spec, horizon)
     for key, cls in OBJECTIVES.items():

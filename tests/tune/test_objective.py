@@ -13,6 +13,7 @@ from ntc_design.tune import (
     ExactObjective,
     MonteCarloObjective,
     PowerGain,
+    PowerOptions,
     objective_for,
     tune,
 )
@@ -42,7 +43,7 @@ def test_nonlinear_noise_is_tuned_by_monte_carlo_with_common_random_numbers(g1, 
     assert isinstance(obj, MonteCarloObjective) and obj.statistical
     g = PowerGain(1.3, 0.8, 0.9)
     assert obj.value(g) == obj.value(g)  # the same draws for every evaluation
-    res = tune(g1, spec, 1.0, max_evaluations=12, landscape=False, certificate=False)
+    res = tune(g1, spec, 1.0, PowerOptions(max_evaluations=12, landscape=False, certificate=False))
     assert res.statistical and "statistical" in res.method
     c = res.curves["tuned"]
     assert c.lo[-1] <= c.final <= c.hi[-1] and c.hi[-1] > c.lo[-1]
@@ -69,7 +70,9 @@ def test_a_topology_given_as_expressions_of_t_is_tuned_by_its_exact_moments(exam
     top, spec, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = tune(top, spec, 1.0, max_evaluations=10, landscape=False, certificate=False)
+        res = tune(
+            top, spec, 1.0, PowerOptions(max_evaluations=10, landscape=False, certificate=False)
+        )
         again = simulate(top, spec=spec.replace(T=1.0, gain=res.tuned.text, method="exact"))
     assert res.method == "exact moments (A(t))" and not res.statistical
     assert res.ms_error_T["tuned"] <= res.ms_error_T["baseline"]
