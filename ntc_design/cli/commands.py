@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 
-from ..choices import RateMethod, choices
+from ..choices import Language, RateMethod, choices
 from ..errors import AssumptionWarning, InputError, blame, one_line, require_number
 from .app import (
     DelayOpt,
@@ -678,16 +678,15 @@ def export_cmd(
 
     if loss is not None:
         require_loss("--loss", loss)
-    if loss_policy is not None:
-        require_policy("--loss-policy", loss_policy)
+    policy = require_policy("--loss-policy", loss_policy) if loss_policy is not None else None
     require_file(file)
     from ..export.run import export
+    from ..export.source import ExportOptions
     from ..present.rows import counted
 
     try:
-        res = export(
-            file, lang, out_dir, period, delay, gain, noise_sigma, noise_f, agent, loss, loss_policy
-        )
+        options = ExportOptions(period, delay, gain, noise_sigma, noise_f, loss, policy)
+        res = export(file, cast("Language", lang), out_dir, options, agent)
     except InputError as exc:  # the library's names for the noise flags
         raise flag_renamed(exc, {"--sigma": sigma_flag, "--f": f_flag}) from None
     law = res.source.law
