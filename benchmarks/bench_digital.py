@@ -115,6 +115,7 @@ def period_rows() -> None:
 
 def export_rows(g1, steps: int) -> None:
     from ntc_design.export.run import export
+    from ntc_design.export.source import ExportOptions
     from ntc_design.protocol.agents import agent_law
     from ntc_design.simulate.replay import replay
 
@@ -131,13 +132,17 @@ def export_rows(g1, steps: int) -> None:
         out = Path(tmp) / "c"
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            export(ROOT / "examples" / "scenarios" / "g1_deadline.yaml", "c", out, 0.01, 1)
+            export(
+                ROOT / "examples" / "scenarios" / "g1_deadline.yaml",
+                "c",
+                out,
+                ExportOptions(0.01, 1),
+            )
             export(
                 ROOT / "examples" / "scenarios" / "g1_deadline.yaml",
                 "python",
                 Path(tmp) / "py",
-                0.01,
-                1,
+                ExportOptions(0.01, 1),
             )
         text = (
             " ".join(map(repr, x0.tolist()))

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import RateMethod
 from ..errors import InputError
 from ..gain.conditions import GainAnalysis
 from ..gain.schedule import ScheduleGain, analyse_any_gain
@@ -19,6 +20,7 @@ from ..model.timevarying import ExpressionTopology
 from ..numerics.linalg import RANGE_TEXT, out_of_range
 from ..present.rows import Table
 from ..protocol import ProtocolDesign, SwitchingDesign, design
+from ..protocol.agents import require_sampled
 from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.timevarying import TimeVaryingDesign
 from .checks import Check, Verification
@@ -190,7 +192,7 @@ def certify(
     delta: float | None = None,
     noise_sigma: float = SIGMA,
     noise_f=F_SCALE,
-    rate_method: str = "lyapunov",
+    rate_method: RateMethod = "lyapunov",
     digital: Digital | None = None,
     sigma_edges: Mapping | None = None,
 ) -> CertifyResult:
@@ -258,7 +260,7 @@ def certify(
         # at scale the critical couplings are not needed by the certificate (design notes it)
         des = design(topology, theta, margin, delta, thresholds=False if big else None)
     if digital is not None:
-        des = _digital_design(des, digital, gain, noise_sigma, noise_f, sigma_edges)
+        des = _digital_design(topology, des, digital, gain, noise_sigma, noise_f, sigma_edges)
     kind = kind_for(des)
     options = IssueOptions(
         gain=g, noise_sigma=noise_sigma, noise_f=noise_f, rate_method=rate_method
@@ -270,17 +272,13 @@ def certify(
     return CertifyResult(des, cert, ver, g, kind.verdicts(des, cert, ver, g))
 
 
-def _digital_design(des: Any, digital: Digital, gain, sigma, f, sigma_edges) -> DigitalDesign:
+def _digital_design(
+    topology: object, des: Any, digital: Digital, gain, sigma, f, sigma_edges
+) -> DigitalDesign:
     """The design wrapped for a digital kind, or one line saying why it cannot be."""
     if gain is None:
         raise InputError("the digital certificate needs the gain c(t)", field="gain", option=True)
-    if not isinstance(des, (ProtocolDesign, SwitchingDesign)):
-        raise InputError(
-            "the digital certificate is for a fixed or switching topology, not one "
-            "given as expressions of t",
-            field="digital",
-            option=True,
-        )
+    require_sampled(topology, "digital", option=True)
     # a value no certificate can state (the subnormal 5e-324) is refused before any work
     for name, value in (
         ("noise_sigma", sigma),

@@ -9,13 +9,16 @@ import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 
 from .. import __version__
 from ..errors import INT_TEXT, NUMBER_TEXT, InputError, blame, number_from_text, number_rule
 from .flags import digital_flags
+
+if TYPE_CHECKING:  # the annotation only: NumPy loads when a command asks for the protocol
+    from ..protocol.digital import Digital
 
 # Everything else loads in the command that needs it: `ntc --help` and a mistyped option
 # answer without importing NumPy, SciPy, SymPy or the library's layers.
@@ -190,9 +193,10 @@ def digital_option(
     horizon: object = None,
     loss: float | None = None,
     policy: str | None = None,
-) -> dict | None:
-    """The ``digital`` block from ``--period`` and ``--delay`` over a scenario's own
-    (``given``), checked with the flags named in errors.
+) -> Digital | None:
+    """The sampled protocol from ``--period`` and ``--delay`` over a scenario's own
+    ``digital`` block (``given``), checked with the flags named in errors: the one
+    :class:`~ntc_design.protocol.digital.Digital` the command passes on.
 
     Parameters
     ----------
@@ -203,7 +207,8 @@ def digital_option(
     given : mapping or None
         The scenario's ``digital`` block, if any.
     horizon : float, optional
-        T (a period longer than it is refused, naming ``--period``).
+        T, for a command whose run does not check h <= T itself (a period longer than it
+        is refused, naming ``--period``); a simulation's spec checks it.
     loss : float or None, optional
         ``--loss``.
     policy : str or None, optional
@@ -211,9 +216,8 @@ def digital_option(
 
     Returns
     -------
-    dict or None
-        ``{period, delay}`` (with ``loss`` and ``policy`` when set), or None when
-        neither the flags nor the scenario ask for one.
+    Digital or None
+        None when no flag asks for one.
 
     Raises
     ------
@@ -225,8 +229,7 @@ def digital_option(
 
     if loss is not None:
         require_loss("--loss", loss)
-    if policy is not None:
-        require_policy("--loss-policy", policy)
+    checked = require_policy("--loss-policy", policy) if policy is not None else None
     if period is None and delay is None and loss is None and policy is None:
         return None
     base = dict(given) if isinstance(given, dict) else {}
@@ -238,13 +241,13 @@ def digital_option(
             period if period is not None else base["period"],
             delay if delay is not None else base.get("delay", 0),
             loss if loss is not None else base.get("loss", 0.0),
-            policy if policy is not None else base.get("policy", "skip"),
+            checked if checked is not None else base.get("policy", "skip"),
         )
         if isinstance(horizon, (int, float)) and not isinstance(horizon, bool) and horizon > 0:
             dg.steps(float(horizon))
     except InputError as exc:
         raise blame(exc, None, digital_flags(period, delay)) from None
-    return dg.to_dict()
+    return dg
 
 
 _V = TypeVar("_V")  # a flag's value type

@@ -8,10 +8,11 @@ import re
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 
+from ..choices import Language, RateMethod, choices
 from ..errors import AssumptionWarning, InputError, blame, one_line, require_number
 from .app import (
     DelayOpt,
@@ -321,7 +322,7 @@ def certify(
 
     # trivially bad input before the library loads
     th = parse_vector(theta, "--theta") if theta is not None else None
-    if rate_method not in ("lyapunov", "lmi"):  # before any work
+    if rate_method not in choices(RateMethod):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
     sampled = digital_option(period, delay, None, None, loss, loss_policy)
     require_file(file)
@@ -333,7 +334,6 @@ def certify(
     from ..certify import write_certificate
     from ..gain.schedule import gain_from_option
     from ..model.load import load
-    from ..protocol.digital import Digital
     from ..protocol.lemma1 import uninformed_modes
 
     if deadline is not None and (loss is not None or loss_policy is not None):
@@ -359,8 +359,8 @@ def certify(
             gain_opt,
             noise_sigma=noise_sigma,
             noise_f=noise_f,
-            rate_method=rate_method,
-            digital=Digital.from_document(sampled) if sampled is not None else None,
+            rate_method=cast("RateMethod", rate_method),  # checked above
+            digital=sampled,
         )
     figures = continuous = None
     if scenario is not None and res.verification.valid:
@@ -417,10 +417,10 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     sampled = digital_option(period, delay, sc.document.get("digital"), t_doc)
     top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
     n, d = top.n, top.dim
-    if sampled:  # before the certificate: its own work is bounded by the same steps
+    if sampled is not None:  # before the certificate: its own work is bounded by the same steps
         from ..certify.deadline import check_sampled_work
 
-        check_sampled_work(top.n * top.dim, float(spec.T), sampled["period"], sampled["delay"])
+        check_sampled_work(top.n * top.dim, float(spec.T), sampled.period, sampled.delay)
     x0, _ = spec.initial_state(n, d)
     noise = spec.noise
     from ..gain.schedule import ScheduleGain
@@ -439,8 +439,8 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     f = np.asarray(noise.f, dtype=float)
     section = {
         "T": float(spec.T),
-        "period": sampled["period"] if sampled else None,
-        "delay": sampled["delay"] if sampled else 0,
+        "period": sampled.period if sampled is not None else None,
+        "delay": sampled.delay if sampled is not None else 0,
         "gain": gain_doc,
         "noise": {
             "sigma": float(noise.sigma),
@@ -675,16 +675,15 @@ def export_cmd(
 
     if loss is not None:
         require_loss("--loss", loss)
-    if loss_policy is not None:
-        require_policy("--loss-policy", loss_policy)
+    policy = require_policy("--loss-policy", loss_policy) if loss_policy is not None else None
     require_file(file)
     from ..export.run import export
+    from ..export.source import ExportOptions
     from ..present.rows import counted
 
     try:
-        res = export(
-            file, lang, out_dir, period, delay, gain, noise_sigma, noise_f, agent, loss, loss_policy
-        )
+        options = ExportOptions(period, delay, gain, noise_sigma, noise_f, loss, policy)
+        res = export(file, cast("Language", lang), out_dir, options, agent)
     except InputError as exc:  # the library's names for the noise flags
         given = {"out": out_dir, "lang": lang, "period": period, "delay": delay, "gain": gain}
         given |= {"sigma": noise_sigma, "f": noise_f, "agent": agent, "loss": loss}

@@ -121,18 +121,16 @@ def simulate(
     }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
     sc = parse_scenario(scenario)
-    if period is not None or delay is not None or loss is not None or loss_policy is not None:
-        overrides["digital"] = digital_option(
-            period,
-            delay,
-            sc.document.get("digital"),
-            overrides.get("T", sc.document.get("T")),
-            loss,
-            loss_policy,
-        )
+    # the flags over the file's block: one Digital, passed as itself (the spec checks h <= T)
+    sampled = digital_option(period, delay, sc.document.get("digital"), None, loss, loss_policy)
+    if sampled is not None:
+        overrides["digital"] = sampled.to_dict()  # as summary.json records the command
     # the fields the flags gave (an error about one names the flag, not the file)
     flags = {**flags_of("simulate", overrides), **digital_flags(period, delay)}
-    top, spec, sc = load_scenario(scenario, overrides, sc, flags)
+    if period is None:  # the file's period: its errors name the file, not --period
+        flags.pop("digital", None)
+    passed = {**overrides, "digital": sampled} if sampled is not None else overrides
+    top, spec, sc = load_scenario(scenario, passed, sc, flags)
     # summary.json records the command as typed: the report's re-run line keeps the overrides
     recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}
     if workers is not None:
@@ -350,6 +348,7 @@ def tune(
     from ..reports.terminal import Progress, out, print_table
     from ..reports.tune import TUNE_FILES, write_tune_outputs
     from ..simulate.scenario import load_scenario
+    from ..tune import options_for
     from ..tune import tune as run
 
     sc0 = parse_scenario(scenario)
@@ -384,16 +383,14 @@ def tune(
         warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
         deadline = spec.T if horizon is None else horizon
         prog.stage(f"tuning {scenario} for T = {deadline:g}")
-        opts: dict[str, Any] = dict(
-            require=require, tune_delta=tune_delta, eps=eps, method=method, progress=prog.stage
-        )
-        if schedule == "optimal":  # the defaults of tune() where a flag is not given
+        opts: dict[str, Any] = dict(require=require, tune_delta=tune_delta, eps=eps)
+        if schedule == "optimal":  # the defaults of the options where a flag is not given
             opts["max_peak"] = max_peak
             opts.update({k: given[k] for k in ("max_gain", "check_paths") if given[k] is not None})
-        elif max_peak is not None:
-            raise InputError("--max-peak: applies to --schedule optimal")
+        else:
+            opts.update(max_evaluations=evaluations, max_peak=max_peak)
         try:
-            res = run(top, spec, deadline, max_evaluations=evaluations, schedule=schedule, **opts)
+            res = run(top, spec, deadline, options_for(schedule, method, **opts), prog.stage)
         except InputError as exc:
             raise blame(exc, sc.source, flags, fields, advice=FLAGS["tune"]) from None
     doc = res.to_dict()
@@ -438,12 +435,11 @@ def _tune_loss(
         raise InputError(f"--period: expected a number, got {period!r:.40}") from None
     given = sc0.document.get("digital")
     t_doc = horizon if horizon is not None else sc0.document.get("T")
-    block = digital_option(h, delay, given, t_doc, None, policy)
-    if block is None:
+    dg = digital_option(h, delay, given, t_doc, None, policy)
+    if dg is None:
         if not isinstance(given, dict):
             raise InputError("--loss: needs --period (or a digital block in the scenario)")
-        block = dict(given)
-    dg = Digital.from_document(block)
+        dg = Digital.from_document(given)
     top, spec, sc = load_scenario(scenario, None, sc0)
     if out_dir is not None:
         check_output_folder(out_dir, ("loss.json",))
@@ -604,7 +600,6 @@ def report(
     sampled = digital_option(
         period, delay, None, None, loss, loss_policy
     )  # before the library loads
-    from ..protocol.digital import Digital
     from ..reports.report import write_report
     from ..reports.sweep import is_sweep_dir, write_sweep_report
     from ..reports.terminal import out
@@ -618,7 +613,7 @@ def report(
         path = write_report(
             directory,
             interactive=interactive,
-            digital=Digital.from_document(sampled) if sampled is not None else None,
+            digital=sampled,
         )
     except InputError as exc:  # h > T, too many steps, the delay's memory: name the flag
         raise blame(exc, None, digital_flags(period, delay)) from None

@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..choices import Language, choices
 from ..errors import InputError, Option, one_line
 from ..expr.code import literal
-from ..gain.schedule import ScheduleGain
 from ..io.outputs import check_output_folder, output_folder
 from ..protocol.agents import AgentLaw
 from ..protocol.digital import decimal_fraction
@@ -31,9 +31,9 @@ from .c import FILES as C_FILES
 from .checks import check_emitted_gain
 from .python import FILES as PY_FILES
 from .python import python_files
-from .source import ExportSource, load_source
+from .source import NO_OPTIONS, ExportOptions, ExportSource, load_source
 
-LANGUAGES = ("c", "python")
+LANGUAGES = choices(Language)
 #: Steps of the example input (fewer when the scenario's horizon has fewer).
 EXAMPLE_STEPS = 100
 #: The seed of the example's normals.
@@ -602,16 +602,10 @@ def check_export_folder(out: str | Path) -> Path:
 
 def export(
     path: str | Path,
-    lang: str,
+    lang: Language,
     out: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
+    options: ExportOptions = NO_OPTIONS,
     agent: str | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
 ) -> ExportResult:
     """Export a scenario's or a certificate's certified design as code, into ``out`` (all
     or nothing: refused before any work when ``out`` holds other files).
@@ -624,16 +618,11 @@ def export(
         The language.
     out : str or Path
         The folder.
-    period, delay : float, int, optional
-        h and D (over a scenario's or a subject's digital block).
-    gain : str or ScheduleGain, optional
-        c(t).
-    sigma, f : float, optional
-        The noise's σ and f.
+    options : ExportOptions, optional
+        h and D (over a scenario's or a subject's digital block), the gain, the noise's σ
+        and f, p on every edge and the policy for a lost message.
     agent : str, optional
         One agent's label: its tables only (C).
-    loss, policy : float, str, optional
-        p on every edge and the policy for a lost message (``--loss``, ``--loss-policy``).
 
     Returns
     -------
@@ -658,7 +647,7 @@ def export(
             option=True,
         )
     check_export_folder(out)
-    src = load_source(path, period, delay, gain, sigma, f, loss, policy)
+    src = load_source(path, options)
     texts = files_for(src, lang, agent)
     check_export_folder(out)  # again: the folder may have changed during the work
     # written into a new folder that then replaces ``out`` whole (all or nothing); what it

@@ -34,6 +34,7 @@ from ..certify.fields import vector
 from ..certify.format import FORMAT
 from ..certify.kinds.digital import DigitalContext, DigitalState
 from ..certify.kinds.digital_loss import LossState
+from ..choices import LossPolicy
 from ..errors import AssumptionWarning, InputError, Option
 from ..gain.schedule import ScheduleGain, analyse_any_gain, gain_from_option, schedule_from_document
 from ..io.documents import read_document
@@ -55,6 +56,46 @@ from ..simulate.spec import SimulationSpec
 
 #: A scenario's horizon when it gives none (the simulator's default).
 DEFAULT_T = SimulationSpec.__dataclass_fields__["T"].default
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """What an export may set over its source, written once: each None keeps the
+    scenario's or the certificate's value (a certified value that an option contradicts is
+    refused by the reader).
+
+    Attributes
+    ----------
+    period, delay : float, int or None
+        h and D (over a scenario's or a subject's digital block; ``period`` required for a
+        continuous certificate).
+    gain : str, ScheduleGain or None
+        c(t) (a ``.csv`` name is a schedule file).
+    sigma, f : float or None
+        The noise's σ and f (a continuous certificate's default: the paper's σ = 0.4,
+        f = 0.3).
+    loss : float or None
+        p on every edge.
+    policy : {"skip", "rescale", "hold"} or None
+        What an agent does with a lost message.
+
+    Examples
+    --------
+    >>> ExportOptions(period=0.1, delay=1).period
+    0.1
+    """
+
+    period: float | None = None
+    delay: int | None = None
+    gain: str | ScheduleGain | None = None
+    sigma: float | None = None
+    f: float | None = None
+    loss: float | None = None
+    policy: LossPolicy | None = None
+
+
+#: No option given: every value is the source's.
+NO_OPTIONS = ExportOptions()
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,16 +189,7 @@ def _check_gain(gain: str | ScheduleGain, where: str) -> None:
         )
 
 
-def from_scenario(
-    path: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
-) -> ExportSource:
+def from_scenario(path: str | Path, options: ExportOptions = NO_OPTIONS) -> ExportSource:
     """The agents' law of a scenario's certified Lemma 1 design (on lossy links when its
     ``digital:`` block or its topology's edges give a loss: the ``digital_loss``
     certificate, D = 0 with ``skip`` or ``rescale``).
@@ -166,16 +198,9 @@ def from_scenario(
     ----------
     path : str or Path
         The scenario (YAML or JSON).
-    period, delay : float, int, optional
-        h and D over the scenario's ``digital:`` block.
-    gain : str or ScheduleGain, optional
-        c(t) instead of the scenario's (a ``.csv`` name is a schedule file).
-    sigma, f : float, optional
-        The noise's σ and f instead of the scenario's.
-    loss : float, optional
-        p on every edge instead of the scenario's ``digital.loss``.
-    policy : str, optional
-        The policy for a lost message instead of the scenario's.
+    options : ExportOptions, optional
+        h and D over the scenario's ``digital:`` block, and the gain, the noise, the loss
+        and the policy instead of the scenario's.
 
     Returns
     -------
@@ -188,7 +213,13 @@ def from_scenario(
         certificate does not verify or for which no theorem is guaranteed; lossy links
         with ``hold`` or a switching set (not proven), or a delay the certificate does not prove.
     """
-
+    period, delay, gain, sigma, f = (
+        options.period,
+        options.delay,
+        options.gain,
+        options.sigma,
+        options.f,
+    )
     sc = parse_scenario(path)
     src = sc.source
     given = sc.document.get("digital")
@@ -197,8 +228,8 @@ def from_scenario(
         horizon = None  # the scenario's own check names it
     # the options replace the file's block before the scenario is checked (a period of the
     # file's that the option overrides is not refused)
-    dg = _digital(period, delay, given, horizon, src, loss, policy)
-    top, spec, _ = load_scenario(path, {"digital": dg.to_dict()}, sc)
+    dg = _digital(period, delay, given, horizon, src, options.loss, options.policy)
+    top, spec, _ = load_scenario(path, {"digital": dg}, sc)
     if not isinstance(top, (Topology, SwitchingTopology)):
         raise InputError(
             f"{src}: topology: only a fixed topology or a switching set can be exported "
@@ -392,15 +423,7 @@ def _digital_gain(given: Any, where: str) -> str | ScheduleGain:
 
 
 def from_certificate(
-    path: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
-    doc: dict | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
+    path: str | Path, options: ExportOptions = NO_OPTIONS, doc: dict | None = None
 ) -> ExportSource:
     """The agents' law of a certificate's design, from its verified reading only.
 
@@ -415,17 +438,14 @@ def from_certificate(
     ----------
     path : str or Path
         The certificate (JSON).
-    period, delay : float, int, optional
-        h and D (``period`` required for a continuous certificate).
-    gain : str or ScheduleGain, optional
-        c(t) of a continuous certificate (default: its tabulated schedule, else 1/(1+t)).
-    sigma, f : float, optional
-        The noise of a continuous certificate (default: the paper's σ = 0.4, f = 0.3).
+    options : ExportOptions, optional
+        h and D (``period`` required for a continuous certificate); the gain of a
+        continuous certificate (default: its tabulated schedule, else 1/(1+t)) and its
+        noise (default: the paper's σ = 0.4, f = 0.3); p and the policy: a
+        ``digital_loss`` certificate's are its verified reading's (an option that differs
+        is refused), a continuous one is certified on lossy links.
     doc : dict, optional
         The certificate already read.
-    loss, policy : float, str, optional
-        p and the policy: a ``digital_loss`` certificate's are its verified reading's
-        (an option that differs is refused); a continuous one is certified on lossy links.
 
     Returns
     -------
@@ -438,6 +458,15 @@ def from_certificate(
         kind without dense modes, an option that differs from a certified value, a missing
         period, or a sampled protocol without a guaranteed theorem.
     """
+    period, delay, gain, sigma, f, loss, policy = (
+        options.period,
+        options.delay,
+        options.gain,
+        options.sigma,
+        options.f,
+        options.loss,
+        options.policy,
+    )
     src = str(path)
     doc = read_document(path) if doc is None else doc
     ver = verify(doc, src)
@@ -455,9 +484,7 @@ def from_certificate(
     schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
     first = next(iter(ctx.modes.values()))
     if not isinstance(ctx, DigitalContext):
-        return _continuous(
-            doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f, loss, policy
-        )
+        return _continuous(doc, ctx, schedule, src, kind.name, options)
     state: DigitalState | LossState = ctx.digital
     sampled = state.subject
     ls = state.loss if isinstance(state, LossState) else None
@@ -555,15 +582,18 @@ def _continuous(
     schedule: tuple,
     src: str,
     kind: str,
-    period: float | None,
-    delay: int | None,
-    gain: str | ScheduleGain | None,
-    sigma: float | None,
-    f: float | None,
-    loss: float | None = None,
-    policy: str | None = None,
+    options: ExportOptions,
 ) -> ExportSource:
     """A continuous certificate's design certified as the sampled protocol first."""
+    period, delay, gain, sigma, f, loss, policy = (
+        options.period,
+        options.delay,
+        options.gain,
+        options.sigma,
+        options.f,
+        options.loss,
+        options.policy,
+    )
     dg = _digital(period, delay, None, None, f"{src} (a {kind} certificate)", loss, policy)
     stated = doc.get("gain")  # a tabulated schedule whose conditions verify derived
     if stated is not None and gain is not None:
@@ -631,16 +661,7 @@ def is_certificate(doc: Any) -> bool:
     return isinstance(doc, dict) and doc.get("format") == FORMAT
 
 
-def load_source(
-    path: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
-) -> ExportSource:
+def load_source(path: str | Path, options: ExportOptions = NO_OPTIONS) -> ExportSource:
     """A scenario's or a certificate's agents' law (:func:`from_scenario`,
     :func:`from_certificate`), told apart by the file's content.
 
@@ -648,14 +669,8 @@ def load_source(
     ----------
     path : str or Path
         The scenario or certificate.
-    period, delay : float, int, optional
-        h and D.
-    gain : str or ScheduleGain, optional
-        c(t).
-    sigma, f : float, optional
-        The noise's σ and f.
-    loss, policy : float, str, optional
-        p on every edge and the policy for a lost message.
+    options : ExportOptions, optional
+        What to set over the file's values.
 
     Returns
     -------
@@ -668,11 +683,13 @@ def load_source(
     """
     doc = read_document(path)
     if is_certificate(doc):
-        return from_certificate(path, period, delay, gain, sigma, f, doc, loss, policy)
-    return from_scenario(path, period, delay, gain, sigma, f, loss, policy)
+        return from_certificate(path, options, doc)
+    return from_scenario(path, options)
 
 
 __all__ = [
+    "NO_OPTIONS",
+    "ExportOptions",
     "ExportSource",
     "from_certificate",
     "from_scenario",

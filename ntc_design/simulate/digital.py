@@ -46,6 +46,7 @@ def digital_grid(
     save_times: np.ndarray,
     step_mode: Callable[[np.ndarray], np.ndarray] | None = None,
     between: bool = False,
+    steps: tuple[int, float] | None = None,
 ) -> tuple[TimeGrid, list[str]]:
     """The sampling grid t_k = k·h, k = 0 … K (K = ⌊T/h⌋), and T after a last partial
     step when T is not a whole number of periods (:meth:`Digital.steps`); the mode of each
@@ -66,6 +67,9 @@ def digital_grid(
         for a switching schedule); None: one mode.
     between : bool, optional
         Keep save times between samples (``save_steps``: the sample at or before each).
+    steps : (int, float), optional
+        K and s as :meth:`Digital.steps` gave them for ``t_end`` (a spec's
+        ``digital_steps``: decided once per run); None: computed here.
 
     Returns
     -------
@@ -77,7 +81,7 @@ def digital_grid(
     InputError
         h > T, or too many steps.
     """
-    k_full, part = digital.steps(t_end)
+    k_full, part = steps if steps is not None else digital.steps(t_end)
     h = digital.period
     t = np.arange(k_full + 1, dtype=float) * h
     if part > 0:
@@ -101,8 +105,8 @@ def digital_grid(
     idx = np.clip(np.rint(asked / h), 0, k_full)
     if part > 0:  # past the last sample: T when nearer to it
         idx = np.where(asked > k_full * h + 0.5 * part, k_steps, idx)
-    steps = np.unique(np.concatenate([[0, k_steps], idx.astype(np.int64)]))
-    return TimeGrid(t, modes, steps, t[steps], noise_last), []
+    saved = np.unique(np.concatenate([[0, k_steps], idx.astype(np.int64)]))
+    return TimeGrid(t, modes, saved, t[saved], noise_last), []
 
 
 def digital_moments_bytes(nd_: int, delay: int) -> float:

@@ -29,6 +29,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..choices import Layout, choices
 from ..errors import InputError, Option, one_line
 from .modes import FixedModes
 from .montecarlo import MonteCarloSpec, PartialStats, PathBlocks
@@ -37,7 +38,7 @@ SIMULATOR_ENV = "NTC_CUDA_SIMULATOR"
 INSTALL = "pip install 'ntc-design[gpu]'"
 #: The advice when the GPU cannot run: the CPU (the scenario's field, or the flag that gave it).
 CPU = Option("device", "cpu", document=True)
-LAYOUTS = ("auto", "fused", "sparse")
+LAYOUTS = choices(Layout)
 
 
 def simulator_requested() -> bool:
@@ -174,7 +175,7 @@ class GpuEngine:
         state, else a thread per row and path), ``fused`` or ``sparse``.
     """
 
-    layout: str = "auto"
+    layout: Layout = "auto"
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:

@@ -19,6 +19,7 @@ from ..errors import LONG_WORK_SECONDS, InputError, format_seconds, quote, warn_
 from ..expr.tree import numeric_function
 from ..model import ExpressionFamily, SwitchingTopology, TimeVaryingTopology, Topology
 from ..protocol import ProtocolDesign, design_topology
+from ..protocol.agents import require_sampled
 from ..protocol.digital import Digital, step_modes
 from .budget import (
     check_budget,
@@ -244,8 +245,8 @@ def check_size(
     """
     saves = spec.save.count(spec.T)
     st = spec.stepping
-    if spec.digital is not None:  # one step per sample
-        steps = float(spec.digital.steps(spec.T)[0])
+    if spec.digital_steps is not None:  # one step per sample
+        steps = float(spec.digital_steps[0])
     else:
         steps = estimate_steps(
             spec.T, st.dt, st.intrinsic_ds, st.max_step, cfun, saves + 2 * n_segments
@@ -367,8 +368,7 @@ def sampled_grid(
     InputError
         h > T or too many steps.
     """
-    if is_expression_topology(topology):
-        raise InputError("digital: a topology given as expressions of t is not sampled")
+    require_sampled(topology)
     fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
     return digital_grid(digital, t_end, save_times, step_mode(fixed, pm, digital.period))[0]
 

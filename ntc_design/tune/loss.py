@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import LossPolicy
 from ..errors import InputError, require_horizon, require_number
 from ..model import Topology
 from ..present.rows import Table, fmt, verdict
@@ -145,7 +146,7 @@ def largest_tolerable_loss(
     spec: SimulationSpec,
     horizon: float,
     digital: Digital,
-    policy: str = "skip",
+    policy: LossPolicy = "skip",
     tolerance: float = 0.1,
 ) -> LossTuning:
     """The largest uniform loss whose exact error at T, and every smaller loss's, stays
@@ -187,7 +188,7 @@ def largest_tolerable_loss(
     pm = prepare_modes(topology, base, gain)
     s = pm.systems[0]
     delay = digital.delay
-    grid = sampled_grid(topology, pm, Digital(digital.period, delay), t_end, np.array([t_end]))
+    grid = sampled_grid(topology, pm, digital, t_end, np.array([t_end]))  # h: its loss aside
 
     def run(p: float) -> tuple[float, float, float]:
         with np.errstate(all="ignore"):

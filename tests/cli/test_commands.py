@@ -282,10 +282,8 @@ def test_export_noise_flags_share_certifys_names(capsys, monkeypatch):
 def test_export_reads_the_old_noise_spellings_with_a_note(tmp_path, examples, capsys, monkeypatch):
     seen = {}
 
-    def fake_export(
-        file, lang, out, period, delay, gain, sigma, f, agent=None, loss=None, policy=None
-    ):
-        seen.update(sigma=sigma, f=f)
+    def fake_export(file, lang, out, options, agent=None):
+        seen.update(sigma=options.sigma, f=options.f)
         raise nd.InputError("stands for the library's name of the flag", field="sigma")
 
     monkeypatch.setattr("ntc_design.export.run.export", fake_export)

@@ -11,6 +11,7 @@ import pytest
 from ntc_design.errors import InputError
 from ntc_design.export import run
 from ntc_design.export.run import export, read_state, state_text, stdin_text
+from ntc_design.export.source import ExportOptions
 from ntc_design.simulate.replay import replay
 from tests.conftest import EXAMPLES, ROOT
 from tests.support.export import CC, CFLAGS, needs_cc
@@ -21,7 +22,7 @@ DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"
 @pytest.fixture(scope="module")
 def c_export(tmp_path_factory):
     out = tmp_path_factory.mktemp("exp") / "g1-c"
-    return export(DEADLINE, "c", out, period=0.1, delay=1)
+    return export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1))
 
 
 def test_the_folder(c_export):
@@ -73,7 +74,9 @@ def test_the_compiled_program_reproduces_the_example_byte_for_byte(c_export, tmp
 
 
 def test_a_python_export_reproduces_its_example(tmp_path):
-    res = export(ROOT / "certificates" / "g1.json", "python", tmp_path / "py", period=0.05)
+    res = export(
+        ROOT / "certificates" / "g1.json", "python", tmp_path / "py", ExportOptions(period=0.05)
+    )
     folder = res.folder
     assert sorted(res.files) == sorted(["ntc_protocol.py", "README.txt", *run.EXAMPLES])
     inp = (folder / "example_input.txt").read_text()
@@ -82,7 +85,9 @@ def test_a_python_export_reproduces_its_example(tmp_path):
     assert out == (folder / "example_output.txt").read_text()
     assert "python ntc_protocol.py < example_input.txt" in (folder / "README.txt").read_text()
     # an earlier export's folder is replaced (the language may change)
-    again = export(ROOT / "certificates" / "g1.json", "c", tmp_path / "py", period=0.05)
+    again = export(
+        ROOT / "certificates" / "g1.json", "c", tmp_path / "py", ExportOptions(period=0.05)
+    )
     assert not (again.folder / "ntc_protocol.py").exists()
 
 
@@ -100,16 +105,16 @@ def test_stdin_and_state_texts_round_trip():
 def test_refusals_write_nothing(tmp_path, monkeypatch):
     out = tmp_path / "o"
     with pytest.raises(InputError, match=r"^lang: expected one of c, python, got 'fortran'"):
-        export(DEADLINE, "fortran", out, period=0.1)
+        export(DEADLINE, "fortran", out, ExportOptions(period=0.1))
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "notes.txt").write_text("keep")
     with pytest.raises(InputError, match=r"^out: .* holds 'notes.txt', which no earlier export"):
-        export(DEADLINE, "c", mine, period=0.1)
+        export(DEADLINE, "c", mine, ExportOptions(period=0.1))
     assert [p.name for p in mine.iterdir()] == ["notes.txt"]
     monkeypatch.setattr(run, "MAX_NUMBERS", 100)
     with pytest.raises(InputError, match=r"^export: the tables would hold"):
-        export(DEADLINE, "c", out, period=0.1)
+        export(DEADLINE, "c", out, ExportOptions(period=0.1))
     with pytest.raises(InputError, match=r"^output: expected 21 numbers, got 2"):
         read_state("1 2", 21)
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["mine"]
@@ -151,7 +156,7 @@ def test_an_export_never_deletes_user_data(tmp_path, case):
         needle = "'README.txt', which is not a regular file"
     before = _tree(out)
     with pytest.raises(InputError) as err:
-        export(DEADLINE, "c", out, period=0.1)
+        export(DEADLINE, "c", out, ExportOptions(period=0.1))
     msg = str(err.value)
     assert "\n" not in msg and msg.startswith("out: ") and needle in msg, msg
     assert _tree(out) == before and sorted(p.name for p in tmp_path.iterdir()) == sorted(
@@ -162,9 +167,9 @@ def test_an_export_never_deletes_user_data(tmp_path, case):
 
 def test_an_earlier_export_and_its_build_are_replaced(tmp_path):
     out = tmp_path / "out"
-    export(DEADLINE, "c", out, period=0.1)
+    export(DEADLINE, "c", out, ExportOptions(period=0.1))
     (out / "ntc_replay").write_bytes(b"built")  # what the README's command makes
-    again = export(DEADLINE, "python", out, period=0.1)
+    again = export(DEADLINE, "python", out, ExportOptions(period=0.1))
     names = sorted(p.name for p in out.iterdir())
     assert names == sorted([*again.files, run.MANIFEST]) and "ntc_replay" not in names
 
@@ -252,7 +257,7 @@ def test_an_out_folder_given_as_a_link_is_refused(tmp_path, capsys, monkeypatch,
 
 def test_one_agents_export_and_its_readme(tmp_path):
     out = tmp_path / "one"
-    res = export(DEADLINE, "c", out, period=0.1, delay=1, agent="3")
+    res = export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1), agent="3")
     assert sorted(res.files) == ["README.txt", "ntc_protocol.c", "ntc_protocol.h"]
     assert "#define NTC_SELF 2" in (out / "ntc_protocol.h").read_text()
     text = (out / "README.txt").read_text()
@@ -264,7 +269,7 @@ def test_one_agents_export_and_its_readme(tmp_path):
     ):
         assert needle in text, needle
     # the full export documents the same embedding
-    full = export(DEADLINE, "c", tmp_path / "all", period=0.1, delay=1)
+    full = export(DEADLINE, "c", tmp_path / "all", ExportOptions(period=0.1, delay=1))
     assert "relative-position sensor" in (full.folder / "README.txt").read_text()
 
 
@@ -347,7 +352,7 @@ def test_a_lossy_export_reproduces_its_example_and_documents_the_flags(tmp_path)
     assert "Lossy links, policy skip (compiled in; keep_e = 1 - p_e: " in readme
     assert "Edges in file order (the order of the normals and of the arrival flags):" in readme
     with pytest.raises(InputError, match="lossy links with the hold policy are not proven"):
-        export(scen, "c", tmp_path / "c", policy="hold")
+        export(scen, "c", tmp_path / "c", ExportOptions(policy="hold"))
     assert not (tmp_path / "c").exists()
 
 

@@ -191,7 +191,7 @@ def test_curves_figure_floors_zero_and_draws_the_peak_bound(schedule_result):
 
 
 def test_landscape_figure_needs_a_landscape(power_analysis):
-    with pytest.raises(ValueError, match=r"the result has no landscape \(tune\(\.\.\., landscape"):
+    with pytest.raises(ValueError, match=r"the result has no landscape \(PowerOptions\(landscape"):
         rt.landscape_figure(power_result(power_analysis))
 
 
