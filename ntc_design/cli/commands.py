@@ -427,9 +427,10 @@ def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, poli
         from ..certify.deadline import check_sampled_work
         from ..certify.deadline_loss import check_loss_work, loss_section
 
-        check_sampled_work(top.n * top.dim, float(spec.T), sampled["period"], sampled["delay"])
         lossy = loss_section(top, sampled.get("loss", 0.0), sampled.get("policy", "skip"))
-        if lossy is not None:
+        if lossy is None:
+            check_sampled_work(n * d, float(spec.T), sampled["period"], sampled["delay"])
+        else:  # the lossy recursion's W is the larger: its estimate alone
             check_loss_work(
                 n * d,
                 len(top.edges),
