@@ -427,7 +427,12 @@ def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, poli
         from ..certify.deadline import check_sampled_work
         from ..certify.deadline_loss import check_loss_work, loss_section
 
-        lossy = loss_section(top, sampled.get("loss", 0.0), sampled.get("policy", "skip"))
+        from ..model import Topology
+
+        p, pol = sampled.get("loss", 0.0), sampled.get("policy", "skip")
+        if not isinstance(top, Topology) and p > 0:
+            raise InputError("--loss: lossy links are modelled on one fixed topology")
+        lossy = loss_section(top, p, pol) if isinstance(top, Topology) else None
         if lossy is None:
             check_sampled_work(n * d, float(spec.T), sampled["period"], sampled["delay"])
         else:  # the lossy recursion's W is the larger: its estimate alone

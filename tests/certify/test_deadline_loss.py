@@ -258,6 +258,13 @@ def test_certify_deadline_refuses_bad_loss_flags(
     assert not out.exists()
 
 
+@pytest.mark.hostile
+def test_certify_deadline_refuses_loss_on_a_switching_set(examples, capsys, monkeypatch):
+    args = ["certify", examples / "scenarios" / "switching.yaml", "--period", "0.01"]
+    args += ["--loss", "0.1", "--deadline", "2"]
+    assert_input_error(args, capsys, monkeypatch, "--loss: lossy links are modelled on one")
+
+
 def test_certify_deadline_on_lossy_links_states_the_loss(examples, tmp_path, capsys, monkeypatch):
     out = tmp_path / "c.json"
     args = ["certify", examples / SCEN, "--period", "0.1", "--loss", "0.3"]
