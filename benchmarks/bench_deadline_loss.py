@@ -42,7 +42,7 @@ def main() -> None:
     print(f"G1, T = {t_end:g}, h = 0.1, c(t) = {spec.gain}, σ = 0.4, f = 0.3")
     print(
         f"{'D':>2}{'p':>5}  {'policy':<8}{'B_T':>12}{'B_T/exact-1':>14}{'B_peak':>12}"
-        f"{'B_peak/exact-1':>14}{'s':>7}"
+        f"{'B_peak/exact-1':>16}{'s':>7}"
     )
     for delay in (0, 1):
         for p in (0.1, 0.3):
@@ -66,7 +66,7 @@ def main() -> None:
                 print(
                     f"{delay:>2}{p:>5g}  {policy:<8}{b.ms_error_bound:>12.7g}"
                     f"{b.ms_error_bound / exact_t - 1:>14.2e}{b.peak_bound:>12.7g}"
-                    f"{b.peak_bound / exact_peak - 1:>14.2e}{secs:>7.1f}"
+                    f"{b.peak_bound / exact_peak - 1:>16.2e}{secs:>7.1f}"
                 )
 
 

@@ -468,13 +468,15 @@ def _upper(x: arb) -> float:
     return u if u >= x.upper() else math.nextafter(u, math.inf)
 
 
-def _quad_max(a: arb, b: arb, q: arb, s: arb) -> arb:
-    """An enclosure of max over σ in [0, s] of a + bσ + qσ²."""
-    end = a + b * s + q * s * s
+def _quad_top(a: arb, b: arb, q: arb, s: arb) -> float:
+    """A float at or above max over σ in [0, s] of a + bσ + qσ²: the larger end's upper
+    bound when q ≥ 0 (no ball union: its radius carries only 30 bits), else the
+    quadratic over the interval."""
+    top = max(_upper(a), _upper(a + b * s + q * s * s))
     if q >= 0:
-        return a.union(end)
+        return top
     sig = arb(0).union(s)
-    return a.union(a + b * sig + q * sig * sig)
+    return max(top, _upper(a + b * sig + q * sig * sig))
 
 
 def _trace_prod(x: arb_mat, y: arb_mat, rows: int, cols: int) -> arb:
@@ -556,7 +558,7 @@ def _recursion(pb: LossDeadlineProblem, bl: _Balls, bits: int) -> DeadlineBound:
             if k == k_full:  # the partial step to T
                 s = arb(base.t_end) - arb(k) * h
                 final = a_ + b_ * s + q_ * s * s
-                peak_hi = max(peak_hi, _upper(_quad_max(a_, b_, q_, s)))
+                peak_hi = max(peak_hi, _quad_top(a_, b_, q_, s))
                 if float(final.mid()) > peak_mid:
                     peak_mid, peak_t = float(final.mid()), base.t_end
                 break
@@ -564,7 +566,7 @@ def _recursion(pb: LossDeadlineProblem, bl: _Balls, bits: int) -> DeadlineBound:
             mbar = bl.m_y + tau * bl.m_tau
             place = bl.ypl + tau * bl.top
             z = mbar * z * mbar.transpose() + place * blk * place.transpose()
-            peak_hi = max(peak_hi, _upper(_quad_max(a_, b_, q_, h)))
+            peak_hi = max(peak_hi, _quad_top(a_, b_, q_, h))
             final = sum((z[r, r] for r in range(nd_)), arb(0))
             if not final.is_finite():
                 break
