@@ -426,7 +426,6 @@ def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, poli
     if sampled:  # before the certificate: its own work is bounded by the same steps
         from ..certify.deadline import check_sampled_work
         from ..certify.deadline_loss import check_loss_work, loss_section
-
         from ..model import Topology
 
         p, pol = sampled.get("loss", 0.0), sampled.get("policy", "skip")
