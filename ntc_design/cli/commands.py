@@ -431,13 +431,14 @@ def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, poli
         p, pol = sampled.get("loss", 0.0), sampled.get("policy", "skip")
         if not isinstance(top, Topology) and p > 0:
             raise InputError("--loss: lossy links are modelled on one fixed topology")
-        lossy = loss_section(top, p, pol) if isinstance(top, Topology) else None
-        if lossy is None:
+        one = top if isinstance(top, Topology) else None
+        lossy = loss_section(one, p, pol) if one is not None else None
+        if lossy is None or one is None:
             check_sampled_work(n * d, float(spec.T), sampled["period"], sampled["delay"])
         else:  # the lossy recursion's W is the larger: its estimate alone
             check_loss_work(
                 n * d,
-                len(top.edges),
+                len(one.edges),
                 d,
                 float(spec.T),
                 sampled["period"],
