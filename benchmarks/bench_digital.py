@@ -63,9 +63,7 @@ def moments_rows(top, theta, label: str, t_end: float, h: float, delays) -> None
     )
     for d in delays:
         grid, _ = digital_grid(Digital(h, d), t_end, np.array([t_end]))
-        sec = best(
-            lambda grid=grid, d=d: digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, d)
-        )
+        sec = best(lambda grid=grid, d=d: digital_moments(pm, grid, gain, d))
         per = sec / grid.n_steps * 1e6
         print(
             f"  D = {d}: exact sampled moments {sec * 1e3:7.1f} ms ({grid.n_steps} steps, "

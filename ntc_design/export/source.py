@@ -32,6 +32,8 @@ from ..certify import KINDS, certify, verify
 from ..certify.dense import DenseContext
 from ..certify.fields import vector
 from ..certify.format import FORMAT
+from ..certify.kinds.digital import DigitalContext, DigitalState
+from ..certify.kinds.digital_loss import LossState
 from ..errors import AssumptionWarning, InputError
 from ..gain.schedule import ScheduleGain, analyse_any_gain, gain_from_option, schedule_from_document
 from ..io.documents import read_document
@@ -189,7 +191,7 @@ def from_scenario(
     InputError
         A bad file or value; a topology that is neither fixed nor switching; a design whose
         certificate does not verify or for which no theorem is guaranteed; lossy links
-        with ``hold``, a delay or a switching set (not proven).
+        with ``hold`` or a switching set (not proven), or a delay the certificate does not prove.
     """
 
     sc = parse_scenario(path)
@@ -310,12 +312,12 @@ def _certified_law(
 
 
 def _unproven(policy: str, delay: int, where: str) -> None:
-    """Refuse lossy links that no certificate proves (``hold``, or a delay), in one line."""
-    if policy == "hold" or delay:
-        what = "the hold policy" if policy == "hold" else f"a delay D = {delay}"
+    """Refuse lossy links that no certificate proves (``hold``), in one line; a delay is
+    exported when the ``digital_loss`` certificate proves it (its delay line)."""
+    if policy == "hold":
         raise InputError(
-            f"{where}: lossy links with {what} are not proven (the digital_loss certificate "
-            "covers D = 0 with skip or rescale); nothing exported"
+            f"{where}: lossy links with the hold policy are not proven (the digital_loss "
+            "certificate covers skip and rescale); nothing exported"
         )
 
 
@@ -453,14 +455,15 @@ def from_certificate(
     ctx: DenseContext = reading.state
     schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
     first = next(iter(ctx.modes.values()))
-    sampled = ctx.digital
-    if sampled is None:
+    if not isinstance(ctx, DigitalContext):
         return _continuous(
             doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f, loss, policy
         )
-    ls = getattr(ctx, "loss", None) if kind.name == "digital_loss" else None
+    state: DigitalState | LossState = ctx.digital
+    sampled = state.subject
+    ls = state.loss if isinstance(state, LossState) else None
     losses = _certified_losses(ls, sampled.delay, loss, policy, src)
-    if ctx.stated is None:
+    if state.stated is None:
         raise InputError(
             f"{src}: the certificate does not prove the sampled protocol "
             "(results.digital.stopped); nothing exported"

@@ -18,7 +18,7 @@ before anything is allocated (:func:`check_digital_moments`).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,8 +27,7 @@ from ..errors import InputError, format_bytes
 from ..numerics.memory import available_memory
 from ..protocol.digital import Digital
 from .grid import TimeGrid
-from .moments import MOMENTS_MAX_ND, MomentRecorder, MomentRhs, Moments
-from .system import ModeSystem
+from .moments import MOMENTS_MAX_ND, MomentRecorder, MomentRhs, Moments, PreparedModes
 
 #: Dense ((D+1)·Nd)² matrices alive during a step of the digital moments.
 DIGITAL_COPIES = 4
@@ -243,12 +242,9 @@ def _held(
 
 
 def digital_moments(
-    systems: Sequence[ModeSystem],
+    modes: PreparedModes,
     grid: TimeGrid,
     gain: Callable[[np.ndarray], np.ndarray],
-    eps0: np.ndarray,
-    n: int,
-    d: int,
     delay: int,
     abort_above: float | None = None,
 ) -> DigitalMoments:
@@ -264,16 +260,13 @@ def digital_moments(
 
     Parameters
     ----------
-    systems : sequence of ModeSystem
-        One system per mode.
+    modes : PreparedModes
+        The systems per mode and e_0 = x(0) − 1⊗θ
+        (:meth:`~ntc_design.simulate.moments.PreparedModes.of` for systems built by hand).
     grid : TimeGrid
         The sampling grid (:func:`digital_grid`).
     gain : callable
         Vectorised c(t); c_k = c(t_k).
-    eps0 : numpy.ndarray
-        e_0 = x(0) − 1⊗θ, length Nd.
-    n, d : int
-        Agents and state dimension.
     delay : int
         D.
     abort_above : float, optional
@@ -289,10 +282,11 @@ def digital_moments(
     InputError
         Too large (:func:`check_digital_moments`).
     """
+    n, d, eps0 = modes.n, modes.d, modes.eps0
     nd_ = n * d
     k_steps = grid.n_steps
     check_digital_moments(nd_, delay, k_steps)
-    rhs = [MomentRhs(s, n, d) for s in systems]
+    rhs = [MomentRhs(s, n, d) for s in modes.systems]
     lo = delay * nd_  # the block of e_{k−D}
     z0 = np.tile(np.asarray(eps0, dtype=float), delay + 1)
     zz, m = np.outer(z0, z0), z0.copy()

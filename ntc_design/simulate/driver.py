@@ -327,7 +327,7 @@ def _simulate_modes(
         if lossy is not None:
             dm = lossy.moments(grid, cfun, pm.eps0, delay)
         else:
-            dm = digital_moments(systems, grid, cfun, pm.eps0, n, d, delay)
+            dm = digital_moments(pm, grid, cfun, delay)
         found.append(dm)
         return dm.moments
 

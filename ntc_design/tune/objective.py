@@ -327,9 +327,7 @@ class ExactObjective(Objective):
         with np.errstate(all="ignore"):
             if scheme == "cayley":
                 ds = CAYLEY_DS_ACCURATE if accurate else CAYLEY_DS
-                m = cayley_moments(
-                    pm.systems, pm.segments, gain, pm.eps0, t, pm.n, pm.d, ds, abort_above=limit
-                )
+                m = cayley_moments(pm, gain, t, ds, abort_above=limit)
             else:
                 kappa = KAPPA if accurate else SEARCH_KAPPA
                 m = pm.moments(gain, t, kappa=kappa, abort_above=limit)
@@ -376,7 +374,7 @@ class DigitalObjective(ExactObjective):
         )
         limit = None if accurate else GROWTH_LIMIT * max(float(pm.eps0 @ pm.eps0), 1.0)
         with np.errstate(all="ignore"):
-            m = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, dg.delay, limit)
+            m = digital_moments(pm, grid, gain, dg.delay, limit)
         return Curve(grid.save_times, m.moments.ms_error.sum(axis=1))
 
     def describe(self) -> str:

@@ -286,7 +286,7 @@ def _prepared(topology: AnyTopology, spec: SimulationSpec, horizon: float):
 def _run(fixed, pm, gain, horizon: float, delay: int, h: float, stop: float | None):
     grid = sampled_grid(fixed, pm, Digital(float(h), delay), float(horizon), np.array([horizon]))
     with np.errstate(all="ignore"):
-        dm = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, delay, abort_above=stop)
+        dm = digital_moments(pm, grid, gain, delay, abort_above=stop)
     return float(dm.moments.ms_error[-1].sum()), dm.peak
 
 

@@ -351,6 +351,56 @@ def test_a_lossy_export_reproduces_its_example_and_documents_the_flags(tmp_path)
     assert not (tmp_path / "c").exists()
 
 
+@pytest.mark.slow
+def test_a_delayed_lossy_export_is_certified_and_replays_bit_for_bit(tmp_path):
+    # D = 1 on lossy links: proven by the digital_loss certificate's delay line, exported
+    # from the scenario and from the certificate, the programs equal to the replay
+    import json
+
+    from ntc_design.certify import certify
+    from ntc_design.protocol.digital import Digital
+    from tests.support.export import arrivals_for, normals_for, run_program
+
+    scen = tmp_path / "s.yaml"
+    scen.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 5\n"
+        "digital: {period: 0.1, delay: 1, loss: 0.1, policy: skip}\n"
+    )
+    res = export(scen, "python", tmp_path / "py")
+    law = res.source.law
+    assert law.digital.delay == 1 and law.policy == "skip"
+    assert np.all(law.modes[0].keep == 1.0 - 0.1)
+    cmd = [sys.executable, str(res.folder / "ntc_protocol.py")]
+    inp = (res.folder / "example_input.txt").read_text()
+    out = subprocess.run(cmd, input=inp, capture_output=True, text=True).stdout
+    assert out == (res.folder / "example_output.txt").read_text()
+    steps, x0 = 120, np.linspace(-3.0, 3.0, 21)
+    z, chi = normals_for(law, steps, 5), arrivals_for(law, steps, 5)
+    assert 0 < chi.sum() < chi.size
+    want = replay(law, x0, z, steps, arrivals=chi)
+    assert (run_program(cmd, law, x0, steps, z, arrivals=chi) == want).all()
+    # the certificate's own export: the same law, the C program equal to the replay
+    import ntc_design as nd
+
+    doc = certify(
+        nd.load(EXAMPLES / "g1.yaml"), [1, 2, -1], 0.1, "1/(1+t)", None, noise_sigma=0.4,
+        noise_f=0.3, digital=Digital(0.1, 1, 0.1),
+    ).certificate  # fmt: skip
+    assert doc["results"]["digital"]["bound"] == "delay_line"
+    cert = tmp_path / "loss_d1.json"
+    cert.write_text(json.dumps(doc))
+    if CC is None:
+        return
+    res_c = export(cert, "c", tmp_path / "c")
+    law_c = res_c.source.law
+    assert law_c.digital.delay == 1 and np.all(law_c.modes[0].keep == 1.0 - 0.1)
+    exe = res_c.folder / "ntc_replay"
+    build = [CC, *CFLAGS, "-o", str(exe), "ntc_replay.c", "ntc_protocol.c", "-lm"]
+    assert subprocess.run(build, cwd=res_c.folder, capture_output=True).returncode == 0
+    want_c = replay(law_c, x0, z, steps, arrivals=chi)
+    assert (run_program(exe, law_c, x0, steps, z, arrivals=chi) == want_c).all()
+
+
 def test_a_certified_gain_given_again_with_spaces_is_the_same_gain(tmp_path, capsys, monkeypatch):
     # the certificate states 1/(1+t): the same text with spaces is no other gain, another is
     from tests.cli_helpers import assert_input_error, run_cli

@@ -536,7 +536,7 @@ def _truth_digital_loss(doc: dict) -> list[str]:
     if "digital_mean_square" not in doc["certifies"]:
         return bad + ([] if set(res) == {"stopped"} else ["numbers of an uncertified section"])
     h, policy = sub["period"], sub["loss"]["policy"]
-    if sub["delay"] != 0 or policy not in ("skip", "rescale"):
+    if policy not in ("skip", "rescale") or (sub["delay"] != 0) != (res.get("bound") is not None):
         return [*bad, "delay or policy"]
     ((name, m),) = doc["subject"]["modes"].items()
     top = Topology.from_data(parse_topology(m["topology"], name))
@@ -568,15 +568,18 @@ def _truth_digital_loss(doc: dict) -> list[str]:
         gm[i * d : i * d + d, j * d : j * d + d] += w @ fm
         gm[i * d : i * d + d, i * d : i * d + d] -= w @ fm
         nbar += sq * gm.T @ p @ gm
-    mu = 2 if policy == "skip" else 1
-    mm = p @ lbar + lbar.T @ p
-    if not _pos(mm - al * p - kap * (h * (lbar.T @ p @ lbar + 2 * s) + mu * nbar)):
-        bad.append("mean-square inequality over the arrivals")
+    if sub["delay"]:
+        bad += _truth_lossy_delay_line(doc, top, lap, loss, fm)
+    else:
+        mu = 2 if policy == "skip" else 1
+        mm = p @ lbar + lbar.T @ p
+        if not _pos(mm - al * p - kap * (h * (lbar.T @ p @ lbar + 2 * s) + mu * nbar)):
+            bad.append("mean-square inequality over the arrivals")
     if sub["gain"] != "1/(1+t)":
         bad.append("gain")
     elif not np.all(1 / (1 + (t0 + np.concatenate([[0.0], np.geomspace(1e-9, 1e9, 3000)]))) < kap):
         bad.append("t₀")
-    if res["k0"] != math.ceil(t0 / h - 1e-12):
+    if res["k0"] != math.ceil(t0 / h - 1e-12) + sub["delay"]:
         bad.append("k₀")
     if res["p_max"] != max(loss.values(), default=0.0):
         bad.append("p_max")
@@ -584,6 +587,65 @@ def _truth_digital_loss(doc: dict) -> list[str]:
         off = float(np.linalg.norm(np.linalg.solve(lbar, rhs)))
         if not _close(res["offset"], off, 1e-8, 1e-14):
             bad.append("offset")
+    return bad
+
+
+def _truth_lossy_delay_line(doc, top, lap, loss, fm) -> list[str]:
+    """The delay line's step over the arrivals: E_χ[A_χᵀ W A_χ] for the augmented
+    transition on (e_k, e_k − e_{k−1}, …) averaged over every arrival pattern edge by edge
+    (the mean A plus each edge's variance term, the arrivals being independent), the noise
+    scaled by E[m_e²]; the R_j decrease; (1/c)' = 1 < g; c_true >= κ."""
+    bad: list[str] = []
+    sub, res = doc["subject"]["digital"], doc["results"]["digital"]
+    h, dl, policy = sub["period"], sub["delay"], sub["loss"]["policy"]
+    mats = doc["matrices"]["P"]
+    s = np.array(mats["loss"])
+    rs = [np.array(mats[f"loss_R{j}"]) for j in range(dl)]
+    ts = [np.array(mats[f"loss_T{j}"]) for j in range(dl)]
+    al, kap, g = res["alpha"], res["kappa"], res["g"]
+    if not (g > 1 and all(_pos(t) for t in ts)):
+        return ["T or g"]
+    n, d = s.shape[0], top.dim
+    rn = [*rs, np.zeros((n, n))]
+    tau = h * kap
+    for j in range(dl):
+        if not _pos(rs[j] - rn[j + 1]) or not _pos(
+            (1 - al * tau) * rs[j] - (1 + g * tau) * rn[j + 1] - tau * ts[j]
+        ):
+            bad.append(f"R_{j} decrease")
+    m = n * (dl + 1)
+    blk = [np.zeros((n, m)) for _ in range(dl + 1)]
+    for b in range(dl + 1):
+        blk[b][:, b * n : (b + 1) * n] = np.eye(n)
+    ey = blk[0] - sum(blk[1:])
+    wt = 1 / tau + g
+    wp = blk[0].T @ s @ blk[0] + sum(wt * blk[j + 1].T @ rs[j] @ blk[j + 1] for j in range(dl))
+    lchi, extra = lap.copy(), np.zeros((m, m))  # the mean L̄ and the arrivals' variance
+    for (i, j), a in top.weights.items():
+        w = _sign(a) * a
+        le = np.zeros((n, n))
+        le[i * d : i * d + d, i * d : i * d + d] = w
+        le[i * d : i * d + d, j * d : j * d + d] = -a
+        q = 1 - loss.get((i, j), 0.0)
+        mult = 1.0 if policy == "skip" else 1 / q
+        lchi += (q * mult - 1) * le
+        b = (blk[0].T + blk[1].T) @ (-tau * le @ ey)
+        gm = np.zeros((n, n))
+        gm[i * d : i * d + d, j * d : j * d + d] += w @ fm
+        gm[i * d : i * d + d, i * d : i * d + d] -= w @ fm
+        extra += q * (1 - q) * mult**2 * b.T @ wp @ b
+        extra += h * kap**2 * q * mult**2 * ey.T @ gm.T @ (s + wt * rs[0]) @ gm @ ey
+    a = blk[0].T @ (blk[0] - tau * lchi @ ey) + blk[1].T @ (-tau * lchi @ ey)
+    for j in range(1, dl):
+        a += blk[j + 1].T @ blk[j]
+    lhs = a.T @ wp @ a + extra
+    rhs = (1 - al * tau) * blk[0].T @ s @ blk[0]
+    for j in range(dl):
+        rhs += blk[j + 1].T @ (((1 + g * tau) * rn[j + 1] + tau * ts[j]) / tau) @ blk[j + 1]
+    if not _pos(rhs - lhs):
+        bad.append("the delay line's step over the arrivals")
+    if "c_true" in res and not res["c_true"] >= kap * (1 - 1e-9):
+        bad.append("c_true")
     return bad
 
 
@@ -847,7 +909,7 @@ def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
         return margin + _truth_robust(doc)
     if kind == "digital_loss-deadline":
         return margin + _truth_loss_deadline(doc)
-    if kind == "digital_loss":
+    if kind.startswith("digital_loss"):
         return margin + _truth_digital_loss(doc)
     if kind.startswith("digital"):
         return margin + _truth_digital(doc)
@@ -942,6 +1004,7 @@ def _careful(doc):
 KIND_OF = {
     "digital": "digital",
     "digital_loss": "digital_loss",
+    "digital_loss-delay": "digital_loss",
     "digital_switching": "digital_switching",
     "robust": "robust",
     "robust-riccati": "robust",
@@ -960,6 +1023,7 @@ STRIDE = {
     "robust-riccati": 4,
     "digital": 3,
     "digital_loss": 3,
+    "digital_loss-delay": 4,
     "digital_switching": 4,
     "hurwitz-deadline": 3,
     "digital_loss-deadline": 3,

@@ -29,7 +29,7 @@ def _final(top, spec, p, policy, t_end=10.0):
     grid, _ = digital_grid(Digital(0.1), t_end, np.array([t_end]))
     s = pm.systems[0]
     if p == 0:
-        dm = digital_moments(pm.systems, grid, gain, pm.eps0, 7, 3, 0)
+        dm = digital_moments(pm, grid, gain, 0)
         return float(dm.moments.ms_error[-1].sum())
     lm = loss_moments(s, grid, gain, pm.eps0, pm.theta, 0, np.full(s.n_edges, p), policy)
     return float(lm.moments.ms_error[-1].sum())

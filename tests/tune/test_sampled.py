@@ -35,7 +35,7 @@ def test_value_and_adjoint(g1, parts, h, delay):
     c = 1 / (1 + nodes) + 0.1 * np.sin(np.arange(6))
     plan = prob.plan(c)
     fwd = prob.forward(c, plan)
-    dm = digital_moments(pm.systems, grid, lambda t: np.interp(t, nodes, c), pm.eps0, 7, 3, delay)
+    dm = digital_moments(pm, grid, lambda t: np.interp(t, nodes, c), delay)
     assert fwd.value == pytest.approx(float(dm.moments.ms_error[-1].sum()), rel=1e-12)
     src = np.random.default_rng(0).random(plan.steps)
     for sources in (None, src):
