@@ -180,6 +180,7 @@ class DeadlineBound:
     ms_error: float
     peak: float
     steps: int
+    loss: dict | None = None  # lossy links: {policy, p_max} (ntc_design.certify.deadline_loss)
 
     def to_dict(self) -> dict:
         """What a certificate's ``results.deadline`` and ``--json`` state.
@@ -187,14 +188,18 @@ class DeadlineBound:
         Returns
         -------
         dict
-            ``T``, ``ms_error_bound``, ``peak_bound``, ``peak_time``.
+            ``T``, ``ms_error_bound``, ``peak_bound``, ``peak_time`` (and ``loss`` on
+            lossy links).
         """
-        return {
+        out: dict = {
             "T": self.t_end,
             "ms_error_bound": self.ms_error_bound,
             "peak_bound": self.peak_bound,
             "peak_time": self.peak_time,
         }
+        if self.loss is not None:
+            out["loss"] = dict(self.loss)
+        return out
 
 
 @contextmanager

@@ -336,9 +336,11 @@ def certify(
     from ..model.load import load
     from ..protocol.lemma1 import uninformed_modes
 
-    if deadline is not None and (loss is not None or loss_policy is not None):
-        raise InputError("--loss: lossy links are not certified at a deadline (drop --deadline)")
-    scenario = _deadline_scenario(file, deadline, period, delay) if deadline is not None else None
+    scenario = (
+        _deadline_scenario(file, deadline, period, delay, loss, loss_policy)
+        if deadline is not None
+        else None
+    )
     if scenario is not None:
         top, th_file, margin, gain_opt, noise_sigma, noise_f, sampled, section = scenario
         th = th if th is not None else th_file
@@ -382,7 +384,7 @@ def certify(
     else:
         _print_certify(res, out_path if written else None)
         if figures is not None and continuous is not None:
-            _print_beside(figures, continuous, file, section.get("delay") or 0)
+            _print_beside(figures, continuous, file, section.get("delay") or 0, section["period"])
     if out_path is not None and not written:
         print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
     if not res.proven:
@@ -391,10 +393,10 @@ def certify(
         raise typer.Exit(1)
 
 
-def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
+def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, policy=None) -> tuple:
     """``ntc certify SCENARIO --deadline [T]``: the scenario's topology, θ, ΔC, gain,
-    noise, digital block and the certificate's ``subject.deadline`` (one line naming the
-    missing field or the flag)."""
+    noise, digital block (with its lossy links) and the certificate's ``subject.deadline``
+    (one line naming the missing field or the flag)."""
     import numpy as np
 
     from ..errors import number_from_text
@@ -414,13 +416,27 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     if sc.document.get("initial") is None:
         raise InputError(f"{sc.source}: initial: missing (--deadline needs the initial state)")
     t_doc = overrides.get("T", sc.document.get("T"))
-    sampled = digital_option(period, delay, sc.document.get("digital"), t_doc)
+    sampled = digital_option(period, delay, sc.document.get("digital"), t_doc, loss, policy)
     top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
     n, d = top.n, top.dim
+    lossy = None
     if sampled is not None:  # before the certificate: its own work is bounded by the same steps
         from ..certify.deadline import check_sampled_work
+        from ..certify.deadline_loss import check_loss_work, loss_section
+        from ..model import Topology
 
-        check_sampled_work(top.n * top.dim, float(spec.T), sampled.period, sampled.delay)
+        p, pol = sampled.loss, sampled.policy
+        if not isinstance(top, Topology) and p > 0:
+            raise InputError("--loss: lossy links are modelled on one fixed topology")
+        one = top if isinstance(top, Topology) else None
+        lossy = loss_section(one, p, pol) if one is not None else None
+        if lossy is None or one is None:
+            check_sampled_work(n * d, float(spec.T), sampled.period, sampled.delay)
+        else:  # the lossy recursion's W is the larger: its estimate alone
+            check_loss_work(
+                n * d, len(one.edges), d, float(spec.T), sampled.period, sampled.delay,
+                lossy["policy"],
+            )  # fmt: skip
     x0, _ = spec.initial_state(n, d)
     noise = spec.noise
     from ..gain.schedule import ScheduleGain
@@ -452,21 +468,34 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
         },
         "initial": {"x0": [float(v) for v in x0]},
     }
+    if lossy is not None:  # the figures of the protocol whose messages are lost
+        section["loss"] = lossy
     f_opt = float(f) if f.ndim == 0 else f
     return top, list(spec.theta), spec.margin, spec.gain, noise.sigma, f_opt, sampled, section
 
 
-def _print_beside(sampled, continuous, file: Path, delay: int = 0) -> None:
+def _print_beside(
+    sampled, continuous, file: Path, delay: int = 0, period: float | None = None
+) -> None:
     """The sampled figures beside the continuous design's, and one warning line when the
     period costs more than 10 % at T or 10× at the peak, naming the longest period that
     keeps both (the search of ``ntc tune --period auto``, with its dense verification)."""
+    loss = sampled.loss
+    lossy = f" on lossy links (p_e <= {loss['p_max']:g}, {loss['policy']})" if loss else ""
     print(
-        f"proven at T = {sampled.t_end:g}: sampled E Σ‖x_i(T) − θ‖² <= "
+        f"proven at T = {sampled.t_end:g}: sampled{lossy} E Σ‖x_i(T) − θ‖² <= "
         f"{sampled.ms_error_bound:.7g} (peak <= {sampled.peak_bound:.7g}); continuous design "
         f"<= {continuous.ms_error_bound:.7g} (peak <= {continuous.peak_bound:.7g})"
     )
     ratio, peak = sampled.ms_error / continuous.ms_error, sampled.peak / continuous.peak
-    if ratio > 1.1 or peak > 10.0:
+    if loss and (ratio > 1.1 or peak > 10.0):  # the period's search knows no loss
+        print(
+            f"warning: the period and the loss cost {ratio:.3g}× the continuous error at T and "
+            f"{peak:.3g}× its peak; find the largest tolerable loss with: ntc tune {file} "
+            f"--loss auto --period {period:g}",
+            file=sys.stderr,
+        )
+    elif ratio > 1.1 or peak > 10.0:
         print(
             f"warning: the period costs {ratio:.3g}× the continuous error at T and {peak:.3g}× "
             f"its peak; {_safe_period_text(file, sampled.t_end, delay, 10.0 * continuous.peak)}",
