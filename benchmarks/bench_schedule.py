@@ -23,7 +23,7 @@ from ntc_design.model.generate import random_network
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.prepare import prepare_modes
 from ntc_design.tune import ScheduleOptions, tune
-from ntc_design.tune.problem import ScheduleProblem
+from ntc_design.tune.schedule_problem import ScheduleProblem
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,6 +1,5 @@
 """Tune the gain c(t) (and δ) of a scenario for a deadline: :func:`tune`."""
 
-from .deadline import MonteCarloCheck, ScheduleTuneResult, tune_schedule
 from .entry import options_for, tune, tuned_scenario
 from .family import BASELINE, PowerGain
 from .objective import (
@@ -13,8 +12,9 @@ from .objective import (
     objective_for,
 )
 from .options import PowerOptions, ScheduleOptions, TuneOptions
-from .result import Landscape, TuneResult
-from .run import delta_range, tune_power
+from .power import delta_range, tune_power
+from .power_result import Landscape, TuneResult
+from .schedule import MonteCarloCheck, ScheduleTuneResult, tune_schedule
 from .search import Dimension, Trace, search
 
 __all__ = [

@@ -1,5 +1,5 @@
 """:func:`tune`: one entry for both questions a deadline asks, the best power law
-(:func:`.run.tune_power`) or the best schedule (:func:`.deadline.tune_schedule`), and
+(:func:`.power.tune_power`) or the best schedule (:func:`.schedule.tune_schedule`), and
 :func:`tuned_scenario`, the scenario that either result writes."""
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ from ..choices import Schedule, TuneMethod, choices
 from ..errors import InputError, Option
 from ..simulate import SimulationSpec
 from ..simulate.prepare import AnyTopology
-from .deadline import ScheduleTuneResult, tune_schedule
 from .options import PowerOptions, ScheduleOptions
-from .result import TuneResult
-from .run import tune_power
+from .power import tune_power
+from .power_result import TuneResult
+from .schedule import ScheduleTuneResult, tune_schedule
 
 #: What ``schedule`` may be.
 SCHEDULES = choices(Schedule)

@@ -63,7 +63,7 @@ import numpy as np
 
 from ..errors import InputError, Option, require_number
 from .family import PowerGain
-from .problem import (
+from .schedule_problem import (
     BIG,
     C_MIN,
     DEFAULT_MAX_GAIN,

@@ -1,6 +1,6 @@
 """What a tuning run is asked, written once: :class:`PowerOptions` for the power law
-(:func:`.run.tune_power`) and :class:`ScheduleOptions` for the optimal schedule
-(:func:`.deadline.tune_schedule`), both with the options they share
+(:func:`.power.tune_power`) and :class:`ScheduleOptions` for the optimal schedule
+(:func:`.schedule.tune_schedule`), both with the options they share
 (:class:`TuneOptions`). Each validates itself on construction (the pattern of diffrax's
 ``SaveAt``), so a bad option is refused before any work, and :func:`.entry.tune` picks the
 tuner by the options' type.
@@ -16,7 +16,7 @@ from ..errors import InputError, require_positive
 from .family import gamma_range
 from .objective import check_method
 from .optimal import check_max_gain
-from .problem import DEFAULT_MAX_GAIN, LEVELS
+from .schedule_problem import DEFAULT_MAX_GAIN, LEVELS
 
 #: The power family's default search budget (evaluations of the objective).
 MAX_EVALUATIONS = 160
@@ -35,7 +35,7 @@ class TuneOptions:
         almost sure), γ ∈ [0.05, 1] for mean square only (the schedule's tail satisfies
         both).
     tune_delta : bool
-        Also choose a common δ (:func:`.run.delta_range`).
+        Also choose a common δ (:func:`.power.delta_range`).
     eps : float or None
         Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.
     certificate : bool

@@ -26,7 +26,7 @@ from ..simulate.digital import check_digital_moments
 from ..simulate.grid import TimeGrid
 from ..simulate.moments import MomentRhs
 from ..simulate.prepare import PreparedModes
-from .problem import BIG, MAX_STORE, Forward
+from .schedule_problem import BIG, MAX_STORE, Forward
 
 
 @dataclass(frozen=True, eq=False)

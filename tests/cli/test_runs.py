@@ -78,7 +78,7 @@ def test_cli_out_that_is_a_file_is_refused_before_the_run(examples, tmp_path, ca
 
 def test_cli_prints_the_table_and_exits_zero(examples, capsys, monkeypatch, tmp_path):
     # a 3×3 landscape, not 13×9: its contour map is still drawn and named (CI time)
-    monkeypatch.setattr("ntc_design.tune.run.LANDSCAPE_SHAPE", (3, 3))
+    monkeypatch.setattr("ntc_design.tune.power.LANDSCAPE_SHAPE", (3, 3))
     code, out, err = run_cli(
         [
             "tune",
@@ -272,7 +272,7 @@ def test_tune_defaults_its_deadline_to_the_scenario_t(tmp_path, capsys, monkeypa
         encoding="utf-8",
     )
     args = ["tune", sc, "--evaluations", "10", "--json"]
-    monkeypatch.setattr("ntc_design.tune.run.LANDSCAPE_SHAPE", (2, 2))  # not what is checked
+    monkeypatch.setattr("ntc_design.tune.power.LANDSCAPE_SHAPE", (2, 2))  # not what is checked
     code, out, err = run_cli(args, capsys, monkeypatch)
     assert code in (0, 1), err
     assert json.loads(out)["horizon"] == 2.0  # no --horizon: the scenario's T

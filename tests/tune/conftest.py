@@ -3,7 +3,7 @@
 import pytest
 
 from ntc_design.simulate.prepare import prepare_modes
-from ntc_design.tune.problem import ScheduleProblem
+from ntc_design.tune.schedule_problem import ScheduleProblem
 
 
 @pytest.fixture(scope="package")

@@ -1,4 +1,4 @@
-"""Tests of :mod:`ntc_design.tune.deadline`."""
+"""Tests of :mod:`ntc_design.tune.schedule`."""
 
 import numpy as np
 import pytest

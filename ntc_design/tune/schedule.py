@@ -1,7 +1,7 @@
 """``tune(..., ScheduleOptions())``: the best gain schedule for a deadline, with the
 evidence a user needs to trust it.
 
-Steps: the best power law a·(b + t)^(−γ) (:func:`.run.tune_power`, polished by exact gradients; the schedule starts
+Steps: the best power law a·(b + t)^(−γ) (:func:`.power.tune_power`, polished by exact gradients; the schedule starts
 from and is compared with); the optimal schedule (:mod:`.optimal`); the schedule written
 as a :class:`~ntc_design.gain.schedule.ScheduleGain` whose tail a·(1 + t)^(−1) meets it at T,
 so Theorems 1 and 2 hold; every number re-evaluated independently by the tuner's exact
@@ -34,15 +34,15 @@ from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import AnyGain, ExactObjective, objective_for
 from .optimal import fit_power, optimise_schedule
 from .options import CHECK_PATHS, PowerOptions, ScheduleOptions
-from .outcome import (
+from .power import delta_range, tune_power
+from .sampled import SampledScheduleProblem
+from .schedule_problem import MomentProblem, ScheduleProblem
+from .schedule_result import (
     AGREE_RTOL,
     MonteCarloCheck,
     ScheduleTuneResult,
     relative_gap,
 )
-from .problem import MomentProblem, ScheduleProblem
-from .run import delta_range, tune_power
-from .sampled import SampledScheduleProblem
 
 #: The coarse power-law search's budget before the gradient polish.
 POWER_EVALUATIONS = 40
@@ -216,7 +216,7 @@ def _schedule_delta(
     notes: list[str],
 ) -> float:
     """The common δ for the schedule: bounded Brent search of log δ over
-    :func:`.run.delta_range`, each δ scored by the optimal schedule on ``DELTA_PIECES``
+    :func:`.power.delta_range`, each δ scored by the optimal schedule on ``DELTA_PIECES``
     pieces (started from the schedule of the nearest δ scored so far); δ written to 4
     significant digits."""
     from scipy.optimize import minimize_scalar

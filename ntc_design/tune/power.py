@@ -34,7 +34,7 @@ from .evidence import certify_tuned, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Objective, objective_for
 from .options import PowerOptions
-from .result import Landscape, TuneResult
+from .power_result import Landscape, TuneResult
 from .search import Dimension, search
 
 #: δ is searched in [max(1.05·δ_crit, 0.05·δ_Lemma1), 4·δ_Lemma1] (δ_crit: δ_H for one

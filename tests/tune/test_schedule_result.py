@@ -1,4 +1,4 @@
-"""Tests of :mod:`ntc_design.tune.outcome`."""
+"""Tests of :mod:`ntc_design.tune.schedule_result`."""
 
 import dataclasses
 
@@ -9,7 +9,7 @@ import ntc_design as nd
 from ntc_design.model.paper import THETA
 from ntc_design.simulate import SimulationSpec, simulate
 from ntc_design.simulate.options import SaveAt
-from ntc_design.tune.deadline import _monte_carlo
+from ntc_design.tune.schedule import _monte_carlo
 from tests.conftest import ROOT
 
 

@@ -1,4 +1,4 @@
-"""Tests of :mod:`ntc_design.tune.result`."""
+"""Tests of :mod:`ntc_design.tune.power_result`."""
 
 import pytest
 

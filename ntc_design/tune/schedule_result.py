@@ -1,4 +1,4 @@
-"""What :func:`ntc_design.tune.deadline.tune_schedule` returns: the optimal schedule, its
+"""What :func:`ntc_design.tune.schedule.tune_schedule` returns: the optimal schedule, its
 baseline and its independent Monte Carlo check, as every face shows them."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Tests of :mod:`ntc_design.tune.problem`: the moment equations, RK4 forward and its discrete adjoint."""
+"""Tests of :mod:`ntc_design.tune.schedule_problem`: the moment equations, RK4 forward and its discrete adjoint."""
 
 import numpy as np
 import pytest

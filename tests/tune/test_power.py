@@ -1,4 +1,4 @@
-"""Tests of :mod:`ntc_design.tune.run`."""
+"""Tests of :mod:`ntc_design.tune.power`."""
 
 import json
 import math
@@ -214,7 +214,7 @@ def test_the_estimate_is_the_mean_candidate_of_the_grid(examples):
     """tune_seconds: the coarse grid's 60 candidates priced by their closed-form step
     counts (a candidate above the step cap scores +∞ unintegrated, so costs nothing)."""
     from ntc_design.tune.objective import MAX_STEPS, objective_for
-    from ntc_design.tune.run import _dimensions, tune_seconds
+    from ntc_design.tune.power import _dimensions, tune_seconds
 
     top, spec, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
     obj = objective_for(top, spec, 1e4)
