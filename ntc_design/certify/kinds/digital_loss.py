@@ -8,8 +8,9 @@ edge's p_e by its labels); the matrices add ``P.loss``; ``results.digital`` stat
 t₀, k₀, the largest p_e and, under skip, the offset ‖x* − 1⊗θ‖. Each is proven by a
 derived claim or recomputed: the inequality exactly (dyadic rationals) or in verified
 floats, c(t) < κ beyond t₀ in ball arithmetic, the offset by an exact rational solve.
-The certificate covers D = 0 with ``skip`` or ``rescale``; for a delay or ``hold`` it
-certifies the continuous properties only and ``results.digital.stopped`` says why.
+The certificate covers D = 0 with ``skip`` or ``rescale``, and ``hold`` by the functional of
+:mod:`ntc_design.certify.loss_hold` (:mod:`.digital_loss_hold`); for a delay it certifies
+the continuous properties only and ``results.digital.stopped`` says why.
 """
 
 from __future__ import annotations
@@ -36,6 +37,14 @@ from ..theorems import TheoremVerdict, digital_verdicts
 from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, number_text
 from .dense import prove_dense
 from .digital import DigitalKind, read_digital
+from .digital_loss_hold import (
+    audit_hold,
+    hold_claims,
+    hold_detail,
+    issue_hold,
+    prove_hold,
+    read_hold,
+)
 from .hurwitz import HurwitzKind
 
 P_NAME = "loss"
@@ -164,7 +173,7 @@ class DigitalLossKind(DigitalKind):
     contraction over the arrivals (and the offset under skip)."""
 
     name = "digital_loss"
-    description = "one topology run as the sampled protocol on lossy links (D = 0, skip or rescale)"
+    description = "one topology run as the sampled protocol on lossy links (D = 0)"
 
     def accepts(self, design: Any) -> bool:
         """A digital design of one topology whose messages may be lost.
@@ -217,10 +226,20 @@ class DigitalLossKind(DigitalKind):
         why = None
         if dg.delay:
             why = "lossy links are certified for D = 0 (a delay is not)"
-        elif dg.policy == "hold":
-            why = "hold keeps the last measurements (an augmented state): not certified"
         pl = None
-        if why is None:
+        if why is None and dg.policy == "hold":
+            edges = loss_edges(top, losses)
+            noises = edge_noises(top, design.f_matrix(d), design.sigma, design.sigma_edges)
+            lap = design.base.grounded_laplacian()
+            res_h, why = issue_hold(doc, lap, edges, noises, d, dg.period, gain_doc)
+            if res_h is not None:
+                res_h["p_max"] = max(losses.values())
+                doc["results"]["digital"] = res_h
+                doc["certifies"] = [*doc["certifies"], MS.value]
+                doc["claims"] = [*doc["claims"], *(c.to_dict() for c in hold_claims(mode))]
+                doc.pop("digest", None)
+                return finish(doc)
+        elif why is None:
             edges = loss_edges(top, losses)
             noises = edge_noises(top, design.f_matrix(d), design.sigma, design.sigma_edges)
             lap = design.base.grounded_laplacian()
@@ -288,6 +307,9 @@ class DigitalLossKind(DigitalKind):
             def num(key: str) -> float:
                 return number(need(res, key, (int, float), where), f"{where}.{key}")
 
+            if ctx.loss.policy == "hold":
+                ctx.stated = read_hold(res, where)
+                return reading
             off = num("offset") if ctx.loss.policy == "skip" else None
             ctx.stated = LossStated(num("alpha"), num("kappa"), num("t0"), off)
         return reading
@@ -316,13 +338,13 @@ class DigitalLossKind(DigitalKind):
         out = HurwitzKind.claims(self, base, subject, reading, alpha)
         if MS in properties:
             ctx = reading.state
-            if ctx.digital.delay or ctx.loss.policy == "hold":
+            if ctx.digital.delay:
                 raise InputError(
-                    f"{ctx.source}: certifies: digital_mean_square on lossy links needs D = 0 "
-                    "and skip or rescale"
+                    f"{ctx.source}: certifies: digital_mean_square on lossy links needs D = 0"
                 )
             mode = next(iter(ctx.modes))
-            out = (*out, *loss_claims(mode, ctx.loss.policy))
+            more = hold_claims(mode) if ctx.loss.policy == "hold" else None
+            out = (*out, *(more or loss_claims(mode, ctx.loss.policy)))
         return out
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
@@ -357,6 +379,15 @@ class DigitalLossKind(DigitalKind):
             return Check(claim.id, False, f"no mode {claim.mode!r} in the certificate", claim)
         edges = loss_edges(mode.top, ls.losses)
         d = mode.top.dim
+        if claim.kind in (ClaimKind.LOSS_HOLD_FORM, ClaimKind.LOSS_HOLD_STEP) or (
+            claim.kind is ClaimKind.LOSS_HOLD_GAIN
+        ):
+            if ls.policy != "hold":
+                return Check(claim.id, False, "a hold claim on another policy", claim)
+            noises = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
+            return prove_hold(claim, ctx, mode, edges, noises)
+        if ls.policy == "hold":
+            return Check(claim.id, False, "not a claim of the hold section", claim)
         if claim.kind is ClaimKind.LOSS_OFFSET:
             if mode.exact is None or st.offset is None:
                 return Check(claim.id, False, "the exact L_B is not available", claim)
@@ -422,6 +453,9 @@ class DigitalLossKind(DigitalKind):
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
+        if ctx.loss.policy == "hold":
+            audit_hold(audit, ctx)
+            return
         for key in ("alpha", "kappa", "t0") + (("offset",) if ctx.loss.policy == "skip" else ()):
             audit.proven(("digital", key))
         audit.exact(("digital", "k0"), first_step(ctx.stated.t0, ctx.digital.period, 0))
@@ -449,6 +483,8 @@ class DigitalLossKind(DigitalKind):
         where = (
             f"to x* at ‖x* − 1⊗θ‖ = {number_text(r.get('offset'))} (skip)"
             if "offset" in r
+            else f"to 1⊗θ ({r.get('policy', 'rescale')}; {hold_detail(r)})"
+            if r.get("policy") == "hold"
             else "to 1⊗θ (rescale)"
         )
         return (
@@ -483,7 +519,8 @@ class DigitalLossKind(DigitalKind):
         if MS not in properties or st is None:
             return base
         k0 = first_step(st.t0, dg.period, 0)
-        off = f", x* at {st.offset:.6g} from 1⊗θ" if st.offset is not None else ""
+        offset = getattr(st, "offset", None)
+        off = f", x* at {offset:.6g} from 1⊗θ" if offset is not None else ""
         return (*base, (MS, f"h = {dg.period:g}, lossy links: from step k₀ = {k0}{off}"))
 
     def verdicts(
@@ -517,7 +554,7 @@ class DigitalLossKind(DigitalKind):
                 f"‖x* − 1⊗θ‖ = {r['offset']:.4g}, not to θ"
             )
         else:
-            detail = f"k₀ = {r['k0']}, lossy links (rescale): converges to θ"
+            detail = f"k₀ = {r['k0']}, lossy links ({r.get('policy', 'rescale')}): converges to θ"
         return (*base, *digital_verdicts(base, verification, gain, dg.period, dg.delay, detail))
 
 
