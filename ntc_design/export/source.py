@@ -189,7 +189,7 @@ def from_scenario(
     InputError
         A bad file or value; a topology that is neither fixed nor switching; a design whose
         certificate does not verify or for which no theorem is guaranteed; lossy links
-        with ``hold``, a delay or a switching set (not proven).
+        with a delay, hold that its certificate does not prove, or a switching set.
     """
 
     sc = parse_scenario(path)
@@ -292,6 +292,8 @@ def _certified_law(
             f"{src}: the design's certificate ({res.certificate['kind']}) does not verify "
             f"({failed}); nothing exported"
         )
+    if losses and dg.policy == "hold" and not _hold_proven(res.certificate):
+        _unproven("hold", 0, src, False)  # before the theorems: what is missing is this proof
     sampled = [t for t in res.theorems if t.sampled]
     if not res.proven or not sampled or not any(t.guaranteed for t in sampled):
         raise InputError(
@@ -309,13 +311,26 @@ def _certified_law(
     return law, res
 
 
-def _unproven(policy: str, delay: int, where: str) -> None:
-    """Refuse lossy links that no certificate proves (``hold``, or a delay), in one line."""
-    if policy == "hold" or delay:
-        what = "the hold policy" if policy == "hold" else f"a delay D = {delay}"
+def _hold_proven(cert: dict) -> bool:
+    """Whether a verified ``digital_loss`` certificate proves hold (its mean-square
+    section, not ``results.digital.stopped``)."""
+    res = cert.get("results", {}).get("digital", {})
+    return (
+        "digital_mean_square" in cert.get("certifies", [])
+        and isinstance(res, dict)
+        and res.get("policy") == "hold"
+        and "stopped" not in res
+    )
+
+
+def _unproven(policy: str, delay: int, where: str, hold_proven: bool = True) -> None:
+    """Refuse lossy links that no certificate proves (a delay, or ``hold`` whose
+    certificate does not prove it), in one line."""
+    if (policy == "hold" and not hold_proven) or delay:
+        what = "the hold policy" if policy == "hold" and not delay else f"a delay D = {delay}"
         raise InputError(
             f"{where}: lossy links with {what} are not proven (the digital_loss certificate "
-            "covers D = 0 with skip or rescale); nothing exported"
+            "covers D = 0, and hold where its section proves it); nothing exported"
         )
 
 
@@ -459,7 +474,7 @@ def from_certificate(
             doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f, loss, policy
         )
     ls = getattr(ctx, "loss", None) if kind.name == "digital_loss" else None
-    losses = _certified_losses(ls, sampled.delay, loss, policy, src)
+    losses = _certified_losses(ls, sampled.delay, loss, policy, src, ctx.stated is not None)
     if ctx.stated is None:
         raise InputError(
             f"{src}: the certificate does not prove the sampled protocol "
@@ -511,7 +526,7 @@ def from_certificate(
 
 
 def _certified_losses(
-    ls: Any, delay: int, loss: float | None, policy: str | None, src: str
+    ls: Any, delay: int, loss: float | None, policy: str | None, src: str, proven: bool = False
 ) -> dict:
     """A sampled certificate's p_e by edge (empty: lossless), from its verified reading
     only: ``--loss``/``--loss-policy`` that differ are refused, as is what it does not prove."""
@@ -536,7 +551,7 @@ def _certified_losses(
         )
     if not any(p > 0 for p in ls.losses.values()):
         return {}
-    _unproven(ls.policy, delay, src)
+    _unproven(ls.policy, delay, src, proven)
     return dict(ls.losses)
 
 
