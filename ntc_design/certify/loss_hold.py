@@ -33,7 +33,7 @@ dominates).
 noise), B̂(c) = [ΠQ_d; Q_d⁻¹(I − hcΓΠ)Q_d] (W×Ed), so that B = Ā(c) + Σ_e (χ_e − q_e)H_e
 with Ā(c) = [[I − hcL; 0], B̂(c)P_d] and H_e = −B̂(c)E_e (E_e: edge e's columns in the u
 block). The arrivals are independent, so E[BᵀQB] = ĀᵀQĀ + Σ_e p_e q_e H_eᵀQH_e. The τ²
-term δ = c²h² (0, Q_d⁻¹ΓL e) is split off by Young with a weight ρc (ρ = 2^-k): V(x + δ) <=
+term δ = c²h² (0, Q_d⁻¹ΓL e) is split off by Young with a weight ρc: V(x + δ) <=
 (1 + ρc)V(x) + (1 + 1/(ρc))V(δ) and c⁴ + c³/ρ <= c²(κ² + κ/ρ) for c <= κ. The noise enters
 as hc·B_n(c)Xn with B_n(c) = B₀ + hcB₁, B₀ = [Π; Q_d⁻¹], B₁ = [0; −Q_d⁻¹ΓΠ], and B_nᵀQB_n
 ⪯ M := (1 + hκ)(B₀ᵀQB₀ + hκ B₁ᵀQB₁) for c <= κ (Young with weight hκ). Hence with
@@ -74,6 +74,7 @@ multiplicative noise) is < 1 (bisection); informational.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -425,6 +426,23 @@ def coupling(ops: HoldOps, mo: HoldModel, s: Any, r: Any, beta: float) -> Any:
     return ops.block([[ops.mul(beta, s), c], [c.T, r]])
 
 
+def inverse_up(x: float) -> float:
+    """The smallest double >= 1/x (x > 0), from the exact rational 1/x.
+
+    Parameters
+    ----------
+    x : float
+        x > 0.
+
+    Returns
+    -------
+    float
+    """
+    want = 1 / Fraction(x)
+    f = float(want)
+    return f if Fraction(f) >= want else math.nextafter(f, math.inf)
+
+
 def step_matrix(
     ops: HoldOps,
     mo: HoldModel,
@@ -447,7 +465,8 @@ def step_matrix(
     s, r : matrix
         S and R.
     alpha1, rho, kappa, h, c : float
-        α', ρ (a power of two), κ, the period and the gain.
+        α', ρ, κ, the period and the gain (1/ρ enters rounded up: a larger factor on
+        the PSD term it multiplies proves more).
 
     Returns
     -------
@@ -471,7 +490,7 @@ def step_matrix(
     f = ops.const(k.f)
     young = f.T @ (r @ f)
     ee = ops.mul(c, ops.mul(c, ops.mul(kappa, ops.mul(kappa, young))))
-    ee = ee + ops.mul(c, ops.mul(c, ops.mul(kappa, ops.mul(1.0 / rho, young))))
+    ee = ee + ops.mul(c, ops.mul(c, ops.mul(kappa, ops.mul(inverse_up(rho), young))))
     b0, b1 = ops.const(k.b0), ops.const(k.b1)
     m1 = b0.T @ (q @ b0) + ops.mul(h, ops.mul(kappa, b1.T @ (q @ b1)))
     mm = ops.mask(m1 + ops.mul(h, ops.mul(kappa, m1)), _blockmask(m, d))
@@ -592,6 +611,7 @@ __all__ = [
     "hold_matrices",
     "hold_model",
     "hold_rate",
+    "inverse_up",
     "holds_in_floats",
     "step_constants",
     "step_matrix",

@@ -28,8 +28,9 @@ from .loss_hold import (
 
 #: The largest order Nd + Ed of the functional the SDP is attempted for.
 HOLD_MAX_ORDER = 160
-#: The Young weight ρ of the τ² term (a power of two, so that 1/ρ is exact).
-RHO_SHARE = 1.0 / 16
+#: The Young weight ρ of the τ² term as a share of h·min Re λ(L_B) (it costs ρc of the
+#: e-block's decay h c (SL + LᵀS)).
+RHO_SHARE = 0.75
 #: The share of α' that the gain's change may cost: β solves gβ/(1 − β) = share·α'.
 BETA_SHARE = 0.5
 #: α' as a share of the slowest continuous decay min Re λ(L_B).
@@ -231,7 +232,7 @@ def plan_hold(mo: HoldModel, h: float, g: float, c_hi: float, decay: float) -> H
     alpha1 = ALPHA_SHARE * decay
     want = BETA_SHARE * alpha1  # gβ/(1 − β)
     beta = float(want / (g + want)) if g > 0 else 0.5
-    rho = RHO_SHARE
+    rho = RHO_SHARE * h * decay
     ops = HoldOps("cvxpy")
     s = cp.Variable((n, n), symmetric=True)
     r = cp.Variable((m, m), symmetric=True)

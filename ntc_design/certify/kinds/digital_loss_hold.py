@@ -102,8 +102,8 @@ def prove_nonincreasing(gain: Any, t0: float) -> tuple[bool, str]:
 
 
 def rate_conditions(st: HoldStated, h: float) -> tuple[bool, str]:
-    """The exact rational conditions: 0 < α <= α' − gβ/(1 − β), 0 < β < 1, ρ a power of
-    two, ghκβ <= 1 − β.
+    """The exact rational conditions: 0 < α <= α' − gβ/(1 − β), 0 < β < 1, ρ > 0,
+    ghκβ <= 1 − β.
 
     Parameters
     ----------
@@ -121,9 +121,8 @@ def rate_conditions(st: HoldStated, h: float) -> tuple[bool, str]:
     b = Fraction(st.beta)
     if not (0 < b < 1 and st.g >= 0 and st.kappa > 0 and st.alpha > 0):
         return False, "not 0 < β < 1, g >= 0, κ > 0 and α > 0"
-    r = Fraction(st.rho)
-    if not (r > 0 and r.numerator == 1 and r.denominator & (r.denominator - 1) == 0):
-        return False, "ρ is not 2^-k"
+    if not st.rho > 0:
+        return False, "ρ is not > 0"
     if Fraction(st.alpha) > hold_rate(st.alpha1, st.beta, st.g):
         return False, "α > α' − gβ/(1 − β)"
     if Fraction(st.g) * Fraction(h) * Fraction(st.kappa) * b > 1 - b:
