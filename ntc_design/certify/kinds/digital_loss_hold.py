@@ -164,27 +164,27 @@ def issue_hold(
         ``results.digital`` without p_max, or None with why not.
     """
     if not isinstance(gain_doc, str):
-        return None, "hold needs c(t) as an expression (not a schedule)"
+        return None, "hold: needs c(t) as an expression (not a schedule)"
     g = growth_bound(gain_doc)
     if g is None:
-        return None, "(1/c)' has no finite bound"
+        return None, "hold: (1/c)' has no finite bound"
     mo = hold_model(lap, edges, noises, d)
     decay = float(np.min(np.linalg.eigvals(lap).real))
     c_hi = hold_ctrue(mo, h)
     if c_hi is None:
-        return None, "no constant gain keeps the lossy second moments bounded"
+        return None, "hold: no constant gain keeps the lossy second moments bounded"
     pl = plan_hold(mo, h, g, c_hi, decay)
     if pl is None:
-        return None, "no S, R found for the hold functional"
+        return None, "hold: no S, R found for the hold functional"
     t0, how = gain_t0(gain_doc, pl.kappa)
     if t0 is None:
-        return None, f"c(t) does not stay below κ = {pl.kappa:.6g}: {how}"
+        return None, f"hold: c(t) does not stay below κ = {pl.kappa:.6g}: {how}"
     ok, why = prove_growth(gain_doc, g, t0)
     if ok is not True:
-        return None, why
+        return None, f"hold: {why}"
     ok2, why2 = prove_nonincreasing(gain_doc, t0)
     if not ok2:
-        return None, why2
+        return None, f"hold: {why2}"
     doc["matrices"]["P"][S_NAME] = pl.s.tolist()
     doc["matrices"]["P"][R_NAME] = pl.r.tolist()
     return {

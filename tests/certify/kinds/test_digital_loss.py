@@ -1,6 +1,6 @@
 """Tests of :mod:`ntc_design.certify.kinds.digital_loss`: issuing and verifying the
 certificate on lossy links, forged numbers and subjects rejected after re-sealing, where
-it stops (a delay, hold), the registry's choice and the CLI."""
+it stops (a delay, an unproven hold), the registry's choice and the CLI."""
 
 import copy
 import json
@@ -113,9 +113,14 @@ def test_malformed_loss_fields_name_the_field(skip10, edit, message):
         verify(_reseal(doc))
 
 
-def test_a_delay_or_hold_is_not_certified_and_says_so(g1):
-    for dg, why in ((Digital(0.1, 1, 0.1), "D = 0"), (Digital(0.1, 0, 0.1, "hold"), "hold")):
-        doc = certify(g1, THETA, gain="1/(1+t)", digital=dg).certificate
+def test_a_delay_or_an_unproven_hold_is_not_certified_and_says_so(g1):
+    # hold is certified where its functional proves it (test_digital_loss_hold); with a
+    # gain whose 1/c grows without bound it stops at once
+    for dg, gain, why in (
+        (Digital(0.1, 1, 0.1), "1/(1+t)", "D = 0"),
+        (Digital(0.1, 0, 0.1, "hold"), "exp(-t)", "hold: (1/c)' has no finite bound"),
+    ):
+        doc = certify(g1, THETA, gain=gain, digital=dg).certificate
         assert doc["kind"] == "digital_loss"
         assert "digital_mean_square" not in doc["certifies"]
         assert why in doc["results"]["digital"]["stopped"]
