@@ -172,3 +172,19 @@ def test_the_rate_conditions_are_exact():
 def test_the_gain_is_non_increasing_from_t0(gain, t0, want):
     assert prove_nonincreasing(gain, t0)[0] is want
     assert prove_nonincreasing({"t": [0, 1], "c": [1, 1]}, 0.0)[0] is False
+
+
+@pytest.mark.slow
+@pytest.mark.hostile
+def test_the_forgery_oracle_accepts_the_honest_hold_certificate_and_catches_lies(hold30):
+    from tests.system.test_forgery_property import truth
+
+    assert truth("digital_loss", hold30, hold30) == []
+    for key, change, what in (
+        ("kappa", 3.0, "G(κ)"),
+        ("alpha", 1.5, "α"),
+        ("beta", 0.01, "coupling or S"),
+    ):
+        forged = copy.deepcopy(hold30)
+        forged["results"]["digital"][key] *= change
+        assert what in truth("digital_loss", forged, hold30), key
