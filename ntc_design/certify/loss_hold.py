@@ -582,7 +582,8 @@ def hold_matrices(
     ops = HoldOps("dyadic" if exact else "floatmat")
     sm, rm = ops.matrix(s), ops.matrix(r)
     g0 = step_matrix(ops, mo, sm, rm, pl.alpha1, pl.rho, pl.kappa, h, 0.0)
-    if exact:
+    g0u: Any
+    if exact:  # the e-rows of G(0) vanish by the identity C = SΠP_d; checked here too
         g0u = Dyadic(g0.num[n:, n:].copy(), g0.exp)
         zero = bool(np.all(g0.num[:n, :] == 0)) and bool(np.all(g0.num[:, :n] == 0))
         if not zero:  # the identity C = SΠP_d failed: nothing to prove with
