@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from .delayline import SOLVER_OPTIONS, largest_level
 from .loss_hold import (
     HoldModel,
     HoldOps,
@@ -223,8 +224,6 @@ def plan_hold(mo: HoldModel, h: float, g: float, c_hi: float, decay: float) -> H
     HoldPlan or None
     """
     import cvxpy as cp
-
-    from .delayline import SOLVER_OPTIONS, largest_level
 
     n, m = mo.n, mo.m
     if not (decay > 0 and c_hi > 0 and g >= 0) or n + m > HOLD_MAX_ORDER:
