@@ -342,11 +342,14 @@ def _lossy(design, policy, delay=0, h=0.05):
 
 
 @needs_cc
-@pytest.mark.parametrize("policy", ["skip", "rescale", "hold"])
-def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
+@pytest.mark.parametrize(
+    ("policy", "delay"),
+    [(p, d) for p in ("skip", "rescale") for d in (0, 1, 2)] + [("hold", 0)],
+)
+def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy, delay):
     from tests.support.export import arrivals_for
 
-    law = _lossy(g1_design, policy)
+    law = _lossy(g1_design, policy, delay)
     code = {"skip": 1, "rescale": 2, "hold": 3}[policy]
     assert f"#define NTC_POLICY {code}" in header(law)
     exe = build_c(tmp_path, law)
@@ -360,7 +363,9 @@ def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
         np.max(
             np.abs(
                 want
-                - replay(agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3), X0, z, steps)
+                - replay(
+                    agent_law(g1_design, Digital(0.05, delay), "1/(1+t)", 0.4, 0.3), X0, z, steps
+                )
             )
         )
         > 1e-3
@@ -386,7 +391,7 @@ AGENT_LOSSY = (
 
 # hold: every agent's held measurements start at the noiseless ones of x(0)
 AGENT_HOLD = AGENT_LOSSY.replace(
-    "    if (scanf(\"%ld\", &K) != 1) return 2;\n",
+    '    if (scanf("%ld", &K) != 1) return 2;\n',
     """    for (i = 0; i < NTC_N; i++) {
         const ntc_agent *ag = ntc_agent_law(&st[i]);
         for (s = 0; s < ag->n_in; s++)
@@ -400,13 +405,16 @@ AGENT_HOLD = AGENT_LOSSY.replace(
 
 
 @needs_cc
-@pytest.mark.parametrize("policy", ["skip", "rescale", "hold"])
-def test_the_agent_api_on_lossy_links_reproduces_the_replay(g1_design, tmp_path, policy):
+@pytest.mark.parametrize(
+    ("policy", "delay"),
+    [(p, d) for p in ("skip", "rescale") for d in (0, 1)] + [("hold", 0)],
+)
+def test_the_agent_api_on_lossy_links_reproduces_the_replay(g1_design, tmp_path, policy, delay):
     from tests.support.export import arrivals_for, write_files
 
     assert AGENT_LOSSY.count("chi") == 3 and "ntc_agent_step_arrived" in AGENT_LOSSY
     assert AGENT_HOLD.count("ntc_agent_init_held") == 1
-    law = _lossy(g1_design, policy)
+    law = _lossy(g1_design, policy, delay)
     write_files(tmp_path, c_files(law))
     (tmp_path / "agents.c").write_text(AGENT_HOLD if policy == "hold" else AGENT_LOSSY)
     cmd = [CC, *CFLAGS, "-o", "agents", "agents.c", "ntc_protocol.c", "-lm"]

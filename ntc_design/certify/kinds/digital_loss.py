@@ -8,14 +8,16 @@ edge's p_e by its labels); the matrices add ``P.loss``; ``results.digital`` stat
 t₀, k₀, the largest p_e and, under skip, the offset ‖x* − 1⊗θ‖. Each is proven by a
 derived claim or recomputed: the inequality exactly (dyadic rationals) or in verified
 floats, c(t) < κ beyond t₀ in ball arithmetic, the offset by an exact rational solve.
-The certificate covers D = 0 with ``skip`` or ``rescale``, and ``hold`` by the functional of
-:mod:`ntc_design.certify.loss_hold` (:mod:`.digital_loss_hold`); for a delay it certifies
-the continuous properties only and ``results.digital.stopped`` says why.
+The certificate covers ``skip`` and ``rescale``, D = 0 here and D >= 1 by the delay line's
+functional over the arrivals (:mod:`.digital_loss_delay`); ``hold`` (D = 0) by the
+functional of :mod:`ntc_design.certify.loss_hold` (:mod:`.digital_loss_hold`). Where no
+proof closes it certifies the continuous properties only and ``results.digital.stopped``
+says why.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Any
 
@@ -36,8 +38,11 @@ from ..loss import exact_offset, loss_edges, loss_ms_matrix, offset_value, plan_
 from ..theorems import TheoremVerdict, digital_verdicts
 from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, number_text
 from .dense import prove_dense
-from .digital import DigitalKind, read_digital
+from .digital import DigitalContext, DigitalKind, DigitalSubject, read_digital
+from .digital_loss_delay import DELAY_LINE, delayed_claims, issue_delayed, prove_delayed
 from .digital_loss_hold import (
+    HOLD_CLAIMS,
+    HoldStated,
     audit_hold,
     hold_claims,
     hold_detail,
@@ -69,6 +74,17 @@ class LossStated:
     kappa: float
     t0: float
     offset: float | None
+    g: float | None = None  # the delay line's growth bound of 1/c (D >= 1)
+
+
+@dataclass(frozen=True, eq=False)
+class LossState:
+    """What ``digital_loss`` reads beside the ``hurwitz`` modes: ``subject.digital``, its
+    ``loss`` and ``results.digital``'s numbers (None: the sampled property not certified)."""
+
+    subject: DigitalSubject
+    loss: LossSubject
+    stated: LossStated | HoldStated | None  # hold's own numbers (.digital_loss_hold)
 
 
 def _gain_document(gain: Any) -> Any:
@@ -168,12 +184,26 @@ def loss_claims(mode: str, policy: str) -> tuple[Claim, ...]:
     return tuple(out)
 
 
+def _limit_row(r: dict) -> tuple[ResultRow, ...]:
+    """κ against c_true on lossy links, where the certificate shows it."""
+    ct, kap = r.get("c_true"), r.get("kappa")
+    if not (isinstance(ct, (int, float)) and isinstance(kap, (int, float)) and ct > 0):
+        return ()
+    return (
+        ResultRow(
+            "mean-square limit, lossy links",
+            f"κ = {kap:.4g} ({100 * kap / ct:.0f} % of c_true = {ct:.4g}, the largest constant "
+            "gain at which the lossy second-moment map contracts; estimated, not a claim)",
+        ),
+    )
+
+
 class DigitalLossKind(DigitalKind):
     """One topology run as the sampled protocol on lossy links: ``hurwitz`` plus the
     contraction over the arrivals (and the offset under skip)."""
 
     name = "digital_loss"
-    description = "one topology run as the sampled protocol on lossy links (D = 0)"
+    description = "one topology run as the sampled protocol on lossy links"
 
     def accepts(self, design: Any) -> bool:
         """A digital design of one topology whose messages may be lost.
@@ -224,8 +254,8 @@ class DigitalLossKind(DigitalKind):
             },
         }
         why = None
-        if dg.delay:
-            why = "lossy links are certified for D = 0 (a delay is not)"
+        if dg.policy == "hold" and dg.delay:
+            why = "hold is certified for D = 0 (a delay is not)"
         pl = None
         if why is None and dg.policy == "hold":
             edges = loss_edges(top, losses)
@@ -245,6 +275,8 @@ class DigitalLossKind(DigitalKind):
             lap = design.base.grounded_laplacian()
             pm = doc["matrices"]["P"]
             fixed = np.array(pm["lyapunov"]) if "lyapunov" in pm else None
+            if dg.delay:  # the delay line's functional over the arrivals
+                return self._issue_delayed(doc, design, lap, edges, noises, gain_doc, mode)
             pl = plan_loss(lap, edges, noises, d, dg.period, dg.policy, fixed)
             if pl is None:
                 why = "no Lyapunov matrix gives α > 0 for the mean matrix"
@@ -280,6 +312,32 @@ class DigitalLossKind(DigitalKind):
         doc.pop("digest", None)
         return finish(doc)
 
+    def _issue_delayed(
+        self, doc: dict, design: Any, lap: Any, edges: Any, noises: Any, gain: Any, mode: str
+    ) -> dict:
+        """The delayed section (:mod:`.digital_loss_delay`) and, under skip, the offset."""
+        dg, top = design.digital, design.base.topology
+        res, why = issue_delayed(doc, lap, edges, noises, top.dim, dg, gain, P_NAME)
+        norm2 = None
+        if res is not None and dg.policy == "skip":
+            norm2 = exact_offset(lap, edges, np.asarray(design.base.theta, dtype=float), top.dim)
+            if norm2 is None:
+                res, why = None, "the offset's exact solve is too large"
+        if res is None:
+            for k in [k for k in doc["matrices"]["P"] if k == P_NAME or k.startswith(P_NAME + "_")]:
+                doc["matrices"]["P"].pop(k)
+            doc["results"]["digital"] = {"stopped": why}
+        else:
+            res["p_max"] = max(e.p for e in edges)
+            if norm2 is not None:
+                res["offset"] = offset_value(norm2)
+            doc["results"]["digital"] = res
+            doc["certifies"] = [*doc["certifies"], MS.value]
+            claims = delayed_claims(mode, dg.policy, P_NAME)
+            doc["claims"] = [*doc["claims"], *(c.to_dict() for c in claims)]
+        doc.pop("digest", None)
+        return finish(doc)
+
     def read(self, doc: dict, source: str) -> Reading:
         """The ``hurwitz`` reading with the sampled and lossy subject and the stated numbers.
 
@@ -295,11 +353,10 @@ class DigitalLossKind(DigitalKind):
         Reading
         """
         reading = HurwitzKind.read(self, doc, source)
-        ctx = reading.state
-        mode = next(iter(ctx.modes.values()))
-        ctx.digital = read_digital(doc, source, mode.top.dim, ("loss",))
-        ctx.loss = read_loss(doc, source, mode.top)
-        ctx.stated = None
+        mode = next(iter(reading.state.modes.values()))
+        sampled = read_digital(doc, source, mode.top.dim, ("loss",))
+        loss = read_loss(doc, source, mode.top)
+        stated: LossStated | HoldStated | None = None
         if MS.value in doc.get("certifies", []):
             res = need(need(doc, "results", dict, source), "digital", dict, f"{source}: results")
             where = f"{source}: results.digital"
@@ -307,12 +364,14 @@ class DigitalLossKind(DigitalKind):
             def num(key: str) -> float:
                 return number(need(res, key, (int, float), where), f"{where}.{key}")
 
-            if ctx.loss.policy == "hold":
-                ctx.stated = read_hold(res, where)
-                return reading
-            off = num("offset") if ctx.loss.policy == "skip" else None
-            ctx.stated = LossStated(num("alpha"), num("kappa"), num("t0"), off)
-        return reading
+            if loss.policy == "hold":
+                stated = read_hold(res, where)
+            else:
+                off = num("offset") if loss.policy == "skip" else None
+                g = num("g") if sampled.delay else None
+                stated = LossStated(num("alpha"), num("kappa"), num("t0"), off, g)
+        state = LossState(sampled, loss, stated)
+        return replace(reading, state=DigitalContext(reading.state, state))
 
     def claims(
         self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
@@ -337,14 +396,20 @@ class DigitalLossKind(DigitalKind):
         base = tuple(p for p in properties if p is not MS)
         out = HurwitzKind.claims(self, base, subject, reading, alpha)
         if MS in properties:
-            ctx = reading.state
-            if ctx.digital.delay:
+            ctx: DigitalContext[LossState] = reading.state
+            hold = ctx.digital.loss.policy == "hold"
+            if hold and ctx.digital.subject.delay:
                 raise InputError(
-                    f"{ctx.source}: certifies: digital_mean_square on lossy links needs D = 0"
+                    f"{ctx.source}: certifies: digital_mean_square on lossy links with hold "
+                    "needs D = 0"
                 )
             mode = next(iter(ctx.modes))
-            more = hold_claims(mode) if ctx.loss.policy == "hold" else None
-            out = (*out, *(more or loss_claims(mode, ctx.loss.policy)))
+            if hold:
+                out = (*out, *hold_claims(mode))
+            elif ctx.digital.subject.delay:
+                out = (*out, *delayed_claims(mode, ctx.digital.loss.policy, P_NAME))
+            else:
+                out = (*out, *loss_claims(mode, ctx.digital.loss.policy))
         return out
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
@@ -367,27 +432,30 @@ class DigitalLossKind(DigitalKind):
             return HurwitzKind.prove(self, claim, subject, reading)
         if claim.kind is ClaimKind.PD:
             return prove_dense(claim, subject, reading)
-        ctx = reading.state
-        dg, st, ls = ctx.digital, ctx.stated, ctx.loss
+        ctx: DigitalContext[LossState] = reading.state
+        dg, st, ls = ctx.digital.subject, ctx.digital.stated, ctx.digital.loss
+        assert st is not None  # the sampled property's claims: its numbers were read
         if claim.kind is ClaimKind.DIGITAL_T0:
             ok, how = prove_gain_below(dg.gain, st.kappa, st.t0)
             return Check(
                 claim.id, ok is True, f"interval: {how} (κ = {st.kappa!r}, t₀ = {st.t0!r})", claim
             )
+        if claim.kind in (ClaimKind.DIGITAL_DL_FORM, ClaimKind.DIGITAL_GROWTH):  # mode-free
+            return prove_delayed(claim, ctx, None, [], [], P_NAME)
         mode = ctx.modes.get(claim.mode or "")
         if mode is None:
             return Check(claim.id, False, f"no mode {claim.mode!r} in the certificate", claim)
         edges = loss_edges(mode.top, ls.losses)
         d = mode.top.dim
-        if claim.kind in (ClaimKind.LOSS_HOLD_FORM, ClaimKind.LOSS_HOLD_STEP) or (
-            claim.kind is ClaimKind.LOSS_HOLD_GAIN
-        ):
-            if ls.policy != "hold":
-                return Check(claim.id, False, "a hold claim on another policy", claim)
+        if (claim.kind in HOLD_CLAIMS) != (ls.policy == "hold"):
+            return Check(claim.id, False, "a claim of another policy's section", claim)
+        if claim.kind in HOLD_CLAIMS:
             noises = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
-            return prove_hold(claim, ctx, mode, edges, noises)
-        if ls.policy == "hold":
-            return Check(claim.id, False, "not a claim of the hold section", claim)
+            return prove_hold(claim, ctx, st, dg, mode, edges, noises)
+        if claim.kind is ClaimKind.LOSS_DL_STEP:
+            noises = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
+            return prove_delayed(claim, ctx, mode, edges, noises, P_NAME)
+        assert isinstance(st, LossStated)  # hold's claims returned above
         if claim.kind is ClaimKind.LOSS_OFFSET:
             if mode.exact is None or st.offset is None:
                 return Check(claim.id, False, "the exact L_B is not available", claim)
@@ -444,8 +512,8 @@ class DigitalLossKind(DigitalKind):
             The decay rate.
         """
         HurwitzKind.audit(self, audit, doc, subject, reading, alpha)
-        ctx = reading.state
-        if ctx.stated is None:
+        state: LossState = reading.state.digital
+        if state.stated is None:
             sec = audit.get("digital")
             if isinstance(sec, dict):
                 for key, v in sec.items():
@@ -453,13 +521,20 @@ class DigitalLossKind(DigitalKind):
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
-        if ctx.loss.policy == "hold":
-            audit_hold(audit, ctx)
+        if state.loss.policy == "hold":
+            audit_hold(audit, state)
             return
-        for key in ("alpha", "kappa", "t0") + (("offset",) if ctx.loss.policy == "skip" else ()):
+        for key in ("alpha", "kappa", "t0") + (("offset",) if state.loss.policy == "skip" else ()):
             audit.proven(("digital", key))
-        audit.exact(("digital", "k0"), first_step(ctx.stated.t0, ctx.digital.period, 0))
-        audit.exact(("digital", "p_max"), max(ctx.loss.losses.values(), default=0.0))
+        dg = state.subject
+        if dg.delay:
+            audit.proven(("digital", "g"))
+            # c_true on lossy links is shown beside κ, not claimed: the step inequality at a
+            # constant c <= κ makes the lossy second-moment map contract, so it is >= κ
+            if "c_true" in (doc.get("results", {}).get("digital") or {}):
+                audit.estimate(("digital", "c_true"), state.stated.kappa, None)
+        audit.exact(("digital", "k0"), first_step(state.stated.t0, dg.period, dg.delay))
+        audit.exact(("digital", "p_max"), max(state.loss.losses.values(), default=0.0))
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
         """What the certificate reports, as rows.
@@ -483,7 +558,7 @@ class DigitalLossKind(DigitalKind):
         where = (
             f"to x* at ‖x* − 1⊗θ‖ = {number_text(r.get('offset'))} (skip)"
             if "offset" in r
-            else f"to 1⊗θ ({r.get('policy', 'rescale')}; {hold_detail(r)})"
+            else f"to 1⊗θ (hold; {hold_detail(r)})"
             if r.get("policy") == "hold"
             else "to 1⊗θ (rescale)"
         )
@@ -494,8 +569,14 @@ class DigitalLossKind(DigitalKind):
                 f"p_e <= {number_text(r.get('p_max'))}: E‖x − x*‖² contracts from step "
                 f"k₀ = {r.get('k0')} (c(t) < κ = {number_text(r.get('kappa'))} from "
                 f"t₀ = {number_text(r.get('t0'))}; α = {number_text(r.get('alpha'))}); the mean "
-                f"goes {where}; P from {r.get('P_from')}",
+                f"goes {where}; P from {r.get('P_from')}"
+                + (
+                    f"; g = {number_text(r.get('g'))} (the delay line's functional)"
+                    if r.get("bound") == DELAY_LINE
+                    else ""
+                ),
             ),
+            *_limit_row(r),
         )
 
     def stated(
@@ -515,10 +596,11 @@ class DigitalLossKind(DigitalKind):
         tuple of (Property, str)
         """
         base = HurwitzKind.stated(self, properties, reading)
-        st, dg = reading.state.stated, reading.state.digital
+        state: LossState = reading.state.digital
+        st, dg = state.stated, state.subject
         if MS not in properties or st is None:
             return base
-        k0 = first_step(st.t0, dg.period, 0)
+        k0 = first_step(st.t0, dg.period, dg.delay)
         offset = getattr(st, "offset", None)
         off = f", x* at {offset:.6g} from 1⊗θ" if offset is not None else ""
         return (*base, (MS, f"h = {dg.period:g}, lossy links: from step k₀ = {k0}{off}"))
@@ -560,6 +642,7 @@ class DigitalLossKind(DigitalKind):
 
 __all__ = [
     "DigitalLossKind",
+    "LossState",
     "LossStated",
     "LossSubject",
     "design_losses",

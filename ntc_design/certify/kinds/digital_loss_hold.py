@@ -237,7 +237,19 @@ def _model(mode: Any, edges: list[LossEdge], noises: list) -> HoldModel | None:
     return hold_model(lap, edges, noises, mode.top.dim)
 
 
-def prove_hold(claim: Claim, ctx: Any, mode: Any, edges: list[LossEdge], noises: list) -> Check:
+#: The claim kinds of the hold section (besides ``pd`` and ``digital_t0``).
+HOLD_CLAIMS = (ClaimKind.LOSS_HOLD_FORM, ClaimKind.LOSS_HOLD_STEP, ClaimKind.LOSS_HOLD_GAIN)
+
+
+def prove_hold(
+    claim: Claim,
+    ctx: Any,
+    st: Any,
+    dg: Any,
+    mode: Any,
+    edges: list[LossEdge],
+    noises: list,
+) -> Check:
     """Prove one claim of the hold section.
 
     Parameters
@@ -245,7 +257,11 @@ def prove_hold(claim: Claim, ctx: Any, mode: Any, edges: list[LossEdge], noises:
     claim : Claim
         ``loss_hold_form``, ``loss_hold_step`` or ``loss_hold_gain``.
     ctx : Any
-        The reading's state (``digital``, ``stated``, ``p``, ``ps``, ``methods``).
+        The reading's state (``p``, ``ps``, ``methods``, ``source``).
+    st : HoldStated
+        The stated numbers.
+    dg : Any
+        ``subject.digital`` as read (``period``, ``gain``).
     mode : Any
         The mode (its exact L_B is used).
     edges : list of LossEdge
@@ -257,7 +273,6 @@ def prove_hold(claim: Claim, ctx: Any, mode: Any, edges: list[LossEdge], noises:
     -------
     Check
     """
-    st, dg = ctx.stated, ctx.digital
     if claim.kind is ClaimKind.LOSS_HOLD_GAIN:
         ok, how = rate_conditions(st, dg.period)
         if ok:
@@ -310,24 +325,25 @@ def hold_detail(r: dict) -> str:
     return f"κ = {k:.4g}{share}" if isinstance(k, float) else ""
 
 
-def audit_hold(audit: Any, ctx: Any) -> None:
+def audit_hold(audit: Any, state: Any) -> None:
     """Account for the hold section's numbers.
 
     Parameters
     ----------
     audit : ResultsAudit
         The audit.
-    ctx : Any
-        The reading's state.
+    state : Any
+        The kind's state (``stated``, ``subject``, ``loss``).
     """
     for key in HOLD_KEYS:
         audit.proven(("digital", key))
-    audit.exact(("digital", "k0"), first_step(ctx.stated.t0, ctx.digital.period, 0))
-    audit.exact(("digital", "p_max"), max(ctx.loss.losses.values(), default=0.0))
+    audit.exact(("digital", "k0"), first_step(state.stated.t0, state.subject.period, 0))
+    audit.exact(("digital", "p_max"), max(state.loss.losses.values(), default=0.0))
     audit.informational(("digital", "c_true"))
 
 
 __all__ = [
+    "HOLD_CLAIMS",
     "HOLD_KEYS",
     "HoldStated",
     "R_NAME",

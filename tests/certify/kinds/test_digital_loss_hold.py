@@ -128,14 +128,14 @@ def test_forged_values_are_rejected_after_resealing(hold30, where, change):
 
 @pytest.mark.slow
 def test_the_export_of_a_proven_hold_certificate_is_allowed(hold30, tmp_path):
-    from ntc_design.export.source import from_certificate
+    from ntc_design.export.source import ExportOptions, from_certificate
 
     path = tmp_path / "hold.json"
     path.write_text(json.dumps(hold30))
     law = from_certificate(path).law
     assert law.policy == "hold" and np.all(law.modes[0].keep == 1.0 - P)
     with pytest.raises(InputError, match="--loss-policy: 'skip' differs"):
-        from_certificate(path, policy="skip")
+        from_certificate(path, ExportOptions(policy="skip"))
     # the same certificate with its section stopped is refused, as not proven
     stopped = copy.deepcopy(hold30)
     stopped["results"]["digital"] = {"stopped": "hold: not attempted"}
