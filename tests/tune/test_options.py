@@ -42,10 +42,7 @@ def test_the_tuning_signature_is_written_once():
         (lambda: ScheduleOptions(max_peak=0.0), "max_peak: must be a positive number"),
         (lambda: ScheduleOptions(check_paths=-1), "check_paths: expected an integer in [0,"),
         (lambda: options_for("best"), "schedule: expected power or optimal, got 'best'"),
-        (
-            lambda: options_for("optimal", "mc"),
-            'schedule="optimal": uses exact moments (method="mc" is for schedule="power")',
-        ),
+        (lambda: options_for("optimal", "mc"), 'schedule="optimal": uses exact moments (method="mc" is for schedule="power")'),
         (lambda: options_for("power", max_peak=1.0), 'max_peak: applies to schedule="optimal"'),
     ],
 )
