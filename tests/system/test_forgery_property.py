@@ -692,6 +692,7 @@ def _truth_hold(doc: dict) -> list[str]:
         bad.append("k₀")
     if res["p_max"] != max(loss.values(), default=0.0):
         bad.append("p_max")
+    return bad
 
 
 def _truth_lossy_delay_line(doc, top, lap, loss, fm) -> list[str]:

@@ -134,7 +134,7 @@ def test_the_export_of_a_proven_hold_certificate_is_allowed(hold30, tmp_path):
     path.write_text(json.dumps(hold30))
     law = from_certificate(path).law
     assert law.policy == "hold" and np.all(law.modes[0].keep == 1.0 - P)
-    with pytest.raises(InputError, match="--loss-policy: 'skip' differs"):
+    with pytest.raises(InputError, match="policy: 'skip' differs"):
         from_certificate(path, ExportOptions(policy="skip"))
     # the same certificate with its section stopped is refused, as not proven
     stopped = copy.deepcopy(hold30)
