@@ -73,6 +73,9 @@ class ClaimKind(StrEnum):
     DIGITAL_GROWTH = "digital_growth"  # (1/c)' < g from t₀ on, c(t₀) > 0 (D > 0)
     DIGITAL_DL_ADDITIVE = "digital_delay_line_additive"  # γ' >= γ(S) + Σ_j γ(T_j)
     LOSS_DL_STEP = "loss_delay_line_step"  # G(κ) ⪰ 0 with L̄ and N' (digital_loss, D > 0)
+    LOSS_HOLD_FORM = "loss_hold_form"  # [[βS, SΠP_d], [·, R]] ≻ 0 and G₀ ≻ 0 (hold)
+    LOSS_HOLD_STEP = "loss_hold_step"  # G(κ) ≻ 0 (hold)
+    LOSS_HOLD_GAIN = "loss_hold_gain"  # c non-increasing, (1/c)' < g, α and β (hold)
 
 
 #: The statements of the digital kinds' claims ({m}: the mode).
@@ -92,6 +95,9 @@ DIGITAL_CLAIM_TEXT = {
     ClaimKind.DIGITAL_DL_ADDITIVE: "γ' >= Σ_e g_eᵀ·(S + Σ_j T_j)·g_e in every mode",
     ClaimKind.LOSS_DL_STEP: "G_{m}(κ) ≻ 0 with L̄ and N' = Σ_e E[m_e²]·G_eᵀ(·)G_e + "
     "h·Σ_e v_e·L_eᵀ(·)L_e: the delay line's step over the arrivals for every c in (0, κ]",
+    ClaimKind.LOSS_HOLD_FORM: "[[β·S, S·Π·P_d], [·, R]] ≻ 0 and G₀ ≻ 0 ({m}, hold: the functional and its c = 0 step)",
+    ClaimKind.LOSS_HOLD_STEP: "G_{m}(κ) ≻ 0: hold's step inequality for every c in (0, κ]",
+    ClaimKind.LOSS_HOLD_GAIN: "c non-increasing and (1/c)' < g from t₀; 0 < α <= α' − gβ/(1 − β), ghκβ <= 1 − β",
 }
 
 #: The statements of the time-varying kind's claims (their certificates list exactly these).

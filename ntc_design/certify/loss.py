@@ -27,8 +27,8 @@ gives E‖w_{k+1}‖²_P <= (1 − ατ_k) E‖w_k‖²_P + h c_k² Γ whenever 
 step on which c <= κ forever, E‖x − x*‖² contracts up to a term that vanishes with c_k;
 with Σ τ_k = ∞ and c_k → 0, E‖x_k − x*‖² → 0. Under rescale x* = 1⊗θ; under skip x* = 1⊗θ
 + e* with L̄ e* = Σ_e p_e L_e (1⊗θ) (equivalently L̄ x* = u for u = L_B(1⊗θ), Lemma 1's
-identity), solved here in exact rationals. hold keeps an augmented state and is not
-certified here.
+identity), solved here in exact rationals. hold keeps an augmented state: it is
+certified by :mod:`.loss_hold`.
 
 The scalar factors enter exactly (p_e is a dyadic rational, so are q_e and q_e(1 − q_e));
 rescale's v_e = (1 − q_e)/q_e and E[m_e²] = 1/q_e enter as dyadic upper bounds (they

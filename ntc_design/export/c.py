@@ -79,7 +79,7 @@ def _in_array(mi: int, ml: ModeLaw, i: int) -> tuple[str, str]:
 
 
 #: NTC_POLICY: how the agents treat a lost message.
-_POLICY_CODE = {None: 0, "skip": 1, "rescale": 2}
+_POLICY_CODE = {None: 0, "skip": 1, "rescale": 2, "hold": 3}
 
 
 def header(law: AgentLaw, agent: int | None = None) -> str:
@@ -111,7 +111,7 @@ def header(law: AgentLaw, agent: int | None = None) -> str:
 #define NTC_MAX_EDGES {max_e}    /* the most edges of one mode */
 #define NTC_AGENTS {law.n if agent is None else 1}       /* agents whose tables are here (1: ntc export --agent) */
 #define NTC_SELF {-1 if agent is None else agent}         /* that one agent's index (-1: every agent) */
-#define NTC_POLICY {_POLICY_CODE[law.policy]}       /* lost messages: 0 none (lossless), 1 skip, 2 rescale */
+#define NTC_POLICY {_POLICY_CODE[law.policy]}       /* lost messages: 0 none (lossless), 1 skip, 2 rescale, 3 hold */
 
 /* One in-edge e = (j -> i) of an agent, in its mode's file order. */
 typedef struct {{
@@ -147,6 +147,7 @@ typedef struct {{
     int slot;                          /* its index into ntc_mode.agents */
     long k;                            /* the next step */
     double line[NTC_DELAY + 1][NTC_D]; /* the delay line */
+    double held[NTC_MAX_IN + 1][NTC_D]; /* hold (NTC_POLICY 3): each in-edge's held measurement */
 }} ntc_agent_state;
 
 extern const double ntc_period;                     /* h */
@@ -171,14 +172,24 @@ void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
                       const double *xd_i, const double *m, double *x_next);
 /* the same on lossy links: arrived[s] is 1 when in-edge s's message arrived at this step,
    0 when it was lost (n_in flags in its in-edges' order; NULL: every one arrived). A lost
-   message adds nothing; under rescale (NTC_POLICY 2) a received one counts m / keep. */
+   message adds nothing; under rescale (NTC_POLICY 2) a received one counts m / keep.
+   Under hold (NTC_POLICY 3) m is the held measurements (ntc_agent_hold) and every row
+   counts (arrived is not read). */
 void ntc_agent_update_arrived(const ntc_agent *agent, double c, const double *x_i,
                               const double *xd_i, const double *m, const int *arrived,
                               double *x_next);
 
+/* Hold: the held measurements (n_in rows of d) take a copy of m's row s where arrived[s]
+   is 1. */
+void ntc_agent_hold(const ntc_agent *agent, double *held, const double *m, const int *arrived);
+
 /* Start agent i (0-based) at x_i(0) (d numbers); 0, or -1 for an agent whose tables are
    not here. */
 int ntc_agent_init(ntc_agent_state *s, int agent, const double *x0);
+/* Hold (NTC_POLICY 3): the held measurements before the first arrival, the noiseless
+   measurements of x(0) (n_in rows of d in the in-edges' order: ntc_measure with z1 = z2 =
+   0.0 on the agents' initial states); call after ntc_agent_init. */
+void ntc_agent_init_held(ntc_agent_state *s, const double *m0);
 /* The agent's mode at its next step k (index into ntc_modes) and its in-edges there:
    the measurements step k needs, one per in-edge in this order. */
 int ntc_agent_mode(const ntc_agent_state *s);
@@ -192,7 +203,8 @@ const double *ntc_agent_delayed(const ntc_agent_state *s);
    finite. */
 int ntc_agent_step(ntc_agent_state *s, const double *m);
 /* The same on lossy links with the in-edges' arrival flags (n_in, 1 arrived, 0 lost; NULL:
-   every one arrived): a lost message's row of m is not read. */
+   every one arrived): a lost message's row of m is not read (under hold the agent steps
+   with its held measurements, updated first from the arrived rows of m). */
 int ntc_agent_step_arrived(ntc_agent_state *s, const double *m, const int *arrived);
 
 #endif
@@ -366,15 +378,15 @@ void ntc_agent_update_arrived(const ntc_agent *agent, double c, const double *x_
 {
     const double hc = ntc_period * c;
     int a, b, s;
-#if NTC_POLICY == 0
-    (void)arrived;  /* lossless: every message arrives */
+#if NTC_POLICY == 0 || NTC_POLICY == 3
+    (void)arrived;  /* lossless, or hold (m is the held measurements): every row counts */
 #endif
     for (a = 0; a < NTC_D; a++) {
         double acc = agent->u[a];
         if (agent->informed)
             for (b = 0; b < NTC_D; b++) acc -= agent->bd[a][b] * xd_i[b];
         for (s = 0; s < agent->n_in; s++) {
-#if NTC_POLICY != 0
+#if NTC_POLICY == 1 || NTC_POLICY == 2
             if (arrived && !arrived[s]) continue;  /* lost: its term and its noise left out */
 #endif
             for (b = 0; b < NTC_D; b++)
@@ -386,6 +398,14 @@ void ntc_agent_update_arrived(const ntc_agent *agent, double c, const double *x_
         }
         x_next[a] = x_i[a] + hc * acc;
     }
+}
+
+void ntc_agent_hold(const ntc_agent *agent, double *held, const double *m, const int *arrived)
+{
+    int s, b;
+    for (s = 0; s < agent->n_in; s++)
+        if (!arrived || arrived[s])
+            for (b = 0; b < NTC_D; b++) held[s * NTC_D + b] = m[s * NTC_D + b];
 }
 
 void ntc_agent_update(const ntc_agent *agent, double c, const double *x_i,
@@ -407,7 +427,17 @@ AGENT_API = """int ntc_agent_init(ntc_agent_state *s, int agent, const double *x
     s->k = 0;
     for (r = 0; r <= NTC_DELAY; r++)
         for (b = 0; b < NTC_D; b++) s->line[r][b] = x0[b];  /* held before the start */
+    for (r = 0; r <= NTC_MAX_IN; r++)
+        for (b = 0; b < NTC_D; b++) s->held[r][b] = 0.0;
     return 0;
+}
+
+void ntc_agent_init_held(ntc_agent_state *s, const double *m0)
+{
+    const ntc_agent *ag = &ntc_modes[ntc_mode_at(s->k)].agents[s->slot];
+    int r, b;
+    for (r = 0; r < ag->n_in; r++)
+        for (b = 0; b < NTC_D; b++) s->held[r][b] = m0[r * NTC_D + b];
 }
 
 int ntc_agent_mode(const ntc_agent_state *s)
@@ -443,6 +473,10 @@ int ntc_agent_step_arrived(ntc_agent_state *s, const double *m, const int *arriv
     double next[NTC_D];
     int b;
     if (!isfinite(c)) return -1;
+#if NTC_POLICY == 3
+    ntc_agent_hold(&ntc_modes[mode].agents[s->slot], &s->held[0][0], m, arrived);
+    m = &s->held[0][0];
+#endif
     ntc_agent_update_arrived(&ntc_modes[mode].agents[s->slot], c,
                              s->line[s->k % (NTC_DELAY + 1)], xd, m, arrived, next);
     for (b = 0; b < NTC_D; b++) xd[b] = next[b];  /* x_i(k+1) replaces x_i(k-D) */
@@ -457,7 +491,8 @@ REPLAY = """/* ntc_replay.c: replays the exported protocol on given normals. Gen
    steps K, then for every step k the 2E normals of the edges of its mode in file order
    (each edge's additive xi1, then its multiplicative xi2) and, on lossy links
    (NTC_POLICY != 0), after them the E arrival flags of the same edges in the same order
-   (1 arrived, 0 lost). stdout: x_K, one agent per line, %.17g. Exit 2 on malformed
+   (1 arrived, 0 lost); under hold (NTC_POLICY 3) each edge keeps its held measurement,
+   the noiseless one of x(0) first. stdout: x_K, one agent per line, %.17g. Exit 2 on malformed
    input, 1 when c(t_k) is not finite. */
 #include <ctype.h>
 #include <math.h>
@@ -485,10 +520,11 @@ int main(void)
     double *m = malloc(sizeof(double) * (size_t)(NTC_MAX_IN * NTC_D + 1));
     int *chi = malloc(sizeof(int) * (size_t)(NTC_MAX_EDGES + 1));
     int *got = malloc(sizeof(int) * (size_t)(NTC_MAX_IN + 1));
+    double *held = malloc(sizeof(double) * (size_t)((NTC_MAX_EDGES + 1) * NTC_D));
     char tok[8];
     long K, k, r, q;
     int i, s, ch;
-    if (!ring || !next || !z || !m || !chi || !got) {
+    if (!ring || !next || !z || !m || !chi || !got || !held) {
         fprintf(stderr, "ntc_replay: out of memory\\n");
         return 2;
     }
@@ -496,6 +532,15 @@ int main(void)
         if (scanf("%lf", &ring[q]) != 1) return fail("expected N*d numbers of the initial state", -1);
     for (r = 1; r < slots; r++) memcpy(ring + r * nd, ring, sizeof(double) * (size_t)nd);
     if (scanf("%ld", &K) != 1 || K < 0) return fail("expected the number of steps K >= 0", -1);
+    if (NTC_POLICY == 3) {  /* hold: the noiseless measurements of x(0), edge by edge */
+        const ntc_mode *m0 = &ntc_modes[ntc_mode_at(0)];
+        for (i = 0; i < NTC_N; i++)
+            for (s = 0; s < m0->agents[i].n_in; s++) {
+                const ntc_in_edge *e = &m0->agents[i].in[s];
+                ntc_measure(e, ring + (long)i * NTC_D, ring + (long)e->from * NTC_D, 0.0, 0.0,
+                            held + (long)e->edge * NTC_D);
+            }
+    }
     for (k = 0; k < K; k++) {
         const ntc_mode *md = &ntc_modes[ntc_mode_at(k)];
         const double c = ntc_gain(ntc_time(k));
@@ -520,6 +565,11 @@ int main(void)
                 ntc_measure(e, xd + (long)i * NTC_D, xd + (long)e->from * NTC_D,
                             z[2 * e->edge], z[2 * e->edge + 1], m + s * NTC_D);
                 got[s] = NTC_POLICY != 0 ? chi[e->edge] : 1;
+                if (NTC_POLICY == 3) {  /* hold: an arrived one is kept, every slot reads it */
+                    if (got[s]) memcpy(held + (long)e->edge * NTC_D, m + s * NTC_D,
+                                       sizeof(double) * NTC_D);
+                    memcpy(m + s * NTC_D, held + (long)e->edge * NTC_D, sizeof(double) * NTC_D);
+                }
             }
             ntc_agent_update_arrived(ag, c, now + (long)i * NTC_D, xd + (long)i * NTC_D, m,
                                      got, next + (long)i * NTC_D);
@@ -542,6 +592,7 @@ int main(void)
     free(m);
     free(chi);
     free(got);
+    free(held);
     return 0;
 }
 """

@@ -37,7 +37,7 @@ def _tables(law: AgentLaw) -> str:
         f"SQRT_PERIOD = {literal(law.sqrt_period)}  # sqrt(h)",
         f"NOISE_F = {_mat(law.noise_f)}  # F of f(x) = F x",
         f"LABELS = {tuple(str(a) for a in law.labels)!r}",
-        f"POLICY = {law.policy!r}  # lost messages: None (lossless), 'skip' or 'rescale'",
+        f"POLICY = {law.policy!r}  # lost messages: None (lossless), 'skip', 'rescale' or 'hold'",
         "",
         "# MODES[m]: (name, E, agents); an agent: (informed, delta_i, delta_i |B_i|, u_i,",
         "# in-edges in file order); an in-edge: (j, its index e in file order, sgn A_ij,",
@@ -165,7 +165,8 @@ def agent_update(agent, c, x_i, xd_i, m, arrived=None):
     """The agent's next state from its state, its delayed state and its measurements
     (one list of d per in-edge, in its in-edges' order), with c = c(t_k). On lossy links
     ``arrived[s]`` is 1 when in-edge s's message arrived, 0 when lost (None: every one
-    arrived): a lost message adds nothing; under rescale a received one counts m / keep."""
+    arrived): a lost message adds nothing; under rescale a received one counts m / keep.
+    Under hold ``m`` is the held measurements (``hold_update``) and every one counts."""
     informed, _, bd, u, inputs = agent
     hc = PERIOD * c
     out = []
@@ -175,7 +176,7 @@ def agent_update(agent, c, x_i, xd_i, m, arrived=None):
             for b in range(DIM):
                 acc -= bd[a][b] * xd_i[b]
         for s, edge in enumerate(inputs):
-            if POLICY is not None and arrived is not None and not arrived[s]:
+            if POLICY in ("skip", "rescale") and arrived is not None and not arrived[s]:
                 continue  # lost: its term and its noise left out
             w, ms = edge[4][a], m[s]
             if POLICY == "rescale":
@@ -189,12 +190,27 @@ def agent_update(agent, c, x_i, xd_i, m, arrived=None):
     return out
 
 
+def hold_update(held, m, arrived):
+    """Hold: each in-edge's held measurement (a list of d per in-edge, the agent's state)
+    becomes a copy of the new one where its message arrived (``arrived[s]`` 1)."""
+    for s, ms in enumerate(m):
+        if arrived[s]:
+            held[s] = list(ms)
+    return held
+
+
 def replay(x0, steps, normals, arrivals=None):
     """x_K from x(0) (N lists of d), K and an iterator over the normals (step by step,
     each edge of the step's mode in file order: its xi1, then its xi2); on lossy links an
     iterator over the arrival flags (after each step's normals, E flags 0 or 1 in the
     same edge order)."""
     ring = [[list(x) for x in x0] for _ in range(DELAY + 1)]
+    held = None  # hold: per agent, its in-edges' held measurements
+    if POLICY == "hold":  # before the first arrival, the noiseless measurement of x(0)
+        held = [
+            [measure(e, x0[i], x0[e[0]], 0.0, 0.0) for e in agent[4]]
+            for i, agent in enumerate(MODES[mode_at(0)][2])
+        ]
     for k in range(steps):
         name, n_edges, agents = MODES[mode_at(k)]
         c = gain(time_of(k))
@@ -208,6 +224,8 @@ def replay(x0, steps, normals, arrivals=None):
         for i, agent in enumerate(agents):
             m = [measure(e, xd[i], xd[e[0]], z[2 * e[1]], z[2 * e[1] + 1]) for e in agent[4]]
             got = [chi[e[1]] for e in agent[4]] if chi is not None else None
+            if held is not None:
+                m, got = hold_update(held[i], m, got), None
             nxt.append(agent_update(agent, c, now[i], xd[i], m, got))
         ring[(k + 1) % (DELAY + 1)] = nxt
     return ring[steps % (DELAY + 1)]

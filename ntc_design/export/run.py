@@ -180,6 +180,17 @@ def _loss_law(law: AgentLaw) -> list[str]:
     keep = sorted({float(v) for m in law.modes for v in np.asarray(m.keep).tolist()})
     shown = ", ".join(literal(v) for v in keep[:8]) + (", …" if len(keep) > 8 else "")
     rescale = law.policy == "rescale"
+    if law.policy == "hold":
+        return [
+            "",
+            f"Lossy links, policy hold (compiled in; keep_e = 1 - p_e: {shown}):",
+            "  each in-edge keeps its last received measurement (the agent's state), the",
+            "  noiseless measurement of x(0) (z1 = z2 = 0) before the first arrival; every",
+            "  in-edge adds |A_ij|[a][b] held_e[b] (hold: the mean converges to 1 (x) theta).",
+            "  C: ntc_agent_init_held(&s, m0) after ntc_agent_init, then",
+            "  ntc_agent_step_arrived(&s, m, arrived) with arrived[q] = 1 or 0 for in-edge",
+            "  ag->in[q]. Python: hold_update(held, m, arrived), then agent_update(..., held).",
+        ]
     return [
         "",
         f"Lossy links, policy {law.policy} (compiled in; keep_e = 1 - p_e: {shown}):",

@@ -211,7 +211,8 @@ def from_scenario(path: str | Path, options: ExportOptions = NO_OPTIONS) -> Expo
     InputError
         A bad file or value; a topology that is neither fixed nor switching; a design whose
         certificate does not verify or for which no theorem is guaranteed; lossy links
-        with ``hold`` or a switching set (not proven), or a delay the certificate does not prove.
+        with ``hold`` its certificate does not prove, a switching set (not proven), or a
+        delay the certificate does not prove.
     """
     period, delay, gain, sigma, f = (
         options.period,
@@ -320,6 +321,8 @@ def _certified_law(
             f"{src}: the design's certificate ({res.certificate['kind']}) does not verify "
             f"({failed}); nothing exported"
         )
+    if losses and dg.policy == "hold" and not _hold_proven(res.certificate):
+        _unproven("hold", 0, src, False)  # before the theorems: what is missing is this proof
     sampled = [t for t in res.theorems if t.sampled]
     if not res.proven or not sampled or not any(t.guaranteed for t in sampled):
         raise InputError(
@@ -338,13 +341,27 @@ def _certified_law(
     return law, res
 
 
-def _unproven(policy: str, delay: int, where: str) -> None:
-    """Refuse lossy links that no certificate proves (``hold``), in one line; a delay is
-    exported when the ``digital_loss`` certificate proves it (its delay line)."""
-    if policy == "hold":
+def _hold_proven(cert: dict) -> bool:
+    """Whether a verified ``digital_loss`` certificate proves hold (its mean-square
+    section, not ``results.digital.stopped``)."""
+    res = cert.get("results", {}).get("digital", {})
+    return (
+        "digital_mean_square" in cert.get("certifies", [])
+        and isinstance(res, dict)
+        and res.get("policy") == "hold"
+        and "stopped" not in res
+    )
+
+
+def _unproven(policy: str, delay: int, where: str, hold_proven: bool = True) -> None:
+    """Refuse lossy links that no certificate proves (``hold`` whose certificate does not
+    prove it), in one line; a delay is exported when the ``digital_loss`` certificate
+    proves it (its delay line)."""
+    if policy == "hold" and not hold_proven:
         raise InputError(
             f"{where}: lossy links with the hold policy are not proven (the digital_loss "
-            "certificate covers skip and rescale); nothing exported"
+            "certificate covers skip and rescale, and hold where its section proves it); "
+            "nothing exported"
         )
 
 
@@ -488,7 +505,7 @@ def from_certificate(
     state: DigitalState | LossState = ctx.digital
     sampled = state.subject
     ls = state.loss if isinstance(state, LossState) else None
-    losses = _certified_losses(ls, sampled.delay, loss, policy, src)
+    losses = _certified_losses(ls, sampled.delay, loss, policy, src, state.stated is not None)
     if state.stated is None:
         raise InputError(
             f"{src}: the certificate does not prove the sampled protocol "
@@ -541,7 +558,7 @@ def from_certificate(
 
 
 def _certified_losses(
-    ls: Any, delay: int, loss: float | None, policy: str | None, src: str
+    ls: Any, delay: int, loss: float | None, policy: str | None, src: str, proven: bool = False
 ) -> dict:
     """A sampled certificate's p_e by edge (empty: lossless), from its verified reading
     only: a ``loss`` or ``policy`` that differs is refused, as is what it does not prove."""
@@ -572,7 +589,7 @@ def _certified_losses(
         )
     if not any(p > 0 for p in ls.losses.values()):
         return {}
-    _unproven(ls.policy, delay, src)
+    _unproven(ls.policy, delay, src, proven)
     return dict(ls.losses)
 
 

@@ -43,7 +43,11 @@ has an arrival flag χ_e ∈ {0, 1} at each step and keep_e = 1 − p_e (the dou
 A slot whose message is lost (χ_e = 0) adds nothing (its term and its noise are left out);
 under ``rescale`` a received slot adds ``|A_ij|[a][b]*(m_e[b]/keep_e)`` instead (the mean
 drift unbiased). With every flag 1 and keep_e = 1, this is the lossless law bit for bit.
-``hold`` is not part of the exported law (no certificate proves it).
+Under ``hold`` each slot keeps a held measurement held_e (d numbers, agent i's state):
+before the first arrival the noiseless measurement of x(0) (the measurement above with
+z1 = z2 = 0.0), and at each step held_e ← m_e when the message arrives (a copy); every slot
+then adds ``W_e[a][b]*held_e[b]`` (the update above with held_e for m_e). Exported only
+where the ``digital_loss`` certificate proves it.
 
 :class:`AgentLaw` holds what that needs: per mode (:class:`ModeLaw`) the edges in file order
 with their sources, signs, |A_ij| and σ_e, per agent δ·|B_i| and u_i, and the period, the
@@ -321,7 +325,7 @@ class AgentLaw:
     gain : GainCode
         c(t).
     policy : str or None
-        What an agent does with a lost message (``skip`` or ``rescale``) on lossy links;
+        What an agent does with a lost message (``skip``, ``rescale`` or ``hold``) on lossy links;
         None: every message arrives.
     """
 
@@ -540,7 +544,7 @@ def make_law(
 
 
 #: The policies the exported law runs (``hold`` has no certificate).
-LAW_POLICIES = ("skip", "rescale")
+LAW_POLICIES = ("skip", "rescale", "hold")
 
 
 def lossy_law(law: AgentLaw, losses: Mapping[tuple[int, int], float], policy: str) -> AgentLaw:
@@ -553,7 +557,7 @@ def lossy_law(law: AgentLaw, losses: Mapping[tuple[int, int], float], policy: st
     losses : mapping of (int, int) to float
         p_e by edge (i, j), j → i; an edge without one has p = 0.
     policy : str
-        ``skip`` or ``rescale``.
+        ``skip``, ``rescale`` or ``hold``.
 
     Returns
     -------

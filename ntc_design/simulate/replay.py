@@ -12,7 +12,9 @@ rounding (1e-12 relative over 1000 steps of G1, in the tests).
 
 On lossy links (:attr:`AgentLaw.lossy`) each step also reads E arrival flags (0 or 1), one
 per edge of its mode in file order; the exported programs read them from stdin after the
-step's 2E normals, :func:`replay` takes them as a separate array.
+step's 2E normals, :func:`replay` takes them as a separate array. Under ``hold`` the
+replay keeps each edge's held measurement (the noiseless measurement of x(0) first, then a
+copy of each arrived one) and every slot adds its held value.
 """
 
 from __future__ import annotations
@@ -98,6 +100,18 @@ class _Mode:
         ]
 
 
+def _noiseless(md: _Mode, x: np.ndarray, f: np.ndarray, sqrth: float) -> np.ndarray:
+    """Each edge's measurement of the states x with z1 = z2 = 0.0 (the law's arithmetic)."""
+    d = x.shape[2]
+    xj, xi = x[:, md.src, :], x[:, md.dst, :]
+    diff = xj - xi
+    fd = f[None, None, :, 0] * diff[:, :, 0, None]
+    for b in range(1, d):
+        fd = fd + f[None, None, :, b] * diff[:, :, b, None]
+    zero = np.zeros((x.shape[0], md.e, 1))
+    return (md.sign * xj - xi) + (md.sigma * zero + fd * zero) / sqrth
+
+
 def replay(
     law: AgentLaw,
     x_init,
@@ -143,6 +157,7 @@ def replay(
     z, offsets = _normals(law, normals, steps, paths)
     chi, flag_at = _arrivals(law, arrivals, steps, paths)
     rescale = law.policy == "rescale"
+    hold = law.policy == "hold"
     modes = law.step_modes(steps)
     prepared: dict[int, _Mode] = {}
     h = law.digital.period
@@ -150,6 +165,7 @@ def replay(
     sqrth = law.sqrt_period
     f = law.noise_f
     ring = [x] * (lag + 1)  # x_{k−j} before the start: the initial state, held
+    held: dict[int, np.ndarray] = {}  # hold: each mode's held measurements (paths, E, d)
     kept = [x.copy()] if record else []
     for k in range(steps):
         t = float(k) * h
@@ -171,9 +187,14 @@ def replay(
         for b in range(1, d):
             fd = fd + f[None, None, :, b] * diff[:, :, b, None]
         m = (md.sign * xj - xi) + (md.sigma * z1 + fd * z2) / sqrth
+        if hold:  # before the first arrival, the noiseless measurement of x(0)
+            if mi not in held:
+                held[mi] = _noiseless(md, x, f, sqrth)
+            held[mi] = np.where(chi[:, flag_at[k] : flag_at[k + 1], None], m, held[mi])
+            m = held[mi]
         if rescale:  # a received measurement over keep_e = 1 − p_e
             m = m / md.keep
-        got = chi[:, flag_at[k] : flag_at[k + 1], None] if law.lossy else None
+        got = chi[:, flag_at[k] : flag_at[k + 1], None] if law.lossy and not hold else None
         acc = np.broadcast_to(md.u, (paths, n, d)).copy()
         if md.informed.size:
             xdi = xd[:, md.informed, :]

@@ -198,7 +198,7 @@ def test_export_refusals_write_nothing(tmp_path, examples, capsys, monkeypatch, 
         (["--loss", "nan"], ["--loss: a loss probability must be finite"]),
         (["--loss", "0.1", "--loss-policy", "drop"], ["--loss-policy: unknown policy 'drop'"]),
         (
-            ["--loss", "0.1", "--loss-policy", "hold"],
+            ["--loss", "0.1", "--loss-policy", "hold", "--gain", "exp(-t)"],
             ["lossy links with the hold policy are not proven", "nothing exported"],
         ),
         (

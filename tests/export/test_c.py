@@ -342,13 +342,16 @@ def _lossy(design, policy, delay=0, h=0.05):
 
 
 @needs_cc
-@pytest.mark.parametrize("delay", [0, 1, 2])
-@pytest.mark.parametrize("policy", ["skip", "rescale"])
+@pytest.mark.parametrize(
+    ("policy", "delay"),
+    [(p, d) for p in ("skip", "rescale") for d in (0, 1, 2)] + [("hold", 0)],
+)
 def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy, delay):
     from tests.support.export import arrivals_for
 
     law = _lossy(g1_design, policy, delay)
-    assert f"#define NTC_POLICY {1 if policy == 'skip' else 2}" in header(law)
+    code = {"skip": 1, "rescale": 2, "hold": 3}[policy]
+    assert f"#define NTC_POLICY {code}" in header(law)
     exe = build_c(tmp_path, law)
     steps = 500
     z, chi = normals_for(law, steps, 2), arrivals_for(law, steps, 2)
@@ -386,16 +389,34 @@ AGENT_LOSSY = (
 )
 
 
+# hold: every agent's held measurements start at the noiseless ones of x(0)
+AGENT_HOLD = AGENT_LOSSY.replace(
+    '    if (scanf("%ld", &K) != 1) return 2;\n',
+    """    for (i = 0; i < NTC_N; i++) {
+        const ntc_agent *ag = ntc_agent_law(&st[i]);
+        for (s = 0; s < ag->n_in; s++)
+            ntc_measure(&ag->in[s], ntc_agent_x(&st[i]), ntc_agent_x(&st[ag->in[s].from]), 0.0,
+                        0.0, m[i] + s * NTC_D);
+        ntc_agent_init_held(&st[i], m[i]);
+    }
+    if (scanf("%ld", &K) != 1) return 2;
+""",
+)
+
+
 @needs_cc
-@pytest.mark.parametrize("delay", [0, 1])
-@pytest.mark.parametrize("policy", ["skip", "rescale"])
+@pytest.mark.parametrize(
+    ("policy", "delay"),
+    [(p, d) for p in ("skip", "rescale") for d in (0, 1)] + [("hold", 0)],
+)
 def test_the_agent_api_on_lossy_links_reproduces_the_replay(g1_design, tmp_path, policy, delay):
     from tests.support.export import arrivals_for, write_files
 
     assert AGENT_LOSSY.count("chi") == 3 and "ntc_agent_step_arrived" in AGENT_LOSSY
+    assert AGENT_HOLD.count("ntc_agent_init_held") == 1
     law = _lossy(g1_design, policy, delay)
     write_files(tmp_path, c_files(law))
-    (tmp_path / "agents.c").write_text(AGENT_LOSSY)
+    (tmp_path / "agents.c").write_text(AGENT_HOLD if policy == "hold" else AGENT_LOSSY)
     cmd = [CC, *CFLAGS, "-o", "agents", "agents.c", "ntc_protocol.c", "-lm"]
     res = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr

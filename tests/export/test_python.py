@@ -121,8 +121,10 @@ def test_a_gain_that_is_not_finite_stops_the_replay(g1_design, tmp_path):
     assert "c(t) = inf is not finite at step 10" in res.stderr
 
 
-@pytest.mark.parametrize("delay", [0, 1, 2])
-@pytest.mark.parametrize("policy", ["skip", "rescale"])
+@pytest.mark.parametrize(
+    ("policy", "delay"),
+    [(p, d) for p in ("skip", "rescale") for d in (0, 1, 2)] + [("hold", 0)],
+)
 def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy, delay):
     from ntc_design.protocol.agents import lossy_law
     from tests.support.export import arrivals_for

@@ -351,8 +351,9 @@ def test_a_lossy_export_reproduces_its_example_and_documents_the_flags(tmp_path)
     assert "in the same file order (below): 1 the message arrived, 0 it was lost" in readme
     assert "Lossy links, policy skip (compiled in; keep_e = 1 - p_e: " in readme
     assert "Edges in file order (the order of the normals and of the arrival flags):" in readme
+    # hold is exported where its certificate proves it; with a gain it cannot prove, not
     with pytest.raises(InputError, match="lossy links with the hold policy are not proven"):
-        export(scen, "c", tmp_path / "c", ExportOptions(policy="hold"))
+        export(scen, "c", tmp_path / "c", ExportOptions(policy="hold", gain="exp(-t)"))
     assert not (tmp_path / "c").exists()
 
 
@@ -419,3 +420,22 @@ def test_a_certified_gain_given_again_with_spaces_is_the_same_gain(tmp_path, cap
     args = ["export", cert, "--out", tmp_path / "b", "--gain", "2/(1+t)"]
     assert_input_error(args, capsys, monkeypatch, "--gain: '2/(1+t)' differs")
     assert not (tmp_path / "b").exists()
+
+
+@pytest.mark.slow
+def test_a_proven_hold_export_reproduces_its_example_and_says_how_to_hold(tmp_path):
+    scen = tmp_path / "s.yaml"
+    scen.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 5\n"
+        "digital: {period: 0.1, loss: 0.1, policy: hold}\n"
+    )
+    res = export(scen, "python", tmp_path / "py")
+    assert res.source.law.policy == "hold"
+    folder = res.folder
+    inp = (folder / "example_input.txt").read_text()
+    cmd = [sys.executable, str(folder / "ntc_protocol.py")]
+    out = subprocess.run(cmd, input=inp, capture_output=True, text=True).stdout
+    assert out == (folder / "example_output.txt").read_text()
+    readme = (folder / "README.txt").read_text()
+    assert "Lossy links, policy hold (compiled in; keep_e = 1 - p_e: 0.90000000000000002)" in readme
+    assert "ntc_agent_init_held(&s, m0) after ntc_agent_init" in readme

@@ -125,7 +125,7 @@ def test_load_source_tells_the_two_apart():
         ("gain: '1'\n", {"period": 0.1}, ["no theorem is guaranteed", "nothing exported"]),
         ("", {"period": 0.1, "sigma": -1.0}, ["sigma: expected a finite number >= 0"]),
         (
-            "digital: {period: 0.1, loss: 0.1, policy: hold}\n",
+            "gain: 'exp(-t)'\ndigital: {period: 0.1, loss: 0.1, policy: hold}\n",
             {},
             ["s.yaml: lossy links with the hold policy are not proven", "nothing exported"],
         ),

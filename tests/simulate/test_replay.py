@@ -1,7 +1,7 @@
 """Tests of :mod:`ntc_design.simulate.replay`: the toolkit's reference for the exported
 agents against an independent scalar loop of the law (bit for bit) and against the
 simulator's compiled kernel (to rounding, 1e-12 relative over 1000 steps); on lossy links
-(skip, rescale) against a written-out recursion and the lossy Monte Carlo kernel, and flags
+(skip, rescale, hold) against a written-out recursion and the lossy Monte Carlo kernel, and flags
 other than 0 or 1 refused."""
 
 import math
@@ -188,24 +188,31 @@ def _lossy_loop(law, x0, z, chi, steps):
     past = [x] * (lag + 1)  # x_{k−D} … x_k
     zz = z.reshape(steps, ml.n_edges, 2)
     cc = chi.reshape(steps, ml.n_edges)
+    # hold: edge e's held measurement, the noiseless one of x(0) before its first arrival
+    held = [ml.sign[e] * x[ml.src[e]] - x[ml.dst[e]] for e in range(ml.n_edges)]
     for k in range(steps):
         c = 1.0 / (1.0 + k * h)
         x, now = past[0], past[-1]
         drift = ml.u - np.einsum("iab,ib->ia", ml.bd, x)
         for e in range(ml.n_edges):
-            if not cc[k, e]:
+            if not cc[k, e] and law.policy != "hold":
                 continue
             i, j = int(ml.dst[e]), int(ml.src[e])
             noise = ml.sigma[e] * zz[k, e, 0] + law.noise_f @ (x[j] - x[i]) * zz[k, e, 1]
             m = ml.sign[e] * x[j] - x[i] + noise / math.sqrt(h)
+            if law.policy == "hold":
+                held[e] = m if cc[k, e] else held[e]
+                m = held[e]
             scale = 1.0 / ml.keep[e] if law.policy == "rescale" else 1.0
             drift[i] += scale * (ml.weight[e] @ m)
         past = [*past[1:], now + h * c * drift]
     return past[-1].ravel()
 
 
-@pytest.mark.parametrize("delay", [0, 1, 2])
-@pytest.mark.parametrize("policy", ["skip", "rescale"])
+@pytest.mark.parametrize(
+    ("policy", "delay"),
+    [(p, d) for p in ("skip", "rescale") for d in (0, 1, 2)] + [("hold", 0)],
+)
 def test_the_lossy_law_is_the_written_out_recursion(g1_design, policy, delay):
     from ntc_design.protocol.agents import lossy_law
 
@@ -267,7 +274,7 @@ def test_arrival_flags_other_than_0_or_1_are_refused(g1_design, flags, needle):
         )
 
 
-@pytest.mark.parametrize("policy", ["skip", "rescale"])
+@pytest.mark.parametrize("policy", ["skip", "rescale", "hold"])
 def test_the_lossy_law_is_the_monte_carlo_kernels_step(g1_design, policy):
     # the compiled lossy kernel (its own arithmetic order) fed the same normals and
     # arrivals: the law agrees to rounding, so both drop (skip) or rescale the same terms

@@ -536,6 +536,8 @@ def _truth_digital_loss(doc: dict) -> list[str]:
     if "digital_mean_square" not in doc["certifies"]:
         return bad + ([] if set(res) == {"stopped"} else ["numbers of an uncertified section"])
     h, policy = sub["period"], sub["loss"]["policy"]
+    if sub["delay"] == 0 and policy == "hold":
+        return bad + _truth_hold(doc)
     if policy not in ("skip", "rescale") or (sub["delay"] != 0) != (res.get("bound") is not None):
         return [*bad, "delay or policy"]
     ((name, m),) = doc["subject"]["modes"].items()
@@ -587,6 +589,109 @@ def _truth_digital_loss(doc: dict) -> list[str]:
         off = float(np.linalg.norm(np.linalg.solve(lbar, rhs)))
         if not _close(res["offset"], off, 1e-8, 1e-14):
             bad.append("offset")
+    return bad
+
+
+def _truth_hold(doc: dict) -> list[str]:
+    """Hold's inequalities rebuilt here from the weights: the state z = (e, u), u = τ Q_d⁻¹ η,
+    its step written out per arrival pattern (a sum over all 2^E, not the mean-plus-variance
+    form of the code), Q = [[S, SΠP_d], [·, R]], G(κ) and G(0) on u, the coupling, the rate
+    α <= α' − gβ/(1 − β), ghκβ <= 1 − β, c = 1/(1+t) below κ beyond t₀, k₀ and p_max."""
+    import itertools
+    from fractions import Fraction
+
+    bad: list[str] = []
+    sub, res = doc["subject"]["digital"], doc["results"]["digital"]
+    h = sub["period"]
+    ((name, md),) = doc["subject"]["modes"].items()
+    top = Topology.from_data(parse_topology(md["topology"], name))
+    d, n = top.dim, top.n * top.dim
+    f = sub["noise"]["f"]
+    fm = np.asarray(f, dtype=float) * np.eye(d) if not isinstance(f, list) else np.array(f)
+    sig = sub["noise"]["sigma"]
+    lab = [str(x) for x in top.labels]
+    loss = {(lab.index(e["to"]), lab.index(e["from"])): e["p"] for e in sub["loss"]["edges"]}
+    order = sorted(top.weights)  # the certificate's edge order (sorted (i, j))
+    ne, m = len(order), len(order) * d
+    try:
+        s = np.array(doc["matrices"]["P"]["hold"], dtype=float)
+        r = np.array(doc["matrices"]["P"]["hold_R"], dtype=float)
+        al, a1, be, rho, g, kap, t0 = (
+            float(res[k]) for k in ("alpha", "alpha_step", "beta", "rho", "g", "kappa", "t0")
+        )
+    except (KeyError, TypeError, ValueError):
+        return ["hold matrices or numbers"]
+    if s.shape != (n, n) or r.shape != (m, m) or not (0 < be < 1 and rho > 0 and kap > 0):
+        return ["hold shapes or numbers"]
+    lap = _lap_b(top, md["delta"])
+    pi, gam = np.zeros((n, m)), np.zeros((m, n))
+    kds, gs, p = [], [], np.zeros(m)
+    for k, (i, j) in enumerate(order):
+        a = top.weights[(i, j)]
+        w = _sign(a) * a
+        pi[i * d : i * d + d, k * d : k * d + d] = np.eye(d)
+        gam[k * d : k * d + d, j * d : j * d + d] += a
+        gam[k * d : k * d + d, i * d : i * d + d] -= w
+        sel = np.zeros((d, n))
+        sel[:, j * d : j * d + d], sel[:, i * d : i * d + d] = np.eye(d), -np.eye(d)
+        kds.append(w @ fm @ sel)
+        gs.append(sig * w.sum(axis=1))
+        p[k * d : k * d + d] = loss.get((i, j), 0.0)
+    q = 1 - p
+    cm = s @ pi @ np.diag(p)
+    qm = np.block([[s, cm], [cm.T, r]])
+    w_ = n + m
+
+    def expected(c: float) -> np.ndarray:
+        tau = h * c
+        out = np.zeros((w_, w_))
+        for chi in itertools.product((0, 1), repeat=ne):
+            x = np.repeat(np.array(chi, dtype=float), d)
+            prob = float(np.prod([q[k * d] if v else p[k * d] for k, v in enumerate(chi)]))
+            # e' = (I − τL)e + Π(I − X)Q_d u;  u' = Q_d⁻¹(I − τΓΠ)(I − X)Q_d u
+            b = np.zeros((w_, w_))
+            b[:n, :n] = np.eye(n) - tau * lap
+            b[:n, n:] = pi @ np.diag((1 - x) * q)
+            b[n:, n:] = np.diag(1 / q) @ (np.eye(m) - tau * gam @ pi) @ np.diag((1 - x) * q)
+            out += prob * b.T @ qm @ b
+        return out
+
+    def g_of(c: float) -> np.ndarray:
+        out = (1 - (a1 * h + rho) * c) * qm - expected(c)
+        if c == 0:
+            return out
+        fmat = h * h * np.diag(1 / q) @ gam @ lap
+        b0 = np.vstack([pi, np.diag(1 / q)])
+        b1 = np.vstack([0 * pi, -np.diag(1 / q) @ gam @ pi])
+        mm = (1 + h * kap) * (b0.T @ qm @ b0 + h * kap * b1.T @ qm @ b1)
+        noise = sum(
+            q[k * d] * kds[k].T @ mm[k * d : k * d + d, k * d : k * d + d] @ kds[k]
+            for k in range(ne)
+        )
+        out[:n, :n] -= c * c * (kap * kap + kap / rho) * fmat.T @ r @ fmat + h * c * c * noise
+        return out
+
+    g0 = g_of(0.0)
+    if not (np.allclose(g0[:n, :], 0, atol=1e-9 * np.max(np.abs(g0))) and _pos(g0[n:, n:])):
+        bad.append("G₀")
+    if not _pos(np.block([[be * s, cm], [cm.T, r]])) or not _pos(s):
+        bad.append("coupling or S")
+    gk = g_of(kap)  # the SDP keeps a margin of 1e-7·hκ here: rounding of this check is ~1e-14
+    if not np.linalg.eigvalsh(0.5 * (gk + gk.T))[0] > 1e-12 * max(1.0, np.max(np.abs(gk))):
+        bad.append("G(κ)")
+    fb = Fraction(be)
+    if not (al > 0 and Fraction(al) <= Fraction(a1) - Fraction(g) * fb / (1 - fb)):
+        bad.append("α")
+    if Fraction(g) * Fraction(h) * Fraction(kap) * fb > 1 - fb or not g > 1.0:
+        bad.append("g or ghκβ")  # (1/c)' = 1 for c = 1/(1+t)
+    if sub["gain"] != "1/(1+t)":
+        bad.append("gain")
+    elif not np.all(1 / (1 + (t0 + np.concatenate([[0.0], np.geomspace(1e-9, 1e9, 3000)]))) < kap):
+        bad.append("t₀")
+    if res["k0"] != math.ceil(t0 / h - 1e-12):
+        bad.append("k₀")
+    if res["p_max"] != max(loss.values(), default=0.0):
+        bad.append("p_max")
     return bad
 
 

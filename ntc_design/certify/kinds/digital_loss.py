@@ -9,8 +9,10 @@ t₀, k₀, the largest p_e and, under skip, the offset ‖x* − 1⊗θ‖. Eac
 derived claim or recomputed: the inequality exactly (dyadic rationals) or in verified
 floats, c(t) < κ beyond t₀ in ball arithmetic, the offset by an exact rational solve.
 The certificate covers ``skip`` and ``rescale``, D = 0 here and D >= 1 by the delay line's
-functional over the arrivals (:mod:`.digital_loss_delay`); for ``hold`` it certifies the
-continuous properties only and ``results.digital.stopped`` says why.
+functional over the arrivals (:mod:`.digital_loss_delay`); ``hold`` (D = 0) by the
+functional of :mod:`ntc_design.certify.loss_hold` (:mod:`.digital_loss_hold`). Where no
+proof closes it certifies the continuous properties only and ``results.digital.stopped``
+says why.
 """
 
 from __future__ import annotations
@@ -38,6 +40,16 @@ from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, numbe
 from .dense import prove_dense
 from .digital import DigitalContext, DigitalKind, DigitalSubject, read_digital
 from .digital_loss_delay import DELAY_LINE, delayed_claims, issue_delayed, prove_delayed
+from .digital_loss_hold import (
+    HOLD_CLAIMS,
+    HoldStated,
+    audit_hold,
+    hold_claims,
+    hold_detail,
+    issue_hold,
+    prove_hold,
+    read_hold,
+)
 from .hurwitz import HurwitzKind
 
 P_NAME = "loss"
@@ -72,7 +84,7 @@ class LossState:
 
     subject: DigitalSubject
     loss: LossSubject
-    stated: LossStated | None
+    stated: LossStated | HoldStated | None  # hold's own numbers (.digital_loss_hold)
 
 
 def _gain_document(gain: Any) -> Any:
@@ -191,7 +203,7 @@ class DigitalLossKind(DigitalKind):
     contraction over the arrivals (and the offset under skip)."""
 
     name = "digital_loss"
-    description = "one topology run as the sampled protocol on lossy links (skip or rescale)"
+    description = "one topology run as the sampled protocol on lossy links"
 
     def accepts(self, design: Any) -> bool:
         """A digital design of one topology whose messages may be lost.
@@ -242,10 +254,22 @@ class DigitalLossKind(DigitalKind):
             },
         }
         why = None
-        if dg.policy == "hold":
-            why = "hold keeps the last measurements (an augmented state): not certified"
+        if dg.policy == "hold" and dg.delay:
+            why = "hold is certified for D = 0 (a delay is not)"
         pl = None
-        if why is None:
+        if why is None and dg.policy == "hold":
+            edges = loss_edges(top, losses)
+            noises = edge_noises(top, design.f_matrix(d), design.sigma, design.sigma_edges)
+            lap = design.base.grounded_laplacian()
+            res_h, why = issue_hold(doc, lap, edges, noises, d, dg.period, gain_doc)
+            if res_h is not None:
+                res_h["p_max"] = max(losses.values())
+                doc["results"]["digital"] = res_h
+                doc["certifies"] = [*doc["certifies"], MS.value]
+                doc["claims"] = [*doc["claims"], *(c.to_dict() for c in hold_claims(mode))]
+                doc.pop("digest", None)
+                return finish(doc)
+        elif why is None:
             edges = loss_edges(top, losses)
             noises = edge_noises(top, design.f_matrix(d), design.sigma, design.sigma_edges)
             lap = design.base.grounded_laplacian()
@@ -332,7 +356,7 @@ class DigitalLossKind(DigitalKind):
         mode = next(iter(reading.state.modes.values()))
         sampled = read_digital(doc, source, mode.top.dim, ("loss",))
         loss = read_loss(doc, source, mode.top)
-        stated = None
+        stated: LossStated | HoldStated | None = None
         if MS.value in doc.get("certifies", []):
             res = need(need(doc, "results", dict, source), "digital", dict, f"{source}: results")
             where = f"{source}: results.digital"
@@ -340,9 +364,12 @@ class DigitalLossKind(DigitalKind):
             def num(key: str) -> float:
                 return number(need(res, key, (int, float), where), f"{where}.{key}")
 
-            off = num("offset") if loss.policy == "skip" else None
-            g = num("g") if sampled.delay else None
-            stated = LossStated(num("alpha"), num("kappa"), num("t0"), off, g)
+            if loss.policy == "hold":
+                stated = read_hold(res, where)
+            else:
+                off = num("offset") if loss.policy == "skip" else None
+                g = num("g") if sampled.delay else None
+                stated = LossStated(num("alpha"), num("kappa"), num("t0"), off, g)
         state = LossState(sampled, loss, stated)
         return replace(reading, state=DigitalContext(reading.state, state))
 
@@ -370,13 +397,16 @@ class DigitalLossKind(DigitalKind):
         out = HurwitzKind.claims(self, base, subject, reading, alpha)
         if MS in properties:
             ctx: DigitalContext[LossState] = reading.state
-            if ctx.digital.loss.policy == "hold":
+            hold = ctx.digital.loss.policy == "hold"
+            if hold and ctx.digital.subject.delay:
                 raise InputError(
-                    f"{ctx.source}: certifies: digital_mean_square on lossy links needs "
-                    "skip or rescale"
+                    f"{ctx.source}: certifies: digital_mean_square on lossy links with hold "
+                    "needs D = 0"
                 )
             mode = next(iter(ctx.modes))
-            if ctx.digital.subject.delay:
+            if hold:
+                out = (*out, *hold_claims(mode))
+            elif ctx.digital.subject.delay:
                 out = (*out, *delayed_claims(mode, ctx.digital.loss.policy, P_NAME))
             else:
                 out = (*out, *loss_claims(mode, ctx.digital.loss.policy))
@@ -417,9 +447,15 @@ class DigitalLossKind(DigitalKind):
             return Check(claim.id, False, f"no mode {claim.mode!r} in the certificate", claim)
         edges = loss_edges(mode.top, ls.losses)
         d = mode.top.dim
+        if (claim.kind in HOLD_CLAIMS) != (ls.policy == "hold"):
+            return Check(claim.id, False, "a claim of another policy's section", claim)
+        if claim.kind in HOLD_CLAIMS:
+            noises = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
+            return prove_hold(claim, ctx, st, dg, mode, edges, noises)
         if claim.kind is ClaimKind.LOSS_DL_STEP:
             noises = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
             return prove_delayed(claim, ctx, mode, edges, noises, P_NAME)
+        assert isinstance(st, LossStated)  # hold's claims returned above
         if claim.kind is ClaimKind.LOSS_OFFSET:
             if mode.exact is None or st.offset is None:
                 return Check(claim.id, False, "the exact L_B is not available", claim)
@@ -485,6 +521,9 @@ class DigitalLossKind(DigitalKind):
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
+        if state.loss.policy == "hold":
+            audit_hold(audit, state)
+            return
         for key in ("alpha", "kappa", "t0") + (("offset",) if state.loss.policy == "skip" else ()):
             audit.proven(("digital", key))
         dg = state.subject
@@ -519,6 +558,8 @@ class DigitalLossKind(DigitalKind):
         where = (
             f"to x* at ‖x* − 1⊗θ‖ = {number_text(r.get('offset'))} (skip)"
             if "offset" in r
+            else f"to 1⊗θ (hold; {hold_detail(r)})"
+            if r.get("policy") == "hold"
             else "to 1⊗θ (rescale)"
         )
         return (
@@ -560,7 +601,8 @@ class DigitalLossKind(DigitalKind):
         if MS not in properties or st is None:
             return base
         k0 = first_step(st.t0, dg.period, dg.delay)
-        off = f", x* at {st.offset:.6g} from 1⊗θ" if st.offset is not None else ""
+        offset = getattr(st, "offset", None)
+        off = f", x* at {offset:.6g} from 1⊗θ" if offset is not None else ""
         return (*base, (MS, f"h = {dg.period:g}, lossy links: from step k₀ = {k0}{off}"))
 
     def verdicts(
@@ -594,7 +636,7 @@ class DigitalLossKind(DigitalKind):
                 f"‖x* − 1⊗θ‖ = {r['offset']:.4g}, not to θ"
             )
         else:
-            detail = f"k₀ = {r['k0']}, lossy links (rescale): converges to θ"
+            detail = f"k₀ = {r['k0']}, lossy links ({r.get('policy', 'rescale')}): converges to θ"
         return (*base, *digital_verdicts(base, verification, gain, dg.period, dg.delay, detail))
 
 

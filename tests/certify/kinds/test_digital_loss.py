@@ -1,6 +1,6 @@
 """Tests of :mod:`ntc_design.certify.kinds.digital_loss`: issuing and verifying the
 certificate on lossy links, forged numbers and subjects rejected after re-sealing, where
-it stops (hold), the registry's choice and the CLI."""
+it stops (hold with a delay, an unproven hold), the registry's choice and the CLI."""
 
 import copy
 import json
@@ -116,10 +116,15 @@ def test_malformed_loss_fields_name_the_field(skip10, edit, message):
         verify(_reseal(doc))
 
 
-def test_hold_is_not_certified_and_says_so(g1):
-    # a delay under skip or rescale is certified (tests/certify/kinds/test_digital_loss_delay.py)
-    for dg, why in ((Digital(0.1, 0, 0.1, "hold"), "hold"),):
-        doc = certify(g1, THETA, gain="1/(1+t)", digital=dg).certificate
+def test_an_unproven_hold_is_not_certified_and_says_so(g1):
+    # a delay under skip or rescale is certified (tests/certify/kinds/test_digital_loss_delay.py),
+    # hold at D = 0 where its functional proves it (test_digital_loss_hold.py); with a delay,
+    # or a gain whose 1/c grows without bound, hold stops at once
+    for dg, gain, why in (
+        (Digital(0.1, 1, 0.1, "hold"), "1/(1+t)", "hold is certified for D = 0"),
+        (Digital(0.1, 0, 0.1, "hold"), "exp(-t)", "hold: (1/c)' has no finite bound"),
+    ):
+        doc = certify(g1, THETA, gain=gain, digital=dg).certificate
         assert doc["kind"] == "digital_loss"
         assert "digital_mean_square" not in doc["certifies"]
         assert why in doc["results"]["digital"]["stopped"]
