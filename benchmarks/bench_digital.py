@@ -63,9 +63,7 @@ def moments_rows(top, theta, label: str, t_end: float, h: float, delays) -> None
     )
     for d in delays:
         grid, _ = digital_grid(Digital(h, d), t_end, np.array([t_end]))
-        sec = best(
-            lambda grid=grid, d=d: digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, d)
-        )
+        sec = best(lambda grid=grid, d=d: digital_moments(pm, grid, gain, d))
         per = sec / grid.n_steps * 1e6
         print(
             f"  D = {d}: exact sampled moments {sec * 1e3:7.1f} ms ({grid.n_steps} steps, "
@@ -117,6 +115,7 @@ def period_rows() -> None:
 
 def export_rows(g1, steps: int) -> None:
     from ntc_design.export.run import export
+    from ntc_design.export.source import ExportOptions
     from ntc_design.protocol.agents import agent_law
     from ntc_design.simulate.replay import replay
 
@@ -133,13 +132,17 @@ def export_rows(g1, steps: int) -> None:
         out = Path(tmp) / "c"
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            export(ROOT / "examples" / "scenarios" / "g1_deadline.yaml", "c", out, 0.01, 1)
+            export(
+                ROOT / "examples" / "scenarios" / "g1_deadline.yaml",
+                "c",
+                out,
+                ExportOptions(0.01, 1),
+            )
             export(
                 ROOT / "examples" / "scenarios" / "g1_deadline.yaml",
                 "python",
                 Path(tmp) / "py",
-                0.01,
-                1,
+                ExportOptions(0.01, 1),
             )
         text = (
             " ".join(map(repr, x0.tolist()))

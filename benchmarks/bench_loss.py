@@ -1,7 +1,7 @@
 """Lossy links (issue 49): what the exact moments and the Monte Carlo cost on G1, beside
 the lossless sampled protocol, as ratios.
 
-    python benchmarks/bench_loss.py [--quick]
+    python benchmarks/bench_loss.py [--quick] [--gpu]
 
 Rows:
 
@@ -9,7 +9,9 @@ Rows:
   <= 0.2 s), beside the lossless digital moments;
 - Monte Carlo with loss (the compiled kernel of ``simulate/loss_kernels.py``, arrivals
   drawn in the kernel) against the lossless kernel, in path-steps/s on one process
-  (target ratio >= 0.7).
+  (target ratio >= 0.7);
+- with ``--gpu`` (a machine with an NVIDIA GPU): the same runs with ``device: gpu`` (the
+  GPU kernels of ``simulate/loss_cuda.py`` and the lossless one), beside the CPU kernel.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.digital import digital_grid, digital_moments
 from ntc_design.simulate.loss import loss_moments
+from ntc_design.simulate.moments import PreparedModes
 from ntc_design.simulate.system import mode_system
 
 X0 = np.linspace(-3, 3, 21)
@@ -42,6 +45,7 @@ def best(fn, repeat: int = 3) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--gpu", action="store_true", help="also the GPU kernels (device: gpu)")
     args = ap.parse_args()
     g1 = nd.model.paper.g1()
     s = mode_system(nd.design(g1, THETA, thresholds=False), NoiseModel(0.4, 0.3))
@@ -51,7 +55,8 @@ def main() -> None:
     def gain(t):
         return 1 / (1 + t)
 
-    base = best(lambda: digital_moments([s], grid, gain, eps0, 7, 3, 1))
+    modes = PreparedModes.of([s], eps0)
+    base = best(lambda: digital_moments(modes, grid, gain, 1))
     print(f"exact moments, G1, h = 0.1, D = 1, K = {grid.n_steps}")
     print(f"  lossless digital moments     {base:8.4f} s")
     loss = np.full(s.n_edges, 0.1)
@@ -66,9 +71,10 @@ def main() -> None:
     simulate(g1, THETA, digital=Digital(0.1, 1), **{**opts, "paths": 8})  # compile/load
     simulate(g1, THETA, digital=Digital(0.1, 1, 0.1), **{**opts, "paths": 8})
 
-    def rate(dg: Digital) -> float:
+    def rate(dg: Digital, device: str = "cpu", n: int = paths) -> float:
+        run = {**opts, "device": device, "paths": n}
         return max(
-            simulate(g1, THETA, digital=dg, **opts).stats.path_steps_per_second for _ in range(3)
+            simulate(g1, THETA, digital=dg, **run).stats.path_steps_per_second for _ in range(3)
         )
 
     lossless = rate(Digital(0.1, 1))
@@ -77,6 +83,20 @@ def main() -> None:
     for policy in ("skip", "rescale", "hold"):
         r = rate(Digital(0.1, 1, 0.1, policy))
         print(f"  loss 0.1, {policy:8s}           {r:10.3g} path-steps/s   ({r / lossless:.2f}x)")
+
+    if not args.gpu:
+        return
+    gpu_paths = 20 * paths  # one thread per path: a GPU needs many to fill
+    simulate(g1, THETA, digital=Digital(0.1, 1), **{**opts, "paths": 64, "device": "gpu"})
+    simulate(g1, THETA, digital=Digital(0.1, 1, 0.1), **{**opts, "paths": 64, "device": "gpu"})
+    base_gpu = rate(Digital(0.1, 1), "gpu", gpu_paths)
+    print(f"Monte Carlo on the GPU, G1, {gpu_paths} paths × 100 steps")
+    print(f"  lossless GPU kernel          {base_gpu:10.3g} path-steps/s   "
+          f"({base_gpu / lossless:.1f}x the CPU kernel)")  # fmt: skip
+    for policy in ("skip", "rescale", "hold"):
+        r = rate(Digital(0.1, 1, 0.1, policy), "gpu", gpu_paths)
+        print(f"  loss 0.1, {policy:8s}           {r:10.3g} path-steps/s   "
+              f"({r / base_gpu:.2f}x lossless GPU)")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""The optimal gain schedule (issue 28): `tune(..., schedule="optimal")` on the paper's G1
+"""The optimal gain schedule (issue 28): `tune(..., ScheduleOptions())` on the paper's G1
 (x(0) = linspace(−3, 3, 21), T = 10) and on a generated 20-agent network (Nd = 60, the
 largest size accepted), with the refinement table, beside one objective evaluation and one
 gradient (the peer: a finite-difference gradient costs K + 1 evaluations).
@@ -22,7 +22,7 @@ import ntc_design as nd
 from ntc_design.model.generate import random_network
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.prepare import prepare_modes
-from ntc_design.tune import tune
+from ntc_design.tune import ScheduleOptions, tune
 from ntc_design.tune.problem import ScheduleProblem
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,7 +46,7 @@ def case(name: str, top, theta, x0, horizon: float, paths: int) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         w, cpu = time.perf_counter(), time.process_time()
-        r = tune(top, spec, horizon, schedule="optimal", check_paths=paths)
+        r = tune(top, spec, horizon, ScheduleOptions(check_paths=paths))
         wall, cpu = time.perf_counter() - w, time.process_time() - cpu
     ms = r.ms_error_T
     print(f"\n{name}: N·d = {top.n * top.dim}, state {prob.ns}, operators built in {build:.2f} s")

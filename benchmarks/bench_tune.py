@@ -26,7 +26,7 @@ from ntc_design.model.generate import random_network
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.moments import MomentRhs
 from ntc_design.simulate.scenario import load_scenario
-from ntc_design.tune import BASELINE, ExactObjective, tune
+from ntc_design.tune import BASELINE, ExactObjective, PowerOptions, tune
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -56,7 +56,9 @@ def dop853_value(obj: ExactObjective, gain) -> float:
 
 def case(name, top, spec, horizon, evaluations, landscape):
     res, wall, cpu = timed(
-        lambda: tune(top, spec, horizon, max_evaluations=evaluations, landscape=landscape)
+        lambda: tune(
+            top, spec, horizon, PowerOptions(max_evaluations=evaluations, landscape=landscape)
+        )
     )
     ms = res.ms_error_T
     print(

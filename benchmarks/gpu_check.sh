@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 42's device check in one go, for a session that has a machine with an NVIDIA GPU.
+# The device check (issues 42 and 49) in one go, for a session that has a machine with an NVIDIA GPU.
 #
 #   bash benchmarks/gpu_check.sh fetch   # here, with the package registry: the wheels the
 #                                        # GPU image lacks, for its Python 3.12, into .whl/
@@ -11,7 +11,8 @@
 # SciPy, SymPy, pandas, pytest; it lacks dask/distributed (the test suite's fixtures import
 # them), python-flint, and a numpy below 2.5. The project runs from the checkout
 # (PYTHONPATH), not installed. Budget (15 device-minutes a session, the start included):
-# the tests stop at 4 minutes, bench_gpu.py at 5.5; run it with timeout_s 600, carry .whl.
+# the tests stop at 3 minutes, bench_loss.py at 2, bench_gpu.py at 170 s; run it with
+# timeout_s 540, carry .whl.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -35,10 +36,17 @@ fi
 OUT=${OUT:-$PWD/gpu_check_out}
 mkdir -p "$OUT"
 PY=python3
+$PY -c "import numpy, numba; print('image: numpy', numpy.__version__, 'numba', numba.__version__)" \
+  2>&1 | tee "$OUT/image.txt" || true
 if compgen -G ".whl/*.whl" > /dev/null; then
   $PY -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
     --target /tmp/site .whl/*.whl
   export PYTHONPATH=/tmp/site:$PWD
+  # the image's numba may refuse the carried numpy < 2.5: then use the image's numpy
+  if ! $PY -c "import numba, numba.cuda" >> "$OUT/image.txt" 2>&1; then
+    rm -rf /tmp/site/numpy /tmp/site/numpy-* /tmp/site/numpy.libs
+    echo "carried numpy dropped: the image's numba refused it" | tee -a "$OUT/image.txt"
+  fi
 else
   export PYTHONPATH=$PWD
 fi
@@ -51,11 +59,14 @@ export PYTHONUNBUFFERED=1
 
 # the GPU tests on the device: larger sizes (1,000 steps), the kernels' PTX included
 status=0
-NTC_GPU_TESTS=device timeout 240 $PY -m pytest -q -n 0 -p no:cacheprovider -o addopts="" \
-  tests/simulate/test_cuda_kernels.py tests/simulate/test_gpu_run.py \
+NTC_GPU_TESTS=device timeout 180 $PY -m pytest -q -n 0 -p no:cacheprovider -o addopts="" \
+  --durations=8 tests/simulate/test_cuda_kernels.py tests/simulate/test_gpu_run.py \
   tests/simulate/test_gpu_timevarying.py tests/simulate/test_gpu.py \
-  tests/test_cli_runs.py::test_simulate_device_gpu_runs_where_the_fixture_says 2>&1 \
+  tests/simulate/test_loss_cuda.py tests/simulate/test_loss_mc.py \
+  tests/cli/test_runs.py::test_simulate_device_gpu_runs_where_the_fixture_says 2>&1 \
   | tee "$OUT/gpu_tests.log" || status=1
 
-timeout 330 $PY benchmarks/bench_gpu.py 2>&1 | tee "$OUT/bench_gpu.log" || status=1
+# lossy links (issue 49): the loss GPU kernels beside the lossless one and the CPU kernel
+timeout 120 $PY benchmarks/bench_loss.py --quick --gpu 2>&1 | tee "$OUT/bench_loss.log" || status=1
+timeout 170 $PY benchmarks/bench_gpu.py 2>&1 | tee "$OUT/bench_gpu.log" || status=1
 exit $status

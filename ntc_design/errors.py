@@ -12,13 +12,104 @@ import types
 import warnings
 from collections.abc import Mapping
 
+from .fields import Option, flag_value, options_written_as
+
+#: The field at the head of a message written as one text (``paths: must be ...``).
+_FIELD_HEAD = re.compile(r"([^\s:]+): ")
+
 
 class InputError(ValueError):
     """Bad input: a file, matrix, label or parameter that is wrong.
 
     The message is one line that names the file and the edge or field and says what is
-    wrong; the CLI prints it and exits with code 2.
+    wrong; the CLI prints it and exits with code 2. The field is data (:attr:`field`):
+    the library names its parameters and fields, the command line maps them to its flags
+    (:func:`blame`).
+
+    Parameters
+    ----------
+    *parts : str or Option
+        The message: text, and the parameters it names (:class:`Option`, written by each
+        reader in its own words).
+    field : str, optional
+        The field or parameter that is wrong; ``str()`` is ``field: message``. Not given:
+        a message written as ``FIELD: ...`` in one text gives it.
+    value : object, optional
+        The field's value the message is about (``schedule="optimal": ...``).
+    option : bool, optional
+        The field is a parameter of the call (not a document's field): each reader names
+        it in its words, the command line by its flag (:func:`options_written_as`).
+
+    Attributes
+    ----------
+    field : str or None
+        The field the error is about.
+    value : object
+        Its value the message is about (None: the field alone).
+    option : bool
+        The field is a parameter of the call.
+    parts : tuple of str or Option
+        The message without the field.
     """
+
+    def __init__(
+        self,
+        *parts: str | Option,
+        field: str | None = None,
+        value: object = None,
+        option: bool = False,
+    ) -> None:
+        if field is None and parts and isinstance(parts[0], str):
+            head = _FIELD_HEAD.match(parts[0])
+            if head is not None:  # a message written as one text: "paths: must be ..."
+                field, parts = head.group(1), (parts[0][head.end() :], *parts[1:])
+        self.field = field
+        self.value = value
+        self.option = option
+        self.parts = parts
+        super().__init__(self.text())
+
+    @property
+    def message(self) -> str:
+        """The message without the field, in the library's words."""
+        return "".join(str(p) for p in self.parts)
+
+    def text(self, flags: Mapping[str, str] | None = None, name: str | None = None) -> str:
+        """The one line, the parameters it names written as flags where ``flags`` has them.
+
+        Parameters
+        ----------
+        flags : mapping of str to str, optional
+            Field -> flag (a command's map).
+        name : str, optional
+            What to call the field (default :attr:`field`, as its flag where ``flags`` has
+            it); ``""``: the message alone.
+
+        Returns
+        -------
+        str
+        """
+        flags = flags or {}
+        body = "".join(
+            p.as_flag(flags[p.field]) if isinstance(p, Option) and p.field in flags else str(p)
+            for p in self.parts
+        )
+        if name is None and self.field is not None:
+            head = Option(self.field, self.value)
+            if self.field in flags:
+                name = head.as_flag(flags[self.field])
+            else:  # a parameter of the call: the reader's words for it (its flag)
+                name = str(head) if self.option else head.words()
+        return f"{name}: {body}" if name else body
+
+    def __reduce__(self):  # across processes, with its field and parts
+        return (_rebuild_error, (type(self), self.parts, self.field, self.value, self.option))
+
+
+def _rebuild_error(
+    cls: type, parts: tuple, field: str | None, value: object, option: bool
+) -> InputError:
+    return cls(*parts, field=field, value=value, option=option)
 
 
 def quote(label) -> str:
@@ -101,7 +192,7 @@ def number_from_text(text: str, name: str) -> float:
         (or inf, nan): ``0_05``, ``٣``, ``３`` are refused, not read as 5, 3, 3.
     """
     if not NUMBER_TEXT.fullmatch(text):
-        raise InputError(f"{name}: {text[:40]!r} is not a number {number_rule(text)}")
+        raise InputError(f"{text[:40]!r} is not a number {number_rule(text)}", field=name)
     return float(text)
 
 
@@ -148,7 +239,7 @@ def real_float(name: str, value) -> float:
         return float(value)
     except OverflowError:
         raise InputError(
-            f"{name}: {_show(value)} is beyond the float range (about 1.8e308)"
+            f"{_show(value)} is beyond the float range (about 1.8e308)", field=name
         ) from None
 
 
@@ -177,13 +268,15 @@ def require_theta(theta, dim: int):
     try:
         th = np.asarray(theta, dtype=float).reshape(-1)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(f"theta: expected {dim} numbers, got {theta!r}") from None
+        raise InputError(f"expected {dim} numbers, got {theta!r}", field="theta") from None
     if th.size != dim:
-        raise InputError(f"theta: expected {dim} numbers (the state dimension d), got {th.size}")
+        raise InputError(
+            f"expected {dim} numbers (the state dimension d), got {th.size}", field="theta"
+        )
     if not np.all(np.isfinite(th)):
-        raise InputError("theta: entries must be finite")
+        raise InputError("entries must be finite", field="theta")
     if not np.any(th):
-        raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
+        raise InputError("must be non-zero (the target of non-trivial consensus)", field="theta")
     return th
 
 
@@ -212,9 +305,10 @@ def require_x0(theta, k1) -> None:
             return
     top = float(np.max(th))
     raise InputError(
-        f"theta: x0 = k1·θ overflows: |θ| up to {top:.4g} times k1 = 1 + 2/δ = {k:.6g} is "
+        f"x0 = k1·θ overflows: |θ| up to {top:.4g} times k1 = 1 + 2/δ = {k:.6g} is "
         f"beyond the float range (about 1.8e308); every |θ_i| must be below "
-        f"{np.finfo(float).max / k:.4g}"
+        f"{np.finfo(float).max / k:.4g}",
+        field="theta",
     )
 
 
@@ -245,7 +339,7 @@ def require_positive(name: str, value, integer: bool = False) -> None:
         or value <= 0
     )
     if bad:
-        raise InputError(f"{name}: must be a positive number, got {_show(value)}")
+        raise InputError(f"must be a positive number, got {_show(value)}", field=name)
 
 
 def require_int(name: str, value, minimum: int = 0, maximum: int | None = None) -> int:
@@ -272,13 +366,13 @@ def require_int(name: str, value, minimum: int = 0, maximum: int | None = None) 
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         kind = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
-        raise InputError(f"{name}: must be {kind}, got {_show(value)}")
+        raise InputError(f"must be {kind}, got {_show(value)}", field=name)
     v = int(value)
     if v < minimum:
         kind = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
-        raise InputError(f"{name}: must be {kind}, got {v}")
+        raise InputError(f"must be {kind}, got {v}", field=name)
     if maximum is not None and v > maximum:
-        raise InputError(f"{name}: must be at most {maximum}, got {_show(v)}")
+        raise InputError(f"must be at most {maximum}, got {_show(v)}", field=name)
     return v
 
 
@@ -309,14 +403,14 @@ def require_number(
         When the value is not a finite number at least ``minimum`` (and within ``bound``).
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{name}: expected a number, got {_show(value)}")
+        raise InputError(f"expected a number, got {_show(value)}", field=name)
     v = real_float(name, value)
     if not math.isfinite(v):
-        raise InputError(f"{name}: must be finite, got {_show(value)}")
+        raise InputError(f"must be finite, got {_show(value)}", field=name)
     if minimum is not None and v < minimum:
-        raise InputError(f"{name}: must be >= {minimum:g}, got {_show(value)}")
+        raise InputError(f"must be >= {minimum:g}, got {_show(value)}", field=name)
     if bound is not None and abs(v) > bound:
-        raise InputError(f"{name}: must be at most {bound:g} in magnitude, got {_show(value)}")
+        raise InputError(f"must be at most {bound:g} in magnitude, got {_show(value)}", field=name)
     return v
 
 
@@ -326,15 +420,16 @@ def blame(
     flags: Mapping[str, str] | None = None,
     fields: Mapping[str, str] | None = None,
     values: Mapping[str, object] | None = None,
+    advice: Mapping[str, str] | None = None,
 ) -> InputError:
-    """Who an error of a run is about: the flag that gave the field it names
-    (``--paths: ...``), or else the file (``SOURCE: FIELD: ...``).
+    """Who an error of a run is about: the flag that gave its field (``--paths: ...``),
+    or else the file (``SOURCE: FIELD: ...``).
 
     Parameters
     ----------
     exc : InputError
-        ``FIELD: what is wrong`` (a field of the scenario, or a parameter of the run); an
-        error that already names a flag (``--x: ...``) is kept as it is.
+        The error, its field as data (:attr:`InputError.field`: a field of the scenario,
+        or a parameter of the run); an error about a flag already (``--x``) is kept.
     source : object
         The file the other fields come from (its name prefixes their errors); None: no
         file (the fields are the program's own).
@@ -345,42 +440,43 @@ def blame(
         when ``--horizon`` defaulted to the scenario's T).
     values : mapping of str to object, optional
         Field -> the value its flag gave: an error about the file's own field that arose
-        with flags given says them (``(with --horizon 1e+12)``), as they took part.
+        with flags given says them (``(with`` and the flags as typed), as they took part.
+    advice : mapping of str to str, optional
+        Field -> flag for every flag of the command: the parameters the message advises
+        (:class:`Option`) are written as flags (default: ``flags``).
 
     Returns
     -------
     InputError
         The error to raise, one line, naming the flag or the file.
     """
-    text = str(exc)
-    field, sep, rest = text.partition(": ")
-    if sep and field.startswith("--"):
-        return InputError(text)
-    head = field.split(".", 1)[0].split("[", 1)[0]
-    # a flag for that very field (digital.delay: --delay), else for its block (digital)
-    key = (field if field in flags else head if head in flags else None) if flags else None
-    if sep and flags and key is not None:
-        # advice in the file's words is given in the flag's: "use device: cpu" -> "use --device cpu"
-        rest = re.sub(rf"\buse {re.escape(key)}: ", f"use {flags[key]} ", rest)
-        return InputError(f"{flags[key]}{field[len(key) :]}: {rest}")
-    if sep and fields and head in fields:
-        text = f"{fields[head]}{field[len(head) :]}: {rest}"
-    given = [
-        f"{flags[k]} {_flag_value(v)}" for k, v in (values or {}).items() if flags and k in flags
-    ]
+    flags = flags or {}
+    field = exc.field
+    if field is not None and field.startswith("--"):
+        return exc
+    # advice names a parameter (the command's flag for it), or a file's field where a flag
+    # gave that field
+    options = {**{k: f for k, f in (advice or {}).items() if k not in _documents(exc)}, **flags}
+    head = field.split(".", 1)[0].split("[", 1)[0] if field is not None else None
+    # a flag for that very field (digital.delay), else for its block (digital)
+    key = field if field in flags else head if head in flags else None
+    if field is not None and key is not None:
+        flag = Option(f"{flags[key]}{field[len(key) :]}", exc.value)
+        return InputError(exc.text(options, ""), field=flag.as_flag(flag.field))
+    name = ""
+    if field is not None:  # a parameter of the call in the reader's words, a field as is
+        name = str(Option(field, exc.value)) if exc.option else Option(field, exc.value).words()
+    if field is not None and head is not None and fields and head in fields:
+        name = f"{fields[head]}{field[len(head) :]}"
+    text = exc.text(options, name)
+    given = [f"{flags[k]} {flag_value(v)}" for k, v in (values or {}).items() if k in flags]
     with_flags = f" (with {', '.join(dict.fromkeys(given))})" if given else ""
     return InputError(f"{source}: {text}{with_flags}" if source is not None else text + with_flags)
 
 
-def _flag_value(value: object) -> str:
-    """A flag's value as typed back (a number in its short form)."""
-    if isinstance(value, float):
-        return f"{value:g}"
-    if isinstance(value, Mapping):  # the digital block of --period/--delay
-        return ", ".join(
-            f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in value.items()
-        )
-    return str(value)
+def _documents(exc: InputError) -> set[str]:
+    """The document fields an error's advice names (written as flags only where given)."""
+    return {p.field for p in exc.parts if isinstance(p, Option) and p.document}
 
 
 class AssumptionWarning(UserWarning):
@@ -463,8 +559,9 @@ def require_horizon(name: str, value) -> float:
     t = real_float(name, value)
     if t < MIN_HORIZON:
         raise InputError(
-            f"{name}: {_show(value)} is shorter than the shortest horizon {MIN_HORIZON:g} (the "
-            "time grids resolve instants to about 1e-14)"
+            f"{_show(value)} is shorter than the shortest horizon {MIN_HORIZON:g} (the "
+            "time grids resolve instants to about 1e-14)",
+            field=name,
         )
     return t
 
@@ -473,7 +570,7 @@ def require_horizon(name: str, value) -> float:
 MAX_SEED = 2**128
 
 
-def require_radius(value, name: str = "--radius", below_one: bool = True) -> float:
+def require_radius(value, name: str = "radius", below_one: bool = True) -> float:
     """A relative radius ρ of a weight's Loewner interval (1−ρ)|A| ⪯ |A'| ⪯ (1+ρ)|A|:
     a finite number >= 0, and below 1 where asked (at 1 a weight may vanish).
 
@@ -496,12 +593,12 @@ def require_radius(value, name: str = "--radius", below_one: bool = True) -> flo
         One line naming the field.
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{name}: expected a number, got {_show(value)}")
+        raise InputError(f"expected a number, got {_show(value)}", field=name)
     r = real_float(name, value)
     if not (math.isfinite(r) and r >= 0 and (r < 1 or not below_one)):
         limit = " and below 1 (at 1 a weight may vanish)" if below_one else ""
         raise InputError(
-            f"{name}: the radius must be a finite number >= 0{limit}, got {_show(value)}"
+            f"the radius must be a finite number >= 0{limit}, got {_show(value)}", field=name
         )
     return r
 
@@ -571,6 +668,8 @@ __all__ = [
     "note_interrupt",
     "number_from_text",
     "number_rule",
+    "Option",
+    "options_written_as",
     "one_line",
     "quote",
     "real_float",

@@ -10,6 +10,8 @@ from ntc_design.errors import (
     EXTRAS,
     MIN_HORIZON,
     InputError,
+    Option,
+    blame,
     one_line,
     quote,
     real_float,
@@ -70,20 +72,21 @@ def test_quote_and_one_line():
         ("--period: too long", {"digital": "--period"}, None, None, "--period: too long"),
         # a parameter the file gave (no flag): the file's name for it
         ("horizon: must be positive", {}, {"horizon": "T"}, None, "s.yaml: T: must be positive"),
-        # advice in the file's words, given where the user typed a flag: in the flag's
-        ("device: gpu: no driver; use device: cpu", {"device": "--device"}, None, None,
-         "--device: gpu: no driver; use --device cpu"),
+        # advice as data: in the file's words, or the flag's where the user typed one
+        (("gpu: no driver; use ", Option("device", "cpu", document=True)),
+         {"device": "--device"}, None, None, "--device: gpu: no driver; use --device cpu"),
         # a flag for the very field, beside the flag for its block
         ("digital.delay: too long", {"digital": "--period", "digital.delay": "--delay"}, None,
          None, "--delay: too long"),
-        ("device: gpu: no driver; use device: cpu", {}, None, None,
+        (("gpu: no driver; use ", Option("device", "cpu", document=True)), {}, None, None,
          "s.yaml: device: gpu: no driver; use device: cpu"),
     ],
 )  # fmt: skip
 def test_blame_names_the_flag_or_the_file(message, flags, fields, values, want):
     from ntc_design.errors import blame
 
-    got = blame(InputError(message), "s.yaml", flags, fields, values)
+    exc = InputError(message) if isinstance(message, str) else InputError(*message, field="device")
+    got = blame(exc, "s.yaml", flags, fields, values)
     assert isinstance(got, InputError) and str(got) == want
     assert str(blame(InputError("dt: x"), None, {"dt": "--dt"})) == "--dt: x"
     assert str(blame(InputError("seed: x"), None, {"dt": "--dt"})) == "seed: x"
@@ -186,3 +189,62 @@ def test_a_numpy_number_is_shown_as_the_number_not_its_repr():
         with pytest.raises(InputError) as info:
             require_number("x", value, minimum=0)
         assert str(info.value).endswith(f"got {shown}") and "np." not in str(info.value)
+
+
+def test_an_error_carries_its_field_as_data():
+    exc = InputError("must be a positive integer, got -5", field="paths")
+    assert (exc.field, exc.message) == ("paths", "must be a positive integer, got -5")
+    assert str(exc) == "paths: must be a positive integer, got -5"
+    # a message written as one text gives its field too (the same line either way)
+    legacy = InputError("digital.period: must be a positive number, got -1")
+    assert (
+        legacy.field == "digital.period" and legacy.message == "must be a positive number, got -1"
+    )
+    assert InputError("no field here").field is None
+    assert InputError("a file name.yaml: x").field is None  # a head with a space is no field
+
+
+def test_advice_is_data_that_each_reader_writes_in_its_words():
+    exc = InputError(
+        "exact moments need a linear f; use ",
+        Option("schedule", "power"),
+        " ",
+        Option("method", "mc"),
+        " or lower ",
+        Option("max_gain"),
+        field="schedule",
+    )
+    # a Python caller reads Python names
+    assert str(exc) == (
+        'schedule: exact moments need a linear f; use schedule="power" method="mc" or lower max_gain'
+    )
+    flags = {"schedule": "--schedule", "method": "--method", "max_gain": "--max-gain"}
+    got = blame(exc, None, {"schedule": "--schedule"}, advice=flags)
+    assert str(got) == (
+        "--schedule: exact moments need a linear f; use --schedule power --method mc or lower "
+        "--max-gain"
+    )
+    assert str(Option("period", 0.137)) == "period=0.137"
+    assert Option("period", 0.137).as_flag("--period") == "--period 0.137"
+
+
+def test_an_error_keeps_its_field_and_advice_across_processes():
+    import pickle
+
+    exc = InputError("lower ", Option("max_gain"), field="schedule")
+    back = pickle.loads(pickle.dumps(exc))
+    assert type(back) is InputError and (back.field, back.parts) == (exc.field, exc.parts)
+    assert str(blame(back, None, advice={"max_gain": "--max-gain"})) == "schedule: lower --max-gain"
+
+
+def test_an_error_about_a_value_of_a_field_names_both():
+    exc = InputError("uses exact moments (", Option("method", "mc"), " is for power)",
+                     field="schedule", value="optimal")  # fmt: skip
+    assert str(exc) == 'schedule="optimal": uses exact moments (method="mc" is for power)'
+    flags = {"schedule": "--schedule", "method": "--method"}
+    assert str(blame(exc, "s.yaml", flags)) == (
+        "--schedule optimal: uses exact moments (--method mc is for power)"
+    )
+    assert str(blame(exc, "s.yaml", {}, advice=flags)) == (
+        's.yaml: schedule="optimal": uses exact moments (--method mc is for power)'
+    )

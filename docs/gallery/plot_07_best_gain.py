@@ -14,13 +14,13 @@ import numpy as np
 import ntc_design as nd
 from ntc_design.reports.tune import curves_figure, schedule_gains_figure
 from ntc_design.simulate import NoiseModel, SimulationSpec
-from ntc_design.tune import tune
+from ntc_design.tune import ScheduleOptions, tune
 
 # the bundled examples, wherever the package is installed (no checkout needed)
 EXAMPLES = nd.example_path()
 g1 = nd.load(EXAMPLES / "g1.yaml")
 spec = SimulationSpec.build([1, 2, -1], noise=NoiseModel(0.4, 0.3), initial=np.linspace(-3, 3, 21))
-best = tune(g1, spec, 4.0, schedule="optimal", check_paths=0, certificate=False)
+best = tune(g1, spec, 4.0, ScheduleOptions(check_paths=0, certificate=False))
 print(best.table().text())
 print(best.refinement_table().text())
 

@@ -13,13 +13,13 @@ import numpy as np
 import ntc_design as nd
 from ntc_design.reports.tune import curves_figure, landscape_figure
 from ntc_design.simulate import NoiseModel, SimulationSpec
-from ntc_design.tune import tune
+from ntc_design.tune import PowerOptions, tune
 
 # the bundled examples, wherever the package is installed (no checkout needed)
 EXAMPLES = nd.example_path()
 x0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, 21)
 spec = SimulationSpec.build([1, 2, -1], noise=NoiseModel(0.4, 0.3), initial=x0)
-res = tune(nd.load(EXAMPLES / "g1.yaml"), spec, 5.0, eps=5.0, max_evaluations=60)
+res = tune(nd.load(EXAMPLES / "g1.yaml"), spec, 5.0, PowerOptions(eps=5.0, max_evaluations=60))
 print(res.table())
 
 # %%

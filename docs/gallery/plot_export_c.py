@@ -21,12 +21,15 @@ import numpy as np
 
 import ntc_design as nd
 from ntc_design.export.run import export, read_state, stdin_text
+from ntc_design.export.source import ExportOptions
 from ntc_design.simulate.replay import replay
 
 # the bundled examples, wherever the package is installed (no checkout needed)
 EXAMPLES = nd.example_path()
 folder = Path(tempfile.mkdtemp()) / "g1-c"
-res = export(EXAMPLES / "scenarios" / "g1_deadline.yaml", "c", folder, period=0.1, delay=1)
+res = export(
+    EXAMPLES / "scenarios" / "g1_deadline.yaml", "c", folder, ExportOptions(period=0.1, delay=1)
+)
 law = res.source.law
 print("\n".join(res.source.notes))
 print("wrote", ", ".join(res.files))
@@ -48,7 +51,12 @@ if cc is not None:
     print(f"compiled in {time.perf_counter() - t0:.2f} s")
     program = [str(folder / "ntc_replay")]
 else:
-    export(EXAMPLES / "scenarios" / "g1_deadline.yaml", "python", folder, period=0.1, delay=1)
+    export(
+        EXAMPLES / "scenarios" / "g1_deadline.yaml",
+        "python",
+        folder,
+        ExportOptions(period=0.1, delay=1),
+    )
     program = ["python", str(folder / "ntc_protocol.py")]
     print("no C compiler: the Python module replays instead")
 

@@ -179,7 +179,7 @@ class Verification:
         return f"Verification({'valid' if self.valid else 'INVALID'}, {self.method}, {what})"
 
     def to_dict(self) -> dict:
-        """The verification as a JSON-ready mapping (what ``ntc verify --json`` prints).
+        """The verification as a JSON-ready mapping (what ``ntc verify`` prints as JSON).
 
         Returns
         -------

@@ -72,6 +72,7 @@ class ClaimKind(StrEnum):
     DIGITAL_DL_STEP = "digital_delay_line_step"  # G(κ) ⪰ 0 for one mode (D > 0)
     DIGITAL_GROWTH = "digital_growth"  # (1/c)' < g from t₀ on, c(t₀) > 0 (D > 0)
     DIGITAL_DL_ADDITIVE = "digital_delay_line_additive"  # γ' >= γ(S) + Σ_j γ(T_j)
+    LOSS_DL_STEP = "loss_delay_line_step"  # G(κ) ⪰ 0 with L̄ and N' (digital_loss, D > 0)
 
 
 #: The statements of the digital kinds' claims ({m}: the mode).
@@ -89,6 +90,8 @@ DIGITAL_CLAIM_TEXT = {
     ClaimKind.DIGITAL_DL_STEP: "G_{m}(κ) ≻ 0: the delay line's step inequality for every c in (0, κ]",
     ClaimKind.DIGITAL_GROWTH: "(1/c)'(t) < g for every t >= t₀ and c(t₀) > 0",
     ClaimKind.DIGITAL_DL_ADDITIVE: "γ' >= Σ_e g_eᵀ·(S + Σ_j T_j)·g_e in every mode",
+    ClaimKind.LOSS_DL_STEP: "G_{m}(κ) ≻ 0 with L̄ and N' = Σ_e E[m_e²]·G_eᵀ(·)G_e + "
+    "h·Σ_e v_e·L_eᵀ(·)L_e: the delay line's step over the arrivals for every c in (0, κ]",
 }
 
 #: The statements of the time-varying kind's claims (their certificates list exactly these).

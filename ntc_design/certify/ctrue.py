@@ -50,7 +50,13 @@ def _dense_g(e: EdgeNoise, n: int, d: int) -> np.ndarray:
 
 
 def spectral_radius(
-    lap: np.ndarray, edges: Sequence[EdgeNoise], d: int, h: float, delay: int, c: float
+    lap: np.ndarray,
+    edges: Sequence[EdgeNoise],
+    d: int,
+    h: float,
+    delay: int,
+    c: float,
+    gs: Sequence[np.ndarray] | None = None,
 ) -> float:
     """The spectral radius of the augmented second-moment map at the constant gain c.
 
@@ -68,13 +74,16 @@ def spectral_radius(
         D.
     c : float
         The gain.
+    gs : sequence of numpy.ndarray, optional
+        The Ĝ_e instead of the edges' (the lossy links' map, :mod:`.loss_delay`).
 
     Returns
     -------
     float
     """
     n = lap.shape[0]
-    gs = [_dense_g(e, n, d) for e in edges]
+    if gs is None:
+        gs = [_dense_g(e, n, d) for e in edges]
     apply, m = _ms_map(lap, gs, h, delay, c)
     if m * m <= 400:
         dense = np.column_stack([apply(col) for col in np.eye(m * m)])
@@ -90,6 +99,7 @@ def ms_limit(
     d: int,
     h: float,
     delay: int,
+    gss: Sequence[Sequence[np.ndarray]] | None = None,
 ) -> tuple[float | None, str]:
     """c_true: per mode the largest constant gain with spectral radius < 1 of the augmented
     second-moment map (bisection to a relative 1e-4), the least over the modes.
@@ -106,6 +116,8 @@ def ms_limit(
         The period.
     delay : int
         D.
+    gss : sequence of sequence of numpy.ndarray, optional
+        Every mode's Ĝ_e instead of its edges' (:func:`spectral_radius`).
 
     Returns
     -------
@@ -117,10 +129,11 @@ def ms_limit(
         return None, f"not computed: (D+1)·Nd = {m} > {CTRUE_MAX_ORDER}"
     out = math.inf
     try:
-        for lap, edges in zip(laps, noises, strict=True):
+        for k, (lap, edges) in enumerate(zip(laps, noises, strict=True)):
+            gs = None if gss is None else gss[k]
 
-            def stable(c: float, lap: np.ndarray = lap, edges: Any = edges) -> bool:
-                return spectral_radius(lap, edges, d, h, delay, c) < 1.0
+            def stable(c: float, lap: np.ndarray = lap, edges: Any = edges, gs: Any = gs) -> bool:
+                return spectral_radius(lap, edges, d, h, delay, c, gs) < 1.0
 
             hi = 1.0 / h
             while stable(hi) and hi < 1e6:

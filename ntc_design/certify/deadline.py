@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from flint import arb, arb_mat, ctx
 
-from ..errors import InputError, check_work
+from ..errors import InputError, Option, check_work
 from ..protocol.digital import WHOLE_RTOL, step_modes
 from ..rigorous.exact import Dyadic
 from ..rigorous.floatmat import FloatMat
@@ -180,6 +180,7 @@ class DeadlineBound:
     ms_error: float
     peak: float
     steps: int
+    loss: dict | None = None  # lossy links: {policy, p_max} (ntc_design.certify.deadline_loss)
 
     def to_dict(self) -> dict:
         """What a certificate's ``results.deadline`` and ``--json`` state.
@@ -187,14 +188,18 @@ class DeadlineBound:
         Returns
         -------
         dict
-            ``T``, ``ms_error_bound``, ``peak_bound``, ``peak_time``.
+            ``T``, ``ms_error_bound``, ``peak_bound``, ``peak_time`` (and ``loss`` on
+            lossy links).
         """
-        return {
+        out: dict = {
             "T": self.t_end,
             "ms_error_bound": self.ms_error_bound,
             "peak_bound": self.peak_bound,
             "peak_time": self.peak_time,
         }
+        if self.loss is not None:
+            out["loss"] = dict(self.loss)
+        return out
 
 
 @contextmanager
@@ -516,7 +521,7 @@ def _sampled(pb: DeadlineProblem, bits: int) -> DeadlineBound:
             if float(final.mid()) > peak_mid:
                 peak_mid, peak_t = float(final.mid()), (k + 1) * h_f
         if not final.is_finite():
-            raise InputError("--deadline: the second moments overflow the balls (diverging)")
+            raise InputError("the second moments overflow the balls (diverging)", field="deadline")
         return DeadlineBound(
             pb.t_end,
             _upper(final),
@@ -716,7 +721,8 @@ def continuous_bound(pb: DeadlineProblem) -> DeadlineBound:
                 steps += 1
                 if not (math.isfinite(eta) and math.isfinite(peak_hi) and (rel or 0) < 0.5):
                     raise InputError(
-                        "--deadline: the moment equations' enclosure overflows (a diverging design)"
+                        "the moment equations' enclosure overflows (a diverging design)",
+                        field="deadline",
                     )
                 t = t1
         final = float(np.trace(s_hat))
@@ -759,7 +765,7 @@ def check_sampled_work(
     secs = k_steps * 6.0 * w**3 * ARB_FLOP_SECONDS
     check_work(
         secs,
-        f"--deadline: the proven moments take K = {k_steps} steps of a {w}×{w} ball "
+        f"{Option('deadline')}: the proven moments take K = {k_steps} steps of a {w}×{w} ball "
         f"recursion (N·d = {nd_}, D = {delay}), roughly {secs:.3g} s",
         MAX_SECONDS if limit is None else limit,
         "raise the period, lower the delay or shorten T",

@@ -11,7 +11,7 @@ from typing import Any
 import sympy as sp
 from flint import arb, arb_series
 
-from ..errors import InputError
+from ..errors import InputError, Option
 from ..expr.symbolic import parse_expression
 
 
@@ -57,7 +57,7 @@ def _series_of(expr: sp.Expr, t: arb_series) -> arb_series:
     fn = fns.get(expr.func)
     if fn is None or len(args) != 1:
         raise InputError(
-            f"gain: --deadline needs an analytic c(t) (+, −, ·, /, powers, exp, log, sin, "
+            f"gain: {Option('deadline')} needs an analytic c(t) (+, −, ·, /, powers, exp, log, sin, "
             f"cos, tan, atan), not {expr.func.__name__}"
         )
     return fn(args[0])

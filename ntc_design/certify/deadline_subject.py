@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, check_work
+from ..errors import InputError, Option, check_work
 from ..rigorous.exact import Dyadic
 from .checks import Check
 from .deadline import (
@@ -28,6 +28,7 @@ from .deadline import (
     deadline_mode,
 )
 from .deadline_gain import GainBalls
+from .deadline_loss import loss_bound, loss_problem, read_loss_section
 from .dense import DenseContext
 from .digital import edge_noises
 from .fields import matrix, need, number, parse_schedule
@@ -205,10 +206,10 @@ def build_problem(
         secs = continuous_work(pb)
         check_work(
             secs,
-            f"--deadline: the enclosure of the moment equations (N·d = {nd_}, T = {t_end:g}) "
-            f"takes roughly {secs:.3g} s",
+            f"{Option('deadline')}: the enclosure of the moment equations (N·d = {nd_}, "
+            f"T = {t_end:g}) takes roughly {secs:.3g} s",
             MAX_SECONDS if limit is None else limit,
-            "shorten T or use --period",
+            f"shorten T or use {Option('period')}",
         )
     return pb
 
@@ -233,7 +234,41 @@ def _bound(doc: dict, reading: Reading, source: str, limit: float | None = None)
     modes = {k: (m.top, m.lap, m.err, m.exact) for k, m in ctx.modes.items()}
     theta = next(iter(reading.modes.values())).theta
     where = f"{source}: subject.deadline"
-    pb = build_problem(modes, schedule, subject["deadline"], theta, where, limit)
+    return section_bound(modes, schedule, subject["deadline"], theta, where, limit)
+
+
+def section_bound(
+    modes: dict[str, tuple[Any, np.ndarray, np.ndarray, Dyadic | None]],
+    schedule: Sequence[tuple[str, float]] | None,
+    section: dict,
+    theta: np.ndarray,
+    source: str = "deadline",
+    limit: float | None = None,
+) -> DeadlineBound:
+    """B_T and B_peak for a ``deadline`` section: :func:`build_problem` and the sampled or
+    continuous bound, or, when the section loses messages (``loss``), the lossy one
+    (:mod:`ntc_design.certify.deadline_loss`).
+
+    Parameters
+    ----------
+    modes, schedule, section, theta, source, limit
+        As for :func:`build_problem`.
+
+    Returns
+    -------
+    DeadlineBound
+
+    Raises
+    ------
+    InputError
+        As :func:`build_problem`; a malformed ``loss``, or a diverging recursion.
+    """
+    pb = build_problem(modes, schedule, section, theta, source, limit)
+    if "loss" in section:  # lossy links
+        top = next(iter(modes.values()))[0]
+        f, sigma, edges = noise_parts(section["noise"], top.dim, f"{source}.noise")
+        noises = edge_noises(top, f, sigma, edges)
+        return loss_bound(loss_problem(pb, top, noises, section, theta, source, limit))
     return deadline_bound(pb)
 
 
@@ -289,6 +324,7 @@ def continuous_figures(doc: dict) -> DeadlineBound:
     """
     probe = copy.deepcopy(doc)
     probe["subject"]["deadline"] = {**doc["subject"]["deadline"], "period": None, "delay": 0}
+    probe["subject"]["deadline"].pop("loss", None)  # the continuous design loses nothing
     reading = KINDS[doc["kind"]].read(probe, "certificate")
     return _bound(probe, reading, "certificate")
 
@@ -328,13 +364,42 @@ def prove_deadline(doc: dict, reading: Reading, source: str) -> DeadlineProof:
         and stated.get("T") == bound.t_end
     )
     how = "ball recursion" if doc["subject"]["deadline"].get("period") else "Taylor enclosure"
+    if bound.loss is not None:
+        how += f" on lossy links ({bound.loss['policy']}, p_e <= {bound.loss['p_max']:g})"
     check = Check(
         f"deadline T = {bound.t_end:g}: E Σ‖x_i(T) − θ‖² <= B_T, max over [0, T] <= B_peak",
         ok,
         f"{how}: proven <= {bound.ms_error_bound!r} and peak <= {bound.peak_bound!r}; stated "
         f"{stated.get('ms_error_bound')!r}, {stated.get('peak_bound')!r}",
     )
-    return DeadlineProof((check,), bound)
+    return DeadlineProof((check, *_loss_checks(doc, reading, source)), bound)
+
+
+def _loss_checks(doc: dict, reading: Reading, source: str) -> tuple[Check, ...]:
+    """The deadline's lossy links are the subject's (``subject.digital.loss``, when the
+    kind states one): the figures belong to the protocol the certificate is about."""
+    subject = doc["subject"]
+    digital = subject.get("digital")
+    stated = digital.get("loss") if isinstance(digital, dict) else None
+    if stated is None:
+        return ()
+    ctx = reading.state
+    if not isinstance(ctx, DenseContext):
+        return ()
+    top = next(iter(ctx.modes.values())).top
+    where = f"{source}: subject"
+    mine = subject["deadline"].get("loss")
+    theirs = read_loss_section(stated, top, f"{where}.digital.loss")
+    same = mine is not None and read_loss_section(mine, top, f"{where}.deadline.loss") == theirs
+    lossless = not any(p > 0 for p in theirs.losses.values())
+    return (
+        Check(
+            "deadline: the lossy links of subject.digital (policy and every p_e)",
+            same or (mine is None and lossless),
+            f"subject.digital.loss: {theirs.policy}, p_e <= {theirs.p_max:g}; "
+            f"subject.deadline.loss: {'none' if mine is None else 'different' if not same else 'the same'}",
+        ),
+    )
 
 
 def audit_deadline(audit: ResultsAudit, proof: DeadlineProof) -> None:
@@ -362,6 +427,11 @@ def audit_deadline(audit: ResultsAudit, proof: DeadlineProof) -> None:
                 f"proven for this subject ({value:.10g}): not this subject's figure"
             )
     audit.estimate(("deadline", "peak_time"), 0.0, b.t_end)
+    if b.loss is not None:
+        audit.exact(("deadline", "loss", "policy"), b.loss["policy"])
+        audit.exact(("deadline", "loss", "p_max"), b.loss["p_max"])
+    elif audit.has("deadline", "loss"):
+        audit.fail("deadline.loss: stated, but the subject's deadline loses no message")
 
 
 def deadline_text(results: dict) -> str | None:
@@ -379,10 +449,16 @@ def deadline_text(results: dict) -> str | None:
     r = results.get("deadline")
     if not isinstance(r, dict):
         return None
+    loss = r.get("loss")
+    lossy = (
+        f" on lossy links (p_e <= {number_text(loss.get('p_max'))}, {loss.get('policy')})"
+        if isinstance(loss, dict)
+        else ""
+    )
     return (
         f"E Σ‖x_i(T) − θ‖² <= {number_text(r.get('ms_error_bound'), 7)} at T = "
         f"{number_text(r.get('T'))}; peak <= {number_text(r.get('peak_bound'), 7)} "
-        f"(t = {number_text(r.get('peak_time'), 4)})"
+        f"(t = {number_text(r.get('peak_time'), 4)}){lossy}"
     )
 
 
@@ -393,4 +469,5 @@ __all__ = [
     "audit_deadline",
     "deadline_text",
     "prove_deadline",
+    "section_bound",
 ]

@@ -222,6 +222,7 @@ def step_matrix(
     g: float,
     h: float,
     exact: bool,
+    noise: Callable[[Any], Any] | None = None,
 ) -> Any:
     """G(κ) for one mode, exactly (Dyadic) or in verified floats (FloatMat).
 
@@ -241,6 +242,8 @@ def step_matrix(
         α, κ, the growth bound of 1/c and the period.
     exact : bool
         Dyadic (True) or FloatMat.
+    noise : callable, optional
+        X ↦ the noise map in that arithmetic instead of N (:mod:`.loss_delay`).
 
     Returns
     -------
@@ -257,7 +260,7 @@ def step_matrix(
         r0,
         tl,
         lp,
-        lambda x: noise_matrix(x, edges, d, exact),
+        noise or (lambda x: noise_matrix(x, edges, d, exact)),
         alpha,
         kappa,
         None,
@@ -486,10 +489,11 @@ def _lowest_step(
     alpha: float,
     g: float,
     c: float,
+    ops: Sequence[Any] | None = None,
 ) -> float:
     """The least eigenvalue over the plan's inequalities for fixed S, R_j, T_j at level c
     (floats): S, T_j, R_j − R_{j+1}, and, less the SDP's margin, the decrease at τ = hc
-    and G(c) per mode."""
+    and G(c) per mode (``ops``: each mode's noise map on vec(X), default N)."""
     s, rs, ts = sol
     n = s.shape[0]
     dd = len(rs)
@@ -499,15 +503,15 @@ def _lowest_step(
     for j in range(dd):
         m = (1 - alpha * h * c) * rs[j] - (1 + g * h * c) * rn[j + 1] - h * c * ts[j]
         out = min(out, float(np.linalg.eigvalsh(m)[0]) - MARGIN)
-    ops = _Ops("float")
+    arith = _Ops("float")
     scale = np.concatenate([np.full(n, h * c), np.ones(n * dd)]) * MARGIN
-    for lap, edges in zip(laps, noises, strict=True):
-        op = noise_operator(edges, n, d)
+    for k, (lap, edges) in enumerate(zip(laps, noises, strict=True)):
+        op = noise_operator(edges, n, d) if ops is None else ops[k]
 
         def noise(x: Any, op: Any = op) -> Any:
             return (op @ np.ravel(x)).reshape(n, n)
 
-        gm = step_blocks(ops, s, rs[0], list(ts), lap, noise, alpha, c, c * c, g, h)
+        gm = step_blocks(arith, s, rs[0], list(ts), lap, noise, alpha, c, c * c, g, h)
         gm = 0.5 * (gm + gm.T) - np.diag(scale)
         out = min(out, float(np.linalg.eigvalsh(gm)[0]))
     return out
@@ -521,6 +525,8 @@ def plan_delay_line(
     delay: int,
     g: float,
     c_hi: float,
+    ops: Sequence[Any] | None = None,
+    holds: Callable[[DelayLinePlan], bool] | None = None,
 ) -> DelayLinePlan | None:
     """S, R_j, T_j and the largest κ <= c_hi found (:func:`largest_level`: a few Clarabel
     solves, a margin :data:`MARGIN` in every inequality, each found S, R_j, T_j pushed to the
@@ -542,6 +548,12 @@ def plan_delay_line(
         The growth bound of 1/c.
     c_hi : float
         The top of the search (c_true).
+    ops : sequence, optional
+        Each mode's map X ↦ N(X) on row-major vec(X) (default :func:`.digital.noise_operator`;
+        the lossy links' certificate passes its own, :mod:`.loss_delay`), and L_B the
+        matrix the step uses.
+    holds : callable, optional
+        The verified-float test of a plan (default :func:`holds_in_floats`).
 
     Returns
     -------
@@ -569,12 +581,12 @@ def plan_delay_line(
             (1 - alpha * h * c) * rs[j] - (1 + g * h * c) * rn[j + 1] - h * c * ts[j]
             >> MARGIN * eye
         )
-    ops = _Ops("cvxpy")
+    arith = _Ops("cvxpy")
     m = n * (delay + 1)
     scale = np.ones(m)
     scale[:n] = 0.0
-    for lap, edges in zip(laps, noises, strict=True):
-        op = noise_operator(edges, n, d)
+    for k, (lap, edges) in enumerate(zip(laps, noises, strict=True)):
+        op = noise_operator(edges, n, d) if ops is None else ops[k]
 
         def noise(x: Any, op: Any = op) -> Any:
             return cp.reshape(op @ cp.vec(x, order="C"), (n, n), order="C")
@@ -584,7 +596,7 @@ def plan_delay_line(
             cons.append(v == x)
             return v
 
-        gm = step_blocks(ops, s, rs[0], ts, lap, noise, alpha, c, c2, g, h, name)
+        gm = step_blocks(arith, s, rs[0], ts, lap, noise, alpha, c, c2, g, h, name)
         margin = MARGIN * (np.diag(scale) + h * c * np.diag(1.0 - scale))
         cons.append(0.5 * (gm + gm.T) - margin >> 0)
     prob = cp.Problem(cp.Minimize(0), cons)
@@ -605,14 +617,14 @@ def plan_delay_line(
             tuple(_sym(t.value) for t in ts),
         )
         # an inaccurate answer counts when its matrices hold at cv (floats)
-        ok = prob.status == cp.OPTIMAL or _lowest_step(sol, laps, noises, d, h, alpha, g, cv) >= 0
+        ok = prob.status == cp.OPTIMAL or low(sol, cv) >= 0
         return sol if ok else None
 
-    def reach(sol: Any, c0: float) -> float:
-        def lowest(cv: float) -> float:
-            return _lowest_step(sol, laps, noises, d, h, alpha, g, cv)
+    def low(sol: Any, cv: float) -> float:
+        return _lowest_step(sol, laps, noises, d, h, alpha, g, cv, ops)
 
-        return _reach(lowest, c0, c_hi)
+    def reach(sol: Any, c0: float) -> float:
+        return _reach(lambda cv: low(sol, cv), c0, c_hi)
 
     lo, best = largest_level(solve, reach, c_hi)
     if best is None:
@@ -620,7 +632,8 @@ def plan_delay_line(
     sv, rv, tv = best
     gamma = max(float(delay_line_gamma(sv, tv, e, d)) for e in noises) * (1 + 1e-12)
     pl = DelayLinePlan(sv, rv, tv, alpha, lo, g, gamma)
-    return pl if holds_in_floats(pl, laps, noises, d, h) else None
+    ok = holds(pl) if holds is not None else holds_in_floats(pl, laps, noises, d, h)
+    return pl if ok else None
 
 
 def plan_no_delay(

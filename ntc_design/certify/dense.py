@@ -326,9 +326,6 @@ class DenseContext:
         self.exact = n <= EXACT_MAX_N
         self._p: dict[str, np.ndarray | None] = {}
         self.methods: set[str] = set()
-        # what a kind built on a dense one reads besides (the digital kinds' section)
-        self.digital: Any = None
-        self.stated: Any = None
 
     def p(self, name: str) -> np.ndarray | None:
         """A matrix P of the certificate by name, parsed once.

@@ -329,7 +329,7 @@ def finish(doc: dict, method: str | None = None) -> dict:
     return doc
 
 
-def write_certificate(doc: dict, path: str | Path, option: str = "--out") -> None:
+def write_certificate(doc: dict, path: str | Path, option: str = "out") -> None:
     """Write a certificate atomically (:func:`ntc_design.io.outputs.write_atomic`): a reader
     never sees a half-written file.
 

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import RateMethod
 from ..errors import InputError
 from ..gain.conditions import GainAnalysis
 from ..gain.schedule import ScheduleGain, analyse_any_gain
@@ -19,6 +20,7 @@ from ..model.timevarying import ExpressionTopology
 from ..numerics.linalg import RANGE_TEXT, out_of_range
 from ..present.rows import Table
 from ..protocol import ProtocolDesign, SwitchingDesign, design
+from ..protocol.agents import require_sampled
 from ..protocol.digital import Digital, DigitalDesign
 from ..protocol.timevarying import TimeVaryingDesign
 from .checks import Check, Verification
@@ -126,7 +128,7 @@ class CertifyResult:
         return f"CertifyResult({self.certificate['kind']}, {ver}; {verdicts or 'no gain given'})"
 
     def to_dict(self) -> dict:
-        """The result as a JSON-ready mapping (what ``ntc certify --json`` prints).
+        """The result as a JSON-ready mapping (what ``ntc certify`` prints as JSON).
 
         Returns
         -------
@@ -190,7 +192,7 @@ def certify(
     delta: float | None = None,
     noise_sigma: float = SIGMA,
     noise_f=F_SCALE,
-    rate_method: str = "lyapunov",
+    rate_method: RateMethod = "lyapunov",
     digital: Digital | None = None,
     sigma_edges: Mapping | None = None,
 ) -> CertifyResult:
@@ -258,7 +260,7 @@ def certify(
         # at scale the critical couplings are not needed by the certificate (design notes it)
         des = design(topology, theta, margin, delta, thresholds=False if big else None)
     if digital is not None:
-        des = _digital_design(des, digital, gain, noise_sigma, noise_f, sigma_edges)
+        des = _digital_design(topology, des, digital, gain, noise_sigma, noise_f, sigma_edges)
     kind = kind_for(des)
     options = IssueOptions(
         gain=g, noise_sigma=noise_sigma, noise_f=noise_f, rate_method=rate_method
@@ -270,23 +272,22 @@ def certify(
     return CertifyResult(des, cert, ver, g, kind.verdicts(des, cert, ver, g))
 
 
-def _digital_design(des: Any, digital: Digital, gain, sigma, f, sigma_edges) -> DigitalDesign:
+def _digital_design(
+    topology: object, des: Any, digital: Digital, gain, sigma, f, sigma_edges
+) -> DigitalDesign:
     """The design wrapped for a digital kind, or one line saying why it cannot be."""
     if gain is None:
-        raise InputError("--gain: the digital certificate needs the gain c(t)")
-    if not isinstance(des, (ProtocolDesign, SwitchingDesign)):
-        raise InputError(
-            "--period: the digital certificate is for a fixed or switching topology, not one "
-            "given as expressions of t"
-        )
+        raise InputError("the digital certificate needs the gain c(t)", field="gain", option=True)
+    require_sampled(topology, "digital", option=True)
     # a value no certificate can state (the subnormal 5e-324) is refused before any work
-    for flag, value in (
-        ("--noise-sigma", sigma),
-        ("--noise-f", f),
+    for name, value in (
+        ("noise_sigma", sigma),
+        ("noise_f", f),
         *(("sigma_edges", v) for v in (sigma_edges or {}).values()),
     ):
         if not callable(value) and out_of_range(np.asarray(value, dtype=float)):
-            raise InputError(f"{flag}: {value!r} has {RANGE_TEXT}"[:200])
+            option = name != "sigma_edges"
+            raise InputError(f"{value!r} has {RANGE_TEXT}"[:180], field=name, option=option)
     out = DigitalDesign(des, digital, gain, float(sigma), f, dict(sigma_edges or {}))
     if not any(k.accepts(out) for k in KINDS.values()):
         nd_ = (
@@ -295,8 +296,10 @@ def _digital_design(des: Any, digital: Digital, gain, sigma, f, sigma_edges) -> 
             else des.topology.nd
         )
         raise InputError(
-            f"--period: the digital certificate needs a dense Lyapunov matrix: N·d <= "
-            f"{DENSE_CERT_MAX_ND}, this network has N·d = {nd_}"
+            f"the digital certificate needs a dense Lyapunov matrix: N·d <= "
+            f"{DENSE_CERT_MAX_ND}, this network has N·d = {nd_}",
+            field="digital",
+            option=True,
         )
     return out
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import sympy as sp
 
-from ..errors import one_line
+from ..errors import Option, one_line
 from ..gain.conditions import CONDITION_LABELS, GainAnalysis
 from ..present.rows import Table, lines, verdict
 from ..protocol import ProtocolDesign, SwitchingDesign, fix_notes
@@ -193,7 +193,8 @@ def assumption_notes(design: Any) -> list[str]:
             for v in viol[:MAX_VIOLATION_NOTES]
         ]
         if len(viol) > MAX_VIOLATION_NOTES:
-            notes.append(f"{at}… and {len(viol) - MAX_VIOLATION_NOTES} more (--json lists them)")
+            json = Option("json", alias="to_dict()")
+            notes.append(f"{at}… and {len(viol) - MAX_VIOLATION_NOTES} more ({json} lists them)")
         notes += [f"{at}{n}" for n in fix_notes(viol, lab)]
     return notes
 
@@ -246,7 +247,9 @@ def gain_premises(gain: GainAnalysis | None, almost_sure: bool) -> list[Premise]
     if gain is None:
         return [
             Premise(
-                "gain c(t)", None, "no gain given (--gain): the gain conditions are not checked"
+                "gain c(t)",
+                None,
+                f"no gain given ({Option('gain')}): the gain conditions are not checked",
             )
         ]
     keys = [k for k in CONDITION_LABELS if almost_sure or k != "square_integrable"]
@@ -459,7 +462,7 @@ def sampled_gain_premises(gain: GainAnalysis | None, h: float, almost_sure: bool
     list of Premise
     """
     if gain is None:
-        return [Premise("gain c(kh)", None, "no gain given (--gain)")]
+        return [Premise("gain c(kh)", None, f"no gain given ({Option('gain')})")]
     mono = _eventually_decreasing(gain.expr)
     transfer = "c non-increasing on [1e9, ∞) (sympy): integral test"
 

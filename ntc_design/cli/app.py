@@ -6,16 +6,19 @@ from __future__ import annotations
 
 import contextlib
 import json
-import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 
 from .. import __version__
 from ..errors import INT_TEXT, NUMBER_TEXT, InputError, blame, number_from_text, number_rule
+from .flags import digital_flags
+
+if TYPE_CHECKING:  # the annotation only: NumPy loads when a command asks for the protocol
+    from ..protocol.digital import Digital
 
 # Everything else loads in the command that needs it: `ntc --help` and a mistyped option
 # answer without importing NumPy, SciPy, SymPy or the library's layers.
@@ -133,32 +136,6 @@ SchedulerOpt = Annotated[
 ]
 
 
-@contextlib.contextmanager
-def flags_named(**flags: str):
-    """Errors of the library about a field a flag gave name the flag: ``theta: x0
-    overflows`` from :func:`ntc_design.design` is ``--theta: x0 overflows`` (the user
-    typed --theta, not a field called theta).
-
-    Parameters
-    ----------
-    **flags : str
-        Field -> flag, e.g. ``theta="--theta"``.
-
-    Yields
-    ------
-    None
-
-    Raises
-    ------
-    InputError
-        The error inside, its field renamed to the flag.
-    """
-    try:
-        yield
-    except InputError as exc:
-        raise blame(exc, None, flags) from None
-
-
 def parse_vector(text: str, field: str) -> list[float]:
     """``"1,2,-1"`` -> ``[1.0, 2.0, -1.0]``; one clear error otherwise."""
     parts = [x for x in text.replace(" ", "").strip("[]").split(",") if x != ""]
@@ -216,9 +193,10 @@ def digital_option(
     horizon: object = None,
     loss: float | None = None,
     policy: str | None = None,
-) -> dict | None:
-    """The ``digital`` block from ``--period`` and ``--delay`` over a scenario's own
-    (``given``), checked with the flags named in errors.
+) -> Digital | None:
+    """The sampled protocol from ``--period`` and ``--delay`` over a scenario's own
+    ``digital`` block (``given``), checked with the flags named in errors: the one
+    :class:`~ntc_design.protocol.digital.Digital` the command passes on.
 
     Parameters
     ----------
@@ -229,7 +207,8 @@ def digital_option(
     given : mapping or None
         The scenario's ``digital`` block, if any.
     horizon : float, optional
-        T (a period longer than it is refused, naming ``--period``).
+        T, for a command whose run does not check h <= T itself (a period longer than it
+        is refused, naming ``--period``); a simulation's spec checks it.
     loss : float or None, optional
         ``--loss``.
     policy : str or None, optional
@@ -237,9 +216,8 @@ def digital_option(
 
     Returns
     -------
-    dict or None
-        ``{period, delay}`` (with ``loss`` and ``policy`` when set), or None when
-        neither the flags nor the scenario ask for one.
+    Digital or None
+        None when no flag asks for one.
 
     Raises
     ------
@@ -251,8 +229,7 @@ def digital_option(
 
     if loss is not None:
         require_loss("--loss", loss)
-    if policy is not None:
-        require_policy("--loss-policy", policy)
+    checked = require_policy("--loss-policy", policy) if policy is not None else None
     if period is None and delay is None and loss is None and policy is None:
         return None
     base = dict(given) if isinstance(given, dict) else {}
@@ -264,39 +241,13 @@ def digital_option(
             period if period is not None else base["period"],
             delay if delay is not None else base.get("delay", 0),
             loss if loss is not None else base.get("loss", 0.0),
-            policy if policy is not None else base.get("policy", "skip"),
+            checked if checked is not None else base.get("policy", "skip"),
         )
         if isinstance(horizon, (int, float)) and not isinstance(horizon, bool) and horizon > 0:
             dg.steps(float(horizon))
     except InputError as exc:
-        raise digital_flags_named(exc, period, delay) from None
-    return dg.to_dict()
-
-
-def digital_flags_named(exc: InputError, period: object, delay: object) -> InputError:
-    """An error about ``digital.period`` or ``digital.delay`` naming ``--period`` or
-    ``--delay`` where that flag was given.
-
-    Parameters
-    ----------
-    exc : InputError
-        The library's error.
-    period, delay : object
-        ``--period`` and ``--delay`` (None: not given; the field keeps its name).
-
-    Returns
-    -------
-    InputError
-        The error to raise.
-    """
-    text = str(exc)
-    for field, flag, given in (
-        ("digital.period", "--period", period),
-        ("digital.delay", "--delay", delay),
-    ):
-        if text.startswith(field) and given is not None:
-            text = flag + text[len(field) :]
-    return InputError(text)
+        raise blame(exc, None, digital_flags(period, delay)) from None
+    return dg
 
 
 _V = TypeVar("_V")  # a flag's value type
@@ -340,27 +291,6 @@ def renamed_flag(
     if flag == old:
         print(f"note: {old} is deprecated; it is {new}", file=sys.stderr)
     return flag, value
-
-
-def flag_renamed(exc: InputError, names: dict[str, str]) -> InputError:
-    """The library's error with the flags it names spelt as the user typed them
-    (``--sigma: …`` is ``--noise-sigma: …``).
-
-    Parameters
-    ----------
-    exc : InputError
-        The library's error.
-    names : dict of str to str
-        The library's spelling -> the user's.
-
-    Returns
-    -------
-    InputError
-    """
-    text = str(exc)
-    for name, typed in names.items():
-        text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", typed, text)
-    return InputError(text)
 
 
 def require_file(path: Path | None, hint: str = "") -> None:
@@ -443,7 +373,7 @@ def check_digital_flags(period: float | None, delay: int | None) -> None:
     try:
         Digital(period if period is not None else 1.0, delay if delay is not None else 0)
     except InputError as exc:
-        raise digital_flags_named(exc, period, delay) from None
+        raise blame(exc, None, digital_flags(period, delay)) from None
 
 
 ARGS: list[str] = []  # this invocation's arguments (set by main)

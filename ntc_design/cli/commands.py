@@ -8,10 +8,11 @@ import re
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 
+from ..choices import Language, RateMethod, choices
 from ..errors import AssumptionWarning, InputError, blame, one_line, require_number
 from .app import (
     DelayOpt,
@@ -23,13 +24,12 @@ from .app import (
     check_digital_flags,
     check_theta_length,
     digital_option,
-    flag_renamed,
-    flags_named,
     json_text,
     parse_vector,
     renamed_flag,
     require_file,
 )
+from .flags import FLAGS, flags_named, flags_of
 
 if TYPE_CHECKING:
     from ..protocol import ProtocolDesign, SwitchingDesign
@@ -127,7 +127,7 @@ def design_cmd(
     if isinstance(top, ExpressionTopology):
         from ..protocol.timevarying import TimeVaryingDesign
 
-        with flags_named(theta="--theta"):
+        with flags_named("design", "theta"):
             tv = TimeVaryingDesign(top, np.asarray(th, dtype=float), margin)
         if as_json:
             print(json_text(tv.to_dict()))
@@ -138,7 +138,7 @@ def design_cmd(
     with warnings.catch_warnings():
         # a failing Assumption 2 is printed in the table (FAILS + violations)
         warnings.simplefilter("ignore", AssumptionWarning)
-        with flags_named(theta="--theta"):
+        with flags_named("design", "theta"):
             res: ProtocolDesign | SwitchingDesign = design(top, th, margin, None, thresholds)
     modes = res.modes if isinstance(res, SwitchingDesign) else {None: res}
     uninformed = [k for k, d in modes.items() if not d.has_informed_agents]
@@ -233,9 +233,7 @@ def generate(
     check_output_file(out_path, "--out", TOPOLOGY_SUFFIXES)  # before the work
     with Progress("ntc generate") as prog:
         prog.stage(f"drawing {n} agents ({family})")
-        with flags_named(
-            n=n_flag, d=d_flag, family="--family", p_negative="--p-negative", seed="--seed"
-        ):
+        with flags_named("generate", "n", "d", "family", "p_negative", "seed", n=n_flag, d=d_flag):
             top = random_network(n, d, seed, family, p_negative=p_negative)
         prog.stage(f"writing {len(top.weights)} edges to {one_line(str(out_path))}")
         write_topology(top, out_path)
@@ -324,7 +322,7 @@ def certify(
 
     # trivially bad input before the library loads
     th = parse_vector(theta, "--theta") if theta is not None else None
-    if rate_method not in ("lyapunov", "lmi"):  # before any work
+    if rate_method not in choices(RateMethod):  # before any work
         raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
     sampled = digital_option(period, delay, None, None, loss, loss_policy)
     require_file(file)
@@ -336,12 +334,13 @@ def certify(
     from ..certify import write_certificate
     from ..gain.schedule import gain_from_option
     from ..model.load import load
-    from ..protocol.digital import Digital
     from ..protocol.lemma1 import uninformed_modes
 
-    if deadline is not None and (loss is not None or loss_policy is not None):
-        raise InputError("--loss: lossy links are not certified at a deadline (drop --deadline)")
-    scenario = _deadline_scenario(file, deadline, period, delay) if deadline is not None else None
+    scenario = (
+        _deadline_scenario(file, deadline, period, delay, loss, loss_policy)
+        if deadline is not None
+        else None
+    )
     if scenario is not None:
         top, th_file, margin, gain_opt, noise_sigma, noise_f, sampled, section = scenario
         th = th if th is not None else th_file
@@ -353,7 +352,7 @@ def certify(
     if uninformed and as_json:  # nothing to certify: said as ntc design says it
         print(json_text({"ok": False, "proven": False, "informed": []}))
     _exit_if_uninformed(uninformed, out_path, "certified")
-    with warnings.catch_warnings(), flags_named(theta="--theta"):
+    with warnings.catch_warnings(), flags_named("certify", "theta"):
         warnings.simplefilter("ignore", AssumptionWarning)  # printed in the verdicts
         res = run(
             top,
@@ -362,8 +361,8 @@ def certify(
             gain_opt,
             noise_sigma=noise_sigma,
             noise_f=noise_f,
-            rate_method=rate_method,
-            digital=Digital.from_document(sampled) if sampled is not None else None,
+            rate_method=cast("RateMethod", rate_method),  # checked above
+            digital=sampled,
         )
     figures = continuous = None
     if scenario is not None and res.verification.valid:
@@ -385,7 +384,7 @@ def certify(
     else:
         _print_certify(res, out_path if written else None)
         if figures is not None and continuous is not None:
-            _print_beside(figures, continuous, file, section.get("delay") or 0)
+            _print_beside(figures, continuous, file, section.get("delay") or 0, section["period"])
     if out_path is not None and not written:
         print(f"not proven: no certificate written to {out_path}", file=sys.stderr)
     if not res.proven:
@@ -394,10 +393,10 @@ def certify(
         raise typer.Exit(1)
 
 
-def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
+def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, policy=None) -> tuple:
     """``ntc certify SCENARIO --deadline [T]``: the scenario's topology, θ, ΔC, gain,
-    noise, digital block and the certificate's ``subject.deadline`` (one line naming the
-    missing field or the flag)."""
+    noise, digital block (with its lossy links) and the certificate's ``subject.deadline``
+    (one line naming the missing field or the flag)."""
     import numpy as np
 
     from ..errors import number_from_text
@@ -417,13 +416,27 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     if sc.document.get("initial") is None:
         raise InputError(f"{sc.source}: initial: missing (--deadline needs the initial state)")
     t_doc = overrides.get("T", sc.document.get("T"))
-    sampled = digital_option(period, delay, sc.document.get("digital"), t_doc)
+    sampled = digital_option(period, delay, sc.document.get("digital"), t_doc, loss, policy)
     top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
     n, d = top.n, top.dim
-    if sampled:  # before the certificate: its own work is bounded by the same steps
+    lossy = None
+    if sampled is not None:  # before the certificate: its own work is bounded by the same steps
         from ..certify.deadline import check_sampled_work
+        from ..certify.deadline_loss import check_loss_work, loss_section
+        from ..model import Topology
 
-        check_sampled_work(top.n * top.dim, float(spec.T), sampled["period"], sampled["delay"])
+        p, pol = sampled.loss, sampled.policy
+        if not isinstance(top, Topology) and p > 0:
+            raise InputError("--loss: lossy links are modelled on one fixed topology")
+        one = top if isinstance(top, Topology) else None
+        lossy = loss_section(one, p, pol) if one is not None else None
+        if lossy is None or one is None:
+            check_sampled_work(n * d, float(spec.T), sampled.period, sampled.delay)
+        else:  # the lossy recursion's W is the larger: its estimate alone
+            check_loss_work(
+                n * d, len(one.edges), d, float(spec.T), sampled.period, sampled.delay,
+                lossy["policy"],
+            )  # fmt: skip
     x0, _ = spec.initial_state(n, d)
     noise = spec.noise
     from ..gain.schedule import ScheduleGain
@@ -442,8 +455,8 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
     f = np.asarray(noise.f, dtype=float)
     section = {
         "T": float(spec.T),
-        "period": sampled["period"] if sampled else None,
-        "delay": sampled["delay"] if sampled else 0,
+        "period": sampled.period if sampled is not None else None,
+        "delay": sampled.delay if sampled is not None else 0,
         "gain": gain_doc,
         "noise": {
             "sigma": float(noise.sigma),
@@ -455,21 +468,34 @@ def _deadline_scenario(file: Path, deadline: str, period, delay) -> tuple:
         },
         "initial": {"x0": [float(v) for v in x0]},
     }
+    if lossy is not None:  # the figures of the protocol whose messages are lost
+        section["loss"] = lossy
     f_opt = float(f) if f.ndim == 0 else f
     return top, list(spec.theta), spec.margin, spec.gain, noise.sigma, f_opt, sampled, section
 
 
-def _print_beside(sampled, continuous, file: Path, delay: int = 0) -> None:
+def _print_beside(
+    sampled, continuous, file: Path, delay: int = 0, period: float | None = None
+) -> None:
     """The sampled figures beside the continuous design's, and one warning line when the
     period costs more than 10 % at T or 10× at the peak, naming the longest period that
     keeps both (the search of ``ntc tune --period auto``, with its dense verification)."""
+    loss = sampled.loss
+    lossy = f" on lossy links (p_e <= {loss['p_max']:g}, {loss['policy']})" if loss else ""
     print(
-        f"proven at T = {sampled.t_end:g}: sampled E Σ‖x_i(T) − θ‖² <= "
+        f"proven at T = {sampled.t_end:g}: sampled{lossy} E Σ‖x_i(T) − θ‖² <= "
         f"{sampled.ms_error_bound:.7g} (peak <= {sampled.peak_bound:.7g}); continuous design "
         f"<= {continuous.ms_error_bound:.7g} (peak <= {continuous.peak_bound:.7g})"
     )
     ratio, peak = sampled.ms_error / continuous.ms_error, sampled.peak / continuous.peak
-    if ratio > 1.1 or peak > 10.0:
+    if loss and (ratio > 1.1 or peak > 10.0):  # the period's search knows no loss
+        print(
+            f"warning: the period and the loss cost {ratio:.3g}× the continuous error at T and "
+            f"{peak:.3g}× its peak; find the largest tolerable loss with: ntc tune {file} "
+            f"--loss auto --period {period:g}",
+            file=sys.stderr,
+        )
+    elif ratio > 1.1 or peak > 10.0:
         print(
             f"warning: the period costs {ratio:.3g}× the continuous error at T and {peak:.3g}× "
             f"its peak; {_safe_period_text(file, sampled.t_end, delay, 10.0 * continuous.peak)}",
@@ -544,10 +570,6 @@ def verify(
         print(f"VALID ({ver.method}): {len(ver.checks)} checks")
 
 
-#: The library's fields that ntc robust's flags give (an error about one names the flag).
-ROBUST_FLAGS = {"radius": "--radius", "theta": "--theta", "margin": "--margin"}
-
-
 def robust(
     file: FileArg,
     theta: Annotated[str, typer.Option(help="Target consensus state θ ≠ 0, e.g. 1,2,-1.")],
@@ -586,7 +608,11 @@ def robust(
     try:
         res = certify_robust(top, th, radius, margin)
     except InputError as exc:  # the library names fields; here they are flags
-        raise blame(exc, None, {**ROBUST_FLAGS, "topology": str(file)}) from None
+        flags = {
+            **flags_of("robust", {"radius": 1, "theta": 1, "margin": 1}),
+            "topology": str(file),
+        }
+        raise blame(exc, None, flags, advice=FLAGS["robust"]) from None
     rep, doc, ver, ok = res.report, res.certificate, res.verification, res.valid
     if out_path is not None and doc is None:
         ok = False  # asked for a certificate; none to write (the reason is printed below)
@@ -678,18 +704,20 @@ def export_cmd(
 
     if loss is not None:
         require_loss("--loss", loss)
-    if loss_policy is not None:
-        require_policy("--loss-policy", loss_policy)
+    policy = require_policy("--loss-policy", loss_policy) if loss_policy is not None else None
     require_file(file)
     from ..export.run import export
+    from ..export.source import ExportOptions
     from ..present.rows import counted
 
     try:
-        res = export(
-            file, lang, out_dir, period, delay, gain, noise_sigma, noise_f, agent, loss, loss_policy
-        )
+        options = ExportOptions(period, delay, gain, noise_sigma, noise_f, loss, policy)
+        res = export(file, cast("Language", lang), out_dir, options, agent)
     except InputError as exc:  # the library's names for the noise flags
-        raise flag_renamed(exc, {"--sigma": sigma_flag, "--f": f_flag}) from None
+        given = {"out": out_dir, "lang": lang, "period": period, "delay": delay, "gain": gain}
+        given |= {"sigma": noise_sigma, "f": noise_f, "agent": agent, "loss": loss}
+        flags = flags_of("export", {**given, "policy": loss_policy}, sigma=sigma_flag, f=f_flag)
+        raise blame(exc, None, flags, advice=FLAGS["export"]) from None
     law = res.source.law
     if as_json:
         print(

@@ -9,7 +9,14 @@ import sys
 
 import typer
 
-from ..errors import AssumptionWarning, InputError, interrupt_seen, note_interrupt, one_line
+from ..errors import (
+    AssumptionWarning,
+    InputError,
+    interrupt_seen,
+    note_interrupt,
+    one_line,
+    options_written_as,
+)
 from ..io.outputs import exit_process
 from .app import ARGS, app
 from .commands import (
@@ -23,6 +30,7 @@ from .commands import (
     robust,
     verify,
 )
+from .flags import FLAGS
 from .runs import report, reproduce, simulate, sweep, tune
 
 # fmt: off
@@ -126,7 +134,10 @@ def main(argv: list[str] | None = None) -> None:
     code = 0
     try:
         try:
-            rv = app(args=_argv(args), prog_name="ntc", standalone_mode=False)
+            # the options the library names (messages, notes, rows) as this command's flags
+            command = next((a for a in args if not a.startswith("-")), "")
+            with options_written_as(FLAGS.get(command, {})):
+                rv = app(args=_argv(args), prog_name="ntc", standalone_mode=False)
         except click.NoArgsIsHelpError as exc:
             print(exc.format_message())
             code = 2

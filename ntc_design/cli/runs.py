@@ -31,52 +31,13 @@ from .app import (
     SchedulerOpt,
     check_digital_flags,
     command_line,
-    digital_flags_named,
     digital_option,
     json_text,
     require_file,
 )
+from .flags import FLAGS, digital_flags, flags_of
 
 OUTPUT_NOTE_BYTES = 100 * 2**20  # ntc simulate says how big its outputs will be above this
-
-#: The scenario field each override flag of ``ntc simulate`` gives (an error about the
-#: field names the flag, not the file).
-SIMULATE_FLAGS = {
-    "paths": "--paths",
-    "T": "--horizon",
-    "dt": "--dt",
-    "seed": "--seed",
-    "method": "--method",
-    "rng": "--rng",
-    "device": "--device",
-    "digital": "--period",
-}
-#: The scenario field each flag of ``ntc reproduce`` gives (``--dt`` is ds when
-#: intrinsic).
-REPRODUCE_FLAGS = {
-    "T": "--horizon",
-    "paths": "--paths",
-    "dt": "--dt",
-    "ds": "--dt",
-    "stepping": "--stepping",
-    "seed": "--seed",
-}
-#: The parameter of :func:`ntc_design.tune.tune` each flag of ``ntc tune`` gives.
-TUNE_FLAGS = {
-    "horizon": "--horizon",
-    "require": "--require",
-    "eps": "--eps",
-    "method": "--method",
-    "max_evaluations": "--evaluations",
-    "schedule": "--schedule",
-    "family": "--schedule",
-    "max_gain": "--max-gain",
-    "max_peak": "--max-peak",
-    "check_paths": "--check-paths",
-    "tolerance": "--tolerance",
-    "delay": "--delay",
-    "period": "--period",
-}
 
 
 def simulate(
@@ -160,19 +121,16 @@ def simulate(
     }
     overrides: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
     sc = parse_scenario(scenario)
-    if period is not None or delay is not None or loss is not None or loss_policy is not None:
-        overrides["digital"] = digital_option(
-            period,
-            delay,
-            sc.document.get("digital"),
-            overrides.get("T", sc.document.get("T")),
-            loss,
-            loss_policy,
-        )
-    flags = {k: f for k, f in SIMULATE_FLAGS.items() if k in overrides}
-    given_digital = (("period", period), ("delay", delay))
-    flags.update({f"digital.{k}": f"--{k}" for k, v in given_digital if v is not None})
-    top, spec, sc = load_scenario(scenario, overrides, sc, flags)
+    # the flags over the file's block: one Digital, passed as itself (the spec checks h <= T)
+    sampled = digital_option(period, delay, sc.document.get("digital"), None, loss, loss_policy)
+    if sampled is not None:
+        overrides["digital"] = sampled.to_dict()  # as summary.json records the command
+    # the fields the flags gave (an error about one names the flag, not the file)
+    flags = {**flags_of("simulate", overrides), **digital_flags(period, delay)}
+    if period is None:  # the file's period: its errors name the file, not --period
+        flags.pop("digital", None)
+    passed = {**overrides, "digital": sampled} if sampled is not None else overrides
+    top, spec, sc = load_scenario(scenario, passed, sc, flags)
     # summary.json records the command as typed: the report's re-run line keeps the overrides
     recorded = {"scenario": str(scenario), "command": command_line(), "overrides": overrides}
     if workers is not None:
@@ -188,7 +146,7 @@ def simulate(
     except InputError as exc:
         if dask is not None:
             dask.close()
-        raise blame(exc, sc.source, flags, values=overrides) from None
+        raise blame(exc, sc.source, flags, values=overrides, advice=FLAGS["simulate"]) from None
     with contextlib.ExitStack() as stack, Progress("ntc simulate") as prog:
         if dask is not None:
             stack.callback(dask.close)
@@ -201,7 +159,7 @@ def simulate(
                 engine=engine,
             )
         except InputError as exc:  # a field of the scenario, or of a flag: name it
-            raise blame(exc, sc.source, flags, values=overrides) from None
+            raise blame(exc, sc.source, flags, values=overrides, advice=FLAGS["simulate"]) from None
         except SimulationDiverged as exc:
             written = write_outputs(exc.result, out_dir, recorded)
             if as_json:
@@ -390,12 +348,17 @@ def tune(
     from ..reports.terminal import Progress, out, print_table
     from ..reports.tune import TUNE_FILES, write_tune_outputs
     from ..simulate.scenario import load_scenario
+    from ..tune import options_for
     from ..tune import tune as run
 
     sc0 = parse_scenario(scenario)
     # the flags given (an error about one names it); the deadline defaults to the file's T
     given = {"horizon": horizon, "eps": eps, "max_gain": max_gain, "check_paths": check_paths}
-    flags = {k: f for k, f in TUNE_FLAGS.items() if given.get(k, k) is not None}
+    flags = {
+        k: f
+        for k, f in FLAGS["tune"].items()
+        if not k.startswith("digital") and given.get(k, k) is not None
+    }
     fields = {"horizon": "T"} if horizon is None else None
     if schedule != "optimal":
         for name, value in (("--max-gain", max_gain), ("--check-paths", check_paths)):
@@ -420,18 +383,16 @@ def tune(
         warnings.simplefilter("ignore", AssumptionWarning)  # the certificate says it
         deadline = spec.T if horizon is None else horizon
         prog.stage(f"tuning {scenario} for T = {deadline:g}")
-        opts: dict[str, Any] = dict(
-            require=require, tune_delta=tune_delta, eps=eps, method=method, progress=prog.stage
-        )
-        if schedule == "optimal":  # the defaults of tune() where a flag is not given
+        opts: dict[str, Any] = dict(require=require, tune_delta=tune_delta, eps=eps)
+        if schedule == "optimal":  # the defaults of the options where a flag is not given
             opts["max_peak"] = max_peak
             opts.update({k: given[k] for k in ("max_gain", "check_paths") if given[k] is not None})
-        elif max_peak is not None:
-            raise InputError("--max-peak: applies to --schedule optimal")
+        else:
+            opts.update(max_evaluations=evaluations, max_peak=max_peak)
         try:
-            res = run(top, spec, deadline, max_evaluations=evaluations, schedule=schedule, **opts)
+            res = run(top, spec, deadline, options_for(schedule, method, **opts), prog.stage)
         except InputError as exc:
-            raise blame(exc, sc.source, flags, fields) from None
+            raise blame(exc, sc.source, flags, fields, advice=FLAGS["tune"]) from None
     doc = res.to_dict()
     written: list[str] = []
     if out_dir is not None:
@@ -474,12 +435,11 @@ def _tune_loss(
         raise InputError(f"--period: expected a number, got {period!r:.40}") from None
     given = sc0.document.get("digital")
     t_doc = horizon if horizon is not None else sc0.document.get("T")
-    block = digital_option(h, delay, given, t_doc, None, policy)
-    if block is None:
+    dg = digital_option(h, delay, given, t_doc, None, policy)
+    if dg is None:
         if not isinstance(given, dict):
             raise InputError("--loss: needs --period (or a digital block in the scenario)")
-        block = dict(given)
-    dg = Digital.from_document(block)
+        dg = Digital.from_document(given)
     top, spec, sc = load_scenario(scenario, None, sc0)
     if out_dir is not None:
         check_output_folder(out_dir, ("loss.json",))
@@ -489,9 +449,9 @@ def _tune_loss(
         deadline = spec.T if horizon is None else horizon
         try:
             res = largest_tolerable_loss(top, spec, deadline, dg, dg.policy, tolerance)
-        except InputError as exc:
-            text = str(exc)
-            raise InputError(text if text.startswith("--") else f"{sc.source}: {text}") from None
+        except InputError as exc:  # its options are the flags; the rest is the file's
+            named = flags_of("tune", dict.fromkeys(("horizon", "tolerance", "loss", "policy"), 1))
+            raise blame(exc, sc.source, named, advice=FLAGS["tune"]) from None
     _write_and_show(res, out_dir, "loss.json", as_json)
     if res.loss is None:
         print("not found: no positive loss keeps the error within the tolerance", file=sys.stderr)
@@ -535,11 +495,11 @@ def _tune_period(scenario, sc0, horizon, delay, tolerance, max_peak, out_dir, as
                 top, spec, deadline, delay=d, tolerance=tolerance, max_peak=max_peak
             )
         except InputError as exc:
-            # longest_safe_period names its options as flags; the defaulted T is the file's
-            text = str(exc)
-            if horizon is None and text.startswith("--horizon:"):
-                text = "T" + text[len("--horizon") :]
-            raise InputError(text if text.startswith("--") else f"{sc.source}: {text}") from None
+            # its options are the flags; the defaulted T is the file's
+            given = {"horizon": horizon, "delay": 1, "tolerance": 1, "max_peak": 1, "period": 1}
+            fields = {"horizon": "T"} if horizon is None else None
+            named = flags_of("tune", given)
+            raise blame(exc, sc.source, named, fields, advice=FLAGS["tune"]) from None
     if res.diverged is not None:  # one line, no period: nothing is safe against it
         if as_json:
             print(json_text(res.to_dict()))
@@ -640,7 +600,6 @@ def report(
     sampled = digital_option(
         period, delay, None, None, loss, loss_policy
     )  # before the library loads
-    from ..protocol.digital import Digital
     from ..reports.report import write_report
     from ..reports.sweep import is_sweep_dir, write_sweep_report
     from ..reports.terminal import out
@@ -654,10 +613,10 @@ def report(
         path = write_report(
             directory,
             interactive=interactive,
-            digital=Digital.from_document(sampled) if sampled is not None else None,
+            digital=sampled,
         )
     except InputError as exc:  # h > T, too many steps, the delay's memory: name the flag
-        raise digital_flags_named(exc, period, delay) from None
+        raise blame(exc, None, digital_flags(period, delay)) from None
     if as_json:
         figs = sorted(str(p) for p in (path.parent / "figures").glob("*") if p.is_file())
         print(
@@ -731,7 +690,7 @@ def reproduce(
                 interactive=interactive,
             )
         except InputError as exc:  # a limit a flag's value breaks: name the flag
-            raise blame(exc, None, REPRODUCE_FLAGS) from None
+            raise blame(exc, None, FLAGS["reproduce"]) from None
     if as_json:
         doc = json.loads((path.parent / "paper_summary.json").read_text(encoding="utf-8"))
         print(json_text({"report": str(path), "all_match": ok, "wall_seconds": wall, **doc}))

@@ -90,7 +90,7 @@ def header(law: AgentLaw, agent: int | None = None) -> str:
     law : AgentLaw
         The agents' law.
     agent : int, optional
-        Only this agent's tables (0-based; ``ntc export --agent``).
+        Only this agent's tables (0-based; the agent option of ``ntc export``).
 
     Returns
     -------

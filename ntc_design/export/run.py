@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, one_line
+from ..choices import Language, choices
+from ..errors import InputError, Option, one_line
 from ..expr.code import literal
-from ..gain.schedule import ScheduleGain
 from ..io.outputs import check_output_folder, output_folder
 from ..protocol.agents import AgentLaw
 from ..protocol.digital import decimal_fraction
@@ -31,9 +31,9 @@ from .c import FILES as C_FILES
 from .checks import check_emitted_gain
 from .python import FILES as PY_FILES
 from .python import python_files
-from .source import ExportSource, load_source
+from .source import NO_OPTIONS, ExportOptions, ExportSource, load_source
 
-LANGUAGES = ("c", "python")
+LANGUAGES = choices(Language)
 #: Steps of the example input (fewer when the scenario's horizon has fewer).
 EXAMPLE_STEPS = 100
 #: The seed of the example's normals.
@@ -434,7 +434,11 @@ def agent_index(law: AgentLaw, label: str | None) -> int | None:
         if str(a) == str(label):
             return i
     shown = ", ".join(one_line(str(a)) for a in law.labels[:10]) + (", …" if law.n > 10 else "")
-    raise InputError(f"--agent: no agent is labelled {one_line(repr(label))} (labels: {shown})")
+    raise InputError(
+        f"no agent is labelled {one_line(repr(label))} (labels: {shown})",
+        field="agent",
+        option=True,
+    )
 
 
 def files_for(src: ExportSource, lang: str, agent: str | None = None) -> dict[str, str]:
@@ -461,9 +465,17 @@ def files_for(src: ExportSource, lang: str, agent: str | None = None) -> dict[st
         large, or an emitted gain that is not the analysed one.
     """
     if lang not in LANGUAGES:
-        raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
+        raise InputError(
+            f"expected one of {', '.join(LANGUAGES)}, got {lang!r}", field="lang", option=True
+        )
     if agent is not None and lang != "c":
-        raise InputError("--agent: one agent's tables are emitted in C only (--lang c)")
+        raise InputError(
+            "one agent's tables are emitted in C only (",
+            Option("lang", "c"),
+            ")",
+            field="agent",
+            option=True,
+        )
     index = agent_index(src.law, agent)
     _size_check(src.law)
     check_emitted_gain(src.law, gain_steps(src), f"{src.source}: gain")
@@ -526,10 +538,12 @@ def _listed(folder: Path) -> set[str]:
     except FileNotFoundError:
         return set()
     except OSError as exc:
-        raise InputError(f"--out: cannot read {one_line(str(path))!r} ({exc.strerror})") from None
+        raise InputError(
+            f"{Option('out')}: cannot read {one_line(str(path))!r} ({exc.strerror})"
+        ) from None
     if not stat.S_ISREG(st.st_mode) or st.st_size > MANIFEST_BYTES:
         raise InputError(
-            f"--out: {one_line(str(path))!r} is not an export's manifest (not a regular file, "
+            f"{Option('out')}: {one_line(str(path))!r} is not an export's manifest (not a regular file, "
             "or too large); choose a new folder"
         )
     try:
@@ -563,7 +577,7 @@ def check_export_folder(out: str | Path) -> Path:
     shown = repr(one_line(str(p)))
     if p.is_symlink():  # the swap would replace the link itself and leave a stray ".old" one
         raise InputError(
-            f"--out: {shown} is a link; give the folder it points to (nothing written)"
+            f"{Option('out')}: {shown} is a link; give the folder it points to (nothing written)"
         )
     if not p.is_dir():
         return p
@@ -571,16 +585,16 @@ def check_export_folder(out: str | Path) -> Path:
     try:
         entries = sorted(os.scandir(p), key=lambda e: e.name)
     except OSError as exc:
-        raise InputError(f"--out: cannot read {shown} ({exc.strerror})") from None
+        raise InputError(f"{Option('out')}: cannot read {shown} ({exc.strerror})") from None
     for e in entries:
         if e.name != MANIFEST and e.name not in listed:
             raise InputError(
-                f"--out: {shown} holds {one_line(e.name)!r}, which no earlier export wrote "
+                f"{Option('out')}: {shown} holds {one_line(e.name)!r}, which no earlier export wrote "
                 f"(its {MANIFEST} does not list it); nothing written, choose a new folder"
             )
         if not e.is_file(follow_symlinks=False):
             raise InputError(
-                f"--out: {shown} holds {one_line(e.name)!r}, which is not a regular file (a "
+                f"{Option('out')}: {shown} holds {one_line(e.name)!r}, which is not a regular file (a "
                 "folder, pipe or link); nothing written, choose a new folder"
             )
     return p
@@ -588,16 +602,10 @@ def check_export_folder(out: str | Path) -> Path:
 
 def export(
     path: str | Path,
-    lang: str,
+    lang: Language,
     out: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
+    options: ExportOptions = NO_OPTIONS,
     agent: str | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
 ) -> ExportResult:
     """Export a scenario's or a certificate's certified design as code, into ``out`` (all
     or nothing: refused before any work when ``out`` holds other files).
@@ -610,16 +618,11 @@ def export(
         The language.
     out : str or Path
         The folder.
-    period, delay : float, int, optional
-        h and D (over a scenario's or a subject's digital block).
-    gain : str or ScheduleGain, optional
-        c(t).
-    sigma, f : float, optional
-        The noise's σ and f.
+    options : ExportOptions, optional
+        h and D (over a scenario's or a subject's digital block), the gain, the noise's σ
+        and f, p on every edge and the policy for a lost message.
     agent : str, optional
         One agent's label: its tables only (C).
-    loss, policy : float, str, optional
-        p on every edge and the policy for a lost message (``--loss``, ``--loss-policy``).
 
     Returns
     -------
@@ -632,11 +635,19 @@ def export(
         (:func:`~ntc_design.export.source.load_source`).
     """
     if lang not in LANGUAGES:
-        raise InputError(f"--lang: expected one of {', '.join(LANGUAGES)}, got {lang!r}")
+        raise InputError(
+            f"expected one of {', '.join(LANGUAGES)}, got {lang!r}", field="lang", option=True
+        )
     if agent is not None and lang != "c":
-        raise InputError("--agent: one agent's tables are emitted in C only (--lang c)")
+        raise InputError(
+            "one agent's tables are emitted in C only (",
+            Option("lang", "c"),
+            ")",
+            field="agent",
+            option=True,
+        )
     check_export_folder(out)
-    src = load_source(path, period, delay, gain, sigma, f, loss, policy)
+    src = load_source(path, options)
     texts = files_for(src, lang, agent)
     check_export_folder(out)  # again: the folder may have changed during the work
     # written into a new folder that then replaces ``out`` whole (all or nothing); what it

@@ -14,8 +14,8 @@ of a certified design, from a scenario or from a certificate.
   the arguments (``period`` is then required; the gain defaults to 1/(1+t), the noise to
   the paper's σ and f), and the gain must satisfy the conditions of Theorem 1.
 
-Messages name the command's options (``--period``, ``--delay``, ``--gain``) for the values
-given as arguments.
+Messages name the parameters (``period``, ``delay``, ``gain``) for the values given as
+arguments (the command line writes them as its flags), the file's fields for the file's.
 """
 
 from __future__ import annotations
@@ -32,7 +32,10 @@ from ..certify import KINDS, certify, verify
 from ..certify.dense import DenseContext
 from ..certify.fields import vector
 from ..certify.format import FORMAT
-from ..errors import AssumptionWarning, InputError
+from ..certify.kinds.digital import DigitalContext, DigitalState
+from ..certify.kinds.digital_loss import LossState
+from ..choices import LossPolicy
+from ..errors import AssumptionWarning, InputError, Option
 from ..gain.schedule import ScheduleGain, analyse_any_gain, gain_from_option, schedule_from_document
 from ..io.documents import read_document
 from ..io.files import parse_scenario
@@ -53,6 +56,46 @@ from ..simulate.spec import SimulationSpec
 
 #: A scenario's horizon when it gives none (the simulator's default).
 DEFAULT_T = SimulationSpec.__dataclass_fields__["T"].default
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """What an export may set over its source, written once: each None keeps the
+    scenario's or the certificate's value (a certified value that an option contradicts is
+    refused by the reader).
+
+    Attributes
+    ----------
+    period, delay : float, int or None
+        h and D (over a scenario's or a subject's digital block; ``period`` required for a
+        continuous certificate).
+    gain : str, ScheduleGain or None
+        c(t) (a ``.csv`` name is a schedule file).
+    sigma, f : float or None
+        The noise's σ and f (a continuous certificate's default: the paper's σ = 0.4,
+        f = 0.3).
+    loss : float or None
+        p on every edge.
+    policy : {"skip", "rescale", "hold"} or None
+        What an agent does with a lost message.
+
+    Examples
+    --------
+    >>> ExportOptions(period=0.1, delay=1).period
+    0.1
+    """
+
+    period: float | None = None
+    delay: int | None = None
+    gain: str | ScheduleGain | None = None
+    sigma: float | None = None
+    f: float | None = None
+    loss: float | None = None
+    policy: LossPolicy | None = None
+
+
+#: No option given: every value is the source's.
+NO_OPTIONS = ExportOptions()
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,7 +136,7 @@ def _digital(
     policy: str | None = None,
 ) -> Digital:
     """h, D, p and the policy: the arguments over a scenario's ``digital:`` block (read as
-    simulate reads it: an unknown field is refused), errors naming the option for an
+    simulate reads it: an unknown field is refused), errors naming the parameter for an
     argument and the block for the file's value."""
     if given is not None and not isinstance(given, dict):
         raise InputError(f"{where}: digital: expected {{period: h, delay: D}}")
@@ -108,28 +151,23 @@ def _digital(
         base["policy"] = policy
     if "period" not in base:
         raise InputError(
-            f"--period: {where} has no digital block (period h, delay D); give --period"
+            f"{where} has no digital block (period h, delay D); give ",
+            Option("period"),
+            field="period",
+            option=True,
         )
     try:
         dg = Digital.from_document(base)
         if horizon is not None:
             dg.steps(horizon)
-    except InputError as exc:
-        text = str(exc)
-        for field, flag, value in (
-            ("digital.period", "--period", period),
-            ("digital.delay", "--delay", delay),
-            ("digital.loss", "--loss", loss),
-            ("digital.policy", "--loss-policy", policy),
-        ):
-            if text.startswith(field):
-                text = (flag + text[len(field) :]) if value is not None else f"{where}: {text}"
-                break
-        else:
-            text = f"{where}: {text}"
-        raise InputError(text) from None
+    except InputError as exc:  # a field an argument gave is that parameter, else the file's
+        args = {"period": period, "delay": delay, "loss": loss, "policy": policy}
+        name = (exc.field or "").removeprefix("digital.")
+        if (exc.field or "").startswith("digital.") and args.get(name) is not None:
+            raise InputError(*exc.parts, field=name, option=True) from None
+        raise InputError(f"{where}: {exc}") from None
     if not math.isfinite(dg.period):
-        raise InputError(f"--period: must be a finite number, got {dg.period!r}")
+        raise InputError(f"must be a finite number, got {dg.period!r}", field="period", option=True)
     return dg
 
 
@@ -137,7 +175,7 @@ def _gain_option(gain: str | ScheduleGain | None) -> str | ScheduleGain | None:
     if gain is None or isinstance(gain, ScheduleGain):
         return gain
 
-    return gain_from_option(gain, "--gain")
+    return gain_from_option(gain, "gain")
 
 
 def _check_gain(gain: str | ScheduleGain, where: str) -> None:
@@ -151,16 +189,7 @@ def _check_gain(gain: str | ScheduleGain, where: str) -> None:
         )
 
 
-def from_scenario(
-    path: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
-) -> ExportSource:
+def from_scenario(path: str | Path, options: ExportOptions = NO_OPTIONS) -> ExportSource:
     """The agents' law of a scenario's certified Lemma 1 design (on lossy links when its
     ``digital:`` block or its topology's edges give a loss: the ``digital_loss``
     certificate, D = 0 with ``skip`` or ``rescale``).
@@ -169,16 +198,9 @@ def from_scenario(
     ----------
     path : str or Path
         The scenario (YAML or JSON).
-    period, delay : float, int, optional
-        h and D over the scenario's ``digital:`` block.
-    gain : str or ScheduleGain, optional
-        c(t) instead of the scenario's (a ``.csv`` name is a schedule file).
-    sigma, f : float, optional
-        The noise's σ and f instead of the scenario's.
-    loss : float, optional
-        p on every edge instead of the scenario's ``digital.loss``.
-    policy : str, optional
-        The policy for a lost message instead of the scenario's.
+    options : ExportOptions, optional
+        h and D over the scenario's ``digital:`` block, and the gain, the noise, the loss
+        and the policy instead of the scenario's.
 
     Returns
     -------
@@ -189,9 +211,15 @@ def from_scenario(
     InputError
         A bad file or value; a topology that is neither fixed nor switching; a design whose
         certificate does not verify or for which no theorem is guaranteed; lossy links
-        with ``hold``, a delay or a switching set (not proven).
+        with ``hold`` or a switching set (not proven), or a delay the certificate does not prove.
     """
-
+    period, delay, gain, sigma, f = (
+        options.period,
+        options.delay,
+        options.gain,
+        options.sigma,
+        options.f,
+    )
     sc = parse_scenario(path)
     src = sc.source
     given = sc.document.get("digital")
@@ -200,8 +228,8 @@ def from_scenario(
         horizon = None  # the scenario's own check names it
     # the options replace the file's block before the scenario is checked (a period of the
     # file's that the option overrides is not refused)
-    dg = _digital(period, delay, given, horizon, src, loss, policy)
-    top, spec, _ = load_scenario(path, {"digital": dg.to_dict()}, sc)
+    dg = _digital(period, delay, given, horizon, src, options.loss, options.policy)
+    top, spec, _ = load_scenario(path, {"digital": dg}, sc)
     if not isinstance(top, (Topology, SwitchingTopology)):
         raise InputError(
             f"{src}: topology: only a fixed topology or a switching set can be exported "
@@ -218,14 +246,14 @@ def from_scenario(
         noise = spec.noise
         spec = spec.replace(
             noise=NoiseModel(
-                sigma=noise.sigma if sigma is None else _number("--sigma", sigma, 0.0),
-                f=noise.f if f is None else _number("--f", f),
+                sigma=noise.sigma if sigma is None else _number("sigma", sigma, 0.0),
+                f=noise.f if f is None else _number("f", f),
                 sigma_edges=noise.sigma_edges,
             )
         )
     if not isinstance(spec.gain, (str, ScheduleGain)):
         raise InputError(f"{src}: gain: a Python function cannot be exported")
-    _check_noise("--sigma" if sigma is not None else f"{src}: noise.sigma", spec.noise.sigma)
+    _check_noise("sigma" if sigma is not None else f"{src}: noise.sigma", spec.noise.sigma)
     law, res = _certified_law(
         top,
         spec.theta,
@@ -296,7 +324,8 @@ def _certified_law(
     if not res.proven or not sampled or not any(t.guaranteed for t in sampled):
         raise InputError(
             f"{src}: no theorem is guaranteed for the sampled protocol at h = {dg.period:g}, "
-            f"D = {dg.delay} with this gain (ntc certify --period says why); nothing exported"
+            f"D = {dg.delay} with this gain (ntc certify "
+            f"{Option('period', alias='with a period')} says why); nothing exported"
         )
     design = res.design.base if isinstance(res.design, DigitalDesign) else res.design
     if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
@@ -310,12 +339,12 @@ def _certified_law(
 
 
 def _unproven(policy: str, delay: int, where: str) -> None:
-    """Refuse lossy links that no certificate proves (``hold``, or a delay), in one line."""
-    if policy == "hold" or delay:
-        what = "the hold policy" if policy == "hold" else f"a delay D = {delay}"
+    """Refuse lossy links that no certificate proves (``hold``), in one line; a delay is
+    exported when the ``digital_loss`` certificate proves it (its delay line)."""
+    if policy == "hold":
         raise InputError(
-            f"{where}: lossy links with {what} are not proven (the digital_loss certificate "
-            "covers D = 0 with skip or rescale); nothing exported"
+            f"{where}: lossy links with the hold policy are not proven (the digital_loss "
+            "certificate covers skip and rescale); nothing exported"
         )
 
 
@@ -359,30 +388,33 @@ def _certified(res: Any) -> str:
     )
 
 
-def _number(flag: str, value: Any, minimum: float | None = None) -> float:
+def _number(name: str, value: Any, minimum: float | None = None) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"{flag}: expected a number, got {value!r}")
+        raise InputError(f"expected a number, got {value!r}", field=name, option=True)
     v = float(value)
     if not math.isfinite(v) or (minimum is not None and v < minimum):
         at_least = "" if minimum is None else f" >= {minimum:g}"
-        raise InputError(f"{flag}: expected a finite number{at_least}, got {v!r}"[:200])
+        text = f"expected a finite number{at_least}, got {v!r}"[:180]
+        raise InputError(text, field=name, option=True)
     return v
 
 
-def _same(flag: str, given: Any, certified: Any, src: str) -> None:
+def _same(name: str, given: Any, certified: Any, src: str) -> None:
     """Refuse an option that differs from the value the certificate proves (equal is fine)."""
     if given is None:
         return
     a = np.asarray(given, dtype=float)
     b = np.asarray(certified, dtype=float)
     if a.shape != b.shape or not np.array_equal(a, b):
-        _differs(flag, given, b.tolist(), src)  # plain numbers, not NumPy reprs
+        _differs(name, given, b.tolist(), src)  # plain numbers, not NumPy reprs
 
 
-def _differs(flag: str, given: Any, shown: Any, src: str) -> None:
+def _differs(name: str, given: Any, shown: Any, src: str) -> None:
     raise InputError(
-        f"{flag}: {given!r} differs from the certified value {shown!r} ({src}); "
-        "the certificate proves only its own protocol: drop the option or certify anew"[:300]
+        f"{given!r} differs from the certified value {shown!r} ({src}); "
+        "the certificate proves only its own protocol: drop the option or certify anew"[:290],
+        field=name,
+        option=True,
     )
 
 
@@ -391,15 +423,7 @@ def _digital_gain(given: Any, where: str) -> str | ScheduleGain:
 
 
 def from_certificate(
-    path: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
-    doc: dict | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
+    path: str | Path, options: ExportOptions = NO_OPTIONS, doc: dict | None = None
 ) -> ExportSource:
     """The agents' law of a certificate's design, from its verified reading only.
 
@@ -414,17 +438,14 @@ def from_certificate(
     ----------
     path : str or Path
         The certificate (JSON).
-    period, delay : float, int, optional
-        h and D (``period`` required for a continuous certificate).
-    gain : str or ScheduleGain, optional
-        c(t) of a continuous certificate (default: its tabulated schedule, else 1/(1+t)).
-    sigma, f : float, optional
-        The noise of a continuous certificate (default: the paper's σ = 0.4, f = 0.3).
+    options : ExportOptions, optional
+        h and D (``period`` required for a continuous certificate); the gain of a
+        continuous certificate (default: its tabulated schedule, else 1/(1+t)) and its
+        noise (default: the paper's σ = 0.4, f = 0.3); p and the policy: a
+        ``digital_loss`` certificate's are its verified reading's (an option that differs
+        is refused), a continuous one is certified on lossy links.
     doc : dict, optional
         The certificate already read.
-    loss, policy : float, str, optional
-        p and the policy: a ``digital_loss`` certificate's are its verified reading's
-        (an option that differs is refused); a continuous one is certified on lossy links.
 
     Returns
     -------
@@ -437,6 +458,15 @@ def from_certificate(
         kind without dense modes, an option that differs from a certified value, a missing
         period, or a sampled protocol without a guaranteed theorem.
     """
+    period, delay, gain, sigma, f, loss, policy = (
+        options.period,
+        options.delay,
+        options.gain,
+        options.sigma,
+        options.f,
+        options.loss,
+        options.policy,
+    )
     src = str(path)
     doc = read_document(path) if doc is None else doc
     ver = verify(doc, src)
@@ -453,26 +483,25 @@ def from_certificate(
     ctx: DenseContext = reading.state
     schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
     first = next(iter(ctx.modes.values()))
-    sampled = ctx.digital
-    if sampled is None:
-        return _continuous(
-            doc, ctx, schedule, src, kind.name, period, delay, gain, sigma, f, loss, policy
-        )
-    ls = getattr(ctx, "loss", None) if kind.name == "digital_loss" else None
+    if not isinstance(ctx, DigitalContext):
+        return _continuous(doc, ctx, schedule, src, kind.name, options)
+    state: DigitalState | LossState = ctx.digital
+    sampled = state.subject
+    ls = state.loss if isinstance(state, LossState) else None
     losses = _certified_losses(ls, sampled.delay, loss, policy, src)
-    if ctx.stated is None:
+    if state.stated is None:
         raise InputError(
             f"{src}: the certificate does not prove the sampled protocol "
             "(results.digital.stopped); nothing exported"
         )
-    _same("--period", period, sampled.period, src)
-    _same("--delay", delay, sampled.delay, src)
+    _same("period", period, sampled.period, src)
+    _same("delay", delay, sampled.delay, src)
     if sigma is not None:
-        _same("--sigma", _number("--sigma", sigma, 0.0), sampled.sigma, src)
+        _same("sigma", _number("sigma", sigma, 0.0), sampled.sigma, src)
     fs = sampled.f
-    if f is not None and not np.array_equal(_number("--f", f) * np.eye(first.top.dim), fs):
+    if f is not None and not np.array_equal(_number("f", f) * np.eye(first.top.dim), fs):
         scalar = np.array_equal(fs, fs[0, 0] * np.eye(len(fs)))
-        _differs("--f", float(f), float(fs[0, 0]) if scalar else fs.tolist(), src)
+        _differs("f", float(f), float(fs[0, 0]) if scalar else fs.tolist(), src)
     g = _digital_gain(sampled.gain, f"{src}: subject.digital.gain")
     if gain is not None:
         given = _gain_option(gain)
@@ -480,9 +509,10 @@ def from_certificate(
         stated = g.text if isinstance(g, ScheduleGain) else g
         if "".join(str(text).split()) != "".join(str(stated).split()):  # spaces mean nothing
             raise InputError(
-                f"--gain: {text!r} differs from the certified gain {stated!r} ({src}); drop --gain"[
-                    :300
-                ]
+                f"{text!r} differs from the certified gain {stated!r} ({src}); drop "[:290],
+                Option("gain"),
+                field="gain",
+                option=True,
             )
     _check_gain(g, f"{src}: subject.digital.gain")
     dg = Digital(sampled.period, sampled.delay)
@@ -514,25 +544,31 @@ def _certified_losses(
     ls: Any, delay: int, loss: float | None, policy: str | None, src: str
 ) -> dict:
     """A sampled certificate's p_e by edge (empty: lossless), from its verified reading
-    only: ``--loss``/``--loss-policy`` that differ are refused, as is what it does not prove."""
+    only: a ``loss`` or ``policy`` that differs is refused, as is what it does not prove."""
     if ls is None:
         if loss is not None and loss != 0:
             raise InputError(
-                f"--loss: {loss!r} differs from the certified protocol ({src}), which has no "
-                "lost messages; drop the option or certify anew"[:300]
+                f"{loss!r} differs from the certified protocol ({src}), which has no "
+                "lost messages; drop the option or certify anew"[:290],
+                field="loss",
+                option=True,
             )
         return {}
     if policy is not None and policy != ls.policy:
         raise InputError(
-            f"--loss-policy: {policy!r} differs from the certified policy {ls.policy!r} ({src}); "
-            "drop the option or certify anew"[:300]
+            f"{policy!r} differs from the certified policy {ls.policy!r} ({src}); "
+            "drop the option or certify anew"[:290],
+            field="policy",
+            option=True,
         )
     values = sorted(set(ls.losses.values()))
     if loss is not None and values != [loss]:
         shown = values[0] if len(values) == 1 else "per-edge losses"
         raise InputError(
-            f"--loss: {loss!r} differs from the certified {shown!r} ({src}); "
-            "drop the option or certify anew"[:300]
+            f"{loss!r} differs from the certified {shown!r} ({src}); "
+            "drop the option or certify anew"[:290],
+            field="loss",
+            option=True,
         )
     if not any(p > 0 for p in ls.losses.values()):
         return {}
@@ -546,30 +582,38 @@ def _continuous(
     schedule: tuple,
     src: str,
     kind: str,
-    period: float | None,
-    delay: int | None,
-    gain: str | ScheduleGain | None,
-    sigma: float | None,
-    f: float | None,
-    loss: float | None = None,
-    policy: str | None = None,
+    options: ExportOptions,
 ) -> ExportSource:
     """A continuous certificate's design certified as the sampled protocol first."""
+    period, delay, gain, sigma, f, loss, policy = (
+        options.period,
+        options.delay,
+        options.gain,
+        options.sigma,
+        options.f,
+        options.loss,
+        options.policy,
+    )
     dg = _digital(period, delay, None, None, f"{src} (a {kind} certificate)", loss, policy)
     stated = doc.get("gain")  # a tabulated schedule whose conditions verify derived
     if stated is not None and gain is not None:
-        raise InputError(f"--gain: the certificate states its gain ({src}: gain); drop --gain")
+        raise InputError(
+            f"the certificate states its gain ({src}: gain); drop ",
+            Option("gain"),
+            field="gain",
+            option=True,
+        )
     g: str | ScheduleGain = (
         schedule_from_document(stated, f"{src}: gain")
         if stated is not None
         else (_gain_option(gain) or "1/(1+t)")
     )
-    _check_gain(g, "--gain" if gain is not None else f"{src}: gain")
+    _check_gain(g, "gain" if gain is not None else f"{src}: gain")
     noise = NoiseModel(
-        sigma=SIGMA if sigma is None else _number("--sigma", sigma, 0.0),
-        f=F_SCALE if f is None else _number("--f", f),
+        sigma=SIGMA if sigma is None else _number("sigma", sigma, 0.0),
+        f=F_SCALE if f is None else _number("f", f),
     )
-    _check_noise("--sigma" if sigma is not None else "noise", noise.sigma, noise.f)
+    _check_noise("sigma" if sigma is not None else "noise", noise.sigma, noise.f)
     tops = {name: m.top for name, m in ctx.modes.items()}
     first_name, first = next(iter(ctx.modes.items()))
     margin = float(doc["subject"]["modes"][first_name]["margin"])
@@ -617,16 +661,7 @@ def is_certificate(doc: Any) -> bool:
     return isinstance(doc, dict) and doc.get("format") == FORMAT
 
 
-def load_source(
-    path: str | Path,
-    period: float | None = None,
-    delay: int | None = None,
-    gain: str | ScheduleGain | None = None,
-    sigma: float | None = None,
-    f: float | None = None,
-    loss: float | None = None,
-    policy: str | None = None,
-) -> ExportSource:
+def load_source(path: str | Path, options: ExportOptions = NO_OPTIONS) -> ExportSource:
     """A scenario's or a certificate's agents' law (:func:`from_scenario`,
     :func:`from_certificate`), told apart by the file's content.
 
@@ -634,14 +669,8 @@ def load_source(
     ----------
     path : str or Path
         The scenario or certificate.
-    period, delay : float, int, optional
-        h and D.
-    gain : str or ScheduleGain, optional
-        c(t).
-    sigma, f : float, optional
-        The noise's σ and f.
-    loss, policy : float, str, optional
-        p on every edge and the policy for a lost message.
+    options : ExportOptions, optional
+        What to set over the file's values.
 
     Returns
     -------
@@ -654,11 +683,13 @@ def load_source(
     """
     doc = read_document(path)
     if is_certificate(doc):
-        return from_certificate(path, period, delay, gain, sigma, f, doc, loss, policy)
-    return from_scenario(path, period, delay, gain, sigma, f, loss, policy)
+        return from_certificate(path, options, doc)
+    return from_scenario(path, options)
 
 
 __all__ = [
+    "NO_OPTIONS",
+    "ExportOptions",
     "ExportSource",
     "from_certificate",
     "from_scenario",

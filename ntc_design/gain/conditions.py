@@ -167,7 +167,7 @@ class GainAnalysis:
         )
 
     def to_dict(self) -> dict:
-        """The analysis as a JSON-ready mapping (what ``ntc gain --json`` prints).
+        """The analysis as a JSON-ready mapping (what ``ntc gain`` prints as JSON).
 
         Returns
         -------

@@ -1,9 +1,9 @@
 """A tabulated gain schedule with an analytic tail: c(t) from a table on [0, T], then a
 closed form for t >= T.
 
-What :func:`ntc_design.tune.tune` returns with ``schedule="optimal"``, and a gain wherever
+What :func:`ntc_design.tune.tune` returns with ``ScheduleOptions``, and a gain wherever
 one is accepted (a scenario's ``gain: {schedule: schedule.csv, tail: "…"}``,
-``ntc certify --gain schedule.csv``, ``simulate``). Theorems 1-4 ask of c only what
+``ntc certify`` with a schedule CSV as its gain, ``simulate``). Theorems 1-4 ask of c only what
 happens as t → ∞ (∫c = ∞, c → 0, ∫c² < ∞) besides c being continuous and non-negative
 (Niu & Wu, eqs. (13), (16)); a finite, non-negative table changes none of the integrals'
 convergence, so the theorems hold for the schedule exactly when
@@ -33,10 +33,11 @@ from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from ..choices import Interpolation, choices
 from ..errors import InputError, real_float
 from ..expr.tree import numeric_function
 from ..present.rows import VERDICT_TEXT
@@ -46,7 +47,7 @@ if TYPE_CHECKING:  # SymPy (through .gain) loads only for an analysis, not to si
 
 #: Interpolation between the table's points: linear (continuous) or previous (a step
 #: at every time; not continuous).
-INTERPOLATIONS = ("linear", "previous")
+INTERPOLATIONS = choices(Interpolation)
 #: Bounds on a table read from a file: points, bytes, and |c|.
 MAX_POINTS = 100_000
 MAX_BYTES = 16 * 2**20
@@ -86,7 +87,7 @@ class ScheduleGain:
 
     t: Any
     c: Any
-    interpolation: str = "linear"
+    interpolation: Interpolation = "linear"
     tail: str = "1/(1+t)"
     field: str = "gain"
 
@@ -361,7 +362,11 @@ def read_schedule(
         )
     try:
         return ScheduleGain(
-            ts, cs, interpolation or meta.get("interpolation", "linear"), tail_text, field=field
+            ts,
+            cs,
+            cast("Interpolation", interpolation or meta.get("interpolation", "linear")),
+            tail_text,
+            field=field,
         )
     except InputError as exc:
         raise InputError(f"{p}: {exc}") from None

@@ -13,7 +13,7 @@ in the file can execute code)::
     weights  (E, d, d) float64: A_ij, the weight of the edge j -> i
     name     optional 0-d string
 
-Write one with ``ntc generate ... --out net.npz`` or :func:`write_npz`; every command
+Write one with ``ntc generate`` (to an ``.npz`` file) or :func:`write_npz`; every command
 that reads a topology file accepts it. Sizes are bounded (:data:`MAX_AGENTS`,
 :data:`MAX_EDGES`, :data:`MAX_DIM`); a wrong array gives one line naming the file and
 the array.

@@ -13,8 +13,8 @@
   file, a folder that holds files other than the outputs being replaced, or a place
   that cannot be written.
 
-Errors are :class:`~ntc_design.errors.InputError`: one line naming the option (``--out``)
-and the path.
+Errors are :class:`~ntc_design.errors.InputError`: one line naming the option (``out``: the parameter, as
+the command line's flag at the command line) and the path.
 """
 
 from __future__ import annotations
@@ -27,16 +27,16 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..errors import InputError, one_line
+from ..errors import InputError, Option, one_line
 
 
 def _oserror(option: str, path: Path, exc: OSError) -> InputError:
     why = exc.strerror or exc.__class__.__name__
-    return InputError(f"{option}: cannot write {one_line(str(path))!r} ({why})")
+    return InputError(f"{Option(option)}: cannot write {one_line(str(path))!r} ({why})")
 
 
 def check_output_file(
-    path: str | Path, option: str = "--out", suffixes: tuple[str, ...] = ()
+    path: str | Path, option: str = "out", suffixes: tuple[str, ...] = ()
 ) -> Path:
     """Refuse, before any work, a file target that cannot be written as a regular file: a
     folder, an existing device, FIFO or socket (``/dev/full``, a named pipe: the rename
@@ -68,17 +68,17 @@ def check_output_file(
         listed = (
             ", ".join(suffixes[:-1]) + " or " + suffixes[-1] if len(suffixes) > 1 else suffixes[0]
         )
-        raise InputError(f"{option}: {shown}: expected a {listed} file")
+        raise InputError(f"{Option(option)}: {shown}: expected a {listed} file")
     if p.is_dir():
-        raise InputError(f"{option}: {shown} is a folder, expected a file name")
+        raise InputError(f"{Option(option)}: {shown} is a folder, expected a file name")
     if os.path.lexists(p) and not p.is_file():
         raise InputError(
-            f"{option}: {shown} exists and is not a regular file (a device, pipe, socket or "
+            f"{Option(option)}: {shown} exists and is not a regular file (a device, pipe, socket or "
             "broken link); choose a file name"
         )
     parent = p.parent
     if not parent.is_dir():
-        raise InputError(f"{option}: the folder {one_line(str(parent))!r} does not exist")
+        raise InputError(f"{Option(option)}: the folder {one_line(str(parent))!r} does not exist")
     _probe(parent, option)
     return p
 
@@ -88,18 +88,18 @@ def _probe(folder: Path, option: str) -> None:
     temporary folder there: permission bits do not say it for root, a read-only mount or
     /proc, and a long run must not find out only at its end."""
     if not os.access(folder, os.W_OK | os.X_OK):
-        raise InputError(f"{option}: the folder {one_line(str(folder))!r} is not writable")
+        raise InputError(f"{Option(option)}: the folder {one_line(str(folder))!r} is not writable")
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".ntc-probe.", dir=folder))
     except OSError as exc:
         why = exc.strerror or exc.__class__.__name__
         raise InputError(
-            f"{option}: cannot write in the folder {one_line(str(folder))!r} ({why})"
+            f"{Option(option)}: cannot write in the folder {one_line(str(folder))!r} ({why})"
         ) from None
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | Path, option: str = "--out") -> Iterator[Path]:
+def atomic_path(path: str | Path, option: str = "out") -> Iterator[Path]:
     """A temporary file beside ``path`` to write (its name ends like ``path``'s, so NumPy
     adds no second ``.npz``); when the block finishes it is synced and renamed over
     ``path``, and on any failure, the rename's included, it is removed.
@@ -146,7 +146,7 @@ def atomic_path(path: str | Path, option: str = "--out") -> Iterator[Path]:
             os.unlink(tmp)
 
 
-def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> Path:
+def write_atomic(path: str | Path, data: str | bytes, option: str = "out") -> Path:
     """Write ``data`` (text as UTF-8) to ``path`` through a temporary file and a rename
     (:func:`atomic_path`).
 
@@ -175,7 +175,7 @@ def write_atomic(path: str | Path, data: str | bytes, option: str = "--out") -> 
 
 
 def check_output_folder(
-    path: str | Path, replaceable: Iterable[str] | None = (), option: str = "--out"
+    path: str | Path, replaceable: Iterable[str] | None = (), option: str = "out"
 ) -> Path:
     """Check, before any work, that ``path`` can become an output folder.
 
@@ -204,12 +204,14 @@ def check_output_folder(
     shown = repr(one_line(str(p)))
     if os.path.lexists(p) and not p.is_dir():
         what = "an existing file" if p.is_file() else "not a folder (a device, pipe or link)"
-        raise InputError(f"{option}: {shown} is {what}, expected a folder")
+        raise InputError(f"{Option(option)}: {shown} is {what}, expected a folder")
     parent = p.resolve().parent
     while not parent.exists() and parent != parent.parent:
         parent = parent.parent  # missing folders are made
     if not parent.is_dir():
-        raise InputError(f"{option}: {one_line(str(parent))!r} in {shown} is a file, not a folder")
+        raise InputError(
+            f"{Option(option)}: {one_line(str(parent))!r} in {shown} is a file, not a folder"
+        )
     _probe(parent, option)
     if p.is_dir() and replaceable is not None:
         allowed = set(replaceable)
@@ -219,7 +221,7 @@ def check_output_folder(
             raise _oserror(option, p, exc) from None
         if other:
             raise InputError(
-                f"{option}: {shown} exists and holds other files ({one_line(other[0])!r}"
+                f"{Option(option)}: {shown} exists and holds other files ({one_line(other[0])!r}"
                 + (f" and {len(other) - 1} more" if len(other) > 1 else "")
                 + "); choose a new folder"
             )
@@ -228,7 +230,7 @@ def check_output_folder(
 
 @contextlib.contextmanager
 def output_folder(
-    path: str | Path, replaceable: Iterable[str] = (), option: str = "--out"
+    path: str | Path, replaceable: Iterable[str] = (), option: str = "out"
 ) -> Iterator[Path]:
     """All-or-nothing output folder: yields a temporary folder beside ``path``; on
     success it replaces ``path`` (an earlier folder is moved aside, then removed); on any

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sparse
 
-from ..errors import NUMBER_TEXT, InputError, format_bytes
+from ..errors import NUMBER_TEXT, InputError, Option, format_bytes
 from ..numerics.memory import available_memory
 from .edgelist import (
     MAX_AGENTS,
@@ -573,7 +573,7 @@ def read_mat(path: str | Path) -> EdgeListData:
 def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
     """The ``uncertainty`` variable: an N×N matrix whose (i, j) entry is edge j -> i's
     radius ρ (0: none given); a value where there is no edge is refused, and so is NaN
-    (as in YAML and CSV: it used to read as none given, the --radius in its place)."""
+    (as in YAML and CSV: it used to read as none given, the common radius in its place)."""
     if u is None:
         return None
     a = np.asarray(u.toarray() if hasattr(u, "toarray") else u)
@@ -587,7 +587,7 @@ def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
         i, j = (int(x) + 1 for x in nan[0])
         raise InputError(
             f"{p}: uncertainty({i}, {j}): NaN is not a radius (0 for none given, then "
-            "--radius applies)"
+            f"{Option('radius')} applies)"
         )
     has = a != 0
     edge = np.zeros((n, n), dtype=bool)

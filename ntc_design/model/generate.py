@@ -465,7 +465,7 @@ def write_topology(top: Topology, path: str | Path) -> Path:
     InputError
         For an unknown file type, a missing or read-only folder, or a target that is
         not a regular file."""
-    p = check_output_file(path, "--out", TOPOLOGY_SUFFIXES)
+    p = check_output_file(path, "out", TOPOLOGY_SUFFIXES)
     suf = p.suffix.lower()
     if suf == ".npz":
         ea = top.edge_arrays

@@ -249,7 +249,7 @@ def example_files() -> list[str]:
 
 def copy_examples(dest: str | Path) -> list[Path]:
     """Copy the bundled examples into a new folder (for a user who installed the package
-    without a checkout: ``ntc examples --copy DIR``).
+    without a checkout: ``ntc examples``, copied to a folder).
 
     Parameters
     ----------

@@ -64,10 +64,46 @@ import numpy as np
 from ..errors import InputError
 from ..gain.code import GainCode
 from ..gain.schedule import ScheduleGain
-from ..model import Label, Topology
+from ..model import ExpressionFamily, Label, Topology
 from .digital import Digital, ScheduleTicks, step_modes
 from .lemma1 import ProtocolDesign, SwitchingDesign, input_vector
 from .loss import require_loss
+
+#: Why the digital protocol refuses a topology given as expressions of t (one text for
+#: the simulator, the tuners and the certificate).
+NOT_SAMPLED = (
+    "a topology given as expressions of t is not sampled by the digital protocol; give it "
+    "as a switching schedule or a fixed topology"
+)
+
+
+def require_sampled(topology: object, field: str = "digital", option: bool = False) -> None:
+    """Refuse a topology given as expressions of t (A(t)) for the digital protocol, the
+    one check of every caller that samples: the protocol runs one topology or a switching
+    set, whose mode at each sample t_k it knows (:func:`.digital.step_modes`). Here, not
+    in :mod:`.digital`, which the command line loads before any topology.
+
+    Parameters
+    ----------
+    topology : object
+        The network.
+    field : str, optional
+        The field the error names (what asked for the sampled protocol).
+    option : bool, optional
+        The field is a parameter of the call (the command line names it by its flag).
+
+    Raises
+    ------
+    InputError
+        ``FIELD: a topology given as expressions of t is not sampled ...``.
+
+    Examples
+    --------
+    >>> import ntc_design as nd
+    >>> require_sampled(nd.load("examples/g1.yaml"))  # one fixed topology: sampled
+    """
+    if isinstance(topology, ExpressionFamily):
+        raise InputError(NOT_SAMPLED, field=field, option=option)
 
 
 def file_edges(top: Topology) -> list[tuple[int, int]]:
@@ -545,6 +581,7 @@ def lossy_law(law: AgentLaw, losses: Mapping[tuple[int, int], float], policy: st
 
 __all__ = [
     "LAW_POLICIES",
+    "NOT_SAMPLED",
     "AgentLaw",
     "ModeLaw",
     "agent_law",
@@ -552,4 +589,5 @@ __all__ = [
     "lossy_law",
     "make_law",
     "mode_law",
+    "require_sampled",
 ]

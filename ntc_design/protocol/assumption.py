@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse import csgraph
 
-from ..errors import AssumptionWarning, one_line
+from ..errors import AssumptionWarning, Option, one_line
 from ..model import Topology, antagonistic_in_weight, in_degree_dominated_all, in_out_difference
 from ..numerics.linalg import pd_batch
 from ..present.rows import Table, counted, set_text, verdict
@@ -322,7 +322,7 @@ def assumption2(top: Topology) -> Decomposition:
     )
 
 
-#: Keys of the stable ``ntc design --json`` format (per mode for a switching file).
+#: Keys of the stable JSON format of ``ntc design`` (per mode for a switching file).
 
 
 def structure_report(top: Topology) -> dict:
@@ -441,7 +441,8 @@ def structure_tables(rep: dict, title: str, most: int = 10) -> list[Table]:
             )
         ]
         rows += [(f"agent {lab(v['agent'])}", lab(v["reason"])) for v in vs[:most]]
-        notes = [f"{len(vs) - most} more (--json lists them all)"] if len(vs) > most else []
+        more = f"{len(vs) - most} more ({Option('json', alias='to_dict()')} lists them all)"
+        notes = [more] if len(vs) > most else []
         notes += _fix_lines([(v["agent"], v.get("fix", "")) for v in vs])
     return [
         edges,
@@ -539,7 +540,8 @@ def summary_table(summary: dict, title: str) -> Table:
     if s["violations_count"] > len(s["violations"]):
         notes.append(f"{s['violations_count']} agents violate Assumption 2; {SHOWN} are shown")
     notes += _fix_lines([(v["agent"], v.get("fix", "")) for v in s["violations"]])
-    notes.append("--full prints every edge and agent; --full --json lists them as data")
+    full, json = Option("full", alias="full=True"), Option("json", alias="to_dict()")
+    notes.append(f"{full} prints every edge and agent; {full} {json} lists them as data")
     return Table.build(f"{title}: structure (summary)", ("quantity", "value"), rows, notes)
 
 

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import LossPolicy
 from ..errors import InputError, require_int, require_number
 from ..present.rows import Table
 from .loss import POLICIES, require_loss, require_policy
@@ -75,7 +76,7 @@ class Digital:
     period: float
     delay: int = 0
     loss: float = 0.0
-    policy: str = "skip"
+    policy: LossPolicy = "skip"
 
     def __post_init__(self) -> None:
         h = require_number("digital.period", self.period)

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.sparse as sparse
 
-from ..errors import one_line, require_positive, require_theta, require_x0, warn_user
+from ..errors import Option, one_line, require_positive, require_theta, require_x0, warn_user
 from ..io.tablefiles import write_mat
 from ..model import SwitchingTopology, Topology, block_coo
 from ..numerics.linalg import require_dense
@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 #: (:func:`~ntc_design.protocol.thresholds.critical_couplings_sparse`), which says what it computed.
 THRESHOLDS_MAX_ND = 200
 #: By default the critical couplings are computed up to this Nd; above it only when asked
-#: (``thresholds=True``, ``ntc design --thresholds``), and a note says so.
+#: (``thresholds=True``, the thresholds option of ``ntc design``), and a note says so.
 THRESHOLDS_DEFAULT_MAX_ND = 30_000
 
 
@@ -326,8 +326,8 @@ class SwitchingDesign:
         }
 
 
-MAX_VIOLATIONS_SHOWN = 10  # in a table's notes (--json and to_dict() list them all)
-MAX_AGENTS_SHOWN = 12  # agents named in a set, and B_i rows, in a table (--json has all)
+MAX_VIOLATIONS_SHOWN = 10  # in a table's notes (the JSON output and to_dict() list them all)
+MAX_AGENTS_SHOWN = 12  # agents named in a set, and B_i rows, in a table (the JSON has all)
 
 
 def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None) -> Table:
@@ -409,7 +409,10 @@ def design_table(designs: Mapping[str, ProtocolDesign], title: str | None = None
                     r for r in rows if r[0] == "identity residual ‖L_B(1⊗θ) − k1(Δ⊗I)Bθ‖ (relative)"
                 )
             ),
-            (f"B_i of {hidden} more informed agents", *["in --json / to_dict()" for _ in ds]),
+            (
+                f"B_i of {hidden} more informed agents",
+                *[f"in {Option('json', alias='JSON')} / to_dict()" for _ in ds],
+            ),
         )
     several = len(designs) > 1
     notes: list[str] = []
@@ -430,7 +433,8 @@ def _design_notes(d: ProtocolDesign, at: str) -> list[str]:
     ]
     if len(viol) > MAX_VIOLATIONS_SHOWN:
         more = len(viol) - MAX_VIOLATIONS_SHOWN
-        notes.append(f"{at}… and {more} more violations (--json lists them all)")
+        json = Option("json", alias="to_dict()")
+        notes.append(f"{at}… and {more} more violations ({json} lists them all)")
     notes += [f"{at}{n}" for n in fix_notes(viol, lab)]
     notes += [f"{at}{n}" for n in d.notes]
     if d.thresholds is not None:
@@ -655,8 +659,8 @@ def _residual_and_thresholds(top, b, dl, u, th, thresholds, notes):
                 if thresholds is False
                 else f"by default above Nd = {THRESHOLDS_DEFAULT_MAX_ND} ("
             )
-            + "ntc design --thresholds computes them, as does the thresholds option of design "
-            "in Python)"
+            + f"ntc design {Option('thresholds', alias='with its thresholds flag')} computes "
+            "them, as does the thresholds option of design in Python)"
         )
     return res, crit
 

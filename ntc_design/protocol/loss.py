@@ -16,13 +16,15 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping, Sequence
+from typing import cast
 
 import numpy as np
 
+from ..choices import LossPolicy, choices
 from ..errors import InputError, real_float
 
 #: The policies for a lost message, in the order the docs list them.
-POLICIES = ("skip", "rescale", "hold")
+POLICIES = choices(LossPolicy)
 
 
 def require_loss(name: str, value: object) -> float:
@@ -57,7 +59,7 @@ def require_loss(name: str, value: object) -> float:
     return p
 
 
-def require_policy(name: str, value: object) -> str:
+def require_policy(name: str, value: object) -> LossPolicy:
     """A policy for lost messages: one of :data:`POLICIES`.
 
     Parameters
@@ -79,7 +81,7 @@ def require_policy(name: str, value: object) -> str:
     if not isinstance(value, str) or value not in POLICIES:
         shown = repr(value) if not isinstance(value, str) else repr(value[:40])
         raise InputError(f"{name}: unknown policy {shown} (known: {', '.join(POLICIES)})")
-    return value
+    return cast("LossPolicy", value)
 
 
 def edge_losses(

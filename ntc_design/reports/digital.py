@@ -123,7 +123,7 @@ def digital_facts(run: RunData, certificate: dict) -> DigitalFacts | None:
         pm = prepare_modes(top, spec.replace(T=t_end), gain)
         cont = pm.moments(gain, run.t).ms_error.sum(axis=1)
         grid = sampled_grid(top, pm, dg, t_end, run.t)
-        dm = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, dg.delay)
+        dm = digital_moments(pm, grid, gain, dg.delay)
         t_s, sampled = grid.save_times, dm.moments.ms_error.sum(axis=1)
         if dg.lossy:  # the curves here are the lossless recursion's
             note = (

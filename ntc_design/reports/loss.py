@@ -12,7 +12,6 @@ import numpy as np
 from ..errors import InputError
 from ..model import Topology
 from ..present.rows import fmt
-from ..protocol.digital import Digital
 from ..protocol.loss import POLICIES
 from ..simulate.loss import loss_moments
 from ..simulate.prepare import make_gain, prepare_modes, sampled_grid
@@ -101,7 +100,7 @@ def loss_facts(run: RunData, certificate: dict) -> LossFacts | None:
         gain = make_gain(run.gain)[0]
         pm = prepare_modes(top, spec.replace(T=t_end, method="exact"), gain)
         s = pm.systems[0]
-        grid = sampled_grid(top, pm, Digital(dg.period, dg.delay), t_end, np.array([t_end]))
+        grid = sampled_grid(top, pm, dg, t_end, np.array([t_end]))  # h and D: its loss aside
         for k in POLICIES:
             for m, q in enumerate(losses):
                 with np.errstate(all="ignore"):

@@ -691,7 +691,7 @@ def write_report(
     Parameters
     ----------
     directory
-        A simulation output directory (``ntc simulate --out``).
+        A simulation output directory (written by ``ntc simulate``).
     interactive
         Embed the figures as SVG with per-agent toggles instead of PNG images (the page
         stays one self-contained file either way).

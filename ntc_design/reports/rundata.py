@@ -49,7 +49,7 @@ class RunData:
     table: dict[str, np.ndarray]
     npz: dict[str, np.ndarray]
     record: RunSummary
-    #: The sampled protocol reported instead of the run's own (``ntc report --period``).
+    #: The sampled protocol reported instead of the run's own (the period option of ``ntc report``).
     asked: Digital | None = field(default=None)
 
     @property
@@ -430,7 +430,7 @@ def load_run(directory: str | Path) -> RunData:
     Parameters
     ----------
     directory : str or Path
-        A folder written by ``ntc simulate --out``.
+        A folder written by ``ntc simulate``.
 
     Returns
     -------

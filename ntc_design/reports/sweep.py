@@ -1,4 +1,4 @@
-"""The report of a sweep directory (``ntc report DIR`` on ``ntc sweep --out DIR``): the
+"""The report of a sweep directory (``ntc report DIR`` on the output folder of ``ntc sweep``): the
 table of points, the final mean-square error against each swept key (one line per
 combination of the other keys), every point's curve overlaid, and links to the tables.
 One self-contained HTML file; the figures are also written to DIR/figures."""

@@ -162,7 +162,7 @@ def landscape_marks(result: TuneResult) -> LandscapeMarks:
     """
     land = result.landscape
     if land is None:
-        raise ValueError("the result has no landscape (tune(..., landscape=True))")
+        raise ValueError("the result has no landscape (PowerOptions(landscape=True))")
     z = np.asarray(land.values, dtype=float)
     curve = z.shape[0] == 1 or z.shape[1] == 1
     return LandscapeMarks(
@@ -320,7 +320,7 @@ def _plain_log_ticks(ax) -> None:
     ax.xaxis.set_minor_formatter(NullFormatter())
 
 
-#: What ``ntc tune --out`` writes (an earlier tuning's folder may be replaced).
+#: What ``ntc tune`` writes to its output folder (an earlier tuning's folder may be replaced).
 TUNE_FILES = (
     "tuned.yaml",
     "schedule.csv",

@@ -30,13 +30,13 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 import numpy as np
 import scipy.sparse as sps
 from scipy.linalg import lu_factor, lu_solve
 
-from .moments import MomentRecorder, MomentRhs, Moments, check_moments_size, march
+from .moments import MomentRecorder, MomentRhs, Moments, PreparedModes, check_moments_size, march
 from .system import ModeSystem
 
 DS = 0.01  # c·h per step (steps uniform in s = ∫c dt)
@@ -77,13 +77,9 @@ def _sandwich(lu, x: np.ndarray) -> np.ndarray:
 
 
 def cayley_moments(
-    systems: Sequence[ModeSystem],
-    segments: Sequence[tuple[float, float, int]],
+    modes: PreparedModes,
     gain: Callable[[np.ndarray], np.ndarray],
-    eps0: np.ndarray,
     save_times: np.ndarray,
-    n: int,
-    d: int,
     ds: float = DS,
     abort_above: float | None = None,
 ) -> Moments:
@@ -91,18 +87,13 @@ def cayley_moments(
 
     Parameters
     ----------
-    systems : sequence of ModeSystem
-        One system per mode.
-    segments : sequence of (float, float, int)
-        (start, stop, mode index) covering the horizon.
+    modes : PreparedModes
+        The systems per mode, the segments (start, stop, mode index) covering the
+        horizon and ε(0).
     gain : callable
         Vectorised c(t).
-    eps0 : numpy.ndarray
-        ε(0), length Nd.
     save_times : numpy.ndarray
         Where to record the moments.
-    n, d : int
-        Agents and state dimension.
     ds : float, optional
         c·h per step.
     abort_above : float, optional
@@ -117,6 +108,7 @@ def cayley_moments(
     InputError
         Nd is above ``MOMENTS_MAX_ND``.
     """
+    n, d, eps0, systems = modes.n, modes.d, modes.eps0, modes.systems
     check_moments_size(n * d)
     nd_ = n * d
     eye = sps.identity(nd_, format="csc")
@@ -135,7 +127,7 @@ def cayley_moments(
             return math.inf
         return min(ds / c0, KAPPA_NOISE / (c0 * c0 * rho_g[mode]) if rho_g[mode] > 0 else math.inf)
 
-    for t, h, mode in march(segments, rec.saves, cap):
+    for t, h, mode in march(modes.segments, rec.saves, cap):
         f = rhs[mode]
         c0, cm, c1 = (float(v) for v in gain(np.array([t, t + h / 2, t + h])))
         half = 0.5 * h * cm * laps[mode]

@@ -117,7 +117,7 @@ def ziggurat_tail(i, u, s, zx, zr):
 
 @cuda.jit(device=True)
 def normal(s, zx, zr):
-    """The next standard normal of the stream ``s`` (kernels._draw_lanes, one lane)."""
+    """The next standard normal of the stream ``s`` (kernels.draw_lanes, one lane)."""
     w = next_word(s)
     li = np.int64(w & MASK)
     uu = 2.0 * (np.int64(w >> U11) * TO_UNIT) - 1.0

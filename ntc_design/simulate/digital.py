@@ -18,7 +18,7 @@ before anything is allocated (:func:`check_digital_moments`).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,8 +27,7 @@ from ..errors import InputError, format_bytes
 from ..numerics.memory import available_memory
 from ..protocol.digital import Digital
 from .grid import TimeGrid
-from .moments import MOMENTS_MAX_ND, MomentRecorder, MomentRhs, Moments
-from .system import ModeSystem
+from .moments import MOMENTS_MAX_ND, MomentRecorder, MomentRhs, Moments, PreparedModes
 
 #: Dense ((D+1)·Nd)² matrices alive during a step of the digital moments.
 DIGITAL_COPIES = 4
@@ -47,6 +46,7 @@ def digital_grid(
     save_times: np.ndarray,
     step_mode: Callable[[np.ndarray], np.ndarray] | None = None,
     between: bool = False,
+    steps: tuple[int, float] | None = None,
 ) -> tuple[TimeGrid, list[str]]:
     """The sampling grid t_k = k·h, k = 0 … K (K = ⌊T/h⌋), and T after a last partial
     step when T is not a whole number of periods (:meth:`Digital.steps`); the mode of each
@@ -67,6 +67,9 @@ def digital_grid(
         for a switching schedule); None: one mode.
     between : bool, optional
         Keep save times between samples (``save_steps``: the sample at or before each).
+    steps : (int, float), optional
+        K and s as :meth:`Digital.steps` gave them for ``t_end`` (a spec's
+        ``digital_steps``: decided once per run); None: computed here.
 
     Returns
     -------
@@ -78,7 +81,7 @@ def digital_grid(
     InputError
         h > T, or too many steps.
     """
-    k_full, part = digital.steps(t_end)
+    k_full, part = steps if steps is not None else digital.steps(t_end)
     h = digital.period
     t = np.arange(k_full + 1, dtype=float) * h
     if part > 0:
@@ -102,8 +105,8 @@ def digital_grid(
     idx = np.clip(np.rint(asked / h), 0, k_full)
     if part > 0:  # past the last sample: T when nearer to it
         idx = np.where(asked > k_full * h + 0.5 * part, k_steps, idx)
-    steps = np.unique(np.concatenate([[0, k_steps], idx.astype(np.int64)]))
-    return TimeGrid(t, modes, steps, t[steps], noise_last), []
+    saved = np.unique(np.concatenate([[0, k_steps], idx.astype(np.int64)]))
+    return TimeGrid(t, modes, saved, t[saved], noise_last), []
 
 
 def digital_moments_bytes(nd_: int, delay: int) -> float:
@@ -243,12 +246,9 @@ def _held(
 
 
 def digital_moments(
-    systems: Sequence[ModeSystem],
+    modes: PreparedModes,
     grid: TimeGrid,
     gain: Callable[[np.ndarray], np.ndarray],
-    eps0: np.ndarray,
-    n: int,
-    d: int,
     delay: int,
     abort_above: float | None = None,
 ) -> DigitalMoments:
@@ -264,16 +264,13 @@ def digital_moments(
 
     Parameters
     ----------
-    systems : sequence of ModeSystem
-        One system per mode.
+    modes : PreparedModes
+        The systems per mode and e_0 = x(0) − 1⊗θ
+        (:meth:`~ntc_design.simulate.moments.PreparedModes.of` for systems built by hand).
     grid : TimeGrid
         The sampling grid (:func:`digital_grid`).
     gain : callable
         Vectorised c(t); c_k = c(t_k).
-    eps0 : numpy.ndarray
-        e_0 = x(0) − 1⊗θ, length Nd.
-    n, d : int
-        Agents and state dimension.
     delay : int
         D.
     abort_above : float, optional
@@ -289,10 +286,11 @@ def digital_moments(
     InputError
         Too large (:func:`check_digital_moments`).
     """
+    n, d, eps0 = modes.n, modes.d, modes.eps0
     nd_ = n * d
     k_steps = grid.n_steps
     check_digital_moments(nd_, delay, k_steps)
-    rhs = [MomentRhs(s, n, d) for s in systems]
+    rhs = [MomentRhs(s, n, d) for s in modes.systems]
     lo = delay * nd_  # the block of e_{k−D}
     z0 = np.tile(np.asarray(eps0, dtype=float), delay + 1)
     zz, m = np.outer(z0, z0), z0.copy()

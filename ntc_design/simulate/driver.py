@@ -17,9 +17,10 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import InputError, warn_user
+from ..errors import InputError, Option, warn_user
 from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..protocol import ProtocolDesign
+from ..protocol.agents import require_sampled
 from ..protocol.digital import Digital
 from .budget import (
     check_exact_work,
@@ -152,10 +153,7 @@ def simulate(
         from .timevarying import simulate_expression
 
         if spec.digital is not None:
-            raise InputError(
-                "digital: a topology given as expressions of t is not sampled by the digital "
-                "protocol; give it as a switching schedule or a fixed topology"
-            )
+            require_sampled(topology)
         if spec.delta is not None:
             raise InputError(
                 "delta: a topology given as expressions of t takes Lemma 1's δ(t) at every t; "
@@ -236,8 +234,10 @@ def device_engine(spec: SimulationSpec, engine):
         return engine
     if engine is not None:
         raise InputError(
-            "device: gpu runs the paths on this machine's GPU; it does not combine with a "
-            "scheduler (use device: cpu there)"
+            "gpu runs the paths on this machine's GPU; it does not combine with a scheduler (use ",
+            Option("device", "cpu", document=True),
+            " there)",
+            field="device",
         )
     load_cuda()
     return GpuEngine()
@@ -265,6 +265,7 @@ def _simulate_modes(
             spec.save.resolve(spec.T),
             step_mode(topology, pm, spec.digital.period),
             between=spec.method == "exact",
+            steps=spec.digital_steps,
         )
         notes.extend(more)
         check_gain(cfun, gain_text, grid.t[:-1])
@@ -327,13 +328,13 @@ def _simulate_modes(
         if lossy is not None:
             dm = lossy.moments(grid, cfun, pm.eps0, delay)
         else:
-            dm = digital_moments(systems, grid, cfun, pm.eps0, n, d, delay)
+            dm = digital_moments(pm, grid, cfun, delay)
         found.append(dm)
         return dm.moments
 
     exact, exact_stats = run_exact(spec, notes, moments)
     summary = digital_summary(
-        spec.digital, grid, found[0] if found else None, pm, cfun, t_end=spec.T
+        spec.digital, grid, found[0] if found else None, pm, cfun, spec.T, spec.digital_steps
     )
     if lossy is not None:
         summary = replace(summary, loss=lossy.block())
@@ -351,6 +352,7 @@ def digital_summary(
     pm: PreparedModes,
     cfun: Callable,
     t_end: float | None = None,
+    steps: tuple[int, float] | None = None,
 ) -> DigitalRun:
     """What a digital run reports beside its curves: the period, the delay, K, the last
     partial step, the peak of the exact E‖e(t)‖² over [0, T] and the continuous design's
@@ -370,6 +372,9 @@ def digital_summary(
         Vectorised c(t).
     t_end : float, optional
         T (default: the grid's end); the continuous design's moments are taken there.
+    steps : (int, float), optional
+        K and s to ``t_end`` as the spec decided them (``SimulationSpec.digital_steps``);
+        None: :meth:`Digital.steps` at the horizon.
 
     Returns
     -------
@@ -382,7 +387,7 @@ def digital_summary(
     if found is not None:
         cont = pm.moments(cfun, np.array([0.0, horizon]))
         continuous = float(cont.ms_error[-1].sum())
-    k_full, part = digital.steps(horizon)
+    k_full, part = steps if steps is not None else digital.steps(horizon)
     return DigitalRun(
         period=digital.period,
         delay=digital.delay,

@@ -29,13 +29,16 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import InputError, one_line
+from ..choices import Layout, choices
+from ..errors import InputError, Option, one_line
 from .modes import FixedModes
 from .montecarlo import MonteCarloSpec, PartialStats, PathBlocks
 
 SIMULATOR_ENV = "NTC_CUDA_SIMULATOR"
 INSTALL = "pip install 'ntc-design[gpu]'"
-LAYOUTS = ("auto", "fused", "sparse")
+#: The advice when the GPU cannot run: the CPU (the scenario's field, or the flag that gave it).
+CPU = Option("device", "cpu", document=True)
+LAYOUTS = choices(Layout)
 
 
 def simulator_requested() -> bool:
@@ -66,8 +69,10 @@ def load_cuda() -> Any:
     sim = simulator_requested()
     if importlib.util.find_spec("numba_cuda") is None:
         raise InputError(
-            "device: gpu needs numba-cuda, which is not installed (ntc-design was not "
-            f"installed with the gpu extra: {INSTALL}); or use device: cpu"
+            "gpu needs numba-cuda, which is not installed (ntc-design was not "
+            f"installed with the gpu extra: {INSTALL}); or use ",
+            CPU,
+            field="device",
         )
     if sim:
         os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
@@ -89,7 +94,7 @@ def load_cuda() -> Any:
             "process; set it before starting Python"
         )
     if not cuda.is_available():
-        raise InputError(f"device: gpu: {_why_unavailable()}; use device: cpu")
+        raise InputError(f"gpu: {_why_unavailable()}; use ", CPU, field="device")
     from numba.cuda.cudadrv import nvvm
 
     if not nvvm.is_available():
@@ -170,7 +175,7 @@ class GpuEngine:
         state, else a thread per row and path), ``fused`` or ``sparse``.
     """
 
-    layout: str = "auto"
+    layout: Layout = "auto"
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:

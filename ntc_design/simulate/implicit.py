@@ -28,6 +28,7 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
+from ..choices import Solver, choices
 from ..errors import InputError
 
 #: Largest Nd solved by a sparse LU.
@@ -43,7 +44,7 @@ GMRES_RESTART, GMRES_MAX_RESTARTS = 40, 50
 #: Significant digits of c·h that key the solvers.
 CH_DIGITS = 12
 
-METHODS = ("auto", "lu", "jacobi", "gmres")
+METHODS = choices(Solver)
 
 
 def ch_key(ch: float) -> float:

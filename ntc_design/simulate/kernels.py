@@ -107,15 +107,31 @@ def ziggurat_slow(i, u, s0, s1, s2, s3):
 
 
 @numba.njit(nogil=True, error_model="numpy")
-def _draw_lanes(s0, s1, s2, s3, zt, wl, c2):
-    """The next ``len(zt)`` normals of each lane's stream (lane q's state in s0[q] … s3[q]),
-    scaled: ``zt[e, q] = c2 · z``. One pass
-    over the lanes per normal, xoshiro256** and the ziggurat's fast test with no branch
-    (it vectorises across lanes); then, if any lane failed the fast test (for 128 lanes
-    two passes in five), that lane's tail or wedge from the same stream, at once: each
-    lane's words are consumed in the same order as :func:`fill_normals` consumes them."""
+def draw_lanes(s0, s1, s2, s3, zt, wl, c2, m):
+    """The next ``m`` normals of each lane's stream (lane q's state in s0[q] … s3[q]),
+    scaled, into the first ``m`` rows of ``zt``: ``zt[e, q] = c2 · z``. One pass over
+    the lanes per normal, xoshiro256** and the ziggurat's fast test with no branch (it
+    vectorises across lanes); then, if any lane failed the fast test (for 128 lanes two
+    passes in five), that lane's tail or wedge from the same stream, at once: each lane's
+    words are consumed in the same order as :func:`fill_normals` consumes them. Shared by
+    the kernels here and the lossy kernel (:mod:`.loss_kernels`), which draws its arrivals
+    after the normals from the same stream.
+
+    Parameters
+    ----------
+    s0, s1, s2, s3 : numpy.ndarray
+        (lanes,) uint64: the four words of each lane's xoshiro256** state, updated.
+    zt : numpy.ndarray
+        (>= m, lanes) float64: the normals, written.
+    wl : numpy.ndarray
+        (lanes,) uint64: scratch (each lane's last word).
+    c2 : float
+        The scale (1.0: the normals themselves, to the bit).
+    m : int
+        Normals per lane.
+    """
     w = s0.size
-    for e in range(zt.shape[0]):
+    for e in range(m):
         nb = np.int64(0)
         for q in range(w):
             a0, a1, a2, a3 = s0[q], s1[q], s2[q], s3[q]
@@ -171,7 +187,7 @@ def fill_normals(states, out):
         zt = np.empty((m, w))
         wl = np.empty(w, dtype=np.uint64)
         for k in range(kk):
-            _draw_lanes(st[0], st[1], st[2], st[3], zt, wl, 1.0)
+            draw_lanes(st[0], st[1], st[2], st[3], zt, wl, 1.0, zt.shape[0])
             for q in range(w):
                 for e in range(m):
                     out[k, q0 + q, e] = zt[e, q]
@@ -300,7 +316,7 @@ def _em_core(
             cur = ((k_base + k) % ring) * nd
             nxt = ((k_base + k + 1) % ring) * nd  # x_{j−D}'s slot (measured), then x_{j+1}'s
             if states is not None:
-                _draw_lanes(st[0], st[1], st[2], st[3], zt, wl, c2)
+                draw_lanes(st[0], st[1], st[2], st[3], zt, wl, c2, zt.shape[0])
             if xi is not None:
                 for q in range(w):
                     for e in range(2 * ne):

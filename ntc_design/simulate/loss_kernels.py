@@ -28,14 +28,7 @@ from ..numerics.linalg import numba_cache_dir
 numba_cache_dir()  # before Numba reads its configuration
 import numba  # noqa: E402
 
-from .kernels import ziggurat_slow  # noqa: E402
-from .ziggurat import LAYERS, ZIG_R, ZIG_X  # noqa: E402
-
-# frozen globals, as in .kernels: the table lookups vectorise across the lanes
-_ZX = ZIG_X.copy()
-_ZR = ZIG_R.copy()
-_MASK = np.uint64(LAYERS - 1)
-TO_UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³
+from .kernels import TO_UNIT, draw_lanes  # noqa: E402
 
 #: The policies by code in the kernel.
 POLICY_CODES = {"skip": 0, "rescale": 1, "hold": 2}
@@ -45,36 +38,8 @@ POLICY_CODES = {"skip": 0, "rescale": 1, "hold": 2}
 def _lanes(s0, s1, s2, s3, zt, ut, wl, m, ne):
     """Each lane's next ``m`` normals into ``zt[:m]`` (as :func:`.kernels.fill_normals`
     draws them), then its next ``ne`` words as uniforms in [0, 1) into ``ut``."""
+    draw_lanes(s0, s1, s2, s3, zt, wl, 1.0, m)
     w = s0.size
-    for e in range(m):
-        nb = np.int64(0)
-        for q in range(w):
-            a0, a1, a2, a3 = s0[q], s1[q], s2[q], s3[q]
-            a5 = a1 * np.uint64(5)
-            wd = ((a5 << np.uint64(7)) | (a5 >> np.uint64(57))) * np.uint64(9)
-            t = a1 << np.uint64(17)
-            a2 ^= a0
-            a3 ^= a1
-            a1 ^= a2
-            a0 ^= a3
-            a2 ^= t
-            s0[q], s1[q], s2[q] = a0, a1, a2
-            s3[q] = (a3 << np.uint64(45)) | (a3 >> np.uint64(19))
-            li = np.int64(wd & _MASK)
-            uu = 2.0 * (np.int64(wd >> np.uint64(11)) * TO_UNIT) - 1.0
-            wl[q] = wd
-            nb += np.int64(abs(uu) >= _ZR[li])
-            zt[e, q] = uu * _ZX[li]
-        if nb:
-            for q in range(w):
-                wd = wl[q]
-                li = np.int64(wd & _MASK)
-                uu = 2.0 * (np.int64(wd >> np.uint64(11)) * TO_UNIT) - 1.0
-                if abs(uu) >= _ZR[li]:
-                    z, s0[q], s1[q], s2[q], s3[q] = ziggurat_slow(
-                        li, uu, s0[q], s1[q], s2[q], s3[q]
-                    )
-                    zt[e, q] = z
     for e in range(ne):
         for q in range(w):
             a0, a1, a2, a3 = s0[q], s1[q], s2[q], s3[q]
@@ -190,6 +155,7 @@ def loss_steps(
         ut = np.empty((ne, w))
         df = np.empty((d, w))
         av = np.empty((d, w))
+        mb = np.empty(w)
         st = np.empty((4, w if drawing else 0), dtype=np.uint64)
         for qq in range(st.shape[1]):
             for c in range(4):
@@ -222,31 +188,38 @@ def loss_steps(
                 io = dst[e] * d
                 jo = src[e] * d
                 qe = q[e]
+                # lane loops innermost and branch-free (selects), coefficients hoisted:
+                # the sums keep the order of the recursion written out (bit for bit)
                 for c in range(d):
                     for qq in range(w):
                         df[c, qq] = xt[nxt + jo + c, qq] - xt[nxt + io + c, qq]
                 for a in range(d):
                     for qq in range(w):
                         av[a, qq] = 0.0
+                        mb[qq] = 0.0
                     for c in range(d):
-                        sa, aa = signed[e, a, c], absw[e, a, c]
+                        sa, aa, ka = signed[e, a, c], absw[e, a, c], kmat[e, a, c]
                         for qq in range(w):
                             av[a, qq] += sa * xt[nxt + jo + c, qq] - aa * xt[nxt + io + c, qq]
-                for a in range(d):
+                            mb[qq] += ka * df[c, qq]
                     ga = gvec[e, a]
-                    for qq in range(w):
-                        mb = 0.0
-                        for c in range(d):
-                            mb += kmat[e, a, c] * df[c, qq]
-                        nz = ga * zt[e, qq] + mb * zt[ne + e, qq]
-                        hit = ut[e, qq] < qe
-                        if policy == 2:
-                            if hit:
-                                yt[e * d + a, qq] = av[a, qq] + r2 * nz
-                            dx[io + a, qq] += c1 * yt[e * d + a, qq]
-                        elif hit:
+                    if policy == 2:
+                        ya = e * d + a
+                        for qq in range(w):
+                            nz = ga * zt[e, qq] + mb[qq] * zt[ne + e, qq]
+                            fresh = av[a, qq] + r2 * nz
+                            yt[ya, qq] = fresh if ut[e, qq] < qe else yt[ya, qq]
+                            dx[io + a, qq] += c1 * yt[ya, qq]
+                    elif policy == 1:
+                        for qq in range(w):
+                            nz = ga * zt[e, qq] + mb[qq] * zt[ne + e, qq]
+                            term = (c1 * av[a, qq] + c2 * nz) / qe
+                            dx[io + a, qq] += term if ut[e, qq] < qe else 0.0
+                    else:
+                        for qq in range(w):
+                            nz = ga * zt[e, qq] + mb[qq] * zt[ne + e, qq]
                             term = c1 * av[a, qq] + c2 * nz
-                            dx[io + a, qq] += term / qe if policy == 1 else term
+                            dx[io + a, qq] += term if ut[e, qq] < qe else 0.0
             for r in range(nd):
                 for qq in range(w):
                     xt[nxt + r, qq] = xt[cur + r, qq] + dx[r, qq]

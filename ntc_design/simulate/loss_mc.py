@@ -9,7 +9,7 @@ batch of steps, the normals (K, p, 2E) and then the uniforms (K, p, E).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +26,10 @@ from .montecarlo import (
 )
 from .rng import path_states
 from .system import ModeSystem
+
+#: Device memory for one chunk of lossy paths on the GPU (their rings, held measurements
+#: and draws; the host keeps a copy of the rings at each save and check point).
+GPU_CHUNK_BYTES = 512 * 2**20
 
 
 @dataclass(frozen=True, eq=False)
@@ -127,20 +131,45 @@ class LossMonteCarloSpec(PathBlocks):
         )
         return np.tile(y.reshape(-1), (p, 1))
 
-    def run_block(self, b: int, progress=None) -> PartialStats:
-        """Integrate block b of the paths.
+    @property
+    def chunk_blocks(self) -> int:
+        """Blocks integrated together: 1 on the CPU; on the GPU as many as keep the
+        device's arrays of a chunk within :data:`GPU_CHUNK_BYTES` (one launch for all).
+
+        Returns
+        -------
+        int
+        """
+        if self.device != "gpu":
+            return 1
+        ne, width = self.system.n_edges, self.x_init.size * (self.delay + 1)
+        per_path = 8 * (width + ne * self.dim + 3 * ne + self.x_init.size + 4)
+        return max(1, GPU_CHUNK_BYTES // (per_path * self.block_paths))
+
+    def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:
+        """Integrate several blocks: on the CPU one after the other, on the GPU side by
+        side (:func:`.loss_cuda.run_loss_blocks`, the same numbers).
 
         Parameters
         ----------
-        b : int
-            The block (its streams from the b-th child of the seed).
+        blocks : sequence of int
+            Block indices.
         progress : callable(int), optional
             Called with path-steps done.
 
         Returns
         -------
-        PartialStats
+        list of PartialStats
         """
+        if self.device == "gpu":
+            from .loss_cuda import run_loss_blocks  # numba-cuda: only on a GPU
+
+            return run_loss_blocks(self, blocks, progress)
+        return [self.run_block(b, progress) for b in blocks]
+
+    def run_block(self, b: int, progress=None) -> PartialStats:  # doc: PathBlocks.run_block
+        if self.device == "gpu":
+            return self.run_blocks([b], progress)[0]
         from .loss_kernels import POLICY_CODES, loss_steps  # numba: only when simulating
 
         grid, bp = self.grid, self.block_paths
@@ -190,18 +219,10 @@ class LossMonteCarloSpec(PathBlocks):
             k = k0
             while k < k0 + kb:
                 stop = min(next(c for c in cuts if c > k), k0 + kb)
-                if self.device == "gpu":
-                    from .loss_cuda import gpu_loss_steps  # numba-cuda: only on a GPU
-
-                    gpu_loss_steps(
-                        x, held, states, 2 * ne, k - k0, stop - k0, ch, cs, rh, arrays, code,
-                        self.delay, k0,
-                    )  # fmt: skip
-                else:
-                    loss_steps(  # type: ignore[call-arg]
-                        x, held, states, xi, uni, 2 * ne, k - k0, stop - k0, ch, cs, rh,
-                        *arrays, code, tile, self.delay, k0,
-                    )  # fmt: skip
+                loss_steps(  # type: ignore[call-arg]
+                    x, held, states, xi, uni, 2 * ne, k - k0, stop - k0, ch, cs, rh,
+                    *arrays, code, tile, self.delay, k0,
+                )  # fmt: skip
                 k = stop
                 if k in save_at and not stats.record(now(k), save_at[k]):
                     return stats.result()

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..protocol import ProtocolDesign
 from .implicit import SolverCache
 from .system import ModeSystem
 
@@ -90,6 +91,95 @@ class Moments:
     ms_error: np.ndarray  # (S, N) E‖x_i − θ‖²
     second: np.ndarray  # (Nd, Nd) S at the final time
     steps: int
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedModes:
+    """What every run over one topology, a switching set or a sampled A(t) shares before
+    any time grid: the designs and linear systems per mode, the segments on [0, T), x(0),
+    θ and the notes so far (:func:`~ntc_design.simulate.prepare.prepare_modes`). The
+    moment engines (:func:`exact_moments`, :func:`em_moments`,
+    :func:`~ntc_design.simulate.digital.digital_moments`) take it whole."""
+
+    names: list[str]
+    designs: dict[str, ProtocolDesign]
+    systems: list[ModeSystem]
+    segments: list[tuple[float, float, int]]
+    x_init: np.ndarray
+    theta: np.ndarray
+    n: int
+    d: int
+    notes: list[str]
+
+    @classmethod
+    def of(
+        cls,
+        systems: Sequence[ModeSystem],
+        eps0: np.ndarray,
+        segments: Sequence[tuple[float, float, int]] = (),
+    ) -> PreparedModes:
+        """Modes from their systems and ε(0) alone, for the engines on systems built by
+        hand: ε's moments do not depend on θ (linear f), so θ is taken as 0 and
+        x(0) = ε(0); no designs.
+
+        Parameters
+        ----------
+        systems : sequence of ModeSystem
+            One system per mode.
+        eps0 : numpy.ndarray
+            ε(0) = x(0) − 1⊗θ, length Nd.
+        segments : sequence of (float, float, int), optional
+            (start, stop, mode index) covering the horizon (for :func:`exact_moments`).
+
+        Returns
+        -------
+        PreparedModes
+        """
+        s0 = systems[0]
+        eps = np.asarray(eps0, dtype=float)
+        return cls(
+            names=[s.name for s in systems],
+            designs={},
+            systems=list(systems),
+            segments=list(segments),
+            x_init=eps,
+            theta=np.zeros(s0.dim),
+            n=s0.n_agents,
+            d=s0.dim,
+            notes=[],
+        )
+
+    @property
+    def eps0(self) -> np.ndarray:
+        """ε(0) = x(0) − 1⊗θ."""
+        return self.x_init - np.tile(self.theta, self.n)
+
+    def moments(
+        self,
+        gain: Callable,
+        save_times: np.ndarray,
+        kappa: float = KAPPA,
+        abort_above: float | None = None,
+    ) -> Moments:
+        """The exact moments of these modes under the gain ``gain`` (linear f):
+        :func:`exact_moments`.
+
+        Parameters
+        ----------
+        gain : callable
+            Vectorised c(t).
+        save_times : numpy.ndarray
+            Where to record them.
+        kappa : float, optional
+            RK4's c·h·ρ (default :data:`KAPPA`).
+        abort_above : float, optional
+            Stop once tr S exceeds it (the rest +∞; :func:`exact_moments`).
+
+        Returns
+        -------
+        Moments
+        """
+        return exact_moments(self, gain, save_times, kappa=kappa, abort_above=abort_above)
 
 
 class MomentRecorder:
@@ -292,13 +382,9 @@ class MomentRhs:
 
 
 def exact_moments(
-    systems: Sequence[ModeSystem],
-    segments: Sequence[tuple[float, float, int]],
+    modes: PreparedModes,
     gain: Callable[[np.ndarray], np.ndarray],
-    eps0: np.ndarray,
     save_times: np.ndarray,
-    n: int,
-    d: int,
     kappa: float = KAPPA,
     abort_above: float | None = None,
 ) -> Moments:
@@ -306,20 +392,13 @@ def exact_moments(
 
     Parameters
     ----------
-    systems : sequence of ModeSystem
-        One system per mode.
-    segments : sequence of (float, float, int)
-        (start, stop, mode index) covering the horizon.
+    modes : PreparedModes
+        The systems per mode, the segments (start, stop, mode index) covering the
+        horizon and ε(0) (:meth:`PreparedModes.of` for systems built by hand).
     gain : callable
         Vectorised c(t).
-    eps0 : numpy.ndarray
-        ε(0) = x(0) − 1⊗θ, length Nd.
     save_times : numpy.ndarray
         Where to record the moments.
-    n : int
-        The number of agents N.
-    d : int
-        The state dimension d.
     kappa : float, optional
         The RK4 steps' c·h·ρ (default ``KAPPA`` = 0.2; RK4 is stable to 2.78, and a
         coarser κ only loses accuracy in modes that have decayed).
@@ -337,8 +416,9 @@ def exact_moments(
     ------
     InputError
         Nd is above ``MOMENTS_MAX_ND``."""
+    n, d, eps0 = modes.n, modes.d, modes.eps0
     check_moments_size(n * d)
-    rhs = [MomentRhs(s, n, d) for s in systems]
+    rhs = [MomentRhs(s, n, d) for s in modes.systems]
     m = eps0.astype(float).copy()
     s = np.outer(eps0, eps0)
     rec = MomentRecorder(save_times, n, d)
@@ -346,7 +426,7 @@ def exact_moments(
     steps = 0
 
     for t, h, mode in march(
-        segments, rec.saves, lambda t, mode: _rk4_cap(rhs[mode], gain, t, kappa)
+        modes.segments, rec.saves, lambda t, mode: _rk4_cap(rhs[mode], gain, t, kappa)
     ):
         f = rhs[mode]
         ch = np.asarray(gain(np.array([t, t + h / 2, t + h])), dtype=float) * np.ones(3)
@@ -406,12 +486,9 @@ def march(
 
 
 def em_moments(
-    systems: Sequence[ModeSystem],
+    modes: PreparedModes,
     grid,
     gain: Callable[[np.ndarray], np.ndarray],
-    eps0: np.ndarray,
-    n: int,
-    d: int,
     scheme: str = "explicit",
 ) -> Moments:
     """Exact moments of the Euler–Maruyama *recursion* on ``grid`` (what the Monte Carlo
@@ -427,18 +504,12 @@ def em_moments(
 
     Parameters
     ----------
-    systems : sequence of ModeSystem
-        One system per mode.
+    modes : PreparedModes
+        The systems per mode and ε(0).
     grid : TimeGrid
         The Monte Carlo grid.
     gain : callable
         Vectorised c(t).
-    eps0 : numpy.ndarray
-        ε(0), length Nd.
-    n : int
-        The number of agents N.
-    d : int
-        The state dimension d.
     scheme : {"explicit", "implicit"}, optional
         The Euler–Maruyama scheme.
 
@@ -451,6 +522,7 @@ def em_moments(
     ------
     InputError
         Nd is above ``MOMENTS_MAX_ND``."""
+    n, d, eps0, systems = modes.n, modes.d, modes.eps0, modes.systems
     check_moments_size(n * d)
     rhs = [MomentRhs(s, n, d) for s in systems]
     m = eps0.astype(float).copy()

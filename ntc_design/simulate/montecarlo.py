@@ -106,6 +106,17 @@ class PathBlocks:
         return [self.run_block(b, progress) for b in blocks]
 
     @property
+    def chunk_blocks(self) -> int:
+        """Blocks one task integrates together (1; a GPU run takes many at once). The
+        result does not depend on it.
+
+        Returns
+        -------
+        int
+        """
+        return 1
+
+    @property
     def block_paths(self) -> int:
         """Paths per block: ``block_size``, or fewer so that there are at least
         MIN_BLOCKS blocks (a function of ``paths`` only, never of the workers)."""
@@ -164,20 +175,7 @@ class MonteCarloSpec(PathBlocks):
         """
         return self.modes.callable_f()
 
-    def run_block(self, b: int, progress=None) -> PartialStats:
-        """Integrate block b of the paths (:meth:`PathBlocks.run_block`).
-
-        Parameters
-        ----------
-        b : int
-            The block.
-        progress : callable(int), optional
-            Called with path-steps done.
-
-        Returns
-        -------
-        PartialStats
-        """
+    def run_block(self, b: int, progress=None) -> PartialStats:  # doc: PathBlocks.run_block
         return _run_block(self, b, progress)
 
     def run_blocks(self, blocks: Sequence[int], progress=None) -> list[PartialStats]:

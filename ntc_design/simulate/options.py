@@ -12,9 +12,11 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..choices import Device, Rng, Scheme, SteppingKind, choices
 from ..errors import (
     MAX_SEED,
     InputError,
+    Option,
     real_float,
     require_int,
     require_number,
@@ -24,7 +26,7 @@ from .noise import MAX_MAGNITUDE, NoiseModel
 
 MAX_VECTOR = 10_000_000  # entries in θ, the initial state or save_times
 MAX_WORKERS = 4096
-DEVICES = ("cpu", "gpu")
+DEVICES = choices(Device)
 Noise = NoiseModel
 
 
@@ -203,16 +205,16 @@ class Stepping:
     uniform in s = ∫c dt: h = min(ds / c(t), h_max)); ``ds`` defaults to ``dt`` and
     ``h_max`` to max(1, 100·dt)."""
 
-    kind: str = "uniform"
+    kind: SteppingKind = "uniform"
     dt: float = 1e-3
     ds: float | None = None
     h_max: float | None = None
-    scheme: str = "explicit"  # or "implicit": (I + c h L_B) x_{k+1} = x_k + c h u + noise
+    scheme: Scheme = "explicit"  # or "implicit": (I + c h L_B) x_{k+1} = x_k + c h u + noise
 
     def __post_init__(self) -> None:
-        if self.kind not in ("uniform", "intrinsic"):
+        if self.kind not in choices(SteppingKind):
             raise InputError(f"stepping: must be uniform or intrinsic, got {self.kind!r}")
-        if self.scheme not in ("explicit", "implicit"):
+        if self.scheme not in choices(Scheme):
             raise InputError(f"scheme: must be explicit or implicit, got {self.scheme!r}")
         if self.scheme == "implicit" and self.kind != "intrinsic":
             raise InputError(
@@ -260,8 +262,8 @@ class MonteCarlo:
     block_size: int = 500
     store_paths: int = 10
     workers: int = 2
-    rng: str = "xoshiro"  # xoshiro256** per path, drawn in the kernel; or numpy (PCG64)
-    device: str = "cpu"  # or "gpu": the same paths on an NVIDIA GPU (.gpu)
+    rng: Rng = "xoshiro"  # xoshiro256** per path, drawn in the kernel; or numpy (PCG64)
+    device: Device = "cpu"  # or "gpu": the same paths on an NVIDIA GPU (.gpu)
 
     def __post_init__(self) -> None:
         require_int("paths", self.paths, minimum=1, maximum=MAX_PATHS)
@@ -269,14 +271,18 @@ class MonteCarlo:
         require_int("block_size", self.block_size, minimum=1, maximum=MAX_PATHS)
         require_int("store_paths", self.store_paths, minimum=0, maximum=MAX_PATHS)
         check_workers(self.workers)
-        if self.rng not in ("xoshiro", "numpy"):
+        if self.rng not in choices(Rng):
             raise InputError(f"rng: expected xoshiro or numpy, got {self.rng!r}")
         if self.device not in DEVICES:
             raise InputError(f"device: expected cpu or gpu, got {self.device!r}")
         if self.device == "gpu" and self.rng == "numpy":
             raise InputError(
-                "rng: numpy stays on the CPU (device: gpu draws xoshiro256** normals in the "
-                "kernel); use rng: xoshiro or device: cpu"
+                "numpy stays on the CPU (device: gpu draws xoshiro256** normals in the "
+                "kernel); use ",
+                Option("rng", "xoshiro", document=True),
+                " or ",
+                Option("device", "cpu", document=True),
+                field="rng",
             )
         for f in fields(self):
             if f.name not in ("rng", "device"):

@@ -1,15 +1,16 @@
 """The prepared modes of a run: the designs per mode (Lemma 1, re-designed per mode of a
 switching file or every ``resample`` time units for a topology given as functions of t),
 the mode systems, the segments on [0, T) and x(0), after the size checks and before any
-time grid (:func:`prepare_modes`); the digital protocol's sampling grid on them
-(:func:`sampled_grid`); c(t) from an expression or a callable (:func:`make_gain`).
-:func:`.driver.simulate` runs them; the tuners and the reports evaluate them.
+time grid (:func:`prepare_modes`, a :class:`PreparedModes`); the digital protocol's
+sampling grid on them (:func:`sampled_grid`); c(t) from an expression or a callable
+(:func:`make_gain`). :func:`.driver.simulate` runs them; the tuners and the reports
+evaluate them. :class:`PreparedModes` is defined beside the moment engines that take it
+whole (:mod:`.moments`, which this module imports) and imported from here.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, TypeAlias, TypeGuard, cast
 
 import numpy as np
@@ -18,6 +19,7 @@ from ..errors import LONG_WORK_SECONDS, InputError, format_seconds, quote, warn_
 from ..expr.tree import numeric_function
 from ..model import ExpressionFamily, SwitchingTopology, TimeVaryingTopology, Topology
 from ..protocol import ProtocolDesign, design_topology
+from ..protocol.agents import require_sampled
 from ..protocol.digital import Digital, step_modes
 from .budget import (
     check_budget,
@@ -29,9 +31,11 @@ from .digital import (
     digital_grid,
 )
 from .grid import TimeGrid
-from .moments import KAPPA, Moments, check_moments_size, exact_moments
+
+# PreparedModes is defined beside the moment engines that take it (which this module imports)
+from .moments import PreparedModes, check_moments_size
 from .spec import SimulationSpec
-from .system import ModeSystem, mode_system
+from .system import mode_system
 
 if TYPE_CHECKING:
     from ..model.timevarying import ExpressionTopology
@@ -241,8 +245,8 @@ def check_size(
     """
     saves = spec.save.count(spec.T)
     st = spec.stepping
-    if spec.digital is not None:  # one step per sample
-        steps = float(spec.digital.steps(spec.T)[0])
+    if spec.digital_steps is not None:  # one step per sample
+        steps = float(spec.digital_steps[0])
     else:
         steps = estimate_steps(
             spec.T, st.dt, st.intrinsic_ds, st.max_step, cfun, saves + 2 * n_segments
@@ -277,64 +281,6 @@ def check_size(
             f"{workers} worker(s); fewer paths, a shorter T or a larger dt shorten it "
             "(Ctrl-C stops cleanly, writing nothing)",
             UserWarning,
-        )
-
-
-@dataclass(frozen=True, eq=False)
-class PreparedModes:
-    """What every run over one topology, a switching set or a sampled A(t) shares before
-    any time grid: the designs and linear systems per mode, the segments on [0, T), x(0),
-    θ and the notes so far (:func:`prepare_modes`)."""
-
-    names: list[str]
-    designs: dict[str, ProtocolDesign]
-    systems: list[ModeSystem]
-    segments: list[tuple[float, float, int]]
-    x_init: np.ndarray
-    theta: np.ndarray
-    n: int
-    d: int
-    notes: list[str]
-
-    @property
-    def eps0(self) -> np.ndarray:
-        """ε(0) = x(0) − 1⊗θ."""
-        return self.x_init - np.tile(self.theta, self.n)
-
-    def moments(
-        self,
-        gain: Callable,
-        save_times: np.ndarray,
-        kappa: float = KAPPA,
-        abort_above: float | None = None,
-    ) -> Moments:
-        """The exact moments of these modes under the gain ``gain`` (linear f).
-
-        Parameters
-        ----------
-        gain : callable
-            Vectorised c(t).
-        save_times : numpy.ndarray
-            Where to record them.
-        kappa : float, optional
-            RK4's c·h·ρ (default :data:`.moments.KAPPA`).
-        abort_above : float, optional
-            Stop once tr S exceeds it (the rest +∞; :func:`.moments.exact_moments`).
-
-        Returns
-        -------
-        Moments
-        """
-        return exact_moments(
-            self.systems,
-            self.segments,
-            gain,
-            self.eps0,
-            save_times,
-            self.n,
-            self.d,
-            kappa=kappa,
-            abort_above=abort_above,
         )
 
 
@@ -422,8 +368,7 @@ def sampled_grid(
     InputError
         h > T or too many steps.
     """
-    if is_expression_topology(topology):
-        raise InputError("digital: a topology given as expressions of t is not sampled")
+    require_sampled(topology)
     fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
     return digital_grid(digital, t_end, save_times, step_mode(fixed, pm, digital.period))[0]
 

@@ -26,9 +26,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..choices import Rng, choices
 from .ziggurat import ZIG_R, ZIG_X
 
-GENERATORS = ("xoshiro", "numpy")
+GENERATORS = choices(Rng)
 
 
 _NONZERO = np.array(

@@ -56,7 +56,7 @@ def load_scenario(
     data : ScenarioData, optional
         The file as :func:`ntc_design.io.files.parse_scenario` already read it (not read again).
     flags : mapping of str to str, optional
-        The flag that gave each override (``{"paths": "--paths"}``): an error about an
+        The command line's name for each override it gave (its flag): an error about an
         override names it, not the file.
 
     Returns
@@ -75,7 +75,8 @@ def load_scenario(
     try:  # unprefixed, to say whether the file or a flag gave the field
         spec = SimulationSpec._from_document(doc, sc.source)
     except InputError as exc:
-        named = {k: v for k, v in (flags or {}).items() if k in given}
+        # a flag for a field of an override's block too (digital.period, given by its flag)
+        named = {k: v for k, v in (flags or {}).items() if k.split(".", 1)[0] in given}
         raise blame(exc, sc.source, named, values=given) from None
     top = load(sc.topology)
     return top, spec, sc

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import SimulateMethod, choices
 from ..errors import (
     InputError,
     quote,
@@ -146,7 +147,7 @@ SCENARIO_KEYS = (
     "digital",
 )
 OPTION_KEYS = tuple(k for k in SCENARIO_KEYS if k not in ("name", "description", "topology"))
-METHODS = ("mc", "exact", "both")
+METHODS = choices(SimulateMethod)
 MAX_GAIN_TEXT = 10_000
 
 
@@ -179,7 +180,7 @@ class SimulationSpec:
         ΔC > 0 of the Lemma 1 design (δ = C + ΔC).
     delta : float or None
         An explicit common coupling δ > 0 for every mode instead of C + ΔC (what
-        ``ntc tune --tune-delta`` writes); None: Lemma 1's.
+        ``ntc tune`` writes when it tunes δ); None: Lemma 1's.
     gain : str or callable
         c(t): an expression in t, or a vectorised callable.
     noise : NoiseModel
@@ -199,6 +200,9 @@ class SimulationSpec:
     digital : Digital or None
         The sampled protocol (period h, delay D; :mod:`ntc_design.protocol.digital`): the
         recursion is stepped every h instead of the continuous SAN; None: continuous.
+    digital_steps : (int, float) or None
+        K = ⌊T/h⌋ and the partial step s of the sampled protocol (:meth:`Digital.steps`),
+        decided once on construction (None: continuous).
     """
 
     theta: np.ndarray
@@ -211,10 +215,15 @@ class SimulationSpec:
     save: SaveAt = field(default_factory=lambda: SaveAt(every=0.1))
     stepping: Stepping = field(default_factory=Stepping)
     mc: MonteCarlo = field(default_factory=MonteCarlo)
-    method: str = "both"
+    method: SimulateMethod = "both"
     resample: float | None = None
     robust: RobustSampling | None = None
     digital: Digital | None = None
+    #: K and s of the sampled protocol to T (:meth:`Digital.steps`), decided once here:
+    #: the size check, the grid and the run's summary read them.
+    digital_steps: tuple[int, float] | None = field(
+        default=None, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         th = check_vector("theta", self.theta, bound=MAX_MAGNITUDE)
@@ -259,7 +268,8 @@ class SimulationSpec:
                     "digital: the sampled protocol steps every period h; stepping: intrinsic "
                     "and scheme: implicit do not apply to it"
                 )
-            self.digital.steps(self.T)  # h <= T and a bounded number of steps
+            # h <= T and a bounded number of steps
+            object.__setattr__(self, "digital_steps", self.digital.steps(self.T))
         if self.mc.device == "gpu":
             if self.stepping.scheme != "explicit":
                 raise InputError("scheme: implicit runs on the CPU only (device: cpu)")

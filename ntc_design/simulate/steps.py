@@ -147,7 +147,7 @@ def run_monte_carlo(
         part = engine.run_mc(mspec, progress)
         stats["engine"] = engine.describe()
     else:
-        part = run(mspec, workers=workers, progress=progress)
+        part = run(mspec, workers, mspec.chunk_blocks, progress)
     sec = max(time.perf_counter() - t0, 1e-9)
     stats.update(
         {"mc_seconds": sec, "path_steps_per_second": mspec.grid.n_steps * mspec.paths / sec}

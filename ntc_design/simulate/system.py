@@ -33,6 +33,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from ..choices import Scheme, choices
 from ..errors import InputError
 from ..numerics.linalg import comparison_solve
 from ..protocol import ProtocolDesign
@@ -432,7 +433,7 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
     )
 
 
-SCHEMES = ("explicit", "implicit")
+SCHEMES = choices(Scheme)
 
 
 def _ms_limit(lam: np.ndarray, mu2: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -213,18 +213,8 @@ class ExpressionModes(ModeSource):
         """
         return batch_size(self.system)
 
-    def ends(self, grid: TimeGrid) -> np.ndarray:
-        """Every step is a mode of its own: a run is one step.
-
-        Parameters
-        ----------
-        grid : TimeGrid
-            The run's grid.
-
-        Returns
-        -------
-        numpy.ndarray
-        """
+    def ends(self, grid: TimeGrid) -> np.ndarray:  # doc: ModeSource.ends
+        # every step is a mode of its own: a run is one step
         return np.arange(1, grid.n_steps + 2)
 
     def step_arrays(self, ts: np.ndarray) -> list:

@@ -22,7 +22,7 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from ..errors import InputError, optional_module
+from ..errors import InputError, Option, optional_module
 from ..simulate.montecarlo import MonteCarloSpec, PartialStats, merge, run, run_chunk
 from ..simulate.options import check_workers
 
@@ -102,7 +102,7 @@ class LocalEngine:
     a sweep ran every point into the same error)."""
 
     def __init__(self, workers: int | None = None):
-        self.workers = None if workers is None else check_workers(workers, "--workers")
+        self.workers = None if workers is None else check_workers(workers, str(Option("workers")))
 
     def describe(self) -> dict:
         """What runs the work, for summaries.
@@ -218,21 +218,23 @@ class DaskEngine:
             When the address is malformed, no scheduler answers within
             :data:`CONNECT_TIMEOUT` seconds, or what answers is not a Dask scheduler.
         """
-        Client = optional_module("distributed", "cluster", "--scheduler").Client
+        Client = optional_module("distributed", "cluster", str(Option("scheduler"))).Client
 
         if not isinstance(address, str) or not address.strip() or len(address) > 1000:
-            raise InputError("--scheduler: expected an address such as tcp://127.0.0.1:8786")
+            raise InputError(
+                f"{Option('scheduler')}: expected an address such as tcp://127.0.0.1:8786"
+            )
         try:
             client = Client(address, timeout=CONNECT_TIMEOUT)
         except MemoryError:  # something answered, but not in Dask's protocol: its reply
             # was read as a frame length of exabytes
             raise InputError(
-                f"--scheduler: {address} answered, but not as a Dask scheduler"
+                f"{Option('scheduler')}: {address} answered, but not as a Dask scheduler"
             ) from None
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             msg = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
             raise InputError(
-                f"--scheduler: cannot reach a Dask scheduler at {address} ({msg})"
+                f"{Option('scheduler')}: cannot reach a Dask scheduler at {address} ({msg})"
             ) from None
         return cls(client, own=True, **kw)
 
@@ -291,7 +293,9 @@ class DaskEngine:
         PartialStats
             Merged in block order: the same as a local run.
         """
-        as_completed = optional_module("distributed", "cluster", "--scheduler").as_completed
+        as_completed = optional_module(
+            "distributed", "cluster", str(Option("scheduler"))
+        ).as_completed
 
         blocks = list(range(spec.n_blocks))
         k = self.blocks_per_chunk
@@ -340,7 +344,7 @@ class DaskEngine:
             ``(key, result, None)``, or ``(key, None, error)`` when the cluster gave up on
             a task (e.g. its workers kept dying).
         """
-        wait = optional_module("distributed", "cluster", "--scheduler").wait
+        wait = optional_module("distributed", "cluster", str(Option("scheduler"))).wait
 
         topic = f"ntc-progress-{uuid.uuid4().hex[:12]}"
         events: queue.SimpleQueue = queue.SimpleQueue()
@@ -423,5 +427,5 @@ def engine_for(scheduler: str | None, workers: int | None = None, **kw):
     if scheduler is None:
         return LocalEngine(workers)
     if workers is not None:  # not used on a cluster, but not silently wrong either
-        check_workers(workers, "--workers")
+        check_workers(workers, str(Option("workers")))
     return DaskEngine.connect(scheduler, **kw)

@@ -56,7 +56,7 @@ class RobustStudy:
         Returns
         -------
         dict
-            ``radius``, ``realizations``, ``brackets`` (as ``ntc robust --json``, without
+            ``radius``, ``realizations``, ``brackets`` (as ``ntc robust`` prints as JSON, without
             the realisations' weights), ``rows`` and the spread of each figure.
         """
 

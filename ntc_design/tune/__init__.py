@@ -1,7 +1,7 @@
 """Tune the gain c(t) (and δ) of a scenario for a deadline: :func:`tune`."""
 
 from .deadline import MonteCarloCheck, ScheduleTuneResult, tune_schedule
-from .entry import tune, tuned_scenario
+from .entry import options_for, tune, tuned_scenario
 from .family import BASELINE, PowerGain
 from .objective import (
     OBJECTIVES,
@@ -12,6 +12,7 @@ from .objective import (
     Objective,
     objective_for,
 )
+from .options import PowerOptions, ScheduleOptions, TuneOptions
 from .result import Landscape, TuneResult
 from .run import delta_range, tune_power
 from .search import Dimension, Trace, search
@@ -28,11 +29,15 @@ __all__ = [
     "MonteCarloObjective",
     "Objective",
     "PowerGain",
+    "PowerOptions",
+    "ScheduleOptions",
     "ScheduleTuneResult",
     "Trace",
+    "TuneOptions",
     "TuneResult",
     "delta_range",
     "objective_for",
+    "options_for",
     "search",
     "tune",
     "tune_power",

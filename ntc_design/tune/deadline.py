@@ -1,4 +1,4 @@
-"""``tune(..., schedule="optimal")``: the best gain schedule for a deadline, with the
+"""``tune(..., ScheduleOptions())``: the best gain schedule for a deadline, with the
 evidence a user needs to trust it.
 
 Steps: the best power law a·(b + t)^(−γ) (:func:`.run.tune_power`, polished by exact gradients; the schedule starts
@@ -20,7 +20,8 @@ from functools import partial
 
 import numpy as np
 
-from ..errors import InputError, require_horizon, require_positive
+from ..choices import Require
+from ..errors import InputError, Option, require_horizon
 from ..gain.schedule import ScheduleGain, analyse_schedule, join_tail
 from ..model import TimeVaryingTopology
 from ..model.timevarying import ExpressionTopology
@@ -31,14 +32,15 @@ from ..simulate.result import Z95
 from .evidence import certify_tuned, checked_spec, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import AnyGain, ExactObjective, objective_for
-from .optimal import check_max_gain, fit_power, optimise_schedule
+from .optimal import fit_power, optimise_schedule
+from .options import CHECK_PATHS, PowerOptions, ScheduleOptions
 from .outcome import (
     AGREE_RTOL,
     MonteCarloCheck,
     ScheduleTuneResult,
     relative_gap,
 )
-from .problem import DEFAULT_MAX_GAIN, LEVELS, MomentProblem, ScheduleProblem
+from .problem import MomentProblem, ScheduleProblem
 from .run import delta_range, tune_power
 from .sampled import SampledScheduleProblem
 
@@ -46,8 +48,7 @@ from .sampled import SampledScheduleProblem
 POWER_EVALUATIONS = 40
 #: Pieces of the schedule that scores each δ of the δ search (``tune_delta``).
 DELTA_PIECES = 10
-#: Monte Carlo paths of the evidence (0: none); z of the 99 % band.
-CHECK_PATHS = 200
+#: z of the 99 % band of the evidence.
 Z99 = 2.5758293035489004
 
 
@@ -69,8 +70,13 @@ def check_schedule_scenario(topology: AnyTopology, spec: SimulationSpec) -> None
     """
     if not spec.noise.linear:
         raise InputError(
-            "--schedule optimal: exact moments exist only for a linear f(x) = F·x; use "
-            "--schedule power --method mc (Monte Carlo with common random numbers)"
+            "exact moments exist only for a linear f(x) = F·x; use ",
+            Option("schedule", "power"),
+            " ",
+            Option("method", "mc"),
+            " (Monte Carlo with common random numbers)",
+            field="schedule",
+            value="optimal",
         )
     ScheduleProblem.check_size(topology.n * topology.dim)
 
@@ -187,7 +193,7 @@ def sampled_levels(prob: MomentProblem, levels: tuple[int, ...]) -> tuple[int, .
 def _polish(
     prob: MomentProblem,
     found: PowerGain,
-    require: str,
+    require: Require,
     obj: ExactObjective,
     delta: float | None,
 ) -> PowerGain:
@@ -252,15 +258,7 @@ def tune_schedule(
     topology: AnyTopology,
     spec: SimulationSpec,
     horizon: float,
-    *,
-    require: str = "both",
-    tune_delta: bool = False,
-    eps: float | None = None,
-    max_gain: float = DEFAULT_MAX_GAIN,
-    max_peak: float | None = None,
-    certificate: bool = True,
-    check_paths: int = CHECK_PATHS,
-    levels: tuple[int, ...] = LEVELS,
+    options: ScheduleOptions | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> ScheduleTuneResult:
     """The optimal c(t) on [0, T] (see :mod:`.optimal`) with its tail, beside the best
@@ -274,23 +272,12 @@ def tune_schedule(
         The scenario (θ, noise with a linear f, x(0), δ or ΔC, Monte Carlo seed).
     horizon : float
         T.
-    require : {"both", "mean-square"}, optional
-        The theorems the power law must satisfy (the schedule's tail satisfies both).
-    tune_delta : bool, optional
-        Also choose δ: the power law's with its search, the schedule's by a bounded
-        search of log δ scored by the schedule optimised on ``DELTA_PIECES`` pieces.
-    eps : float, optional
-        Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.
-    max_gain : float, optional
-        Upper bound on c(t).
-    max_peak : float, optional
-        Bound M on sup_t E Σ‖x_i(t) − θ‖² (above the initial error).
-    certificate : bool, optional
-        Certify the design with the schedule.
-    check_paths : int, optional
-        Monte Carlo paths of the evidence (0: none).
-    levels : tuple of int, optional
-        The refinement's pieces.
+    options : ScheduleOptions, optional
+        The theorems the power law must satisfy (the schedule's tail satisfies both), δ
+        (the power law's with its search, the schedule's by a bounded search of log δ
+        scored by the schedule optimised on ``DELTA_PIECES`` pieces), ε, the bounds on c
+        and on the peak, the certificate, the evidence's paths and the refinement's
+        pieces (default: ``ScheduleOptions()``).
     progress : callable, optional
         Called with a line per stage.
 
@@ -301,17 +288,13 @@ def tune_schedule(
     Raises
     ------
     InputError
-        A bad horizon, bound or scenario (see :func:`check_schedule_scenario`).
+        A bad horizon or scenario (see :func:`check_schedule_scenario`).
     """
     t0 = time.perf_counter()
     require_horizon("horizon", horizon)
-    check_max_gain(max_gain)
-    if max_peak is not None:
-        require_positive("--max-peak", max_peak)
-    if eps is not None:
-        require_positive("eps", eps)
-    if not isinstance(check_paths, int) or not 0 <= check_paths <= 100_000:
-        raise InputError(f"check_paths: expected an integer in [0, 100000], got {check_paths!r}")
+    o = options if options is not None else ScheduleOptions()
+    require, tune_delta, eps, certificate = o.require, o.tune_delta, o.eps, o.certificate
+    max_gain, max_peak, check_paths, levels = o.max_gain, o.max_peak, o.check_paths, o.levels
     check_schedule_scenario(topology, spec)
     notes: list[str] = []
     say = progress or (lambda _m: None)
@@ -329,8 +312,9 @@ def tune_schedule(
         )
     if max_peak is not None and not max_peak > initial:
         raise InputError(
-            f"--max-peak: {max_peak:g} is not above the initial error E Σ‖x_i(0) − θ‖² = "
-            f"{initial:.6g}; no gain can keep below it"
+            f"{max_peak:g} is not above the initial error E Σ‖x_i(0) − θ‖² = "
+            f"{initial:.6g}; no gain can keep below it",
+            field="max_peak",
         )
 
     say("the best power law a·(b + t)^(−γ)")
@@ -338,11 +322,13 @@ def tune_schedule(
         model,
         spec,
         horizon,
-        require=require,
-        tune_delta=tune_delta,
-        max_evaluations=POWER_EVALUATIONS,
-        landscape=False,
-        certificate=False,
+        PowerOptions(
+            require,
+            tune_delta,
+            max_evaluations=POWER_EVALUATIONS,
+            landscape=False,
+            certificate=False,
+        ),
     )
     prob = problem_for(obj, pw.delta, model)
     levels = sampled_levels(prob, levels)
@@ -359,7 +345,7 @@ def tune_schedule(
     notes.extend(sol.notes)
     if sol.binds:
         notes.append(
-            f"--max-gain {max_gain:g} binds on {len(sol.binds)} node(s) from t = {sol.binds[0]:g}: "
+            f"{Option('max_gain', max_gain)} binds on {len(sol.binds)} node(s) from t = {sol.binds[0]:g}: "
             "a larger bound would do better"
         )
     if max_peak is not None and sol.peak[0] > max_peak * (1 + AGREE_RTOL):

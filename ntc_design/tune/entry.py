@@ -7,43 +7,32 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
-from ..errors import InputError
+from ..choices import Schedule, TuneMethod, choices
+from ..errors import InputError, Option
 from ..simulate import SimulationSpec
 from ..simulate.prepare import AnyTopology
-from .deadline import CHECK_PATHS, ScheduleTuneResult, tune_schedule
-from .problem import DEFAULT_MAX_GAIN
+from .deadline import ScheduleTuneResult, tune_schedule
+from .options import PowerOptions, ScheduleOptions
 from .result import TuneResult
-from .run import MAX_EVALUATIONS, tune_power
+from .run import tune_power
 
 #: What ``schedule`` may be.
-SCHEDULES = ("power", "optimal")
+SCHEDULES = choices(Schedule)
 
 
 def tune(
     topology: AnyTopology,
     spec: SimulationSpec,
     horizon: float,
-    *,
-    require: str = "both",
-    tune_delta: bool = False,
-    eps: float | None = None,
-    method: str = "auto",
-    max_evaluations: int = MAX_EVALUATIONS,
-    landscape: bool = True,
-    certificate: bool = True,
-    bounds: Mapping[str, tuple[float, float]] | None = None,
-    family: str = "power",
-    schedule: str = "power",
-    max_gain: float = DEFAULT_MAX_GAIN,
-    max_peak: float | None = None,
-    check_paths: int = CHECK_PATHS,
+    options: PowerOptions | ScheduleOptions | None = None,
     progress: Callable[..., None] | None = None,
 ) -> TuneResult | ScheduleTuneResult:
     """Tune the gain for a deadline T: minimise E Σ_i ‖x_i(T) − θ‖² over the family
-    c(t) = a·(b + t)^(−γ) (and δ), or with ``schedule="optimal"`` over every schedule
-    c(t) on [0, T] by optimal control of the exact moment equations.
+    c(t) = a·(b + t)^(−γ) (and δ) with :class:`~.options.PowerOptions`, or with
+    :class:`~.options.ScheduleOptions` over every schedule c(t) on [0, T] by optimal
+    control of the exact moment equations.
 
     Parameters
     ----------
@@ -53,37 +42,11 @@ def tune(
         The scenario: θ, noise, x(0), δ or ΔC, and for Monte Carlo the paths, seed, dt.
     horizon : float
         The deadline T.
-    require : {"both", "mean-square"}, optional
-        The theorems the power law must satisfy: γ ∈ [0.51, 1] for both (mean square and
-        almost sure), γ ∈ [0.05, 1] for mean square only.
-    tune_delta : bool, optional
-        Also choose a common δ in :func:`.run.delta_range`.
-    eps : float, optional
-        Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.
-    method : {"auto", "exact", "mc"}, optional
-        The power family's objective (auto: exact moments where they apply); the
-        schedule always uses exact moments.
-    max_evaluations : int, optional
-        The power family's search budget.
-    landscape : bool, optional
-        The power family's contour map over (a, γ).
-    certificate : bool, optional
-        Certify the tuned design.
-    bounds : mapping of str to (float, float), optional
-        The power family's narrower ranges for ``a``, ``b``, ``gamma`` or ``delta``.
-    family : {"power"}, optional
-        The gain family: a·(b + t)^(−γ) (the only one).
-    schedule : {"power", "optimal"}, optional
-        ``optimal``: the schedule on [0, T] with an admissible tail (see
-        :mod:`.optimal`).
-    max_gain : float, optional
-        ``optimal``: the upper bound on c.
-    max_peak : float, optional
-        ``optimal``: the bound M on sup_t E Σ‖x_i(t) − θ‖².
-    check_paths : int, optional
-        ``optimal``: Monte Carlo paths of the evidence (0: none).
+    options : PowerOptions or ScheduleOptions, optional
+        What to tune and how (each validated on construction); default: the power law,
+        ``PowerOptions()``.
     progress : callable, optional
-        ``optimal``: called with a line per stage.
+        Called with a line per stage.
 
     Returns
     -------
@@ -92,57 +55,69 @@ def tune(
     Raises
     ------
     InputError
-        A bad option, or a scenario the objective refuses.
+        A bad horizon, or a scenario the objective refuses.
 
     Examples
     --------
     >>> import ntc_design as nd
-    >>> from ntc_design.tune import tune
+    >>> from ntc_design.tune import PowerOptions, tune
     >>> from ntc_design.simulate import NoiseModel, SimulationSpec
     >>> spec = SimulationSpec.build([1, 2, -1], noise=NoiseModel(0.4, 0.3))
-    >>> r = tune(nd.load("examples/g1.yaml"), spec, 2.0, max_evaluations=30,
-    ...          landscape=False, certificate=False)
+    >>> opts = PowerOptions(max_evaluations=30, landscape=False, certificate=False)
+    >>> r = tune(nd.load("examples/g1.yaml"), spec, 2.0, opts)
     >>> r.ms_error_T["tuned"] <= r.ms_error_T["baseline"]
     True
     """
-    if family != "power":
-        raise InputError(f"--family: only 'power' (a·(b + t)^(−γ)) is available, got {family!r}")
-    if schedule not in SCHEDULES:
-        raise InputError(f"--schedule: expected power or optimal, got {schedule!r}")
-    if schedule == "power":
-        if max_peak is not None:
-            raise InputError("--max-peak: applies to --schedule optimal")
-        return tune_power(
-            topology,
-            spec,
-            horizon,
-            require=require,
-            tune_delta=tune_delta,
-            eps=eps,
-            method=method,
-            max_evaluations=max_evaluations,
-            landscape=landscape,
-            certificate=certificate,
-            bounds=bounds,
-            progress=progress,
+    if isinstance(options, ScheduleOptions):
+        return tune_schedule(topology, spec, horizon, options, progress)
+    if options is not None and not isinstance(options, PowerOptions):
+        raise InputError(
+            f"options: expected PowerOptions or ScheduleOptions, got {type(options).__name__}"
         )
+    return tune_power(topology, spec, horizon, options, progress)
+
+
+def options_for(
+    schedule: str, method: str = "auto", **fields: Any
+) -> PowerOptions | ScheduleOptions:
+    """The options of a tuner named by a string, from flat fields (what the command line
+    gives: ``--schedule`` and one flag per field).
+
+    Parameters
+    ----------
+    schedule : {"power", "optimal"}
+        The tuner.
+    method : {"auto", "exact", "mc"}, optional
+        The power law's objective (the schedule always uses exact moments).
+    **fields
+        The fields of :class:`~.options.PowerOptions` or :class:`~.options.ScheduleOptions`.
+
+    Returns
+    -------
+    PowerOptions or ScheduleOptions
+
+    Raises
+    ------
+    InputError
+        An unknown tuner, ``mc`` for the schedule, or a bad field.
+    """
+    if schedule not in SCHEDULES:
+        raise InputError(f"expected power or optimal, got {schedule!r}", field="schedule")
+    if schedule == "power":
+        if fields.pop("max_peak", None) is not None:
+            raise InputError("applies to ", Option("schedule", "optimal"), field="max_peak")
+        return PowerOptions(method=cast("TuneMethod", method), **fields)
     if method not in ("auto", "exact"):
         raise InputError(
-            "--schedule optimal: uses exact moments (--method mc is for --schedule power)"
+            "uses exact moments (",
+            Option("method", "mc"),
+            " is for ",
+            Option("schedule", "power"),
+            ")",
+            field="schedule",
+            value="optimal",
         )
-    return tune_schedule(
-        topology,
-        spec,
-        horizon,
-        require=require,
-        tune_delta=tune_delta,
-        eps=eps,
-        max_gain=max_gain,
-        max_peak=max_peak,
-        certificate=certificate,
-        check_paths=check_paths,
-        progress=progress,
-    )
+    return ScheduleOptions(**fields)
 
 
 def tuned_scenario(
@@ -187,4 +162,4 @@ def tuned_scenario(
     return doc
 
 
-__all__ = ["SCHEDULES", "tune", "tuned_scenario"]
+__all__ = ["SCHEDULES", "options_for", "tune", "tuned_scenario"]

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from ..certify import CertifyResult, certify
+from ..certify.deadline_loss import loss_section
 from ..certify.deadline_subject import add_deadline
 from ..errors import InputError
 from ..gain.schedule import ScheduleGain
@@ -239,6 +240,10 @@ def _add_deadline(res, spec, tuned, deadline: float, notes: list[str]) -> None:
         },
         "initial": {"x0": [float(v) for v in x0]},
     }
+    if dg is not None and dg.period is not None and not modes:  # its lossy links, if any
+        lossy = loss_section(first.topology, dg.loss, dg.policy)
+        if lossy is not None:
+            section["loss"] = lossy
     try:
         if f is None:
             raise InputError("f: a linear f(x) = F x is needed")

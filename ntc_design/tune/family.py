@@ -14,11 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..choices import Require, choices
 from ..errors import InputError
 
 #: What a tuned gain must satisfy: both theorems (mean square and almost sure), or mean
 #: square only.
-REQUIRE = ("both", "mean-square")
+REQUIRE = choices(Require)
 #: Searched exponents: closed intervals inside (1/2, 1] and (0, 1].
 GAMMA_RANGE = {"both": (0.51, 1.0), "mean-square": (0.05, 1.0)}
 #: Searched scale a and offset b (c(0) = a·b^(−γ) is at most 200).
@@ -115,7 +116,7 @@ class PowerGain:
 BASELINE = PowerGain(1.0, 1.0, 1.0)
 
 
-def gamma_range(require: str) -> tuple[float, float]:
+def gamma_range(require: Require) -> tuple[float, float]:
     """The searched exponents for a requirement.
 
     Parameters

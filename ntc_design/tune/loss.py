@@ -1,4 +1,4 @@
-"""The largest tolerable message loss of the digital protocol (``ntc tune --loss auto``):
+"""The largest tolerable message loss of the digital protocol (``ntc tune`` with the loss ``auto``):
 the largest uniform loss p such that every loss in [0, p] keeps the exact
 E Σ_i ‖x_i(T) − θ‖² of the lossy sampled recursion (:mod:`ntc_design.simulate.loss`, one
 policy) within (1 + tolerance) of the lossless sampled protocol's at the same period h and
@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import LossPolicy
 from ..errors import InputError, require_horizon, require_number
 from ..model import Topology
 from ..present.rows import Table, fmt, verdict
@@ -121,7 +122,7 @@ class LossTuning:
         )
 
     def to_dict(self) -> dict:
-        """What ``ntc tune --loss auto --json`` prints.
+        """What ``ntc tune`` prints as JSON for the loss ``auto``.
 
         Returns
         -------
@@ -145,7 +146,7 @@ def largest_tolerable_loss(
     spec: SimulationSpec,
     horizon: float,
     digital: Digital,
-    policy: str = "skip",
+    policy: LossPolicy = "skip",
     tolerance: float = 0.1,
 ) -> LossTuning:
     """The largest uniform loss whose exact error at T, and every smaller loss's, stays
@@ -173,21 +174,21 @@ def largest_tolerable_loss(
     Raises
     ------
     InputError
-        Not one fixed topology, a non-linear f, or a bad option (naming the flag).
+        Not one fixed topology, a non-linear f, or a bad option (naming the parameter).
     """
-    t_end = require_horizon("--horizon", horizon)
-    tol = require_number("--tolerance", tolerance, minimum=0.0)
-    policy = require_policy("--loss-policy", policy)
+    t_end = require_horizon("horizon", horizon)
+    tol = require_number("tolerance", tolerance, minimum=0.0)
+    policy = require_policy("policy", policy)
     if not isinstance(topology, Topology):
-        raise InputError("--loss: lossy links are modelled on one fixed topology")
+        raise InputError("lossy links are modelled on one fixed topology", field="loss")
     base = spec.replace(T=t_end, digital=None, method="exact")
     if not base.noise.linear:
-        raise InputError("--loss: the exact moments need a linear f (a scalar or a matrix)")
+        raise InputError("the exact moments need a linear f (a scalar or a matrix)", field="loss")
     gain = make_gain(base.gain)[0]
     pm = prepare_modes(topology, base, gain)
     s = pm.systems[0]
     delay = digital.delay
-    grid = sampled_grid(topology, pm, Digital(digital.period, delay), t_end, np.array([t_end]))
+    grid = sampled_grid(topology, pm, digital, t_end, np.array([t_end]))  # h: its loss aside
 
     def run(p: float) -> tuple[float, float, float]:
         with np.errstate(all="ignore"):

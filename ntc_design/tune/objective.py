@@ -20,18 +20,21 @@ whose moments overflow, scores +∞ with the reason recorded: it is never the op
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..choices import TuneMethod, choices
 from ..errors import InputError
 from ..gain.schedule import ScheduleGain
 from ..model.timevarying import ExpressionTopology
 from ..protocol import design_topology
+from ..protocol.digital import Digital
 from ..simulate import SimulationSpec, simulate
 from ..simulate.budget import Estimate, exact_seconds, mc_seconds
 from ..simulate.cayley import KAPPA_NOISE, cayley_moments, noise_radius
-from ..simulate.digital import digital_moments
+from ..simulate.digital import DigitalMoments, digital_moments
 from ..simulate.moments import KAPPA, MOMENTS_MAX_ND, generator_radius
 from ..simulate.options import SaveAt
 from ..simulate.prepare import (
@@ -327,9 +330,7 @@ class ExactObjective(Objective):
         with np.errstate(all="ignore"):
             if scheme == "cayley":
                 ds = CAYLEY_DS_ACCURATE if accurate else CAYLEY_DS
-                m = cayley_moments(
-                    pm.systems, pm.segments, gain, pm.eps0, t, pm.n, pm.d, ds, abort_above=limit
-                )
+                m = cayley_moments(pm, gain, t, ds, abort_above=limit)
             else:
                 kappa = KAPPA if accurate else SEARCH_KAPPA
                 m = pm.moments(gain, t, kappa=kappa, abort_above=limit)
@@ -367,17 +368,53 @@ class DigitalObjective(ExactObjective):
             and topology.n * topology.dim <= MOMENTS_MAX_ND
         )
 
+    def moments(
+        self,
+        gain: Callable[[np.ndarray], np.ndarray],
+        save_times: np.ndarray,
+        digital: Digital | None = None,
+        delta: float | None = None,
+        abort_above: float | None = None,
+    ) -> DigitalMoments:
+        """The exact moments of the sampled recursion to T under ``gain`` (what
+        :meth:`curve` reduces, and what the period search of ``ntc tune`` evaluates at each
+        period: the designs are prepared once, whatever h).
+
+        Parameters
+        ----------
+        gain : callable
+            c(t), vectorised (a candidate, or the scenario's gain).
+        save_times : numpy.ndarray
+            Where to record (moved to the nearest sample).
+        digital : Digital, optional
+            The period and delay (default: the scenario's ``digital`` block).
+        delta : float, optional
+            An explicit common δ (else the scenario's).
+        abort_above : float, optional
+            A run whose E‖e_k‖² passes this stops (its values +∞).
+
+        Returns
+        -------
+        DigitalMoments
+
+        Raises
+        ------
+        InputError
+            h > T, or moments too large for memory.
+        """
+        dg = digital if digital is not None else self.spec.digital
+        assert dg is not None  # see accepts
+        pm = self.prepared(delta)[0]
+        grid = sampled_grid(self.topology, pm, dg, self.horizon, save_times)
+        with np.errstate(all="ignore"):
+            return digital_moments(pm, grid, gain, dg.delay, abort_above)
+
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         pm = self.prepared(delta)[0]
-        dg = self.spec.digital
-        assert dg is not None  # see accepts
-        grid = sampled_grid(
-            self.topology, pm, dg, self.horizon, np.linspace(0, self.horizon, points)
-        )
         limit = None if accurate else GROWTH_LIMIT * max(float(pm.eps0 @ pm.eps0), 1.0)
-        with np.errstate(all="ignore"):
-            m = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, dg.delay, limit)
-        return Curve(grid.save_times, m.moments.ms_error.sum(axis=1))
+        save = np.linspace(0, self.horizon, points)
+        m = self.moments(gain, save, delta=delta, abort_above=limit)
+        return Curve(m.moments.t, m.moments.ms_error.sum(axis=1))
 
     def describe(self) -> str:
         """What the objective computes.
@@ -454,7 +491,7 @@ class ExpressionObjective(Objective):
 
     def _curve(self, gain: AnyGain, delta: float | None, points: int, accurate: bool) -> Curve:
         if delta is not None:
-            raise InputError("--tune-delta: a topology given as expressions of t takes δ(t)")
+            raise InputError("a topology given as expressions of t takes δ(t)", field="tune_delta")
         steps = self._steps(gain)
         if steps > MAX_STEPS * (5 if accurate else 1):  # the search's cap is ExactObjective's
             raise InputError(f"{gain.text}: about {steps:.3g} steps at t = 0's radius; too stiff")
@@ -540,8 +577,27 @@ OBJECTIVES: dict[str, type[Objective]] = {
 }
 
 
+def check_method(method: object) -> None:
+    """Refuse an objective that is not one of ``auto``, ``exact`` or ``mc``.
+
+    Parameters
+    ----------
+    method : object
+        The method asked for.
+
+    Raises
+    ------
+    InputError
+        One line naming ``method`` (and why ``both`` is not one).
+    """
+    if method not in choices(TuneMethod):
+        # one objective per candidate: simulate's 'both' (the two curves) has no meaning here
+        why = " (tuning minimises one objective; both is simulate's)" if method == "both" else ""
+        raise InputError(f"method: expected auto, exact or mc, got {method!r}{why}")
+
+
 def objective_for(
-    topology: AnyTopology, spec: SimulationSpec, horizon: float, method: str = "auto"
+    topology: AnyTopology, spec: SimulationSpec, horizon: float, method: TuneMethod = "auto"
 ) -> Objective:
     """The objective for a scenario: the first of :data:`OBJECTIVES` that accepts it
     (``auto``), exact moments (``exact``) or Monte Carlo (``mc``).
@@ -566,10 +622,7 @@ def objective_for(
     InputError
         ``exact`` for a non-linear f or above the exact moments' size; an unknown method.
     """
-    if method not in ("auto", "exact", "mc"):
-        # one objective per candidate: simulate's 'both' (the two curves) has no meaning here
-        why = " (tuning minimises one objective; both is simulate's)" if method == "both" else ""
-        raise InputError(f"method: expected auto, exact or mc, got {method!r}{why}")
+    check_method(method)
     if method == "mc":
         return MonteCarloObjective(topology, spec, horizon)
     for key, cls in OBJECTIVES.items():

@@ -61,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, require_number
+from ..errors import InputError, Option, require_number
 from .family import PowerGain
 from .problem import (
     BIG,
@@ -93,13 +93,16 @@ def check_max_gain(max_gain: float) -> float:
     Raises
     ------
     InputError
-        One line naming --max-gain.
+        One line naming ``max_gain``.
     """
-    v = require_number("--max-gain", max_gain)
+    v = require_number("max_gain", max_gain)
     if not C_MIN < v <= MAX_MAX_GAIN:
         raise InputError(
-            f"--max-gain: expected a number in ({C_MIN:g}, {MAX_MAX_GAIN:g}] (the optimiser "
-            f"searches c(t) in [{C_MIN:g}, --max-gain]), got {max_gain!r}"
+            f"expected a number in ({C_MIN:g}, {MAX_MAX_GAIN:g}] (the optimiser "
+            f"searches c(t) in [{C_MIN:g}, ",
+            Option("max_gain"),
+            f"]), got {max_gain!r}",
+            field="max_gain",
         )
     return v
 
@@ -304,7 +307,11 @@ def solve(
     fwd = prob.forward(param.nodes(x), plan)
     if fwd is None:
         raise InputError(
-            "--schedule optimal: the optimum left RK4's stable range (lower --max-gain)"
+            "the optimum left RK4's stable range (lower ",
+            Option("max_gain"),
+            ")",
+            field="schedule",
+            value="optimal",
         )
     c = param.nodes(x)
     return Solved(x, c, plan, fwd, param.pullback(x, c, prob.adjoint(plan, fwd)), message)

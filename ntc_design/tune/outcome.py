@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..errors import Option
 from ..gain.conditions import GainAnalysis
 from ..gain.schedule import ScheduleGain
 from ..present.rows import Table, fmt, verdict
@@ -235,7 +236,7 @@ class ScheduleTuneResult:
                 "",
             ),
             (
-                f"--max-gain {fmt(sol.max_gain)}",
+                str(Option("max_gain", fmt(sol.max_gain), quoted=False)),
                 (
                     "binds at t = "
                     + ", ".join(fmt(t) for t in sol.binds[:6])
@@ -249,7 +250,8 @@ class ScheduleTuneResult:
         ]
         if self.max_peak is not None:
             ok = pk["optimal"]["value"] <= self.max_peak * (1 + AGREE_RTOL)
-            rows.append((f"--max-peak {fmt(self.max_peak)}", verdict(ok), "", ""))
+            peak = Option("max_peak", fmt(self.max_peak), quoted=False)
+            rows.append((str(peak), verdict(ok), "", ""))
         rows += [
             ("theorems 1 and 2 (schedule + tail)", verdict(self.required_holds), "", ""),
             (
@@ -315,7 +317,7 @@ class ScheduleTuneResult:
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """The result as a JSON-ready mapping (what ``ntc tune --json`` prints).
+        """The result as a JSON-ready mapping (what ``ntc tune`` prints as JSON).
 
         Returns
         -------

@@ -1,4 +1,4 @@
-"""The longest safe sampling period of the digital protocol (``ntc tune --period auto``):
+"""The longest safe sampling period of the digital protocol (``ntc tune`` with the period ``auto``):
 the largest h such that every period in (0, h] keeps the exact E Σ_i ‖x_i(T) − θ‖² of the
 sampled protocol within (1 + tolerance) of the continuous design's, and its peak
 sup_{t ≤ T} E Σ_i ‖x_i(t) − θ‖² within ``max_peak`` (when given). The protocol runs to T
@@ -24,24 +24,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any, cast
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
 from ..errors import InputError, require_horizon, require_int, require_number
-from ..model import SwitchingTopology, TimeVaryingTopology, Topology
 from ..present.rows import Table, fmt, verdict
+from ..protocol.agents import require_sampled
 from ..protocol.digital import Digital
 from ..simulate import SimulationSpec
-from ..simulate.digital import digital_moments
-from ..simulate.prepare import (
-    AnyTopology,
-    is_expression_topology,
-    make_gain,
-    prepare_modes,
-    sampled_grid,
-)
+from ..simulate.prepare import AnyTopology, make_gain
+from .objective import DigitalObjective
 
 SCAN_POINTS = 36
 #: The shortest period scanned is T / SCAN_STEPS (K = SCAN_STEPS steps).
@@ -246,7 +240,7 @@ class SafePeriod:
         )
 
     def to_dict(self) -> dict:
-        """What ``ntc tune --period auto --json`` prints.
+        """What ``ntc tune`` prints as JSON for the period ``auto``.
 
         Returns
         -------
@@ -268,25 +262,28 @@ class SafePeriod:
         }
 
 
-def _prepared(topology: AnyTopology, spec: SimulationSpec, horizon: float):
-    """The continuous design's modes and the gain, for every period."""
-    if is_expression_topology(topology):
-        raise InputError(
-            "--period: a topology given as expressions of t is not sampled by the digital "
-            "protocol; give it as a switching schedule or a fixed topology"
-        )
+def _objective(
+    topology: AnyTopology, spec: SimulationSpec, horizon: float, delay: int
+) -> tuple[DigitalObjective, Digital, Callable]:
+    """The objective every period is evaluated by (the continuous design's modes prepared
+    once), the sampled protocol at h = T with the delay D (each period replaces h), and
+    the scenario's gain."""
+    require_sampled(topology, "period")
     base = spec.replace(T=float(horizon), digital=None, method="exact")
     if not base.noise.linear:
-        raise InputError("--period: the exact moments need a linear f (a scalar or a matrix)")
-    gain = make_gain(base.gain)[0]
-    fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
-    return fixed, prepare_modes(fixed, base, gain), gain
+        raise InputError("the exact moments need a linear f (a scalar or a matrix)", field="period")
+    return (
+        DigitalObjective(topology, base, horizon),
+        Digital(float(horizon), delay),
+        make_gain(base.gain)[0],
+    )
 
 
-def _run(fixed, pm, gain, horizon: float, delay: int, h: float, stop: float | None):
-    grid = sampled_grid(fixed, pm, Digital(float(h), delay), float(horizon), np.array([horizon]))
-    with np.errstate(all="ignore"):
-        dm = digital_moments(pm.systems, grid, gain, pm.eps0, pm.n, pm.d, delay, abort_above=stop)
+def _run(
+    obj: DigitalObjective, dg: Digital, gain: Callable, h: float, stop: float | None
+) -> tuple[float, float]:
+    """E Σ‖x_i(T) − θ‖² and the peak of the sampled recursion at the period h."""
+    dm = obj.moments(gain, np.array([obj.horizon]), replace(dg, period=float(h)), None, stop)
     return float(dm.moments.ms_error[-1].sum()), dm.peak
 
 
@@ -324,8 +321,8 @@ def period_curve(
     InputError
         A non-linear f, an A(t) topology, or a recursion too large for memory.
     """
-    fixed, pm, gain = _prepared(topology, spec, horizon)
-    return [_run(fixed, pm, gain, horizon, delay, float(h), stop_above) for h in periods]
+    obj, dg, gain = _objective(topology, spec, horizon, delay)
+    return [_run(obj, dg, gain, float(h), stop_above) for h in periods]
 
 
 def longest_safe_period(
@@ -376,13 +373,14 @@ def longest_safe_period(
     >>> 0 < r.period < 2
     True
     """
-    horizon = require_horizon("--horizon", horizon)
-    delay = require_int("--delay", delay, minimum=0)
-    tolerance = require_number("--tolerance", tolerance, minimum=0.0)
-    if max_peak is not None and not require_number("--max-peak", max_peak) > 0:
-        raise InputError(f"--max-peak: must be a positive number, got {max_peak!r}")
+    horizon = require_horizon("horizon", horizon)
+    delay = require_int("delay", delay, minimum=0)
+    tolerance = require_number("tolerance", tolerance, minimum=0.0)
+    if max_peak is not None and not require_number("max_peak", max_peak) > 0:
+        raise InputError(f"must be a positive number, got {max_peak!r}", field="max_peak")
     points = require_int("points", points, minimum=2, maximum=1000)
-    fixed, pm, gain = _prepared(topology, spec, horizon)
+    obj, dg, gain = _objective(topology, spec, horizon, delay)
+    pm = obj.prepared(None)[0]
     start = float(pm.eps0 @ pm.eps0)
     t = np.linspace(0.0, horizon, 401)
     with np.errstate(all="ignore"):
@@ -407,7 +405,7 @@ def longest_safe_period(
 
     def evaluate(h: float) -> PeriodPoint:
         if h not in seen:
-            final, peak = _run(fixed, pm, gain, horizon, delay, h, stop)
+            final, peak = _run(obj, dg, gain, h, stop)
             ok = final <= bound and (max_peak is None or peak <= max_peak)
             seen[h] = PeriodPoint(h, final, peak, bool(ok))
         return seen[h]

@@ -11,7 +11,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ..errors import InputError, format_bytes
+from ..errors import InputError, Option, format_bytes
 from ..simulate.prepare import PreparedModes
 from .operators import MomentOperators
 
@@ -29,7 +29,7 @@ MAX_PIECES = 800
 REFINE_RTOL = 1e-3
 C_MIN = 1e-6
 DEFAULT_MAX_GAIN = 50.0
-#: The largest --max-gain accepted.
+#: The largest ``max_gain`` accepted.
 MAX_MAX_GAIN = 1e6
 #: Stored stage derivatives above this many bytes are refused (the adjoint needs them).
 MAX_STORE = 2 * 2**30
@@ -194,9 +194,12 @@ class ScheduleProblem:
         """
         if nd_ > OPTIMAL_MAX_ND:
             raise InputError(
-                f"--schedule optimal: N·d = {nd_} is above {OPTIMAL_MAX_ND} (an evaluation "
+                f"N·d = {nd_} is above {OPTIMAL_MAX_ND} (an evaluation "
                 "grows as (Nd)³ per RK4 step and the steps with ρ(L_B); a search takes "
-                "hundreds); use --schedule power"
+                "hundreds); use ",
+                Option("schedule", "power"),
+                field="schedule",
+                value="optimal",
             )
 
     # ------------------------------------------------------------------ the step plan
@@ -244,8 +247,12 @@ class ScheduleProblem:
         need = steps * 4 * self.ns * 8  # refused before any array of that many steps exists
         if need > MAX_STORE:
             raise InputError(
-                f"--schedule optimal: {steps:.3g} RK4 steps would store {format_bytes(need)} "
-                f"for the adjoint (limit {format_bytes(MAX_STORE)}); lower --max-gain or T"
+                f"{steps:.3g} RK4 steps would store {format_bytes(need)} "
+                f"for the adjoint (limit {format_bytes(MAX_STORE)}); lower ",
+                Option("max_gain"),
+                " or T",
+                field="schedule",
+                value="optimal",
             )
         per = np.zeros(kk, dtype=np.int64)
         modes, ks, hs, th, ends = [], [], [], [], []

@@ -220,7 +220,7 @@ class TuneResult:
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """The result as a JSON-ready mapping (what ``ntc tune --json`` prints).
+        """The result as a JSON-ready mapping (what ``ntc tune`` prints as JSON).
 
         Returns
         -------

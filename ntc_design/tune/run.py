@@ -17,7 +17,14 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from ..errors import InputError, check_work, format_seconds, require_horizon, require_positive
+from ..choices import Require
+from ..errors import (
+    InputError,
+    Option,
+    check_work,
+    format_seconds,
+    require_horizon,
+)
 from ..gain.conditions import analyse_gain
 from ..model import SwitchingTopology, Topology
 from ..protocol import design_topology
@@ -26,6 +33,7 @@ from ..simulate.prepare import AnyTopology
 from .evidence import certify_tuned, stable_stepping
 from .family import A_RANGE, B_RANGE, BASELINE, PowerGain, gamma_range
 from .objective import Objective, objective_for
+from .options import PowerOptions
 from .result import Landscape, TuneResult
 from .search import Dimension, search
 
@@ -34,8 +42,6 @@ from .search import Dimension, search
 DELTA_UPPER = 4.0
 DELTA_LOWER_FRACTION = 0.05
 DELTA_CRIT_FACTOR = 1.05
-#: Default search budget (objective evaluations, the grid included).
-MAX_EVALUATIONS = 160
 #: The contour map's grid (a × γ), and its size when each point is a Monte Carlo run.
 LANDSCAPE_SHAPE = (13, 9)
 LANDSCAPE_SHAPE_MC = (5, 4)
@@ -76,24 +82,26 @@ def delta_range(topology: AnyTopology, theta) -> tuple[float, float, float]:
         what = "−L_B Hurwitz"
     else:
         raise InputError(
-            "--tune-delta: a topology given as functions of t takes Lemma 1's δ(t) at every t"
+            "a topology given as functions of t takes Lemma 1's δ(t) at every t",
+            field="tune_delta",
         )
     if any(c is None for c in crits):
-        raise InputError(f"--tune-delta: no δ gives {what} for every larger δ")
+        raise InputError(f"no δ gives {what} for every larger δ", field="tune_delta")
     lemma = max(d.delta for d in designs)
     crit = max(float(c) for c in crits if c is not None)
     lo = max(DELTA_CRIT_FACTOR * crit, DELTA_LOWER_FRACTION * lemma)
     hi = DELTA_UPPER * lemma
     if not lo < hi:
         raise InputError(
-            f"--tune-delta: the critical δ {crit:.4g} leaves no room below {hi:.4g} "
-            f"({DELTA_UPPER:g} × Lemma 1's δ)"
+            f"the critical δ {crit:.4g} leaves no room below {hi:.4g} "
+            f"({DELTA_UPPER:g} × Lemma 1's δ)",
+            field="tune_delta",
         )
     return lo, hi, lemma
 
 
 def _dimensions(
-    require: str,
+    require: Require,
     delta: tuple[float, float] | None,
     bounds: Mapping[str, tuple[float, float]] | None,
 ) -> list[Dimension]:
@@ -174,28 +182,19 @@ def _check_tune_work(
         f"tuning for T = {horizon:g} takes roughly {format_seconds(total)} ({n} evaluations "
         f"of {obj.name}, about {per:.3g} s each)"
     )
-    check_work(
-        total, f"--horizon: {what}", MAX_TUNE_SECONDS, "a shorter --horizon or fewer --evaluations"
-    )
+    instead = f"a shorter {Option('horizon')} or fewer {Option('max_evaluations')}"
+    check_work(total, f"{Option('horizon')}: {what}", MAX_TUNE_SECONDS, instead)
 
 
 def tune_power(
     topology: AnyTopology,
     spec: SimulationSpec,
     horizon: float,
-    *,
-    require: str = "both",
-    tune_delta: bool = False,
-    eps: float | None = None,
-    method: str = "auto",
-    max_evaluations: int = MAX_EVALUATIONS,
-    landscape: bool = True,
-    certificate: bool = True,
-    bounds: Mapping[str, tuple[float, float]] | None = None,
+    options: PowerOptions | None = None,
     progress: Callable[..., None] | None = None,
 ) -> TuneResult:
     """Tune c(t) = a·(b + t)^(−γ) (and δ) to minimise E Σ_i ‖x_i(T) − θ‖² (what
-    :func:`ntc_design.tune.tune` runs for ``schedule="power"``).
+    :func:`ntc_design.tune.tune` runs for :class:`.options.PowerOptions`).
 
     Parameters
     ----------
@@ -205,24 +204,9 @@ def tune_power(
         The scenario: θ, noise, x(0), δ or ΔC, and for Monte Carlo the paths, seed, dt.
     horizon : float
         The deadline T.
-    require : {"both", "mean-square"}, optional
-        The theorems the gain must satisfy: γ ∈ [0.51, 1] for both (mean square and
-        almost sure), γ ∈ [0.05, 1] for mean square only.
-    tune_delta : bool, optional
-        Also search a common δ in :func:`delta_range`.
-    eps : float, optional
-        Report when each gain first reaches E Σ‖x_i − θ‖² ≤ ε.
-    method : {"auto", "exact", "mc"}, optional
-        The objective (auto: exact moments where they apply).
-    max_evaluations : int, optional
-        The search's budget.
-    landscape : bool, optional
-        Evaluate the objective over (a, γ) for the contour map.
-    certificate : bool, optional
-        Certify the tuned design.
-    bounds : mapping of str to (float, float), optional
-        Narrower ranges for ``a``, ``b``, ``gamma`` (inside the required theorems' range)
-        or ``delta``; lo = hi fixes the parameter.
+    options : PowerOptions, optional
+        The theorems required, δ, ε, the objective, the budget, the landscape, the
+        certificate and narrower ranges (default: ``PowerOptions()``).
     progress : callable, optional
         Called with a line of text at each stage, and with ``transient=True`` for each
         evaluation (done, the time left in the search).
@@ -234,17 +218,17 @@ def tune_power(
     Raises
     ------
     InputError
-        A bad horizon, requirement, ε, method or δ range; a scenario the objective
-        refuses.
+        A bad horizon or δ range; a scenario the objective refuses.
     """
     require_horizon("horizon", horizon)
-    gamma_range(require)
-    if eps is not None:
-        require_positive("eps", eps)
-    if not isinstance(max_evaluations, int) or not 10 <= max_evaluations <= 10_000:
-        raise InputError(
-            f"max_evaluations: expected an integer in [10, 10000], got {max_evaluations!r}"
-        )
+    o = options if options is not None else PowerOptions()
+    require, tune_delta, eps, method = o.require, o.tune_delta, o.eps, o.method
+    max_evaluations, landscape, certificate, bounds = (
+        o.max_evaluations,
+        o.landscape,
+        o.certificate,
+        o.bounds,
+    )
     t0 = time.perf_counter()
     notes: list[str] = []
     drange = delta_range(topology, spec.theta) if tune_delta else None

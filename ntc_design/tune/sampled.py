@@ -1,5 +1,5 @@
-"""The optimal schedule of the digital protocol (``ntc tune --period h --delay D --schedule
-optimal``): optimal control of the sampled recursion's exact second moments.
+"""The optimal schedule of the digital protocol (``ntc tune`` with a period h, a delay D
+and the optimal schedule): optimal control of the sampled recursion's exact second moments.
 
 The same problem as :mod:`.optimal` with the recursion in place of the moment equations:
 c is piecewise linear on K pieces of [0, T] and enters the recursion through its samples
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, format_bytes
+from ..errors import InputError, Option, format_bytes
 from ..protocol.digital import Digital
 from ..simulate.digital import check_digital_moments
 from ..simulate.grid import TimeGrid
@@ -69,9 +69,13 @@ class SampledScheduleProblem:
         need = grid.n_steps * w * w * 8.0
         if need > MAX_STORE:
             raise InputError(
-                f"--schedule optimal: {grid.n_steps} samples of a {w}×{w} second moment "
+                f"{grid.n_steps} samples of a {w}×{w} second moment "
                 f"would store {format_bytes(need)} for the adjoint (limit "
-                f"{format_bytes(MAX_STORE)}); raise --period or shorten T"
+                f"{format_bytes(MAX_STORE)}); raise ",
+                Option("period"),
+                " or shorten T",
+                field="schedule",
+                value="optimal",
             )
         self.grid = grid
         self.horizon = float(grid.t[-1])

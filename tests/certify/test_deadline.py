@@ -103,15 +103,15 @@ def test_sampled_bound_encloses_the_float_recursion(g1_case, t_end, delay):
 def test_sampled_bound_matches_simulate_digital(g1_case):
     from ntc_design.protocol.digital import Digital
     from ntc_design.simulate.digital import digital_grid, digital_moments
+    from ntc_design.simulate.moments import PreparedModes
     from ntc_design.simulate.noise import NoiseModel
     from ntc_design.simulate.system import mode_system
 
     top, theta, lap, x0 = g1_case
     sys_ = mode_system(design(top, theta, 0.1), NoiseModel(0.4, 0.3))
     grid, _ = digital_grid(Digital(0.1, 1), 2.0, np.array([2.0]))
-    ref = digital_moments(
-        [sys_], grid, lambda t: 1 / (1 + t), x0 - np.tile(theta, top.n), top.n, top.dim, 1
-    )
+    modes = PreparedModes.of([sys_], x0 - np.tile(theta, top.n))
+    ref = digital_moments(modes, grid, lambda t: 1 / (1 + t), 1)
     got = deadline_bound(_problem(g1_case, 2.0, 0.1, 1))
     assert got.ms_error_bound == pytest.approx(float(ref.moments.ms_error[-1].sum()), rel=1e-9)
     assert got.peak_bound == pytest.approx(ref.peak, rel=1e-9)

@@ -15,6 +15,7 @@ from ntc_design.rigorous.exact import Dyadic
 from ntc_design.rigorous.floatmat import FloatMat
 from ntc_design.simulate import NoiseModel
 from ntc_design.simulate.digital import digital_grid, digital_moments
+from ntc_design.simulate.moments import PreparedModes
 from ntc_design.simulate.system import mode_system
 
 F = 0.3 * np.eye(3)
@@ -146,7 +147,7 @@ def test_the_certified_contraction_holds_on_the_exact_second_moments(g1, h, dela
     steps = k0 + 40
     grid, _ = digital_grid(Digital(h, delay), steps * h, np.arange(steps + 1) * h)
     eps0 = np.linspace(-3, 3, 21) - np.tile(THETA, 7)
-    m = digital_moments([s], grid, lambda t: 1 / (1 + t), eps0, 7, 3, delay)
+    m = digital_moments(PreparedModes.of([s], eps0), grid, lambda t: 1 / (1 + t), delay)
     # E[eᵀPe] = tr(P S) at every step (save times are every step)
     s_all = m.moments  # ms_error holds per-agent traces; rebuild v from the recursion's S
     assert s_all.t.size == steps + 1

@@ -29,8 +29,8 @@ def test_terminal_and_html_show_the_kinds_rows(file, tmp_path, capsys, monkeypat
 @pytest.mark.parametrize(
     "kwargs, needle",
     [
-        ({"noise_sigma": 5e-324}, "--noise-sigma: 5e-324 has a nonzero |entry| outside"),
-        ({"noise_f": 1e300}, "--noise-f: 1e+300 has a nonzero |entry| outside"),
+        ({"noise_sigma": 5e-324}, "noise_sigma: 5e-324 has a nonzero |entry| outside"),
+        ({"noise_f": 1e300}, "noise_f: 1e+300 has a nonzero |entry| outside"),
     ],
 )
 def test_a_noise_no_certificate_can_state_is_refused_up_front(g1, kwargs, needle):

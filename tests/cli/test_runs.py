@@ -225,6 +225,13 @@ G1_FIXED = EXAMPLES / "scenarios" / "g1_fixed.yaml"
             "--max-gain: expected a number in (1e-06",
         ),
         ("tune", ["--schedule", "optimal", "--check-paths", "-1"], "--check-paths: expected"),
+        # the library names its parameters; the command line writes them as its flags
+        (
+            "tune",
+            ["--schedule", "optimal", "--method", "mc"],
+            "--schedule optimal: uses exact moments (--method mc is for --schedule power)",
+        ),
+        ("tune", ["--period", "auto", "--loss", "auto"], "--period: give a number with --loss"),
         ("tune", ["--period", "0.1", "--delay", "-1"], "--delay: must be an integer >= 0"),
         ("tune", ["--period", "auto", "--horizon", "-2"], "--horizon: must be a positive"),
         ("tune", ["--period", "auto", "--tolerance", "-1"], "--tolerance: must be >= 0"),
@@ -469,3 +476,33 @@ def test_report_loss_flags_are_checked(tmp_path, capsys, monkeypatch):
     assert line.startswith("error: --loss: a loss probability")
     line = assert_input_error(["report", tmp_path, "--loss", "0.1"], capsys, monkeypatch)
     assert line.startswith("error: --loss: needs --period")
+
+
+def test_simulate_period_passes_one_digital_and_decides_its_steps_once(
+    tmp_path, capsys, monkeypatch
+):
+    """``ntc simulate --period 0.1``: the flags make one Digital (beside the early check of
+    the flags' values), passed as itself to the spec, whose K = ⌊T/h⌋ the size check, the
+    grid and the summary read (issue 48: it was built three times and stepped five)."""
+    from ntc_design.protocol.digital import Digital
+
+    made, stepped = [], []
+    init, steps = Digital.__post_init__, Digital.steps
+
+    def counted_init(self):
+        made.append(self)
+        init(self)
+
+    def counted_steps(self, t_end):
+        stepped.append(t_end)
+        return steps(self, t_end)
+
+    monkeypatch.setattr(Digital, "__post_init__", counted_init)
+    monkeypatch.setattr(Digital, "steps", counted_steps)
+    args = ["simulate", G1_FIXED, "--out", tmp_path / "o", "--paths", "8", "--T", "1"]
+    code, _, err = run_cli([*args, "--period", "0.1", "--method", "both"], capsys, monkeypatch)
+    assert code == 0, err
+    assert stepped == [1.0] and len(made) == 2
+    doc = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert doc["overrides"]["digital"] == {"period": 0.1, "delay": 0}
+    assert (doc["digital"]["steps"], doc["digital"]["partial_step"]) == (10, 0.0)

@@ -342,11 +342,12 @@ def _lossy(design, policy, delay=0, h=0.05):
 
 
 @needs_cc
+@pytest.mark.parametrize("delay", [0, 1, 2])
 @pytest.mark.parametrize("policy", ["skip", "rescale"])
-def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
+def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy, delay):
     from tests.support.export import arrivals_for
 
-    law = _lossy(g1_design, policy)
+    law = _lossy(g1_design, policy, delay)
     assert f"#define NTC_POLICY {1 if policy == 'skip' else 2}" in header(law)
     exe = build_c(tmp_path, law)
     steps = 500
@@ -359,7 +360,9 @@ def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
         np.max(
             np.abs(
                 want
-                - replay(agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3), X0, z, steps)
+                - replay(
+                    agent_law(g1_design, Digital(0.05, delay), "1/(1+t)", 0.4, 0.3), X0, z, steps
+                )
             )
         )
         > 1e-3
@@ -384,12 +387,13 @@ AGENT_LOSSY = (
 
 
 @needs_cc
+@pytest.mark.parametrize("delay", [0, 1])
 @pytest.mark.parametrize("policy", ["skip", "rescale"])
-def test_the_agent_api_on_lossy_links_reproduces_the_replay(g1_design, tmp_path, policy):
+def test_the_agent_api_on_lossy_links_reproduces_the_replay(g1_design, tmp_path, policy, delay):
     from tests.support.export import arrivals_for, write_files
 
     assert AGENT_LOSSY.count("chi") == 3 and "ntc_agent_step_arrived" in AGENT_LOSSY
-    law = _lossy(g1_design, policy)
+    law = _lossy(g1_design, policy, delay)
     write_files(tmp_path, c_files(law))
     (tmp_path / "agents.c").write_text(AGENT_LOSSY)
     cmd = [CC, *CFLAGS, "-o", "agents", "agents.c", "ntc_protocol.c", "-lm"]

@@ -18,6 +18,7 @@ from ntc_design.export.checks import (
     sample_steps,
 )
 from ntc_design.export.run import export
+from ntc_design.export.source import ExportOptions
 from ntc_design.gain.code import GainCode
 from ntc_design.gain.schedule import ScheduleGain
 from ntc_design.protocol.agents import agent_law
@@ -112,8 +113,7 @@ def test_export_refuses_the_cancelled_gain_and_writes_nothing(tmp_path):
             EXAMPLES / "scenarios" / "g1_deadline.yaml",
             "c",
             out,
-            period=0.1,
-            gain="1/(1+t)+exp(40)-exp(40)",
+            ExportOptions(period=0.1, gain="1/(1+t)+exp(40)-exp(40)"),
         )
     assert "g1_deadline.yaml: gain: c(t) = 1/(1+t)+exp(40)-exp(40) computes to" in str(err.value)
     assert not out.exists()

@@ -121,12 +121,13 @@ def test_a_gain_that_is_not_finite_stops_the_replay(g1_design, tmp_path):
     assert "c(t) = inf is not finite at step 10" in res.stderr
 
 
+@pytest.mark.parametrize("delay", [0, 1, 2])
 @pytest.mark.parametrize("policy", ["skip", "rescale"])
-def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy):
+def test_lossy_links_bit_for_bit(g1_design, tmp_path, policy, delay):
     from ntc_design.protocol.agents import lossy_law
     from tests.support.export import arrivals_for
 
-    base = agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3)
+    base = agent_law(g1_design, Digital(0.05, delay), "1/(1+t)", 0.4, 0.3)
     ml = base.modes[0]
     law = lossy_law(
         base, {(int(i), int(j)): 0.25 for i, j in zip(ml.dst, ml.src, strict=True)}, policy

@@ -11,6 +11,7 @@ import pytest
 from ntc_design.errors import InputError
 from ntc_design.export import run
 from ntc_design.export.run import export, read_state, state_text, stdin_text
+from ntc_design.export.source import ExportOptions
 from ntc_design.simulate.replay import replay
 from tests.conftest import EXAMPLES, ROOT
 from tests.support.export import CC, CFLAGS, needs_cc
@@ -21,7 +22,7 @@ DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"
 @pytest.fixture(scope="module")
 def c_export(tmp_path_factory):
     out = tmp_path_factory.mktemp("exp") / "g1-c"
-    return export(DEADLINE, "c", out, period=0.1, delay=1)
+    return export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1))
 
 
 def test_the_folder(c_export):
@@ -73,7 +74,9 @@ def test_the_compiled_program_reproduces_the_example_byte_for_byte(c_export, tmp
 
 
 def test_a_python_export_reproduces_its_example(tmp_path):
-    res = export(ROOT / "certificates" / "g1.json", "python", tmp_path / "py", period=0.05)
+    res = export(
+        ROOT / "certificates" / "g1.json", "python", tmp_path / "py", ExportOptions(period=0.05)
+    )
     folder = res.folder
     assert sorted(res.files) == sorted(["ntc_protocol.py", "README.txt", *run.EXAMPLES])
     inp = (folder / "example_input.txt").read_text()
@@ -82,7 +85,9 @@ def test_a_python_export_reproduces_its_example(tmp_path):
     assert out == (folder / "example_output.txt").read_text()
     assert "python ntc_protocol.py < example_input.txt" in (folder / "README.txt").read_text()
     # an earlier export's folder is replaced (the language may change)
-    again = export(ROOT / "certificates" / "g1.json", "c", tmp_path / "py", period=0.05)
+    again = export(
+        ROOT / "certificates" / "g1.json", "c", tmp_path / "py", ExportOptions(period=0.05)
+    )
     assert not (again.folder / "ntc_protocol.py").exists()
 
 
@@ -99,17 +104,17 @@ def test_stdin_and_state_texts_round_trip():
 @pytest.mark.hostile
 def test_refusals_write_nothing(tmp_path, monkeypatch):
     out = tmp_path / "o"
-    with pytest.raises(InputError, match=r"^--lang: expected one of c, python, got 'fortran'"):
-        export(DEADLINE, "fortran", out, period=0.1)
+    with pytest.raises(InputError, match=r"^lang: expected one of c, python, got 'fortran'"):
+        export(DEADLINE, "fortran", out, ExportOptions(period=0.1))
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "notes.txt").write_text("keep")
-    with pytest.raises(InputError, match=r"^--out: .* holds 'notes.txt', which no earlier export"):
-        export(DEADLINE, "c", mine, period=0.1)
+    with pytest.raises(InputError, match=r"^out: .* holds 'notes.txt', which no earlier export"):
+        export(DEADLINE, "c", mine, ExportOptions(period=0.1))
     assert [p.name for p in mine.iterdir()] == ["notes.txt"]
     monkeypatch.setattr(run, "MAX_NUMBERS", 100)
     with pytest.raises(InputError, match=r"^export: the tables would hold"):
-        export(DEADLINE, "c", out, period=0.1)
+        export(DEADLINE, "c", out, ExportOptions(period=0.1))
     with pytest.raises(InputError, match=r"^output: expected 21 numbers, got 2"):
         read_state("1 2", 21)
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["mine"]
@@ -151,9 +156,9 @@ def test_an_export_never_deletes_user_data(tmp_path, case):
         needle = "'README.txt', which is not a regular file"
     before = _tree(out)
     with pytest.raises(InputError) as err:
-        export(DEADLINE, "c", out, period=0.1)
+        export(DEADLINE, "c", out, ExportOptions(period=0.1))
     msg = str(err.value)
-    assert "\n" not in msg and msg.startswith("--out: ") and needle in msg, msg
+    assert "\n" not in msg and msg.startswith("out: ") and needle in msg, msg
     assert _tree(out) == before and sorted(p.name for p in tmp_path.iterdir()) == sorted(
         ["out", *(["mine.txt"] if case == "link" else [])]
     )
@@ -162,9 +167,9 @@ def test_an_export_never_deletes_user_data(tmp_path, case):
 
 def test_an_earlier_export_and_its_build_are_replaced(tmp_path):
     out = tmp_path / "out"
-    export(DEADLINE, "c", out, period=0.1)
+    export(DEADLINE, "c", out, ExportOptions(period=0.1))
     (out / "ntc_replay").write_bytes(b"built")  # what the README's command makes
-    again = export(DEADLINE, "python", out, period=0.1)
+    again = export(DEADLINE, "python", out, ExportOptions(period=0.1))
     names = sorted(p.name for p in out.iterdir())
     assert names == sorted([*again.files, run.MANIFEST]) and "ntc_replay" not in names
 
@@ -252,7 +257,7 @@ def test_an_out_folder_given_as_a_link_is_refused(tmp_path, capsys, monkeypatch,
 
 def test_one_agents_export_and_its_readme(tmp_path):
     out = tmp_path / "one"
-    res = export(DEADLINE, "c", out, period=0.1, delay=1, agent="3")
+    res = export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1), agent="3")
     assert sorted(res.files) == ["README.txt", "ntc_protocol.c", "ntc_protocol.h"]
     assert "#define NTC_SELF 2" in (out / "ntc_protocol.h").read_text()
     text = (out / "README.txt").read_text()
@@ -264,7 +269,7 @@ def test_one_agents_export_and_its_readme(tmp_path):
     ):
         assert needle in text, needle
     # the full export documents the same embedding
-    full = export(DEADLINE, "c", tmp_path / "all", period=0.1, delay=1)
+    full = export(DEADLINE, "c", tmp_path / "all", ExportOptions(period=0.1, delay=1))
     assert "relative-position sensor" in (full.folder / "README.txt").read_text()
 
 
@@ -347,8 +352,58 @@ def test_a_lossy_export_reproduces_its_example_and_documents_the_flags(tmp_path)
     assert "Lossy links, policy skip (compiled in; keep_e = 1 - p_e: " in readme
     assert "Edges in file order (the order of the normals and of the arrival flags):" in readme
     with pytest.raises(InputError, match="lossy links with the hold policy are not proven"):
-        export(scen, "c", tmp_path / "c", policy="hold")
+        export(scen, "c", tmp_path / "c", ExportOptions(policy="hold"))
     assert not (tmp_path / "c").exists()
+
+
+@pytest.mark.slow
+def test_a_delayed_lossy_export_is_certified_and_replays_bit_for_bit(tmp_path):
+    # D = 1 on lossy links: proven by the digital_loss certificate's delay line, exported
+    # from the scenario and from the certificate, the programs equal to the replay
+    import json
+
+    from ntc_design.certify import certify
+    from ntc_design.protocol.digital import Digital
+    from tests.support.export import arrivals_for, normals_for, run_program
+
+    scen = tmp_path / "s.yaml"
+    scen.write_text(
+        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 5\n"
+        "digital: {period: 0.1, delay: 1, loss: 0.1, policy: skip}\n"
+    )
+    res = export(scen, "python", tmp_path / "py")
+    law = res.source.law
+    assert law.digital.delay == 1 and law.policy == "skip"
+    assert np.all(law.modes[0].keep == 1.0 - 0.1)
+    cmd = [sys.executable, str(res.folder / "ntc_protocol.py")]
+    inp = (res.folder / "example_input.txt").read_text()
+    out = subprocess.run(cmd, input=inp, capture_output=True, text=True).stdout
+    assert out == (res.folder / "example_output.txt").read_text()
+    steps, x0 = 120, np.linspace(-3.0, 3.0, 21)
+    z, chi = normals_for(law, steps, 5), arrivals_for(law, steps, 5)
+    assert 0 < chi.sum() < chi.size
+    want = replay(law, x0, z, steps, arrivals=chi)
+    assert (run_program(cmd, law, x0, steps, z, arrivals=chi) == want).all()
+    # the certificate's own export: the same law, the C program equal to the replay
+    import ntc_design as nd
+
+    doc = certify(
+        nd.load(EXAMPLES / "g1.yaml"), [1, 2, -1], 0.1, "1/(1+t)", None, noise_sigma=0.4,
+        noise_f=0.3, digital=Digital(0.1, 1, 0.1),
+    ).certificate  # fmt: skip
+    assert doc["results"]["digital"]["bound"] == "delay_line"
+    cert = tmp_path / "loss_d1.json"
+    cert.write_text(json.dumps(doc))
+    if CC is None:
+        return
+    res_c = export(cert, "c", tmp_path / "c")
+    law_c = res_c.source.law
+    assert law_c.digital.delay == 1 and np.all(law_c.modes[0].keep == 1.0 - 0.1)
+    exe = res_c.folder / "ntc_replay"
+    build = [CC, *CFLAGS, "-o", str(exe), "ntc_replay.c", "ntc_protocol.c", "-lm"]
+    assert subprocess.run(build, cwd=res_c.folder, capture_output=True).returncode == 0
+    want_c = replay(law_c, x0, z, steps, arrivals=chi)
+    assert (run_program(exe, law_c, x0, steps, z, arrivals=chi) == want_c).all()
 
 
 def test_a_certified_gain_given_again_with_spaces_is_the_same_gain(tmp_path, capsys, monkeypatch):

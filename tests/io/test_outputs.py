@@ -21,7 +21,7 @@ def test_write_atomic_replaces_whole_file(tmp_path):
     write_atomic(p, "old")
     write_atomic(p, "new")
     assert p.read_text() == "new" and os.listdir(tmp_path) == ["f.txt"]
-    with pytest.raises(InputError, match=r"^--out: .* is a folder"):
+    with pytest.raises(InputError, match=r"^out: .* is a folder"):
         write_atomic(tmp_path, "x")
 
 
@@ -33,7 +33,7 @@ def test_atomic_writer_removes_its_temporary_file(tmp_path, monkeypatch):
 
     target = tmp_path / "report.html"
     target.mkdir()
-    monkeypatch.setattr(outputs, "check_output_file", lambda p, option="--out": Path(p))
+    monkeypatch.setattr(outputs, "check_output_file", lambda p, option="out": Path(p))
     with pytest.raises(InputError, match=r"^report: cannot write .*report.html"):
         write_atomic(target, "x", option="report")
     assert os.listdir(tmp_path) == ["report.html"] and os.listdir(target) == []
@@ -67,7 +67,7 @@ def test_output_folder_is_all_or_nothing(tmp_path):
 @pytest.mark.hostile
 def test_output_folder_refuses_a_folder_with_other_files(tmp_path):
     (tmp_path / "precious.txt").write_text("keep")
-    with pytest.raises(InputError, match=r"^--out: .* holds other files \('precious.txt'"):
+    with pytest.raises(InputError, match=r"^out: .* holds other files \('precious.txt'"):
         with output_folder(tmp_path, ["summary.json"]):
             pass
     assert (tmp_path / "precious.txt").read_text() == "keep"
@@ -81,7 +81,7 @@ def test_permission_error_while_writing_is_one_line(g1, tmp_path, monkeypatch):
         raise PermissionError(13, "Permission denied")
 
     monkeypatch.setattr(outputs.tempfile, "mkdtemp", denied)
-    with pytest.raises(InputError, match=r"^--out: cannot write .* \(Permission denied\)$"):
+    with pytest.raises(InputError, match=r"^out: cannot write .* \(Permission denied\)$"):
         write_outputs(res, tmp_path / "o")
     assert not (tmp_path / "o").exists()
 

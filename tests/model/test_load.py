@@ -11,7 +11,7 @@ from ntc_design.model.timevarying import from_document
 from ntc_design.protocol import design
 from ntc_design.protocol.timevarying import TimeVaryingDesign
 from ntc_design.simulate import NoiseModel, simulate
-from ntc_design.simulate.moments import exact_moments
+from ntc_design.simulate.moments import PreparedModes, exact_moments
 from ntc_design.simulate.system import mode_system
 from ntc_design.simulate.timevarying import exact_moments_tv, time_varying_system
 from tests.conftest import ROOT, X0
@@ -66,13 +66,8 @@ def test_constant_expressions_give_the_fixed_topology_exactly(tmp_path):
     sys_ = time_varying_system(des, NoiseModel())
     st = np.arange(0, 11) * 0.1
     m_tv = exact_moments_tv(sys_, lambda t: 1 / (1 + t), X0 - np.tile(THETA, 7), st, 1.0)
-    m_fx = exact_moments(
-        [mode_system(d, NoiseModel())],
-        [(0.0, 1.0, 0)],
-        lambda t: 1 / (1 + t),
-        X0 - np.tile(THETA, 7),
-        st,
-        7,
-        3,
+    fixed = PreparedModes.of(
+        [mode_system(d, NoiseModel())], X0 - np.tile(THETA, 7), [(0.0, 1.0, 0)]
     )
+    m_fx = exact_moments(fixed, lambda t: 1 / (1 + t), st)
     np.testing.assert_allclose(m_tv.ms_error, m_fx.ms_error, rtol=1e-7)

@@ -113,3 +113,29 @@ def test_refusals(g1_design):
     top = g1_design.topology
     with pytest.raises(InputError, match=r"schedule\[0\]: unknown mode 'G9'"):
         make_law("x", top, g1_design.theta, ml, [("G9", 1.0)], Digital(0.1), "1", 0.3)
+
+
+@pytest.mark.hostile
+def test_a_topology_given_as_expressions_of_t_is_refused_by_one_check_everywhere(g1, g1tv, theta):
+    """The digital protocol's refusal of A(t) is one function with one text: the
+    simulator, the period search and the certificate say it alike (issue 48)."""
+    from ntc_design.certify import certify
+    from ntc_design.protocol.agents import NOT_SAMPLED, require_sampled
+    from ntc_design.simulate import SimulationSpec, simulate
+    from ntc_design.tune.period import longest_safe_period
+
+    require_sampled(g1)  # one fixed topology: nothing to say
+    with pytest.raises(InputError) as exc:
+        require_sampled(g1tv, "digital")
+    assert str(exc.value) == f"digital: {NOT_SAMPLED}"
+    spec = SimulationSpec.build(theta, T=1.0, digital={"period": 0.1}, noise=NoiseModel(0.4, 0.3))
+    refusals = []
+    for call in (
+        lambda: simulate(g1tv, spec=spec),
+        lambda: longest_safe_period(g1tv, spec, 1.0),
+        lambda: certify(g1tv, theta, gain="1/(1+t)", digital=Digital(0.1)),
+    ):
+        with pytest.raises(InputError) as exc:
+            call()
+        refusals.append(str(exc.value))
+    assert refusals == [f"digital: {NOT_SAMPLED}", *[f"--period: {NOT_SAMPLED}"] * 2]

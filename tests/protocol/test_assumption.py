@@ -42,7 +42,12 @@ def test_check_tables_are_typed_rows_every_face_renders(g1, g3):
     assert "<table" in edges.html() and "PD" in edges.text()  # the HTML and terminal faces
     *_, bad = structure_tables(structure_report(g3), "G3", most=1)
     assert bad.rows[0][1].verdict_word == "fails" and len(bad.rows) == 2
-    assert bad.notes[0] == "1 more (--json lists them all)"
+    assert bad.notes[0] == "1 more (to_dict() lists them all)"  # the Python caller's words
+    from ntc_design.errors import options_written_as
+
+    with options_written_as({"json": "--json"}):  # the command line's
+        *_, bad_cli = structure_tables(structure_report(g3), "G3", most=1)
+    assert bad_cli.notes[0] == "1 more (--json lists them all)"
     # each fix once, for every agent it applies to (not only the rows shown)
     assert len(bad.notes) == 2 and bad.notes[1].startswith("fix (agents 4, 7): give the agent")
 

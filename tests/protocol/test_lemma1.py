@@ -181,6 +181,14 @@ def test_the_note_on_critical_couplings_not_computed_reads_as_a_sentence(
     monkeypatch.setattr(lemma1, "THRESHOLDS_DEFAULT_MAX_ND", 1)  # G1 (Nd = 21) is above
     (note,) = [n for n in nd.design(g1, theta, thresholds=thresholds).notes if "δ_H" in n]
     assert note.startswith(f"critical couplings δ_H, δ_S not computed {why}")
+    assert note.endswith(  # a Python caller's words; ntc design's below
+        "ntc design with its thresholds flag computes them, as does the thresholds option of "
+        "design in Python)"
+    )
+    from ntc_design.errors import options_written_as
+
+    with options_written_as({"thresholds": "--thresholds"}):
+        (note,) = [n for n in nd.design(g1, theta, thresholds=thresholds).notes if "δ_H" in n]
     assert note.endswith(
         "ntc design --thresholds computes them, as does the thresholds option of design in Python)"
     )

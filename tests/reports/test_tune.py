@@ -191,7 +191,7 @@ def test_curves_figure_floors_zero_and_draws_the_peak_bound(schedule_result):
 
 
 def test_landscape_figure_needs_a_landscape(power_analysis):
-    with pytest.raises(ValueError, match=r"the result has no landscape \(tune\(\.\.\., landscape"):
+    with pytest.raises(ValueError, match=r"the result has no landscape \(PowerOptions\(landscape"):
         rt.landscape_figure(power_result(power_analysis))
 
 
@@ -333,7 +333,7 @@ def test_outputs_refuse_a_folder_holding_other_files(power_analysis, scenario, t
     out = tmp_path / "out"
     out.mkdir()
     (out / "mine.txt").write_text("keep", encoding="utf-8")
-    with pytest.raises(InputError, match=r"^--out: .*out' exists and holds other files \('mine"):
+    with pytest.raises(InputError, match=r"^out: .*out' exists and holds other files \('mine"):
         rt.write_tune_outputs(power_result(power_analysis), scenario, out)
     assert [p.name for p in out.iterdir()] == ["mine.txt"]  # left as it was
 

@@ -1,5 +1,7 @@
 """Tests of :mod:`ntc_design.simulate.cayley`."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -34,7 +36,7 @@ def test_cayley_moments_agree_with_rk4(examples, scenario, gain):
     pm = _prepared(examples / "scenarios" / scenario)
     t = np.linspace(0, 5, 11)
     ref = pm.moments(gain, t).ms_error.sum(axis=1)
-    got = cayley_moments(pm.systems, pm.segments, gain, pm.eps0, t, pm.n, pm.d, ds=0.002)
+    got = cayley_moments(pm, gain, t, ds=0.002)
     # about 2e-3 in the fast transient of the stiffer gain (E‖ε‖² peaks near t = 0.5)
     np.testing.assert_allclose(got.ms_error.sum(axis=1), ref, rtol=3e-3)
     assert abs(got.ms_error[-1].sum() / ref[-1] - 1) < 3e-4
@@ -44,15 +46,7 @@ def test_cayley_moments_are_second_order(examples):
     pm = _prepared(examples / "scenarios" / "g1_fixed.yaml")
     gain, t = PowerGain(1.0, 1.0, 1.0), np.array([0.0, 3.0])
     ref = pm.moments(gain, t).ms_error[-1].sum()
-    err = [
-        abs(
-            cayley_moments(pm.systems, pm.segments, gain, pm.eps0, t, pm.n, pm.d, ds)
-            .ms_error[-1]
-            .sum()
-            - ref
-        )
-        for ds in (0.004, 0.002)
-    ]
+    err = [abs(cayley_moments(pm, gain, t, ds).ms_error[-1].sum() - ref) for ds in (0.004, 0.002)]
     assert 3.3 < err[0] / err[1] < 4.7  # halving the step quarters the error
 
 
@@ -66,16 +60,8 @@ def test_cayley_steady_state_is_exact_for_a_constant_gain(g1, theta):
     lap = s.lap_b.toarray()
     q = (s.g @ s.g.T).toarray()
     steady = solve_continuous_lyapunov(-lap, -q)
-    m = cayley_moments(
-        pm.systems,
-        [(0.0, 60.0, 0)],
-        lambda t: np.ones(np.shape(t)),
-        pm.eps0,
-        np.array([0.0, 60.0]),
-        pm.n,
-        pm.d,
-        ds=0.5,
-    )
+    long = replace(pm, segments=[(0.0, 60.0, 0)])
+    m = cayley_moments(long, lambda t: np.ones(np.shape(t)), np.array([0.0, 60.0]), ds=0.5)
     np.testing.assert_allclose(m.second, steady, rtol=1e-6, atol=1e-9)
 
 
@@ -83,9 +69,7 @@ def test_cayley_stops_early_when_the_moments_blow_up(g1, theta):
     spec = SimulationSpec.build(theta, noise=NoiseModel(0.4, 0.3), method="exact")
     pm = prepare_modes(g1, spec, lambda t: np.ones(np.shape(t)))
     big = PowerGain(20.0, 1.0, 0.6)  # c ≈ 20: multiplicative noise dominates
-    m = cayley_moments(
-        pm.systems, pm.segments, big, pm.eps0, np.linspace(0, 5, 6), pm.n, pm.d, abort_above=1e6
-    )
+    m = cayley_moments(pm, big, np.linspace(0, 5, 6), abort_above=1e6)
     assert np.isinf(m.ms_error[-1]).all() and m.steps < 5000
 
 

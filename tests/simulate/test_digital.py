@@ -13,6 +13,7 @@ from ntc_design.simulate import NoiseModel, simulate
 from ntc_design.simulate.digital import digital_grid, digital_moments
 from ntc_design.simulate.kernels import em_steps
 from ntc_design.simulate.modes import Stepper
+from ntc_design.simulate.moments import PreparedModes
 from ntc_design.simulate.system import mode_system
 
 X0_LIN = np.linspace(-3, 3, 21)  # the issue's x(0) on G1
@@ -85,7 +86,7 @@ def g1_issue(g1):
 def test_exact_moments_reproduce_the_issue_table_on_g1(g1_issue, h, delay, final, peak):
     s, eps0 = g1_issue
     grid, _ = digital_grid(Digital(h, delay), 10.0, np.array([10.0]))
-    got = digital_moments([s], grid, lambda t: 1 / (1 + t), eps0, 7, 3, delay)
+    got = digital_moments(PreparedModes.of([s], eps0), grid, lambda t: 1 / (1 + t), delay)
     assert float(got.moments.ms_error[-1].sum()) == pytest.approx(final, rel=6e-4)
     assert got.peak == pytest.approx(peak, rel=6e-4)
 
@@ -95,7 +96,7 @@ def test_exact_moments_match_the_dense_augmented_recursion(g1_issue, h, delay):
     s, eps0 = g1_issue
     gain = lambda t: 1 / (1 + t)  # noqa: E731
     grid, _ = digital_grid(Digital(h, delay), 2.0, np.array([1.0, 2.0]))
-    got = digital_moments([s], grid, gain, eps0, 7, 3, delay)
+    got = digital_moments(PreparedModes.of([s], eps0), grid, gain, delay)
     want, peak = dense_digital([s], [0] * grid.n_steps, h, delay, grid.n_steps, eps0, gain)
     assert float(got.moments.ms_error[-1].sum()) == pytest.approx(want, rel=1e-12)
     assert got.peak == pytest.approx(peak, rel=1e-12)
@@ -123,7 +124,7 @@ def test_exact_moments_at_t_and_between_samples_follow_the_held_input(g1_issue, 
     times = np.array([0.1, 0.7, 1.0, 1.95, 2.0])
     grid, _ = digital_grid(Digital(h, delay), 2.0, times, between=True)
     assert grid.t[-1] == 2.0 and grid.noise_last == pytest.approx((2.0 % h) ** 2 / h)
-    got = digital_moments([s], grid, gain, eps0, 7, 3, delay)
+    got = digital_moments(PreparedModes.of([s], eps0), grid, gain, delay)
     assert got.moments.t.tolist() == pytest.approx([0.0, *times])
     want = _dense_at(s, h, delay, eps0, gain, times)
     np.testing.assert_allclose(got.moments.ms_error[1:].sum(axis=1), want, rtol=1e-11)
@@ -145,7 +146,7 @@ def test_the_error_at_t_is_continuous_in_the_period(g1_issue, delay):
 
     def final(h):
         grid, _ = digital_grid(Digital(h, delay), 10.0, np.array([10.0]))
-        m = digital_moments([s], grid, gain, eps0, 7, 3, delay)
+        m = digital_moments(PreparedModes.of([s], eps0), grid, gain, delay)
         return float(m.moments.ms_error[-1].sum()), m.peak
 
     for edge in (10.0 / 104.5, 10.0 / 104, 10.0 / 57.5, 10.0 / 57):
@@ -168,7 +169,7 @@ def test_switching_moments_use_the_mode_of_each_sample(switching_set):
         dg, 1.0, np.array([1.0]), lambda t: step_modes(switching_set.schedule, t, names, h)
     )
     eps0 = X0_LIN - np.tile(THETA, 7)
-    got = digital_moments(systems, grid, lambda t: 2 / (1 + t), eps0, 7, 3, delay)
+    got = digital_moments(PreparedModes.of(systems, eps0), grid, lambda t: 2 / (1 + t), delay)
     modes = grid.mode.tolist()
     assert len(set(modes)) == 3  # every mode is sampled
     k_full, part = dg.steps(1.0)  # 76 whole steps and 0.012 of one

@@ -12,7 +12,7 @@ from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, implicit, simulate
 from ntc_design.simulate.grid import build_grid
 from ntc_design.simulate.implicit import ImplicitSolver, SolverCache, ch_key
-from ntc_design.simulate.moments import em_moments, exact_moments
+from ntc_design.simulate.moments import PreparedModes, em_moments, exact_moments
 from ntc_design.simulate.system import mode_system
 from tests.support.kernel import stiff_network
 
@@ -135,13 +135,13 @@ def test_implicit_monte_carlo_matches_its_exact_recursion():
 
     def recursion(ds):
         grid = build_grid(t_end, ds, saves, gain=gain, intrinsic_ds=ds, h_max=1.0)
-        return em_moments(systems, grid, gain, eps0, 12, 3, scheme="implicit")
+        return em_moments(PreparedModes.of(systems, eps0), grid, gain, scheme="implicit")
 
     em = recursion(0.02)
     mc, half = res.mc.mean[1:], np.maximum(res.mc.hi - res.mc.mean, 1e-12)[1:]
     z = np.abs(mc - em.ms_error[1:]) / half * 1.96
     assert np.median(z) < 1.2 and np.max(z) < 6.0
-    ex = exact_moments(systems, [(0.0, t_end, 0)], gain, eps0, saves, 12, 3)
+    ex = exact_moments(PreparedModes.of(systems, eps0, [(0.0, t_end, 0)]), gain, saves)
 
     def gaps(m):
         mean = np.max(np.abs(m.mean[1:] - ex.mean[1:])) / np.max(np.abs(ex.mean[1:]))

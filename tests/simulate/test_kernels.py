@@ -8,9 +8,17 @@ import pytest
 import ntc_design as nd
 from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel
-from ntc_design.simulate.kernels import em_steps, kernel_arrays, numpy_step
+from ntc_design.simulate.kernels import (
+    TO_UNIT,
+    draw_lanes,
+    em_steps,
+    kernel_arrays,
+    numpy_step,
+    ziggurat_slow,
+)
 from ntc_design.simulate.rng import NormalSource, path_states
 from ntc_design.simulate.system import mode_system
+from ntc_design.simulate.ziggurat import LAYERS, ZIG_R, ZIG_X
 from tests.support.kernel import stiff_network
 
 
@@ -154,3 +162,42 @@ def test_a_compiled_kernel_is_found_in_the_index_by_the_next_process(tmp_path):
     assert _probe(tmp_path, "warm") == [[False, False], 0, True]
     # a new process: the fused kernel is in the index (nothing loaded yet), the array one not
     assert _probe(tmp_path, "ask") == [[True, False], 0, True]
+
+
+def _xoshiro(s):
+    """One xoshiro256** step written out with Python integers: (word, new state)."""
+    m64 = (1 << 64) - 1
+    rot = lambda x, k: ((x << k) | (x >> (64 - k))) & m64  # noqa: E731
+    word = (rot((s[1] * 5) & m64, 7) * 9) & m64
+    t = (s[1] << 17) & m64
+    s2, s3 = s[2] ^ s[0], s[3] ^ s[1]
+    s1 = s[1] ^ s2
+    s0 = s[0] ^ s3
+    return word, [s0, s1, s2 ^ t, rot(s3, 45)]
+
+
+def test_draw_lanes_draws_each_lanes_stream_in_order_scaled():
+    """The shared lane draw against one stream at a time written out: the ziggurat's fast
+    test in Python, its rare tail or wedge by :func:`ziggurat_slow` from the same state;
+    rows past ``m`` are left alone and every lane's state ends where its stream is."""
+    states = path_states(3, 0, 5)
+    st = np.ascontiguousarray(states.T)
+    zt, wl, m, c2 = np.full((210, 5), 7.0), np.empty(5, dtype=np.uint64), 200, 2.5
+    draw_lanes(st[0], st[1], st[2], st[3], zt, wl, c2, m)
+    assert (zt[m:] == 7.0).all()
+    slow = 0
+    for q in range(5):
+        s, want = [int(v) for v in states[q]], []
+        while len(want) < m:
+            w, s = _xoshiro(s)
+            i, u = w & (LAYERS - 1), 2.0 * ((w >> 11) * TO_UNIT) - 1.0
+            if abs(u) < ZIG_R[i]:
+                want.append(c2 * (u * ZIG_X[i]))
+                continue
+            slow += 1
+            z, *s = ziggurat_slow(np.int64(i), u, *(np.uint64(v) for v in s))
+            s = [int(v) for v in s]
+            want.append(c2 * z)
+        assert zt[:m, q].tolist() == want
+        assert [int(v) for v in st[:, q]] == s
+    assert slow > 0  # the tail or wedge ran

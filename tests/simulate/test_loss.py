@@ -25,6 +25,7 @@ from ntc_design.simulate.loss import (
     mean_offset,
     multipliers,
 )
+from ntc_design.simulate.moments import PreparedModes
 from ntc_design.simulate.system import mode_system
 
 X0_LIN = np.linspace(-3, 3, 21)
@@ -177,7 +178,7 @@ def test_exact_moments_equal_the_enumeration_of_every_arrival_pattern(tiny, poli
 def test_without_loss_every_policy_is_the_lossless_recursion(g1_sys, delay, t_end):
     s, eps0, _ = g1_sys
     grid, _ = digital_grid(Digital(0.1, delay), t_end, np.array([1.0, t_end]))
-    want = digital_moments([s], grid, gain, eps0, 7, 3, delay)
+    want = digital_moments(PreparedModes.of([s], eps0), grid, gain, delay)
     for policy in POLICIES:
         got = loss_moments(s, grid, gain, eps0, THETA, delay, np.zeros(s.n_edges), policy)
         assert got.moments.ms_error == pytest.approx(want.moments.ms_error, rel=1e-11)

@@ -13,7 +13,9 @@ from ntc_design.simulate import (
     system,
 )
 from ntc_design.simulate.grid import build_grid
-from ntc_design.simulate.moments import em_moments, exact_moments
+from ntc_design.simulate.moments import PreparedModes, em_moments, exact_moments
+from ntc_design.simulate.prepare import prepare_modes
+from ntc_design.simulate.spec import SimulationSpec
 from ntc_design.simulate.system import mode_system
 from tests.conftest import X0
 from tests.support.moments_math import SIGMA, F, _moment_rhs
@@ -24,7 +26,7 @@ def test_implicit_recursion_moments_match_a_dense_reference(g1_system):
     des, s = g1_system
     grid = build_grid(0.5, 0.05, [0, 0.25, 0.5])
     eps0 = X0 - np.tile(THETA, 7)
-    got = em_moments([s], grid, lambda t: 1 / (1 + t), eps0, 7, 3, scheme="implicit")
+    got = em_moments(PreparedModes.of([s], eps0), grid, lambda t: 1 / (1 + t), scheme="implicit")
     lap, g = s.lap_b.toarray(), s.g.toarray()
     m, sm = eps0.copy(), np.outer(eps0, eps0)
     for k in range(grid.n_steps):
@@ -48,9 +50,13 @@ def test_sparse_moments_equal_dense_moments(g1, monkeypatch):
     segs = [(0.0, 2.0, 0)]
     eps0 = X0 - np.tile(THETA, 7)
     gain = lambda t: 1 / (1 + t)  # noqa: E731
-    a = exact_moments([mode_system(des, NoiseModel())], segs, gain, eps0, [0, 1, 2], 7, 3)
+    a = exact_moments(
+        PreparedModes.of([mode_system(des, NoiseModel())], eps0, segs), gain, [0, 1, 2]
+    )
     monkeypatch.setattr(system, "DENSE_LB_MAX_ND", 0)
-    b = exact_moments([mode_system(des, NoiseModel())], segs, gain, eps0, [0, 1, 2], 7, 3)
+    b = exact_moments(
+        PreparedModes.of([mode_system(des, NoiseModel())], eps0, segs), gain, [0, 1, 2]
+    )
     np.testing.assert_allclose(a.ms_error, b.ms_error, rtol=1e-12)
     np.testing.assert_allclose(a.second, b.second, rtol=1e-10, atol=1e-14)
 
@@ -212,3 +218,20 @@ def test_the_noise_operator_is_the_sum_over_edges(seed, d, f):
     via_operator = rhs.noise(big_s)
     rhs.a2 = None  # the gathers the operator replaces at small Nd
     np.testing.assert_allclose(via_operator, rhs.noise(big_s), rtol=0, atol=1e-13 * scale)
+
+
+def test_prepared_modes_of_systems_give_the_moments_of_the_prepared_run(g1, theta):
+    """ε's moments do not depend on θ: modes built from the systems and ε(0) alone (θ
+    taken as 0) give the prepared run's moments to the last bit, and carry N, d, ε(0)."""
+    spec = SimulationSpec.build(theta, noise=NoiseModel(SIGMA, F), method="exact", T=2.0)
+    gain = lambda t: 1 / (1 + t)  # noqa: E731
+    pm = prepare_modes(g1, spec, gain)
+    assert np.any(pm.theta != 0)
+    by_hand = PreparedModes.of(pm.systems, pm.eps0, pm.segments)
+    assert (by_hand.n, by_hand.d, by_hand.names) == (g1.n, g1.dim, pm.names)
+    np.testing.assert_array_equal(by_hand.eps0, pm.eps0)
+    saves = np.linspace(0.0, 2.0, 5)
+    want = pm.moments(gain, saves)
+    got = exact_moments(by_hand, gain, saves)
+    np.testing.assert_array_equal(got.ms_error, want.ms_error)
+    np.testing.assert_array_equal(got.second, want.second)

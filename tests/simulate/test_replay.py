@@ -178,15 +178,19 @@ def test_refusals(g1_design):
 
 
 def _lossy_loop(law, x0, z, chi, steps):
-    """The lossy law written out edge by edge with dense products (a different order)."""
+    """The lossy law written out edge by edge with dense products (a different order):
+    x_{k+1} = x_k + h c_k (u − δB x_{k−D} + Σ_{arrived} W_e m_e(x_{k−D})), the initial
+    state held before the start (simulate/loss.py's recursion)."""
     ml = law.modes[0]
     n, d = law.n, law.dim
-    h = law.digital.period
+    h, lag = law.digital.period, law.digital.delay
     x = np.asarray(x0, dtype=float).reshape(n, d).copy()
+    past = [x] * (lag + 1)  # x_{k−D} … x_k
     zz = z.reshape(steps, ml.n_edges, 2)
     cc = chi.reshape(steps, ml.n_edges)
     for k in range(steps):
         c = 1.0 / (1.0 + k * h)
+        x, now = past[0], past[-1]
         drift = ml.u - np.einsum("iab,ib->ia", ml.bd, x)
         for e in range(ml.n_edges):
             if not cc[k, e]:
@@ -196,15 +200,16 @@ def _lossy_loop(law, x0, z, chi, steps):
             m = ml.sign[e] * x[j] - x[i] + noise / math.sqrt(h)
             scale = 1.0 / ml.keep[e] if law.policy == "rescale" else 1.0
             drift[i] += scale * (ml.weight[e] @ m)
-        x = x + h * c * drift
-    return x.ravel()
+        past = [*past[1:], now + h * c * drift]
+    return past[-1].ravel()
 
 
+@pytest.mark.parametrize("delay", [0, 1, 2])
 @pytest.mark.parametrize("policy", ["skip", "rescale"])
-def test_the_lossy_law_is_the_written_out_recursion(g1_design, policy):
+def test_the_lossy_law_is_the_written_out_recursion(g1_design, policy, delay):
     from ntc_design.protocol.agents import lossy_law
 
-    law = agent_law(g1_design, Digital(0.05), "1/(1+t)", 0.4, 0.3)
+    law = agent_law(g1_design, Digital(0.05, delay), "1/(1+t)", 0.4, 0.3)
     e = law.modes[0].n_edges
     losses = {
         (int(i), int(j)): 0.1 + 0.05 * (k % 3)

@@ -96,6 +96,8 @@ def _honest_certificates() -> dict[str, dict]:
     dig = certify(g1t, theta3, gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
     lossy = Digital(0.1, 0, 0.1)  # lossy links, skip: the contraction and the offset
     digl = certify(g1t, theta3, gain="1/(1+t)", digital=lossy).certificate
+    lossy_d1 = Digital(0.1, 1, 0.1)  # lossy links with a delay: the lossy delay line
+    digld = certify(g1t, theta3, gain="1/(1+t)", digital=lossy_d1).certificate
     with pytest.warns(Warning):  # G3 fails Assumption 2
         sw_top = nd.load(ROOT / "examples" / "switching.yaml")
         digsw = certify(sw_top, theta3, gain="1/(1+t)", digital=Digital(0.013, 0)).certificate
@@ -103,6 +105,7 @@ def _honest_certificates() -> dict[str, dict]:
         "digital": json.loads(json.dumps(dig)),
         "digital_switching": json.loads(json.dumps(digsw)),
         "digital_loss": json.loads(json.dumps(digl)),
+        "digital_loss-delay": json.loads(json.dumps(digld)),
         "robust": rob,
         "hurwitz": g1,
         "switching": sw,

@@ -7,7 +7,7 @@ import numpy as np
 
 from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel
-from ntc_design.simulate.moments import em_moments
+from ntc_design.simulate.moments import PreparedModes, em_moments
 from ntc_design.simulate.system import mode_system
 from tests.conftest import ROOT, X0
 
@@ -15,7 +15,7 @@ from tests.conftest import ROOT, X0
 def em_exact(res, gain=lambda t: 1 / (1 + t)):
     """Exact moments of the Euler–Maruyama recursion on the run's own grid."""
     systems = [mode_system(res.designs[k], NoiseModel()) for k in res.designs]
-    return em_moments(systems, res.grid, gain, X0 - np.tile(THETA, 7), 7, 3).ms_error
+    return em_moments(PreparedModes.of(systems, X0 - np.tile(THETA, 7)), res.grid, gain).ms_error
 
 
 def assert_mc_matches_exact(res, max_outside=0.15, max_z=6.0, exact=None):

@@ -574,7 +574,7 @@ def _truth_digital_loss(doc: dict) -> list[str]:
     if "digital_mean_square" not in doc["certifies"]:
         return bad + ([] if set(res) == {"stopped"} else ["numbers of an uncertified section"])
     h, policy = sub["period"], sub["loss"]["policy"]
-    if sub["delay"] != 0 or policy not in ("skip", "rescale"):
+    if policy not in ("skip", "rescale") or (sub["delay"] != 0) != (res.get("bound") is not None):
         return [*bad, "delay or policy"]
     ((name, m),) = doc["subject"]["modes"].items()
     top = Topology.from_data(parse_topology(m["topology"], name))
@@ -606,15 +606,18 @@ def _truth_digital_loss(doc: dict) -> list[str]:
         gm[i * d : i * d + d, j * d : j * d + d] += w @ fm
         gm[i * d : i * d + d, i * d : i * d + d] -= w @ fm
         nbar += sq * gm.T @ p @ gm
-    mu = 2 if policy == "skip" else 1
-    mm = p @ lbar + lbar.T @ p
-    if not _pos(mm - al * p - kap * (h * (lbar.T @ p @ lbar + 2 * s) + mu * nbar)):
-        bad.append("mean-square inequality over the arrivals")
+    if sub["delay"]:
+        bad += _truth_lossy_delay_line(doc, top, lap, loss, fm)
+    else:
+        mu = 2 if policy == "skip" else 1
+        mm = p @ lbar + lbar.T @ p
+        if not _pos(mm - al * p - kap * (h * (lbar.T @ p @ lbar + 2 * s) + mu * nbar)):
+            bad.append("mean-square inequality over the arrivals")
     if sub["gain"] != "1/(1+t)":
         bad.append("gain")
     elif not np.all(1 / (1 + (t0 + np.concatenate([[0.0], np.geomspace(1e-9, 1e9, 3000)]))) < kap):
         bad.append("t₀")
-    if res["k0"] != math.ceil(t0 / h - 1e-12):
+    if res["k0"] != math.ceil(t0 / h - 1e-12) + sub["delay"]:
         bad.append("k₀")
     if res["p_max"] != max(loss.values(), default=0.0):
         bad.append("p_max")
@@ -622,6 +625,65 @@ def _truth_digital_loss(doc: dict) -> list[str]:
         off = float(np.linalg.norm(np.linalg.solve(lbar, rhs)))
         if not _close(res["offset"], off, 1e-8, 1e-14):
             bad.append("offset")
+    return bad
+
+
+def _truth_lossy_delay_line(doc, top, lap, loss, fm) -> list[str]:
+    """The delay line's step over the arrivals: E_χ[A_χᵀ W A_χ] for the augmented
+    transition on (e_k, e_k − e_{k−1}, …) averaged over every arrival pattern edge by edge
+    (the mean A plus each edge's variance term, the arrivals being independent), the noise
+    scaled by E[m_e²]; the R_j decrease; (1/c)' = 1 < g; c_true >= κ."""
+    bad: list[str] = []
+    sub, res = doc["subject"]["digital"], doc["results"]["digital"]
+    h, dl, policy = sub["period"], sub["delay"], sub["loss"]["policy"]
+    mats = doc["matrices"]["P"]
+    s = np.array(mats["loss"])
+    rs = [np.array(mats[f"loss_R{j}"]) for j in range(dl)]
+    ts = [np.array(mats[f"loss_T{j}"]) for j in range(dl)]
+    al, kap, g = res["alpha"], res["kappa"], res["g"]
+    if not (g > 1 and all(_pos(t) for t in ts)):
+        return ["T or g"]
+    n, d = s.shape[0], top.dim
+    rn = [*rs, np.zeros((n, n))]
+    tau = h * kap
+    for j in range(dl):
+        if not _pos(rs[j] - rn[j + 1]) or not _pos(
+            (1 - al * tau) * rs[j] - (1 + g * tau) * rn[j + 1] - tau * ts[j]
+        ):
+            bad.append(f"R_{j} decrease")
+    m = n * (dl + 1)
+    blk = [np.zeros((n, m)) for _ in range(dl + 1)]
+    for b in range(dl + 1):
+        blk[b][:, b * n : (b + 1) * n] = np.eye(n)
+    ey = blk[0] - sum(blk[1:])
+    wt = 1 / tau + g
+    wp = blk[0].T @ s @ blk[0] + sum(wt * blk[j + 1].T @ rs[j] @ blk[j + 1] for j in range(dl))
+    lchi, extra = lap.copy(), np.zeros((m, m))  # the mean L̄ and the arrivals' variance
+    for (i, j), a in top.weights.items():
+        w = _sign(a) * a
+        le = np.zeros((n, n))
+        le[i * d : i * d + d, i * d : i * d + d] = w
+        le[i * d : i * d + d, j * d : j * d + d] = -a
+        q = 1 - loss.get((i, j), 0.0)
+        mult = 1.0 if policy == "skip" else 1 / q
+        lchi += (q * mult - 1) * le
+        b = (blk[0].T + blk[1].T) @ (-tau * le @ ey)
+        gm = np.zeros((n, n))
+        gm[i * d : i * d + d, j * d : j * d + d] += w @ fm
+        gm[i * d : i * d + d, i * d : i * d + d] -= w @ fm
+        extra += q * (1 - q) * mult**2 * b.T @ wp @ b
+        extra += h * kap**2 * q * mult**2 * ey.T @ gm.T @ (s + wt * rs[0]) @ gm @ ey
+    a = blk[0].T @ (blk[0] - tau * lchi @ ey) + blk[1].T @ (-tau * lchi @ ey)
+    for j in range(1, dl):
+        a += blk[j + 1].T @ blk[j]
+    lhs = a.T @ wp @ a + extra
+    rhs = (1 - al * tau) * blk[0].T @ s @ blk[0]
+    for j in range(dl):
+        rhs += blk[j + 1].T @ (((1 + g * tau) * rn[j + 1] + tau * ts[j]) / tau) @ blk[j + 1]
+    if not _pos(rhs - lhs):
+        bad.append("the delay line's step over the arrivals")
+    if "c_true" in res and not res["c_true"] >= kap * (1 - 1e-9):
+        bad.append("c_true")
     return bad
 
 
@@ -756,6 +818,106 @@ def _truth_deadline(doc: dict) -> list[str]:
     return bad
 
 
+def _truth_loss_deadline(doc: dict) -> list[str]:
+    """The lossy certificate's truth, then E‖e‖² of the sampled protocol on lossy links at
+    every sample and at T by a recursion written out here in error coordinates from the
+    weights (L_δ = δ·blockdiag(B_i), b_e = (A_ij − |A_ij|)θ, each edge's step matrix as the
+    coefficient of its arrival χ_e, E[χ_e χ_f] = q_e q_f or q_e): the stated B_T and B_peak
+    must be at or above it, and the deadline's lossy links the subject's."""
+    bad = _truth_digital_loss(doc)
+    sec, res = doc["subject"]["deadline"], doc["results"]["deadline"]
+    if sec["gain"] != "1/(1+t)" or sec["noise"].get("sigma_edges") or not sec.get("period"):
+        return [*bad, "gain, σ per edge or no period"]
+    ((name, mode),) = doc["subject"]["modes"].items()
+    top = Topology.from_data(parse_topology(mode["topology"], name))
+    lab, d, n = [str(x) for x in top.labels], top.dim, top.n * top.dim
+    theta = np.array(mode["theta"], dtype=float)
+    e0 = np.array(sec["initial"]["x0"], dtype=float) - np.tile(theta, top.n)
+    h, dl, t_end = sec["period"], sec.get("delay", 0), sec["T"]
+    policy, mine = sec["loss"]["policy"], sec["loss"]["edges"]
+    theirs = doc["subject"]["digital"]["loss"]
+    key = lambda es: sorted((e["from"], e["to"], e["p"]) for e in es)  # noqa: E731
+    if theirs["policy"] != policy or key(theirs["edges"]) != key(mine):
+        bad.append("the deadline's lossy links are not the subject's")
+    loss = {(lab.index(e["to"]), lab.index(e["from"])): e["p"] for e in mine}
+    edges = list(top.weights.items())
+    ne, hold = len(edges), policy == "hold"
+    one, lo = (dl + 1) * n, dl * n
+    w = one + 1 + (ne * d if hold else 0)
+    fm = sec["noise"]["f"] * np.eye(d)
+    ground = np.zeros((n, n))
+    for (i, _j), a in edges:
+        if _sign(a) < 0:
+            ground[i * d : i * d + d, i * d : i * d + d] -= mode["delta"] * a
+    z0 = np.concatenate([np.tile(e0, dl + 1), [1.0], np.zeros(w - one - 1)])
+    rows = []  # a_e (minus y_e for hold) as a d×w row block of z
+    for k, ((i, j), a) in enumerate(edges):
+        r = np.zeros((d, w))
+        r[:, lo + j * d : lo + j * d + d] += a
+        r[:, lo + i * d : lo + i * d + d] -= _sign(a) * a
+        r[:, one] = (a - _sign(a) * a) @ theta
+        if hold:
+            z0[one + 1 + k * d : one + 1 + k * d + d] = r @ z0
+            r[:, one + 1 + k * d : one + 1 + k * d + d] -= np.eye(d)
+        rows.append(r)
+    zz = np.outer(z0, z0)
+    k_full = math.floor(t_end / h + 1e-9)
+    values = [float(np.trace(zz[:n, :n]))]
+    for k in range(k_full + 1):
+        sk = min(h, t_end - k * h)
+        if sk <= 1e-9 * t_end:
+            break
+        tau = sk / (1 + k * h)
+        a0 = np.zeros((w, w))
+        a0[:n, :n] = np.eye(n)
+        a0[n:one, : one - n] = np.eye(one - n)
+        a0[one:, one:] = np.eye(w - one)
+        a0[:n, lo : lo + n] -= tau * ground
+        new = np.zeros((w, w))
+        mean = a0.copy()
+        coef = []
+        for k2, ((i, j), a) in enumerate(edges):
+            q = 1 - loss.get((i, j), 0.0)
+            ai, ce = np.zeros((w, w)), np.zeros((w, d))  # χ_e's coefficient, its noise's
+            a0[i * d : i * d + d, one] -= tau * (a - _sign(a) * a) @ theta
+            mean[i * d : i * d + d, one] -= tau * (a - _sign(a) * a) @ theta
+            if hold:
+                y = one + 1 + k2 * d
+                a0[i * d : i * d + d, y : y + d] += tau * np.eye(d)
+                mean[i * d : i * d + d, y : y + d] += tau * np.eye(d)
+                ai[y : y + d] = rows[k2]
+                ai[i * d : i * d + d] = tau * rows[k2]
+                ce[y : y + d], ce[i * d : i * d + d] = np.eye(d), tau * np.eye(d)
+            else:
+                scale = 1 / q if policy == "rescale" else 1.0
+                ai[i * d : i * d + d] = tau * scale * rows[k2]
+                ce[i * d : i * d + d] = tau * scale * np.eye(d)
+            mean += q * ai
+            kk = (_sign(a) * a) @ fm
+            diff = zz[lo + j * d : lo + j * d + d, lo + j * d : lo + j * d + d]
+            diff = diff - zz[lo + j * d : lo + j * d + d, lo + i * d : lo + i * d + d]
+            diff = diff - zz[lo + i * d : lo + i * d + d, lo + j * d : lo + j * d + d]
+            diff = diff + zz[lo + i * d : lo + i * d + d, lo + i * d : lo + i * d + d]
+            g = sec["noise"]["sigma"] * (_sign(a) * a).sum(axis=1)
+            cov = (np.outer(g, g) + kk @ diff @ kk.T) / h
+            coef.append((q, ai))
+            new += q * ce @ cov @ ce.T
+        new += mean @ zz @ mean.T
+        for q, ai in coef:  # E[χ_e²] − E[χ_e]² = q(1 − q)
+            new += q * (1 - q) * ai @ zz @ ai.T
+        zz = new
+        values.append(float(np.trace(zz[:n, :n])))
+    if not _at_least(res["ms_error_bound"], values[-1], 1e-9, 0.0):
+        bad.append("B_T")
+    if not _at_least(res["peak_bound"], max(values), 1e-9, 0.0):
+        bad.append("B_peak")
+    if res["T"] != t_end or not 0 <= res["peak_time"] <= t_end:
+        bad.append("T or the peak's time")
+    if res.get("loss") != {"policy": policy, "p_max": max(loss.values(), default=0.0)}:
+        bad.append("results.deadline.loss")
+    return bad
+
+
 def _truth_margin(doc: dict, honest_doc: dict) -> list[str]:
     """A stated ΔC must give the stated δ = C + ΔC. C depends on the topology only: the
     honest certificate's δ − ΔC for the same mode and topology (a mode whose topology was
@@ -783,7 +945,9 @@ def truth(kind: str, doc: dict, honest_doc: dict) -> list[str]:
     margin = _truth_margin(doc, honest_doc)
     if kind.startswith("robust"):
         return margin + _truth_robust(doc)
-    if kind == "digital_loss":
+    if kind == "digital_loss-deadline":
+        return margin + _truth_loss_deadline(doc)
+    if kind.startswith("digital_loss"):
         return margin + _truth_digital_loss(doc)
     if kind.startswith("digital"):
         return margin + _truth_digital(doc)
@@ -898,6 +1062,7 @@ def _share_enclosures(monkeypatch) -> None:
 KIND_OF = {
     "digital": "digital",
     "digital_loss": "digital_loss",
+    "digital_loss-delay": "digital_loss",
     "digital_switching": "digital_switching",
     "robust": "robust",
     "robust-riccati": "robust",
@@ -908,6 +1073,7 @@ KIND_OF = {
     "switching-scale": "switching-scale",
     "time_varying": "time_varying",
     "hurwitz-deadline": "hurwitz",
+    "digital_loss-deadline": "digital_loss",
 }
 
 
@@ -915,8 +1081,10 @@ STRIDE = {
     "robust-riccati": 4,
     "digital": 3,
     "digital_loss": 3,
+    "digital_loss-delay": 4,
     "digital_switching": 4,
     "hurwitz-deadline": 3,
+    "digital_loss-deadline": 3,
 }
 
 
@@ -939,7 +1107,12 @@ def honest_all(honest, tmp_path_factory) -> dict[str, dict]:
     Riccati decay and margin, the offset with the equation eliminated); built for the
     slow lane only, once per run (tests/support/shared.py)."""
     doc = once_per_run(tmp_path_factory, "riccati_certificate", _riccati_certificate)
-    return {**honest, "robust-riccati": doc, "hurwitz-deadline": _deadline_certificate(honest)}
+    return {
+        **honest,
+        "robust-riccati": doc,
+        "hurwitz-deadline": _deadline_certificate(honest),
+        "digital_loss-deadline": _loss_deadline_certificate(honest),
+    }
 
 
 def _deadline_certificate(honest) -> dict:
@@ -961,6 +1134,29 @@ def _deadline_certificate(honest) -> dict:
     add_deadline(doc, section)
     doc = json.loads(json.dumps(doc))
     assert verify(copy.deepcopy(doc)).valid and truth("hurwitz-deadline", doc, doc) == []
+    return doc
+
+
+def _loss_deadline_certificate(honest) -> dict:
+    """G1's lossy certificate (p = 0.1, skip, h = 0.1, D = 0) with the figures at T = 0.45
+    on its lossy links (a partial step at the end)."""
+    from ntc_design.certify.deadline_subject import add_deadline
+
+    doc = copy.deepcopy(honest["digital_loss"])
+    (mode,) = doc["subject"]["modes"].values()
+    n = len(mode["topology"]["agents"]) * len(mode["theta"])
+    section = {
+        "T": 0.45,
+        "period": 0.1,
+        "delay": 0,
+        "gain": "1/(1+t)",
+        "noise": {"sigma": 0.4, "f": 0.3, "sigma_edges": []},
+        "initial": {"x0": np.linspace(-3.0, 3.0, n).tolist()},
+        "loss": copy.deepcopy(doc["subject"]["digital"]["loss"]),
+    }
+    add_deadline(doc, section)
+    doc = json.loads(json.dumps(doc))
+    assert verify(copy.deepcopy(doc)).valid and truth("digital_loss-deadline", doc, doc) == []
     return doc
 
 

@@ -224,3 +224,38 @@ def test_an_unregistered_marker_is_an_error():
     options = config["tool"]["pytest"]["ini_options"]
     assert "--strict-markers" in options["addopts"].split()
     assert sorted(m.split(":")[0] for m in options["markers"]) == ["hostile", "slow"]
+
+
+#: A flag string (``--period``) as the before-stop hook finds it: after a quote, a
+#: parenthesis or a space.
+FLAG_TEXT = re.compile(r"[\"'( ]--[a-z][a-z-]+")
+
+#: Library modules allowed to write a flag string, each with its reason (none is a flag of
+#: ``ntc``: the command line maps the library's fields to its flags, ntc_design/cli/flags.py).
+FLAG_TEXT_ALLOWED: dict[str, str] = {
+    # text of the files an export writes (README.txt, ntc_protocol.h): which ntc command
+    # made them, the same bytes whoever calls export()
+    "ntc_design/export/c.py": "the emitted C header's comments name ntc export's option",
+    "ntc_design/export/run.py": "the emitted README.txt names ntc export's option",
+    # a command line of ntc, quoted whole: how to make the missing input, or the re-run line
+    # a report records (the same for every reader: a file's content, a user's next step)
+    "ntc_design/certify/verify.py": "how a certificate is made: ntc certify ... --out",
+    "ntc_design/reports/reproduce.py": "the recorded re-run line of ntc reproduce",
+    "ntc_design/reports/rundata.py": "the recorded re-run line of ntc simulate",
+    "ntc_design/reports/sweep.py": "how a sweep folder is made: ntc sweep ... --out",
+    # a script's own command line (python -m ntc_design.reports.examples), not ntc's
+    "ntc_design/reports/examples.py": "the example script's argparse options",
+}
+
+
+def test_no_library_module_names_a_command_line_flag():
+    """The library names its parameters and the scenario's fields (``digital.period``);
+    only ``ntc_design/cli`` knows the flags (errors.blame maps the one to the other)."""
+    flagged = {
+        str(p.relative_to(ROOT)).replace("\\", "/")
+        for p in PACKAGE.rglob("*.py")
+        if "cli" not in p.relative_to(PACKAGE).parts[:1]
+        and FLAG_TEXT.search(p.read_text(encoding="utf-8"))
+    }
+    assert sorted(flagged - set(FLAG_TEXT_ALLOWED)) == []  # name the field, not the flag
+    assert sorted(set(FLAG_TEXT_ALLOWED) - flagged) == []  # an exception for nothing: remove it

@@ -7,7 +7,7 @@ import ntc_design as nd
 from ntc_design.errors import InputError
 from ntc_design.model.paper import THETA
 from ntc_design.simulate import NoiseModel, SimulationSpec
-from ntc_design.tune import tune
+from ntc_design.tune import ScheduleOptions, tune
 from tests.cli_helpers import assert_input_error
 from tests.support.tune_schedule import X0
 
@@ -20,7 +20,7 @@ def test_g1_deadline_numbers_of_the_issue(g1, g1_spec):
     about 1.545, 1/(1 + t) 2.917 (independent numbers of issue 28), every Monte Carlo
     value inside its 99 % band, both theorems for the schedule with its tail."""
     r = tune(
-        g1, g1_spec.replace(mc=g1_spec.mc.__class__(paths=200, seed=0)), 10.0, schedule="optimal"
+        g1, g1_spec.replace(mc=g1_spec.mc.__class__(paths=200, seed=0)), 10.0, ScheduleOptions()
     )
     ms = r.ms_error_T
     assert ms["optimal"] == pytest.approx(0.8325, rel=3e-3)
@@ -44,7 +44,7 @@ def test_expressions_of_t_are_optimised_sampled_and_judged_continuous(examples):
     from ntc_design.simulate.scenario import load_scenario
 
     top, sp, _ = load_scenario(examples / "scenarios" / "g1_tv.yaml")
-    r = tune(top, sp, 1.0, schedule="optimal", check_paths=0, certificate=False)
+    r = tune(top, sp, 1.0, ScheduleOptions(check_paths=0, certificate=False))
     assert r.agreement < 1e-2
     ms = r.ms_error_T
     assert ms["optimal"] < ms["power"] <= ms["baseline"] * (1 + 1e-9)
@@ -86,5 +86,9 @@ def test_cli_bad_schedule_options_give_one_line(extra, needle, tmp_path, capsys,
 def test_schedule_needs_exact_moments(g1):
     """A non-linear f (from Python) has no exact moments: one line pointing to Monte Carlo."""
     sp = SimulationSpec.build(THETA, noise=NoiseModel(0.4, np.sin), initial=X0)
-    with pytest.raises(InputError, match="linear f.*--method mc"):
-        tune(g1, sp, 1.0, schedule="optimal")
+    # a Python caller reads Python names, not the command line's flags
+    with pytest.raises(InputError) as err:
+        tune(g1, sp, 1.0, ScheduleOptions())
+    assert str(err.value).startswith('schedule="optimal": exact moments exist only for a linear')
+    assert 'use schedule="power" method="mc" (Monte Carlo' in str(err.value)
+    assert "--" not in str(err.value)

@@ -252,3 +252,18 @@ def test_proven_text_rounds_the_bound_up():
     assert proven_text(cert(0.83251234)) == ", proven ≤ 0.832513"
     assert proven_text(cert(15.816133)) == ", proven ≤ 15.8162"
     assert proven_text(cert(1.0, valid=False)) == "" and proven_text(None) == ""
+
+
+def test_certify_tuned_proves_the_deadline_on_the_scenarios_lossy_links():
+    from ntc_design.certify import verify
+    from ntc_design.protocol.digital import Digital
+    from ntc_design.simulate.scenario import load_scenario
+
+    top, spec, _ = load_scenario(EXAMPLES / "scenarios" / "g1_deadline.yaml")
+    lossy = spec.replace(digital=Digital(0.1, 0, 0.3, "rescale"))
+    notes: list[str] = []
+    res = certify_tuned(top, lossy, PowerGain(1.0, 1.0, 1.0), None, notes, deadline=0.45)
+    assert notes == [] and res.certificate["kind"] == "digital_loss"
+    figures = res.certificate["results"]["deadline"]
+    assert figures["loss"] == {"policy": "rescale", "p_max": 0.3}
+    assert verify(res.certificate).valid  # the figures are those of the lossy subject

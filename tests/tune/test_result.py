@@ -2,11 +2,11 @@
 
 import pytest
 
-from ntc_design.tune import tune
+from ntc_design.tune import PowerOptions, tune
 
 
 def test_power_tune_reports_its_peak(g1, g1_spec):
-    r = tune(g1, g1_spec, 2.0, max_evaluations=20, landscape=False, certificate=False)
+    r = tune(g1, g1_spec, 2.0, PowerOptions(max_evaluations=20, landscape=False, certificate=False))
     pk = r.ms_error_peak
     assert pk["tuned"]["value"] == pytest.approx(float(r.curves["tuned"].total.max()))
     assert 0 <= pk["tuned"]["t"] <= 2.0
@@ -18,7 +18,7 @@ def test_power_tune_reports_its_peak(g1, g1_spec):
 
 
 def test_the_note_says_what_took_the_time(g1, g1_spec):
-    r = tune(g1, g1_spec, 2.0, max_evaluations=20, landscape=False, certificate=False)
+    r = tune(g1, g1_spec, 2.0, PowerOptions(max_evaluations=20, landscape=False, certificate=False))
     st = r.stage_seconds
     assert list(st) == ["search", "final curves", "step check", "theorems and certificate"]
     assert all(v >= 0 for v in st.values()) and sum(st.values()) <= r.seconds * (1 + 1e-9)

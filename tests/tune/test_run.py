@@ -18,6 +18,7 @@ from ntc_design.tune import (
     BASELINE,
     ExactObjective,
     PowerGain,
+    PowerOptions,
     tune,
 )
 from tests.cli_helpers import assert_input_error
@@ -35,7 +36,7 @@ def test_tuned_gain_reaches_the_known_optimum(pair_network):
     )
     best = ref.fun
     assert 0.05 < math.exp(ref.x[0]) < 20 and 0.1 < math.exp(ref.x[1]) < 10  # interior
-    res = tune(top, spec, T_PAIR, bounds={"gamma": (1.0, 1.0)}, landscape=False)
+    res = tune(top, spec, T_PAIR, PowerOptions(bounds={"gamma": (1.0, 1.0)}, landscape=False))
     assert res.tuned.gamma == 1.0
     assert res.ms_error_T["tuned"] == pytest.approx(closed(res.tuned.a, res.tuned.b), rel=1e-8)
     assert res.ms_error_T["tuned"] <= best * (1 + 1e-4)
@@ -104,7 +105,9 @@ def test_switching_set_tuned_with_delta_is_certified(examples):
     top, spec, _ = load_scenario(examples / "scenarios" / "switching.yaml")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = tune(top, spec, 2.0, tune_delta=True, max_evaluations=40, landscape=False)
+        res = tune(
+            top, spec, 2.0, PowerOptions(tune_delta=True, max_evaluations=40, landscape=False)
+        )
         lo = 1.05 * max(nd.design(m, spec.theta).thresholds.symmetric for m in top.modes.values())
         # the reported value is the exact moments of the design at that δ
         again = ExactObjective(top, spec.replace(delta=res.delta), 2.0).curve(res.tuned).final
@@ -161,7 +164,7 @@ def test_cli_tune_delta_on_expressions_of_t_gives_one_line(examples, capsys, mon
 def test_bad_bounds_are_refused(g1, theta, bounds, needle):
     spec = SimulationSpec.build(theta)
     with pytest.raises(nd.InputError, match=needle):
-        tune(g1, spec, 1.0, bounds=bounds)
+        tune(g1, spec, 1.0, PowerOptions(bounds=bounds))
 
 
 # -- issue 41, item 8: a tuning run estimated before it starts ----------------------------

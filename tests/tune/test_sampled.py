@@ -10,7 +10,7 @@ from ntc_design.protocol.digital import Digital
 from ntc_design.simulate import NoiseModel, SimulationSpec
 from ntc_design.simulate.digital import digital_moments
 from ntc_design.simulate.prepare import make_gain, prepare_modes, sampled_grid
-from ntc_design.tune import tune
+from ntc_design.tune import ScheduleOptions, tune
 from ntc_design.tune.sampled import SampledScheduleProblem
 
 X0 = np.linspace(-3, 3, 21)
@@ -35,7 +35,7 @@ def test_value_and_adjoint(g1, parts, h, delay):
     c = 1 / (1 + nodes) + 0.1 * np.sin(np.arange(6))
     plan = prob.plan(c)
     fwd = prob.forward(c, plan)
-    dm = digital_moments(pm.systems, grid, lambda t: np.interp(t, nodes, c), pm.eps0, 7, 3, delay)
+    dm = digital_moments(pm, grid, lambda t: np.interp(t, nodes, c), delay)
     assert fwd.value == pytest.approx(float(dm.moments.ms_error[-1].sum()), rel=1e-12)
     src = np.random.default_rng(0).random(plan.steps)
     for sources in (None, src):
@@ -56,7 +56,7 @@ def test_optimal_sampled_schedule_beats_the_power_law_and_is_certified(g1):
     spec = SimulationSpec.build(
         THETA, noise=NoiseModel(0.4, 0.3), initial=X0.tolist(), digital=Digital(0.2, 1)
     )
-    r = tune(g1, spec, 4.0, schedule="optimal", check_paths=0)
+    r = tune(g1, spec, 4.0, ScheduleOptions(check_paths=0))
     assert r.ms_error_T["optimal"] <= r.ms_error_T["power"] <= r.ms_error_T["baseline"]
     assert r.solution.levels[-1].pieces == 20  # one node per sample at the finest level
     assert r.certificate is not None and r.certificate.certificate["kind"] == "digital"

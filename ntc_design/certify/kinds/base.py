@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from ...choices import RateMethod
 from ...errors import InputError
 from ...model.paper import F_SCALE, SIGMA
 from ..checks import Check
@@ -449,7 +450,7 @@ class IssueOptions:
     gain: GainAnalysis | None = None
     noise_sigma: float = SIGMA
     noise_f: Any = F_SCALE
-    rate_method: str = "lyapunov"
+    rate_method: RateMethod = "lyapunov"
 
 
 #: The top-level fields of every kind's certificates (``gain``: a tabulated schedule, whose

@@ -16,9 +16,9 @@ continuous properties only and ``results.digital.stopped`` says where it stopped
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Generic, TypeVar
 
 import numpy as np
 
@@ -40,6 +40,7 @@ from ..delayline import (
     prove_growth,
     step_matrix,
 )
+from ..dense import DenseContext
 from ..digital import (
     additive_energy,
     edge_noises,
@@ -103,6 +104,42 @@ class Stated:
     ell2: float | None
     bound: str = RAZUMIKHIN
     g: float | None = None
+
+    @property
+    def growth(self) -> float:
+        """g, which a delay-line certificate states (its claims are derived from it)."""
+        assert self.g is not None, "a delay-line certificate states g"
+        return self.g
+
+    @property
+    def razumikhin(self) -> tuple[float, float]:
+        """β and ℓ², which a Razumikhin certificate with D > 0 states."""
+        assert self.beta is not None and self.ell2 is not None, "Razumikhin states β, ℓ²"
+        return self.beta, self.ell2
+
+
+@dataclass(frozen=True, eq=False)
+class DigitalState:
+    """What a digital kind reads beside its base kind's dense modes: ``subject.digital``
+    and ``results.digital``'s numbers (None when the certificate does not certify the
+    sampled property)."""
+
+    subject: DigitalSubject
+    stated: Stated | None
+
+
+StateT = TypeVar("StateT")
+
+
+class DigitalContext(DenseContext, Generic[StateT]):
+    """The reading state of a digital certificate: its base kind's :class:`DenseContext`
+    (read as one by the base kind's provers, the exporter and the deadline figures) and
+    the digital kind's frozen state, ``digital`` (a :class:`DigitalState`; for
+    ``digital_loss`` its own)."""
+
+    def __init__(self, dense: DenseContext, digital: StateT) -> None:
+        super().__init__(dense.source, dense.n, dense.modes, dense.ps)
+        self.digital = digital
 
 
 def _gain_document(gain: Any) -> Any:
@@ -375,13 +412,13 @@ class _DigitalMixin:
     # -------------------------------------------------------------- verifying
     def read(self, doc: dict, source: str) -> Reading:
         reading = self._base.read(doc, source)
-        ctx = reading.state
         d = next(iter(reading.modes.values())).d
-        ctx.digital = read_digital(doc, source, d)
-        ctx.stated = None
+        sampled = read_digital(doc, source, d)
+        stated = None
         if MS.value in doc.get("certifies", []):
-            ctx.stated = _stated(doc, source, ctx.digital.delay)
-        return reading
+            stated = _stated(doc, source, sampled.delay)
+        state = DigitalState(sampled, stated)
+        return replace(reading, state=DigitalContext(reading.state, state))
 
     def claims(
         self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
@@ -389,9 +426,9 @@ class _DigitalMixin:
         base = tuple(p for p in properties if p is not MS)
         out = self._base.claims(base, subject, reading, alpha)
         if MS in properties:
-            st = reading.state.stated
-            bound = st.bound if st is not None else RAZUMIKHIN
-            out = (*out, *digital_claims(subject.scheduled, reading.state.digital.delay, bound))
+            state: DigitalState = reading.state.digital
+            bound = state.stated.bound if state.stated is not None else RAZUMIKHIN
+            out = (*out, *digital_claims(subject.scheduled, state.subject.delay, bound))
         return out
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
@@ -399,15 +436,16 @@ class _DigitalMixin:
             return self._base.prove(claim, subject, reading)
         if claim.kind is ClaimKind.PD:
             return prove_dense(claim, subject, reading)
-        ctx = reading.state
-        dg, st = ctx.digital, ctx.stated
+        ctx: DigitalContext[DigitalState] = reading.state
+        dg, st = ctx.digital.subject, ctx.digital.stated
+        assert st is not None  # the sampled property's claims: its numbers were read
         if claim.kind is ClaimKind.DIGITAL_T0:
             ok, how = prove_gain_below(dg.gain, st.kappa, st.t0)
             return Check(
                 claim.id, ok is True, f"interval: {how} (κ = {st.kappa!r}, t₀ = {st.t0!r})", claim
             )
         if claim.kind is ClaimKind.DIGITAL_GROWTH:
-            ok, how = prove_growth(dg.gain, st.g, st.t0)
+            ok, how = prove_growth(dg.gain, st.growth, st.t0)
             return Check(claim.id, ok is True, f"interval: {how}", claim)
         if claim.kind in (ClaimKind.DIGITAL_DL_FORM, ClaimKind.DIGITAL_DL_STEP):
             return self._prove_delay_line(claim, subject, ctx)
@@ -427,7 +465,7 @@ class _DigitalMixin:
                 claim.id, ok, f"exact fractions: γ(S) + Σ γ(T_j) = {float(worst):.10g}", claim
             )
         if claim.kind is ClaimKind.DIGITAL_LEVEL:
-            ok, how = level_holds(st.kappa, st.alpha, st.beta, st.ell2, dg.period, dg.delay)
+            ok, how = level_holds(st.kappa, st.alpha, *st.razumikhin, dg.period, dg.delay)
             return Check(claim.id, ok, how, claim)
         p = ctx.p(P_NAME)
         if p is None:
@@ -443,9 +481,9 @@ class _DigitalMixin:
         return self._prove_matrix(claim, ctx, p)
 
     @staticmethod
-    def _delay_line_matrices(ctx: Any) -> Any:
+    def _delay_line_matrices(ctx: DigitalContext[DigitalState]) -> Any:
         # S, R_j, T_j of a delay-line certificate (None: an entry out of range)
-        delay = ctx.digital.delay
+        delay = ctx.digital.subject.delay
         try:  # a matrix missing (a forged delay) fails the claim
             s = ctx.p(P_NAME)
             rs = [ctx.p(f"{P_NAME}_R{j}") for j in range(delay)]
@@ -456,19 +494,23 @@ class _DigitalMixin:
             return None
         return s, rs, ts
 
-    def _prove_delay_line(self, claim: Claim, subject: Subject, ctx: Any) -> Check:
-        dg, st = ctx.digital, ctx.stated
+    def _prove_delay_line(
+        self, claim: Claim, subject: Subject, ctx: DigitalContext[DigitalState]
+    ) -> Check:
+        dg, st = ctx.digital.subject, ctx.digital.stated
+        assert st is not None  # the sampled property's claims: its numbers were read
+        g = st.growth
         mats = self._delay_line_matrices(ctx)
-        nums = [st.alpha, st.kappa, st.g, dg.period]
+        nums = [st.alpha, st.kappa, g, dg.period]
         if mats is None or any(out_of_range(x) for x in nums):
             return Check(claim.id, False, f"matrices.P or α, κ, g have {RANGE_TEXT}", claim)
-        if not (st.alpha > 0 and st.kappa > 0 and st.g >= 0):
+        if not (st.alpha > 0 and st.kappa > 0 and g >= 0):
             return Check(claim.id, False, "α, κ must be > 0 and g >= 0", claim)
         s, rs, ts = mats
         if claim.kind is ClaimKind.DIGITAL_DL_FORM:
 
             def build(exact: bool) -> list:
-                return form_matrices(s, rs, ts, st.alpha, st.kappa, st.g, dg.period, exact)
+                return form_matrices(s, rs, ts, st.alpha, st.kappa, g, dg.period, exact)
 
             exact = exact_affordable(s.shape[0], 4 * max(Dyadic.of(m).bits for m in [s, *rs, *ts]))
             details = []
@@ -496,7 +538,7 @@ class _DigitalMixin:
         def step(exact: bool) -> Any:
             lap = mode.exact if exact else FloatMat.of(mode.lap, mode.err)
             return step_matrix(
-                s, rs, ts, lap, edges, mode.top.dim, st.alpha, st.kappa, st.g, dg.period, exact
+                s, rs, ts, lap, edges, mode.top.dim, st.alpha, st.kappa, g, dg.period, exact
             )
 
         m = step(True) if mode.exact is not None else None
@@ -508,14 +550,17 @@ class _DigitalMixin:
         ctx.methods.add(proof.method)
         return Check(claim.id, proof.holds, f"{proof.method}: {proof.detail}", claim)
 
-    def _prove_matrix(self, claim: Claim, ctx: Any, p: np.ndarray) -> Check:
+    def _prove_matrix(
+        self, claim: Claim, ctx: DigitalContext[DigitalState], p: np.ndarray
+    ) -> Check:
         mode = ctx.modes.get(claim.mode or "")
-        dg, st = ctx.digital, ctx.stated
+        dg, st = ctx.digital.subject, ctx.digital.stated
+        assert st is not None  # the sampled property's claims: its numbers were read
         if mode is None:
             return Check(
                 claim.id, False, f"the certificate does not describe mode {claim.mode!r}", claim
             )
-        nums = [st.alpha, st.kappa, dg.period] + ([st.beta, st.ell2] if dg.delay else [])
+        nums = [st.alpha, st.kappa, dg.period] + (list(st.razumikhin) if dg.delay else [])
         if (
             not mode.in_range
             or any(out_of_range(x) for x in nums)
@@ -535,8 +580,8 @@ class _DigitalMixin:
                     pm, lap, noise_matrix(pm, edges, d, exact), st.alpha, st.kappa, dg.period
                 )
             if claim.kind is ClaimKind.DIGITAL_NOISE:
-                return scaled(pm, st.beta) - noise_matrix(pm, edges, d, exact)
-            return lipschitz_matrix(pm, lap, st.ell2)
+                return scaled(pm, st.razumikhin[0]) - noise_matrix(pm, edges, d, exact)
+            return lipschitz_matrix(pm, lap, st.razumikhin[1])
 
         m = build(True) if mode.exact is not None else None
         if m is not None and exact_affordable(m.num.shape[0], m.bits):
@@ -552,9 +597,9 @@ class _DigitalMixin:
         # the base kind's results, then results.digital: every number stated by a claim
         # (proven there), k₀ recomputed exactly; a stopped section reports no number
         self._base.audit(audit, doc, subject, reading, alpha)
-        ctx = reading.state
-        dg = ctx.digital
-        if ctx.stated is None:
+        state: DigitalState = reading.state.digital
+        dg = state.subject
+        if state.stated is None:
             sec = audit.get("digital")
             if isinstance(sec, dict) and any(isinstance(v, (int, float)) for v in sec.values()):
                 for key, v in sec.items():
@@ -562,7 +607,7 @@ class _DigitalMixin:
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
-        st = ctx.stated
+        st = state.stated
         extra: tuple[str, ...] = ()
         if dg.delay:
             extra = ("g",) if st.bound == DELAY_LINE else ("beta", "ell2")
@@ -573,7 +618,7 @@ class _DigitalMixin:
         # makes that map contract)
         if "c_true" in (doc.get("results", {}).get("digital") or {}):
             audit.estimate(("digital", "c_true"), st.kappa, None)
-        audit.exact(("digital", "k0"), first_step(ctx.stated.t0, dg.period, dg.delay))
+        audit.exact(("digital", "k0"), first_step(st.t0, dg.period, dg.delay))
 
     # -------------------------------------------------------------- presenting
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
@@ -614,7 +659,8 @@ class _DigitalMixin:
         self, properties: tuple[Property, ...], reading: Reading
     ) -> tuple[tuple[Property, str], ...]:
         base = self._base.stated(properties, reading)
-        st, dg = reading.state.stated, reading.state.digital
+        state: DigitalState = reading.state.digital
+        st, dg = state.stated, state.subject
         if MS not in properties or st is None:
             return base
         k0 = first_step(st.t0, dg.period, dg.delay)
@@ -671,7 +717,9 @@ for _name in ("issue", "read", "claims", "prove", "audit", "rows", "stated", "ve
     _member.__doc__ = _member.__doc__ or getattr(CertificateKind, _name).__doc__
 
 __all__ = [
+    "DigitalContext",
     "DigitalKind",
+    "DigitalState",
     "DigitalSubject",
     "DigitalSwitchingKind",
     "digital_claims",

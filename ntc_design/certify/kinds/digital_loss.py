@@ -8,13 +8,14 @@ edge's p_e by its labels); the matrices add ``P.loss``; ``results.digital`` stat
 t₀, k₀, the largest p_e and, under skip, the offset ‖x* − 1⊗θ‖. Each is proven by a
 derived claim or recomputed: the inequality exactly (dyadic rationals) or in verified
 floats, c(t) < κ beyond t₀ in ball arithmetic, the offset by an exact rational solve.
-The certificate covers D = 0 with ``skip`` or ``rescale``; for a delay or ``hold`` it
-certifies the continuous properties only and ``results.digital.stopped`` says why.
+The certificate covers ``skip`` and ``rescale``, D = 0 here and D >= 1 by the delay line's
+functional over the arrivals (:mod:`.digital_loss_delay`); for ``hold`` it certifies the
+continuous properties only and ``results.digital.stopped`` says why.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Any
 
@@ -35,7 +36,8 @@ from ..loss import exact_offset, loss_edges, loss_ms_matrix, offset_value, plan_
 from ..theorems import TheoremVerdict, digital_verdicts
 from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject, number_text
 from .dense import prove_dense
-from .digital import DigitalKind, read_digital
+from .digital import DigitalContext, DigitalKind, DigitalSubject, read_digital
+from .digital_loss_delay import DELAY_LINE, delayed_claims, issue_delayed, prove_delayed
 from .hurwitz import HurwitzKind
 
 P_NAME = "loss"
@@ -60,6 +62,17 @@ class LossStated:
     kappa: float
     t0: float
     offset: float | None
+    g: float | None = None  # the delay line's growth bound of 1/c (D >= 1)
+
+
+@dataclass(frozen=True, eq=False)
+class LossState:
+    """What ``digital_loss`` reads beside the ``hurwitz`` modes: ``subject.digital``, its
+    ``loss`` and ``results.digital``'s numbers (None: the sampled property not certified)."""
+
+    subject: DigitalSubject
+    loss: LossSubject
+    stated: LossStated | None
 
 
 def _gain_document(gain: Any) -> Any:
@@ -159,12 +172,26 @@ def loss_claims(mode: str, policy: str) -> tuple[Claim, ...]:
     return tuple(out)
 
 
+def _limit_row(r: dict) -> tuple[ResultRow, ...]:
+    """κ against c_true on lossy links, where the certificate shows it."""
+    ct, kap = r.get("c_true"), r.get("kappa")
+    if not (isinstance(ct, (int, float)) and isinstance(kap, (int, float)) and ct > 0):
+        return ()
+    return (
+        ResultRow(
+            "mean-square limit, lossy links",
+            f"κ = {kap:.4g} ({100 * kap / ct:.0f} % of c_true = {ct:.4g}, the largest constant "
+            "gain at which the lossy second-moment map contracts; estimated, not a claim)",
+        ),
+    )
+
+
 class DigitalLossKind(DigitalKind):
     """One topology run as the sampled protocol on lossy links: ``hurwitz`` plus the
     contraction over the arrivals (and the offset under skip)."""
 
     name = "digital_loss"
-    description = "one topology run as the sampled protocol on lossy links (D = 0, skip or rescale)"
+    description = "one topology run as the sampled protocol on lossy links (skip or rescale)"
 
     def accepts(self, design: Any) -> bool:
         """A digital design of one topology whose messages may be lost.
@@ -215,9 +242,7 @@ class DigitalLossKind(DigitalKind):
             },
         }
         why = None
-        if dg.delay:
-            why = "lossy links are certified for D = 0 (a delay is not)"
-        elif dg.policy == "hold":
+        if dg.policy == "hold":
             why = "hold keeps the last measurements (an augmented state): not certified"
         pl = None
         if why is None:
@@ -226,6 +251,8 @@ class DigitalLossKind(DigitalKind):
             lap = design.base.grounded_laplacian()
             pm = doc["matrices"]["P"]
             fixed = np.array(pm["lyapunov"]) if "lyapunov" in pm else None
+            if dg.delay:  # the delay line's functional over the arrivals
+                return self._issue_delayed(doc, design, lap, edges, noises, gain_doc, mode)
             pl = plan_loss(lap, edges, noises, d, dg.period, dg.policy, fixed)
             if pl is None:
                 why = "no Lyapunov matrix gives α > 0 for the mean matrix"
@@ -261,6 +288,32 @@ class DigitalLossKind(DigitalKind):
         doc.pop("digest", None)
         return finish(doc)
 
+    def _issue_delayed(
+        self, doc: dict, design: Any, lap: Any, edges: Any, noises: Any, gain: Any, mode: str
+    ) -> dict:
+        """The delayed section (:mod:`.digital_loss_delay`) and, under skip, the offset."""
+        dg, top = design.digital, design.base.topology
+        res, why = issue_delayed(doc, lap, edges, noises, top.dim, dg, gain, P_NAME)
+        norm2 = None
+        if res is not None and dg.policy == "skip":
+            norm2 = exact_offset(lap, edges, np.asarray(design.base.theta, dtype=float), top.dim)
+            if norm2 is None:
+                res, why = None, "the offset's exact solve is too large"
+        if res is None:
+            for k in [k for k in doc["matrices"]["P"] if k == P_NAME or k.startswith(P_NAME + "_")]:
+                doc["matrices"]["P"].pop(k)
+            doc["results"]["digital"] = {"stopped": why}
+        else:
+            res["p_max"] = max(e.p for e in edges)
+            if norm2 is not None:
+                res["offset"] = offset_value(norm2)
+            doc["results"]["digital"] = res
+            doc["certifies"] = [*doc["certifies"], MS.value]
+            claims = delayed_claims(mode, dg.policy, P_NAME)
+            doc["claims"] = [*doc["claims"], *(c.to_dict() for c in claims)]
+        doc.pop("digest", None)
+        return finish(doc)
+
     def read(self, doc: dict, source: str) -> Reading:
         """The ``hurwitz`` reading with the sampled and lossy subject and the stated numbers.
 
@@ -276,11 +329,10 @@ class DigitalLossKind(DigitalKind):
         Reading
         """
         reading = HurwitzKind.read(self, doc, source)
-        ctx = reading.state
-        mode = next(iter(ctx.modes.values()))
-        ctx.digital = read_digital(doc, source, mode.top.dim, ("loss",))
-        ctx.loss = read_loss(doc, source, mode.top)
-        ctx.stated = None
+        mode = next(iter(reading.state.modes.values()))
+        sampled = read_digital(doc, source, mode.top.dim, ("loss",))
+        loss = read_loss(doc, source, mode.top)
+        stated = None
         if MS.value in doc.get("certifies", []):
             res = need(need(doc, "results", dict, source), "digital", dict, f"{source}: results")
             where = f"{source}: results.digital"
@@ -288,9 +340,11 @@ class DigitalLossKind(DigitalKind):
             def num(key: str) -> float:
                 return number(need(res, key, (int, float), where), f"{where}.{key}")
 
-            off = num("offset") if ctx.loss.policy == "skip" else None
-            ctx.stated = LossStated(num("alpha"), num("kappa"), num("t0"), off)
-        return reading
+            off = num("offset") if loss.policy == "skip" else None
+            g = num("g") if sampled.delay else None
+            stated = LossStated(num("alpha"), num("kappa"), num("t0"), off, g)
+        state = LossState(sampled, loss, stated)
+        return replace(reading, state=DigitalContext(reading.state, state))
 
     def claims(
         self, properties: tuple[Property, ...], subject: Subject, reading: Reading, alpha: float
@@ -315,14 +369,17 @@ class DigitalLossKind(DigitalKind):
         base = tuple(p for p in properties if p is not MS)
         out = HurwitzKind.claims(self, base, subject, reading, alpha)
         if MS in properties:
-            ctx = reading.state
-            if ctx.digital.delay or ctx.loss.policy == "hold":
+            ctx: DigitalContext[LossState] = reading.state
+            if ctx.digital.loss.policy == "hold":
                 raise InputError(
-                    f"{ctx.source}: certifies: digital_mean_square on lossy links needs D = 0 "
-                    "and skip or rescale"
+                    f"{ctx.source}: certifies: digital_mean_square on lossy links needs "
+                    "skip or rescale"
                 )
             mode = next(iter(ctx.modes))
-            out = (*out, *loss_claims(mode, ctx.loss.policy))
+            if ctx.digital.subject.delay:
+                out = (*out, *delayed_claims(mode, ctx.digital.loss.policy, P_NAME))
+            else:
+                out = (*out, *loss_claims(mode, ctx.digital.loss.policy))
         return out
 
     def prove(self, claim: Claim, subject: Subject, reading: Reading) -> Check | list[Check]:
@@ -345,18 +402,24 @@ class DigitalLossKind(DigitalKind):
             return HurwitzKind.prove(self, claim, subject, reading)
         if claim.kind is ClaimKind.PD:
             return prove_dense(claim, subject, reading)
-        ctx = reading.state
-        dg, st, ls = ctx.digital, ctx.stated, ctx.loss
+        ctx: DigitalContext[LossState] = reading.state
+        dg, st, ls = ctx.digital.subject, ctx.digital.stated, ctx.digital.loss
+        assert st is not None  # the sampled property's claims: its numbers were read
         if claim.kind is ClaimKind.DIGITAL_T0:
             ok, how = prove_gain_below(dg.gain, st.kappa, st.t0)
             return Check(
                 claim.id, ok is True, f"interval: {how} (κ = {st.kappa!r}, t₀ = {st.t0!r})", claim
             )
+        if claim.kind in (ClaimKind.DIGITAL_DL_FORM, ClaimKind.DIGITAL_GROWTH):  # mode-free
+            return prove_delayed(claim, ctx, None, [], [], P_NAME)
         mode = ctx.modes.get(claim.mode or "")
         if mode is None:
             return Check(claim.id, False, f"no mode {claim.mode!r} in the certificate", claim)
         edges = loss_edges(mode.top, ls.losses)
         d = mode.top.dim
+        if claim.kind is ClaimKind.LOSS_DL_STEP:
+            noises = edge_noises(mode.top, dg.f, dg.sigma, dg.sigma_edges)
+            return prove_delayed(claim, ctx, mode, edges, noises, P_NAME)
         if claim.kind is ClaimKind.LOSS_OFFSET:
             if mode.exact is None or st.offset is None:
                 return Check(claim.id, False, "the exact L_B is not available", claim)
@@ -413,8 +476,8 @@ class DigitalLossKind(DigitalKind):
             The decay rate.
         """
         HurwitzKind.audit(self, audit, doc, subject, reading, alpha)
-        ctx = reading.state
-        if ctx.stated is None:
+        state: LossState = reading.state.digital
+        if state.stated is None:
             sec = audit.get("digital")
             if isinstance(sec, dict):
                 for key, v in sec.items():
@@ -422,10 +485,17 @@ class DigitalLossKind(DigitalKind):
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
-        for key in ("alpha", "kappa", "t0") + (("offset",) if ctx.loss.policy == "skip" else ()):
+        for key in ("alpha", "kappa", "t0") + (("offset",) if state.loss.policy == "skip" else ()):
             audit.proven(("digital", key))
-        audit.exact(("digital", "k0"), first_step(ctx.stated.t0, ctx.digital.period, 0))
-        audit.exact(("digital", "p_max"), max(ctx.loss.losses.values(), default=0.0))
+        dg = state.subject
+        if dg.delay:
+            audit.proven(("digital", "g"))
+            # c_true on lossy links is shown beside κ, not claimed: the step inequality at a
+            # constant c <= κ makes the lossy second-moment map contract, so it is >= κ
+            if "c_true" in (doc.get("results", {}).get("digital") or {}):
+                audit.estimate(("digital", "c_true"), state.stated.kappa, None)
+        audit.exact(("digital", "k0"), first_step(state.stated.t0, dg.period, dg.delay))
+        audit.exact(("digital", "p_max"), max(state.loss.losses.values(), default=0.0))
 
     def rows(self, results: dict) -> tuple[ResultRow, ...]:
         """What the certificate reports, as rows.
@@ -458,8 +528,14 @@ class DigitalLossKind(DigitalKind):
                 f"p_e <= {number_text(r.get('p_max'))}: E‖x − x*‖² contracts from step "
                 f"k₀ = {r.get('k0')} (c(t) < κ = {number_text(r.get('kappa'))} from "
                 f"t₀ = {number_text(r.get('t0'))}; α = {number_text(r.get('alpha'))}); the mean "
-                f"goes {where}; P from {r.get('P_from')}",
+                f"goes {where}; P from {r.get('P_from')}"
+                + (
+                    f"; g = {number_text(r.get('g'))} (the delay line's functional)"
+                    if r.get("bound") == DELAY_LINE
+                    else ""
+                ),
             ),
+            *_limit_row(r),
         )
 
     def stated(
@@ -479,10 +555,11 @@ class DigitalLossKind(DigitalKind):
         tuple of (Property, str)
         """
         base = HurwitzKind.stated(self, properties, reading)
-        st, dg = reading.state.stated, reading.state.digital
+        state: LossState = reading.state.digital
+        st, dg = state.stated, state.subject
         if MS not in properties or st is None:
             return base
-        k0 = first_step(st.t0, dg.period, 0)
+        k0 = first_step(st.t0, dg.period, dg.delay)
         off = f", x* at {st.offset:.6g} from 1⊗θ" if st.offset is not None else ""
         return (*base, (MS, f"h = {dg.period:g}, lossy links: from step k₀ = {k0}{off}"))
 
@@ -523,6 +600,7 @@ class DigitalLossKind(DigitalKind):
 
 __all__ = [
     "DigitalLossKind",
+    "LossState",
     "LossStated",
     "LossSubject",
     "design_losses",

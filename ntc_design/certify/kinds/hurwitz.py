@@ -8,6 +8,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ...choices import RateMethod, choices
 from ...errors import InputError
 from ...protocol import ProtocolDesign
 from ..claims import Property, derive_claims
@@ -19,11 +20,14 @@ from ..theorems import TheoremVerdict, fixed_verdicts
 from .base import IssueOptions, Reading, ResultRow, ResultsAudit, Subject
 from .dense import DenseKind
 
-RATE_METHODS = ("lyapunov", "lmi")
+RATE_METHODS = choices(RateMethod)
 
 
 def hurwitz_certificate(
-    d: ProtocolDesign, name: str | None = None, rate: bool = True, rate_method: str = "lyapunov"
+    d: ProtocolDesign,
+    name: str | None = None,
+    rate: bool = True,
+    rate_method: RateMethod = "lyapunov",
 ) -> dict:
     """Certify −L_B Hurwitz for one design in two independent ways: (a) the Lyapunov
     equation P L_B + L_Bᵀ P = I with P ≻ 0; (b) a decay rate α with

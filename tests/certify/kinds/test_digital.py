@@ -4,12 +4,15 @@ rejected after re-sealing, where the certificate stops, and the CLI."""
 import copy
 import json
 import math
+from dataclasses import FrozenInstanceError
 
 import numpy as np
 import pytest
 
-from ntc_design.certify import certify, verify
+from ntc_design.certify import KINDS, certify, verify
+from ntc_design.certify.dense import DenseContext
 from ntc_design.certify.format import digest, document_hash
+from ntc_design.certify.kinds.digital import DigitalContext, DigitalState
 from ntc_design.errors import InputError
 from ntc_design.model.paper import THETA
 from ntc_design.protocol.digital import Digital
@@ -145,12 +148,12 @@ def test_switching_schedule_is_certified_with_one_p(switching_set):
 
 @pytest.mark.hostile
 def test_digital_needs_a_gain_and_a_dense_network(g1):
-    with pytest.raises(InputError, match="--gain: the digital certificate needs the gain"):
+    with pytest.raises(InputError, match="^gain: the digital certificate needs the gain"):
         certify(g1, THETA, digital=Digital(0.1))
     from ntc_design.model.generate import random_network
 
     big = random_network(25, 3, seed=1)
-    with pytest.raises(InputError, match=r"--period: .* N·d <= 60, this network has N·d = 75"):
+    with pytest.raises(InputError, match=r"^digital: .* N·d <= 60, this network has N·d = 75"):
         certify(big, [1.0, 2.0, -1.0], gain="1/(1+t)", digital=Digital(0.1))
 
 
@@ -205,3 +208,24 @@ def test_the_razumikhin_bound_is_kept_and_an_older_certificate_verifies(g1, monk
     assert verify(_reseal(old)).valid
     old["results"]["digital"]["kappa"] *= 1.01
     assert not verify(_reseal(old)).valid
+
+
+def test_the_reading_carries_the_digital_state_typed_and_frozen(g1_d1):
+    doc = copy.deepcopy(g1_d1.certificate)
+    ctx = KINDS["digital"].read(doc, "g1").state
+    assert isinstance(ctx, DigitalContext) and isinstance(ctx, DenseContext)  # the base's too
+    state = ctx.digital
+    assert isinstance(state, DigitalState)
+    res, sub = doc["results"]["digital"], doc["subject"]["digital"]
+    assert (state.subject.period, state.subject.delay) == (sub["period"], sub["delay"])
+    st = state.stated
+    assert (st.alpha, st.kappa, st.gamma, st.t0) == tuple(
+        res[k] for k in ("alpha", "kappa", "gamma", "t0")
+    )
+    assert (st.bound, st.growth, st.beta, st.ell2) == ("delay_line", res["g"], None, None)
+    assert list(ctx.modes) == list(doc["subject"]["modes"])
+    with pytest.raises(FrozenInstanceError):
+        state.stated = None  # type: ignore[misc]
+    # a certificate that does not certify the sampled property states no numbers
+    doc["certifies"] = [p for p in doc["certifies"] if p != "digital_mean_square"]
+    assert KINDS["digital"].read(doc, "g1").state.digital.stated is None

@@ -1,15 +1,18 @@
 """Tests of :mod:`ntc_design.certify.kinds.digital_loss`: issuing and verifying the
 certificate on lossy links, forged numbers and subjects rejected after re-sealing, where
-it stops (a delay, hold), the registry's choice and the CLI."""
+it stops (hold), the registry's choice and the CLI."""
 
 import copy
 import json
+from dataclasses import FrozenInstanceError
 
 import numpy as np
 import pytest
 
-from ntc_design.certify import certify, verify
+from ntc_design.certify import KINDS, certify, verify
 from ntc_design.certify.format import digest, document_hash
+from ntc_design.certify.kinds.digital import DigitalContext
+from ntc_design.certify.kinds.digital_loss import LossState
 from ntc_design.certify.kinds.registry import kind_for
 from ntc_design.errors import InputError
 from ntc_design.model.paper import THETA
@@ -113,8 +116,9 @@ def test_malformed_loss_fields_name_the_field(skip10, edit, message):
         verify(_reseal(doc))
 
 
-def test_a_delay_or_hold_is_not_certified_and_says_so(g1):
-    for dg, why in ((Digital(0.1, 1, 0.1), "D = 0"), (Digital(0.1, 0, 0.1, "hold"), "hold")):
+def test_hold_is_not_certified_and_says_so(g1):
+    # a delay under skip or rescale is certified (tests/certify/kinds/test_digital_loss_delay.py)
+    for dg, why in ((Digital(0.1, 0, 0.1, "hold"), "hold"),):
         doc = certify(g1, THETA, gain="1/(1+t)", digital=dg).certificate
         assert doc["kind"] == "digital_loss"
         assert "digital_mean_square" not in doc["certifies"]
@@ -149,3 +153,18 @@ def test_cli_certify_with_loss_writes_a_certificate_verify_accepts(
     code, text, _ = run_cli(["verify", out], capsys, monkeypatch)
     assert code == 0 and "VALID" in text
     assert_input_error([*args, "--period", "0.1", "--loss", "1.2"], capsys, monkeypatch, "--loss")
+
+
+def test_the_reading_carries_the_loss_state_typed_and_frozen(skip10):
+    doc = copy.deepcopy(skip10)
+    ctx = KINDS["digital_loss"].read(doc, "g1").state
+    assert isinstance(ctx, DigitalContext) and isinstance(ctx.digital, LossState)
+    state, res = ctx.digital, doc["results"]["digital"]
+    assert (state.subject.period, state.subject.delay, state.loss.policy) == (0.1, 0, "skip")
+    assert max(state.loss.losses.values()) == res["p_max"] == 0.1
+    st = state.stated
+    assert (st.alpha, st.kappa, st.t0, st.offset) == tuple(
+        res[k] for k in ("alpha", "kappa", "t0", "offset")
+    )
+    with pytest.raises(FrozenInstanceError):
+        state.loss = None  # type: ignore[misc]
