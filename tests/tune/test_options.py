@@ -37,13 +37,13 @@ def test_the_tuning_signature_is_written_once():
         (lambda: PowerOptions(method="both"), "method: expected auto, exact or mc, got 'both'"),  # type: ignore[arg-type]
         (lambda: PowerOptions(max_evaluations=5), "max_evaluations: expected an integer"),
         (lambda: PowerOptions(max_evaluations=True), "max_evaluations: expected an integer"),
-        (lambda: PowerOptions(family="exp"), "--family: only 'power'"),  # type: ignore[arg-type]
-        (lambda: ScheduleOptions(max_gain=-1.0), "--max-gain: expected a number in"),
-        (lambda: ScheduleOptions(max_peak=0.0), "--max-peak: must be a positive number"),
+        (lambda: PowerOptions(family="exp"), "family: only 'power'"),  # type: ignore[arg-type]
+        (lambda: ScheduleOptions(max_gain=-1.0), "max_gain: expected a number in"),
+        (lambda: ScheduleOptions(max_peak=0.0), "max_peak: must be a positive number"),
         (lambda: ScheduleOptions(check_paths=-1), "check_paths: expected an integer in [0,"),
-        (lambda: options_for("best"), "--schedule: expected power or optimal, got 'best'"),
-        (lambda: options_for("optimal", "mc"), "--schedule optimal: uses exact moments"),
-        (lambda: options_for("power", max_peak=1.0), "--max-peak: applies to --schedule"),
+        (lambda: options_for("best"), "schedule: expected power or optimal, got 'best'"),
+        (lambda: options_for("optimal", "mc"), 'schedule="optimal": uses exact moments (method="mc" is for schedule="power")'),
+        (lambda: options_for("power", max_peak=1.0), 'max_peak: applies to schedule="optimal"'),
     ],
 )
 def test_a_bad_option_is_refused_when_made(make, line):
