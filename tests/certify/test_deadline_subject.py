@@ -8,16 +8,15 @@ import copy
 import numpy as np
 import pytest
 
-from ntc_design.certify import certify, verify
+from ntc_design.certify import verify
 from ntc_design.certify.deadline_subject import add_deadline
 from ntc_design.certify.format import finish
-from ntc_design.protocol.digital import Digital
 
 
 @pytest.fixture(scope="module")
-def deadline_cert(g1, theta):
-    res = certify(g1, theta, 0.1, "1/(1+t)", digital=Digital(0.1, 1))
-    doc = res.certificate
+def deadline_cert(g1, g1_digital_d1):
+    # certify(g1, theta, 0.1, "1/(1+t)", digital=Digital(0.1, 1)), issued once per worker
+    doc = copy.deepcopy(g1_digital_d1.certificate)
     section = {
         "T": 1.0,
         "period": 0.1,

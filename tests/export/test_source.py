@@ -54,15 +54,15 @@ def test_a_scenario_gives_its_certified_design(tmp_path):
 def test_the_digital_block_and_the_noise_are_read_and_overridden(tmp_path):
     p = _scenario(
         tmp_path,
-        "gain: 2/(2+t)\ndigital: {period: 0.05, delay: 2}\n"
+        "gain: 2/(2+t)\ndigital: {period: 0.05, delay: 1}\n"
         "noise: {sigma: 0.2, f: 0.1, sigma_edges: [{from: 5, to: 6, sigma: 0.7}]}\n",
     )
     law = from_scenario(p).law
-    assert law.digital == Digital(0.05, 2) and law.gain.label == "2/(2+t)"
+    assert law.digital == Digital(0.05, 1) and law.gain.label == "2/(2+t)"
     assert sorted(set(law.modes[0].sigma.tolist())) == [0.2, 0.7]
     assert (law.noise_f == 0.1 * np.eye(3)).all()
     law = from_scenario(p, ExportOptions(period=0.02, gain="1/(1+t)", sigma=0.3, f=0.25)).law
-    assert law.digital == Digital(0.02, 2) and law.gain.label == "1/(1+t)"
+    assert law.digital == Digital(0.02, 1) and law.gain.label == "1/(1+t)"
     assert sorted(set(law.modes[0].sigma.tolist())) == [0.3, 0.7]
     assert (law.noise_f == 0.25 * np.eye(3)).all()
 
@@ -86,7 +86,7 @@ def test_a_switching_scenario(tmp_path):
 
 
 def test_a_certificate_gives_its_subject():
-    src = from_certificate(CERTS / "g1.json", ExportOptions(period=0.1, delay=2))
+    src = from_certificate(CERTS / "g1.json", ExportOptions(period=0.1, delay=1))
     law = src.law
     assert src.kind == "certificate (hurwitz)" and "valid" in src.notes[0]
     doc = json.loads((CERTS / "g1.json").read_text())

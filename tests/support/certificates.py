@@ -58,6 +58,14 @@ def _tv_topology() -> dict:
 
 
 @pytest.fixture(scope="session")
+def g1_digital_d1(g1):
+    """``certify(G1, θ, "1/(1+t)", digital=Digital(0.1, 1))``: the delay line's certificate
+    (about 7 s of SDP solves), issued once per worker for the modules that read it (it was
+    issued once in each). Copy its certificate before editing it."""
+    return certify(g1, THETA, gain="1/(1+t)", digital=Digital(0.1, 1))
+
+
+@pytest.fixture(scope="session")
 def honest_certificates(tmp_path_factory) -> dict[str, dict]:
     """One honest certificate of every kind (two of hurwitz-scale; the digital kinds with and
     without a delay), each verified: the
