@@ -188,3 +188,46 @@ def test_the_forgery_oracle_accepts_the_honest_hold_certificate_and_catches_lies
         forged = copy.deepcopy(hold30)
         forged["results"]["digital"][key] *= change
         assert what in truth("digital_loss", forged, hold30), key
+
+
+@pytest.fixture(scope="module")
+def tiny_hold():
+    """Hold on a 3-agent, d = 2 signed cycle (p = 0.2, h = 0.1): issued in about 2 s."""
+    import warnings
+
+    top = nd.Topology.from_edges(
+        3,
+        2,
+        [
+            (2, 1, np.array([[1.0, 0.2], [0.2, 0.5]])),
+            (3, 2, -np.array([[0.8, 0.0], [0.0, 0.6]])),
+            (1, 3, np.array([[0.7, 0.1], [0.1, 0.9]])),
+        ],
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = certify(
+            top, np.array([1.0, -0.5]), gain="3/(1+t)", digital=Digital(H, 0, 0.2, "hold")
+        )
+    return json.loads(json.dumps(res.certificate))
+
+
+def test_a_small_hold_certificate_is_issued_and_re_proven(tiny_hold):
+    doc = tiny_hold
+    res = doc["results"]["digital"]
+    assert "digital_mean_square" in doc["certifies"] and res["policy"] == "hold"
+    assert 0 < res["kappa"] < res["c_true"]
+    assert res["t0"] == pytest.approx(3 / res["kappa"] - 1, rel=1e-3)  # c(t0) = κ
+    assert res["k0"] == math.ceil(res["t0"] / H)
+    kinds = {c["kind"] for c in doc["claims"] if c["property"] == "digital_mean_square"}
+    assert kinds == {"pd", "loss_hold_form", "loss_hold_step", "digital_t0", "loss_hold_gain"}
+    ver = verify(copy.deepcopy(doc))
+    assert ver.valid, [c.detail for c in ver.failed]
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("key, factor", [("kappa", 4.0), ("alpha", 50.0), ("t0", 0.5)])
+def test_a_small_hold_certificate_with_a_forged_number_fails(tiny_hold, key, factor):
+    doc = copy.deepcopy(tiny_hold)
+    doc["results"]["digital"][key] *= factor
+    assert not verify(_reseal(doc)).valid
