@@ -424,9 +424,16 @@ def test_a_certified_gain_given_again_with_spaces_is_the_same_gain(tmp_path, cap
 
 @pytest.mark.slow
 def test_a_proven_hold_export_reproduces_its_example_and_says_how_to_hold(tmp_path):
+    # a 3-agent signed cycle: its hold certificate is issued in about 2 s (G1's in 50 s)
+    (tmp_path / "cycle.yaml").write_text(
+        "dim: 2\nagents: 3\nedges:\n"
+        "  - {from: 1, to: 2, weight: [[1.0, 0.2], [0.2, 0.5]]}\n"
+        "  - {from: 2, to: 3, weight: [[-0.8, 0.0], [0.0, -0.6]]}\n"
+        "  - {from: 3, to: 1, weight: [[0.7, 0.1], [0.1, 0.9]]}\n"
+    )
     scen = tmp_path / "s.yaml"
     scen.write_text(
-        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 5\n"
+        "topology: cycle.yaml\ntheta: [1, -0.5]\nT: 5\ngain: 3/(1+t)\n"
         "digital: {period: 0.1, loss: 0.1, policy: hold}\n"
     )
     res = export(scen, "python", tmp_path / "py")
