@@ -35,7 +35,7 @@ from flint import arb, arb_mat, ctx
 
 from ..errors import InputError, Option, check_work, format_bytes
 from ..numerics.memory import available_memory
-from ..protocol.loss import require_loss, require_policy
+from ..protocol.loss import loss_width, require_loss, require_policy
 from .deadline import (
     ARB_FLOP_SECONDS,
     BUILD_BITS,
@@ -150,29 +150,6 @@ def read_loss_section(section: Any, top: Any, where: str) -> LossSection:
             raise InputError(f"{w}: no edge {e['from']}->{e['to']} (or listed twice)")
         losses[key] = require_loss(f"{w}.p", e.get("p"))
     return LossSection(policy, {k: losses.get(k, 0.0) for k in top.edges})
-
-
-def loss_width(nd_: int, delay: int, n_edges: int, d: int, policy: str) -> int:
-    """W, the length of the augmented state (e_k … e_{k−D}, 1, and the y_e for hold).
-
-    Parameters
-    ----------
-    nd_ : int
-        N·d.
-    delay : int
-        D.
-    n_edges : int
-        E.
-    d : int
-        The state dimension.
-    policy : str
-        The policy.
-
-    Returns
-    -------
-    int
-    """
-    return (delay + 1) * nd_ + 1 + (n_edges * d if policy == "hold" else 0)
 
 
 def check_loss_work(

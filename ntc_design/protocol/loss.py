@@ -134,4 +134,32 @@ def edge_losses(
     )
 
 
-__all__ = ["POLICIES", "edge_losses", "require_loss", "require_policy"]
+def loss_width(nd_: int, delay: int, n_edges: int, d: int, policy: str) -> int:
+    """W, the length of the augmented state (e_k … e_{k−D}, 1, and the held y_e for hold).
+
+    Parameters
+    ----------
+    nd_ : int
+        N·d.
+    delay : int
+        D.
+    n_edges : int
+        E.
+    d : int
+        The state dimension.
+    policy : str
+        The policy.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> loss_width(21, 1, 8, 3, "hold")  # G1 at D = 1: two states, the 1, 8 held d-vectors
+    67
+    """
+    return (delay + 1) * nd_ + 1 + (n_edges * d if policy == "hold" else 0)
+
+
+__all__ = ["POLICIES", "edge_losses", "loss_width", "require_loss", "require_policy"]

@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import InputError, format_bytes
 from ..numerics.memory import available_memory
+from ..protocol.loss import loss_width
 from .digital import MEMORY_SHARE
 from .grid import TimeGrid
 from .moments import MOMENTS_MAX_ND, MomentRecorder, Moments
@@ -172,29 +173,6 @@ def mean_offset(s: ModeSystem, theta: np.ndarray, loss: np.ndarray, policy: str)
         raise InputError(
             "digital.loss: L_δ + Σ_e (1 − p_e) L_e is singular; the mean has no unique limit"
         ) from None
-
-
-def loss_width(nd_: int, delay: int, n_edges: int, d: int, policy: str) -> int:
-    """W, the length of the augmented state (e_k … e_{k−D}, 1, and the held y_e for hold).
-
-    Parameters
-    ----------
-    nd_ : int
-        N·d.
-    delay : int
-        D.
-    n_edges : int
-        E.
-    d : int
-        The state dimension.
-    policy : str
-        The policy.
-
-    Returns
-    -------
-    int
-    """
-    return (delay + 1) * nd_ + 1 + (n_edges * d if policy == "hold" else 0)
 
 
 def check_loss_moments(nd_: int, delay: int, n_edges: int, d: int, policy: str) -> None:
