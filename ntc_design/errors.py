@@ -14,9 +14,6 @@ from collections.abc import Mapping
 
 from .fields import Option, flag_value, options_written_as
 
-#: The field at the head of a message written as one text (``paths: must be ...``).
-_FIELD_HEAD = re.compile(r"([^\s:]+): ")
-
 
 class InputError(ValueError):
     """Bad input: a file, matrix, label or parameter that is wrong.
@@ -32,8 +29,9 @@ class InputError(ValueError):
         The message: text, and the parameters it names (:class:`Option`, written by each
         reader in its own words).
     field : str, optional
-        The field or parameter that is wrong; ``str()`` is ``field: message``. Not given:
-        a message written as ``FIELD: ...`` in one text gives it.
+        The field or parameter that is wrong (``digital.period``, a file's name); ``str()``
+        is ``field: message``. Never written into the message's text: the command line
+        names the field by its flag (:func:`blame`).
     value : object, optional
         The field's value the message is about (``schedule="optimal": ...``).
     option : bool, optional
@@ -59,10 +57,6 @@ class InputError(ValueError):
         value: object = None,
         option: bool = False,
     ) -> None:
-        if field is None and parts and isinstance(parts[0], str):
-            head = _FIELD_HEAD.match(parts[0])
-            if head is not None:  # a message written as one text: "paths: must be ..."
-                field, parts = head.group(1), (parts[0][head.end() :], *parts[1:])
         self.field = field
         self.value = value
         self.option = option
@@ -468,10 +462,13 @@ def blame(
         name = str(Option(field, exc.value)) if exc.option else Option(field, exc.value).words()
     if field is not None and head is not None and fields and head in fields:
         name = f"{fields[head]}{field[len(head) :]}"
-    text = exc.text(options, name)
+    body = exc.text(options, "")
     given = [f"{flags[k]} {flag_value(v)}" for k, v in (values or {}).items() if k in flags]
     with_flags = f" (with {', '.join(dict.fromkeys(given))})" if given else ""
-    return InputError(f"{source}: {text}{with_flags}" if source is not None else text + with_flags)
+    if source is None:
+        return InputError(body + with_flags, field=name or None)
+    text = f"{name}: {body}" if name else body
+    return InputError(text + with_flags, field=str(source))
 
 
 def _documents(exc: InputError) -> set[str]:
@@ -708,7 +705,14 @@ def warn_user(message: str, category: type[Warning]) -> None:
 LONG_WORK_SECONDS = 60.0
 
 
-def check_work(seconds: float, what: str, limit: float, instead: str) -> None:
+def check_work(
+    seconds: float,
+    what: str,
+    limit: float,
+    instead: str,
+    field: str | None = None,
+    option: bool = False,
+) -> None:
     """Refuse work estimated past ``limit`` in one line; past :data:`LONG_WORK_SECONDS`,
     say the estimate before it starts.
 
@@ -717,12 +721,17 @@ def check_work(seconds: float, what: str, limit: float, instead: str) -> None:
     seconds : float
         The estimate.
     what : str
-        What the work is and how long it takes, the message's start (``--horizon: tuning
-        for T = 1e4 takes roughly 2 h``).
+        What the work is and how long it takes, the message's start (``tuning for T = 1e4
+        takes roughly 2 h``).
     limit : float
         The longest work accepted, in seconds.
     instead : str
         What to do instead, said when it is refused.
+    field : str, optional
+        The field or parameter whose value asks for the work (``horizon``): the error's
+        field, and the warning's start.
+    option : bool, optional
+        ``field`` is a parameter of the call (written as its flag at the command line).
 
     Raises
     ------
@@ -731,12 +740,17 @@ def check_work(seconds: float, what: str, limit: float, instead: str) -> None:
 
     Examples
     --------
-    >>> check_work(5.0, "a test: roughly 5 s", 3600.0, "a smaller one")
+    >>> check_work(5.0, "a test of roughly 5 s", 3600.0, "a smaller one", field="test")
     """
     if not seconds <= limit:
-        raise InputError(f"{what}, more than the limit of {format_seconds(limit)}; {instead}")
+        raise InputError(
+            f"{what}, more than the limit of {format_seconds(limit)}; {instead}",
+            field=field,
+            option=option,
+        )
     if seconds > LONG_WORK_SECONDS:
-        warn_user(f"{what}; Ctrl-C stops cleanly", UserWarning)
+        head = "" if field is None else f"{Option(field) if option else field}: "
+        warn_user(f"{head}{what}; Ctrl-C stops cleanly", UserWarning)
 
 
 # -- interrupts that Python may lose ---------------------------------------------------------

@@ -74,29 +74,34 @@ def topology_from_networkx(
 
     if not isinstance(graph, nx.DiGraph) or graph.is_multigraph():
         raise InputError(
-            f"from_networkx: expected a networkx.DiGraph, got {type(graph).__name__} "
-            "(convert an undirected graph with graph.to_directed())"
+            f"expected a networkx.DiGraph, got {type(graph).__name__} "
+            "(convert an undirected graph with graph.to_directed())",
+            field="from_networkx",
         )
     labels = tuple(graph.nodes)
     if len(set(map(str, labels))) != len(labels):
-        raise InputError("from_networkx: node labels must stay distinct as text")
+        raise InputError("node labels must stay distinct as text", field="from_networkx")
     mats = []
     for u, v, data in graph.edges(data=True):
         where = f"from_networkx: edge {u}->{v}"
         if weight not in data:
-            raise InputError(f"{where}: no '{weight}' attribute")
+            raise InputError(f"no '{weight}' attribute", field=where)
         try:
             a = np.array(data[weight], dtype=float)
         except (TypeError, ValueError):
-            raise InputError(f"{where}: '{weight}' is not a number or a matrix") from None
+            raise InputError(f"'{weight}' is not a number or a matrix", field=where) from None
         if a.ndim == 0:
             a = a.reshape(1, 1)
         if a.ndim != 2 or a.shape[0] != a.shape[1]:
-            raise InputError(f"{where}: '{weight}' has shape {a.shape}, expected a square matrix")
+            raise InputError(
+                f"'{weight}' has shape {a.shape}, expected a square matrix", field=where
+            )
         if dim is None:
             dim = a.shape[0]
         if a.shape != (dim, dim):
-            raise InputError(f"{where}: '{weight}' has shape {a.shape}, expected ({dim}, {dim})")
+            raise InputError(
+                f"'{weight}' has shape {a.shape}, expected ({dim}, {dim})", field=where
+            )
         mats.append((u, v, a))
     if dim is None:
         dim = int(graph.graph.get("dim", 1))
@@ -154,7 +159,7 @@ def save_topology(top: Topology, path: str | Path) -> Path:
     """
     p = Path(path)
     if not p.parent.is_dir():
-        raise InputError(f"{p}: directory {p.parent} does not exist")
+        raise InputError(f"directory {p.parent} does not exist", field=str(p))
     doc = jsonable(top.to_dict())
     if p.suffix.lower() == ".json":
         text = json.dumps(doc, indent=1, ensure_ascii=False) + "\n"

@@ -67,21 +67,21 @@ def unpack(x: Any, where: str, kind: str, shape: tuple[int, ...]) -> np.ndarray:
         Not a packed array, or the wrong dtype, shape, base64 or length.
     """
     if not isinstance(x, dict) or set(x) != {"dtype", "shape", "base64"}:
-        raise InputError(f"{where}: expected a packed array {{dtype, shape, base64}}")
+        raise InputError("expected a packed array {dtype, shape, base64}", field=where)
     if x["dtype"] != kind or x["shape"] != list(shape):
-        raise InputError(f"{where}: expected dtype {kind} and shape {list(shape)}")
+        raise InputError(f"expected dtype {kind} and shape {list(shape)}", field=where)
     if not isinstance(x["base64"], str):
-        raise InputError(f"{where}: base64 must be a string")
+        raise InputError("base64 must be a string", field=where)
     try:
         raw = base64.b64decode(x["base64"].encode("ascii"), validate=True)
     except (ValueError, UnicodeEncodeError):
-        raise InputError(f"{where}: invalid base64") from None
+        raise InputError("invalid base64", field=where) from None
     dt = np.dtype(_DTYPES[kind])
     if len(raw) != dt.itemsize * int(np.prod(shape, dtype=np.int64)):
-        raise InputError(f"{where}: {len(raw)} bytes do not fit shape {list(shape)}")
+        raise InputError(f"{len(raw)} bytes do not fit shape {list(shape)}", field=where)
     arr = np.frombuffer(raw, dtype=dt).reshape(shape).astype(dt.newbyteorder("="))
     if kind == "f8" and not np.all(np.isfinite(arr)):
-        raise InputError(f"{where}: non-finite entry")
+        raise InputError("non-finite entry", field=where)
     return arr
 
 
@@ -138,30 +138,30 @@ def topology_from_subject(sub: dict, where: str) -> Topology:
         A missing or malformed field, or an invalid weight.
     """
     if not isinstance(sub, dict):
-        raise InputError(f"{where}: expected an object")
+        raise InputError("expected an object", field=where)
     for key in ("dim", "agents", "edges", "from", "to", "weights"):
         if key not in sub:
-            raise InputError(f"{where}: missing field '{key}'")
+            raise InputError(f"missing field '{key}'", field=where)
     d = sub["dim"]
     if isinstance(d, bool) or not isinstance(d, int) or not 1 <= d <= 64:
-        raise InputError(f"{where}.dim: must be an integer in 1..64")
+        raise InputError("must be an integer in 1..64", field=f"{where}.dim")
     labels = sub["agents"]
     if not isinstance(labels, list) or not labels:
-        raise InputError(f"{where}.agents: expected a non-empty list of labels")
+        raise InputError("expected a non-empty list of labels", field=f"{where}.agents")
     if len({str(x) for x in labels}) != len(labels):
-        raise InputError(f"{where}.agents: labels must be unique")
+        raise InputError("labels must be unique", field=f"{where}.agents")
     e = sub["edges"]
     if isinstance(e, bool) or not isinstance(e, int) or not 0 <= e <= 50_000_000:
-        raise InputError(f"{where}.edges: must be an edge count")
+        raise InputError("must be an edge count", field=f"{where}.edges")
     cols = unpack(sub["from"], f"{where}.from", "i8", (e,))
     rows = unpack(sub["to"], f"{where}.to", "i8", (e,))
     w = unpack(sub["weights"], f"{where}.weights", "f8", (e, d, d))
     n = len(labels)
     if cols.size and (min(cols.min(), rows.min()) < 0 or max(cols.max(), rows.max()) >= n):
-        raise InputError(f"{where}: an edge index is out of range")
+        raise InputError("an edge index is out of range", field=where)
 
     if out_of_range(w):  # so no product in a proof overflows or underflows
-        raise InputError(f"{where}.weights: {RANGE_TEXT}")
+        raise InputError(f"{RANGE_TEXT}", field=f"{where}.weights")
     return Topology.from_arrays(tuple(labels), d, rows, cols, w.reshape(-1, d, d), sub.get("name"))
 
 
@@ -201,7 +201,7 @@ def margin_check(name: str, sub: dict, where: str, top: Topology, delta: float) 
         ``margin`` is missing, or neither null (δ given directly) nor a finite number.
     """
     if "margin" not in sub:
-        raise InputError(f"{where}.margin: missing")
+        raise InputError("missing", field=f"{where}.margin")
     if sub["margin"] is None:  # δ given directly: the subject makes no Lemma 1 claim
         return [Check(f"{name}: margin ΔC > 0", True, "none stated: δ was given directly")]
     m = number(need(sub, "margin", (int, float), where), f"{where}.margin")
@@ -251,19 +251,19 @@ def read_array_mode(
         A missing or malformed field, or a size that differs from the certificate's.
     """
     if not isinstance(sub, dict):
-        raise InputError(f"{where}: expected an object")
+        raise InputError("expected an object", field=where)
     top = topology_from_subject(need(sub, "topology", dict, where), f"{where}.topology")
     if top.nd != size:
-        raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {size}")
+        raise InputError(f"topology has Nd={top.nd}, certificate size is {size}", field=where)
     delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
     if not delta > 0 or out_of_range(delta):
-        raise InputError(f"{where}.delta: must be a positive number in [2^-250, 2^250]")
+        raise InputError("must be a positive number in [2^-250, 2^250]", field=f"{where}.delta")
     theta = vector(need(sub, "theta", list, where), top.dim, f"{where}.theta")
     informed = need(sub, "informed", list, where)
     try:
         inf_idx = sorted(top.index(x) for x in informed)
     except InputError:
-        raise InputError(f"{where}.informed: lists an unknown agent") from None
+        raise InputError("lists an unknown agent", field=f"{where}.informed") from None
     ok_u = inf_idx == sorted(top.antagonised)
     name = where.rsplit("subject.modes.", 1)[-1]
     check = Check(f"{name}: informed agents are U", ok_u, "V_I = U" if ok_u else "V_I ≠ U")

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from flint import arb, arb_mat, ctx
 
-from ..errors import InputError, Option, check_work
+from ..errors import InputError, check_work
 from ..protocol.digital import WHOLE_RTOL, step_modes
 from ..rigorous.exact import Dyadic
 from ..rigorous.floatmat import FloatMat
@@ -765,10 +765,12 @@ def check_sampled_work(
     secs = k_steps * 6.0 * w**3 * ARB_FLOP_SECONDS
     check_work(
         secs,
-        f"{Option('deadline')}: the proven moments take K = {k_steps} steps of a {w}×{w} ball "
+        f"the proven moments take K = {k_steps} steps of a {w}×{w} ball "
         f"recursion (N·d = {nd_}, D = {delay}), roughly {secs:.3g} s",
         MAX_SECONDS if limit is None else limit,
         "raise the period, lower the delay or shorten T",
+        field="deadline",
+        option=True,
     )
 
 

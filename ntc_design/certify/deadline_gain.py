@@ -57,8 +57,9 @@ def _series_of(expr: sp.Expr, t: arb_series) -> arb_series:
     fn = fns.get(expr.func)
     if fn is None or len(args) != 1:
         raise InputError(
-            f"gain: {Option('deadline')} needs an analytic c(t) (+, −, ·, /, powers, exp, log, sin, "
-            f"cos, tan, atan), not {expr.func.__name__}"
+            f"{Option('deadline')} needs an analytic c(t) (+, −, ·, /, powers, exp, log, sin, "
+            f"cos, tan, atan), not {expr.func.__name__}",
+            field="gain",
         )
     return fn(args[0])
 
@@ -88,15 +89,19 @@ class GainBalls:
                 self.interp = str(gain.get("interpolation", "linear"))
                 tail = gain["tail"]
             except (KeyError, TypeError, ValueError):
-                raise InputError("gain: expected a schedule {t, c, interpolation, tail}") from None
+                raise InputError(
+                    "expected a schedule {t, c, interpolation, tail}", field="gain"
+                ) from None
             if self.interp not in ("linear", "previous") or len(self.t) != len(self.c):
-                raise InputError("gain: a schedule interpolated linearly or by the previous value")
+                raise InputError(
+                    "a schedule interpolated linearly or by the previous value", field="gain"
+                )
             self.expr = parse_expression(tail, "gain.tail")
         elif isinstance(gain, str):
             self.t, self.c, self.interp = [], [], "linear"
             self.expr = parse_expression(gain, "gain")
         else:
-            raise InputError("gain: expected an expression in t or a schedule")
+            raise InputError("expected an expression in t or a schedule", field="gain")
         self.symbol = next(iter(self.expr.free_symbols), sp.Symbol("t"))
 
     def knots(self, t_end: float) -> list[float]:

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from flint import arb, arb_mat, ctx
 
-from ..errors import InputError, Option, check_work, format_bytes
+from ..errors import InputError, check_work, format_bytes
 from ..numerics.memory import available_memory
 from ..protocol.loss import loss_width, require_loss, require_policy
 from .deadline import (
@@ -136,7 +136,7 @@ def read_loss_section(section: Any, top: Any, where: str) -> LossSection:
         p or policy.
     """
     if not isinstance(section, dict):
-        raise InputError(f"{where}: expected {{policy, edges}}")
+        raise InputError("expected {policy, edges}", field=where)
     policy = require_policy(f"{where}.policy", section.get("policy"))
     index = {str(a): k for k, a in enumerate(top.labels)}
     edges = set(top.edges)
@@ -144,10 +144,10 @@ def read_loss_section(section: Any, top: Any, where: str) -> LossSection:
     for k, e in enumerate(need(section, "edges", list, where)):
         w = f"{where}.edges[{k}]"
         if not isinstance(e, dict) or not all(isinstance(e.get(x), str) for x in ("from", "to")):
-            raise InputError(f"{w}: expected {{from, to, p}}")
+            raise InputError("expected {from, to, p}", field=w)
         key = (index.get(e["to"], -1), index.get(e["from"], -1))
         if key not in edges or key in losses:
-            raise InputError(f"{w}: no edge {e['from']}->{e['to']} (or listed twice)")
+            raise InputError(f"no edge {e['from']}->{e['to']} (or listed twice)", field=w)
         losses[key] = require_loss(f"{w}.p", e.get("p"))
     return LossSection(policy, {k: losses.get(k, 0.0) for k in top.edges})
 
@@ -202,10 +202,12 @@ def check_loss_work(
     secs = k_steps * (6.0 * w**3 + 8.0 * ed * w * w) * ARB_FLOP_SECONDS
     check_work(
         secs,
-        f"{Option('deadline')}: the proven moments on lossy links take K = {k_steps} steps of a "
+        f"the proven moments on lossy links take K = {k_steps} steps of a "
         f"{w}×{w} ball recursion (N·d = {nd_}, D = {delay}, {policy}), roughly {secs:.3g} s",
         MAX_SECONDS if limit is None else limit,
         "raise the period, lower the delay or shorten T",
+        field="deadline",
+        option=True,
     )
 
 
@@ -300,9 +302,9 @@ def loss_problem(
         No period, more than one mode, a malformed ``loss``, or work past the limits.
     """
     if base.period is None:
-        raise InputError(f"{where}.loss: lossy links need a period (the sampled protocol)")
+        raise InputError("lossy links need a period (the sampled protocol)", field=f"{where}.loss")
     if len(base.modes) != 1 or base.schedule is not None:
-        raise InputError(f"{where}.loss: lossy links are modelled on one fixed topology")
+        raise InputError("lossy links are modelled on one fixed topology", field=f"{where}.loss")
     sec = read_loss_section(section.get("loss"), top, f"{where}.loss")
     d, nd_ = top.dim, base.nd
     check_loss_work(nd_, len(top.edges), d, base.t_end, base.period, base.delay, sec.policy, limit)

@@ -69,7 +69,7 @@ def initial_moment(initial: Any, theta: np.ndarray, n: int, source: str = "initi
     """
     nd_ = n * theta.size
     if not isinstance(initial, dict):
-        raise InputError(f"{source}: expected {{x0: [...]}} or {{mean: [...], variance: [...]}}")
+        raise InputError("expected {x0: [...]} or {mean: [...], variance: [...]}", field=source)
     key = "x0" if "x0" in initial else "mean"
     mean = np.asarray(
         [number(v, f"{source}.{key}") for v in need(initial, key, list, source)], dtype=float
@@ -83,9 +83,9 @@ def initial_moment(initial: Any, theta: np.ndarray, n: int, source: str = "initi
         else np.zeros(nd_)
     )
     if mean.size != nd_ or var.size != nd_:
-        raise InputError(f"{source}.{key}: expected N·d = {nd_} numbers")
+        raise InputError(f"expected N·d = {nd_} numbers", field=f"{source}.{key}")
     if np.any(var < 0):
-        raise InputError(f"{source}.variance: must be >= 0")
+        raise InputError("must be >= 0", field=f"{source}.variance")
     e = mean - np.tile(theta, n)
     return np.outer(e, e) + np.diag(var)
 
@@ -112,7 +112,7 @@ def noise_parts(noise: Any, d: int, source: str) -> tuple[np.ndarray, float, dic
         A missing or malformed field.
     """
     if not isinstance(noise, dict):
-        raise InputError(f"{source}: expected {{sigma, f, sigma_edges}}")
+        raise InputError("expected {sigma, f, sigma_edges}", field=source)
     sigma = number(need(noise, "sigma", (int, float), source), f"{source}.sigma")
     f_raw = need(noise, "f", (int, float, list), source)
     f = (
@@ -123,10 +123,10 @@ def noise_parts(noise: Any, d: int, source: str) -> tuple[np.ndarray, float, dic
     edges = {}
     for k, e in enumerate(noise.get("sigma_edges", [])):
         if not isinstance(e, dict) or not all(isinstance(e.get(x), str) for x in ("from", "to")):
-            raise InputError(f"{source}.sigma_edges[{k}]: expected {{from, to, sigma}}")
+            raise InputError("expected {from, to, sigma}", field=f"{source}.sigma_edges[{k}]")
         edges[(e["from"], e["to"])] = number(e.get("sigma"), f"{source}.sigma_edges[{k}].sigma")
     if sigma < 0 or any(v < 0 for v in edges.values()):
-        raise InputError(f"{source}.sigma: must be >= 0")
+        raise InputError("must be >= 0", field=f"{source}.sigma")
     return f, sigma, edges
 
 
@@ -167,18 +167,18 @@ def build_problem(
         A missing or malformed field, or work past the limit (naming ``--deadline``).
     """
     if not isinstance(section, dict):
-        raise InputError(f"{source}: expected an object")
+        raise InputError("expected an object", field=source)
     t_end = number(need(section, "T", (int, float), source), f"{source}.T")
     if not t_end > 0:
-        raise InputError(f"{source}.T: must be > 0")
+        raise InputError("must be > 0", field=f"{source}.T")
     period = section.get("period")
     if period is not None:
         period = number(period, f"{source}.period")
         if not 0 < period <= t_end:
-            raise InputError(f"{source}.period: must be in (0, T]")
+            raise InputError("must be in (0, T]", field=f"{source}.period")
     delay = section.get("delay", 0)
     if not isinstance(delay, int) or isinstance(delay, bool) or not 0 <= delay <= 10_000:
-        raise InputError(f"{source}.delay: expected an integer D >= 0")
+        raise InputError("expected an integer D >= 0", field=f"{source}.delay")
     first = next(iter(modes.values()))[0]  # the agents and d of every mode
     n, d = first.n, first.dim
     f, sigma, edges = noise_parts(section.get("noise"), d, f"{source}.noise")
@@ -206,10 +206,12 @@ def build_problem(
         secs = continuous_work(pb)
         check_work(
             secs,
-            f"{Option('deadline')}: the enclosure of the moment equations (N·d = {nd_}, "
+            f"the enclosure of the moment equations (N·d = {nd_}, "
             f"T = {t_end:g}) takes roughly {secs:.3g} s",
             MAX_SECONDS if limit is None else limit,
             f"shorten T or use {Option('period')}",
+            field="deadline",
+            option=True,
         )
     return pb
 
@@ -226,8 +228,9 @@ def _bound(doc: dict, reading: Reading, source: str, limit: float | None = None)
     ctx = reading.state
     if not isinstance(ctx, DenseContext):
         raise InputError(
-            f"{source}: subject.deadline: kind {doc.get('kind')!r} states no deadline figures "
-            "(a dense kind: hurwitz, switching, digital, digital_switching)"
+            f"kind {doc.get('kind')!r} states no deadline figures "
+            "(a dense kind: hurwitz, switching, digital, digital_switching)",
+            field=f"{source}: subject.deadline",
         )
     subject = doc["subject"]
     schedule = parse_schedule(subject, f"{source}: subject") if "schedule" in subject else None

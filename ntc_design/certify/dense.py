@@ -105,9 +105,10 @@ def require_lmi(n: int, what: str) -> None:
     need = 128.0 * m * m
     if need > DENSE_MAX_BYTES:
         raise DenseRefused(
-            f"{what}: a dense {n}×{n} P needs about {need / 2**30:.0f} GiB "
+            f"a dense {n}×{n} P needs about {need / 2**30:.0f} GiB "
             f"(limit {DENSE_MAX_BYTES / 2**30:.1f} GiB); refused — the component-wise "
-            "certificate (ntc_design.certify.scale) applies at this size"
+            "certificate (ntc_design.certify.scale) applies at this size",
+            field=what,
         )
 
 
@@ -347,7 +348,7 @@ class DenseContext:
         """
         if name not in self._p:
             if name not in self.ps:
-                raise InputError(f"{self.source}: matrices.P: missing {name!r}")
+                raise InputError(f"missing {name!r}", field=f"{self.source}: matrices.P")
             a = matrix(self.ps[name], self.n, f"{self.source}: matrices.P.{name}")
             self._p[name] = None if out_of_range(a) else a
         return self._p[name]
@@ -408,12 +409,12 @@ def _check_topology_fields(t: dict, size: int, where: str) -> None:
     """Sizes of a subject topology before it is parsed (nothing large is allocated)."""
     dim, agents, edges = t.get("dim"), t.get("agents"), t.get("edges")
     if isinstance(dim, int) and not isinstance(dim, bool) and not 1 <= dim <= size:
-        raise InputError(f"{where}.dim: must be between 1 and the certificate size {size}")
+        raise InputError(f"must be between 1 and the certificate size {size}", field=f"{where}.dim")
     n = agents if isinstance(agents, int) else len(agents) if isinstance(agents, list) else 0
     if n > size:
-        raise InputError(f"{where}.agents: more agents than the certificate size {size}")
+        raise InputError(f"more agents than the certificate size {size}", field=f"{where}.agents")
     if isinstance(edges, list) and len(edges) > max(n * (n - 1), 0):
-        raise InputError(f"{where}.edges: more edges than N(N−1)")
+        raise InputError("more edges than N(N−1)", field=f"{where}.edges")
 
 
 def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) -> DenseMode:
@@ -446,17 +447,17 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
     """
     where = f"{source}: subject.modes.{name}"
     if not isinstance(sub, dict):
-        raise InputError(f"{where}: expected an object")
+        raise InputError("expected an object", field=where)
     tdoc = need(sub, "topology", dict, where)
     _check_topology_fields(tdoc, n, f"{where}.topology")
     top = Topology.from_data(parse_topology(tdoc, f"{where}.topology"))
     if top.nd != n:
-        raise InputError(f"{where}: topology has Nd={top.nd}, certificate size is {n}")
+        raise InputError(f"topology has Nd={top.nd}, certificate size is {n}", field=where)
     d = top.dim
     theta = vector(need(sub, "theta", list, where), d, f"{where}.theta")
     delta = number(need(sub, "delta", (int, float), where), f"{where}.delta")
     if not delta > 0:
-        raise InputError(f"{where}.delta: must be positive")
+        raise InputError("must be positive", field=f"{where}.delta")
     k1 = number(need(sub, "k1", (int, float), where), f"{where}.k1")
     x0 = vector(need(sub, "x0", list, where), d, f"{where}.x0")
     stated_hash = need(sub, "topology_hash", str, where)
@@ -464,13 +465,13 @@ def parse_mode(name: str, sub: Any, n: int, source: str, checks: list[Check]) ->
     try:
         informed = [top.index(x) for x in informed_l]
     except InputError:
-        raise InputError(f"{where}.informed: lists an unknown agent") from None
+        raise InputError("lists an unknown agent", field=f"{where}.informed") from None
     bd = need(sub, "B", dict, where)
     try:
         b = {top.index(k): matrix(v, d, f"{where}.B.{k}") for k, v in bd.items()}
     except InputError as exc:
         if "unknown agent" in str(exc):
-            raise InputError(f"{where}.B: lists an unknown agent") from None
+            raise InputError("lists an unknown agent", field=f"{where}.B") from None
         raise
 
     h = topology_hash(top)

@@ -692,7 +692,7 @@ def prove_gain_below(gain: Any, kappa: float, t0: float) -> tuple[bool | None, s
         c = np.asarray(gain["c"], dtype=float)
         interp = gain["interpolation"]
     except (KeyError, TypeError, ValueError):
-        raise InputError("gain: expected a schedule {t, c, interpolation, tail}") from None
+        raise InputError("expected a schedule {t, c, interpolation, tail}", field="gain") from None
     end = float(t[-1])
     if t0 < end:
         # the knots bracketing [t0, end]: linear or previous interpolation stays within them

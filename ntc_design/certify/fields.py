@@ -37,14 +37,14 @@ def need(doc: dict, key: str, typ: type | tuple, where: str) -> Any:
         Missing, not an object, or of the wrong type.
     """
     if not isinstance(doc, dict):
-        raise InputError(f"{where}: expected an object")
+        raise InputError("expected an object", field=where)
     if key not in doc:
-        raise InputError(f"{where}: missing field '{key}'")
+        raise InputError(f"missing field '{key}'", field=where)
     v = doc[key]
     if isinstance(v, bool) and bool not in (typ if isinstance(typ, tuple) else (typ,)):
-        raise InputError(f"{where}: field '{key}' has the wrong type (bool)")
+        raise InputError(f"field '{key}' has the wrong type (bool)", field=where)
     if not isinstance(v, typ):
-        raise InputError(f"{where}: field '{key}' has the wrong type ({type(v).__name__})")
+        raise InputError(f"field '{key}' has the wrong type ({type(v).__name__})", field=where)
     return v
 
 
@@ -68,13 +68,13 @@ def number(x: Any, where: str) -> float:
         Not a number, too large for a double, or not finite.
     """
     if isinstance(x, bool) or not isinstance(x, (int, float)):
-        raise InputError(f"{where}: expected a number, got {type(x).__name__}")
+        raise InputError(f"expected a number, got {type(x).__name__}", field=where)
     try:
         v = float(x)
     except OverflowError:
-        raise InputError(f"{where}: number too large") from None
+        raise InputError("number too large", field=where) from None
     if not math.isfinite(v):
-        raise InputError(f"{where}: must be finite")
+        raise InputError("must be finite", field=where)
     return v
 
 
@@ -100,7 +100,7 @@ def vector(x: Any, n: int, where: str) -> np.ndarray:
         Not a list of n numbers.
     """
     if not isinstance(x, list) or len(x) != n:
-        raise InputError(f"{where}: expected a list of {n} numbers")
+        raise InputError(f"expected a list of {n} numbers", field=where)
     return np.array([number(v, where) for v in x], dtype=float)
 
 
@@ -130,17 +130,17 @@ def matrix(x: Any, n: int, where: str) -> np.ndarray:
         or len(x) != n
         or any(not isinstance(r, list) or len(r) != n for r in x)
     ):
-        raise InputError(f"{where}: expected a {n}x{n} matrix")
+        raise InputError(f"expected a {n}x{n} matrix", field=where)
     for r in x:
         for v in r:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise InputError(f"{where}: non-numeric entry")
+                raise InputError("non-numeric entry", field=where)
     try:
         a = np.array(x, dtype=float)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(f"{where}: non-numeric or too large entry") from None
+        raise InputError("non-numeric or too large entry", field=where) from None
     if not np.all(np.isfinite(a)):
-        raise InputError(f"{where}: non-finite entry")
+        raise InputError("non-finite entry", field=where)
     return a
 
 
@@ -188,17 +188,17 @@ def parse_schedule(subject: dict, where: str) -> tuple[tuple[str, float], ...]:
     """
     sched = need(subject, "schedule", list, where)
     if not sched or len(sched) > MAX_SCHEDULE:
-        raise InputError(f"{where}.schedule: expected 1 to {MAX_SCHEDULE} entries")
+        raise InputError(f"expected 1 to {MAX_SCHEDULE} entries", field=f"{where}.schedule")
     out = []
     for k, item in enumerate(sched):
         w = f"{where}.schedule[{k}]"
         if not isinstance(item, dict) or set(item) != {"mode", "duration"}:
-            raise InputError(f"{w}: expected {{mode, duration}}")
+            raise InputError("expected {mode, duration}", field=w)
         if not isinstance(item["mode"], str):
-            raise InputError(f"{w}.mode: expected a mode name")
+            raise InputError("expected a mode name", field=f"{w}.mode")
         t = number(item["duration"], f"{w}.duration")
         if not 0 < t < 1e300:
-            raise InputError(f"{w}.duration: must be positive and finite")
+            raise InputError("must be positive and finite", field=f"{w}.duration")
         out.append((item["mode"], t))
     return tuple(out)
 

@@ -353,7 +353,8 @@ def write_certificate(doc: dict, path: str | Path, option: str = "out") -> None:
         text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
     except ValueError:  # JSON has no NaN/Inf: such numbers prove nothing anyway
         raise InputError(
-            f"{path}: the certificate holds non-finite numbers (nothing is proven); not written"
+            "the certificate holds non-finite numbers (nothing is proven); not written",
+            field=str(path),
         ) from None
     write_atomic(path, text, option)
 

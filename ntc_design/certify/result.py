@@ -249,11 +249,14 @@ def certify(
     if isinstance(topology, ExpressionTopology):
         if isinstance(gain, ScheduleGain):
             raise InputError(
-                "gain: a schedule with a topology given as expressions of t: the time-varying "
-                "certificate needs c(t) as one expression (its t₀ of μ₂ is symbolic)"
+                "a schedule with a topology given as expressions of t: the time-varying "
+                "certificate needs c(t) as one expression (its t₀ of μ₂ is symbolic)",
+                field="gain",
             )
         if delta is not None:
-            raise InputError("delta: a time-varying topology uses δ(t) = C(t) + ΔC (Lemma 1)")
+            raise InputError(
+                "a time-varying topology uses δ(t) = C(t) + ΔC (Lemma 1)", field="delta"
+            )
         des: Any = TimeVaryingDesign(topology, np.asarray(theta, dtype=float), margin)
     else:
         big = topology.n * topology.dim > DENSE_CERT_MAX_ND
@@ -380,7 +383,8 @@ def certify_robust(
     rho = check_radius(radius, "radius")
     if not isinstance(topology, Topology):
         raise InputError(
-            "topology: robust needs one fixed topology (not a switching or time-varying one)"
+            "robust needs one fixed topology (not a switching or time-varying one)",
+            field="topology",
         )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the certificate says whether Assumption 2 holds

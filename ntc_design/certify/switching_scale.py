@@ -311,11 +311,13 @@ def proof_fields(x: Any, where: str) -> float:
         Not ``{lower}``, or ℓ negative or out of range.
     """
     if not isinstance(x, dict) or set(x) != {"lower"}:
-        raise InputError(f"{where}: expected {{lower}}")
+        raise InputError("expected {lower}", field=where)
 
     lo = number(x["lower"], f"{where}.lower")
     if lo < 0 or (lo != 0 and not 2.0**-NUMBER_EXP <= lo <= 2.0**NUMBER_EXP):
-        raise InputError(f"{where}.lower: must be 0 or in [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}]")
+        raise InputError(
+            f"must be 0 or in [2^-{NUMBER_EXP}, 2^{NUMBER_EXP}]", field=f"{where}.lower"
+        )
     return float(lo)
 
 

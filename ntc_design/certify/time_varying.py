@@ -232,8 +232,8 @@ class Enclosures:
         if not (np.all(np.isfinite(rad)) and np.all(np.isfinite(mid))):
             k = int(np.argmax(~np.all(np.isfinite(rad) & np.isfinite(mid), axis=(1, 2))))
             raise CertificationRefused(
-                f"{tv.edges[k].field}: weight unbounded on t ∈ [{a:.6g}, {b:.6g}] "
-                "(Assumption 3 needs bounded entries)"
+                f"weight unbounded on t ∈ [{a:.6g}, {b:.6g}] (Assumption 3 needs bounded entries)",
+                field=tv.edges[k].field,
             )
         g = gamma(4 * d + 8)
         live = np.array(self.live, dtype=np.int64)
@@ -416,13 +416,15 @@ def refuse_unbounded_horizon(tv: ExpressionTopology, margin: float) -> None:
                     if v is not None and v.has(sp.AccumBounds):
                         continue
                     raise CertificationRefused(
-                        f"{e.field}: entry [{r}][{c}] = {x} has no limit as t → ∞ that sympy "
-                        "can find; declare period or constant_after to certify Theorems 3-4"
+                        f"entry [{r}][{c}] = {x} has no limit as t → ∞ that sympy "
+                        "can find; declare period or constant_after to certify Theorems 3-4",
+                        field=e.field,
                     )
                 if v in (sp.oo, -sp.oo, sp.zoo):
                     raise CertificationRefused(
-                        f"{e.field}: entry [{r}][{c}] = {x} is unbounded (→ {v} as t → ∞): "
-                        "Assumption 3 (|a_kl(t)| <= D) fails"
+                        f"entry [{r}][{c}] = {x} is unbounded (→ {v} as t → ∞): "
+                        "Assumption 3 (|a_kl(t)| <= D) fails",
+                        field=e.field,
                     )
                 lim[r, c] = float(v)
         limits.append(lim)
@@ -625,7 +627,9 @@ def time_varying_document(
     sigma_bar = noise_sigma_bar(f)
     kappa = mu2_threshold(bound.lambda2, bound.lambda1, sigma_bar, tv.n)
     if isinstance(gain, GainAnalysis) and gain.label is not None:
-        raise InputError("gain: a schedule's t₀ of μ₂ is not derived: give c(t) as one expression")
+        raise InputError(
+            "a schedule's t₀ of μ₂ is not derived: give c(t) as one expression", field="gain"
+        )
     c = gain.expr if isinstance(gain, GainAnalysis) else gain  # a text is parsed by mu2_t0
     t0, t0_how = mu2_t0(c, kappa) if c is not None else (None, "no gain given")
     results = {

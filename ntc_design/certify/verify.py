@@ -86,9 +86,9 @@ def _only(doc: Any, known: frozenset[str], where: str) -> None:
         return  # the reader names the wrong type
     unknown = sorted(str(k) for k in doc if k not in known)
     if unknown:
-        raise InputError(
-            f"{where}{unknown[0]}: unknown field (known: {', '.join(sorted(known))})"[:300]
-        )
+        field = f"{where}{unknown[0]}"
+        known_text = f"unknown field (known: {', '.join(sorted(known))})"
+        raise InputError(known_text[: max(0, 298 - len(field))], field=field)
 
 
 def known_fields(kind: CertificateKind, doc: dict, source: str) -> None:
@@ -121,8 +121,9 @@ def known_fields(kind: CertificateKind, doc: dict, source: str) -> None:
         # the sampled proofs read subject.digital.gain only: another schedule at the top
         # level would verify its own conditions and read as certified
         raise InputError(
-            f"{source}: gain: differs from subject.digital.gain, the gain the sampled "
-            "protocol is proven for (a digital certificate states one gain)"
+            "differs from subject.digital.gain, the gain the sampled "
+            "protocol is proven for (a digital certificate states one gain)",
+            field=f"{source}: gain",
         )
     tops = []
     if "topology" in kind.subject_fields:
@@ -151,7 +152,9 @@ def _subject(
     modes = reading.modes
     if not kind.switching:
         if len(modes) != 1:
-            raise InputError(f"{source}: subject.modes: a {kind.name!r} certificate has one mode")
+            raise InputError(
+                f"a {kind.name!r} certificate has one mode", field=f"{source}: subject.modes"
+            )
         return Subject(modes, None, tuple(modes), None)
     schedule = parse_schedule(doc_subject, f"{source}: subject")
     scheduled = scheduled_modes(schedule)
@@ -176,7 +179,7 @@ def _properties(kind: CertificateKind, listed: list, checks: list[Check]) -> tup
     """The properties certified, in the kind's order, with the check that they are ones
     the kind can certify and include the ones it must."""
     if any(not isinstance(p, str) for p in listed):
-        raise InputError("certifies: expected a list of property names")
+        raise InputError("expected a list of property names", field="certifies")
     names = {q.value for q in kind.properties}
     unknown = [p for p in listed if p not in names]
     props = tuple(q for q in kind.properties if q.value in listed)
@@ -290,8 +293,9 @@ def verify(
     if not kind.switching and isinstance(modes_doc, dict) and len(modes_doc) != 1:
         # before the kind reads a subject it takes to be one topology (a kind edited)
         raise InputError(
-            f"{source}: kind {kind.name!r} is about one topology, but subject.modes lists "
-            f"{counted(len(modes_doc), 'mode')}"
+            f"kind {kind.name!r} is about one topology, but subject.modes lists "
+            f"{counted(len(modes_doc), 'mode')}",
+            field=source,
         )
 
     known_fields(kind, doc, source)  # a field no reader checks is refused, never trusted
@@ -307,7 +311,7 @@ def verify(
     try:
         props = _properties(kind, listed_props, checks)
     except InputError as exc:
-        raise InputError(f"{source}: {exc}") from None
+        raise InputError(f"{exc}", field=source) from None
     alpha = kind.rate(doc, source) if Property.DECAY_RATE in props else 0.0
     claims = kind.claims(props, subject, reading, alpha)
     checks.append(_claims_check(kind, claims, listed))
@@ -336,9 +340,9 @@ def _kind_of(doc: Any, source: str) -> CertificateKind | Verification:
     """The certificate's kind, or an invalid verification for a version or kind this
     ntc does not know (nothing can be proven about it)."""
     if not isinstance(doc, dict):
-        raise InputError(f"{source}: expected a JSON object")
+        raise InputError("expected a JSON object", field=source)
     if doc.get("format") != FORMAT:
-        raise InputError(f"{source}: field 'format' must be {FORMAT!r}")
+        raise InputError(f"field 'format' must be {FORMAT!r}", field=source)
     version = need(doc, "version", int, source)
     if version not in SUPPORTED_VERSIONS:
         return _invalid(
@@ -408,10 +412,10 @@ def verify_file(
             else "not a regular file"
         )
         raise InputError(
-            f"{p}: {what}; expected a certificate (the JSON file ntc certify --out writes)"
+            f"{what}; expected a certificate (the JSON file ntc certify --out writes)", field=str(p)
         )
     if p.stat().st_size > MAX_CERT_BYTES:
-        raise InputError(f"{p}: larger than {MAX_CERT_BYTES // 2**20} MB")
+        raise InputError(f"larger than {MAX_CERT_BYTES // 2**20} MB", field=str(p))
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -423,13 +427,14 @@ def verify_file(
             else f"not valid JSON ({exc.__class__.__name__})"
         )
         raise InputError(
-            f"{p}: {kind}; expected a certificate (the JSON file ntc certify --out writes; "
-            "a topology file goes to ntc verify CERT --topology FILE)"
+            f"{kind}; expected a certificate (the JSON file ntc certify --out writes; "
+            "a topology file goes to ntc verify CERT --topology FILE)",
+            field=str(p),
         ) from None
     except RecursionError:
-        raise InputError(f"{p}: nested too deeply") from None
+        raise InputError("nested too deeply", field=str(p)) from None
     except (ValueError, OSError) as exc:  # e.g. an integer literal with 10^5 digits
-        raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
+        raise InputError(f"cannot read ({exc.__class__.__name__})", field=str(p)) from None
     check_text(doc, str(p))  # a lone surrogate (a label, a name) cannot be shown or written
     return verify(doc, str(p), topology, theta)
 

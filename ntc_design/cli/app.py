@@ -142,12 +142,13 @@ def parse_vector(text: str, field: str) -> list[float]:
     if not all(NUMBER_TEXT.fullmatch(x) for x in parts):
         bad = next(x for x in parts if not NUMBER_TEXT.fullmatch(x))
         raise InputError(
-            f"{field}: expected comma-separated numbers, got {text!r} ({bad[:40]!r} is not a "
-            f"number {number_rule(bad)})"
+            f"expected comma-separated numbers, got {text!r} ({bad[:40]!r} is not a "
+            f"number {number_rule(bad)})",
+            field=field,
         )
     vals = [number_from_text(x, field) for x in parts]
     if not vals:
-        raise InputError(f"{field}: expected comma-separated numbers, got {text!r}")
+        raise InputError(f"expected comma-separated numbers, got {text!r}", field=field)
     return vals
 
 
@@ -235,7 +236,7 @@ def digital_option(
     base = dict(given) if isinstance(given, dict) else {}
     if period is None and "period" not in base:
         flag = "--delay" if delay is not None else "--loss" if loss is not None else "--loss-policy"
-        raise InputError(f"{flag}: needs --period (or a digital block in the scenario)")
+        raise InputError("needs --period (or a digital block in the scenario)", field=flag)
     try:
         dg = Digital(
             period if period is not None else base["period"],
@@ -285,7 +286,7 @@ def renamed_flag(
     """
     flag, value = (new, new_value) if old_value is None else (old, old_value)
     if old_value is not None and new_value is not None:
-        raise InputError(f"{old}: the old spelling of {new}; give {new} only")
+        raise InputError(f"the old spelling of {new}; give {new} only", field=old)
     if check is not None and value is not None:
         check(flag, value)
     if flag == old:
@@ -317,7 +318,7 @@ def require_file(path: Path | None, hint: str = "") -> None:
     except (OSError, ValueError):  # a name the reader refuses in its own words
         return
     if missing:
-        raise InputError(f"{path}: no such file{hint}")
+        raise InputError(f"no such file{hint}", field=str(path))
 
 
 def check_theta_length(file: Path, theta: list[float]) -> None:
@@ -346,7 +347,7 @@ def check_theta_length(file: Path, theta: list[float]) -> None:
         return
     if type(dim) is int and dim > 0 and len(theta) != dim:
         raise InputError(
-            f"--theta: expected {dim} numbers (the state dimension d), got {len(theta)}"
+            f"expected {dim} numbers (the state dimension d), got {len(theta)}", field="--theta"
         )
 
 

@@ -187,7 +187,7 @@ def _write_design(res: ProtocolDesign | SwitchingDesign, path: Path) -> list[Pat
             for k in res.modes
         ]
         if len(set(paths)) != len(paths):
-            raise InputError(f"--out: two modes give the same file name beside {path.name}")
+            raise InputError(f"two modes give the same file name beside {path.name}", field="--out")
         for q in paths:
             check_output_file(q, "--out")
         for q, d in zip(paths, res.modes.values(), strict=True):
@@ -224,7 +224,7 @@ def generate(
     n_flag, n = renamed_flag("--n", old_n, "--agents", agents)
     d_flag, d = renamed_flag("--d", old_d, "--dim", dim)
     if n is None:
-        raise InputError("--agents: missing: the number of agents N (e.g. --agents 1000)")
+        raise InputError("missing: the number of agents N (e.g. --agents 1000)", field="--agents")
     d = 3 if d is None else d
     from ..io.outputs import check_output_file
     from ..model.generate import TOPOLOGY_SUFFIXES, random_network, write_topology
@@ -323,7 +323,7 @@ def certify(
     # trivially bad input before the library loads
     th = parse_vector(theta, "--theta") if theta is not None else None
     if rate_method not in choices(RateMethod):  # before any work
-        raise InputError(f"--rate-method: expected lyapunov or lmi, got {rate_method!r}")
+        raise InputError(f"expected lyapunov or lmi, got {rate_method!r}", field="--rate-method")
     sampled = digital_option(period, delay, None, None, loss, loss_policy)
     require_file(file)
     if th is not None and deadline is None:  # a scenario (--deadline) gives its own θ
@@ -346,7 +346,7 @@ def certify(
         th = th if th is not None else th_file
     else:
         if th is None:
-            raise InputError("--theta: missing (the target consensus state, e.g. 1,2,-1)")
+            raise InputError("missing (the target consensus state, e.g. 1,2,-1)", field="--theta")
         top, gain_opt = load(file), gain_from_option(gain, "--gain")
     uninformed = uninformed_modes(top)
     if uninformed and as_json:  # nothing to certify: said as ntc design says it
@@ -408,13 +408,15 @@ def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, poli
     if deadline != "":
         overrides["T"] = number_from_text(deadline, "--deadline")
         if not overrides["T"] > 0:
-            raise InputError(f"--deadline: T must be > 0, got {deadline!r}")
+            raise InputError(f"T must be > 0, got {deadline!r}", field="--deadline")
     elif "T" not in sc.document:
         raise InputError(
-            f"{sc.source}: T: missing (--deadline needs the deadline; or --deadline T)"
+            "missing (--deadline needs the deadline; or --deadline T)", field=f"{sc.source}: T"
         )
     if sc.document.get("initial") is None:
-        raise InputError(f"{sc.source}: initial: missing (--deadline needs the initial state)")
+        raise InputError(
+            "missing (--deadline needs the initial state)", field=f"{sc.source}: initial"
+        )
     t_doc = overrides.get("T", sc.document.get("T"))
     sampled = digital_option(period, delay, sc.document.get("digital"), t_doc, loss, policy)
     top, spec, sc = load_scenario(file, overrides, sc, {"T": "--deadline"})
@@ -427,7 +429,7 @@ def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, poli
 
         p, pol = sampled.loss, sampled.policy
         if not isinstance(top, Topology) and p > 0:
-            raise InputError("--loss: lossy links are modelled on one fixed topology")
+            raise InputError("lossy links are modelled on one fixed topology", field="--loss")
         one = top if isinstance(top, Topology) else None
         lossy = loss_section(one, p, pol) if one is not None else None
         if lossy is None or one is None:
@@ -449,9 +451,11 @@ def _deadline_scenario(file: Path, deadline: str, period, delay, loss=None, poli
         else None
     )
     if gain_doc is None:
-        raise InputError(f"{sc.source}: gain: --deadline needs c(t) as an expression or a schedule")
+        raise InputError(
+            "--deadline needs c(t) as an expression or a schedule", field=f"{sc.source}: gain"
+        )
     if callable(noise.f):
-        raise InputError(f"{sc.source}: noise.f: --deadline needs f(x) = f·x or F x")
+        raise InputError("--deadline needs f(x) = f·x or F x", field=f"{sc.source}: noise.f")
     f = np.asarray(noise.f, dtype=float)
     section = {
         "T": float(spec.T),
@@ -602,8 +606,9 @@ def robust(
     top = load(file)
     if out_path is not None and isinstance(top, Topology) and top.nd > RICCATI_MAX_ND:
         raise InputError(
-            f"--out: a robust certificate is issued up to Nd = {RICCATI_MAX_ND} (this network: "
-            f"Nd = {top.nd}); without --out the sparse bounds are proven and printed"
+            f"a robust certificate is issued up to Nd = {RICCATI_MAX_ND} (this network: "
+            f"Nd = {top.nd}); without --out the sparse bounds are proven and printed",
+            field="--out",
         )
     try:
         res = certify_robust(top, th, radius, margin)

@@ -339,7 +339,7 @@ def tune(
     value: float | None = None  # --period as a number (ASCII numerals, as every number flag)
     if period not in (None, "auto"):
         if not NUMBER_TEXT.fullmatch(period):
-            raise InputError(f"--period: expected a number or auto, got {period[:40]!r}")
+            raise InputError(f"expected a number or auto, got {period[:40]!r}", field="--period")
         value = float(period)
         check_digital_flags(value, delay)
     require_file(scenario)
@@ -363,7 +363,7 @@ def tune(
     if schedule != "optimal":
         for name, value in (("--max-gain", max_gain), ("--check-paths", check_paths)):
             if value is not None:
-                raise InputError(f"{name}: applies to --schedule optimal")
+                raise InputError("applies to --schedule optimal", field=name)
     if loss is not None or loss_policy is not None:
         _tune_loss(
             scenario, sc0, horizon, period, delay, loss, loss_policy, tolerance, out_dir, as_json
@@ -426,19 +426,23 @@ def _tune_loss(
     from ..tune.loss import largest_tolerable_loss
 
     if loss != "auto":
-        raise InputError(f"--loss: expected auto (the largest tolerable loss), got {loss!r:.40}")
+        raise InputError(
+            f"expected auto (the largest tolerable loss), got {loss!r:.40}", field="--loss"
+        )
     if period == "auto":
-        raise InputError("--period: give a number with --loss auto (the loss is tuned at one h)")
+        raise InputError(
+            "give a number with --loss auto (the loss is tuned at one h)", field="--period"
+        )
     try:
         h = float(period) if period is not None else None
     except ValueError:
-        raise InputError(f"--period: expected a number, got {period!r:.40}") from None
+        raise InputError(f"expected a number, got {period!r:.40}", field="--period") from None
     given = sc0.document.get("digital")
     t_doc = horizon if horizon is not None else sc0.document.get("T")
     dg = digital_option(h, delay, given, t_doc, None, policy)
     if dg is None:
         if not isinstance(given, dict):
-            raise InputError("--loss: needs --period (or a digital block in the scenario)")
+            raise InputError("needs --period (or a digital block in the scenario)", field="--loss")
         dg = Digital.from_document(given)
     top, spec, sc = load_scenario(scenario, None, sc0)
     if out_dir is not None:
@@ -465,11 +469,13 @@ def _schedule_option(schedule: str, family: str | None) -> str:
         return schedule
     if family != "power":
         raise InputError(
-            f"--family: replaced by --schedule power|optimal (power is a·(b + t)^(−γ)), "
-            f"got {family!r}"
+            f"replaced by --schedule power|optimal (power is a·(b + t)^(−γ)), got {family!r}",
+            field="--family",
         )
     if schedule != "power":
-        raise InputError(f"--family: power contradicts --schedule {schedule}; give --schedule only")
+        raise InputError(
+            f"power contradicts --schedule {schedule}; give --schedule only", field="--family"
+        )
     print("note: --family is deprecated; it is --schedule power", file=sys.stderr)
     return "power"
 
@@ -606,7 +612,7 @@ def report(
 
     if is_sweep_dir(directory):
         if sampled is not None:
-            raise InputError("--period: applies to a run's report, not a sweep's")
+            raise InputError("applies to a run's report, not a sweep's", field="--period")
         out.print(f"wrote {write_sweep_report(directory)}", soft_wrap=True)
         return
     try:
@@ -660,7 +666,7 @@ def reproduce(
     from ..reports.terminal import Progress, out
 
     if what != "paper":
-        raise InputError(f"reproduce: unknown target {what!r} (known: paper)")
+        raise InputError(f"unknown target {what!r} (known: paper)", field="reproduce")
     from ..errors import MAX_SEED, require_int, require_positive
     from ..io.outputs import check_output_folder
     from ..simulate.options import check_workers
@@ -670,7 +676,7 @@ def reproduce(
     require_positive("--paths", paths, integer=True)
     require_positive("--dt", dt)
     if stepping not in ("intrinsic", "uniform"):
-        raise InputError(f"--stepping: must be uniform or intrinsic, got {stepping!r}")
+        raise InputError(f"must be uniform or intrinsic, got {stepping!r}", field="--stepping")
     require_int("--seed", seed, minimum=0, maximum=MAX_SEED)
     check_workers(workers, "--workers")
     require_horizon("--horizon", t_end)

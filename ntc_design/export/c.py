@@ -281,9 +281,10 @@ def _mode_rule(law: AgentLaw) -> str:
     tk = law.schedule_ticks
     if tk.period >= MAX_TICKS:
         raise InputError(
-            f"schedule: h and the durations as decimals need {tk.period:.3g} ticks of 1/{tk.unit} s "
+            f"h and the durations as decimals need {tk.period:.3g} ticks of 1/{tk.unit} s "
             f"per period (the C rule's limit is 2^31); give h and the durations with fewer "
-            "decimals"
+            "decimals",
+            field="schedule",
         )
     s = len(law.schedule)
     return f"""/* the schedule: (mode, duration) {s} entries, decided exactly in integer ticks of

@@ -131,9 +131,10 @@ def check_emitted_gain(law: AgentLaw, steps: int, where: str = "gain") -> None:
             c = g.value(t)
             if not math.isfinite(c) or not abs(c) * h * norm <= MAX_STEP_GAIN:
                 raise InputError(
-                    f"{where}: c(t) = {shown} is {c:.3g} at t = {t:.6g} (step {k}): one step "
+                    f"c(t) = {shown} is {c:.3g} at t = {t:.6g} (step {k}): one step "
                     f"h·|c|·‖L_B‖ = {abs(c) * h * norm:.3g} exceeds {MAX_STEP_GAIN:.0e}, the "
-                    "state would leave the double range; nothing exported"
+                    "state would leave the double range; nothing exported",
+                    field=where,
                 )
             if not t >= g.end:
                 continue  # the table: its doubles, by the analysed rule
@@ -142,9 +143,10 @@ def check_emitted_gain(law: AgentLaw, steps: int, where: str = "gain") -> None:
                 continue
             if not abs(c - ref) <= GAIN_RTOL * abs(ref) + GAIN_ATOL:
                 raise InputError(
-                    f"{where}: c(t) = {shown} computes to {c!r} at t = {t:.6g} (step {k}) but "
+                    f"c(t) = {shown} computes to {c!r} at t = {t:.6g} (step {k}) but "
                     f"is {ref!r} (the analysed gain): its constants cancel in floating point; "
-                    "simplify it; nothing exported"
+                    "simplify it; nothing exported",
+                    field=where,
                 )
     finally:
         ctx.prec = old

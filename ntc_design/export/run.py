@@ -121,9 +121,9 @@ def read_state(text: str, nd: int) -> np.ndarray:
     try:
         x = np.array([float(w) for w in text.split()])
     except ValueError:
-        raise InputError("output: expected numbers") from None
+        raise InputError("expected numbers", field="output") from None
     if x.size != nd:
-        raise InputError(f"output: expected {nd} numbers, got {x.size}")
+        raise InputError(f"expected {nd} numbers, got {x.size}", field="output")
     return x
 
 
@@ -390,8 +390,9 @@ def _size_check(law: AgentLaw) -> None:
     numbers = sum(m.n_edges * (d * d + 2) + law.n * (d * d + d) for m in law.modes)
     if numbers > MAX_NUMBERS:
         raise InputError(
-            f"export: the tables would hold {numbers:.3g} numbers (limit {MAX_NUMBERS:.0e}); "
-            "too large to write as source code"
+            f"the tables would hold {numbers:.3g} numbers (limit {MAX_NUMBERS:.0e}); "
+            "too large to write as source code",
+            field="export",
         )
 
 
@@ -550,12 +551,14 @@ def _listed(folder: Path) -> set[str]:
         return set()
     except OSError as exc:
         raise InputError(
-            f"{Option('out')}: cannot read {one_line(str(path))!r} ({exc.strerror})"
+            f"cannot read {one_line(str(path))!r} ({exc.strerror})", field="out", option=True
         ) from None
     if not stat.S_ISREG(st.st_mode) or st.st_size > MANIFEST_BYTES:
         raise InputError(
-            f"{Option('out')}: {one_line(str(path))!r} is not an export's manifest (not a regular file, "
-            "or too large); choose a new folder"
+            f"{one_line(str(path))!r} is not an export's manifest (not a regular file, "
+            "or too large); choose a new folder",
+            field="out",
+            option=True,
         )
     try:
         text = path.read_text(encoding="utf-8")
@@ -588,7 +591,9 @@ def check_export_folder(out: str | Path) -> Path:
     shown = repr(one_line(str(p)))
     if p.is_symlink():  # the swap would replace the link itself and leave a stray ".old" one
         raise InputError(
-            f"{Option('out')}: {shown} is a link; give the folder it points to (nothing written)"
+            f"{shown} is a link; give the folder it points to (nothing written)",
+            field="out",
+            option=True,
         )
     if not p.is_dir():
         return p
@@ -596,17 +601,23 @@ def check_export_folder(out: str | Path) -> Path:
     try:
         entries = sorted(os.scandir(p), key=lambda e: e.name)
     except OSError as exc:
-        raise InputError(f"{Option('out')}: cannot read {shown} ({exc.strerror})") from None
+        raise InputError(
+            f"cannot read {shown} ({exc.strerror})", field="out", option=True
+        ) from None
     for e in entries:
         if e.name != MANIFEST and e.name not in listed:
             raise InputError(
-                f"{Option('out')}: {shown} holds {one_line(e.name)!r}, which no earlier export wrote "
-                f"(its {MANIFEST} does not list it); nothing written, choose a new folder"
+                f"{shown} holds {one_line(e.name)!r}, which no earlier export wrote "
+                f"(its {MANIFEST} does not list it); nothing written, choose a new folder",
+                field="out",
+                option=True,
             )
         if not e.is_file(follow_symlinks=False):
             raise InputError(
-                f"{Option('out')}: {shown} holds {one_line(e.name)!r}, which is not a regular file (a "
-                "folder, pipe or link); nothing written, choose a new folder"
+                f"{shown} holds {one_line(e.name)!r}, which is not a regular file (a "
+                "folder, pipe or link); nothing written, choose a new folder",
+                field="out",
+                option=True,
             )
     return p
 

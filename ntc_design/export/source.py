@@ -139,7 +139,7 @@ def _digital(
     simulate reads it: an unknown field is refused), errors naming the parameter for an
     argument and the block for the file's value."""
     if given is not None and not isinstance(given, dict):
-        raise InputError(f"{where}: digital: expected {{period: h, delay: D}}")
+        raise InputError("expected {period: h, delay: D}", field=f"{where}: digital")
     base = dict(given or {})
     if period is not None:
         base["period"] = period
@@ -165,7 +165,7 @@ def _digital(
         name = (exc.field or "").removeprefix("digital.")
         if (exc.field or "").startswith("digital.") and args.get(name) is not None:
             raise InputError(*exc.parts, field=name, option=True) from None
-        raise InputError(f"{where}: {exc}") from None
+        raise InputError(f"{exc}", field=where) from None
     if not math.isfinite(dg.period):
         raise InputError(f"must be a finite number, got {dg.period!r}", field="period", option=True)
     return dg
@@ -184,8 +184,9 @@ def _check_gain(gain: str | ScheduleGain, where: str) -> None:
     if a.mean_square is not True:
         label = gain.text if isinstance(gain, ScheduleGain) else gain
         raise InputError(
-            f"{where}: c(t) = {label} does not satisfy the gain conditions of Theorem 1 "
-            "(continuous and >= 0, ∫c = ∞, c → 0); no theorem would be guaranteed"
+            f"c(t) = {label} does not satisfy the gain conditions of Theorem 1 "
+            "(continuous and >= 0, ∫c = ∞, c → 0); no theorem would be guaranteed",
+            field=where,
         )
 
 
@@ -233,12 +234,12 @@ def from_scenario(path: str | Path, options: ExportOptions = NO_OPTIONS) -> Expo
     top, spec, _ = load_scenario(path, {"digital": dg}, sc)
     if not isinstance(top, (Topology, SwitchingTopology)):
         raise InputError(
-            f"{src}: topology: only a fixed topology or a switching set can be exported "
-            f"(got {type(top).__name__})"
+            f"only a fixed topology or a switching set can be exported (got {type(top).__name__})",
+            field=f"{src}: topology",
         )
     if uninformed_modes(top):  # said as ntc design says it, not as a failed inequality
         raise InputError(
-            f"{src}: {no_informed_agent_text(uninformed_modes(top))}; nothing exported"
+            f"{no_informed_agent_text(uninformed_modes(top))}; nothing exported", field=src
         )
     g = _gain_option(gain)
     if g is not None:
@@ -253,7 +254,7 @@ def from_scenario(path: str | Path, options: ExportOptions = NO_OPTIONS) -> Expo
             )
         )
     if not isinstance(spec.gain, (str, ScheduleGain)):
-        raise InputError(f"{src}: gain: a Python function cannot be exported")
+        raise InputError("a Python function cannot be exported", field=f"{src}: gain")
     _check_noise("sigma" if sigma is not None else f"{src}: noise.sigma", spec.noise.sigma)
     law, res = _certified_law(
         top,
@@ -280,7 +281,7 @@ def _check_noise(where: str, sigma: Any, f: Any = None) -> None:
         if value is None or callable(value):
             continue
         if out_of_range(np.asarray(value, dtype=float)):
-            raise InputError(f"{where}: {value!r} has {RANGE_TEXT}"[:200])
+            raise InputError(f"{value!r} has {RANGE_TEXT}"[: max(0, 198 - len(where))], field=where)
 
 
 def _certified_law(
@@ -318,25 +319,27 @@ def _certified_law(
     if not res.verification.valid:
         failed = "; ".join(c.name for c in res.verification.failed)[:300]
         raise InputError(
-            f"{src}: the design's certificate ({res.certificate['kind']}) does not verify "
-            f"({failed}); nothing exported"
+            f"the design's certificate ({res.certificate['kind']}) does not verify "
+            f"({failed}); nothing exported",
+            field=src,
         )
     if losses and dg.policy == "hold" and not _hold_proven(res.certificate):
         _unproven("hold", 0, src, False)  # before the theorems: what is missing is this proof
     sampled = [t for t in res.theorems if t.sampled]
     if not res.proven or not sampled or not any(t.guaranteed for t in sampled):
         raise InputError(
-            f"{src}: no theorem is guaranteed for the sampled protocol at h = {dg.period:g}, "
+            f"no theorem is guaranteed for the sampled protocol at h = {dg.period:g}, "
             f"D = {dg.delay} with this gain (ntc certify "
-            f"{Option('period', alias='with a period')} says why); nothing exported"
+            f"{Option('period', alias='with a period')} says why); nothing exported",
+            field=src,
         )
     design = res.design.base if isinstance(res.design, DigitalDesign) else res.design
     if not isinstance(design, (ProtocolDesign, SwitchingDesign)):
-        raise InputError(f"{src}: topology: this design cannot be exported")
+        raise InputError("this design cannot be exported", field=f"{src}: topology")
     law = agent_law(design, dg, gain, noise.sigma, noise.f, noise.sigma_edges)
     if losses:
         if res.certificate["kind"] != "digital_loss":  # the lossy proof, nothing weaker
-            raise InputError(f"{src}: lossy links are not certified; nothing exported")
+            raise InputError("lossy links are not certified; nothing exported", field=src)
         law = lossy_law(law, losses, dg.policy)
     return law, res
 
@@ -359,9 +362,10 @@ def _unproven(policy: str, delay: int, where: str, hold_proven: bool = True) -> 
     proves it (its delay line)."""
     if policy == "hold" and not hold_proven:
         raise InputError(
-            f"{where}: lossy links with the hold policy are not proven (the digital_loss "
+            "lossy links with the hold policy are not proven (the digital_loss "
             "certificate covers skip and rescale, and hold where its section proves it); "
-            "nothing exported"
+            "nothing exported",
+            field=where,
         )
 
 
@@ -372,8 +376,9 @@ def _losses(top: Topology | SwitchingTopology, dg: Digital, src: str) -> dict:
         lossy = dg.lossy or any(getattr(t, "loss", None) for t in top.modes.values())
         if lossy:
             raise InputError(
-                f"{src}: lossy links are certified for one topology (digital_loss), not a "
-                "switching set; nothing exported"
+                "lossy links are certified for one topology (digital_loss), not a "
+                "switching set; nothing exported",
+                field=src,
             )
         return {}
     own = dict(getattr(top, "loss", {}) or {})
@@ -489,13 +494,14 @@ def from_certificate(
     ver = verify(doc, src)
     if not ver.valid:
         failed = "; ".join(c.name for c in ver.failed)[:300]
-        raise InputError(f"{src}: the certificate does not verify ({failed}); nothing exported")
+        raise InputError(f"the certificate does not verify ({failed}); nothing exported", field=src)
     kind = KINDS[str(doc["kind"])]
     reading = kind.read(doc, src)  # the reading verify proved things about
     if not isinstance(reading.state, DenseContext):
         raise InputError(
-            f"{src}: kind: a {kind.name} certificate cannot be exported (its subject has no "
-            "dense modes; the hurwitz, switching and digital kinds can)"
+            f"a {kind.name} certificate cannot be exported (its subject has no "
+            "dense modes; the hurwitz, switching and digital kinds can)",
+            field=f"{src}: kind",
         )
     ctx: DenseContext = reading.state
     schedule = ver.about.schedule if ver.about is not None and ver.about.schedule else ()
@@ -508,8 +514,9 @@ def from_certificate(
     losses = _certified_losses(ls, sampled.delay, loss, policy, src, state.stated is not None)
     if state.stated is None:
         raise InputError(
-            f"{src}: the certificate does not prove the sampled protocol "
-            "(results.digital.stopped); nothing exported"
+            "the certificate does not prove the sampled protocol "
+            "(results.digital.stopped); nothing exported",
+            field=src,
         )
     _same("period", period, sampled.period, src)
     _same("delay", delay, sampled.delay, src)
@@ -652,8 +659,9 @@ def _continuous(
         m = ctx.modes.get(ml.name)
         if m is None or ml.delta != m.delta or sorted(ml.informed) != sorted(m.b):
             raise InputError(
-                f"{src}: subject.modes.{ml.name}: Lemma 1's design of its topology is not the "
-                "certificate's (δ or the informed agents differ); nothing exported"
+                "Lemma 1's design of its topology is not the "
+                "certificate's (δ or the informed agents differ); nothing exported",
+                field=f"{src}: subject.modes.{ml.name}",
             )
     law = _named(law, first.top.name or Path(src).stem)
     notes = (

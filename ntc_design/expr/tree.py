@@ -117,23 +117,25 @@ def syntax_tree(text: object, field: str) -> tuple[str, ast.Expression]:
         does not parse, or too many nodes or too deep.
     """
     if not isinstance(text, str):
-        raise InputError(f"{field}: expected an expression as a string, got {type(text).__name__}")
+        raise InputError(
+            f"expected an expression as a string, got {type(text).__name__}", field=field
+        )
     if not text.strip():
-        raise InputError(f"{field}: empty expression")
+        raise InputError("empty expression", field=field)
     if len(text) > MAX_CHARS:
-        raise InputError(f"{field}: expression longer than {MAX_CHARS} characters")
+        raise InputError(f"expression longer than {MAX_CHARS} characters", field=field)
     if not text.isprintable():
-        raise InputError(f"{field}: expression contains control characters or newlines")
+        raise InputError("expression contains control characters or newlines", field=field)
     src = text.strip().replace("^", "**")
     try:
         tree = ast.parse(src, mode="eval")
     except (SyntaxError, ValueError, MemoryError, RecursionError):
-        raise InputError(f"{field}: cannot parse expression {short(text)}") from None
+        raise InputError(f"cannot parse expression {short(text)}", field=field) from None
     count, depth = _shape_of_tree(tree)
     if count > MAX_NODES or depth > MAX_DEPTH:
         raise InputError(
-            f"{field}: expression too complex (at most {MAX_NODES} syntax nodes and "
-            f"nesting {MAX_DEPTH})"
+            f"expression too complex (at most {MAX_NODES} syntax nodes and nesting {MAX_DEPTH})",
+            field=field,
         )
     return src, tree
 
@@ -177,7 +179,7 @@ class TreeBuilder:
 
     # -- the rules ----------------------------------------------------------------------
     def fail(self, what: str) -> InputError:
-        return InputError(f"{self.field}: {what} in expression {short(self.text)}")
+        return InputError(f"{what} in expression {short(self.text)}", field=self.field)
 
     def checked(self, value: Any, approx: float | None) -> tuple[Any, float | None]:
         ex = self.exact(value)

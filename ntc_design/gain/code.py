@@ -91,8 +91,9 @@ class GainCode:
         if isinstance(gain, str):
             return cls(gain, scalar_program(gain, field))
         raise InputError(
-            f"{field}: expected an expression in t or a schedule, got "
-            f"{type(gain).__name__} (a Python function cannot be exported)"
+            f"expected an expression in t or a schedule, got "
+            f"{type(gain).__name__} (a Python function cannot be exported)",
+            field=field,
         )
 
     @property

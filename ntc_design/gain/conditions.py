@@ -583,18 +583,20 @@ def _sign(expr: sp.Expr, text: str, continuous: bool | None) -> str:
             inf = neg.inf
             pt = inf if inf.is_finite else 0
             raise InputError(
-                f"gain: {short!r} is negative on {neg} (e.g. near t = {sp.N(pt, 4)}); "
-                "c(t) must be >= 0"
+                f"{short!r} is negative on {neg} (e.g. near t = {sp.N(pt, 4)}); c(t) must be >= 0",
+                field="gain",
             )
     f = compile_expression(expr, (T,))
     ts = np.concatenate([[0.0], np.logspace(-6, 8, 4000)])
     vals = f(ts)
     bad = ts[~np.isfinite(vals)]
     if bad.size and continuous is not True:
-        raise InputError(f"gain: {short!r} is not finite at t = {bad[0]:.4g}")
+        raise InputError(f"{short!r} is not finite at t = {bad[0]:.4g}", field="gain")
     bad = ts[np.isfinite(vals) & (vals < 0)]
     if bad.size:
-        raise InputError(f"gain: {short!r} is negative at t = {bad[0]:.4g}; c(t) must be >= 0")
+        raise InputError(
+            f"{short!r} is negative at t = {bad[0]:.4g}; c(t) must be >= 0", field="gain"
+        )
     if neg is sp.S.EmptySet:
         return "c(t) >= 0 on [0, ∞) (sympy " + ("assumptions)" if known else "solveset)")
     return "c(t) >= 0 at 4001 sample points of [0, 1e8] (numerical; sympy could not decide)"
@@ -629,7 +631,7 @@ def _decide(expr: sp.Expr, text: str, send: Callable[[str, Any], None]) -> None:
     try:
         sign = _sign(expr, text, cont.value)
     except InputError as exc:
-        send("error", str(exc))
+        send("error", exc)  # pickled with its field across the worker's pipe
         return
     send("continuous_nonnegative", Condition(cont.value, f"{cont.reason}; {sign}"))
     tail = _tail_form(expr)
@@ -729,7 +731,7 @@ def analyse_gain(text: str, seconds: float = GAIN_SECONDS) -> GainAnalysis:
         return _DECIDED[text]
     results, why = _run(expr, text, seconds)
     if "error" in results:
-        raise InputError(results["error"])
+        raise results["error"]
     missing = Condition(None, why or "not decided")
     got = {k: results.get(k, missing) for k in CONDITION_LABELS}
     analysis = GainAnalysis(text, expr, **got)

@@ -61,7 +61,7 @@ _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d{1,3})?", re.ASCII)
 def _number(text: str, where: str) -> float:
     s = text.strip()
     if not _NUMBER.fullmatch(s):
-        raise InputError(f"{where}: expected a number, got {s[:30]!r}")
+        raise InputError(f"expected a number, got {s[:30]!r}", field=where)
     return float(s)
 
 
@@ -97,42 +97,45 @@ class ScheduleGain:
             t = np.array(self.t, dtype=float).reshape(-1)
             c = np.array(self.c, dtype=float).reshape(-1)
         except (TypeError, ValueError):
-            raise InputError(f"{f}.schedule: expected lists of numbers t and c") from None
+            raise InputError("expected lists of numbers t and c", field=f"{f}.schedule") from None
         except OverflowError:  # an integer beyond the float range, from a document
             for name, values in (("t", self.t), ("c", self.c)):
                 for k, v in enumerate(values):
                     real_float(f"{f}.schedule: {name}[{k}]", v)
             raise  # pragma: no cover - one of them overflowed
         if t.size != c.size:
-            raise InputError(f"{f}.schedule: {t.size} times but {c.size} values")
+            raise InputError(f"{t.size} times but {c.size} values", field=f"{f}.schedule")
         if not 2 <= t.size <= MAX_POINTS:
-            raise InputError(f"{f}.schedule: expected 2 to {MAX_POINTS} points, got {t.size}")
+            raise InputError(
+                f"expected 2 to {MAX_POINTS} points, got {t.size}", field=f"{f}.schedule"
+            )
         for name, arr in (("t", t), ("c", c)):
             bad = np.flatnonzero(~np.isfinite(arr))
             if bad.size:
-                raise InputError(f"{f}.schedule: {name}[{bad[0]}] is not finite")
+                raise InputError(f"{name}[{bad[0]}] is not finite", field=f"{f}.schedule")
         if t[0] != 0.0:
-            raise InputError(f"{f}.schedule: t[0] must be 0, got {t[0]:g}")
+            raise InputError(f"t[0] must be 0, got {t[0]:g}", field=f"{f}.schedule")
         bad = np.flatnonzero(np.diff(t) <= 0)
         if bad.size:
             k = int(bad[0]) + 1
             raise InputError(
-                f"{f}.schedule: times must increase strictly; t[{k}] = {t[k]:g} after "
-                f"t[{k - 1}] = {t[k - 1]:g}"
+                f"times must increase strictly; t[{k}] = {t[k]:g} after t[{k - 1}] = {t[k - 1]:g}",
+                field=f"{f}.schedule",
             )
         bad = np.flatnonzero((c < 0) | (c > MAX_VALUE))
         if bad.size:
             k = int(bad[0])
             raise InputError(
-                f"{f}.schedule: c[{k}] = {c[k]:g} at t = {t[k]:g} is outside [0, {MAX_VALUE:g}]"
+                f"c[{k}] = {c[k]:g} at t = {t[k]:g} is outside [0, {MAX_VALUE:g}]",
+                field=f"{f}.schedule",
             )
         if self.interpolation not in INTERPOLATIONS:
             raise InputError(
-                f"{f}.interpolation: expected one of {', '.join(INTERPOLATIONS)}, "
-                f"got {self.interpolation!r}"
+                f"expected one of {', '.join(INTERPOLATIONS)}, got {self.interpolation!r}",
+                field=f"{f}.interpolation",
             )
         if not isinstance(self.tail, str) or not self.tail.strip():
-            raise InputError(f"{f}.tail: expected an expression in t")
+            raise InputError("expected an expression in t", field=f"{f}.tail")
         t.setflags(write=False)
         c.setflags(write=False)
         object.__setattr__(self, "t", t)
@@ -244,21 +247,23 @@ def schedule_from_document(doc: Any, field: str = "gain") -> ScheduleGain:
         A missing or malformed field, naming it.
     """
     if not isinstance(doc, Mapping):
-        raise InputError(f"{field}: expected a mapping with t, c, interpolation and tail")
+        raise InputError("expected a mapping with t, c, interpolation and tail", field=field)
     unknown = sorted(set(doc) - {"t", "c", "interpolation", "tail"})
     if unknown:
-        raise InputError(f"{field}.{unknown[0]}: unknown field (known: t, c, interpolation, tail)")
+        raise InputError(
+            "unknown field (known: t, c, interpolation, tail)", field=f"{field}.{unknown[0]}"
+        )
     for key in ("t", "c", "tail"):
         if key not in doc:
-            raise InputError(f"{field}.{key}: missing")
+            raise InputError("missing", field=f"{field}.{key}")
     for key in ("t", "c"):
         v = doc[key]
         if not isinstance(v, list) or not all(
             isinstance(x, (int, float)) and not isinstance(x, bool) for x in v
         ):
-            raise InputError(f"{field}.{key}: expected a list of numbers")
+            raise InputError("expected a list of numbers", field=f"{field}.{key}")
     if not isinstance(doc["tail"], str):
-        raise InputError(f"{field}.tail: expected an expression in t (a string)")
+        raise InputError("expected an expression in t (a string)", field=f"{field}.tail")
     return ScheduleGain(
         doc["t"], doc["c"], doc.get("interpolation", "linear"), doc["tail"], field=field
     )
@@ -299,19 +304,22 @@ def read_schedule(
         st = p.stat()  # stat, never open: opening a FIFO waits for a writer
     except OSError as exc:
         what = "no such file" if isinstance(exc, FileNotFoundError) else "cannot read"
-        raise InputError(f"{field}.schedule: {what} {str(p)!r}") from None
+        raise InputError(f"{what} {str(p)!r}", field=f"{field}.schedule") from None
     if stat.S_ISDIR(st.st_mode):
-        raise InputError(f"{field}.schedule: {str(p)!r} is a directory, not a schedule file")
+        raise InputError(
+            f"{str(p)!r} is a directory, not a schedule file", field=f"{field}.schedule"
+        )
     if not stat.S_ISREG(st.st_mode):
         raise InputError(
-            f"{field}.schedule: {str(p)!r} is not a regular file (a FIFO, device or socket)"
+            f"{str(p)!r} is not a regular file (a FIFO, device or socket)",
+            field=f"{field}.schedule",
         )
     if st.st_size > MAX_BYTES:
-        raise InputError(f"{p}: larger than {MAX_BYTES // 2**20} MB")
+        raise InputError(f"larger than {MAX_BYTES // 2**20} MB", field=str(p))
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{p}: cannot read ({exc.__class__.__name__})") from None
+        raise InputError(f"cannot read ({exc.__class__.__name__})", field=str(p)) from None
     meta: dict[str, str] = {}
     where: dict[str, int] = {}  # the line of each comment field
     ts: list[float] = []
@@ -326,26 +334,29 @@ def read_schedule(
             if sep and key.strip() in ("tail", "interpolation"):
                 if key.strip() in meta:  # a second one: which would apply is a guess
                     raise InputError(
-                        f"{p}: line {k}: a second '# {key.strip()}:' line (line {where[key.strip()]} "
-                        "gave one already)"
+                        f"line {k}: a second '# {key.strip()}:' line (line {where[key.strip()]} "
+                        "gave one already)",
+                        field=str(p),
                     )
                 meta[key.strip()] = value.strip()
                 where[key.strip()] = k
             continue
         if not header:
             if [x.strip().lower() for x in line.split(",")] != ["t", "c"]:
-                raise InputError(f"{p}: line {k}: expected the header 't,c', got {line[:40]!r}")
+                raise InputError(
+                    f"line {k}: expected the header 't,c', got {line[:40]!r}", field=str(p)
+                )
             header = True
             continue
         parts = line.split(",")
         if len(parts) != 2:
-            raise InputError(f"{p}: line {k}: expected two numbers t,c, got {line[:40]!r}")
+            raise InputError(f"line {k}: expected two numbers t,c, got {line[:40]!r}", field=str(p))
         if len(ts) >= MAX_POINTS:
-            raise InputError(f"{p}: more than {MAX_POINTS} rows")
+            raise InputError(f"more than {MAX_POINTS} rows", field=str(p))
         ts.append(_number(parts[0], f"{p}: line {k}: t"))
         cs.append(_number(parts[1], f"{p}: line {k}: c"))
     if not header:
-        raise InputError(f"{p}: no header 't,c'")
+        raise InputError("no header 't,c'", field=str(p))
     for key, given in (("tail", tail), ("interpolation", interpolation)):
         if (
             given is not None
@@ -353,12 +364,13 @@ def read_schedule(
             and meta[key].replace(" ", "") != given.replace(" ", "")
         ):
             raise InputError(
-                f"{field}.{key}: {given!r} differs from the file's {meta[key]!r} ({p})"
+                f"{given!r} differs from the file's {meta[key]!r} ({p})", field=f"{field}.{key}"
             )
     tail_text = tail if tail is not None else meta.get("tail")
     if tail_text is None:
         raise InputError(
-            f"{field}.tail: missing (give tail: \"a*(b+t)**-g\" or a '# tail:' line in {p})"
+            f"missing (give tail: \"a*(b+t)**-g\" or a '# tail:' line in {p})",
+            field=f"{field}.tail",
         )
     try:
         return ScheduleGain(
@@ -369,7 +381,7 @@ def read_schedule(
             field=field,
         )
     except InputError as exc:
-        raise InputError(f"{p}: {exc}") from None
+        raise InputError(f"{exc}", field=str(p)) from None
 
 
 def gain_from_option(text: str | None, field: str = "gain") -> str | ScheduleGain | None:
@@ -425,9 +437,9 @@ def join_tail(t_end: float, c_end: float, gamma: float = 1.0, b: float = 1.0) ->
     '0.55/(1 + t)'
     """
     if not (math.isfinite(c_end) and c_end > 0):
-        raise InputError(f"tail: the schedule ends at c = {c_end:g}; a tail needs c(T) > 0")
+        raise InputError(f"the schedule ends at c = {c_end:g}; a tail needs c(T) > 0", field="tail")
     if not 0.5 < gamma <= 1.0:
-        raise InputError(f"tail: γ = {gamma:g} is outside (1/2, 1]")
+        raise InputError(f"γ = {gamma:g} is outside (1/2, 1]", field="tail")
     a = float(f"{c_end * (b + t_end) ** gamma:.12g}")
     if gamma == 1.0:
         return f"{a:.12g}/({b:g} + t)"
@@ -540,7 +552,9 @@ def analyse_any_gain(gain: Any) -> GainAnalysis:
         return analyse_schedule(gain)
     if isinstance(gain, str):
         return analyse_gain(gain)
-    raise InputError(f"gain: expected an expression in t or a schedule, got {type(gain).__name__}")
+    raise InputError(
+        f"expected an expression in t or a schedule, got {type(gain).__name__}", field="gain"
+    )
 
 
 def schedule_checks(doc: Any, source: str = "certificate") -> list[tuple[str, bool, str]]:
@@ -571,7 +585,7 @@ def schedule_checks(doc: Any, source: str = "certificate") -> list[tuple[str, bo
     except InputError as exc:
         msg = str(exc)
         if any(w in msg for w in ("missing", "unknown field", "expected a", "expected lists")):
-            raise InputError(f"{source}: {msg}") from None
+            raise InputError(f"{msg}", field=source) from None
         return [("gain schedule", False, msg)]
     exact_t = [Fraction(x) for x in doc["t"]]
     exact_c = [Fraction(x) for x in doc["c"]]

@@ -74,27 +74,27 @@ def read_document(path: str | Path) -> dict[str, Any]:
         exists = p.is_file()
         size = p.stat().st_size if exists else 0
     except (OSError, ValueError) as exc:  # a name with a NUL byte, a loop of links
-        raise InputError(f"{p}: cannot read the file ({exc.__class__.__name__})") from None
+        raise InputError(f"cannot read the file ({exc.__class__.__name__})", field=str(p)) from None
     if not exists:
         if p.is_dir():
-            raise InputError(f"{p}: is a folder, expected a file (e.g. {p / 'g1.yaml'})")
+            raise InputError(f"is a folder, expected a file (e.g. {p / 'g1.yaml'})", field=str(p))
         kind = "not a regular file (a device, pipe or socket)" if p.exists() else "no such file"
-        raise InputError(f"{p}: {kind}")
+        raise InputError(f"{kind}", field=str(p))
     if size > MAX_FILE_BYTES:
         raise InputError(
-            f"{p}: file of {size / 2**20:.0f} MB is larger than the "
-            f"{MAX_FILE_BYTES // 2**20} MB limit"
+            f"file of {size / 2**20:.0f} MB is larger than the {MAX_FILE_BYTES // 2**20} MB limit",
+            field=str(p),
         )
     try:
         with p.open("rb") as fh:
             raw = fh.read(MAX_FILE_BYTES + 1)
         text = raw.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{p}: cannot read the file ({exc.__class__.__name__})") from None
+        raise InputError(f"cannot read the file ({exc.__class__.__name__})", field=str(p)) from None
     if len(raw) > MAX_FILE_BYTES:
-        raise InputError(f"{p}: larger than the {MAX_FILE_BYTES // 2**20} MB limit")
+        raise InputError(f"larger than the {MAX_FILE_BYTES // 2**20} MB limit", field=str(p))
     if not text.strip():
-        raise InputError(f"{p}: the file is empty")
+        raise InputError("the file is empty", field=str(p))
     try:
         if p.suffix.lower() == ".json":
             doc = json.loads(text)
@@ -104,20 +104,22 @@ def read_document(path: str | Path) -> dict[str, Any]:
     except InputError:
         raise
     except json.JSONDecodeError as exc:
-        raise InputError(f"{p}: not valid JSON (line {exc.lineno}: {exc.msg})") from None
+        raise InputError(f"not valid JSON (line {exc.lineno}: {exc.msg})", field=str(p)) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = f"line {mark.line + 1}: " if mark is not None else ""
         problem = getattr(exc, "problem", None) or "malformed YAML"
-        raise InputError(f"{p}: not valid YAML ({line}{problem})") from None
+        raise InputError(f"not valid YAML ({line}{problem})", field=str(p)) from None
     except RecursionError:
-        raise InputError(f"{p}: nested deeper than {MAX_DEPTH} levels") from None
+        raise InputError(f"nested deeper than {MAX_DEPTH} levels", field=str(p)) from None
     except ValueError as exc:  # int('9' * 5000): Python's 4300-digit limit
         if "digits" in str(exc):
-            raise InputError(f"{p}: an integer with too many digits") from None
-        raise InputError(f"{p}: a value that cannot be read ({_one_line(str(exc))})") from None
+            raise InputError("an integer with too many digits", field=str(p)) from None
+        raise InputError(
+            f"a value that cannot be read ({_one_line(str(exc))})", field=str(p)
+        ) from None
     if not isinstance(doc, dict):
-        raise InputError(f"{p}: expected a mapping at the top level, got {type_name(doc)}")
+        raise InputError(f"expected a mapping at the top level, got {type_name(doc)}", field=str(p))
     if _SURROGATE_ESCAPE.search(text):
         check_text(doc, str(p))
     return doc
@@ -157,8 +159,9 @@ def check_text(doc: Any, source: str) -> None:
                     if bad is not None:
                         shown = field.encode("utf-8", "backslashreplace").decode("ascii")
                         raise InputError(
-                            f"{source}: {shown}: a string that is not Unicode text (a lone "
-                            f"surrogate, \\u{ord(bad):04x})"
+                            f"a string that is not Unicode text (a lone "
+                            f"surrogate, \\u{ord(bad):04x})",
+                            field=f"{source}: {shown}",
                         )
             if isinstance(v, (dict, list)):
                 stack.append((v, field))
@@ -175,7 +178,7 @@ def _check_depth(doc: Any, p: Path) -> None:
     while stack:
         x, d = stack.pop()
         if d > MAX_DEPTH:
-            raise InputError(f"{p}: nested deeper than {MAX_DEPTH} levels")
+            raise InputError(f"nested deeper than {MAX_DEPTH} levels", field=str(p))
         items = x.values() if isinstance(x, dict) else x
         stack.extend((v, d + 1) for v in items if isinstance(v, (dict, list)))
 
@@ -220,7 +223,8 @@ def _load_yaml(text: str, p: Path) -> Any:
         if not loader.check_event(yaml.StreamEndEvent):
             ev = loader.get_event()
             raise InputError(
-                f"{p}: not valid YAML (line {ev.start_mark.line + 1}: expected a single document)"
+                f"not valid YAML (line {ev.start_mark.line + 1}: expected a single document)",
+                field=str(p),
             )
         return loader.construct_document(root)
     finally:
@@ -245,7 +249,8 @@ def _compose(loader: Any, p: Path) -> Any:
         top[1] += size
         if top[1] > MAX_EXPANDED_NODES:
             raise InputError(
-                f"{p}: the document expands to more than {MAX_EXPANDED_NODES} nodes through aliases"
+                f"the document expands to more than {MAX_EXPANDED_NODES} nodes through aliases",
+                field=str(p),
             )
         if top[0].__class__ is seq:
             top[0].value.append(node)
@@ -269,9 +274,10 @@ def _compose(loader: Any, p: Path) -> Any:
                     tag = resolved[key] = loader.resolve(scalar, ev.value, ev.implicit)
                     if "_" in ev.value and tag in _NUMBER_TAGS:  # YAML 1.1: 0_05 is 5
                         raise InputError(
-                            f"{p}: line {ev.start_mark.line + 1}: {ev.value[:40]!r} is a number "
+                            f"line {ev.start_mark.line + 1}: {ev.value[:40]!r} is a number "
                             "with underscores (YAML 1.1 reads 0_05 as 5, 1_0 as 10); write it "
-                            "without them"
+                            "without them",
+                            field=str(p),
                         )
             node = scalar(tag, ev.value, ev.start_mark, ev.end_mark, style=ev.style)
             if ev.anchor is not None:
@@ -281,18 +287,19 @@ def _compose(loader: Any, p: Path) -> Any:
         elif cls is yaml.AliasEvent:
             if ev.anchor not in anchors:
                 raise InputError(
-                    f"{p}: not valid YAML (line {ev.start_mark.line + 1}: undefined alias "
-                    f"{ev.anchor!r})"
+                    f"not valid YAML (line {ev.start_mark.line + 1}: undefined alias "
+                    f"{ev.anchor!r})",
+                    field=str(p),
                 )
             if ev.anchor in open_anchors:
                 raise InputError(
-                    f"{p}: recursive alias {ev.anchor!r} (line {ev.start_mark.line + 1})"
+                    f"recursive alias {ev.anchor!r} (line {ev.start_mark.line + 1})", field=str(p)
                 )
             node = anchors[ev.anchor]
             attach(node, sizes[id(node)])
         elif cls is yaml.SequenceStartEvent or cls is yaml.MappingStartEvent:
             if len(stack) >= MAX_DEPTH:
-                raise InputError(f"{p}: nested deeper than {MAX_DEPTH} levels")
+                raise InputError(f"nested deeper than {MAX_DEPTH} levels", field=str(p))
             kind = seq if cls is yaml.SequenceStartEvent else mapping
             tag = ev.tag
             if tag is None or tag == "!":
@@ -313,7 +320,7 @@ def _compose(loader: Any, p: Path) -> Any:
             if not stack:
                 return root
         else:  # pragma: no cover - the parser emits nothing else inside a document
-            raise InputError(f"{p}: not valid YAML (unexpected {cls.__name__})")
+            raise InputError(f"not valid YAML (unexpected {cls.__name__})", field=str(p))
         if root is not None and not stack:
             return root
 

@@ -109,18 +109,21 @@ def check_label_spellings(texts, what: str) -> tuple:
         if not t.isascii() and any("\ud800" <= c <= "\udfff" for c in t):
             # a lone surrogate (JSON's "\ud800") is no character: it cannot be printed,
             # written to a file or emitted as code
-            raise InputError(f"{what}: label {t!r} holds a lone surrogate (not a character)")
+            raise InputError(f"label {t!r} holds a lone surrogate (not a character)", field=what)
         n = t if t.isascii() else unicodedata.normalize("NFC", t)
         key = n.strip()
         if key in forms and forms[key] != t:
             how = "surrounding spaces" if forms[key].strip() == t.strip() else "Unicode form"
             raise InputError(
-                f"{what}: labels {_spelled(forms[key])} and {_spelled(t)} differ only by "
-                f"{how}: they look like one agent; write each agent's label one way"
+                f"labels {_spelled(forms[key])} and {_spelled(t)} differ only by "
+                f"{how}: they look like one agent; write each agent's label one way",
+                field=what,
             )
         forms[key] = t
         if key != n:
-            raise InputError(f"{what}: label {t!r} has surrounding spaces (write it as {key!r})")
+            raise InputError(
+                f"label {t!r} has surrounding spaces (write it as {key!r})", field=what
+            )
         out.append(n)
         if len(t) > 40 or not _NUMBER_LIKE.fullmatch(t):
             continue
@@ -130,8 +133,9 @@ def check_label_spellings(texts, what: str) -> tuple:
             continue
         if v in seen and seen[v] != t:
             raise InputError(
-                f"{what}: labels {seen[v]!r} and {t!r} are two spellings of the number {v}; "
-                "write each agent's label one way (or use names that are not numbers)"
+                f"labels {seen[v]!r} and {t!r} are two spellings of the number {v}; "
+                "write each agent's label one way (or use names that are not numbers)",
+                field=what,
             )
         seen.setdefault(v, t)
     return tuple(out)
@@ -175,20 +179,21 @@ def read_npz(path: str | Path) -> EdgeListData:
     src = str(path)
 
     def bad(field: str, msg: str) -> InputError:
-        return InputError(f"{src}: {field}: {msg}")
+        return InputError(f"{msg}", field=f"{src}: {field}")
 
     if not Path(path).is_file():
-        raise InputError(f"{src}: no such file")
+        raise InputError("no such file", field=src)
     try:
         z = np.load(path, allow_pickle=False)
     except (OSError, ValueError, zipfile.BadZipFile, EOFError):
-        raise InputError(f"{src}: not a readable .npz edge list") from None
+        raise InputError("not a readable .npz edge list", field=src) from None
     with z:
         total = sum(i.file_size for i in z.zip.infolist())
         if total > MAX_NPZ_BYTES:
             raise InputError(
-                f"{src}: arrays take {total / 2**30:.1f} GiB uncompressed; at most "
-                f"{MAX_NPZ_BYTES / 2**30:.0f} GiB"
+                f"arrays take {total / 2**30:.1f} GiB uncompressed; at most "
+                f"{MAX_NPZ_BYTES / 2**30:.0f} GiB",
+                field=src,
             )
         keys = set(z.files)
         unknown = keys - KEYS
@@ -234,7 +239,7 @@ def read_npz(path: str | Path) -> EdgeListData:
         except InputError:
             raise
         except (ValueError, TypeError, KeyError, zipfile.BadZipFile):
-            raise InputError(f"{src}: not a readable .npz edge list") from None
+            raise InputError("not a readable .npz edge list", field=src) from None
     rows, cols = _check_edges(bad, rows, cols, w, n, dim, labels)
     return EdgeListData(name, dim, labels, rows, cols, np.asarray(w, dtype=float), src)
 

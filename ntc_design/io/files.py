@@ -110,7 +110,7 @@ def jsonable(x: Any) -> Any:
 
 def field_error(source: str | None, field: str, msg: str) -> InputError:
     """The one-line error naming the file and the field."""
-    return InputError(f"{source}: {field}: {msg}" if source else f"{field}: {msg}")
+    return InputError(msg, field=f"{source}: {field}" if source else field)
 
 
 def _close(key: Any, known: Any) -> str:
@@ -370,10 +370,10 @@ def parse_edge_loss(value: Any, source: str | None, field: str) -> float:
     """
     where = f"{source}: {field}" if source else field
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"{where}: expected a loss probability in [0, 1), got {_show(value)}")
+        raise InputError(f"expected a loss probability in [0, 1), got {_show(value)}", field=where)
     v = float(value)
     if not (math.isfinite(v) and 0.0 <= v < 1.0):
-        raise InputError(f"{where}: a loss probability must be finite and in [0, 1), got {v!r}")
+        raise InputError(f"a loss probability must be finite and in [0, 1), got {v!r}", field=where)
     return v
 
 
@@ -650,10 +650,11 @@ def parse_scenario(path: str | Path) -> ScenarioData:
     if "topology" not in doc:
         if "edges" in doc or "agents" in doc or "modes" in doc:
             raise InputError(
-                f"{src}: this is a topology file; simulate and tune need a scenario whose "
+                f"this is a topology file; simulate and tune need a scenario whose "
                 f"'topology:' names it, e.g. a YAML file with 'topology: {Path(src).name}', "
                 "'theta: [1, 2, -1]', 'gain: 1/(1+t)', 'T: 10' "
-                "(see examples/scenarios/g1_fixed.yaml)"
+                "(see examples/scenarios/g1_fixed.yaml)",
+                field=src,
             )
         raise field_error(src, "topology", "missing (the topology file this scenario runs on)")
     topo = doc["topology"]

@@ -27,12 +27,12 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..errors import InputError, Option, one_line
+from ..errors import InputError, one_line
 
 
 def _oserror(option: str, path: Path, exc: OSError) -> InputError:
     why = exc.strerror or exc.__class__.__name__
-    return InputError(f"{Option(option)}: cannot write {one_line(str(path))!r} ({why})")
+    return InputError(f"cannot write {one_line(str(path))!r} ({why})", field=option, option=True)
 
 
 def check_output_file(
@@ -68,17 +68,21 @@ def check_output_file(
         listed = (
             ", ".join(suffixes[:-1]) + " or " + suffixes[-1] if len(suffixes) > 1 else suffixes[0]
         )
-        raise InputError(f"{Option(option)}: {shown}: expected a {listed} file")
+        raise InputError(f"{shown}: expected a {listed} file", field=option, option=True)
     if p.is_dir():
-        raise InputError(f"{Option(option)}: {shown} is a folder, expected a file name")
+        raise InputError(f"{shown} is a folder, expected a file name", field=option, option=True)
     if os.path.lexists(p) and not p.is_file():
         raise InputError(
-            f"{Option(option)}: {shown} exists and is not a regular file (a device, pipe, socket or "
-            "broken link); choose a file name"
+            f"{shown} exists and is not a regular file (a device, pipe, socket or "
+            "broken link); choose a file name",
+            field=option,
+            option=True,
         )
     parent = p.parent
     if not parent.is_dir():
-        raise InputError(f"{Option(option)}: the folder {one_line(str(parent))!r} does not exist")
+        raise InputError(
+            f"the folder {one_line(str(parent))!r} does not exist", field=option, option=True
+        )
     _probe(parent, option)
     return p
 
@@ -88,13 +92,17 @@ def _probe(folder: Path, option: str) -> None:
     temporary folder there: permission bits do not say it for root, a read-only mount or
     /proc, and a long run must not find out only at its end."""
     if not os.access(folder, os.W_OK | os.X_OK):
-        raise InputError(f"{Option(option)}: the folder {one_line(str(folder))!r} is not writable")
+        raise InputError(
+            f"the folder {one_line(str(folder))!r} is not writable", field=option, option=True
+        )
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".ntc-probe.", dir=folder))
     except OSError as exc:
         why = exc.strerror or exc.__class__.__name__
         raise InputError(
-            f"{Option(option)}: cannot write in the folder {one_line(str(folder))!r} ({why})"
+            f"cannot write in the folder {one_line(str(folder))!r} ({why})",
+            field=option,
+            option=True,
         ) from None
 
 
@@ -204,13 +212,15 @@ def check_output_folder(
     shown = repr(one_line(str(p)))
     if os.path.lexists(p) and not p.is_dir():
         what = "an existing file" if p.is_file() else "not a folder (a device, pipe or link)"
-        raise InputError(f"{Option(option)}: {shown} is {what}, expected a folder")
+        raise InputError(f"{shown} is {what}, expected a folder", field=option, option=True)
     parent = p.resolve().parent
     while not parent.exists() and parent != parent.parent:
         parent = parent.parent  # missing folders are made
     if not parent.is_dir():
         raise InputError(
-            f"{Option(option)}: {one_line(str(parent))!r} in {shown} is a file, not a folder"
+            f"{one_line(str(parent))!r} in {shown} is a file, not a folder",
+            field=option,
+            option=True,
         )
     _probe(parent, option)
     if p.is_dir() and replaceable is not None:
@@ -221,9 +231,11 @@ def check_output_folder(
             raise _oserror(option, p, exc) from None
         if other:
             raise InputError(
-                f"{Option(option)}: {shown} exists and holds other files ({one_line(other[0])!r}"
+                f"{shown} exists and holds other files ({one_line(other[0])!r}"
                 + (f" and {len(other) - 1} more" if len(other) > 1 else "")
-                + "); choose a new folder"
+                + "); choose a new folder",
+                field=option,
+                option=True,
             )
     return p
 

@@ -54,13 +54,17 @@ def _bounded(p: Path, limit: float) -> Path:
     try:
         st = os.stat(p)
     except OSError as exc:
-        raise InputError(f"{p}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
+        raise InputError(
+            f"cannot read ({exc.strerror or exc.__class__.__name__})", field=str(p)
+        ) from None
     if stat.S_ISDIR(st.st_mode):
-        raise InputError(f"{p}: is a folder, expected a topology file")
+        raise InputError("is a folder, expected a topology file", field=str(p))
     if not stat.S_ISREG(st.st_mode):
-        raise InputError(f"{p}: not a regular file (a device, pipe or socket)")
+        raise InputError("not a regular file (a device, pipe or socket)", field=str(p))
     if st.st_size > limit:
-        raise InputError(f"{p}: {st.st_size / 2**30:.1f} GiB; at most {limit / 2**30:.0f} GiB")
+        raise InputError(
+            f"{st.st_size / 2**30:.1f} GiB; at most {limit / 2**30:.0f} GiB", field=str(p)
+        )
     return p
 
 
@@ -160,15 +164,16 @@ def _mat_inflated_bytes(p: Path, limit: float) -> None:
                         out += z.decompress(z.unconsumed_tail, _MAT_HEAD)
                 except zlib.error as exc:
                     raise InputError(
-                        f"{p}: not a readable MATLAB file (a compressed variable: {exc})"
+                        f"not a readable MATLAB file (a compressed variable: {exc})", field=str(p)
                     ) from None
                 if z.unconsumed_tail:
                     break  # the header is in: the rest is data
             info = _mat_header(bytes(out), order)
             if info is None and len(out) >= _MAT_HEAD:  # loadmat would read on: refuse
                 raise InputError(
-                    f"{p}: not a readable MATLAB file (a variable's header is longer than "
-                    f"{_MAT_HEAD} bytes)"
+                    f"not a readable MATLAB file (a variable's header is longer than "
+                    f"{_MAT_HEAD} bytes)",
+                    field=str(p),
                 )
             if info is not None and info[0] in _MAT_VARIABLES:
                 name, cls, nzmax, shape, total = info
@@ -176,20 +181,22 @@ def _mat_inflated_bytes(p: Path, limit: float) -> None:
                 if cls & 0xFF in _MAT_ITEM_BYTES or cls & 0xFF == 5:
                     if total > mem + _MAT_HEAD:
                         raise InputError(
-                            f"{p}: {name}: declares {format_bytes(total)} of data for a "
+                            f"declares {format_bytes(total)} of data for a "
                             f"{'×'.join(map(str, shape))} array of {format_bytes(mem)} "
-                            "(a corrupt MATLAB file)"
+                            "(a corrupt MATLAB file)",
+                            field=f"{p}: {name}",
                         )
                 need += mem
                 if need > limit:
                     what = _MAT_CLASSES.get(cls & 0xFF, "numeric")
                     raise InputError(
-                        f"{p}: {name}: a {'×'.join(map(str, shape))} {what} array needs "
+                        f"a {'×'.join(map(str, shape))} {what} array needs "
                         f"{format_bytes(mem)} once loaded (from a "
                         f"{format_bytes(os.path.getsize(p))} file), more than the "
                         f"{format_bytes(limit)} allowed here (a sixth of the memory available: "
                         "free, within ulimit -v, or NTC_AVAILABLE_MEMORY); store a large "
-                        "network as a sparse A or as .npz"
+                        "network as a sparse A or as .npz",
+                        field=f"{p}: {name}",
                     )
                 if z is not None:  # inflate the rest, counting: never past what it declares
                     got = len(out)
@@ -203,12 +210,14 @@ def _mat_inflated_bytes(p: Path, limit: float) -> None:
                             got += len(z.decompress(data, 2**20))
                         except zlib.error as exc:
                             raise InputError(
-                                f"{p}: not a readable MATLAB file (a compressed variable: {exc})"
+                                f"not a readable MATLAB file (a compressed variable: {exc})",
+                                field=str(p),
                             ) from None
                         if got > total + 8:
                             raise InputError(
-                                f"{p}: {name}: inflates past the {format_bytes(total)} it "
-                                "declares (a corrupt MATLAB file)"
+                                f"inflates past the {format_bytes(total)} it "
+                                "declares (a corrupt MATLAB file)",
+                                field=f"{p}: {name}",
                             )
             fh.seek(start + nbytes + (-nbytes % 8 if kind == 14 else 0))
 
@@ -239,7 +248,7 @@ def _rows_and_fields(p: Path) -> tuple[np.ndarray, np.ndarray]:
     nul = np.flatnonzero(data == 0)
     if nul.size:
         row = int(np.count_nonzero(data[: nul[0]] == ord("\n"))) + 1
-        raise InputError(f"{p}: row {row}: a NUL byte")
+        raise InputError(f"row {row}: a NUL byte", field=str(p))
     if np.any(data == ord('"')):
         with open(p, encoding="utf-8", errors="replace", newline="") as fh:
             got = [(k, len(row)) for k, row in enumerate(csv.reader(fh), 1) if row and k > 1]
@@ -294,25 +303,32 @@ def _csv_header(p: Path) -> tuple[list[str], list[str], int]:
         line = fh.readline(MAX_HEADER_CHARS + 1)
     if len(line) > MAX_HEADER_CHARS:
         raise InputError(
-            f"{p}: row 1: the header is longer than {MAX_HEADER_CHARS} characters "
-            f"(at most d = {CSV_MAX_DIM} in a CSV file; use .npz or .mat for larger weights)"
+            f"row 1: the header is longer than {MAX_HEADER_CHARS} characters "
+            f"(at most d = {CSV_MAX_DIM} in a CSV file; use .npz or .mat for larger weights)",
+            field=str(p),
         )
     header = [h.strip() for h in line.rstrip("\n\r").split(",")]
     if len(header) < 3 or header[:2] != ["from", "to"]:
-        raise InputError(f"{p}: row 1: the header must start with from, to (then a11 … add)")
+        raise InputError(
+            "row 1: the header must start with from, to (then a11 … add)", field=str(p)
+        )
     k = len(header) - 2 - len(_trailing(header))
     d = int(round(k**0.5))
     if d * d != k:
-        raise InputError(f"{p}: row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)")
+        raise InputError(
+            f"row 1: {k} weight columns; d² columns are needed (d = 1, 2, 3, …)", field=str(p)
+        )
     if d > CSV_MAX_DIM:
         raise InputError(
-            f"{p}: row 1: d = {d}; a CSV file holds at most d = {CSV_MAX_DIM} "
-            "(use .npz or .mat for larger weights)"
+            f"row 1: d = {d}; a CSV file holds at most d = {CSV_MAX_DIM} "
+            "(use .npz or .mat for larger weights)",
+            field=str(p),
         )
     want = [f"a{r}{c}" if d < 10 else f"a{r}_{c}" for r in range(1, d + 1) for c in range(1, d + 1)]
     if header[2 : 2 + k] != want:
         raise InputError(
-            f"{p}: row 1: weight columns must be {', '.join(want[:4])}{' …' if k > 4 else ''}"
+            f"row 1: weight columns must be {', '.join(want[:4])}{' …' if k > 4 else ''}",
+            field=str(p),
         )
     return header, want, d
 
@@ -343,13 +359,13 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
     lines, fields = _rows_and_fields(p)
     e = lines.size
     if e > MAX_EDGES:
-        raise InputError(f"{p}: more than {MAX_EDGES} rows")
+        raise InputError(f"more than {MAX_EDGES} rows", field=str(p))
     wrong = np.flatnonzero(fields != len(header))
     if wrong.size:
         r = int(wrong[0])
         short = " (a short row)" if fields[r] < len(header) else ""
         raise InputError(
-            f"{p}: row {lines[r]}: {fields[r]} fields, the header has {len(header)}{short}"
+            f"row {lines[r]}: {fields[r]} fields, the header has {len(header)}{short}", field=str(p)
         )
     extra = _trailing(header)
     at = {name: len(header) - len(extra) + m for m, name in enumerate(extra)}
@@ -362,29 +378,33 @@ def read_csv_edges(path: str | Path) -> EdgeListData:
             r"could not convert string '(.*)' to float64 at row (\d+), column (\d+)", str(exc)
         )
         if m is None:
-            raise InputError(f"{p}: not a readable CSV table ({exc.__class__.__name__})") from None
+            raise InputError(
+                f"not a readable CSV table ({exc.__class__.__name__})", field=str(p)
+            ) from None
         r, c, got = int(m.group(2)), int(m.group(3)) - 3, m.group(1).strip()
         what = f"= {got[:30]!r} is not a finite number" if got else "is empty (a short row?)"
-        raise InputError(f"{p}: row {lines[r]}: {want[c]} {what}") from None
+        raise InputError(f"row {lines[r]}: {want[c]} {what}", field=str(p)) from None
     src, dst = text[:, 0], text[:, 1]
     for name, col in (("from", src), ("to", dst)):
         empty = np.flatnonzero(np.char.str_len(np.char.strip(col)) == 0)
         if empty.size:
-            raise InputError(f"{p}: row {lines[empty[0]]}: '{name}' is empty")
+            raise InputError(f"row {lines[empty[0]]}: '{name}' is empty", field=str(p))
     bad = np.flatnonzero(~np.isfinite(w))
     if bad.size:
         r, c = divmod(int(bad[0]), k)
         got = float(w[bad[0]])  # inf, nan: not NumPy's repr (np.float64(inf))
-        raise InputError(f"{p}: row {lines[r]}: {want[c]} = {got!r} is not a finite number")
+        raise InputError(
+            f"row {lines[r]}: {want[c]} = {got!r} is not a finite number", field=str(p)
+        )
     labels, rows, cols = _labels_in_order(np.char.strip(src), np.char.strip(dst), p)
     if len(labels) > MAX_AGENTS:
-        raise InputError(f"{p}: {len(labels)} agents; at most {MAX_AGENTS}")
+        raise InputError(f"{len(labels)} agents; at most {MAX_AGENTS}", field=str(p))
     key = rows.astype(np.int64) * len(labels) + cols
     order = np.argsort(key, kind="stable")
     dup = np.flatnonzero(np.diff(key[order]) == 0)
     if dup.size:
         r = int(order[dup[0] + 1])
-        raise InputError(f"{p}: row {lines[r]}: edge {src[r]}->{dst[r]} is listed twice")
+        raise InputError(f"row {lines[r]}: edge {src[r]}->{dst[r]} is listed twice", field=str(p))
     place = {name: 2 + m for m, name in enumerate(extra)}
     unc = (
         _csv_uncertainty(text[:, place["uncertainty"]], lines, p)
@@ -404,8 +424,9 @@ def _csv_loss(column: np.ndarray, lines: np.ndarray, p: Path) -> np.ndarray:
         v = float(text) if NUMBER_TEXT.fullmatch(text) else math.nan  # ASCII numerals only
         if not (math.isfinite(v) and 0 <= v < 1):
             raise InputError(
-                f"{p}: row {lines[r]}: loss = {text[:30]!r}: a loss probability must be a "
-                "number in [0, 1) (or empty)"
+                f"row {lines[r]}: loss = {text[:30]!r}: a loss probability must be a "
+                "number in [0, 1) (or empty)",
+                field=str(p),
             )
         out[r] = v
     return out
@@ -420,8 +441,9 @@ def _csv_uncertainty(column: np.ndarray, lines: np.ndarray, p: Path) -> np.ndarr
         v = float(text) if NUMBER_TEXT.fullmatch(text) else math.nan  # ASCII numerals only
         if not (math.isfinite(v) and 0 <= v < 1):
             raise InputError(
-                f"{p}: row {lines[r]}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "
-                "number in [0, 1) (or empty)"
+                f"row {lines[r]}: uncertainty = {str(vals[r])[:30]!r}: the radius must be a "
+                "number in [0, 1) (or empty)",
+                field=str(p),
             )
         out[r] = v
     return out
@@ -471,16 +493,16 @@ def _mat_labels(raw: Any, n: int, p: Path) -> tuple:
     if arr.dtype == object:
         items = [np.asarray(x).ravel() for x in arr.ravel()]
         if not all(x.dtype.kind == "U" and x.size == 1 for x in items):
-            raise InputError(f"{p}: labels: expected a cell array of strings")
+            raise InputError("expected a cell array of strings", field=f"{p}: labels")
         out = [str(x[0]) for x in items]
     elif arr.dtype.kind == "U":
         out = [str(x).strip() for x in arr.ravel()]
     else:
-        raise InputError(f"{p}: labels: expected a cell array of strings, got {arr.dtype}")
+        raise InputError(f"expected a cell array of strings, got {arr.dtype}", field=f"{p}: labels")
     if len(out) != n:
-        raise InputError(f"{p}: labels: {len(out)} labels for {n} agents")
+        raise InputError(f"{len(out)} labels for {n} agents", field=f"{p}: labels")
     if len(set(out)) != n:
-        raise InputError(f"{p}: labels: agent labels must be unique")
+        raise InputError("agent labels must be unique", field=f"{p}: labels")
     return tuple(label_from_text(x) for x in check_label_spellings(out, f"{p}: labels"))
 
 
@@ -519,16 +541,19 @@ def read_mat(path: str | Path) -> EdgeListData:
     try:
         doc = loadmat(p, variable_names=["A", "dim", "labels", "uncertainty"], mat_dtype=False)
     except Exception as exc:  # noqa: BLE001 - whatever a malformed file raises inside scipy
-        raise InputError(f"{p}: not a readable MATLAB file ({exc.__class__.__name__})") from None
+        raise InputError(
+            f"not a readable MATLAB file ({exc.__class__.__name__})", field=str(p)
+        ) from None
     for key in ("A", "dim"):
         if key not in doc:
-            raise InputError(f"{p}: {key}: missing")
+            raise InputError("missing", field=f"{p}: {key}")
     a = doc["A"]
     if not sparse.issparse(a):
         a = np.asarray(a)
         if a.dtype.kind not in "fiub" or a.dtype.names is not None:
             raise InputError(
-                f"{p}: A: expected a numeric matrix, got {'a struct' if a.dtype.names else a.dtype}"
+                f"expected a numeric matrix, got {'a struct' if a.dtype.names else a.dtype}",
+                field=f"{p}: A",
             )
     dim_a = np.asarray(doc["dim"])
     if (
@@ -537,31 +562,36 @@ def read_mat(path: str | Path) -> EdgeListData:
         or not np.isfinite(dim_a.ravel()[0])
         or float(dim_a.ravel()[0]) != int(dim_a.ravel()[0])
     ):
-        raise InputError(f"{p}: dim: expected one integer, got {_scalar_text(dim_a)}")
+        raise InputError(f"expected one integer, got {_scalar_text(dim_a)}", field=f"{p}: dim")
     d = int(dim_a.ravel()[0])
     if not 1 <= d <= MAX_DIM:
-        raise InputError(f"{p}: dim: must be in 1..{MAX_DIM}, got {d}")
+        raise InputError(f"must be in 1..{MAX_DIM}, got {d}", field=f"{p}: dim")
     if a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] % d:
         raise InputError(
-            f"{p}: A: expected a square (N·d)×(N·d) matrix, got shape {a.shape} with dim = {d}"
+            f"expected a square (N·d)×(N·d) matrix, got shape {a.shape} with dim = {d}",
+            field=f"{p}: A",
         )
     n = a.shape[0] // d
     if not 1 <= n <= MAX_AGENTS:
-        raise InputError(f"{p}: A: {n} agents; at most {MAX_AGENTS}")
+        raise InputError(f"{n} agents; at most {MAX_AGENTS}", field=f"{p}: A")
     coo = sparse.coo_matrix(a, dtype=float)
     if not np.all(np.isfinite(coo.data)):
         k = int(np.flatnonzero(~np.isfinite(coo.data))[0])
-        raise InputError(f"{p}: A({coo.row[k] + 1}, {coo.col[k] + 1}): not a finite number")
+        raise InputError(
+            f"A({coo.row[k] + 1}, {coo.col[k] + 1}): not a finite number", field=str(p)
+        )
     nz = coo.data != 0
     bi, bj = coo.row[nz] // d, coo.col[nz] // d
     self_loop = np.flatnonzero(bi == bj)
     if self_loop.size:
         i = int(bi[self_loop[0]])
-        raise InputError(f"{p}: A: diagonal block ({i + 1}, {i + 1}) is not zero (a self-loop)")
+        raise InputError(
+            f"diagonal block ({i + 1}, {i + 1}) is not zero (a self-loop)", field=f"{p}: A"
+        )
     labels = _mat_labels(doc.get("labels"), n, p)
     pairs = np.unique(bi.astype(np.int64) * n + bj)
     if pairs.size > MAX_EDGES:
-        raise InputError(f"{p}: A: more than {MAX_EDGES} edges")
+        raise InputError(f"more than {MAX_EDGES} edges", field=f"{p}: A")
     rows, cols = pairs // n, pairs % n
     w = np.zeros((pairs.size, d, d))
     at = np.searchsorted(pairs, bi.astype(np.int64) * n + bj)  # each entry's edge
@@ -579,15 +609,16 @@ def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
     a = np.asarray(u.toarray() if hasattr(u, "toarray") else u)
     if a.dtype.kind not in "fiu" or a.shape != (n, n):
         raise InputError(
-            f"{p}: uncertainty: expected a numeric {n}×{n} matrix (one radius per edge)"
+            f"expected a numeric {n}×{n} matrix (one radius per edge)", field=f"{p}: uncertainty"
         )
     a = a.astype(float)
     nan = np.argwhere(np.isnan(a))
     if nan.size:
         i, j = (int(x) + 1 for x in nan[0])
         raise InputError(
-            f"{p}: uncertainty({i}, {j}): NaN is not a radius (0 for none given, then "
-            f"{Option('radius')} applies)"
+            f"uncertainty({i}, {j}): NaN is not a radius (0 for none given, then "
+            f"{Option('radius')} applies)",
+            field=str(p),
         )
     has = a != 0
     edge = np.zeros((n, n), dtype=bool)
@@ -595,14 +626,15 @@ def _mat_uncertainty(u, n: int, rows, cols, p: Path) -> np.ndarray | None:
     stray = np.argwhere(has & ~edge)
     if stray.size:
         i, j = (int(x) + 1 for x in stray[0])
-        raise InputError(f"{p}: uncertainty({i}, {j}): uncertainty on a missing edge")
+        raise InputError(f"uncertainty({i}, {j}): uncertainty on a missing edge", field=str(p))
     vals = a[rows, cols]
     bad = np.flatnonzero(has[rows, cols] & ~((vals >= 0) & (vals < 1)))
     if bad.size:
         k = int(bad[0])
         raise InputError(
-            f"{p}: uncertainty({rows[k] + 1}, {cols[k] + 1}): the radius must be in [0, 1), "
-            f"got {vals[k]:g}"
+            f"uncertainty({rows[k] + 1}, {cols[k] + 1}): the radius must be in [0, 1), "
+            f"got {vals[k]:g}",
+            field=str(p),
         )
     return np.where(has[rows, cols], vals, np.nan)  # NaN here: none given, for the caller
 

@@ -371,7 +371,7 @@ def values_read_differently(doc: Any, max_depth: int, where: str) -> bool:
     while stack:
         x, d = stack.pop()
         if d > max_depth:
-            raise InputError(f"{where}: nested deeper than {max_depth} levels")
+            raise InputError(f"nested deeper than {max_depth} levels", field=where)
         if isinstance(x, dict):
             for k in x:
                 if (
@@ -433,7 +433,7 @@ def load_compiled(text: str, where: str, max_nodes: int) -> Any:
         )
     except (yaml_rs.YAMLDecodeError, ValueError, RecursionError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else "malformed YAML"
-        raise InputError(f"{where}: not valid YAML ({one_line(first)[:120]})") from None
+        raise InputError(f"not valid YAML ({one_line(first)[:120]})", field=where) from None
     return doc
 
 

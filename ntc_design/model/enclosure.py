@@ -27,7 +27,7 @@ def _fmt(x: float) -> str:
 class SignProof:
     """Proofs that a scalar or a matrix keeps one strict sign on a domain, by bisection."""
 
-    def __init__(self, where: Callable[[str], str], domain: tuple[float, float] | None):
+    def __init__(self, where: Callable[[str], InputError], domain: tuple[float, float] | None):
         self.where = where
         self.domain = domain
 
@@ -61,11 +61,9 @@ class SignProof:
                 return 1
             if e.is_negative:
                 return -1
-            raise InputError(
-                self.where(
-                    f"cannot prove that {what} = {e} keeps one sign for every t >= 0; "
-                    "declare period or constant_after"
-                )
+            raise self.where(
+                f"cannot prove that {what} = {e} keeps one sign for every t >= 0; "
+                "declare period or constant_after"
             )
         fn = compile_expression(e)
         a0, b0 = self.domain
@@ -74,15 +72,13 @@ class SignProof:
         if not np.all(np.isfinite(probe)):
             k = int(np.argmax(~np.isfinite(probe)))
             t = a0 + (b0 - a0) * k / 256
-            raise InputError(self.where(f"{what} = {e} is unbounded near t = {_fmt(t)}"))
+            raise self.where(f"{what} = {e} is unbounded near t = {_fmt(t)}")
         bad = np.nonzero(sgn * probe <= 0)[0]
         if bad.size:
             t = a0 + (b0 - a0) * bad[0] / 256
-            raise InputError(
-                self.where(
-                    f"{what} = {e} changes sign ({probe[bad[0]]:.4g} at t = {_fmt(t)}); "
-                    "a weight must keep one sign class for every t"
-                )
+            raise self.where(
+                f"{what} = {e} changes sign ({probe[bad[0]]:.4g} at t = {_fmt(t)}); "
+                "a weight must keep one sign class for every t"
             )
         stack = [
             (a0 + (b0 - a0) * k / SIGN_PIECES, a0 + (b0 - a0) * (k + 1) / SIGN_PIECES)
@@ -95,20 +91,16 @@ class SignProof:
             try:
                 lo, hi = bounds(enclose(e, t_ball(a, b)))
             except NotEnclosable as exc:
-                raise InputError(self.where(f"{what} = {e}: {exc}")) from None
+                raise self.where(f"{what} = {e}: {exc}") from None
             if (sgn > 0 and lo > 0) or (sgn < 0 and hi < 0):
                 continue
             if b - a < min_w:
                 if not math.isfinite(lo) or not math.isfinite(hi):
-                    raise InputError(
-                        self.where(f"{what} = {e} is unbounded near t = {_fmt(0.5 * (a + b))}")
-                    )
-                raise InputError(
-                    self.where(
-                        f"cannot prove that {what} = {e} stays "
-                        f"{'positive' if sgn > 0 else 'negative'} near t = {_fmt(0.5 * (a + b))} "
-                        "(it may reach 0); a weight must keep one sign class for every t"
-                    )
+                    raise self.where(f"{what} = {e} is unbounded near t = {_fmt(0.5 * (a + b))}")
+                raise self.where(
+                    f"cannot prove that {what} = {e} stays "
+                    f"{'positive' if sgn > 0 else 'negative'} near t = {_fmt(0.5 * (a + b))} "
+                    "(it may reach 0); a weight must keep one sign class for every t"
                 )
             m = 0.5 * (a + b)
             stack += [(a, m), (m, b)]
@@ -137,11 +129,9 @@ class SignProof:
         """
         d = len(entries)
         if self.domain is None:
-            raise InputError(
-                self.where(
-                    f"{what}: a weight written by rows with expressions needs a declared "
-                    "period or constant_after (its definiteness is proven on that domain)"
-                )
+            raise self.where(
+                f"{what}: a weight written by rows with expressions needs a declared "
+                "period or constant_after (its definiteness is proven on that domain)"
             )
         a0, b0 = self.domain
         fns = [[compile_expression(entries[k][m]) for m in range(d)] for k in range(d)]
@@ -149,18 +139,16 @@ class SignProof:
         vals = np.stack([np.stack([fns[k][m](ts) for m in range(d)], -1) for k in range(d)], -2)
         if not np.all(np.isfinite(vals)):
             k = int(np.argmax(~np.all(np.isfinite(vals), axis=(1, 2))))
-            raise InputError(self.where(f"{what} is unbounded near t = {_fmt(ts[k])}"))
+            raise self.where(f"{what} is unbounded near t = {_fmt(ts[k])}")
         lam = np.linalg.eigvalsh(vals)
         sgn = 1 if lam[0, 0] > 0 else -1
         ext = lam[:, 0] if sgn > 0 else -lam[:, -1]
         if np.any(ext <= 0):
             k = int(np.argmax(ext <= 0))
-            raise InputError(
-                self.where(
-                    f"{what} is not {'positive' if sgn > 0 else 'negative'} definite at "
-                    f"t = {_fmt(ts[k])} (eigenvalues {lam[k, 0]:.4g} .. {lam[k, -1]:.4g}); a "
-                    "weight written by rows must stay definite (one sign class) for every t"
-                )
+            raise self.where(
+                f"{what} is not {'positive' if sgn > 0 else 'negative'} definite at "
+                f"t = {_fmt(ts[k])} (eigenvalues {lam[k, 0]:.4g} .. {lam[k, -1]:.4g}); a "
+                "weight written by rows must stay definite (one sign class) for every t"
             )
         stack = [
             (a0 + (b0 - a0) * k / SIGN_PIECES, a0 + (b0 - a0) * (k + 1) / SIGN_PIECES)
@@ -172,16 +160,14 @@ class SignProof:
             mid, rad = enclose_matrix(entries, a, b)
             if not np.all(np.isfinite(rad)):
                 if b - a < min_w:
-                    raise InputError(self.where(f"{what} is unbounded near t = {_fmt(a)}"))
+                    raise self.where(f"{what} is unbounded near t = {_fmt(a)}")
             else:
                 lam_lo = sym_min_eig_lower(sgn * mid, rad)
                 if lam_lo > 0:
                     continue
                 if b - a < min_w:
-                    raise InputError(
-                        self.where(
-                            f"cannot prove {what} stays definite near t = {_fmt(0.5 * (a + b))}"
-                        )
+                    raise self.where(
+                        f"cannot prove {what} stays definite near t = {_fmt(0.5 * (a + b))}"
                     )
             m = 0.5 * (a + b)
             stack += [(a, m), (m, b)]

@@ -290,34 +290,38 @@ def _check_parameters(n, d, seed, family, p_negative, v1_fraction, extra, k, cho
     require_positive("n", n, integer=True)
     require_positive("d", d, integer=True)
     if n < 2:
-        raise InputError("n: a network needs at least 2 agents")
+        raise InputError("a network needs at least 2 agents", field="n")
     if family not in FAMILIES:
-        raise InputError(f"family: unknown {family!r} (known: {', '.join(FAMILIES)})")
+        raise InputError(f"unknown {family!r} (known: {', '.join(FAMILIES)})", field="family")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed: must be a non-negative integer, got {seed!r}")
+        raise InputError(f"must be a non-negative integer, got {seed!r}", field="seed")
     if not 0.0 <= p_negative <= 1.0:
-        raise InputError(f"p_negative: must be in [0, 1], got {p_negative}")
+        raise InputError(f"must be in [0, 1], got {p_negative}", field="p_negative")
     if not 0.0 < v1_fraction <= 1.0:
-        raise InputError(f"v1_fraction: must be in (0, 1], got {v1_fraction}")
+        raise InputError(f"must be in (0, 1], got {v1_fraction}", field="v1_fraction")
     if not (extra >= 0 and np.isfinite(extra)):
-        raise InputError(f"extra: must be a non-negative number, got {extra}")
+        raise InputError(f"must be a non-negative number, got {extra}", field="extra")
     require_positive("k", k, integer=True)
     require_positive("chord_scale", chord_scale)
     if n > MAX_AGENTS:
-        raise InputError(f"n: {n} agents is more than every topology reader accepts ({MAX_AGENTS})")
+        raise InputError(
+            f"{n} agents is more than every topology reader accepts ({MAX_AGENTS})", field="n"
+        )
     if d > MAX_DIM:
-        raise InputError(f"d: {d} is more than every topology reader accepts ({MAX_DIM})")
+        raise InputError(f"{d} is more than every topology reader accepts ({MAX_DIM})", field="d")
     edges, need = generation_size(n, d, family, extra, k)
     if edges > MAX_EDGES:
         raise InputError(
-            f"n: about {edges:.3g} edges, more than every topology reader accepts ({MAX_EDGES}); "
-            "lower n, k or extra"
+            f"about {edges:.3g} edges, more than every topology reader accepts ({MAX_EDGES}); "
+            "lower n, k or extra",
+            field="n",
         )
     avail = available_memory()
     if need > 0.5 * avail:
         raise InputError(
-            f"n: generating needs about {format_bytes(need)} of memory, more than 50 % of the "
-            f"{format_bytes(avail)} available; lower n or d"
+            f"generating needs about {format_bytes(need)} of memory, more than 50 % of the "
+            f"{format_bytes(avail)} available; lower n or d",
+            field="n",
         )
 
 

@@ -163,10 +163,12 @@ def example_path(name: str = "") -> Path:
     root = _examples_root()
     target = (root / name).resolve()
     if root.resolve() not in (target, *target.parents):
-        raise InputError(f"example_path: {name!r} is outside the bundled examples")
+        raise InputError(f"{name!r} is outside the bundled examples", field="example_path")
     if not target.exists():
         known = sorted(p.name for p in root.glob("*.yaml"))
-        raise InputError(f"example_path: no example {name!r} (there are {', '.join(known)}, …)")
+        raise InputError(
+            f"no example {name!r} (there are {', '.join(known)}, …)", field="example_path"
+        )
     return target
 
 
@@ -186,7 +188,9 @@ def _examples_root() -> Path:
     checkout = Path(__file__).resolve().parents[2] / "examples"  # a checkout (editable)
     if (checkout / "g1.yaml").is_file():
         return checkout
-    raise InputError("example_path: the bundled examples are not installed with this package")
+    raise InputError(
+        "the bundled examples are not installed with this package", field="example_path"
+    )
 
 
 def _has_examples(bundled: Traversable) -> bool:
@@ -272,13 +276,14 @@ def copy_examples(dest: str | Path) -> list[Path]:
     dest = Path(dest)
     if dest.is_symlink() and not dest.exists():  # mkdir would say "File exists"
         raise InputError(
-            f"{dest}: a link to {str(dest.readlink())!r}, which does not exist (give a new or "
-            "empty folder, or the folder the link should name)"
+            f"a link to {str(dest.readlink())!r}, which does not exist (give a new or "
+            "empty folder, or the folder the link should name)",
+            field=str(dest),
         )
     if dest.exists() and not dest.is_dir():
-        raise InputError(f"{dest}: exists and is not a folder (give a new or empty folder)")
+        raise InputError("exists and is not a folder (give a new or empty folder)", field=str(dest))
     if dest.is_dir() and any(dest.iterdir()):
-        raise InputError(f"{dest}: the folder is not empty (give a new or empty folder)")
+        raise InputError("the folder is not empty (give a new or empty folder)", field=str(dest))
     root = _examples_root()
     names = example_files()
     written = []

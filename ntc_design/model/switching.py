@@ -35,41 +35,47 @@ class SwitchingTopology:
     def __post_init__(self) -> None:
         where = f"{self.source}: " if self.source else ""
         if not self.modes:
-            raise InputError(f"{where}modes: at least one mode is needed")
+            raise InputError("at least one mode is needed", field=f"{where}modes")
         first_name, first = next(iter(self.modes.items()))
         for name, top in self.modes.items():
             if top.dim != first.dim or top.n != first.n:
                 raise InputError(
-                    f"{where}modes.{name}: has N={top.n}, d={top.dim} but mode {first_name} "
-                    f"has N={first.n}, d={first.dim}; all modes must share the agents"
+                    f"has N={top.n}, d={top.dim} but mode {first_name} "
+                    f"has N={first.n}, d={first.dim}; all modes must share the agents",
+                    field=f"{where}modes.{name}",
                 )
             if [str(a) for a in top.labels] != [str(a) for a in first.labels]:
-                raise InputError(f"{where}modes.{name}: agent labels differ from mode {first_name}")
+                raise InputError(
+                    f"agent labels differ from mode {first_name}", field=f"{where}modes.{name}"
+                )
         if not self.schedule:
-            raise InputError(f"{where}schedule: must not be empty")
+            raise InputError("must not be empty", field=f"{where}schedule")
         for k, (m, dur) in enumerate(self.schedule):
             if m not in self.modes:
                 raise InputError(
-                    f"{where}schedule[{k}]: unknown mode {m!r} (modes: {', '.join(self.modes)})"
+                    f"unknown mode {m!r} (modes: {', '.join(self.modes)})",
+                    field=f"{where}schedule[{k}]",
                 )
             if not (dur > 0 and math.isfinite(dur)):
                 raise InputError(
-                    f"{where}schedule[{k}].duration: must be a finite positive number, got {dur}"
+                    f"must be a finite positive number, got {dur}",
+                    field=f"{where}schedule[{k}].duration",
                 )
         # every switching instant must be a distinct float: a period that overflows to
         # infinity, or a duration lost in rounding (1e308 + 0.02), would silently drop modes
         ends = np.cumsum([d for _, d in self.schedule])
         if not math.isfinite(float(ends[-1])):
             raise InputError(
-                f"{where}schedule: the period (sum of durations) overflows to infinity"
+                "the period (sum of durations) overflows to infinity", field=f"{where}schedule"
             )
         starts = np.concatenate([[0.0], ends[:-1]])
         lost = np.flatnonzero(ends <= starts)
         if lost.size:
             k = int(lost[0])
             raise InputError(
-                f"{where}schedule[{k}].duration: {self.schedule[k][1]!r} is lost in rounding "
-                f"next to the other durations: its switching instants collide at {float(starts[k])!r}"
+                f"{self.schedule[k][1]!r} is lost in rounding "
+                f"next to the other durations: its switching instants collide at {float(starts[k])!r}",
+                field=f"{where}schedule[{k}].duration",
             )
 
     @classmethod

@@ -87,8 +87,8 @@ class ExpressionTopology(ExpressionFamily):
         for e in data.edges:
             i, j = index[str(e.target)], index[str(e.source)]
 
-            def where(msg: str, f: str = e.field) -> str:
-                return f"{data.source}: {f}: {msg}" if data.source else f"{f}: {msg}"
+            def where(msg: str, f: str = e.field) -> InputError:
+                return InputError(msg, field=f"{data.source}: {f}" if data.source else f)
 
             cls_ = _prove_class(e.weight, data.dim, SignProof(where, dom), where)
             if data.period is not None and not e.weight.constant:
@@ -202,7 +202,7 @@ class ExpressionTopology(ExpressionFamily):
         if not np.all(np.isfinite(w)):
             k = int(np.argmax(~np.all(np.isfinite(w), axis=(1, 2, 3))))
             raise InputError(
-                f"{self.source or 'topology'}: a weight is not finite at t = {tl[k]:.6g}"
+                f"a weight is not finite at t = {tl[k]:.6g}", field=self.source or "topology"
             )
         return w
 
@@ -256,7 +256,7 @@ class ExpressionTopology(ExpressionFamily):
             got = top.classes[(e.i, e.j)]
             if got is not e.cls:
                 raise InputError(
-                    f"{e.field}: classified {got.value} at t = {ref:.6g}, proven {e.cls.value}"
+                    f"classified {got.value} at t = {ref:.6g}, proven {e.cls.value}", field=e.field
                 )
         return top
 
@@ -287,7 +287,7 @@ def _upper(e: sp.Expr) -> float:
     return bounds(enclose(e, t_ball(0.0, 0.0)))[1]
 
 
-def _check_periodic(w: ExprWeight, period: sp.Expr, where: Callable[[str], str]) -> None:
+def _check_periodic(w: ExprWeight, period: sp.Expr, where: Callable[[str], InputError]) -> None:
     """A(t + P) = A(t) symbolically (sympy), else the file is refused."""
     t = symbol("t")
     exprs: list[sp.Expr] = (
@@ -305,38 +305,34 @@ def _check_periodic(w: ExprWeight, period: sp.Expr, where: Callable[[str], str])
             ts = np.linspace(0, float(period), 33)
             v = fn(ts)
             k = int(np.argmax(np.abs(v)))
-            raise InputError(
-                where(
-                    f"{e} is not periodic with period {period} (A(t+P) − A(t) = {v[k]:.4g} at "
-                    f"t = {ts[k]:.4g})"
-                    if np.max(np.abs(v)) > 1e-12
-                    else f"cannot prove that {e} has period {period}"
-                )
+            raise where(
+                f"{e} is not periodic with period {period} (A(t+P) − A(t) = {v[k]:.4g} at "
+                f"t = {ts[k]:.4g})"
+                if np.max(np.abs(v)) > 1e-12
+                else f"cannot prove that {e} has period {period}"
             )
 
 
 def _prove_class(
-    w: ExprWeight, d: int, proof: SignProof, where: Callable[[str], str]
+    w: ExprWeight, d: int, proof: SignProof, where: Callable[[str], InputError]
 ) -> Definiteness:
     """The sign class of a weight, proven for every t of the domain."""
     t = symbol("t")
     if w.constant:
         m = np.array([[float(v) for v in r] for r in w.entries])
         if not is_symmetric(m):
-            raise InputError(where("weight is not symmetric (A_ij must equal A_ijᵀ)"))
+            raise where("weight is not symmetric (A_ij must equal A_ijᵀ)")
         c = classify(m)
         if c is Definiteness.INDEFINITE:
-            raise InputError(
-                where("weight is indefinite; it must be positive or negative (semi)definite")
-            )
+            raise where("weight is indefinite; it must be positive or negative (semi)definite")
         return c
     if w.form == "scale":
         base = np.asarray(w.base, dtype=float)
         if not is_symmetric(base):
-            raise InputError(where("matrix is not symmetric"))
+            raise where("matrix is not symmetric")
         c = classify(base)
         if c is Definiteness.INDEFINITE:
-            raise InputError(where("matrix is indefinite"))
+            raise where("matrix is indefinite")
         if c is Definiteness.ZERO:
             return c
         s = proof.scalar(w.scale, "scale")
@@ -353,7 +349,7 @@ def _prove_class(
         signs = [proof.scalar(w.entries[k][k], f"diag[{k}]") for k in range(d)]
         nz = {s for s in signs if s != 0}
         if len(nz) > 1:
-            raise InputError(where("diag has entries of both signs: the weight is indefinite"))
+            raise where("diag has entries of both signs: the weight is indefinite")
         if not nz:
             return Definiteness.ZERO
         sign = nz.pop()
@@ -366,10 +362,8 @@ def _prove_class(
         for col in range(k + 1, d):
             a, b = w.entries[k][col], w.entries[col][k]
             if a != b and sp.simplify(a - b) != 0:
-                raise InputError(
-                    where(
-                        f"weight is not symmetric: entry [{k}][{col}] = {a} but [{col}][{k}] = {b}"
-                    )
+                raise where(
+                    f"weight is not symmetric: entry [{k}][{col}] = {a} but [{col}][{k}] = {b}"
                 )
     del t
     lowest = proof.matrix(w.entries, "weight")

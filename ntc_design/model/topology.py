@@ -84,7 +84,7 @@ class Topology:
     def __post_init__(self) -> None:
         n, d = len(self.labels), self.dim
         if n < 1 or d < 1:
-            raise InputError(self._where("topology", "needs at least one agent and dim >= 1"))
+            raise self._error("topology", "needs at least one agent and dim >= 1")
         keys = list(self.weights.keys())
         e = len(keys)
         ij = np.array(keys, dtype=np.int64).reshape(e, 2)
@@ -92,13 +92,11 @@ class Topology:
         bad = np.flatnonzero((rows < 0) | (rows >= n) | (cols < 0) | (cols >= n))
         if bad.size:
             k = keys[bad[0]]
-            raise InputError(self._where(self.edge_field(*k), "agent index out of range"))
+            raise self._error(self.edge_field(*k), "agent index out of range")
         loop = np.flatnonzero(rows == cols)
         if loop.size:
             k = keys[loop[0]]
-            raise InputError(
-                self._where(self.edge_field(*k), "self-loop (an agent cannot listen to itself)")
-            )
+            raise self._error(self.edge_field(*k), "self-loop (an agent cannot listen to itself)")
         w = self._stack(keys, d)
         # Checks vectorised over all edges; the first offending edge is named.
         finite = np.all(np.isfinite(w), axis=(1, 2))
@@ -117,44 +115,36 @@ class Topology:
         for k in np.flatnonzero(~finite | out | (asym > SYM_RTOL * scale) | (codes == _INDEF)):
             f = self.edge_field(*keys[k])
             if not finite[k]:
-                raise InputError(self._where(f, "weight has a NaN or infinite entry"))
+                raise self._error(f, "weight has a NaN or infinite entry")
             if out[k]:
                 x = scale[k] if scale[k] > 2.0**MAGNITUDE_EXP else tiny[k]
-                raise InputError(
-                    self._where(
-                        f,
-                        f"weight has an entry of magnitude {x:.3g}, outside "
-                        f"[2^-{MAGNITUDE_EXP}, 2^{MAGNITUDE_EXP}] ≈ [5.5e-76, 1.8e75] (or 0): "
-                        "its sums and eigenvalues would overflow or underflow; rescale the weights",
-                    )
+                raise self._error(
+                    f,
+                    f"weight has an entry of magnitude {x:.3g}, outside "
+                    f"[2^-{MAGNITUDE_EXP}, 2^{MAGNITUDE_EXP}] ≈ [5.5e-76, 1.8e75] (or 0): "
+                    "its sums and eigenvalues would overflow or underflow; rescale the weights",
                 )
             if asym[k] > SYM_RTOL * scale[k]:
-                raise InputError(self._where(f, "weight is not symmetric (A_ij must equal A_ijᵀ)"))
+                raise self._error(f, "weight is not symmetric (A_ij must equal A_ijᵀ)")
             lam = np.linalg.eigvalsh(0.5 * (w[k] + w[k].T))
-            raise InputError(
-                self._where(
-                    f,
-                    f"weight is indefinite (eigenvalues {lam[0]:.4g} .. {lam[-1]:.4g}); "
-                    "a weight must be positive or negative (semi)definite",
-                )
+            raise self._error(
+                f,
+                f"weight is indefinite (eigenvalues {lam[0]:.4g} .. {lam[-1]:.4g}); "
+                "a weight must be positive or negative (semi)definite",
             )
         w.setflags(write=False)
         pos = {k: m for m, k in enumerate(keys)} if self.uncertainty else {}
         for key in self.uncertainty:
             if key not in pos:
-                raise InputError(
-                    self._where(self.edge_field(*key), "uncertainty on a missing edge")
-                )
+                raise self._error(self.edge_field(*key), "uncertainty on a missing edge")
             if not np.any(w[pos[key]]):
-                raise InputError(
-                    self._where(
-                        self.edge_field(*key),
-                        "uncertainty on a zero weight (its interval is {0}; remove the value)",
-                    )
+                raise self._error(
+                    self.edge_field(*key),
+                    "uncertainty on a zero weight (its interval is {0}; remove the value)",
                 )
         for key in self.loss:
             if key not in self.weights:
-                raise InputError(self._where(self.edge_field(*key), "loss on a missing edge"))
+                raise self._error(self.edge_field(*key), "loss on a missing edge")
         object.__setattr__(self, "weights", {k: w[m] for m, k in enumerate(keys)})
         object.__setattr__(self, "_arrays", EdgeArrays(rows, cols, w, codes))
 
@@ -174,16 +164,12 @@ class Topology:
             try:
                 a = np.array(a, dtype=float)
             except (TypeError, ValueError):
-                raise InputError(
-                    self._where(self.edge_field(*k), "weight has a non-numeric entry")
-                ) from None
+                raise self._error(self.edge_field(*k), "weight has a non-numeric entry") from None
             if a.shape != (d, d):
-                raise InputError(
-                    self._where(
-                        self.edge_field(*k), f"weight has shape {a.shape}, expected ({d}, {d})"
-                    )
+                raise self._error(
+                    self.edge_field(*k), f"weight has shape {a.shape}, expected ({d}, {d})"
                 )
-        raise InputError(self._where("edges", "weights could not be read"))  # unreachable
+        raise self._error("edges", "weights could not be read")  # unreachable
 
     # -- construction -------------------------------------------------------------
     @classmethod
@@ -227,10 +213,10 @@ class Topology:
         for j, i, a in edges:
             f = f"edge {j}->{i}"
             if str(j) not in index or str(i) not in index:
-                raise InputError(f"{f}: unknown agent label")
+                raise InputError("unknown agent label", field=f)
             key = (index[str(i)], index[str(j)])
             if key in weights:
-                raise InputError(f"{f}: duplicated edge")
+                raise InputError("duplicated edge", field=f)
             weights[key] = np.asarray(a, dtype=float)
         return cls(labels, dim, weights, name=name)
 
@@ -286,7 +272,7 @@ class Topology:
         keys = list(zip(rows.tolist(), cols.tolist(), strict=True))
         mapping = dict(zip(keys, w, strict=True))
         if len(mapping) != len(keys):
-            raise InputError(f"{source + ': ' if source else ''}edges: duplicated edge")
+            raise InputError("duplicated edge", field=f"{source + ': ' if source else ''}edges")
         unc: dict[tuple[int, int], float] = {}
         if uncertainty is not None:
             u = np.asarray(uncertainty, dtype=float)
@@ -375,8 +361,8 @@ class Topology:
             return f"edge {lab[j]}->{lab[i]}"
         return f"edge {j}->{i}"
 
-    def _where(self, f: str, msg: str) -> str:
-        return f"{self.source}: {f}: {msg}" if self.source else f"{f}: {msg}"
+    def _error(self, f: str, msg: str) -> InputError:
+        return InputError(msg, field=f"{self.source}: {f}" if self.source else f)
 
     @cached_property
     def _label_index(self) -> dict[str, int]:

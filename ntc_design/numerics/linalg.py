@@ -253,8 +253,9 @@ def require_dense(n: int, what: str, copies: float = 1.0, limit: float | None = 
     cap = DENSE_MAX_BYTES if limit is None else limit
     if need > cap:
         raise DenseRefused(
-            f"{what}: a dense {n}×{n} step needs about {need / 2**30:.1f} GiB "
-            f"(limit {cap / 2**30:.1f} GiB); refused — use the sparse path"
+            f"a dense {n}×{n} step needs about {need / 2**30:.1f} GiB "
+            f"(limit {cap / 2**30:.1f} GiB); refused — use the sparse path",
+            field=what,
         )
 
 
@@ -423,11 +424,12 @@ def require_sparse_factor(fill: CholeskyFill, what: str, factorisations: int = 1
     if fill.bytes > SPARSE_FACTOR_MAX_BYTES or flops > SPARSE_FACTOR_MAX_FLOPS:
         times = f"{factorisations} factorisations of " if factorisations > 1 else ""
         raise DenseRefused(
-            f"{what}: {times}the sparse Cholesky factor of this {fill.n}×{fill.n} matrix has "
+            f"{times}the sparse Cholesky factor of this {fill.n}×{fill.n} matrix has "
             f"{fill.nnz:.3g} non-zeros (about {fill.bytes / 2**30:.1f} GiB, limit "
             f"{SPARSE_FACTOR_MAX_BYTES / 2**30:.0f} GiB) and need {flops:.2g} flops "
             f"(limit {SPARSE_FACTOR_MAX_FLOPS:.2g}); refused — the network's symmetrised "
-            "graph fills in too much"
+            "graph fills in too much",
+            field=what,
         )
 
 

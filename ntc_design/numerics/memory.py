@@ -82,8 +82,8 @@ def _machine_memory() -> float:
         value = float(m.group(1)) * _UNITS[m.group(2).upper()] if m else 0.0
         if not value > 0 or not math.isfinite(value):
             raise InputError(
-                f"{MEMORY_ENV}: expected a positive size such as 8G or 8589934592, "
-                f"got {pinned[:40]!r}"
+                f"expected a positive size such as 8G or 8589934592, got {pinned[:40]!r}",
+                field=MEMORY_ENV,
             )
         return value
     try:

@@ -218,14 +218,18 @@ class ModeLaw:
 def _noise_matrix(f: Any, d: int) -> np.ndarray:
     """F of f(x) = F x: s·I for a number s (as the simulator's ScalarNoise), a d×d matrix."""
     if callable(f):
-        raise InputError("noise.f: a Python function cannot be exported; give a number or a matrix")
+        raise InputError(
+            "a Python function cannot be exported; give a number or a matrix", field="noise.f"
+        )
     arr = np.asarray(f, dtype=float)
     if arr.ndim == 0:
         return float(arr) * np.eye(d)
     if arr.shape != (d, d):
-        raise InputError(f"noise.f: expected a scalar or a {d}x{d} matrix, got shape {arr.shape}")
+        raise InputError(
+            f"expected a scalar or a {d}x{d} matrix, got shape {arr.shape}", field="noise.f"
+        )
     if not np.all(np.isfinite(arr)):
-        raise InputError("noise.f: an entry is not finite")
+        raise InputError("an entry is not finite", field="noise.f")
     return arr.copy()
 
 
@@ -276,7 +280,7 @@ def mode_law(
     known = {(str(lab[j]), str(lab[i])) for i, j in edges}
     for key in sig_by:
         if key not in known:
-            raise InputError(f"noise.sigma_edges: no edge {key[0]}->{key[1]} in {name}")
+            raise InputError(f"no edge {key[0]}->{key[1]} in {name}", field="noise.sigma_edges")
     position = {e: k for k, e in enumerate(top.edges)}
     e_n = len(edges)
     bd = np.zeros((n, d, d))
@@ -528,7 +532,7 @@ def make_law(
     names = [m.name for m in modes]
     for k, (m, _) in enumerate(schedule):
         if m not in names:
-            raise InputError(f"schedule[{k}]: unknown mode {m!r}")
+            raise InputError(f"unknown mode {m!r}", field=f"schedule[{k}]")
     code = gain if isinstance(gain, GainCode) else GainCode.of(gain)
     return AgentLaw(
         name=str(name),
@@ -570,8 +574,8 @@ def lossy_law(law: AgentLaw, losses: Mapping[tuple[int, int], float], policy: st
     """
     if policy not in LAW_POLICIES:
         raise InputError(
-            f"digital.policy: {policy!r} is not exported (the exported law runs "
-            f"{' or '.join(LAW_POLICIES)})"
+            f"{policy!r} is not exported (the exported law runs {' or '.join(LAW_POLICIES)})",
+            field="digital.policy",
         )
     modes = []
     for ml in law.modes:

@@ -81,7 +81,7 @@ class Digital:
     def __post_init__(self) -> None:
         h = require_number("digital.period", self.period)
         if not h > 0:
-            raise InputError(f"digital.period: must be a positive number, got {h!r}")
+            raise InputError(f"must be a positive number, got {h!r}", field="digital.period")
         object.__setattr__(self, "period", h)
         d = require_int("digital.delay", self.delay, minimum=0, maximum=MAX_DELAY)
         object.__setattr__(self, "delay", d)
@@ -114,13 +114,15 @@ class Digital:
         if isinstance(doc, Digital):
             return doc
         if not isinstance(doc, Mapping):
-            raise InputError("digital: expected {period: h, delay: D}")
+            raise InputError("expected {period: h, delay: D}", field="digital")
         known = ("period", "delay", "loss", "policy")
         unknown = sorted(str(k) for k in set(doc) - set(known))
         if unknown:
-            raise InputError(f"digital.{unknown[0]}: unknown field (known: {', '.join(known)})")
+            raise InputError(
+                f"unknown field (known: {', '.join(known)})", field=f"digital.{unknown[0]}"
+            )
         if "period" not in doc:
-            raise InputError("digital.period: missing")
+            raise InputError("missing", field="digital.period")
         return cls(
             doc["period"], doc.get("delay", 0), doc.get("loss", 0.0), doc.get("policy", "skip")
         )
@@ -147,12 +149,15 @@ class Digital:
         """
         h = self.period
         if h > t_end:
-            raise InputError(f"digital.period: h = {h:g} is longer than the horizon T = {t_end:g}")
+            raise InputError(
+                f"h = {h:g} is longer than the horizon T = {t_end:g}", field="digital.period"
+            )
         ratio = t_end / h
         if not ratio <= MAX_STEPS:
             raise InputError(
-                f"digital.period: T/h = {ratio:.3g} steps exceed the limit {MAX_STEPS:.0e}; "
-                "raise the period or shorten T"
+                f"T/h = {ratio:.3g} steps exceed the limit {MAX_STEPS:.0e}; "
+                "raise the period or shorten T",
+                field="digital.period",
             )
         k = max(1, round(ratio))
         if abs(k * h - t_end) <= WHOLE_RTOL * t_end:

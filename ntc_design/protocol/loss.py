@@ -52,10 +52,10 @@ def require_loss(name: str, value: object) -> float:
     0.1
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{name}: expected a loss probability in [0, 1), got {value!r:.60}")
+        raise InputError(f"expected a loss probability in [0, 1), got {value!r:.60}", field=name)
     p = real_float(name, value)
     if not math.isfinite(p) or not 0.0 <= p < 1.0:
-        raise InputError(f"{name}: a loss probability must be finite and in [0, 1), got {p!r}")
+        raise InputError(f"a loss probability must be finite and in [0, 1), got {p!r}", field=name)
     return p
 
 
@@ -80,7 +80,7 @@ def require_policy(name: str, value: object) -> LossPolicy:
     """
     if not isinstance(value, str) or value not in POLICIES:
         shown = repr(value) if not isinstance(value, str) else repr(value[:40])
-        raise InputError(f"{name}: unknown policy {shown} (known: {', '.join(POLICIES)})")
+        raise InputError(f"unknown policy {shown} (known: {', '.join(POLICIES)})", field=name)
     return cast("LossPolicy", value)
 
 
@@ -127,7 +127,7 @@ def edge_losses(
     known = {(str(labels[j]), str(labels[i])) for i, j in edges}
     for key, v in own.items():
         if key not in known:
-            raise InputError(f"{name}: no edge {key[0]}->{key[1]} in the topology")
+            raise InputError(f"no edge {key[0]}->{key[1]} in the topology", field=name)
         require_loss(f"{name} of edge {key[0]}->{key[1]}", v)
     return np.array(
         [float(own.get((str(labels[j]), str(labels[i])), p)) for i, j in edges], dtype=float

@@ -43,7 +43,7 @@ def certify_run(run: RunData) -> CertifyResult:
         return certify(run.topology(), theta, spec.margin, run.gain)
     noise = spec.noise
     if not noise.linear:
-        raise InputError(f"{run.path}: the digital certificate needs a linear f")
+        raise InputError("the digital certificate needs a linear f", field=str(run.path))
     return certify(
         run.topology(),
         theta,

@@ -174,7 +174,9 @@ SPEC_KEYS = (
 
 def _unrecorded_f(x: np.ndarray) -> np.ndarray:
     """A run's callable f (recorded as ``"callable"``): not linear, and never evaluated."""
-    raise InputError("noise.f: the run's f was a Python callable, which summary.json does not hold")
+    raise InputError(
+        "the run's f was a Python callable, which summary.json does not hold", field="noise.f"
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -229,7 +231,7 @@ class RunSummary:
             return cls._read(doc)
         except InputError as exc:
             if source:
-                raise InputError(f"{source}: {exc}") from None
+                raise InputError(f"{exc}", field=source) from None
             raise
 
     @classmethod
@@ -238,20 +240,20 @@ class RunSummary:
             raise InputError("expected a mapping")
         for key in ("parameters", "topologies"):
             if not isinstance(doc.get(key), Mapping) or not doc[key]:
-                raise InputError(f"{key}: missing field '{key}' (a mapping)")
+                raise InputError(f"missing field '{key}' (a mapping)", field=key)
         p = doc["parameters"]
         for key in ("theta", "margin", "gain"):
             if key not in p:
-                raise InputError(f"parameters.{key}: missing field 'parameters.{key}'")
+                raise InputError(f"missing field 'parameters.{key}'", field=f"parameters.{key}")
         for key in ("noise", "time_varying"):
             if p.get(key) is not None and not isinstance(p[key], Mapping):
-                raise InputError(f"parameters.{key}: expected a mapping")
+                raise InputError("expected a mapping", field=f"parameters.{key}")
         for key in ("run", "sample_paths"):
             if not isinstance(doc.get(key, {}), Mapping):
-                raise InputError(f"{key}: expected a mapping")
+                raise InputError("expected a mapping", field=key)
         scenario = doc.get("scenario")
         if scenario is not None and not isinstance(scenario, str):
-            raise InputError("scenario: expected a file name")
+            raise InputError("expected a file name", field="scenario")
         sp_ = dict(doc.get("sample_paths", {}))
         if sp_.get("stored"):
             window = sp_.get("late_window")
@@ -262,18 +264,20 @@ class RunSummary:
                 isinstance(v, (int, float)) and not isinstance(v, bool) for v in numbers
             ):
                 raise InputError(
-                    f"sample_paths: expected numbers {', '.join(SPREAD_KEYS)}, late_window"
+                    f"expected numbers {', '.join(SPREAD_KEYS)}, late_window", field="sample_paths"
                 )
         try:
             spec = SimulationSpec.from_document(_spec_document(p))
         except InputError as exc:
-            raise InputError(f"parameters.{exc}") from None
+            field = f"parameters.{exc.field}" if exc.field else "parameters"
+            raise InputError(*exc.parts, field=field, value=exc.value, option=exc.option) from None
         if isinstance(p.get("noise"), Mapping) and p["noise"].get("f") == "callable":
             spec = spec.replace(noise=replace(spec.noise, f=_unrecorded_f))
         top = _topology(doc["topologies"], p)
         if spec.theta.size != top.dim:
             raise InputError(
-                f"parameters.theta: {spec.theta.size} numbers, the topology has d = {top.dim}"
+                f"{spec.theta.size} numbers, the topology has d = {top.dim}",
+                field="parameters.theta",
             )
         return cls(spec, top, scenario, sp_, _digital_run(doc.get("digital")))
 
@@ -290,7 +294,7 @@ def _spec_document(p: Mapping[str, Any]) -> dict[str, Any]:
         if isinstance(edges, Mapping):
             pairs = [(str(k).partition("->"), v) for k, v in edges.items()]
             if any(not arrow for (_, arrow, _), _ in pairs):
-                raise InputError("noise.sigma_edges: expected keys 'FROM->TO'")
+                raise InputError("expected keys 'FROM->TO'", field="noise.sigma_edges")
             noise["sigma_edges"] = [{"from": a, "to": b, "sigma": v} for (a, _, b), v in pairs]
         if noise.get("f") == "callable":  # read as the default, then replaced (_read)
             noise.pop("f")
@@ -305,7 +309,7 @@ def _topology(tops_doc: Mapping[str, Any], p: Mapping[str, Any]) -> Topology | S
     tops = {}
     for k, v in tops_doc.items():
         if not isinstance(v, dict):
-            raise InputError(f"topologies.{k}: expected a topology")
+            raise InputError("expected a topology", field=f"topologies.{k}")
         tops[k] = Topology.from_data(parse_topology(v, f"topologies.{k}"))
     sched = p.get("schedule")
     if sched is not None:  # a switching run: [{mode, duration}, ...] over the topologies
@@ -317,7 +321,7 @@ def _topology(tops_doc: Mapping[str, Any], p: Mapping[str, Any]) -> Topology | S
             for s in sched
         )
         if not ok:
-            raise InputError("parameters.schedule: expected a list of {mode, duration}")
+            raise InputError("expected a list of {mode, duration}", field="parameters.schedule")
         return SwitchingTopology(
             tops,
             tuple((s["mode"], float(s["duration"])) for s in sched),
@@ -325,8 +329,8 @@ def _topology(tops_doc: Mapping[str, Any], p: Mapping[str, Any]) -> Topology | S
         )
     if len(tops) != 1:
         raise InputError(
-            "topologies: a run over a topology given as functions of t has no single topology "
-            "to certify"
+            "a run over a topology given as functions of t has no single topology to certify",
+            field="topologies",
         )
     return next(iter(tops.values()))
 
@@ -336,10 +340,10 @@ def _digital_run(doc: Any) -> DigitalRun | None:
     if doc is None:
         return None
     if not isinstance(doc, Mapping):
-        raise InputError("digital: expected a mapping")
+        raise InputError("expected a mapping", field="digital")
     for key in ("period", "delay", "steps"):
         if key not in doc:
-            raise InputError(f"digital.{key}: missing")
+            raise InputError("missing", field=f"digital.{key}")
     # the exact figures may be ±inf or NaN on a diverging run (written as such): numbers
     optional = {
         key: _optional_number(f"digital.{key}", doc.get(key))
@@ -348,7 +352,7 @@ def _digital_run(doc: Any) -> DigitalRun | None:
     loss = doc.get("loss")
     if loss is not None:
         if not isinstance(loss, Mapping):
-            raise InputError("digital.loss: expected {policy, p, offset}")
+            raise InputError("expected {policy, p, offset}", field="digital.loss")
         require_policy("digital.loss.policy", loss.get("policy"))
         require_loss("digital.loss.p", loss.get("p"))
         _optional_number("digital.loss.offset", loss.get("offset"))
@@ -370,7 +374,7 @@ def _optional_number(name: str, value: Any) -> float | None:
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"{name}: expected a number, got {type(value).__name__}")
+        raise InputError(f"expected a number, got {type(value).__name__}", field=name)
     return float(value)
 
 
@@ -386,10 +390,14 @@ def _rerun(d: Path) -> str:
 def _read_text(path: Path, d: Path) -> str:
     try:
         if path.stat().st_size > MAX_TEXT_BYTES:
-            raise InputError(f"{path}: larger than {MAX_TEXT_BYTES // 2**20} MiB; {_rerun(d)}")
+            raise InputError(
+                f"larger than {MAX_TEXT_BYTES // 2**20} MiB; {_rerun(d)}", field=str(path)
+            )
         return path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: unreadable ({exc.__class__.__name__}); {_rerun(d)}") from None
+        raise InputError(
+            f"unreadable ({exc.__class__.__name__}); {_rerun(d)}", field=str(path)
+        ) from None
 
 
 def _read_npz(path: Path, d: Path) -> dict[str, np.ndarray]:
@@ -400,26 +408,27 @@ def _read_npz(path: Path, d: Path) -> dict[str, np.ndarray]:
         limit = MEMORY_FRACTION * available_memory()
         if size > limit:
             raise InputError(
-                f"{path}: unpacks to {format_bytes(size)}, more than {format_bytes(limit)}; {_rerun(d)}"
+                f"unpacks to {format_bytes(size)}, more than {format_bytes(limit)}; {_rerun(d)}",
+                field=str(path),
             )
         with np.load(path, allow_pickle=False) as z:
             missing = [k for k in NPZ_KEYS if k not in z.files]
             if missing:
-                raise InputError(f"{path}: missing array {missing[0]!r}; {_rerun(d)}")
+                raise InputError(f"missing array {missing[0]!r}; {_rerun(d)}", field=str(path))
             npz = {k: z[k] for k in z.files}
     except InputError:
         raise
     except Exception as exc:  # noqa: BLE001 - BadZipFile, EOFError, zlib.error, ValueError...
         raise InputError(
-            f"{path}: not a readable .npz archive ({exc.__class__.__name__}); {_rerun(d)}"
+            f"not a readable .npz archive ({exc.__class__.__name__}); {_rerun(d)}", field=str(path)
         ) from None
     if npz["paths"].ndim != 3 or npz["t"].ndim != 1 or npz["labels"].ndim != 1:
-        raise InputError(f"{path}: arrays of the wrong shape; {_rerun(d)}")
+        raise InputError(f"arrays of the wrong shape; {_rerun(d)}", field=str(path))
     if npz["labels"].dtype.kind not in "UO" and npz["labels"].size:
-        raise InputError(f"{path}: labels are not text; {_rerun(d)}")
+        raise InputError(f"labels are not text; {_rerun(d)}", field=str(path))
     for k in ("t", "paths", "theta"):
         if npz[k].dtype.kind not in "fiu":
-            raise InputError(f"{path}: array {k!r} is not numeric; {_rerun(d)}")
+            raise InputError(f"array {k!r} is not numeric; {_rerun(d)}", field=str(path))
     return npz
 
 
@@ -443,45 +452,59 @@ def load_run(directory: str | Path) -> RunData:
     """
     d = Path(directory)
     if not d.is_dir():
-        raise InputError(f"{d}: no such directory; make it with: ntc simulate SCENARIO --out {d}")
+        raise InputError(
+            f"no such directory; make it with: ntc simulate SCENARIO --out {d}", field=str(d)
+        )
     for name in REQUIRED:
         if not (d / name).is_file():
-            raise InputError(f"{d}: missing {name}; make it with: ntc simulate SCENARIO --out {d}")
+            raise InputError(
+                f"missing {name}; make it with: ntc simulate SCENARIO --out {d}", field=str(d)
+            )
     try:
         summary = json.loads(_read_text(d / "summary.json", d))
     except (json.JSONDecodeError, RecursionError, ValueError) as exc:
         raise InputError(
-            f"{d}/summary.json: not valid JSON ({exc.__class__.__name__}); {_rerun(d)}"
+            f"not valid JSON ({exc.__class__.__name__}); {_rerun(d)}", field=f"{d}/summary.json"
         ) from None
     rows = list(csv.reader(io.StringIO(_read_text(d / "ms_error.csv", d))))
     if len(rows) < 2:
-        raise InputError(f"{d}/ms_error.csv: no data rows; {_rerun(d)}")
+        raise InputError(f"no data rows; {_rerun(d)}", field=f"{d}/ms_error.csv")
     header = rows[0]
     if not header or header[0] != "t" or len(set(header)) != len(header):
         raise InputError(
-            f"{d}/ms_error.csv: the header must start with 't' (unique columns); {_rerun(d)}"
+            f"the header must start with 't' (unique columns); {_rerun(d)}",
+            field=f"{d}/ms_error.csv",
         )
     for k, r in enumerate(rows[1:], start=2):
         if len(r) != len(header):
             raise InputError(
-                f"{d}/ms_error.csv: line {k} has {len(r)} values, the header {len(header)}; {_rerun(d)}"
+                f"line {k} has {len(r)} values, the header {len(header)}; {_rerun(d)}",
+                field=f"{d}/ms_error.csv",
             )
     try:
         data = np.array([[float(v) for v in r] for r in rows[1:]])
     except ValueError:
-        raise InputError(f"{d}/ms_error.csv: a value is not a number; {_rerun(d)}") from None
+        raise InputError(
+            f"a value is not a number; {_rerun(d)}", field=f"{d}/ms_error.csv"
+        ) from None
     if not np.all(np.isfinite(data[:, 0])) or np.any(np.diff(data[:, 0]) <= 0):
-        raise InputError(f"{d}/ms_error.csv: times are not finite and increasing; {_rerun(d)}")
+        raise InputError(
+            f"times are not finite and increasing; {_rerun(d)}", field=f"{d}/ms_error.csv"
+        )
     npz = _read_npz(d / "paths.npz", d)
     if npz["t"].shape[0] != data.shape[0]:
         raise InputError(
-            f"{d}: paths.npz has {npz['t'].shape[0]} save times, ms_error.csv {data.shape[0]} "
-            f"(files from different runs?); {_rerun(d)}"
+            f"paths.npz has {npz['t'].shape[0]} save times, ms_error.csv {data.shape[0]} "
+            f"(files from different runs?); {_rerun(d)}",
+            field=str(d),
         )
     try:
         record = RunSummary.from_document(summary, f"{d}/summary.json")
     except InputError as exc:
-        raise InputError(f"{exc}; {_rerun(d)}") from None
+        more = f"; {_rerun(d)}"
+        raise InputError(
+            *exc.parts, more, field=exc.field, value=exc.value, option=exc.option
+        ) from None
     table = {h: data[:, k] for k, h in enumerate(header)}
     run = RunData(d, summary, table["t"], table, npz, record)
     _check_files(run)
@@ -495,7 +518,7 @@ def _check_files(run: RunData) -> None:
     d = run.path
 
     def bad(field: str, what: str, file: str) -> InputError:
-        return InputError(f"{file}: {field}: {what}; {_rerun(d)}")
+        return InputError(f"{what}; {_rerun(d)}", field=f"{file}: {field}")
 
     top = run.record.topology
     labels = [str(a) for a in top.labels]

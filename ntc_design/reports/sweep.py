@@ -80,23 +80,26 @@ def _load(d: Path):
 
     for name in ("sweep.json", "results.csv", "results.parquet", "curves.parquet"):
         if not (d / name).is_file():
-            raise InputError(f"{d}: {name}: missing (run ntc sweep ... --out {d} first)")
+            raise InputError(f"missing (run ntc sweep ... --out {d} first)", field=f"{d}: {name}")
     try:
         man = json.loads((d / "sweep.json").read_text(encoding="utf-8"))
         res = pd.read_parquet(d / "results.parquet")
         curves = pd.read_parquet(d / "curves.parquet")
     except (OSError, ValueError, RecursionError) as exc:
-        raise InputError(f"{d}: cannot read the sweep tables ({exc.__class__.__name__})") from None
+        raise InputError(
+            f"cannot read the sweep tables ({exc.__class__.__name__})", field=str(d)
+        ) from None
     _check_results_csv(d / "results.csv", res)
     if not isinstance(man, dict):
-        raise InputError(f"{d}: sweep.json: expected a mapping")
+        raise InputError("expected a mapping", field=f"{d}: sweep.json")
     if len(res) == 0:
         raise InputError(
-            f"{d}: results.parquet: no points (the sweep has not run; run ntc sweep ... --out {d})"
+            f"no points (the sweep has not run; run ntc sweep ... --out {d})",
+            field=f"{d}: results.parquet",
         )
     keys = man.get("keys")
     if not isinstance(keys, list) or any(k not in res.columns for k in keys):
-        raise InputError(f"{d}: sweep.json: keys do not match results.parquet")
+        raise InputError("keys do not match results.parquet", field=f"{d}: sweep.json")
     return man, res, curves, [str(k) for k in keys]
 
 
@@ -110,16 +113,20 @@ def _check_results_csv(path: Path, res) -> None:
         csv = pd.read_csv(path)
     except (OSError, ValueError, UnicodeDecodeError) as exc:  # EmptyDataError, ParserError
         why = "empty" if isinstance(exc, pd.errors.EmptyDataError) else "not a results table"
-        raise InputError(f"{path}: {why} ({exc.__class__.__name__}); re-run ntc sweep") from None
+        raise InputError(
+            f"{why} ({exc.__class__.__name__}); re-run ntc sweep", field=str(path)
+        ) from None
     if list(csv.columns) != [str(c) for c in res.columns]:
-        raise InputError(f"{path}: its columns are not those of results.parquet; re-run ntc sweep")
+        raise InputError(
+            "its columns are not those of results.parquet; re-run ntc sweep", field=str(path)
+        )
     if len(csv) != len(res) or (
         "point" in res.columns
         and csv["point"].astype(str).tolist() != res["point"].astype(str).tolist()
     ):
         raise InputError(
-            f"{path}: {len(csv)} rows, not the {len(res)} points of results.parquet; re-run "
-            "ntc sweep"
+            f"{len(csv)} rows, not the {len(res)} points of results.parquet; re-run ntc sweep",
+            field=str(path),
         )
 
 

@@ -120,10 +120,12 @@ def check_gain(gain: Callable[[np.ndarray], np.ndarray], text: str, ts: np.ndarr
     """
     c = gain(ts)
     if c.shape != ts.shape or not np.all(np.isfinite(c)):
-        raise InputError(f"gain: {text!r} is not finite on [0, T]")
+        raise InputError(f"{text!r} is not finite on [0, T]", field="gain")
     if np.any(c < 0):
         k = int(np.argmax(c < 0))
-        raise InputError(f"gain: {text!r} is negative at t = {ts[k]:.6g}; c(t) must be >= 0")
+        raise InputError(
+            f"{text!r} is negative at t = {ts[k]:.6g}; c(t) must be >= 0", field="gain"
+        )
     return c
 
 
@@ -250,9 +252,10 @@ def check_exact_work(steps: float, nd: int) -> None:
     seconds = exact_seconds(steps, nd)
     if not math.isfinite(seconds) or seconds > MAX_EXACT_SECONDS:
         raise InputError(
-            f"method: the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd} "
+            f"the exact moments would take about {steps:.3g} RK4 steps on N·d = {nd} "
             f"(~{seconds:.3g} s, more than {MAX_EXACT_SECONDS:g} s); use method: mc, fewer "
-            "save times, a smaller gain or a shorter T"
+            "save times, a smaller gain or a shorter T",
+            field="method",
         )
 
 
@@ -407,12 +410,14 @@ def check_budget(est: Estimate, available: float | None = None) -> None:
     if not math.isfinite(total) or total > MEMORY_FRACTION * avail:
         name, fld, b = est.largest()
         raise InputError(
-            f"{fld}: the run would need about {format_bytes(total)} of memory "
+            f"the run would need about {format_bytes(total)} of memory "
             f"({name}: {format_bytes(b)}), more than {MEMORY_FRACTION:.0%} of the "
-            f"{format_bytes(avail)} available; {_HINTS.get(fld, f'reduce {fld}')}"
+            f"{format_bytes(avail)} available; {_HINTS.get(fld, f'reduce {fld}')}",
+            field=fld,
         )
     if est.path_steps > MAX_PATH_STEPS:
         raise InputError(
-            f"paths: {est.path_steps:.3g} path-steps (paths × {est.steps:.3g} steps) exceed "
-            f"the limit {MAX_PATH_STEPS:.0e}; reduce paths or T, or raise dt"
+            f"{est.path_steps:.3g} path-steps (paths × {est.steps:.3g} steps) exceed "
+            f"the limit {MAX_PATH_STEPS:.0e}; reduce paths or T, or raise dt",
+            field="paths",
         )

@@ -147,25 +147,27 @@ def check_digital_moments(nd_: int, delay: int, k_steps: int) -> None:
     """
     if nd_ > MOMENTS_MAX_ND:
         raise InputError(
-            f"method: exact moments at Nd = {nd_} exceed the limit Nd <= {MOMENTS_MAX_ND}; "
-            "use method: mc"
+            f"exact moments at Nd = {nd_} exceed the limit Nd <= {MOMENTS_MAX_ND}; use method: mc",
+            field="method",
         )
     need = digital_moments_bytes(nd_, delay)
     avail = MEMORY_SHARE * available_memory()
     if need > avail:
         raise InputError(
-            f"digital.delay: the exact moments of the delayed recursion hold "
+            f"the exact moments of the delayed recursion hold "
             f"((D+1)·Nd)² = ({delay + 1}·{nd_})² numbers, about {format_bytes(need)}, more "
             f"than {format_bytes(avail)} ({MEMORY_SHARE:.0%} of the memory available); "
-            "lower the delay or use method: mc"
+            "lower the delay or use method: mc",
+            field="digital.delay",
         )
     w = (delay + 1) * nd_
     secs = k_steps * (STEP_OVERHEAD + FLOP_SECONDS * 3.0 * w * nd_ * min(nd_, 64))
     if secs > MAX_SECONDS:
         raise InputError(
-            f"digital.period: the exact moments take K = {k_steps} steps of a "
+            f"the exact moments take K = {k_steps} steps of a "
             f"{w}×{w} recursion, roughly {secs:.3g} s (limit {MAX_SECONDS:g} s); "
-            "raise the period, shorten T or use method: mc"
+            "raise the period, shorten T or use method: mc",
+            field="digital.period",
         )
 
 

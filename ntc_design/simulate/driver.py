@@ -144,7 +144,8 @@ def simulate(
     spec = _resolve_spec(theta, spec, options)
     if spec.theta.size != topology.dim:
         raise InputError(
-            f"theta: expected {topology.dim} numbers (the state dimension d), got {spec.theta.size}"
+            f"expected {topology.dim} numbers (the state dimension d), got {spec.theta.size}",
+            field="theta",
         )
     engine = device_engine(spec, engine)
     cfun, gain_text = make_gain(spec.gain)
@@ -156,8 +157,9 @@ def simulate(
             require_sampled(topology)
         if spec.delta is not None:
             raise InputError(
-                "delta: a topology given as expressions of t takes Lemma 1's δ(t) at every t; "
-                "an explicit δ does not apply"
+                "a topology given as expressions of t takes Lemma 1's δ(t) at every t; "
+                "an explicit δ does not apply",
+                field="delta",
             )
         check_size(topology, spec, cfun, 1, 1, workers)
         gpu = engine if isinstance(engine, GpuEngine) else None  # A(t) runs locally otherwise
@@ -196,7 +198,8 @@ def check_stepping(topology: AnyTopology, spec: SimulationSpec) -> StepCheck | N
         return None
     if spec.theta.size != topology.dim:
         raise InputError(
-            f"theta: expected {topology.dim} numbers (the state dimension d), got {spec.theta.size}"
+            f"expected {topology.dim} numbers (the state dimension d), got {spec.theta.size}",
+            field="theta",
         )
     cfun, gain_text = make_gain(spec.gain)
     fixed = cast("Topology | SwitchingTopology | TimeVaryingTopology", topology)
@@ -405,8 +408,8 @@ def _resolve_spec(theta, spec: SimulationSpec | None, options: dict) -> Simulati
         theta, spec = None, theta
     if spec is None:
         if theta is None:
-            raise InputError("theta: missing")
+            raise InputError("missing", field="theta")
         return SimulationSpec.build(theta, **options)
     if theta is not None or options:
-        raise InputError("simulate: give a SimulationSpec or theta with options, not both")
+        raise InputError("give a SimulationSpec or theta with options, not both", field="simulate")
     return spec

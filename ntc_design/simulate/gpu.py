@@ -83,15 +83,16 @@ def load_cuda() -> Any:
         from numba import cuda
     except ImportError as exc:  # numba-cuda without its CUDA bindings, or a broken install
         raise InputError(
-            f"device: gpu: numba-cuda does not import ({one_line(str(exc))}); "
-            f"reinstall with {INSTALL}"
+            f"gpu: numba-cuda does not import ({one_line(str(exc))}); reinstall with {INSTALL}",
+            field="device",
         ) from None
     if _simulating(cuda):
         return cuda
     if sim:  # numba.cuda was imported before the variable was set: it keeps the device
         raise InputError(
-            f"device: {SIMULATOR_ENV}=1 was set after numba.cuda was imported in this "
-            "process; set it before starting Python"
+            f"{SIMULATOR_ENV}=1 was set after numba.cuda was imported in this "
+            "process; set it before starting Python",
+            field="device",
         )
     if not cuda.is_available():
         raise InputError(f"gpu: {_why_unavailable()}; use ", CPU, field="device")
@@ -99,8 +100,9 @@ def load_cuda() -> Any:
 
     if not nvvm.is_available():
         raise InputError(
-            "device: gpu: numba-cuda finds no NVVM (the CUDA compiler of the toolkit); "
-            f"install the gpu extra ({INSTALL}), which brings it"
+            "gpu: numba-cuda finds no NVVM (the CUDA compiler of the toolkit); "
+            f"install the gpu extra ({INSTALL}), which brings it",
+            field="device",
         )
     return cuda
 
@@ -179,7 +181,9 @@ class GpuEngine:
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:
-            raise InputError(f"layout: expected one of {', '.join(LAYOUTS)}, got {self.layout!r}")
+            raise InputError(
+                f"expected one of {', '.join(LAYOUTS)}, got {self.layout!r}", field="layout"
+            )
 
     def describe(self) -> dict:
         """What runs the work, for summaries.
@@ -250,12 +254,13 @@ def check_supported(spec: PathBlocks) -> None:
     """
     if spec.rng != "xoshiro":
         raise InputError(
-            "rng: numpy stays on the CPU (device: gpu draws xoshiro256** normals in the kernel)"
+            "numpy stays on the CPU (device: gpu draws xoshiro256** normals in the kernel)",
+            field="rng",
         )
     if spec.scheme != "explicit":
-        raise InputError("scheme: implicit runs on the CPU only (device: cpu)")
+        raise InputError("implicit runs on the CPU only (device: cpu)", field="scheme")
     if spec.callable_f():
-        raise InputError("noise.f: a callable f runs on the CPU only (device: cpu)")
+        raise InputError("a callable f runs on the CPU only (device: cpu)", field="noise.f")
 
 
 __all__ = [

@@ -186,8 +186,9 @@ class ImplicitSolver:
             )  # fmt: skip
             if info != 0:
                 raise InputError(
-                    f"scheme: implicit: GMRES did not solve (I + c h L_B) y = b to {GMRES_RTOL:g} "
-                    f"at c·h = {self.ch:.4g} (‖D⁻¹O‖_∞ = {self.q:.3g}); use a smaller ds"
+                    f"implicit: GMRES did not solve (I + c h L_B) y = b to {GMRES_RTOL:g} "
+                    f"at c·h = {self.ch:.4g} (‖D⁻¹O‖_∞ = {self.q:.3g}); use a smaller ds",
+                    field="scheme",
                 )
             out[:, k] = y
         return out.reshape(b.shape)

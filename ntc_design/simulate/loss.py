@@ -171,7 +171,8 @@ def mean_offset(s: ModeSystem, theta: np.ndarray, loss: np.ndarray, policy: str)
         return np.linalg.solve(mat, rhs)
     except np.linalg.LinAlgError:
         raise InputError(
-            "digital.loss: L_δ + Σ_e (1 − p_e) L_e is singular; the mean has no unique limit"
+            "L_δ + Σ_e (1 − p_e) L_e is singular; the mean has no unique limit",
+            field="digital.loss",
         ) from None
 
 
@@ -198,16 +199,17 @@ def check_loss_moments(nd_: int, delay: int, n_edges: int, d: int, policy: str) 
     """
     if nd_ > MOMENTS_MAX_ND:
         raise InputError(
-            f"method: exact moments at Nd = {nd_} exceed the limit Nd <= {MOMENTS_MAX_ND}; "
-            "use method: mc"
+            f"exact moments at Nd = {nd_} exceed the limit Nd <= {MOMENTS_MAX_ND}; use method: mc",
+            field="method",
         )
     w = loss_width(nd_, delay, n_edges, d, policy)
     need = LOSS_COPIES * 8.0 * (w * w + (n_edges * d) ** 2)
     avail = MEMORY_SHARE * available_memory()
     if need > avail:
         raise InputError(
-            f"digital.loss: the exact moments with lossy links hold W² = {w}² numbers, about "
-            f"{format_bytes(need)}, more than {format_bytes(avail)}; use method: mc"
+            f"the exact moments with lossy links hold W² = {w}² numbers, about "
+            f"{format_bytes(need)}, more than {format_bytes(avail)}; use method: mc",
+            field="digital.loss",
         )
 
 

@@ -256,7 +256,9 @@ def lossy_mc_spec(mspec: MonteCarloSpec, plan, device: str = "cpu") -> LossMonte
     """
     s = mspec.mode_systems()[0]
     if s.f is not None:
-        raise InputError("noise.f: lossy links need a linear f (f·x or F x) in the Monte Carlo")
+        raise InputError(
+            "lossy links need a linear f (f·x or F x) in the Monte Carlo", field="noise.f"
+        )
     return LossMonteCarloSpec(
         system=s,
         grid=mspec.grid,

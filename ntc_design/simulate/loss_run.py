@@ -173,8 +173,9 @@ def loss_plan(
         return None
     if not single or len(systems) != 1:
         raise InputError(
-            "digital.loss: lossy links are modelled on one fixed topology (not a switching "
-            "set or a sampled A(t))"
+            "lossy links are modelled on one fixed topology (not a switching "
+            "set or a sampled A(t))",
+            field="digital.loss",
         )
     s = systems[0]
     edges = list(zip(s.dst.tolist(), s.src.tolist(), strict=True))

@@ -76,8 +76,9 @@ def check_moments_size(nd_: int) -> None:
         Nd is above the limit."""
     if nd_ > MOMENTS_MAX_ND:
         raise InputError(
-            f"method: exact moments at Nd = {nd_} need about {moments_memory(nd_) / 2**30:.1f} GB "
-            f"(dense Nd×Nd second moments; limit Nd <= {MOMENTS_MAX_ND}); use method: mc"
+            f"exact moments at Nd = {nd_} need about {moments_memory(nd_) / 2**30:.1f} GB "
+            f"(dense Nd×Nd second moments; limit Nd <= {MOMENTS_MAX_ND}); use method: mc",
+            field="method",
         )
 
 

@@ -129,7 +129,7 @@ class MatrixNoise(StateNoise):
         """
         if self.f.shape != (d, d):
             raise InputError(
-                f"noise.f: expected a scalar or a {d}x{d} matrix, got shape {self.f.shape}"
+                f"expected a scalar or a {d}x{d} matrix, got shape {self.f.shape}", field="noise.f"
             )
         return self.f
 
@@ -178,13 +178,14 @@ class CallableNoise(StateNoise):
                 out = np.asarray(self.fn(probe + 1.0))
         except Exception as exc:  # noqa: BLE001 - user code
             raise InputError(
-                f"noise.f: calling it on an array of shape {probe.shape} failed "
-                f"({exc.__class__.__name__})"
+                f"calling it on an array of shape {probe.shape} failed ({exc.__class__.__name__})",
+                field="noise.f",
             ) from None
         if out.shape != probe.shape:
             raise InputError(
-                f"noise.f: returned shape {out.shape} for input shape {probe.shape}; it must "
-                "return the same shape"
+                f"returned shape {out.shape} for input shape {probe.shape}; it must "
+                "return the same shape",
+                field="noise.f",
             )
 
 
@@ -289,41 +290,45 @@ def noise_from_document(doc: Any) -> NoiseModel:
     if doc is None:
         return NoiseModel()
     if not isinstance(doc, Mapping):
-        raise InputError("noise: expected {sigma, f, sigma_edges}")
+        raise InputError("expected {sigma, f, sigma_edges}", field="noise")
     extra = sorted(str(k) for k in set(doc) - {"sigma", "f", "sigma_edges"})
     if extra:
-        raise InputError(f"noise.{extra[0]}: unknown field (allowed: sigma, f, sigma_edges)")
+        raise InputError(
+            "unknown field (allowed: sigma, f, sigma_edges)", field=f"noise.{extra[0]}"
+        )
     sigma = require_number("noise.sigma", doc.get("sigma", SIGMA), minimum=0.0, bound=MAX_MAGNITUDE)
     f = doc.get("f", F_SCALE)
     if isinstance(f, list):
         for r, row in enumerate(f):
             if not isinstance(row, list):
-                raise InputError(f"noise.f[{r}]: expected a row (a list of numbers)")
+                raise InputError("expected a row (a list of numbers)", field=f"noise.f[{r}]")
             if len(row) != len(f):
                 raise InputError(
-                    f"noise.f: expected a square matrix, row {r} has {len(row)} of {len(f)} entries"
+                    f"expected a square matrix, row {r} has {len(row)} of {len(f)} entries",
+                    field="noise.f",
                 )
             for c, v in enumerate(row):
                 require_number(f"noise.f[{r}][{c}]", v, bound=MAX_MAGNITUDE)
         f = np.asarray(f, dtype=float) if f else f
     elif isinstance(f, bool) or not isinstance(f, (int, float)):
-        raise InputError(f"noise.f: expected a number or a d×d matrix, got {f!r}"[:200])
+        raise InputError(f"expected a number or a d×d matrix, got {f!r}"[:192], field="noise.f")
     else:
         require_number("noise.f", f, bound=MAX_MAGNITUDE)
     edges = doc.get("sigma_edges") or []
     if not isinstance(edges, list):
-        raise InputError("noise.sigma_edges: expected a list of {from, to, sigma}")
+        raise InputError("expected a list of {from, to, sigma}", field="noise.sigma_edges")
     sig: dict[tuple, float] = {}
     for k, e in enumerate(edges):
         if not isinstance(e, Mapping) or set(e) != {"from", "to", "sigma"}:
-            raise InputError(f"noise.sigma_edges[{k}]: expected {{from, to, sigma}}")
+            raise InputError("expected {from, to, sigma}", field=f"noise.sigma_edges[{k}]")
         for end in ("from", "to"):
             if isinstance(e[end], bool) or not isinstance(e[end], (int, str)):
-                raise InputError(f"noise.sigma_edges[{k}].{end}: expected an agent label")
+                raise InputError("expected an agent label", field=f"noise.sigma_edges[{k}].{end}")
         key = (e["from"], e["to"])
         if key in sig:
             raise InputError(
-                f"noise.sigma_edges[{k}]: edge {quote(key[0])}->{quote(key[1])} listed twice"
+                f"edge {quote(key[0])}->{quote(key[1])} listed twice",
+                field=f"noise.sigma_edges[{k}]",
             )
         sig[key] = require_number(
             f"noise.sigma_edges[{k}].sigma", e["sigma"], minimum=0.0, bound=MAX_MAGNITUDE

@@ -60,17 +60,17 @@ def check_vector(
     every entry at most ``bound`` in magnitude if given."""
     if isinstance(values, np.ndarray):
         if values.dtype.kind not in "iuf":
-            raise InputError(f"{name}: expected numbers, got an array of {values.dtype}")
+            raise InputError(f"expected numbers, got an array of {values.dtype}", field=name)
         arr = values.astype(float).reshape(-1)
     else:
         if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Sequence):
-            raise InputError(f"{name}: expected a list of numbers, got {type(values).__name__}")
+            raise InputError(f"expected a list of numbers, got {type(values).__name__}", field=name)
         if len(values) > max_size:
-            raise InputError(f"{name}: {len(values)} entries, more than the limit {max_size}")
+            raise InputError(f"{len(values)} entries, more than the limit {max_size}", field=name)
         for k, v in enumerate(values):
             if isinstance(v, bool) or not isinstance(v, numbers.Real):
                 what = "a nested list" if isinstance(v, (list, tuple)) else repr(v)[:40]
-                raise InputError(f"{name}[{k}]: expected a number, got {what}")
+                raise InputError(f"expected a number, got {what}", field=f"{name}[{k}]")
         try:
             arr = np.asarray(values, dtype=float).reshape(-1)
         except OverflowError:  # an integer beyond the float range: name its entry
@@ -78,15 +78,15 @@ def check_vector(
                 real_float(f"{name}[{k}]", v)
             raise  # pragma: no cover - one of them overflowed
     if arr.size > max_size:
-        raise InputError(f"{name}: {arr.size} entries, more than the limit {max_size}")
+        raise InputError(f"{arr.size} entries, more than the limit {max_size}", field=name)
     bad = ~np.isfinite(arr)
     if bad.any():
         k = int(np.argmax(bad))
-        raise InputError(f"{name}[{k}]: must be finite, got {float(arr[k])!r}")
+        raise InputError(f"must be finite, got {float(arr[k])!r}", field=f"{name}[{k}]")
     if bound is not None and np.any(np.abs(arr) > bound):
         k = int(np.argmax(np.abs(arr) > bound))
         raise InputError(
-            f"{name}[{k}]: must be at most {bound:g} in magnitude, got {float(arr[k])!r}"
+            f"must be at most {bound:g} in magnitude, got {float(arr[k])!r}", field=f"{name}[{k}]"
         )
     arr.setflags(write=False)
     return arr
@@ -108,20 +108,22 @@ def check_states(values) -> np.ndarray:
         for k, row in enumerate(values):
             if not isinstance(row, (list, tuple)):
                 raise InputError(
-                    f"initial[{k}]: expected a state (a list of d numbers) like "
-                    f"initial[{first}], got {repr(row)[:40]}"
+                    f"expected a state (a list of d numbers) like "
+                    f"initial[{first}], got {repr(row)[:40]}",
+                    field=f"initial[{k}]",
                 )
             if len(row) != width:
                 raise InputError(
-                    f"initial[{k}]: {len(row)} numbers, but initial[{first}] has {width}; "
-                    "every state has d numbers"
+                    f"{len(row)} numbers, but initial[{first}] has {width}; "
+                    "every state has d numbers",
+                    field=f"initial[{k}]",
                 )
             for j, v in enumerate(row):
                 if isinstance(v, (list, tuple)):
-                    raise InputError(f"initial[{k}]: expected d numbers, got a nested list")
+                    raise InputError("expected d numbers, got a nested list", field=f"initial[{k}]")
                 require_number(f"initial[{k}][{j}]", v, bound=MAX_MAGNITUDE)
         if len(values) * width > MAX_VECTOR:
-            raise InputError(f"initial: more than the limit {MAX_VECTOR} numbers")
+            raise InputError(f"more than the limit {MAX_VECTOR} numbers", field="initial")
         arr = np.array(values, dtype=float).reshape(len(values), width)
         arr.setflags(write=False)
         return arr
@@ -139,21 +141,21 @@ class SaveAt:
     def _listed(self) -> np.ndarray:
         # the listed times (the constructor made sure that every or times is given)
         if self.times is None:
-            raise InputError("save_times: not given")
+            raise InputError("not given", field="save_times")
         return self.times
 
     def __post_init__(self) -> None:
         if (self.every is None) == (self.times is None):
-            raise InputError("save_every: give save_every or save_times (exactly one)")
+            raise InputError("give save_every or save_times (exactly one)", field="save_every")
         if self.every is not None:
             require_positive("save_every", self.every)
             object.__setattr__(self, "every", float(self.every))
         else:
             arr = check_vector("save_times", self.times)
             if arr.size == 0:
-                raise InputError("save_times: expected at least one time")
+                raise InputError("expected at least one time", field="save_times")
             if np.any(arr < 0):
-                raise InputError("save_times: times must be >= 0")
+                raise InputError("times must be >= 0", field="save_times")
             object.__setattr__(self, "times", arr)
 
     def count(self, t_end: float) -> float:
@@ -195,7 +197,7 @@ class SaveAt:
         if self.every is not None:
             return np.unique(np.concatenate([np.arange(0.0, t_end, self.every), [t_end]]))
         if np.any(self._listed() > t_end):
-            raise InputError(f"save_times: expected times in [0, T={t_end:g}]")
+            raise InputError(f"expected times in [0, T={t_end:g}]", field="save_times")
         return np.unique(np.concatenate([[0.0], self.times]))
 
 
@@ -213,13 +215,14 @@ class Stepping:
 
     def __post_init__(self) -> None:
         if self.kind not in choices(SteppingKind):
-            raise InputError(f"stepping: must be uniform or intrinsic, got {self.kind!r}")
+            raise InputError(f"must be uniform or intrinsic, got {self.kind!r}", field="stepping")
         if self.scheme not in choices(Scheme):
-            raise InputError(f"scheme: must be explicit or implicit, got {self.scheme!r}")
+            raise InputError(f"must be explicit or implicit, got {self.scheme!r}", field="scheme")
         if self.scheme == "implicit" and self.kind != "intrinsic":
             raise InputError(
-                "scheme: implicit needs stepping: intrinsic (c·h constant, so (I + c h L_B) "
-                "is factorised once per mode)"
+                "implicit needs stepping: intrinsic (c·h constant, so (I + c h L_B) "
+                "is factorised once per mode)",
+                field="scheme",
             )
         require_positive("dt", self.dt)
         if self.ds is not None:
@@ -272,9 +275,9 @@ class MonteCarlo:
         require_int("store_paths", self.store_paths, minimum=0, maximum=MAX_PATHS)
         check_workers(self.workers)
         if self.rng not in choices(Rng):
-            raise InputError(f"rng: expected xoshiro or numpy, got {self.rng!r}")
+            raise InputError(f"expected xoshiro or numpy, got {self.rng!r}", field="rng")
         if self.device not in DEVICES:
-            raise InputError(f"device: expected cpu or gpu, got {self.device!r}")
+            raise InputError(f"expected cpu or gpu, got {self.device!r}", field="device")
         if self.device == "gpu" and self.rng == "numpy":
             raise InputError(
                 "numpy stays on the CPU (device: gpu draws xoshiro256** normals in the "
@@ -302,7 +305,7 @@ class UniformInitial:
         lo = require_number("initial.uniform[0]", self.lo, bound=MAX_MAGNITUDE)
         hi = require_number("initial.uniform[1]", self.hi, bound=MAX_MAGNITUDE)
         if not lo < hi:
-            raise InputError(f"initial.uniform: need lo < hi, got [{lo:g}, {hi:g}]")
+            raise InputError(f"need lo < hi, got [{lo:g}, {hi:g}]", field="initial.uniform")
         require_int("initial.seed", self.seed, minimum=0, maximum=MAX_SEED)
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)

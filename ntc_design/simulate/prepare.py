@@ -89,7 +89,7 @@ def make_gain(
     if isinstance(gain, str):
         return ExpressionGain(gain, field_name), gain
     if not callable(gain):
-        raise InputError(f"{field_name}: expected an expression in t or a callable")
+        raise InputError("expected an expression in t or a callable", field=field_name)
 
     def c(t):  # a constant expression returns a scalar: broadcast it
         with np.errstate(all="ignore"):  # overflow shows up as a non-finite value, checked
@@ -125,24 +125,29 @@ def _modes(
     t_end, th, margin = spec.T, spec.theta, spec.margin
     if spec.resample is not None and not isinstance(topology, TimeVaryingTopology):
         raise InputError(
-            "resample: applies only to a topology given as functions of t, not to a fixed or switching topology"
+            "applies only to a topology given as functions of t, not to a fixed or switching topology",
+            field="resample",
         )
     if isinstance(topology, SwitchingTopology):
         durs = np.array([dur for _, dur in topology.schedule], dtype=float)
         per = float(sum(durs.tolist()))  # Python floats overflow to inf without a warning
         if not np.isfinite(per):
-            raise InputError("schedule: the period (sum of durations) overflows to infinity")
+            raise InputError(
+                "the period (sum of durations) overflows to infinity", field="schedule"
+            )
         if np.any(durs < 1e-12 * per):
             k = int(np.argmax(durs < 1e-12 * per))
             raise InputError(
-                f"schedule[{k}].duration: {durs[k]:g} is below 1e-12 of the period {per:g}; "
-                "switching instants would collide in floating point"
+                f"{durs[k]:g} is below 1e-12 of the period {per:g}; "
+                "switching instants would collide in floating point",
+                field=f"schedule[{k}].duration",
             )
         n_seg = np.ceil(t_end / per) * len(durs)
         if n_seg > MAX_SEGMENTS:
             raise InputError(
-                f"schedule: {n_seg:.3g} switching segments on [0, T={t_end:g}] exceed the limit "
-                f"{MAX_SEGMENTS:.0e}; shorten T or lengthen the durations"
+                f"{n_seg:.3g} switching segments on [0, T={t_end:g}] exceed the limit "
+                f"{MAX_SEGMENTS:.0e}; shorten T or lengthen the durations",
+                field="schedule",
             )
         names = list(topology.modes)
         segments = [(a, b, names.index(m)) for a, b, m in topology.segments(t_end)]
@@ -160,8 +165,9 @@ def _modes(
         count = np.ceil(t_end / step)
         if count > MAX_REDESIGNS:
             raise InputError(
-                f"resample: {count:.3g} re-designs on [0, T={t_end:g}] exceed the limit "
-                f"{MAX_REDESIGNS}; raise resample or shorten T"
+                f"{count:.3g} re-designs on [0, T={t_end:g}] exceed the limit "
+                f"{MAX_REDESIGNS}; raise resample or shorten T",
+                field="resample",
             )
         ts = np.arange(0.0, t_end, step)
         names = [f"t={t:g}" for t in ts]
@@ -181,11 +187,11 @@ def _modes(
             [note],
         )
     if not isinstance(topology, Topology):
-        raise InputError(f"topology: expected a Topology, got {type(topology).__name__}")
+        raise InputError(f"expected a Topology, got {type(topology).__name__}", field="topology")
     name = topology.name or "topology"
     if protocol is not None:  # a kept protocol (B_i, δ, x0) on these weights
         if protocol.topology is not topology:
-            raise InputError("protocol: its topology must be the topology simulated")
+            raise InputError("its topology must be the topology simulated", field="protocol")
         return [name], lambda: {name: protocol}, [(0.0, t_end, 0)], []
     return (
         [name],

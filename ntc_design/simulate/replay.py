@@ -37,12 +37,14 @@ def _normals(law: AgentLaw, normals, steps: int, paths: int) -> tuple[np.ndarray
     z = z.reshape(1, -1) if z.ndim == 1 else z
     if z.ndim != 2 or z.shape[0] != paths:
         raise InputError(
-            f"normals: expected {paths} row(s) of normals, one per path, got shape {z.shape}"
+            f"expected {paths} row(s) of normals, one per path, got shape {z.shape}",
+            field="normals",
         )
     if z.shape[1] != offsets[-1]:
         raise InputError(
-            f"normals: {steps} steps need {int(offsets[-1])} normals per path (2 per edge of "
-            f"each step's mode), got {z.shape[1]}"
+            f"{steps} steps need {int(offsets[-1])} normals per path (2 per edge of "
+            f"each step's mode), got {z.shape[1]}",
+            field="normals",
         )
     return z, offsets
 
@@ -54,21 +56,22 @@ def _arrivals(law: AgentLaw, arrivals, steps: int, paths: int) -> tuple[np.ndarr
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     if not law.lossy:
         if arrivals is not None:
-            raise InputError("arrivals: the law is lossless; it reads no arrival flags")
+            raise InputError("the law is lossless; it reads no arrival flags", field="arrivals")
         return np.ones((paths, 0), dtype=bool), offsets
     if arrivals is None:
         raise InputError(
-            f"arrivals: the law runs on lossy links ({law.policy}); give E flags per step"
+            f"the law runs on lossy links ({law.policy}); give E flags per step", field="arrivals"
         )
     a = np.asarray(arrivals)
     a = a.reshape(1, -1) if a.ndim == 1 else a
     if a.ndim != 2 or a.shape[0] != paths or a.shape[1] != offsets[-1]:
         raise InputError(
-            f"arrivals: {steps} steps need {int(offsets[-1])} flags per path (1 per edge of "
-            f"each step's mode), got shape {a.shape}"
+            f"{steps} steps need {int(offsets[-1])} flags per path (1 per edge of "
+            f"each step's mode), got shape {a.shape}",
+            field="arrivals",
         )
     if a.dtype.kind not in "biuf" or not np.all((a == 0) | (a == 1)):
-        raise InputError("arrivals: an arrival flag is not 0 or 1")
+        raise InputError("an arrival flag is not 0 or 1", field="arrivals")
     return a == 1, offsets
 
 
@@ -76,7 +79,9 @@ def _states(law: AgentLaw, x_init) -> tuple[np.ndarray, bool]:
     x = np.asarray(x_init, dtype=float)
     nd_ = law.n * law.dim
     if x.shape[-1:] != (nd_,) or x.ndim > 2:
-        raise InputError(f"initial: expected N·d = {nd_} numbers (a row per path), got {x.shape}")
+        raise InputError(
+            f"expected N·d = {nd_} numbers (a row per path), got {x.shape}", field="initial"
+        )
     return x.reshape(-1, law.n, law.dim).copy(), x.ndim == 1
 
 
@@ -150,7 +155,7 @@ def replay(
         K, or c(t_k) not finite.
     """
     if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-        raise InputError(f"steps: expected an integer K >= 0, got {steps!r}")
+        raise InputError(f"expected an integer K >= 0, got {steps!r}", field="steps")
     steps = int(steps)
     x, single = _states(law, x_init)
     paths, n, d = x.shape
@@ -171,7 +176,7 @@ def replay(
         t = float(k) * h
         c = law.gain.value(t)
         if not math.isfinite(c):
-            raise InputError(f"gain: c(t) = {c!r} is not finite at t = {t!r} (step {k})")
+            raise InputError(f"c(t) = {c!r} is not finite at t = {t!r} (step {k})", field="gain")
         hc = h * c
         mi = int(modes[k])
         md = prepared.get(mi)
@@ -303,10 +308,10 @@ def kernel_replay(
     from .kernels import em_steps, kernel_arrays, tile_width
 
     if law.lossy:
-        raise InputError("law: kernel_replay runs the lossless kernel; the law is lossy")
+        raise InputError("kernel_replay runs the lossless kernel; the law is lossy", field="law")
 
     if len(systems) != len(law.modes):
-        raise InputError(f"systems: {len(systems)} given for {len(law.modes)} modes")
+        raise InputError(f"{len(systems)} given for {len(law.modes)} modes", field="systems")
     x0 = np.asarray(x_init, dtype=float)
     single = x0.ndim == 1
     xs = x0.reshape(-1, law.n * law.dim)

@@ -50,11 +50,13 @@ class RobustSampling:
             Not a mapping, an unknown key or a bad value.
         """
         if not isinstance(doc, Mapping):
-            raise InputError(f"robust: expected {{realizations, radius, seed}}, got {doc!r}")
+            raise InputError(
+                f"expected {{realizations, radius, seed}}, got {doc!r}", field="robust"
+            )
         unknown = sorted(str(k) for k in set(doc) - {"realizations", "radius", "seed"})
         if unknown:
             raise InputError(
-                f"robust.{unknown[0]}: unknown field (known: realizations, radius, seed)"
+                "unknown field (known: realizations, radius, seed)", field=f"robust.{unknown[0]}"
             )
         return cls(**dict(doc))
 

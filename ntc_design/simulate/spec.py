@@ -77,36 +77,38 @@ def check_noise(noise: NoiseModel) -> NoiseModel:
         Naming the field (``noise.sigma``, ``noise.f``, ``noise.sigma_edges``).
     """
     if not isinstance(noise, NoiseModel):
-        raise InputError(f"noise: expected a NoiseModel, got {type(noise).__name__}")
+        raise InputError(f"expected a NoiseModel, got {type(noise).__name__}", field="noise")
     require_number("noise.sigma", noise.sigma, minimum=0.0, bound=MAX_MAGNITUDE)
     f = noise.f
     if not callable(f):
         if isinstance(f, bool):
-            raise InputError("noise.f: expected a number or a d×d matrix, got a boolean")
+            raise InputError("expected a number or a d×d matrix, got a boolean", field="noise.f")
         if isinstance(f, numbers.Real):
             require_number("noise.f", f, bound=MAX_MAGNITUDE)
         else:
             try:
                 arr = np.asarray(f, dtype=float)
             except (TypeError, ValueError):
-                raise InputError("noise.f: expected a number or a d×d matrix") from None
+                raise InputError("expected a number or a d×d matrix", field="noise.f") from None
             except OverflowError:
                 raise InputError(
-                    "noise.f: an entry is beyond the float range (about 1.8e308)"
+                    "an entry is beyond the float range (about 1.8e308)", field="noise.f"
                 ) from None
             if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.size == 0:
                 raise InputError(
-                    f"noise.f: expected a number or a square matrix, got shape {arr.shape}"
+                    f"expected a number or a square matrix, got shape {arr.shape}", field="noise.f"
                 )
             if not np.all(np.isfinite(arr)):
-                raise InputError("noise.f: entries must be finite")
+                raise InputError("entries must be finite", field="noise.f")
             if np.any(np.abs(arr) > MAX_MAGNITUDE):
-                raise InputError(f"noise.f: entries must be at most {MAX_MAGNITUDE:g} in magnitude")
+                raise InputError(
+                    f"entries must be at most {MAX_MAGNITUDE:g} in magnitude", field="noise.f"
+                )
     if not isinstance(noise.sigma_edges, Mapping):
-        raise InputError("noise.sigma_edges: expected a mapping (from, to) -> σ")
+        raise InputError("expected a mapping (from, to) -> σ", field="noise.sigma_edges")
     for key, s in noise.sigma_edges.items():
         if not isinstance(key, tuple) or len(key) != 2:
-            raise InputError(f"noise.sigma_edges: key {key!r} is not a (from, to) pair")
+            raise InputError(f"key {key!r} is not a (from, to) pair", field="noise.sigma_edges")
         require_number(
             f"noise.sigma_edges {quote(key[0])}->{quote(key[1])}",
             s,
@@ -158,10 +160,12 @@ def _schedule_from_document(doc: Mapping[str, Any], source: str | None) -> Sched
         return schedule_from_document(dict(doc), "gain")
     unknown = sorted(str(k) for k in set(doc) - {"schedule", "tail", "interpolation"})
     if unknown:
-        raise InputError(f"gain.{unknown[0]}: unknown field (known: schedule, tail, interpolation)")
+        raise InputError(
+            "unknown field (known: schedule, tail, interpolation)", field=f"gain.{unknown[0]}"
+        )
     for key in ("schedule", "tail", "interpolation"):
         if key in doc and not isinstance(doc[key], str):
-            raise InputError(f"gain.{key}: expected a string, got {doc[key]!r}")
+            raise InputError(f"expected a string, got {doc[key]!r}", field=f"gain.{key}")
     base = Path(source).parent if source else Path(".")
     return read_schedule(base / doc["schedule"], doc.get("tail"), doc.get("interpolation"))
 
@@ -228,9 +232,11 @@ class SimulationSpec:
     def __post_init__(self) -> None:
         th = check_vector("theta", self.theta, bound=MAX_MAGNITUDE)
         if th.size == 0:
-            raise InputError("theta: expected at least one number")
+            raise InputError("expected at least one number", field="theta")
         if not np.any(th):
-            raise InputError("theta: must be non-zero (the target of non-trivial consensus)")
+            raise InputError(
+                "must be non-zero (the target of non-trivial consensus)", field="theta"
+            )
         object.__setattr__(self, "theta", th)
         object.__setattr__(self, "T", require_horizon("T", self.T))
         require_positive("margin", self.margin)
@@ -239,12 +245,13 @@ class SimulationSpec:
             object.__setattr__(self, "delta", float(self.delta))
         if isinstance(self.gain, str):
             if len(self.gain) > MAX_GAIN_TEXT:
-                raise InputError(f"gain: longer than {MAX_GAIN_TEXT} characters")
+                raise InputError(f"longer than {MAX_GAIN_TEXT} characters", field="gain")
 
             numeric_function(self.gain, "gain")  # whitelisted, in t; or one line naming gain
         elif not callable(self.gain):
             raise InputError(
-                f"gain: expected an expression in t or a callable, got {type(self.gain).__name__}"
+                f"expected an expression in t or a callable, got {type(self.gain).__name__}",
+                field="gain",
             )
         check_noise(self.noise)
         ini = self.initial
@@ -254,28 +261,30 @@ class SimulationSpec:
             object.__setattr__(self, "initial", check_states(ini))
         for name, cls in (("save", SaveAt), ("stepping", Stepping), ("mc", MonteCarlo)):
             if not isinstance(getattr(self, name), cls):
-                raise InputError(f"{name}: expected a {cls.__name__}")
+                raise InputError(f"expected a {cls.__name__}", field=name)
         if self.save.times is not None and np.any(self.save.times > self.T):
-            raise InputError(f"save_times: expected times in [0, T={self.T:g}]")
+            raise InputError(f"expected times in [0, T={self.T:g}]", field="save_times")
         if self.method not in METHODS:
-            raise InputError(f"method: must be mc, exact or both, got {self.method!r}")
+            raise InputError(f"must be mc, exact or both, got {self.method!r}", field="method")
         if self.resample is not None:
             require_positive("resample", self.resample)
         if self.digital is not None:
             object.__setattr__(self, "digital", Digital.from_document(self.digital))
             if self.stepping.kind != "uniform" or self.stepping.scheme != "explicit":
                 raise InputError(
-                    "digital: the sampled protocol steps every period h; stepping: intrinsic "
-                    "and scheme: implicit do not apply to it"
+                    "the sampled protocol steps every period h; stepping: intrinsic "
+                    "and scheme: implicit do not apply to it",
+                    field="digital",
                 )
             # h <= T and a bounded number of steps
             object.__setattr__(self, "digital_steps", self.digital.steps(self.T))
         if self.mc.device == "gpu":
             if self.stepping.scheme != "explicit":
-                raise InputError("scheme: implicit runs on the CPU only (device: cpu)")
+                raise InputError("implicit runs on the CPU only (device: cpu)", field="scheme")
             if callable(self.noise.f):
                 raise InputError(
-                    "noise.f: a callable f runs on the CPU only (device: gpu compiles a linear f)"
+                    "a callable f runs on the CPU only (device: gpu compiles a linear f)",
+                    field="noise.f",
                 )
 
     # -- constructors -------------------------------------------------------------
@@ -306,12 +315,12 @@ class SimulationSpec:
         unknown = sorted(set(options) - set(OPTION_KEYS))
         if unknown:
             raise InputError(
-                f"{unknown[0]}: unknown option (known: {', '.join(sorted(OPTION_KEYS))})"
+                f"unknown option (known: {', '.join(sorted(OPTION_KEYS))})", field=unknown[0]
             )
         o = dict(options)
         if "save_times" in o and o["save_times"] is not None:
             if o.get("save_every") is not None:
-                raise InputError("save_times: give save_every or save_times, not both")
+                raise InputError("give save_every or save_times, not both", field="save_times")
             save = SaveAt(times=o.pop("save_times"))
             o.pop("save_every", None)
         else:
@@ -362,7 +371,7 @@ class SimulationSpec:
             return cls._from_document(doc, source)
         except InputError as exc:
             if source:
-                raise InputError(f"{source}: {exc}") from None
+                raise InputError(f"{exc}", field=source) from None
             raise
 
     @classmethod
@@ -370,10 +379,10 @@ class SimulationSpec:
         unknown = sorted(str(k) for k in set(doc) - set(SCENARIO_KEYS))
         if unknown:
             raise InputError(
-                f"{quote(unknown[0])}: unknown field (allowed: {', '.join(SCENARIO_KEYS)})"
+                f"unknown field (allowed: {', '.join(SCENARIO_KEYS)})", field=quote(unknown[0])
             )
         if "theta" not in doc:
-            raise InputError("theta: missing")
+            raise InputError("missing", field="theta")
         o = {k: v for k, v in doc.items() if k in OPTION_KEYS}
         o["noise"] = noise_from_document(doc.get("noise"))
         if o.get("robust") is not None:
@@ -384,17 +393,18 @@ class SimulationSpec:
             o["gain"] = _schedule_from_document(o["gain"], source)
         elif "gain" in o and not isinstance(o["gain"], str):
             raise InputError(
-                "gain: expected an expression in t (a string) or {schedule: FILE.csv, tail: "
-                f"EXPRESSION}}, got {o['gain']!r}"
+                "expected an expression in t (a string) or {schedule: FILE.csv, tail: "
+                f"EXPRESSION}}, got {o['gain']!r}",
+                field="gain",
             )
         for key in ("method", "stepping", "scheme"):
             if key in o and not isinstance(o[key], str):
-                raise InputError(f"{key}: expected a string, got {o[key]!r}")
+                raise InputError(f"expected a string, got {o[key]!r}", field=key)
         for key in ("T", "dt", "ds", "margin", "delta", "save_every", "resample"):
             if key in o and o[key] is not None:
                 require_number(key, o[key])
         if o.get("save_times") is not None and o.get("save_every") is not None:
-            raise InputError("save_times: give save_every or save_times, not both")
+            raise InputError("give save_every or save_times, not both", field="save_times")
         return cls.build(**o)
 
     def replace(self, **changes: Any) -> SimulationSpec:
@@ -444,12 +454,13 @@ class SimulationSpec:
             return ini.draw(n * d), []
         if ini.ndim == 2 and ini.shape != (n, d):
             raise InputError(
-                f"initial: expected {n} states of {d} numbers, got {ini.shape[0]} states of "
-                f"{ini.shape[1]}"
+                f"expected {n} states of {d} numbers, got {ini.shape[0]} states of {ini.shape[1]}",
+                field="initial",
             )
         if ini.size != n * d:
             raise InputError(
-                f"initial: expected {n} states of {d} numbers ({n * d} values), got {ini.size}"
+                f"expected {n} states of {d} numbers ({n * d} values), got {ini.size}",
+                field="initial",
             )
         return np.array(ini, dtype=float).reshape(-1), []
 
@@ -502,18 +513,20 @@ def _initial_from_document(doc: Any) -> np.ndarray | UniformInitial | None:
     if isinstance(doc, Mapping):
         if set(doc) != {"uniform", "seed"}:
             raise InputError(
-                "initial: expected {uniform: [lo, hi], seed: S} (UniformInitial(lo, hi, seed) in "
-                "Python) or a list of states"
+                "expected {uniform: [lo, hi], seed: S} (UniformInitial(lo, hi, seed) in "
+                "Python) or a list of states",
+                field="initial",
             )
         uni = doc["uniform"]
         if not isinstance(uni, (list, tuple)) or len(uni) != 2:
-            raise InputError("initial.uniform: expected [lo, hi]")
+            raise InputError("expected [lo, hi]", field="initial.uniform")
         return UniformInitial(uni[0], uni[1], doc["seed"])
     if isinstance(doc, list):
         return check_states(doc)
     raise InputError(
-        "initial: expected {uniform: [lo, hi], seed: S} (UniformInitial(lo, hi, seed) in "
-        "Python) or a list of states"
+        "expected {uniform: [lo, hi], seed: S} (UniformInitial(lo, hi, seed) in "
+        "Python) or a list of states",
+        field="initial",
     )
 
 

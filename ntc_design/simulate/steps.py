@@ -186,7 +186,7 @@ def run_exact(
         return None, {}
     if not spec.noise.linear:
         if spec.method == "exact":
-            raise InputError("method: exact moments need a linear f (a scalar or a matrix)")
+            raise InputError("exact moments need a linear f (a scalar or a matrix)", field="method")
         notes.append("exact moments skipped: f is not linear")
         return None, {}
     t0 = time.perf_counter()
@@ -194,8 +194,9 @@ def run_exact(
     stats = {"exact_seconds": time.perf_counter() - t0, "exact_rk4_steps": exact.steps}
     if not (np.all(np.isfinite(exact.ms_error)) and np.all(np.isfinite(exact.mean))):
         raise InputError(
-            "method: the exact moments overflow (not finite) on [0, T]; the noise is too "
-            "strong for this gain and horizon (use method: mc, or a shorter T)"
+            "the exact moments overflow (not finite) on [0, T]; the noise is too "
+            "strong for this gain and horizon (use method: mc, or a shorter T)",
+            field="method",
         )
     return exact, stats
 

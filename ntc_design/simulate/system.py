@@ -400,7 +400,7 @@ def mode_system(des: ProtocolDesign, noise: NoiseModel, name: str = "") -> ModeS
     for key in sig_by:
         if key not in known:
             raise InputError(
-                f"noise.sigma_edges: no edge {key[0]}->{key[1]} in {name or 'the topology'}"
+                f"no edge {key[0]}->{key[1]} in {name or 'the topology'}", field="noise.sigma_edges"
             )
     dst = np.array([i for i, _ in edges], dtype=np.int64)
     src = np.array([j for _, j in edges], dtype=np.int64)
@@ -508,7 +508,7 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
         step and the implicit option.
     """
     if scheme not in SCHEMES:
-        raise InputError(f"scheme: must be explicit or implicit, got {scheme!r}")
+        raise InputError(f"must be explicit or implicit, got {scheme!r}", field="scheme")
     if grid.n_steps == 0:
         return StepCheck(0.0, None)
     if scheme == "implicit":
@@ -516,8 +516,9 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
             floor, how = s.implicit_floor
             if not floor > 0:
                 raise InputError(
-                    f"scheme: implicit needs every eigenvalue of L_B with Re λ > 0; mode {s.name or 0} has "
-                    f"Re λ = {floor:.4g} ({how})"
+                    f"implicit needs every eigenvalue of L_B with Re λ > 0; mode {s.name or 0} has "
+                    f"Re λ = {floor:.4g} ({how})",
+                    field="scheme",
                 )
         return StepCheck(0.0, None)
     modes = grid.mode
@@ -548,8 +549,9 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
     sysw = systems[modes[worst]]
     if r >= 1.0 and not limit[worst] > 0:
         raise InputError(
-            f"dt: L_B of mode {sysw.name} has an eigenvalue with Re λ <= 0 ({sysw.eig_method}): "
-            "the drift is not stable and Euler–Maruyama has no stable step"
+            f"L_B of mode {sysw.name} has an eigenvalue with Re λ <= 0 ({sysw.eig_method}): "
+            "the drift is not stable and Euler–Maruyama has no stable step",
+            field="dt",
         )
     if r >= 1.0:
         which = (
@@ -559,9 +561,10 @@ def check_step_size(systems, grid, c_grid: np.ndarray, scheme: str = "explicit")
         )
         h_ok = grid.h[worst] / r
         raise InputError(
-            f"dt: Euler–Maruyama is unstable: at t = {grid.t[worst]:.4g}, c·h = {ch[worst]:.4g} "
+            f"Euler–Maruyama is unstable: at t = {grid.t[worst]:.4g}, c·h = {ch[worst]:.4g} "
             f"exceeds {which} for L_B of mode {sysw.name} (ρ(L_B) = {sysw.spectral_radius:.4g}, {sysw.eig_method}); "
-            f"use dt < {h_ok:.3g}, or the drift-implicit scheme (stepping: intrinsic, scheme: implicit)"
+            f"use dt < {h_ok:.3g}, or the drift-implicit scheme (stepping: intrinsic, scheme: implicit)",
+            field="dt",
         )
     if r > 0.5:
         return StepCheck(

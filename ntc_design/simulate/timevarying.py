@@ -134,7 +134,9 @@ def time_varying_system(des: TimeVaryingDesign, noise: NoiseModel) -> TimeVaryin
         sig[k] = sig_by.pop((str(lab[j]), str(lab[i])), noise.sigma)
     if sig_by:
         a, b_ = next(iter(sig_by))
-        raise InputError(f"noise.sigma_edges: no edge {a}->{b_} in {tv.name or 'the topology'}")
+        raise InputError(
+            f"no edge {a}->{b_} in {tv.name or 'the topology'}", field="noise.sigma_edges"
+        )
     return TimeVaryingSystem(des, dmat, sig, fmat, term.function, live)
 
 
@@ -468,8 +470,9 @@ def _step_guard(
     ratio, tw, bnd, hw = stability_ratio(sys_, grid, c_grid)
     if ratio >= 1.0:
         raise InputError(
-            f"dt: Euler–Maruyama is unstable: at t = {tw:.4g}, c·h exceeds 2·Re λ/|λ|² = "
-            f"{bnd:.4g} for L_B(t); use dt < {hw / ratio:.3g}"
+            f"Euler–Maruyama is unstable: at t = {tw:.4g}, c·h exceeds 2·Re λ/|λ|² = "
+            f"{bnd:.4g} for L_B(t); use dt < {hw / ratio:.3g}",
+            field="dt",
         )
     if ratio > 0.5:
         notes.append(

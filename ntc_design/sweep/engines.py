@@ -192,7 +192,7 @@ class DaskEngine:
 
     def __init__(self, client, *, retries: int = RETRIES, blocks_per_chunk: int = 1, own=False):
         if retries < 0 or blocks_per_chunk < 1:
-            raise InputError("engine: retries must be >= 0 and blocks_per_chunk >= 1")
+            raise InputError("retries must be >= 0 and blocks_per_chunk >= 1", field="engine")
         self.client, self.retries, self.blocks_per_chunk = client, retries, blocks_per_chunk
         self._own = own
 
@@ -222,19 +222,21 @@ class DaskEngine:
 
         if not isinstance(address, str) or not address.strip() or len(address) > 1000:
             raise InputError(
-                f"{Option('scheduler')}: expected an address such as tcp://127.0.0.1:8786"
+                "expected an address such as tcp://127.0.0.1:8786", field="scheduler", option=True
             )
         try:
             client = Client(address, timeout=CONNECT_TIMEOUT)
         except MemoryError:  # something answered, but not in Dask's protocol: its reply
             # was read as a frame length of exabytes
             raise InputError(
-                f"{Option('scheduler')}: {address} answered, but not as a Dask scheduler"
+                f"{address} answered, but not as a Dask scheduler", field="scheduler", option=True
             ) from None
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             msg = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
             raise InputError(
-                f"{Option('scheduler')}: cannot reach a Dask scheduler at {address} ({msg})"
+                f"cannot reach a Dask scheduler at {address} ({msg})",
+                field="scheduler",
+                option=True,
             ) from None
         return cls(client, own=True, **kw)
 

@@ -162,7 +162,7 @@ def _certification(top, spec: SimulationSpec) -> CertificationRow:
     elif isinstance(des, ProtocolDesign):
         delta = des.delta
     else:  # topology_from_document never gives A(t)
-        raise InputError("sweep: a topology given as functions of t cannot be swept")
+        raise InputError("a topology given as functions of t cannot be swept", field="sweep")
     verdict = {th.theorem: th.guaranteed for th in res.theorems}
     return CertificationRow(
         delta=float(delta),

@@ -149,13 +149,14 @@ def robust_study(
     """
     rs = spec.robust
     if rs is None:
-        raise InputError("robust: the scenario has no robust: {realizations, radius, seed}")
+        raise InputError("the scenario has no robust: {realizations, radius, seed}", field="robust")
     if not isinstance(top, Topology):
-        raise InputError("robust: weight realisations are drawn for one fixed topology")
+        raise InputError("weight realisations are drawn for one fixed topology", field="robust")
     if top.nd > STUDY_MAX_ND:
         raise InputError(
-            f"robust: Nd = {top.nd} is above {STUDY_MAX_ND}, where each realisation's decay "
-            "rate and offset are computed exactly (dense)"
+            f"Nd = {top.nd} is above {STUDY_MAX_ND}, where each realisation's decay "
+            "rate and offset are computed exactly (dense)",
+            field="robust",
         )
     nominal = design_topology(top, spec.theta, spec.margin, spec.delta, thresholds=False)
     assert isinstance(nominal, ProtocolDesign)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, Option
+from ..errors import InputError
 from ..simulate import SimulationSpec
 from .engines import LocalEngine, engine_for
 from .point import PointResult, PointRow, certify_key, certify_task, run_point
@@ -107,7 +107,7 @@ def run_sweep(
     sw = sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise InputError(f"{Option('out')}: {out} exists and is not a directory")
+        raise InputError(f"{out} exists and is not a directory", field="out", option=True)
     own = engine is None
     eng = engine_for(scheduler, workers) if own else engine
     t0 = time.monotonic()

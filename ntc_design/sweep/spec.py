@@ -78,7 +78,7 @@ class PointTask:
 
 
 def _err(src: Path, fieldname: str, msg: str) -> InputError:
-    return InputError(f"{src}: {fieldname}: {msg}")
+    return InputError(f"{msg}", field=f"{src}: {fieldname}")
 
 
 def _check_key(src: Path, where: str, key: Any, base_doc: dict) -> str:

@@ -72,7 +72,8 @@ def tune(
         return tune_schedule(topology, spec, horizon, options, progress)
     if options is not None and not isinstance(options, PowerOptions):
         raise InputError(
-            f"options: expected PowerOptions or ScheduleOptions, got {type(options).__name__}"
+            f"expected PowerOptions or ScheduleOptions, got {type(options).__name__}",
+            field="options",
         )
     return tune_power(topology, spec, horizon, options, progress)
 

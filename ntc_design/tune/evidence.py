@@ -246,7 +246,7 @@ def _add_deadline(res, spec, tuned, deadline: float, notes: list[str]) -> None:
             section["loss"] = lossy
     try:
         if f is None:
-            raise InputError("f: a linear f(x) = F x is needed")
+            raise InputError("a linear f(x) = F x is needed", field="f")
         add_deadline(res.certificate, section, DEADLINE_SECONDS)
     except (InputError, KeyError, TypeError) as exc:
         res.certificate["subject"].pop("deadline", None)

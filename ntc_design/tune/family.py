@@ -62,7 +62,7 @@ class PowerGain:
         for name in ("a", "b", "gamma"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise InputError(f"{name}: expected a finite number > 0, got {v!r}")
+                raise InputError(f"expected a finite number > 0, got {v!r}", field=name)
             object.__setattr__(self, name, float(v))
 
     def __call__(self, t) -> np.ndarray:
@@ -134,5 +134,5 @@ def gamma_range(require: Require) -> tuple[float, float]:
         An unknown requirement.
     """
     if require not in REQUIRE:
-        raise InputError(f"require: expected one of {', '.join(REQUIRE)}, got {require!r}")
+        raise InputError(f"expected one of {', '.join(REQUIRE)}, got {require!r}", field="require")
     return GAMMA_RANGE[require]

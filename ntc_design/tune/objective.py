@@ -320,8 +320,9 @@ class ExactObjective(Objective):
         scheme, steps = self.plan(gain, delta, accurate)
         if steps > MAX_STEPS * (5 if accurate else 1):
             raise InputError(
-                f"{gain.text}: about {steps:.3g} steps of the moment equations (c(0) = "
-                f"{float(gain(np.array([0.0]))[0]):.3g}); too stiff"
+                f"about {steps:.3g} steps of the moment equations (c(0) = "
+                f"{float(gain(np.array([0.0]))[0]):.3g}); too stiff",
+                field=gain.text,
             )
         pm = self.prepared(delta)[0]
         t = np.linspace(0.0, self.horizon, points)
@@ -494,7 +495,9 @@ class ExpressionObjective(Objective):
             raise InputError("a topology given as expressions of t takes δ(t)", field="tune_delta")
         steps = self._steps(gain)
         if steps > MAX_STEPS * (5 if accurate else 1):  # the search's cap is ExactObjective's
-            raise InputError(f"{gain.text}: about {steps:.3g} steps at t = 0's radius; too stiff")
+            raise InputError(
+                f"about {steps:.3g} steps at t = 0's radius; too stiff", field=gain.text
+            )
         t = np.linspace(0.0, self.horizon, points)
         spec = self.spec.replace(T=self.horizon, gain=gain, method="exact", save=_save_at(t))
         run = simulate(self.topology, spec=spec)
@@ -593,7 +596,7 @@ def check_method(method: object) -> None:
     if method not in choices(TuneMethod):
         # one objective per candidate: simulate's 'both' (the two curves) has no meaning here
         why = " (tuning minimises one objective; both is simulate's)" if method == "both" else ""
-        raise InputError(f"method: expected auto, exact or mc, got {method!r}{why}")
+        raise InputError(f"expected auto, exact or mc, got {method!r}{why}", field="method")
 
 
 def objective_for(
@@ -634,5 +637,5 @@ def objective_for(
             if not spec.noise.linear
             else f"N·d = {topology.n * topology.dim} is above {MOMENTS_MAX_ND}"
         )
-        raise InputError(f"method: exact moments are not available here ({why}); use mc")
+        raise InputError(f"exact moments are not available here ({why}); use mc", field="method")
     return MonteCarloObjective(topology, spec, horizon)

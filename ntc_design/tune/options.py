@@ -93,7 +93,9 @@ class PowerOptions(TuneOptions):
         check_method(self.method)
         n = self.max_evaluations
         if not isinstance(n, int) or isinstance(n, bool) or not 10 <= n <= 10_000:
-            raise InputError(f"max_evaluations: expected an integer in [10, 10000], got {n!r}")
+            raise InputError(
+                f"expected an integer in [10, 10000], got {n!r}", field="max_evaluations"
+            )
 
 
 @dataclass(frozen=True)
@@ -130,7 +132,7 @@ class ScheduleOptions(TuneOptions):
             require_positive("max_peak", self.max_peak)
         n = self.check_paths
         if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 100_000:
-            raise InputError(f"check_paths: expected an integer in [0, 100000], got {n!r}")
+            raise InputError(f"expected an integer in [0, 100000], got {n!r}", field="check_paths")
 
 
 __all__ = ["CHECK_PATHS", "MAX_EVALUATIONS", "PowerOptions", "ScheduleOptions", "TuneOptions"]

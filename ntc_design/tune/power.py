@@ -112,16 +112,19 @@ def _dimensions(
         box["delta"] = delta
     for name, rng in (bounds or {}).items():
         if name not in box:
-            raise InputError(f"bounds: unknown parameter {name!r} (known: {', '.join(box)})")
+            raise InputError(
+                f"unknown parameter {name!r} (known: {', '.join(box)})", field="bounds"
+            )
         lo, hi = (float(v) for v in rng)
         allowed = box[name] if name in ("gamma", "delta") else (0.0, math.inf)
         if not (math.isfinite(lo) and math.isfinite(hi) and allowed[0] <= lo <= hi <= allowed[1]):
             raise InputError(
-                f"bounds: {name} range [{lo:g}, {hi:g}] is not inside [{allowed[0]:g}, "
-                f"{allowed[1]:g}]" + (" (the required theorems)" if name == "gamma" else "")
+                f"{name} range [{lo:g}, {hi:g}] is not inside [{allowed[0]:g}, "
+                f"{allowed[1]:g}]" + (" (the required theorems)" if name == "gamma" else ""),
+                field="bounds",
             )
         if name in ("a", "b") and lo <= 0:
-            raise InputError(f"bounds: {name} must be > 0")
+            raise InputError(f"{name} must be > 0", field="bounds")
         box[name] = (lo, hi)
     points = {"a": 5, "b": 3, "gamma": 4, "delta": 3}
     logs = {"a", "b", "delta"}
@@ -183,7 +186,7 @@ def _check_tune_work(
         f"of {obj.name}, about {per:.3g} s each)"
     )
     instead = f"a shorter {Option('horizon')} or fewer {Option('max_evaluations')}"
-    check_work(total, f"{Option('horizon')}: {what}", MAX_TUNE_SECONDS, instead)
+    check_work(total, what, MAX_TUNE_SECONDS, instead, field="horizon", option=True)
 
 
 def tune_power(
@@ -259,7 +262,8 @@ def tune_power(
     (best, value) = trace.best
     if not math.isfinite(value):
         raise InputError(
-            f"tune: no candidate could be evaluated ({next(iter(obj.skipped.values()), '')})"
+            f"no candidate could be evaluated ({next(iter(obj.skipped.values()), '')})",
+            field="tune",
         )
     p = dict(zip(trace.names, best, strict=True))
     for d in dims:

@@ -307,8 +307,9 @@ def tune_schedule(
     initial = float(eps0 @ eps0)
     if initial == 0 and not _additive_noise(spec):
         raise InputError(
-            "initial: x(0) = 1⊗θ and noise.sigma = 0: E Σ‖x_i(t) − θ‖² = 0 at every t for "
-            "every gain (the multiplicative noise vanishes at consensus); nothing to tune"
+            "x(0) = 1⊗θ and noise.sigma = 0: E Σ‖x_i(t) − θ‖² = 0 at every t for "
+            "every gain (the multiplicative noise vanishes at consensus); nothing to tune",
+            field="initial",
         )
     if max_peak is not None and not max_peak > initial:
         raise InputError(

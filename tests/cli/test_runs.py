@@ -107,7 +107,7 @@ def test_the_gpu_refusal_comes_before_any_progress_line(tmp_path, capsys, monkey
     # if 5 s had gone by in the imports), and this machine has no GPU
     import ntc_design.reports.terminal as terminal
     import ntc_design.simulate.driver as driver
-    from ntc_design.errors import InputError
+    from ntc_design.errors import InputError, Option
 
     class AtOnce(terminal.Progress):
         def __enter__(self):
@@ -116,7 +116,11 @@ def test_the_gpu_refusal_comes_before_any_progress_line(tmp_path, capsys, monkey
             return self
 
     def no_gpu():
-        raise InputError("device: gpu: no NVIDIA driver on this machine; use device: cpu")
+        raise InputError(
+            "gpu: no NVIDIA driver on this machine; use ",
+            Option("device", "cpu", document=True),
+            field="device",
+        )
 
     monkeypatch.setattr(terminal, "Progress", AtOnce)
     monkeypatch.setattr(driver, "load_cuda", no_gpu)

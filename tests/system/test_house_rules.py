@@ -259,3 +259,53 @@ def test_no_library_module_names_a_command_line_flag():
     }
     assert sorted(flagged - set(FLAG_TEXT_ALLOWED)) == []  # name the field, not the flag
     assert sorted(set(FLAG_TEXT_ALLOWED) - flagged) == []  # an exception for nothing: remove it
+
+
+#: A message's head written as a field (``paths: must be ...``, ``{where}: ...``): the text
+#: before the first ": " has no space outside braces.
+_HEAD = re.compile(r"^(?:\{[^{}]*\}|[^\s:{}])+: ")
+
+
+def _message_head(node: ast.expr) -> str | None:
+    """The static start of a message argument (a literal, an f-string, a sum of them)."""
+    while isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
+        node = node.left
+    if isinstance(node, ast.Subscript):  # a message cut to a length
+        node = node.value
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    if isinstance(node, ast.JoinedStr):
+        return "".join(v.value if isinstance(v, ast.Constant) else "{}" for v in node.values)
+    return None
+
+
+def _fields_in_text(tree: ast.AST) -> list[int]:
+    """The lines of error calls without ``field=`` whose message starts with ``FIELD: ``."""
+    errors = {"InputError", "DenseRefused", "CertificationRefused"}
+    found = []
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Call) and node.args):
+            continue
+        func = node.func
+        name = func.id if isinstance(func, ast.Name) else getattr(func, "attr", None)
+        if name not in errors or any(k.arg == "field" for k in node.keywords):
+            continue  # with its field given, a message may start with the value
+        head = _message_head(node.args[0])
+        if head is not None and _HEAD.match(head):
+            found.append(node.lineno)
+    return found
+
+
+def test_no_error_writes_its_field_into_its_message():
+    """The field travels as data (``InputError(message, field=...)``): a message without a
+    field that starts with ``FIELD: `` would hide it from the command line's field -> flag
+    map (the constructor no longer reads a field out of the text)."""
+    caught = 'InputError(f"{p}: x")\nInputError("digital.period: " + "y"[:3])\n'
+    fine = 'InputError("x", field="p")\nInputError("a file name.yaml: x")\nInputError(msg)\n'
+    assert _fields_in_text(ast.parse(caught)) == [1, 2] and _fields_in_text(ast.parse(fine)) == []
+    found = [
+        f"{p.relative_to(ROOT)}:{line}"
+        for p in PACKAGE.rglob("*.py")
+        for line in _fields_in_text(ast.parse(p.read_text(encoding="utf-8")))
+    ]
+    assert found == []

@@ -134,7 +134,7 @@ class ResultsAudit:
 
     def __init__(self, results: Any, source: str) -> None:
         if not isinstance(results, dict):
-            raise InputError(f"{source}: results: expected an object")
+            raise InputError("expected an object", field=f"{source}: results")
         self.results = results
         self.bad: list[str] = []
         self._seen: set[tuple] = set()

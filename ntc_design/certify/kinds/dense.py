@@ -40,15 +40,15 @@ def read_dense(doc: dict, source: str) -> Reading:
     """
     n = need(doc, "size", int, source)
     if not 1 <= n <= MAX_SIZE:
-        raise InputError(f"{source}: size: must be between 1 and {MAX_SIZE}, got {n}")
+        raise InputError(f"must be between 1 and {MAX_SIZE}, got {n}", field=f"{source}: size")
     subject = need(doc, "subject", dict, source)
     modes_doc = need(subject, "modes", dict, f"{source}: subject")
     if not modes_doc or len(modes_doc) > MAX_MODES:
-        raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
+        raise InputError(f"expected 1 to {MAX_MODES} modes", field=f"{source}: subject.modes")
     mats = need(doc, "matrices", dict, source)
     lbs = mats.get("L_B", {})
     if not isinstance(lbs, dict):
-        raise InputError(f"{source}: matrices.L_B: expected an object mode -> matrix")
+        raise InputError("expected an object mode -> matrix", field=f"{source}: matrices.L_B")
     ps = need(mats, "P", dict, f"{source}: matrices")
     checks: list[Check] = []
     modes = {str(k): parse_mode(str(k), v, n, source, checks) for k, v in modes_doc.items()}

@@ -147,7 +147,9 @@ def _gain_document(gain: Any) -> Any:
         return gain.to_document()
     if isinstance(gain, str):
         return gain
-    raise InputError("gain: the digital certificate needs c(t) as an expression or a schedule")
+    raise InputError(
+        "the digital certificate needs c(t) as an expression or a schedule", field="gain"
+    )
 
 
 def _only(doc: Any, known: tuple[str, ...], where: str) -> None:
@@ -155,7 +157,9 @@ def _only(doc: Any, known: tuple[str, ...], where: str) -> None:
     if isinstance(doc, dict):
         unknown = sorted(str(k) for k in doc if k not in known)
         if unknown:
-            raise InputError(f"{where}.{unknown[0]}: unknown field (known: {', '.join(known)})")
+            raise InputError(
+                f"unknown field (known: {', '.join(known)})", field=f"{where}.{unknown[0]}"
+            )
 
 
 def read_digital(doc: dict, source: str, d: int, extra: tuple[str, ...] = ()) -> DigitalSubject:
@@ -187,7 +191,7 @@ def read_digital(doc: dict, source: str, d: int, extra: tuple[str, ...] = ()) ->
     try:
         dg = Digital(sub.get("period"), sub.get("delay"))
     except InputError as exc:
-        raise InputError(f"{source}: subject.{exc}") from None
+        raise InputError(f"subject.{exc}", field=source) from None
     gain = sub.get("gain")
     if isinstance(gain, dict):
         ScheduleGain(
@@ -198,14 +202,14 @@ def read_digital(doc: dict, source: str, d: int, extra: tuple[str, ...] = ()) ->
             f"{where}.gain",
         )
     elif not isinstance(gain, str):
-        raise InputError(f"{where}.gain: expected an expression in t or a schedule")
+        raise InputError("expected an expression in t or a schedule", field=f"{where}.gain")
     noise = need(sub, "noise", dict, where)
     _only(noise, ("sigma", "f", "sigma_edges"), f"{where}.noise")
     if isinstance(gain, dict):
         _only(gain, ("t", "c", "interpolation", "tail"), f"{where}.gain")
     sigma = number(need(noise, "sigma", (int, float), f"{where}.noise"), f"{where}.noise.sigma")
     if sigma < 0:
-        raise InputError(f"{where}.noise.sigma: must be >= 0")
+        raise InputError("must be >= 0", field=f"{where}.noise.sigma")
     f_raw = need(noise, "f", (int, float, list), f"{where}.noise")
     f = (
         number(f_raw, f"{where}.noise.f") * np.eye(d)
@@ -221,13 +225,13 @@ def read_digital(doc: dict, source: str, d: int, extra: tuple[str, ...] = ()) ->
             or not isinstance(e.get("from"), str)
             or not isinstance(e.get("to"), str)
         ):
-            raise InputError(f"{w}: expected {{from, to, sigma}}")
+            raise InputError("expected {from, to, sigma}", field=w)
         s = number(need(e, "sigma", (int, float), w), f"{w}.sigma")
         if s < 0:
-            raise InputError(f"{w}.sigma: must be >= 0")
+            raise InputError("must be >= 0", field=f"{w}.sigma")
         edges[(e["from"], e["to"])] = s
     if out_of_range(f) or out_of_range(sigma) or any(out_of_range(v) for v in edges.values()):
-        raise InputError(f"{where}.noise: {RANGE_TEXT}")
+        raise InputError(f"{RANGE_TEXT}", field=f"{where}.noise")
     return DigitalSubject(dg.period, dg.delay, gain, f, sigma, edges)
 
 
@@ -240,7 +244,7 @@ def _stated(doc: dict, source: str, delay: int) -> Stated:
 
     bound = res.get("bound", RAZUMIKHIN) if delay else RAZUMIKHIN
     if bound not in (DELAY_LINE, RAZUMIKHIN):
-        raise InputError(f"{where}.bound: expected {DELAY_LINE!r} or {RAZUMIKHIN!r}")
+        raise InputError(f"expected {DELAY_LINE!r} or {RAZUMIKHIN!r}", field=f"{where}.bound")
     raz = bool(delay) and bound == RAZUMIKHIN
     return Stated(
         num("alpha"),

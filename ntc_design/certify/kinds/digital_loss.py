@@ -93,7 +93,9 @@ def _gain_document(gain: Any) -> Any:
         return to_doc()
     if isinstance(gain, str):
         return gain
-    raise InputError("gain: the digital certificate needs c(t) as an expression or a schedule")
+    raise InputError(
+        "the digital certificate needs c(t) as an expression or a schedule", field="gain"
+    )
 
 
 def design_losses(design: DigitalDesign) -> dict[tuple[int, int], float]:
@@ -152,10 +154,10 @@ def read_loss(doc: dict, source: str, top: Any) -> LossSubject:
             or not isinstance(e.get("from"), str)
             or not isinstance(e.get("to"), str)
         ):
-            raise InputError(f"{w}: expected {{from, to, p}}")
+            raise InputError("expected {from, to, p}", field=w)
         key = (index.get(e["to"], -1), index.get(e["from"], -1))
         if key not in edges or key in losses:
-            raise InputError(f"{w}: no edge {e['from']}->{e['to']} (or listed twice)")
+            raise InputError(f"no edge {e['from']}->{e['to']} (or listed twice)", field=w)
         losses[key] = require_loss(f"{w}.p", e.get("p"))
     return LossSubject(policy, losses)
 
@@ -400,8 +402,8 @@ class DigitalLossKind(DigitalKind):
             hold = ctx.digital.loss.policy == "hold"
             if hold and ctx.digital.subject.delay:
                 raise InputError(
-                    f"{ctx.source}: certifies: digital_mean_square on lossy links with hold "
-                    "needs D = 0"
+                    "digital_mean_square on lossy links with hold needs D = 0",
+                    field=f"{ctx.source}: certifies",
                 )
             mode = next(iter(ctx.modes))
             if hold:

@@ -284,7 +284,7 @@ def prove_hold(
     m = len(edges) * mode.top.dim
     raw = ctx.ps.get(R_NAME)
     if raw is None:
-        raise InputError(f"{ctx.source}: matrices.P: missing {R_NAME!r}")
+        raise InputError(f"missing {R_NAME!r}", field=f"{ctx.source}: matrices.P")
     r = matrix(raw, m, f"{ctx.source}: matrices.P.{R_NAME}")
     if s is None or out_of_range(r):
         return Check(claim.id, False, f"S or R has {RANGE_TEXT}", claim)

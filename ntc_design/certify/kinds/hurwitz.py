@@ -60,7 +60,7 @@ def hurwitz_certificate(
     """
     name = name or d.topology.name or "topology"
     if rate_method not in RATE_METHODS:
-        raise InputError(f"rate_method: expected lyapunov or lmi, got {rate_method!r}")
+        raise InputError(f"expected lyapunov or lmi, got {rate_method!r}", field="rate_method")
     if rate and rate_method == "lmi":  # estimated before any dense step: never an OOM kill
         require_lmi(d.topology.nd, "decay-rate LMI")
     lap_b = d.grounded_laplacian()

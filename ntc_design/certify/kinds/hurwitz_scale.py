@@ -133,7 +133,9 @@ class HurwitzScaleKind(CertificateKind):
         subject = need(doc, "subject", dict, source)
         modes = need(subject, "modes", dict, f"{source}: subject")
         if len(modes) != 1:
-            raise InputError(f"{source}: subject.modes: a hurwitz-scale certificate has one mode")
+            raise InputError(
+                "a hurwitz-scale certificate has one mode", field=f"{source}: subject.modes"
+            )
         ((mname, sub),) = modes.items()
         where = f"{source}: subject.modes.{mname}"
         top, delta, theta, informed = read_array_mode(sub, where, need(doc, "size", int, source))
@@ -144,12 +146,14 @@ class HurwitzScaleKind(CertificateKind):
         comp = unpack(need(comps, "label", dict, cw), f"{cw}.label", "i8", (n,))
         meth = need(comps, "method", list, cw)
         if any(not isinstance(m, str) for m in meth):
-            raise InputError(f"{cw}.method: expected strings")
+            raise InputError("expected strings", field=f"{cw}.method")
         unknown = set(meth) - set(METHODS)
         if unknown:
-            raise InputError(f"{cw}.method: unknown method {sorted(unknown)[0]!r}")
+            raise InputError(f"unknown method {sorted(unknown)[0]!r}", field=f"{cw}.method")
         if n and (comp.min() < 0 or comp.max() >= len(meth)):
-            raise InputError(f"{cw}.label: a component number is out of range 0..{len(meth) - 1}")
+            raise InputError(
+                f"a component number is out of range 0..{len(meth) - 1}", field=f"{cw}.label"
+            )
         v = unpack(need(comps, "v", dict, cw), f"{cw}.v", "f8", (n,))
         mu = unpack(need(comps, "mu", dict, cw), f"{cw}.mu", "f8", (n,))
         lyap = need(comps, "lyapunov", dict, cw)
@@ -280,7 +284,7 @@ class HurwitzScaleKind(CertificateKind):
             m = agents.size * st.top.dim
             if m > LYAPUNOV_COMPONENT_MAX_ND:
                 raise InputError(
-                    f"{cw}.lyapunov.{c}: component above Nd = {LYAPUNOV_COMPONENT_MAX_ND}"
+                    f"component above Nd = {LYAPUNOV_COMPONENT_MAX_ND}", field=f"{cw}.lyapunov.{c}"
                 )
             entry = need(st.lyapunov, str(c), dict, f"{cw}.lyapunov")
             p = unpack(

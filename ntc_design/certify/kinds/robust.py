@@ -61,7 +61,7 @@ def _radii(x: Any, m: int, where: str) -> np.ndarray:
     """The subject's radius: one number for every uncertain edge, or a list of m."""
     if isinstance(x, list):
         if len(x) != m:
-            raise InputError(f"{where}: expected {m} radii, one per uncertain edge")
+            raise InputError(f"expected {m} radii, one per uncertain edge", field=where)
         return np.array([check_radius(v, where) for v in x], dtype=float)
     return np.full(m, check_radius(x, where))
 
@@ -94,8 +94,9 @@ def robust_certificate(rep: RobustReport, name: str | None = None) -> dict:
     pr = rep.proofs
     if not pr:  # the sparse path proves in the process; there is nothing to re-check
         raise InputError(
-            f"robust: a certificate is issued up to Nd = {RICCATI_MAX_ND} (this network: "
-            f"Nd = {d.topology.nd}); above, the sparse bounds are proven but not stored"
+            f"a certificate is issued up to Nd = {RICCATI_MAX_ND} (this network: "
+            f"Nd = {d.topology.nd}); above, the sparse bounds are proven but not stored",
+            field="robust",
         )
     props: list[Property] = []
     mats: dict[str, Any] = {"L_B": {name: d.grounded_laplacian().tolist()}, "P": {}}
@@ -225,19 +226,19 @@ def _rect(x: Any, rows: int, cols: int, where: str) -> np.ndarray:
         or len(x) != rows
         or any(not isinstance(r, list) or len(r) != cols for r in x)
     ):
-        raise InputError(f"{where}: expected a {rows}×{cols} matrix")
+        raise InputError(f"expected a {rows}×{cols} matrix", field=where)
     out = np.array([[number(v, where) for v in r] for r in x], dtype=float)
     if not np.all(np.isfinite(out)):
-        raise InputError(f"{where}: expected finite numbers")
+        raise InputError("expected finite numbers", field=where)
     return out
 
 
 def _floats(x: Any, n: int, where: str) -> np.ndarray:
     if not isinstance(x, list) or len(x) != n:
-        raise InputError(f"{where}: expected a list of {n} numbers")
+        raise InputError(f"expected a list of {n} numbers", field=where)
     out = np.array([number(v, where) for v in x], dtype=float)
     if np.any(out < 0):
-        raise InputError(f"{where}: multipliers must be >= 0")
+        raise InputError("multipliers must be >= 0", field=where)
     return out
 
 
@@ -281,7 +282,7 @@ class RobustKind(CertificateKind):
             Not a robust design, or one whose margin search proved no radius.
         """
         if not isinstance(design, RobustDesign):
-            raise InputError("robust: expected a RobustDesign (the brackets of robust())")
+            raise InputError("expected a RobustDesign (the brackets of robust())", field="robust")
         return robust_certificate(design.report)
 
     def verdicts(self, design, certificate, verification, gain) -> tuple[TheoremVerdict, ...]:
@@ -300,14 +301,14 @@ class RobustKind(CertificateKind):
         mult = need(mats, "multipliers", dict, f"{source}: matrices")
         for key in ("margin", "decay", "offset"):
             if key in res and not isinstance(res[key], dict):
-                raise InputError(f"{source}: results.{key}: expected an object")
+                raise InputError("expected an object", field=f"{source}: results.{key}")
         m_lo = res.get("margin", {}).get("lower")
         a_lo = res.get("decay", {}).get("lower")
         margin = (
             None if m_lo is None else check_radius(m_lo, f"{source}: results.margin.lower", False)
         )
         if margin is not None and margin > 1:
-            raise InputError(f"{source}: results.margin.lower: above 1")
+            raise InputError("above 1", field=f"{source}: results.margin.lower")
         alpha = None if a_lo is None else number(a_lo, f"{source}: results.decay.lower")
         gam = res.get("offset", {}).get("gamma")
         gamma = None if gam is None else number(gam, f"{source}: results.offset.gamma")

@@ -86,7 +86,7 @@ class SwitchingScaleKind(CertificateKind):
         size = need(doc, "size", int, source)
         modes_doc = need(subject, "modes", dict, f"{source}: subject")
         if not modes_doc or len(modes_doc) > MAX_MODES:
-            raise InputError(f"{source}: subject.modes: expected 1 to {MAX_MODES} modes")
+            raise InputError(f"expected 1 to {MAX_MODES} modes", field=f"{source}: subject.modes")
         checks: list = []
         modes, tops, deltas = {}, {}, {}
         for name, sub in modes_doc.items():

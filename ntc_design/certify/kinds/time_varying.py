@@ -148,18 +148,18 @@ class TimeVaryingKind(CertificateKind):
         w = f"{source}: subject"
         tv = from_document(need(subj, "topology", dict, w), f"{w}.topology")
         if tv.domain is None:
-            raise InputError(f"{w}.topology: declares neither period nor constant_after")
+            raise InputError("declares neither period nor constant_after", field=f"{w}.topology")
         size = need(doc, "size", int, source)
         if tv.nd != size:
-            raise InputError(f"{w}.topology: has Nd={tv.nd}, certificate size is {size}")
+            raise InputError(f"has Nd={tv.nd}, certificate size is {size}", field=f"{w}.topology")
         theta = vector(need(subj, "theta", list, w), tv.dim, f"{w}.theta")
         margin = number(need(subj, "margin", (int, float), w), f"{w}.margin")
         if not margin > 0:
-            raise InputError(f"{w}.margin: ΔC must be positive")
+            raise InputError("ΔC must be positive", field=f"{w}.margin")
         noise = need(subj, "noise", dict, w)
         sigma = number(need(noise, "sigma", (int, float), f"{w}.noise"), f"{w}.noise.sigma")
         if sigma < 0:
-            raise InputError(f"{w}.noise.sigma: must be >= 0")
+            raise InputError("must be >= 0", field=f"{w}.noise.sigma")
         f = need(noise, "f", (int, float, list), f"{w}.noise")
         f = (
             number(f, f"{w}.noise.f")
@@ -168,7 +168,7 @@ class TimeVaryingKind(CertificateKind):
         )
         gain = subj.get("gain")
         if gain is not None and not isinstance(gain, str):
-            raise InputError(f"{w}.gain: expected an expression of t or null")
+            raise InputError("expected an expression of t or null", field=f"{w}.gain")
         res = need(need(doc, "results", dict, source), RESULTS_KEY, dict, f"{source}: results")
         ivs = need(doc, "intervals", list, source)
         if (
@@ -182,7 +182,8 @@ class TimeVaryingKind(CertificateKind):
             )
         ):
             raise InputError(
-                f"{source}: intervals: expected 1 to {MAX_INTERVALS} intervals [a, b, bound]"
+                f"expected 1 to {MAX_INTERVALS} intervals [a, b, bound]",
+                field=f"{source}: intervals",
             )
         for k, q in enumerate(ivs):
             for x in q:

@@ -155,7 +155,9 @@ def gamma_exact(lap, ch, target, r0, gamma, lam, y, radius) -> Dyadic:
     k = n + sum(sizes) + 1
     yd = Dyadic.of(y)
     if yd.num.shape != (n, k):
-        raise InputError(f"matrices.Y: expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}")
+        raise InputError(
+            f"expected {n}×{k}, got {yd.num.shape[0]}×{yd.num.shape[1]}", field="matrices.Y"
+        )
     active = perturbed(np.asarray(radius, dtype=float), len(ch))
     yd = Dyadic(yd.num[:, active_columns(n, sizes, active)], yd.exp)
     ch = [ch[e] for e in active]

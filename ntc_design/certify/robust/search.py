@@ -172,8 +172,9 @@ def check_robust_work(
         The estimate exceeds :data:`MAX_SECONDS`.
     """
     seconds, what = robust_seconds(design, bisection_steps, margin)
-    line = f"robust: roughly {format_seconds(seconds)} ({what})"
-    check_work(seconds, line, MAX_SECONDS, "the network is too large for the robust brackets")
+    line = f"roughly {format_seconds(seconds)} ({what})"
+    too_large = "the network is too large for the robust brackets"
+    check_work(seconds, line, MAX_SECONDS, too_large, field="robust")
 
 
 def robust(
@@ -245,8 +246,9 @@ def robust(
     alpha0 = abscissa(p.lap_b)
     if not alpha0 > 0:
         raise InputError(
-            f"robust: the nominal −L_B is not Hurwitz (min Re λ(L_B) = {alpha0:.6g}); "
-            "certify the nominal design first"
+            f"the nominal −L_B is not Hurwitz (min Re λ(L_B) = {alpha0:.6g}); "
+            "certify the nominal design first",
+            field="robust",
         )
     ch = channels(p)
     lmi = DecayLMI(p, ch)
