@@ -10,7 +10,8 @@ from tests.cli_helpers import run_cli
 
 def test_cli_schedule_end_to_end_writes_a_runnable_folder(tmp_path, capsys, monkeypatch):
     # a 3-agent signed cycle (d = 1): the folder, the certificate and the run are what is
-    # checked here; G1's optimal schedule and its numbers are tests/tune/test_schedule.py's
+    # checked here; the optimal schedule on G1 against independent evaluations is
+    # tests/tune/test_optimal.py's (and its issue numbers tests/tune/test_schedule.py's)
     (tmp_path / "cycle.yaml").write_text(
         "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
         "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
