@@ -141,14 +141,29 @@ def test_out_above_the_dense_size_is_refused_before_work(tmp_path, capsys, monke
 # -- ntc export ---------------------------------------------------------------------------
 
 
+def _cycle_scenario(tmp_path) -> str:
+    """A scenario on a 3-agent signed cycle (d = 1): its D = 1 certificate takes about 0.2 s
+    (G1's delay line about 10 s; G1's export at D = 1 is tests/export/test_run.py's)."""
+    (tmp_path / "cycle.yaml").write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
+    p = tmp_path / "cycle-scenario.yaml"
+    p.write_text("topology: cycle.yaml\ntheta: [1]\ngain: 1/(1+t)\ninitial: [1, -1, 0.5]\nT: 5\n")
+    return str(p)
+
+
 def test_export_writes_the_folder(tmp_path, examples, capsys, monkeypatch):
-    out = tmp_path / "g1-c"
-    args = ["export", examples / "scenarios" / "g1_deadline.yaml", "--lang", "c"]
+    out = tmp_path / "cycle-c"
+    args = ["export", _cycle_scenario(tmp_path), "--lang", "c"]
     code, text, err = run_cli(
         [*args, "--out", out, "--period", "0.1", "--delay", "1"], capsys, monkeypatch
     )
     assert code == 0, err
-    assert "exported G1 (7 agents, d = 3, 1 mode; h = 0.1, D = 1, c(t) = 1/(1+t)) as c" in text
+    assert (
+        "exported cycle-scenario (3 agents, d = 1, 1 mode; h = 0.1, D = 1, c(t) = 1/(1+t)) as c"
+        in text
+    )
     assert (out / "ntc_protocol.c").is_file() and (out / "README.txt").is_file()
     code, text, err = run_cli(
         ["export", examples.parent / "certificates" / "g1.json", "--lang", "python",
@@ -528,7 +543,7 @@ def test_certify_deadline_refusals(examples, capsys, monkeypatch, extra, needle)
 
 
 def test_certify_deadline_json_states_the_figures(tmp_path, examples, capsys, monkeypatch):
-    scen = examples / "scenarios" / "g1_deadline.yaml"
+    scen = _cycle_scenario(tmp_path)  # G1's delay line: tests/certify/test_deadline*.py
     out = tmp_path / "c.json"
     args = ["certify", scen, "--period", "0.1", "--delay", "1", "--deadline", "1.05"]
     code, text, _ = run_cli([*args, "--out", out, "--json"], capsys, monkeypatch)

@@ -270,9 +270,13 @@ def test_an_override_flag_is_named_not_the_file(
 
 
 def test_tune_defaults_its_deadline_to_the_scenario_t(tmp_path, capsys, monkeypatch):
+    (tmp_path / "cycle.yaml").write_text(  # 3 agents, d = 1: the horizon is what is checked
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
     sc = tmp_path / "sc.yaml"
     sc.write_text(
-        f"topology: {EXAMPLES / 'g1.yaml'}\ntheta: [1, 2, -1]\nT: 2\nnoise: {{sigma: 0.4, f: 0.3}}\n",
+        "topology: cycle.yaml\ntheta: [1]\nT: 2\nnoise: {sigma: 0.4, f: 0.3}\n",
         encoding="utf-8",
     )
     args = ["tune", sc, "--evaluations", "10", "--json"]

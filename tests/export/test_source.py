@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import ntc_design as nd
-from ntc_design.certify import certify, verify
+from ntc_design.certify import verify
 from ntc_design.errors import InputError
 from ntc_design.export.source import (
     ExportOptions,
@@ -36,8 +36,42 @@ def _scenario(tmp_path, extra: str, topology: str | None = None) -> str:
     return str(p)
 
 
-def test_a_scenario_gives_its_certified_design(tmp_path):
-    src = from_scenario(DEADLINE, ExportOptions(period=0.1, delay=1))
+def _small(tmp_path, extra: str) -> str:
+    """A scenario on a 3-agent signed cycle (d = 1): its D = 1 certificate takes about 0.2 s
+    (G1's about 10 s), for the tests about reading the file, not about G1's numbers."""
+    (tmp_path / "cycle.yaml").write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
+    p = tmp_path / "s.yaml"
+    p.write_text(f"topology: cycle.yaml\ntheta: [1]\nT: 5\n{extra}")
+    return str(p)
+
+
+@pytest.fixture(scope="module")
+def g1_scenario_d1():
+    """G1's scenario exported at h = 0.1, D = 1 (its delay line's certificate, about 10 s),
+    once for the tests that read it."""
+    return from_scenario(DEADLINE, ExportOptions(period=0.1, delay=1))
+
+
+@pytest.fixture(scope="module")
+def switching_json():
+    """certificates/switching.json exported at h = 0.013 (its sampled protocol certified
+    first, about 3 s), once for the tests that read it."""
+    return from_certificate(CERTS / "switching.json", ExportOptions(period=0.013))
+
+
+@pytest.fixture(scope="module")
+def g1_json_d0():
+    """certificates/g1.json (continuous) exported at h = 0.1, D = 0: the sampled protocol
+    certified first (about 1 s; at D = 1 the scenario's test has G1's delay line), once for
+    the tests that read it."""
+    return from_certificate(CERTS / "g1.json", ExportOptions(period=0.1))
+
+
+def test_a_scenario_gives_its_certified_design(g1_scenario_d1):
+    src = g1_scenario_d1
     law = src.law
     des = nd.design(nd.load(EXAMPLES / "g1.yaml"), [1, 2, -1], 0.1, thresholds=False)
     want = agent_law(des, Digital(0.1, 1), "1/(1+t)", 0.4, 0.3).modes[0]
@@ -52,19 +86,19 @@ def test_a_scenario_gives_its_certified_design(tmp_path):
 
 
 def test_the_digital_block_and_the_noise_are_read_and_overridden(tmp_path):
-    p = _scenario(
+    p = _small(
         tmp_path,
         "gain: 2/(2+t)\ndigital: {period: 0.05, delay: 1}\n"
-        "noise: {sigma: 0.2, f: 0.1, sigma_edges: [{from: 5, to: 6, sigma: 0.7}]}\n",
+        "noise: {sigma: 0.2, f: 0.1, sigma_edges: [{from: 2, to: 3, sigma: 0.7}]}\n",
     )
     law = from_scenario(p).law
     assert law.digital == Digital(0.05, 1) and law.gain.label == "2/(2+t)"
-    assert sorted(set(law.modes[0].sigma.tolist())) == [0.2, 0.7]
-    assert (law.noise_f == 0.1 * np.eye(3)).all()
+    assert law.modes[0].sigma.tolist() == [0.2, 0.7, 0.2]  # 1->2, 2->3, 3->1
+    assert (law.noise_f == 0.1 * np.eye(1)).all()
     law = from_scenario(p, ExportOptions(period=0.02, gain="1/(1+t)", sigma=0.3, f=0.25)).law
     assert law.digital == Digital(0.02, 1) and law.gain.label == "1/(1+t)"
-    assert sorted(set(law.modes[0].sigma.tolist())) == [0.3, 0.7]
-    assert (law.noise_f == 0.25 * np.eye(3)).all()
+    assert law.modes[0].sigma.tolist() == [0.3, 0.7, 0.3]
+    assert (law.noise_f == 0.25 * np.eye(1)).all()
 
 
 def test_a_schedule_csv_gain(tmp_path):
@@ -85,8 +119,8 @@ def test_a_switching_scenario(tmp_path):
     ]
 
 
-def test_a_certificate_gives_its_subject():
-    src = from_certificate(CERTS / "g1.json", ExportOptions(period=0.1, delay=1))
+def test_a_certificate_gives_its_subject(g1_json_d0):
+    src = g1_json_d0
     law = src.law
     assert src.kind == "certificate (hurwitz)" and "valid" in src.notes[0]
     doc = json.loads((CERTS / "g1.json").read_text())
@@ -102,9 +136,9 @@ def test_a_certificate_gives_its_subject():
     assert ml.sigma.tolist() == [0.4] * 8 and (src.initial == 0).all()
 
 
-def test_a_switching_certificate_gives_its_schedule():
+def test_a_switching_certificate_gives_its_schedule(switching_json):
     doc = json.loads((CERTS / "switching.json").read_text())
-    law = from_certificate(CERTS / "switching.json", ExportOptions(period=0.013)).law
+    law = switching_json.law
     assert list(law.schedule) == [(s["mode"], s["duration"]) for s in doc["subject"]["schedule"]]
     assert set(law.step_modes(400).tolist()) == {0, 1, 2}
 
@@ -321,11 +355,13 @@ def _sealed_doc(tmp_path, doc):
     return p
 
 
-def test_a_continuous_certificate_is_certified_sampled_first():
+def test_a_continuous_certificate_is_certified_sampled_first(g1_json_d0):
     # g1.json proves the continuous protocol only: the sampled one is certified here
-    src = load_source(CERTS / "g1.json", ExportOptions(period=0.1, delay=1))
+    # (load_source reads a certificate with from_certificate: test_load_source_tells_the_two_apart)
+    src = g1_json_d0
     assert "the sampled protocol certified here" in src.notes[0]
-    assert "for the sampled one (contracting from step k₀ = 24)" in src.notes[1]
+    # at D = 0 (without the delay line, whose k₀ = 24 the scenario's test asserts)
+    assert "for the sampled one (contracting from step k₀ = 4)" in src.notes[1]
     # at h = 0.5 the h = 0.1 proof does not hold; certified anew at h = 0.5, it does
     assert (
         "(contracting from step k₀ = 7)"
@@ -392,7 +428,7 @@ def test_a_time_varying_scenario_is_refused():
 
 
 def test_the_option_replaces_a_file_period_that_would_be_refused(tmp_path):
-    p = _scenario(tmp_path, "digital: {period: 20, delay: 1}\n")  # longer than T = 5
+    p = _small(tmp_path, "digital: {period: 20, delay: 1}\n")  # longer than T = 5
     with pytest.raises(InputError, match=r"s.yaml: digital.period: h = 20 is longer"):
         from_scenario(p)
     assert from_scenario(p, ExportOptions(period=0.1)).law.digital == Digital(0.1, 1)
@@ -403,20 +439,24 @@ def _order(law, m=0):
     return [(law.labels[j], law.labels[i]) for i, j in zip(ml.dst, ml.src, strict=True)]
 
 
-def test_a_certificate_and_its_scenario_list_the_edges_in_the_file_order(tmp_path):
+def test_a_certificate_and_its_scenario_list_the_edges_in_the_file_order(
+    tmp_path, g1_scenario_d1, g1_digital_d1, switching_json
+):
     top = nd.load(EXAMPLES / "g1.yaml")
     file_order = [(top.labels[j], top.labels[i]) for i, j in top.weights]
     assert file_order[:3] == [(2, 1), (1, 2), (5, 6)]  # not the sorted (2,1), (1,2), (6,2)
-    scenario = from_scenario(DEADLINE, ExportOptions(period=0.1, delay=1)).law
+    scenario = g1_scenario_d1.law
     shipped = load_source(CERTS / "g1_digital.json").law
-    fresh = certify(top, [1, 2, -1], gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
+    # a certificate issued by this checkout: certify(G1, θ, "1/(1+t)", Digital(0.1, 1)), the
+    # session's (tests/support/certificates.py)
+    fresh = g1_digital_d1.certificate
     p = tmp_path / "fresh.json"
     p.write_text(json.dumps(fresh))
     issued = load_source(p).law
     assert _order(scenario) == _order(shipped) == _order(issued) == file_order
     assert (scenario.modes[0].weight == issued.modes[0].weight).all()
     # the switching set: each mode in its own file's order
-    sw = load_source(CERTS / "switching.json", ExportOptions(period=0.013)).law
+    sw = switching_json.law
     for m, name in enumerate(sw.mode_names):
         t = nd.load(EXAMPLES / f"{name.lower()}.yaml")
         assert _order(sw, m) == [(t.labels[j], t.labels[i]) for i, j in t.weights]
@@ -454,7 +494,7 @@ def test_a_lossy_scenario_and_its_certificate_export_the_certified_losses(tmp_pa
         from_certificate(CERTS / "g1_digital.json", ExportOptions(loss=0.3))
 
 
-def test_the_export_options_are_written_once():
+def test_the_export_options_are_written_once(g1_scenario_d1):
     """(period, delay, gain, σ, f, loss, policy) is one frozen ExportOptions that every
     reader takes (issue 48: the tuple was written four times)."""
     import dataclasses
@@ -469,5 +509,5 @@ def test_the_export_options_are_written_once():
         names = set(inspect.signature(fn).parameters)
         assert "options" in names and not names & {"period", "delay", "sigma", "f"}, fn
     # the options set over the file's values: the same law as the file's own block
-    given = from_scenario(DEADLINE, ExportOptions(period=0.1, delay=1)).law
+    given = g1_scenario_d1.law
     assert given.digital == Digital(0.1, 1)

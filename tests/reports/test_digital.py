@@ -19,12 +19,23 @@ X0 = np.linspace(-3, 3, 21)
 
 
 @pytest.fixture(scope="module")
-def digital_run(g1, tmp_path_factory):
+def digital_run(tmp_path_factory):
+    """A digital run (h = 0.1, D = 1) on a 3-agent signed cycle (d = 1): its report's
+    certificate is issued in about 0.2 s (G1's delay line in about 10 s, whose certificate
+    tests/certify/kinds/test_digital.py checks)."""
+    import ntc_design as nd
+
+    folder = tmp_path_factory.mktemp("digital")
+    (folder / "cycle.yaml").write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
     res = simulate(
-        g1, [1, 2, -1], T=3.0, initial=X0, noise=NoiseModel(0.4, 0.3), method="exact",
-        digital={"period": 0.1, "delay": 1}, save_every=0.1,
+        nd.load(folder / "cycle.yaml"), [1], T=3.0, initial=[-3, 0.5, 3],
+        noise=NoiseModel(0.4, 0.3), method="exact", digital={"period": 0.1, "delay": 1},
+        save_every=0.1,
     )  # fmt: skip
-    out = tmp_path_factory.mktemp("digital") / "run"
+    out = folder / "run"
     write_outputs(res, out)
     return res, out
 

@@ -20,6 +20,18 @@ import yaml
 from tests.cli_helpers import run_cli, without_progress
 from tests.conftest import ROOT
 
+
+@pytest.fixture(autouse=True)
+def _png_figures(monkeypatch):
+    """Figures as PNG at 72 dpi: the pages' text is what is read here (the PNG data and the
+    links are dropped from it); the SVG and PDF copies are tests/reports' (CI time)."""
+    import functools
+
+    from ntc_design.reports import style
+
+    monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",), dpi=72))
+
+
 #: What Python writes and a user should never read.
 PYTHON = re.compile(r"\{'|\bTrue\b|\bFalse\b|\bNone\b|=True\b|=False\b|=None\b")
 

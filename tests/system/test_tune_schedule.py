@@ -6,16 +6,20 @@ import pytest
 
 from ntc_design.gain.schedule import read_schedule
 from tests.cli_helpers import run_cli
-from tests.support.tune_schedule import X0
 
 
 def test_cli_schedule_end_to_end_writes_a_runnable_folder(tmp_path, capsys, monkeypatch):
+    # a 3-agent signed cycle (d = 1): the folder, the certificate and the run are what is
+    # checked here; the optimal schedule on G1 against independent evaluations is
+    # tests/tune/test_optimal.py's (and its issue numbers tests/tune/test_schedule.py's)
+    (tmp_path / "cycle.yaml").write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
     sc = tmp_path / "sc.yaml"
     sc.write_text(
-        f"topology: {__import__('pathlib').Path('examples/g1.yaml').resolve()}\n"
-        "theta: [1, 2, -1]\nnoise: {sigma: 0.4, f: 0.3}\ninitial: ["
-        + ", ".join(map(str, X0))
-        + "]\npaths: 40\nseed: 3\n",
+        "topology: cycle.yaml\ntheta: [1]\nnoise: {sigma: 0.4, f: 0.3}\n"
+        "initial: [-3, 0.5, 3]\npaths: 40\nseed: 3\n",
         encoding="utf-8",
     )
     out = tmp_path / "out"
@@ -49,7 +53,7 @@ def test_cli_schedule_end_to_end_writes_a_runnable_folder(tmp_path, capsys, monk
     code, _, err = run_cli(["verify", out / "certificate.json"], capsys, monkeypatch)
     assert code == 0, err
     code, _, err = run_cli(
-        ["certify", "examples/g1.yaml", "--theta", "1,2,-1", "--gain", out / "schedule.csv"],
+        ["certify", tmp_path / "cycle.yaml", "--theta", "1", "--gain", out / "schedule.csv"],
         capsys,
         monkeypatch,
     )
