@@ -523,6 +523,13 @@ class DigitalLossKind(DigitalKind):
                         audit.fail(f"digital.{key}: a number for a property not certified")
                         audit.informational(("digital", key))
             return
+        # the words the rows print are the subject's, never the file's: the policy, and at
+        # D >= 1 the delay line's functional (the one proof of a delay on lossy links)
+        audit.exact(("digital", "policy"), state.loss.policy)
+        if state.subject.delay:
+            audit.exact(("digital", "bound"), DELAY_LINE)
+        elif "bound" in (audit.get("digital") or {}):
+            audit.fail("digital.bound: states a delay line's functional without a delay")
         if state.loss.policy == "hold":
             audit_hold(audit, state)
             return

@@ -173,3 +173,44 @@ def test_the_reading_carries_the_loss_state_typed_and_frozen(skip10):
     )
     with pytest.raises(FrozenInstanceError):
         state.loss = None  # type: ignore[misc]
+
+
+@pytest.fixture(scope="module")
+def cycle(tmp_path_factory):
+    from ntc_design.model.load import load
+
+    p = tmp_path_factory.mktemp("cycle") / "cycle.yaml"
+    p.write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
+    return load(p)
+
+
+FORGED_WORDS = [
+    (delay, field, forged)
+    for delay in (0, 1)
+    for field, forged in [("bound", None), ("bound", "razumikhin"), ("bound", "delay_line"),
+                          ("bound", "absent"), ("policy", "rescale"), ("policy", "hold"),
+                          ("policy", "absent")]
+    if (field, forged) != ("bound", "absent" if delay == 0 else "delay_line")  # the honest
+]  # fmt: skip
+
+
+@pytest.mark.hostile
+@pytest.mark.parametrize("delay, field, forged", FORGED_WORDS)
+def test_the_words_the_rows_print_are_proven_not_read(cycle, delay, field, forged):
+    # the bound named in the rows (the delay line's functional) and the policy are the
+    # subject's: a resealed certificate that names another is invalid, on a 3-agent cycle
+    # whose certificates take about 0.2 s (G1's: test_digital_loss_delay.py, slow)
+    doc = certify(cycle, [1.0], gain="1/(1+t)", digital=Digital(0.1, delay, 0.1)).certificate
+    doc = json.loads(json.dumps(doc))
+    assert verify(doc).valid and doc["results"]["digital"]["policy"] == "skip"
+    assert ("bound" in doc["results"]["digital"]) == (delay == 1)
+    res = doc["results"]["digital"]
+    if forged == "absent":
+        del res[field]
+    else:
+        res[field] = forged
+    ver = verify(_reseal(doc))
+    assert not ver.valid and any(f"digital.{field}" in str(c) for c in ver.failed), ver.failed
