@@ -1103,28 +1103,40 @@ def _variants(x) -> list:
 
 
 def _mutants(doc):
+    """Every mutant of ``doc`` as (label, build): ``build()`` makes it, so a test that
+    tries every STRIDE-th copies only those (a copy of a large certificate per mutant was
+    a quarter of the slow lane's forgery time)."""
     for path, value in list(_paths(doc)):
         if path == ():
             continue
-        for v in _variants(value):
-            m = copy.deepcopy(doc)
-            parent = m
-            for k in path[:-1]:
-                parent = parent[k]
+        for i, v in enumerate(_variants(value)):
             if v == "__drop__":
                 for key in list(value):
-                    mm = copy.deepcopy(m)
-                    par = mm
-                    for k in path:
-                        par = par[k]
-                    del par[key]
-                    yield f"{path}-{key}", mm
+                    yield f"{path}-{key}", (lambda path=path, key=key: _dropped(doc, path, key))
                 continue
-            if v == "__extra__":
-                parent[path[-1]] = {**value, "forged": 1.0}
-            else:
-                parent[path[-1]] = v
-            yield f"{path}={str(v)[:20]}", m
+            yield f"{path}={str(v)[:20]}", (lambda path=path, i=i: _replaced(doc, path, i))
+
+
+def _dropped(doc: dict, path: tuple, key) -> dict:
+    """``doc`` without ``key`` in the dict at ``path``."""
+    m = copy.deepcopy(doc)
+    parent = m
+    for k in path:
+        parent = parent[k]
+    del parent[key]
+    return m
+
+
+def _replaced(doc: dict, path: tuple, i: int) -> dict:
+    """``doc`` with the value at ``path`` replaced by its ``i``-th variant."""
+    m = copy.deepcopy(doc)
+    parent = m
+    for k in path[:-1]:
+        parent = parent[k]
+    value = parent[path[-1]]
+    v = _variants(value)[i]
+    parent[path[-1]] = {**value, "forged": 1.0} if v == "__extra__" else v
+    return m
 
 
 def _redigest(doc):
@@ -1162,6 +1174,30 @@ def _share_enclosures(monkeypatch) -> None:
         return memo[key]
 
     monkeypatch.setattr(Enclosures, "leaf", shared)
+
+
+_MINORS: dict[tuple, int | None] = {}
+
+
+def _share_minors(monkeypatch) -> None:
+    """Verify decides each exact ``m ≻ 0`` by Sylvester's criterion on an integer matrix
+    (``rigorous.exact.first_nonpositive_minor``), a pure function of its entries; most
+    mutants keep the matrices and the numbers they are built from, and the deadline kinds
+    carry their base kind's, so each distinct matrix is factorised once per worker and its
+    answer shared by every mutant and kind that builds it (the key is every entry and the
+    shape). Verify's verdicts are unchanged."""
+    from ntc_design.rigorous import exact
+
+    first = exact.first_nonpositive_minor
+
+    def shared(num):
+        arr = np.asarray(num, dtype=object)
+        key = (arr.shape, tuple(int(x) for x in arr.ravel().tolist()))
+        if key not in _MINORS:
+            _MINORS[key] = first(num)
+        return _MINORS[key]
+
+    monkeypatch.setattr(exact, "first_nonpositive_minor", shared)
 
 
 KIND_OF = {
@@ -1270,13 +1306,14 @@ def _loss_deadline_certificate(honest) -> dict:
 @pytest.mark.parametrize("which", list(KIND_OF))
 def test_no_valid_forgery_states_something_false(which, honest_all, monkeypatch):
     base = honest_all[which]
+    _share_minors(monkeypatch)
     if which == "time_varying":
         _share_enclosures(monkeypatch)
     tried = accepted = 0
-    for k, (label, m) in enumerate(_mutants(base)):
+    for k, (label, build) in enumerate(_mutants(base)):
         if k % STRIDE.get(which, 1):
             continue  # a large certificate: every STRIDE-th of its ~1,200 mutants
-        doc = _redigest(m)
+        doc = _redigest(build())
         for careful in (False, True):
             tried += 1
             try:
