@@ -1200,6 +1200,32 @@ def _share_minors(monkeypatch) -> None:
     monkeypatch.setattr(exact, "first_nonpositive_minor", shared)
 
 
+_DELTAS: dict[tuple, tuple] = {}
+
+
+def _share_lemma1(monkeypatch) -> None:
+    """Verify re-derives each mode's δ = C + ΔC from its topology (Assumption 2's
+    decomposition, ``certify.arrays.lemma1_delta``), a pure function of the topology and
+    ΔC that most mutants keep: each distinct (topology, ΔC) is decomposed once per worker
+    (the key is the labels, the dimension, every weight's bytes and ΔC; a failure is not
+    kept, it is raised again for each mutant). Verify's verdicts are unchanged."""
+    from ntc_design.certify import arrays
+
+    derive = arrays.lemma1_delta
+
+    def shared(top, margin):
+        weights = tuple(
+            (k, a.shape, a.dtype.str, a.tobytes())
+            for k, a in sorted((k, np.asarray(a)) for k, a in top.weights.items())
+        )
+        key = (repr(top.labels), top.dim, weights, repr(margin))
+        if key not in _DELTAS:
+            _DELTAS[key] = derive(top, margin)
+        return _DELTAS[key]
+
+    monkeypatch.setattr(arrays, "lemma1_delta", shared)
+
+
 KIND_OF = {
     "digital": "digital",
     "digital_loss": "digital_loss",
@@ -1307,6 +1333,7 @@ def _loss_deadline_certificate(honest) -> dict:
 def test_no_valid_forgery_states_something_false(which, honest_all, monkeypatch):
     base = honest_all[which]
     _share_minors(monkeypatch)
+    _share_lemma1(monkeypatch)
     if which == "time_varying":
         _share_enclosures(monkeypatch)
     tried = accepted = 0
