@@ -12,9 +12,11 @@ time-varying weights), never by the code under test.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import math
 import warnings
+from fractions import Fraction
 
 import networkx as nx
 import numpy as np
@@ -1176,54 +1178,61 @@ def _share_enclosures(monkeypatch) -> None:
     monkeypatch.setattr(Enclosures, "leaf", shared)
 
 
-_MINORS: dict[tuple, int | None] = {}
+_SHARED: dict[str, dict] = {}
 
 
-def _share_minors(monkeypatch) -> None:
-    """Verify decides each exact ``m ≻ 0`` by Sylvester's criterion on an integer matrix
-    (``rigorous.exact.first_nonpositive_minor``), a pure function of its entries; most
-    mutants keep the matrices and the numbers they are built from, and the deadline kinds
-    carry their base kind's, so each distinct matrix is factorised once per worker and its
-    answer shared by every mutant and kind that builds it (the key is every entry and the
-    shape). Verify's verdicts are unchanged."""
+def _content(x):
+    """A hashable key that is equal exactly when the values are (arrays by their bytes,
+    dtype and shape; exact numbers by their digits); anything else is refused."""
+    if isinstance(x, Topology):
+        weights = sorted((k, np.asarray(a)) for k, a in x.weights.items())
+        return ("Topology", repr(x.labels), x.dim, _content(weights))
+    if isinstance(x, np.ndarray):
+        if x.dtype == object:
+            return ("O", x.shape, tuple(_content(v) for v in x.ravel().tolist()))
+        return ("A", x.shape, x.dtype.str, x.tobytes())
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        fields = dataclasses.fields(x)
+        return (type(x).__name__, tuple(_content(getattr(x, f.name)) for f in fields))
+    if isinstance(x, (list, tuple)):
+        return (type(x).__name__, tuple(_content(v) for v in x))
+    if x is None or isinstance(x, (bool, int, str, Fraction)):
+        return (type(x).__name__, x)
+    if isinstance(x, float):
+        return ("float", repr(x))  # -0.0 and 0.0 apart
+    raise TypeError(f"no content key for {type(x).__name__}")
+
+
+def _share(monkeypatch, module, name: str) -> None:
+    """``module.name``, a pure function of its arguments, computed once per worker for
+    each distinct content of them and shared by every mutant and kind that asks (most
+    mutants keep the subject and the matrices, and the deadline kinds carry their base
+    kind's). Its answer is an immutable value; a failure is not kept (raised again for
+    each mutant). Verify's verdicts are unchanged."""
+    pure, memo = getattr(module, name), _SHARED.setdefault(f"{module.__name__}.{name}", {})
+
+    def shared(*args):
+        key = _content(args)
+        if key not in memo:
+            memo[key] = pure(*args)
+        return memo[key]
+
+    monkeypatch.setattr(module, name, shared)
+
+
+def _share_proofs(monkeypatch) -> None:
+    """The costly pure steps of verify, shared across mutants: Sylvester's criterion on an
+    integer matrix (``rigorous.exact.first_nonpositive_minor``, behind every exact
+    ``m ≻ 0``), Lemma 1's δ = C + ΔC re-derived from a mode's topology
+    (``certify.arrays.lemma1_delta``: Assumption 2's decomposition) and the lossy kinds'
+    exact offset ‖e*‖² (``exact_offset``, as the digital_loss kind calls it)."""
+    from ntc_design.certify import arrays
+    from ntc_design.certify.kinds import digital_loss
     from ntc_design.rigorous import exact
 
-    first = exact.first_nonpositive_minor
-
-    def shared(num):
-        arr = np.asarray(num, dtype=object)
-        key = (arr.shape, tuple(int(x) for x in arr.ravel().tolist()))
-        if key not in _MINORS:
-            _MINORS[key] = first(num)
-        return _MINORS[key]
-
-    monkeypatch.setattr(exact, "first_nonpositive_minor", shared)
-
-
-_DELTAS: dict[tuple, tuple] = {}
-
-
-def _share_lemma1(monkeypatch) -> None:
-    """Verify re-derives each mode's δ = C + ΔC from its topology (Assumption 2's
-    decomposition, ``certify.arrays.lemma1_delta``), a pure function of the topology and
-    ΔC that most mutants keep: each distinct (topology, ΔC) is decomposed once per worker
-    (the key is the labels, the dimension, every weight's bytes and ΔC; a failure is not
-    kept, it is raised again for each mutant). Verify's verdicts are unchanged."""
-    from ntc_design.certify import arrays
-
-    derive = arrays.lemma1_delta
-
-    def shared(top, margin):
-        weights = tuple(
-            (k, a.shape, a.dtype.str, a.tobytes())
-            for k, a in sorted((k, np.asarray(a)) for k, a in top.weights.items())
-        )
-        key = (repr(top.labels), top.dim, weights, repr(margin))
-        if key not in _DELTAS:
-            _DELTAS[key] = derive(top, margin)
-        return _DELTAS[key]
-
-    monkeypatch.setattr(arrays, "lemma1_delta", shared)
+    _share(monkeypatch, exact, "first_nonpositive_minor")
+    _share(monkeypatch, arrays, "lemma1_delta")
+    _share(monkeypatch, digital_loss, "exact_offset")
 
 
 KIND_OF = {
@@ -1332,8 +1341,7 @@ def _loss_deadline_certificate(honest) -> dict:
 @pytest.mark.parametrize("which", list(KIND_OF))
 def test_no_valid_forgery_states_something_false(which, honest_all, monkeypatch):
     base = honest_all[which]
-    _share_minors(monkeypatch)
-    _share_lemma1(monkeypatch)
+    _share_proofs(monkeypatch)
     if which == "time_varying":
         _share_enclosures(monkeypatch)
     tried = accepted = 0
