@@ -2,12 +2,14 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import ntc_design as nd
 from ntc_design.simulate import NoiseModel, SimulationSpec
+from tests.support.shared import once_per_run
 
 # -- a known optimum: two agents, d = 1, additive noise, γ = 1 ------------------------------
 # Both edges antagonistic with weight −w: L_B = w[[1+δ, 1], [1, 1+δ]], eigenvalues w(2+δ)
@@ -62,13 +64,19 @@ def pair_network(pair_topology):
 
 @pytest.fixture(scope="session")
 def g1_tuned(tmp_path_factory, examples):
-    """`ntc tune` of the paper's G1 scenario at T = 10, with --out, as a user runs it."""
-    out = tmp_path_factory.mktemp("tune") / "g1"
-    args = [str(examples / "scenarios" / "g1_fixed.yaml"), "--horizon", "10", "--eps", "2"]
-    proc = subprocess.run(
-        [sys.executable, "-m", "ntc_design", "tune", *args, "--out", str(out), "--json"],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    return proc, out
+    """`ntc tune` of the paper's G1 scenario at T = 10, with --out, as a user runs it: once
+    per test run, whichever xdist worker asks first (the others read its folder)."""
+
+    def build():
+        out = tmp_path_factory.mktemp("tune") / "g1"
+        args = [str(examples / "scenarios" / "g1_fixed.yaml"), "--horizon", "10", "--eps", "2"]
+        proc = subprocess.run(
+            [sys.executable, "-m", "ntc_design", "tune", *args, "--out", str(out), "--json"],
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        return [proc.args, proc.returncode, proc.stdout, proc.stderr, str(out)]
+
+    args, code, stdout, stderr, out = once_per_run(tmp_path_factory, "g1_tuned", build)
+    return subprocess.CompletedProcess(args, code, stdout, stderr), Path(out)

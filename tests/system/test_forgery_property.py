@@ -12,9 +12,11 @@ time-varying weights), never by the code under test.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import math
 import warnings
+from fractions import Fraction
 
 import networkx as nx
 import numpy as np
@@ -1103,28 +1105,40 @@ def _variants(x) -> list:
 
 
 def _mutants(doc):
+    """Every mutant of ``doc`` as (label, build): ``build()`` makes it, so a test that
+    tries every STRIDE-th copies only those (a copy of a large certificate per mutant was
+    a quarter of the slow lane's forgery time)."""
     for path, value in list(_paths(doc)):
         if path == ():
             continue
-        for v in _variants(value):
-            m = copy.deepcopy(doc)
-            parent = m
-            for k in path[:-1]:
-                parent = parent[k]
+        for i, v in enumerate(_variants(value)):
             if v == "__drop__":
                 for key in list(value):
-                    mm = copy.deepcopy(m)
-                    par = mm
-                    for k in path:
-                        par = par[k]
-                    del par[key]
-                    yield f"{path}-{key}", mm
+                    yield f"{path}-{key}", (lambda path=path, key=key: _dropped(doc, path, key))
                 continue
-            if v == "__extra__":
-                parent[path[-1]] = {**value, "forged": 1.0}
-            else:
-                parent[path[-1]] = v
-            yield f"{path}={str(v)[:20]}", m
+            yield f"{path}={str(v)[:20]}", (lambda path=path, i=i: _replaced(doc, path, i))
+
+
+def _dropped(doc: dict, path: tuple, key) -> dict:
+    """``doc`` without ``key`` in the dict at ``path``."""
+    m = copy.deepcopy(doc)
+    parent = m
+    for k in path:
+        parent = parent[k]
+    del parent[key]
+    return m
+
+
+def _replaced(doc: dict, path: tuple, i: int) -> dict:
+    """``doc`` with the value at ``path`` replaced by its ``i``-th variant."""
+    m = copy.deepcopy(doc)
+    parent = m
+    for k in path[:-1]:
+        parent = parent[k]
+    value = parent[path[-1]]
+    v = _variants(value)[i]
+    parent[path[-1]] = {**value, "forged": 1.0} if v == "__extra__" else v
+    return m
 
 
 def _redigest(doc):
@@ -1162,6 +1176,63 @@ def _share_enclosures(monkeypatch) -> None:
         return memo[key]
 
     monkeypatch.setattr(Enclosures, "leaf", shared)
+
+
+_SHARED: dict[str, dict] = {}
+
+
+def _content(x):
+    """A hashable key that is equal exactly when the values are (arrays by their bytes,
+    dtype and shape; exact numbers by their digits); anything else is refused."""
+    if isinstance(x, Topology):
+        weights = sorted((k, np.asarray(a)) for k, a in x.weights.items())
+        return ("Topology", repr(x.labels), x.dim, _content(weights))
+    if isinstance(x, np.ndarray):
+        if x.dtype == object:
+            return ("O", x.shape, tuple(_content(v) for v in x.ravel().tolist()))
+        return ("A", x.shape, x.dtype.str, x.tobytes())
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        fields = dataclasses.fields(x)
+        return (type(x).__name__, tuple(_content(getattr(x, f.name)) for f in fields))
+    if isinstance(x, (list, tuple)):
+        return (type(x).__name__, tuple(_content(v) for v in x))
+    if x is None or isinstance(x, (bool, int, str, Fraction)):
+        return (type(x).__name__, x)
+    if isinstance(x, float):
+        return ("float", repr(x))  # -0.0 and 0.0 apart
+    raise TypeError(f"no content key for {type(x).__name__}")
+
+
+def _share(monkeypatch, module, name: str) -> None:
+    """``module.name``, a pure function of its arguments, computed once per worker for
+    each distinct content of them and shared by every mutant and kind that asks (most
+    mutants keep the subject and the matrices, and the deadline kinds carry their base
+    kind's). Its answer is an immutable value; a failure is not kept (raised again for
+    each mutant). Verify's verdicts are unchanged."""
+    pure, memo = getattr(module, name), _SHARED.setdefault(f"{module.__name__}.{name}", {})
+
+    def shared(*args):
+        key = _content(args)
+        if key not in memo:
+            memo[key] = pure(*args)
+        return memo[key]
+
+    monkeypatch.setattr(module, name, shared)
+
+
+def _share_proofs(monkeypatch) -> None:
+    """The costly pure steps of verify, shared across mutants: Sylvester's criterion on an
+    integer matrix (``rigorous.exact.first_nonpositive_minor``, behind every exact
+    ``m ≻ 0``), Lemma 1's δ = C + ΔC re-derived from a mode's topology
+    (``certify.arrays.lemma1_delta``: Assumption 2's decomposition) and the lossy kinds'
+    exact offset ‖e*‖² (``exact_offset``, as the digital_loss kind calls it)."""
+    from ntc_design.certify import arrays
+    from ntc_design.certify.kinds import digital_loss
+    from ntc_design.rigorous import exact
+
+    _share(monkeypatch, exact, "first_nonpositive_minor")
+    _share(monkeypatch, arrays, "lemma1_delta")
+    _share(monkeypatch, digital_loss, "exact_offset")
 
 
 KIND_OF = {
@@ -1270,13 +1341,14 @@ def _loss_deadline_certificate(honest) -> dict:
 @pytest.mark.parametrize("which", list(KIND_OF))
 def test_no_valid_forgery_states_something_false(which, honest_all, monkeypatch):
     base = honest_all[which]
+    _share_proofs(monkeypatch)
     if which == "time_varying":
         _share_enclosures(monkeypatch)
     tried = accepted = 0
-    for k, (label, m) in enumerate(_mutants(base)):
+    for k, (label, build) in enumerate(_mutants(base)):
         if k % STRIDE.get(which, 1):
             continue  # a large certificate: every STRIDE-th of its ~1,200 mutants
-        doc = _redigest(m)
+        doc = _redigest(build())
         for careful in (False, True):
             tried += 1
             try:

@@ -26,6 +26,7 @@ from ntc_design.errors import InputError
 from ntc_design.model.paper import THETA
 from ntc_design.protocol.digital import Digital
 from tests.certify.test_loss_hold import _gamma, _recursion
+from tests.support.shared import once_per_run
 
 H = 0.1
 P = 0.3
@@ -38,9 +39,15 @@ def _reseal(doc):
 
 
 @pytest.fixture(scope="module")
-def hold30(g1):
-    digital = Digital(H, 0, P, "hold")
-    return json.loads(json.dumps(certify(g1, THETA, gain="1/(1+t)", digital=digital).certificate))
+def hold30(g1, tmp_path_factory):
+    """G1's hold certificate (~30 s), issued once per run: the module's slow tests may land
+    on both xdist workers (tests/support/shared.py)."""
+
+    def build():
+        digital = Digital(H, 0, P, "hold")
+        return certify(g1, THETA, gain="1/(1+t)", digital=digital).certificate
+
+    return once_per_run(tmp_path_factory, "hold30_certificate", build)
 
 
 @pytest.mark.slow
