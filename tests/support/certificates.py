@@ -98,8 +98,12 @@ def _honest_certificates() -> dict[str, dict]:
     dig = _load("g1_digital.json")
     lossy = Digital(0.1, 0, 0.1)  # lossy links, skip: the contraction and the offset
     digl = certify(g1t, theta3, gain="1/(1+t)", digital=lossy).certificate
-    lossy_d1 = Digital(0.1, 1, 0.1)  # lossy links with a delay: the lossy delay line
-    digld = certify(g1t, theta3, gain="1/(1+t)", digital=lossy_d1).certificate
+    # lossy links with a delay, the lossy delay line, on a 3-agent signed cycle (d = 1):
+    # 0.2 s, G1's 9 s (G1's is tests/certify/kinds/test_digital_loss_delay.py's, slow)
+    one = np.ones((1, 1))
+    cycle = nd.Topology.from_edges(3, 1, [(1, 2, one), (2, 3, -one), (3, 1, one)])
+    lossy_d1 = Digital(0.1, 1, 0.1)
+    digld = certify(cycle, [1.0], gain="1/(1+t)", digital=lossy_d1).certificate
     with pytest.warns(Warning):  # G3 fails Assumption 2
         sw_top = nd.load(ROOT / "examples" / "switching.yaml")
         digsw = certify(sw_top, theta3, gain="1/(1+t)", digital=Digital(0.013, 0)).certificate
