@@ -1257,7 +1257,7 @@ STRIDE = {
     "robust-riccati": 4,
     "digital": 3,
     "digital_loss": 3,
-    "digital_loss-delay": 4,
+    "digital_loss-delay": 1,  # a 3-agent cycle: every mutant (the stride of 4 missed the bound)
     "digital_switching": 4,
     "hurwitz-deadline": 3,
     "digital_loss-deadline": 3,
