@@ -96,7 +96,44 @@ KNOWN = [
 ]
 
 
-@pytest.mark.parametrize("expr, diverges, to_zero, square", KNOWN, ids=[k[0] for k in KNOWN])
+# -- the analysis in this process (the branch taken where fork is unavailable) ------------
+
+_IN_PROCESS = [
+    # (gain, ∫c = ∞, c → 0, ∫c² < ∞): the textbook answers
+    ("1/(1+t)", True, True, True),
+    ("(1+t)^-2", False, True, True),
+    ("(1+t)^(-1/3)", True, True, False),
+    ("exp(-t)", False, True, True),
+    ("2 + cos(t)", True, False, False),
+    ("1/(2+t)^0.75", True, True, True),
+    ("(1 + sin(t)^2)/(1+t)", True, True, True),
+    ("t/(1+t^2)", True, True, True),
+    ("3", True, False, False),
+    ("1/(1+t) + sin(t)/(1+t)", True, True, True),  # an oscillating part
+    ("exp(-t)*(2+sin(t))", False, True, True),
+    ("1/((1+t)*log(2+t))", True, True, True),  # ∫c diverges like log log t
+    ("(2+cos(t))/(1+t)^0.6", True, True, True),
+    ("1/sqrt(1+t)", True, True, False),
+    ("1/(1+t)^0.5 + cos(t)/(1+t)^2", True, True, False),
+    ("min(1, 2/(1+t))", True, True, True),
+    ("max(1/(1+t), exp(-t))", True, True, True),
+    ("abs(sin(t))/(1+t)", True, True, True),  # mean 2/π over a period
+    ("atan(t)/(1+t)", True, True, True),
+    ("tanh(1+t)/(1+t)", True, True, True),
+    ("log(2+t)/(1+t)^2", False, True, True),
+]
+
+
+def _same_gain(a: tuple, b: tuple) -> bool:
+    return a[0].replace(" ", "") == b[0].replace(" ", "") and a[1:] == b[1:]
+
+
+#: The forked analysis of a gain runs the same ``_decide`` as the in-process test below:
+#: a gain of both tables, with the same answers, is analysed there only (0.3-1.4 s a fork)
+FORKED = [k for k in KNOWN if not any(_same_gain(k, i) for i in _IN_PROCESS)]
+
+
+@pytest.mark.parametrize("expr, diverges, to_zero, square", FORKED, ids=[k[0] for k in FORKED])
 def test_known_gains(expr, diverges, to_zero, square):
     g = analyse_gain(expr, seconds=60.0)  # generous: a loaded CI machine must not flip these
     assert g.continuous_nonnegative.value is True, g.continuous_nonnegative.reason
@@ -138,15 +175,16 @@ def test_hostile_gains_refused_fast(expr, capsys, monkeypatch):
 @pytest.mark.hostile
 def test_slow_gain_stops_at_the_hard_limit():
     """A gain sympy cannot finish: the forked analysis is killed; undecided, not hung."""
-    g = analyse_gain("sin(t)^1000/(1+t)", seconds=2.0)
+    g = analyse_gain("sin(t)^1000/(1+t)", seconds=1.0)
     undecided = [c for c in (g.integral_diverges, g.square_integrable) if c.value is None]
-    assert undecided and all("2 s time limit" in c.reason for c in undecided), undecided
+    assert undecided and all("1 s time limit" in c.reason for c in undecided), undecided
     assert g.mean_square is not True
 
 
 def test_undecided_is_none_not_a_guess():
     # ∫ (1 + sin t²)/(1+t) diverges, but sin(t²) is outside the oscillation rule
-    g = analyse_gain("(1 + sin(t^2))/(1+t)", seconds=3.0)
+    # cut short at 1 s, as it was at 3 s (the full analysis, ~7 s, ends in "cannot decide")
+    g = analyse_gain("(1 + sin(t^2))/(1+t)", seconds=1.0)
     assert g.integral_diverges.value in (True, None)
     assert g.tends_to_zero.value in (True, None)
 
@@ -172,34 +210,6 @@ def test_no_sympy_spelling_reaches_a_user(gain, capsys, monkeypatch):
         assert code == (0 if gain in ("(1+t)^(-1/3)", "1/(1+t)", "(2+t)^(-0.7)") else 1)
         assert "**" not in out and " oo" not in out and "zoo" not in out, out
         assert "oo " not in out.replace("too ", "").replace("goo", "")
-
-
-# -- the analysis in this process (the branch taken where fork is unavailable) ------------
-
-_IN_PROCESS = [
-    # (gain, ∫c = ∞, c → 0, ∫c² < ∞): the textbook answers
-    ("1/(1+t)", True, True, True),
-    ("(1+t)^-2", False, True, True),
-    ("(1+t)^(-1/3)", True, True, False),
-    ("exp(-t)", False, True, True),
-    ("2 + cos(t)", True, False, False),
-    ("1/(2+t)^0.75", True, True, True),
-    ("(1 + sin(t)^2)/(1+t)", True, True, True),
-    ("t/(1+t^2)", True, True, True),
-    ("3", True, False, False),
-    ("1/(1+t) + sin(t)/(1+t)", True, True, True),  # an oscillating part
-    ("exp(-t)*(2+sin(t))", False, True, True),
-    ("1/((1+t)*log(2+t))", True, True, True),  # ∫c diverges like log log t
-    ("(2+cos(t))/(1+t)^0.6", True, True, True),
-    ("1/sqrt(1+t)", True, True, False),
-    ("1/(1+t)^0.5 + cos(t)/(1+t)^2", True, True, False),
-    ("min(1, 2/(1+t))", True, True, True),
-    ("max(1/(1+t), exp(-t))", True, True, True),
-    ("abs(sin(t))/(1+t)", True, True, True),  # mean 2/π over a period
-    ("atan(t)/(1+t)", True, True, True),
-    ("tanh(1+t)/(1+t)", True, True, True),
-    ("log(2+t)/(1+t)^2", False, True, True),
-]
 
 
 @pytest.mark.parametrize("text, diverges, to_zero, square", _IN_PROCESS)
