@@ -6,6 +6,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -323,50 +324,72 @@ def test_output_lost_at_exit_is_a_failure_not_a_success():
     assert b"Traceback" not in err
 
 
+REFUSED = [
+    (["certify", "nope.yaml", "--theta", "1,2,-1"], "nope.yaml: no such file"),
+    (["certify", "examples/g1.yaml", "--theta", "1,2"], "--theta: expected 3 numbers"),
+    (["certify", "examples/g1.yaml", "--theta", "1,2,-1", "--period", "0"], "--period:"),
+    (["design", "examples/g1.yaml", "--theta", "1"], "--theta: expected 3 numbers"),
+    (["robust", "examples/g1.yaml", "--theta", "1,2,3,4"], "--theta: expected 3 numbers"),
+    (["check", "nope.yaml"], "nope.yaml: no such file"),
+    (["verify", "nope.json"], "nope.json: no such file; expected a certificate"),
+    (["simulate", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
+    (["simulate", "examples/scenarios/g1_fixed.yaml", "--out", "OUT", "--period", "0"],
+     "--period: must be a positive number"),
+    (["tune", "examples/scenarios/g1_fixed.yaml", "--period", "0"], "--period: must be"),
+    (["tune", "nope.yaml"], "nope.yaml: no such file"),
+    (["export", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
+    (["export", "examples/scenarios/g1_deadline.yaml", "--out", "OUT", "--delay", "-1"],
+     "--delay: must be an integer >= 0"),
+    (["report", "OUT", "--period", "0"], "--period: must be a positive number"),
+    (["sweep", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
+]  # fmt: skip
+
+# each command in a child forked from one interpreter that has imported only the CLI (as
+# `ntc` has when it parses the command line): the modules a fresh process would hold, for
+# one interpreter start instead of one each
+_PROBE = """
+import contextlib, io, json, os, sys
+from ntc_design.cli import main
+for argv, where in json.loads(sys.argv[1]):
+    pid = os.fork()
+    if pid == 0:
+        try:
+            sys.argv = ['ntc', *argv]
+            err = io.StringIO()
+            with contextlib.suppress(SystemExit), contextlib.redirect_stderr(err):
+                main()
+            with open(where, 'w') as f:
+                json.dump([err.getvalue(), sorted(sys.modules)], f)
+        finally:
+            os._exit(0)
+    os.waitpid(pid, 0)
+"""
+
+
+@pytest.fixture(scope="module")
+def refusals(tmp_path_factory):
+    """Per case of REFUSED: (its folder, stderr, the modules loaded)."""
+    runs = []
+    for k, (argv, _) in enumerate(REFUSED):
+        d = tmp_path_factory.mktemp(f"refused{k}")
+        runs.append(([str(d / "out") if a == "OUT" else a for a in argv], str(d / "probe.json")))
+    subprocess.run(
+        [sys.executable, "-c", _PROBE, json.dumps(runs)], cwd=ROOT, check=True, timeout=120
+    )
+    out = []
+    for _, where in runs:
+        err, mods = json.loads(Path(where).read_text())
+        out.append((Path(where).parent, err, set(mods)))
+    return out
+
+
 @pytest.mark.hostile
-@pytest.mark.parametrize(
-    "argv, needle",
-    [
-        (["certify", "nope.yaml", "--theta", "1,2,-1"], "nope.yaml: no such file"),
-        (["certify", "examples/g1.yaml", "--theta", "1,2"], "--theta: expected 3 numbers"),
-        (["certify", "examples/g1.yaml", "--theta", "1,2,-1", "--period", "0"], "--period:"),
-        (["design", "examples/g1.yaml", "--theta", "1"], "--theta: expected 3 numbers"),
-        (["robust", "examples/g1.yaml", "--theta", "1,2,3,4"], "--theta: expected 3 numbers"),
-        (["check", "nope.yaml"], "nope.yaml: no such file"),
-        (["verify", "nope.json"], "nope.json: no such file; expected a certificate"),
-        (["simulate", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
-        (["simulate", "examples/scenarios/g1_fixed.yaml", "--out", "OUT", "--period", "0"],
-         "--period: must be a positive number"),
-        (["tune", "examples/scenarios/g1_fixed.yaml", "--period", "0"], "--period: must be"),
-        (["tune", "nope.yaml"], "nope.yaml: no such file"),
-        (["export", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
-        (["export", "examples/scenarios/g1_deadline.yaml", "--out", "OUT", "--delay", "-1"],
-         "--delay: must be an integer >= 0"),
-        (["report", "OUT", "--period", "0"], "--period: must be a positive number"),
-        (["sweep", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
-    ],
-)  # fmt: skip
-def test_trivially_bad_input_is_refused_before_the_heavy_imports(tmp_path, argv, needle):
+@pytest.mark.parametrize("k", range(len(REFUSED)), ids=[" ".join(a) for a, _ in REFUSED])
+def test_trivially_bad_input_is_refused_before_the_heavy_imports(refusals, k):
     # a missing file, --period 0, a θ of the wrong length: refused in one line before the
     # library's layers (SciPy's sparse matrices, SymPy, Numba, the optimisers) are imported
-    argv = [str(tmp_path / "out") if a == "OUT" else a for a in argv]
-    code = (
-        "import contextlib, io\n"
-        f"sys.argv = ['ntc', *{argv!r}]\n"
-        "from ntc_design.cli import main\n"
-        "err = io.StringIO()\n"
-        "with contextlib.suppress(SystemExit), contextlib.redirect_stderr(err):\n    main()\n"
-        "print(json.dumps(err.getvalue()))"
-    )
-    probe = f"import sys, json\n{code}\nprint(json.dumps(sorted(sys.modules)))"
-    out = (
-        subprocess.run(
-            [sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True
-        )
-        .stdout.strip()
-        .splitlines()
-    )
-    err, mods = json.loads(out[-2]), set(json.loads(out[-1]))
+    d, err, mods = refusals[k]
+    needle = REFUSED[k][1]
     assert err.startswith("error: ") and needle in err and err.count("\n") == 1, err
     assert heavy_in(mods) == [] and "ntc_design.model.topology" not in mods
-    assert not (tmp_path / "out").exists()
+    assert not (d / "out").exists()
