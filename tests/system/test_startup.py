@@ -27,23 +27,70 @@ def heavy_in(mods: set[str]) -> list[str]:
     return sorted(h for h in HEAVY if h in mods)
 
 
+# each command in a child forked from one interpreter that has imported only the CLI (as
+# `ntc` has when it parses the command line): the modules a fresh process would hold, for
+# one interpreter start instead of one each
+_PROBE = """
+import contextlib, io, json, os, sys
+from ntc_design.cli import main
+for argv, where in json.loads(sys.argv[1]):
+    pid = os.fork()
+    if pid == 0:
+        try:
+            sys.argv = ['ntc', *argv]
+            err = io.StringIO()
+            with (
+                contextlib.suppress(SystemExit),
+                contextlib.redirect_stdout(io.StringIO()),
+                contextlib.redirect_stderr(err),
+            ):
+                main()
+            with open(where, 'w') as f:
+                json.dump([err.getvalue(), sorted(sys.modules)], f)
+        finally:
+            os._exit(0)
+    os.waitpid(pid, 0)
+"""
+
+
+@pytest.fixture(scope="module")
+def forked_cli(tmp_path_factory):
+    """``(name, commands)`` -> per command (its folder, stderr, the modules loaded), from
+    one probe per name; ``OUT`` in a command is a path in its folder (not made)."""
+    done: dict = {}
+
+    def run(name, commands):
+        if name not in done:
+            runs = []
+            for k, argv in enumerate(commands):
+                d = tmp_path_factory.mktemp(f"{name}{k}")
+                argv = [str(d / "out") if a == "OUT" else a for a in argv]
+                runs.append((argv, str(d / "probe.json")))
+            subprocess.run(
+                [sys.executable, "-c", _PROBE, json.dumps(runs)], cwd=ROOT, check=True, timeout=120
+            )
+            done[name] = []
+            for _, where in runs:
+                err, mods = json.loads(Path(where).read_text())
+                done[name].append((Path(where).parent, err, set(mods)))
+        return done[name]
+
+    return run
+
+
 def test_import_ntc_design_loads_no_heavy_library():
     mods = loaded_after("import ntc_design")
     assert heavy_in(mods) == []
     assert "numpy" not in mods  # the package namespace itself is free
 
 
-@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["check", "--help"], ["nope"]])
-def test_help_version_and_typos_load_no_library(argv):
-    code = (
-        "import contextlib, io\n"
-        f"sys.argv = ['ntc', *{argv!r}]\n"
-        "from ntc_design.cli import main\n"
-        "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()), "
-        "contextlib.redirect_stderr(io.StringIO()):\n    main()"
-    )
-    mods = loaded_after(code)
-    assert heavy_in(mods) == [] and "numpy" not in mods
+LIGHT = [["--help"], ["--version"], ["check", "--help"], ["nope"]]
+
+
+@pytest.mark.parametrize("k", range(len(LIGHT)), ids=[" ".join(a) for a in LIGHT])
+def test_help_version_and_typos_load_no_library(forked_cli, k):
+    _, _, mods = forked_cli("light", LIGHT)[k]
+    assert heavy_in(mods) == [] and "numpy" not in mods and "ntc_design.cli" in mods
 
 
 def test_check_of_a_fixed_topology_loads_no_sympy_or_optimiser():
@@ -344,51 +391,13 @@ REFUSED = [
     (["sweep", "nope.yaml", "--out", "OUT"], "nope.yaml: no such file"),
 ]  # fmt: skip
 
-# each command in a child forked from one interpreter that has imported only the CLI (as
-# `ntc` has when it parses the command line): the modules a fresh process would hold, for
-# one interpreter start instead of one each
-_PROBE = """
-import contextlib, io, json, os, sys
-from ntc_design.cli import main
-for argv, where in json.loads(sys.argv[1]):
-    pid = os.fork()
-    if pid == 0:
-        try:
-            sys.argv = ['ntc', *argv]
-            err = io.StringIO()
-            with contextlib.suppress(SystemExit), contextlib.redirect_stderr(err):
-                main()
-            with open(where, 'w') as f:
-                json.dump([err.getvalue(), sorted(sys.modules)], f)
-        finally:
-            os._exit(0)
-    os.waitpid(pid, 0)
-"""
-
-
-@pytest.fixture(scope="module")
-def refusals(tmp_path_factory):
-    """Per case of REFUSED: (its folder, stderr, the modules loaded)."""
-    runs = []
-    for k, (argv, _) in enumerate(REFUSED):
-        d = tmp_path_factory.mktemp(f"refused{k}")
-        runs.append(([str(d / "out") if a == "OUT" else a for a in argv], str(d / "probe.json")))
-    subprocess.run(
-        [sys.executable, "-c", _PROBE, json.dumps(runs)], cwd=ROOT, check=True, timeout=120
-    )
-    out = []
-    for _, where in runs:
-        err, mods = json.loads(Path(where).read_text())
-        out.append((Path(where).parent, err, set(mods)))
-    return out
-
 
 @pytest.mark.hostile
 @pytest.mark.parametrize("k", range(len(REFUSED)), ids=[" ".join(a) for a, _ in REFUSED])
-def test_trivially_bad_input_is_refused_before_the_heavy_imports(refusals, k):
+def test_trivially_bad_input_is_refused_before_the_heavy_imports(forked_cli, k):
     # a missing file, --period 0, a θ of the wrong length: refused in one line before the
     # library's layers (SciPy's sparse matrices, SymPy, Numba, the optimisers) are imported
-    d, err, mods = refusals[k]
+    d, err, mods = forked_cli("refused", [argv for argv, _ in REFUSED])[k]
     needle = REFUSED[k][1]
     assert err.startswith("error: ") and needle in err and err.count("\n") == 1, err
     assert heavy_in(mods) == [] and "ntc_design.model.topology" not in mods
