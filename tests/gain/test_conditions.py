@@ -10,6 +10,19 @@ from ntc_design.gain.conditions import CONDITION_LABELS, analyse_gain
 from tests.cli_helpers import assert_input_error, run_cli
 from tests.support.rows import _text
 
+
+@pytest.fixture(scope="module", autouse=True)
+def _sympy_loaded():
+    """One analysis in this process first: the forked analyses below inherit the ~250
+    modules SymPy imports on first use and its caches, instead of each child importing
+    them again (40 % of a forked analysis). What each analysis decides is unchanged."""
+    from ntc_design.gain import conditions as gain
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gain._decide(gain.parse_gain("2/(3+t)"), "2/(3+t)", lambda k, v: None)
+
+
 # -------------------------------------------------------------------- gain and verdicts
 
 
