@@ -45,7 +45,8 @@ def _assert_links_resolve(path: Path) -> int:
 def stand_in_save(monkeypatch, draw: tuple[str, ...] = (), formats=("png",)) -> list[Path]:
     """Replace ``style.save`` by one that draws nothing: each figure is closed and its
     files (``formats``) are empty stand-ins, so links to them resolve; the stems ending in
-    one of ``draw`` are drawn for real (PNG at 72 dpi) for the tests that read pixels.
+    one of ``draw`` are drawn for real (``formats``, PNG at 72 dpi) for the tests that
+    read them.
     Drawing is the slow part of a report (about 0.4 s a figure); the full-size runs and
     tests/reports/test_style.py draw every format. Returns the stems saved, in order."""
     import matplotlib.pyplot as plt
@@ -58,7 +59,7 @@ def stand_in_save(monkeypatch, draw: tuple[str, ...] = (), formats=("png",)) -> 
     def save(fig, stem, **_):
         got.append(stem)
         if draw and stem.name.endswith(draw):
-            return real(fig, stem, formats=("png",), dpi=72)
+            return real(fig, stem, formats=formats, dpi=72)
         plt.close(fig)
         stem.parent.mkdir(parents=True, exist_ok=True)
         files = {f: stem.with_suffix(f".{f}") for f in formats}
