@@ -126,13 +126,22 @@ def test_a_schedule_csv_gain(tmp_path):
 
 
 def test_a_switching_scenario(tmp_path):
-    p = _scenario(tmp_path, "", str(EXAMPLES / "switching.yaml"))
+    """A switching scenario's modes and schedule as its files give them: two 3-agent
+    cycles (certified at h = 0.013 in about 1 s; the paper's set, about 5 s, is
+    switching_json's below)."""
+    _small(tmp_path, "")  # writes cycle.yaml
+    (tmp_path / "more.yaml").write_text(
+        (tmp_path / "cycle.yaml").read_text() + "  - {from: 1, to: 3, weight: 1}\n"
+    )
+    (tmp_path / "sw.yaml").write_text(
+        "modes: {A: cycle.yaml, B: more.yaml}\nschedule:\n  - {mode: B, duration: 0.02}\n"
+        "  - {mode: B, duration: 0.02}\n  - {mode: A, duration: 0.02}\n"
+    )
+    p = tmp_path / "s.yaml"
+    p.write_text("topology: sw.yaml\ntheta: [1]\nT: 5\n")
     law = from_scenario(p, ExportOptions(period=0.013)).law
-    assert law.mode_names == ["G1", "G2", "G3"] and [m for m, _ in law.schedule][:3] == [
-        "G2",
-        "G2",
-        "G1",
-    ]
+    assert law.mode_names == ["A", "B"] and [m for m, _ in law.schedule] == ["B", "B", "A"]
+    assert [m.n_edges for m in law.modes] == [3, 4]
 
 
 def test_a_certificate_gives_its_subject(g1_json_d0):
