@@ -14,15 +14,19 @@ from ntc_design.export.run import export, read_state, state_text, stdin_text
 from ntc_design.export.source import ExportOptions
 from ntc_design.simulate.replay import replay
 from tests.conftest import EXAMPLES, ROOT
-from tests.support.export import CC, CFLAGS, needs_cc
+from tests.support.export import CC, CFLAGS, g1_d1_certified, needs_cc
 
 DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"
 
 
 @pytest.fixture(scope="module")
-def c_export(tmp_path_factory):
+def c_export(tmp_path_factory, g1, g1_digital_d1):
+    """G1's scenario exported to C at h = 0.1, D = 1; its certificate is the session's
+    g1_digital_d1 once the export's certify call is checked to be that one."""
     out = tmp_path_factory.mktemp("exp") / "g1-c"
-    return export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1))
+    with pytest.MonkeyPatch.context() as mp:
+        g1_d1_certified(mp, g1, g1_digital_d1)
+        return export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1))
 
 
 def test_the_folder(c_export):

@@ -24,6 +24,7 @@ from ntc_design.gain.schedule import ScheduleGain
 from ntc_design.protocol.agents import agent_law
 from ntc_design.protocol.digital import Digital
 from tests.conftest import EXAMPLES, ROOT
+from tests.support.export import g1_d1_certified
 
 DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"
 CERTS = ROOT / "certificates"
@@ -53,21 +54,9 @@ def g1_scenario_d1(g1, g1_digital_d1):
     """G1's scenario exported at h = 0.1, D = 1, once for the tests that read it. Its delay
     line's certificate (about 10 s) is the session's g1_digital_d1 = certify(G1, θ,
     "1/(1+t)", Digital(0.1, 1)) at the paper's noise (0.4, 0.3), which the scenario's file
-    gives: the certify call from_scenario makes is checked to be exactly that one (each
-    argument read from the file) and answered with it; test_digital.py proves that result."""
-    from ntc_design.export import source
-
-    def certify(top, theta, margin, gain, delta, **kw):
-        assert top.labels == g1.labels and top.dim == g1.dim
-        assert top.weights.keys() == g1.weights.keys()
-        assert all(np.array_equal(top.weights[k], g1.weights[k]) for k in g1.weights)
-        assert list(theta) == [1, 2, -1] and margin == 0.1 and delta is None
-        assert gain == "1/(1+t)" and kw["digital"] == Digital(0.1, 1)
-        assert (kw["noise_sigma"], kw["noise_f"], kw["sigma_edges"]) == (0.4, 0.3, {})
-        return g1_digital_d1
-
+    gives (tests/support/export.py's g1_d1_certified checks the call and answers it)."""
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(source, "certify", certify)
+        g1_d1_certified(mp, g1, g1_digital_d1)
         return from_scenario(DEADLINE, ExportOptions(period=0.1, delay=1))
 
 

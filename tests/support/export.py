@@ -12,12 +12,14 @@ import pytest
 from ntc_design.export.c import c_files
 from ntc_design.export.python import python_files
 from ntc_design.export.run import read_state, stdin_text
+from ntc_design.protocol.digital import Digital
 
 __all__ = [
     "CC",
     "CFLAGS",
     "arrivals_for",
     "build_c",
+    "g1_d1_certified",
     "needs_cc",
     "normals_for",
     "read_state",
@@ -94,3 +96,24 @@ def normals_for(law, steps, seed=0, paths=None):
     count = int(law.normals_per_step(steps).sum())
     rng = np.random.default_rng(seed)
     return rng.standard_normal(count if paths is None else (paths, count))
+
+
+def g1_d1_certified(monkeypatch, g1, g1_digital_d1):
+    """Answer the export's certify call for examples/scenarios/g1_deadline.yaml at h = 0.1,
+    D = 1 with the session's g1_digital_d1 = certify(G1, θ, "1/(1+t)", Digital(0.1, 1)) at
+    the paper's noise (0.4, 0.3), after checking that the call is exactly that one (each
+    argument as read from the file): its delay line's certificate (about 10 s) is issued
+    once per worker, and tests/certify/kinds/test_digital.py proves it. Any other call
+    fails the test."""
+    from ntc_design.export import source
+
+    def certify(top, theta, margin, gain, delta, **kw):
+        assert top.labels == g1.labels and top.dim == g1.dim
+        assert top.weights.keys() == g1.weights.keys()
+        assert all(np.array_equal(top.weights[k], g1.weights[k]) for k in g1.weights)
+        assert list(theta) == [1, 2, -1] and margin == 0.1 and delta is None
+        assert gain == "1/(1+t)" and kw["digital"] == Digital(0.1, 1)
+        assert (kw["noise_sigma"], kw["noise_f"], kw["sigma_edges"]) == (0.4, 0.3, {})
+        return g1_digital_d1
+
+    monkeypatch.setattr(source, "certify", certify)
