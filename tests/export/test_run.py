@@ -170,10 +170,18 @@ def test_an_export_never_deletes_user_data(tmp_path, case):
 
 
 def test_an_earlier_export_and_its_build_are_replaced(tmp_path):
+    # the folder is what is checked: a 3-agent signed cycle's scenario (G1's is c_export)
+    (tmp_path / "cycle.yaml").write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
+    sc = tmp_path / "s.yaml"
+    sc.write_text("topology: cycle.yaml\ntheta: [1]\nT: 5\n")
     out = tmp_path / "out"
-    export(DEADLINE, "c", out, ExportOptions(period=0.1))
+    first = export(sc, "c", out, ExportOptions(period=0.1))
+    assert "ntc_protocol.c" in first.files
     (out / "ntc_replay").write_bytes(b"built")  # what the README's command makes
-    again = export(DEADLINE, "python", out, ExportOptions(period=0.1))
+    again = export(sc, "python", out, ExportOptions(period=0.1))
     names = sorted(p.name for p in out.iterdir())
     assert names == sorted([*again.files, run.MANIFEST]) and "ntc_replay" not in names
 
