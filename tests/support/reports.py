@@ -46,8 +46,7 @@ def stand_in_save(monkeypatch, draw: tuple[str, ...] = (), formats=("png",)) -> 
     """Replace ``style.save`` by one that draws nothing: each figure is closed and its
     files (``formats``) are empty stand-ins, so links to them resolve; the stems ending in
     one of ``draw`` are drawn for real (``formats``, PNG at 72 dpi) for the tests that
-    read them.
-    Drawing is the slow part of a report (about 0.4 s a figure); the full-size runs and
+    read them. Drawing is the slow part of a report (about 0.4 s a figure); the full-size runs and
     tests/reports/test_style.py draw every format. Returns the stems saved, in order."""
     import matplotlib.pyplot as plt
 
