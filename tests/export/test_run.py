@@ -14,15 +14,19 @@ from ntc_design.export.run import export, read_state, state_text, stdin_text
 from ntc_design.export.source import ExportOptions
 from ntc_design.simulate.replay import replay
 from tests.conftest import EXAMPLES, ROOT
-from tests.support.export import CC, CFLAGS, needs_cc
+from tests.support.export import CC, CFLAGS, g1_d1_certified, needs_cc
 
 DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"
 
 
 @pytest.fixture(scope="module")
-def c_export(tmp_path_factory):
+def c_export(tmp_path_factory, g1, g1_digital_d1):
+    """G1's scenario exported to C at h = 0.1, D = 1; its certificate is the session's
+    g1_digital_d1 once the export's certify call is checked to be that one."""
     out = tmp_path_factory.mktemp("exp") / "g1-c"
-    return export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1))
+    with pytest.MonkeyPatch.context() as mp:
+        g1_d1_certified(mp, g1, g1_digital_d1)
+        return export(DEADLINE, "c", out, ExportOptions(period=0.1, delay=1))
 
 
 def test_the_folder(c_export):
@@ -166,10 +170,18 @@ def test_an_export_never_deletes_user_data(tmp_path, case):
 
 
 def test_an_earlier_export_and_its_build_are_replaced(tmp_path):
+    # the folder is what is checked: a 3-agent signed cycle's scenario (G1's is c_export)
+    (tmp_path / "cycle.yaml").write_text(
+        "dim: 1\nagents: 3\nedges:\n  - {from: 1, to: 2, weight: 1}\n"
+        "  - {from: 2, to: 3, weight: -1}\n  - {from: 3, to: 1, weight: 1}\n"
+    )
+    sc = tmp_path / "s.yaml"
+    sc.write_text("topology: cycle.yaml\ntheta: [1]\nT: 5\n")
     out = tmp_path / "out"
-    export(DEADLINE, "c", out, ExportOptions(period=0.1))
+    first = export(sc, "c", out, ExportOptions(period=0.1))
+    assert "ntc_protocol.c" in first.files
     (out / "ntc_replay").write_bytes(b"built")  # what the README's command makes
-    again = export(DEADLINE, "python", out, ExportOptions(period=0.1))
+    again = export(sc, "python", out, ExportOptions(period=0.1))
     names = sorted(p.name for p in out.iterdir())
     assert names == sorted([*again.files, run.MANIFEST]) and "ntc_replay" not in names
 

@@ -24,6 +24,7 @@ from ntc_design.gain.schedule import ScheduleGain
 from ntc_design.protocol.agents import agent_law
 from ntc_design.protocol.digital import Digital
 from tests.conftest import EXAMPLES, ROOT
+from tests.support.export import g1_d1_certified
 
 DEADLINE = EXAMPLES / "scenarios" / "g1_deadline.yaml"
 CERTS = ROOT / "certificates"
@@ -49,10 +50,14 @@ def _small(tmp_path, extra: str) -> str:
 
 
 @pytest.fixture(scope="module")
-def g1_scenario_d1():
-    """G1's scenario exported at h = 0.1, D = 1 (its delay line's certificate, about 10 s),
-    once for the tests that read it."""
-    return from_scenario(DEADLINE, ExportOptions(period=0.1, delay=1))
+def g1_scenario_d1(g1, g1_digital_d1):
+    """G1's scenario exported at h = 0.1, D = 1, once for the tests that read it. Its delay
+    line's certificate (about 10 s) is the session's g1_digital_d1 = certify(G1, θ,
+    "1/(1+t)", Digital(0.1, 1)) at the paper's noise (0.4, 0.3), which the scenario's file
+    gives (tests/support/export.py's g1_d1_certified checks the call and answers it)."""
+    with pytest.MonkeyPatch.context() as mp:
+        g1_d1_certified(mp, g1, g1_digital_d1)
+        return from_scenario(DEADLINE, ExportOptions(period=0.1, delay=1))
 
 
 @pytest.fixture(scope="module")
@@ -110,13 +115,22 @@ def test_a_schedule_csv_gain(tmp_path):
 
 
 def test_a_switching_scenario(tmp_path):
-    p = _scenario(tmp_path, "", str(EXAMPLES / "switching.yaml"))
+    """A switching scenario's modes and schedule as its files give them: two 3-agent
+    cycles (certified at h = 0.013 in about 1 s; the paper's set, about 5 s, is
+    switching_json's below)."""
+    _small(tmp_path, "")  # writes cycle.yaml
+    (tmp_path / "more.yaml").write_text(
+        (tmp_path / "cycle.yaml").read_text() + "  - {from: 1, to: 3, weight: 1}\n"
+    )
+    (tmp_path / "sw.yaml").write_text(
+        "modes: {A: cycle.yaml, B: more.yaml}\nschedule:\n  - {mode: B, duration: 0.02}\n"
+        "  - {mode: B, duration: 0.02}\n  - {mode: A, duration: 0.02}\n"
+    )
+    p = tmp_path / "s.yaml"
+    p.write_text("topology: sw.yaml\ntheta: [1]\nT: 5\n")
     law = from_scenario(p, ExportOptions(period=0.013)).law
-    assert law.mode_names == ["G1", "G2", "G3"] and [m for m, _ in law.schedule][:3] == [
-        "G2",
-        "G2",
-        "G1",
-    ]
+    assert law.mode_names == ["A", "B"] and [m for m, _ in law.schedule] == ["B", "B", "A"]
+    assert [m.n_edges for m in law.modes] == [3, 4]
 
 
 def test_a_certificate_gives_its_subject(g1_json_d0):
@@ -219,10 +233,17 @@ def test_certificate_option_refusals(tmp_path):
 
 
 @pytest.mark.hostile
-def test_a_kind_without_dense_modes_is_refused(g1_robust, tmp_path):
+def test_a_kind_without_dense_modes_is_refused(tmp_path):
     from ntc_design.certify.kinds.robust import robust_certificate
+    from ntc_design.certify.robust import robust
 
-    doc = json.loads(json.dumps(robust_certificate(g1_robust[1])))
+    # the kind is what is refused: a 3-agent cycle's robust study (G1's takes about 5 s)
+    _small(tmp_path, "")
+    des = nd.design(nd.load(tmp_path / "cycle.yaml"), [1], thresholds=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        doc = json.loads(json.dumps(robust_certificate(robust(des, 0.05))))
+    assert doc["kind"] == "robust"
     with pytest.raises(InputError, match=r"kind: a robust certificate cannot be exported"):
         from_certificate(tmp_path / "r.json", ExportOptions(period=0.1), doc=doc)
 

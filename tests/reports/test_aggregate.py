@@ -1,22 +1,23 @@
 """Tests of :mod:`ntc_design.reports.aggregate`."""
 
-import functools
 import json
 
 import numpy as np
 import pytest
 
-from ntc_design.reports import aggregate, parts, style
+from ntc_design.reports import aggregate, parts
 from ntc_design.reports.figlist import render_figures
 from ntc_design.reports.rundata import load_run
 from tests.cli_helpers import run_cli
 from tests.support.figlist import _no_certify
+from tests.support.reports import stand_in_save
 
 
 def test_the_aggregate_report_renders_from_its_facts_alone(tmp_path, capsys, monkeypatch):
     from ntc_design.model.generate import random_network, write_topology
 
-    monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",)))
+    # the figures' ids are what is read: built, not drawn (test_report_above_... draws)
+    saved = stand_in_save(monkeypatch)
     top = random_network(aggregate.AGGREGATE_ABOVE + 2, 2, seed=11)
     write_topology(top, tmp_path / "net.yaml")
     sc = tmp_path / "sc.yaml"
@@ -35,6 +36,7 @@ def test_the_aggregate_report_renders_from_its_facts_alone(tmp_path, capsys, mon
     assert [d.id for d in figs["topology"]][:2] == ["a-fig-degrees", "a-fig-sparsity"]
     assert [d.id for d in figs["ms"]] == ["a-fig-ms_quantiles"]
     assert [d.id for d in figs["paths"]][-1] == "a-fig-final_hist"
+    assert len(saved) == sum(len(v) for v in figs.values()) and saved[0].name == "a_degrees"
 
 
 def _aggregate_report(tmp_path, sc, n_agents, capsys, monkeypatch, exts=("png",)):
@@ -100,7 +102,11 @@ def test_report_above_the_aggregate_size_in_the_fast_lane(tmp_path, capsys, monk
         "initial: {uniform: [-3, 3], seed: 1}\nT: 0.1\ndt: 0.0005\npaths: 12\n"
         "save_every: 0.05\nworkers: 1\nmethod: mc\n"
     )
-    _aggregate_report(tmp_path, sc, AGGREGATE_ABOVE + 2, capsys, monkeypatch)
+    # the quantile curves drawn for real; the other pictures are stand-in files (the slow
+    # tests above draw them all, in every format)
+    stand_in_save(monkeypatch, draw=("ms_quantiles",))
+    out, _ = _aggregate_report(tmp_path, sc, AGGREGATE_ABOVE + 2, capsys, monkeypatch)
+    assert (out / "figures" / "run_ms_quantiles.png").stat().st_size > 1000
 
 
 def test_total_band_is_conservative():

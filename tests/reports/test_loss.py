@@ -19,6 +19,7 @@ from ntc_design.simulate.digital import digital_grid
 from ntc_design.simulate.loss import loss_moments
 from ntc_design.simulate.scenario import write_outputs
 from ntc_design.simulate.system import mode_system
+from tests.support.reports import stand_in_save
 
 X0 = np.linspace(-3, 3, 21)
 
@@ -68,12 +69,15 @@ def test_a_lossless_run_has_no_section(tmp_path, g1):
     assert loss_facts(load_run(tmp_path / "r"), {}) is None
 
 
-def test_the_report_has_the_lossy_section(lossy_run):
+def test_the_report_has_the_lossy_section(lossy_run, monkeypatch):
     _, out = lossy_run
+    # the text is what is read: only the lossy curves are drawn (their SVG is checked)
+    saved = stand_in_save(monkeypatch, draw=("loss_curves",), formats=("png", "svg"))
     html = write_report(out).read_text()
     assert 'id="run-loss"' in html
     text = re.sub("<[^>]+>", " ", html[html.index('id="run-loss"') :][:5000])
     assert "certified: E‖x − x*‖² contracts from step k₀ = 19" in text
-    assert (out / "figures" / "run_loss_curves.svg").is_file()
+    assert (out / "figures" / "run_loss_curves.svg").read_text().lstrip().startswith("<?xml")
+    assert [s.name for s in saved].count("run_loss_curves") == 1
     digital = re.sub("<[^>]+>", " ", html[html.index('id="run-digital"') :][:3000])
     assert "These curves are without message loss" in digital

@@ -1,6 +1,5 @@
 """Tests of :mod:`ntc_design.reports.report`."""
 
-import functools
 import json
 import shutil
 
@@ -14,7 +13,7 @@ from ntc_design.reports.rundata import load_run
 from tests.cli_helpers import run_cli
 from tests.conftest import EXAMPLES, ROOT
 from tests.support.figlist import _no_certify
-from tests.support.reports import _assert_links_resolve
+from tests.support.reports import _assert_links_resolve, stand_in_save
 from tests.support.rows import _squash, _text
 
 
@@ -47,7 +46,9 @@ def g1_facts(g1_run, tmp_path_factory):
 
 
 def test_rendering_certifies_nothing_and_draws_the_whole_list(g1_facts, tmp_path, monkeypatch):
-    monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",)))
+    # every figure of the list is built and saved; only the coupling is drawn for real (the
+    # slow test_ntc_report_on_a_simulation draws them all, in every format)
+    stand_in_save(monkeypatch, draw=("coupling",))
     facts = g1_facts
     assert facts.cert["valid"] and facts.res.certificate["kind"] == "hurwitz"  # computed first
     monkeypatch.setattr(report, "certify", _no_certify)  # A(t)'s certificate
@@ -63,12 +64,13 @@ def test_rendering_certifies_nothing_and_draws_the_whole_list(g1_facts, tmp_path
         f"k_{s}.png" for s in ("coupling", "topology_G1", "ms_error", "states", "gain")
     )
     assert section.robust_figure is None and section.robust is None  # no robust study
+    assert (tmp_path / "k_coupling.png").stat().st_size > 1000
 
 
 def test_a_new_figure_is_one_function_in_the_list(g1_facts, tmp_path, monkeypatch):
     import matplotlib.pyplot as plt
 
-    monkeypatch.setattr(style, "save", functools.partial(style.save, formats=("png",)))
+    stand_in_save(monkeypatch, draw=("final",))  # the new figure drawn, the others built
     facts = g1_facts
 
     def final_bars(f, gid):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ntc_design.reports.reproduce import reproduce_paper
-from tests.support.reports import _assert_links_resolve, _links
+from tests.support.reports import _assert_links_resolve, _links, stand_in_save
 
 
 def _rows(html: str) -> list[str]:
@@ -90,14 +90,10 @@ def test_reproduce_report_structure(paper_run):
 def test_a_short_reproduction_in_the_fast_lane(tmp_path, monkeypatch):
     """The paper's Section 5 at T = 2 with 40 paths: every design and certification row
     matches at any horizon; only the three rows about the limit t → ∞ need the full T.
-    Figures as PNG only (the vector copies are what the slow full-size run checks)."""
-    import functools
-
-    from ntc_design.reports import style
-
-    # PNG at 72 dpi: the figures' content, not their print resolution, is what is checked
-    save = functools.partial(style.save, formats=("png",), dpi=72)
-    monkeypatch.setattr(style, "save", save)
+    Only the figure whose pixels are read is drawn (PNG at 72 dpi); the others are empty
+    stand-in files, so the links to them resolve (drawing them is the slow full-size
+    run's check, test_reproduce_paper_summary_matches)."""
+    saved = stand_in_save(monkeypatch, draw=("switching_schedule",))
     path, ok, _ = reproduce_paper(tmp_path, T=2.0, paths=40, workers=1)
     doc = json.loads((tmp_path / "paper_summary.json").read_text())
     missed = [r["quantity"] for r in doc["rows"] if not r["match"]]
@@ -114,5 +110,10 @@ def test_a_short_reproduction_in_the_fast_lane(tmp_path, monkeypatch):
     # the switching figure is drawn, not blank: a tenth of its pixels are ink
     import matplotlib.image
 
+    # every section's figures were drawn (built; saved as stand-ins), 23 in all
+    keys = ("g1", "switching", "gain_vanishing", "gain_energy")
+    assert len(saved) == 23 and [s.name for s in saved if s.name.endswith("_coupling")] == [
+        f"{k}_coupling" for k in keys
+    ]
     img = matplotlib.image.imread(tmp_path / "figures" / "switching_schedule.png")
     assert np.mean(img[..., :3].min(axis=-1) < 0.9) > 0.1

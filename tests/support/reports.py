@@ -40,3 +40,31 @@ def _assert_links_resolve(path: Path) -> int:
             assert "://" not in h, h
             assert (path.parent / h).is_file(), h
     return len(files)
+
+
+def stand_in_save(monkeypatch, draw: tuple[str, ...] = (), formats=("png",)) -> list[Path]:
+    """Replace ``style.save`` by one that draws nothing: each figure is closed and its
+    files (``formats``) are empty stand-ins, so links to them resolve; the stems ending in
+    one of ``draw`` are drawn for real (``formats``, PNG at 72 dpi) for the tests that
+    read them. Drawing is the slow part of a report (about 0.4 s a figure); the full-size runs and
+    tests/reports/test_style.py draw every format. Returns the stems saved, in order."""
+    import matplotlib.pyplot as plt
+
+    from ntc_design.reports import style
+
+    real = style.save
+    got: list[Path] = []
+
+    def save(fig, stem, **_):
+        got.append(stem)
+        if draw and stem.name.endswith(draw):
+            return real(fig, stem, formats=formats, dpi=72)
+        plt.close(fig)
+        stem.parent.mkdir(parents=True, exist_ok=True)
+        files = {f: stem.with_suffix(f".{f}") for f in formats}
+        for p in files.values():
+            p.write_bytes(b"")
+        return style.SavedFigure(stem, files, b"")
+
+    monkeypatch.setattr(style, "save", save)
+    return got
