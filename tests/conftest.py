@@ -39,6 +39,20 @@ settings.load_profile("ntc")
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
+
+#: (all, fast lane) as this process collected them, before ``-m`` deselects any, when it
+#: collected the whole suite (no path given): the README's counts test reads them rather
+#: than collecting the suite again in a second pytest (about 15 s of CPU in every slow lane)
+WHOLE_SUITE_COUNTS = pytest.StashKey[tuple[int, int]]()
+
+
+@pytest.hookimpl(tryfirst=True)  # before the -m deselection
+def pytest_collection_modifyitems(config, items):
+    if not config.args or config.args == config.getini("testpaths"):
+        fast = sum(1 for it in items if it.get_closest_marker("slow") is None)
+        config.stash[WHOLE_SUITE_COUNTS] = (len(items), fast)
+
+
 # the initial state of the G1 simulations (21 = 7 agents × d 3), one seed for every test
 X0 = np.random.default_rng(np.random.SeedSequence(1)).uniform(-3, 3, size=21)
 

@@ -68,17 +68,22 @@ def test_readme_numbers_of_the_first_command(g1, theta):
     assert minors == g1.n * g1.dim
 
 
-@pytest.mark.slow  # ~11 s: it collects the whole suite in a second pytest
-def test_readme_test_counts_are_those_collected():
-    # one collection gives both: "2845/2872 tests collected (27 deselected)"
-    out = subprocess.run(
-        [sys.executable, "-m", "pytest", "--collect-only", "-q", "-m", "not slow"],
-        cwd=ROOT, capture_output=True, text=True,
-        env={k: v for k, v in os.environ.items() if k != "PYTEST_ADDOPTS"},  # CI's coverage
-    ).stdout  # fmt: skip
-    m = re.search(r"(\d+)/(\d+) tests collected", out)
-    assert m, out[-500:]
-    fast_now, total_now = int(m.group(1)), int(m.group(2))
+@pytest.mark.slow  # ~11 s when it collects the whole suite in a second pytest
+def test_readme_test_counts_are_those_collected(request):
+    from tests.conftest import WHOLE_SUITE_COUNTS
+
+    counted = request.config.stash.get(WHOLE_SUITE_COUNTS, None)
+    if counted is not None:  # this run collected the whole suite: its own counts
+        total_now, fast_now = counted
+    else:  # one collection gives both: "2845/2872 tests collected (27 deselected)"
+        out = subprocess.run(
+            [sys.executable, "-m", "pytest", "--collect-only", "-q", "-m", "not slow"],
+            cwd=ROOT, capture_output=True, text=True,
+            env={k: v for k, v in os.environ.items() if k != "PYTEST_ADDOPTS"},  # CI's coverage
+        ).stdout  # fmt: skip
+        m = re.search(r"(\d+)/(\d+) tests collected", out)
+        assert m, out[-500:]
+        fast_now, total_now = int(m.group(1)), int(m.group(2))
     # the one place that states them: docs/_generated/figures.json (bench_readme.py --write)
     total, fast = _stated_test_counts()
     # within 5 %: the figures are re-measured when the suite grows by more
