@@ -93,15 +93,16 @@ def _honest_certificates() -> dict[str, dict]:
         warnings.simplefilter("ignore")
         rob = json.loads(json.dumps(robust_certificate(robust(rdes, 0.1, starts=2))))
     g1t = nd.load(ROOT / "examples" / "g1.yaml")
-    # G1 at h = 0.1, D = 1 as shipped (verified below): issuing it again is the delay line's
-    # 10 s of SDP solves, and tests/certify/kinds/test_digital.py issues it
-    dig = _load("g1_digital.json")
+    # the delay line (D = 1) and the lossy delay line on a 3-agent signed cycle (d = 1):
+    # 0.2 s each and a cheap verify per mutant (G1's: tests/certify/kinds/test_digital.py,
+    # test_digital_loss_delay.py and the shipped certificates/g1_digital.json)
+    one = np.ones((1, 1))
+    cycle = nd.Topology.from_edges(3, 1, [(1, 2, one), (2, 3, -one), (3, 1, one)])
+    dig = certify(cycle, [1.0], gain="1/(1+t)", digital=Digital(0.1, 1)).certificate
     lossy = Digital(0.1, 0, 0.1)  # lossy links, skip: the contraction and the offset
     digl = certify(g1t, theta3, gain="1/(1+t)", digital=lossy).certificate
     # lossy links with a delay, the lossy delay line, on a 3-agent signed cycle (d = 1):
     # 0.2 s, G1's 9 s (G1's is tests/certify/kinds/test_digital_loss_delay.py's, slow)
-    one = np.ones((1, 1))
-    cycle = nd.Topology.from_edges(3, 1, [(1, 2, one), (2, 3, -one), (3, 1, one)])
     lossy_d1 = Digital(0.1, 1, 0.1)
     digld = certify(cycle, [1.0], gain="1/(1+t)", digital=lossy_d1).certificate
     with pytest.warns(Warning):  # G3 fails Assumption 2

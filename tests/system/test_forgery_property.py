@@ -1255,7 +1255,7 @@ KIND_OF = {
 
 STRIDE = {
     "robust-riccati": 4,
-    "digital": 3,
+    "digital": 1,  # a 3-agent cycle at D = 1: every mutant
     "digital_loss": 3,
     "digital_loss-delay": 1,  # a 3-agent cycle: every mutant (the stride of 4 missed the bound)
     "digital_switching": 4,
