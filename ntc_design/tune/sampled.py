@@ -26,7 +26,7 @@ from ..simulate.digital import check_digital_moments
 from ..simulate.grid import TimeGrid
 from ..simulate.moments import MomentRhs
 from ..simulate.prepare import PreparedModes
-from .schedule_problem import BIG, MAX_STORE, Forward
+from .schedule_problem import BIG, MAX_STORE, Forward, MomentProblem
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,7 +47,7 @@ class SamplePlan:
         return int(self.k.size)
 
 
-class SampledScheduleProblem:
+class SampledScheduleProblem(MomentProblem):
     """J(c) = E Σ‖x_i(Kh) − θ‖² of the sampled recursion for a piecewise-linear c on K
     pieces, its exact gradient and the traces for the peak aggregate (see the module).
 
@@ -92,20 +92,6 @@ class SampledScheduleProblem:
         self.z0 = np.outer(z, z)
         self.initial = float(prepared.eps0 @ prepared.eps0)
         self.evaluations = 0
-
-    def node_times(self, pieces: int) -> np.ndarray:
-        """The K + 1 node times of K equal pieces of [0, T].
-
-        Parameters
-        ----------
-        pieces : int
-            K.
-
-        Returns
-        -------
-        numpy.ndarray
-        """
-        return np.linspace(0.0, self.horizon, pieces + 1)
 
     def plan(self, c: np.ndarray, kappa: float = 0.0) -> SamplePlan:
         """Where each sample lies among the nodes (the same for any node values).

@@ -60,7 +60,7 @@ class MomentProblem(Protocol):
         -------
         numpy.ndarray
         """
-        ...
+        return np.linspace(0.0, self.horizon, pieces + 1)
 
     def plan(self, c: np.ndarray, kappa: float = ...) -> Any:
         """The steps for node values ``c``.
@@ -134,7 +134,7 @@ class Plan:
         return int(self.h.size)
 
 
-class ScheduleProblem:
+class ScheduleProblem(MomentProblem):
     """J(c) = tr S(T) for a piecewise-linear c on K pieces, its exact gradient, and the
     peak aggregate (see the module).
 
@@ -163,20 +163,6 @@ class ScheduleProblem:
         self.initial = float(eps0 @ eps0)
         self.rho = np.array([[op.rho1, op.rho2] for op in self.ops])  # (modes, 2)
         self.evaluations = 0
-
-    def node_times(self, pieces: int) -> np.ndarray:
-        """The K + 1 node times of K equal pieces of [0, T].
-
-        Parameters
-        ----------
-        pieces : int
-            K.
-
-        Returns
-        -------
-        numpy.ndarray
-        """
-        return np.linspace(0.0, self.horizon, pieces + 1)
 
     @staticmethod
     def check_size(nd_: int) -> None:
